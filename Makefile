@@ -1,0 +1,51 @@
+# Every target creates or reuses the virtual environment in $(VENV).
+PYTHON ?= python3
+VENV ?= .venv
+PY := $(VENV)/bin/python
+STAMP := $(VENV)/.installed-stamp
+RESULTS ?= results
+
+.PHONY: install demo test test-slow test-all lint format bench figures clean
+
+$(STAMP): pyproject.toml
+	test -x $(PY) || $(PYTHON) -m venv $(VENV)
+	# CPU torch first: an unpinned torch (pulled by stable-baselines3) would fetch GB of CUDA wheels.
+	$(PY) -m pip install --disable-pip-version-check -q torch==2.13.0
+	$(PY) -m pip install --disable-pip-version-check -q -e ".[dev]"
+	touch $(STAMP)
+
+install: $(STAMP)
+
+## Main job (until the policy benchmark lands): simulate a pre-flight test and a flight window
+## at three health states, save signals (CSV) and plots, and the paper's physics figures.
+demo: install
+	$(PY) scripts/simulate.py --out $(RESULTS)/demo
+	$(PY) scripts/paper_figures.py --out $(RESULTS)/figures
+
+## Default test suite (fast; slow checks are behind the `slow` marker).
+test: install
+	$(PY) -m pytest -m "not slow" -n 2 -q
+
+test-slow: install
+	$(PY) -m pytest -m slow -q
+
+test-all: install
+	$(PY) -m pytest -n 2 -q
+
+lint: install
+	$(PY) -m ruff check .
+	$(PY) -m ruff format --check .
+
+format: install
+	$(PY) -m ruff format .
+	$(PY) -m ruff check --fix .
+
+## Integrator speed and accuracy beside a fine-step reference in the same run.
+bench: install
+	$(PY) scripts/bench_integrator.py
+
+figures: install
+	$(PY) scripts/paper_figures.py --out $(RESULTS)/figures
+
+clean:
+	rm -rf $(RESULTS) .pytest_cache .ruff_cache
