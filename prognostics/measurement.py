@@ -1,0 +1,346 @@
+"""Measurement model ``y = h(x) + v``, ``v ~ N(0, sigma_v(x)^2)``, fitted from campaign data.
+
+Ref §5.2 "Measurement model for this project": ``h`` maps fault severity ``x`` to a feature
+(e.g. G3 or I2 for the crack, I6 for wear), fitted to Monte Carlo campaign runs:
+
+- mean curve ``h``: least-squares polynomial of chosen degree (``"poly"``), or a monotone
+  piecewise-cubic Hermite interpolant (PCHIP, Fritsch-Carlson) through the per-level means
+  (``"pchip"``; monotone wherever the level means are). Outside the fitted range the PCHIP
+  curve is extended linearly with its end slopes; the polynomial is used as is.
+- noise ``sigma_v``: per-level sample std (ddof = 1) interpolated linearly in severity and
+  held constant outside (``"per_level"``), or one pooled residual std (``"constant"``,
+  residual dof = n - number of mean-curve parameters).
+
+Likelihood (ref §5.2): ``log p(y | x) = -1/2 ((y - h(x)) / sigma)^2 - log sigma - 1/2 log 2 pi``.
+
+    >>> sev = np.repeat([0.0, 1.0, 2.0], 2)
+    >>> feat = np.array([0.9, 1.1, 1.9, 2.1, 3.9, 4.1])
+    >>> mm = fit_measurement_model(sev, feat, mean_kind="pchip", sigma_kind="constant")
+    >>> [round(float(v), 3) for v in mm.mean(np.array([0.0, 1.0, 2.0]))]
+    [1.0, 2.0, 4.0]
+    >>> round(float(mm.sigma(np.array([0.5]))[0]), 4)
+    0.1414
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, fields
+from typing import Any
+
+import numpy as np
+from numba import njit
+from numpy.polynomial import Polynomial
+from scipy.interpolate import PchipInterpolator
+
+MEAN_KINDS: tuple[str, ...] = ("poly", "pchip")
+SIGMA_KINDS: tuple[str, ...] = ("per_level", "constant")
+_HALF_LOG_2PI = 0.5 * math.log(2.0 * math.pi)
+
+
+@njit(cache=True, inline="always")
+def _interval(knots: np.ndarray, x: float) -> int:
+    """k in [0, n-2] with knots[k] <= x < knots[k+1] (clamped); knots.size >= 2."""
+    lo = 0
+    hi = knots.size - 1
+    while hi - lo > 1:
+        mid = (lo + hi) >> 1
+        if knots[mid] <= x:
+            lo = mid
+        else:
+            hi = mid
+    return lo
+
+
+@njit(cache=True, inline="always")
+def mean_scalar(
+    is_poly: bool,
+    offset: float,
+    scale: float,
+    coef: np.ndarray,
+    knots: np.ndarray,
+    values: np.ndarray,
+    slopes: np.ndarray,
+    x: float,
+) -> float:
+    """h(x): Horner in ``t = offset + scale x`` (poly) or cubic Hermite on knots (pchip)."""
+    if is_poly:
+        t = offset + scale * x
+        acc = 0.0
+        for j in range(coef.size - 1, -1, -1):
+            acc = acc * t + coef[j]
+        return acc
+    if x <= knots[0]:
+        return values[0] + slopes[0] * (x - knots[0])
+    if x >= knots[-1]:
+        return values[-1] + slopes[-1] * (x - knots[-1])
+    k = _interval(knots, x)
+    h = knots[k + 1] - knots[k]
+    s = (x - knots[k]) / h
+    s2 = s * s
+    s3 = s2 * s
+    return (
+        (2.0 * s3 - 3.0 * s2 + 1.0) * values[k]
+        + (s3 - 2.0 * s2 + s) * h * slopes[k]
+        + (-2.0 * s3 + 3.0 * s2) * values[k + 1]
+        + (s3 - s2) * h * slopes[k + 1]
+    )
+
+
+@njit(cache=True, inline="always")
+def sigma_scalar(sigma_knots: np.ndarray, sigma_values: np.ndarray, x: float) -> float:
+    """sigma_v(x): linear between knots, constant outside (a single knot = constant)."""
+    if sigma_knots.size == 1 or x <= sigma_knots[0]:
+        return sigma_values[0]
+    if x >= sigma_knots[-1]:
+        return sigma_values[-1]
+    k = _interval(sigma_knots, x)
+    w = (x - sigma_knots[k]) / (sigma_knots[k + 1] - sigma_knots[k])
+    return sigma_values[k] + w * (sigma_values[k + 1] - sigma_values[k])
+
+
+@njit(cache=True)
+def log_likelihood_kernel(
+    y: float,
+    x: np.ndarray,
+    out: np.ndarray,
+    is_poly: bool,
+    offset: float,
+    scale: float,
+    coef: np.ndarray,
+    knots: np.ndarray,
+    values: np.ndarray,
+    slopes: np.ndarray,
+    sigma_knots: np.ndarray,
+    sigma_values: np.ndarray,
+) -> None:
+    """``out[i] = log N(y; h(x_i), sigma_v(x_i)^2)`` for one measurement and all particles.
+
+    Two passes (mean first, then sigma and the log-density): measured 2x faster with numba
+    than one fused loop.
+    """
+    for i in range(x.size):
+        out[i] = mean_scalar(is_poly, offset, scale, coef, knots, values, slopes, x[i])
+    for i in range(x.size):
+        s = sigma_scalar(sigma_knots, sigma_values, x[i])
+        z = (y - out[i]) / s
+        out[i] = -0.5 * z * z - math.log(s) - _HALF_LOG_2PI
+
+
+@njit(cache=True)
+def _mean_array(
+    is_poly: bool,
+    offset: float,
+    scale: float,
+    coef: np.ndarray,
+    knots: np.ndarray,
+    values: np.ndarray,
+    slopes: np.ndarray,
+    x: np.ndarray,
+    out: np.ndarray,
+) -> None:
+    for i in range(x.size):
+        out[i] = mean_scalar(is_poly, offset, scale, coef, knots, values, slopes, x[i])
+
+
+@njit(cache=True)
+def _sigma_array(
+    sigma_knots: np.ndarray, sigma_values: np.ndarray, x: np.ndarray, out: np.ndarray
+) -> None:
+    for i in range(x.size):
+        out[i] = sigma_scalar(sigma_knots, sigma_values, x[i])
+
+
+def _empty() -> np.ndarray:
+    return np.empty(0)
+
+
+def _float_array(name: str, values: Any, min_size: int = 0) -> np.ndarray:
+    arr = np.array(values, dtype=np.float64).ravel()
+    if arr.size < min_size or not np.all(np.isfinite(arr)):
+        raise ValueError(f"{name} must hold >= {min_size} finite values, got {arr.size} ({arr!r})")
+    arr.setflags(write=False)
+    return arr
+
+
+@dataclass(frozen=True, eq=False)
+class MeasurementModel:
+    """Feature-vs-severity model: mean curve ``h(x)`` and noise std ``sigma_v(x)``.
+
+    Fields (build with :func:`fit_measurement_model` or :meth:`from_dict`):
+    ``kind`` ("poly" or "pchip"); for "poly", ``coef`` (ascending) in ``t = offset + scale x``;
+    for "pchip", ``knots`` (strictly increasing), ``values`` and ``slopes`` (dh/dx) at them;
+    ``sigma_knots`` (strictly increasing, >= 1) and ``sigma_values`` (> 0), feature units.
+    Unused fields are empty arrays.
+    """
+
+    kind: str
+    sigma_knots: np.ndarray
+    sigma_values: np.ndarray
+    coef: np.ndarray = field(default_factory=_empty)
+    offset: float = 0.0
+    scale: float = 1.0
+    knots: np.ndarray = field(default_factory=_empty)
+    values: np.ndarray = field(default_factory=_empty)
+    slopes: np.ndarray = field(default_factory=_empty)
+
+    def __post_init__(self) -> None:
+        if self.kind not in MEAN_KINDS:
+            raise ValueError(f"kind = {self.kind!r} is not one of {MEAN_KINDS}")
+        is_poly = self.kind == "poly"
+        for name in ("coef", "knots", "values", "slopes"):
+            needed = (name == "coef") == is_poly
+            object.__setattr__(self, name, _float_array(name, getattr(self, name), int(needed)))
+        if not is_poly and (
+            self.knots.size < 2
+            or self.values.size != self.knots.size
+            or self.slopes.size != self.knots.size
+            or np.any(np.diff(self.knots) <= 0.0)
+        ):
+            raise ValueError(
+                "pchip needs >= 2 strictly increasing knots and one value and slope per knot, "
+                f"got {self.knots.size} knots, {self.values.size} values, {self.slopes.size} slopes"
+            )
+        if not (math.isfinite(self.offset) and math.isfinite(self.scale)):
+            raise ValueError(f"offset = {self.offset}, scale = {self.scale} must be finite")
+        sk = _float_array("sigma_knots", self.sigma_knots, 1)
+        sv = _float_array("sigma_values", self.sigma_values, 1)
+        if sv.shape != sk.shape or np.any(np.diff(sk) <= 0.0) or np.any(sv <= 0.0):
+            raise ValueError(
+                "sigma_knots must be strictly increasing with one sigma_value > 0 per knot"
+            )
+        object.__setattr__(self, "sigma_knots", sk)
+        object.__setattr__(self, "sigma_values", sv)
+
+    @property
+    def kernel_args(self) -> tuple:
+        """Arguments after ``(y, x, out)`` of :func:`log_likelihood_kernel`."""
+        return (
+            self.kind == "poly",
+            float(self.offset),
+            float(self.scale),
+            self.coef,
+            self.knots,
+            self.values,
+            self.slopes,
+            self.sigma_knots,
+            self.sigma_values,
+        )
+
+    def mean(self, x: np.ndarray) -> np.ndarray:
+        """Mean feature ``h(x)`` at severities ``x`` (any shape)."""
+        xa = np.ascontiguousarray(x, dtype=np.float64)
+        out = np.empty_like(xa)
+        _mean_array(*self.kernel_args[:7], xa.ravel(), out.ravel())
+        return out
+
+    def sigma(self, x: np.ndarray) -> np.ndarray:
+        """Noise std ``sigma_v(x)`` at severities ``x`` (any shape)."""
+        xa = np.ascontiguousarray(x, dtype=np.float64)
+        out = np.empty_like(xa)
+        _sigma_array(self.sigma_knots, self.sigma_values, xa.ravel(), out.ravel())
+        return out
+
+    def log_likelihood(self, y: np.ndarray, x: np.ndarray) -> np.ndarray:
+        """``log N(y; h(x), sigma_v(x)^2)``, broadcasting ``y`` against ``x``."""
+        ya, xa = np.broadcast_arrays(np.asarray(y, dtype=np.float64), np.asarray(x, np.float64))
+        z = (ya - self.mean(xa)) / self.sigma(xa)
+        return -0.5 * z * z - np.log(self.sigma(xa)) - _HALF_LOG_2PI
+
+    def sample(self, x: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+        """Synthetic measurements ``h(x) + sigma_v(x) eps``, ``eps ~ N(0, 1)`` from ``rng``."""
+        xa = np.asarray(x, dtype=np.float64)
+        return self.mean(xa) + self.sigma(xa) * rng.standard_normal(xa.shape)
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready dict (lists and floats); inverse of :meth:`from_dict`."""
+        out: dict[str, Any] = {}
+        for f in fields(self):
+            value = getattr(self, f.name)
+            out[f.name] = value.tolist() if isinstance(value, np.ndarray) else value
+        return out
+
+    @classmethod
+    def from_dict(cls, data: dict[str, Any]) -> MeasurementModel:
+        """Rebuild from :meth:`to_dict` output; unknown keys raise ``ValueError``."""
+        allowed = {f.name for f in fields(cls)}
+        unknown = sorted(set(data) - allowed)
+        if unknown:
+            raise ValueError(
+                f"MeasurementModel: unknown key(s) {unknown}; allowed {sorted(allowed)}"
+            )
+        return cls(**data)
+
+
+def fit_measurement_model(
+    severity: np.ndarray,
+    feature: np.ndarray,
+    *,
+    mean_kind: str = "pchip",
+    degree: int = 3,
+    sigma_kind: str = "per_level",
+    min_sigma: float = 0.0,
+) -> MeasurementModel:
+    """Fit a :class:`MeasurementModel` from campaign rows ``(severity_i, feature_i)``.
+
+    Parameters
+    ----------
+    severity, feature : (n,) finite arrays, one row per campaign run.
+    mean_kind : "pchip" (through per-level means, >= 2 levels) or "poly" (least squares,
+        more distinct severities than ``degree``).
+    degree : polynomial degree for "poly" (>= 0).
+    sigma_kind : "per_level" (std per severity level, >= 2 runs per level) or "constant"
+        (pooled residual std around the mean curve).
+    min_sigma : explicit floor on sigma (feature units, >= 0); the fit raises if a sigma is
+        still <= 0, e.g. a noise-free feature level.
+    """
+    sev = np.asarray(severity, dtype=np.float64)
+    feat = np.asarray(feature, dtype=np.float64)
+    if sev.ndim != 1 or sev.shape != feat.shape or sev.size < 2:
+        raise ValueError(
+            f"severity and feature must be 1-D of equal length >= 2: {sev.shape}, {feat.shape}"
+        )
+    if not (np.all(np.isfinite(sev)) and np.all(np.isfinite(feat))):
+        raise ValueError("severity and feature must be finite")
+    if mean_kind not in MEAN_KINDS:
+        raise ValueError(f"mean_kind = {mean_kind!r} is not one of {MEAN_KINDS}")
+    if sigma_kind not in SIGMA_KINDS:
+        raise ValueError(f"sigma_kind = {sigma_kind!r} is not one of {SIGMA_KINDS}")
+    if not (math.isfinite(min_sigma) and min_sigma >= 0.0):
+        raise ValueError(f"min_sigma = {min_sigma} must be finite and >= 0")
+    levels, inverse, counts = np.unique(sev, return_inverse=True, return_counts=True)
+    level_means = np.bincount(inverse, weights=feat) / counts
+    if mean_kind == "pchip":
+        if levels.size < 2:
+            raise ValueError(f"pchip needs >= 2 distinct severity levels, got {levels.size}")
+        slopes = PchipInterpolator(levels, level_means).derivative()(levels)
+        curve: dict[str, Any] = {"knots": levels, "values": level_means, "slopes": slopes}
+        n_params = levels.size
+    else:
+        if not (isinstance(degree, int | np.integer) and 0 <= degree < levels.size):
+            raise ValueError(
+                f"degree = {degree} must be an integer in [0, {levels.size - 1}] "
+                f"(distinct severities: {levels.size})"
+            )
+        poly = Polynomial.fit(sev, feat, int(degree))
+        offset, scale = poly.mapparms()
+        curve = {"coef": poly.coef, "offset": float(offset), "scale": float(scale)}
+        n_params = int(degree) + 1
+    provisional = MeasurementModel(
+        kind=mean_kind, sigma_knots=np.array([0.0]), sigma_values=np.array([1.0]), **curve
+    )
+    if sigma_kind == "per_level":
+        if np.any(counts < 2):
+            raise ValueError("sigma_kind='per_level' needs >= 2 runs at every severity level")
+        ss = np.bincount(inverse, weights=(feat - level_means[inverse]) ** 2)
+        knots, sig = levels, np.sqrt(ss / (counts - 1))
+    else:
+        dof = sev.size - n_params
+        if dof < 1:
+            raise ValueError(f"sigma_kind='constant' needs more runs ({sev.size}) than {n_params}")
+        resid = feat - provisional.mean(sev)
+        knots, sig = np.array([0.0]), np.array([math.sqrt(float(resid @ resid) / dof)])
+    sig = np.maximum(sig, min_sigma)
+    if np.any(sig <= 0.0):
+        raise ValueError(f"fitted sigma has zeros {sig}; pass min_sigma > 0 to floor it")
+    return MeasurementModel(kind=mean_kind, sigma_knots=knots, sigma_values=sig, **curve)

@@ -1,0 +1,381 @@
+"""SIR particle filter on (severity x, growth multiplier theta), ref §5.2 and [DJS20] §5.2.
+
+One step: ``predict(usage)`` moves every particle with the process model
+(:class:`~prognostics.degradation_models.TabulatedRateModel`, theta kept as ``log theta``);
+``update(y)`` multiplies the weights by the likelihood of the measured feature
+(:class:`~prognostics.measurement.MeasurementModel`), in log space:
+
+    log w_i <- log w_i + log p(y | x_i) - log sum_j w_j p(y | x_j)       ([DJS20] eq. 11)
+
+and resamples (systematic by default) when ``N_eff = 1 / sum w_i^2 < resample_threshold N``.
+
+Regularisation after resampling (regularised PF, Musso, Oudjane & Le Gland 2001, in
+Doucet et al., "Sequential Monte Carlo Methods in Practice", ch. 12; ref §5.1): each
+resampled particle ``z_i = (x_i, log theta_i)`` (dimension n = 2) is moved to
+``m + a (z_i - m) + h L eps_i``, with ``m``, ``S = L L^T`` the weighted mean and covariance
+before resampling, ``eps_i`` drawn from the kernel, and the optimal bandwidth
+
+- Epanechnikov kernel (default): ``h = A N^{-1/(n+4)}``,
+  ``A = (8 / c_n (n + 4) (2 sqrt(pi))^n)^{1/(n+4)}``, ``c_2 = pi`` (A = 192^{1/6} = 2.40);
+  kernel variance per dimension ``kappa = 1 / (n + 4)``;
+- Gaussian kernel: ``h = (4 / (N (n + 2)))^{1/(n+4)}``, ``kappa = 1``.
+
+With ``shrink=True`` (Liu & West 2001 kernel shrinkage), ``a = sqrt(1 - h^2 kappa)`` so the
+jitter keeps the mean and covariance of the particle cloud; ``shrink=False`` is the plain
+RPF (``a = 1``, covariance inflated by ``1 + h^2 kappa``). The Epanechnikov draw in 2-D is
+``eps = sqrt(1 - sqrt(U_1)) (cos 2 pi U_2, sin 2 pi U_2)`` (radius^2 ~ Beta(1, 2)).
+
+Randomness: only the ``numpy.random.Generator`` given at construction (numba kernels draw
+from the same Generator, sharing its state).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+from numba import njit
+
+from prognostics.degradation_models import TabulatedRateModel
+from prognostics.measurement import MeasurementModel, log_likelihood_kernel
+from prognostics.resampling import SCHEMES, resample, systematic_indices
+
+KERNELS: tuple[str, ...] = ("epanechnikov", "gaussian")
+_STATE_DIM = 2
+
+InitialValues = float | np.ndarray | Callable[[np.random.Generator, int], np.ndarray]
+
+
+def regularisation_bandwidth(n_particles: int, kernel: str = "epanechnikov") -> float:
+    """Optimal RPF bandwidth h for the 2-D state (Musso et al. 2001; module docstring).
+
+    >>> round(regularisation_bandwidth(1000), 4)
+    0.7595
+    >>> round(regularisation_bandwidth(1000, "gaussian"), 4)
+    0.3162
+    """
+    n = _STATE_DIM
+    if kernel == "epanechnikov":
+        c_n = math.pi ** (n / 2) / math.gamma(n / 2 + 1)
+        a = (8.0 / c_n * (n + 4) * (2.0 * math.sqrt(math.pi)) ** n) ** (1.0 / (n + 4))
+        return a * n_particles ** (-1.0 / (n + 4))
+    if kernel == "gaussian":
+        return (4.0 / (n_particles * (n + 2))) ** (1.0 / (n + 4))
+    raise ValueError(f"kernel = {kernel!r} is not one of {KERNELS}")
+
+
+@njit(cache=True)
+def _reweight(log_w: np.ndarray, w: np.ndarray, loglik: np.ndarray) -> float:
+    """log w += loglik, normalise in log space, w = exp(log w); returns N_eff = 1/sum w^2."""
+    peak = -np.inf
+    for i in range(log_w.size):
+        log_w[i] += loglik[i]
+        peak = max(peak, log_w[i])
+    total = 0.0
+    for i in range(log_w.size):
+        w[i] = math.exp(log_w[i] - peak)
+        total += w[i]
+    shift = peak + math.log(total)
+    sum_sq = 0.0
+    for i in range(log_w.size):
+        w[i] /= total
+        log_w[i] -= shift
+        sum_sq += w[i] * w[i]
+    return 1.0 / sum_sq
+
+
+@njit(cache=True)
+def _systematic_from_weights(w: np.ndarray, cumsum: np.ndarray, u: float, idx: np.ndarray) -> None:
+    """Normalised cumulative weights into ``cumsum``, then systematic indices into ``idx``."""
+    acc = 0.0
+    for i in range(w.size):
+        acc += w[i]
+        cumsum[i] = acc
+    for i in range(w.size):
+        cumsum[i] /= acc
+    cumsum[-1] = 1.0
+    systematic_indices(cumsum, u, idx)
+
+
+@njit(cache=True)
+def _gather_regularise(
+    x: np.ndarray,
+    log_theta: np.ndarray,
+    w: np.ndarray,
+    log_w: np.ndarray,
+    idx: np.ndarray,
+    buf_x: np.ndarray,
+    buf_lt: np.ndarray,
+    h: float,
+    kappa: float,
+    gaussian: bool,
+    shrink: bool,
+    rng: np.random.Generator,
+) -> None:
+    """Copy parents ``idx``, jitter with the kernel (h > 0), reset weights to 1/N."""
+    n = x.size
+    m1 = 0.0
+    m2 = 0.0
+    for i in range(n):
+        m1 += w[i] * x[i]
+        m2 += w[i] * log_theta[i]
+    s11 = 0.0
+    s12 = 0.0
+    s22 = 0.0
+    for i in range(n):
+        d1 = x[i] - m1
+        d2 = log_theta[i] - m2
+        s11 += w[i] * d1 * d1
+        s12 += w[i] * d1 * d2
+        s22 += w[i] * d2 * d2
+    l11 = math.sqrt(s11)
+    l21 = s12 / l11 if l11 > 0.0 else 0.0
+    l22 = math.sqrt(max(s22 - l21 * l21, 0.0))
+    a = math.sqrt(1.0 - h * h * kappa) if shrink else 1.0
+    for i in range(n):
+        buf_x[i] = x[idx[i]]
+        buf_lt[i] = log_theta[idx[i]]
+    for i in range(n):
+        if h > 0.0:
+            if gaussian:
+                e1 = rng.standard_normal()
+                e2 = rng.standard_normal()
+            else:
+                r = math.sqrt(1.0 - math.sqrt(rng.random()))
+                phi = 2.0 * math.pi * rng.random()
+                e1 = r * math.cos(phi)
+                e2 = r * math.sin(phi)
+            x[i] = m1 + a * (buf_x[i] - m1) + h * l11 * e1
+            log_theta[i] = m2 + a * (buf_lt[i] - m2) + h * (l21 * e1 + l22 * e2)
+        else:
+            x[i] = buf_x[i]
+            log_theta[i] = buf_lt[i]
+        w[i] = 1.0 / n
+        log_w[i] = -math.log(n)
+
+
+@dataclass(frozen=True)
+class StateEstimate:
+    """Weighted posterior summary: means and standard deviations, and N_eff."""
+
+    x_mean: float
+    x_std: float
+    theta_mean: float
+    theta_std: float
+    ess: float
+
+
+def _initial(name: str, values: InitialValues, rng: np.random.Generator, n: int) -> np.ndarray:
+    arr = values(rng, n) if callable(values) else values
+    out = np.broadcast_to(np.asarray(arr, dtype=np.float64), (n,)).copy()
+    if not np.all(np.isfinite(out)):
+        raise ValueError(f"{name} must give {n} finite values")
+    return out
+
+
+class ParticleFilter:
+    """SIR particle filter with an unknown growth multiplier (see module docstring).
+
+    Parameters
+    ----------
+    process : degradation process model (state units, usage units).
+    measurement : feature-vs-severity model (feature units).
+    n_particles : N >= 2.
+    rng : the only source of randomness.
+    resample_threshold : resample when N_eff < resample_threshold * N, in (0, 1].
+    regularise : jitter after resampling (RPF); kernel "epanechnikov" or "gaussian".
+    shrink : Liu-West shrinkage so the jitter keeps mean and covariance.
+    resampler : one of :data:`prognostics.resampling.SCHEMES`.
+
+    >>> from prognostics.degradation_models import linear_wear_model
+    >>> from prognostics.measurement import MeasurementModel
+    >>> mm = MeasurementModel("poly", [0.0], [0.1], coef=[0.0, 1.0])
+    >>> pf = ParticleFilter(linear_wear_model(1.0), mm, 500, np.random.default_rng(0))
+    >>> pf.reset(x0=0.0, theta0=1.0)
+    >>> pf.predict(2.0)
+    >>> _ = pf.update(2.05)
+    >>> round(pf.estimate().x_mean, 6)
+    2.0
+    """
+
+    def __init__(
+        self,
+        process: TabulatedRateModel,
+        measurement: MeasurementModel,
+        n_particles: int,
+        rng: np.random.Generator,
+        *,
+        resample_threshold: float = 0.5,
+        regularise: bool = True,
+        kernel: str = "epanechnikov",
+        shrink: bool = True,
+        resampler: str = "systematic",
+    ) -> None:
+        if not isinstance(process, TabulatedRateModel):
+            raise ValueError(f"process must be a TabulatedRateModel, got {type(process).__name__}")
+        if not isinstance(measurement, MeasurementModel):
+            raise ValueError(
+                f"measurement must be a MeasurementModel, got {type(measurement).__name__}"
+            )
+        if not (isinstance(n_particles, int | np.integer) and n_particles >= 2):
+            raise ValueError(f"n_particles = {n_particles!r} must be an integer >= 2")
+        if not isinstance(rng, np.random.Generator):
+            raise ValueError(f"rng must be a numpy.random.Generator, got {type(rng).__name__}")
+        if not 0.0 < resample_threshold <= 1.0:
+            raise ValueError(f"resample_threshold = {resample_threshold} must be in (0, 1]")
+        if kernel not in KERNELS:
+            raise ValueError(f"kernel = {kernel!r} is not one of {KERNELS}")
+        if resampler not in SCHEMES:
+            raise ValueError(f"resampler = {resampler!r} is not one of {SCHEMES}")
+        n = int(n_particles)
+        self.process = process
+        self.measurement = measurement
+        self.rng = rng
+        self.resample_threshold = float(resample_threshold)
+        self.resampler = resampler
+        self.kernel = kernel
+        self.regularise = bool(regularise)
+        self.shrink = bool(shrink)
+        self._h = regularisation_bandwidth(n, kernel) if regularise else 0.0
+        self._kappa = 1.0 if kernel == "gaussian" else 1.0 / (_STATE_DIM + 4)
+        self._likelihood_args = measurement.kernel_args
+        self._x = np.zeros(n)
+        self._log_theta = np.zeros(n)
+        self._w = np.full(n, 1.0 / n)
+        self._log_w = np.full(n, -math.log(n))
+        self._loglik = np.empty(n)
+        self._buf_x = np.empty(n)
+        self._buf_lt = np.empty(n)
+        self._cumsum = np.empty(n)
+        self._idx = np.empty(n, dtype=np.intp)
+        self._ess = float(n)
+        self._ready = False
+        self.n_resamples = 0
+
+    @property
+    def n_particles(self) -> int:
+        """Number of particles N."""
+        return self._x.size
+
+    @property
+    def ess(self) -> float:
+        """Effective sample size after the last update (N after reset or resampling)."""
+        return self._ess
+
+    @property
+    def x(self) -> np.ndarray:
+        """Read-only view of the particle severities."""
+        return _read_only(self._x)
+
+    @property
+    def log_theta(self) -> np.ndarray:
+        """Read-only view of the particle log growth multipliers."""
+        return _read_only(self._log_theta)
+
+    @property
+    def theta(self) -> np.ndarray:
+        """Particle growth multipliers (a new array)."""
+        return np.exp(self._log_theta)
+
+    @property
+    def weights(self) -> np.ndarray:
+        """Read-only view of the normalised weights."""
+        return _read_only(self._w)
+
+    def reset(self, x0: InitialValues, theta0: InitialValues) -> None:
+        """Draw the initial cloud and set uniform weights.
+
+        ``x0`` and ``theta0`` are each a scalar, an (N,) array, or a sampler
+        ``f(rng, N) -> (N,) array`` called with the filter's Generator; theta0 must be > 0.
+        """
+        n = self.n_particles
+        x = _initial("x0", x0, self.rng, n)
+        theta = _initial("theta0", theta0, self.rng, n)
+        if np.any(theta <= 0.0):
+            raise ValueError("theta0 must be > 0 for every particle")
+        self._x[:] = x
+        self._log_theta[:] = np.log(theta)
+        self._w.fill(1.0 / n)
+        self._log_w.fill(-math.log(n))
+        self._ess = float(n)
+        self.n_resamples = 0
+        self._ready = True
+
+    def _check_ready(self) -> None:
+        if not self._ready:
+            raise RuntimeError("call reset(x0, theta0) before predict/update")
+
+    def predict(self, usage: float) -> None:
+        """Propagate every particle over a step of ``usage`` (>= 0, usage units)."""
+        self._check_ready()
+        self.process.predict(self._x, self._log_theta, usage, self.rng, self._buf_x)
+
+    def update(self, y: float) -> bool:
+        """Weight by the likelihood of feature ``y``; NaN = no measurement (no change).
+
+        Returns True if the filter resampled.
+        """
+        self._check_ready()
+        y = float(y)
+        if math.isnan(y):
+            return False
+        if not math.isfinite(y):
+            raise ValueError(f"y = {y} must be finite or NaN (no measurement)")
+        log_likelihood_kernel(y, self._x, self._loglik, *self._likelihood_args)
+        self._ess = _reweight(self._log_w, self._w, self._loglik)
+        if not math.isfinite(self._ess):
+            raise FloatingPointError("particle weights degenerated (non-finite likelihoods)")
+        if self._ess >= self.resample_threshold * self.n_particles:
+            return False
+        self._resample()
+        return True
+
+    def step(self, usage: float, y: float) -> bool:
+        """``predict(usage)`` then ``update(y)``; returns whether the filter resampled."""
+        self.predict(usage)
+        return self.update(y)
+
+    def _resample(self) -> None:
+        if self.resampler == "systematic":
+            _systematic_from_weights(self._w, self._cumsum, self.rng.random(), self._idx)
+        else:
+            self._idx[:] = resample(self._w, self.rng, self.resampler)
+        _gather_regularise(
+            self._x,
+            self._log_theta,
+            self._w,
+            self._log_w,
+            self._idx,
+            self._buf_x,
+            self._buf_lt,
+            self._h,
+            self._kappa,
+            self.kernel == "gaussian",
+            self.shrink,
+            self.rng,
+        )
+        self._ess = float(self.n_particles)
+        self.n_resamples += 1
+
+    def estimate(self) -> StateEstimate:
+        """Weighted means and standard deviations of x and theta, and N_eff."""
+        self._check_ready()
+        w = self._w
+        theta = np.exp(self._log_theta)
+        x_mean = float(w @ self._x)
+        th_mean = float(w @ theta)
+        return StateEstimate(
+            x_mean=x_mean,
+            x_std=math.sqrt(float(w @ (self._x - x_mean) ** 2)),
+            theta_mean=th_mean,
+            theta_std=math.sqrt(float(w @ (theta - th_mean) ** 2)),
+            ess=self._ess,
+        )
+
+
+def _read_only(arr: np.ndarray) -> np.ndarray:
+    view = arr.view()
+    view.flags.writeable = False
+    return view

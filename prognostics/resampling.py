@@ -1,0 +1,195 @@
+"""Particle resampling schemes that draw only from a passed ``numpy.random.Generator``.
+
+Every scheme maps normalised weights ``w`` (length N) to N parent indices whose expected
+counts are unbiased, ``E[n_i] = N w_i`` (Douc, Cappé & Moulines 2005, "Comparison of
+resampling schemes for particle filtering"; ref §5.2 "Resample (systematic/SIR)").
+
+- systematic: one uniform ``u``; positions ``(u + k) / N``, k = 0..N-1;
+- stratified: one uniform per stratum; positions ``(u_k + k) / N``;
+- multinomial: N independent uniforms;
+- residual: ``floor(N w_i)`` deterministic copies, the remaining ``R = N - sum floor(N w_i)``
+  drawn multinomially from the residual weights ``(N w_i - floor(N w_i)) / R``
+  (Liu & Chen 1998). This is the unbiased form; ``filterpy.monte_carlo.residual_resample``
+  normalises ``w_i - floor(N w_i)`` instead and is biased (filterpy issue 290).
+
+The index rule matches ``filterpy.monte_carlo``: position p goes to the first j with
+``p < cumsum(w)[j]``, so the systematic and stratified schemes return exactly filterpy's
+indices for the same uniforms (tested). The cumulative sum is normalised by its last entry,
+which is then set to exactly 1.
+
+    >>> import numpy as np
+    >>> systematic_resample(np.array([0.1, 0.2, 0.7]), u=0.5)
+    array([1, 2, 2])
+    >>> effective_sample_size(np.array([0.25, 0.25, 0.25, 0.25]))
+    4.0
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import numpy as np
+from numba import njit
+
+SCHEMES: tuple[str, ...] = ("systematic", "stratified", "multinomial", "residual")
+
+
+def _check_weights(weights: np.ndarray) -> np.ndarray:
+    w = np.asarray(weights, dtype=np.float64)
+    if w.ndim != 1 or w.size == 0:
+        raise ValueError(f"weights must be a non-empty 1-D array, got shape {w.shape}")
+    if not np.all(np.isfinite(w)) or np.any(w < 0.0):
+        raise ValueError("weights must be finite and >= 0")
+    if not w.sum() > 0.0:
+        raise ValueError(f"weights must have a positive sum, got {w.sum()}")
+    return w
+
+
+def _normalised_cumsum(w: np.ndarray) -> np.ndarray:
+    c = np.cumsum(w)
+    c /= c[-1]
+    c[-1] = 1.0
+    return c
+
+
+@njit(cache=True)
+def _positions_to_indices(cumsum: np.ndarray, positions: np.ndarray, out: np.ndarray) -> None:
+    """Sorted positions in [0, 1) -> first j with ``position < cumsum[j]`` (filterpy rule)."""
+    n_w = cumsum.size
+    j = 0
+    for i in range(positions.size):
+        while j < n_w - 1 and positions[i] >= cumsum[j]:
+            j += 1
+        out[i] = j
+
+
+@njit(cache=True)
+def systematic_indices(cumsum: np.ndarray, u: float, out: np.ndarray) -> None:
+    """Systematic resampling kernel: positions ``(u + k) / N`` written as indices into ``out``.
+
+    ``cumsum`` is the normalised cumulative weight (last entry 1); ``u`` in [0, 1).
+    Allocation-free, for the particle filter's hot path.
+    """
+    n = out.size
+    j = 0
+    for i in range(n):
+        p = (u + i) / n
+        while j < cumsum.size - 1 and p >= cumsum[j]:
+            j += 1
+        out[i] = j
+
+
+def effective_sample_size(weights: np.ndarray) -> float:
+    """Effective sample size ``N_eff = (sum w)^2 / sum w^2`` (= 1 / sum w^2 if normalised).
+
+    Ref §5.2 (resample when ``N_eff < N_th``). Between 1 (one particle holds all the mass)
+    and N (uniform weights).
+    """
+    w = _check_weights(weights)
+    return float(w.sum() ** 2 / np.dot(w, w))
+
+
+def _uniforms(
+    rng: np.random.Generator | None, u: np.ndarray | float | None, size: int | None
+) -> np.ndarray | float:
+    if (rng is None) == (u is None):
+        raise ValueError("pass exactly one of rng (a numpy Generator) or u (explicit uniforms)")
+    if u is None:
+        if not isinstance(rng, np.random.Generator):
+            raise ValueError(f"rng must be a numpy.random.Generator, got {type(rng).__name__}")
+        return rng.random() if size is None else rng.random(size)
+    arr = np.asarray(u, dtype=np.float64)
+    expected = () if size is None else (size,)
+    if arr.shape != expected:
+        raise ValueError(f"u must have shape {expected}, got {arr.shape}")
+    if np.any(arr < 0.0) or np.any(arr >= 1.0):
+        raise ValueError("u must lie in [0, 1)")
+    return float(arr) if size is None else arr
+
+
+def systematic_resample(
+    weights: np.ndarray, rng: np.random.Generator | None = None, u: float | None = None
+) -> np.ndarray:
+    """Systematic resampling: one uniform ``u``, positions ``(u + k) / N``.
+
+    Parameters
+    ----------
+    weights : (N,) non-negative weights (normalised internally).
+    rng : Generator that draws ``u``; or
+    u : explicit uniform in [0, 1) (reproduces another implementation's draw).
+
+    Returns
+    -------
+    (N,) int array of parent indices, non-decreasing.
+    """
+    w = _check_weights(weights)
+    uu = _uniforms(rng, u, None)
+    out = np.empty(w.size, dtype=np.intp)
+    systematic_indices(_normalised_cumsum(w), uu, out)
+    return out
+
+
+def stratified_resample(
+    weights: np.ndarray, rng: np.random.Generator | None = None, u: np.ndarray | None = None
+) -> np.ndarray:
+    """Stratified resampling: positions ``(u_k + k) / N`` with one uniform per stratum.
+
+    ``u`` (N,) in [0, 1) replaces ``rng`` for reproducing another implementation's draws.
+    """
+    w = _check_weights(weights)
+    uu = _uniforms(rng, u, w.size)
+    out = np.empty(w.size, dtype=np.intp)
+    _positions_to_indices(_normalised_cumsum(w), (uu + np.arange(w.size)) / w.size, out)
+    return out
+
+
+def multinomial_resample(
+    weights: np.ndarray, rng: np.random.Generator | None = None, u: np.ndarray | None = None
+) -> np.ndarray:
+    """Multinomial resampling: N independent uniforms, sorted, mapped through the CDF.
+
+    The output is sorted by parent index (the multiset of parents is what matters).
+    """
+    w = _check_weights(weights)
+    uu = _uniforms(rng, u, w.size)
+    out = np.empty(w.size, dtype=np.intp)
+    _positions_to_indices(_normalised_cumsum(w), np.sort(uu), out)
+    return out
+
+
+def residual_resample(weights: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+    """Unbiased residual resampling (Liu & Chen 1998).
+
+    ``n_i = floor(N w_i)`` copies of particle i, then ``R = N - sum n_i`` multinomial draws
+    from ``r_i = (N w_i - n_i) / R``; so ``E[count_i] = n_i + R r_i = N w_i``.
+    """
+    w = _check_weights(weights)
+    if not isinstance(rng, np.random.Generator):
+        raise ValueError(f"rng must be a numpy.random.Generator, got {type(rng).__name__}")
+    n = w.size
+    scaled = n * w / w.sum()
+    copies = np.floor(scaled).astype(np.intp)
+    out = np.repeat(np.arange(n, dtype=np.intp), copies)
+    n_rest = n - out.size
+    if n_rest == 0:
+        return out
+    rest = np.empty(n_rest, dtype=np.intp)
+    _positions_to_indices(_normalised_cumsum(scaled - copies), np.sort(rng.random(n_rest)), rest)
+    return np.sort(np.concatenate([out, rest]))
+
+
+_DISPATCH: dict[str, Callable[[np.ndarray, np.random.Generator], np.ndarray]] = {
+    "systematic": systematic_resample,
+    "stratified": stratified_resample,
+    "multinomial": multinomial_resample,
+    "residual": residual_resample,
+}
+
+
+def resample(
+    weights: np.ndarray, rng: np.random.Generator, scheme: str = "systematic"
+) -> np.ndarray:
+    """Parent indices from the named scheme (one of :data:`SCHEMES`), drawing from ``rng``."""
+    if scheme not in _DISPATCH:
+        raise ValueError(f"scheme = {scheme!r} is not one of {SCHEMES}")
+    return _DISPATCH[scheme](weights, rng)

@@ -1,0 +1,101 @@
+"""Saxena et al. (2010) metrics on hand-computed cases."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from prognostics.metrics import (
+    alpha_bounds,
+    alpha_lambda_distribution,
+    alpha_lambda_point,
+    beta_criterion,
+    convergence,
+    cumulative_relative_accuracy,
+    evaluate_predictions,
+    point_prediction,
+    prognostic_horizon,
+    relative_accuracy,
+)
+
+
+def test_relative_accuracy_mean_and_median() -> None:
+    samples, w = np.array([80.0, 100.0, 140.0]), np.array([0.25, 0.5, 0.25])
+    # mean = 20 + 50 + 35 = 105 -> RA = 1 - 5/100; median = 100 -> RA = 1
+    assert relative_accuracy(100.0, samples, w) == pytest.approx(0.95)
+    assert relative_accuracy(100.0, samples, w, "median") == pytest.approx(1.0)
+    assert relative_accuracy(50.0, np.array([65.0])) == pytest.approx(0.7)
+    assert point_prediction(np.array([3.0, 1.0, 2.0]), estimator="median") == 2.0
+
+
+def test_cumulative_relative_accuracy() -> None:
+    assert cumulative_relative_accuracy(np.array([0.9, 0.8, 1.0])) == pytest.approx(0.9)
+    # (0.9 + 2 * 0.8 + 1.0) / 4 = 0.875
+    assert cumulative_relative_accuracy(
+        np.array([0.9, 0.8, 1.0]), np.array([1.0, 2.0, 1.0])
+    ) == pytest.approx(0.875)
+
+
+def test_bounds_alpha_lambda_and_beta() -> None:
+    assert alpha_bounds(50.0, 0.2) == pytest.approx((40.0, 60.0))
+    assert alpha_bounds(50.0, 0.1, "band", eol=200.0) == pytest.approx((30.0, 70.0))
+    assert alpha_lambda_point(50.0, 59.0, 0.2) and not alpha_lambda_point(50.0, 61.0, 0.2)
+    samples = np.array([35.0, 45.0, 55.0, 65.0])  # half the mass inside [40, 60]
+    assert alpha_lambda_distribution(50.0, samples, None, alpha=0.2, beta=0.5)
+    assert not alpha_lambda_distribution(50.0, samples, None, alpha=0.2, beta=0.6)
+    assert beta_criterion(samples, np.array([0.1, 0.4, 0.4, 0.1]), 40.0, 60.0, 0.8)
+
+
+def test_prognostic_horizon_band_and_cone() -> None:
+    times, eol = np.array([0.0, 50.0, 100.0, 150.0]), 200.0
+    preds = [np.array([100.0]), np.array([168.0]), np.array([108.0]), np.array([50.0])]
+    # band +-20: t=50 bounds [130, 170] holds 168 -> PH = 150
+    assert prognostic_horizon(times, preds, None, eol, alpha=0.1, band="band") == 150.0
+    # cone: t=50 [135, 165] misses 168; t=100 [90, 110] holds 108 -> PH = 100
+    assert prognostic_horizon(times, preds, None, eol, alpha=0.1, band="cone") == 100.0
+    never = [np.array([1.0])] * 4
+    assert math.isnan(prognostic_horizon(times, never, None, eol))
+
+
+def test_convergence_centroid() -> None:
+    # dt = 10, 10; M = 4, 2 (last point closes the interval); area 60
+    # x_c = (100 * 4 + 300 * 2) / 2 / 60 = 25/3; y_c = (10 * 16 + 10 * 4) / 2 / 60 = 5/3
+    c = convergence(np.array([0.0, 10.0, 20.0]), np.array([4.0, 2.0, 0.0]))
+    assert c == pytest.approx(math.hypot(25.0 / 3.0, 5.0 / 3.0))
+    assert convergence(np.array([5.0, 6.0]), np.array([0.0, 3.0])) == 0.0
+
+
+def test_evaluate_predictions_by_hand() -> None:
+    times, eol = np.array([0.0, 50.0, 100.0, 150.0]), 200.0
+    preds = [np.array([180.0]), np.array([168.0]), np.array([108.0]), np.array([50.0])]
+    m = evaluate_predictions(times, preds, None, eol)
+    # RA = 1 - 20/200, 1 - 18/150, 1 - 8/100, 1 - 0/50
+    np.testing.assert_allclose(m.relative_accuracy, [0.9, 0.88, 0.92, 1.0])
+    assert m.min_relative_accuracy == pytest.approx(0.88)
+    assert m.cumulative_relative_accuracy == pytest.approx(0.925)
+    # t_lambda = 50, 100, 150: cone +-20% holds 168 in [120, 180], 108 in [80, 120], 50
+    assert m.alpha_lambda == {0.25: True, 0.5: True, 0.75: True}
+    assert m.prognostic_horizon == 200.0  # t=0: band [180, 220] holds 180
+    errors = np.array([20.0, 18.0, 8.0, 0.0])
+    assert m.convergence == pytest.approx(convergence(times, errors))
+
+
+def test_bad_inputs_raise() -> None:
+    with pytest.raises(ValueError, match="true_rul"):
+        relative_accuracy(0.0, np.array([1.0]))
+    with pytest.raises(ValueError, match="estimator"):
+        point_prediction(np.array([1.0]), estimator="mode")
+    with pytest.raises(ValueError, match="band"):
+        alpha_bounds(10.0, 0.1, "tube")
+    with pytest.raises(ValueError, match="eol"):
+        alpha_bounds(10.0, 0.1, "band")
+    with pytest.raises(ValueError, match="beta"):
+        beta_criterion(np.array([1.0]), None, 0.0, 2.0, beta=0.0)
+    with pytest.raises(ValueError, match="eol"):
+        prognostic_horizon(np.array([0.0, 10.0]), [np.ones(1)] * 2, None, eol=10.0)
+    with pytest.raises(ValueError, match="increasing"):
+        evaluate_predictions(np.array([1.0, 0.0]), [np.ones(1)] * 2, None, eol=10.0)
+    with pytest.raises(ValueError, match="metric"):
+        convergence(np.array([0.0, 1.0]), np.array([-1.0, 1.0]))

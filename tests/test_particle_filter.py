@@ -1,0 +1,136 @@
+"""Particle filter: Kalman cross-check, parameter learning, determinism, bad inputs."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from filterpy.kalman import KalmanFilter
+
+from prognostics.degradation_models import linear_wear_model, paris_crack_model
+from prognostics.measurement import MeasurementModel
+from prognostics.particle_filter import ParticleFilter
+
+Q, R, M0, P0, USAGE = 0.04, 0.25, 0.0, 1.0, 1.0
+
+
+def _linear_gaussian_pf(n: int, seed: int, **kwargs: object) -> ParticleFilter:
+    """x_{k+1} = x_k + u + w, w ~ N(0, Q); y = x + v, v ~ N(0, R)."""
+    process = linear_wear_model(1.0, process_noise_std=math.sqrt(Q))
+    meas = MeasurementModel("poly", [0.0], [math.sqrt(R)], coef=[0.0, 1.0])
+    pf = ParticleFilter(process, meas, n, np.random.default_rng(seed), **kwargs)
+    pf.reset(lambda rng, k: rng.normal(M0, math.sqrt(P0), k), 1.0)
+    return pf
+
+
+@pytest.mark.parametrize("kernel", ["epanechnikov", "gaussian"])
+def test_matches_kalman_filter_on_linear_gaussian_random_walk(kernel: str) -> None:
+    kf = KalmanFilter(dim_x=1, dim_z=1)
+    kf.x = np.array([[M0]])
+    kf.P = np.array([[P0]])
+    kf.F = np.array([[1.0]])
+    kf.B = np.array([[1.0]])
+    kf.H = np.array([[1.0]])
+    kf.Q = np.array([[Q]])
+    kf.R = np.array([[R]])
+    pf = _linear_gaussian_pf(5000, seed=1, kernel=kernel)
+    data_rng = np.random.default_rng(123)
+    x_true = M0
+    for _ in range(30):
+        x_true += USAGE + math.sqrt(Q) * data_rng.standard_normal()
+        y = x_true + math.sqrt(R) * data_rng.standard_normal()
+        kf.predict(u=np.array([[USAGE]]))
+        kf.update(np.array([[y]]))
+        pf.step(USAGE, y)
+        est = pf.estimate()
+        kf_mean, kf_std = float(kf.x[0, 0]), math.sqrt(float(kf.P[0, 0]))
+        assert abs(est.x_mean - kf_mean) < 3.0 * kf_std / math.sqrt(est.ess)
+        assert est.x_std == pytest.approx(kf_std, rel=0.08)
+    assert pf.n_resamples > 0
+
+
+def test_learns_growth_multiplier_from_wrong_prior() -> None:
+    depth = np.linspace(1e-4, 2e-3, 120)
+    rate = 1e-7 * (depth / 1e-4) ** 1.125
+    process = paris_crack_model(depth, rate, process_noise_std_m=2e-7, log_theta_noise_std=0.002)
+    levels = np.linspace(0.0, 2e-3, 9)
+    meas = MeasurementModel(
+        "pchip", [0.0], [0.01], knots=levels, values=levels / 1e-3, slopes=np.full(9, 1e3)
+    )
+    pf = ParticleFilter(process, meas, 2000, np.random.default_rng(4))
+    pf.reset(lambda rng, k: rng.normal(1.5e-4, 1e-5, k), lambda rng, k: rng.lognormal(0, 0.5, k))
+    prior_theta = pf.estimate().theta_mean
+    theta_true, a_true = 2.0, 1.5e-4
+    data_rng = np.random.default_rng(9)
+    for _ in range(400):
+        a_true += theta_true * float(np.interp(a_true, depth, rate))
+        pf.step(1.0, meas.sample(np.array([a_true]), data_rng)[0])
+    est = pf.estimate()
+    assert abs(est.theta_mean - theta_true) < 0.3 * abs(prior_theta - theta_true)
+    assert abs(est.x_mean - a_true) < 3.0 * 0.01e-3 + 3.0 * est.x_std
+
+
+def test_same_seed_same_particles() -> None:
+    runs = []
+    for _ in range(2):
+        pf = _linear_gaussian_pf(300, seed=5)
+        for y in [1.2, 1.8, 3.3, np.nan, 5.1]:
+            pf.step(USAGE, y)
+        runs.append((pf.x.copy(), pf.theta.copy(), pf.weights.copy()))
+    for a, b in zip(*runs, strict=True):
+        np.testing.assert_array_equal(a, b)
+
+
+def test_nan_measurement_keeps_weights_and_update_normalises() -> None:
+    pf = _linear_gaussian_pf(200, seed=2)
+    pf.predict(USAGE)
+    before = pf.weights.copy()
+    assert pf.update(float("nan")) is False
+    np.testing.assert_array_equal(pf.weights, before)
+    pf.update(1.1)
+    assert pf.weights.sum() == pytest.approx(1.0)
+    assert 1.0 <= pf.ess <= 200.0
+
+
+def test_shrinkage_regularisation_keeps_mean_and_variance() -> None:
+    pf = _linear_gaussian_pf(20000, seed=3, resample_threshold=1.0)
+    pf.predict(USAGE)
+    x, w = pf.x.copy(), pf.weights.copy()
+    # weights from a measurement, computed independently
+    logw = -0.5 * (2.0 - x) ** 2 / R
+    w = np.exp(logw - logw.max())
+    w /= w.sum()
+    mean, var = w @ x, w @ (x - w @ x) ** 2
+    assert pf.update(2.0) is True
+    est = pf.estimate()
+    assert est.x_mean == pytest.approx(mean, abs=4.0 * math.sqrt(var / 20000))
+    assert est.x_std**2 == pytest.approx(var, rel=0.05)
+
+
+def test_bad_inputs_raise() -> None:
+    process = linear_wear_model(1.0)
+    meas = MeasurementModel("poly", [0.0], [1.0], coef=[0.0, 1.0])
+    rng = np.random.default_rng(0)
+    for kwargs in (
+        {"n_particles": 1},
+        {"n_particles": 10.5},
+        {"resample_threshold": 0.0},
+        {"kernel": "box"},
+        {"resampler": "bogus"},
+    ):
+        args = {"n_particles": 10, **kwargs}
+        with pytest.raises(ValueError):
+            ParticleFilter(process, meas, args.pop("n_particles"), rng, **args)
+    with pytest.raises(ValueError, match="rng"):
+        ParticleFilter(process, meas, 10, np.random.RandomState(0))  # type: ignore[arg-type]
+    pf = ParticleFilter(process, meas, 10, rng)
+    with pytest.raises(RuntimeError, match="reset"):
+        pf.predict(1.0)
+    with pytest.raises(ValueError, match="theta0"):
+        pf.reset(0.0, -1.0)
+    pf.reset(0.0, 1.0)
+    with pytest.raises(ValueError, match="usage"):
+        pf.predict(-1.0)
+    with pytest.raises(ValueError, match="finite"):
+        pf.update(float("inf"))

@@ -1,0 +1,154 @@
+"""RUL: tabulated integral vs step-by-step simulation and quadrature, risk, quantiles, errors."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from scipy.integrate import quad
+from scipy.stats import norm
+
+from prognostics.degradation_models import TabulatedRateModel, linear_wear_model, paris_crack_model
+from prognostics.rul import (
+    HazardZone,
+    predict_rul,
+    probability_of_failure,
+    rul_summary,
+    summarize_rul,
+    weighted_quantile,
+)
+
+DEPTH = np.concatenate([np.linspace(1e-4, 5e-4, 30), np.linspace(5.2e-4, 1.2e-3, 25)])
+RATE = 1e-7 * (DEPTH / 1e-4) ** 1.125  # Paris-like, non-uniform grid
+H = 1.0e-3
+
+
+def _paris() -> TabulatedRateModel:
+    return paris_crack_model(DEPTH, RATE)
+
+
+def test_damage_integral_matches_quadrature_and_inverts() -> None:
+    model = _paris()
+    x = np.array([5e-5, 1e-4, 1.37e-4, 5.1e-4, 9.99e-4, 1.3e-3])
+
+    def g(z: float) -> float:
+        return float(np.interp(z, DEPTH, RATE))
+
+    ref = [
+        quad(
+            lambda z: 1.0 / g(z),
+            1e-4,
+            xi,
+            points=DEPTH[(min(xi, 1e-4) < DEPTH) & (xi > DEPTH)],
+            limit=200,
+            epsabs=0.0,
+            epsrel=1e-11,
+        )[0]
+        for xi in x
+    ]
+    np.testing.assert_allclose(model.damage(x), ref, rtol=1e-9)
+    np.testing.assert_allclose(model.inverse_damage(model.damage(x)), x, rtol=1e-12)
+
+
+def test_tabulated_rul_equals_step_by_step_simulation() -> None:
+    model = _paris()
+    rng = np.random.default_rng(0)
+    x = rng.uniform(1.2e-4, 9.5e-4, 300)
+    theta = rng.lognormal(0.0, 0.3, 300)
+    exact = predict_rul(x, theta, model, HazardZone(H))
+    steps = model.simulate_steps_to_threshold(x, theta, H, 1.0)
+    # Euler lags the exact solution of a growing rate by ~1/2 ln(g(H)/g(x)) steps (< 1 here)
+    lag = 0.5 * np.log(np.interp(H, DEPTH, RATE) / np.interp(x, DEPTH, RATE))
+    assert np.all(steps >= exact)
+    assert np.all(steps - exact <= 1.0 + lag)
+
+
+def test_linear_wear_rul_is_closed_form_and_euler_exact_within_one_step() -> None:
+    model = linear_wear_model(2.0e-9)
+    x = np.array([0.0, 1.0e-6, 3.1e-6, 3.0e-6, 4.0e-6])
+    theta = np.array([1.0, 0.5, 2.0, 1.0, 1.0])
+    rul = predict_rul(x, theta, model, HazardZone(3.0e-6), usage_per_step=1.5)
+    expected = np.maximum(3.0e-6 - x, 0.0) / (theta * 2.0e-9 * 1.5)
+    np.testing.assert_allclose(rul, expected, rtol=1e-12)
+    assert rul[2] == 0.0 and rul[3] == 0.0 and rul[4] == 0.0  # at or past the threshold
+    steps = model.simulate_steps_to_threshold(x, theta, 3.0e-6, 1.5)
+    assert np.all((steps - 1 - 1e-9 <= rul) & (rul <= steps + 1e-9))
+
+
+def test_probability_of_failure_matches_independent_numpy() -> None:
+    rng = np.random.default_rng(1)
+    x = rng.uniform(0.0, 3.0e-6, 500)
+    theta = rng.lognormal(0.0, 0.2, 500)
+    w = rng.random(500)
+    w /= w.sum()
+    model = linear_wear_model(2.0e-9)
+    horizon, usage = 400.0, 1.5
+    rul_np = (3.0e-6 - x) / (theta * 2.0e-9 * usage)
+    expected = np.sum(w[rul_np <= horizon])
+    summary = rul_summary(
+        x, theta, w, model, HazardZone(3.0e-6), horizon_steps=horizon, usage_per_step=usage
+    )
+    assert summary.prob_failure == pytest.approx(expected, abs=1e-12)
+    assert summary.mean == pytest.approx(np.average(rul_np, weights=w), rel=1e-12)
+    # Gaussian hazard zone: x_i(h) = x_i + theta_i r h u, P = sum w Phi((x_i(h) - mu) / sigma)
+    zone = HazardZone(3.0e-6, 0.2e-6)
+    exact = np.sum(w * norm.cdf((x + theta * 2.0e-9 * horizon * usage - 3.0e-6) / 0.2e-6))
+    p = probability_of_failure(x, theta, w, model, zone, horizon, usage)
+    assert p == pytest.approx(exact, rel=1e-10)
+    # sampled thresholds reproduce it in distribution (Monte Carlo, 40 repeats)
+    mc = np.mean(
+        [w @ (predict_rul(x, theta, model, zone, usage, rng) <= horizon) for _ in range(40)]
+    )
+    assert mc == pytest.approx(exact, abs=0.02)
+
+
+def test_weighted_quantile_matches_numpy_inverted_cdf() -> None:
+    v = np.random.default_rng(2).normal(size=101)
+    q = np.array([0.013, 0.05, 0.37, 0.5, 0.95, 1.0])
+    np.testing.assert_array_equal(
+        weighted_quantile(v, np.ones(101), q), np.quantile(v, q, method="inverted_cdf")
+    )
+    # integer weights = repeated samples
+    counts = np.array([1, 3, 2, 5])
+    vals = np.array([4.0, 1.0, 3.0, 2.0])
+    np.testing.assert_array_equal(
+        weighted_quantile(vals, counts.astype(float), q),
+        np.quantile(np.repeat(vals, counts), q, method="inverted_cdf"),
+    )
+
+
+def test_summary_values_by_hand() -> None:
+    # rul 10, 20, 30, 40 with weights 0.1, 0.2, 0.3, 0.4: mean 30, var 100, CDF .1 .3 .6 1
+    s = summarize_rul(
+        np.array([40.0, 10.0, 30.0, 20.0]),
+        np.array([0.4, 0.1, 0.3, 0.2]),
+        horizon_steps=25.0,
+        low_quantile=0.2,
+        high_quantile=0.9,
+    )
+    assert (s.mean, s.std, s.median, s.low, s.high) == pytest.approx((30.0, 10.0, 30.0, 20.0, 40.0))
+    assert s.prob_failure == pytest.approx(0.3)
+
+
+def test_bad_inputs_raise() -> None:
+    model = linear_wear_model(1.0)
+    x, th, w = np.array([0.0, 1.0]), np.array([1.0, 1.0]), np.array([0.5, 0.5])
+    with pytest.raises(ValueError, match="std"):
+        HazardZone(1.0, -0.1)
+    with pytest.raises(ValueError, match="rng"):
+        predict_rul(x, th, model, HazardZone(5.0, 1.0))
+    with pytest.raises(ValueError, match="usage_per_step"):
+        predict_rul(x, th, model, HazardZone(5.0), usage_per_step=0.0)
+    with pytest.raises(ValueError, match="theta"):
+        predict_rul(x, np.array([1.0, -1.0]), model, HazardZone(5.0))
+    with pytest.raises(ValueError, match="horizon"):
+        probability_of_failure(x, th, w, model, HazardZone(5.0), -1.0)
+    with pytest.raises(ValueError, match="quantile"):
+        summarize_rul(x, w, horizon_steps=1.0, low_quantile=0.7)
+    with pytest.raises(ValueError, match="weights"):
+        summarize_rul(x, np.array([0.5, -0.5]), horizon_steps=1.0)
+    with pytest.raises(ValueError, match="increasing"):
+        TabulatedRateModel(np.array([1.0, 0.0]), np.array([1.0, 1.0]))
+    with pytest.raises(ValueError, match="rate"):
+        TabulatedRateModel(np.array([0.0, 1.0]), np.array([1.0, 0.0]))
+    with pytest.raises(ValueError, match="max_steps"):
+        model.simulate_steps_to_threshold(x, th, 100.0, 1.0, max_steps=10)
