@@ -23,15 +23,19 @@ bias), a run's operating conditions and a health state into the
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 
 from scas_env.params import ScasParams
-from scas_env.physics.actuator import ActuatorConfig
+from scas_env.physics.actuator import RK4_STABILITY_LIMIT, ActuatorConfig
 from scas_env.physics.fluid import dynamic_viscosity
 from scas_env.physics.seal import leakage_coefficients
 from scas_env.physics.spring import spring_rate_n_per_m
 from scas_env.uncertainty import RunConditions, UnitSample, nominal_conditions, nominal_unit
+
+#: Substeps used to build a config before the stable number is known (always stable).
+MAX_SUBSTEPS = 64
 
 #: Index of the spring that carries the crack (spring 0, the one compressed for x > 0).
 CRACKED_SPRING = 0
@@ -113,7 +117,7 @@ def actuator_config(
     fluid = conditions.fluid_params(params.fluid)
     k_i1, k_i2 = leakage_at(params, health.seal_wear_m, fluid.temperature_c)
     delta0 = params.spring.installed_compression_m
-    return ActuatorConfig.from_params(
+    config = ActuatorConfig.from_params(
         params,
         spring_rates_n_m=spring_rates_n_m(params, unit, health.crack_depth_m),
         installed_compressions_m=(delta0, delta0),
@@ -123,4 +127,20 @@ def actuator_config(
         air_fraction=fluid.air_fraction,
         supply_pressure_pa=fluid.supply_pressure_pa,
         null_bias_a=unit.null_bias_a,
+        substeps=MAX_SUBSTEPS,
     )
+    return with_stable_substeps(config)
+
+
+def with_stable_substeps(config: ActuatorConfig) -> ActuatorConfig:
+    """``config`` with the fewest RK4 substeps per step that keep the integration stable.
+
+    Worn seals add a fast chamber-equalisation mode (time constant V_0 / (E K_i)); past
+    about 20 um of wear it is faster than one default step can follow, so the step is
+    split instead of refusing the health state. Healthy and mildly worn units keep one.
+    """
+    bound = config.stiffness_bound_rad_s() * config.dt_s
+    substeps = max(1, math.ceil(bound / (0.9 * RK4_STABILITY_LIMIT)))
+    if substeps == config.substeps:
+        return config
+    return dataclasses.replace(config, substeps=substeps)

@@ -54,7 +54,7 @@ GROUND_TEST_REGIME = -1
 
 #: Pre-flight test levels in units of ``MissionParams.test_step_m``; the first is the
 #: leading rest segment.
-PREFLIGHT_LEVELS = (0.0, 0.5, 1.0, 0.0, -0.5, -1.0, 0.0)
+PREFLIGHT_LEVELS = (0.0, 0.25, 1.0, 0.0, -1.0, 0.0)
 
 DEFAULT_SEGMENT_S = 5.0
 DEFAULT_CROSSFADE_S = 0.2
@@ -217,15 +217,18 @@ def _check_positive(name: str, value: float) -> float:
 def preflight_test_command(mission: MissionParams, sample_rate_hz: float) -> MissionProfile:
     """Deterministic on-ground pre-flight test command (see the module docstring).
 
-    Levels ``PREFLIGHT_LEVELS x test_step_m``: 0, +s/2, +s, 0, -s/2, -s, 0 (the first 0 is
-    the leading rest), each for ``test_dwell_s``; step k covers samples
-    ``round(k T fs) : round((k+1) T fs)``. Pilot command zero. Duration ``7 test_dwell_s``.
+    Levels ``PREFLIGHT_LEVELS x test_step_m``: 0, +s/4, +s, 0, -s, 0 (the first 0 is the
+    leading rest), each for ``test_dwell_s``; step k covers samples
+    ``round(k T fs) : round((k+1) T fs)``. Pilot command zero. Duration ``6 test_dwell_s``.
+    The profile is deliberately asymmetric (a small positive step): a spring crack shows as
+    a constant null-bias current, which cancels in a current/displacement ratio averaged
+    over symmetric plateaus; the s/4 plateau keeps it visible in G3 (mean 1/x = 0.67/s).
 
     Examples
     --------
     >>> p = preflight_test_command(MissionParams(), 1000.0)
     >>> p.duration_s, [s.level_m for s in p.steps]
-    (3.5, [0.0, 0.001, 0.002, 0.0, -0.001, -0.002, 0.0])
+    (3.0, [0.0, 0.0005, 0.002, 0.0, -0.002, 0.0])
     """
     _check_mission(mission)
     fs = _check_rate(sample_rate_hz)

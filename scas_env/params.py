@@ -90,7 +90,13 @@ class ServovalveParams(Validated):
     )
     damping_ratio: float = param(0.7, "-", lo=0.0, hi=5.0, lo_open=True, source="ref §9 [A]")
     leakage_coeff_m3_s_pa: float = param(
-        1e-13, "m^3/(s Pa)", lo=0.0, hi=1e-9, source="valve pressure sensitivity K_c, ref §9 [B]"
+        1e-12,
+        "m^3/(s Pa)",
+        lo=0.0,
+        hi=1e-9,
+        source="valve flow-pressure coefficient K_c of a wide-null SCAS valve (pressure gain "
+        "K_q/K_c = 2.9e9 Pa/A) [B]; sets how much null-bias current a spring bias force needs: "
+        "11 uA at the critical crack (1.4 uA with 1e-13, ref §9), see README calibration",
     )
     laminar_transition_pa: float = param(
         2e5,
@@ -396,7 +402,12 @@ class UncertaintyParams(Validated):
         0.002, "-", lo=0.0, hi=0.1, source="0.005 +- 0.002, truncated at 0 (ref §9)"
     )
     null_bias_sigma_a: float = param(
-        0.1e-3, "A", lo=0.0, hi=0.01, source="servovalve null bias 0 +- 0.1 mA, ref §9 [B]"
+        0.01e-3,
+        "A",
+        lo=0.0,
+        hi=0.01,
+        source="residual servovalve null bias after rigging at installation, 1% of the "
+        "0.1 mA manufacturing spread of ref §9 [B]",
     )
     paris_c_log_sigma: float = param(
         0.3, "-", lo=0.0, hi=3.0, source="log-normal unit scatter of Paris C [B]"

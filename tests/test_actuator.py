@@ -217,7 +217,10 @@ def test_null_bias_current_is_cancelled_by_the_loop() -> None:
     c = _cfg(null_bias_a=0.1e-3)
     run = simulate(c, np.zeros(600), rng=None, noise=False)
     x_ss, i_ss = _static_solution(c, 0.0)
-    assert i_ss == pytest.approx(-0.1e-3, rel=0.01)
+    # the loop cancels the bias up to the current the spring load at the offset x_ss needs
+    # through the valve's flow-pressure coefficient (a few % with K_c = 1e-12)
+    assert i_ss == pytest.approx(-0.1e-3, rel=0.03)
+    assert abs(i_ss) < 0.1e-3
     assert float(np.mean(run.current_a[-100:])) == pytest.approx(i_ss, rel=1e-4)
     assert run.position_m[-1] == pytest.approx(x_ss, rel=1e-4)
 
@@ -228,7 +231,7 @@ def test_step_settles_within_closed_form_error() -> None:
     run = simulate(c, cmd, rng=None, noise=False)
     x_ss, _ = _static_solution(c, 1e-3)
     e_ss = 1e-3 - x_ss
-    assert 1e-7 < e_ss < 1e-5  # P loop with a spring load: small positive error
+    assert 1e-7 < e_ss < 3e-5  # P loop with a spring load: small positive error
     assert 1e-3 - run.position_m[-1] == pytest.approx(e_ss, rel=1e-3)
     # mid-way response: velocity-limited first-order loop, settled after ~10 time constants
     assert run.position_m[60] < 0.9e-3 < run.position_m[200]

@@ -31,11 +31,11 @@ FS = 200.0  # Hz, fast but well above the 2 Hz Table-1 maximum
 def test_preflight_plateaus_and_duration(step_m: float, dwell_s: float, fs: float) -> None:
     mission = MissionParams(test_step_m=step_m, test_dwell_s=dwell_s)
     prof = preflight_test_command(mission, fs)
-    expected_levels = [0.0, step_m / 2, step_m, 0.0, -step_m / 2, -step_m, 0.0]
+    expected_levels = [0.0, step_m / 4, step_m, 0.0, -step_m, 0.0]
     assert [s.level_m for s in prof.steps] == pytest.approx(expected_levels, abs=1e-15)
     # duration: leading rest + 6 steps, each dwell long
-    assert prof.duration_s == pytest.approx(7 * dwell_s, abs=0.5 / fs)
-    assert prof.n_samples == round(7 * dwell_s * fs)
+    assert prof.duration_s == pytest.approx(6 * dwell_s, abs=0.5 / fs)
+    assert prof.n_samples == round(6 * dwell_s * fs)
     # steps tile the record and hold their level exactly
     assert prof.steps[0].start_index == 0
     assert prof.steps[-1].stop_index == prof.n_samples

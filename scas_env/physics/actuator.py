@@ -257,6 +257,7 @@ class ActuatorConfig:
         supply_pressure_pa: float | None = None,
         null_bias_a: float = 0.0,
         supply_noise_bandwidth_hz: float = SUPPLY_NOISE_BANDWIDTH_HZ,
+        substeps: int = 1,
     ) -> ActuatorConfig:
         """Config of one run from the design parameters and the per-run values.
 
@@ -328,6 +329,7 @@ class ActuatorConfig:
             lvdt_noise_m=sn.lvdt_noise_m,
             sample_rate_hz=sn.sample_rate_hz,
             dt_s=sn.sim_dt_s,
+            substeps=substeps,
         )
 
     @property
