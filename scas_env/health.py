@@ -140,7 +140,7 @@ def with_stable_substeps(config: ActuatorConfig) -> ActuatorConfig:
     split instead of refusing the health state. Healthy and mildly worn units keep one.
     """
     bound = config.stiffness_bound_rad_s() * config.dt_s
-    substeps = max(1, math.ceil(bound / (0.9 * RK4_STABILITY_LIMIT)))
+    substeps = max(1, math.ceil(bound / RK4_STABILITY_LIMIT))
     if substeps == config.substeps:
         return config
     return dataclasses.replace(config, substeps=substeps)

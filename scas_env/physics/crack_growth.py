@@ -117,6 +117,14 @@ class CycleSpectrum:
             raise ValueError(f"factor = {factor} must be a finite number >= 0")
         return CycleSpectrum(self.ranges, self.means, self.counts * factor, self.unit)
 
+    def scaled_values(self, factor: float) -> CycleSpectrum:
+        """Ranges and means multiplied by ``factor`` > 0 (same counts), e.g. a load that
+        scales with a spring rate."""
+        factor = float(factor)
+        if not math.isfinite(factor) or factor <= 0.0:
+            raise ValueError(f"factor = {factor} must be a finite number > 0")
+        return CycleSpectrum(self.ranges * factor, self.means * factor, self.counts, self.unit)
+
     @staticmethod
     def concatenate(spectra: Sequence[CycleSpectrum]) -> CycleSpectrum:
         """One block made of several spectra (e.g. pre-flight test + flight), same unit."""

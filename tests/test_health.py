@@ -1,0 +1,78 @@
+"""Health state -> actuator configuration (faults seen by the integrator)."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+from scas_env.health import HealthState, actuator_config, leakage_at, spring_rates_n_m
+from scas_env.params import ScasParams
+from scas_env.physics.actuator import simulate
+from scas_env.physics.spring import spring_rate_n_per_m
+from scas_env.uncertainty import draw_unit, nominal_unit
+
+P = ScasParams()
+
+
+def test_healthy_nominal_unit_is_symmetric() -> None:
+    cfg = actuator_config(P)
+    assert cfg.spring_rate_1_n_m == cfg.spring_rate_2_n_m == pytest.approx(P.spring.rate_n_per_m)
+    assert cfg.spring_bias_force_n == pytest.approx(0.0, abs=1e-9)
+    assert cfg.substeps == 1
+
+
+def test_unit_geometry_and_crack_reach_the_springs() -> None:
+    unit = draw_unit(P, np.random.default_rng(3))
+    k0, k1 = spring_rates_n_m(P, unit, 0.4e-3)
+    assert k0 == pytest.approx(
+        spring_rate_n_per_m(
+            0.4e-3,
+            shear_modulus_pa=P.spring.shear_modulus_pa,
+            wire_diameter_m=unit.wire_diameter_m[0],
+            coil_diameter_m=unit.mean_coil_diameter_m[0],
+            active_coils=P.spring.active_coils,
+        )
+    )
+    cfg = actuator_config(P, unit=unit, health=HealthState(crack_depth_m=0.4e-3))
+    assert (cfg.spring_rate_1_n_m, cfg.spring_rate_2_n_m) == pytest.approx((k0, k1))
+    assert cfg.null_bias_a == unit.null_bias_a
+
+
+def test_crack_bias_force_and_null_bias_current_grow_with_depth() -> None:
+    # paper Fig. 7a: a weaker spring (same installed compression) needs a growing,
+    # same-sign null-bias current at zero command
+    unit = nominal_unit(P)
+    biases, currents = [], []
+    for depth in (0.0, 0.25e-3, 0.5e-3, 0.75e-3):
+        cfg = actuator_config(P, unit=unit, health=HealthState(crack_depth_m=depth))
+        delta0 = P.spring.installed_compression_m
+        expected = (cfg.spring_rate_1_n_m - cfg.spring_rate_2_n_m) * delta0
+        assert cfg.spring_bias_force_n == pytest.approx(expected, abs=1e-9)
+        run = simulate(cfg, np.zeros(500), rng=None, noise=False)
+        biases.append(cfg.spring_bias_force_n)
+        currents.append(float(np.mean(run.current_a[-100:])))
+    assert np.all(np.diff(biases) < 0.0)
+    assert currents[0] == pytest.approx(0.0, abs=1e-12)
+    assert np.all(np.diff(currents) < 0.0)
+
+
+def test_seal_wear_raises_leakage_and_adds_substeps_when_needed() -> None:
+    k_new = leakage_at(P, 0.0, 40.0)
+    k_worn = leakage_at(P, 20e-6, 40.0)
+    assert k_worn[0] > 10 * k_new[0] and k_worn[1] > 0.0 == k_new[1]
+    worn = actuator_config(P, health=HealthState(seal_wear_m=30e-6))
+    assert worn.substeps > 1
+    h = worn.dt_s / worn.substeps
+    assert worn.stiffness_bound_rad_s() * h <= 2.78
+    assert dataclasses.replace(worn, substeps=worn.substeps).substeps == worn.substeps
+
+
+def test_bad_health_raises() -> None:
+    with pytest.raises(ValueError, match="crack_depth_m"):
+        HealthState(crack_depth_m=-1e-6)
+    with pytest.raises(ValueError, match="seal_wear_m"):
+        HealthState(seal_wear_m=float("nan"))
+    with pytest.raises(ValueError, match="wire"):
+        actuator_config(P, health=HealthState(crack_depth_m=3e-3))
