@@ -41,6 +41,7 @@ __all__ = [
     "CONDITIONS",
     "FAULT_MODES",
     "FORMAT",
+    "ID_COLUMNS",
     "RUN_COLUMNS",
     "CampaignResult",
     "campaign_columns",
@@ -171,6 +172,16 @@ class CampaignResult:
             means = [float(np.mean(self.table[f][rows])) for f in features]
             out.append((str(mode), int(level), float(self.table["severity"][rows][0]), means))
         return out
+
+    def summary(self, features: Sequence[str] = ("G3", "I2", "I6")) -> str:
+        """Text table of :meth:`level_means` for the ``features`` present in the table."""
+        present = [f for f in features if f in self.table]
+        lines = [" ".join([f"{'mode':<6}", f"{'level':>5}", f"{'s':>6}"])]
+        lines[0] += "".join(f"{f:>13}" for f in present)
+        for mode, level, severity, means in self.level_means(present):
+            cells = "".join(f"{m:>13.5g}" for m in means)
+            lines.append(f"{mode:<6} {level:>5} {severity:>6.3f}{cells}")
+        return "\n".join(lines)
 
     def to_csv(self, path: str | os.PathLike[str]) -> str:
         """Write the table as CSV at ``path``; returns the SHA-256 hex digest of the bytes."""

@@ -1,0 +1,243 @@
+"""Calibration of the default actuator: failure thresholds, growth per flight and unit lives.
+
+Everything the fast (surrogate) world and the particle filters need about degradation,
+computed once from the physics and shipped as ``scas_env/data/calibration.json``
+(rebuild: ``python scripts/build_calibration.py``; ``tests/test_calibration.py`` fails
+when the shipped file no longer matches the default parameters):
+
+* the seal failure criterion (critical wear, cut-off frequencies) and the spring failure
+  depth of the nominal unit;
+* the crack growth per flight against depth at the nominal Paris constant, from the
+  Table-1 load spectrum (``scas_env.degradation``), and the seal wear per flight at the
+  nominal wear rate;
+* the flight-to-flight scatter of both increments (coefficient of variation over simulated
+  flight windows, which differ in regime order, amplitudes and noise).
+
+:func:`sample_lives` draws the flights to failure of random units (their Paris C, initial
+flaw and wear rate) from these tables: the life distribution stated in the README.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import math
+from dataclasses import asdict, dataclass
+from functools import lru_cache
+from importlib import resources
+from pathlib import Path
+
+import numpy as np
+import numpy.typing as npt
+from tqdm.auto import tqdm
+
+from prognostics.degradation_models import paris_crack_model
+from scas_env.degradation import (
+    crack_increment_m,
+    crack_rate_table,
+    flight_loads_from_run,
+    growth_model,
+    load_spectrum_from_physics,
+    wear_increment_m,
+)
+from scas_env.health import actuator_config
+from scas_env.missions import flight_profile, link_force_n
+from scas_env.params import ScasParams
+from scas_env.physics.actuator import simulate
+from scas_env.physics.frequency import seal_criterion
+from scas_env.uncertainty import draw_units, nominal_unit
+
+FloatArray = npt.NDArray[np.float64]
+CALIBRATION_VERSION = 1
+DATA_FILE = "calibration.json"
+
+
+def params_digest(params: ScasParams) -> str:
+    """Stable short hash of every parameter value (detects a stale calibration)."""
+    text = json.dumps(params.to_dict(), sort_keys=True)
+    return hashlib.sha256(text.encode()).hexdigest()[:16]
+
+
+@dataclass(frozen=True, eq=False)
+class Calibration:
+    """Degradation tables of one actuator design (see the module docstring).
+
+    Attributes
+    ----------
+    params_digest : :func:`params_digest` of the parameters it was built from.
+    seed : root seed of the simulations.
+    flight_duration_s : flight duration the per-flight values refer to (s).
+    seal_critical_wear_m : lambda_crit (m), cut-off 10% below healthy.
+    healthy_cutoff_hz, critical_cutoff_hz : cut-off frequencies (Hz).
+    spring_failure_depth_m : failure depth of the nominal spring (m).
+    crack_depth_m, crack_rate_m_per_flight : growth table at the nominal Paris C.
+    crack_dormant_below_m : depth below which no cycle passes the threshold (m).
+    wear_rate_m_per_flight : seal wear per flight at the nominal wear rate (m).
+    crack_cv_depth_m, crack_cv : flight-to-flight coefficient of variation of the crack
+        increment at a few depths.
+    wear_cv : flight-to-flight coefficient of variation of the wear increment.
+    """
+
+    params_digest: str
+    seed: int
+    flight_duration_s: float
+    seal_critical_wear_m: float
+    healthy_cutoff_hz: float
+    critical_cutoff_hz: float
+    spring_failure_depth_m: float
+    crack_depth_m: FloatArray
+    crack_rate_m_per_flight: FloatArray
+    crack_dormant_below_m: float
+    wear_rate_m_per_flight: float
+    crack_cv_depth_m: FloatArray
+    crack_cv: FloatArray
+    wear_cv: float
+    version: int = CALIBRATION_VERSION
+
+    def __post_init__(self) -> None:
+        for name in ("crack_depth_m", "crack_rate_m_per_flight", "crack_cv_depth_m", "crack_cv"):
+            arr = np.array(getattr(self, name), dtype=np.float64)
+            arr.setflags(write=False)
+            object.__setattr__(self, name, arr)
+        if self.version != CALIBRATION_VERSION:
+            raise ValueError(
+                f"calibration version {self.version} is not the supported {CALIBRATION_VERSION}; "
+                "rebuild it with scripts/build_calibration.py"
+            )
+
+    def crack_cv_at(self, depth_m: float | FloatArray) -> FloatArray:
+        """Flight-to-flight CV of the crack increment at ``depth_m`` (log-depth interpolation)."""
+        return np.interp(np.log(depth_m), np.log(self.crack_cv_depth_m), self.crack_cv)
+
+    def to_dict(self) -> dict:
+        out = asdict(self)
+        for key, value in out.items():
+            if isinstance(value, np.ndarray):
+                out[key] = value.tolist()
+        return out
+
+    def save(self, path: str | Path) -> None:
+        Path(path).write_text(json.dumps(self.to_dict(), indent=1) + "\n")
+
+    @classmethod
+    def load(cls, path: str | Path) -> Calibration:
+        data = json.loads(Path(path).read_text())
+        return cls(**data)
+
+
+def build_calibration(
+    params: ScasParams,
+    *,
+    seed: int = 2020,
+    n_windows: int = 30,
+    window_s: float | None = None,
+    spectrum_window_s: float = 120.0,
+    cv_depths_m: tuple[float, ...] = (60e-6, 100e-6, 200e-6, 400e-6, 800e-6),
+    progress: bool = True,
+) -> Calibration:
+    """Compute the calibration of ``params`` from physics (a few seconds with defaults)."""
+    if n_windows < 2:
+        raise ValueError(f"n_windows = {n_windows} must be >= 2 to estimate a scatter")
+    window_s = params.mission.flight_window_s if window_s is None else window_s
+    root = np.random.SeedSequence(seed)
+    spectrum_seq, windows_seq = root.spawn(2)
+    criterion = seal_criterion(params)
+    duration = params.mission.flight_duration_s
+    loads = load_spectrum_from_physics(
+        params, np.random.default_rng(spectrum_seq), window_s=spectrum_window_s
+    ).per_flight(duration)
+    table = crack_rate_table(params, loads)
+    unit = nominal_unit(params)
+    model = growth_model(params, unit)
+    cfg = actuator_config(params)
+    fs = params.sensors.sample_rate_hz
+    depths = np.array([d for d in cv_depths_m if d < table.failure_depth_m])
+    cracks = np.empty((n_windows, depths.size))
+    wears = np.empty(n_windows)
+    for k, seq in enumerate(
+        tqdm(windows_seq.spawn(n_windows), desc="flight windows", disable=not progress)
+    ):
+        rng = np.random.default_rng(seq)
+        prof = flight_profile(params.mission, rng, fs, duration_s=window_s)
+        force = link_force_n(prof.pilot_command_m, params.actuator.link_force_amplitude_n)
+        run = simulate(cfg, prof.scas_command_m, rng=rng, link_force_n=force)
+        window_loads = flight_loads_from_run(run, duration, cfg.spring_rate_1_n_m)
+        cracks[k] = [crack_increment_m(params, unit, model, a, window_loads) for a in depths]
+        wears[k] = wear_increment_m(params, unit, window_loads)
+    crack_cv = cracks.std(axis=0, ddof=1) / cracks.mean(axis=0)
+    return Calibration(
+        params_digest=params_digest(params),
+        seed=seed,
+        flight_duration_s=duration,
+        seal_critical_wear_m=criterion.critical_wear_m,
+        healthy_cutoff_hz=criterion.healthy_cutoff_hz,
+        critical_cutoff_hz=criterion.critical_cutoff_hz,
+        spring_failure_depth_m=table.failure_depth_m,
+        crack_depth_m=table.depth_m,
+        crack_rate_m_per_flight=table.rate_m_per_flight,
+        crack_dormant_below_m=table.dormant_below_m,
+        wear_rate_m_per_flight=wear_increment_m(params, unit, loads),
+        crack_cv_depth_m=depths,
+        crack_cv=crack_cv,
+        wear_cv=float(wears.std(ddof=1) / wears.mean()),
+    )
+
+
+@lru_cache(maxsize=1)
+def default_calibration() -> Calibration:
+    """The shipped calibration of the default :class:`ScasParams`."""
+    text = resources.files("scas_env").joinpath("data", DATA_FILE).read_text()
+    return Calibration(**json.loads(text))
+
+
+def calibration_for(params: ScasParams) -> Calibration:
+    """The shipped calibration if it matches ``params``, else a fresh one from physics."""
+    shipped = default_calibration()
+    if shipped.params_digest == params_digest(params):
+        return shipped
+    return build_calibration(params, progress=False)
+
+
+@dataclass(frozen=True, eq=False)
+class UnitLives:
+    """Flights to failure of random units (no maintenance), from the calibration tables.
+
+    ``spring_flights`` is ``inf`` for a unit whose initial flaw is below the dormant depth.
+    """
+
+    spring_flights: FloatArray
+    seal_flights: FloatArray
+
+    def summary(self) -> dict[str, dict[str, float]]:
+        out = {}
+        for name, life in (("spring", self.spring_flights), ("seal", self.seal_flights)):
+            finite = life[np.isfinite(life)]
+            out[name] = {
+                "mean": float(finite.mean()),
+                "median": float(np.median(finite)),
+                "p10": float(np.quantile(finite, 0.1)),
+                "p90": float(np.quantile(finite, 0.9)),
+                "cv": float(finite.std() / finite.mean()),
+                "never_fails_fraction": float(1.0 - finite.size / life.size),
+            }
+        return out
+
+
+def sample_lives(
+    params: ScasParams, calibration: Calibration, rng: np.random.Generator, n_units: int
+) -> UnitLives:
+    """Flights to failure of ``n_units`` random units (continuous growth, no flight scatter).
+
+    Spring: ``(I(a_f) - I(a_0)) / theta`` with ``I`` the damage integral of the growth
+    table and ``theta = C_unit / C_nom``; seal: ``lambda_crit / (r k_w,unit / k_w,nom)``.
+    """
+    units = draw_units(params, rng, n_units)
+    model = paris_crack_model(calibration.crack_depth_m, calibration.crack_rate_m_per_flight)
+    a0 = np.array([u.initial_crack_m for u in units])
+    theta = np.array([u.paris_c for u in units]) / params.spring.paris_c
+    start = np.maximum(a0, calibration.crack_depth_m[0])
+    spring = model.usage_to_threshold(start, theta, calibration.spring_failure_depth_m)
+    spring = np.where(a0 < calibration.crack_dormant_below_m, math.inf, spring)
+    k_ratio = np.array([u.wear_rate_m3_n_m for u in units]) / params.seal.wear_rate_m3_n_m
+    seal = calibration.seal_critical_wear_m / (calibration.wear_rate_m_per_flight * k_ratio)
+    return UnitLives(np.asarray(spring, dtype=np.float64), seal)

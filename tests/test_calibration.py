@@ -1,0 +1,87 @@
+"""The shipped calibration is current, and unit lives follow from it."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from prognostics.degradation_models import paris_crack_model
+from scas_env.calibration import (
+    build_calibration,
+    default_calibration,
+    params_digest,
+    sample_lives,
+)
+from scas_env.degradation import (
+    crack_increment_m,
+    growth_model,
+    load_spectrum_from_physics,
+)
+from scas_env.params import ScasParams
+from scas_env.uncertainty import nominal_unit
+
+P = ScasParams()
+SHIPPED = default_calibration()
+
+
+def test_shipped_calibration_matches_default_parameters() -> None:
+    assert SHIPPED.params_digest == params_digest(P), (
+        "scas_env/data/calibration.json is stale: run `python scripts/build_calibration.py`"
+    )
+
+
+def test_shipped_calibration_is_reproduced_by_the_physics() -> None:
+    fresh = build_calibration(P, seed=SHIPPED.seed, n_windows=6, progress=False)
+    assert fresh.seal_critical_wear_m == pytest.approx(SHIPPED.seal_critical_wear_m, rel=1e-9)
+    assert fresh.spring_failure_depth_m == pytest.approx(SHIPPED.spring_failure_depth_m)
+    np.testing.assert_allclose(fresh.crack_depth_m, SHIPPED.crack_depth_m, rtol=1e-9)
+    np.testing.assert_allclose(
+        fresh.crack_rate_m_per_flight, SHIPPED.crack_rate_m_per_flight, rtol=1e-9
+    )
+    assert fresh.wear_rate_m_per_flight == pytest.approx(SHIPPED.wear_rate_m_per_flight, rel=1e-9)
+    # the scatter is estimated from few windows here: same order only
+    assert fresh.wear_cv == pytest.approx(SHIPPED.wear_cv, rel=1.0)
+
+
+def test_spring_life_equals_direct_integration_of_paris_law() -> None:
+    # independent route: Euler steps of crack_increment_m on the same load spectrum
+    spectrum_seq = np.random.SeedSequence(SHIPPED.seed).spawn(2)[0]
+    loads = load_spectrum_from_physics(
+        P, np.random.default_rng(spectrum_seq), window_s=120.0
+    ).per_flight(P.mission.flight_duration_s)
+    unit = nominal_unit(P)
+    model = growth_model(P, unit)
+    a, flights = P.spring.initial_crack_m, 0.0
+    while a < SHIPPED.spring_failure_depth_m:
+        da = crack_increment_m(P, unit, model, a, loads)
+        step = max(1.0, min(50.0, 0.01 * a / da))
+        a += step * da
+        flights += step
+    lives = sample_lives(P, SHIPPED, np.random.default_rng(0), 1)
+    table = paris_crack_model(SHIPPED.crack_depth_m, SHIPPED.crack_rate_m_per_flight)
+    exact = table.usage_to_threshold(
+        np.array([P.spring.initial_crack_m]), np.array([1.0]), SHIPPED.spring_failure_depth_m
+    )[0]
+    assert exact == pytest.approx(flights, rel=0.02)
+    assert np.isfinite(lives.spring_flights).all()
+
+
+def test_seal_life_distribution_matches_lognormal_closed_form() -> None:
+    lives = sample_lives(P, SHIPPED, np.random.default_rng(1), 40_000)
+    sigma = P.uncertainty.wear_rate_log_sigma
+    nominal = SHIPPED.seal_critical_wear_m / SHIPPED.wear_rate_m_per_flight
+    # life = nominal / k_ratio with ln k_ratio ~ N(0, sigma^2): E = nominal exp(sigma^2/2)
+    expected_mean = nominal * math.exp(0.5 * sigma**2)
+    se = expected_mean * math.sqrt(math.exp(sigma**2) - 1) / math.sqrt(lives.seal_flights.size)
+    assert lives.seal_flights.mean() == pytest.approx(expected_mean, abs=4 * se)
+    assert np.median(lives.seal_flights) == pytest.approx(nominal, rel=0.02)
+    summary = lives.summary()
+    assert 300 < summary["spring"]["median"] < 3000  # "hundreds to a few thousand flights"
+    assert 300 < summary["seal"]["median"] < 3000
+
+
+def test_bad_inputs_raise() -> None:
+    with pytest.raises(ValueError, match="n_windows"):
+        build_calibration(P, n_windows=1, progress=False)
