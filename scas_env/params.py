@@ -374,11 +374,12 @@ class MissionParams(Validated):
         5400.0, "s", lo=60.0, hi=36000.0, source="1.5 h mission, ref §8.2 [B]"
     )
     flight_window_s: float = param(
-        60.0,
+        20.0,
         "s",
         lo=1.0,
         hi=3600.0,
-        source="simulated representative window; damage scaled to flight_duration_s",
+        source="simulated representative window (all Table-1 regimes in proportion); its "
+        "features are the flight's, its damage is scaled to flight_duration_s (README)",
     )
     amplitude_variation_frac: float = param(
         0.10, "-", lo=0.0, hi=1.0, source="random variation, 10% of amplitude ([DJS20] Table 1)"
