@@ -393,7 +393,7 @@ def flight_profile(
     --------
     >>> p = flight_profile(MissionParams(), np.random.default_rng(0), 1000.0)
     >>> p.duration_s, p.regime_fraction
-    (60.0, (0.02, 0.6, 0.3, 0.08))
+    (20.0, (0.02, 0.6, 0.3, 0.08))
     """
     _check_mission(mission, rng)
     fs = _check_rate(sample_rate_hz, 2.0 * _MAX_FREQUENCY_HZ)

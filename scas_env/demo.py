@@ -1,0 +1,183 @@
+"""Demonstration run: the actuator at three health states, signals to CSV, overlays to PNG.
+
+For each health state (default: healthy; a spring crack at 50% of the failure depth; seal
+wear at 80% of the critical wear) the nominal unit at nominal conditions runs
+
+* ``preflight``: the on-ground pre-flight test (:func:`scas_env.missions.preflight_test_command`);
+* ``flight``: a Table-1 in-flight window of ``window_s`` seconds
+  (:func:`scas_env.missions.flight_profile`, link force from the pilot command),
+
+with sensor and supply noise on. Seeding: ``SeedSequence(seed).spawn(1 + n_states)``; the
+first child draws the flight command, shared by every state so the overlays compare like with
+like; child ``1 + k`` drives the noise of state ``k``. One CSV per (state, condition) with the
+columns :data:`CSV_COLUMNS`, one PNG per condition overlaying the states.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from collections.abc import Mapping
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+from tqdm import tqdm
+
+from scas_env.health import HealthState, actuator_config
+from scas_env.missions import MissionProfile, flight_profile, link_force_n, preflight_test_command
+from scas_env.params import ScasParams
+from scas_env.physics.actuator import ActuatorRun, simulate
+from scas_env.physics.frequency import critical_seal_wear_m
+from scas_env.physics.spring import failure_depth_from_params
+from scas_env.plotting import plot_demo_condition
+
+#: Signals written to each CSV, in order (SI units: s, m, A, Pa).
+CSV_COLUMNS = (
+    "t_s",
+    "command_m",
+    "current_a",
+    "lvdt_m",
+    "position_m",
+    "pressure_a_pa",
+    "pressure_b_pa",
+)
+CONDITIONS = ("preflight", "flight")
+DEFAULT_WINDOW_S = 20.0
+
+
+def default_health_states(params: ScasParams) -> dict[str, HealthState]:
+    """Healthy, a crack at 50% of the failure depth, seal wear at 80% of the critical wear."""
+    return {
+        "healthy": HealthState(),
+        "crack_50pct": HealthState(crack_depth_m=0.5 * failure_depth_from_params(params).depth_m),
+        "wear_80pct": HealthState(seal_wear_m=0.8 * critical_seal_wear_m(params)),
+    }
+
+
+@dataclass(frozen=True)
+class DemoRow:
+    """Summary of one (state, condition) run: mean current (A), RMS true position (m)."""
+
+    state: str
+    condition: str
+    mean_current_a: float
+    rms_position_m: float
+    csv_path: Path
+
+
+@dataclass(frozen=True)
+class DemoSummary:
+    """Rows per (state, condition) and the overlay PNG of each condition."""
+
+    rows: tuple[DemoRow, ...]
+    png_paths: tuple[Path, ...]
+
+    def format_table(self) -> str:
+        """Plain-text table of the rows (current in uA, position in mm)."""
+        lines = [f"{'state':<14}{'condition':<11}{'mean i (uA)':>13}{'rms x (mm)':>12}"]
+        for r in self.rows:
+            lines.append(
+                f"{r.state:<14}{r.condition:<11}{r.mean_current_a * 1e6:>13.3f}"
+                f"{r.rms_position_m * 1e3:>12.4f}"
+            )
+        return "\n".join(lines)
+
+
+def write_run_csv(run: ActuatorRun, path: str | os.PathLike[str]) -> None:
+    """Write the :data:`CSV_COLUMNS` signals of ``run`` to ``path`` (header row, 10 digits)."""
+    table = np.column_stack([getattr(run, name) for name in CSV_COLUMNS])
+    np.savetxt(path, table, fmt="%.10g", delimiter=",", header=",".join(CSV_COLUMNS), comments="")
+
+
+def _check_run(seed: int, window_s: float) -> None:
+    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
+        raise ValueError(f"seed = {seed!r} must be an integer >= 0")
+    if not (math.isfinite(window_s) and window_s > 0.0):
+        raise ValueError(f"window_s = {window_s} s must be finite and > 0")
+
+
+def _check_states(health_states: Mapping[str, HealthState]) -> None:
+    if not health_states:
+        raise ValueError("health_states must hold at least one state")
+    for name, state in health_states.items():
+        if not isinstance(state, HealthState) or not name or "/" in name or os.sep in name:
+            raise ValueError(
+                f"health_states[{name!r}] must be a HealthState under a non-empty name "
+                "usable as a file name"
+            )
+
+
+def _run_condition(
+    params: ScasParams,
+    health: HealthState,
+    profile: MissionProfile,
+    rng: np.random.Generator,
+) -> ActuatorRun:
+    force = link_force_n(profile.pilot_command_m, params.actuator.link_force_amplitude_n)
+    config = actuator_config(params, health=health)
+    return simulate(config, profile.scas_command_m, rng=rng, link_force_n=force)
+
+
+def run_demo(
+    params: ScasParams,
+    out_dir: str | os.PathLike[str],
+    seed: int,
+    health_states: Mapping[str, HealthState] | None = None,
+    *,
+    window_s: float = DEFAULT_WINDOW_S,
+    progress: bool = True,
+) -> DemoSummary:
+    """Simulate the pre-flight test and a flight window per health state; save CSV and PNG.
+
+    Parameters
+    ----------
+    params : design parameters (nominal unit, nominal conditions).
+    out_dir : output folder, created if missing. Files: ``<state>_<condition>.csv`` and
+        ``<condition>.png`` for condition in :data:`CONDITIONS`.
+    seed : root seed (>= 0); same seed, same files byte for byte.
+    health_states : name -> HealthState; default :func:`default_health_states`.
+    window_s : length of the flight window (s).
+    progress : show a tqdm bar over the states.
+    """
+    _check_run(seed, window_s)
+    states = default_health_states(params) if health_states is None else dict(health_states)
+    _check_states(states)
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    fs = params.sensors.sample_rate_hz
+    mission_seq, *state_seqs = np.random.SeedSequence(seed).spawn(1 + len(states))
+    profiles = {
+        "preflight": preflight_test_command(params.mission, fs),
+        "flight": flight_profile(params.mission, np.random.default_rng(mission_seq), fs, window_s),
+    }
+    runs: dict[str, dict[str, ActuatorRun]] = {c: {} for c in CONDITIONS}
+    rows = []
+    items = tqdm(
+        list(zip(states.items(), state_seqs, strict=True)),
+        desc="health states",
+        disable=not progress,
+    )
+    for (name, health), seq in items:
+        rng = np.random.default_rng(seq)
+        for condition in CONDITIONS:
+            run = _run_condition(params, health, profiles[condition], rng)
+            csv_path = out / f"{name}_{condition}.csv"
+            write_run_csv(run, csv_path)
+            runs[condition][name] = run
+            rows.append(
+                DemoRow(
+                    name,
+                    condition,
+                    float(np.mean(run.current_a)),
+                    float(np.sqrt(np.mean(run.position_m**2))),
+                    csv_path,
+                )
+            )
+    pngs = []
+    for condition in CONDITIONS:
+        png = out / f"{condition}.png"
+        title = f"SCAS actuator, {condition} ({', '.join(states)}; seed {seed}, noise on)"
+        plot_demo_condition(runs[condition], png, title=title)
+        pngs.append(png)
+    return DemoSummary(tuple(rows), tuple(pngs))

@@ -1,0 +1,114 @@
+"""Scenario of a maintenance episode: fidelity, observation, horizon, filters, active faults.
+
+>>> s = Scenario()
+>>> s.fidelity, s.obs_mode, s.episode_slots
+('surrogate', 'features+rul', 2000)
+>>> Scenario(fidelity="fast")
+Traceback (most recent call last):
+...
+ValueError: Scenario.fidelity = 'fast' must be one of ('surrogate', 'physics')
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from scas_env.config import Validated, param
+
+FIDELITIES = ("surrogate", "physics")
+OBS_MODES = ("features+rul", "features", "state", "dict")
+INITIAL_HEALTH = ("new", "random")
+
+
+@dataclass(frozen=True)
+class Scenario(Validated):
+    """Everything about an episode that is not the actuator design or the costs.
+
+    Attributes
+    ----------
+    fidelity : ``"surrogate"`` (features from a model calibrated on physics campaigns,
+        degradation from the calibrated growth tables; microseconds per step) or
+        ``"physics"`` (the actuator is simulated for every test and flight window).
+    obs_mode : ``"features+rul"``, ``"features"`` (no particle filter), ``"state"`` (true
+        severities: the oracle's view) or ``"dict"`` (every quantity, for inspection).
+    initial_health : ``"new"`` (new parts at reset) or ``"random"`` (each part starts at a
+        uniformly drawn fraction of its life, as on a fleet in service).
+    """
+
+    fidelity: str = "surrogate"
+    obs_mode: str = "features+rul"
+    initial_health: str = "new"
+    episode_slots: float = param(
+        2000,
+        "slots",
+        lo=1,
+        hi=10_000_000,
+        integer=True,
+        source="about 1.7 spring and seal lives without maintenance (README calibration)",
+    )
+    n_particles: float = param(
+        200, "-", lo=10, hi=100_000, integer=True, source="particles per filter (per part)"
+    )
+    risk_horizon_flights: float = param(
+        20,
+        "flights",
+        lo=1,
+        hi=10_000,
+        integer=True,
+        source="horizon of the probability-of-failure observation [B] (ref §9: 10 flights)",
+    )
+    rul_quantile: float = param(
+        0.05, "-", lo=0.0, hi=0.5, lo_open=True, source="low quantile of the RUL observation"
+    )
+    rul_cap_flights: float = param(
+        5000,
+        "flights",
+        lo=1,
+        hi=1e7,
+        source="RUL observations saturate here (documented bound of the observation)",
+    )
+    crack_active: float = param(1, "bool", lo=0, hi=1, integer=True, source="spring crack on")
+    wear_active: float = param(1, "bool", lo=0, hi=1, integer=True, source="seal wear on")
+    go_no_go_false_alarm: float = param(
+        0.001,
+        "-",
+        lo=1e-9,
+        hi=0.5,
+        source="probability that a healthy actuator fails the pre-flight test (sets the band)",
+    )
+    detection_window: float = param(
+        20,
+        "samples",
+        lo=2,
+        hi=1000,
+        integer=True,
+        source="running window of the section-5.1 detector ([DJS20] rule, ref §9)",
+    )
+    filter_noise_scale: float = param(
+        1.0,
+        "-",
+        lo=0.0,
+        lo_open=True,
+        hi=100.0,
+        source="multiplies the measurement noise the filters assume (filter-quality studies)",
+    )
+    filter_growth_bias: float = param(
+        1.0,
+        "-",
+        lo=0.0,
+        lo_open=True,
+        hi=100.0,
+        source="multiplies the growth rates the filters assume (a model that is off)",
+    )
+
+    def _check(self) -> None:
+        for name, allowed in (
+            ("fidelity", FIDELITIES),
+            ("obs_mode", OBS_MODES),
+            ("initial_health", INITIAL_HEALTH),
+        ):
+            value = getattr(self, name)
+            if value not in allowed:
+                raise ValueError(f"Scenario.{name} = {value!r} must be one of {allowed}")
+        if not (self.crack_active or self.wear_active):
+            raise ValueError("Scenario: at least one of crack_active, wear_active must be 1")

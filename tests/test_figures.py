@@ -1,0 +1,219 @@
+"""Paper physics figures (Figs. 3, 4, 5, 7a, 7b), their plots and the demo run."""
+
+from __future__ import annotations
+
+import csv
+import json
+
+import numpy as np
+import pytest
+
+from scas_env.degradation import CrackRateTable, growth_model, load_spectrum_from_physics
+from scas_env.demo import CSV_COLUMNS, run_demo
+from scas_env.figures import (
+    PaperFigures,
+    crack_growth_curves,
+    fig3_spring_rate,
+    fig4_crack_growth,
+    fig5_frequency_response,
+    fig7a_null_bias,
+    fig7b_seal_gain,
+)
+from scas_env.health import HealthState
+from scas_env.params import ScasParams
+from scas_env.physics.crack_growth import block_growth_rate_m, crack_history
+from scas_env.physics.frequency import cutoff_frequency_hz, seal_criterion
+from scas_env.plotting import PAPER_PLOTS, plot_demo_condition, save_paper_figures
+
+P = ScasParams()
+
+
+LOAD_SEED, LOAD_WINDOW_S = 3, 30.0
+
+
+@pytest.fixture(scope="module")
+def loads():
+    """The Fig. 4 loads: same seed and window as the ``figs`` fixture."""
+    spectrum = load_spectrum_from_physics(
+        P, np.random.default_rng(LOAD_SEED), window_s=LOAD_WINDOW_S
+    )
+    return spectrum.per_flight(P.mission.flight_duration_s)
+
+
+@pytest.fixture(scope="module")
+def criterion():
+    return seal_criterion(P)
+
+
+@pytest.fixture(scope="module")
+def figs(criterion) -> PaperFigures:
+    rng = np.random.default_rng(LOAD_SEED)
+    return PaperFigures(
+        fig3=fig3_spring_rate(P, n_points=41),
+        fig4=fig4_crack_growth(P, rng, window_s=LOAD_WINDOW_S, n_points=60),
+        fig5=fig5_frequency_response(P, n_freq=9, n_sweep=7, criterion=criterion),
+        fig7a=fig7a_null_bias(P, n_depths=6),
+        fig7b=fig7b_seal_gain(P, n_wear=6, criterion=criterion),
+    )
+
+
+def test_fig3_healthy_rate_is_closed_form_and_rate_falls(figs) -> None:
+    d = figs.fig3
+    s = P.spring
+    closed = s.shear_modulus_pa * s.wire_diameter_m**4 / (8 * s.mean_coil_diameter_m**3 * 10)
+    assert d.spring_rate_exact_n_m[0] == pytest.approx(closed, rel=1e-12)
+    assert d.spring_rate_paper_n_m[0] == pytest.approx(closed, rel=1e-12)
+    assert d.coil_rate_exact_n_m[0] == pytest.approx(10 * closed, rel=1e-12)
+    for curve in (d.spring_rate_exact_n_m, d.spring_rate_paper_n_m, d.coil_rate_exact_n_m):
+        assert np.all(np.diff(curve) < 0.0)
+    # the printed eq. 6 drops a positive term of J: less stiff than the exact form
+    assert np.all(d.spring_rate_paper_n_m[1:] < d.spring_rate_exact_n_m[1:])
+    # series coils: 1/K = 9/k_coil + 1/K_f holds at every depth
+    series = 1.0 / (9.0 / (10 * closed) + 1.0 / d.coil_rate_exact_n_m)
+    np.testing.assert_allclose(d.spring_rate_exact_n_m, series, rtol=1e-12)
+    assert d.depth_m[-1] == pytest.approx(d.failure_depth_m)
+
+
+def test_fig4_reaches_failure_with_accelerating_growth(figs) -> None:
+    d = figs.fig4
+    np.testing.assert_allclose(d.depth_m[:, 0], P.spring.initial_crack_m, rtol=1e-9)
+    np.testing.assert_allclose(d.depth_m[:, -1], d.failure_depth_m, rtol=1e-12)
+    for row in d.depth_m:
+        steps = np.diff(row)  # equal flight steps: increments grow (acceleration)
+        assert np.all(steps > 0.0)
+        assert np.all(np.diff(steps) > 0.0)
+    # Paris is linear in C: flights to failure scale as 1 / theta
+    np.testing.assert_allclose(
+        d.flights_to_failure * d.multipliers, d.flights_to_failure[1], rtol=1e-12
+    )
+
+
+def test_fig4_table_integration_matches_block_integration(figs, loads) -> None:
+    # crack_history integrates the flight's force cycles block by block without rescaling the
+    # force with k(a); tabulate that same rate on the Fig. 4 grid and integrate it exactly
+    d = figs.fig4
+    model = growth_model(P)
+    cycles = loads.spring_force_cycles
+    rate = np.array([block_growth_rate_m(a, cycles, model) for a in d.table_depth_m])
+    table = CrackRateTable(d.table_depth_m, rate, d.failure_depth_m, d.dormant_below_m)
+    same_loads = crack_growth_curves(table, P.spring.initial_crack_m, multipliers=(1.0,))
+    history = crack_history(P.spring.initial_crack_m, cycles, model, max_blocks=1e6)
+    assert history.failed
+    assert same_loads.flights_to_failure[0] == pytest.approx(history.blocks[-1], rel=0.02)
+    # intermediate depths agree too (interpolated on the block history)
+    flights = np.interp(same_loads.depth_m[0, 1:-1], history.depth_m, history.blocks)
+    np.testing.assert_allclose(same_loads.flights[0, 1:-1], flights, rtol=0.03)
+    # the Fig. 4 table lets the cracked spring shed force as k(a) drops: slower growth,
+    # a few percent more flights (measured 4%)
+    nominal = d.flights_to_failure[list(d.multipliers).index(1.0)]
+    assert 1.0 < nominal / history.blocks[-1] < 1.08
+
+
+def test_fig5_cutoff_falls_with_leakage_and_critical_point(figs, criterion) -> None:
+    d = figs.fig5
+    assert np.all(np.diff(d.sweep_k_i1_m3_s_pa) > 0.0)
+    assert np.all(np.diff(d.sweep_cutoff_hz) < 0.0)
+    assert d.critical_cutoff_hz == pytest.approx(0.9 * d.healthy_cutoff_hz, rel=1e-12)
+    # independent check: the cut-off at the critical wear really is 10% below healthy
+    at_critical = cutoff_frequency_hz(P, HealthState(seal_wear_m=d.critical_wear_m))
+    assert at_critical == pytest.approx(0.9 * d.healthy_cutoff_hz, rel=1e-3)
+    assert d.sweep_cutoff_hz[0] == pytest.approx(d.healthy_cutoff_hz, rel=1e-3)
+    k1 = np.interp(d.critical_wear_m, d.sweep_wear_m, d.sweep_k_i1_m3_s_pa)
+    assert d.critical_k_i1_m3_s_pa == pytest.approx(k1, rel=0.05)
+    # responses: ~0 dB at low frequency, below -3 dB well past the cut-off, more wear lower
+    assert d.magnitude_db.shape == d.phase_deg.shape == (5, 9)
+    assert np.all(np.abs(d.magnitude_db[:, 0]) < 0.5)
+    assert np.all(d.magnitude_db[:, -1] < -3.0)
+    assert np.all(np.diff(d.magnitude_db[:, 0]) < 0.0)
+    assert np.all(np.diff(d.phase_deg, axis=1) < 0.0)
+
+
+def test_fig7a_null_bias_grows_and_keeps_its_sign(figs) -> None:
+    d = figs.fig7a
+    assert abs(d.null_bias_a[0]) < 1e-9
+    bias = d.null_bias_a[1:]
+    assert np.all(np.diff(np.abs(bias)) > 0.0)
+    assert np.all(np.sign(bias) == np.sign(bias[-1]))
+    # the weaker cracked spring 0 is compressed for x > 0: negative bias (actuator doctest)
+    assert bias[-1] < -1e-6
+    assert d.current_a.shape == (5, d.t_s.size)
+
+
+def test_fig7b_gain_falls_with_wear(figs) -> None:
+    d = figs.fig7b
+    assert np.all(np.diff(d.gain) < 0.0)
+    assert 0.9 < d.gain[0] < 1.0
+    # held position at the 2 mm plateau falls with wear (less static gain)
+    plateau = d.command_m == d.command_m.max()
+    held = d.position_m[:, plateau][:, -1]
+    assert np.all(np.diff(held) < 0.0)
+
+
+def test_to_dict_is_json_serialisable(figs) -> None:
+    text = json.dumps(figs.to_dict(), allow_nan=False)
+    back = json.loads(text)
+    assert set(back) == {"fig3", "fig4", "fig5", "fig7a", "fig7b"}
+    assert back["fig3"]["governing"] == figs.fig3.governing
+    assert np.allclose(back["fig4"]["depth_m"], figs.fig4.depth_m)
+
+
+def test_plots_write_png_files(figs, tmp_path) -> None:
+    paths = save_paper_figures(figs, tmp_path / "figs")
+    names = {p.name for p in paths}
+    assert names == {f"{stem}.png" for stem, _ in PAPER_PLOTS.values()} | {"figures.json"}
+    for path in paths:
+        assert path.stat().st_size > 1000
+        if path.suffix == ".png":
+            assert path.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    with pytest.raises(ValueError, match="runs"):
+        plot_demo_condition({}, tmp_path / "x.png", title="empty")
+
+
+def _read_csv(path) -> tuple[list[str], np.ndarray]:
+    with open(path, newline="") as fh:
+        header = next(csv.reader(fh))
+    return header, np.loadtxt(path, delimiter=",", skiprows=1)
+
+
+def test_demo_writes_columns_and_is_deterministic(tmp_path) -> None:
+    states = {"healthy": HealthState(), "cracked": HealthState(crack_depth_m=0.5e-3)}
+    first = run_demo(P, tmp_path / "a", 5, states, window_s=2.0, progress=False)
+    second = run_demo(P, tmp_path / "b", 5, states, window_s=2.0, progress=False)
+    other = run_demo(P, tmp_path / "c", 6, states, window_s=2.0, progress=False)
+    assert len(first.rows) == 4
+    assert [p.name for p in first.png_paths] == ["preflight.png", "flight.png"]
+    for row, again, changed in zip(first.rows, second.rows, other.rows, strict=True):
+        header, data = _read_csv(row.csv_path)
+        assert header == list(CSV_COLUMNS)
+        assert data.shape[1] == len(CSV_COLUMNS)
+        if row.condition == "flight":
+            assert data.shape[0] == 2000
+        assert row.csv_path.read_bytes() == again.csv_path.read_bytes()
+        assert row.csv_path.read_bytes() != changed.csv_path.read_bytes()
+        assert row.mean_current_a == pytest.approx(np.mean(data[:, 2]), abs=1e-9)
+    # same seed, same shared flight command for every state
+    _, healthy = _read_csv(tmp_path / "a" / "healthy_flight.csv")
+    _, cracked = _read_csv(tmp_path / "a" / "cracked_flight.csv")
+    np.testing.assert_array_equal(healthy[:, 1], cracked[:, 1])
+    for png in first.png_paths:
+        assert png.stat().st_size > 1000
+
+
+def test_bad_inputs_raise(tmp_path) -> None:
+    with pytest.raises(ValueError, match="n_points"):
+        fig3_spring_rate(P, n_points=1)
+    with pytest.raises(ValueError, match="wear_fractions"):
+        fig5_frequency_response(P, wear_fractions=[-0.1])
+    with pytest.raises(ValueError, match="trace_fractions"):
+        fig7a_null_bias(P, trace_fractions=[])
+    with pytest.raises(ValueError, match="params"):
+        fig7b_seal_gain("not params")  # type: ignore[arg-type]
+    with pytest.raises(ValueError, match="seed"):
+        run_demo(P, tmp_path, -1, window_s=2.0, progress=False)
+    with pytest.raises(ValueError, match="window_s"):
+        run_demo(P, tmp_path, 0, window_s=0.0, progress=False)
+    table = CrackRateTable(np.array([1e-4, 1e-3]), np.array([1e-9, 1e-6]), 1e-3, 0.0)
+    with pytest.raises(ValueError, match="initial_depth_m"):
+        crack_growth_curves(table, 5e-5)
+    with pytest.raises(ValueError, match="multipliers"):
+        crack_growth_curves(table, 2e-4, multipliers=(0.0,))
