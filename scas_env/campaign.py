@@ -3,9 +3,9 @@
 The paper calibrates feature selection and detection on ">100 runs" at each of 8 severity
 levels from healthy to failure, with every uncertainty of §3 drawn per run. A campaign here:
 
-* **Severity levels**: ``s_l = l / (n_levels - 1)``, l = 0..n_levels-1 (``numpy.linspace(0,
-  1, n_levels)``): level 0 is healthy, the last level (s = 1) is exactly critical. s is the
-  fraction of the critical value: crack depth ``a = s a_crit(unit)`` with the unit's own
+* **Severity levels**: ``s_l = l / (n_levels - 1)``, l = 0..n_levels-1 (evenly spaced):
+  level 0 is healthy, the last level (s = 1) is exactly critical. s is the fraction of the
+  critical value: crack depth ``a = s a_crit(unit)`` with the unit's own
   critical depth (``failure_depth_from_params`` with the drawn d, D of the cracked spring,
   about 1 mm, below the 2.2 mm wire, so a = a_crit is a valid state), seal wear
   ``lambda = s lambda_crit`` (``critical_seal_wear_m``, the same for all units). Mode
@@ -16,7 +16,8 @@ levels from healthy to failure, with every uncertainty of §3 drawn per run. A c
   number of workers, any chunking and any subset of modes. Draws, in order: the unit
   (:func:`draw_unit`), the run conditions (:func:`draw_run_conditions`, shared by the test
   and the flight window of the run), the pre-flight test noise, the flight command
-  (:func:`flight_profile`), the flight noise.
+  (:func:`flight_profile`), the flight noise (the draws of a condition that is not
+  simulated are skipped).
 * **Signals**: recorded current ``i`` and LVDT position ``x`` (noisy). Ground features
   G1-G3 on the pre-flight test (plateaus after the leading rest, set-points from the test
   command); flight features I1-I7 on a window of ``flight_window_s``. The pilot link force
@@ -28,7 +29,12 @@ levels from healthy to failure, with every uncertainty of §3 drawn per run. A c
   unit scatter and noise included.
 
 Parallel runs use a ``ProcessPoolExecutor`` ("spawn" start, so a numba threading layer
-already running in the parent is never forked) with one numba thread per worker.
+already running in the parent is never forked; a calling script therefore needs the usual
+``if __name__ == "__main__":`` guard) with one numba thread per worker.
+
+Cost: about 0.13 s per run on one core with the default 60 s window (two 60 s
+integrations, the run and its baseline, ~40 ms each; flight features 10-20 ms; noise
+draws ~10 ms); 100 runs x 8 levels x 3 modes take about 3 min on 2 workers.
 """
 
 from __future__ import annotations
@@ -78,8 +84,7 @@ def _choices(name: str, value: Any, allowed: tuple[str, ...]) -> tuple[str, ...]
     items = (value,) if isinstance(value, str) else tuple(value)
     if not items or len(set(items)) != len(items) or not set(items) <= set(allowed):
         raise ValueError(
-            f"CampaignConfig.{name} = {value!r} must be a non-empty subset of {allowed} "
-            "without repeats"
+            f"{name} = {value!r} must be a non-empty subset of {allowed} without repeats"
         )
     return items
 
@@ -105,10 +110,9 @@ class CampaignConfig(Validated):
     seal_critical_m: float | None = None
 
     def _check(self) -> None:
-        object.__setattr__(
-            self, "fault_modes", _choices("fault_modes", self.fault_modes, FAULT_MODES)
-        )
-        object.__setattr__(self, "conditions", _choices("conditions", self.conditions, CONDITIONS))
+        for name, allowed in (("fault_modes", FAULT_MODES), ("conditions", CONDITIONS)):
+            items = _choices(f"CampaignConfig.{name}", getattr(self, name), allowed)
+            object.__setattr__(self, name, items)
         for name, md in (("flight_window_s", _WINDOW_RANGE), ("seal_critical_m", _WEAR_RANGE)):
             value = getattr(self, name)
             if value is not None:
@@ -117,8 +121,8 @@ class CampaignConfig(Validated):
 
     @property
     def severities(self) -> NDArray[np.float64]:
-        """Severity of each level, ``linspace(0, 1, n_levels)`` (0 healthy, 1 critical)."""
-        return np.linspace(0.0, 1.0, self.n_levels)
+        """Severity of each level, ``s_l = l / (n_levels - 1)`` (0 healthy, exactly 1 critical)."""
+        return np.arange(self.n_levels) / (self.n_levels - 1.0)
 
     def resolved(self, params: ScasParams) -> CampaignConfig:
         """This config with ``flight_window_s`` and ``seal_critical_m`` made explicit."""
@@ -166,6 +170,9 @@ def simulate_run(
         raise ValueError(f"fault_mode = {fault_mode!r} must be one of {FAULT_MODES}")
     if not (math.isfinite(severity) and severity >= 0.0):
         raise ValueError(f"severity = {severity} must be finite and >= 0")
+    if not (math.isfinite(seal_critical_m) and seal_critical_m > 0.0):
+        raise ValueError(f"seal_critical_m = {seal_critical_m} m must be finite and > 0")
+    conditions = _choices("conditions", conditions, CONDITIONS)
     unit = draw_unit(params, rng)
     cond = draw_run_conditions(params, rng)
     d = unit.wire_diameter_m[CRACKED_SPRING]

@@ -185,28 +185,25 @@ def test_load_rejects_modified_or_mismatched_files(small: CampaignResult, tmp_pa
     csv_path, json_path = small.save(tmp_path / "c")
     original = csv_path.read_text()
     lines = original.splitlines()
-
+    header = lines[0].split(",")
+    dropped_column = "\n".join(",".join(line.split(",")[:-1]) for line in lines) + "\n"
+    cases = [
+        # (CSV text, sidecar changes, expected message); each case rewrites the checksum
+        (dropped_column, {"columns": header[:-1]}, "columns"),
+        ("\n".join(lines[:-1]) + "\n", {}, "rows"),
+        (original.replace("crack,0,0,", "crack,zero,0,", 1), {}, "level"),
+        (original.replace("crack,0,0,", "rust,0,0,", 1), {}, "fault_mode"),
+        (original, {"format": "scas-campaign/0"}, "format"),
+        (original, {"config": {"conditions": ["ground"]}}, "columns"),
+    ]
+    for text, changes, message in cases:
+        small.save(csv_path)
+        _write_consistent(csv_path, json_path, text, **changes)
+        with pytest.raises(ValueError, match=message):
+            load(csv_path)
+    small.save(csv_path)
     csv_path.write_text(original.replace(",0.5,", ",0.6,", 1))  # edited value, stale checksum
     with pytest.raises(ValueError, match="SHA-256"):
-        load(csv_path)
-
-    header = lines[0].split(",")
-    dropped = "\n".join(",".join(line.split(",")[:-1]) for line in lines) + "\n"
-    _write_consistent(csv_path, json_path, dropped, columns=header[:-1])
-    with pytest.raises(ValueError, match="columns"):
-        load(csv_path)
-
-    _write_consistent(csv_path, json_path, "\n".join(lines[:-1]) + "\n")
-    with pytest.raises(ValueError, match="rows"):
-        load(csv_path)
-
-    bad_cell = original.replace("crack,0,0,", "crack,zero,0,", 1)
-    _write_consistent(csv_path, json_path, bad_cell)
-    with pytest.raises(ValueError, match="level"):
-        load(csv_path)
-
-    _write_consistent(csv_path, json_path, original, format="scas-campaign/0")
-    with pytest.raises(ValueError, match="format"):
         load(csv_path)
 
 
@@ -261,3 +258,15 @@ def test_simulate_run_rejects_bad_inputs() -> None:
         simulate_run(PARAMS, "rust", 0.5, rng, seal_critical_m=SEAL_CRIT_M, flight_window_s=4.0)
     with pytest.raises(ValueError, match="severity"):
         simulate_run(PARAMS, "wear", -0.1, rng, seal_critical_m=SEAL_CRIT_M, flight_window_s=4.0)
+    with pytest.raises(ValueError, match="seal_critical_m"):
+        simulate_run(PARAMS, "crack", 0.5, rng, seal_critical_m=0.0, flight_window_s=4.0)
+    with pytest.raises(ValueError, match="conditions"):
+        simulate_run(
+            PARAMS,
+            "wear",
+            0.5,
+            rng,
+            seal_critical_m=SEAL_CRIT_M,
+            flight_window_s=4.0,
+            conditions=("orbit",),
+        )
