@@ -4,10 +4,12 @@
 read, ref §0.5 and §9): from rest, steps of the SCAS position command in both directions,
 no pilot input. Levels, in units of ``MissionParams.test_step_m`` (default 2 mm):
 
-    0 (leading rest), +1/2, +1, 0, -1/2, -1, 0
+    0 (leading rest), +1/4, +1, 0, -1, 0
 
-each held for ``test_dwell_s``, so the test lasts ``7 test_dwell_s`` (3.5 s by default).
-The plateau levels are the "set" values of the overshoot feature G2.
+each held for ``test_dwell_s``, so the test lasts ``6 test_dwell_s`` (6 s by default).
+The plateau levels are the "set" values of the overshoot feature G2. The small positive
+step makes the profile asymmetric so that a constant null-bias current (the crack's
+signature) does not cancel in the current/displacement feature G3.
 
 **In-flight window** ([DJS20] §3.2, Table 1, see :data:`REGIMES`): four regimes, each a
 SCAS sinusoid plus a pilot sinusoid. A window of ``duration_s`` is built as follows.
@@ -228,7 +230,7 @@ def preflight_test_command(mission: MissionParams, sample_rate_hz: float) -> Mis
     --------
     >>> p = preflight_test_command(MissionParams(), 1000.0)
     >>> p.duration_s, [s.level_m for s in p.steps]
-    (3.0, [0.0, 0.0005, 0.002, 0.0, -0.002, 0.0])
+    (6.0, [0.0, 0.0005, 0.002, 0.0, -0.002, 0.0])
     """
     _check_mission(mission)
     fs = _check_rate(sample_rate_hz)
