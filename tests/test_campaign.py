@@ -60,7 +60,7 @@ def test_same_seed_identical_other_seed_different(small: CampaignResult) -> None
     again = run_campaign(PARAMS, SMALL, seed=11, n_workers=1)
     _assert_tables_equal(small, again)
     other = run_campaign(PARAMS, SMALL, seed=12, n_workers=1)
-    for name in (*FEATURES, "temperature_c", "null_bias_a", "crack_critical_m"):
+    for name in (*FEATURES, "temperature_c", "air_fraction", "crack_critical_m"):
         assert np.all(other.table[name] != small.table[name]), name
     assert other.metadata["seed"] == 12
 

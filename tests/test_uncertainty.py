@@ -31,9 +31,15 @@ def _check_moments(x: np.ndarray, mean: float, std: float) -> None:
     assert abs(x.std(ddof=1) - std) < 5 * std / math.sqrt(2 * n), (x.std(ddof=1), std)
 
 
+#: Default parameters with the optional servovalve null-bias scatter switched on.
+SCATTERED = ScasParams().replace(
+    uncertainty=ScasParams().uncertainty.replace(null_bias_sigma_a=0.1e-3)
+)
+
+
 @pytest.fixture(scope="module")
 def units() -> tuple[UnitSample, ...]:
-    return draw_units(ScasParams(), np.random.default_rng(2024), N)
+    return draw_units(SCATTERED, np.random.default_rng(2024), N)
 
 
 @pytest.fixture(scope="module")
@@ -42,7 +48,7 @@ def runs() -> tuple[RunConditions, ...]:
 
 
 def test_unit_moments(units: tuple[UnitSample, ...]) -> None:
-    p = ScasParams()
+    p = SCATTERED
     unc = p.uncertainty
     wire = np.array([u.wire_diameter_m for u in units])
     coil = np.array([u.mean_coil_diameter_m for u in units])
