@@ -40,19 +40,14 @@ draws ~10 ms); 100 runs x 8 levels x 3 modes take about 3 min on 2 workers.
 from __future__ import annotations
 
 import math
-import multiprocessing
 import os
 from collections.abc import Sequence
-from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import dataclass
 from typing import Any
 
-import numba
 import numpy as np
 from numpy.typing import NDArray
-from tqdm import tqdm
 
-from prognostics.features import flight_features, ground_features
 from scas_env import __version__
 from scas_env.campaign_io import (
     CONDITIONS,
@@ -65,15 +60,14 @@ from scas_env.campaign_io import (
 )
 from scas_env.config import Validated, check_value, param
 from scas_env.health import CRACKED_SPRING, HealthState, actuator_config
-from scas_env.missions import flight_profile, link_force_n, preflight_test_command
+from scas_env.measure import flight_window, ground_test
+from scas_env.parallel import map_chunks
 from scas_env.params import ScasParams
-from scas_env.physics.actuator import simulate
 from scas_env.physics.spring import failure_depth_from_params
 from scas_env.uncertainty import draw_run_conditions, draw_unit
 
 __all__ = ["CampaignConfig", "run_campaign", "run_generator", "simulate_run"]
 
-MAX_CHUNK_RUNS = 16
 """Largest number of runs sent to a worker at once (chunks only change the scheduling)."""
 
 _WINDOW_RANGE = {"unit": "s", "lo": 1.0, "hi": 3600.0, "lo_open": False, "hi_open": False}
@@ -189,39 +183,10 @@ def simulate_run(
     values = [severity, crack, wear, a_crit, seal_critical_m, cond.temperature_c]
     values += [cond.air_fraction, cond.supply_pressure_offset_pa, unit.null_bias_a, d, big_d]
     row = dict(zip(RUN_COLUMNS, values, strict=True))
-    fs = params.sensors.sample_rate_hz
-    amplitude_n = params.actuator.link_force_amplitude_n
     if "ground" in conditions:
-        test = preflight_test_command(params.mission, fs)
-        run = simulate(
-            config,
-            test.scas_command_m,
-            rng=rng,
-            link_force_n=link_force_n(test.pilot_command_m, amplitude_n),
-        )
-        steps = test.steps[1:]  # the leading rest is not a step (G2 needs a set-point change)
-        feats = ground_features(
-            run.t_s,
-            run.current_a,
-            run.lvdt_m,
-            [s.start_s for s in steps],
-            [s.level_m for s in steps],
-            initial_setpoint_m=test.steps[0].level_m,
-        )
-        row.update({k: float(v) for k, v in feats.items()})
+        row.update(ground_test(params, config, rng).features)
     if "flight" in conditions:
-        profile = flight_profile(params.mission, rng, fs, duration_s=flight_window_s)
-        link = link_force_n(profile.pilot_command_m, amplitude_n)
-        run = simulate(config, profile.scas_command_m, rng=rng, link_force_n=link)
-        base = simulate(
-            actuator_config(params),
-            profile.scas_command_m,
-            rng=None,
-            link_force_n=link,
-            noise=False,
-        )
-        feats = flight_features(run.t_s, run.current_a, run.lvdt_m, base.current_a, base.lvdt_m)
-        row.update({k: float(v) for k, v in feats.items()})
+        row.update(flight_window(params, config, rng, flight_window_s).features)
     return row
 
 
@@ -247,11 +212,6 @@ def _simulate_chunk(
         )
         for mode, level, run in specs
     ]
-
-
-def _init_worker() -> None:
-    """Pool initializer: one numba thread per process (the pool provides the parallelism)."""
-    numba.set_num_threads(1)
 
 
 def _check_int(name: str, value: Any, minimum: int) -> int:
@@ -280,7 +240,7 @@ def run_campaign(
         ``chunk_size``.
     n_workers : worker processes; default ``os.cpu_count()``; 1 runs in this process.
     chunk_size : runs per task; default ``ceil(runs / (4 n_workers))``, at most
-        :data:`MAX_CHUNK_RUNS`.
+        :data:`scas_env.parallel.MAX_CHUNK`.
     progress : show a tqdm progress bar (runs done).
 
     Returns
@@ -308,25 +268,15 @@ def run_campaign(
         for level in range(config.n_levels)
         for run in range(config.n_runs)
     ]
-    auto = min(MAX_CHUNK_RUNS, math.ceil(len(specs) / (4 * workers)))
-    size = _check_int("chunk_size", auto if chunk_size is None else chunk_size, 1)
-    chunks = [specs[k : k + size] for k in range(0, len(specs), size)]
-    done: list[list[dict[str, float]]] = [[] for _ in chunks]
-    with tqdm(total=len(specs), disable=not progress, unit="run") as bar:
-        if workers == 1:
-            for k, chunk in enumerate(chunks):
-                done[k] = _simulate_chunk(*task, chunk)
-                bar.update(len(chunk))
-        else:
-            context = multiprocessing.get_context("spawn")
-            with ProcessPoolExecutor(workers, mp_context=context, initializer=_init_worker) as pool:
-                futures = {
-                    pool.submit(_simulate_chunk, *task, chunk): k for k, chunk in enumerate(chunks)
-                }
-                for future in as_completed(futures):
-                    done[futures[future]] = future.result()
-                    bar.update(len(chunks[futures[future]]))
-    rows = [row for chunk in done for row in chunk]
+    rows = map_chunks(
+        _simulate_chunk,
+        task,
+        specs,
+        n_workers=workers,
+        chunk_size=chunk_size,
+        progress=progress,
+        desc="campaign",
+    )
     table: dict[str, Any] = {
         "fault_mode": [s[0] for s in specs],
         "level": [s[1] for s in specs],
