@@ -1,0 +1,202 @@
+"""Surrogate of the measured features: a random-effects model calibrated on physics runs.
+
+For each feature ``f`` the surrogate draws, at crack fraction ``c = a / a_crit`` and seal
+wear fraction ``w = lambda / lambda_crit``::
+
+    f = mu_f(c, w) + tau_f(c, w) z_unit + sigma_f(c, w) z_run,     z ~ N(0, 1)
+
+* ``mu``: mean over units and runs; ``tau``: between-installation spread (spring geometry
+  tolerances and any valve null bias: fixed for an installation, so ``z_unit`` is drawn once
+  when a spring pair is fitted and kept until it is replaced); ``sigma``: run-to-run spread
+  (fluid temperature, air, supply pressure, sensor noise, the flight's command draw).
+* All three are tabulated on a grid of (c, w) and interpolated bilinearly; outside
+  [0, 1]^2 a ``ValueError`` is raised (a part at its critical value has failed).
+* The tables come from a nested physics design (``scas_env.surrogate_build``): at every
+  grid point, several units with several runs each; ``tau`` and ``sigma`` from the one-way
+  random-effects ANOVA (``tau^2 = (MS_between - MS_within)/R``, taken as 0 when the
+  estimate is negative, the usual truncated estimator).
+
+Features are independent given (c, w, z_unit); cross-feature correlations inside a run
+are not modelled (documented simplification; the test against fresh physics checks means
+and spreads only).
+
+    >>> model = default_surrogate()
+    >>> model.features
+    ('G3', 'G1', 'I2', 'I6', 'I7')
+    >>> bool(model.mean_at(0.0, 1.0)[0] > model.mean_at(0.0, 0.0)[0])  # G3 rises with wear
+    True
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import asdict, dataclass
+from functools import lru_cache
+from importlib import resources
+from pathlib import Path
+
+import numpy as np
+import numpy.typing as npt
+
+FloatArray = npt.NDArray[np.float64]
+SURROGATE_VERSION = 1
+DATA_FILE = "surrogate.json"
+#: Features the surrogate models and the condition each is measured in.
+FEATURE_CONDITION = {"G3": "ground", "G1": "ground", "I2": "flight", "I6": "flight", "I7": "flight"}
+
+
+@dataclass(frozen=True, eq=False)
+class SurrogateModel:
+    """Tabulated random-effects model of the features (see the module docstring).
+
+    Attributes
+    ----------
+    features : feature ids, in the order of the first axis of the tables.
+    crack_grid, wear_grid : grid of crack and wear fractions of critical, ascending, [0, 1].
+    mean, unit_std, run_std : tables of shape (features, crack, wear), feature units.
+    params_digest : digest of the parameters the physics ran with.
+    seed, units_per_point, runs_per_unit : the design it was built from.
+    """
+
+    features: tuple[str, ...]
+    crack_grid: FloatArray
+    wear_grid: FloatArray
+    mean: FloatArray
+    unit_std: FloatArray
+    run_std: FloatArray
+    params_digest: str
+    seed: int
+    units_per_point: int
+    runs_per_unit: int
+    version: int = SURROGATE_VERSION
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "features", tuple(self.features))
+        for name in ("crack_grid", "wear_grid", "mean", "unit_std", "run_std"):
+            arr = np.array(getattr(self, name), dtype=np.float64)
+            arr.setflags(write=False)
+            object.__setattr__(self, name, arr)
+        shape = (len(self.features), self.crack_grid.size, self.wear_grid.size)
+        for name in ("mean", "unit_std", "run_std"):
+            if getattr(self, name).shape != shape:
+                raise ValueError(f"SurrogateModel.{name} must have shape {shape}")
+        for name in ("crack_grid", "wear_grid"):
+            grid = getattr(self, name)
+            if grid[0] != 0.0 or grid[-1] != 1.0 or np.any(np.diff(grid) <= 0.0):
+                raise ValueError(f"SurrogateModel.{name} must rise strictly from 0 to 1")
+        if np.any(self.unit_std < 0.0) or np.any(self.run_std <= 0.0):
+            raise ValueError("SurrogateModel: unit_std must be >= 0 and run_std > 0")
+        if self.version != SURROGATE_VERSION:
+            raise ValueError(
+                f"surrogate version {self.version} is not the supported {SURROGATE_VERSION}; "
+                "rebuild it with scripts/build_surrogate.py"
+            )
+
+    def index(self, feature: str) -> int:
+        """Position of ``feature`` in :attr:`features`."""
+        if feature not in self.features:
+            raise ValueError(f"feature {feature!r} is not modelled; available: {self.features}")
+        return self.features.index(feature)
+
+    def _weights(
+        self, crack_frac: npt.ArrayLike, wear_frac: npt.ArrayLike
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        c = np.asarray(crack_frac, dtype=np.float64)
+        w = np.asarray(wear_frac, dtype=np.float64)
+        for name, v in (("crack_frac", c), ("wear_frac", w)):
+            if not np.all(np.isfinite(v)) or np.any(v < 0.0) or np.any(v > 1.0):
+                raise ValueError(f"{name} = {v} must lie in [0, 1] (fraction of critical)")
+        i = np.clip(
+            np.searchsorted(self.crack_grid, c, side="right") - 1, 0, self.crack_grid.size - 2
+        )
+        j = np.clip(
+            np.searchsorted(self.wear_grid, w, side="right") - 1, 0, self.wear_grid.size - 2
+        )
+        tc = (c - self.crack_grid[i]) / (self.crack_grid[i + 1] - self.crack_grid[i])
+        tw = (w - self.wear_grid[j]) / (self.wear_grid[j + 1] - self.wear_grid[j])
+        return i, j, tc, tw
+
+    def _interp(self, table: FloatArray, crack_frac: npt.ArrayLike, wear_frac: npt.ArrayLike):
+        i, j, tc, tw = self._weights(crack_frac, wear_frac)
+        return (
+            table[:, i, j] * (1 - tc) * (1 - tw)
+            + table[:, i + 1, j] * tc * (1 - tw)
+            + table[:, i, j + 1] * (1 - tc) * tw
+            + table[:, i + 1, j + 1] * tc * tw
+        )
+
+    def mean_at(self, crack_frac: npt.ArrayLike, wear_frac: npt.ArrayLike) -> FloatArray:
+        """Mean of every feature at (c, w): shape (features, *broadcast shape)."""
+        return self._interp(self.mean, crack_frac, wear_frac)
+
+    def unit_std_at(self, crack_frac: npt.ArrayLike, wear_frac: npt.ArrayLike) -> FloatArray:
+        """Between-installation standard deviation at (c, w)."""
+        return self._interp(self.unit_std, crack_frac, wear_frac)
+
+    def run_std_at(self, crack_frac: npt.ArrayLike, wear_frac: npt.ArrayLike) -> FloatArray:
+        """Run-to-run standard deviation at (c, w)."""
+        return self._interp(self.run_std, crack_frac, wear_frac)
+
+    def sample(
+        self,
+        crack_frac: float,
+        wear_frac: float,
+        unit_z: FloatArray,
+        rng: np.random.Generator,
+        features: tuple[str, ...] | None = None,
+    ) -> dict[str, float]:
+        """One run's features at (c, w) for an installation with effects ``unit_z``.
+
+        ``unit_z`` holds one standard-normal draw per modelled feature (from
+        :meth:`draw_unit_z`); the run noise is drawn from ``rng``, one normal per
+        requested feature, in the order of ``features`` (default: all).
+        """
+        names = self.features if features is None else features
+        idx = [self.index(f) for f in names]
+        z = rng.standard_normal(len(idx))
+        i, j, tc, tw = self._weights(crack_frac, wear_frac)
+        w00, w10 = (1 - tc) * (1 - tw), tc * (1 - tw)
+        w01, w11 = (1 - tc) * tw, tc * tw
+        out = {}
+        for k, f in zip(idx, names, strict=True):
+
+            def at(table: FloatArray, k: int = k) -> float:
+                return float(
+                    table[k, i, j] * w00
+                    + table[k, i + 1, j] * w10
+                    + table[k, i, j + 1] * w01
+                    + table[k, i + 1, j + 1] * w11
+                )
+
+            out[f] = (
+                at(self.mean)
+                + at(self.unit_std) * float(unit_z[k])
+                + at(self.run_std) * float(z[len(out)])
+            )
+        return out
+
+    def draw_unit_z(self, rng: np.random.Generator) -> FloatArray:
+        """Standardised installation effects, one per modelled feature."""
+        return rng.standard_normal(len(self.features))
+
+    def to_dict(self) -> dict:
+        out = asdict(self)
+        for key, value in out.items():
+            if isinstance(value, np.ndarray):
+                out[key] = value.tolist()
+        out["features"] = list(self.features)
+        return out
+
+    def save(self, path: str | Path) -> None:
+        Path(path).write_text(json.dumps(self.to_dict()) + "\n")
+
+    @classmethod
+    def load(cls, path: str | Path) -> SurrogateModel:
+        return cls(**json.loads(Path(path).read_text()))
+
+
+@lru_cache(maxsize=1)
+def default_surrogate() -> SurrogateModel:
+    """The shipped surrogate of the default :class:`~scas_env.params.ScasParams`."""
+    text = resources.files("scas_env").joinpath("data", DATA_FILE).read_text()
+    return SurrogateModel(**json.loads(text))
