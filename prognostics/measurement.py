@@ -29,6 +29,7 @@ from dataclasses import dataclass, field, fields
 from typing import Any
 
 import numpy as np
+import numpy.typing as npt
 from numba import njit
 from numpy.polynomial import Polynomial
 from scipy.interpolate import PchipInterpolator
@@ -344,3 +345,30 @@ def fit_measurement_model(
     if np.any(sig <= 0.0):
         raise ValueError(f"fitted sigma has zeros {sig}; pass min_sigma > 0 to floor it")
     return MeasurementModel(kind=mean_kind, sigma_knots=knots, sigma_values=sig, **curve)
+
+
+def measurement_from_curve(
+    severity: npt.ArrayLike, mean: npt.ArrayLike, sigma: npt.ArrayLike
+) -> MeasurementModel:
+    """Measurement model through tabulated per-level means and standard deviations.
+
+    The same model :func:`fit_measurement_model` builds with ``mean_kind="pchip"`` and
+    ``sigma_kind="per_level"``, for curves that are already summarised (e.g. the tables of a
+    feature surrogate): PCHIP through ``(severity, mean)``, ``sigma`` linear in between.
+    """
+    sev = np.asarray(severity, dtype=np.float64)
+    mu = np.asarray(mean, dtype=np.float64)
+    sig = np.asarray(sigma, dtype=np.float64)
+    if sev.ndim != 1 or sev.size < 2 or mu.shape != sev.shape or sig.shape != sev.shape:
+        raise ValueError(
+            "severity, mean and sigma must be 1-D arrays of the same length >= 2, got shapes "
+            f"{sev.shape}, {mu.shape}, {sig.shape}"
+        )
+    if np.any(np.diff(sev) <= 0.0):
+        raise ValueError("severity must be strictly increasing")
+    if not (np.all(np.isfinite(mu)) and np.all(np.isfinite(sig)) and np.all(sig > 0.0)):
+        raise ValueError("mean must be finite and sigma finite and > 0")
+    slopes = PchipInterpolator(sev, mu).derivative()(sev)
+    return MeasurementModel(
+        kind="pchip", sigma_knots=sev, sigma_values=sig, knots=sev, values=mu, slopes=slopes
+    )

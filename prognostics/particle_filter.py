@@ -312,10 +312,11 @@ class ParticleFilter:
         self._check_ready()
         self.process.predict(self._x, self._log_theta, usage, self.rng, self._buf_x)
 
-    def update(self, y: float) -> bool:
+    def update(self, y: float, measurement: MeasurementModel | None = None) -> bool:
         """Weight by the likelihood of feature ``y``; NaN = no measurement (no change).
 
-        Returns True if the filter resampled.
+        ``measurement`` overrides the filter's model for this update (a filter fed by
+        several features, each with its own model). Returns True if the filter resampled.
         """
         self._check_ready()
         y = float(y)
@@ -323,7 +324,15 @@ class ParticleFilter:
             return False
         if not math.isfinite(y):
             raise ValueError(f"y = {y} must be finite or NaN (no measurement)")
-        log_likelihood_kernel(y, self._x, self._loglik, *self._likelihood_args)
+        if measurement is None:
+            args = self._likelihood_args
+        elif isinstance(measurement, MeasurementModel):
+            args = measurement.kernel_args
+        else:
+            raise ValueError(
+                f"measurement must be a MeasurementModel, got {type(measurement).__name__}"
+            )
+        log_likelihood_kernel(y, self._x, self._loglik, *args)
         self._ess = _reweight(self._log_w, self._w, self._loglik)
         if not math.isfinite(self._ess):
             raise FloatingPointError("particle weights degenerated (non-finite likelihoods)")

@@ -10,7 +10,11 @@ import pytest
 from scipy.interpolate import PchipInterpolator
 from scipy.stats import norm
 
-from prognostics.measurement import MeasurementModel, fit_measurement_model
+from prognostics.measurement import (
+    MeasurementModel,
+    fit_measurement_model,
+    measurement_from_curve,
+)
 
 LEVELS = np.array([0.0, 1.0, 2.0, 3.0, 4.0])
 HALF_SPREAD = 0.1 * (np.arange(5) + 1.0)  # +- d_k around the level mean
@@ -126,3 +130,19 @@ def test_bad_data_raise() -> None:
         )
     with pytest.raises(ValueError, match="sigma"):
         MeasurementModel("poly", [0.0], [0.0], coef=[1.0])
+
+
+def test_measurement_from_curve_equals_the_fitted_pchip_model() -> None:
+    rng = np.random.default_rng(3)
+    levels = np.repeat(np.linspace(0.0, 1.0, 5), 40)
+    y = 2.0 + 3.0 * levels**2 + 0.1 * (1 + levels) * rng.standard_normal(levels.size)
+    fitted = fit_measurement_model(levels, y)
+    u = np.unique(levels)
+    means = np.array([y[levels == v].mean() for v in u])
+    stds = np.array([y[levels == v].std(ddof=1) for v in u])
+    curve = measurement_from_curve(u, means, stds)
+    x = np.linspace(0.0, 1.0, 37)
+    np.testing.assert_allclose(curve.mean(x), fitted.mean(x), rtol=1e-12)
+    np.testing.assert_allclose(curve.sigma(x), fitted.sigma(x), rtol=1e-12)
+    with pytest.raises(ValueError, match="sigma"):
+        measurement_from_curve(u, means, -stds)
