@@ -1,0 +1,324 @@
+"""``ScasMaintenance-v0``: maintenance of a degrading helicopter SCAS actuator, flight by flight."""
+
+from __future__ import annotations
+
+from typing import Any, ClassVar
+
+import gymnasium as gym
+import numpy as np
+from gymnasium import spaces
+
+from scas_env.calibration import Calibration, calibration_for
+from scas_env.costs import CostModel
+from scas_env.monitor import HealthMonitor
+from scas_env.observation import ObservationBuilder
+from scas_env.params import ScasParams
+from scas_env.scenario import Scenario
+from scas_env.surrogate import SurrogateModel, default_surrogate
+from scas_env.world import PARTS, ActuatorWorld
+
+FLY, TEST_AND_FLY, REPLACE_SPRING, REPLACE_SEAL = range(4)
+ACTION_NAMES = ("fly", "test_and_fly", "replace_spring", "replace_seal")
+
+
+class ScasMaintenanceEnv(gym.Env):
+    """Maintenance of a helicopter SCAS hydraulic actuator with two propagating faults.
+
+    ## Description
+
+    A SCAS (stability and command augmentation system) actuator flies one flight per step.
+    One coil of a centering spring carries a fatigue crack that grows by Paris' law with the
+    rainflow-counted cycles of each flight; the piston seals wear by Archard's law, which
+    opens internal leakage and lowers the loop's bandwidth. Both faults progress at once,
+    each unit with its own growth constants. The operator sees only what the avionics
+    measure (servovalve current and actuator position, turned into the features of De Martin
+    et al. 2020, Table 2) and what a particle filter makes of them. A part that reaches its
+    critical value fails in flight: an expensive, unscheduled event. Testing before a flight
+    costs a little and measures the on-ground features; replacing a part costs and takes the
+    aircraft off the line. The task: most availability for the least cost.
+
+    ## Action Space
+
+    ``Discrete(4)``:
+
+    | action | name | effect |
+    |---|---|---|
+    | 0 | fly | fly the slot's flight |
+    | 1 | test_and_fly | run the pre-flight test (G1, G3); fly only if it passes go/no-go |
+    | 2 | replace_spring | fit a new centering-spring pair; the slot (plus downtime) on ground |
+    | 3 | replace_seal | fit a new piston-seal set; the slot (plus downtime) on ground |
+
+    While the aircraft is on the ground for earlier downtime, 0 and 1 do nothing and 2, 3
+    replace the part at no extra downtime beyond the longest pending one.
+
+    ## Observation Space
+
+    ``obs_mode="features+rul"`` (default): ``Box(17,)`` float32, finite bounds
+    (``env.unwrapped.obs_names`` and ``obs_units`` name every entry):
+
+    | idx | name | unit | bounds | meaning |
+    |---|---|---|---|---|
+    | 0 | I2 | - | [-1, 1] | last flight: mean normalised xcorr of i with the healthy baseline |
+    | 1 | I6 | mm | [0, 5.2] | last flight: rms of the LVDT position |
+    | 2 | I7 | uA/mm | [0, 1e5] | last flight: rms(i) / rms(x) |
+    | 3 | G1 | uA | [-1e4, 1e4] | last pre-flight test: mean current |
+    | 4 | G3 | uA/mm | [-4e4, 4e4] | last pre-flight test: current / displacement |
+    | 5 | test_age | flights | [0, slots] | flights since that test (since reset if none) |
+    | 6 | spring_rul_mean | flights | [0, cap] | particle-filter RUL of the spring, mean |
+    | 7 | spring_rul_low | flights | [0, cap] | its low quantile (``rul_quantile``) |
+    | 8 | spring_risk | - | [0, 1] | P(spring fails within ``risk_horizon_flights``) |
+    | 9-11 | seal_rul_mean, seal_rul_low, seal_risk | | | the same for the seals |
+    | 12 | spring_alarm | 0/1 | [0, 1] | section-5.1 detector on G1 has alarmed |
+    | 13 | seal_alarm | 0/1 | [0, 1] | section-5.1 detector on G3 has alarmed |
+    | 14 | spring_age | flights | [0, slots] | flights since the spring pair was fitted |
+    | 15 | seal_age | flights | [0, slots] | flights since the seals were fitted |
+    | 16 | downtime | slots | [0, max] | slots still to spend on the ground |
+
+    Feature values before the first flight or test are the healthy surrogate means. RUL
+    entries saturate at ``rul_cap_flights``; feature entries saturate at their bounds (the
+    raw values are in ``info["features"]``). ``"features"``: entries 0-5 and 12-16 (no
+    filter). ``"state"``: the truth (an oracle's view): crack fraction of critical, wear
+    fraction, true spring RUL, true seal RUL (flights, capped), spring age, seal age,
+    downtime. ``"dict"``: a ``Dict`` of all of the above.
+
+    ## Rewards
+
+    Per step, in USD (``CostModel``): ``+flight_value`` for a flight flown, ``-test`` per
+    pre-flight test, ``-no_go_inspection`` when the test fails, ``-spring_replacement`` /
+    ``-seal_replacement``, and ``-(unscheduled_removal + mission_abort)`` for an in-flight
+    failure (the flight earns nothing; failed parts are replaced; ``failure_downtime_slots``
+    on the ground). ``info["reward_terms"]`` splits it.
+
+    ## Starting State
+
+    A new unit drawn from the design's scatter (spring geometry, Paris constant, initial
+    flaw, seal wear rate), new parts (``initial_health="new"``) or each part at a uniform
+    fraction of its life (``"random"``); the filters start from their priors.
+
+    ## Episode End
+
+    Truncation after ``episode_slots`` flight slots (default 2000, about 1.7 mean part lives).
+    There is no termination: a failure is an event with its cost, not the end.
+
+    ## Arguments
+
+    ``gym.make("scas_env/ScasMaintenance-v0", fidelity=..., obs_mode=..., episode_slots=...,
+    n_particles=..., cost_model=CostModel(...), params=ScasParams(...), scenario=Scenario(...))``.
+    Keywords are the fields of :class:`~scas_env.scenario.Scenario` (or pass ``scenario``);
+    unknown keywords raise ``ValueError``. ``params`` other than the default are calibrated
+    from physics at construction (seconds); the feature surrogate is the shipped one.
+
+    ## Version History
+
+    * v0: initial release.
+
+    ## Example
+
+    >>> import gymnasium as gym
+    >>> import scas_env
+    >>> env = gym.make("scas_env/ScasMaintenance-v0")
+    >>> obs, info = env.reset(seed=0)
+    >>> obs.shape, env.action_space
+    ((17,), Discrete(4))
+    >>> obs, reward, terminated, truncated, info = env.step(1)
+    >>> float(reward)  # flight value minus the test
+    2400.0
+    """
+
+    metadata: ClassVar[dict[str, Any]] = {"render_modes": ["ansi"]}
+
+    def __init__(
+        self,
+        *,
+        scenario: Scenario | None = None,
+        cost_model: CostModel | None = None,
+        params: ScasParams | None = None,
+        calibration: Calibration | None = None,
+        surrogate: SurrogateModel | None = None,
+        render_mode: str | None = None,
+        **scenario_fields: Any,
+    ) -> None:
+        if scenario is not None and scenario_fields:
+            raise ValueError(
+                "pass either scenario=Scenario(...) or its fields, not both: "
+                f"{sorted(scenario_fields)}"
+            )
+        self.scenario = scenario if scenario is not None else Scenario.from_dict(scenario_fields)
+        self.costs = cost_model if cost_model is not None else CostModel()
+        self.params = params if params is not None else ScasParams()
+        for name, value, cls in (
+            ("scenario", self.scenario, Scenario),
+            ("cost_model", self.costs, CostModel),
+            ("params", self.params, ScasParams),
+        ):
+            if not isinstance(value, cls):
+                raise ValueError(f"{name} must be a {cls.__name__}, got {type(value).__name__}")
+        if render_mode not in (None, "ansi"):
+            raise ValueError(f"render_mode = {render_mode!r} must be None or 'ansi'")
+        self.render_mode = render_mode
+        self.calibration = calibration if calibration is not None else calibration_for(self.params)
+        self.surrogate = surrogate if surrogate is not None else default_surrogate()
+        self.world = ActuatorWorld(self.params, self.scenario, self.calibration, self.surrogate)
+        self.builder = ObservationBuilder(self.scenario, self.costs, self.surrogate, self.params)
+        self.observation_space = self.builder.space
+        self.action_space = spaces.Discrete(4)
+        self.obs_names, self.obs_units = self.builder.names, self.builder.units
+        self.monitor: HealthMonitor | None = None
+
+    # ------------------------------------------------------------------ gym API
+    def reset(
+        self, *, seed: int | None = None, options: dict[str, Any] | None = None
+    ) -> tuple[Any, dict[str, Any]]:
+        super().reset(seed=seed)
+        if options:
+            raise ValueError(f"options are not supported, got {sorted(options)}")
+        rng = self.np_random
+        self.world.reset(rng)
+        self.monitor = HealthMonitor(
+            self.params, self.scenario, self.calibration, self.surrogate, rng
+        )
+        self.monitor.reset()
+        self.slot = 0
+        self.downtime = 0
+        self.part_age = {"spring": 0, "seal": 0}
+        self.stats = _Stats()
+        self.builder.reset()
+        return self._observation(), self._info({})
+
+    def step(self, action: Any) -> tuple[Any, float, bool, bool, dict[str, Any]]:
+        if self.monitor is None:
+            raise RuntimeError("call reset() before step()")
+        if not self.action_space.contains(action):
+            raise ValueError(f"action = {action!r} is not in Discrete(4): {ACTION_NAMES}")
+        action = int(action)
+        rng = self.np_random
+        terms = dict.fromkeys(("flight", "test", "no_go", "replacement", "failure"), 0.0)
+        grounded = self.downtime > 0
+        flew = False
+        if action in (REPLACE_SPRING, REPLACE_SEAL):
+            part = PARTS[action - REPLACE_SPRING]
+            self._replace(part, rng, terms, failed=False)
+            extra = (
+                self.costs.spring_downtime_slots
+                if part == "spring"
+                else self.costs.seal_downtime_slots
+            )
+            self.downtime = max(self.downtime, 1 + extra)
+        elif not grounded:
+            go = True
+            if action == TEST_AND_FLY:
+                feats = self.world.test(rng)
+                self.monitor.tested(feats)
+                self.builder.tested(feats)
+                self.stats.tests += 1
+                terms["test"] = -self.costs.test_usd
+                go = self._go(feats)
+                if not go:
+                    self.stats.no_go += 1
+                    terms["no_go"] = -self.costs.no_go_inspection_usd
+            if go:
+                flew = self._fly(rng, terms)
+        self.downtime = max(self.downtime - 1, 0)
+        self.slot += 1
+        self.stats.flown += int(flew)
+        self.builder.slot_passed()
+        for part in PARTS:
+            self.part_age[part] += int(flew)
+        reward = float(sum(terms.values()))
+        self.stats.cost -= sum(v for k, v in terms.items() if k != "flight")
+        self.stats.revenue += terms["flight"]
+        truncated = self.slot >= self.scenario.episode_slots
+        return self._observation(), reward, False, truncated, self._info(terms)
+
+    def render(self) -> str | None:
+        if self.render_mode != "ansi":
+            return None
+        w = self.world
+        return (
+            f"slot {self.slot}: crack {w.crack_m * 1e6:.0f} um ({w.crack_fraction:.0%}), "
+            f"wear {w.wear_m * 1e6:.2f} um ({w.wear_fraction:.0%}), downtime {self.downtime}, "
+            f"availability {self.stats.flown / max(self.slot, 1):.3f}"
+        )
+
+    # ------------------------------------------------------------------ internals
+    def _go(self, feats: dict[str, float]) -> bool:
+        """Go/no-go: every ground feature inside its healthy two-sided acceptance band."""
+        return self.builder.within_acceptance(feats)
+
+    def _fly(self, rng: np.random.Generator, terms: dict[str, float]) -> bool:
+        result = self.world.fly(rng)
+        self.monitor.flown(result.features)
+        if result.failed:
+            terms["failure"] = -self.costs.failure_total_usd
+            for part in result.failed:
+                self.stats.failures[part] += 1
+                self._replace(part, rng, terms, failed=True)
+            self.downtime = max(self.downtime, 1 + self.costs.failure_downtime_slots)
+            return False
+        self.builder.flown(result.features)
+        terms["flight"] = self.costs.flight_value_usd
+        return True
+
+    def _replace(
+        self, part: str, rng: np.random.Generator, terms: dict[str, float], *, failed: bool
+    ) -> None:
+        rul = self.world.true_rul_flights()[PARTS.index(part)]
+        if not failed:
+            cost = (
+                self.costs.spring_replacement_usd
+                if part == "spring"
+                else self.costs.seal_replacement_usd
+            )
+            terms["replacement"] -= cost
+            self.stats.wasted_life[part].append(min(rul, self.scenario.rul_cap_flights))
+        self.stats.replacements[part] += 1
+        self.world.replace(part, rng)
+        self.monitor.replaced(part)
+        self.part_age[part] = 0
+
+    def _observation(self) -> Any:
+        return self.builder.observation(self)
+
+    def _info(self, terms: dict[str, float]) -> dict[str, Any]:
+        s, w = self.stats, self.world
+        spring_rul, seal_rul = w.true_rul_flights()
+        return {
+            "slot": self.slot,
+            "availability": s.flown / self.slot if self.slot else 1.0,
+            "flights": s.flown,
+            "cost_usd": s.cost,
+            "revenue_usd": s.revenue,
+            "failures": dict(s.failures),
+            "replacements": dict(s.replacements),
+            "tests": s.tests,
+            "no_go": s.no_go,
+            "wasted_life_flights": {k: list(v) for k, v in s.wasted_life.items()},
+            "reward_terms": terms,
+            "features": self.builder.raw_features(),
+            "true_state": {
+                "crack_depth_m": w.crack_m,
+                "seal_wear_m": w.wear_m,
+                "crack_fraction": w.crack_fraction,
+                "wear_fraction": w.wear_fraction,
+                "spring_rul_flights": spring_rul,
+                "seal_rul_flights": seal_rul,
+            },
+            "downtime": self.downtime,
+        }
+
+
+class _Stats:
+    """Running counters of an episode."""
+
+    def __init__(self) -> None:
+        self.flown = 0
+        self.tests = 0
+        self.no_go = 0
+        self.cost = 0.0
+        self.revenue = 0.0
+        self.failures = dict.fromkeys(PARTS, 0)
+        self.replacements = dict.fromkeys(PARTS, 0)
+        self.wasted_life: dict[str, list[float]] = {p: [] for p in PARTS}
+
+
+__all__ = ["ACTION_NAMES", "ScasMaintenanceEnv"]

@@ -1,0 +1,230 @@
+"""The operator's view: what a ground station computes from the measured features.
+
+:class:`HealthMonitor` keeps, for each part, a particle filter on its severity with an
+unknown growth multiplier (``prognostics.particle_filter``) and a section-5.1 detector, and
+turns them into RUL summaries. It sees only features, never the truth.
+
+* **Spring** filter: crack depth (m), process = the calibrated growth table (Paris), prior
+  a0 ~ N(a0_nom, sigma_a0) and log theta ~ N(0, sigma_logC); measurement = G1 (mean test
+  current) through the surrogate's G1-vs-crack curve.
+* **Seal** filter: wear (m), process = linear wear, prior 0 and log theta ~ N(0, sigma_logk);
+  measurements = G3 (test current/displacement) and the in-flight I7, each through the
+  surrogate's curve against wear.
+* **Installation baseline**: ground features carry a per-installation offset (spring
+  tolerances). After a spring pair is fitted, the first ``BASELINE_TESTS`` tests estimate
+  that offset (feature minus the model mean at the current estimate) and are not used by the
+  filters; later tests use the offset-corrected value with the run-to-run noise.
+* **Concurrent faults**: each ground feature responds to both faults. Each filter corrects
+  its measurement by the other fault's effect at the other filter's current estimate
+  (``mu(c_hat, w_hat) - mu(c_hat, 0)`` for the spring, symmetrically for the seal).
+* **Detection**: the section-5.1 rule (``prognostics.detection``) on the corrected G1
+  (spring, both directions) and G3 (seal, rising), baseline = the healthy run-to-run
+  distribution of the surrogate.
+* ``filter_noise_scale`` and ``filter_growth_bias`` of the scenario make the filters assume
+  more noise or faster/slower growth than the truth (filter-quality studies).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.stats import norm
+
+from prognostics.degradation_models import linear_wear_model, paris_crack_model
+from prognostics.detection import DetectorConfig, PercentileDetector
+from prognostics.measurement import MeasurementModel, measurement_from_curve
+from prognostics.particle_filter import ParticleFilter
+from prognostics.rul import HazardZone, rul_summary
+from scas_env.calibration import Calibration
+from scas_env.params import ScasParams
+from scas_env.scenario import Scenario
+from scas_env.surrogate import SurrogateModel
+from scas_env.uncertainty import truncated_normal
+
+BASELINE_TESTS = 3
+#: Artificial-evolution random walk of log theta per flight (lets the filters track the unit).
+THETA_WALK = 0.005
+#: Quantiles of the healthy distribution the detectors are fitted on (deterministic).
+_BASELINE_Z = norm.ppf(np.linspace(0.0005, 0.9995, 2000))
+
+
+@dataclass(frozen=True)
+class PartEstimate:
+    """RUL summary of one part (flights) and its detection flag."""
+
+    rul_mean: float
+    rul_low: float
+    prob_failure: float
+    detected: bool
+    severity_mean: float
+
+
+class HealthMonitor:
+    """Particle filters, baselines and detectors of one actuator (module docstring)."""
+
+    def __init__(
+        self,
+        params: ScasParams,
+        scenario: Scenario,
+        calibration: Calibration,
+        surrogate: SurrogateModel,
+        rng: np.random.Generator,
+    ) -> None:
+        self.params, self.scenario, self.cal, self.sur = params, scenario, calibration, surrogate
+        self.rng = rng
+        self.a_fail = calibration.spring_failure_depth_m
+        self.w_crit = calibration.seal_critical_wear_m
+        noise = scenario.filter_noise_scale
+        bias = scenario.filter_growth_bias
+        c_grid = surrogate.crack_grid * self.a_fail
+        w_grid = surrogate.wear_grid * self.w_crit
+        k1, k3, k7 = (surrogate.index(f) for f in ("G1", "G3", "I7"))
+        self._k = {"G1": k1, "G3": k3, "I7": k7}
+        self.g1_model = measurement_from_curve(
+            c_grid, surrogate.mean[k1, :, 0], noise * _baselined(surrogate.run_std[k1, :, 0])
+        )
+        self.g3_model = measurement_from_curve(
+            w_grid, surrogate.mean[k3, 0, :], noise * _baselined(surrogate.run_std[k3, 0, :])
+        )
+        i7_total = np.hypot(surrogate.unit_std[k7, 0, :], surrogate.run_std[k7, 0, :])
+        self.i7_model = measurement_from_curve(w_grid, surrogate.mean[k7, 0, :], noise * i7_total)
+        a0 = params.spring.initial_crack_m
+        rate_a0 = float(
+            np.interp(a0, calibration.crack_depth_m, calibration.crack_rate_m_per_flight)
+        )
+        self.spring_filter = ParticleFilter(
+            paris_crack_model(
+                calibration.crack_depth_m,
+                bias * calibration.crack_rate_m_per_flight,
+                process_noise_std_m=float(calibration.crack_cv_at(a0)) * rate_a0,
+                log_theta_noise_std=THETA_WALK,
+            ),
+            self.g1_model,
+            scenario.n_particles,
+            rng,
+        )
+        self.seal_filter = ParticleFilter(
+            linear_wear_model(
+                bias * calibration.wear_rate_m_per_flight,
+                process_noise_std=calibration.wear_cv * calibration.wear_rate_m_per_flight,
+                log_theta_noise_std=THETA_WALK,
+            ),
+            self.g3_model,
+            scenario.n_particles,
+            rng,
+        )
+        det = DetectorConfig(window=scenario.detection_window, direction="both")
+        self.crack_detector = PercentileDetector(det).fit(
+            surrogate.mean[k1, 0, 0] + surrogate.run_std[k1, 0, 0] * _BASELINE_Z
+        )
+        det_w = DetectorConfig(window=scenario.detection_window, direction="rising")
+        self.seal_detector = PercentileDetector(det_w).fit(
+            surrogate.mean[k3, 0, 0] + surrogate.run_std[k3, 0, 0] * _BASELINE_Z
+        )
+        self.crack_detected = False
+        self.seal_detected = False
+
+    # ------------------------------------------------------------------ events
+    def reset(self) -> None:
+        self.replaced("spring")
+        self.replaced("seal")
+
+    def replaced(self, part: str) -> None:
+        """A new part is fitted: its filter restarts from the prior."""
+        unc, spring = self.params.uncertainty, self.params.spring
+        if part == "spring":
+            a0, s0 = spring.initial_crack_m, unc.initial_crack_sigma_m
+
+            def prior_a(rng: np.random.Generator, n: int) -> np.ndarray:
+                return truncated_normal(rng, a0, s0, lower=0.0, upper=self.a_fail, size=n)
+
+            self.spring_filter.reset(prior_a, _lognormal_sampler(unc.paris_c_log_sigma))
+            self._baseline: dict[str, list[float]] = {"G1": [], "G3": []}
+            self._offset = {"G1": 0.0, "G3": 0.0}
+            self.crack_detector.reset()
+            self.crack_detected = False
+        elif part == "seal":
+            self.seal_filter.reset(0.0, _lognormal_sampler(unc.wear_rate_log_sigma))
+            self.seal_detector.reset()
+            self.seal_detected = False
+        else:
+            raise ValueError(f"part = {part!r} must be 'spring' or 'seal'")
+
+    def flown(self, features: dict[str, float]) -> None:
+        """One flight of usage; in-flight features (NaN when aborted) update the seal filter."""
+        self.spring_filter.predict(1.0)
+        self.seal_filter.predict(1.0)
+        self.seal_filter.update(features["I7"], self.i7_model)
+
+    def tested(self, features: dict[str, float]) -> None:
+        """A pre-flight test: baseline first, then offset- and cross-corrected updates."""
+        c_hat = self.spring_filter.estimate().x_mean / self.a_fail
+        w_hat = self.seal_filter.estimate().x_mean / self.w_crit
+        c_hat, w_hat = min(max(c_hat, 0.0), 1.0), min(max(w_hat, 0.0), 1.0)
+        mean = self.sur.mean_at(c_hat, w_hat)
+        if len(self._baseline["G1"]) < BASELINE_TESTS:
+            for f in ("G1", "G3"):
+                self._baseline[f].append(features[f] - float(mean[self._k[f]]))
+                self._offset[f] = float(np.mean(self._baseline[f]))
+            return
+        cross_g1 = float(mean[self._k["G1"]] - self.sur.mean_at(c_hat, 0.0)[self._k["G1"]])
+        cross_g3 = float(mean[self._k["G3"]] - self.sur.mean_at(0.0, w_hat)[self._k["G3"]])
+        g1 = features["G1"] - self._offset["G1"] - cross_g1
+        g3 = features["G3"] - self._offset["G3"] - cross_g3
+        self.spring_filter.update(g1)
+        self.seal_filter.update(g3, self.g3_model)
+        self.crack_detected = self.crack_detector.update(g1) or self.crack_detected
+        self.seal_detected = self.seal_detector.update(g3) or self.seal_detected
+
+    # ------------------------------------------------------------------ outputs
+    def estimate(self, part: str) -> PartEstimate:
+        """RUL summary (flights, capped at the scenario's ``rul_cap_flights``)."""
+        s = self.scenario
+        if part == "spring":
+            pf, model, hazard, detected = (
+                self.spring_filter,
+                self.spring_filter.process,
+                HazardZone(self.a_fail),
+                self.crack_detected,
+            )
+        else:
+            pf, model, hazard, detected = (
+                self.seal_filter,
+                self.seal_filter.process,
+                HazardZone(self.w_crit),
+                self.seal_detected,
+            )
+        summary = rul_summary(
+            pf.x,
+            pf.theta,
+            pf.weights,
+            model,
+            hazard,
+            horizon_steps=s.risk_horizon_flights,
+            low_quantile=s.rul_quantile,
+        )
+        cap = s.rul_cap_flights
+        return PartEstimate(
+            rul_mean=min(summary.mean, cap),
+            rul_low=min(summary.low, cap),
+            prob_failure=summary.prob_failure,
+            detected=detected,
+            severity_mean=float(pf.weights @ pf.x),
+        )
+
+
+def _baselined(run_std: np.ndarray) -> np.ndarray:
+    """Noise of an offset-corrected measurement: run noise plus the offset's own error."""
+    return run_std * math.sqrt(1.0 + 1.0 / BASELINE_TESTS)
+
+
+def _lognormal_sampler(sigma: float):
+    def sample(rng: np.random.Generator, n: int) -> np.ndarray:
+        return np.exp(sigma * rng.standard_normal(n))
+
+    return sample
+
+
+__all__ = ["BASELINE_TESTS", "HealthMonitor", "MeasurementModel", "PartEstimate"]

@@ -1,0 +1,184 @@
+"""Observation layout of ``ScasMaintenance-v0``: names, units, bounds, and assembly.
+
+Float64 inside; the observation is cast to float32 here, at the boundary. Entries saturate
+at their documented bounds (the raw values travel in ``info["features"]``).
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+from gymnasium import spaces
+from scipy.stats import norm
+
+from scas_env.costs import CostModel
+from scas_env.params import ScasParams
+from scas_env.scenario import Scenario
+from scas_env.surrogate import SurrogateModel
+from scas_env.world import FLIGHT_FEATURES, GROUND_FEATURES
+
+if TYPE_CHECKING:
+    from scas_env.env import ScasMaintenanceEnv
+
+#: feature -> (display unit, factor from SI, lower bound, upper bound) in display units
+FEATURE_UNITS = {
+    "I2": ("-", 1.0, -1.0, 1.0),
+    "I6": ("mm", 1e3, 0.0, 5.2),
+    "I7": ("uA/mm", 1e3, 0.0, 1e5),
+    "G1": ("uA", 1e6, -1e4, 1e4),
+    "G3": ("uA/mm", 1e3, -4e4, 4e4),
+}
+
+
+class ObservationBuilder:
+    """Keeps the last measured features and assembles observations for one env."""
+
+    def __init__(
+        self, scenario: Scenario, costs: CostModel, surrogate: SurrogateModel, params: ScasParams
+    ) -> None:
+        self.scenario = scenario
+        slots = float(scenario.episode_slots)
+        cap = float(scenario.rul_cap_flights)
+        max_down = 1.0 + max(
+            costs.failure_downtime_slots, costs.seal_downtime_slots, costs.spring_downtime_slots
+        )
+        feats = [*FLIGHT_FEATURES, *GROUND_FEATURES]
+        rows: list[tuple[str, str, float, float]] = [
+            (f, FEATURE_UNITS[f][0], FEATURE_UNITS[f][2], FEATURE_UNITS[f][3]) for f in feats
+        ]
+        rows.append(("test_age", "slots", 0.0, slots))
+        filt = [
+            (f"{part}_{name}", unit, 0.0, hi)
+            for part in ("spring", "seal")
+            for name, unit, hi in (
+                ("rul_mean", "flights", cap),
+                ("rul_low", "flights", cap),
+                ("risk", "-", 1.0),
+            )
+        ]
+        tail = [
+            ("spring_alarm", "0/1", 0.0, 1.0),
+            ("seal_alarm", "0/1", 0.0, 1.0),
+            ("spring_age", "flights", 0.0, slots),
+            ("seal_age", "flights", 0.0, slots),
+            ("downtime", "slots", 0.0, max_down),
+        ]
+        state = [
+            ("crack_fraction", "-", 0.0, 1.0),
+            ("wear_fraction", "-", 0.0, 1.0),
+            ("spring_rul_true", "flights", 0.0, cap),
+            ("seal_rul_true", "flights", 0.0, cap),
+            ("spring_age", "flights", 0.0, slots),
+            ("seal_age", "flights", 0.0, slots),
+            ("downtime", "slots", 0.0, max_down),
+        ]
+        self.groups = {"features": rows, "filter": filt, "monitor": tail, "state": state}
+        mode = scenario.obs_mode
+        layout = {
+            "features+rul": rows + filt + tail,
+            "features": rows + tail,
+            "state": state,
+        }
+        if mode == "dict":
+            self.space = spaces.Dict({k: _box(v) for k, v in self.groups.items()})
+            self.names = tuple(f"{k}.{r[0]}" for k, v in self.groups.items() for r in v)
+            self.units = tuple(r[1] for v in self.groups.values() for r in v)
+        else:
+            self.layout = layout[mode]
+            self.space = _box(self.layout)
+            self.names = tuple(r[0] for r in self.layout)
+            self.units = tuple(r[1] for r in self.layout)
+        k = {f: surrogate.index(f) for f in (*FLIGHT_FEATURES, *GROUND_FEATURES)}
+        self.healthy = {f: float(surrogate.mean[k[f], 0, 0]) for f in k}
+        total = {
+            f: float(np.hypot(surrogate.unit_std[k[f], 0, 0], surrogate.run_std[k[f], 0, 0]))
+            for f in GROUND_FEATURES
+        }
+        # two ground features, two-sided each: the combined false no-go rate is alpha
+        z = float(norm.isf(scenario.go_no_go_false_alarm / (2 * len(GROUND_FEATURES))))
+        self.acceptance = {
+            f: (self.healthy[f] - z * total[f], self.healthy[f] + z * total[f])
+            for f in GROUND_FEATURES
+        }
+        self.reset()
+
+    def reset(self) -> None:
+        self.last = dict(self.healthy)
+        self.test_age = 0
+
+    def tested(self, feats: dict[str, float]) -> None:
+        self.last.update(feats)
+        self.test_age = 0
+
+    def flown(self, feats: dict[str, float]) -> None:
+        self.last.update(feats)
+
+    def slot_passed(self) -> None:
+        self.test_age += 1
+
+    def within_acceptance(self, feats: dict[str, float]) -> bool:
+        return all(lo <= feats[f] <= hi for f, (lo, hi) in self.acceptance.items())
+
+    def raw_features(self) -> dict[str, float]:
+        return dict(self.last)
+
+    def _values(self, env: ScasMaintenanceEnv) -> dict[str, list[float]]:
+        out: dict[str, list[float]] = {}
+        if self.scenario.obs_mode in ("features+rul", "features", "dict"):
+            out["features"] = [
+                self.last[f] * FEATURE_UNITS[f][1] for f in (*FLIGHT_FEATURES, *GROUND_FEATURES)
+            ] + [float(self.test_age)]
+            m = env.monitor
+            out["monitor"] = [
+                float(m.crack_detected),
+                float(m.seal_detected),
+                float(env.part_age["spring"]),
+                float(env.part_age["seal"]),
+                float(env.downtime),
+            ]
+        if self.scenario.obs_mode in ("features+rul", "dict"):
+            filt = []
+            for part in ("spring", "seal"):
+                e = env.monitor.estimate(part)
+                filt += [e.rul_mean, e.rul_low, e.prob_failure]
+            out["filter"] = filt
+        if self.scenario.obs_mode in ("state", "dict"):
+            w = env.world
+            spring_rul, seal_rul = w.true_rul_flights()
+            out["state"] = [
+                w.crack_fraction,
+                w.wear_fraction,
+                spring_rul,
+                seal_rul,
+                float(env.part_age["spring"]),
+                float(env.part_age["seal"]),
+                float(env.downtime),
+            ]
+        return out
+
+    def observation(self, env: ScasMaintenanceEnv) -> Any:
+        values = self._values(env)
+        if self.scenario.obs_mode == "dict":
+            return {k: _clip(values[k], self.groups[k]) for k in self.groups}
+        order = {
+            "features+rul": ("features", "filter", "monitor"),
+            "features": ("features", "monitor"),
+            "state": ("state",),
+        }[self.scenario.obs_mode]
+        return _clip([v for k in order for v in values[k]], self.layout)
+
+
+def _box(rows: list[tuple[str, str, float, float]]) -> spaces.Box:
+    low = np.array([r[2] for r in rows], dtype=np.float32)
+    high = np.array([r[3] for r in rows], dtype=np.float32)
+    return spaces.Box(low, high, dtype=np.float32)
+
+
+def _clip(values: list[float], rows: list[tuple[str, str, float, float]]) -> np.ndarray:
+    """Saturate at the documented bounds (the observation's definition) and cast to float32."""
+    low = np.array([r[2] for r in rows])
+    high = np.array([r[3] for r in rows])
+    return np.minimum(np.maximum(np.asarray(values, dtype=np.float64), low), high).astype(
+        np.float32
+    )

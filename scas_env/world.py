@@ -1,0 +1,263 @@
+"""The simulated actuator across flights: hidden state, degradation, measurements, failures.
+
+One :class:`ActuatorWorld` is one SCAS actuator in service. It knows the truth (crack
+depth, seal wear, the unit's growth constants) and answers three requests:
+
+* :meth:`ActuatorWorld.test`: run the pre-flight test, return G1 and G3;
+* :meth:`ActuatorWorld.fly`: fly one flight: in-flight features (I2, I6, I7) measured on the
+  way, damage added, and which parts failed (their critical value reached during the
+  flight: an in-flight failure; the flight is aborted and its features are not reported);
+* :meth:`ActuatorWorld.replace`: fit a new spring pair or a new seal set.
+
+Two fidelities, one interface:
+
+* ``"surrogate"``: features from :class:`~scas_env.surrogate.SurrogateModel`
+  (installation effects drawn when a spring pair is fitted); damage from the calibrated
+  growth tables: the crack advances by the damage integral of the table times the unit's
+  multiplier ``theta = C_unit / C_nom`` times a lognormal flight factor of the calibrated
+  flight-to-flight scatter, the wear by ``r k_w,unit / k_w,nom`` times its own factor.
+* ``"physics"``: the actuator is simulated for each test and each flight window
+  (:mod:`scas_env.measure`); the crack grows by Paris' law on the window's rainflow cycles
+  scaled to the flight, the wear by Archard on its friction work (:mod:`scas_env.degradation`).
+
+The spring failure depth is the nominal one (calibration) in the surrogate and the unit's
+own (its wire and coil diameters) in the physics; the seal fails at the calibrated
+critical wear in both. Everything random comes from the ``rng`` passed to each call.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from prognostics.degradation_models import paris_crack_model
+from scas_env.calibration import Calibration
+from scas_env.degradation import (
+    crack_increment_m,
+    flight_loads_from_run,
+    growth_model,
+    wear_increment_m,
+)
+from scas_env.health import CRACKED_SPRING, HealthState, actuator_config
+from scas_env.measure import flight_window, ground_test
+from scas_env.params import ScasParams
+from scas_env.physics.spring import failure_depth_from_params
+from scas_env.scenario import Scenario
+from scas_env.surrogate import SurrogateModel
+from scas_env.uncertainty import UnitSample, draw_run_conditions, draw_unit
+
+PARTS = ("spring", "seal")
+GROUND_FEATURES = ("G1", "G3")
+FLIGHT_FEATURES = ("I2", "I6", "I7")
+
+
+@dataclass(frozen=True)
+class FlightResult:
+    """Outcome of one flight.
+
+    Attributes
+    ----------
+    features : in-flight features (NaN when the flight was aborted by a failure).
+    failed : parts that reached their critical value during the flight.
+    """
+
+    features: dict[str, float]
+    failed: tuple[str, ...]
+
+
+class ActuatorWorld:
+    """One actuator in service (see the module docstring)."""
+
+    def __init__(
+        self,
+        params: ScasParams,
+        scenario: Scenario,
+        calibration: Calibration,
+        surrogate: SurrogateModel,
+    ) -> None:
+        self.params = params
+        self.scenario = scenario
+        self.calibration = calibration
+        self.surrogate = surrogate
+        self._table = paris_crack_model(
+            calibration.crack_depth_m, calibration.crack_rate_m_per_flight
+        )
+        self._damage_grid = np.asarray(self._table.damage(calibration.crack_depth_m))
+        self._flight_feature_idx = [surrogate.index(f) for f in FLIGHT_FEATURES]
+        self._ground_feature_idx = [surrogate.index(f) for f in GROUND_FEATURES]
+        self.unit: UnitSample | None = None
+        self.crack_m = 0.0
+        self.wear_m = 0.0
+        self.spring_failure_m = calibration.spring_failure_depth_m
+        self.unit_z = np.zeros(len(surrogate.features))
+
+    # ------------------------------------------------------------------ state
+    @property
+    def physics(self) -> bool:
+        return self.scenario.fidelity == "physics"
+
+    @property
+    def crack_fraction(self) -> float:
+        return self.crack_m / self.spring_failure_m
+
+    @property
+    def wear_fraction(self) -> float:
+        return self.wear_m / self.calibration.seal_critical_wear_m
+
+    @property
+    def theta(self) -> float:
+        """Crack growth multiplier of the fitted spring, C_unit / C_nom."""
+        return self.unit.paris_c / self.params.spring.paris_c
+
+    @property
+    def wear_multiplier(self) -> float:
+        """Wear rate multiplier of the fitted seals, k_w,unit / k_w,nom."""
+        return self.unit.wear_rate_m3_n_m / self.params.seal.wear_rate_m3_n_m
+
+    def true_rul_flights(self) -> tuple[float, float]:
+        """Expected flights to failure of (spring, seal) at the units' own rates (inf if the
+        fault is inactive or the crack is dormant below the threshold)."""
+        cal = self.calibration
+        if not self.scenario.crack_active or self.crack_m < cal.crack_dormant_below_m:
+            spring = math.inf
+        else:
+            x = np.array([self.crack_m])
+            spring = float(
+                self._table.usage_to_threshold(x, np.array([self.theta]), self.spring_failure_m)[0]
+            )
+        if not self.scenario.wear_active:
+            seal = math.inf
+        else:
+            rate = cal.wear_rate_m_per_flight * self.wear_multiplier
+            seal = max(cal.seal_critical_wear_m - self.wear_m, 0.0) / rate
+        return spring, seal
+
+    # ------------------------------------------------------------------ life cycle
+    def reset(self, rng: np.random.Generator) -> None:
+        """A new actuator: new unit, new parts (or parts part-way through life)."""
+        self.unit = draw_unit(self.params, rng)
+        self._fit_spring(self.unit, rng)
+        self.wear_m = 0.0
+        if self.scenario.initial_health == "random":
+            life_used = rng.random(2)
+            if (
+                self.scenario.crack_active
+                and self.crack_m >= self.calibration.crack_dormant_below_m
+            ):
+                start = float(self._table.damage(np.array([self.crack_m]))[0])
+                end = float(self._table.damage(np.array([self.spring_failure_m]))[0])
+                self.crack_m = float(
+                    self._table.inverse_damage(np.array([start + life_used[0] * (end - start)]))[0]
+                )
+            if self.scenario.wear_active:
+                self.wear_m = life_used[1] * self.calibration.seal_critical_wear_m
+
+    def _fit_spring(self, donor: UnitSample, rng: np.random.Generator) -> None:
+        """Fit the spring pair (geometry, Paris C, initial flaw) of ``donor``."""
+        self.unit = replace(
+            self.unit,
+            wire_diameter_m=donor.wire_diameter_m,
+            mean_coil_diameter_m=donor.mean_coil_diameter_m,
+            paris_c=donor.paris_c,
+            initial_crack_m=donor.initial_crack_m,
+        )
+        self.crack_m = donor.initial_crack_m if self.scenario.crack_active else 0.0
+        self.unit_z = self.surrogate.draw_unit_z(rng)
+        if self.physics:
+            self.spring_failure_m = failure_depth_from_params(
+                self.params,
+                wire_diameter_m=self.unit.wire_diameter_m[CRACKED_SPRING],
+                coil_diameter_m=self.unit.mean_coil_diameter_m[CRACKED_SPRING],
+            ).depth_m
+            self._growth = growth_model(self.params, self.unit)
+
+    def replace(self, part: str, rng: np.random.Generator) -> None:
+        """Fit a new spring pair (``"spring"``) or a new seal set (``"seal"``)."""
+        donor = draw_unit(self.params, rng)
+        if part == "spring":
+            self._fit_spring(donor, rng)
+        elif part == "seal":
+            self.unit = replace(self.unit, wear_rate_m3_n_m=donor.wear_rate_m3_n_m)
+            self.wear_m = 0.0
+        else:
+            raise ValueError(f"part = {part!r} must be one of {PARTS}")
+
+    # ------------------------------------------------------------------ measurements
+    def _config(self, rng: np.random.Generator):
+        health = HealthState(crack_depth_m=self.crack_m, seal_wear_m=self.wear_m)
+        conditions = draw_run_conditions(self.params, rng)
+        return actuator_config(self.params, unit=self.unit, conditions=conditions, health=health)
+
+    def _surrogate_features(
+        self, names: tuple[str, ...], idx: list[int], rng: np.random.Generator
+    ) -> dict[str, float]:
+        model = self.surrogate
+        c, w = min(self.crack_fraction, 1.0), min(self.wear_fraction, 1.0)
+        mean = model.mean_at(c, w)
+        unit_std = model.unit_std_at(c, w)
+        run_std = model.run_std_at(c, w)
+        z = rng.standard_normal(len(idx))
+        return {
+            f: float(mean[k] + unit_std[k] * self.unit_z[k] + run_std[k] * z[n])
+            for n, (f, k) in enumerate(zip(names, idx, strict=True))
+        }
+
+    def test(self, rng: np.random.Generator) -> dict[str, float]:
+        """Run the pre-flight test; returns G1 (A) and G3 (A/m)."""
+        if self.physics:
+            feats = ground_test(self.params, self._config(rng), rng).features
+            return {f: feats[f] for f in GROUND_FEATURES}
+        return self._surrogate_features(GROUND_FEATURES, self._ground_feature_idx, rng)
+
+    def fly(self, rng: np.random.Generator) -> FlightResult:
+        """Fly one flight: measure, degrade, report failures."""
+        cal = self.calibration
+        if self.physics:
+            config = self._config(rng)
+            window = flight_window(self.params, config, rng, self.params.mission.flight_window_s)
+            feats = {f: window.features[f] for f in FLIGHT_FEATURES}
+            loads = flight_loads_from_run(
+                window.run, self.params.mission.flight_duration_s, config.spring_rate_1_n_m
+            )
+            d_crack = (
+                crack_increment_m(self.params, self.unit, self._growth, self.crack_m, loads)
+                if self.scenario.crack_active
+                else 0.0
+            )
+            new_crack = self.crack_m + d_crack
+            d_wear = (
+                wear_increment_m(self.params, self.unit, loads)
+                if self.scenario.wear_active
+                else 0.0
+            )
+            new_wear = self.wear_m + d_wear
+        else:
+            feats = self._surrogate_features(FLIGHT_FEATURES, self._flight_feature_idx, rng)
+            z = rng.standard_normal(2)
+            new_crack = self.crack_m
+            if self.scenario.crack_active and self.crack_m >= cal.crack_dormant_below_m:
+                factor = _lognormal_unit_mean(float(cal.crack_cv_at(self.crack_m)), z[0])
+                damage = float(self._table.damage(np.array([self.crack_m]))[0])
+                damage += self.theta * factor
+                new_crack = float(self._table.inverse_damage(np.array([damage]))[0])
+            new_wear = self.wear_m
+            if self.scenario.wear_active:
+                factor = _lognormal_unit_mean(cal.wear_cv, z[1])
+                new_wear += cal.wear_rate_m_per_flight * self.wear_multiplier * factor
+        failed = []
+        if new_crack >= self.spring_failure_m:
+            failed.append("spring")
+        if new_wear >= cal.seal_critical_wear_m:
+            failed.append("seal")
+        self.crack_m, self.wear_m = new_crack, new_wear
+        if failed:
+            feats = {f: math.nan for f in FLIGHT_FEATURES}
+        return FlightResult(feats, tuple(failed))
+
+
+def _lognormal_unit_mean(cv: float, z: float) -> float:
+    """exp(s z - s^2/2) with s^2 = ln(1 + cv^2): a lognormal factor of mean 1 and CV ``cv``."""
+    s2 = math.log1p(cv * cv)
+    return math.exp(math.sqrt(s2) * z - 0.5 * s2)
