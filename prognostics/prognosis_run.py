@@ -68,9 +68,7 @@ class PrognosisTrace:
     rul_samples: tuple[FloatArray, ...]
     rul_weights: tuple[FloatArray, ...]
 
-    def metrics(
-        self, eol: float, end: float | None = None, **kwargs: object
-    ) -> PrognosticMetrics:
+    def metrics(self, eol: float, end: float | None = None, **kwargs: object) -> PrognosticMetrics:
         """:func:`prognostics.metrics.evaluate_predictions` of the predictions up to ``end``.
 
         ``eol`` is the true end of life and ``end`` (default ``eol``, exclusive) the end of
@@ -125,7 +123,9 @@ def run_prognosis(
     u = np.asarray(usage, dtype=np.float64)
     y = np.asarray(measurements, dtype=np.float64)
     if u.ndim != 1 or u.size == 0 or y.shape != u.shape:
-        raise ValueError(f"usage and measurements must be 1-D of one length, got {u.shape}, {y.shape}")
+        raise ValueError(
+            f"usage and measurements must be 1-D of one length, got {u.shape}, {y.shape}"
+        )
     if not (np.all(np.isfinite(u)) and np.all(u > 0.0)):
         raise ValueError("usage must be finite and > 0 at every test")
     if isinstance(start_index, bool) or not 0 <= start_index < u.size:

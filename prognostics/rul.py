@@ -34,7 +34,7 @@ import numpy as np
 from numba import njit
 from scipy.special import ndtr
 
-from prognostics.degradation_models import TabulatedRateModel
+from prognostics.degradation_models import TabulatedRateModel, damage_array
 
 
 @dataclass(frozen=True)
@@ -275,3 +275,71 @@ def rul_summary(
         high_quantile=high_quantile,
         prob_failure=risk,
     )
+
+
+@njit(cache=True)
+def _rul_from_damage(
+    d_x: np.ndarray, log_theta: np.ndarray, d_threshold: float, out: np.ndarray
+) -> None:
+    for i in range(d_x.size):
+        remaining = d_threshold - d_x[i]
+        out[i] = remaining / math.exp(log_theta[i]) if remaining > 0.0 else 0.0
+
+
+class RulPredictor:
+    """Fast repeated RUL summaries of one filter's particles against a fixed threshold.
+
+    The same numbers as :func:`rul_summary` with a deterministic threshold, for a hot loop
+    (an environment step): the threshold's damage ``I(H)`` is computed once, buffers are
+    reused, and the particle arrays (the filter's own, already validated) are not checked
+    again. RUL of particle i = ``max(I(H) - I(x_i), 0) / theta_i`` steps of one usage unit.
+    """
+
+    def __init__(
+        self,
+        model: TabulatedRateModel,
+        threshold: float,
+        n_particles: int,
+        *,
+        horizon_steps: float,
+        low_quantile: float = 0.05,
+        high_quantile: float = 0.95,
+    ) -> None:
+        if not math.isfinite(threshold):
+            raise ValueError(f"threshold = {threshold} must be finite")
+        if not (math.isfinite(horizon_steps) and horizon_steps >= 0.0):
+            raise ValueError(f"horizon_steps = {horizon_steps} must be finite and >= 0")
+        if not 0.0 <= low_quantile <= 0.5 <= high_quantile <= 1.0:
+            raise ValueError(
+                f"need 0 <= low_quantile ({low_quantile}) <= 0.5 "
+                f"<= high_quantile ({high_quantile}) <= 1"
+            )
+        self.model = model
+        self.d_threshold = float(model.damage(np.array([threshold]))[0])
+        self.horizon = float(horizon_steps)
+        self.levels = np.array([low_quantile, 0.5, high_quantile])
+        self._d = np.empty(n_particles)
+        self._rul = np.empty(n_particles)
+        self._q = np.empty(3)
+
+    def summary(self, x: np.ndarray, log_theta: np.ndarray, weights: np.ndarray) -> RulSummary:
+        """Weighted RUL summary of particles ``x`` with log multipliers ``log_theta``."""
+        damage_array(*self.model.table_args, x, self._d)
+        _rul_from_damage(self._d, log_theta, self.d_threshold, self._rul)
+        status, mean, std, risk = _weighted_summary(
+            self._rul, weights, self.levels, self.horizon, self._q
+        )
+        if status:
+            raise ValueError("particle weights or RUL values are not finite")
+        low, median, high = self._q
+        return RulSummary(
+            mean=mean,
+            std=std,
+            median=float(median),
+            low=float(low),
+            high=float(high),
+            low_quantile=float(self.levels[0]),
+            high_quantile=float(self.levels[2]),
+            horizon_steps=self.horizon,
+            prob_failure=risk,
+        )

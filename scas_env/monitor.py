@@ -36,7 +36,7 @@ from prognostics.degradation_models import linear_wear_model, paris_crack_model
 from prognostics.detection import DetectorConfig, PercentileDetector
 from prognostics.measurement import MeasurementModel, measurement_from_curve
 from prognostics.particle_filter import ParticleFilter
-from prognostics.rul import HazardZone, rul_summary
+from prognostics.rul import RulPredictor
 from scas_env.calibration import Calibration
 from scas_env.params import ScasParams
 from scas_env.scenario import Scenario
@@ -125,6 +125,19 @@ class HealthMonitor:
         )
         self.crack_detected = False
         self.seal_detected = False
+        self._rul = {
+            part: RulPredictor(
+                pf.process,
+                threshold,
+                scenario.n_particles,
+                horizon_steps=scenario.risk_horizon_flights,
+                low_quantile=scenario.rul_quantile,
+            )
+            for part, pf, threshold in (
+                ("spring", self.spring_filter, self.a_fail),
+                ("seal", self.seal_filter, self.w_crit),
+            )
+        }
 
     # ------------------------------------------------------------------ events
     def reset(self) -> None:
@@ -183,28 +196,12 @@ class HealthMonitor:
         """RUL summary (flights, capped at the scenario's ``rul_cap_flights``)."""
         s = self.scenario
         if part == "spring":
-            pf, model, hazard, detected = (
-                self.spring_filter,
-                self.spring_filter.process,
-                HazardZone(self.a_fail),
-                self.crack_detected,
-            )
+            pf, detected = self.spring_filter, self.crack_detected
+        elif part == "seal":
+            pf, detected = self.seal_filter, self.seal_detected
         else:
-            pf, model, hazard, detected = (
-                self.seal_filter,
-                self.seal_filter.process,
-                HazardZone(self.w_crit),
-                self.seal_detected,
-            )
-        summary = rul_summary(
-            pf.x,
-            pf.theta,
-            pf.weights,
-            model,
-            hazard,
-            horizon_steps=s.risk_horizon_flights,
-            low_quantile=s.rul_quantile,
-        )
+            raise ValueError(f"part = {part!r} must be 'spring' or 'seal'")
+        summary = self._rul[part].summary(pf.x, pf.log_theta, pf.weights)
         cap = s.rul_cap_flights
         return PartEstimate(
             rul_mean=min(summary.mean, cap),

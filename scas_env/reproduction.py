@@ -390,8 +390,8 @@ def _path_unit(
 class PathPrognosis:
     """One prognosis path: truth, tests, detection and the filter output with its metrics.
 
-    ``unit_offset`` is the feature offset of the unit removed before filtering
-    (:func:`unit_offset`); ``eoup_flights`` the end of useful predictions.
+    ``unit_gain`` and ``measurement_model`` refer the unit's feature to the population
+    (:func:`unit_reference`); ``eoup_flights`` is the end of useful predictions.
     """
 
     path: DegradationPath
@@ -402,32 +402,45 @@ class PathPrognosis:
     measurements: FloatArray
     alarms: NDArray[np.bool_]
     detection_index: int | None
-    unit_offset: float
+    unit_gain: float
     eoup_flights: float
     trace: PrognosisTrace
     metrics: PrognosticMetrics
     measurement_model: MeasurementModel
 
 
-def unit_offset(
+def unit_reference(
     y: FloatArray,
     flights: FloatArray,
     model: TabulatedRateModel,
     x0: float,
     measurement: MeasurementModel,
     n_tests: int,
-) -> float:
-    """Feature offset of one unit from its first ``n_tests`` tests after installation.
+) -> tuple[float, MeasurementModel]:
+    """Refer one unit's feature to the population model from its first ``n_tests`` tests.
 
-    ``mean(y_j) - mean(h(x_prior(t_j)))`` over those tests, with ``x_prior(t) =
-    I^{-1}(I(x0) + t)`` the noise-free severity at unit multiplier. The campaign's ``h`` is a
-    population mean; one unit sits at its own offset (e.g. the two springs' wire diameters
-    differ by manufacturing tolerance, which biases the null current like a crack), which
-    the filter would otherwise read as severity.
+    The campaign's ``h`` is a population mean; one unit keeps its own level (e.g. its two
+    springs' wire diameters differ by the manufacturing tolerance, which biases the current
+    like a crack; with leakage that current grows like the feature itself, so the unit's
+    deviation is a ratio). With ``x_prior(t) = I^{-1}(I(x0) + t)`` the noise-free severity at
+    unit multiplier over those tests (the part is new):
+
+    - gain ``c = mean(h(x_prior)) / mean(y)``: the filter is fed ``c y``;
+    - noise: the model's sigma scaled by ``std(c y - h(x_prior)) / mean(sigma(x_prior))``
+      (one unit's test-to-test scatter instead of the population spread).
+
+    Returns ``(c, unit measurement model)``.
     """
     n = min(int(n_tests), y.size)
+    if n < 3:
+        raise ValueError(f"n_tests = {n_tests} must leave >= 3 reference tests (have {y.size})")
     x_prior = model.inverse_damage(model.damage(np.array([x0])) + flights[:n])
-    return float(np.mean(y[:n]) - np.mean(measurement.mean(x_prior)))
+    h = measurement.mean(x_prior)
+    gain = float(np.mean(h) / np.mean(y[:n]))
+    scale = float(np.std(gain * y[:n] - h, ddof=1) / np.mean(measurement.sigma(x_prior)))
+    data = measurement.to_dict()
+    data["sigma_values"] = [scale * v for v in data["sigma_values"]]
+    return gain, MeasurementModel.from_dict(data)
 
 
 def _measurement_model(campaign: CampaignResult, fault: str, feature: str) -> MeasurementModel:
@@ -491,15 +504,17 @@ def prognose_path(
     detection = int(hits[0]) if hits.size else None
     cap = int(np.searchsorted(flights, config.start_fraction * path.eol_flights))
     start = min(cap if detection is None else detection, cap, flights.size - 1)
-    mm = _measurement_model(campaign, fault, feature)
+    population = _measurement_model(campaign, fault, feature)
     x0_nominal = params.spring.initial_crack_m if fault == "crack" else 0.0
-    offset = unit_offset(y, flights, spec["truth"], x0_nominal, mm, config.detector_window)
+    gain, mm = unit_reference(
+        y, flights, spec["truth"], x0_nominal, population, config.detector_window
+    )
     log_sigma = spec["log_sigma"]
     trace = run_prognosis(
         spec["process"],
         mm,
         np.diff(flights, prepend=0.0),
-        y - offset,
+        gain * y,
         HazardZone(spec["threshold"]),
         n_particles=config.n_particles,
         rng=filter_rng,
@@ -521,7 +536,7 @@ def prognose_path(
         measurements=y,
         alarms=alarms,
         detection_index=detection,
-        unit_offset=offset,
+        unit_gain=gain,
         eoup_flights=eoup,
         trace=trace,
         metrics=metrics,
@@ -626,4 +641,3 @@ def run_reproduction(
     return Reproduction(
         config, seed, campaign, selection, detection, prognosis, unit_far, cal, timings
     )
-

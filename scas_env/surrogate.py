@@ -30,6 +30,7 @@ and spreads only).
 from __future__ import annotations
 
 import json
+from bisect import bisect_right
 from dataclasses import asdict, dataclass
 from functools import lru_cache
 from importlib import resources
@@ -86,6 +87,11 @@ class SurrogateModel:
                 raise ValueError(f"SurrogateModel.{name} must rise strictly from 0 to 1")
         if np.any(self.unit_std < 0.0) or np.any(self.run_std <= 0.0):
             raise ValueError("SurrogateModel: unit_std must be >= 0 and run_std > 0")
+        stack = np.stack([self.mean, self.unit_std, self.run_std])
+        stack.setflags(write=False)
+        object.__setattr__(self, "_stack", stack)
+        object.__setattr__(self, "_crack_list", self.crack_grid.tolist())
+        object.__setattr__(self, "_wear_list", self.wear_grid.tolist())
         if self.version != SURROGATE_VERSION:
             raise ValueError(
                 f"surrogate version {self.version} is not the supported {SURROGATE_VERSION}; "
@@ -137,43 +143,42 @@ class SurrogateModel:
         """Run-to-run standard deviation at (c, w)."""
         return self._interp(self.run_std, crack_frac, wear_frac)
 
+    def tables_at(self, crack_frac: float, wear_frac: float) -> FloatArray:
+        """(mean, unit_std, run_std) of every feature at one scalar (c, w): shape (3, F).
+
+        The scalar fast path of :meth:`mean_at` and friends (same bilinear values).
+        """
+        c, w = float(crack_frac), float(wear_frac)
+        if not (0.0 <= c <= 1.0 and 0.0 <= w <= 1.0):
+            raise ValueError(f"crack_frac = {c} and wear_frac = {w} must lie in [0, 1]")
+        cg, wg = self._crack_list, self._wear_list
+        i = min(bisect_right(cg, c) - 1, len(cg) - 2)
+        j = min(bisect_right(wg, w) - 1, len(wg) - 2)
+        tc = (c - cg[i]) / (cg[i + 1] - cg[i])
+        tw = (w - wg[j]) / (wg[j + 1] - wg[j])
+        corner = self._stack[:, :, i : i + 2, j : j + 2]
+        return (
+            corner[:, :, 0, 0] * ((1 - tc) * (1 - tw))
+            + corner[:, :, 1, 0] * (tc * (1 - tw))
+            + corner[:, :, 0, 1] * ((1 - tc) * tw)
+            + corner[:, :, 1, 1] * (tc * tw)
+        )
+
     def sample(
         self,
         crack_frac: float,
         wear_frac: float,
         unit_z: FloatArray,
         rng: np.random.Generator,
-        features: tuple[str, ...] | None = None,
-    ) -> dict[str, float]:
-        """One run's features at (c, w) for an installation with effects ``unit_z``.
+        idx: list[int],
+    ) -> FloatArray:
+        """One run's features ``idx`` at (c, w) for an installation with effects ``unit_z``.
 
         ``unit_z`` holds one standard-normal draw per modelled feature (from
-        :meth:`draw_unit_z`); the run noise is drawn from ``rng``, one normal per
-        requested feature, in the order of ``features`` (default: all).
+        :meth:`draw_unit_z`); the run noise is ``rng.standard_normal(len(idx))``.
         """
-        names = self.features if features is None else features
-        idx = [self.index(f) for f in names]
-        z = rng.standard_normal(len(idx))
-        i, j, tc, tw = self._weights(crack_frac, wear_frac)
-        w00, w10 = (1 - tc) * (1 - tw), tc * (1 - tw)
-        w01, w11 = (1 - tc) * tw, tc * tw
-        out = {}
-        for k, f in zip(idx, names, strict=True):
-
-            def at(table: FloatArray, k: int = k) -> float:
-                return float(
-                    table[k, i, j] * w00
-                    + table[k, i + 1, j] * w10
-                    + table[k, i, j + 1] * w01
-                    + table[k, i + 1, j + 1] * w11
-                )
-
-            out[f] = (
-                at(self.mean)
-                + at(self.unit_std) * float(unit_z[k])
-                + at(self.run_std) * float(z[len(out)])
-            )
-        return out
+        t = self.tables_at(crack_frac, wear_frac)[:, idx]
+        return t[0] + t[1] * unit_z[idx] + t[2] * rng.standard_normal(len(idx))
 
     def draw_unit_z(self, rng: np.random.Generator) -> FloatArray:
         """Standardised installation effects, one per modelled feature."""

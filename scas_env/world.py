@@ -123,10 +123,8 @@ class ActuatorWorld:
         if not self.scenario.crack_active or self.crack_m < cal.crack_dormant_below_m:
             spring = math.inf
         else:
-            x = np.array([self.crack_m])
-            spring = float(
-                self._table.usage_to_threshold(x, np.array([self.theta]), self.spring_failure_m)[0]
-            )
+            d_x, d_fail = self._table.damage(np.array([self.crack_m, self.spring_failure_m]))
+            spring = max(float(d_fail - d_x), 0.0) / self.theta
         if not self.scenario.wear_active:
             seal = math.inf
         else:
@@ -193,16 +191,9 @@ class ActuatorWorld:
     def _surrogate_features(
         self, names: tuple[str, ...], idx: list[int], rng: np.random.Generator
     ) -> dict[str, float]:
-        model = self.surrogate
         c, w = min(self.crack_fraction, 1.0), min(self.wear_fraction, 1.0)
-        mean = model.mean_at(c, w)
-        unit_std = model.unit_std_at(c, w)
-        run_std = model.run_std_at(c, w)
-        z = rng.standard_normal(len(idx))
-        return {
-            f: float(mean[k] + unit_std[k] * self.unit_z[k] + run_std[k] * z[n])
-            for n, (f, k) in enumerate(zip(names, idx, strict=True))
-        }
+        values = self.surrogate.sample(c, w, self.unit_z, rng, idx)
+        return dict(zip(names, values.tolist(), strict=True))
 
     def test(self, rng: np.random.Generator) -> dict[str, float]:
         """Run the pre-flight test; returns G1 (A) and G3 (A/m)."""

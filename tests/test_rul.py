@@ -10,6 +10,7 @@ from scipy.stats import norm
 from prognostics.degradation_models import TabulatedRateModel, linear_wear_model, paris_crack_model
 from prognostics.rul import (
     HazardZone,
+    RulPredictor,
     predict_rul,
     probability_of_failure,
     rul_summary,
@@ -152,3 +153,20 @@ def test_bad_inputs_raise() -> None:
         TabulatedRateModel(np.array([0.0, 1.0]), np.array([1.0, 0.0]))
     with pytest.raises(ValueError, match="max_steps"):
         model.simulate_steps_to_threshold(x, th, 100.0, 1.0, max_steps=10)
+
+
+def test_rul_predictor_matches_rul_summary() -> None:
+    grid = np.linspace(1e-4, 1e-3, 30)
+    model = paris_crack_model(grid, 1e-7 * (grid / 1e-4) ** 1.5)
+    rng = np.random.default_rng(5)
+    x = rng.uniform(1e-4, 1.05e-3, 300)  # some particles already past the threshold
+    log_theta = 0.3 * rng.standard_normal(300)
+    w = rng.random(300)
+    w /= w.sum()
+    fast = RulPredictor(model, 1e-3, 300, horizon_steps=50.0, low_quantile=0.1)
+    got = fast.summary(x, log_theta, w)
+    ref = rul_summary(
+        x, np.exp(log_theta), w, model, HazardZone(1e-3), horizon_steps=50.0, low_quantile=0.1
+    )
+    for name in ("mean", "std", "median", "low", "high", "prob_failure"):
+        assert getattr(got, name) == pytest.approx(getattr(ref, name), rel=1e-9, abs=1e-9), name
