@@ -1,0 +1,36 @@
+"""Maintenance policies (rules, oracle, random) and the policy benchmark.
+
+Importing the package registers every built-in policy by name (:func:`make_policy`).
+"""
+
+from policies.base import (
+    POLICIES,
+    Policy,
+    make_policy,
+    policy_family,
+    policy_obs_mode,
+    register_policy,
+)
+from policies.oracle import OraclePolicy
+from policies.rules import (
+    CorrectivePolicy,
+    DetectionPolicy,
+    PreventivePolicy,
+    RandomPolicy,
+    RulRiskPolicy,
+)
+
+__all__ = [
+    "POLICIES",
+    "CorrectivePolicy",
+    "DetectionPolicy",
+    "OraclePolicy",
+    "Policy",
+    "PreventivePolicy",
+    "RandomPolicy",
+    "RulRiskPolicy",
+    "make_policy",
+    "policy_family",
+    "policy_obs_mode",
+    "register_policy",
+]

@@ -169,6 +169,10 @@ class ScasMaintenanceEnv(gym.Env):
     def reset(
         self, *, seed: int | None = None, options: dict[str, Any] | None = None
     ) -> tuple[Any, dict[str, Any]]:
+        if seed is not None and (
+            isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0
+        ):
+            raise ValueError(f"seed = {seed!r} must be None or an integer >= 0")
         super().reset(seed=seed)
         if options:
             raise ValueError(f"options are not supported, got {sorted(options)}")

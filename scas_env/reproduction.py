@@ -113,6 +113,14 @@ class ReproductionConfig(Validated):
     healthy_units: int = param(
         20, "-", lo=1, hi=1e5, integer=True, source="healthy units for the per-unit FAR"
     )
+    reference_fraction: float = param(
+        0.1,
+        "-",
+        lo=0.0,
+        hi=0.5,
+        lo_open=True,
+        source="unit reference: tests in this x nominal life",
+    )
     nominal_unit: bool = False
 
     @classmethod
@@ -506,9 +514,10 @@ def prognose_path(
     start = min(cap if detection is None else detection, cap, flights.size - 1)
     population = _measurement_model(campaign, fault, feature)
     x0_nominal = params.spring.initial_crack_m if fault == "crack" else 0.0
-    gain, mm = unit_reference(
-        y, flights, spec["truth"], x0_nominal, population, config.detector_window
+    n_reference = max(
+        3, int(np.count_nonzero(flights <= config.reference_fraction * spec["nominal_life"]))
     )
+    gain, mm = unit_reference(y, flights, spec["truth"], x0_nominal, population, n_reference)
     log_sigma = spec["log_sigma"]
     trace = run_prognosis(
         spec["process"],

@@ -1,0 +1,290 @@
+"""The policy benchmark: every policy on the same episodes, in parallel, with statistics.
+
+Seeds (common random numbers): ``SeedSequence(seed).spawn(episodes)`` gives one child per
+episode; ``child.generate_state(2, uint64)`` gives the env seed (``reset(seed=...)``) and
+the policy seed (``policy.reset(seed=...)``, used by random policies). Episode ``e`` of every
+policy starts from the same actuator unit; the episodes then share the env's random stream
+only as long as the policies act alike (a test draws measurement noise), so the paired
+differences are of policies on the same units, not on the same sample paths.
+
+Tasks (policy, episode) are independent and carry their seeds, so the results do not depend
+on the number of workers, the chunking, or on running locally (:func:`map_chunks`) or on a
+Ray cluster (``ray_address``; ``ray`` is imported only then).
+
+Per episode (one row of results.csv): flight hours ``FH = flights * flight_duration_s /
+3600``; ``cost_per_fh = cost_usd / FH`` (costs only, the value of flights excluded);
+in-flight failures, preventive replacements (failures excluded) and pre-flight tests per
+1000 FH; ``wasted_life`` = mean true RUL (flights) of the parts replaced preventively (NaN
+without one); ``reward`` = sum of rewards; ``term_*`` = reward terms summed. Every removal
+of a part (failure or preventive replacement) and every part still fitted at the end
+(censored) is an event with the part's age in flights (events.csv, survival plot).
+"""
+
+from __future__ import annotations
+
+import importlib
+import math
+import time
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+
+import policies  # noqa: F401  (registers the built-in policies)
+from policies.base import make_policy, policy_family, policy_obs_mode
+from policies.benchmark_stats import summarize
+from scas_env import ENV_ID
+from scas_env.parallel import MAX_CHUNK, map_chunks
+from scas_env.world import PARTS
+
+DEFAULT_POLICIES = ("corrective", "preventive", "detection", "rul_risk", "oracle", "random")
+TERMS = ("flight", "test", "no_go", "replacement", "failure")
+
+__all__ = [
+    "DEFAULT_POLICIES",
+    "BenchmarkResult",
+    "PolicySpec",
+    "episode_seeds",
+    "run_benchmark",
+    "run_episode",
+]
+
+
+@dataclass(frozen=True)
+class PolicySpec:
+    """A policy to benchmark, rebuilt by name in each worker.
+
+    Attributes
+    ----------
+    name : registry name (:func:`policies.base.make_policy`).
+    params : keyword parameters of the policy.
+    label : name in the tables (default ``name``); labels must be unique.
+    module : module imported in the worker before building the policy (a plug-in that
+        registers itself, e.g. a loader of trained agents).
+    obs_mode : observation mode of the env (default: the registered one).
+    """
+
+    name: str
+    params: Mapping[str, Any] = field(default_factory=dict)
+    label: str | None = None
+    module: str | None = None
+    obs_mode: str | None = None
+
+    @property
+    def key(self) -> str:
+        return self.label or self.name
+
+    def build_mode(self) -> str:
+        if self.module:
+            importlib.import_module(self.module)
+        return self.obs_mode or policy_obs_mode(self.name)
+
+
+def episode_seeds(seed: int, episodes: int) -> list[tuple[int, int]]:
+    """``(env_seed, policy_seed)`` of each episode from ``SeedSequence(seed).spawn``.
+
+    >>> episode_seeds(0, 2) == episode_seeds(0, 3)[:2]
+    True
+    """
+    if isinstance(episodes, bool) or not isinstance(episodes, int) or episodes < 1:
+        raise ValueError(f"episodes = {episodes!r} must be an integer >= 1")
+    children = np.random.SeedSequence(seed).spawn(episodes)
+    return [tuple(int(v) for v in c.generate_state(2, np.uint64)) for c in children]
+
+
+def run_episode(env: gym.Env, policy: Any, env_seed: int, policy_seed: int) -> dict[str, Any]:
+    """Run one episode to truncation; returns ``{"row": results row, "events": [...]}``."""
+    reset = getattr(policy, "reset", None)
+    if callable(reset):
+        reset(seed=policy_seed)
+    obs, info = env.reset(seed=env_seed)
+    terms = dict.fromkeys(TERMS, 0.0)
+    reward_sum = 0.0
+    fitted_at = dict.fromkeys(PARTS, 0)
+    events: list[dict[str, Any]] = []
+    state, start, done = None, True, False
+    while not done:
+        action, state = policy.predict(obs, state=state, episode_start=start, deterministic=True)
+        before = info
+        obs, reward, terminated, truncated, info = env.step(int(action))
+        start, done = False, terminated or truncated
+        reward_sum += float(reward)
+        for k in TERMS:
+            terms[k] += info["reward_terms"].get(k, 0.0)
+        for part in PARTS:
+            if info["replacements"][part] > before["replacements"][part]:
+                failed = info["failures"][part] > before["failures"][part]
+                events.append(
+                    {
+                        "part": part,
+                        "age_flights": info["flights"] - fitted_at[part],
+                        "kind": "failure" if failed else "preventive",
+                    }
+                )
+                fitted_at[part] = info["flights"]
+    for part in PARTS:
+        age = info["flights"] - fitted_at[part]
+        events.append({"part": part, "age_flights": age, "kind": "censored"})
+    return {"row": _row(env, info, terms, reward_sum), "events": events}
+
+
+def _row(
+    env: gym.Env, info: Mapping[str, Any], terms: Mapping[str, float], reward: float
+) -> dict[str, Any]:
+    fh = info["flights"] * env.unwrapped.params.mission.flight_duration_s / 3600.0
+    per_kfh = 1000.0 / fh if fh > 0 else math.nan
+    failures = sum(info["failures"].values())
+    preventive = {p: info["replacements"][p] - info["failures"][p] for p in PARTS}
+    wasted = {p: info["wasted_life_flights"][p] for p in PARTS}
+    all_wasted = [w for p in PARTS for w in wasted[p]]
+    row: dict[str, Any] = {
+        "slots": info["slot"],
+        "flights": info["flights"],
+        "flight_hours": fh,
+        "availability": info["availability"],
+        "cost_usd": info["cost_usd"],
+        "revenue_usd": info["revenue_usd"],
+        "reward": reward,
+        "cost_per_fh": info["cost_usd"] / fh if fh > 0 else math.nan,
+        "failures_per_1000fh": failures * per_kfh,
+        "replacements_per_1000fh": sum(preventive.values()) * per_kfh,
+        "tests_per_1000fh": info["tests"] * per_kfh,
+        "wasted_life": float(np.mean(all_wasted)) if all_wasted else math.nan,
+        "tests": info["tests"],
+        "no_go": info["no_go"],
+    }
+    for p in PARTS:
+        row[f"failures_{p}"] = info["failures"][p]
+        row[f"replacements_{p}"] = preventive[p]
+        row[f"wasted_life_{p}"] = float(np.mean(wasted[p])) if wasted[p] else math.nan
+    for k in TERMS:
+        row[f"term_{k}"] = terms[k]
+    return row
+
+
+def _run_chunk(
+    specs: tuple[PolicySpec, ...],
+    env_kwargs: Mapping[str, Any],
+    chunk: Sequence[tuple[int, int, int, int]],
+) -> list[dict[str, Any]]:
+    """Episodes ``(policy index, episode, env seed, policy seed)``; one env per obs_mode."""
+    envs: dict[str, gym.Env] = {}
+    built: dict[int, Any] = {}
+    out = []
+    for p, e, env_seed, policy_seed in chunk:
+        spec = specs[p]
+        mode = spec.build_mode()
+        if mode not in envs:
+            envs[mode] = gym.make(ENV_ID, obs_mode=mode, disable_env_checker=True, **env_kwargs)
+        env = envs[mode]
+        if p not in built:
+            built[p] = make_policy(spec.name, env.unwrapped.obs_names, **dict(spec.params))
+        result = run_episode(env, built[p], env_seed, policy_seed)
+        result["row"] = {"policy": spec.key, "episode": e, "env_seed": env_seed, **result["row"]}
+        result["events"] = [{"policy": spec.key, "episode": e, **ev} for ev in result["events"]]
+        out.append(result)
+    for env in envs.values():
+        env.close()
+    return out
+
+
+def _map_ray(
+    shared: tuple[Any, ...], items: Sequence[Any], address: str, chunk_size: int
+) -> list[dict[str, Any]]:
+    """The same chunks as :func:`map_chunks`, as Ray tasks on the cluster at ``address``
+    (the workers need this package installed)."""
+    try:
+        import ray
+    except ImportError as exc:
+        raise ImportError(
+            f"ray_address = {address!r} needs ray: pip install 'scas-maintenance-gym[ray]'"
+        ) from exc
+    ray.init(address=address, ignore_reinit_error=True)
+    remote = ray.remote(_run_chunk)
+    refs = [
+        remote.remote(*shared, list(items[k : k + chunk_size]))
+        for k in range(0, len(items), chunk_size)
+    ]
+    return [r for chunk in ray.get(refs) for r in chunk]
+
+
+@dataclass(frozen=True)
+class BenchmarkResult:
+    """Rows (one per policy and episode), removal events, statistics and run metadata."""
+
+    rows: list[dict[str, Any]]
+    events: list[dict[str, Any]]
+    summary: dict[str, Any]
+    config: dict[str, Any]
+    wall_s: float
+
+
+def run_benchmark(
+    specs: Sequence[PolicySpec | str] = DEFAULT_POLICIES,
+    *,
+    episodes: int = 40,
+    slots: int = 2000,
+    seed: int = 0,
+    n_workers: int = 1,
+    env_kwargs: Mapping[str, Any] | None = None,
+    progress: bool = False,
+    ray_address: str | None = None,
+    confidence: float = 0.95,
+) -> BenchmarkResult:
+    """Run every policy on episodes ``0..episodes-1`` (seeds :func:`episode_seeds`).
+
+    ``env_kwargs`` go to ``gym.make`` besides ``obs_mode`` (Scenario fields such as
+    ``fidelity`` or ``crack_active``, and ``cost_model``); ``slots`` sets
+    ``episode_slots``. Paired differences are taken against the rule-based policy
+    (family ``"rule"``) with the highest mean reward.
+    """
+    specs = tuple(PolicySpec(s) if isinstance(s, str) else s for s in specs)
+    keys = [s.key for s in specs]
+    if not specs or len(set(keys)) != len(keys):
+        raise ValueError(f"policies = {keys} must be a non-empty list of unique labels")
+    kwargs = dict(env_kwargs or {})
+    for reserved in ("obs_mode", "episode_slots"):
+        if reserved in kwargs:
+            raise ValueError(f"env_kwargs must not set {reserved!r} (set per policy / slots)")
+    kwargs["episode_slots"] = slots
+    seeds = episode_seeds(seed, episodes)
+    tasks = [(p, e, *seeds[e]) for e in range(episodes) for p in range(len(specs))]
+    shared = (specs, kwargs)
+    t0 = time.perf_counter()
+    if ray_address:
+        chunk = max(1, min(MAX_CHUNK, math.ceil(len(tasks) / 64)))
+        results = _map_ray(shared, tasks, ray_address, chunk)
+    else:
+        results = map_chunks(
+            _run_chunk, shared, tasks, n_workers=n_workers, progress=progress, desc="episodes"
+        )
+    wall = time.perf_counter() - t0
+    rows = sorted(
+        (r["row"] for r in results), key=lambda r: (keys.index(r["policy"]), r["episode"])
+    )
+    events = [ev for r in results for ev in r["events"]]
+    events.sort(key=lambda ev: (keys.index(ev["policy"]), ev["episode"]))
+    rules = [s.key for s in specs if _family(s) == "rule"]
+    config = {
+        "episodes": episodes,
+        "slots": slots,
+        "seed": seed,
+        "n_workers": n_workers,
+        "ray_address": ray_address,
+        "env_kwargs": {
+            k: repr(v) if not isinstance(v, int | float | str) else v for k, v in kwargs.items()
+        },
+        "policies": [
+            {"label": s.key, "name": s.name, "params": dict(s.params), "family": _family(s)}
+            for s in specs
+        ],
+    }
+    summary = summarize(rows, keys, rules, confidence)
+    return BenchmarkResult(rows, events, summary, config, wall)
+
+
+def _family(spec: PolicySpec) -> str:
+    spec.build_mode()
+    return policy_family(spec.name)

@@ -1,0 +1,298 @@
+"""Rule-based condition-based maintenance (CBM) policies and a random lower bound.
+
+Every rule is a stateless function of the current observation (ages, test age, alarms,
+filter RUL summaries, downtime), vectorised over a batch of observations. Shared
+conventions:
+
+* **One replacement per slot**, the seals first when both parts are due: a reseal grounds
+  the next slot too (``CostModel.seal_downtime_slots``), and the spring change then fits in
+  that grounded slot at no extra downtime.
+* **Never replace a part that has not flown** (age 0): a part just fitted is new.
+* **Opportunistic replacement** (``opportunity`` in [0, 1)): while the aircraft is on the
+  ground anyway (observation ``downtime > 0``), a part is replaced when it is within the
+  fraction ``opportunity`` of its own trigger (age >= (1 - opportunity) T for the
+  preventive rule; RUL low quantile <= lead / (1 - opportunity) and risk >=
+  (1 - opportunity) threshold for the RUL-risk rule). ``0`` turns it off.
+* Tests are never requested while grounded (``test_and_fly`` does nothing then).
+
+Default parameters are the constants ``*_DEFAULTS`` below: grid-searched with
+``scripts/tune_policies.py`` (:mod:`policies.tuning`, objective: mean reward per
+episode on training seeds, checked on held-out seeds); see that module for the grids and
+the command.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from typing import Any, ClassVar
+
+import numpy as np
+
+from policies.base import (
+    FLY,
+    REPLACE_SEAL,
+    REPLACE_SPRING,
+    TEST_AND_FLY,
+    IntArray,
+    Policy,
+    register,
+)
+
+#: Tuned defaults (policies.tuning, `python scripts/tune_policies.py`, see module docstring).
+PREVENTIVE_DEFAULTS: dict[str, float] = {"spring_age": 600.0, "seal_age": 700.0, "opportunity": 0.2}
+DETECTION_DEFAULTS: dict[str, float] = {"test_every": 20.0}
+RUL_RISK_DEFAULTS: dict[str, float] = {
+    "risk_threshold": 0.05,
+    "spring_lead": 50.0,
+    "seal_lead": 50.0,
+    "test_every": 20.0,
+    "uncertainty": math.inf,
+    "min_test_gap": 5.0,
+    "opportunity": 0.2,
+}
+RANDOM_DEFAULTS: tuple[float, float, float, float] = (0.96, 0.02, 0.01, 0.01)
+
+__all__ = [
+    "DETECTION_DEFAULTS",
+    "PREVENTIVE_DEFAULTS",
+    "RANDOM_DEFAULTS",
+    "RUL_RISK_DEFAULTS",
+    "CorrectivePolicy",
+    "DetectionPolicy",
+    "PreventivePolicy",
+    "RandomPolicy",
+    "RulRiskPolicy",
+    "choose",
+]
+
+
+def _positive(name: str, value: float, *, allow_inf: bool = True) -> float:
+    v = float(value)
+    if not (v > 0.0) or (math.isinf(v) and not allow_inf) or math.isnan(v):
+        allowed = "(0, inf]" if allow_inf else "(0, inf)"
+        raise ValueError(f"{name} = {value!r} must be in {allowed}")
+    return v
+
+
+def _fraction(name: str, value: float) -> float:
+    v = float(value)
+    if not 0.0 <= v < 1.0:
+        raise ValueError(f"{name} = {value!r} must be in [0, 1)")
+    return v
+
+
+def choose(
+    replace_spring: np.ndarray, replace_seal: np.ndarray, test: np.ndarray | None = None
+) -> IntArray:
+    """Action per row: seals first, then the spring, then a test, else fly.
+
+    >>> choose(np.array([True, True, False, False]), np.array([True, False, False, False]),
+    ...        np.array([False, False, True, False])).tolist()
+    [3, 2, 1, 0]
+    """
+    no_test = np.zeros_like(replace_spring, dtype=bool)
+    return np.select(
+        [replace_seal, replace_spring, no_test if test is None else test],
+        [REPLACE_SEAL, REPLACE_SPRING, TEST_AND_FLY],
+        default=FLY,
+    ).astype(np.int64)
+
+
+@register
+class CorrectivePolicy(Policy):
+    """Run to failure: always fly; parts are replaced only when they fail (by the env)."""
+
+    name: ClassVar[str] = "corrective"
+    obs_mode: ClassVar[str] = "features"
+
+    def _act(self, obs: np.ndarray) -> IntArray:
+        return np.full(obs.shape[0], FLY, dtype=np.int64)
+
+
+@register
+class PreventivePolicy(Policy):
+    """Age replacement: replace each part once it has flown ``spring_age`` / ``seal_age``
+    flights (``inf``: never); ``opportunity`` as in the module docstring."""
+
+    name: ClassVar[str] = "preventive"
+    obs_mode: ClassVar[str] = "features"
+    reads: ClassVar[tuple[str, ...]] = ("spring_age", "seal_age", "downtime")
+
+    def __init__(
+        self,
+        obs_names: Sequence[str],
+        *,
+        spring_age: float = PREVENTIVE_DEFAULTS["spring_age"],
+        seal_age: float = PREVENTIVE_DEFAULTS["seal_age"],
+        opportunity: float = PREVENTIVE_DEFAULTS["opportunity"],
+    ) -> None:
+        super().__init__(obs_names)
+        self.spring_age = _positive("spring_age", spring_age)
+        self.seal_age = _positive("seal_age", seal_age)
+        self.opportunity = _fraction("opportunity", opportunity)
+
+    def params(self) -> dict[str, Any]:
+        return {
+            "spring_age": self.spring_age,
+            "seal_age": self.seal_age,
+            "opportunity": self.opportunity,
+        }
+
+    def _act(self, obs: np.ndarray) -> IntArray:
+        scale = np.where(self.column(obs, "downtime") > 0, 1.0 - self.opportunity, 1.0)
+        due = []
+        for part, limit in (("spring", self.spring_age), ("seal", self.seal_age)):
+            age = self.column(obs, f"{part}_age")
+            due.append((age > 0) & (age >= scale * limit))
+        return choose(*due)
+
+
+@register
+class DetectionPolicy(Policy):
+    """Detection-triggered: test when ``test_age >= test_every`` slots, replace the part
+    whose section-5.1 alarm is on (the spring on ``spring_alarm``, the seals on
+    ``seal_alarm``). The alarm is binary, so there is no opportunistic variant."""
+
+    name: ClassVar[str] = "detection"
+    obs_mode: ClassVar[str] = "features"
+    reads: ClassVar[tuple[str, ...]] = (
+        "test_age",
+        "spring_alarm",
+        "seal_alarm",
+        "spring_age",
+        "seal_age",
+        "downtime",
+    )
+
+    def __init__(
+        self, obs_names: Sequence[str], *, test_every: float = DETECTION_DEFAULTS["test_every"]
+    ) -> None:
+        super().__init__(obs_names)
+        self.test_every = _positive("test_every", test_every)
+
+    def params(self) -> dict[str, Any]:
+        return {"test_every": self.test_every}
+
+    def _act(self, obs: np.ndarray) -> IntArray:
+        flying = self.column(obs, "downtime") <= 0
+        spring = (self.column(obs, "spring_alarm") > 0.5) & (self.column(obs, "spring_age") > 0)
+        seal = (self.column(obs, "seal_alarm") > 0.5) & (self.column(obs, "seal_age") > 0)
+        test = flying & (self.column(obs, "test_age") >= self.test_every)
+        return choose(spring, seal, test)
+
+
+@register
+class RulRiskPolicy(Policy):
+    """Prognostic rule on the particle filters' RUL summaries.
+
+    Replace a part when its risk of failing within the scenario's horizon
+    (``spring_risk`` / ``seal_risk``) reaches ``risk_threshold``, or when its RUL low
+    quantile (``*_rul_low``, flights) falls to its lead time (``spring_lead`` /
+    ``seal_lead``). Test when ``test_age >= test_every`` slots, or when a filter is
+    uncertain, ``(rul_mean - rul_low) / rul_mean > uncertainty`` for either part, and the
+    last test is at least ``min_test_gap`` slots old (``uncertainty = inf``: off).
+    """
+
+    name: ClassVar[str] = "rul_risk"
+    obs_mode: ClassVar[str] = "features+rul"
+    reads: ClassVar[tuple[str, ...]] = (
+        "test_age",
+        "spring_rul_mean",
+        "spring_rul_low",
+        "spring_risk",
+        "seal_rul_mean",
+        "seal_rul_low",
+        "seal_risk",
+        "spring_age",
+        "seal_age",
+        "downtime",
+    )
+
+    def __init__(
+        self,
+        obs_names: Sequence[str],
+        *,
+        risk_threshold: float = RUL_RISK_DEFAULTS["risk_threshold"],
+        spring_lead: float = RUL_RISK_DEFAULTS["spring_lead"],
+        seal_lead: float = RUL_RISK_DEFAULTS["seal_lead"],
+        test_every: float = RUL_RISK_DEFAULTS["test_every"],
+        uncertainty: float = RUL_RISK_DEFAULTS["uncertainty"],
+        min_test_gap: float = RUL_RISK_DEFAULTS["min_test_gap"],
+        opportunity: float = RUL_RISK_DEFAULTS["opportunity"],
+    ) -> None:
+        super().__init__(obs_names)
+        self.risk_threshold = float(risk_threshold)
+        if not 0.0 < self.risk_threshold <= 1.0:
+            raise ValueError(f"risk_threshold = {risk_threshold!r} must be in (0, 1]")
+        self.spring_lead = _positive("spring_lead", spring_lead, allow_inf=False)
+        self.seal_lead = _positive("seal_lead", seal_lead, allow_inf=False)
+        self.test_every = _positive("test_every", test_every)
+        self.uncertainty = _positive("uncertainty", uncertainty)
+        self.min_test_gap = _positive("min_test_gap", min_test_gap, allow_inf=False)
+        self.opportunity = _fraction("opportunity", opportunity)
+
+    def params(self) -> dict[str, Any]:
+        return {
+            "risk_threshold": self.risk_threshold,
+            "spring_lead": self.spring_lead,
+            "seal_lead": self.seal_lead,
+            "test_every": self.test_every,
+            "uncertainty": self.uncertainty,
+            "min_test_gap": self.min_test_gap,
+            "opportunity": self.opportunity,
+        }
+
+    def _act(self, obs: np.ndarray) -> IntArray:
+        flying = self.column(obs, "downtime") <= 0
+        scale = np.where(flying, 1.0, 1.0 - self.opportunity)
+        due, uncertain = [], np.zeros(obs.shape[0], dtype=bool)
+        for part, lead in (("spring", self.spring_lead), ("seal", self.seal_lead)):
+            mean = self.column(obs, f"{part}_rul_mean")
+            low = self.column(obs, f"{part}_rul_low")
+            risky = self.column(obs, f"{part}_risk") >= scale * self.risk_threshold
+            short = low * scale <= lead
+            due.append((self.column(obs, f"{part}_age") > 0) & (risky | short))
+            spread = (mean - low) / np.maximum(mean, 1.0)
+            uncertain |= spread > self.uncertainty
+        age = self.column(obs, "test_age")
+        test = flying & ((age >= self.test_every) | (uncertain & (age >= self.min_test_gap)))
+        return choose(*due, test)
+
+
+@register
+class RandomPolicy(Policy):
+    """Random actions with ``probabilities`` (fly, test_and_fly, replace_spring,
+    replace_seal) from a seeded ``numpy.random.Generator``: a lower bound."""
+
+    name: ClassVar[str] = "random"
+    obs_mode: ClassVar[str] = "features"
+    family: ClassVar[str] = "bound"
+
+    def __init__(
+        self,
+        obs_names: Sequence[str],
+        *,
+        probabilities: Sequence[float] = RANDOM_DEFAULTS,
+        seed: int | None = 0,
+    ) -> None:
+        super().__init__(obs_names)
+        p = np.asarray(probabilities, dtype=np.float64)
+        if p.shape != (4,) or np.any(p < 0) or not math.isclose(p.sum(), 1.0, abs_tol=1e-9):
+            raise ValueError(
+                f"probabilities = {probabilities!r} must be 4 non-negative numbers summing to 1"
+            )
+        self.probabilities = p
+        self.seed = seed
+        self.rng = np.random.default_rng(seed)
+
+    def params(self) -> dict[str, Any]:
+        return {"probabilities": self.probabilities.tolist(), "seed": self.seed}
+
+    def reset(self, seed: int | None = None) -> None:
+        """Re-seed the generator when ``seed`` is given (the benchmark seeds each episode)."""
+        if seed is not None:
+            self.rng = np.random.default_rng(seed)
+
+    def _act(self, obs: np.ndarray) -> IntArray:
+        return self.rng.choice(4, size=obs.shape[0], p=self.probabilities).astype(np.int64)

@@ -1,0 +1,202 @@
+"""ScasMaintenance-v0: API conformance, determinism, pickling, bad inputs, physics sanity."""
+
+from __future__ import annotations
+
+import pickle
+import warnings
+
+import gymnasium as gym
+import numpy as np
+import pytest
+from gymnasium.utils.env_checker import check_env as gym_check_env
+from stable_baselines3.common.env_checker import check_env as sb3_check_env
+
+import scas_env
+from scas_env.costs import CostModel
+from scas_env.env import ScasMaintenanceEnv
+from scas_env.scenario import OBS_MODES, Scenario
+
+ENV_ID = scas_env.ENV_ID
+
+
+def _rollout(env: gym.Env, actions: list[int], seed: int) -> list[tuple]:
+    obs, info = env.reset(seed=seed)
+    out = [(_flat(obs), 0.0, info["true_state"]["crack_depth_m"])]
+    for a in actions:
+        obs, r, term, trunc, info = env.step(a)
+        out.append((_flat(obs), r, info["true_state"]["crack_depth_m"], term, trunc))
+    return out
+
+
+def _flat(obs) -> np.ndarray:
+    if isinstance(obs, dict):
+        return np.concatenate([obs[k] for k in sorted(obs)])
+    return obs
+
+
+def _actions(n: int, seed: int = 0) -> list[int]:
+    rng = np.random.default_rng(seed)
+    return rng.choice(4, size=n, p=[0.8, 0.15, 0.025, 0.025]).tolist()
+
+
+@pytest.mark.parametrize("obs_mode", OBS_MODES)
+def test_gymnasium_and_sb3_checkers_pass_without_warnings(obs_mode: str) -> None:
+    env = ScasMaintenanceEnv(obs_mode=obs_mode, episode_slots=50)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        gym_check_env(env, skip_render_check=True)
+        sb3_check_env(ScasMaintenanceEnv(obs_mode=obs_mode, episode_slots=50), warn=True)
+
+
+def test_registered_id_and_vector_entry_point() -> None:
+    assert ENV_ID in gym.registry
+    spec = gym.spec(ENV_ID)
+    assert spec.entry_point == "scas_env.env:ScasMaintenanceEnv"
+    env = gym.make(ENV_ID, episode_slots=5)
+    assert env.unwrapped.scenario.episode_slots == 5
+
+
+def test_observation_names_units_and_bounds() -> None:
+    env = ScasMaintenanceEnv()
+    assert len(env.obs_names) == env.observation_space.shape[0] == len(env.obs_units) == 17
+    assert env.obs_names[:5] == ("I2", "I6", "I7", "G1", "G3")
+    obs, _ = env.reset(seed=3)
+    for a in _actions(300, 3):
+        obs, *_ = env.step(a)
+        assert env.observation_space.contains(obs)
+        assert obs.dtype == np.float32
+
+
+@pytest.mark.parametrize("fidelity,n", [("surrogate", 300), ("physics", 6)])
+def test_same_seed_same_actions_same_episode_bit_for_bit(fidelity: str, n: int) -> None:
+    actions = _actions(n, 1)
+    if fidelity == "physics":
+        actions = [1, 0, 2, 1, 3, 1]
+    a = _rollout(ScasMaintenanceEnv(fidelity=fidelity), actions, seed=7)
+    b = _rollout(ScasMaintenanceEnv(fidelity=fidelity), actions, seed=7)
+    c = _rollout(ScasMaintenanceEnv(fidelity=fidelity), actions, seed=8)
+    for x, y in zip(a, b, strict=True):
+        np.testing.assert_array_equal(x[0], y[0])
+        assert x[1:] == y[1:]
+    assert any(not np.array_equal(x[0], y[0]) for x, y in zip(a, c, strict=True))
+
+
+def test_pickle_round_trip_continues_identically() -> None:
+    env = ScasMaintenanceEnv()
+    env.reset(seed=11)
+    for a in _actions(50, 2):
+        env.step(a)
+    clone = pickle.loads(pickle.dumps(env))
+    for a in _actions(100, 4):
+        o1, r1, *_ = env.step(a)
+        o2, r2, *_ = clone.step(a)
+        np.testing.assert_array_equal(o1, o2)
+        assert r1 == r2
+
+
+@pytest.mark.parametrize("action", [4, -1, 1.5, "fly", None])
+def test_bad_actions_raise(action) -> None:
+    env = ScasMaintenanceEnv()
+    env.reset(seed=0)
+    with pytest.raises(ValueError, match="action"):
+        env.step(action)
+
+
+def test_step_before_reset_and_bad_seeds_raise() -> None:
+    env = ScasMaintenanceEnv()
+    with pytest.raises(RuntimeError, match="reset"):
+        env.step(0)
+    for seed in (-1, 1.5, "0"):
+        with pytest.raises(ValueError, match="seed"):
+            env.reset(seed=seed)
+
+
+def test_bad_configs_raise_clear_errors() -> None:
+    with pytest.raises(ValueError, match="unknown key"):
+        gym.make(ENV_ID, episode_slot=10)
+    with pytest.raises(ValueError, match="obs_mode"):
+        ScasMaintenanceEnv(obs_mode="pixels")
+    with pytest.raises(ValueError, match="episode_slots"):
+        ScasMaintenanceEnv(episode_slots=0)
+    with pytest.raises(ValueError, match="not both"):
+        ScasMaintenanceEnv(scenario=Scenario(), episode_slots=3)
+    with pytest.raises(ValueError, match="cost_model"):
+        ScasMaintenanceEnv(cost_model={"test_usd": 1.0})
+
+
+def test_reward_accounting_matches_cost_model() -> None:
+    costs = CostModel(test_usd=123.0, flight_value_usd=1000.0)
+    env = ScasMaintenanceEnv(cost_model=costs)
+    env.reset(seed=0)
+    _, r, *_, info = env.step(1)
+    assert info["reward_terms"]["test"] == -123.0
+    assert r == pytest.approx(sum(info["reward_terms"].values()))
+    _, r, *_, info = env.step(2)  # spring change: the slot on the ground, parts cost
+    assert r == -costs.spring_replacement_usd
+    assert info["replacements"]["spring"] == 1
+
+
+def test_never_maintained_unit_fails_and_failed_part_is_renewed() -> None:
+    env = ScasMaintenanceEnv(episode_slots=3000)
+    env.reset(seed=5)
+    failures = 0
+    for _ in range(3000):
+        _, r, _, _, info = env.step(0)
+        if info["reward_terms"]["failure"] < 0:
+            failures += 1
+            state = info["true_state"]
+            # the failed part was replaced: at least one part is new again
+            assert state["crack_fraction"] < 0.2 or state["wear_fraction"] < 0.01
+            assert r == -env.costs.failure_total_usd
+    assert failures >= 2
+    assert sum(info["failures"].values()) == failures
+    assert info["availability"] < 1.0
+
+
+def test_replacement_resets_hidden_state_and_filter() -> None:
+    env = ScasMaintenanceEnv()
+    env.reset(seed=9)
+    for _ in range(600):
+        env.step(1)
+    worn = env.world.wear_m
+    assert worn > 0.3 * env.calibration.seal_critical_wear_m
+    env.step(3)
+    assert env.world.wear_m == 0.0
+    assert env.monitor.seal_filter.estimate().x_mean == 0.0
+    assert env.part_age["seal"] == 0
+    crack_before = env.world.crack_m
+    env.step(2)
+    assert env.world.crack_m < crack_before
+    est = env.monitor.spring_filter.estimate()
+    assert est.x_mean == pytest.approx(env.params.spring.initial_crack_m, rel=0.2)
+
+
+def test_filter_tracks_seal_wear_under_regular_tests() -> None:
+    env = ScasMaintenanceEnv()
+    env.reset(seed=21)
+    errors = []
+    for k in range(900):
+        env.step(1 if k % 5 == 0 else 0)
+        if k > 300 and env.world.wear_fraction < 0.95:
+            est = env.monitor.seal_filter.estimate().x_mean
+            errors.append(abs(est - env.world.wear_m) / env.calibration.seal_critical_wear_m)
+    assert np.median(errors) < 0.1
+
+
+@pytest.mark.slow
+def test_long_surrogate_run_stays_finite_with_bounded_memory() -> None:
+    import tracemalloc
+
+    env = ScasMaintenanceEnv(episode_slots=100_000)
+    env.reset(seed=1)
+    actions = _actions(100_000, 9)
+    tracemalloc.start()
+    for k, a in enumerate(actions):
+        obs, r, _, trunc, _ = env.step(a)
+        assert np.all(np.isfinite(obs)) and np.isfinite(r)
+        if k == 10_000:
+            base = tracemalloc.get_traced_memory()[0]
+    grown = tracemalloc.get_traced_memory()[0] - base
+    tracemalloc.stop()
+    assert trunc
+    assert grown < 20e6
