@@ -40,9 +40,11 @@ format: install
 	$(PY) -m ruff format .
 	$(PY) -m ruff check --fix .
 
-## Integrator speed and accuracy beside a fine-step reference in the same run.
+## Speed, each beside a reference measured in the same run.
 bench: install
 	$(PY) scripts/bench_integrator.py
+	$(PY) scripts/bench_prognostics.py
+	$(PY) scripts/bench_env.py
 
 figures: install
 	$(PY) scripts/paper_figures.py --out $(RESULTS)/figures

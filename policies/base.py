@@ -96,7 +96,7 @@ class Policy(ABC):
         actions = self._act(np.atleast_2d(obs)).astype(np.int64)
         return (int(actions[0]) if obs.ndim == 1 else actions), state
 
-    def reset(self, seed: int | None = None) -> None:
+    def reset(self, seed: int | None = None) -> None:  # noqa: B027 (optional hook)
         """Start a new episode (rules keep no state; ``seed`` re-seeds random policies)."""
 
     def params(self) -> dict[str, Any]:

@@ -23,11 +23,11 @@ from typing import Any
 import matplotlib
 
 matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
+import matplotlib.pyplot as plt
+import numpy as np
 
-from policies.benchmark import TERMS, BenchmarkResult  # noqa: E402
-from policies.benchmark_stats import METRICS  # noqa: E402
+from policies.benchmark import TERMS, BenchmarkResult
+from policies.benchmark_stats import METRICS
 
 __all__ = ["format_table", "markdown_summary", "write_outputs"]
 

@@ -57,9 +57,17 @@ def _row(claim: str, paper: Any, ours: Any, holds: bool, reason: str) -> dict[st
 
 
 def detection_severity(rep: Reproduction, fault: str) -> float:
-    """Mean severity at detection over the campaign paths (NaN when no path detects)."""
+    """Mean severity at detection over the campaign paths; a path that never alarms counts
+    as NaN, so the mean is NaN unless every path detects (see :func:`detected_share`)."""
+    return float(np.mean(rep.detection[fault]["combined_severity_at_detection"]))
+
+
+def detected_share(rep: Reproduction, fault: str) -> str:
+    """``"<mean over detecting paths> (<k>/<n> paths)"`` for the report."""
     values = np.array(rep.detection[fault]["combined_severity_at_detection"])
-    return float(np.mean(values)) if np.all(np.isfinite(values)) else math.nan
+    hit = values[np.isfinite(values)]
+    mean = float(hit.mean()) if hit.size else math.nan
+    return f"{_fmt(mean)} ({hit.size}/{values.size} paths)"
 
 
 def prognosis_summary(paths: list[PathPrognosis]) -> dict[str, float]:
@@ -176,7 +184,7 @@ def verdicts(rep: Reproduction) -> list[dict[str, Any]]:
             _row(
                 f"{_NAMES[fault]}: severity at detection",
                 paper,
-                f"campaign paths {_fmt(ours_det)}; prognosis paths "
+                f"campaign paths {detected_share(rep, fault)}; prognosis paths "
                 f"{_fmt(prog[fault]['severity_at_detection'])}",
                 math.isfinite(ours_det) and abs(ours_det - paper) <= DETECTION_TOLERANCE,
                 "population baseline: unit-to-unit scatter of G3 (spring tolerances, fluid "

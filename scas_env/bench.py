@@ -1,0 +1,108 @@
+"""Speed measurements of the environment, each beside a reference measured in the same run.
+
+Used by ``scripts/bench_env.py`` (``make bench``); never by unit tests.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import gymnasium as gym
+import numpy as np
+
+import scas_env
+from prognostics.features import flight_features
+from scas_env.env import ScasMaintenanceEnv
+
+
+@dataclass(frozen=True)
+class Timing:
+    name: str
+    seconds_per_call: float
+    reference: str
+    reference_seconds_per_call: float
+
+    @property
+    def ratio(self) -> float:
+        """How many times slower than the reference (>1 = slower)."""
+        return self.seconds_per_call / self.reference_seconds_per_call
+
+
+def _per_call(fn: Callable[[], object], n: int, repeats: int = 3) -> float:
+    best = float("inf")
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        for _ in range(n):
+            fn()
+        best = min(best, (time.perf_counter() - t0) / n)
+    return best
+
+
+def _stepper(env: gym.Env, seed: int, test_every: int = 10) -> Callable[[], object]:
+    env.reset(seed=seed)
+    state = {"k": 0}
+
+    def step() -> object:
+        state["k"] += 1
+        out = env.step(1 if state["k"] % test_every == 0 else 0)
+        if out[3]:
+            env.reset()
+        return out
+
+    return step
+
+
+def cartpole_step_s(n: int = 20_000) -> float:
+    env = gym.make("CartPole-v1").unwrapped
+    env.reset(seed=0)
+
+    def step() -> object:
+        out = env.step(env.action_space.sample())
+        if out[2]:
+            env.reset()
+        return out
+
+    return _per_call(step, n)
+
+
+def env_timings(n_steps: int = 5000, physics_steps: int = 20) -> list[Timing]:
+    """Surrogate and physics step times beside CartPole's, in one process."""
+    cart = cartpole_step_s()
+    surrogate = _per_call(_stepper(ScasMaintenanceEnv(), 0), n_steps)
+    features_only = _per_call(_stepper(ScasMaintenanceEnv(obs_mode="features"), 0), n_steps)
+    physics_env = ScasMaintenanceEnv(fidelity="physics")
+    physics = _per_call(_stepper(physics_env, 0, test_every=1), physics_steps, repeats=1)
+    t = np.arange(20_000) / 1000.0
+    x = 1e-3 * np.sin(2 * np.pi * 2 * t)
+    features = _per_call(lambda: flight_features(t, 3.2 * x, x, 3.2 * x, x), 50)
+    return [
+        Timing("surrogate step, features+rul (PF)", surrogate, "CartPole-v1 step", cart),
+        Timing("surrogate step, features only", features_only, "CartPole-v1 step", cart),
+        Timing("physics step, test + 20 s window + PF", physics, "CartPole-v1 step", cart),
+        Timing("in-flight features of a 20 s window", features, "CartPole-v1 step", cart),
+    ]
+
+
+def vector_throughput(num_envs: int = 64, n_steps: int = 50) -> float:
+    """Env-steps per second of ``make_vec`` with ``num_envs`` environments."""
+    envs = gym.make_vec(scas_env.ENV_ID, num_envs=num_envs, vectorization_mode="vector_entry_point")
+    envs.reset(seed=0)
+    actions = np.zeros(num_envs, dtype=np.int64)
+    t0 = time.perf_counter()
+    for _ in range(n_steps):
+        envs.step(actions)
+    return num_envs * n_steps / (time.perf_counter() - t0)
+
+
+def format_timings(timings: list[Timing]) -> str:
+    lines = [
+        f"{'what':42s} {'per call':>12s} {'reference':>22s} {'ref per call':>12s} {'ratio':>7s}"
+    ]
+    for t in timings:
+        lines.append(
+            f"{t.name:42s} {t.seconds_per_call * 1e6:10.1f}us {t.reference:>22s} "
+            f"{t.reference_seconds_per_call * 1e6:10.1f}us {t.ratio:7.1f}"
+        )
+    return "\n".join(lines)
