@@ -1,0 +1,174 @@
+"""Policies: each rule on crafted observations, batching, SB3 evaluate_policy, the oracle."""
+
+from __future__ import annotations
+
+import math
+
+import gymnasium as gym
+import numpy as np
+import pytest
+from stable_baselines3.common.evaluation import evaluate_policy
+from stable_baselines3.common.monitor import Monitor
+
+import scas_env
+from policies import make_policy, policy_obs_mode
+from policies.benchmark import run_episode
+from policies.oracle import OraclePolicy
+from policies.rules import DetectionPolicy, PreventivePolicy, RandomPolicy, RulRiskPolicy
+
+FULL = (
+    "I2", "I6", "I7", "G1", "G3", "test_age", "spring_rul_mean", "spring_rul_low",
+    "spring_risk", "seal_rul_mean", "seal_rul_low", "seal_risk", "spring_alarm", "seal_alarm",
+    "spring_age", "seal_age", "downtime",
+)  # fmt: skip
+STATE = (
+    "crack_fraction", "wear_fraction", "spring_rul_true", "seal_rul_true", "spring_age",
+    "seal_age", "downtime",
+)  # fmt: skip
+HEALTHY = {
+    "test_age": 1.0, "spring_rul_mean": 900.0, "spring_rul_low": 600.0, "spring_risk": 0.0,
+    "seal_rul_mean": 900.0, "seal_rul_low": 700.0, "seal_risk": 0.0, "spring_age": 100.0,
+    "seal_age": 100.0, "spring_rul_true": 900.0, "seal_rul_true": 900.0,
+}  # fmt: skip
+
+
+def obs(names: tuple[str, ...] = FULL, **values: float) -> np.ndarray:
+    """An observation with entries set by name (others healthy or 0)."""
+    merged = {**HEALTHY, **values}
+    return np.array([merged.get(n, 0.0) for n in names], dtype=np.float32)
+
+
+def act(policy, **values: float) -> int:
+    return policy.predict(obs(policy.obs_names, **values))[0]
+
+
+def test_env_obs_names_match_the_crafted_layouts():
+    for mode, names in (("features+rul", FULL), ("state", STATE)):
+        env = gym.make(scas_env.ENV_ID, obs_mode=mode, episode_slots=10)
+        assert env.unwrapped.obs_names == names
+
+
+def test_corrective_always_flies():
+    p = make_policy("corrective", FULL)
+    assert act(p, spring_rul_low=0.0, spring_risk=1.0, seal_alarm=1.0, test_age=500) == 0
+
+
+def test_preventive_replaces_at_age_seals_first_and_opportunistically():
+    p = PreventivePolicy(FULL, spring_age=600, seal_age=800, opportunity=0.25)
+    assert act(p, spring_age=599, seal_age=799) == 0
+    assert act(p, spring_age=600, seal_age=10) == 2
+    assert act(p, spring_age=10, seal_age=800) == 3
+    assert act(p, spring_age=700, seal_age=900) == 3  # both due: seals first
+    # grounded: within 25% of the trigger (600 * 0.75 = 450) is enough
+    assert act(p, spring_age=450, seal_age=10, downtime=1) == 2
+    assert act(p, spring_age=449, seal_age=10, downtime=1) == 0
+    assert act(p, spring_age=449, seal_age=10, downtime=0) == 0
+    never = PreventivePolicy(FULL, spring_age=math.inf, seal_age=800, opportunity=0.0)
+    assert act(never, spring_age=5000, seal_age=10) == 0
+
+
+def test_detection_tests_every_k_and_replaces_on_alarm():
+    p = DetectionPolicy(FULL, test_every=10)
+    assert act(p, test_age=9) == 0
+    assert act(p, test_age=10) == 1
+    assert act(p, test_age=10, downtime=2) == 0  # no test while grounded
+    assert act(p, spring_alarm=1.0) == 2
+    assert act(p, seal_alarm=1.0, spring_alarm=1.0) == 3
+    assert act(p, seal_alarm=1.0, seal_age=0.0) == 0  # a new part is never replaced
+
+
+def test_rul_risk_replaces_on_risk_or_low_rul_and_tests_when_uncertain():
+    p = RulRiskPolicy(
+        FULL, risk_threshold=0.1, spring_lead=50, seal_lead=80, test_every=30,
+        uncertainty=0.5, min_test_gap=5, opportunity=0.5,
+    )  # fmt: skip
+    assert act(p) == 0
+    assert act(p, spring_risk=0.1) == 2
+    assert act(p, seal_risk=0.2) == 3
+    assert act(p, spring_rul_low=50.0) == 2
+    assert act(p, seal_rul_low=80.0) == 3
+    assert act(p, seal_rul_low=81.0) == 0
+    assert act(p, seal_rul_low=160.0, downtime=1) == 3  # 160 * (1 - 0.5) <= 80
+    assert act(p, spring_risk=0.05, downtime=1) == 2  # 0.05 >= 0.5 * 0.1
+    assert act(p, test_age=30) == 1
+    # spread (900 - 300) / 900 = 0.67 > 0.5: test once the last test is 5 slots old
+    assert act(p, spring_rul_low=300.0, test_age=4) == 0
+    assert act(p, spring_rul_low=300.0, test_age=5) == 1
+
+
+def test_oracle_replaces_at_margin():
+    p = OraclePolicy(STATE, margin=2.0, opportunity=10.0)
+    assert act(p, spring_rul_true=2.5) == 0
+    assert act(p, spring_rul_true=2.0) == 2
+    assert act(p, seal_rul_true=1.0, spring_rul_true=1.0) == 3
+    assert act(p, seal_rul_true=12.0, downtime=1) == 3
+    assert act(p, seal_rul_true=12.0, downtime=0) == 0
+
+
+def test_random_policy_frequencies_and_reseeding():
+    probs = (0.5, 0.2, 0.2, 0.1)
+    p = RandomPolicy(FULL, probabilities=probs, seed=3)
+    batch = np.tile(obs(), (20_000, 1))
+    actions, _ = p.predict(batch)
+    freq = np.bincount(actions, minlength=4) / actions.size
+    sigma = np.sqrt(np.array(probs) * (1 - np.array(probs)) / actions.size)
+    assert np.all(np.abs(freq - probs) < 5 * sigma)
+    p.reset(seed=7)
+    first = p.predict(batch[:50])[0]
+    p.reset(seed=7)
+    assert np.array_equal(first, p.predict(batch[:50])[0])
+
+
+def test_batched_predict_matches_rows():
+    rng = np.random.default_rng(0)
+    rows = np.array([obs() for _ in range(64)])
+    for col, hi in ((5, 40), (7, 900), (8, 0.2), (10, 900), (12, 1.5), (14, 1500), (16, 3)):
+        rows[:, col] = rng.uniform(0, hi, 64) if col != 12 else rng.integers(0, 2, 64)
+    for name in ("corrective", "preventive", "detection", "rul_risk"):
+        p = make_policy(name, FULL)
+        batch, state = p.predict(rows, state="s")
+        assert state == "s" and batch.shape == (64,) and batch.dtype == np.int64
+        assert batch.tolist() == [p.predict(r)[0] for r in rows]
+        assert len(set(batch.tolist())) > 1 or name == "corrective"
+
+
+def test_bad_input_raises():
+    with pytest.raises(ValueError, match="seal_age"):
+        PreventivePolicy(("spring_age", "downtime"))
+    with pytest.raises(ValueError, match="spring_age"):
+        PreventivePolicy(FULL, spring_age=-1)
+    with pytest.raises(ValueError, match="opportunity"):
+        RulRiskPolicy(FULL, opportunity=1.0)
+    with pytest.raises(ValueError, match="probabilities"):
+        RandomPolicy(FULL, probabilities=(0.5, 0.5, 0.5, 0.0))
+    with pytest.raises(ValueError, match="not registered"):
+        make_policy("nope", FULL)
+    with pytest.raises(ValueError, match="shape"):
+        make_policy("corrective", FULL).predict(np.zeros(3))
+
+
+def test_sb3_evaluate_policy_drives_a_rule():
+    env = Monitor(gym.make(scas_env.ENV_ID, obs_mode="features", episode_slots=100))
+    policy = make_policy("corrective", env.unwrapped.obs_names)
+    rewards, lengths = evaluate_policy(policy, env, n_eval_episodes=2, return_episode_rewards=True)
+    # 100 flights, no part lives fewer than ~400 flights: every flight flown and paid
+    assert lengths == [100, 100]
+    assert rewards == [100 * 2500.0, 100 * 2500.0]
+    det_env = Monitor(gym.make(scas_env.ENV_ID, obs_mode="features", episode_slots=100))
+    det = make_policy("detection", det_env.unwrapped.obs_names, test_every=10)
+    mean, _ = evaluate_policy(det, det_env, n_eval_episodes=1)
+    assert mean < 100 * 2500.0  # tests cost
+
+
+def test_oracle_never_fails_in_flight():
+    env = gym.make(scas_env.ENV_ID, obs_mode=policy_obs_mode("oracle"), episode_slots=2000)
+    oracle = make_policy("oracle", env.unwrapped.obs_names)
+    replaced = 0
+    for seed in (11, 12):
+        out = run_episode(env, oracle, seed, 0)
+        row = out["row"]
+        assert row["failures_spring"] == 0 and row["failures_seal"] == 0
+        replaced += row["replacements_spring"] + row["replacements_seal"]
+        # just in time: the true RUL at replacement is within the margin
+        assert 0.0 < row["wasted_life"] <= oracle.margin
+    assert replaced >= 2  # 2000 slots outlast most parts: the check is not vacuous
