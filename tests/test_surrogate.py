@@ -1,0 +1,80 @@
+"""The shipped feature surrogate is current and matches fresh physics runs."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from scas_env.calibration import default_calibration, params_digest
+from scas_env.params import ScasParams
+from scas_env.surrogate import SurrogateModel, default_surrogate
+from scas_env.surrogate_build import random_effects, unit_runs
+
+P = ScasParams()
+MODEL = default_surrogate()
+
+
+def test_shipped_surrogate_matches_default_parameters() -> None:
+    assert MODEL.params_digest == params_digest(P), (
+        "scas_env/data/surrogate.json is stale: run `python scripts/build_surrogate.py`"
+    )
+
+
+@pytest.mark.parametrize("crack,wear", [(0.0, 0.0), (0.9, 0.0), (0.0, 0.7), (0.6, 0.6)])
+def test_surrogate_matches_fresh_physics(crack: float, wear: float) -> None:
+    # fresh units (seeds the build never used), several runs each: compare the mean and the
+    # total spread of every feature with the surrogate at the same health state
+    n_units, runs = 8, 3
+    block = np.stack(
+        [
+            unit_runs(
+                P,
+                crack,
+                wear,
+                np.random.SeedSequence(987_654, spawn_key=(u,)),
+                runs,
+                default_calibration().seal_critical_wear_m,
+            )
+            for u in range(n_units)
+        ]
+    )
+    mean = MODEL.mean_at(crack, wear)
+    total = np.hypot(MODEL.unit_std_at(crack, wear), MODEL.run_std_at(crack, wear))
+    physics_mean = block.mean(axis=(0, 1))
+    physics_std = block.reshape(-1, block.shape[2]).std(axis=0, ddof=1)
+    # standard error of the physics mean with unit clustering: total / sqrt(n_units) at most
+    se = total / np.sqrt(n_units)
+    for k, f in enumerate(MODEL.features):
+        assert abs(physics_mean[k] - mean[k]) < 4.0 * se[k] + 1e-12, f
+        assert 0.4 < physics_std[k] / total[k] < 2.0, f
+
+
+def test_random_effects_recovers_known_components() -> None:
+    rng = np.random.default_rng(0)
+    units, runs = 400, 6
+    tau, sigma = 2.0, 0.5
+    values = (
+        10.0
+        + tau * rng.standard_normal((units, 1, 1))
+        + sigma * rng.standard_normal((units, runs, 1))
+    )
+    mean, tau_hat, sigma_hat = random_effects(values)
+    assert mean[0] == pytest.approx(10.0, abs=4 * tau / np.sqrt(units))
+    assert tau_hat[0] == pytest.approx(tau, rel=0.1)
+    assert sigma_hat[0] == pytest.approx(sigma, rel=0.05)
+
+
+def test_sampling_fast_path_equals_interpolation_and_bad_inputs_raise() -> None:
+    for c, w in [(0.0, 0.0), (0.37, 0.81), (1.0, 1.0)]:
+        fast = MODEL.tables_at(c, w)
+        slow = np.stack([MODEL.mean_at(c, w), MODEL.unit_std_at(c, w), MODEL.run_std_at(c, w)])
+        np.testing.assert_allclose(fast, slow, rtol=1e-12, atol=1e-15)
+    with pytest.raises(ValueError, match="crack_frac"):
+        MODEL.mean_at(1.2, 0.0)
+    with pytest.raises(ValueError, match="crack_frac"):
+        MODEL.tables_at(-0.1, 0.0)
+    with pytest.raises(ValueError, match="feature"):
+        MODEL.index("G9")
+    bad = MODEL.to_dict() | {"run_std": (-np.asarray(MODEL.run_std)).tolist()}
+    with pytest.raises(ValueError, match="run_std"):
+        SurrogateModel(**bad)
