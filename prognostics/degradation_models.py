@@ -170,26 +170,25 @@ def _predict_kernel(
     usage: float,
     sigma_x: float,
     sigma_log_theta: float,
-    rng: np.random.Generator,
-    work: np.ndarray,
+    noise: np.ndarray,
 ) -> None:
     """In-place Euler step of the module-level process model for every particle.
 
-    Separate passes (rate into ``work``, drift, noise): measured faster with numba than
-    one fused loop.
+    ``noise`` holds the standard normals: ``noise[:n]`` for x (if ``sigma_x > 0``), then
+    ``noise[n:2n]`` for log theta (if ``sigma_log_theta > 0``); drawn by the caller with
+    numpy (passing a Generator into numba costs more per call than the whole step).
     """
-    for i in range(x.size):
-        work[i] = rate_at_scalar(grid, rate, cells, inv_cell, x[i])
-    for i in range(x.size):
-        x[i] += math.exp(log_theta[i]) * work[i] * usage
-    if sigma_x > 0.0:
-        sx = sigma_x * math.sqrt(usage)
-        for i in range(x.size):
-            x[i] += sx * rng.standard_normal()
-    if sigma_log_theta > 0.0:
-        sth = sigma_log_theta * math.sqrt(usage)
-        for i in range(x.size):
-            log_theta[i] += sth * rng.standard_normal()
+    n = x.size
+    sx = sigma_x * math.sqrt(usage)
+    sth = sigma_log_theta * math.sqrt(usage)
+    k_th = n if sigma_x > 0.0 else 0
+    for i in range(n):
+        g = rate_at_scalar(grid, rate, cells, inv_cell, x[i])
+        x[i] += math.exp(log_theta[i]) * g * usage
+        if sigma_x > 0.0:
+            x[i] += sx * noise[i]
+        if sigma_log_theta > 0.0:
+            log_theta[i] += sth * noise[k_th + i]
 
 
 def _frozen_1d(name: str, values: np.ndarray) -> np.ndarray:
@@ -311,13 +310,19 @@ class TabulatedRateModel:
     ) -> None:
         """One filter step of usage ``usage`` >= 0, in place on ``x`` and ``log_theta``.
 
-        ``x``, ``log_theta`` (and the optional scratch ``work``) are float64 arrays of one
-        length; passing ``work`` avoids an allocation per call.
+        ``x`` and ``log_theta`` are float64 arrays of one length; the optional scratch
+        ``work`` (float64, at least ``2 len(x)``) receives the normal draws and avoids an
+        allocation per call. Draws: ``rng.standard_normal`` for the x noise (if any), then
+        for the log-theta walk (if any).
         """
         if not (math.isfinite(usage) and usage >= 0.0):
             raise ValueError(f"usage = {usage} must be finite and >= 0")
-        if work is None:
-            work = np.empty_like(x)
+        n_draws = x.size * ((self.process_noise_std > 0.0) + (self.log_theta_noise_std > 0.0))
+        if work is None or work.size < n_draws:
+            work = np.empty(max(n_draws, 1))
+        noise = work[:n_draws]
+        if n_draws:
+            rng.standard_normal(out=noise)
         _predict_kernel(
             self.grid,
             self.rate,
@@ -328,8 +333,7 @@ class TabulatedRateModel:
             float(usage),
             self.process_noise_std,
             self.log_theta_noise_std,
-            rng,
-            work,
+            noise,
         )
 
     def simulate_steps_to_threshold(

@@ -247,6 +247,7 @@ class ParticleFilter:
         self._log_w = np.full(n, -math.log(n))
         self._loglik = np.empty(n)
         self._buf_x = np.empty(n)
+        self._noise = np.empty(2 * n)
         self._buf_lt = np.empty(n)
         self._cumsum = np.empty(n)
         self._idx = np.empty(n, dtype=np.intp)
@@ -310,7 +311,7 @@ class ParticleFilter:
     def predict(self, usage: float) -> None:
         """Propagate every particle over a step of ``usage`` (>= 0, usage units)."""
         self._check_ready()
-        self.process.predict(self._x, self._log_theta, usage, self.rng, self._buf_x)
+        self.process.predict(self._x, self._log_theta, usage, self.rng, self._noise)
 
     def update(self, y: float, measurement: MeasurementModel | None = None) -> bool:
         """Weight by the likelihood of feature ``y``; NaN = no measurement (no change).

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import functools
 import importlib.util
 import math
 
@@ -119,8 +120,9 @@ def test_ray_path_without_ray_is_a_clear_error():
 COSTS = CostModel(unscheduled_removal_usd=7000.0, mission_abort_usd=5000.0)
 
 
+@functools.cache
 def _renewal_rates(age: float) -> tuple[float, float]:
-    lives = sample_lives(ScasParams(), default_calibration(), np.random.default_rng(0), 400_000)
+    lives = sample_lives(ScasParams(), default_calibration(), np.random.default_rng(0), 100_000)
     life = lives.seal_flights
     fail = life <= age
     flights = np.where(fail, np.ceil(life) - 1.0, age)
