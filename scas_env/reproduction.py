@@ -33,48 +33,39 @@ Pipeline (:func:`run_reproduction`; the report and plots are in
 
 from __future__ import annotations
 
-import math
 import time
-from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
-from tqdm.auto import tqdm
 
-from prognostics.degradation_models import TabulatedRateModel, linear_wear_model, paris_crack_model
 from prognostics.detection import DetectorConfig, PercentileDetector, severity_at_detection
 from prognostics.features import FEATURE_INFO
-from prognostics.measurement import MeasurementModel, fit_measurement_model
-from prognostics.metrics import PrognosticMetrics
-from prognostics.prognosis_run import PrognosisTrace, run_prognosis
-from prognostics.rul import HazardZone
 from prognostics.selection import FeatureScore, rank_features, redundancy_matrix, redundant_pairs
 from scas_env.calibration import Calibration, calibration_for
 from scas_env.campaign import CampaignConfig, run_campaign
 from scas_env.campaign_io import CampaignResult, load
 from scas_env.config import Validated, param
-from scas_env.health import HealthState, actuator_config
-from scas_env.measure import ground_test
 from scas_env.params import ScasParams
-from scas_env.uncertainty import (
-    UnitSample,
-    draw_run_conditions,
-    draw_unit,
-    nominal_unit,
-    truncated_normal,
+from scas_env.reproduction_paths import (
+    HealthySet,
+    PathPrognosis,
+    feature_score,
+    healthy_residuals,
+    installation_detector,
+    population_detector,
+    prognose_path,
+    simulate_healthy_set,
 )
 
 __all__ = [
     "FAULTS",
-    "DegradationPath",
-    "PathPrognosis",
     "Reproduction",
     "ReproductionConfig",
     "campaign_detection",
-    "grow_path",
+    "healthy_unit_alarms",
     "run_reproduction",
     "select_features",
 ]
@@ -83,7 +74,6 @@ FloatArray = NDArray[np.float64]
 FAULTS = ("crack", "wear")
 REDUNDANT_MIN_CORRELATION = 0.95
 RESPONSIVE_MIN_SPEARMAN = 0.2
-MAX_UNIT_DRAWS = 1000
 
 
 @dataclass(frozen=True)
@@ -108,17 +98,32 @@ class ReproductionConfig(Validated):
         0.05, "-", lo=0.0, hi=1.0, hi_open=True, source="t_EoUP: true RUL >= this x life"
     )
     healthy_units: int = param(
-        20, "-", lo=1, hi=1e5, integer=True, source="healthy units for the per-unit FAR"
+        20, "-", lo=4, hi=1e5, integer=True, source="nested healthy units (run spread, FAR)"
     )
     reference_fraction: float = param(
-        0.1,
-        "-",
-        lo=0.0,
-        hi=0.5,
-        lo_open=True,
-        source="unit reference: tests in this x nominal life",
+        0.1, "-", lo=0.0, hi=0.5, lo_open=True, source="unit reference: first x nominal life"
+    )
+    baseline_tests: int = param(
+        5, "-", lo=3, hi=100, integer=True, source="installation offset: at most this many tests"
     )
     nominal_unit: bool = False
+
+    @property
+    def installation_tests(self) -> int:
+        """K = min(baseline_tests, floor(reference_fraction x tests_per_path)).
+
+        The installation variant's reference tests: the first K tests of a unit, within the
+        first ``reference_fraction`` of the nominal life (full size: 5 tests, 3% of life;
+        quick: 4 tests, 10%).
+        """
+        return min(self.baseline_tests, int(self.reference_fraction * self.tests_per_path))
+
+    def _check(self) -> None:
+        if self.installation_tests < 3:
+            raise ValueError(
+                f"reference_fraction = {self.reference_fraction} x tests_per_path = "
+                f"{self.tests_per_path} must leave >= 3 installation reference tests"
+            )
 
     @classmethod
     def quick(cls) -> ReproductionConfig:
@@ -214,20 +219,7 @@ def _merit(score: FeatureScore) -> float:
     return score.accuracy * abs(score.spearman)
 
 
-def _score(selection: dict[str, Any], fault: str, cond: str, name: str) -> FeatureScore:
-    return next(s for s in selection["scores"][f"{fault}/{cond}"] if s.name == name)
-
-
 # ----------------------------------------------------------------------------- detection
-def _detector(
-    campaign: CampaignResult, feature: str, direction: str, window: int
-) -> PercentileDetector:
-    """Detector fitted on the healthy runs of every fault mode (population baseline)."""
-    healthy = campaign.table["level"] == 0
-    det = PercentileDetector(DetectorConfig(window=window, direction=direction))  # type: ignore[arg-type]
-    return det.fit(campaign.table[feature][healthy])
-
-
 def campaign_detection(
     campaign: CampaignResult, selection: dict[str, Any], window: int
 ) -> dict[str, Any]:
@@ -243,8 +235,8 @@ def campaign_detection(
         any_alarm = np.zeros((n_paths, levels.size * w), dtype=bool)
         for cond in ("ground", "flight"):
             name = chosen[cond]
-            direction = _score(selection, fault, cond, name).direction
-            det = _detector(campaign, name, direction, w)
+            direction = feature_score(selection, f"{fault}/{cond}", name).direction
+            det = population_detector(campaign, name, direction, w)
             values = campaign.select(fault, cond)[1][name].reshape(levels.size, n_runs)
             series = values[:, : n_paths * w].reshape(levels.size, n_paths, w).transpose(1, 0, 2)
             series = series.reshape(n_paths, -1)
@@ -281,18 +273,65 @@ def _cross_validated_far(campaign: CampaignResult, feature: str, direction: str,
     return sum(rates) / sum(counts)
 
 
+# ----------------------------------------------------------------------------- healthy units
+def healthy_unit_alarms(
+    campaign: CampaignResult,
+    selection: dict[str, Any],
+    healthy: HealthySet,
+    window: int,
+) -> dict[str, dict[str, float]]:
+    """Share of healthy units whose first detector window alarms, per variant and fault.
+
+    The population baseline mixes units; one unit keeps its own offset, so the per-unit
+    false alarm is what a fleet would see. Paper variant: the population detector on a
+    unit's first ``window`` tests. Installation variant: the offset from the unit's first
+    K tests, the detector on the next ``window`` corrected tests, its baseline from the
+    residuals of the other half of the units (even/odd units, 2 folds).
+    """
+    k = healthy.n_reference
+    out: dict[str, dict[str, float]] = {"paper": {}, "installation": {}}
+    for fault in FAULTS:
+        chosen, key = selection["selected"][fault], f"{fault}/ground"
+        name = chosen["ground"]
+        det = population_detector(
+            campaign, name, feature_score(selection, key, name).direction, window
+        )
+        out["paper"][fault] = float(
+            np.mean([det.alarms(s[:window])[-1] for s in healthy.series[name]])
+        )
+        name = chosen["ground_per_fault_top"]
+        series = healthy.series[name]
+        hits = []
+        for fit, held in ((series[0::2], series[1::2]), (series[1::2], series[0::2])):
+            det = installation_detector(
+                0.0,
+                healthy_residuals(fit),
+                k,
+                feature_score(selection, key, name).direction,
+                window,
+            )
+            hits += [det.alarms(s[k : k + window] - s[:k].mean())[-1] for s in held]
+        out["installation"][fault] = float(np.mean(hits))
+    return out
+
+
 # ----------------------------------------------------------------------------- top level
 @dataclass(frozen=True, eq=False)
 class Reproduction:
-    """Everything the report needs (see :mod:`scas_env.reproduction_report`)."""
+    """Everything the report needs (see :mod:`scas_env.reproduction_report`).
+
+    ``healthy_unit_alarm_share[variant][fault]``: per-unit false alarm
+    (:func:`healthy_unit_alarms`); ``healthy``: the nested healthy set.
+    """
 
     config: ReproductionConfig
     seed: int
     campaign: CampaignResult
     selection: dict[str, Any]
     detection: dict[str, Any]
+    healthy: HealthySet
     prognosis: dict[str, list[PathPrognosis]]
-    healthy_unit_alarm_share: dict[str, float]
+    healthy_unit_alarm_share: dict[str, dict[str, float]]
     calibration: Calibration
     timings_s: dict[str, float]
 
@@ -306,11 +345,11 @@ def run_reproduction(
     campaign_path: str | Path | None = None,
     progress: bool = False,
 ) -> Reproduction:
-    """Campaign (or load), selection, detection and prognosis paths (module docstring).
+    """Campaign (or load), selection, detection, healthy set and prognosis paths.
 
     Randomness: the campaign from ``seed`` (:func:`run_campaign`), path i of fault f from
-    ``SeedSequence(seed, spawn_key=(f, i))`` (f = index in :data:`FAULTS`), the healthy
-    units of the per-unit false-alarm share from ``SeedSequence(seed, spawn_key=(2,))``.
+    ``SeedSequence(seed, spawn_key=(f, i))`` (f = index in :data:`FAULTS`), the nested
+    healthy units from ``SeedSequence(seed, spawn_key=(2,))``.
     """
     clock = time.perf_counter()
     timings: dict[str, float] = {}
@@ -326,15 +365,28 @@ def run_reproduction(
     selection = select_features(campaign)
     detection = campaign_detection(campaign, selection, config.detector_window)
     timings["selection_detection"] = time.perf_counter() - clock - timings["campaign"]
+    chosen = [
+        selection["selected"][f][k] for f in FAULTS for k in ("ground", "ground_per_fault_top")
+    ]
+    k = config.installation_tests
+    healthy = simulate_healthy_set(
+        params,
+        tuple(sorted(set(chosen))),
+        config.healthy_units,
+        k + config.detector_window,
+        k,
+        np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(len(FAULTS),))),
+    )
+    timings["healthy_units"] = time.perf_counter() - clock - sum(timings.values())
     cal = calibration_for(params)
-    prognosis: dict[str, list[PathPrognosis]] = {}
-    for f_index, fault in enumerate(FAULTS):
-        prognosis[fault] = [
+    prognosis = {
+        fault: [
             prognose_path(
                 params,
                 cal,
                 campaign,
                 selection,
+                healthy,
                 fault,
                 config,
                 np.random.SeedSequence(seed, spawn_key=(f_index, i)),
@@ -342,10 +394,10 @@ def run_reproduction(
             )
             for i in range(config.n_paths)
         ]
-    unit_far = healthy_unit_alarms(
-        params, campaign, selection, config, np.random.SeedSequence(seed, spawn_key=(len(FAULTS),))
-    )
+        for f_index, fault in enumerate(FAULTS)
+    }
+    unit_far = healthy_unit_alarms(campaign, selection, healthy, config.detector_window)
     timings["prognosis"] = time.perf_counter() - clock - sum(timings.values())
     return Reproduction(
-        config, seed, campaign, selection, detection, prognosis, unit_far, cal, timings
+        config, seed, campaign, selection, detection, healthy, prognosis, unit_far, cal, timings
     )

@@ -1,6 +1,7 @@
 """Reproduce [DJS20] sections 4-5 (feature selection, detection, PF prognosis, RA/CRA).
 
-Logic in :mod:`scas_env.reproduction` and :mod:`scas_env.reproduction_report`. Examples::
+Logic in :mod:`scas_env.reproduction`, :mod:`scas_env.reproduction_paths` and
+:mod:`scas_env.reproduction_report`. Examples::
 
     python scripts/reproduce_paper.py --quick                      # CI size, < 2 min
     python scripts/reproduce_paper.py --full --campaign results/campaign/paper_100x8

@@ -9,18 +9,23 @@ import numpy as np
 import pytest
 
 from prognostics.degradation_models import linear_wear_model, paris_crack_model
+from prognostics.detection import DetectorConfig, PercentileDetector
 from prognostics.measurement import MeasurementModel, fit_measurement_model
-from prognostics.prognosis_run import run_prognosis
-from prognostics.rul import HazardZone
-from scas_env.params import ScasParams
-from scas_env.reproduction import (
-    FAULTS,
-    ReproductionConfig,
+from prognostics.prognosis_run import (
     grow_path,
-    run_reproduction,
+    healthy_residuals,
+    installation_detector,
+    installation_measurement_model,
+    installation_reference,
+    run_prognosis,
     unit_reference,
 )
+from prognostics.rul import HazardZone
+from scas_env.params import ScasParams
+from scas_env.reproduction import FAULTS, ReproductionConfig, run_reproduction
+from scas_env.reproduction_paths import INSTALLATION_EFFECT, VARIANTS
 from scas_env.reproduction_report import detection_severity, verdicts, write_report
+from scas_env.surrogate import default_surrogate
 
 
 # ----------------------------------------------------------------------------- helpers
@@ -65,6 +70,71 @@ def test_unit_reference_recovers_gain_and_noise() -> None:
     gain, unit_model = unit_reference(y, flights, model, 0.0, population, 200)
     assert gain == pytest.approx(1 / 1.25, rel=0.01)
     assert float(unit_model.sigma(np.array([0.0]))[0]) == pytest.approx(0.05 / 1.25, rel=0.15)
+
+
+def test_installation_reference_recovers_known_offset_and_ratio() -> None:
+    rng = np.random.default_rng(11)
+    mm = MeasurementModel("poly", [0.0], [1.0], coef=[40.0, 50.0])  # h(x) = 40 + 50 x
+    x_prior = np.linspace(0.0, 0.04, 5)  # h = 40 .. 42, level 41
+    noise = 0.6 * rng.standard_normal(5)
+    scale, offset, level = installation_reference(mm.mean(x_prior) + 2.5 + noise, x_prior, mm)
+    assert (scale, level) == (1.0, pytest.approx(41.0))
+    assert offset == pytest.approx(2.5 + noise.mean(), rel=1e-12)  # within 0.6/sqrt(5) of 2.5
+    scale, offset, level = installation_reference(1.08 * mm.mean(x_prior), x_prior, mm, True)
+    assert (offset, level) == (0.0, pytest.approx(41.0))
+    assert scale == pytest.approx(1 / 1.08, rel=1e-12)
+
+
+def test_installation_measurement_model_removes_the_healthy_unit_spread() -> None:
+    # population sigma 5 (healthy) and 13 (critical), run spread 3, K = 4:
+    # tau0^2 = 25 - 9 = 16; sigma^2 = max(sigma_p^2 - 16, 9) + 9/4
+    population = MeasurementModel(
+        "pchip", [0.0, 1.0], [5.0, 13.0], knots=[0.0, 1.0], values=[0.0, 1.0], slopes=[1.0, 1.0]
+    )
+    model = installation_measurement_model(population, 3.0, 4)
+    np.testing.assert_allclose(model.sigma_values, np.sqrt([11.25, 155.25]), rtol=1e-12)
+    np.testing.assert_array_equal(model.values, population.values)
+
+
+def test_healthy_residuals_remove_unit_levels() -> None:
+    rng = np.random.default_rng(2)
+    series = 10.0 * rng.standard_normal((40, 1)) + 0.5 * rng.standard_normal((40, 6))
+    r = healthy_residuals(series)
+    assert r.size == 240 and abs(r.mean()) < 1e-12
+    assert np.sqrt(np.mean(r**2)) == pytest.approx(0.5, rel=0.1)  # run spread, not 10
+    with pytest.raises(ValueError, match="series"):
+        healthy_residuals(np.ones((3, 1)))
+
+
+def test_installation_detector_detects_earlier_than_the_population_one() -> None:
+    # G1-like: unit offsets N(0, 4.4), run noise 0.6; a unit 1 sigma above the mean whose
+    # feature falls linearly by 12 over 300 tests after 20 healthy ones
+    rng = np.random.default_rng(4)
+    unit_sd, run_sd, k, w = 4.4, 0.6, 5, 20
+    population = unit_sd * rng.standard_normal(2000) + run_sd * rng.standard_normal(2000)
+    nested = unit_sd * rng.standard_normal((20, 1)) + run_sd * rng.standard_normal((20, 25))
+    drift = np.concatenate([np.zeros(20), -12.0 * np.arange(1, 301) / 300])
+    y = unit_sd + drift + run_sd * rng.standard_normal(drift.size)
+    cfg = DetectorConfig(window=w, direction="falling")
+    pop_hits = np.flatnonzero(PercentileDetector(cfg).fit(population).alarms(y))
+    det = installation_detector(0.0, healthy_residuals(nested), k, "falling", w)
+    inst_hits = np.flatnonzero(det.alarms(y[k:] - y[:k].mean())) + k
+    assert inst_hits.size and inst_hits[0] > 20 + w // 2  # no alarm on the healthy part
+    # installation: shift ~3.3 run sigma = 2 (test ~70); population: 4.4 + 1.645 * 4.4 +
+    # 1.645 * 0.6 ~ 12.6 below the start, never reached
+    assert pop_hits.size == 0 or inst_hits[0] < pop_hits[0]
+    assert inst_hits[0] < 120
+
+
+def test_installation_effect_matches_the_surrogate_tables() -> None:
+    # G1's unit spread has no trend with the crack (offset); G3's scales with its mean (ratio)
+    sur = default_surrogate()
+    g1, g3 = sur.index("G1"), sur.index("G3")
+    assert INSTALLATION_EFFECT["G1"] == "offset" and INSTALLATION_EFFECT["G3"] == "ratio"
+    unit_g1 = sur.unit_std[g1, :, 0]
+    assert abs(unit_g1[-1] - unit_g1[0]) < 0.1 * abs(sur.mean[g1, -1, 0] - sur.mean[g1, 0, 0])
+    ratio = sur.unit_std[g3, 0, :] / sur.mean[g3, 0, :]
+    assert abs(ratio[-1] / ratio[0] - 1.0) < 0.1  # while the mean more than doubles
 
 
 def test_run_prognosis_synthetic_wear_reaches_accurate_rul() -> None:
@@ -122,13 +192,17 @@ def quick_reproduction():
 
 def test_quick_reproduction_verdict_structure(quick_reproduction, tmp_path) -> None:
     rows = verdicts(quick_reproduction)
-    assert len(rows) == 15
+    assert len(rows) == 22
+    assert sum("(installation baseline)" in r["claim"] for r in rows) == 7
     assert all(r["verdict"] in ("holds", "differs") and r["reason"] for r in rows)
     files = write_report(quick_reproduction, tmp_path)
     assert all(f.exists() for f in files)
     report = json.loads((tmp_path / "report.json").read_text())
     assert [r["claim"] for r in report["verdicts"]] == [r["claim"] for r in rows]
     assert {p.name for p in files} >= {f"fig{n}_{f}.png" for n in (8, 9) for f in FAULTS}
+    assert {p.name for p in files} >= {f"fig9_{f}_installation.csv" for f in FAULTS}
+    summary = report["prognosis"]["crack"]["summary"]
+    assert set(summary) == set(VARIANTS)
 
 
 def test_quick_reproduction_key_physical_verdicts(quick_reproduction) -> None:
@@ -140,4 +214,21 @@ def test_quick_reproduction_key_physical_verdicts(quick_reproduction) -> None:
     wear, crack = detection_severity(rep, "wear"), detection_severity(rep, "crack")
     assert math.isfinite(wear) and (not math.isfinite(crack) or wear < crack)
     # floor: quick runs of seeds 0-5 gave seal CRA 0.27 .. 0.89 (0.65 for seed 0)
-    assert rep.prognosis["wear"][0].metrics.cumulative_relative_accuracy > 0.2
+    assert rep.prognosis["wear"][0].variants["paper"].metrics.cumulative_relative_accuracy > 0.2
+
+
+def test_quick_reproduction_installation_variant(quick_reproduction) -> None:
+    rep = quick_reproduction
+    k = rep.config.installation_tests
+    assert k == 4 and rep.healthy.n_reference == k
+    # nested healthy set: run-to-run spread near the surrogate's (G1 0.60 uA, G3 1.97 uA/mm)
+    assert rep.healthy.run_std("G1") == pytest.approx(0.60e-6, rel=0.3)
+    assert rep.healthy.run_std("G3") == pytest.approx(1.97e-3, rel=0.3)
+    for fault, feature in (("crack", "G1"), ("wear", "G3")):
+        v = rep.prognosis[fault][0].variants["installation"]
+        assert v.feature == feature
+        assert np.all(np.isnan(v.fed[:k])) and not np.any(v.alarms[:k])
+        # the corrected reference tests average the reference level
+        corrected = v.reference["scale"] * v.measurements[:k] - v.reference["offset"]
+        assert corrected.mean() == pytest.approx(v.reference["level"], rel=1e-9)
+        assert rep.healthy_unit_alarm_share["installation"][fault] <= 0.25
