@@ -18,6 +18,9 @@ from scas_env.surrogate import SurrogateModel, default_surrogate
 from scas_env.world import PARTS, ActuatorWorld
 
 FLY, TEST_AND_FLY, REPLACE_SPRING, REPLACE_SEAL = range(4)
+#: Random streams of an episode: new units and parts, per-flight degradation, measurement
+#: noise (tests, flight features, physics windows), particle filters.
+STREAMS = ("parts", "degradation", "measure", "filter")
 ACTION_NAMES = ("fly", "test_and_fly", "replace_spring", "replace_seal")
 
 
@@ -176,10 +179,16 @@ class ScasMaintenanceEnv(gym.Env):
         super().reset(seed=seed)
         if options:
             raise ValueError(f"options are not supported, got {sorted(options)}")
-        rng = self.np_random
-        self.world.reset(rng)
+        # Independent streams, all seeded from np_random, so that two policies run on the
+        # same seed share the units, the parts fitted, and each flight's degradation draw
+        # (common random numbers), whatever they test or replace.
+        seeds = self.np_random.integers(0, 2**63 - 1, size=len(STREAMS))
+        self.rngs = {
+            name: np.random.default_rng(int(s)) for name, s in zip(STREAMS, seeds, strict=True)
+        }
+        self.world.reset(self.rngs["parts"])
         self.monitor = HealthMonitor(
-            self.params, self.scenario, self.calibration, self.surrogate, rng
+            self.params, self.scenario, self.calibration, self.surrogate, self.rngs["filter"]
         )
         self.monitor.reset()
         self.slot = 0
@@ -195,13 +204,12 @@ class ScasMaintenanceEnv(gym.Env):
         if not self.action_space.contains(action):
             raise ValueError(f"action = {action!r} is not in Discrete(4): {ACTION_NAMES}")
         action = int(action)
-        rng = self.np_random
         terms = dict.fromkeys(("flight", "test", "no_go", "replacement", "failure"), 0.0)
         grounded = self.downtime > 0
         flew = False
         if action in (REPLACE_SPRING, REPLACE_SEAL):
             part = PARTS[action - REPLACE_SPRING]
-            self._replace(part, rng, terms, failed=False)
+            self._replace(part, terms, failed=False)
             extra = (
                 self.costs.spring_downtime_slots
                 if part == "spring"
@@ -211,7 +219,7 @@ class ScasMaintenanceEnv(gym.Env):
         elif not grounded:
             go = True
             if action == TEST_AND_FLY:
-                feats = self.world.test(rng)
+                feats = self.world.test(self.rngs["measure"])
                 self.monitor.tested(feats)
                 self.builder.tested(feats)
                 self.stats.tests += 1
@@ -221,7 +229,7 @@ class ScasMaintenanceEnv(gym.Env):
                     self.stats.no_go += 1
                     terms["no_go"] = -self.costs.no_go_inspection_usd
             if go:
-                flew = self._fly(rng, terms)
+                flew = self._fly(terms)
         self.downtime = max(self.downtime - 1, 0)
         self.slot += 1
         self.stats.flown += int(flew)
@@ -249,23 +257,21 @@ class ScasMaintenanceEnv(gym.Env):
         """Go/no-go: every ground feature inside its healthy two-sided acceptance band."""
         return self.builder.within_acceptance(feats)
 
-    def _fly(self, rng: np.random.Generator, terms: dict[str, float]) -> bool:
-        result = self.world.fly(rng)
+    def _fly(self, terms: dict[str, float]) -> bool:
+        result = self.world.fly(self.rngs["measure"], self.rngs["degradation"])
         self.monitor.flown(result.features)
         if result.failed:
             terms["failure"] = -self.costs.failure_total_usd
             for part in result.failed:
                 self.stats.failures[part] += 1
-                self._replace(part, rng, terms, failed=True)
+                self._replace(part, terms, failed=True)
             self.downtime = max(self.downtime, 1 + self.costs.failure_downtime_slots)
             return False
         self.builder.flown(result.features)
         terms["flight"] = self.costs.flight_value_usd
         return True
 
-    def _replace(
-        self, part: str, rng: np.random.Generator, terms: dict[str, float], *, failed: bool
-    ) -> None:
+    def _replace(self, part: str, terms: dict[str, float], *, failed: bool) -> None:
         rul = self.world.true_rul_flights()[PARTS.index(part)]
         if not failed:
             cost = (
@@ -276,7 +282,7 @@ class ScasMaintenanceEnv(gym.Env):
             terms["replacement"] -= cost
             self.stats.wasted_life[part].append(min(rul, self.scenario.rul_cap_flights))
         self.stats.replacements[part] += 1
-        self.world.replace(part, rng)
+        self.world.replace(part, self.rngs["parts"])
         self.monitor.replaced(part)
         self.part_age[part] = 0
 

@@ -202,8 +202,13 @@ class ActuatorWorld:
             return {f: feats[f] for f in GROUND_FEATURES}
         return self._surrogate_features(GROUND_FEATURES, self._ground_feature_idx, rng)
 
-    def fly(self, rng: np.random.Generator) -> FlightResult:
-        """Fly one flight: measure, degrade, report failures."""
+    def fly(self, rng: np.random.Generator, degradation_rng: np.random.Generator) -> FlightResult:
+        """Fly one flight: measure (``rng``), degrade, report failures.
+
+        The surrogate draws the flight's two degradation factors from ``degradation_rng``
+        (two normals per flight, whatever else happens); the physics takes its damage from
+        the simulated window, drawn from ``rng``.
+        """
         cal = self.calibration
         if self.physics:
             config = self._config(rng)
@@ -226,7 +231,7 @@ class ActuatorWorld:
             new_wear = self.wear_m + d_wear
         else:
             feats = self._surrogate_features(FLIGHT_FEATURES, self._flight_feature_idx, rng)
-            z = rng.standard_normal(2)
+            z = degradation_rng.standard_normal(2)
             new_crack = self.crack_m
             if self.scenario.crack_active and self.crack_m >= cal.crack_dormant_below_m:
                 factor = _lognormal_unit_mean(float(cal.crack_cv_at(self.crack_m)), z[0])

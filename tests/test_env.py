@@ -172,15 +172,23 @@ def test_replacement_resets_hidden_state_and_filter() -> None:
 
 
 def test_filter_tracks_seal_wear_under_regular_tests() -> None:
-    env = ScasMaintenanceEnv()
-    env.reset(seed=21)
-    errors = []
-    for k in range(900):
-        env.step(1 if k % 5 == 0 else 0)
-        if k > 300 and env.world.wear_fraction < 0.95:
-            est = env.monitor.seal_filter.estimate().x_mean
-            errors.append(abs(est - env.world.wear_m) / env.calibration.seal_critical_wear_m)
-    assert np.median(errors) < 0.1
+    # testing every 5 flights, after the first 300 flights of a seal set: the filter's mean
+    # follows the true wear (units 0-3; per-unit median error measured 3-9% of critical)
+    medians = []
+    for seed in range(4):
+        env = ScasMaintenanceEnv()
+        env.reset(seed=seed)
+        truth, est = [], []
+        for k in range(900):
+            env.step(1 if k % 5 == 0 else 0)
+            if env.part_age["seal"] > 300 and env.world.wear_fraction < 0.95:
+                truth.append(env.world.wear_m)
+                est.append(env.monitor.seal_filter.estimate().x_mean)
+        truth, est = np.array(truth), np.array(est)
+        assert truth.size > 100
+        assert np.corrcoef(truth, est)[0, 1] > 0.95
+        medians.append(np.median(np.abs(est - truth)) / env.calibration.seal_critical_wear_m)
+    assert np.mean(medians) < 0.1
 
 
 @pytest.mark.slow
