@@ -5,7 +5,7 @@ PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed-stamp
 RESULTS ?= results
 
-.PHONY: install demo test test-slow test-all lint format bench figures clean
+.PHONY: install benchmark demo test test-slow test-all lint format bench figures reproduce clean
 
 $(STAMP): pyproject.toml
 	test -x $(PY) || $(PYTHON) -m venv $(VENV)
@@ -16,8 +16,13 @@ $(STAMP): pyproject.toml
 
 install: $(STAMP)
 
-## Main job (until the policy benchmark lands): simulate a pre-flight test and a flight window
-## at three health states, save signals (CSV) and plots, and the paper's physics figures.
+## Main job: every maintenance policy on the same 40 episodes of 2000 flight slots (default
+## scenario, 2 workers); prints the table, writes CSV/JSON/Markdown and plots.
+benchmark: install
+	$(PY) scripts/benchmark.py --out $(RESULTS)/benchmark
+
+## Physics demonstration: a pre-flight test and a flight window at three health states
+## (signals as CSV, plots) and the paper's physics figures.
 demo: install
 	$(PY) scripts/simulate.py --out $(RESULTS)/demo
 	$(PY) scripts/paper_figures.py --out $(RESULTS)/figures
@@ -48,6 +53,10 @@ bench: install
 
 figures: install
 	$(PY) scripts/paper_figures.py --out $(RESULTS)/figures
+
+## The paper's sections 4-5 from our physics (quick mode; `--full` for the paper's sizes).
+reproduce: install
+	$(PY) scripts/reproduce_paper.py --quick
 
 clean:
 	rm -rf $(RESULTS) .pytest_cache .ruff_cache
