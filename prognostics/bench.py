@@ -19,7 +19,7 @@ import numpy as np
 from prognostics.degradation_models import TabulatedRateModel, paris_crack_model
 from prognostics.measurement import MeasurementModel
 from prognostics.particle_filter import ParticleFilter
-from prognostics.rul import HazardZone, rul_summary
+from prognostics.rul import HazardZone, RulPredictor, rul_summary
 
 
 def _median_time_us(fn: Callable[[], object], n_calls: int, n_warmup: int) -> float:
@@ -80,6 +80,9 @@ def run_benchmark(
     reset_us = _median_time_us(fresh, n_calls, n_warmup)
     out = {
         "predict": _median_time_us(timed(lambda: pf.predict(1.0)), n_calls, n_warmup),
+        "measurement update (no resampling)": _median_time_us(
+            timed(lambda: pf.update(y_flat)), n_calls, n_warmup
+        ),
         "step (no resampling)": _median_time_us(
             timed(lambda: pf.step(1.0, y_flat)), n_calls, n_warmup
         ),
@@ -94,6 +97,10 @@ def run_benchmark(
         lambda: rul_summary(pf.x, pf.theta, pf.weights, model, hazard, horizon_steps=100.0),
         n_calls,
         n_warmup,
+    )
+    fast = RulPredictor(model, hazard.mean, n_particles, horizon_steps=100.0)
+    out["RulPredictor.summary (hot path)"] = _median_time_us(
+        lambda: fast.summary(pf.x, pf.log_theta, pf.weights), n_calls, n_warmup
     )
     out["rul step-by-step (reference)"] = _median_time_us(
         lambda: model.simulate_steps_to_threshold(pf.x, pf.theta, hazard.mean, 1.0),
