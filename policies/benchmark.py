@@ -39,14 +39,26 @@ from scas_env import ENV_ID
 from scas_env.parallel import MAX_CHUNK, map_chunks
 from scas_env.world import PARTS
 
-DEFAULT_POLICIES = ("corrective", "preventive", "detection", "rul_risk", "oracle", "random")
+#: Named plug-ins: a benchmark name that needs a module imported first (trained agents).
+PLUGINS: dict[str, PolicySpec] = {}
+DEFAULT_POLICIES = (
+    "corrective",
+    "preventive",
+    "detection",
+    "rul_risk",
+    "oracle",
+    "random",
+    "ppo",
+)
 TERMS = ("flight", "test", "no_go", "replacement", "failure")
 
 __all__ = [
     "DEFAULT_POLICIES",
+    "PLUGINS",
     "BenchmarkResult",
     "PolicySpec",
     "episode_seeds",
+    "resolve_spec",
     "run_benchmark",
     "run_episode",
 ]
@@ -80,6 +92,15 @@ class PolicySpec:
         if self.module:
             importlib.import_module(self.module)
         return self.obs_mode or policy_obs_mode(self.name)
+
+
+PLUGINS["ppo"] = PolicySpec("sb3", label="ppo", module="policies.rl")
+
+
+def resolve_spec(name: str) -> PolicySpec:
+    """The spec of a benchmark name: a plug-in (``"ppo"``: the shipped PPO agent) or a
+    registered policy with its default parameters."""
+    return PLUGINS.get(name, PolicySpec(name))
 
 
 def episode_seeds(seed: int, episodes: int) -> list[tuple[int, int]]:
@@ -240,7 +261,7 @@ def run_benchmark(
     ``episode_slots``. Paired differences are taken against the rule-based policy
     (family ``"rule"``) with the highest mean reward.
     """
-    specs = tuple(PolicySpec(s) if isinstance(s, str) else s for s in specs)
+    specs = tuple(resolve_spec(s) if isinstance(s, str) else s for s in specs)
     keys = [s.key for s in specs]
     if not specs or len(set(keys)) != len(keys):
         raise ValueError(f"policies = {keys} must be a non-empty list of unique labels")
