@@ -345,3 +345,19 @@ def test_same_seed_same_bits_and_batch_equals_sequential() -> None:
 def test_bad_inputs_raise_value_error(call: object, match: str) -> None:
     with pytest.raises(ValueError, match=match):
         call(_cfg())  # type: ignore[operator]
+
+
+def test_batch_with_per_run_noise_flags_equals_single_runs() -> None:
+    noisy_cfg, clean_cfg = _cfg(), _cfg(null_bias_a=1e-5)
+    cmd = _step(0.05, 400, 1e-3)
+    a, b = simulate_batch(
+        [noisy_cfg, clean_cfg], cmd, rngs=[np.random.default_rng(4), None], noise=[True, False]
+    )
+    ref_a = simulate(noisy_cfg, cmd, rng=np.random.default_rng(4))
+    ref_b = simulate(clean_cfg, cmd, rng=None, noise=False)
+    for got, ref in ((a, ref_a), (b, ref_b)):
+        np.testing.assert_array_equal(got.position_m, ref.position_m)
+        np.testing.assert_array_equal(got.current_a, ref.current_a)
+        assert got.friction_work_j == ref.friction_work_j
+    with pytest.raises(ValueError, match="noise"):
+        simulate_batch([noisy_cfg, clean_cfg], cmd, rngs=[None, None], noise=[True])

@@ -614,16 +614,18 @@ def simulate_batch(
     configs: Sequence[ActuatorConfig],
     commands: ArrayLike,
     *,
-    rngs: Sequence[np.random.Generator | np.random.SeedSequence] | None,
+    rngs: Sequence[np.random.Generator | np.random.SeedSequence | None] | None,
     link_forces_n: ArrayLike | None = None,
-    noise: bool = True,
+    noise: bool | Sequence[bool] = True,
     x0: float = 0.0,
 ) -> list[ActuatorRun]:
     """Simulate many runs in parallel (numba ``prange`` over runs, all cores).
 
-    Bit-identical to ``[simulate(c, cmd, rng=g, ...) for ...]`` with the same per-run
-    Generators: run r draws its noise from ``rngs[r]`` only (a SeedSequence is turned into
-    ``np.random.default_rng(seq)``). ``commands`` is ``(n_runs, n)`` or one ``(n,)`` command
+    Bit-identical to ``[simulate(c, cmd, rng=g, noise=flag, ...) for ...]`` with the same
+    per-run Generators: run r draws its noise from ``rngs[r]`` only (a SeedSequence is turned
+    into ``np.random.default_rng(seq)``). ``noise`` is one flag for all runs or one per run
+    (a noise-free run integrates zero noise sequences, which is exactly the noise-free model;
+    its ``rngs`` entry may be None). ``commands`` is ``(n_runs, n)`` or one ``(n,)`` command
     for every run; ``link_forces_n`` likewise or None. All configs must share ``dt_s``,
     ``substeps`` and ``sample_rate_hz``. Noise is drawn ``BATCH_CHUNK_RUNS`` runs at a time
     to bound memory.
@@ -655,7 +657,10 @@ def simulate_batch(
         links = np.stack(
             [_check_link(row, n, f"link_forces_n[{r}]") for r, row in enumerate(links)]
         )
-    gens = _generators(rngs, n_runs) if noise else None
+    flags = [bool(noise)] * n_runs if isinstance(noise, bool) else [bool(f) for f in noise]
+    if len(flags) != n_runs:
+        raise ValueError(f"noise must be a bool or {n_runs} flags, got {len(flags)}")
+    gens = _generators(rngs, n_runs, flags) if any(flags) else None
     prm = np.stack([c.to_array() for c in configs])
     state0 = np.stack(
         [
@@ -668,11 +673,20 @@ def simulate_batch(
         hi = min(lo + BATCH_CHUNK_RUNS, n_runs)
         w = np.zeros((3, hi - lo, 0))
         if gens is not None:
-            w = np.empty((3, hi - lo, n * base.steps_per_sample))
+            w = np.zeros((3, hi - lo, n * base.steps_per_sample))
+            noisy = [r for r in range(lo, hi) if flags[r]]
             # numpy releases the GIL while filling: draw the runs' noise on all cores
             with ThreadPoolExecutor(max_workers=numba.get_num_threads()) as pool:
-                outs = [w[:, r] for r in range(hi - lo)]
-                list(pool.map(draw_noise, configs[lo:hi], repeat(n), gens[lo:hi], outs))
+                outs = [w[:, r - lo] for r in noisy]
+                list(
+                    pool.map(
+                        draw_noise,
+                        [configs[r] for r in noisy],
+                        repeat(n),
+                        [gens[r] for r in noisy],
+                        outs,
+                    )
+                )
         out, work, status = km.run_batch(
             prm[lo:hi], cmds[lo:hi], links[lo:hi], state0[lo:hi], w[0], w[1], w[2]
         )
@@ -692,15 +706,19 @@ def _batch_rows(values: ArrayLike, n_runs: int, name: str) -> NDArray:
 
 
 def _generators(
-    rngs: Sequence[np.random.Generator | np.random.SeedSequence] | None, n_runs: int
-) -> list[np.random.Generator]:
+    rngs: Sequence[np.random.Generator | np.random.SeedSequence | None] | None,
+    n_runs: int,
+    flags: Sequence[bool],
+) -> list[np.random.Generator | None]:
     if rngs is None or len(rngs) != n_runs:
         raise ValueError(
             f"rngs must be a sequence of {n_runs} Generators or SeedSequences when noise=True"
         )
-    gens = []
+    gens: list[np.random.Generator | None] = []
     for r, g in enumerate(rngs):
-        if isinstance(g, np.random.SeedSequence):
+        if not flags[r]:
+            gens.append(None)
+        elif isinstance(g, np.random.SeedSequence):
             gens.append(np.random.default_rng(g))
         elif isinstance(g, np.random.Generator):
             gens.append(g)
