@@ -138,8 +138,28 @@ class HealthMonitor:
 
     # ------------------------------------------------------------------ events
     def reset(self) -> None:
+        """Start of an episode: new parts, or (``initial_health="random"``) parts of unknown
+        age, whose priors spread uniformly over the parts' life."""
         self.replaced("spring")
         self.replaced("seal")
+        if self.scenario.initial_health == "random":
+            self._spread_over_life()
+
+    def _spread_over_life(self) -> None:
+        """Priors of parts part-way through life: each particle at a uniform fraction of its
+        own life (in damage for the crack, in wear for the seals)."""
+        rng = self.rng
+        pf = self.spring_filter
+        model = pf.process
+        n = pf.n_particles
+        x, theta = np.array(pf.x), pf.theta
+        start = model.damage(np.maximum(x, model.grid[0]))
+        end = model.damage(np.array([self.a_fail]))[0]
+        used = rng.random(n) * np.maximum(end - start, 0.0)
+        crack = model.inverse_damage(start + used)
+        self.spring_filter.reset(crack, theta)
+        wear = rng.random(n) * self.w_crit
+        self.seal_filter.reset(wear, self.seal_filter.theta)
 
     def replaced(self, part: str) -> None:
         """A new part is fitted: its filter restarts from the prior."""
