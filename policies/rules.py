@@ -194,13 +194,16 @@ class RulRiskPolicy(Policy):
     quantile (``*_rul_low``, flights) falls to its lead time (``spring_lead`` /
     ``seal_lead``). Test when ``test_age >= test_every`` slots, or when a filter is
     uncertain, ``(rul_mean - rul_low) / rul_mean > uncertainty`` for either part, and the
-    last test is at least ``min_test_gap`` slots old (``uncertainty = inf``: off).
+    last test is at least ``min_test_gap`` slots old (``uncertainty = inf``: off). After a
+    failed go/no-go (``no_go``), replace the part the filters find closer to failure (the
+    higher risk; on a tie, the shorter low-quantile RUL) instead of flying on.
     """
 
     name: ClassVar[str] = "rul_risk"
     obs_mode: ClassVar[str] = "features+rul"
     reads: ClassVar[tuple[str, ...]] = (
         "test_age",
+        "no_go",
         "spring_rul_mean",
         "spring_rul_low",
         "spring_risk",
@@ -260,6 +263,14 @@ class RulRiskPolicy(Policy):
             uncertain |= spread > self.uncertainty
         age = self.column(obs, "test_age")
         test = flying & ((age >= self.test_every) | (uncertain & (age >= self.min_test_gap)))
+        failed = flying & (self.column(obs, "no_go") > 0)
+        spring_risk, seal_risk = self.column(obs, "spring_risk"), self.column(obs, "seal_risk")
+        spring_first = (spring_risk > seal_risk) | (
+            (spring_risk == seal_risk)
+            & (self.column(obs, "spring_rul_low") < self.column(obs, "seal_rul_low"))
+        )
+        due[0] |= failed & spring_first & (self.column(obs, "spring_age") > 0)
+        due[1] |= failed & ~spring_first & (self.column(obs, "seal_age") > 0)
         return choose(*due, test)
 
 

@@ -56,7 +56,7 @@ class ScasMaintenanceEnv(gym.Env):
 
     ## Observation Space
 
-    ``obs_mode="features+rul"`` (default): ``Box(17,)`` float32, finite bounds
+    ``obs_mode="features+rul"`` (default): ``Box(18,)`` float32, finite bounds
     (``env.unwrapped.obs_names`` and ``obs_units`` name every entry):
 
     | idx | name | unit | bounds | meaning |
@@ -66,20 +66,21 @@ class ScasMaintenanceEnv(gym.Env):
     | 2 | I7 | uA/mm | [0, 1e5] | last flight: rms(i) / rms(x) |
     | 3 | G1 | uA | [-1e4, 1e4] | last pre-flight test: mean current |
     | 4 | G3 | uA/mm | [-4e4, 4e4] | last pre-flight test: current / displacement |
-    | 5 | test_age | flights | [0, slots] | flights since that test (since reset if none) |
-    | 6 | spring_rul_mean | flights | [0, cap] | particle-filter RUL of the spring, mean |
-    | 7 | spring_rul_low | flights | [0, cap] | its low quantile (``rul_quantile``) |
-    | 8 | spring_risk | - | [0, 1] | P(spring fails within ``risk_horizon_flights``) |
-    | 9-11 | seal_rul_mean, seal_rul_low, seal_risk | | | the same for the seals |
-    | 12 | spring_alarm | 0/1 | [0, 1] | section-5.1 detector on G1 has alarmed |
-    | 13 | seal_alarm | 0/1 | [0, 1] | section-5.1 detector on G3 has alarmed |
-    | 14 | spring_age | flights | [0, slots] | flights since the spring pair was fitted |
-    | 15 | seal_age | flights | [0, slots] | flights since the seals were fitted |
-    | 16 | downtime | slots | [0, max] | slots still to spend on the ground |
+    | 5 | test_age | slots | [0, slots] | slots since that test (since reset if none) |
+    | 6 | no_go | 0/1 | [0, 1] | that test failed the go/no-go acceptance band |
+    | 7 | spring_rul_mean | flights | [0, cap] | particle-filter RUL of the spring, mean |
+    | 8 | spring_rul_low | flights | [0, cap] | its low quantile (``rul_quantile``) |
+    | 9 | spring_risk | - | [0, 1] | P(spring fails within ``risk_horizon_flights``) |
+    | 10-12 | seal_rul_mean, seal_rul_low, seal_risk | | | the same for the seals |
+    | 13 | spring_alarm | 0/1 | [0, 1] | section-5.1 detector on G1 has alarmed |
+    | 14 | seal_alarm | 0/1 | [0, 1] | section-5.1 detector on G3 has alarmed |
+    | 15 | spring_age | flights | [0, slots] | flights since the spring pair was fitted |
+    | 16 | seal_age | flights | [0, slots] | flights since the seals were fitted |
+    | 17 | downtime | slots | [0, max] | slots still to spend on the ground |
 
     Feature values before the first flight or test are the healthy surrogate means. RUL
     entries saturate at ``rul_cap_flights``; feature entries saturate at their bounds (the
-    raw values are in ``info["features"]``). ``"features"``: entries 0-5 and 12-16 (no
+    raw values are in ``info["features"]``). ``"features"``: entries 0-6 and 13-17 (no
     filter). ``"state"``: the truth (an oracle's view): crack fraction of critical, wear
     fraction, true spring RUL, true seal RUL (flights, capped), spring age, seal age,
     downtime. ``"dict"``: a ``Dict`` of all of the above.
@@ -113,7 +114,7 @@ class ScasMaintenanceEnv(gym.Env):
 
     ## Version History
 
-    * v0: initial release.
+    * v0: initial release (18-entry observation with the go/no-go flag).
 
     ## Example
 
@@ -122,7 +123,7 @@ class ScasMaintenanceEnv(gym.Env):
     >>> env = gym.make("scas_env/ScasMaintenance-v0")
     >>> obs, info = env.reset(seed=0)
     >>> obs.shape, env.action_space
-    ((17,), Discrete(4))
+    ((18,), Discrete(4))
     >>> obs, reward, terminated, truncated, info = env.step(1)
     >>> float(reward)  # flight value minus the test
     2400.0
@@ -221,10 +222,10 @@ class ScasMaintenanceEnv(gym.Env):
             if action == TEST_AND_FLY:
                 feats = self.world.test(self.rngs["measure"])
                 self.monitor.tested(feats)
-                self.builder.tested(feats)
+                go = self._go(feats)
+                self.builder.tested(feats, go)
                 self.stats.tests += 1
                 terms["test"] = -self.costs.test_usd
-                go = self._go(feats)
                 if not go:
                     self.stats.no_go += 1
                     terms["no_go"] = -self.costs.no_go_inspection_usd

@@ -48,6 +48,7 @@ class ObservationBuilder:
             (f, FEATURE_UNITS[f][0], FEATURE_UNITS[f][2], FEATURE_UNITS[f][3]) for f in feats
         ]
         rows.append(("test_age", "slots", 0.0, slots))
+        rows.append(("no_go", "0/1", 0.0, 1.0))
         filt = [
             (f"{part}_{name}", unit, 0.0, hi)
             for part in ("spring", "seal")
@@ -106,10 +107,12 @@ class ObservationBuilder:
     def reset(self) -> None:
         self.last = dict(self.healthy)
         self.test_age = 0
+        self.no_go = False
 
-    def tested(self, feats: dict[str, float]) -> None:
+    def tested(self, feats: dict[str, float], passed: bool) -> None:
         self.last.update(feats)
         self.test_age = 0
+        self.no_go = not passed
 
     def flown(self, feats: dict[str, float]) -> None:
         self.last.update(feats)
@@ -128,7 +131,7 @@ class ObservationBuilder:
         if self.scenario.obs_mode in ("features+rul", "features", "dict"):
             out["features"] = [
                 self.last[f] * FEATURE_UNITS[f][1] for f in (*FLIGHT_FEATURES, *GROUND_FEATURES)
-            ] + [float(self.test_age)]
+            ] + [float(self.test_age), float(self.no_go)]
             m = env.monitor
             out["monitor"] = [
                 float(m.crack_detected),

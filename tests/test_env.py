@@ -58,8 +58,8 @@ def test_registered_id_and_vector_entry_point() -> None:
 
 def test_observation_names_units_and_bounds() -> None:
     env = ScasMaintenanceEnv()
-    assert len(env.obs_names) == env.observation_space.shape[0] == len(env.obs_units) == 17
-    assert env.obs_names[:5] == ("I2", "I6", "I7", "G1", "G3")
+    assert len(env.obs_names) == env.observation_space.shape[0] == len(env.obs_units) == 18
+    assert env.obs_names[:7] == ("I2", "I6", "I7", "G1", "G3", "test_age", "no_go")
     obs, _ = env.reset(seed=3)
     for a in _actions(300, 3):
         obs, *_ = env.step(a)
@@ -208,3 +208,18 @@ def test_long_surrogate_run_stays_finite_with_bounded_memory() -> None:
     tracemalloc.stop()
     assert trunc
     assert grown < 20e6
+
+
+def test_failed_go_no_go_grounds_the_slot_and_shows_in_the_observation() -> None:
+    env = ScasMaintenanceEnv()
+    env.reset(seed=2)
+    k = env.obs_names.index("no_go")
+    env.world.wear_m = 0.97 * env.calibration.seal_critical_wear_m  # G3 far above its band
+    obs, r, _, _, info = env.step(1)
+    assert obs[k] == 1.0 and info["no_go"] == 1 and info["flights"] == 0
+    assert r == -(env.costs.test_usd + env.costs.no_go_inspection_usd)
+    env.step(3)  # new seals
+    env.step(0)  # the reseal's extra downtime slot
+    obs, r, *_ = env.step(1)
+    assert obs[k] == 0.0
+    assert r == env.costs.flight_value_usd - env.costs.test_usd

@@ -17,7 +17,7 @@ from policies.oracle import OraclePolicy
 from policies.rules import DetectionPolicy, PreventivePolicy, RandomPolicy, RulRiskPolicy
 
 FULL = (
-    "I2", "I6", "I7", "G1", "G3", "test_age", "spring_rul_mean", "spring_rul_low",
+    "I2", "I6", "I7", "G1", "G3", "test_age", "no_go", "spring_rul_mean", "spring_rul_low",
     "spring_risk", "seal_rul_mean", "seal_rul_low", "seal_risk", "spring_alarm", "seal_alarm",
     "spring_age", "seal_age", "downtime",
 )  # fmt: skip
@@ -94,6 +94,11 @@ def test_rul_risk_replaces_on_risk_or_low_rul_and_tests_when_uncertain():
     # spread (900 - 300) / 900 = 0.67 > 0.5: test once the last test is 5 slots old
     assert act(p, spring_rul_low=300.0, test_age=4) == 0
     assert act(p, spring_rul_low=300.0, test_age=5) == 1
+    # a failed go/no-go: replace the part closer to failure rather than fly on
+    assert act(p, no_go=1.0, seal_risk=0.05, spring_risk=0.01) == 3
+    assert act(p, no_go=1.0, spring_risk=0.05) == 2
+    assert act(p, no_go=1.0, spring_rul_low=200.0) == 2  # tie on risk: shorter RUL
+    assert act(p, no_go=1.0, seal_risk=0.05, seal_age=0.0) == 0  # new seals stay
 
 
 def test_oracle_replaces_at_margin():
@@ -122,8 +127,13 @@ def test_random_policy_frequencies_and_reseeding():
 def test_batched_predict_matches_rows():
     rng = np.random.default_rng(0)
     rows = np.array([obs() for _ in range(64)])
-    for col, hi in ((5, 40), (7, 900), (8, 0.2), (10, 900), (12, 1.5), (14, 1500), (16, 3)):
-        rows[:, col] = rng.uniform(0, hi, 64) if col != 12 else rng.integers(0, 2, 64)
+    spans = (
+        ("test_age", 40), ("spring_rul_low", 900), ("spring_risk", 0.2), ("seal_rul_low", 900),
+        ("spring_alarm", None), ("spring_age", 1500), ("downtime", 3),
+    )  # fmt: skip
+    for name, hi in spans:
+        col = FULL.index(name)
+        rows[:, col] = rng.integers(0, 2, 64) if hi is None else rng.uniform(0, hi, 64)
     for name in ("corrective", "preventive", "detection", "rul_risk"):
         p = make_policy(name, FULL)
         batch, state = p.predict(rows, state="s")
