@@ -67,7 +67,7 @@ class ScasMaintenanceEnv(gym.Env):
     | 3 | G1 | uA | [-1e4, 1e4] | last pre-flight test: mean current |
     | 4 | G3 | uA/mm | [-4e4, 4e4] | last pre-flight test: current / displacement |
     | 5 | test_age | slots | [0, slots] | slots since that test (since reset if none) |
-    | 6 | no_go | 0/1 | [0, 1] | that test failed the go/no-go acceptance band |
+    | 6 | no_go | 0/1 | [0, 1] | that test failed go/no-go (cleared by a replacement) |
     | 7 | spring_rul_mean | flights | [0, cap] | particle-filter RUL of the spring, mean |
     | 8 | spring_rul_low | flights | [0, cap] | its low quantile (``rul_quantile``) |
     | 9 | spring_risk | - | [0, 1] | P(spring fails within ``risk_horizon_flights``) |
@@ -285,6 +285,7 @@ class ScasMaintenanceEnv(gym.Env):
         self.stats.replacements[part] += 1
         self.world.replace(part, self.rngs["parts"])
         self.monitor.replaced(part)
+        self.builder.part_replaced()
         self.part_age[part] = 0
 
     def _observation(self) -> Any:

@@ -114,6 +114,10 @@ class ObservationBuilder:
         self.test_age = 0
         self.no_go = not passed
 
+    def part_replaced(self) -> None:
+        """A replacement answers a failed test: the go/no-go flag is cleared."""
+        self.no_go = False
+
     def flown(self, feats: dict[str, float]) -> None:
         self.last.update(feats)
 

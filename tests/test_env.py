@@ -218,7 +218,8 @@ def test_failed_go_no_go_grounds_the_slot_and_shows_in_the_observation() -> None
     obs, r, _, _, info = env.step(1)
     assert obs[k] == 1.0 and info["no_go"] == 1 and info["flights"] == 0
     assert r == -(env.costs.test_usd + env.costs.no_go_inspection_usd)
-    env.step(3)  # new seals
+    obs, *_ = env.step(3)  # new seals: the failed test has been answered
+    assert obs[k] == 0.0
     env.step(0)  # the reseal's extra downtime slot
     obs, r, *_ = env.step(1)
     assert obs[k] == 0.0
