@@ -33,7 +33,7 @@ from scipy.stats import norm
 
 from prognostics.degradation_models import linear_wear_model, paris_crack_model
 from prognostics.detection import DetectorConfig, PercentileDetector
-from prognostics.measurement import MeasurementModel, measurement_from_curve
+from prognostics.measurement import measurement_from_curve
 from prognostics.particle_filter import ParticleFilter
 from prognostics.rul import RulPredictor
 from scas_env.calibration import Calibration
@@ -57,7 +57,6 @@ class PartEstimate:
     rul_low: float
     prob_failure: float
     detected: bool
-    severity_mean: float
 
 
 class HealthMonitor:
@@ -231,7 +230,6 @@ class HealthMonitor:
             rul_low=min(summary.low, cap),
             prob_failure=summary.prob_failure,
             detected=detected,
-            severity_mean=float(pf.weights @ pf.x),
         )
 
 
@@ -247,4 +245,4 @@ def _lognormal_sampler(sigma: float):
     return sample
 
 
-__all__ = ["BASELINE_TESTS", "HealthMonitor", "MeasurementModel", "PartEstimate"]
+__all__ = ["BASELINE_TESTS", "HealthMonitor", "PartEstimate"]

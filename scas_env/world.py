@@ -84,7 +84,6 @@ class ActuatorWorld:
         self._table = paris_crack_model(
             calibration.crack_depth_m, calibration.crack_rate_m_per_flight
         )
-        self._damage_grid = np.asarray(self._table.damage(calibration.crack_depth_m))
         self._flight_feature_idx = [surrogate.index(f) for f in FLIGHT_FEATURES]
         self._ground_feature_idx = [surrogate.index(f) for f in GROUND_FEATURES]
         self.unit: UnitSample | None = None

@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 import pytest
 
@@ -14,7 +12,6 @@ from scas_env.physics.fluid import (
     effective_bulk_modulus,
     effective_bulk_modulus_nb,
     kinematic_viscosity,
-    laminar_gap_leakage_coeff,
     liquid_bulk_modulus,
 )
 
@@ -91,15 +88,6 @@ def test_walther_viscosity_through_reference_points() -> None:
     assert float(dynamic_viscosity(40.0, 14e-6, 3.5e-6, 850.0)) == pytest.approx(850 * 14e-6)
 
 
-def test_hagen_poiseuille_gap_leakage() -> None:
-    mu = 850.0 * 14e-6
-    k = laminar_gap_leakage_coeff(0.016, np.array([5e-6, 10e-6]), mu, 0.003)
-    expected = math.pi * 0.016 * 5e-6**3 / (12 * mu * 0.003)  # ref §4.2: ~1.5e-14
-    assert k[0] == pytest.approx(expected, rel=1e-14)
-    assert k[0] == pytest.approx(1.47e-14, rel=0.01)
-    assert k[1] / k[0] == pytest.approx(8.0)  # cubic in the gap
-
-
 @pytest.mark.parametrize(
     ("call", "match"),
     [
@@ -108,8 +96,6 @@ def test_hagen_poiseuille_gap_leakage() -> None:
         (lambda: effective_bulk_modulus(np.nan, 1.5e9, 0.005, 1.4), "pressure_pa"),
         (lambda: effective_bulk_modulus(1e6, 1.5e9, 0.005, 0.5), "polytropic_index"),
         (lambda: kinematic_viscosity(40.0, 3e-6, 4e-6), "nu100_m2_s"),
-        (lambda: laminar_gap_leakage_coeff(0.016, -1e-6, 0.01, 0.003), "gap_m"),
-        (lambda: laminar_gap_leakage_coeff(0.016, 1e-6, 0.0, 0.003), "dynamic_viscosity"),
     ],
 )
 def test_bad_inputs_raise(call: object, match: str) -> None:

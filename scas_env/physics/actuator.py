@@ -88,7 +88,8 @@ from scipy.optimize import brentq
 
 from scas_env.params import ATM_PA, ScasParams
 from scas_env.physics import actuator_model as km
-from scas_env.physics.fluid import dynamic_viscosity, laminar_gap_leakage_coeff
+from scas_env.physics.fluid import dynamic_viscosity
+from scas_env.physics.seal import laminar_leakage_coeff_m3_s_pa
 
 SUPPLY_NOISE_BANDWIDTH_HZ = 20.0  # Hz, corner of the supply fluctuation low-pass [B]
 RK4_STABILITY_LIMIT = 2.78  # |lambda| dt bound of classic RK4 on the real axis (2.785)
@@ -284,9 +285,7 @@ class ActuatorConfig:
                     temp, fl.viscosity_40c_m2_s, fl.viscosity_100c_m2_s, fl.density_kg_m3
                 )
             )
-            leakage_k1 = float(
-                laminar_gap_leakage_coeff(se.diameter_m, se.initial_gap_m, mu, se.land_length_m)
-            )
+            leakage_k1 = float(laminar_leakage_coeff_m3_s_pa(0.0, se, mu))
         return cls(
             area_m2=ac.area_m2,
             dead_volume_m3=ac.dead_volume_m3,

@@ -200,26 +200,3 @@ def dynamic_viscosity(
     if not density_kg_m3 > 0.0:
         raise ValueError(f"density_kg_m3 = {density_kg_m3} must be > 0")
     return density_kg_m3 * kinematic_viscosity(temperature_c, nu40_m2_s, nu100_m2_s)
-
-
-def laminar_gap_leakage_coeff(
-    diameter_m: float, gap_m: ArrayLike, dynamic_viscosity_pa_s: float, length_m: float
-) -> NDArray[np.float64]:
-    """Hagen-Poiseuille leakage coefficient of a concentric annular gap (m^3/(s Pa)).
-
-    ``K_i1 = pi D h^3 / (12 mu L)`` (ref §4.1 [A], §4.2): laminar flow ``Q = K_i1 dp``.
-
-    >>> f"{float(laminar_gap_leakage_coeff(0.016, 5e-6, 850 * 14e-6, 0.003)):.2e}"
-    '1.47e-14'
-    """
-    h = _finite_array("gap_m", gap_m)
-    if np.any(h < 0.0):
-        raise ValueError(f"gap_m = {gap_m!r} must be >= 0")
-    for name, value in (
-        ("diameter_m", diameter_m),
-        ("dynamic_viscosity_pa_s", dynamic_viscosity_pa_s),
-        ("length_m", length_m),
-    ):
-        if not value > 0.0:
-            raise ValueError(f"{name} = {value} must be > 0")
-    return math.pi * diameter_m * h**3 / (12.0 * dynamic_viscosity_pa_s * length_m)
