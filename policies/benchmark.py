@@ -30,7 +30,9 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import gymnasium as gym
+import numba
 import numpy as np
+from tqdm.auto import tqdm
 
 import policies  # noqa: F401  (registers the built-in policies)
 from policies.base import make_policy, policy_family, policy_obs_mode
@@ -211,24 +213,67 @@ def _run_chunk(
     return out
 
 
-def _map_ray(
-    shared: tuple[Any, ...], items: Sequence[Any], address: str, chunk_size: int
+def _run_chunk_ray(
+    specs: tuple[PolicySpec, ...],
+    env_kwargs: Mapping[str, Any],
+    chunk: Sequence[tuple[int, int, int, int]],
 ) -> list[dict[str, Any]]:
-    """The same chunks as :func:`map_chunks`, as Ray tasks on the cluster at ``address``
-    (the workers need this package installed)."""
+    """:func:`_run_chunk` in a Ray worker, with one numba thread like the local workers."""
+    numba.set_num_threads(1)
+    return _run_chunk(specs, env_kwargs, chunk)
+
+
+def _map_ray(
+    shared: tuple[Any, ...],
+    items: Sequence[Any],
+    address: str,
+    chunk_size: int,
+    *,
+    progress: bool = False,
+) -> list[dict[str, Any]]:
+    """The same chunks as :func:`map_chunks`, as Ray tasks (one CPU each), in chunk order.
+
+    If this process is already connected to Ray (``ray.init`` called by the caller), that
+    connection is used as it is and left open. Otherwise ``ray.init(address=address)``
+    connects (``"auto"``: the cluster started on this machine by ``ray start``;
+    ``"ray://host:10001"``: Ray Client) or, for ``"local"``, starts a new instance on this
+    machine (loopback only, no dashboard); it is shut down at the end. The shared objects
+    go to the object store once, not once per task. The workers need this package
+    installed.
+    """
     try:
         import ray
     except ImportError as exc:
         raise ImportError(
-            f"ray_address = {address!r} needs ray: pip install 'scas-maintenance-gym[ray]'"
+            f"ray_address = {address!r} needs ray, which is not installed: "
+            "pip install 'scas-maintenance-gym[ray]' (or 'ray>=2.9'), "
+            "or leave ray_address unset to run on local worker processes"
         ) from exc
-    ray.init(address=address, ignore_reinit_error=True)
-    remote = ray.remote(_run_chunk)
-    refs = [
-        remote.remote(*shared, list(items[k : k + chunk_size]))
-        for k in range(0, len(items), chunk_size)
-    ]
-    return [r for chunk in ray.get(refs) for r in chunk]
+    owner = not ray.is_initialized()
+    if owner:
+        options: dict[str, Any] = {}
+        if address == "local":
+            options = {"include_dashboard": False, "_node_ip_address": "127.0.0.1"}
+        ray.init(address=address, **options)
+    try:
+        task = ray.remote(num_cpus=1)(_run_chunk_ray)
+        shared_refs = [ray.put(obj) for obj in shared]
+        chunks = [list(items[k : k + chunk_size]) for k in range(0, len(items), chunk_size)]
+        refs = [task.remote(*shared_refs, chunk) for chunk in chunks]
+        index = {ref: k for k, ref in enumerate(refs)}
+        done: list[list[dict[str, Any]]] = [[] for _ in chunks]
+        pending = list(refs)
+        with tqdm(total=len(items), disable=not progress, desc="episodes", unit="run") as bar:
+            while pending:
+                ready, pending = ray.wait(pending, num_returns=1)
+                for ref in ready:
+                    k = index[ref]
+                    done[k] = ray.get(ref)
+                    bar.update(len(chunks[k]))
+    finally:
+        if owner:
+            ray.shutdown()
+    return [r for chunk in done for r in chunk]
 
 
 @dataclass(frozen=True)
@@ -258,9 +303,13 @@ def run_benchmark(
 
     ``env_kwargs`` go to ``gym.make`` besides ``obs_mode`` (Scenario fields such as
     ``fidelity`` or ``crack_active``, and ``cost_model``); ``slots`` sets
-    ``episode_slots``. Paired differences are taken against the rule-based policy
-    (family ``"rule"``) with the highest mean reward.
+    ``episode_slots``. ``ray_address`` (e.g. ``"auto"``, ``"local"``, ``"ray://host:10001"``)
+    runs the episodes as Ray tasks instead of on ``n_workers`` local processes, with the
+    same results (:func:`_map_ray`). Paired differences are taken against the rule-based
+    policy (family ``"rule"``) with the highest mean reward.
     """
+    if ray_address is not None and not isinstance(ray_address, str):
+        raise ValueError(f"ray_address = {ray_address!r} must be a string or None")
     specs = tuple(resolve_spec(s) if isinstance(s, str) else s for s in specs)
     keys = [s.key for s in specs]
     if not specs or len(set(keys)) != len(keys):
@@ -276,7 +325,7 @@ def run_benchmark(
     t0 = time.perf_counter()
     if ray_address:
         chunk = max(1, min(MAX_CHUNK, math.ceil(len(tasks) / 64)))
-        results = _map_ray(shared, tasks, ray_address, chunk)
+        results = _map_ray(shared, tasks, ray_address, chunk, progress=progress)
     else:
         results = map_chunks(
             _run_chunk, shared, tasks, n_workers=n_workers, progress=progress, desc="episodes"

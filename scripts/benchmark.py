@@ -2,8 +2,11 @@
 
 Usage: ``python scripts/benchmark.py [--episodes 40] [--slots 2000] [--workers 2] [--seed 0]
 [--policies corrective,preventive,...] [--out results/benchmark] [--fidelity surrogate]
-[--ray-address ADDRESS]``. ``RAY_ADDRESS`` in the environment also selects Ray.
-See policies.benchmark.run_benchmark.
+[--ray-address ADDRESS]``. ``--ray-address`` (default: ``RAY_ADDRESS`` from the environment,
+as set by ``ray job submit``) runs the episodes as Ray tasks: ``auto`` (the cluster this
+machine belongs to), ``local`` (a new instance on this machine) or ``ray://host:10001``;
+``--ray-address ""`` runs locally even when ``RAY_ADDRESS`` is set. ``--workers`` is then
+unused. See policies.benchmark.run_benchmark.
 """
 
 from __future__ import annotations
@@ -27,7 +30,9 @@ def main() -> None:
     parser.add_argument("--out", default="results/benchmark", help="output folder")
     parser.add_argument("--fidelity", default="surrogate", help="surrogate or physics")
     parser.add_argument(
-        "--ray-address", default=os.environ.get("RAY_ADDRESS"), help="Ray cluster (optional)"
+        "--ray-address",
+        default=os.environ.get("RAY_ADDRESS") or None,
+        help="run on Ray: auto, local or ray://host:port (default: $RAY_ADDRESS; '' = local)",
     )
     args = parser.parse_args()
     result = run_benchmark(
@@ -38,15 +43,17 @@ def main() -> None:
         n_workers=args.workers,
         env_kwargs={"fidelity": args.fidelity},
         progress=True,
-        ray_address=args.ray_address,
+        ray_address=args.ray_address or None,
     )
     print(format_table(result.summary))
     paths = write_outputs(result, args.out)
     n = len(result.rows)
-    print(
-        f"{n} episodes in {result.wall_s:.1f} s ({n / result.wall_s:.2f} episodes/s, "
-        f"{n / result.wall_s / max(args.workers, 1):.2f} per worker)"
+    where = (
+        f"on Ray at {args.ray_address!r}"
+        if args.ray_address
+        else f"{n / result.wall_s / max(args.workers, 1):.2f} per worker"
     )
+    print(f"{n} episodes in {result.wall_s:.1f} s ({n / result.wall_s:.2f} episodes/s, {where})")
     for name, path in paths.items():
         print(f"{name}: {path}")
 
