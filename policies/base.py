@@ -96,8 +96,9 @@ class Policy(ABC):
         actions = self._act(np.atleast_2d(obs)).astype(np.int64)
         return (int(actions[0]) if obs.ndim == 1 else actions), state
 
-    def reset(self, seed: int | None = None) -> None:  # noqa: B027 (optional hook)
-        """Start a new episode (rules keep no state; ``seed`` re-seeds random policies)."""
+    def reset(self, seed: int | Sequence[int] | None = None) -> None:  # noqa: B027
+        """Start a new episode, or a batch of episodes side by side (a sequence of seeds, one
+        per row); rules keep no state, random policies re-seed."""
 
     def params(self) -> dict[str, Any]:
         """The policy's parameters (for tables and for rebuilding it by name)."""

@@ -7,9 +7,12 @@ policy starts from the same actuator unit; the episodes then share the env's ran
 only as long as the policies act alike (a test draws measurement noise), so the paired
 differences are of policies on the same units, not on the same sample paths.
 
-Tasks (policy, episode) are independent and carry their seeds, so the results do not depend
-on the number of workers, the chunking, or on running locally (:func:`map_chunks`) or on a
-Ray cluster (``ray_address``; ``ray`` is imported only then).
+Tasks are batches of up to :data:`BATCH_EPISODES` consecutive episodes of one policy, run
+side by side in the native vectorised env (:mod:`policies.batch_runner`; the physics
+fidelity runs them one by one). Each episode gives exactly what :func:`run_episode` gives
+on its seeds (tested), the batches are fixed by episode index, and tasks carry their seeds,
+so the results do not depend on the number of workers or on running locally
+(:func:`map_chunks`) or on a Ray cluster (``ray_address``; ``ray`` is imported only then).
 
 Per episode (one row of results.csv): flight hours ``FH = flights * flight_duration_s /
 3600``; ``cost_per_fh = cost_usd / FH`` (costs only, the value of flights excluded);
@@ -23,7 +26,6 @@ of a part (failure or preventive replacement) and every part still fitted at the
 from __future__ import annotations
 
 import importlib
-import math
 import time
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
@@ -36,9 +38,10 @@ from tqdm.auto import tqdm
 
 import policies  # noqa: F401  (registers the built-in policies)
 from policies.base import make_policy, policy_family, policy_obs_mode
+from policies.batch_runner import TERMS, episode_row, run_batch
 from policies.benchmark_stats import summarize
 from scas_env import ENV_ID
-from scas_env.parallel import MAX_CHUNK, map_chunks
+from scas_env.parallel import map_chunks
 from scas_env.world import PARTS
 
 #: Named plug-ins: a benchmark name that needs a module imported first (trained agents).
@@ -52,7 +55,8 @@ DEFAULT_POLICIES = (
     "random",
     "ppo",
 )
-TERMS = ("flight", "test", "no_go", "replacement", "failure")
+#: Episodes of one policy stepped together in one vectorised env (one task).
+BATCH_EPISODES = 32
 
 __all__ = [
     "DEFAULT_POLICIES",
@@ -156,58 +160,58 @@ def run_episode(env: gym.Env, policy: Any, env_seed: int, policy_seed: int) -> d
 def _row(
     env: gym.Env, info: Mapping[str, Any], terms: Mapping[str, float], reward: float
 ) -> dict[str, Any]:
-    fh = info["flights"] * env.unwrapped.params.mission.flight_duration_s / 3600.0
-    per_kfh = 1000.0 / fh if fh > 0 else math.nan
-    failures = sum(info["failures"].values())
-    preventive = {p: info["replacements"][p] - info["failures"][p] for p in PARTS}
-    wasted = {p: info["wasted_life_flights"][p] for p in PARTS}
-    all_wasted = [w for p in PARTS for w in wasted[p]]
-    row: dict[str, Any] = {
-        "slots": info["slot"],
-        "flights": info["flights"],
-        "flight_hours": fh,
-        "availability": info["availability"],
-        "cost_usd": info["cost_usd"],
-        "revenue_usd": info["revenue_usd"],
-        "reward": reward,
-        "cost_per_fh": info["cost_usd"] / fh if fh > 0 else math.nan,
-        "failures_per_1000fh": failures * per_kfh,
-        "replacements_per_1000fh": sum(preventive.values()) * per_kfh,
-        "tests_per_1000fh": info["tests"] * per_kfh,
-        "wasted_life": float(np.mean(all_wasted)) if all_wasted else math.nan,
-        "tests": info["tests"],
-        "no_go": info["no_go"],
-    }
-    for p in PARTS:
-        row[f"failures_{p}"] = info["failures"][p]
-        row[f"replacements_{p}"] = preventive[p]
-        row[f"wasted_life_{p}"] = float(np.mean(wasted[p])) if wasted[p] else math.nan
-    for k in TERMS:
-        row[f"term_{k}"] = terms[k]
-    return row
+    lives = info["wasted_life_flights"]
+    wasted = {p: (float(sum(lives[p])), len(lives[p])) for p in PARTS}
+    duration = env.unwrapped.params.mission.flight_duration_s
+    return episode_row(info, terms, reward, wasted, duration)
+
+
+Batch = tuple[int, tuple[tuple[int, int, int], ...]]
 
 
 def _run_chunk(
-    specs: tuple[PolicySpec, ...],
-    env_kwargs: Mapping[str, Any],
-    chunk: Sequence[tuple[int, int, int, int]],
+    specs: tuple[PolicySpec, ...], env_kwargs: Mapping[str, Any], chunk: Sequence[Batch]
 ) -> list[dict[str, Any]]:
-    """Episodes ``(policy index, episode, env seed, policy seed)``; one env per obs_mode."""
-    envs: dict[str, gym.Env] = {}
+    """Batches ``(policy index, ((episode, env seed, policy seed), ...))``."""
+    physics = env_kwargs.get("fidelity", "surrogate") == "physics"
+    envs: dict[tuple[str, int], Any] = {}
     built: dict[int, Any] = {}
     out = []
-    for p, e, env_seed, policy_seed in chunk:
+    for p, batch in chunk:
         spec = specs[p]
         mode = spec.build_mode()
-        if mode not in envs:
-            envs[mode] = gym.make(ENV_ID, obs_mode=mode, disable_env_checker=True, **env_kwargs)
-        env = envs[mode]
+        n = 1 if physics else len(batch)
+        if (mode, n) not in envs:
+            if physics:
+                envs[mode, n] = gym.make(
+                    ENV_ID, obs_mode=mode, disable_env_checker=True, **env_kwargs
+                )
+            else:
+                envs[mode, n] = gym.make_vec(
+                    ENV_ID,
+                    num_envs=n,
+                    vectorization_mode="vector_entry_point",
+                    obs_mode=mode,
+                    **env_kwargs,
+                )
+        env = envs[mode, n]
         if p not in built:
-            built[p] = make_policy(spec.name, env.unwrapped.obs_names, **dict(spec.params))
-        result = run_episode(env, built[p], env_seed, policy_seed)
-        result["row"] = {"policy": spec.key, "episode": e, "env_seed": env_seed, **result["row"]}
-        result["events"] = [{"policy": spec.key, "episode": e, **ev} for ev in result["events"]]
-        out.append(result)
+            names = env.unwrapped.obs_names if physics else env.obs_names
+            built[p] = make_policy(spec.name, names, **dict(spec.params))
+        if physics:
+            results = [run_episode(env, built[p], es, ps) for _, es, ps in batch]
+        else:
+            duration = env.envs[0].params.mission.flight_duration_s
+            results = run_batch(env, built[p], [(es, ps) for _, es, ps in batch], duration)
+        for (e, env_seed, _), result in zip(batch, results, strict=True):
+            result["row"] = {
+                "policy": spec.key,
+                "episode": e,
+                "env_seed": env_seed,
+                **result["row"],
+            }
+            result["events"] = [{"policy": spec.key, "episode": e, **ev} for ev in result["events"]]
+            out.append(result)
     for env in envs.values():
         env.close()
     return out
@@ -320,15 +324,24 @@ def run_benchmark(
             raise ValueError(f"env_kwargs must not set {reserved!r} (set per policy / slots)")
     kwargs["episode_slots"] = slots
     seeds = episode_seeds(seed, episodes)
-    tasks = [(p, e, *seeds[e]) for e in range(episodes) for p in range(len(specs))]
+    tasks: list[Batch] = [
+        (p, tuple((e, *seeds[e]) for e in range(b, min(b + BATCH_EPISODES, episodes))))
+        for b in range(0, episodes, BATCH_EPISODES)
+        for p in range(len(specs))
+    ]
     shared = (specs, kwargs)
     t0 = time.perf_counter()
     if ray_address:
-        chunk = max(1, min(MAX_CHUNK, math.ceil(len(tasks) / 64)))
-        results = _map_ray(shared, tasks, ray_address, chunk, progress=progress)
+        results = _map_ray(shared, tasks, ray_address, 1, progress=progress)
     else:
         results = map_chunks(
-            _run_chunk, shared, tasks, n_workers=n_workers, progress=progress, desc="episodes"
+            _run_chunk,
+            shared,
+            tasks,
+            n_workers=n_workers,
+            chunk_size=1,
+            progress=progress,
+            desc="episode batches",
         )
     wall = time.perf_counter() - t0
     rows = sorted(

@@ -283,11 +283,13 @@ class SB3Agent:
         actions = np.asarray(actions, dtype=np.int64)
         return (int(actions) if obs.ndim == 1 else actions.reshape(-1)), state
 
-    def reset(self, seed: int | None = None) -> None:
+    def reset(self, seed: int | Sequence[int] | None = None) -> None:
         """New episode. ``seed`` re-seeds the global Python, NumPy and torch generators (SB3's
-        ``set_random_seed``) for reproducible ``deterministic=False`` actions."""
+        ``set_random_seed``) for reproducible ``deterministic=False`` actions; for a batch
+        (a sequence of seeds) the first one is used."""
         if seed is not None:
-            self.model.set_random_seed(int(seed) % 2**32)
+            first = seed[0] if isinstance(seed, Sequence) else seed
+            self.model.set_random_seed(int(first) % 2**32)
 
 
 def _paths(out_dir: Path, name: str) -> tuple[Path, Path, Path]:

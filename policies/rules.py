@@ -299,14 +299,29 @@ class RandomPolicy(Policy):
         self.probabilities = p
         self.seed = seed
         self.rng = np.random.default_rng(seed)
+        self.row_rngs: list[np.random.Generator] | None = None
 
     def params(self) -> dict[str, Any]:
         return {"probabilities": self.probabilities.tolist(), "seed": self.seed}
 
-    def reset(self, seed: int | None = None) -> None:
-        """Re-seed the generator when ``seed`` is given (the benchmark seeds each episode)."""
-        if seed is not None:
+    def reset(self, seed: int | Sequence[int] | None = None) -> None:
+        """Re-seed when ``seed`` is given (the benchmark seeds each episode). A sequence of
+        seeds gives one generator per row of the next batches (episodes run side by side),
+        each drawing what a single episode with that seed draws."""
+        if seed is None:
+            return
+        if isinstance(seed, Sequence):
+            self.row_rngs = [np.random.default_rng(s) for s in seed]
+        else:
             self.rng = np.random.default_rng(seed)
+            self.row_rngs = None
 
     def _act(self, obs: np.ndarray) -> IntArray:
+        rows = self.row_rngs
+        if rows is not None:
+            if len(rows) != obs.shape[0]:
+                raise ValueError(f"{obs.shape[0]} observations for {len(rows)} seeded rows")
+            return np.array(
+                [int(g.choice(4, size=1, p=self.probabilities)[0]) for g in rows], dtype=np.int64
+            )
         return self.rng.choice(4, size=obs.shape[0], p=self.probabilities).astype(np.int64)

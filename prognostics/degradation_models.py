@@ -8,7 +8,15 @@ usage ``u`` (flights or flight hours):
     log theta_{k+1} = log theta_k + sigma_theta * sqrt(u) * eps_2      ("artificial evolution")
 
 with ``eps_1, eps_2 ~ N(0, 1)`` and ``g`` the growth rate at unit multiplier, given as a table
-(``grid`` -> ``rate``, linear in between, held constant outside the grid). This covers
+(``grid`` -> ``rate``, linear in between, held constant outside the grid). With
+``scheme="exact"`` the deterministic part is integrated exactly instead of by one Euler step,
+
+    x_{k+1} = I^{-1}(I(x_k) + theta_k u) + sigma_x * sqrt(u) * eps_1
+
+(``I`` the cumulative damage integral below): one step of ``u`` usage units then lands where
+``u`` steps of one unit would without noise, so a filter can be predicted over the whole
+interval between two measurements in one call (the environment's monitor does this). This
+covers
 
 - Paris-type crack growth in flight units: ``g(a) = da/dflight`` at the nominal Paris
   constant, tabulated by the simulator (ref §3.2, eq. 7 context) -- :func:`paris_crack_model`;
@@ -36,6 +44,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 from numba import njit
+
+from prognostics.normals import Handle, standard_normal
 
 _CELLS_PER_SEGMENT = 4
 _SMALL = 1e-10  # |s d| below which expm1(s d) / s ~ d (1 + s d / 2) is used
@@ -75,12 +85,13 @@ def rate_at_scalar(
     grid: np.ndarray, rate: np.ndarray, cells: np.ndarray, inv_cell: float, x: float
 ) -> float:
     """g(x): linear interpolation of the table, constant outside it (as ``np.interp``)."""
-    if x <= grid[0]:
-        return rate[0]
     if x >= grid[-1]:
         return rate[-1]
-    k = _locate(grid, cells, inv_cell, x)
-    return rate[k] + (rate[k + 1] - rate[k]) * (x - grid[k]) / (grid[k + 1] - grid[k])
+    # below the grid, clamp: the first segment's formula gives rate[0] exactly there, and a
+    # cloud straddling grid[0] costs no mispredicted branch
+    xc = max(x, grid[0])
+    k = _locate(grid, cells, inv_cell, xc)
+    return rate[k] + (rate[k + 1] - rate[k]) * (xc - grid[k]) / (grid[k + 1] - grid[k])
 
 
 @njit(cache=True)
@@ -191,6 +202,136 @@ def _predict_kernel(
             log_theta[i] += sth * noise[k_th + i]
 
 
+@njit(cache=True)
+def _predict_exact_kernel(
+    grid: np.ndarray,
+    rate: np.ndarray,
+    cum: np.ndarray,
+    cells: np.ndarray,
+    inv_cell: float,
+    x: np.ndarray,
+    log_theta: np.ndarray,
+    usage: float,
+    sigma_x: float,
+    sigma_log_theta: float,
+    noise: np.ndarray,
+) -> None:
+    """As :func:`_predict_kernel` with the exact deterministic step ``I^{-1}(I(x) + theta u)``
+    (the multiplier of the step is the one at its start, as in the Euler step)."""
+    n = x.size
+    sx = sigma_x * math.sqrt(usage)
+    sth = sigma_log_theta * math.sqrt(usage)
+    k_th = n if sigma_x > 0.0 else 0
+    for i in range(n):
+        d = damage_scalar(grid, rate, cum, cells, inv_cell, x[i])
+        x[i] = inverse_damage_scalar(grid, rate, cum, d + math.exp(log_theta[i]) * usage)
+        if sigma_x > 0.0:
+            x[i] += sx * noise[i]
+        if sigma_log_theta > 0.0:
+            log_theta[i] += sth * noise[k_th + i]
+
+
+@njit(cache=True, inline="always")
+def advance_scalar(
+    exact: bool,
+    grid: np.ndarray,
+    rate: np.ndarray,
+    cum: np.ndarray,
+    cells: np.ndarray,
+    inv_cell: float,
+    x: float,
+    theta: float,
+    usage: float,
+) -> float:
+    """Noise-free step of one particle: ``I^{-1}(I(x) + theta u)`` (exact) or
+    ``x + theta g(x) u`` (Euler), with the arithmetic of the predict kernels above."""
+    if exact:
+        d = damage_scalar(grid, rate, cum, cells, inv_cell, x)
+        return inverse_damage_scalar(grid, rate, cum, d + theta * usage)
+    return x + theta * rate_at_scalar(grid, rate, cells, inv_cell, x) * usage
+
+
+#: numba options of the particle filter's hot kernels. ``_nrt=False``: no NRT reference
+#: counting -- array arguments of helpers inlined into a particle loop otherwise cost ~8
+#: atomic incref/decref pairs per particle (numba's refcount pruning gives up on helpers
+#: with loops), ~2x the kernel time; the kernels allocate nothing, so they need no NRT.
+#: ``error_model="numpy"``: no zero-divisor branch per division, so that loops vectorise
+#: (divisions are by table spacings, sigmas and weight sums, all > 0).
+HOT_KERNEL = {"cache": True, "_nrt": False, "error_model": "numpy"}
+
+#: rows of the filter's scratch array used by :func:`advance_severities`
+PROCESS_SCRATCH_ROWS = 2
+
+
+@njit(cache=True, inline="always")
+def advance_severities(
+    x: np.ndarray,
+    log_theta: np.ndarray,
+    usage: float,
+    handle: Handle,
+    scratch: np.ndarray,
+    exact: bool,
+    grid: np.ndarray,
+    rate: np.ndarray,
+    cum: np.ndarray,
+    cells: np.ndarray,
+    inv_cell: float,
+    sigma_x: float,
+) -> None:
+    """x-part of a filter step for every particle (log theta is read, not changed).
+
+    The x noise is drawn from ``handle`` (:mod:`prognostics.normals`) in particle order:
+    the first N draws of :meth:`TabulatedRateModel.predict`, and the same arithmetic, so
+    the same result bit for bit. ``scratch``: float64 array of shape (>= 2, N). Two passes,
+    ``exp`` and the draws first, then the table: measured faster than one.
+    """
+    n = x.size
+    theta = scratch[0]
+    noise = scratch[1]
+    for i in range(n):
+        theta[i] = math.exp(log_theta[i])
+        if sigma_x > 0.0:
+            noise[i] = standard_normal(handle)
+    sx = sigma_x * math.sqrt(usage)
+    for i in range(n):
+        xi = advance_scalar(exact, grid, rate, cum, cells, inv_cell, x[i], theta[i], usage)
+        if sigma_x > 0.0:
+            xi += sx * noise[i]
+        x[i] = xi
+
+
+@njit(**HOT_KERNEL)
+def predict_particles(
+    x: np.ndarray,
+    log_theta: np.ndarray,
+    usage: float,
+    handle: Handle,
+    scratch: np.ndarray,
+    exact: bool,
+    grid: np.ndarray,
+    rate: np.ndarray,
+    cum: np.ndarray,
+    cells: np.ndarray,
+    inv_cell: float,
+    sigma_x: float,
+    sigma_log_theta: float,
+) -> None:
+    """:meth:`TabulatedRateModel.predict` with the normals drawn inside numba from
+    ``handle``: the same draws in the same order and the same arithmetic, so the same
+    result bit for bit. Arguments after ``scratch`` (float64, shape (>= 2, N)) are
+    :attr:`TabulatedRateModel.kernel_args`."""
+    advance_severities(
+        x, log_theta, usage, handle, scratch, exact, grid, rate, cum, cells, inv_cell, sigma_x
+    )
+    if sigma_log_theta > 0.0:
+        sth = sigma_log_theta * math.sqrt(usage)
+        for i in range(x.size):
+            log_theta[i] += sth * standard_normal(handle)
+
+
+SCHEMES: tuple[str, ...] = ("euler", "exact")
+
+
 def _frozen_1d(name: str, values: np.ndarray) -> np.ndarray:
     arr = np.array(values, dtype=np.float64)
     if arr.ndim != 1:
@@ -221,12 +362,15 @@ class TabulatedRateModel:
     process_noise_std : sigma_x, std of the additive state noise per sqrt(usage unit).
     log_theta_noise_std : sigma_theta, std of the log-multiplier random walk per
         sqrt(usage unit) (0 freezes theta).
+    scheme : deterministic step, ``"euler"`` (one Euler step) or ``"exact"`` (the damage
+        integral; see the module docstring).
     """
 
     grid: np.ndarray
     rate: np.ndarray
     process_noise_std: float = 0.0
     log_theta_noise_std: float = 0.0
+    scheme: str = "euler"
     cumulative: np.ndarray = field(init=False, repr=False)
     cells: np.ndarray = field(init=False, repr=False)
     inv_cell: float = field(init=False, repr=False)
@@ -242,6 +386,8 @@ class TabulatedRateModel:
             raise ValueError("grid must be strictly increasing")
         if np.any(rate <= 0.0):
             raise ValueError(f"rate must be > 0 everywhere, min is {rate.min()}")
+        if self.scheme not in SCHEMES:
+            raise ValueError(f"scheme = {self.scheme!r} is not one of {SCHEMES}")
         for name in ("process_noise_std", "log_theta_noise_std"):
             value = getattr(self, name)
             if not (math.isfinite(value) and value >= 0.0):
@@ -267,6 +413,19 @@ class TabulatedRateModel:
         cells.setflags(write=False)
         object.__setattr__(self, "cells", cells)
         object.__setattr__(self, "inv_cell", n_cells / (grid[-1] - grid[0]))
+
+    @property
+    def kernel_args(
+        self,
+    ) -> tuple[bool, np.ndarray, np.ndarray, np.ndarray, np.ndarray, float, float, float]:
+        """``(exact, grid, rate, cumulative, cells, inv_cell, sigma_x, sigma_log_theta)``:
+        the model arguments of :func:`predict_particles` (after ``scratch``)."""
+        return (
+            self.scheme == "exact",
+            *self.table_args,
+            float(self.process_noise_std),
+            float(self.log_theta_noise_std),
+        )
 
     @property
     def table_args(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, float]:
@@ -323,6 +482,17 @@ class TabulatedRateModel:
         noise = work[:n_draws]
         if n_draws:
             rng.standard_normal(out=noise)
+        if self.scheme == "exact":
+            _predict_exact_kernel(
+                *self.table_args,
+                x,
+                log_theta,
+                float(usage),
+                self.process_noise_std,
+                self.log_theta_noise_std,
+                noise,
+            )
+            return
         _predict_kernel(
             self.grid,
             self.rate,
@@ -374,6 +544,7 @@ def paris_crack_model(
     *,
     process_noise_std_m: float = 0.0,
     log_theta_noise_std: float = 0.0,
+    scheme: str = "euler",
 ) -> TabulatedRateModel:
     """Paris-type crack growth in flight units: ``a_{k+1} = a_k + theta g(a_k) u_k + noise``.
 
@@ -386,6 +557,7 @@ def paris_crack_model(
         rate=growth_rate_m_per_flight,
         process_noise_std=process_noise_std_m,
         log_theta_noise_std=log_theta_noise_std,
+        scheme=scheme,
     )
 
 

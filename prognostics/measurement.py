@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field, fields
+from functools import cached_property
 from typing import Any
 
 import numpy as np
@@ -54,6 +55,19 @@ def _interval(knots: np.ndarray, x: float) -> int:
 
 
 @njit(cache=True, inline="always")
+def _hermite(s: float, h: float, v0: float, d0: float, v1: float, d1: float) -> float:
+    """Cubic Hermite at ``s = (x - x_k) / h`` from values and slopes at both ends."""
+    s2 = s * s
+    s3 = s2 * s
+    return (
+        (2.0 * s3 - 3.0 * s2 + 1.0) * v0
+        + (s3 - 2.0 * s2 + s) * h * d0
+        + (-2.0 * s3 + 3.0 * s2) * v1
+        + (s3 - s2) * h * d1
+    )
+
+
+@njit(cache=True, inline="always")
 def mean_scalar(
     is_poly: bool,
     offset: float,
@@ -77,15 +91,7 @@ def mean_scalar(
         return values[-1] + slopes[-1] * (x - knots[-1])
     k = _interval(knots, x)
     h = knots[k + 1] - knots[k]
-    s = (x - knots[k]) / h
-    s2 = s * s
-    s3 = s2 * s
-    return (
-        (2.0 * s3 - 3.0 * s2 + 1.0) * values[k]
-        + (s3 - 2.0 * s2 + s) * h * slopes[k]
-        + (-2.0 * s3 + 3.0 * s2) * values[k + 1]
-        + (s3 - s2) * h * slopes[k + 1]
-    )
+    return _hermite((x - knots[k]) / h, h, values[k], slopes[k], values[k + 1], slopes[k + 1])
 
 
 @njit(cache=True, inline="always")
@@ -98,6 +104,127 @@ def sigma_scalar(sigma_knots: np.ndarray, sigma_values: np.ndarray, x: float) ->
     k = _interval(sigma_knots, x)
     w = (x - sigma_knots[k]) / (sigma_knots[k + 1] - sigma_knots[k])
     return sigma_values[k] + w * (sigma_values[k + 1] - sigma_values[k])
+
+
+#: rows of the filter's scratch array used by :func:`log_likelihood_terms`; the last two hold
+#: its results
+LIKELIHOOD_SCRATCH_ROWS = 10
+
+
+@njit(cache=True, inline="always")
+def log_density(q: float, s: float) -> float:
+    """``log N`` from the terms of :func:`log_likelihood_terms`: ``q - log s - log(2 pi)/2``."""
+    return q - math.log(s) - _HALF_LOG_2PI
+
+
+@njit(cache=True, inline="always")
+def log_likelihood_terms(
+    y: float,
+    x: np.ndarray,
+    scratch: np.ndarray,
+    shared_knots: bool,
+    is_poly: bool,
+    offset: float,
+    scale: float,
+    coef: np.ndarray,
+    knots: np.ndarray,
+    values: np.ndarray,
+    slopes: np.ndarray,
+    sigma_knots: np.ndarray,
+    sigma_values: np.ndarray,
+) -> None:
+    """Terms of ``log N(y; h(x_i), sigma_v(x_i)^2)`` for all particles, for fused kernels:
+    ``s_i = sigma_v(x_i)`` into ``scratch[9]`` and ``q_i = -z_i^2 / 2`` into ``scratch[8]``
+    (then :func:`log_density` ``(q_i, s_i)``); arguments after ``scratch`` (float64, shape
+    (10, N)) are :attr:`MeasurementModel.likelihood_args`.
+
+    The arithmetic of :func:`log_likelihood_kernel`, bit for bit. With ``shared_knots``
+    (PCHIP mean with ``sigma_knots`` equal to ``knots``, as :func:`measurement_from_curve`
+    builds) one interval search serves both curves, and the arithmetic is vectorised: with
+    the knot values of each particle's interval copied out (rows 0-7), or, when the whole
+    cloud lies in one interval (the usual case), with no copy at all.
+    """
+    n = x.size
+    q = scratch[8]
+    sig = scratch[9]
+    if not shared_knots:
+        for i in range(n):
+            mean = mean_scalar(is_poly, offset, scale, coef, knots, values, slopes, x[i])
+            s = sigma_scalar(sigma_knots, sigma_values, x[i])
+            z = (y - mean) / s
+            sig[i] = s
+            q[i] = -0.5 * z * z
+        return
+    lo = knots[0]
+    hi = knots[-1]
+    x0 = x[0]
+    k = _interval(knots, x0)
+    a = knots[k]
+    b = knots[k + 1]
+    outside = 0
+    for i in range(n):  # vectorised: is every x_i inside interval k (and the knot range)?
+        xi = x[i]
+        outside |= (xi <= lo) | (xi >= hi) | (xi < a) | (xi >= b)
+    if outside == 0:
+        h = b - a
+        v0 = values[k]
+        v1 = values[k + 1]
+        d0 = slopes[k]
+        d1 = slopes[k + 1]
+        s0 = sigma_values[k]
+        s1 = sigma_values[k + 1]
+        for i in range(n):  # vectorised
+            u = (x[i] - a) / h
+            s = s0 + u * (s1 - s0)
+            z = (y - _hermite(u, h, v0, d0, v1, d1)) / s
+            sig[i] = s
+            q[i] = -0.5 * z * z
+        return
+    seg_x = scratch[0]
+    seg_h = scratch[1]
+    seg_v0 = scratch[2]
+    seg_d0 = scratch[3]
+    seg_v1 = scratch[4]
+    seg_d1 = scratch[5]
+    seg_s0 = scratch[6]
+    seg_s1 = scratch[7]
+    for i in range(n):
+        xi = x[i]
+        if xi <= lo or xi >= hi:  # linear extension, constant sigma
+            k = 0 if xi <= lo else knots.size - 1
+            seg_x[i] = knots[k]
+            seg_v0[i] = values[k]
+            seg_d0[i] = slopes[k]
+            seg_s0[i] = sigma_values[k]
+            seg_h[i] = 1.0
+            seg_v1[i] = 0.0
+            seg_d1[i] = 0.0
+            seg_s1[i] = 0.0
+        else:
+            k = _interval(knots, xi)
+            seg_x[i] = knots[k]
+            seg_h[i] = knots[k + 1] - knots[k]
+            seg_v0[i] = values[k]
+            seg_d0[i] = slopes[k]
+            seg_v1[i] = values[k + 1]
+            seg_d1[i] = slopes[k + 1]
+            seg_s0[i] = sigma_values[k]
+            seg_s1[i] = sigma_values[k + 1]
+    for i in range(n):  # vectorised: both branches, then a select
+        xi = x[i]
+        dx = xi - seg_x[i]
+        h = seg_h[i]
+        u = dx / h
+        s0 = seg_s0[i]
+        linear = seg_v0[i] + seg_d0[i] * dx
+        cubic = _hermite(u, h, seg_v0[i], seg_d0[i], seg_v1[i], seg_d1[i])
+        inner_s = s0 + u * (seg_s1[i] - s0)
+        ends = (xi <= lo) | (xi >= hi)
+        mean = linear if ends else cubic
+        s = s0 if ends else inner_s
+        z = (y - mean) / s
+        sig[i] = s
+        q[i] = -0.5 * z * z
 
 
 @njit(cache=True)
@@ -227,6 +354,17 @@ class MeasurementModel:
             self.sigma_knots,
             self.sigma_values,
         )
+
+    @cached_property
+    def likelihood_args(self) -> tuple:
+        """Arguments after ``scratch`` of :func:`log_likelihood_terms`: ``shared_knots``,
+        then :attr:`kernel_args`."""
+        shared = (
+            self.kind == "pchip"
+            and self.sigma_knots.shape == self.knots.shape
+            and bool(np.all(self.sigma_knots == self.knots))
+        )
+        return (shared, *self.kernel_args)
 
     def mean(self, x: np.ndarray) -> np.ndarray:
         """Mean feature ``h(x)`` at severities ``x`` (any shape)."""

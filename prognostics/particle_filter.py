@@ -25,6 +25,16 @@ jitter keeps the mean and covariance of the particle cloud; ``shrink=False`` is 
 RPF (``a = 1``, covariance inflated by ``1 + h^2 kappa``). The Epanechnikov draw in 2-D is
 ``eps = sqrt(1 - sqrt(U_1)) (cos 2 pi U_2, sin 2 pi U_2)`` (radius^2 ~ Beta(1, 2)).
 
+Speed: ``predict``, ``update`` and ``step`` are one numba call each (``step`` fuses both,
+with the same arrays bit for bit as ``predict`` then ``update``). The kernels draw the
+normals themselves from the Generator's bit generator (:mod:`prognostics.normals`: numpy's
+ziggurat on the same state, so exactly the values ``rng.standard_normal`` would give, in the
+same order), run without NRT reference counting, and split each particle loop into scalar
+passes (``exp``, ``log``, normal draws, table searches) and vectorised ones (interpolation,
+divisions, normalisation). Every result is the same, bit for bit, as with the plain
+one-particle-at-a-time arithmetic (``TabulatedRateModel.predict``,
+:func:`~prognostics.measurement.log_likelihood_kernel`; tested): same seed, same numbers.
+
 Randomness: only the ``numpy.random.Generator`` given at construction (numba kernels draw
 from the same Generator, sharing its state).
 """
@@ -38,12 +48,25 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
-from prognostics.degradation_models import TabulatedRateModel
-from prognostics.measurement import MeasurementModel, log_likelihood_kernel
+from prognostics.degradation_models import (
+    HOT_KERNEL,
+    PROCESS_SCRATCH_ROWS,
+    TabulatedRateModel,
+    advance_severities,
+    predict_particles,
+)
+from prognostics.measurement import (
+    LIKELIHOOD_SCRATCH_ROWS,
+    MeasurementModel,
+    log_density,
+    log_likelihood_terms,
+)
+from prognostics.normals import Handle, NormalStream, random, standard_normal
 from prognostics.resampling import SCHEMES, resample, systematic_indices
 
 KERNELS: tuple[str, ...] = ("epanechnikov", "gaussian")
 _STATE_DIM = 2
+_SCRATCH_ROWS = max(PROCESS_SCRATCH_ROWS, LIKELIHOOD_SCRATCH_ROWS)
 
 InitialValues = float | np.ndarray | Callable[[np.random.Generator, int], np.ndarray]
 
@@ -66,24 +89,125 @@ def regularisation_bandwidth(n_particles: int, kernel: str = "epanechnikov") -> 
     raise ValueError(f"kernel = {kernel!r} is not one of {KERNELS}")
 
 
-@njit(cache=True)
-def _reweight(log_w: np.ndarray, w: np.ndarray, loglik: np.ndarray) -> float:
-    """log w += loglik, normalise in log space, w = exp(log w); returns N_eff = 1/sum w^2."""
-    peak = -np.inf
-    for i in range(log_w.size):
-        log_w[i] += loglik[i]
-        peak = max(peak, log_w[i])
+@njit(cache=True, inline="always")
+def _normalise(log_w: np.ndarray, w: np.ndarray, peak: float) -> float:
+    """Normalise in log space (``peak = max log w``), ``w = exp(log w)``; returns N_eff."""
     total = 0.0
     for i in range(log_w.size):
         w[i] = math.exp(log_w[i] - peak)
         total += w[i]
     shift = peak + math.log(total)
-    sum_sq = 0.0
-    for i in range(log_w.size):
+    for i in range(log_w.size):  # no reduction: vectorised
         w[i] /= total
         log_w[i] -= shift
+    sum_sq = 0.0
+    for i in range(log_w.size):
         sum_sq += w[i] * w[i]
     return 1.0 / sum_sq
+
+
+@njit(**HOT_KERNEL)
+def _update_kernel(
+    y: float,
+    x: np.ndarray,
+    log_w: np.ndarray,
+    w: np.ndarray,
+    scratch: np.ndarray,
+    shared_knots: bool,
+    is_poly: bool,
+    offset: float,
+    scale: float,
+    coef: np.ndarray,
+    knots: np.ndarray,
+    values: np.ndarray,
+    slopes: np.ndarray,
+    sigma_knots: np.ndarray,
+    sigma_values: np.ndarray,
+) -> float:
+    """Measurement update ([DJS20] eq. 11) in place; returns N_eff = 1 / sum w^2."""
+    log_likelihood_terms(
+        y,
+        x,
+        scratch,
+        shared_knots,
+        is_poly,
+        offset,
+        scale,
+        coef,
+        knots,
+        values,
+        slopes,
+        sigma_knots,
+        sigma_values,
+    )
+    q = scratch[8]
+    sig = scratch[9]
+    peak = -np.inf
+    for i in range(x.size):
+        log_w[i] += log_density(q[i], sig[i])
+        peak = max(peak, log_w[i])
+    return _normalise(log_w, w, peak)
+
+
+@njit(**HOT_KERNEL)
+def _step_kernel(
+    x: np.ndarray,
+    log_theta: np.ndarray,
+    log_w: np.ndarray,
+    w: np.ndarray,
+    scratch: np.ndarray,
+    usage: float,
+    handle: Handle,
+    exact: bool,
+    grid: np.ndarray,
+    rate: np.ndarray,
+    cum: np.ndarray,
+    cells: np.ndarray,
+    inv_cell: float,
+    sigma_x: float,
+    sigma_log_theta: float,
+    y: float,
+    shared_knots: bool,
+    is_poly: bool,
+    offset: float,
+    scale: float,
+    coef: np.ndarray,
+    knots: np.ndarray,
+    values: np.ndarray,
+    slopes: np.ndarray,
+    sigma_knots: np.ndarray,
+    sigma_values: np.ndarray,
+) -> float:
+    """``predict_particles`` then ``_update_kernel`` in one call; returns N_eff."""
+    advance_severities(
+        x, log_theta, usage, handle, scratch, exact, grid, rate, cum, cells, inv_cell, sigma_x
+    )
+    log_likelihood_terms(
+        y,
+        x,
+        scratch,
+        shared_knots,
+        is_poly,
+        offset,
+        scale,
+        coef,
+        knots,
+        values,
+        slopes,
+        sigma_knots,
+        sigma_values,
+    )
+    if sigma_log_theta > 0.0:  # numpy draws this noise after all the x noise
+        sth = sigma_log_theta * math.sqrt(usage)
+        for i in range(x.size):
+            log_theta[i] += sth * standard_normal(handle)
+    q = scratch[8]
+    sig = scratch[9]
+    peak = -np.inf
+    for i in range(x.size):
+        log_w[i] += log_density(q[i], sig[i])
+        peak = max(peak, log_w[i])
+    return _normalise(log_w, w, peak)
 
 
 @njit(cache=True)
@@ -99,7 +223,7 @@ def _systematic_from_weights(w: np.ndarray, cumsum: np.ndarray, u: float, idx: n
     systematic_indices(cumsum, u, idx)
 
 
-@njit(cache=True)
+@njit(**HOT_KERNEL)
 def _gather_regularise(
     x: np.ndarray,
     log_theta: np.ndarray,
@@ -112,7 +236,7 @@ def _gather_regularise(
     kappa: float,
     gaussian: bool,
     shrink: bool,
-    rng: np.random.Generator,
+    handle: Handle,
 ) -> None:
     """Copy parents ``idx``, jitter with the kernel (h > 0), reset weights to 1/N."""
     n = x.size
@@ -140,11 +264,11 @@ def _gather_regularise(
     for i in range(n):
         if h > 0.0:
             if gaussian:
-                e1 = rng.standard_normal()
-                e2 = rng.standard_normal()
+                e1 = standard_normal(handle)
+                e2 = standard_normal(handle)
             else:
-                r = math.sqrt(1.0 - math.sqrt(rng.random()))
-                phi = 2.0 * math.pi * rng.random()
+                r = math.sqrt(1.0 - math.sqrt(random(handle)))
+                phi = 2.0 * math.pi * random(handle)
                 e1 = r * math.cos(phi)
                 e2 = r * math.sin(phi)
             x[i] = m1 + a * (buf_x[i] - m1) + h * l11 * e1
@@ -232,7 +356,7 @@ class ParticleFilter:
         n = int(n_particles)
         self.process = process
         self.measurement = measurement
-        self.rng = rng
+        self._stream = NormalStream(rng)
         self.resample_threshold = float(resample_threshold)
         self.resampler = resampler
         self.kernel = kernel
@@ -240,20 +364,34 @@ class ParticleFilter:
         self.shrink = bool(shrink)
         self._h = regularisation_bandwidth(n, kernel) if regularise else 0.0
         self._kappa = 1.0 if kernel == "gaussian" else 1.0 / (_STATE_DIM + 4)
-        self._likelihood_args = measurement.kernel_args
+        self._likelihood_args = measurement.likelihood_args
+        self._process_args = process.kernel_args
         self._x = np.zeros(n)
         self._log_theta = np.zeros(n)
         self._w = np.full(n, 1.0 / n)
         self._log_w = np.full(n, -math.log(n))
-        self._loglik = np.empty(n)
+        self._scratch = np.zeros((_SCRATCH_ROWS, n))
         self._buf_x = np.empty(n)
-        self._noise = np.empty(2 * n)
         self._buf_lt = np.empty(n)
         self._cumsum = np.empty(n)
         self._idx = np.empty(n, dtype=np.intp)
         self._ess = float(n)
         self._ready = False
         self.n_resamples = 0
+
+    def __getstate__(self) -> dict:
+        state = self.__dict__.copy()
+        del state["_scratch"]  # work space, rebuilt on loading
+        return state
+
+    def __setstate__(self, state: dict) -> None:
+        self.__dict__.update(state)
+        self._scratch = np.zeros((_SCRATCH_ROWS, self._x.size))
+
+    @property
+    def rng(self) -> np.random.Generator:
+        """The filter's Generator (the only source of randomness)."""
+        return self._stream.rng
 
     @property
     def n_particles(self) -> int:
@@ -309,9 +447,21 @@ class ParticleFilter:
             raise RuntimeError("call reset(x0, theta0) before predict/update")
 
     def predict(self, usage: float) -> None:
-        """Propagate every particle over a step of ``usage`` (>= 0, usage units)."""
+        """Propagate every particle over a step of ``usage`` (>= 0, usage units).
+
+        Same draws and result as ``process.predict(x, log_theta, usage, rng)``.
+        """
         self._check_ready()
-        self.process.predict(self._x, self._log_theta, usage, self.rng, self._noise)
+        usage = _checked_usage(usage)
+        with self._stream.lock:
+            predict_particles(
+                self._x,
+                self._log_theta,
+                usage,
+                self._stream.handle,
+                self._scratch,
+                *self._process_args,
+            )
 
     def update(self, y: float, measurement: MeasurementModel | None = None) -> bool:
         """Weight by the likelihood of feature ``y``; NaN = no measurement (no change).
@@ -328,13 +478,39 @@ class ParticleFilter:
         if measurement is None:
             args = self._likelihood_args
         elif isinstance(measurement, MeasurementModel):
-            args = measurement.kernel_args
+            args = measurement.likelihood_args
         else:
             raise ValueError(
                 f"measurement must be a MeasurementModel, got {type(measurement).__name__}"
             )
-        log_likelihood_kernel(y, self._x, self._loglik, *args)
-        self._ess = _reweight(self._log_w, self._w, self._loglik)
+        self._ess = _update_kernel(y, self._x, self._log_w, self._w, self._scratch, *args)
+        return self._after_update()
+
+    def step(self, usage: float, y: float) -> bool:
+        """``predict(usage)`` then ``update(y)`` (one fused kernel, the same result bit for
+        bit); returns whether the filter resampled."""
+        y = float(y)
+        if not math.isfinite(y):  # NaN: predict only; inf: predict, then update raises
+            self.predict(usage)
+            return self.update(y)
+        self._check_ready()
+        usage = _checked_usage(usage)
+        with self._stream.lock:
+            self._ess = _step_kernel(
+                self._x,
+                self._log_theta,
+                self._log_w,
+                self._w,
+                self._scratch,
+                usage,
+                self._stream.handle,
+                *self._process_args,
+                y,
+                *self._likelihood_args,
+            )
+        return self._after_update()
+
+    def _after_update(self) -> bool:
         if not math.isfinite(self._ess):
             raise FloatingPointError("particle weights degenerated (non-finite likelihoods)")
         if self._ess >= self.resample_threshold * self.n_particles:
@@ -342,30 +518,26 @@ class ParticleFilter:
         self._resample()
         return True
 
-    def step(self, usage: float, y: float) -> bool:
-        """``predict(usage)`` then ``update(y)``; returns whether the filter resampled."""
-        self.predict(usage)
-        return self.update(y)
-
     def _resample(self) -> None:
         if self.resampler == "systematic":
             _systematic_from_weights(self._w, self._cumsum, self.rng.random(), self._idx)
         else:
             self._idx[:] = resample(self._w, self.rng, self.resampler)
-        _gather_regularise(
-            self._x,
-            self._log_theta,
-            self._w,
-            self._log_w,
-            self._idx,
-            self._buf_x,
-            self._buf_lt,
-            self._h,
-            self._kappa,
-            self.kernel == "gaussian",
-            self.shrink,
-            self.rng,
-        )
+        with self._stream.lock:
+            _gather_regularise(
+                self._x,
+                self._log_theta,
+                self._w,
+                self._log_w,
+                self._idx,
+                self._buf_x,
+                self._buf_lt,
+                self._h,
+                self._kappa,
+                self.kernel == "gaussian",
+                self.shrink,
+                self._stream.handle,
+            )
         self._ess = float(self.n_particles)
         self.n_resamples += 1
 
@@ -383,6 +555,13 @@ class ParticleFilter:
             theta_std=math.sqrt(float(w @ (theta - th_mean) ** 2)),
             ess=self._ess,
         )
+
+
+def _checked_usage(usage: float) -> float:
+    value = float(usage)
+    if not (math.isfinite(value) and value >= 0.0):
+        raise ValueError(f"usage = {usage} must be finite and >= 0")
+    return value
 
 
 def _read_only(arr: np.ndarray) -> np.ndarray:

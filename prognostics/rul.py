@@ -322,10 +322,17 @@ class RulPredictor:
         self._rul = np.empty(n_particles)
         self._q = np.empty(3)
 
-    def summary(self, x: np.ndarray, log_theta: np.ndarray, weights: np.ndarray) -> RulSummary:
-        """Weighted RUL summary of particles ``x`` with log multipliers ``log_theta``."""
+    def values(self, x: np.ndarray, log_theta: np.ndarray) -> np.ndarray:
+        """RUL of every particle (steps; a read-only view of a buffer reused by the next call)."""
         damage_array(*self.model.table_args, x, self._d)
         _rul_from_damage(self._d, log_theta, self.d_threshold, self._rul)
+        view = self._rul.view()
+        view.flags.writeable = False
+        return view
+
+    def summary(self, x: np.ndarray, log_theta: np.ndarray, weights: np.ndarray) -> RulSummary:
+        """Weighted RUL summary of particles ``x`` with log multipliers ``log_theta``."""
+        self.values(x, log_theta)
         status, mean, std, risk = _weighted_summary(
             self._rul, weights, self.levels, self.horizon, self._q
         )

@@ -20,5 +20,5 @@ if ENV_ID not in registry:
     register(
         id=ENV_ID,
         entry_point="scas_env.env:ScasMaintenanceEnv",
-        vector_entry_point="scas_env.vector_env:ScasMaintenanceVectorEnv",
+        vector_entry_point="scas_env.vector_env:make_vector_env",
     )

@@ -11,6 +11,7 @@ from gymnasium import spaces
 from scas_env.calibration import Calibration, calibration_for
 from scas_env.costs import CostModel
 from scas_env.monitor import HealthMonitor
+from scas_env.normal_buffer import NormalBuffer
 from scas_env.observation import ObservationBuilder
 from scas_env.params import ScasParams
 from scas_env.scenario import Scenario
@@ -78,7 +79,10 @@ class ScasMaintenanceEnv(gym.Env):
     | 16 | seal_age | flights | [0, slots] | flights since the seals were fitted |
     | 17 | downtime | slots | [0, max] | slots still to spend on the ground |
 
-    Feature values before the first flight or test are the healthy surrogate means. RUL
+    The filters learn at tests only: between two tests the RUL entries are those of the last
+    update aged by the flights flown since (each particle's RUL falls by one per flight;
+    ``scas_env.monitor``). Feature values before the first flight or test are the healthy
+    surrogate means. RUL
     entries saturate at ``rul_cap_flights``; feature entries saturate at their bounds (the
     raw values are in ``info["features"]``). ``"features"``: entries 0-6 and 13-17 (no
     filter). ``"state"``: the truth (an oracle's view): crack fraction of critical, wear
@@ -111,6 +115,13 @@ class ScasMaintenanceEnv(gym.Env):
     Keywords are the fields of :class:`~scas_env.scenario.Scenario` (or pass ``scenario``);
     unknown keywords raise ``ValueError``. ``params`` other than the default are calibrated
     from physics at construction (seconds); the feature surrogate is the shipped one.
+
+    ## Vectorised
+
+    ``gym.make_vec("scas_env/ScasMaintenance-v0", num_envs=N,
+    vectorization_mode="vector_entry_point")`` is natively batched for the surrogate
+    (``scas_env.vector_env``): the episodes of N single envs seeded ``seed + i``, bit for
+    bit, next-step autoreset, info as a dict of arrays.
 
     ## Version History
 
@@ -168,6 +179,9 @@ class ScasMaintenanceEnv(gym.Env):
         self.action_space = spaces.Discrete(4)
         self.obs_names, self.obs_units = self.builder.names, self.builder.units
         self.monitor: HealthMonitor | None = None
+        #: where the surrogate's normal buffers live (the vectorised env points them at rows
+        #: of its tables): stream name -> (values, position) arrays
+        self.buffer_storage: dict[str, tuple[np.ndarray, np.ndarray]] = {}
 
     # ------------------------------------------------------------------ gym API
     def reset(
@@ -187,6 +201,12 @@ class ScasMaintenanceEnv(gym.Env):
         self.rngs = {
             name: np.random.default_rng(int(s)) for name, s in zip(STREAMS, seeds, strict=True)
         }
+        if self.scenario.fidelity == "surrogate":
+            # The surrogate draws only standard normals from these two streams: hand them
+            # out from blocks (the same numbers, fewer calls; scas_env.normal_buffer).
+            for name in ("measure", "degradation"):
+                values, position = self.buffer_storage.get(name, (None, None))
+                self.rngs[name] = NormalBuffer(self.rngs[name], values, position)
         self.world.reset(self.rngs["parts"])
         self.monitor = HealthMonitor(
             self.params, self.scenario, self.calibration, self.surrogate, self.rngs["filter"]

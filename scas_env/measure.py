@@ -54,22 +54,44 @@ def ground_test(
     return Measurement({k: float(v) for k, v in feats.items()}, run, test)
 
 
+@dataclass(frozen=True, eq=False)
+class FlightWindow:
+    """A Table-1 command window with its healthy noise-free baseline run (for I2/I3)."""
+
+    profile: MissionProfile
+    link_force_n: np.ndarray
+    baseline: ActuatorRun
+
+
+def draw_window(params: ScasParams, rng: np.random.Generator, window_s: float) -> FlightWindow:
+    """Draw a Table-1 window from ``rng`` and simulate its healthy baseline (no noise)."""
+    fs = params.sensors.sample_rate_hz
+    profile = flight_profile(params.mission, rng, fs, duration_s=window_s)
+    link = link_force_n(profile.pilot_command_m, params.actuator.link_force_amplitude_n)
+    base = simulate(
+        actuator_config(params), profile.scas_command_m, rng=None, link_force_n=link, noise=False
+    )
+    return FlightWindow(profile, link, base)
+
+
 def flight_window(
     params: ScasParams,
     config: ActuatorConfig,
     rng: np.random.Generator,
     window_s: float,
+    *,
+    window: FlightWindow | None = None,
 ) -> Measurement:
-    """Draw a Table-1 window from ``rng``, simulate it (noise from ``rng``), compute I1-I7."""
-    fs = params.sensors.sample_rate_hz
-    profile = flight_profile(params.mission, rng, fs, duration_s=window_s)
-    link = link_force_n(profile.pilot_command_m, params.actuator.link_force_amplitude_n)
-    baseline_config = actuator_config(params)
+    """Simulate a Table-1 window (noise from ``rng``) and compute I1-I7.
+
+    The window is drawn from ``rng`` (:func:`draw_window`) unless ``window`` is given (a
+    window drawn earlier, with its baseline: the physics env's window library).
+    """
     # In turn, not as a two-run batch: measured here, simulate_batch of the two runs took
     # 22 ms against 12 + 9 ms in turn (two vCPUs gain nothing on a 20 s window).
-    run = simulate(config, profile.scas_command_m, rng=rng, link_force_n=link)
-    base = simulate(
-        baseline_config, profile.scas_command_m, rng=None, link_force_n=link, noise=False
-    )
+    if window is None:
+        window = draw_window(params, rng, window_s)
+    profile, base = window.profile, window.baseline
+    run = simulate(config, profile.scas_command_m, rng=rng, link_force_n=window.link_force_n)
     feats = flight_features(run.t_s, run.current_a, run.lvdt_m, base.current_a, base.lvdt_m)
     return Measurement({k: float(v) for k, v in feats.items()}, run, profile)

@@ -13,6 +13,12 @@ turns them into RUL summaries. It sees only features, never the truth.
   tolerances). After a spring pair is fitted, the first ``BASELINE_TESTS`` tests estimate
   that offset (feature minus the model mean at the current estimate) and are not used by the
   filters; later tests use the offset-corrected value with the run-to-run noise.
+* **Event-driven prediction**: a flight only counts usage. The filters are predicted over
+  all the flights since their last update in one step, at the next test (``scheme="exact"``:
+  the damage integral, so one step of k flights lands where k flights would without noise;
+  process noise with variance k times the per-flight one). Between tests the RUL summary of
+  the frozen cloud is aged by the flights flown (:class:`prognostics.rul_ageing.AgeingRul`,
+  a binary search per query), so a flight costs O(log N), a test O(N log N).
 * **Concurrent faults**: each ground feature responds to both faults. Each filter corrects
   its measurement by the other fault's effect at the other filter's current estimate
   (``mu(c_hat, w_hat) - mu(c_hat, 0)`` for the spring, symmetrically for the seal).
@@ -36,6 +42,7 @@ from prognostics.detection import DetectorConfig, PercentileDetector
 from prognostics.measurement import measurement_from_curve
 from prognostics.particle_filter import ParticleFilter
 from prognostics.rul import RulPredictor
+from prognostics.rul_ageing import AgeingRul
 from scas_env.calibration import Calibration
 from scas_env.params import ScasParams
 from scas_env.scenario import Scenario
@@ -96,6 +103,7 @@ class HealthMonitor:
                 bias * calibration.crack_rate_m_per_flight,
                 process_noise_std_m=float(calibration.crack_cv_at(a0)) * rate_a0,
                 log_theta_noise_std=THETA_WALK,
+                scheme="exact",
             ),
             self.g1_model,
             scenario.n_particles,
@@ -134,6 +142,10 @@ class HealthMonitor:
                 ("seal", self.seal_filter, self.w_crit),
             )
         }
+        self._filters = {"spring": self.spring_filter, "seal": self.seal_filter}
+        #: flights flown since each filter was last predicted
+        self.pending = {"spring": 0, "seal": 0}
+        self._ageing: dict[str, AgeingRul] = {}
 
     # ------------------------------------------------------------------ events
     def reset(self) -> None:
@@ -159,6 +171,8 @@ class HealthMonitor:
         self.spring_filter.reset(crack, theta)
         wear = rng.random(n) * self.w_crit
         self.seal_filter.reset(wear, self.seal_filter.theta)
+        self._refresh("spring")
+        self._refresh("seal")
 
     def replaced(self, part: str) -> None:
         """A new part is fitted: its filter restarts from the prior."""
@@ -180,6 +194,21 @@ class HealthMonitor:
             self.seal_detected = False
         else:
             raise ValueError(f"part = {part!r} must be 'spring' or 'seal'")
+        self.pending[part] = 0
+        self._refresh(part)
+
+    def _refresh(self, part: str) -> None:
+        """New RUL distribution of ``part``'s cloud (after a reset or a measurement)."""
+        pf = self._filters[part]
+        rul = self._rul[part].values(pf.x, pf.log_theta)
+        self._ageing[part] = AgeingRul(rul, pf.weights, low_quantile=self.scenario.rul_quantile)
+
+    def _catch_up(self) -> None:
+        """Predict each filter over the flights flown since its last prediction."""
+        for part, pf in self._filters.items():
+            if self.pending[part]:
+                pf.predict(float(self.pending[part]))
+                self.pending[part] = 0
 
     def flown(self, features: dict[str, float]) -> None:
         """One flight of usage for both filters.
@@ -190,22 +219,31 @@ class HealthMonitor:
         life in tests. What the filters learn comes from the pre-flight tests, so testing
         is the price of information.
         """
-        self.spring_filter.predict(1.0)
-        self.seal_filter.predict(1.0)
+        self.pending["spring"] += 1
+        self.pending["seal"] += 1
 
     def tested(self, features: dict[str, float]) -> None:
         """A pre-flight test: baseline first, then offset- and cross-corrected updates."""
-        c_hat = self.spring_filter.estimate().x_mean / self.a_fail
-        w_hat = self.seal_filter.estimate().x_mean / self.w_crit
+        self._catch_up()
+        try:
+            self._measured(features)
+        finally:
+            self._refresh("spring")
+            self._refresh("seal")
+
+    def _measured(self, features: dict[str, float]) -> None:
+        sf, wf = self.spring_filter, self.seal_filter
+        c_hat = float(sf.weights @ sf.x) / self.a_fail
+        w_hat = float(wf.weights @ wf.x) / self.w_crit
         c_hat, w_hat = min(max(c_hat, 0.0), 1.0), min(max(w_hat, 0.0), 1.0)
-        mean = self.sur.mean_at(c_hat, w_hat)
+        mean = self.sur.tables_at(c_hat, w_hat)[0]
         if len(self._baseline["G1"]) < BASELINE_TESTS:
             for f in ("G1", "G3"):
                 self._baseline[f].append(features[f] - float(mean[self._k[f]]))
                 self._offset[f] = float(np.mean(self._baseline[f]))
             return
-        cross_g1 = float(mean[self._k["G1"]] - self.sur.mean_at(c_hat, 0.0)[self._k["G1"]])
-        cross_g3 = float(mean[self._k["G3"]] - self.sur.mean_at(0.0, w_hat)[self._k["G3"]])
+        cross_g1 = float(mean[self._k["G1"]] - self.sur.tables_at(c_hat, 0.0)[0, self._k["G1"]])
+        cross_g3 = float(mean[self._k["G3"]] - self.sur.tables_at(0.0, w_hat)[0, self._k["G3"]])
         g1 = features["G1"] - self._offset["G1"] - cross_g1
         g3 = features["G3"] - self._offset["G3"] - cross_g3
         self.spring_filter.update(g1)
@@ -214,21 +252,25 @@ class HealthMonitor:
         self.seal_detected = self.seal_detector.update(g3) or self.seal_detected
 
     # ------------------------------------------------------------------ outputs
+    def ageing(self, part: str) -> AgeingRul:
+        """``part``'s RUL distribution at its filter's last update (aged by ``pending``)."""
+        return self._ageing[part]
+
     def estimate(self, part: str) -> PartEstimate:
         """RUL summary (flights, capped at the scenario's ``rul_cap_flights``)."""
         s = self.scenario
         if part == "spring":
-            pf, detected = self.spring_filter, self.crack_detected
+            detected = self.crack_detected
         elif part == "seal":
-            pf, detected = self.seal_filter, self.seal_detected
+            detected = self.seal_detected
         else:
             raise ValueError(f"part = {part!r} must be 'spring' or 'seal'")
-        summary = self._rul[part].summary(pf.x, pf.log_theta, pf.weights)
+        dist, k = self._ageing[part], float(self.pending[part])
         cap = s.rul_cap_flights
         return PartEstimate(
-            rul_mean=min(summary.mean, cap),
-            rul_low=min(summary.low, cap),
-            prob_failure=summary.prob_failure,
+            rul_mean=min(dist.mean(k), cap),
+            rul_low=min(dist.low(k), cap),
+            prob_failure=dist.prob_failure(k, s.risk_horizon_flights),
             detected=detected,
         )
 

@@ -101,6 +101,16 @@ class Scenario(Validated):
         source="multiplies the growth rates the filters assume (a model that is off)",
     )
 
+    window_library: float = param(
+        64,
+        "windows",
+        lo=0,
+        hi=100_000,
+        integer=True,
+        source="physics fidelity: each flight flies one of this many Table-1 windows drawn at "
+        "reset, each window's healthy baseline simulated once (0: a new window every flight)",
+    )
+
     def _check(self) -> None:
         for name, allowed in (
             ("fidelity", FIDELITIES),

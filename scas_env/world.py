@@ -40,8 +40,9 @@ from scas_env.degradation import (
     growth_model,
     wear_increment_m,
 )
+from scas_env.fleet_kernels import surrogate_flights, true_rul
 from scas_env.health import CRACKED_SPRING, HealthState, actuator_config
-from scas_env.measure import flight_window, ground_test
+from scas_env.measure import FlightWindow, draw_window, flight_window, ground_test
 from scas_env.params import ScasParams
 from scas_env.physics.spring import failure_depth_from_params
 from scas_env.scenario import Scenario
@@ -91,6 +92,17 @@ class ActuatorWorld:
         self.wear_m = 0.0
         self.spring_failure_m = calibration.spring_failure_depth_m
         self.unit_z = np.zeros(len(surrogate.features))
+        self.kernel_tables = kernel_tables(calibration, surrogate, scenario)
+        self._scratch = {
+            "envs": np.zeros(1, dtype=np.int64),
+            "x": np.empty((8, 1)),
+            "z": np.empty((1, len(surrogate.features))),
+            "meas": np.empty((1, len(FLIGHT_FEATURES))),
+            "deg": np.empty((1, 2)),
+            "feats": np.empty((1, len(FLIGHT_FEATURES))),
+            "failed": np.zeros((1, 2), dtype=np.bool_),
+            "rul": np.empty((1, 2)),
+        }
 
     # ------------------------------------------------------------------ state
     @property
@@ -118,23 +130,22 @@ class ActuatorWorld:
     def true_rul_flights(self) -> tuple[float, float]:
         """Expected flights to failure of (spring, seal) at the units' own rates (inf if the
         fault is inactive or the crack is dormant below the threshold)."""
-        cal = self.calibration
-        if not self.scenario.crack_active or self.crack_m < cal.crack_dormant_below_m:
-            spring = math.inf
-        else:
-            d_x, d_fail = self._table.damage(np.array([self.crack_m, self.spring_failure_m]))
-            spring = max(float(d_fail - d_x), 0.0) / self.theta
-        if not self.scenario.wear_active:
-            seal = math.inf
-        else:
-            rate = cal.wear_rate_m_per_flight * self.wear_multiplier
-            seal = max(cal.seal_critical_wear_m - self.wear_m, 0.0) / rate
-        return spring, seal
+        x, out = self._scratch["x"], self._scratch["rul"]
+        x[0, 0], x[1, 0], x[2, 0] = self.crack_m, self.wear_m, self.spring_failure_m
+        x[3, 0], x[4, 0] = self.theta, self.wear_multiplier
+        t = self.kernel_tables
+        true_rul(x[0], x[1], x[2], x[3], x[4], *t["damage"], *t["rul_consts"], out)
+        return float(out[0, 0]), float(out[0, 1])
 
     # ------------------------------------------------------------------ life cycle
     def reset(self, rng: np.random.Generator) -> None:
         """A new actuator: new unit, new parts (or parts part-way through life)."""
         self.unit = draw_unit(self.params, rng)
+        if self.physics:
+            # the episode's window library (scenario.window_library): windows drawn lazily
+            # from their own seeds, each with its healthy baseline simulated once
+            self._library_seed = int(rng.integers(0, 2**63 - 1))
+            self._windows: dict[int, FlightWindow] = {}
         self._fit_spring(self.unit, rng)
         self.wear_m = 0.0
         if self.scenario.initial_health == "random":
@@ -181,6 +192,17 @@ class ActuatorWorld:
         else:
             raise ValueError(f"part = {part!r} must be one of {PARTS}")
 
+    def _library_window(self, rng: np.random.Generator) -> FlightWindow | None:
+        """This flight's window from the library (None: draw a new one from ``rng``)."""
+        size = int(self.scenario.window_library)
+        if size == 0:
+            return None
+        k = int(rng.integers(size))
+        if k not in self._windows:
+            seeded = np.random.default_rng((self._library_seed, k))
+            self._windows[k] = draw_window(self.params, seeded, self.params.mission.flight_window_s)
+        return self._windows[k]
+
     # ------------------------------------------------------------------ measurements
     def _config(self, rng: np.random.Generator):
         health = HealthState(crack_depth_m=self.crack_m, seal_wear_m=self.wear_m)
@@ -211,7 +233,13 @@ class ActuatorWorld:
         cal = self.calibration
         if self.physics:
             config = self._config(rng)
-            window = flight_window(self.params, config, rng, self.params.mission.flight_window_s)
+            window = flight_window(
+                self.params,
+                config,
+                rng,
+                self.params.mission.flight_window_s,
+                window=self._library_window(rng),
+            )
             feats = {f: window.features[f] for f in FLIGHT_FEATURES}
             loads = flight_loads_from_run(
                 window.run, self.params.mission.flight_duration_s, config.spring_rate_1_n_m
@@ -229,18 +257,21 @@ class ActuatorWorld:
             )
             new_wear = self.wear_m + d_wear
         else:
-            feats = self._surrogate_features(FLIGHT_FEATURES, self._flight_feature_idx, rng)
-            z = degradation_rng.standard_normal(2)
-            new_crack = self.crack_m
-            if self.scenario.crack_active and self.crack_m >= cal.crack_dormant_below_m:
-                factor = _lognormal_unit_mean(float(cal.crack_cv_at(self.crack_m)), z[0])
-                damage = float(self._table.damage(np.array([self.crack_m]))[0])
-                damage += self.theta * factor
-                new_crack = float(self._table.inverse_damage(np.array([damage]))[0])
-            new_wear = self.wear_m
-            if self.scenario.wear_active:
-                factor = _lognormal_unit_mean(cal.wear_cv, z[1])
-                new_wear += cal.wear_rate_m_per_flight * self.wear_multiplier * factor
+            sc = self._scratch
+            sc["meas"][0] = rng.standard_normal(len(FLIGHT_FEATURES))
+            sc["deg"][0] = degradation_rng.standard_normal(2)
+            sc["z"][0] = self.unit_z
+            x = sc["x"]
+            x[0, 0], x[1, 0], x[2, 0] = self.crack_m, self.wear_m, self.spring_failure_m
+            x[3, 0], x[4, 0] = self.theta, self.wear_multiplier
+            t = self.kernel_tables
+            surrogate_flights(
+                sc["envs"], x[0], x[1], x[2], x[3], x[4], sc["z"], sc["meas"], sc["deg"],
+                *t["flight"], *t["damage"], *t["flight_consts"],
+                x[5], x[6], sc["feats"], sc["failed"],
+            )  # fmt: skip
+            new_crack, new_wear = float(x[5, 0]), float(x[6, 0])
+            feats = dict(zip(FLIGHT_FEATURES, sc["feats"][0].tolist(), strict=True))
         failed = []
         if new_crack >= self.spring_failure_m:
             failed.append("spring")
@@ -252,7 +283,31 @@ class ActuatorWorld:
         return FlightResult(feats, tuple(failed))
 
 
-def _lognormal_unit_mean(cv: float, z: float) -> float:
-    """exp(s z - s^2/2) with s^2 = ln(1 + cv^2): a lognormal factor of mean 1 and CV ``cv``."""
-    s2 = math.log1p(cv * cv)
-    return math.exp(math.sqrt(s2) * z - 0.5 * s2)
+def kernel_tables(
+    calibration: Calibration, surrogate: SurrogateModel, scenario: Scenario
+) -> dict[str, tuple]:
+    """Argument groups of :mod:`scas_env.fleet_kernels` for one world configuration."""
+    cal = calibration
+    table = paris_crack_model(cal.crack_depth_m, cal.crack_rate_m_per_flight)
+    idx = np.array([surrogate.index(f) for f in FLIGHT_FEATURES], dtype=np.int64)
+    stack = np.stack([surrogate.mean, surrogate.unit_std, surrogate.run_std])
+    active = (bool(scenario.crack_active), bool(scenario.wear_active))
+    return {
+        "flight": (surrogate.crack_grid, surrogate.wear_grid, stack, idx),
+        "damage": table.table_args,
+        "flight_consts": (
+            np.log(cal.crack_cv_depth_m),
+            np.asarray(cal.crack_cv, dtype=np.float64),
+            float(cal.crack_dormant_below_m),
+            float(cal.wear_cv),
+            float(cal.wear_rate_m_per_flight),
+            float(cal.seal_critical_wear_m),
+            *active,
+        ),
+        "rul_consts": (
+            float(cal.crack_dormant_below_m),
+            float(cal.wear_rate_m_per_flight),
+            float(cal.seal_critical_wear_m),
+            *active,
+        ),
+    }

@@ -13,7 +13,8 @@ def main() -> None:
     parser.add_argument("--num-envs", type=int, default=64)
     args = parser.parse_args()
     print(format_timings(env_timings(args.steps)))
-    print(f"vector env, {args.num_envs} envs: {vector_throughput(args.num_envs):,.0f} env-steps/s")
+    for mix, rate in vector_throughput(args.num_envs).items():
+        print(f"vector env, {args.num_envs} envs, {mix:24s} {rate:12,.0f} env-steps/s")
 
 
 if __name__ == "__main__":

@@ -148,3 +148,14 @@ def test_bad_inputs_raise_value_error():
         severity_at_detection([0.1, 0.2], [0, 1])
     with pytest.raises(ValueError, match="healthy_series"):
         false_alarm_rate(det, np.zeros(5))
+
+
+def test_fast_linear_quantile_is_numpy_bit_for_bit() -> None:
+    from prognostics.detection import _linear_quantile
+
+    rng = np.random.default_rng(8)
+    for n in (1, 2, 5, 10, 21):
+        for _ in range(200):
+            v = rng.normal(0.0, 1.0, n) * 10.0 ** rng.integers(-6, 6)
+            for q in (0.0, 0.05, 0.5, 0.95, 1.0, float(rng.random())):
+                assert _linear_quantile(sorted(v.tolist()), q) == np.quantile(v, q)

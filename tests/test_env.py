@@ -224,3 +224,25 @@ def test_failed_go_no_go_grounds_the_slot_and_shows_in_the_observation() -> None
     obs, r, *_ = env.step(1)
     assert obs[k] == 0.0
     assert r == env.costs.flight_value_usd - env.costs.test_usd
+
+
+def test_physics_window_library_reuses_windows_and_their_baselines() -> None:
+    env = ScasMaintenanceEnv(fidelity="physics", window_library=2)
+    env.reset(seed=4)
+    for _ in range(5):
+        env.step(0)
+    windows = env.world._windows
+    assert 1 <= len(windows) <= 2  # five flights, at most two distinct windows
+    # a library window is what draw_window gives from its own seed
+    from scas_env.measure import draw_window
+
+    k, window = next(iter(windows.items()))
+    again = draw_window(
+        env.params,
+        np.random.default_rng((env.world._library_seed, k)),
+        env.params.mission.flight_window_s,
+    )
+    np.testing.assert_array_equal(window.profile.scas_command_m, again.profile.scas_command_m)
+    np.testing.assert_array_equal(window.baseline.current_a, again.baseline.current_a)
+    with pytest.raises(ValueError, match="window_library"):
+        ScasMaintenanceEnv(fidelity="physics", window_library=-1)

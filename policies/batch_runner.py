@@ -1,0 +1,142 @@
+"""Episodes of one policy run side by side in the native vectorised environment.
+
+:func:`run_batch` steps ``len(seeds)`` episodes together through
+:class:`scas_env.vector_env.ScasMaintenanceVectorEnv` and asks the policy for a batch of
+actions per slot (one forward pass for a network). The vectorised env gives each actuator
+exactly the episode of a single env with the same seed (tested), and the benchmark's
+policies act row by row (rules on their row, the random policy with one generator per
+episode, a network deterministically), so each episode's row and events are those of
+:func:`policies.benchmark.run_episode` on the same seeds (tested); the batches are fixed by
+episode index, whatever the number of workers.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+import numpy as np
+
+from scas_env.world import PARTS
+
+TERMS = ("flight", "test", "no_go", "replacement", "failure")
+
+
+def episode_row(
+    info: Mapping[str, Any],
+    terms: Mapping[str, float],
+    reward: float,
+    wasted: Mapping[str, tuple[float, int]],
+    flight_duration_s: float,
+) -> dict[str, Any]:
+    """One results row from an episode's final info (see :mod:`policies.benchmark`).
+
+    ``wasted[part] = (sum, count)`` of the true RUL (flights) at preventive replacements.
+    """
+    fh = info["flights"] * flight_duration_s / 3600.0
+    per_kfh = 1000.0 / fh if fh > 0 else math.nan
+    failures = sum(int(info["failures"][p]) for p in PARTS)
+    preventive = {p: int(info["replacements"][p]) - int(info["failures"][p]) for p in PARTS}
+    total_sum = sum(wasted[p][0] for p in PARTS)
+    total_count = sum(wasted[p][1] for p in PARTS)
+    row: dict[str, Any] = {
+        "slots": int(info["slot"]),
+        "flights": int(info["flights"]),
+        "flight_hours": fh,
+        "availability": float(info["availability"]),
+        "cost_usd": float(info["cost_usd"]),
+        "revenue_usd": float(info["revenue_usd"]),
+        "reward": float(reward),
+        "cost_per_fh": float(info["cost_usd"]) / fh if fh > 0 else math.nan,
+        "failures_per_1000fh": failures * per_kfh,
+        "replacements_per_1000fh": sum(preventive.values()) * per_kfh,
+        "tests_per_1000fh": int(info["tests"]) * per_kfh,
+        "wasted_life": total_sum / total_count if total_count else math.nan,
+        "tests": int(info["tests"]),
+        "no_go": int(info["no_go"]),
+    }
+    for p in PARTS:
+        row[f"failures_{p}"] = int(info["failures"][p])
+        row[f"replacements_{p}"] = preventive[p]
+        row[f"wasted_life_{p}"] = wasted[p][0] / wasted[p][1] if wasted[p][1] else math.nan
+    for k in TERMS:
+        row[f"term_{k}"] = float(terms[k])
+    return row
+
+
+def run_batch(
+    venv: Any, policy: Any, seeds: Sequence[tuple[int, int]], flight_duration_s: float
+) -> list[dict[str, Any]]:
+    """Run one episode per ``(env_seed, policy_seed)`` to truncation, all at once.
+
+    ``venv`` is a vectorised env with ``len(seeds)`` actuators. Returns, per episode,
+    ``{"row": results row, "events": [removal events]}`` as ``run_episode`` does.
+    """
+    n = len(seeds)
+    if venv.num_envs != n:
+        raise ValueError(f"the vector env has {venv.num_envs} envs for {n} seeds")
+    reset = getattr(policy, "reset", None)
+    if callable(reset):
+        reset(seed=[int(ps) for _, ps in seeds])
+    obs, info = venv.reset(seed=[int(es) for es, _ in seeds])
+    terms = {k: np.zeros(n) for k in TERMS}
+    reward_sum = np.zeros(n)
+    fitted_at = np.zeros((n, len(PARTS)), dtype=np.int64)
+    events: list[list[dict[str, Any]]] = [[] for _ in range(n)]
+    start = np.ones(n, dtype=np.bool_)
+    state = None
+    while True:
+        before = info
+        actions, state = policy.predict(obs, state=state, episode_start=start, deterministic=True)
+        obs, reward, terminated, truncated, info = venv.step(np.asarray(actions, dtype=np.int64))
+        start[:] = False
+        reward_sum += reward
+        for k in TERMS:
+            terms[k] += info["reward_terms"][k]
+        for p, part in enumerate(PARTS):
+            changed = info["replacements"][part] > before["replacements"][part]
+            for e in np.flatnonzero(changed):
+                failed = info["failures"][part][e] > before["failures"][part][e]
+                events[e].append(
+                    {
+                        "part": part,
+                        "age_flights": int(info["flights"][e] - fitted_at[e, p]),
+                        "kind": "failure" if failed else "preventive",
+                    }
+                )
+                fitted_at[e, p] = info["flights"][e]
+        done = terminated | truncated
+        if done.all():
+            break
+        if done.any():
+            raise RuntimeError("episodes of one batch must end together (same episode_slots)")
+    out = []
+    for e in range(n):
+        for p, part in enumerate(PARTS):
+            age = int(info["flights"][e] - fitted_at[e, p])
+            events[e].append({"part": part, "age_flights": age, "kind": "censored"})
+        row_info = _info_row(info, e)
+        wasted = {
+            part: (
+                float(info["wasted_life_sum_flights"][part][e]),
+                int(info["wasted_life_count"][part][e]),
+            )
+            for part in PARTS
+        }
+        term_e = {k: terms[k][e] for k in TERMS}
+        row = episode_row(row_info, term_e, reward_sum[e], wasted, flight_duration_s)
+        out.append({"row": row, "events": events[e]})
+    return out
+
+
+def _info_row(info: Mapping[str, Any], e: int) -> dict[str, Any]:
+    """Episode ``e``'s entries of a vector info (the keys :func:`episode_row` reads)."""
+    keys = ("slot", "flights", "availability", "cost_usd", "revenue_usd", "tests", "no_go")
+    row: dict[str, Any] = {k: info[k][e] for k in keys}
+    for group in ("failures", "replacements"):
+        row[group] = {p: info[group][p][e] for p in PARTS}
+    return row
+
+
+__all__ = ["TERMS", "episode_row", "run_batch"]

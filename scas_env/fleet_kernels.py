@@ -1,0 +1,194 @@
+"""Numba kernels of the surrogate world's hot path, over a batch of actuators.
+
+The single environment calls them with batches of one and the vectorised environment with
+all its actuators, so both compute the same floats by construction. Units: crack depth and
+seal wear in m, rates in m per flight, features in SI (A, A/m, m, -).
+
+* :func:`surrogate_flights`: one flight of every listed actuator: in-flight features from
+  the surrogate's random-effects model (bilinear in crack and wear fraction, as
+  :meth:`scas_env.surrogate.SurrogateModel.tables_at`), then the crack advanced by the
+  damage integral of the growth table times ``theta`` times a lognormal flight factor, the
+  wear by ``rate * multiplier * factor`` (:mod:`scas_env.world`). Nothing is committed: the
+  caller decides (a flight that fails takes the slow path).
+* :func:`ageing_estimates`: the monitor's RUL summaries (:mod:`prognostics.rul_ageing`) of
+  every actuator after its flights since the last filter update.
+* :func:`true_rul`: flights to failure at the units' own rates (the oracle's view).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from prognostics.degradation_models import damage_scalar, inverse_damage_scalar
+
+
+@njit(cache=True, inline="always")
+def _cell(grid: np.ndarray, v: float) -> int:
+    """``min(bisect_right(grid, v) - 1, len(grid) - 2)`` for v >= grid[0]."""
+    k = 0
+    while k < grid.size and grid[k] <= v:
+        k += 1
+    return min(k - 1, grid.size - 2)
+
+
+@njit(cache=True, inline="always")
+def _bilinear(stack: np.ndarray, q: int, f: int, i: int, j: int, tc: float, tw: float) -> float:
+    """Table ``stack[q, f]`` at (i + tc, j + tw), in the order of ``SurrogateModel.tables_at``."""
+    return (
+        stack[q, f, i, j] * ((1 - tc) * (1 - tw))
+        + stack[q, f, i + 1, j] * (tc * (1 - tw))
+        + stack[q, f, i, j + 1] * ((1 - tc) * tw)
+        + stack[q, f, i + 1, j + 1] * (tc * tw)
+    )
+
+
+@njit(cache=True, inline="always")
+def lognormal_factor(cv: float, z: float) -> float:
+    """exp(s z - s^2/2) with s^2 = ln(1 + cv^2): lognormal, mean 1, CV ``cv``."""
+    s2 = math.log1p(cv * cv)
+    return math.exp(math.sqrt(s2) * z - 0.5 * s2)
+
+
+@njit(cache=True)
+def surrogate_flights(
+    envs: np.ndarray,
+    crack_m: np.ndarray,
+    wear_m: np.ndarray,
+    fail_depth_m: np.ndarray,
+    theta: np.ndarray,
+    wear_mult: np.ndarray,
+    unit_z: np.ndarray,
+    meas_normals: np.ndarray,
+    deg_normals: np.ndarray,
+    crack_grid: np.ndarray,
+    wear_grid: np.ndarray,
+    stack: np.ndarray,
+    feature_idx: np.ndarray,
+    dmg_grid: np.ndarray,
+    dmg_rate: np.ndarray,
+    dmg_cum: np.ndarray,
+    dmg_cells: np.ndarray,
+    dmg_inv_cell: float,
+    cv_log_depth: np.ndarray,
+    cv_values: np.ndarray,
+    dormant_m: float,
+    wear_cv: float,
+    wear_rate_m: float,
+    seal_critical_m: float,
+    crack_active: bool,
+    wear_active: bool,
+    new_crack_m: np.ndarray,
+    new_wear_m: np.ndarray,
+    features: np.ndarray,
+    failed: np.ndarray,
+) -> None:
+    """Candidate flight of each actuator ``e`` in ``envs`` (module docstring).
+
+    ``meas_normals[e, :n_features]`` and ``deg_normals[e, :2]`` are the flight's draws;
+    ``stack`` is the surrogate's (3, F, n_crack, n_wear) table of mean, unit std, run std.
+    Outputs ``new_crack_m[e]``, ``new_wear_m[e]``, ``features[e, :]`` (NaN if failed) and
+    ``failed[e, 0/1]`` (spring, seal reached their critical value).
+    """
+    nf = feature_idx.size
+    for e in envs:
+        c = min(crack_m[e] / fail_depth_m[e], 1.0)
+        w = min(wear_m[e] / seal_critical_m, 1.0)
+        i = _cell(crack_grid, c)
+        j = _cell(wear_grid, w)
+        tc = (c - crack_grid[i]) / (crack_grid[i + 1] - crack_grid[i])
+        tw = (w - wear_grid[j]) / (wear_grid[j + 1] - wear_grid[j])
+        for m in range(nf):
+            f = feature_idx[m]
+            mean = _bilinear(stack, 0, f, i, j, tc, tw)
+            unit = _bilinear(stack, 1, f, i, j, tc, tw)
+            run = _bilinear(stack, 2, f, i, j, tc, tw)
+            features[e, m] = mean + unit * unit_z[e, f] + run * meas_normals[e, m]
+        crack = crack_m[e]
+        if crack_active and crack >= dormant_m:
+            cv = np.interp(math.log(crack), cv_log_depth, cv_values)
+            factor = lognormal_factor(cv, deg_normals[e, 0])
+            damage = damage_scalar(dmg_grid, dmg_rate, dmg_cum, dmg_cells, dmg_inv_cell, crack)
+            damage += theta[e] * factor
+            crack = inverse_damage_scalar(dmg_grid, dmg_rate, dmg_cum, damage)
+        wear = wear_m[e]
+        if wear_active:
+            wear += wear_rate_m * wear_mult[e] * lognormal_factor(wear_cv, deg_normals[e, 1])
+        new_crack_m[e] = crack
+        new_wear_m[e] = wear
+        failed[e, 0] = crack >= fail_depth_m[e]
+        failed[e, 1] = wear >= seal_critical_m
+        if failed[e, 0] or failed[e, 1]:
+            for m in range(nf):
+                features[e, m] = np.nan
+
+
+@njit(cache=True)
+def ageing_estimates(
+    sorted_rul: np.ndarray,
+    cum_w: np.ndarray,
+    suffix_w: np.ndarray,
+    suffix_wr: np.ndarray,
+    low: np.ndarray,
+    pending: np.ndarray,
+    horizon: float,
+    cap: float,
+    out: np.ndarray,
+) -> None:
+    """``out[e, p] = (mean, low, risk)`` of part p of actuator e after ``pending[e, p]`` flights.
+
+    Row ``[e, p]`` of the tables is :class:`prognostics.rul_ageing.AgeingRul`'s state;
+    mean and low are capped at ``cap`` as in :meth:`scas_env.monitor.HealthMonitor.estimate`.
+    """
+    n = sorted_rul.shape[2]
+    for e in range(sorted_rul.shape[0]):
+        for p in range(sorted_rul.shape[1]):
+            k = float(pending[e, p])
+            r = sorted_rul[e, p]
+            j = np.searchsorted(r, k, side="right")
+            mean = max(suffix_wr[e, p, j] - k * suffix_w[e, p, j], 0.0)
+            j = np.searchsorted(r, horizon + k, side="right")
+            risk = min(cum_w[e, p, min(j, n)], 1.0)
+            out[e, p, 0] = min(mean, cap)
+            out[e, p, 1] = min(max(low[e, p] - k, 0.0), cap)
+            out[e, p, 2] = risk
+
+
+@njit(cache=True)
+def true_rul(
+    crack_m: np.ndarray,
+    wear_m: np.ndarray,
+    fail_depth_m: np.ndarray,
+    theta: np.ndarray,
+    wear_mult: np.ndarray,
+    dmg_grid: np.ndarray,
+    dmg_rate: np.ndarray,
+    dmg_cum: np.ndarray,
+    dmg_cells: np.ndarray,
+    dmg_inv_cell: float,
+    dormant_m: float,
+    wear_rate_m: float,
+    seal_critical_m: float,
+    crack_active: bool,
+    wear_active: bool,
+    out: np.ndarray,
+) -> None:
+    """``out[e] = (spring, seal)`` expected flights to failure (inf if inactive or dormant)."""
+    for e in range(crack_m.size):
+        if not crack_active or crack_m[e] < dormant_m:
+            out[e, 0] = np.inf
+        else:
+            d_x = damage_scalar(dmg_grid, dmg_rate, dmg_cum, dmg_cells, dmg_inv_cell, crack_m[e])
+            d_f = damage_scalar(
+                dmg_grid, dmg_rate, dmg_cum, dmg_cells, dmg_inv_cell, fail_depth_m[e]
+            )
+            out[e, 0] = max(d_f - d_x, 0.0) / theta[e]
+        if not wear_active:
+            out[e, 1] = np.inf
+        else:
+            out[e, 1] = max(seal_critical_m - wear_m[e], 0.0) / (wear_rate_m * wear_mult[e])
+
+
+__all__ = ["ageing_estimates", "lognormal_factor", "surrogate_flights", "true_rul"]

@@ -1,0 +1,72 @@
+"""AgeingRul: the RUL summary of a frozen cloud after k more steps, against direct computation."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from prognostics.degradation_models import paris_crack_model
+from prognostics.rul import RulPredictor, weighted_quantile
+from prognostics.rul_ageing import AgeingRul
+
+
+def _sample(seed: int = 0, n: int = 600) -> tuple[np.ndarray, np.ndarray]:
+    rng = np.random.default_rng(seed)
+    r = rng.gamma(2.0, 300.0, n)
+    r[:25] = 0.0  # particles already past the threshold
+    return r, rng.random(n)
+
+
+@pytest.mark.parametrize("k", [0.0, 1.0, 37.0, 250.0, 5000.0])
+def test_matches_the_shifted_sample_computed_directly(k: float) -> None:
+    r, w = _sample()
+    dist = AgeingRul(r, w, low_quantile=0.05)
+    shifted = np.maximum(r - k, 0.0)
+    wn = w / w.sum()
+    assert dist.mean(k) == pytest.approx(float(wn @ shifted), rel=1e-12, abs=1e-9)
+    assert dist.low(k) == float(weighted_quantile(shifted, w, 0.05))
+    for h in (0.0, 10.0, 100.0, 1e4):
+        assert dist.prob_failure(k, h) == pytest.approx(float(wn[shifted <= h].sum()), abs=1e-12)
+
+
+def test_equals_the_rul_predictor_after_noise_free_exact_steps() -> None:
+    # a Paris-like cloud predicted k steps without noise (exact scheme) has RUL R_i - k
+    depth = np.linspace(1e-4, 1e-3, 50)
+    model = paris_crack_model(depth, 1e-7 * (depth / 1e-4) ** 1.1, scheme="exact")
+    rng = np.random.default_rng(3)
+    x = rng.uniform(1e-4, 4e-4, 400)
+    log_theta = rng.normal(0.0, 0.3, 400)
+    w = rng.random(400)
+    pred = RulPredictor(model, 1e-3, 400, horizon_steps=20.0, low_quantile=0.1)
+    dist = AgeingRul(pred.values(x, log_theta), w, low_quantile=0.1)
+    for k in (0, 5, 60, 700):
+        xk = x.copy()
+        lt = log_theta.copy()
+        if k:
+            model.predict(xk, lt, float(k), rng)  # noise-free model: rng unused
+        s = pred.summary(xk, lt, w)
+        assert dist.mean(k) == pytest.approx(s.mean, rel=1e-6)
+        assert dist.low(k) == pytest.approx(s.low, rel=1e-6, abs=1e-6)
+        assert dist.prob_failure(k, 20.0) == pytest.approx(s.prob_failure, abs=1e-2)
+
+
+def test_doc_numbers_by_hand() -> None:
+    dist = AgeingRul(np.array([10.0, 30.0, 50.0]), np.array([0.25, 0.25, 0.5]), low_quantile=0.3)
+    assert dist.mean(0.0) == pytest.approx(35.0)
+    assert dist.mean(20.0) == pytest.approx(0.25 * 10.0 + 0.5 * 30.0)
+    assert dist.low(0.0) == 30.0 and dist.low(40.0) == 0.0
+    assert dist.prob_failure(15.0, 10.0) == pytest.approx(0.25)
+    assert dist.prob_failure(25.0, 10.0) == pytest.approx(0.5)
+
+
+def test_bad_inputs_raise() -> None:
+    with pytest.raises(ValueError, match="weights"):
+        AgeingRul(np.ones(3), np.zeros(3), low_quantile=0.1)
+    with pytest.raises(ValueError, match="RUL values"):
+        AgeingRul(np.array([1.0, -1.0]), np.ones(2), low_quantile=0.1)
+    with pytest.raises(ValueError, match="low_quantile"):
+        AgeingRul(np.ones(2), np.ones(2), low_quantile=1.5)
+    with pytest.raises(ValueError, match="one length"):
+        AgeingRul(np.ones(2), np.ones(3), low_quantile=0.1)
+    with pytest.raises(ValueError, match="horizon"):
+        AgeingRul(np.ones(2), np.ones(2), low_quantile=0.1).prob_failure(0.0, -1.0)
