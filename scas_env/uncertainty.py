@@ -43,7 +43,7 @@ from dataclasses import dataclass, fields
 
 import numpy as np
 import numpy.typing as npt
-from scipy.special import ndtr
+from numba import njit
 
 from scas_env.params import FluidParams, ScasParams, SealParams, SpringParams
 
@@ -104,19 +104,14 @@ def truncated_normal(
     if size is not None:
         shape = np.broadcast_shapes(shape, (size,) if isinstance(size, int) else tuple(size))
     mu, sd, lo, hi = (np.broadcast_to(a, shape) for a in arrays)
-    if not (np.all(np.isfinite(mu)) and np.all(np.isfinite(sd))):
+    status, worst = _check_truncated(mu.ravel(), sd.ravel(), lo.ravel(), hi.ravel())
+    if status == 1:
         raise ValueError(f"truncated_normal: mean = {mean!r} and sigma = {sigma!r} must be finite")
-    if np.any(sd < 0.0):
+    if status == 2:
         raise ValueError(f"truncated_normal: sigma = {sigma!r} must be >= 0")
-    if np.any(lo > hi):
+    if status == 3:
         raise ValueError(f"truncated_normal: lower = {lower!r} must not exceed upper = {upper!r}")
-    inside = (mu >= lo) & (mu <= hi)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        acceptance = np.where(
-            sd > 0.0, ndtr((hi - mu) / sd) - ndtr((lo - mu) / sd), inside.astype(np.float64)
-        )
-    if np.any(acceptance < MIN_ACCEPTANCE):
-        worst = float(np.min(acceptance))
+    if worst < MIN_ACCEPTANCE:
         raise ValueError(
             f"truncated_normal: bounds [{lower!r}, {upper!r}] keep only a fraction {worst:.3g} "
             f"of N({mean!r}, {sigma!r}^2); at least {MIN_ACCEPTANCE} is required"
@@ -127,6 +122,34 @@ def truncated_normal(
         out[bad] = rng.normal(mu[bad], sd[bad])
         bad = (out < lo) | (out > hi)
     return float(out) if out.ndim == 0 else out
+
+
+@njit(cache=True)
+def _check_truncated(
+    mu: np.ndarray, sd: np.ndarray, lo: np.ndarray, hi: np.ndarray
+) -> tuple[int, float]:
+    """(status, smallest acceptance probability) of :func:`truncated_normal`'s arguments.
+
+    Status 1: non-finite mean or sigma; 2: sigma < 0; 3: lower > upper. The acceptance is
+    ``Phi((hi - mu)/sd) - Phi((lo - mu)/sd)`` (``Phi(z) = erfc(-z / sqrt 2) / 2``), or 1/0
+    for ``sd = 0`` with the mean inside/outside the bounds.
+    """
+    worst = 1.0
+    for k in range(mu.size):
+        if not (math.isfinite(mu[k]) and math.isfinite(sd[k])):
+            return 1, 0.0
+        if sd[k] < 0.0:
+            return 2, 0.0
+        if lo[k] > hi[k]:
+            return 3, 0.0
+        if sd[k] > 0.0:
+            a = 0.5 * math.erfc(-(hi[k] - mu[k]) / sd[k] / math.sqrt(2.0))
+            b = 0.5 * math.erfc(-(lo[k] - mu[k]) / sd[k] / math.sqrt(2.0))
+            acc = a - b
+        else:
+            acc = 1.0 if lo[k] <= mu[k] <= hi[k] else 0.0
+        worst = min(worst, acc)
+    return 0, worst
 
 
 def _field_range(cls: type, name: str) -> tuple[float, float]:
