@@ -31,6 +31,14 @@ FEATURE_UNITS = {
 }
 
 
+#: Groups of each flat observation mode, in order (``"dict"`` holds every group).
+GROUP_ORDER: dict[str, tuple[str, ...]] = {
+    "features+rul": ("features", "filter", "monitor"),
+    "features": ("features", "monitor"),
+    "state": ("state",),
+}
+
+
 class ObservationBuilder:
     """Keeps the last measured features and assembles observations for one env."""
 
@@ -76,17 +84,15 @@ class ObservationBuilder:
         ]
         self.groups = {"features": rows, "filter": filt, "monitor": tail, "state": state}
         mode = scenario.obs_mode
-        layout = {
-            "features+rul": rows + filt + tail,
-            "features": rows + tail,
-            "state": state,
-        }
+        #: (low, high) float64 bounds per group, and of the flat layout ("flat")
+        self.bounds = {k: _bounds(v) for k, v in self.groups.items()}
         if mode == "dict":
             self.space = spaces.Dict({k: _box(v) for k, v in self.groups.items()})
             self.names = tuple(f"{k}.{r[0]}" for k, v in self.groups.items() for r in v)
             self.units = tuple(r[1] for v in self.groups.values() for r in v)
         else:
-            self.layout = layout[mode]
+            self.layout = [r for g in GROUP_ORDER[mode] for r in self.groups[g]]
+            self.bounds["flat"] = _bounds(self.layout)
             self.space = _box(self.layout)
             self.names = tuple(r[0] for r in self.layout)
             self.units = tuple(r[1] for r in self.layout)
@@ -167,13 +173,9 @@ class ObservationBuilder:
     def observation(self, env: ScasMaintenanceEnv) -> Any:
         values = self._values(env)
         if self.scenario.obs_mode == "dict":
-            return {k: _clip(values[k], self.groups[k]) for k in self.groups}
-        order = {
-            "features+rul": ("features", "filter", "monitor"),
-            "features": ("features", "monitor"),
-            "state": ("state",),
-        }[self.scenario.obs_mode]
-        return _clip([v for k in order for v in values[k]], self.layout)
+            return {k: clip_to_bounds(values[k], *self.bounds[k]) for k in self.groups}
+        order = GROUP_ORDER[self.scenario.obs_mode]
+        return clip_to_bounds([v for k in order for v in values[k]], *self.bounds["flat"])
 
 
 def _box(rows: list[tuple[str, str, float, float]]) -> spaces.Box:
@@ -182,10 +184,13 @@ def _box(rows: list[tuple[str, str, float, float]]) -> spaces.Box:
     return spaces.Box(low, high, dtype=np.float32)
 
 
-def _clip(values: list[float], rows: list[tuple[str, str, float, float]]) -> np.ndarray:
-    """Saturate at the documented bounds (the observation's definition) and cast to float32."""
-    low = np.array([r[2] for r in rows])
-    high = np.array([r[3] for r in rows])
+def _bounds(rows: list[tuple[str, str, float, float]]) -> tuple[np.ndarray, np.ndarray]:
+    return np.array([r[2] for r in rows]), np.array([r[3] for r in rows])
+
+
+def clip_to_bounds(values: Any, low: np.ndarray, high: np.ndarray) -> np.ndarray:
+    """Saturate at the documented bounds (the observation's definition) and cast to float32;
+    ``values`` is one observation or a batch (rows)."""
     return np.minimum(np.maximum(np.asarray(values, dtype=np.float64), low), high).astype(
         np.float32
     )

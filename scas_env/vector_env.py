@@ -33,7 +33,7 @@ from gymnasium.vector.utils import batch_space
 from scas_env.env import ScasMaintenanceEnv
 from scas_env.fleet_kernels import ageing_estimates, surrogate_flights, true_rul
 from scas_env.normal_buffer import DEFAULT_BLOCK
-from scas_env.observation import FEATURE_UNITS
+from scas_env.observation import FEATURE_UNITS, GROUP_ORDER, clip_to_bounds
 from scas_env.world import FLIGHT_FEATURES, GROUND_FEATURES, PARTS
 
 _FEATURES = (*FLIGHT_FEATURES, *GROUND_FEATURES)
@@ -134,17 +134,7 @@ class ScasMaintenanceVectorEnv(VectorEnv):
             "rul": np.empty((n, 2)),
         }
         self._factor = np.array([FEATURE_UNITS[f][1] for f in _FEATURES])
-        builder = first.builder
-        rows = {k: v for k, v in builder.groups.items()}
-        self._bounds = {
-            k: (np.array([r[2] for r in v]), np.array([r[3] for r in v])) for k, v in rows.items()
-        }
-        if first.scenario.obs_mode != "dict":
-            layout = builder.layout
-            self._bounds["flat"] = (
-                np.array([r[2] for r in layout]),
-                np.array([r[3] for r in layout]),
-            )
+        self._bounds = first.builder.bounds
 
     # ------------------------------------------------------------------ sync
     def _pull(self, e: int) -> None:
@@ -205,7 +195,8 @@ class ScasMaintenanceVectorEnv(VectorEnv):
         self._autoreset[:] = False
         for t in self._terms.values():
             t.fill(0.0)
-        return self._observation(), self._info()
+        rul = self._true_rul()
+        return self._observation(rul), self._info(rul)
 
     def step(self, actions: Any) -> tuple[Any, np.ndarray, np.ndarray, np.ndarray, dict]:
         act = np.asarray(actions)
@@ -258,7 +249,8 @@ class ScasMaintenanceVectorEnv(VectorEnv):
         truncated = (a["slot"] >= self.scenario.episode_slots) & ~resetting
         terminated = np.zeros(n, dtype=np.bool_)
         self._autoreset = truncated.copy()
-        return self._observation(), rewards, terminated, truncated, self._info()
+        rul = self._true_rul()
+        return self._observation(rul), rewards, terminated, truncated, self._info(rul)
 
     def _fly(self, idx: np.ndarray) -> np.ndarray:
         """Candidate flights of ``idx`` (draws peeked); commits those that did not fail."""
@@ -296,7 +288,7 @@ class ScasMaintenanceVectorEnv(VectorEnv):
         )  # fmt: skip
         return out
 
-    def _groups(self) -> dict[str, np.ndarray]:
+    def _groups(self, rul: np.ndarray) -> dict[str, np.ndarray]:
         a, s = self.a, self.scenario
         mode = s.obs_mode
         out: dict[str, np.ndarray] = {}
@@ -316,28 +308,21 @@ class ScasMaintenanceVectorEnv(VectorEnv):
             )  # fmt: skip
             out["filter"] = est.reshape(self.num_envs, 6)
         if mode in ("state", "dict"):
-            rul = self._true_rul()
             out["state"] = np.column_stack(
                 [a["crack"] / a["fail"], a["wear"] / self._crit, rul, a["part_age"], a["downtime"]]
             ).astype(np.float64)
         return out
 
-    def _observation(self) -> Any:
-        values = self._groups()
+    def _observation(self, rul: np.ndarray) -> Any:
+        values = self._groups(rul)
         if self.scenario.obs_mode == "dict":
-            return {k: _clip(values[k], *self._bounds[k]) for k in self.envs[0].builder.groups}
-        order = {
-            "features+rul": ("features", "filter", "monitor"),
-            "features": ("features", "monitor"),
-            "state": ("state",),
-        }[self.scenario.obs_mode]
-        flat = np.concatenate([values[k] for k in order], axis=1)
-        return _clip(flat, *self._bounds["flat"])
+            return {k: clip_to_bounds(values[k], *self._bounds[k]) for k in self._bounds}
+        flat = np.concatenate([values[k] for k in GROUP_ORDER[self.scenario.obs_mode]], axis=1)
+        return clip_to_bounds(flat, *self._bounds["flat"])
 
-    def _info(self) -> dict[str, Any]:
+    def _info(self, rul: np.ndarray) -> dict[str, Any]:
         a = self.a
         slot = a["slot"]
-        rul = self._true_rul()
         info: dict[str, Any] = {
             "slot": slot.copy(),
             "availability": np.where(slot > 0, a["flown"] / np.maximum(slot, 1), 1.0),
@@ -369,11 +354,6 @@ class ScasMaintenanceVectorEnv(VectorEnv):
     def close_extras(self, **kwargs: Any) -> None:
         for env in self.envs:
             env.close()
-
-
-def _clip(values: np.ndarray, low: np.ndarray, high: np.ndarray) -> np.ndarray:
-    """Saturate at the documented bounds and cast to float32 (as the single env)."""
-    return np.minimum(np.maximum(values, low), high).astype(np.float32)
 
 
 __all__ = [

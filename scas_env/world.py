@@ -32,7 +32,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from prognostics.degradation_models import paris_crack_model
+from prognostics.degradation_models import TabulatedRateModel, paris_crack_model
 from scas_env.calibration import Calibration
 from scas_env.degradation import (
     crack_increment_m,
@@ -92,7 +92,7 @@ class ActuatorWorld:
         self.wear_m = 0.0
         self.spring_failure_m = calibration.spring_failure_depth_m
         self.unit_z = np.zeros(len(surrogate.features))
-        self.kernel_tables = kernel_tables(calibration, surrogate, scenario)
+        self.kernel_tables = kernel_tables(calibration, surrogate, scenario, self._table)
         self._scratch = {
             "envs": np.zeros(1, dtype=np.int64),
             "x": np.empty((8, 1)),
@@ -284,11 +284,14 @@ class ActuatorWorld:
 
 
 def kernel_tables(
-    calibration: Calibration, surrogate: SurrogateModel, scenario: Scenario
+    calibration: Calibration,
+    surrogate: SurrogateModel,
+    scenario: Scenario,
+    table: TabulatedRateModel,
 ) -> dict[str, tuple]:
-    """Argument groups of :mod:`scas_env.fleet_kernels` for one world configuration."""
+    """Argument groups of :mod:`scas_env.fleet_kernels` for one world configuration
+    (``table``: the calibrated crack-growth table)."""
     cal = calibration
-    table = paris_crack_model(cal.crack_depth_m, cal.crack_rate_m_per_flight)
     idx = np.array([surrogate.index(f) for f in FLIGHT_FEATURES], dtype=np.int64)
     stack = np.stack([surrogate.mean, surrogate.unit_std, surrogate.run_std])
     active = (bool(scenario.crack_active), bool(scenario.wear_active))

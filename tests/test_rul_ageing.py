@@ -47,7 +47,9 @@ def test_equals_the_rul_predictor_after_noise_free_exact_steps() -> None:
         s = pred.summary(xk, lt, w)
         assert dist.mean(k) == pytest.approx(s.mean, rel=1e-6)
         assert dist.low(k) == pytest.approx(s.low, rel=1e-6, abs=1e-6)
-        assert dist.prob_failure(k, 20.0) == pytest.approx(s.prob_failure, abs=1e-2)
+        # R_i - k and the recomputed RUL differ by rounding only: at most a particle lying
+        # exactly on the horizon can change side
+        assert dist.prob_failure(k, 20.0) == pytest.approx(s.prob_failure, abs=w.max() / w.sum())
 
 
 def test_doc_numbers_by_hand() -> None:
