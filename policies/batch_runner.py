@@ -18,9 +18,8 @@ from typing import Any
 
 import numpy as np
 
+from scas_env.env import REWARD_TERMS as TERMS
 from scas_env.world import PARTS
-
-TERMS = ("flight", "test", "no_go", "replacement", "failure")
 
 
 def episode_row(

@@ -160,8 +160,10 @@ def run_episode(env: gym.Env, policy: Any, env_seed: int, policy_seed: int) -> d
 def _row(
     env: gym.Env, info: Mapping[str, Any], terms: Mapping[str, float], reward: float
 ) -> dict[str, Any]:
-    lives = info["wasted_life_flights"]
-    wasted = {p: (float(sum(lives[p])), len(lives[p])) for p in PARTS}
+    wasted = {
+        p: (float(info["wasted_life_sum_flights"][p]), int(info["wasted_life_count"][p]))
+        for p in PARTS
+    }
     duration = env.unwrapped.params.mission.flight_duration_s
     return episode_row(info, terms, reward, wasted, duration)
 

@@ -134,6 +134,44 @@ def fill_random(handle: Handle, out: np.ndarray) -> None:
         out[i] = random(handle)
 
 
+@njit(cache=True)
+def fill_truncated_normal(
+    handle: Handle,
+    mean: np.ndarray,
+    sigma: np.ndarray,
+    lower: np.ndarray,
+    upper: np.ndarray,
+    out: np.ndarray,
+) -> None:
+    """``out[k] ~ N(mean[k], sigma[k]^2)`` restricted to ``[lower[k], upper[k]]``, by rejection.
+
+    Every parameter array is 1-D with either one value (shared) or ``out.size`` values. The
+    draws are numpy's, in numpy's order, for the vectorised rejection loop
+    ``out = rng.normal(mean, sigma); while any(bad): out[bad] = rng.normal(mean[bad],
+    sigma[bad])``: one pass over all elements, then passes over the rejected ones in index
+    order until none is rejected (``Generator.normal`` is ``loc + scale * z``). The caller
+    guarantees a positive acceptance probability (else the loop does not end).
+    """
+    n = out.size
+    one_m, one_s = mean.size == 1, sigma.size == 1
+    one_lo, one_hi = lower.size == 1, upper.size == 1
+    for k in range(n):
+        m = mean[0] if one_m else mean[k]
+        s = sigma[0] if one_s else sigma[k]
+        out[k] = m + s * standard_normal(handle)
+    redraw = True
+    while redraw:
+        redraw = False
+        for k in range(n):
+            lo = lower[0] if one_lo else lower[k]
+            hi = upper[0] if one_hi else upper[k]
+            if out[k] < lo or out[k] > hi:
+                m = mean[0] if one_m else mean[k]
+                s = sigma[0] if one_s else sigma[k]
+                out[k] = m + s * standard_normal(handle)
+                redraw = True
+
+
 def _address(fn: ctypes._CFuncPtr) -> int:
     return int(ctypes.cast(fn, ctypes.c_void_p).value)
 

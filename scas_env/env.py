@@ -18,6 +18,9 @@ from scas_env.scenario import Scenario
 from scas_env.surrogate import SurrogateModel, default_surrogate
 from scas_env.world import PARTS, ActuatorWorld
 
+#: keys of ``info["reward_terms"]`` (USD this step)
+REWARD_TERMS = ("flight", "test", "no_go", "replacement", "failure")
+
 FLY, TEST_AND_FLY, REPLACE_SPRING, REPLACE_SEAL = range(4)
 #: Random streams of an episode: new units and parts, per-flight degradation, measurement
 #: noise (tests, flight features, physics windows), particle filters.
@@ -97,6 +100,18 @@ class ScasMaintenanceEnv(gym.Env):
     failure (the flight earns nothing; failed parts are replaced; ``failure_downtime_slots``
     on the ground). ``info["reward_terms"]`` splits it.
 
+    ## Info
+
+    A flat dict of scalars and small dicts, its size fixed over the episode: ``slot``,
+    ``availability`` (flights flown / slots), ``flights``, ``cost_usd`` (costs so far),
+    ``revenue_usd``, ``tests``, ``no_go`` (failed tests), ``downtime``; per part
+    ``failures`` and ``replacements`` (counts, failures included); ``wasted_life_flights``
+    (the true RUL, capped at ``rul_cap_flights``, thrown away by this step's preventive
+    replacement of the part, 0 if none), ``wasted_life_sum_flights`` and
+    ``wasted_life_count`` (running over the episode's preventive replacements);
+    ``reward_terms``; ``features`` (raw latest features, SI units); ``true_state`` (crack
+    depth and wear in m and as fractions of critical, true RUL of each part in flights).
+
     ## Starting State
 
     A new unit drawn from the design's scatter (spring geometry, Paris constant, initial
@@ -125,7 +140,8 @@ class ScasMaintenanceEnv(gym.Env):
 
     ## Version History
 
-    * v0: initial release (18-entry observation with the go/no-go flag).
+    * v0: initial release (18-entry observation with the go/no-go flag; ``info`` of fixed
+      size: wasted life as this step's value plus running sum and count).
 
     ## Example
 
@@ -216,8 +232,9 @@ class ScasMaintenanceEnv(gym.Env):
         self.downtime = 0
         self.part_age = {"spring": 0, "seal": 0}
         self.stats = _Stats()
+        self._wasted_now = dict.fromkeys(PARTS, 0.0)
         self.builder.reset()
-        return self._observation(), self._info({})
+        return self._observation(), self._info(dict.fromkeys(REWARD_TERMS, 0.0))
 
     def step(self, action: Any) -> tuple[Any, float, bool, bool, dict[str, Any]]:
         if self.monitor is None:
@@ -225,7 +242,8 @@ class ScasMaintenanceEnv(gym.Env):
         if not self.action_space.contains(action):
             raise ValueError(f"action = {action!r} is not in Discrete(4): {ACTION_NAMES}")
         action = int(action)
-        terms = dict.fromkeys(("flight", "test", "no_go", "replacement", "failure"), 0.0)
+        terms = dict.fromkeys(REWARD_TERMS, 0.0)
+        self._wasted_now = dict.fromkeys(PARTS, 0.0)
         grounded = self.downtime > 0
         flew = False
         if action in (REPLACE_SPRING, REPLACE_SEAL):
@@ -301,7 +319,10 @@ class ScasMaintenanceEnv(gym.Env):
                 else self.costs.seal_replacement_usd
             )
             terms["replacement"] -= cost
-            self.stats.wasted_life[part].append(min(rul, self.scenario.rul_cap_flights))
+            wasted = min(rul, self.scenario.rul_cap_flights)
+            self.stats.wasted_life_sum[part] += wasted
+            self.stats.wasted_life_count[part] += 1
+            self._wasted_now[part] = wasted
         self.stats.replacements[part] += 1
         self.world.replace(part, self.rngs["parts"])
         self.monitor.replaced(part)
@@ -324,7 +345,9 @@ class ScasMaintenanceEnv(gym.Env):
             "replacements": dict(s.replacements),
             "tests": s.tests,
             "no_go": s.no_go,
-            "wasted_life_flights": {k: list(v) for k, v in s.wasted_life.items()},
+            "wasted_life_flights": self._wasted_now,
+            "wasted_life_sum_flights": dict(s.wasted_life_sum),
+            "wasted_life_count": dict(s.wasted_life_count),
             "reward_terms": terms,
             "features": self.builder.raw_features(),
             "true_state": {
@@ -350,7 +373,8 @@ class _Stats:
         self.revenue = 0.0
         self.failures = dict.fromkeys(PARTS, 0)
         self.replacements = dict.fromkeys(PARTS, 0)
-        self.wasted_life: dict[str, list[float]] = {p: [] for p in PARTS}
+        self.wasted_life_sum = dict.fromkeys(PARTS, 0.0)
+        self.wasted_life_count = dict.fromkeys(PARTS, 0)
 
 
 __all__ = ["ACTION_NAMES", "ScasMaintenanceEnv"]

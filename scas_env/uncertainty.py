@@ -38,6 +38,7 @@ Example:
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass, fields
 
@@ -45,6 +46,7 @@ import numpy as np
 import numpy.typing as npt
 from numba import njit
 
+from prognostics.normals import NormalStream, fill_truncated_normal
 from scas_env.params import FluidParams, ScasParams, SealParams, SpringParams
 
 FloatArray = npt.NDArray[np.float64]
@@ -99,12 +101,33 @@ def truncated_normal(
     """
     if not isinstance(rng, np.random.Generator):
         raise ValueError(f"rng must be a numpy.random.Generator, got {type(rng).__name__}")
+    return _truncated(NormalStream(rng), mean, sigma, lower, upper, size)
+
+
+def _truncated(
+    stream: NormalStream,
+    mean: npt.ArrayLike,
+    sigma: npt.ArrayLike,
+    lower: npt.ArrayLike,
+    upper: npt.ArrayLike,
+    size: int | tuple[int, ...] | None,
+) -> float | FloatArray:
+    """:func:`truncated_normal` drawing from ``stream`` (numba kernel, numpy's draws)."""
     arrays = [np.asarray(v, dtype=np.float64) for v in (mean, sigma, lower, upper)]
-    shape = np.broadcast_shapes(*(a.shape for a in arrays))
+    shapes = {a.shape for a in arrays if a.ndim}
+    shape: tuple[int, ...] = shapes.pop() if len(shapes) == 1 else ()
+    if shapes:
+        shape = np.broadcast_shapes(*(a.shape for a in arrays))
     if size is not None:
-        shape = np.broadcast_shapes(shape, (size,) if isinstance(size, int) else tuple(size))
-    mu, sd, lo, hi = (np.broadcast_to(a, shape) for a in arrays)
-    status, worst = _check_truncated(mu.ravel(), sd.ravel(), lo.ravel(), hi.ravel())
+        wanted = (size,) if isinstance(size, int) else tuple(size)
+        shape = wanted if shape in ((), wanted) else np.broadcast_shapes(shape, wanted)
+    # the kernel reads a one-value parameter for every element: broadcast only the others
+    flat = [
+        a.reshape(1) if a.size == 1 else a.ravel() if a.shape == shape
+        else np.broadcast_to(a, shape).ravel()
+        for a in arrays
+    ]  # fmt: skip
+    status, worst = _check_truncated(*flat)
     if status == 1:
         raise ValueError(f"truncated_normal: mean = {mean!r} and sigma = {sigma!r} must be finite")
     if status == 2:
@@ -116,12 +139,10 @@ def truncated_normal(
             f"truncated_normal: bounds [{lower!r}, {upper!r}] keep only a fraction {worst:.3g} "
             f"of N({mean!r}, {sigma!r}^2); at least {MIN_ACCEPTANCE} is required"
         )
-    out = np.array(rng.normal(mu, sd, size=shape), dtype=np.float64)
-    bad = (out < lo) | (out > hi)
-    while np.any(bad):
-        out[bad] = rng.normal(mu[bad], sd[bad])
-        bad = (out < lo) | (out > hi)
-    return float(out) if out.ndim == 0 else out
+    out = np.empty(shape)
+    with stream.lock:
+        fill_truncated_normal(stream.handle, *flat, out.reshape(-1))
+    return float(out[()]) if out.ndim == 0 else out
 
 
 @njit(cache=True)
@@ -130,28 +151,37 @@ def _check_truncated(
 ) -> tuple[int, float]:
     """(status, smallest acceptance probability) of :func:`truncated_normal`'s arguments.
 
-    Status 1: non-finite mean or sigma; 2: sigma < 0; 3: lower > upper. The acceptance is
+    Each array holds one value (shared) or one per element. Status 1: non-finite mean or
+    sigma; 2: sigma < 0; 3: lower > upper. The acceptance is
     ``Phi((hi - mu)/sd) - Phi((lo - mu)/sd)`` (``Phi(z) = erfc(-z / sqrt 2) / 2``), or 1/0
     for ``sd = 0`` with the mean inside/outside the bounds.
     """
     worst = 1.0
-    for k in range(mu.size):
-        if not (math.isfinite(mu[k]) and math.isfinite(sd[k])):
+    if min(mu.size, sd.size, lo.size, hi.size) == 0:
+        return 0, worst  # nothing to draw
+    n = max(mu.size, sd.size, lo.size, hi.size)  # a one-value array is shared
+    for k in range(n):
+        m = mu[0] if mu.size == 1 else mu[k]
+        s = sd[0] if sd.size == 1 else sd[k]
+        a_lo = lo[0] if lo.size == 1 else lo[k]
+        a_hi = hi[0] if hi.size == 1 else hi[k]
+        if not (math.isfinite(m) and math.isfinite(s)):
             return 1, 0.0
-        if sd[k] < 0.0:
+        if s < 0.0:
             return 2, 0.0
-        if lo[k] > hi[k]:
+        if a_lo > a_hi:
             return 3, 0.0
-        if sd[k] > 0.0:
-            a = 0.5 * math.erfc(-(hi[k] - mu[k]) / sd[k] / math.sqrt(2.0))
-            b = 0.5 * math.erfc(-(lo[k] - mu[k]) / sd[k] / math.sqrt(2.0))
+        if s > 0.0:
+            a = 0.5 * math.erfc(-(a_hi - m) / s / math.sqrt(2.0))
+            b = 0.5 * math.erfc(-(a_lo - m) / s / math.sqrt(2.0))
             acc = a - b
         else:
-            acc = 1.0 if lo[k] <= mu[k] <= hi[k] else 0.0
+            acc = 1.0 if a_lo <= m <= a_hi else 0.0
         worst = min(worst, acc)
     return 0, worst
 
 
+@functools.cache
 def _field_range(cls: type, name: str) -> tuple[float, float]:
     """Allowed closed range ``(lo, hi)`` of a parameter field, from its metadata."""
     md = next(f.metadata for f in fields(cls) if f.name == name)
@@ -317,18 +347,19 @@ def draw_units(params: ScasParams, rng: np.random.Generator, n: int) -> tuple[Un
     sp, unc = params.spring, params.uncertainty
     d_lo, d_hi = _field_range(SpringParams, "wire_diameter_m")
     big_d_hi = _field_range(SpringParams, "mean_coil_diameter_m")[1]
-    wire = truncated_normal(
-        rng, sp.wire_diameter_m, unc.wire_diameter_sigma_m, lower=d_lo, upper=d_hi, size=(n, 2)
+    stream = NormalStream(rng)
+    wire = _truncated(
+        stream, sp.wire_diameter_m, unc.wire_diameter_sigma_m, d_lo, d_hi, size=(n, 2)
     )
-    coil = truncated_normal(
-        rng, sp.mean_coil_diameter_m, unc.coil_diameter_sigma_m, lower=wire, upper=big_d_hi
+    coil = _truncated(
+        stream, sp.mean_coil_diameter_m, unc.coil_diameter_sigma_m, wire, big_d_hi, None
     )
     paris_c = sp.paris_c * np.exp(unc.paris_c_log_sigma * rng.standard_normal(n))
     wear_rate = params.seal.wear_rate_m3_n_m * np.exp(
         unc.wear_rate_log_sigma * rng.standard_normal(n)
     )
-    a0 = truncated_normal(
-        rng, sp.initial_crack_m, unc.initial_crack_sigma_m, lower=0.0, upper=wire.min(axis=1)
+    a0 = _truncated(
+        stream, sp.initial_crack_m, unc.initial_crack_sigma_m, 0.0, wire.min(axis=1), None
     )
     bias = rng.normal(0.0, unc.null_bias_sigma_a, size=n)
     return tuple(

@@ -30,7 +30,7 @@ from gymnasium import spaces
 from gymnasium.vector import AutoresetMode, SyncVectorEnv, VectorEnv
 from gymnasium.vector.utils import batch_space
 
-from scas_env.env import ScasMaintenanceEnv
+from scas_env.env import REWARD_TERMS, ScasMaintenanceEnv
 from scas_env.fleet_kernels import ageing_estimates, surrogate_flights, true_rul
 from scas_env.normal_buffer import DEFAULT_BLOCK
 from scas_env.observation import FEATURE_UNITS, GROUP_ORDER, clip_to_bounds
@@ -38,7 +38,6 @@ from scas_env.world import FLIGHT_FEATURES, GROUND_FEATURES, PARTS
 
 _FEATURES = (*FLIGHT_FEATURES, *GROUND_FEATURES)
 _STREAMS = ("measure", "degradation")
-_TERMS = ("flight", "test", "no_go", "replacement", "failure")
 
 
 def make_vector_env(num_envs: int, **kwargs: Any) -> VectorEnv:
@@ -123,7 +122,9 @@ class ScasMaintenanceVectorEnv(VectorEnv):
             "rul_low": np.zeros((n, 2)),
         }
         self._autoreset = np.zeros(n, dtype=np.bool_)
-        self._terms = {t: np.zeros(n) for t in _TERMS}
+        self._terms = {t: np.zeros(n) for t in REWARD_TERMS}
+        #: true RUL thrown away by each actuator's preventive replacement this step (0: none)
+        self._wasted_now = np.zeros((n, len(PARTS)))
         self._scratch = {
             "new": np.empty((2, n)),
             "feats": np.empty((n, len(FLIGHT_FEATURES))),
@@ -149,8 +150,8 @@ class ScasMaintenanceVectorEnv(VectorEnv):
             a["part_age"][e, p] = env.part_age[part]
             a["failures"][e, p] = s.failures[part]
             a["replacements"][e, p] = s.replacements[part]
-            a["wasted_sum"][e, p] = sum(s.wasted_life[part])
-            a["wasted_count"][e, p] = len(s.wasted_life[part])
+            a["wasted_sum"][e, p] = s.wasted_life_sum[part]
+            a["wasted_count"][e, p] = s.wasted_life_count[part]
             r, cum_w, suffix_w, suffix_wr, low = m.ageing(part).tables()
             a["rul_sorted"][e, p] = r
             a["rul_cum_w"][e, p] = cum_w
@@ -195,6 +196,7 @@ class ScasMaintenanceVectorEnv(VectorEnv):
         self._autoreset[:] = False
         for t in self._terms.values():
             t.fill(0.0)
+        self._wasted_now.fill(0.0)
         rul = self._true_rul()
         return self._observation(rul), self._info(rul)
 
@@ -213,6 +215,7 @@ class ScasMaintenanceVectorEnv(VectorEnv):
         rewards = np.zeros(n)
         for t in self._terms.values():
             t.fill(0.0)
+        self._wasted_now.fill(0.0)
         resetting = self._autoreset.copy()
         grounded = a["downtime"] > 0
         fly = (act == 0) & ~grounded & ~resetting
@@ -243,8 +246,9 @@ class ScasMaintenanceVectorEnv(VectorEnv):
             else:
                 _, r, _, _, info = env.step(int(act[e]))
                 rewards[e] = r
-                for t in _TERMS:
+                for t in REWARD_TERMS:
                     self._terms[t][e] = info["reward_terms"][t]
+                self._wasted_now[e] = [info["wasted_life_flights"][part] for part in PARTS]
             self._pull(e)
         truncated = (a["slot"] >= self.scenario.episode_slots) & ~resetting
         terminated = np.zeros(n, dtype=np.bool_)
@@ -333,6 +337,7 @@ class ScasMaintenanceVectorEnv(VectorEnv):
             "replacements": {p: a["replacements"][:, k].copy() for k, p in enumerate(PARTS)},
             "tests": a["tests"].copy(),
             "no_go": a["no_go_count"].copy(),
+            "wasted_life_flights": {p: self._wasted_now[:, k].copy() for k, p in enumerate(PARTS)},
             "wasted_life_sum_flights": {
                 p: a["wasted_sum"][:, k].copy() for k, p in enumerate(PARTS)
             },

@@ -136,6 +136,40 @@ def test_reward_accounting_matches_cost_model() -> None:
     assert info["replacements"]["spring"] == 1
 
 
+def test_wasted_life_is_the_true_rul_thrown_away_and_info_keeps_its_size() -> None:
+    env = ScasMaintenanceEnv()
+    _, info = env.reset(seed=2)
+    keys = _nested_keys(info)
+    thrown = {"spring": [], "seal": []}
+    rng = np.random.default_rng(0)
+    for _ in range(400):
+        action = int(rng.choice(4, p=[0.6, 0.2, 0.1, 0.1]))
+        before = info["true_state"]
+        _, _, _, _, info = env.step(action)
+        assert _nested_keys(info) == keys
+        for k, part in ((2, "spring"), (3, "seal")):
+            now = info["wasted_life_flights"][part]
+            if action == k:
+                rul = before[f"{part}_rul_flights"]
+                assert now == min(rul, env.scenario.rul_cap_flights)
+                thrown[part].append(now)
+            else:
+                assert now == 0.0
+    for part, values in thrown.items():
+        assert len(values) > 5
+        assert info["wasted_life_count"][part] == len(values)
+        assert info["wasted_life_sum_flights"][part] == pytest.approx(sum(values), rel=1e-12)
+
+
+def _nested_keys(d: dict, prefix: str = "") -> set[str]:
+    out = set()
+    for k, v in d.items():
+        out.add(prefix + k)
+        if isinstance(v, dict):
+            out |= _nested_keys(v, prefix + k + ".")
+    return out
+
+
 def test_never_maintained_unit_fails_and_failed_part_is_renewed() -> None:
     env = ScasMaintenanceEnv(episode_slots=3000)
     env.reset(seed=5)
