@@ -291,12 +291,16 @@ class StateEstimate:
     ess: float
 
 
-def _initial(name: str, values: InitialValues, rng: np.random.Generator, n: int) -> np.ndarray:
+def _initial(name: str, values: InitialValues, rng: np.random.Generator, out: np.ndarray) -> None:
+    """``out[:] = values`` (a scalar, an (N,) array, or a sampler's (N,) draw), all finite."""
+    n = out.size
     arr = values(rng, n) if callable(values) else values
-    out = np.broadcast_to(np.asarray(arr, dtype=np.float64), (n,)).copy()
-    if not np.all(np.isfinite(out)):
+    try:
+        out[:] = arr
+    except (ValueError, TypeError) as err:
+        raise ValueError(f"{name} must give a scalar or {n} values: {err}") from None
+    if not np.isfinite(out).all():
         raise ValueError(f"{name} must give {n} finite values")
-    return out
 
 
 class ParticleFilter:
@@ -430,12 +434,12 @@ class ParticleFilter:
         ``f(rng, N) -> (N,) array`` called with the filter's Generator; theta0 must be > 0.
         """
         n = self.n_particles
-        x = _initial("x0", x0, self.rng, n)
-        theta = _initial("theta0", theta0, self.rng, n)
-        if np.any(theta <= 0.0):
+        self._ready = False  # until both clouds are drawn and valid
+        _initial("x0", x0, self.rng, self._x)
+        _initial("theta0", theta0, self.rng, self._log_theta)
+        if not np.all(self._log_theta > 0.0):
             raise ValueError("theta0 must be > 0 for every particle")
-        self._x[:] = x
-        self._log_theta[:] = np.log(theta)
+        np.log(self._log_theta, out=self._log_theta)
         self._w.fill(1.0 / n)
         self._log_w.fill(-math.log(n))
         self._ess = float(n)

@@ -26,6 +26,9 @@ import math
 import numpy as np
 from numba import njit
 
+from prognostics.degradation_models import damage_scalar
+from prognostics.rul import RulPredictor
+
 
 @njit(cache=True)
 def _build(
@@ -72,6 +75,49 @@ def _build(
     return 0, quantile
 
 
+@njit(cache=True)
+def _build_from_cloud(
+    grid: np.ndarray,
+    rate: np.ndarray,
+    cum: np.ndarray,
+    cells: np.ndarray,
+    inv_cell: float,
+    d_threshold: float,
+    x: np.ndarray,
+    log_theta: np.ndarray,
+    w: np.ndarray,
+    level: float,
+    r: np.ndarray,
+    sorted_r: np.ndarray,
+    cum_w: np.ndarray,
+    suffix_w: np.ndarray,
+    suffix_wr: np.ndarray,
+) -> tuple[int, float]:
+    """RUL of each particle (as ``RulPredictor.values``: ``max(I(H) - I(x_i), 0) /
+    theta_i``) into ``r``, then :func:`_build`."""
+    for i in range(x.size):
+        remaining = d_threshold - damage_scalar(grid, rate, cum, cells, inv_cell, x[i])
+        r[i] = remaining / math.exp(log_theta[i]) if remaining > 0.0 else 0.0
+    return _build(r, w, level, sorted_r, cum_w, suffix_w, suffix_wr)
+
+
+@njit(cache=True)
+def _summary(
+    r: np.ndarray,
+    cum_w: np.ndarray,
+    suffix_w: np.ndarray,
+    suffix_wr: np.ndarray,
+    low: float,
+    k: float,
+    horizon: float,
+) -> tuple[float, float, float]:
+    """(mean, low, risk) after ``k`` steps: :meth:`AgeingRul.mean`, ``low``, ``prob_failure``."""
+    j = np.searchsorted(r, k, side="right")
+    mean = max(suffix_wr[j] - k * suffix_w[j], 0.0)
+    j = np.searchsorted(r, horizon + k, side="right")
+    return mean, max(low - k, 0.0), min(cum_w[j], 1.0)
+
+
 class AgeingRul:
     """Summary of a weighted RUL sample ``R`` after ``k`` further steps (module docstring).
 
@@ -97,12 +143,49 @@ class AgeingRul:
         status, q = _build(
             r, w, low_quantile, self._r, self._cum_w, self._suffix_w, self._suffix_wr
         )
+        self._check(status)
+        self._low = float(q)
+        self.low_quantile = float(low_quantile)
+
+    @classmethod
+    def from_cloud(
+        cls,
+        predictor: RulPredictor,
+        x: np.ndarray,
+        log_theta: np.ndarray,
+        weights: np.ndarray,
+        *,
+        low_quantile: float,
+    ) -> AgeingRul:
+        """``AgeingRul(predictor.values(x, log_theta), weights, low_quantile=...)`` in one
+        kernel: the summary of a particle filter's cloud (its own float64 arrays of one
+        length, e.g. ``pf.x``, ``pf.log_theta``, ``pf.weights``), the same numbers."""
+        n = x.size
+        if log_theta.shape != (n,) or weights.shape != (n,) or x.shape != (n,) or n == 0:
+            raise ValueError(
+                f"x, log_theta and weights must be 1-D of one length, got {x.shape}, "
+                f"{log_theta.shape}, {weights.shape}"
+            )
+        if not 0.0 <= low_quantile <= 1.0:
+            raise ValueError(f"low_quantile = {low_quantile} must lie in [0, 1]")
+        self = cls.__new__(cls)
+        self._r, self._cum_w = np.empty(n), np.empty(n + 1)
+        self._suffix_w, self._suffix_wr = np.empty(n + 1), np.empty(n + 1)
+        status, q = _build_from_cloud(
+            *predictor.model.table_args, predictor.d_threshold, x, log_theta, weights,
+            low_quantile, np.empty(n), self._r, self._cum_w, self._suffix_w, self._suffix_wr,
+        )  # fmt: skip
+        self._check(status)
+        self._low = float(q)
+        self.low_quantile = float(low_quantile)
+        return self
+
+    @staticmethod
+    def _check(status: int) -> None:
         if status == 1:
             raise ValueError("weights must be finite, >= 0, with a positive sum")
         if status == 2:
             raise ValueError("RUL values must be finite and >= 0")
-        self._low = float(q)
-        self.low_quantile = float(low_quantile)
 
     def tables(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, float]:
         """``(sorted R, prefix sums of w, suffix sums of w, suffix sums of w R, low quantile)``,
@@ -117,6 +200,14 @@ class AgeingRul:
     def low(self, k: float) -> float:
         """Quantile of ``max(R - k, 0)`` at ``low_quantile`` (steps)."""
         return max(self._low - k, 0.0)
+
+    def summary(self, k: float, horizon: float) -> tuple[float, float, float]:
+        """``(mean(k), low(k), prob_failure(k, horizon))`` in one call (the same numbers)."""
+        if not (math.isfinite(horizon) and horizon >= 0.0):
+            raise ValueError(f"horizon = {horizon} must be finite and >= 0")
+        return _summary(
+            self._r, self._cum_w, self._suffix_w, self._suffix_wr, self._low, float(k), horizon
+        )
 
     def prob_failure(self, k: float, horizon: float) -> float:
         """``P(max(R - k, 0) <= horizon) = P(R <= horizon + k)``, ``horizon >= 0``."""

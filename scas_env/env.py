@@ -10,6 +10,7 @@ from gymnasium import spaces
 
 from scas_env.calibration import Calibration, calibration_for
 from scas_env.costs import CostModel
+from scas_env.info import StepInfo
 from scas_env.monitor import HealthMonitor
 from scas_env.normal_buffer import NormalBuffer
 from scas_env.observation import ObservationBuilder
@@ -18,6 +19,8 @@ from scas_env.scenario import Scenario
 from scas_env.surrogate import SurrogateModel, default_surrogate
 from scas_env.world import PARTS, ActuatorWorld
 
+#: action types checked without ``Discrete.contains`` (SB3 passes numpy int64)
+_PLAIN_INTS = (int, np.int64)
 #: keys of ``info["reward_terms"]`` (USD this step)
 REWARD_TERMS = ("flight", "test", "no_go", "replacement", "failure")
 
@@ -239,7 +242,9 @@ class ScasMaintenanceEnv(gym.Env):
     def step(self, action: Any) -> tuple[Any, float, bool, bool, dict[str, Any]]:
         if self.monitor is None:
             raise RuntimeError("call reset() before step()")
-        if not self.action_space.contains(action):
+        if not (type(action) in _PLAIN_INTS and 0 <= action < 4) and not (
+            self.action_space.contains(action)  # the general check (0-d arrays, ...)
+        ):
             raise ValueError(f"action = {action!r} is not in Discrete(4): {ACTION_NAMES}")
         action = int(action)
         terms = dict.fromkeys(REWARD_TERMS, 0.0)
@@ -332,34 +337,34 @@ class ScasMaintenanceEnv(gym.Env):
     def _observation(self) -> Any:
         return self.builder.observation(self)
 
-    def _info(self, terms: dict[str, float]) -> dict[str, Any]:
+    def _info(self, terms: dict[str, float]) -> StepInfo:
         s, w = self.stats, self.world
         spring_rul, seal_rul = w.true_rul_flights()
-        return {
-            "slot": self.slot,
-            "availability": s.flown / self.slot if self.slot else 1.0,
-            "flights": s.flown,
-            "cost_usd": s.cost,
-            "revenue_usd": s.revenue,
-            "failures": dict(s.failures),
-            "replacements": dict(s.replacements),
-            "tests": s.tests,
-            "no_go": s.no_go,
-            "wasted_life_flights": self._wasted_now,
-            "wasted_life_sum_flights": dict(s.wasted_life_sum),
-            "wasted_life_count": dict(s.wasted_life_count),
-            "reward_terms": terms,
-            "features": self.builder.raw_features(),
-            "true_state": {
-                "crack_depth_m": w.crack_m,
-                "seal_wear_m": w.wear_m,
-                "crack_fraction": w.crack_fraction,
-                "wear_fraction": w.wear_fraction,
-                "spring_rul_flights": spring_rul,
-                "seal_rul_flights": seal_rul,
-            },
-            "downtime": self.downtime,
-        }
+        return StepInfo(
+            slot=self.slot,
+            availability=s.flown / self.slot if self.slot else 1.0,
+            flights=s.flown,
+            cost_usd=s.cost,
+            revenue_usd=s.revenue,
+            failures=StepInfo(s.failures),
+            replacements=StepInfo(s.replacements),
+            tests=s.tests,
+            no_go=s.no_go,
+            wasted_life_flights=StepInfo(self._wasted_now),
+            wasted_life_sum_flights=StepInfo(s.wasted_life_sum),
+            wasted_life_count=StepInfo(s.wasted_life_count),
+            reward_terms=StepInfo(terms),
+            features=StepInfo(self.builder.last),
+            true_state=StepInfo(
+                crack_depth_m=w.crack_m,
+                seal_wear_m=w.wear_m,
+                crack_fraction=w.crack_fraction,
+                wear_fraction=w.wear_fraction,
+                spring_rul_flights=spring_rul,
+                seal_rul_flights=seal_rul,
+            ),
+            downtime=self.downtime,
+        )
 
 
 class _Stats:

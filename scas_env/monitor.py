@@ -40,6 +40,7 @@ from scipy.stats import norm
 from prognostics.degradation_models import linear_wear_model, paris_crack_model
 from prognostics.detection import DetectorConfig, PercentileDetector
 from prognostics.measurement import measurement_from_curve
+from prognostics.normals import NormalStream
 from prognostics.particle_filter import ParticleFilter
 from prognostics.rul import RulPredictor
 from prognostics.rul_ageing import AgeingRul
@@ -200,8 +201,9 @@ class HealthMonitor:
     def _refresh(self, part: str) -> None:
         """New RUL distribution of ``part``'s cloud (after a reset or a measurement)."""
         pf = self._filters[part]
-        rul = self._rul[part].values(pf.x, pf.log_theta)
-        self._ageing[part] = AgeingRul(rul, pf.weights, low_quantile=self.scenario.rul_quantile)
+        self._ageing[part] = AgeingRul.from_cloud(
+            self._rul[part], pf.x, pf.log_theta, pf.weights, low_quantile=self.scenario.rul_quantile
+        )
 
     def _catch_up(self) -> None:
         """Predict each filter over the flights flown since its last prediction."""
@@ -236,14 +238,16 @@ class HealthMonitor:
         c_hat = float(sf.weights @ sf.x) / self.a_fail
         w_hat = float(wf.weights @ wf.x) / self.w_crit
         c_hat, w_hat = min(max(c_hat, 0.0), 1.0), min(max(w_hat, 0.0), 1.0)
-        mean = self.sur.tables_at(c_hat, w_hat)[0]
+        mu = self.sur.feature_mean
+        k1, k3 = self._k["G1"], self._k["G3"]
+        mean = {"G1": mu(k1, c_hat, w_hat), "G3": mu(k3, c_hat, w_hat)}
         if len(self._baseline["G1"]) < BASELINE_TESTS:
             for f in ("G1", "G3"):
-                self._baseline[f].append(features[f] - float(mean[self._k[f]]))
+                self._baseline[f].append(features[f] - mean[f])
                 self._offset[f] = float(np.mean(self._baseline[f]))
             return
-        cross_g1 = float(mean[self._k["G1"]] - self.sur.tables_at(c_hat, 0.0)[0, self._k["G1"]])
-        cross_g3 = float(mean[self._k["G3"]] - self.sur.tables_at(0.0, w_hat)[0, self._k["G3"]])
+        cross_g1 = mean["G1"] - mu(k1, c_hat, 0.0)
+        cross_g3 = mean["G3"] - mu(k3, 0.0, w_hat)
         g1 = features["G1"] - self._offset["G1"] - cross_g1
         g3 = features["G3"] - self._offset["G3"] - cross_g3
         self.spring_filter.update(g1)
@@ -265,13 +269,12 @@ class HealthMonitor:
             detected = self.seal_detected
         else:
             raise ValueError(f"part = {part!r} must be 'spring' or 'seal'")
-        dist, k = self._ageing[part], float(self.pending[part])
+        mean, low, risk = self._ageing[part].summary(
+            float(self.pending[part]), float(s.risk_horizon_flights)
+        )
         cap = s.rul_cap_flights
         return PartEstimate(
-            rul_mean=min(dist.mean(k), cap),
-            rul_low=min(dist.low(k), cap),
-            prob_failure=dist.prob_failure(k, s.risk_horizon_flights),
-            detected=detected,
+            rul_mean=min(mean, cap), rul_low=min(low, cap), prob_failure=risk, detected=detected
         )
 
 
@@ -282,7 +285,8 @@ def _baselined(run_std: np.ndarray) -> np.ndarray:
 
 def _lognormal_sampler(sigma: float):
     def sample(rng: np.random.Generator, n: int) -> np.ndarray:
-        return np.exp(sigma * rng.standard_normal(n))
+        # exp(sigma * rng.standard_normal(n)), the normals drawn in numba (same values)
+        return np.exp(sigma * NormalStream(rng).standard_normal(n))
 
     return sample
 

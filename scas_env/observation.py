@@ -133,9 +133,6 @@ class ObservationBuilder:
     def within_acceptance(self, feats: dict[str, float]) -> bool:
         return all(lo <= feats[f] <= hi for f, (lo, hi) in self.acceptance.items())
 
-    def raw_features(self) -> dict[str, float]:
-        return dict(self.last)
-
     def _values(self, env: ScasMaintenanceEnv) -> dict[str, list[float]]:
         out: dict[str, list[float]] = {}
         if self.scenario.obs_mode in ("features+rul", "features", "dict"):

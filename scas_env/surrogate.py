@@ -31,6 +31,7 @@ from __future__ import annotations
 
 import json
 from bisect import bisect_right
+from collections.abc import Sequence
 from dataclasses import asdict, dataclass
 from functools import lru_cache
 from importlib import resources
@@ -92,6 +93,7 @@ class SurrogateModel:
         object.__setattr__(self, "_stack", stack)
         object.__setattr__(self, "_crack_list", self.crack_grid.tolist())
         object.__setattr__(self, "_wear_list", self.wear_grid.tolist())
+        object.__setattr__(self, "_stack_lists", stack.tolist())
         if self.version != SURROGATE_VERSION:
             raise ValueError(
                 f"surrogate version {self.version} is not the supported {SURROGATE_VERSION}; "
@@ -164,6 +166,34 @@ class SurrogateModel:
             + corner[:, :, 1, 1] * (tc * tw)
         )
 
+    def feature_mean(self, k: int, crack_frac: float, wear_frac: float) -> float:
+        """Mean of feature ``k`` at one scalar (c, w): ``tables_at(c, w)[0, k]``, the same
+        float, without the arrays (the monitor's per-test path)."""
+        return self._scalar_tables(crack_frac, wear_frac, (k,), (0,))[0]
+
+    def _scalar_tables(
+        self, crack_frac: float, wear_frac: float, idx: Sequence[int], stats: Sequence[int]
+    ) -> list[float]:
+        """``tables_at(c, w)[s, k]`` for s in ``stats``, k in ``idx`` (that order), as Python
+        floats with the same arithmetic: the bilinear weights of :meth:`tables_at`."""
+        c, w = float(crack_frac), float(wear_frac)
+        if not (0.0 <= c <= 1.0 and 0.0 <= w <= 1.0):
+            raise ValueError(f"crack_frac = {c} and wear_frac = {w} must lie in [0, 1]")
+        cg, wg = self._crack_list, self._wear_list
+        i = min(bisect_right(cg, c) - 1, len(cg) - 2)
+        j = min(bisect_right(wg, w) - 1, len(wg) - 2)
+        tc = (c - cg[i]) / (cg[i + 1] - cg[i])
+        tw = (w - wg[j]) / (wg[j + 1] - wg[j])
+        w00, w10 = (1 - tc) * (1 - tw), tc * (1 - tw)
+        w01, w11 = (1 - tc) * tw, tc * tw
+        out = []
+        for s in stats:
+            table = self._stack_lists[s]
+            for k in idx:
+                lo, hi = table[k][i], table[k][i + 1]
+                out.append(lo[j] * w00 + hi[j] * w10 + lo[j + 1] * w01 + hi[j + 1] * w11)
+        return out
+
     def sample(
         self,
         crack_frac: float,
@@ -177,8 +207,21 @@ class SurrogateModel:
         ``unit_z`` holds one standard-normal draw per modelled feature (from
         :meth:`draw_unit_z`); the run noise is ``rng.standard_normal(len(idx))``.
         """
-        t = self.tables_at(crack_frac, wear_frac)[:, idx]
-        return t[0] + t[1] * unit_z[idx] + t[2] * rng.standard_normal(len(idx))
+        return np.array(self.sample_list(crack_frac, wear_frac, unit_z, rng, idx))
+
+    def sample_list(
+        self,
+        crack_frac: float,
+        wear_frac: float,
+        unit_z: FloatArray,
+        rng: np.random.Generator,
+        idx: Sequence[int],
+    ) -> list[float]:
+        """:meth:`sample` as a list of Python floats (the same values, without arrays)."""
+        n = len(idx)
+        t = self._scalar_tables(crack_frac, wear_frac, idx, (0, 1, 2))
+        z = rng.standard_normal(n).tolist()
+        return [t[m] + t[n + m] * float(unit_z[k]) + t[2 * n + m] * z[m] for m, k in enumerate(idx)]
 
     def draw_unit_z(self, rng: np.random.Generator) -> FloatArray:
         """Standardised installation effects, one per modelled feature."""

@@ -46,7 +46,7 @@ import numpy as np
 import numpy.typing as npt
 from numba import njit
 
-from prognostics.normals import NormalStream, fill_truncated_normal
+from prognostics.normals import NormalStream, fill_truncated_normal, standard_normal
 from scas_env.params import FluidParams, ScasParams, SealParams, SpringParams
 
 FloatArray = npt.NDArray[np.float64]
@@ -127,7 +127,9 @@ def _truncated(
         else np.broadcast_to(a, shape).ravel()
         for a in arrays
     ]  # fmt: skip
-    status, worst = _check_truncated(*flat)
+    out = np.empty(shape)
+    with stream.lock:
+        status, worst = _draw_truncated(stream.handle, *flat, out.reshape(-1))
     if status == 1:
         raise ValueError(f"truncated_normal: mean = {mean!r} and sigma = {sigma!r} must be finite")
     if status == 2:
@@ -139,9 +141,6 @@ def _truncated(
             f"truncated_normal: bounds [{lower!r}, {upper!r}] keep only a fraction {worst:.3g} "
             f"of N({mean!r}, {sigma!r}^2); at least {MIN_ACCEPTANCE} is required"
         )
-    out = np.empty(shape)
-    with stream.lock:
-        fill_truncated_normal(stream.handle, *flat, out.reshape(-1))
     return float(out[()]) if out.ndim == 0 else out
 
 
@@ -179,6 +178,73 @@ def _check_truncated(
             acc = 1.0 if a_lo <= m <= a_hi else 0.0
         worst = min(worst, acc)
     return 0, worst
+
+
+@njit(cache=True)
+def _draw_truncated(
+    handle: tuple[int, int, int],
+    mu: np.ndarray,
+    sd: np.ndarray,
+    lo: np.ndarray,
+    hi: np.ndarray,
+    out: np.ndarray,
+) -> tuple[int, float]:
+    """Check (:func:`_check_truncated`), then draw (``fill_truncated_normal``) if well posed."""
+    status, worst = _check_truncated(mu, sd, lo, hi)
+    if status == 0 and worst >= MIN_ACCEPTANCE:
+        fill_truncated_normal(handle, mu, sd, lo, hi, out)
+    return status, worst
+
+
+@njit(cache=True)
+def _draw_unit_values(
+    handle: tuple[int, int, int],
+    wire_args: np.ndarray,
+    coil_args: np.ndarray,
+    crack_args: np.ndarray,
+    wire: np.ndarray,
+    coil: np.ndarray,
+    z_c: np.ndarray,
+    z_w: np.ndarray,
+    a0: np.ndarray,
+    bias: np.ndarray,
+) -> tuple[int, int, float]:
+    """The draws of :func:`draw_units`, in its order, for ``n = a0.size`` units.
+
+    ``wire_args = (d_nom, sigma_d, d_lo, d_hi)``, ``coil_args = (D_nom, sigma_D, D_hi)``,
+    ``crack_args = (a0_nom, sigma_a0, sigma_bias)``; ``z_c``, ``z_w``: the standard normals
+    of Paris C and k_w. Returns ``(stage, status, worst)``: stage 0 if all went well, else
+    1/2/3 for the wire/coil/crack draw whose arguments failed :func:`_check_truncated`
+    (nothing drawn after it).
+    """
+    n = a0.size
+    one = np.empty(1)
+    wire_flat, coil_flat = wire.reshape(-1), coil.reshape(-1)
+    status, worst = _draw_truncated(
+        handle, wire_args[0:1], wire_args[1:2], wire_args[2:3], wire_args[3:4], wire_flat
+    )
+    if status or worst < MIN_ACCEPTANCE:
+        return 1, status, worst
+    one[0] = coil_args[2]
+    status, worst = _draw_truncated(
+        handle, coil_args[0:1], coil_args[1:2], wire_flat, one, coil_flat
+    )
+    if status or worst < MIN_ACCEPTANCE:
+        return 2, status, worst
+    for k in range(n):
+        z_c[k] = standard_normal(handle)
+    for k in range(n):
+        z_w[k] = standard_normal(handle)
+    upper = np.empty(n)
+    for k in range(n):
+        upper[k] = min(wire[k, 0], wire[k, 1])
+    one[0] = 0.0
+    status, worst = _draw_truncated(handle, crack_args[0:1], crack_args[1:2], one, upper, a0)
+    if status or worst < MIN_ACCEPTANCE:
+        return 3, status, worst
+    for k in range(n):
+        bias[k] = 0.0 + crack_args[2] * standard_normal(handle)
+    return 0, 0, 1.0
 
 
 @functools.cache
@@ -348,20 +414,25 @@ def draw_units(params: ScasParams, rng: np.random.Generator, n: int) -> tuple[Un
     d_lo, d_hi = _field_range(SpringParams, "wire_diameter_m")
     big_d_hi = _field_range(SpringParams, "mean_coil_diameter_m")[1]
     stream = NormalStream(rng)
-    wire = _truncated(
-        stream, sp.wire_diameter_m, unc.wire_diameter_sigma_m, d_lo, d_hi, size=(n, 2)
-    )
-    coil = _truncated(
-        stream, sp.mean_coil_diameter_m, unc.coil_diameter_sigma_m, wire, big_d_hi, None
-    )
-    paris_c = sp.paris_c * np.exp(unc.paris_c_log_sigma * rng.standard_normal(n))
-    wear_rate = params.seal.wear_rate_m3_n_m * np.exp(
-        unc.wear_rate_log_sigma * rng.standard_normal(n)
-    )
-    a0 = _truncated(
-        stream, sp.initial_crack_m, unc.initial_crack_sigma_m, 0.0, wire.min(axis=1), None
-    )
-    bias = rng.normal(0.0, unc.null_bias_sigma_a, size=n)
+    wire, coil = np.empty((n, 2)), np.empty((n, 2))
+    z_c, z_w, a0, bias = np.empty(n), np.empty(n), np.empty(n), np.empty(n)
+    with stream.lock:
+        stage, status, worst = _draw_unit_values(
+            stream.handle,
+            np.array([sp.wire_diameter_m, unc.wire_diameter_sigma_m, d_lo, d_hi]),
+            np.array([sp.mean_coil_diameter_m, unc.coil_diameter_sigma_m, big_d_hi]),
+            np.array([sp.initial_crack_m, unc.initial_crack_sigma_m, unc.null_bias_sigma_a]),
+            wire, coil, z_c, z_w, a0, bias,
+        )  # fmt: skip
+    if stage:
+        what = ("wire diameters", "coil diameters", "initial cracks")[stage - 1]
+        problem = ("non-finite mean or sigma", "sigma < 0", "lower > upper")
+        raise ValueError(
+            f"draw_units: the truncated normal of the {what} is ill-posed: "
+            + (problem[status - 1] if status else f"acceptance {worst:.3g} < {MIN_ACCEPTANCE}")
+        )
+    paris_c = sp.paris_c * np.exp(unc.paris_c_log_sigma * z_c)
+    wear_rate = params.seal.wear_rate_m3_n_m * np.exp(unc.wear_rate_log_sigma * z_w)
     return tuple(
         UnitSample(
             wire_diameter_m=(float(wire[k, 0]), float(wire[k, 1])),

@@ -213,8 +213,8 @@ class ActuatorWorld:
         self, names: tuple[str, ...], idx: list[int], rng: np.random.Generator
     ) -> dict[str, float]:
         c, w = min(self.crack_fraction, 1.0), min(self.wear_fraction, 1.0)
-        values = self.surrogate.sample(c, w, self.unit_z, rng, idx)
-        return dict(zip(names, values.tolist(), strict=True))
+        values = self.surrogate.sample_list(c, w, self.unit_z, rng, idx)
+        return dict(zip(names, values, strict=True))
 
     def test(self, rng: np.random.Generator) -> dict[str, float]:
         """Run the pre-flight test; returns G1 (A) and G3 (A/m)."""

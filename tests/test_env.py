@@ -94,12 +94,22 @@ def test_pickle_round_trip_continues_identically() -> None:
         assert r1 == r2
 
 
-@pytest.mark.parametrize("action", [4, -1, 1.5, "fly", None])
+@pytest.mark.parametrize(
+    "action", [4, -1, 1.5, "fly", None, np.int64(4), np.int64(-1), np.array([1]), np.float64(1)]
+)
 def test_bad_actions_raise(action) -> None:
     env = ScasMaintenanceEnv()
     env.reset(seed=0)
     with pytest.raises(ValueError, match="action"):
         env.step(action)
+
+
+@pytest.mark.parametrize("action", [1, np.int64(1), np.int32(1), np.uint8(1), np.array(1)])
+def test_integer_actions_of_any_kind_are_accepted(action) -> None:
+    env = ScasMaintenanceEnv()
+    env.reset(seed=0)
+    *_, info = env.step(action)
+    assert info["tests"] == 1
 
 
 def test_step_before_reset_and_bad_seeds_raise() -> None:

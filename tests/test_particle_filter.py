@@ -129,6 +129,14 @@ def test_bad_inputs_raise() -> None:
         pf.predict(1.0)
     with pytest.raises(ValueError, match="theta0"):
         pf.reset(0.0, -1.0)
+    with pytest.raises(RuntimeError, match="reset"):
+        pf.predict(1.0)  # a failed reset leaves the filter unusable, not half-reset
+    with pytest.raises(ValueError, match="x0 must give 10 finite"):
+        pf.reset(np.full(10, np.nan), 1.0)
+    with pytest.raises(ValueError, match="x0 must give a scalar or 10 values"):
+        pf.reset(np.zeros(3), 1.0)
+    with pytest.raises(ValueError, match="theta0 must give a scalar or 10 values"):
+        pf.reset(0.0, lambda g, n: np.ones(n + 1))
     pf.reset(0.0, 1.0)
     with pytest.raises(ValueError, match="usage"):
         pf.predict(-1.0)

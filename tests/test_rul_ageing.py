@@ -52,6 +52,30 @@ def test_equals_the_rul_predictor_after_noise_free_exact_steps() -> None:
         assert dist.prob_failure(k, 20.0) == pytest.approx(s.prob_failure, abs=w.max() / w.sum())
 
 
+def test_from_cloud_and_summary_are_the_same_numbers() -> None:
+    """The fused paths equal RulPredictor.values + AgeingRul and mean/low/prob_failure."""
+    depth = np.linspace(1e-4, 1e-3, 50)
+    model = paris_crack_model(depth, 1e-7 * (depth / 1e-4) ** 1.1, scheme="exact")
+    rng = np.random.default_rng(8)
+    x = rng.uniform(5e-5, 1.1e-3, 500)  # below the grid, inside, beyond the threshold
+    log_theta = rng.normal(0.0, 0.4, 500)
+    w = rng.random(500)
+    pred = RulPredictor(model, 1e-3, 500, horizon_steps=20.0, low_quantile=0.1)
+    ref = AgeingRul(pred.values(x, log_theta), w, low_quantile=0.1)
+    fused = AgeingRul.from_cloud(pred, x, log_theta, w, low_quantile=0.1)
+    for a, b in zip(ref.tables(), fused.tables(), strict=True):
+        assert np.array_equal(a, b)
+    for k in (0.0, 3.0, 250.0, 1e5):
+        for h in (0.0, 20.0):
+            assert fused.summary(k, h) == (ref.mean(k), ref.low(k), ref.prob_failure(k, h))
+    with pytest.raises(ValueError, match="one length"):
+        AgeingRul.from_cloud(pred, x, log_theta[:-1], w, low_quantile=0.1)
+    with pytest.raises(ValueError, match="weights"):
+        AgeingRul.from_cloud(pred, x, log_theta, np.zeros(500), low_quantile=0.1)
+    with pytest.raises(ValueError, match="horizon"):
+        fused.summary(0.0, np.nan)
+
+
 def test_doc_numbers_by_hand() -> None:
     dist = AgeingRul(np.array([10.0, 30.0, 50.0]), np.array([0.25, 0.25, 0.5]), low_quantile=0.3)
     assert dist.mean(0.0) == pytest.approx(35.0)

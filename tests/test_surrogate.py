@@ -69,6 +69,22 @@ def test_sampling_fast_path_equals_interpolation_and_bad_inputs_raise() -> None:
         fast = MODEL.tables_at(c, w)
         slow = np.stack([MODEL.mean_at(c, w), MODEL.unit_std_at(c, w), MODEL.run_std_at(c, w)])
         np.testing.assert_allclose(fast, slow, rtol=1e-12, atol=1e-15)
+    rng = np.random.default_rng(1)
+    grid_points = [(c, w) for c in MODEL.crack_grid for w in MODEL.wear_grid]
+    for c, w in [*rng.random((50, 2)).tolist(), *grid_points]:
+        means = MODEL.tables_at(c, w)[0]
+        for k in range(len(MODEL.features)):
+            assert MODEL.feature_mean(k, c, w) == means[k]  # the same float
+    with pytest.raises(ValueError, match="wear_frac"):
+        MODEL.feature_mean(0, 0.5, 1.01)
+    z = MODEL.draw_unit_z(rng)
+    for idx in ([0], [MODEL.index("G1"), MODEL.index("G3")], list(range(len(MODEL.features)))):
+        c, w = rng.random(2)
+        ref = np.random.default_rng(5)
+        t = MODEL.tables_at(c, w)[:, idx]
+        expected = t[0] + t[1] * z[idx] + t[2] * ref.standard_normal(len(idx))
+        got = MODEL.sample(c, w, z, np.random.default_rng(5), idx)
+        assert np.array_equal(got, expected)  # the array formula, bit for bit
     with pytest.raises(ValueError, match="crack_frac"):
         MODEL.mean_at(1.2, 0.0)
     with pytest.raises(ValueError, match="crack_frac"):

@@ -2,13 +2,14 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
 import pytest
 from scipy import stats
 
-from scas_env.params import ScasParams, UncertaintyParams
+from scas_env.params import ScasParams, SpringParams, UncertaintyParams
 from scas_env.uncertainty import (
     RunConditions,
     UnitSample,
@@ -106,6 +107,75 @@ def test_truncated_normal_direct() -> None:
     assert isinstance(truncated_normal(rng, 0.0, 1.0), float)
 
 
+def _numpy_truncated(rng, mean, sigma, lower, upper, size):
+    """The reference: numpy's vectorised rejection loop (truncated_normal before numba)."""
+    arrays = [np.asarray(v, dtype=np.float64) for v in (mean, sigma, lower, upper)]
+    shape = np.broadcast_shapes(*(a.shape for a in arrays))
+    if size is not None:
+        shape = np.broadcast_shapes(shape, (size,) if isinstance(size, int) else tuple(size))
+    mu, sd, lo, hi = (np.broadcast_to(a, shape) for a in arrays)
+    out = np.array(rng.normal(mu, sd, size=shape), dtype=np.float64)
+    bad = (out < lo) | (out > hi)
+    while np.any(bad):
+        out[bad] = rng.normal(mu[bad], sd[bad])
+        bad = (out < lo) | (out > hi)
+    return out
+
+
+@pytest.mark.parametrize(
+    ("mean", "sigma", "lower", "upper", "size"),
+    [
+        (0.0, 1.0, -0.3, 0.2, 500),  # acceptance 0.2: several rejection passes
+        (1.0, 2.0, 0.5, 3.0, None),  # scalar result
+        ([0.0, 1.0, 2.0], 1.0, [-0.1, 0.9, 1.95], 3.0, (4, 3)),  # shapes broadcast
+        ([[0.0], [1.0]], [0.5, 1.0, 1.5], 0.0, np.inf, None),  # column x row
+        (np.zeros((6, 2)), 0.0, -1.0, 1.0, None),  # sigma = 0: the mean, no draws kept
+        (0.0, 1.0, -np.inf, np.inf, 0),  # nothing to draw
+    ],
+)
+def test_truncated_normal_draws_numpy_sequence_bit_for_bit(mean, sigma, lower, upper, size):
+    """The numba kernel makes numpy's draws in numpy's order: same values, same state."""
+    ours, ref = np.random.default_rng(11), np.random.default_rng(11)
+    x = truncated_normal(ours, mean, sigma, lower=lower, upper=upper, size=size)
+    y = _numpy_truncated(ref, mean, sigma, lower, upper, size)
+    assert np.asarray(x).shape == y.shape
+    assert np.array_equal(np.asarray(x), y)
+    assert ours.random() == ref.random()  # the Generators are left in the same state
+
+
+@pytest.mark.parametrize("n", [1, 7])
+def test_draw_units_makes_numpys_draws_bit_for_bit(n: int) -> None:
+    """The one-kernel draw_units equals the sequence of numpy calls it replaced."""
+    p = ScasParams()
+    sp, unc = p.spring, p.uncertainty
+    ref = np.random.default_rng(4)
+    wire = _numpy_truncated(
+        ref, sp.wire_diameter_m, unc.wire_diameter_sigma_m, *_range("wire_diameter_m"), (n, 2)
+    )
+    coil = _numpy_truncated(
+        ref, sp.mean_coil_diameter_m, unc.coil_diameter_sigma_m, wire,
+        _range("mean_coil_diameter_m")[1], None,
+    )  # fmt: skip
+    paris_c = sp.paris_c * np.exp(unc.paris_c_log_sigma * ref.standard_normal(n))
+    wear = p.seal.wear_rate_m3_n_m * np.exp(unc.wear_rate_log_sigma * ref.standard_normal(n))
+    a0 = _numpy_truncated(
+        ref, sp.initial_crack_m, unc.initial_crack_sigma_m, 0.0, wire.min(axis=1), None
+    )
+    bias = ref.normal(0.0, unc.null_bias_sigma_a, size=n)
+    ours = np.random.default_rng(4)
+    units = draw_units(p, ours, n)
+    for k, u in enumerate(units):
+        assert u.wire_diameter_m == tuple(wire[k]) and u.mean_coil_diameter_m == tuple(coil[k])
+        assert (u.paris_c, u.wear_rate_m3_n_m) == (paris_c[k], wear[k])
+        assert (u.initial_crack_m, u.null_bias_a) == (a0[k], bias[k])
+    assert ours.random() == ref.random()
+
+
+def _range(name: str) -> tuple[float, float]:
+    md = next(f.metadata for f in dataclasses.fields(SpringParams) if f.name == name)
+    return float(md["lo"]), float(md["hi"])
+
+
 def test_same_seed_same_draws() -> None:
     p = ScasParams()
     assert draw_unit(p, np.random.default_rng(9)) == draw_unit(p, np.random.default_rng(9))
@@ -162,6 +232,14 @@ def test_bad_inputs_raise() -> None:
         draw_units(p, rng, 0)
     with pytest.raises(ValueError, match="supply_offset_sigma_frac"):
         draw_run_conditions(p, rng, supply_offset_sigma_frac=-0.1)
+    # a0 = 2.19 mm +- 0.1 um below wires of 2.2 +- 0.1 mm: half the units cannot get a flaw
+    crowded = dataclasses.replace(
+        p,
+        spring=p.spring.replace(initial_crack_m=2.19e-3),
+        uncertainty=UncertaintyParams(initial_crack_sigma_m=1e-7, wire_diameter_sigma_m=1e-4),
+    )
+    with pytest.raises(ValueError, match="initial cracks is ill-posed: acceptance"):
+        draw_units(crowded, rng, 50)
     with pytest.raises(ValueError, match="fraction"):
         truncated_normal(rng, 0.0, 1.0, lower=10.0)  # acceptance ~ 1e-23
     with pytest.raises(ValueError, match="sigma"):
