@@ -96,6 +96,7 @@ __all__ = [
     "risk_rule",
     "save_agent",
     "train",
+    "FPS_CONFIGS",
     "training_fps",
 ]
 
@@ -585,16 +586,34 @@ def train(
     return save_agent(model, venv, out_dir, name, algo=algo, scenario=scenario, extra=extra)
 
 
+#: PPO hyperparameters of :func:`training_fps`: SB3's own defaults (``PPO("MlpPolicy",
+#: env)``: n_steps 2048, batch 64, 10 epochs, a 64-64 MLP) or this project's (:data:`ALGOS`)
+FPS_CONFIGS = ("sb3-default", "project")
+
+
 def training_fps(
-    env_fn: Callable[[], gym.Env], total_timesteps: int, n_envs: int = 4, seed: int = 0
+    env_fn: Callable[[], gym.Env],
+    total_timesteps: int,
+    n_envs: int = 4,
+    seed: int = 0,
+    *,
+    config: str = "project",
 ) -> float:
-    """Frames per second of PPO (:data:`ALGOS` ``"ppo"`` settings, ``VecNormalize``, one torch
-    thread) learning ``total_timesteps`` on ``n_envs`` ``DummyVecEnv`` copies of ``env_fn()``."""
+    """Frames per second of PPO learning ``total_timesteps`` on ``n_envs`` ``DummyVecEnv``
+    copies of ``env_fn()`` under ``VecNormalize``, one torch thread, on the CPU.
+
+    ``config`` (:data:`FPS_CONFIGS`): ``"sb3-default"``, SB3's default PPO hyperparameters;
+    ``"project"``, :data:`ALGOS` ``"ppo"`` (batches of 256: fewer gradient steps per frame,
+    so the env's share of the time is larger).
+    """
+    if config not in FPS_CONFIGS:
+        raise ValueError(f"config = {config!r} must be one of {FPS_CONFIGS}")
     spec = ALGOS["ppo"]
+    kwargs = spec.kwargs if config == "project" else {}
     torch.set_num_threads(1)
     set_random_seed(seed)
     venv = VecNormalize(sb3_make_vec_env(env_fn, n_envs=n_envs, seed=seed))
-    model = spec.cls(spec.policy, venv, seed=seed, device="cpu", **spec.kwargs)
+    model = spec.cls(spec.policy, venv, seed=seed, device="cpu", **kwargs)
     start = time.perf_counter()
     model.learn(total_timesteps)
     fps = model.num_timesteps / (time.perf_counter() - start)

@@ -382,15 +382,23 @@ class ParticleFilter:
         self._ess = float(n)
         self._ready = False
         self.n_resamples = 0
+        self._make_views()
+
+    def _make_views(self) -> None:
+        # read-only views of the particle arrays, made once: the filter only ever writes
+        # into these arrays in place, so the views stay current
+        self._views = {k: _read_only(getattr(self, k)) for k in ("_x", "_log_theta", "_w")}
 
     def __getstate__(self) -> dict:
         state = self.__dict__.copy()
         del state["_scratch"]  # work space, rebuilt on loading
+        del state["_views"]  # views of the arrays, rebuilt on loading
         return state
 
     def __setstate__(self, state: dict) -> None:
         self.__dict__.update(state)
         self._scratch = np.zeros((_SCRATCH_ROWS, self._x.size))
+        self._make_views()
 
     @property
     def rng(self) -> np.random.Generator:
@@ -410,12 +418,12 @@ class ParticleFilter:
     @property
     def x(self) -> np.ndarray:
         """Read-only view of the particle severities."""
-        return _read_only(self._x)
+        return self._views["_x"]
 
     @property
     def log_theta(self) -> np.ndarray:
         """Read-only view of the particle log growth multipliers."""
-        return _read_only(self._log_theta)
+        return self._views["_log_theta"]
 
     @property
     def theta(self) -> np.ndarray:
@@ -425,7 +433,7 @@ class ParticleFilter:
     @property
     def weights(self) -> np.ndarray:
         """Read-only view of the normalised weights."""
-        return _read_only(self._w)
+        return self._views["_w"]
 
     def reset(self, x0: InitialValues, theta0: InitialValues) -> None:
         """Draw the initial cloud and set uniform weights.

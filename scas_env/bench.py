@@ -54,6 +54,20 @@ def _stepper(env: gym.Env, seed: int, test_every: int = 10) -> Callable[[], obje
     return step
 
 
+def _random_stepper(env: gym.Env, seed: int) -> Callable[[], object]:
+    """Uniform random actions (an untrained agent: half the steps replace a part)."""
+    env.reset(seed=seed)
+    actions = iter(np.random.default_rng(seed).integers(0, 4, 10**7).tolist())
+
+    def step() -> object:
+        out = env.step(next(actions))
+        if out[3]:
+            env.reset()
+        return out
+
+    return step
+
+
 def cartpole_step_s(n: int = 20_000) -> float:
     env = gym.make("CartPole-v1").unwrapped
     env.reset(seed=0)
@@ -78,6 +92,7 @@ def env_timings(
     cart = cartpole_step_s()
     surrogate = _per_call(_stepper(ScasMaintenanceEnv(), 0), n_steps)
     features_only = _per_call(_stepper(ScasMaintenanceEnv(obs_mode="features"), 0), n_steps)
+    random_actions = _per_call(_random_stepper(ScasMaintenanceEnv(), 0), n_steps)
     physics_env = ScasMaintenanceEnv(fidelity="physics")
     physics_step = _stepper(physics_env, 0, test_every=1)
     t0 = time.perf_counter()
@@ -91,6 +106,7 @@ def env_timings(
     return [
         Timing("surrogate step, features+rul (PF)", surrogate, "CartPole-v1 step", cart),
         Timing("surrogate step, features only", features_only, "CartPole-v1 step", cart),
+        Timing("surrogate step, uniform random actions", random_actions, "CartPole-v1 step", cart),
         Timing("physics step, test + 20 s window + PF", physics, "CartPole-v1 step", cart),
         Timing("physics step, first 200 of an episode", warm, "CartPole-v1 step", cart),
         Timing("in-flight features of a 20 s window", features, "CartPole-v1 step", cart),

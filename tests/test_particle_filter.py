@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import pickle
 
 import numpy as np
 import pytest
@@ -142,3 +143,23 @@ def test_bad_inputs_raise() -> None:
         pf.predict(-1.0)
     with pytest.raises(ValueError, match="finite"):
         pf.update(float("inf"))
+
+
+def test_read_only_views_follow_the_cloud_and_survive_pickling() -> None:
+    meas = MeasurementModel("poly", [0.0], [0.05], coef=[0.0, 1.0])
+    pf = ParticleFilter(linear_wear_model(1.0), meas, 200, np.random.default_rng(2))
+    pf.reset(lambda g, n: g.normal(0.0, 0.1, n), 1.0)
+    x, lt, w = pf.x, pf.log_theta, pf.weights
+    assert not (x.flags.writeable or lt.flags.writeable or w.flags.writeable)
+    resampled = False
+    for k in range(1, 30):
+        pf.predict(1.0)
+        resampled |= pf.update(float(k))
+        # the views handed out before are the current cloud, not a snapshot
+        assert np.array_equal(x, pf._x) and np.array_equal(w, pf._w)
+        assert np.array_equal(lt, pf._log_theta)
+    assert resampled
+    clone = pickle.loads(pickle.dumps(pf))
+    assert np.array_equal(clone.x, pf.x) and np.array_equal(clone.weights, pf.weights)
+    clone.predict(1.0)
+    assert np.array_equal(clone.x, clone._x) and not np.array_equal(clone.x, pf.x)
