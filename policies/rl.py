@@ -82,6 +82,7 @@ MASK_READS = ("downtime", "spring_age", "seal_age")
 __all__ = [
     "ALGOS",
     "DEFAULT_AGENT",
+    "FPS_CONFIGS",
     "AlgoSpec",
     "EvalResult",
     "MaintenanceEvalCallback",
@@ -96,7 +97,6 @@ __all__ = [
     "risk_rule",
     "save_agent",
     "train",
-    "FPS_CONFIGS",
     "training_fps",
 ]
 
