@@ -145,11 +145,8 @@ class SurrogateModel:
         """Run-to-run standard deviation at (c, w)."""
         return self._interp(self.run_std, crack_frac, wear_frac)
 
-    def tables_at(self, crack_frac: float, wear_frac: float) -> FloatArray:
-        """(mean, unit_std, run_std) of every feature at one scalar (c, w): shape (3, F).
-
-        The scalar fast path of :meth:`mean_at` and friends (same bilinear values).
-        """
+    def _cell(self, crack_frac: float, wear_frac: float) -> tuple[int, int, float, float]:
+        """Grid cell (i, j) holding one scalar (c, w) and the fractions (tc, tw) inside it."""
         c, w = float(crack_frac), float(wear_frac)
         if not (0.0 <= c <= 1.0 and 0.0 <= w <= 1.0):
             raise ValueError(f"crack_frac = {c} and wear_frac = {w} must lie in [0, 1]")
@@ -158,6 +155,14 @@ class SurrogateModel:
         j = min(bisect_right(wg, w) - 1, len(wg) - 2)
         tc = (c - cg[i]) / (cg[i + 1] - cg[i])
         tw = (w - wg[j]) / (wg[j + 1] - wg[j])
+        return i, j, tc, tw
+
+    def tables_at(self, crack_frac: float, wear_frac: float) -> FloatArray:
+        """(mean, unit_std, run_std) of every feature at one scalar (c, w): shape (3, F).
+
+        The scalar fast path of :meth:`mean_at` and friends (same bilinear values).
+        """
+        i, j, tc, tw = self._cell(crack_frac, wear_frac)
         corner = self._stack[:, :, i : i + 2, j : j + 2]
         return (
             corner[:, :, 0, 0] * ((1 - tc) * (1 - tw))
@@ -176,14 +181,7 @@ class SurrogateModel:
     ) -> list[float]:
         """``tables_at(c, w)[s, k]`` for s in ``stats``, k in ``idx`` (that order), as Python
         floats with the same arithmetic: the bilinear weights of :meth:`tables_at`."""
-        c, w = float(crack_frac), float(wear_frac)
-        if not (0.0 <= c <= 1.0 and 0.0 <= w <= 1.0):
-            raise ValueError(f"crack_frac = {c} and wear_frac = {w} must lie in [0, 1]")
-        cg, wg = self._crack_list, self._wear_list
-        i = min(bisect_right(cg, c) - 1, len(cg) - 2)
-        j = min(bisect_right(wg, w) - 1, len(wg) - 2)
-        tc = (c - cg[i]) / (cg[i + 1] - cg[i])
-        tw = (w - wg[j]) / (wg[j + 1] - wg[j])
+        i, j, tc, tw = self._cell(crack_frac, wear_frac)
         w00, w10 = (1 - tc) * (1 - tw), tc * (1 - tw)
         w01, w11 = (1 - tc) * tw, tc * tw
         out = []

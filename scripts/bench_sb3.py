@@ -64,6 +64,7 @@ def main() -> None:
     for i, c in enumerate(configs):
         ax.annotate(f"ratio {summary[c]['ratio']:.2f}", (i, summary[c]["fps_cartpole"]),
                     ha="center", va="bottom")  # fmt: skip
+    ax.set_ylim(0.0, 1.15 * max(summary[c]["fps_cartpole"] for c in configs))
     ax.set_xticks(list(x), configs)
     ax.set_ylabel("PPO frames / s (median)")
     ax.legend(loc="lower right")
