@@ -32,7 +32,6 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import gymnasium as gym
-import numba
 import numpy as np
 from tqdm.auto import tqdm
 
@@ -41,7 +40,7 @@ from policies.base import make_policy, policy_family, policy_obs_mode
 from policies.batch_runner import TERMS, episode_row, run_batch
 from policies.benchmark_stats import summarize
 from scas_env import ENV_ID
-from scas_env.parallel import map_chunks
+from scas_env.parallel import in_worker, init_worker, map_chunks, single_thread
 from scas_env.world import PARTS
 
 #: Named plug-ins: a benchmark name that needs a module imported first (trained agents).
@@ -200,6 +199,8 @@ def _run_chunk(
         if p not in built:
             names = env.unwrapped.obs_names if physics else env.obs_names
             built[p] = make_policy(spec.name, names, **dict(spec.params))
+            if in_worker():
+                single_thread()  # the policy may have loaded torch
         if physics:
             results = [run_episode(env, built[p], es, ps) for _, es, ps in batch]
         else:
@@ -224,8 +225,8 @@ def _run_chunk_ray(
     env_kwargs: Mapping[str, Any],
     chunk: Sequence[tuple[int, int, int, int]],
 ) -> list[dict[str, Any]]:
-    """:func:`_run_chunk` in a Ray worker, with one numba thread like the local workers."""
-    numba.set_num_threads(1)
+    """:func:`_run_chunk` in a Ray worker, one thread per library like the local workers."""
+    init_worker()
     return _run_chunk(specs, env_kwargs, chunk)
 
 

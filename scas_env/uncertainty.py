@@ -74,7 +74,10 @@ def truncated_normal(
     truncated normal. The acceptance probability ``Phi((upper-mean)/sigma) -
     Phi((lower-mean)/sigma)`` must be at least :data:`MIN_ACCEPTANCE` for every element,
     which also guarantees that the loop ends. ``sigma = 0`` returns ``mean`` (which must then
-    lie inside the bounds).
+    lie inside the bounds). The draws are made in numba on ``rng``'s bit generator
+    (:func:`prognostics.normals.fill_truncated_normal`): the values, their order and the
+    Generator's final state are those of numpy's vectorised loop ``x = rng.normal(mean,
+    sigma); while any(bad): x[bad] = rng.normal(mean[bad], sigma[bad])``.
 
     Parameters
     ----------
