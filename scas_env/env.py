@@ -105,7 +105,9 @@ class ScasMaintenanceEnv(gym.Env):
 
     ## Info
 
-    A flat dict of scalars and small dicts, its size fixed over the episode: ``slot``,
+    A dict of scalars and small dicts (``scas_env.info.StepInfo``, a ``dict`` whose deep copy
+    is fast: SB3's ``DummyVecEnv`` deep-copies infos each step), its size fixed over the
+    episode: ``slot``,
     ``availability`` (flights flown / slots), ``flights``, ``cost_usd`` (costs so far),
     ``revenue_usd``, ``tests``, ``no_go`` (failed tests), ``downtime``; per part
     ``failures`` and ``replacements`` (counts, failures included); ``wasted_life_flights``
