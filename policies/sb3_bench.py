@@ -21,8 +21,9 @@ from tqdm.auto import tqdm
 
 from policies.rl import FPS_CONFIGS, make_env, training_fps
 
+#: the reference env (a Gymnasium id) and the label of ours
 REFERENCE_ID = "CartPole-v1"
-ENV_ID = "ScasMaintenance-v0"
+ENV_LABEL = "ScasMaintenance-v0"
 
 
 def fps_pairs(
@@ -40,7 +41,7 @@ def fps_pairs(
     for config in configs:
         if config not in FPS_CONFIGS:
             raise ValueError(f"config = {config!r} must be one of {FPS_CONFIGS}")
-    envs = {REFERENCE_ID: partial(gym.make, REFERENCE_ID), ENV_ID: make_env}
+    envs = {REFERENCE_ID: partial(gym.make, REFERENCE_ID), ENV_LABEL: make_env}
     rows = []
     runs = [(c, r) for r in range(repeats) for c in configs]
     for config, rep in tqdm(runs, desc="PPO runs (pairs)"):
@@ -52,8 +53,8 @@ def fps_pairs(
                 "config": config,
                 "repeat": rep,
                 "fps_cartpole": fps[REFERENCE_ID],
-                "fps_scas": fps[ENV_ID],
-                "ratio": fps[ENV_ID] / fps[REFERENCE_ID],
+                "fps_scas": fps[ENV_LABEL],
+                "ratio": fps[ENV_LABEL] / fps[REFERENCE_ID],
             }
         )
     return rows
@@ -76,4 +77,4 @@ def summarise(rows: Sequence[dict[str, Any]]) -> dict[str, dict[str, float]]:
     return out
 
 
-__all__ = ["ENV_ID", "REFERENCE_ID", "fps_pairs", "summarise"]
+__all__ = ["ENV_LABEL", "REFERENCE_ID", "fps_pairs", "summarise"]

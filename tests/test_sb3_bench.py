@@ -5,7 +5,7 @@ from __future__ import annotations
 import pytest
 
 from policies.rl import make_env, training_fps
-from policies.sb3_bench import ENV_ID, REFERENCE_ID, fps_pairs, summarise
+from policies.sb3_bench import ENV_LABEL, REFERENCE_ID, fps_pairs, summarise
 
 
 def test_runs_alternate_and_ratios_are_taken_within_a_pair() -> None:
@@ -44,4 +44,4 @@ def test_bad_arguments_raise() -> None:
 def test_training_fps_runs_ppo_for_real() -> None:
     fps = training_fps(make_env, 512, n_envs=1, seed=0, config="project")
     assert fps > 0.0
-    assert ENV_ID.startswith("ScasMaintenance") and REFERENCE_ID == "CartPole-v1"
+    assert ENV_LABEL.startswith("ScasMaintenance") and REFERENCE_ID == "CartPole-v1"
