@@ -91,6 +91,7 @@ __all__ = [
     "always_fly",
     "env_action_mask",
     "evaluate",
+    "fps_ppo_kwargs",
     "load_agent",
     "make_env",
     "make_vec_env",
@@ -591,6 +592,14 @@ def train(
 FPS_CONFIGS = ("sb3-default", "project")
 
 
+def fps_ppo_kwargs(config: str) -> dict[str, Any]:
+    """PPO keyword arguments of :func:`training_fps` for ``config`` (:data:`FPS_CONFIGS`):
+    none for SB3's defaults, :data:`ALGOS` ``"ppo"``'s for the project's."""
+    if config not in FPS_CONFIGS:
+        raise ValueError(f"config = {config!r} must be one of {FPS_CONFIGS}")
+    return dict(ALGOS["ppo"].kwargs) if config == "project" else {}
+
+
 def training_fps(
     env_fn: Callable[[], gym.Env],
     total_timesteps: int,
@@ -606,10 +615,8 @@ def training_fps(
     ``"project"``, :data:`ALGOS` ``"ppo"`` (batches of 256: fewer gradient steps per frame,
     so the env's share of the time is larger).
     """
-    if config not in FPS_CONFIGS:
-        raise ValueError(f"config = {config!r} must be one of {FPS_CONFIGS}")
     spec = ALGOS["ppo"]
-    kwargs = spec.kwargs if config == "project" else {}
+    kwargs = fps_ppo_kwargs(config)
     torch.set_num_threads(1)
     set_random_seed(seed)
     venv = VecNormalize(sb3_make_vec_env(env_fn, n_envs=n_envs, seed=seed))

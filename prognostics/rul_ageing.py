@@ -102,7 +102,7 @@ def _build_from_cloud(
 
 
 @njit(cache=True)
-def _summary(
+def ageing_summary(
     r: np.ndarray,
     cum_w: np.ndarray,
     suffix_w: np.ndarray,
@@ -111,7 +111,8 @@ def _summary(
     k: float,
     horizon: float,
 ) -> tuple[float, float, float]:
-    """(mean, low, risk) after ``k`` steps: :meth:`AgeingRul.mean`, ``low``, ``prob_failure``."""
+    """(mean, low, risk) after ``k`` steps of :class:`AgeingRul`'s tables (its ``mean``,
+    ``low`` and ``prob_failure``), for kernels that hold many of them (a vector env)."""
     j = np.searchsorted(r, k, side="right")
     mean = max(suffix_wr[j] - k * suffix_w[j], 0.0)
     j = np.searchsorted(r, horizon + k, side="right")
@@ -205,7 +206,7 @@ class AgeingRul:
         """``(mean(k), low(k), prob_failure(k, horizon))`` in one call (the same numbers)."""
         if not (math.isfinite(horizon) and horizon >= 0.0):
             raise ValueError(f"horizon = {horizon} must be finite and >= 0")
-        return _summary(
+        return ageing_summary(
             self._r, self._cum_w, self._suffix_w, self._suffix_wr, self._low, float(k), horizon
         )
 
@@ -217,4 +218,4 @@ class AgeingRul:
         return min(float(self._cum_w[j]), 1.0)
 
 
-__all__ = ["AgeingRul"]
+__all__ = ["AgeingRul", "ageing_summary"]

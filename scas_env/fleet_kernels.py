@@ -23,6 +23,7 @@ import numpy as np
 from numba import njit
 
 from prognostics.degradation_models import damage_scalar, inverse_damage_scalar
+from prognostics.rul_ageing import ageing_summary
 
 
 @njit(cache=True, inline="always")
@@ -142,17 +143,14 @@ def ageing_estimates(
     Row ``[e, p]`` of the tables is :class:`prognostics.rul_ageing.AgeingRul`'s state;
     mean and low are capped at ``cap`` as in :meth:`scas_env.monitor.HealthMonitor.estimate`.
     """
-    n = sorted_rul.shape[2]
     for e in range(sorted_rul.shape[0]):
         for p in range(sorted_rul.shape[1]):
-            k = float(pending[e, p])
-            r = sorted_rul[e, p]
-            j = np.searchsorted(r, k, side="right")
-            mean = max(suffix_wr[e, p, j] - k * suffix_w[e, p, j], 0.0)
-            j = np.searchsorted(r, horizon + k, side="right")
-            risk = min(cum_w[e, p, min(j, n)], 1.0)
+            mean, low_k, risk = ageing_summary(
+                sorted_rul[e, p], cum_w[e, p], suffix_w[e, p], suffix_wr[e, p], low[e, p],
+                float(pending[e, p]), horizon,
+            )  # fmt: skip
             out[e, p, 0] = min(mean, cap)
-            out[e, p, 1] = min(max(low[e, p] - k, 0.0), cap)
+            out[e, p, 1] = min(low_k, cap)
             out[e, p, 2] = risk
 
 

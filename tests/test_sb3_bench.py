@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import pytest
 
-from policies.rl import make_env, training_fps
-from policies.sb3_bench import ENV_LABEL, REFERENCE_ID, fps_pairs, summarise
+from policies.rl import ALGOS, fps_ppo_kwargs, make_env, training_fps
+from policies.sb3_bench import fps_pairs, summarise
 
 
 def test_runs_alternate_and_ratios_are_taken_within_a_pair() -> None:
@@ -41,7 +41,14 @@ def test_bad_arguments_raise() -> None:
         training_fps(make_env, 100, config="tuned")
 
 
+def test_configs_are_sb3_defaults_and_the_project_settings() -> None:
+    assert fps_ppo_kwargs("sb3-default") == {}
+    project = fps_ppo_kwargs("project")
+    assert project == dict(ALGOS["ppo"].kwargs) and project["batch_size"] == 256
+    project["batch_size"] = 1  # a copy: the shipped settings stay as they are
+    assert ALGOS["ppo"].kwargs["batch_size"] == 256
+
+
 def test_training_fps_runs_ppo_for_real() -> None:
     fps = training_fps(make_env, 512, n_envs=1, seed=0, config="project")
-    assert fps > 0.0
-    assert ENV_LABEL.startswith("ScasMaintenance") and REFERENCE_ID == "CartPole-v1"
+    assert 0.0 < fps < 1e6  # 512 frames of PPO take well over a microsecond
