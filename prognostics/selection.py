@@ -24,15 +24,16 @@ import os
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Literal
+from typing import TYPE_CHECKING, Literal
 
 import numpy as np
 import scipy.stats
-from matplotlib.backends.backend_agg import FigureCanvasAgg
-from matplotlib.figure import Figure
 from numpy.typing import ArrayLike, NDArray
 
 from prognostics.detection import DetectorConfig, PercentileDetector
+
+if TYPE_CHECKING:  # matplotlib is imported lazily, inside the plotting function
+    from matplotlib.figure import Figure
 
 __all__ = [
     "DEFAULT_REDUNDANCY_NATS",
@@ -359,6 +360,9 @@ def plot_accuracy_sensitivity(
     finite = snr[np.isfinite(snr)]
     lo, hi = (finite.min(), finite.max()) if finite.size else (0.0, 0.0)
     span = hi - lo if hi > lo else 1.0
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
     fig = Figure(figsize=(6.4, 4.8))
     FigureCanvasAgg(fig)
     ax = fig.add_subplot()

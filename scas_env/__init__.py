@@ -1,16 +1,24 @@
-"""SCAS maintenance gym: the simulated helicopter SCAS actuator world.
+"""SCAS maintenance gym: a Gymnasium task around a degrading helicopter SCAS actuator.
 
-Physics modules (``scas_env.physics``, ``scas_env.params``, ``scas_env.missions``...) never
-import gymnasium; only the environment modules do. Environment ids are registered here,
-once, on import.
+Layout (imports point down only; ``tests/test_layers.py`` enforces it):
+
+- ``scas_env`` (this package's top): the maintenance task - the env, its native vector twin,
+  the observation and info contract, scenario, costs, world, health monitor.
+- ``scas_env.actuator``: one actuator - parameters, physics, faults, missions, sensing,
+  degradation, calibration, feature surrogate, shipped data. Never imports gymnasium.
+- ``scas_env.studies``: offline work beside the env - campaigns, the paper's reproduction,
+  figures, demo, builders of the shipped data, speed benches. Nothing imports it but scripts
+  and tests.
+
+Environment ids are registered here, once, on import.
 """
 
 from gymnasium.envs.registration import register, registry
 
-from scas_env.params import ScasParams
+from scas_env._version import __version__
+from scas_env.actuator.params import ScasParams
 
 __all__ = ["ENV_ID", "ScasParams", "__version__"]
-__version__ = "0.1.0"
 
 ENV_ID = "scas_env/ScasMaintenance-v0"
 

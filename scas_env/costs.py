@@ -17,7 +17,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from scas_env.config import Validated, param
+from scas_env.actuator.config import Validated, param
 
 
 @dataclass(frozen=True)

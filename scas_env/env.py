@@ -8,15 +8,15 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
-from scas_env.calibration import Calibration, calibration_for
+from scas_env.actuator.calibration import Calibration, calibration_for
+from scas_env.actuator.params import ScasParams
+from scas_env.actuator.surrogate import SurrogateModel, default_surrogate
+from scas_env.block_draws import NormalBuffer
 from scas_env.costs import CostModel
 from scas_env.info import StepInfo
 from scas_env.monitor import HealthMonitor
-from scas_env.normal_buffer import NormalBuffer
 from scas_env.observation import ObservationBuilder
-from scas_env.params import ScasParams
 from scas_env.scenario import Scenario
-from scas_env.surrogate import SurrogateModel, default_surrogate
 from scas_env.world import PARTS, ActuatorWorld
 
 #: action types checked without ``Discrete.contains`` (SB3 passes numpy int64)
@@ -224,7 +224,7 @@ class ScasMaintenanceEnv(gym.Env):
         }
         if self.scenario.fidelity == "surrogate":
             # The surrogate draws only standard normals from these two streams: hand them
-            # out from blocks (the same numbers, fewer calls; scas_env.normal_buffer).
+            # out from blocks (the same numbers, fewer calls; scas_env.block_draws).
             for name in ("measure", "degradation"):
                 values, position = self.buffer_storage.get(name, (None, None))
                 self.rngs[name] = NormalBuffer(self.rngs[name], values, position)

@@ -6,7 +6,7 @@ seal wear in m, rates in m per flight, features in SI (A, A/m, m, -).
 
 * :func:`surrogate_flights`: one flight of every listed actuator: in-flight features from
   the surrogate's random-effects model (bilinear in crack and wear fraction, as
-  :meth:`scas_env.surrogate.SurrogateModel.tables_at`), then the crack advanced by the
+  :meth:`scas_env.actuator.surrogate.SurrogateModel.tables_at`), then the crack advanced by the
   damage integral of the growth table times ``theta`` times a lognormal flight factor, the
   wear by ``rate * multiplier * factor`` (:mod:`scas_env.world`). Nothing is committed: the
   caller decides (a flight that fails takes the slow path).

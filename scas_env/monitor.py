@@ -44,11 +44,11 @@ from prognostics.normals import NormalStream
 from prognostics.particle_filter import ParticleFilter
 from prognostics.rul import RulPredictor
 from prognostics.rul_ageing import AgeingRul
-from scas_env.calibration import Calibration
-from scas_env.params import ScasParams
+from scas_env.actuator.calibration import Calibration
+from scas_env.actuator.params import ScasParams
+from scas_env.actuator.surrogate import SurrogateModel
+from scas_env.actuator.uncertainty import truncated_normal
 from scas_env.scenario import Scenario
-from scas_env.surrogate import SurrogateModel
-from scas_env.uncertainty import truncated_normal
 
 BASELINE_TESTS = 3
 #: Artificial-evolution random walk of log theta per flight (lets the filters track the unit).

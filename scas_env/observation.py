@@ -12,10 +12,10 @@ import numpy as np
 from gymnasium import spaces
 from scipy.stats import norm
 
+from scas_env.actuator.params import ScasParams
+from scas_env.actuator.surrogate import SurrogateModel
 from scas_env.costs import CostModel
-from scas_env.params import ScasParams
 from scas_env.scenario import Scenario
-from scas_env.surrogate import SurrogateModel
 from scas_env.world import FLIGHT_FEATURES, GROUND_FEATURES
 
 if TYPE_CHECKING:

@@ -14,7 +14,7 @@ summaries by a binary search per part (:mod:`prognostics.rul_ageing`). Everythin
 autoreset) goes through that actuator's own :class:`~scas_env.env.ScasMaintenanceEnv`,
 synchronised with the arrays before and after: these cost O(N_particles log N_particles)
 whatever the batching. The surrogate's normal draws of every actuator come from rows of one
-table (:class:`~scas_env.normal_buffer.NormalBuffer`), read in a batch.
+table (:class:`~scas_env.block_draws.NormalBuffer`), read in a batch.
 
 The physics fidelity has no batched form: ``make_vec`` then returns
 :class:`ScasMaintenanceSyncVectorEnv` (N single envs in one process).
@@ -30,9 +30,9 @@ from gymnasium import spaces
 from gymnasium.vector import AutoresetMode, SyncVectorEnv, VectorEnv
 from gymnasium.vector.utils import batch_space
 
+from scas_env.block_draws import DEFAULT_BLOCK
 from scas_env.env import REWARD_TERMS, ScasMaintenanceEnv
 from scas_env.fleet_kernels import ageing_estimates, surrogate_flights, true_rul
-from scas_env.normal_buffer import DEFAULT_BLOCK
 from scas_env.observation import FEATURE_UNITS, GROUP_ORDER, clip_to_bounds
 from scas_env.world import FLIGHT_FEATURES, GROUND_FEATURES, PARTS
 

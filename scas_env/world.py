@@ -11,14 +11,15 @@ depth, seal wear, the unit's growth constants) and answers three requests:
 
 Two fidelities, one interface:
 
-* ``"surrogate"``: features from :class:`~scas_env.surrogate.SurrogateModel`
+* ``"surrogate"``: features from :class:`~scas_env.actuator.surrogate.SurrogateModel`
   (installation effects drawn when a spring pair is fitted); damage from the calibrated
   growth tables: the crack advances by the damage integral of the table times the unit's
   multiplier ``theta = C_unit / C_nom`` times a lognormal flight factor of the calibrated
   flight-to-flight scatter, the wear by ``r k_w,unit / k_w,nom`` times its own factor.
 * ``"physics"``: the actuator is simulated for each test and each flight window
-  (:mod:`scas_env.measure`); the crack grows by Paris' law on the window's rainflow cycles
-  scaled to the flight, the wear by Archard on its friction work (:mod:`scas_env.degradation`).
+  (:mod:`scas_env.actuator.sensing`); the crack grows by Paris' law on the window's rainflow
+  cycles scaled to the flight, the wear by Archard on its friction work
+  (:mod:`scas_env.actuator.flight_damage`).
 
 The spring failure depth is the nominal one (calibration) in the surrogate and the unit's
 own (its wire and coil diameters) in the physics; the seal fails at the calibrated
@@ -33,21 +34,21 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from prognostics.degradation_models import TabulatedRateModel, paris_crack_model
-from scas_env.calibration import Calibration
-from scas_env.degradation import (
+from scas_env.actuator.calibration import Calibration
+from scas_env.actuator.flight_damage import (
     crack_increment_m,
     flight_loads_from_run,
     growth_model,
     wear_increment_m,
 )
+from scas_env.actuator.health import CRACKED_SPRING, HealthState, actuator_config
+from scas_env.actuator.params import ScasParams
+from scas_env.actuator.physics.spring import failure_depth_from_params
+from scas_env.actuator.sensing import FlightWindow, draw_window, flight_window, ground_test
+from scas_env.actuator.surrogate import SurrogateModel
+from scas_env.actuator.uncertainty import UnitSample, draw_run_conditions, draw_unit
 from scas_env.fleet_kernels import surrogate_flights, true_rul
-from scas_env.health import CRACKED_SPRING, HealthState, actuator_config
-from scas_env.measure import FlightWindow, draw_window, flight_window, ground_test
-from scas_env.params import ScasParams
-from scas_env.physics.spring import failure_depth_from_params
 from scas_env.scenario import Scenario
-from scas_env.surrogate import SurrogateModel
-from scas_env.uncertainty import UnitSample, draw_run_conditions, draw_unit
 
 PARTS = ("spring", "seal")
 GROUND_FEATURES = ("G1", "G3")

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from scas_env.bench import env_timings, format_timings, vector_throughput
+from scas_env.studies.env_speed import env_timings, format_timings, vector_throughput
 
 
 def main() -> None:

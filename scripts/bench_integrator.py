@@ -1,7 +1,7 @@
 """Integrator speed and accuracy: real-time factor, batch throughput, error vs fine step.
 
 Usage: ``python scripts/bench_integrator.py [--dt 2.5e-4] [--friction-velocity 2e-3]``.
-Without options the ScasParams defaults are used. See scas_env.physics.actuator_bench.
+Without options the ScasParams defaults are used. See scas_env.studies.integrator_speed.
 """
 
 from __future__ import annotations
@@ -10,8 +10,8 @@ import argparse
 
 import numba
 
-from scas_env.params import ScasParams
-from scas_env.physics.actuator_bench import benchmark_integrator, format_results
+from scas_env.actuator.params import ScasParams
+from scas_env.studies.integrator_speed import benchmark_integrator, format_results
 
 
 def main() -> None:

@@ -1,10 +1,10 @@
-"""Particle-filter and RUL timing for N particles (logic in prognostics.bench)."""
+"""Particle-filter and RUL timing for N particles (logic in scas_env.studies.prognostics_speed)."""
 
 from __future__ import annotations
 
 import argparse
 
-from prognostics.bench import format_table, run_benchmark
+from scas_env.studies.prognostics_speed import format_table, run_benchmark
 
 
 def main() -> None:

@@ -3,7 +3,7 @@
 Usage: ``python scripts/bench_sb3.py [--timesteps 32768] [--n-envs 4] [--repeats 3]
 [--configs sb3-default,project] [--out results/bench_sb3]``. Both envs train PPO with the same
 settings (``n_envs`` ``DummyVecEnv`` copies, ``VecNormalize``, one torch thread), once with
-SB3's default hyperparameters and once with this project's (:mod:`policies.sb3_bench`); runs
+SB3's default hyperparameters and once with this project's (:mod:`policies.sb3_speed`); runs
 alternate between the envs and the median ratio over the repeats is printed (target >= 0.7)
 and saved with every run (JSON, CSV) and a bar chart (PNG).
 """
@@ -18,7 +18,7 @@ from pathlib import Path
 from matplotlib.figure import Figure
 
 from policies.rl import FPS_CONFIGS
-from policies.sb3_bench import fps_pairs, summarise
+from policies.sb3_speed import fps_pairs, summarise
 
 
 def main() -> None:

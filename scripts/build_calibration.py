@@ -8,15 +8,15 @@ from pathlib import Path
 
 import numpy as np
 
-from scas_env.calibration import DATA_FILE, build_calibration, sample_lives
-from scas_env.params import ScasParams
+from scas_env.actuator.calibration import DATA_FILE, build_calibration, sample_lives
+from scas_env.actuator.params import ScasParams
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--seed", type=int, default=2020)
     parser.add_argument("--windows", type=int, default=60, help="flight windows for the scatter")
-    parser.add_argument("--out", type=Path, default=Path("scas_env/data") / DATA_FILE)
+    parser.add_argument("--out", type=Path, default=Path("scas_env/actuator/data") / DATA_FILE)
     parser.add_argument("--lives", type=int, default=100_000, help="units for the life summary")
     args = parser.parse_args()
     params = ScasParams()

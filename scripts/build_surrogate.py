@@ -8,9 +8,9 @@ from pathlib import Path
 
 import numpy as np
 
-from scas_env.params import ScasParams
-from scas_env.surrogate import DATA_FILE
-from scas_env.surrogate_build import build_surrogate
+from scas_env.actuator.params import ScasParams
+from scas_env.actuator.surrogate import DATA_FILE
+from scas_env.studies.surrogate_builder import build_surrogate
 
 
 def main() -> None:
@@ -20,7 +20,7 @@ def main() -> None:
     parser.add_argument("--units", type=int, default=8, help="units per grid point")
     parser.add_argument("--runs", type=int, default=5, help="runs per unit")
     parser.add_argument("--workers", type=int, default=os.cpu_count() or 1)
-    parser.add_argument("--out", type=Path, default=Path("scas_env/data") / DATA_FILE)
+    parser.add_argument("--out", type=Path, default=Path("scas_env/actuator/data") / DATA_FILE)
     args = parser.parse_args()
     model = build_surrogate(
         ScasParams(),

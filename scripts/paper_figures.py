@@ -1,7 +1,8 @@
 """Paper physics figures (Figs. 3, 4, 5, 7a, 7b): one PNG each plus figures.json.
 
 Usage: ``python scripts/paper_figures.py --out results/figures [--seed 0]``.
-See scas_env.figures.paper_figures and scas_env.plotting.save_paper_figures.
+See scas_env.studies.figure_data.paper_figures and
+scas_env.studies.figure_drawing.save_paper_figures.
 """
 
 from __future__ import annotations
@@ -11,9 +12,9 @@ import time
 
 import numpy as np
 
-from scas_env.figures import paper_figures
-from scas_env.params import ScasParams
-from scas_env.plotting import save_paper_figures
+from scas_env.actuator.params import ScasParams
+from scas_env.studies.figure_data import paper_figures
+from scas_env.studies.figure_drawing import save_paper_figures
 
 
 def main() -> None:

@@ -1,7 +1,7 @@
 """Reproduce [DJS20] sections 4-5 (feature selection, detection, PF prognosis, RA/CRA).
 
-Logic in :mod:`scas_env.reproduction`, :mod:`scas_env.reproduction_paths` and
-:mod:`scas_env.reproduction_report`. Examples::
+Logic in :mod:`scas_env.studies.reproduction`, :mod:`scas_env.studies.reproduction_prognosis` and
+:mod:`scas_env.studies.reproduction_report`. Examples::
 
     python scripts/reproduce_paper.py --quick                      # CI size, < 2 min
     python scripts/reproduce_paper.py --full --campaign results/campaign/paper_100x8
@@ -14,9 +14,9 @@ import shlex
 import sys
 import time
 
-from scas_env.params import ScasParams
-from scas_env.reproduction import ReproductionConfig, run_reproduction
-from scas_env.reproduction_report import write_report
+from scas_env.actuator.params import ScasParams
+from scas_env.studies.reproduction import ReproductionConfig, run_reproduction
+from scas_env.studies.reproduction_report import write_report
 
 
 def main() -> None:

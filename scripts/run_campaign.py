@@ -1,6 +1,6 @@
 """Run a Monte Carlo campaign (runs x severity levels x fault modes) and save its table.
 
-Logic in :mod:`scas_env.campaign`; files as in :mod:`scas_env.campaign_io`
+Logic in :mod:`scas_env.studies.campaign`; files as in :mod:`scas_env.studies.campaign_table`
 (``<out>.csv`` + ``<out>.json``). Example (the paper's size, 2 workers)::
 
     python scripts/run_campaign.py --runs 100 --levels 8 --workers 2 --out results/campaign/c
@@ -11,9 +11,9 @@ from __future__ import annotations
 import argparse
 import time
 
-from scas_env.campaign import CampaignConfig, run_campaign
-from scas_env.campaign_io import CONDITIONS, FAULT_MODES
-from scas_env.params import ScasParams
+from scas_env.actuator.params import ScasParams
+from scas_env.studies.campaign import CampaignConfig, run_campaign
+from scas_env.studies.campaign_table import CONDITIONS, FAULT_MODES
 
 
 def main() -> None:

@@ -1,7 +1,7 @@
 """Demo: pre-flight test and a flight window at three health states -> CSV signals and PNGs.
 
 Usage: ``python scripts/simulate.py --out results/demo [--seed 0] [--window 20]``.
-See scas_env.demo.run_demo.
+See scas_env.studies.demo.run_demo.
 """
 
 from __future__ import annotations
@@ -9,8 +9,8 @@ from __future__ import annotations
 import argparse
 import time
 
-from scas_env.demo import DEFAULT_WINDOW_S, run_demo
-from scas_env.params import ScasParams
+from scas_env.actuator.params import ScasParams
+from scas_env.studies.demo import DEFAULT_WINDOW_S, run_demo
 
 
 def main() -> None:

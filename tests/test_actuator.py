@@ -1,7 +1,7 @@
 """SCAS actuator model: reference integrator, static closed forms, leakage, determinism, inputs.
 
 The reference model below (``_rhs``, ``_flows``, ``_static_solution``) is written again
-from the equations of the ``scas_env.physics.actuator`` docstring, independently of the
+from the equations of the ``scas_env.actuator.physics.actuator`` docstring, independently of the
 numba kernel; only the fluid bulk-modulus function is shared (tested in test_fluid).
 """
 
@@ -15,15 +15,15 @@ import pytest
 from scipy.integrate import solve_ivp
 from scipy.optimize import brentq
 
-from scas_env.params import ActuatorParams, ScasParams, SensorParams
-from scas_env.physics.actuator import (
+from scas_env.actuator.params import ActuatorParams, ScasParams, SensorParams
+from scas_env.actuator.physics.actuator import (
     ActuatorConfig,
     ActuatorRun,
     initial_state,
     simulate,
     simulate_batch,
 )
-from scas_env.physics.fluid import effective_bulk_modulus
+from scas_env.actuator.physics.fluid import effective_bulk_modulus
 
 # Step and friction regularisation recommended for the compiled RK4 (see bench_integrator).
 PARAMS = ScasParams(

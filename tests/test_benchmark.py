@@ -13,9 +13,9 @@ from scipy import stats
 from policies.benchmark import PolicySpec, episode_seeds, run_benchmark
 from policies.benchmark_report import format_table, write_outputs
 from policies.benchmark_stats import paired_difference, summarize, t_interval
-from scas_env.calibration import default_calibration, sample_lives
+from scas_env.actuator.calibration import default_calibration, sample_lives
+from scas_env.actuator.params import ScasParams
 from scas_env.costs import CostModel
-from scas_env.params import ScasParams
 
 SMALL = {"episodes": 2, "slots": 150, "seed": 5}
 
@@ -106,7 +106,7 @@ def test_ray_path_without_ray_is_a_clear_error():
 # ---------------------------------------------------------------- renewal theory
 # Age replacement of the seals alone (crack_active=0), replacement age T flights. Mapping of
 # the benchmark onto C(T) = (c_p R(T) + c_f F(T)) / int_0^T R(t) dt, time in flights flown:
-# * a seal of life L (flights, continuous, scas_env.calibration.sample_lives) fails on
+# * a seal of life L (flights, continuous, scas_env.actuator.calibration.sample_lives) fails on
 #   flight N = ceil(L) (per-flight wear scatter CV 0.07 neglected), so a cycle ends in
 #   failure when N <= T, i.e. L <= T: F(T) = P(L <= T);
 # * flights flown in a cycle: T (preventive) or N - 1 = ceil(L) - 1 (the failing flight is

@@ -8,19 +8,19 @@ import numpy as np
 import pytest
 
 from prognostics.degradation_models import paris_crack_model
-from scas_env.calibration import (
+from scas_env.actuator.calibration import (
     build_calibration,
     default_calibration,
     params_digest,
     sample_lives,
 )
-from scas_env.degradation import (
+from scas_env.actuator.flight_damage import (
     crack_increment_m,
     growth_model,
     load_spectrum_from_physics,
 )
-from scas_env.params import ScasParams
-from scas_env.uncertainty import nominal_unit
+from scas_env.actuator.params import ScasParams
+from scas_env.actuator.uncertainty import nominal_unit
 
 P = ScasParams()
 SHIPPED = default_calibration()

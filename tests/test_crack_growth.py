@@ -10,9 +10,9 @@ import numpy as np
 import pytest
 import rainflow
 
-from scas_env.params import ScasParams
-from scas_env.physics import crack_growth as cg
-from scas_env.physics import spring as sp
+from scas_env.actuator.params import ScasParams
+from scas_env.actuator.physics import crack_growth as cg
+from scas_env.actuator.physics import spring as sp
 
 D_WIRE = 2.2e-3
 D_COIL = 11e-3

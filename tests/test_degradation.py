@@ -7,7 +7,7 @@ import dataclasses
 import numpy as np
 import pytest
 
-from scas_env.degradation import (
+from scas_env.actuator.flight_damage import (
     crack_increment_m,
     crack_rate_table,
     cracked_spring_rate_n_m,
@@ -16,12 +16,12 @@ from scas_env.degradation import (
     load_spectrum_from_physics,
     wear_increment_m,
 )
-from scas_env.health import actuator_config
-from scas_env.missions import flight_profile, link_force_n
-from scas_env.params import ScasParams
-from scas_env.physics.actuator import simulate
-from scas_env.physics.seal import archard_beta_j_m3
-from scas_env.uncertainty import nominal_unit
+from scas_env.actuator.health import actuator_config
+from scas_env.actuator.missions import flight_profile, link_force_n
+from scas_env.actuator.params import ScasParams
+from scas_env.actuator.physics.actuator import simulate
+from scas_env.actuator.physics.seal import archard_beta_j_m3
+from scas_env.actuator.uncertainty import nominal_unit
 
 P = ScasParams()
 UNIT = nominal_unit(P)

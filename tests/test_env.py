@@ -278,7 +278,7 @@ def test_physics_window_library_reuses_windows_and_their_baselines() -> None:
     windows = env.world._windows
     assert 1 <= len(windows) <= 2  # five flights, at most two distinct windows
     # a library window is what draw_window gives from its own seed
-    from scas_env.measure import draw_window
+    from scas_env.actuator.sensing import draw_window
 
     k, window = next(iter(windows.items()))
     again = draw_window(

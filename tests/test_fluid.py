@@ -5,9 +5,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from scas_env.params import ATM_PA
-from scas_env.physics import actuator_model as km
-from scas_env.physics.fluid import (
+from scas_env.actuator.params import ATM_PA
+from scas_env.actuator.physics import actuator_kernels as km
+from scas_env.actuator.physics.fluid import (
     dynamic_viscosity,
     effective_bulk_modulus,
     effective_bulk_modulus_nb,

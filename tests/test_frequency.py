@@ -7,13 +7,13 @@ import math
 import numpy as np
 import pytest
 
-from scas_env.health import HealthState, actuator_config
-from scas_env.params import ScasParams
-from scas_env.physics.frequency import (
+from scas_env.actuator.bandwidth import (
     closed_loop_gain,
     cutoff_frequency_hz,
     seal_criterion,
 )
+from scas_env.actuator.health import HealthState, actuator_config
+from scas_env.actuator.params import ScasParams
 
 P = ScasParams()
 

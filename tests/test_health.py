@@ -7,11 +7,11 @@ import dataclasses
 import numpy as np
 import pytest
 
-from scas_env.health import HealthState, actuator_config, leakage_at, spring_rates_n_m
-from scas_env.params import ScasParams
-from scas_env.physics.actuator import simulate
-from scas_env.physics.spring import spring_rate_n_per_m
-from scas_env.uncertainty import draw_unit, nominal_unit
+from scas_env.actuator.health import HealthState, actuator_config, leakage_at, spring_rates_n_m
+from scas_env.actuator.params import ScasParams
+from scas_env.actuator.physics.actuator import simulate
+from scas_env.actuator.physics.spring import spring_rate_n_per_m
+from scas_env.actuator.uncertainty import draw_unit, nominal_unit
 
 P = ScasParams()
 

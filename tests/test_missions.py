@@ -1,4 +1,4 @@
-"""Tests of the pre-flight test command and the in-flight profiles (scas_env.missions)."""
+"""Tests of the pre-flight test command and the in-flight profiles (scas_env.actuator.missions)."""
 
 from __future__ import annotations
 
@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from scas_env.missions import (
+from scas_env.actuator.missions import (
     GROUND_TEST_REGIME,
     PILOT_FULL_SCALE_M,
     REGIMES,
@@ -17,7 +17,7 @@ from scas_env.missions import (
     preflight_test_command,
     regime_profile,
 )
-from scas_env.params import MissionParams
+from scas_env.actuator.params import MissionParams
 
 FS = 200.0  # Hz, fast but well above the 2 Hz Table-1 maximum
 

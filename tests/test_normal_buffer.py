@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from scas_env.normal_buffer import NormalBuffer
+from scas_env.block_draws import NormalBuffer
 
 
 def test_same_numbers_as_successive_generator_calls_across_refills() -> None:

@@ -12,7 +12,6 @@ import pytest
 from numba import njit
 from numba.np.random._constants import ki_double, ziggurat_nor_r
 
-from prognostics.bench import synthetic_case
 from prognostics.degradation_models import TabulatedRateModel, rate_at_scalar
 from prognostics.measurement import (
     MeasurementModel,
@@ -29,6 +28,7 @@ from prognostics.normals import (
     standard_normal,
 )
 from prognostics.particle_filter import ParticleFilter
+from scas_env.studies.prognostics_speed import synthetic_case
 
 BIT_GENERATORS = (
     np.random.PCG64,

@@ -1,4 +1,4 @@
-"""Tests of the paper reproduction (scas_env.reproduction*, prognostics.prognosis_run)."""
+"""Tests of the paper reproduction (scas_env.studies.reproduction*, prognostics.prognosis_run)."""
 
 from __future__ import annotations
 
@@ -21,11 +21,11 @@ from prognostics.prognosis_run import (
     unit_reference,
 )
 from prognostics.rul import HazardZone
-from scas_env.params import ScasParams
-from scas_env.reproduction import FAULTS, ReproductionConfig, run_reproduction
-from scas_env.reproduction_paths import INSTALLATION_EFFECT, VARIANTS
-from scas_env.reproduction_report import detection_severity, verdicts, write_report
-from scas_env.surrogate import default_surrogate
+from scas_env.actuator.params import ScasParams
+from scas_env.actuator.surrogate import default_surrogate
+from scas_env.studies.reproduction import FAULTS, ReproductionConfig, run_reproduction
+from scas_env.studies.reproduction_prognosis import INSTALLATION_EFFECT, VARIANTS
+from scas_env.studies.reproduction_report import detection_severity, verdicts, write_report
 
 
 # ----------------------------------------------------------------------------- helpers

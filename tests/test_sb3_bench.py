@@ -1,11 +1,11 @@
-"""The SB3 throughput benchmark's bookkeeping (policies.sb3_bench) and training_fps."""
+"""The SB3 throughput benchmark's bookkeeping (policies.sb3_speed) and training_fps."""
 
 from __future__ import annotations
 
 import pytest
 
 from policies.rl import ALGOS, fps_ppo_kwargs, make_env, training_fps
-from policies.sb3_bench import fps_pairs, summarise
+from policies.sb3_speed import fps_pairs, summarise
 
 
 def test_runs_alternate_and_ratios_are_taken_within_a_pair() -> None:

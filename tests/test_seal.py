@@ -1,4 +1,4 @@
-"""Tests of seal wear (Archard, eq. 8) and internal leakage (eq. 9): scas_env.physics.seal."""
+"""Tests of seal wear (Archard, eq. 8) and internal leakage (eq. 9): actuator.physics.seal."""
 
 from __future__ import annotations
 
@@ -7,8 +7,8 @@ import math
 import numpy as np
 import pytest
 
-from scas_env.params import SealParams
-from scas_env.physics.seal import (
+from scas_env.actuator.params import SealParams
+from scas_env.actuator.physics.seal import (
     archard_beta_j_m3,
     friction_work_for_wear_j,
     gap_m,

@@ -7,8 +7,8 @@ import math
 import numpy as np
 import pytest
 
-from scas_env.params import ScasParams, SpringParams
-from scas_env.physics import spring as sp
+from scas_env.actuator.params import ScasParams, SpringParams
+from scas_env.actuator.physics import spring as sp
 
 D_WIRE = 2.2e-3
 D_COIL = 11e-3

@@ -5,10 +5,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from scas_env.calibration import default_calibration, params_digest
-from scas_env.params import ScasParams
-from scas_env.surrogate import SurrogateModel, default_surrogate
-from scas_env.surrogate_build import random_effects, unit_runs
+from scas_env.actuator.calibration import default_calibration, params_digest
+from scas_env.actuator.params import ScasParams
+from scas_env.actuator.surrogate import SurrogateModel, default_surrogate
+from scas_env.studies.surrogate_builder import random_effects, unit_runs
 
 P = ScasParams()
 MODEL = default_surrogate()

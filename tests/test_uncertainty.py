@@ -1,4 +1,4 @@
-"""Tests of the unit / run uncertainty draws (scas_env.uncertainty)."""
+"""Tests of the unit / run uncertainty draws (scas_env.actuator.uncertainty)."""
 
 from __future__ import annotations
 
@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from scas_env.params import ScasParams, SpringParams, UncertaintyParams
-from scas_env.uncertainty import (
+from scas_env.actuator.params import ScasParams, SpringParams, UncertaintyParams
+from scas_env.actuator.uncertainty import (
     RunConditions,
     UnitSample,
     draw_run_conditions,

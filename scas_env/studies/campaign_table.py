@@ -1,6 +1,6 @@
 """Feature table of a simulation campaign: schema, selection, CSV + JSON files.
 
-A campaign (:mod:`scas_env.campaign`) gives one row per run. Columns, in order:
+A campaign (:mod:`scas_env.studies.campaign`) gives one row per run. Columns, in order:
 
 * ``fault_mode`` (str, one of :data:`FAULT_MODES`), ``level`` (int, 0 = healthy),
   ``run_index`` (int, 0..n_runs-1 within its mode and level);
@@ -35,7 +35,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from prognostics.features import FEATURE_INFO
-from scas_env.params import ScasParams
+from scas_env.actuator.params import ScasParams
 
 __all__ = [
     "CONDITIONS",

@@ -3,9 +3,10 @@
 For each health state (default: healthy; a spring crack at 50% of the failure depth; seal
 wear at 80% of the critical wear) the nominal unit at nominal conditions runs
 
-* ``preflight``: the on-ground pre-flight test (:func:`scas_env.missions.preflight_test_command`);
+* ``preflight``: the on-ground pre-flight test
+  (:func:`scas_env.actuator.missions.preflight_test_command`);
 * ``flight``: a Table-1 in-flight window of ``window_s`` seconds
-  (:func:`scas_env.missions.flight_profile`, link force from the pilot command),
+  (:func:`scas_env.actuator.missions.flight_profile`, link force from the pilot command),
 
 with sensor and supply noise on. Seeding: ``SeedSequence(seed).spawn(1 + n_states)``; the
 first child draws the flight command, shared by every state so the overlays compare like with
@@ -24,13 +25,18 @@ from pathlib import Path
 import numpy as np
 from tqdm import tqdm
 
-from scas_env.health import HealthState, actuator_config
-from scas_env.missions import MissionProfile, flight_profile, link_force_n, preflight_test_command
-from scas_env.params import ScasParams
-from scas_env.physics.actuator import ActuatorRun, simulate
-from scas_env.physics.frequency import critical_seal_wear_m
-from scas_env.physics.spring import failure_depth_from_params
-from scas_env.plotting import plot_demo_condition
+from scas_env.actuator.bandwidth import critical_seal_wear_m
+from scas_env.actuator.health import HealthState, actuator_config
+from scas_env.actuator.missions import (
+    MissionProfile,
+    flight_profile,
+    link_force_n,
+    preflight_test_command,
+)
+from scas_env.actuator.params import ScasParams
+from scas_env.actuator.physics.actuator import ActuatorRun, simulate
+from scas_env.actuator.physics.spring import failure_depth_from_params
+from scas_env.studies.figure_drawing import plot_demo_condition
 
 #: Signals written to each CSV, in order (SI units: s, m, A, Pa).
 CSV_COLUMNS = (

@@ -24,7 +24,7 @@ All functions are vectorised (numpy broadcasting). The fluid's dynamic viscosity
 mu = rho nu(T) (Pa s) is an argument: it comes from the fluid model at the run temperature.
 
 Example (ref §4.2 check value, h0 = 5 um, mu = 850 x 14e-6 Pa s):
-    >>> from scas_env.params import SealParams
+    >>> from scas_env.actuator.params import SealParams
     >>> k1, k2 = leakage_coefficients(0.0, SealParams(), 850 * 14e-6, 850.0)
     >>> f"{k1:.2e}", float(k2)
     ('1.47e-14', 0.0)
@@ -37,7 +37,7 @@ import math
 import numpy as np
 import numpy.typing as npt
 
-from scas_env.params import SealParams
+from scas_env.actuator.params import SealParams
 
 FloatArray = npt.NDArray[np.float64]
 
@@ -97,7 +97,7 @@ def wear_depth_m(
     --------
     ref §4.2: 9 m of sliding per flight hour at F_f = 20 N gives about 0.007 um/FH.
 
-    >>> from scas_env.params import SealParams
+    >>> from scas_env.actuator.params import SealParams
     >>> round(float(wear_depth_m(20.0 * 9.0, SealParams())) * 1e6, 4)
     0.0072
     """

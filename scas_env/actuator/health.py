@@ -4,16 +4,16 @@ The two faults of [DJS20] are carried by :class:`HealthState`: the depth ``a`` o
 in one coil of centering spring 0 (the "cracked spring") and the worn thickness ``lambda``
 of the piston seals. :func:`actuator_config` turns a unit (its drawn geometry and null
 bias), a run's operating conditions and a health state into the
-:class:`~scas_env.physics.actuator.ActuatorConfig` the integrator runs:
+:class:`~scas_env.actuator.physics.actuator.ActuatorConfig` the integrator runs:
 
 * spring rates from eq. 1 with the unit's own d, D (spring 0 with the crack, spring 1
   healthy); both installed compressions are the nominal assembly value, so a weaker spring
   also pushes with a smaller preload and the pair exerts a bias force (Fig. 7a);
 * leakage coefficients K_i1, K_i2 of eq. 9 from the seal wear and the run's fluid
-  viscosity (laminar annulus plus a lip orifice, ``scas_env.physics.seal``);
+  viscosity (laminar annulus plus a lip orifice, ``scas_env.actuator.physics.seal``);
 * temperature, air fraction and mean supply pressure of the run.
 
-    >>> from scas_env.params import ScasParams
+    >>> from scas_env.actuator.params import ScasParams
     >>> p = ScasParams()
     >>> healthy = actuator_config(p)
     >>> cracked = actuator_config(p, health=HealthState(crack_depth_m=0.5e-3))
@@ -27,12 +27,17 @@ import dataclasses
 import math
 from dataclasses import dataclass
 
-from scas_env.params import ScasParams
-from scas_env.physics.actuator import RK4_STABILITY_LIMIT, ActuatorConfig
-from scas_env.physics.fluid import dynamic_viscosity
-from scas_env.physics.seal import leakage_coefficients
-from scas_env.physics.spring import spring_rate_n_per_m
-from scas_env.uncertainty import RunConditions, UnitSample, nominal_conditions, nominal_unit
+from scas_env.actuator.params import ScasParams
+from scas_env.actuator.physics.actuator import RK4_STABILITY_LIMIT, ActuatorConfig
+from scas_env.actuator.physics.fluid import dynamic_viscosity
+from scas_env.actuator.physics.seal import leakage_coefficients
+from scas_env.actuator.physics.spring import spring_rate_n_per_m
+from scas_env.actuator.uncertainty import (
+    RunConditions,
+    UnitSample,
+    nominal_conditions,
+    nominal_unit,
+)
 
 #: Substeps used to build a config before the stable number is known (always stable).
 MAX_SUBSTEPS = 64

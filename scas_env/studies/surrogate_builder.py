@@ -11,14 +11,14 @@ from __future__ import annotations
 
 import numpy as np
 
-from scas_env.calibration import calibration_for, params_digest
-from scas_env.health import CRACKED_SPRING, HealthState, actuator_config
-from scas_env.measure import flight_window, ground_test
+from scas_env.actuator.calibration import calibration_for, params_digest
+from scas_env.actuator.health import CRACKED_SPRING, HealthState, actuator_config
+from scas_env.actuator.params import ScasParams
+from scas_env.actuator.physics.spring import failure_depth_from_params
+from scas_env.actuator.sensing import flight_window, ground_test
+from scas_env.actuator.surrogate import FEATURE_CONDITION, SurrogateModel
+from scas_env.actuator.uncertainty import draw_run_conditions, draw_unit
 from scas_env.parallel import map_chunks
-from scas_env.params import ScasParams
-from scas_env.physics.spring import failure_depth_from_params
-from scas_env.surrogate import FEATURE_CONDITION, SurrogateModel
-from scas_env.uncertainty import draw_run_conditions, draw_unit
 
 
 def unit_runs(

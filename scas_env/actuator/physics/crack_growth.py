@@ -28,8 +28,8 @@ import numpy as np
 import numpy.typing as npt
 import rainflow
 
-from scas_env.params import ScasParams
-from scas_env.physics.spring import (
+from scas_env.actuator.params import ScasParams
+from scas_env.actuator.physics.spring import (
     FloatArray,
     GeometryFactor,
     JForm,
@@ -209,7 +209,7 @@ class CrackGrowthModel:
     walker_gamma : Walker exponent gamma in [0, 1]; 1 = plain Paris.
     failure_depth_m : depth at which the spring fails (m), 0 < a_f < d.
     geometry_factor : F_T(eta) of eq. 7.
-    j_form, stress_section : see ``scas_env.physics.spring``.
+    j_form, stress_section : see ``scas_env.actuator.physics.spring``.
     """
 
     wire_diameter_m: float
@@ -497,7 +497,7 @@ def grow_crack(
     GrowthResult: depth (the failure depth if failed), failed flag, blocks integrated
     (``n_blocks``, or the fractional number of blocks to failure).
 
-    >>> from scas_env.params import ScasParams
+    >>> from scas_env.actuator.params import ScasParams
     >>> model = CrackGrowthModel.from_params(ScasParams())
     >>> big = CycleSpectrum([135.6], [120.0], [230.0], "N")  # 2 mm SCAS cycles of one flight
     >>> grow_crack(2e-4, big, 10, model).depth_m > 2e-4

@@ -45,7 +45,7 @@ import numpy as np
 from numba import njit
 from numpy.typing import ArrayLike, NDArray
 
-from scas_env.params import ATM_PA
+from scas_env.actuator.params import ATM_PA
 
 KELVIN_OFFSET = 273.15  # K
 WALTHER_SHIFT_CST = 0.7  # cSt, constant of the Walther law (ASTM D341)

@@ -8,7 +8,7 @@ when the shipped file no longer matches the default parameters):
 * the seal failure criterion (critical wear, cut-off frequencies) and the spring failure
   depth of the nominal unit;
 * the crack growth per flight against depth at the nominal Paris constant, from the
-  Table-1 load spectrum (``scas_env.degradation``), and the seal wear per flight at the
+  Table-1 load spectrum (``scas_env.actuator.flight_damage``), and the seal wear per flight at the
   nominal wear rate;
 * the flight-to-flight scatter of both increments (coefficient of variation over simulated
   flight windows, which differ in regime order, amplitudes and noise).
@@ -32,7 +32,8 @@ import numpy.typing as npt
 from tqdm.auto import tqdm
 
 from prognostics.degradation_models import paris_crack_model
-from scas_env.degradation import (
+from scas_env.actuator.bandwidth import seal_criterion
+from scas_env.actuator.flight_damage import (
     crack_increment_m,
     crack_rate_table,
     flight_loads_from_run,
@@ -40,12 +41,11 @@ from scas_env.degradation import (
     load_spectrum_from_physics,
     wear_increment_m,
 )
-from scas_env.health import actuator_config
-from scas_env.missions import flight_profile, link_force_n
-from scas_env.params import ScasParams
-from scas_env.physics.actuator import simulate
-from scas_env.physics.frequency import seal_criterion
-from scas_env.uncertainty import draw_units, nominal_unit
+from scas_env.actuator.health import actuator_config
+from scas_env.actuator.missions import flight_profile, link_force_n
+from scas_env.actuator.params import ScasParams
+from scas_env.actuator.physics.actuator import simulate
+from scas_env.actuator.uncertainty import draw_units, nominal_unit
 
 FloatArray = npt.NDArray[np.float64]
 CALIBRATION_VERSION = 1
@@ -186,7 +186,7 @@ def build_calibration(
 @lru_cache(maxsize=1)
 def default_calibration() -> Calibration:
     """The shipped calibration of the default :class:`ScasParams`."""
-    text = resources.files("scas_env").joinpath("data", DATA_FILE).read_text()
+    text = resources.files("scas_env.actuator").joinpath("data", DATA_FILE).read_text()
     return Calibration(**json.loads(text))
 
 

@@ -48,8 +48,15 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from scas_env import __version__
-from scas_env.campaign_io import (
+from scas_env._version import __version__
+from scas_env.actuator.config import Validated, check_value, param
+from scas_env.actuator.health import CRACKED_SPRING, HealthState, actuator_config
+from scas_env.actuator.params import ScasParams
+from scas_env.actuator.physics.spring import failure_depth_from_params
+from scas_env.actuator.sensing import flight_window, ground_test
+from scas_env.actuator.uncertainty import draw_run_conditions, draw_unit
+from scas_env.parallel import map_chunks
+from scas_env.studies.campaign_table import (
     CONDITIONS,
     FAULT_MODES,
     FORMAT,
@@ -58,13 +65,6 @@ from scas_env.campaign_io import (
     CampaignResult,
     campaign_columns,
 )
-from scas_env.config import Validated, check_value, param
-from scas_env.health import CRACKED_SPRING, HealthState, actuator_config
-from scas_env.measure import flight_window, ground_test
-from scas_env.parallel import map_chunks
-from scas_env.params import ScasParams
-from scas_env.physics.spring import failure_depth_from_params
-from scas_env.uncertainty import draw_run_conditions, draw_unit
 
 __all__ = ["CampaignConfig", "run_campaign", "run_generator", "simulate_run"]
 
@@ -88,7 +88,7 @@ class CampaignConfig(Validated):
     """What to simulate (defaults: the paper's 100 runs x 8 levels, all modes and conditions).
 
     ``flight_window_s = None`` uses ``params.mission.flight_window_s``; ``seal_critical_m =
-    None`` computes ``scas_env.physics.frequency.critical_seal_wear_m(params)``. The config
+    None`` computes ``scas_env.actuator.bandwidth.critical_seal_wear_m(params)``. The config
     stored with a result has both made explicit.
     """
 
@@ -123,7 +123,7 @@ class CampaignConfig(Validated):
         window = self.flight_window_s
         wear = self.seal_critical_m
         if wear is None:
-            from scas_env.physics.frequency import critical_seal_wear_m
+            from scas_env.actuator.bandwidth import critical_seal_wear_m
 
             wear = critical_seal_wear_m(params)
         return self.replace(

@@ -15,7 +15,7 @@ in two levels:
   offset. The fast supply fluctuation inside a run (``FluidParams.supply_pressure_noise_frac``)
   is not drawn here.
 
-Distributions (1-sigma values from :class:`~scas_env.params.UncertaintyParams`):
+Distributions (1-sigma values from :class:`~scas_env.actuator.params.UncertaintyParams`):
 
 * geometry, temperature, air fraction, a0, null bias, supply offset: Gaussian with the
   nominal value as mean. Quantities with an allowed range are **truncated Gaussians drawn by
@@ -27,7 +27,7 @@ Distributions (1-sigma values from :class:`~scas_env.params.UncertaintyParams`):
 
 Example:
     >>> import numpy as np
-    >>> from scas_env.params import ScasParams
+    >>> from scas_env.actuator.params import ScasParams
     >>> p = ScasParams()
     >>> u = draw_unit(p, np.random.default_rng(1))
     >>> u == draw_unit(p, np.random.default_rng(1))
@@ -47,7 +47,7 @@ import numpy.typing as npt
 from numba import njit
 
 from prognostics.normals import NormalStream, fill_truncated_normal, standard_normal
-from scas_env.params import FluidParams, ScasParams, SealParams, SpringParams
+from scas_env.actuator.params import FluidParams, ScasParams, SealParams, SpringParams
 
 FloatArray = npt.NDArray[np.float64]
 

@@ -24,8 +24,8 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from scas_env.params import ScasParams
-from scas_env.physics.actuator import ActuatorConfig, simulate, simulate_batch
+from scas_env.actuator.params import ScasParams
+from scas_env.actuator.physics.actuator import ActuatorConfig, simulate, simulate_batch
 
 STEP_LEVELS_MM = (0.0, 1.0, 0.0, -1.0, 0.0, 2.0, 0.0, -2.0)  # pre-flight-like step cycle
 

@@ -13,7 +13,7 @@ A flight's damage is computed in one of two ways, which agree (``tests/test_degr
   counted (the SCAS command has zero mean in every regime, so they are small).
 
 Crack growth per flight then follows Paris' law on the counted cycles at the current depth
-(``scas_env.physics.crack_growth``); the cracked spring's force scales with its rate
+(``scas_env.actuator.physics.crack_growth``); the cracked spring's force scales with its rate
 ``k(a)`` because its installed compression is fixed, ``F = k(a) (delta_0 + x)``. Seal wear
 per flight is Archard's eq. 8, ``d lambda = W_flight / (beta A_c)``.
 
@@ -30,20 +30,20 @@ from dataclasses import dataclass
 import numpy as np
 import numpy.typing as npt
 
-from scas_env.health import HealthState, actuator_config
-from scas_env.missions import REGIMES, link_force_n, regime_profile
-from scas_env.params import ScasParams
-from scas_env.physics.actuator import ActuatorRun, simulate
-from scas_env.physics.crack_growth import (
+from scas_env.actuator.health import HealthState, actuator_config
+from scas_env.actuator.missions import REGIMES, link_force_n, regime_profile
+from scas_env.actuator.params import ScasParams
+from scas_env.actuator.physics.actuator import ActuatorRun, simulate
+from scas_env.actuator.physics.crack_growth import (
     CrackGrowthModel,
     CycleSpectrum,
     count_cycles,
     force_to_stress_spectrum,
     paris_increment_m,
 )
-from scas_env.physics.seal import wear_depth_m
-from scas_env.physics.spring import spring_rate_n_per_m
-from scas_env.uncertainty import UnitSample, nominal_unit
+from scas_env.actuator.physics.seal import wear_depth_m
+from scas_env.actuator.physics.spring import spring_rate_n_per_m
+from scas_env.actuator.uncertainty import UnitSample, nominal_unit
 
 FloatArray = npt.NDArray[np.float64]
 

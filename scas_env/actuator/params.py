@@ -20,7 +20,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
-from scas_env.config import Validated, param
+from scas_env.actuator.config import Validated, param
 
 GRAVITY = 9.80665  # m/s^2
 ATM_PA = 101_325.0  # Pa

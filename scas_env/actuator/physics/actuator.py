@@ -1,6 +1,6 @@
 """SCAS actuator dynamics: position loop, servovalve, chambers, piston, springs, LVDT.
 
-Python API over the compiled kernels of :mod:`scas_env.physics.actuator_model`. Gauge
+Python API over the compiled kernels of :mod:`scas_env.actuator.physics.actuator_kernels`. Gauge
 pressures (Pa), SI units; "ref" = ``shared/reference/physics-reference.md``, "eq." = [DJS20].
 
 Model (ref §1.2, paper §2-3)
@@ -35,7 +35,7 @@ Chambers (double rod, equal areas ``A``), internal leakage eq. 9 (same ``f``)::
     dp_A/dt = beta(p_A)/V_A (Q_A - A v - Q_l),   dp_B/dt = beta(p_B)/V_B (Q_B + A v + Q_l)
     Q_l = K_i1 (p_A - p_B) + K_i2 f(p_A - p_B)
 
-``beta`` is the entrained-air effective bulk modulus of :mod:`scas_env.physics.fluid`
+``beta`` is the entrained-air effective bulk modulus of :mod:`scas_env.actuator.physics.fluid`
 (ref §1.1) with ``E_l(T) = E_l40 (1 - c (T - 40))``, read from a per-run table.
 
 Piston and centering springs (two opposed, preloaded, own rates and installed compressions)::
@@ -86,10 +86,10 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.optimize import brentq
 
-from scas_env.params import ATM_PA, ScasParams
-from scas_env.physics import actuator_model as km
-from scas_env.physics.fluid import dynamic_viscosity
-from scas_env.physics.seal import laminar_leakage_coeff_m3_s_pa
+from scas_env.actuator.params import ATM_PA, ScasParams
+from scas_env.actuator.physics import actuator_kernels as km
+from scas_env.actuator.physics.fluid import dynamic_viscosity
+from scas_env.actuator.physics.seal import laminar_leakage_coeff_m3_s_pa
 
 SUPPLY_NOISE_BANDWIDTH_HZ = 20.0  # Hz, corner of the supply fluctuation low-pass [B]
 RK4_STABILITY_LIMIT = 2.78  # |lambda| dt bound of classic RK4 on the real axis (2.785)
@@ -377,7 +377,7 @@ class ActuatorConfig:
         return max(friction, hydraulic, conductance)
 
     def to_array(self) -> NDArray[np.float64]:
-        """Flat float64 parameter vector in the layout of :mod:`actuator_model` (``I_*``)."""
+        """Flat float64 parameter vector in the layout of :mod:`actuator_kernels` (``I_*``)."""
         a = np.zeros(km.N_PARAMS)
         a[km.I_AREA] = self.area_m2
         a[km.I_VOL_A0] = self.dead_volume_m3 + self.area_m2 * self.half_stroke_m

@@ -1,10 +1,10 @@
 """End-to-end reproduction of [DJS20] §4-5 from this package's physics.
 
 Pipeline (:func:`run_reproduction`; the report and plots are in
-:mod:`scas_env.reproduction_report`):
+:mod:`scas_env.studies.reproduction_report`):
 
 1. **Campaign** (§4): ``n_runs`` x ``n_levels`` runs of the ``crack`` and ``wear`` modes, both
-   conditions (:func:`scas_env.campaign.run_campaign`), or a saved one.
+   conditions (:func:`scas_env.studies.campaign.run_campaign`), or a saved one.
 2. **Selection** (§4, reference sheet §7.2), per fault mode and condition:
    :func:`prognostics.selection.rank_features` (correlation, SNR, accuracy, severity at
    detection). Redundancy: Jeffreys divergence of the normalised responses
@@ -23,7 +23,8 @@ Pipeline (:func:`run_reproduction`; the report and plots are in
    ``p W .. (p+1) W - 1`` (``n_runs // W`` paths). A fault is declared when any selected
    feature alarms. False-alarm rate: 2-fold cross-validation on the healthy runs.
 4. **Prognosis** (§5.2, Fig. 9), ``n_paths`` paths per fault, in two variants (paper
-   protocol and installation baseline): :mod:`scas_env.reproduction_paths`. The installation
+   protocol and installation baseline): :mod:`scas_env.studies.reproduction_prognosis`. The
+   installation
    baseline's run-to-run spread comes from a nested set of ``healthy_units`` healthy units
    with ``installation_tests + detector_window`` tests each (the campaign has one run per
    unit, so it cannot separate run-to-run from unit-to-unit scatter).
@@ -44,12 +45,12 @@ from numpy.typing import NDArray
 from prognostics.detection import DetectorConfig, PercentileDetector, severity_at_detection
 from prognostics.features import FEATURE_INFO
 from prognostics.selection import FeatureScore, rank_features, redundancy_matrix, redundant_pairs
-from scas_env.calibration import Calibration, calibration_for
-from scas_env.campaign import CampaignConfig, run_campaign
-from scas_env.campaign_io import CampaignResult, load
-from scas_env.config import Validated, param
-from scas_env.params import ScasParams
-from scas_env.reproduction_paths import (
+from scas_env.actuator.calibration import Calibration, calibration_for
+from scas_env.actuator.config import Validated, param
+from scas_env.actuator.params import ScasParams
+from scas_env.studies.campaign import CampaignConfig, run_campaign
+from scas_env.studies.campaign_table import CampaignResult, load
+from scas_env.studies.reproduction_prognosis import (
     HealthySet,
     PathPrognosis,
     feature_score,
@@ -318,7 +319,7 @@ def healthy_unit_alarms(
 # ----------------------------------------------------------------------------- top level
 @dataclass(frozen=True, eq=False)
 class Reproduction:
-    """Everything the report needs (see :mod:`scas_env.reproduction_report`).
+    """Everything the report needs (see :mod:`scas_env.studies.reproduction_report`).
 
     ``healthy_unit_alarm_share[variant][fault]``: per-unit false alarm
     (:func:`healthy_unit_alarms`); ``healthy``: the nested healthy set.

@@ -20,10 +20,15 @@ from dataclasses import dataclass
 import numpy as np
 
 from prognostics.features import flight_features, ground_features
-from scas_env.health import actuator_config
-from scas_env.missions import MissionProfile, flight_profile, link_force_n, preflight_test_command
-from scas_env.params import ScasParams
-from scas_env.physics.actuator import ActuatorConfig, ActuatorRun, simulate
+from scas_env.actuator.health import actuator_config
+from scas_env.actuator.missions import (
+    MissionProfile,
+    flight_profile,
+    link_force_n,
+    preflight_test_command,
+)
+from scas_env.actuator.params import ScasParams
+from scas_env.actuator.physics.actuator import ActuatorConfig, ActuatorRun, simulate
 
 
 @dataclass(frozen=True, eq=False)

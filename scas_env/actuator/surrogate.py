@@ -11,7 +11,7 @@ wear fraction ``w = lambda / lambda_crit``::
   (fluid temperature, air, supply pressure, sensor noise, the flight's command draw).
 * All three are tabulated on a grid of (c, w) and interpolated bilinearly; outside
   [0, 1]^2 a ``ValueError`` is raised (a part at its critical value has failed).
-* The tables come from a nested physics design (``scas_env.surrogate_build``): at every
+* The tables come from a nested physics design (``scas_env.studies.surrogate_builder``): at every
   grid point, several units with several runs each; ``tau`` and ``sigma`` from the one-way
   random-effects ANOVA (``tau^2 = (MS_between - MS_within)/R``, taken as 0 when the
   estimate is negative, the usual truncated estimator).
@@ -243,6 +243,6 @@ class SurrogateModel:
 
 @lru_cache(maxsize=1)
 def default_surrogate() -> SurrogateModel:
-    """The shipped surrogate of the default :class:`~scas_env.params.ScasParams`."""
-    text = resources.files("scas_env").joinpath("data", DATA_FILE).read_text()
+    """The shipped surrogate of the default :class:`~scas_env.actuator.params.ScasParams`."""
+    text = resources.files("scas_env.actuator").joinpath("data", DATA_FILE).read_text()
     return SurrogateModel(**json.loads(text))

@@ -1,9 +1,9 @@
 """Compiled (numba) kernels of the SCAS actuator model: right-hand side, RK4 loop, batch.
 
-The equations are documented in :mod:`scas_env.physics.actuator`; this module holds the
+The equations are documented in :mod:`scas_env.actuator.physics.actuator`; this module holds the
 flat parameter layout (the ``I_*`` indices below, the only place it is defined), the
 scalar flow laws and the fixed-step integrator. Nothing here validates inputs: the
-Python API in :mod:`scas_env.physics.actuator` checks them once per run.
+Python API in :mod:`scas_env.actuator.physics.actuator` checks them once per run.
 
 Parameter vector layout (float64, length ``N_PARAMS``)::
 
@@ -37,7 +37,7 @@ import numpy as np
 from numba import njit, prange
 from numpy.typing import NDArray
 
-from scas_env.physics.fluid import ABS_PRESSURE_FLOOR_PA, effective_bulk_modulus_nb
+from scas_env.actuator.physics.fluid import ABS_PRESSURE_FLOOR_PA, effective_bulk_modulus_nb
 
 (
     I_AREA,

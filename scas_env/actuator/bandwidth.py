@@ -12,7 +12,7 @@ model (noise off) to small sinusoidal commands, instead of assuming a linearisat
 * :func:`critical_seal_wear_m` is the wear ``lambda_crit`` at which ``f_c`` has fallen to
   ``(1 - drop) f_c(healthy)`` (drop = 10%), for the nominal unit at nominal conditions.
 
-    >>> from scas_env.params import ScasParams
+    >>> from scas_env.actuator.params import ScasParams
     >>> f0 = cutoff_frequency_hz(ScasParams())
     >>> 5.0 < f0 < 20.0  # K_v / (2 pi) with K_v ~ 60 1/s
     True
@@ -26,9 +26,9 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import brentq
 
-from scas_env.health import HealthState, actuator_config
-from scas_env.params import ScasParams
-from scas_env.physics.actuator import ActuatorConfig, simulate
+from scas_env.actuator.health import HealthState, actuator_config
+from scas_env.actuator.params import ScasParams
+from scas_env.actuator.physics.actuator import ActuatorConfig, simulate
 
 #: Command amplitude of the sweep (m): small against the stroke, large against friction.
 SWEEP_AMPLITUDE_M = 0.2e-3

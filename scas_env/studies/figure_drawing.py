@@ -2,7 +2,7 @@
 
 Object API only (``matplotlib.figure.Figure`` on an Agg canvas): no pyplot state, safe in
 headless runs and threads. Each ``plot_*`` function takes the data of
-:mod:`scas_env.figures` (or simulated runs) and an output path, writes a PNG at
+:mod:`scas_env.studies.figure_data` (or simulated runs) and an output path, writes a PNG at
 :data:`DPI` (creating the parent folder) and returns the Figure.
 """
 
@@ -18,7 +18,8 @@ from matplotlib import colormaps
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
-from scas_env.figures import (
+from scas_env.actuator.physics.actuator import ActuatorRun
+from scas_env.studies.figure_data import (
     CrackGrowthCurves,
     FrequencyResponseCurves,
     NullBiasCurves,
@@ -26,7 +27,6 @@ from scas_env.figures import (
     SealGainCurves,
     SpringRateCurves,
 )
-from scas_env.physics.actuator import ActuatorRun
 
 DPI = 120
 MM = 1e3  # m -> mm

@@ -45,8 +45,8 @@ from dataclasses import dataclass
 import numpy as np
 import numpy.typing as npt
 
-from scas_env.params import ActuatorParams, MissionParams
-from scas_env.uncertainty import truncated_normal
+from scas_env.actuator.params import ActuatorParams, MissionParams
+from scas_env.actuator.uncertainty import truncated_normal
 
 FloatArray = npt.NDArray[np.float64]
 IntArray = npt.NDArray[np.int64]

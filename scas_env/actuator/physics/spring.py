@@ -39,7 +39,7 @@ import numpy as np
 import numpy.typing as npt
 from scipy.optimize import bisect, brentq
 
-from scas_env.params import ScasParams, SpringParams
+from scas_env.actuator.params import ScasParams, SpringParams
 
 FloatArray = npt.NDArray[np.float64]
 GeometryFactor = Callable[[FloatArray], FloatArray]

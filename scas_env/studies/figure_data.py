@@ -2,7 +2,7 @@
 
 Each ``fig*`` function runs the library's physics for the nominal unit at nominal operating
 conditions and returns a frozen dataclass of float64 arrays (read-only) with a ``to_dict()``
-that gives JSON-serialisable lists. :mod:`scas_env.plotting` draws them.
+that gives JSON-serialisable lists. :mod:`scas_env.studies.figure_drawing` draws them.
 
 * Fig. 3 (:func:`fig3_spring_rate`): spring rate (eq. 1) and cracked-coil rate (eq. 5) against
   crack depth, with the exact polar moment and the printed eq. 6 (ref §0.11).
@@ -33,18 +33,22 @@ import numpy as np
 import numpy.typing as npt
 
 from prognostics.degradation_models import paris_crack_model
-from scas_env.degradation import CrackRateTable, crack_rate_table, load_spectrum_from_physics
-from scas_env.health import HealthState, actuator_config, leakage_at
-from scas_env.missions import MissionProfile, preflight_test_command
-from scas_env.params import ScasParams
-from scas_env.physics.actuator import ActuatorRun, simulate
-from scas_env.physics.frequency import (
+from scas_env.actuator.bandwidth import (
     SealCriterion,
     closed_loop_gain,
     cutoff_frequency_hz,
     seal_criterion,
 )
-from scas_env.physics.spring import (
+from scas_env.actuator.flight_damage import (
+    CrackRateTable,
+    crack_rate_table,
+    load_spectrum_from_physics,
+)
+from scas_env.actuator.health import HealthState, actuator_config, leakage_at
+from scas_env.actuator.missions import MissionProfile, preflight_test_command
+from scas_env.actuator.params import ScasParams
+from scas_env.actuator.physics.actuator import ActuatorRun, simulate
+from scas_env.actuator.physics.spring import (
     coil_stiffness_n_per_m,
     failure_depth_from_params,
     spring_rate_from_params,
@@ -251,9 +255,10 @@ def fig4_crack_growth(
     """Crack growth to failure from ``params.spring.initial_crack_m`` (paper Fig. 4).
 
     Loads: the Table-1 load spectrum simulated per regime for ``window_s`` each
-    (:func:`scas_env.degradation.load_spectrum_from_physics`, noise on, draws from ``rng``),
+    (:func:`scas_env.actuator.flight_damage.load_spectrum_from_physics`, noise on, draws from
+    ``rng``),
     scaled to ``params.mission.flight_duration_s``; rate table from
-    :func:`scas_env.degradation.crack_rate_table` (rainflow + Paris with threshold and
+    :func:`scas_env.actuator.flight_damage.crack_rate_table` (rainflow + Paris with threshold and
     Walker correction, force scaled with the cracked spring's rate k(a)).
     """
     _check_params(params)
@@ -314,7 +319,7 @@ def fig5_frequency_response(
 ) -> FrequencyResponseCurves:
     """Closed-loop responses and the cut-off vs leakage curve (paper Fig. 5).
 
-    Responses: :func:`scas_env.physics.frequency.closed_loop_gain` (nonlinear model, noise
+    Responses: :func:`scas_env.actuator.bandwidth.closed_loop_gain` (nonlinear model, noise
     off, 0.2 mm sine) at ``n_freq`` log-spaced frequencies, at ``wear_fractions`` x the
     critical wear. Sweep: -3 dB cut-off (:func:`cutoff_frequency_hz`) at ``n_sweep`` wears
     evenly spaced from 0 to ``sweep_max_fraction`` x critical, with K_i1, K_i2 of eq. 9 at

@@ -1,4 +1,4 @@
-"""Prognosis paths of the [DJS20] reproduction (:mod:`scas_env.reproduction`, step 4).
+"""Prognosis paths of the [DJS20] reproduction (:mod:`scas_env.studies.reproduction`, step 4).
 
 A unit (drawn, or nominal) degrades flight by flight (:func:`prognostics.prognosis_run.
 grow_path`: the calibration's damage integral, the unit's growth multiplier theta and the
@@ -50,18 +50,18 @@ from prognostics.prognosis_run import (
 )
 from prognostics.rul import HazardZone
 from prognostics.selection import FeatureScore
-from scas_env.calibration import Calibration
-from scas_env.campaign_io import CampaignResult
-from scas_env.health import HealthState, actuator_config
-from scas_env.measure import ground_test
-from scas_env.params import ScasParams
-from scas_env.uncertainty import (
+from scas_env.actuator.calibration import Calibration
+from scas_env.actuator.health import HealthState, actuator_config
+from scas_env.actuator.params import ScasParams
+from scas_env.actuator.sensing import ground_test
+from scas_env.actuator.uncertainty import (
     UnitSample,
     draw_run_conditions,
     draw_unit,
     nominal_unit,
     truncated_normal,
 )
+from scas_env.studies.campaign_table import CampaignResult
 
 __all__ = [
     "INSTALLATION_EFFECT",
@@ -360,7 +360,7 @@ def prognose_path(
 ) -> PathPrognosis:
     """Simulate, test, detect, filter and score one path of ``fault`` in both variants.
 
-    ``config`` is a :class:`scas_env.reproduction.ReproductionConfig`. Randomness: the truth
+    ``config`` is a :class:`scas_env.studies.reproduction.ReproductionConfig`. Randomness: the truth
     (unit, growth, tests) and the filters of the variants from children 0, 1, 2 of
     ``seed_seq``.
     """
