@@ -18,15 +18,19 @@ from gymnasium.envs.registration import register, registry
 from scas_env._version import __version__
 from scas_env.actuator.params import ScasParams
 
-__all__ = ["ENV_ID", "ScasParams", "__version__"]
+__all__ = ["ENV_ID", "ENV_ID_V1", "ScasParams", "__version__"]
 
 ENV_ID = "scas_env/ScasMaintenance-v0"
+#: v1: the pre-flight test's go/no-go is an airworthiness limit (scas_env.acceptance)
+ENV_ID_V1 = "scas_env/ScasMaintenance-v1"
 
-if ENV_ID not in registry:
-    # Episode length is the scenario's ``episode_slots`` (2000 by default): the env truncates
-    # itself, so no TimeLimit wrapper is added.
-    register(
-        id=ENV_ID,
-        entry_point="scas_env.env:ScasMaintenanceEnv",
-        vector_entry_point="scas_env.vector_env:make_vector_env",
-    )
+# Episode length is the scenario's ``episode_slots`` (2000 by default): the env truncates
+# itself, so no TimeLimit wrapper is added.
+for _id, _kwargs in ((ENV_ID, {}), (ENV_ID_V1, {"go_no_go": "airworthiness"})):
+    if _id not in registry:
+        register(
+            id=_id,
+            entry_point="scas_env.env:ScasMaintenanceEnv",
+            vector_entry_point="scas_env.vector_env:make_vector_env",
+            kwargs=_kwargs,
+        )

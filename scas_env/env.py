@@ -8,6 +8,7 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
+from scas_env.acceptance import AirworthinessLimits
 from scas_env.actuator.calibration import Calibration, calibration_for
 from scas_env.actuator.params import ScasParams
 from scas_env.actuator.surrogate import SurrogateModel, default_surrogate
@@ -202,6 +203,18 @@ class ScasMaintenanceEnv(gym.Env):
         self.calibration = calibration if calibration is not None else calibration_for(self.params)
         self.surrogate = surrogate if surrogate is not None else default_surrogate()
         self.world = ActuatorWorld(self.params, self.scenario, self.calibration, self.surrogate)
+        #: airworthiness go/no-go: limits on the ground features' deviation from the
+        #: installation's reference (scas_env.acceptance); None for the detection band
+        self.limits = (
+            AirworthinessLimits.from_surrogate(
+                self.surrogate,
+                reference_tests=int(self.scenario.reference_tests),
+                catch=self.scenario.acceptance_catch,
+            )
+            if self.scenario.go_no_go == "airworthiness"
+            else None
+        )
+        self.reference: dict[str, float] = {}
         self.builder = ObservationBuilder(self.scenario, self.costs, self.surrogate, self.params)
         self.observation_space = self.builder.space
         self.action_space = spaces.Discrete(4)
@@ -239,6 +252,7 @@ class ScasMaintenanceEnv(gym.Env):
                 values, position = self.buffer_storage.get(name, (None, None))
                 self.rngs[name] = NormalBuffer(self.rngs[name], values, position)
         self.world.reset(self.rngs["parts"])
+        self._record_reference()
         self.monitor = HealthMonitor(
             self.params, self.scenario, self.calibration, self.surrogate, self.rngs["filter"]
         )
@@ -281,14 +295,16 @@ class ScasMaintenanceEnv(gym.Env):
             )
             self.downtime = max(self.downtime, 1 + extra)
         elif not grounded:
-            go = True
-            if action == TEST_AND_FLY:
+            every_flight = self.scenario.preflight == "every_flight"
+            # airworthiness: a failed test holds the aircraft until a pass or a replacement
+            go = not (self.limits is not None and self.builder.no_go)
+            if action == TEST_AND_FLY or every_flight:
                 feats = self.world.test(self.rngs["measure"])
                 self.monitor.tested(feats)
                 go = self._go(feats)
                 self.builder.tested(feats, go)
                 self.stats.tests += 1
-                terms["test"] = -self.costs.test_usd
+                terms["test"] = 0.0 if every_flight else -self.costs.test_usd
                 if not go:
                     self.stats.no_go += 1
                     terms["no_go"] = -self.costs.no_go_inspection_usd
@@ -319,8 +335,19 @@ class ScasMaintenanceEnv(gym.Env):
 
     # ------------------------------------------------------------------ internals
     def _go(self, feats: dict[str, float]) -> bool:
-        """Go/no-go: every ground feature inside its healthy two-sided acceptance band."""
+        """Go/no-go (``Scenario.go_no_go``): every ground feature inside its healthy
+        two-sided band, or within the airworthiness limits of the installation's reference."""
+        if self.limits is not None:
+            return self.limits.passes(feats, self.reference)
         return self.builder.within_acceptance(feats)
+
+    def _record_reference(self) -> None:
+        """Airworthiness go/no-go: record the installation's reference at fitting (reset and
+        each new spring pair, which brings its own installation effects)."""
+        if self.limits is not None:
+            self.reference = self.world.installation_reference(
+                self.rngs["measure"], int(self.scenario.reference_tests)
+            )
 
     def _fly(self, terms: dict[str, float]) -> bool:
         result = self.world.fly(self.rngs["measure"], self.rngs["degradation"])
@@ -351,6 +378,8 @@ class ScasMaintenanceEnv(gym.Env):
             self._wasted_now[part] = wasted
         self.stats.replacements[part] += 1
         self.world.replace(part, self.rngs["parts"])
+        if part == "spring":
+            self._record_reference()
         self.monitor.replaced(part)
         self.builder.part_replaced()
         self.part_age[part] = 0

@@ -18,6 +18,8 @@ from scas_env.actuator.config import Validated, param
 FIDELITIES = ("surrogate", "physics")
 OBS_MODES = ("features+rul", "features", "state", "dict")
 INITIAL_HEALTH = ("new", "random")
+GO_NO_GO = ("detection_band", "airworthiness")
+PREFLIGHT = ("on_demand", "every_flight")
 
 
 @dataclass(frozen=True)
@@ -33,11 +35,21 @@ class Scenario(Validated):
         severities: the oracle's view) or ``"dict"`` (every quantity, for inspection).
     initial_health : ``"new"`` (new parts at reset) or ``"random"`` (each part starts at a
         uniformly drawn fraction of its life, as on a fleet in service).
+    go_no_go : what a failed pre-flight test means (:mod:`scas_env.acceptance`):
+        ``"detection_band"`` (v0: outside the healthy population's band) or
+        ``"airworthiness"`` (v1: a ground feature moved from the installation's reference as
+        far as a part at its critical level; the aircraft then stays on the ground until a
+        passing re-test or a replacement clears it).
+    preflight : ``"on_demand"`` (the test runs when action 1 asks for it and costs
+        ``test_usd``) or ``"every_flight"`` (the paper's concept: the test runs at every
+        power-up, before every flight, at no cost; action 1 then equals action 0).
     """
 
     fidelity: str = "surrogate"
     obs_mode: str = "features+rul"
     initial_health: str = "new"
+    go_no_go: str = "detection_band"
+    preflight: str = "on_demand"
     episode_slots: float = param(
         2000,
         "slots",
@@ -101,6 +113,23 @@ class Scenario(Validated):
         source="multiplies the growth rates the filters assume (a model that is off)",
     )
 
+    reference_tests: float = param(
+        4,
+        "tests",
+        lo=1,
+        hi=100,
+        integer=True,
+        source="airworthiness go/no-go: tests averaged into the installation's reference at "
+        "fitting (a fitting check of a few power-ups)",
+    )
+    acceptance_catch: float = param(
+        0.9,
+        "-",
+        lo=0.5,
+        hi=0.999,
+        source="airworthiness go/no-go: probability that a part at its critical level fails "
+        "the test (the limit sits at that quantile of its reading)",
+    )
     window_library: float = param(
         64,
         "windows",
@@ -116,6 +145,8 @@ class Scenario(Validated):
             ("fidelity", FIDELITIES),
             ("obs_mode", OBS_MODES),
             ("initial_health", INITIAL_HEALTH),
+            ("go_no_go", GO_NO_GO),
+            ("preflight", PREFLIGHT),
         ):
             value = getattr(self, name)
             if value not in allowed:

@@ -117,6 +117,8 @@ class ScasMaintenanceVectorEnv(VectorEnv):
             "deg": np.empty((n, 2)),
         }
         self._builder = first.builder
+        self._every_flight = first.scenario.preflight == "every_flight"
+        self._holds = first.limits is not None
 
     # ------------------------------------------------------------------ copies
     def __setstate__(self, state: dict[str, Any]) -> None:
@@ -180,9 +182,15 @@ class ScasMaintenanceVectorEnv(VectorEnv):
         self.fleet.clear_step()
         resetting = self._autoreset.copy()
         grounded = a["downtime"] > 0
+        # the fast path flies untested flights; a test (asked for, or before every flight),
+        # a hold by a failed airworthiness test, a replacement or a reset go the slow path
         fly = (act == 0) & ~grounded & ~resetting
+        if self._every_flight:
+            fly[:] = False
+        elif self._holds:
+            fly &= ~a["no_go"]
         idle = (act <= 1) & grounded & ~resetting
-        slow = resetting | (act >= 2) | ((act == 1) & ~grounded)
+        slow = resetting | (act >= 2) | ((act <= 1) & ~grounded & ~fly)
         fly_idx = np.flatnonzero(fly)
         if fly_idx.size:
             ok = self._fly(fly_idx)

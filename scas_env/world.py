@@ -236,6 +236,18 @@ class ActuatorWorld:
             return {f: feats[f] for f in GROUND_FEATURES}
         return self._surrogate_features(GROUND_FEATURES, self._ground_feature_idx, rng)
 
+    def installation_reference(self, rng: np.random.Generator, n_tests: int) -> dict[str, float]:
+        """The installation's reference reading of each ground feature, as recorded at
+        fitting: the mean of ``n_tests`` pre-flight tests of this installation with healthy
+        parts (its tolerances and installation effects included; ``scas_env.acceptance``)."""
+        crack, wear = self.crack_m, self.wear_m
+        self.crack_m, self.wear_m = 0.0, 0.0
+        try:
+            tests = [self.test(rng) for _ in range(n_tests)]
+        finally:
+            self.crack_m, self.wear_m = crack, wear
+        return {f: math.fsum(t[f] for t in tests) / n_tests for f in GROUND_FEATURES}
+
     def fly(self, rng: np.random.Generator, degradation_rng: np.random.Generator) -> FlightResult:
         """Fly one flight: measure (``rng``), degrade, report failures.
 

@@ -76,6 +76,36 @@ def test_make_vec_matches_single_envs_across_autoreset(obs_mode: str) -> None:
     assert sum(needs_reset) == 0  # 400 steps = 2 episodes of 150 + 1 reset + 99 slots
 
 
+@pytest.mark.parametrize(
+    "variant",
+    [{"go_no_go": "airworthiness"}, {"preflight": "every_flight"},
+     {"go_no_go": "airworthiness", "preflight": "every_flight"}],
+)  # fmt: skip
+def test_vector_env_matches_single_envs_in_every_test_mode(variant: dict) -> None:
+    """Holds after failed airworthiness tests and tests before every flight take the slow
+    path; the episodes stay those of single envs."""
+    n, seed = 3, 8
+    kwargs = {"episode_slots": 120, "initial_health": "random", **variant}
+    envs = gym.make_vec(
+        scas_env.ENV_ID, num_envs=n, vectorization_mode="vector_entry_point", **kwargs
+    )
+    singles = [ScasMaintenanceEnv(**kwargs) for _ in range(n)]
+    actions = np.random.default_rng(3).choice(4, size=(119, n), p=[0.8, 0.16, 0.02, 0.02])
+    obs, _ = envs.reset(seed=seed)
+    for i, e in enumerate(singles):
+        np.testing.assert_array_equal(obs[i], e.reset(seed=seed + i)[0])
+    no_go = 0
+    for t in range(119):
+        obs, rew, _, _, info = envs.step(actions[t])
+        for i, e in enumerate(singles):
+            o, r, _, _, inf = e.step(int(actions[t, i]))
+            np.testing.assert_array_equal(obs[i], o)
+            assert rew[i] == r
+            _compare_info(info, inf, i)
+            no_go += inf["reward_terms"]["no_go"] < 0
+    assert no_go >= 1  # the hold path was exercised
+
+
 def test_vector_episodes_do_not_depend_on_the_batch_size() -> None:
     kwargs = {"episode_slots": 80}
     actions = np.random.default_rng(2).choice(4, size=(80, 4), p=[0.9, 0.08, 0.01, 0.01])
