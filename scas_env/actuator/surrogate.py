@@ -97,8 +97,8 @@ class SurrogateModel:
             grid = finite_array(own, name, getattr(self, name), ndim=1, min_size=2, increasing=True)
             if grid[0] != 0.0 or grid[-1] != 1.0:
                 raise ValueError(
-                    f"{own}.{name} runs from {grid[0]!r} to {grid[-1]!r}; it must rise strictly "
-                    "from 0 to 1 (fractions of critical)"
+                    f"{own}.{name} runs from {float(grid[0])!r} to {float(grid[-1])!r}; "
+                    "it must rise strictly from 0 to 1 (fractions of critical)"
                 )
             object.__setattr__(self, name, grid)
         shape = (len(features), self.crack_grid.size, self.wear_grid.size)
