@@ -27,7 +27,6 @@ which is then set to exactly 1.
 from __future__ import annotations
 
 import math
-
 from collections.abc import Callable
 
 import numpy as np
