@@ -59,8 +59,9 @@ def test_nan_crack_cv_in_a_file_is_refused_naming_the_file(tmp_path: Path) -> No
         Calibration.load(path)
 
 
-def test_the_env_with_a_nan_crack_cv_fails_cleanly_not_with_a_segfault() -> None:
-    """The original crash, in a child process: a clear ValueError (exit 1), not exit 139."""
+def test_a_nan_crack_cv_ends_a_fresh_process_with_a_clear_error_not_a_segfault() -> None:
+    """The crash's input in a child process: a clear ValueError (exit 1), not exit 139
+    (before the fix the env built from this calibration segfaulted on its first flights)."""
     code = (
         "from scas_env.actuator.calibration import Calibration, default_calibration\n"
         "d = default_calibration().to_dict(); d['crack_cv'][2:] = [float('nan')] * 3\n"

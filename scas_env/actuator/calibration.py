@@ -110,7 +110,7 @@ class Calibration:
             )
         if not isinstance(self.params_digest, str):
             raise ValueError(f"{own}.params_digest = {self.params_digest!r} must be a string")
-        whole_number(own, "seed", self.seed, lo=0)
+        object.__setattr__(self, "seed", whole_number(own, "seed", self.seed, lo=0))
         positive = (
             "flight_duration_s",
             "seal_critical_wear_m",
@@ -119,10 +119,12 @@ class Calibration:
             "spring_failure_depth_m",
             "wear_rate_m_per_flight",
         )
-        for name in positive:
-            finite_scalar(own, name, getattr(self, name), lo=0.0, lo_open=True)
-        finite_scalar(own, "crack_dormant_below_m", self.crack_dormant_below_m, lo=0.0)
-        finite_scalar(own, "wear_cv", self.wear_cv, lo=0.0)
+        scalars = {
+            name: finite_scalar(own, name, getattr(self, name), lo=0.0, lo_open=True)
+            for name in positive
+        }
+        for name in ("crack_dormant_below_m", "wear_cv"):
+            scalars[name] = finite_scalar(own, name, getattr(self, name), lo=0.0)
         arrays = {
             "crack_depth_m": finite_array(
                 own,
@@ -157,8 +159,8 @@ class Calibration:
                     f"{own}.{table} has {arrays[table].size} values but {own}.{grid} has "
                     f"{arrays[grid].size}: one value per grid point is required"
                 )
-        for name, arr in arrays.items():
-            object.__setattr__(self, name, arr)
+        for name, value in (scalars | arrays).items():  # Python floats, read-only arrays
+            object.__setattr__(self, name, value)
 
     def crack_cv_at(self, depth_m: float | FloatArray) -> FloatArray:
         """Flight-to-flight CV of the crack increment at ``depth_m`` (log-depth interpolation)."""

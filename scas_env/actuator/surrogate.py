@@ -90,9 +90,8 @@ class SurrogateModel:
         object.__setattr__(self, "features", features)
         if not isinstance(self.params_digest, str):
             raise ValueError(f"{own}.params_digest = {self.params_digest!r} must be a string")
-        whole_number(own, "seed", self.seed, lo=0)
-        whole_number(own, "units_per_point", self.units_per_point, lo=1)
-        whole_number(own, "runs_per_unit", self.runs_per_unit, lo=1)
+        for name, lo in (("seed", 0), ("units_per_point", 1), ("runs_per_unit", 1)):
+            object.__setattr__(self, name, whole_number(own, name, getattr(self, name), lo=lo))
         for name in ("crack_grid", "wear_grid"):
             grid = finite_array(own, name, getattr(self, name), ndim=1, min_size=2, increasing=True)
             if grid[0] != 0.0 or grid[-1] != 1.0:
