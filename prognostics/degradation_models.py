@@ -394,6 +394,10 @@ class TabulatedRateModel:
             raise ValueError(
                 f"grid and rate must have the same length >= 2, got {grid.size} and {rate.size}"
             )
+        if not math.isfinite(float(grid[-1]) - float(grid[0])):
+            raise ValueError(
+                f"grid runs from {float(grid[0])} to {float(grid[-1])}: its width overflows"
+            )
         if np.any(np.diff(grid) <= 0.0):
             raise ValueError("grid must be strictly increasing")
         if np.any(rate <= 0.0):
@@ -404,7 +408,14 @@ class TabulatedRateModel:
             value = getattr(self, name)
             if not (math.isfinite(value) and value >= 0.0):
                 raise ValueError(f"{name} = {value} must be finite and >= 0")
-        slopes = np.diff(rate) / np.diff(grid)
+        with np.errstate(over="ignore", divide="ignore", invalid="ignore"):
+            slopes = np.diff(rate) / np.diff(grid)
+            inv_cell = _CELLS_PER_SEGMENT * (grid.size - 1) / (grid[-1] - grid[0])
+        if not (np.all(np.isfinite(slopes)) and math.isfinite(inv_cell)):
+            raise ValueError(
+                f"grid steps down to {float(np.diff(grid).min())} are too small for the rate "
+                "table (its slopes overflow): use a coarser grid"
+            )
         seg = np.array(
             [
                 _segment_integral(rate[k], slopes[k], grid[k + 1] - grid[k])

@@ -411,6 +411,94 @@ def run_features(case: tuple) -> Any:
     return results
 
 
+# ----------------------------------------------------------------------------- models
+@st.composite
+def measurement_case(draw):
+    n = draw(st.integers(0, 12))
+    levels = draw(st.integers(1, 4))
+    severity = np.repeat(np.linspace(0.0, 1.0, levels), -(-n // levels))[:n]
+    severity = draw(st.one_of(st.just(severity), array(n=st.just(n))))
+    feature = draw(array(n=st.just(n)))
+    kind = draw(st.sampled_from(["pchip", "poly", "spline"]))
+    sigma_kind = draw(st.sampled_from(["per_level", "constant"]))
+    min_sigma = draw(st.one_of(st.floats(0, 1), st.sampled_from(SPECIAL)))
+    return (
+        severity,
+        feature,
+        kind,
+        sigma_kind,
+        min_sigma,
+        draw(array(n=st.integers(0, 5))),
+        draw(number),
+    )
+
+
+def run_measurement(case: tuple) -> Any:
+    from prognostics.measurement import fit_measurement_model
+
+    severity, feature, kind, sigma_kind, min_sigma, x, y = case
+    model = outcome(
+        fit_measurement_model, severity, feature, mean_kind=kind, degree=1,
+        sigma_kind=sigma_kind, min_sigma=min_sigma,
+    )  # fmt: skip
+    if not all_finite(severity, feature) or not math.isfinite(min_sigma) or min_sigma < 0:
+        assert isinstance(model, Raised), f"fit accepted {case}"
+    if isinstance(model, Raised):
+        return model
+    rebuilt = outcome(MeasurementModel.from_dict, model.to_dict())
+    assert not isinstance(rebuilt, Raised), rebuilt
+    mean = outcome(model.mean, x)
+    sigma = outcome(model.sigma, x)
+    if not all_finite(x):
+        assert isinstance(mean, Raised) and isinstance(sigma, Raised), f"accepted x = {x}"
+    return outcome(model.log_likelihood, np.full(x.shape, y), x)
+
+
+@st.composite
+def tabulated_case(draw):
+    model = _model(draw)
+    return model, draw(any_shape()), draw(array(st.floats(-5, 5))), draw(number)
+
+
+def run_tabulated(case: tuple) -> Any:
+    model, x, d, threshold = case
+    if isinstance(model, Raised):
+        return model
+    damage = outcome(model.damage, x)
+    if not all_finite(x):
+        assert isinstance(damage, Raised), f"damage accepted {x}"
+    elif not isinstance(damage, Raised):  # monotone: I(x) rises with x
+        flat = np.sort(x.ravel())
+        assert np.all(np.diff(model.damage(flat)) >= 0)
+    outcome(model.inverse_damage, d)
+    outcome(model.rate_at, x)
+    theta = np.ones(np.size(x))
+    got = outcome(model.usage_to_threshold, np.ravel(x), theta, threshold)
+    if not (all_finite(x) and math.isfinite(threshold)):
+        assert isinstance(got, Raised), f"usage_to_threshold accepted {case}"
+    return got
+
+
+@st.composite
+def detection_path_case(draw):
+    n = draw(st.integers(0, 10))
+    sev = draw(array(n=st.just(n)))
+    alarms = draw(st.one_of(hnp.arrays(np.bool_, st.just(n)), array(n=st.just(n))))
+    return sev, alarms
+
+
+def run_detection_path(case: tuple) -> Any:
+    sev, alarms = case
+    got = outcome(detection.severity_at_detection, sev, alarms, allow_nan=True)
+    valid = sev.size > 0 and all_finite(sev) and alarms.dtype == np.bool_
+    if not valid:
+        assert isinstance(got, Raised), f"severity_at_detection accepted {case}"
+    elif not isinstance(got, Raised):
+        hits = np.flatnonzero(alarms)
+        assert (math.isnan(got) and hits.size == 0) or got == sev[hits[0]]
+    return got
+
+
 #: name -> (strategy of one case, runner)
 CASES: dict[str, tuple[st.SearchStrategy, Callable[[Any], Any]]] = {
     "point_prediction": (point_prediction_case(), run_point_prediction),
@@ -424,4 +512,7 @@ CASES: dict[str, tuple[st.SearchStrategy, Callable[[Any], Any]]] = {
     "particle_filter": (filter_case(), run_filter),
     "detector": (detector_case(), run_detector),
     "features": (feature_case(), run_features),
+    "measurement": (measurement_case(), run_measurement),
+    "tabulated_model": (tabulated_case(), run_tabulated),
+    "severity_at_detection": (detection_path_case(), run_detection_path),
 }
