@@ -343,13 +343,19 @@ class RulPredictor:
     def _check_sizes(self, *arrays: np.ndarray) -> None:
         """Every array must have one entry per particle the buffers were built for: the
         kernels run unchecked, a shorter array would leave buffer entries unset."""
-        n = self._rul.size
+        shape = self._rul.shape
+        try:  # the hot path: the filter's own arrays
+            if all(a.shape == shape for a in arrays):
+                return
+        except AttributeError:
+            pass
         for name, arr in zip(("x", "log_theta", "weights"), arrays, strict=False):
-            if np.shape(arr) != (n,):
+            if np.shape(arr) != shape:
                 raise ValueError(
-                    f"RulPredictor built for {n} particles got {name} of shape {np.shape(arr)}; "
-                    f"need shape ({n},)"
+                    f"RulPredictor built for {shape[0]} particles got {name} of shape "
+                    f"{np.shape(arr)}; need shape {shape}"
                 )
+        raise ValueError("x, log_theta and weights must be numpy arrays")
 
     def values(self, x: np.ndarray, log_theta: np.ndarray) -> np.ndarray:
         """RUL of every particle (steps; a read-only view of a buffer reused by the next call)."""
