@@ -58,5 +58,8 @@ figures: install
 reproduce: install
 	$(PY) scripts/reproduce_paper.py --quick
 
+## Results, tool caches and numba's compiled kernels (*.nbi index, *.nbc code in __pycache__).
 clean:
-	rm -rf $(RESULTS) .pytest_cache .ruff_cache
+	rm -rf $(RESULTS) .pytest_cache .ruff_cache .hypothesis
+	find . \( -path ./$(VENV) -o -path ./.git \) -prune -o -path '*/__pycache__/*' \
+		\( -name '*.nbi' -o -name '*.nbc' \) -type f -exec rm -f {} +

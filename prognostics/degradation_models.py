@@ -73,7 +73,10 @@ def _locate(grid: np.ndarray, cells: np.ndarray, inv_cell: float, x: float) -> i
     ``cells[c]`` is a segment at or before the one holding lattice point
     ``grid[0] + c / inv_cell``; a short forward scan finishes the search.
     """
-    c = min(int((x - grid[0]) * inv_cell), cells.size - 1)
+    f = (x - grid[0]) * inv_cell
+    if not f >= 0.0:  # NaN (or x below the grid): the first cell, never an index out of range
+        f = 0.0
+    c = int(min(f, cells.size - 1.0))
     k = cells[c]
     while k < grid.size - 2 and grid[k + 1] <= x:
         k += 1
@@ -342,6 +345,15 @@ def _frozen_1d(name: str, values: np.ndarray) -> np.ndarray:
     return arr
 
 
+def _finite(name: str, values: np.ndarray) -> np.ndarray:
+    """``values`` as float64, or ValueError naming the first non-finite entry."""
+    arr = np.asarray(values, dtype=np.float64)
+    if not np.all(np.isfinite(arr)):
+        bad = arr.ravel()[~np.isfinite(arr.ravel())][0]
+        raise ValueError(f"{name} contains {bad}: every value must be finite")
+    return arr
+
+
 def _check_theta(theta: np.ndarray, n: int) -> np.ndarray:
     th = np.asarray(theta, dtype=np.float64)
     if th.shape != (n,):
@@ -382,6 +394,10 @@ class TabulatedRateModel:
             raise ValueError(
                 f"grid and rate must have the same length >= 2, got {grid.size} and {rate.size}"
             )
+        if not math.isfinite(float(grid[-1]) - float(grid[0])):
+            raise ValueError(
+                f"grid runs from {float(grid[0])} to {float(grid[-1])}: its width overflows"
+            )
         if np.any(np.diff(grid) <= 0.0):
             raise ValueError("grid must be strictly increasing")
         if np.any(rate <= 0.0):
@@ -392,7 +408,14 @@ class TabulatedRateModel:
             value = getattr(self, name)
             if not (math.isfinite(value) and value >= 0.0):
                 raise ValueError(f"{name} = {value} must be finite and >= 0")
-        slopes = np.diff(rate) / np.diff(grid)
+        with np.errstate(over="ignore", divide="ignore", invalid="ignore"):
+            slopes = np.diff(rate) / np.diff(grid)
+            inv_cell = _CELLS_PER_SEGMENT * (grid.size - 1) / (grid[-1] - grid[0])
+        if not (np.all(np.isfinite(slopes)) and math.isfinite(inv_cell)):
+            raise ValueError(
+                f"grid steps down to {float(np.diff(grid).min())} are too small for the rate "
+                "table (its slopes overflow): use a coarser grid"
+            )
         seg = np.array(
             [
                 _segment_integral(rate[k], slopes[k], grid[k + 1] - grid[k])
@@ -400,6 +423,11 @@ class TabulatedRateModel:
             ]
         )
         cum = np.concatenate([[0.0], np.cumsum(seg)])
+        if not (math.isfinite(grid[-1] - grid[0]) and np.all(np.isfinite(cum))):
+            raise ValueError(
+                f"grid [{grid[0]}, {grid[-1]}] and rate (min {rate.min()}) give a damage "
+                "integral that overflows: use a grid span and rates whose ratio is finite"
+            )
         cum.setflags(write=False)
         object.__setattr__(self, "grid", grid)
         object.__setattr__(self, "rate", rate)
@@ -434,18 +462,18 @@ class TabulatedRateModel:
 
     def rate_at(self, x: np.ndarray) -> np.ndarray:
         """g(x) at unit multiplier (linear in the table, constant outside)."""
-        return np.interp(np.asarray(x, dtype=np.float64), self.grid, self.rate)
+        return np.interp(_finite("x", x), self.grid, self.rate)
 
     def damage(self, x: np.ndarray) -> np.ndarray:
         """Cumulative damage ``I(x) = int_{grid[0]}^x dz / g(z)`` (usage units at theta = 1)."""
-        xa = np.ascontiguousarray(x, dtype=np.float64)
+        xa = np.ascontiguousarray(_finite("x", x))
         out = np.empty_like(xa)
         damage_array(*self.table_args, xa.ravel(), out.ravel())
         return out
 
     def inverse_damage(self, d: np.ndarray) -> np.ndarray:
         """Severity x with ``I(x) = d`` (inverse of :meth:`damage`)."""
-        da = np.ascontiguousarray(d, dtype=np.float64)
+        da = np.ascontiguousarray(_finite("d", d))
         out = np.empty_like(da)
         _inverse_damage_array(self.grid, self.rate, self.cumulative, da.ravel(), out.ravel())
         return out

@@ -106,13 +106,22 @@ FEATURE_INFO: dict[str, FeatureInfo] = {
 
 
 # ----------------------------------------------------------------------------- validation
+#: Largest |sample| a signal may hold: squares summed over any record length stay finite.
+MAX_ABS_SIGNAL = 1e100
+
+
 def _signal(name: str, values: ArrayLike) -> FloatArray:
     """Float64 signal with time on the last axis, at least 2 samples, all finite."""
     arr = np.asarray(values, dtype=np.float64)
     if arr.ndim < 1 or arr.shape[-1] < 2:
         raise ValueError(f"{name} must have at least 2 samples on its last axis, got {arr.shape}")
-    if not np.all(np.isfinite(arr)):
-        raise ValueError(f"{name} must be finite (contains NaN or inf)")
+    if not np.all(np.abs(arr) <= MAX_ABS_SIGNAL):  # also false for NaN
+        if not np.all(np.isfinite(arr)):
+            raise ValueError(f"{name} must be finite (contains NaN or inf)")
+        raise ValueError(
+            f"{name} holds |values| up to {float(np.abs(arr).max())}: at most "
+            f"{MAX_ABS_SIGNAL:g} is allowed (sums of squares would overflow)"
+        )
     return arr
 
 
@@ -527,7 +536,13 @@ def i7_current_position_rms_ratio(i: ArrayLike, x: ArrayLike) -> FloatArray:
 def _i7(energy_i: FloatArray, energy_x: FloatArray) -> FloatArray:
     if np.any(energy_x <= 0.0):
         raise ValueError("x is identically zero in at least one record: I7 undefined")
-    return np.sqrt(energy_i / energy_x)
+    with np.errstate(over="ignore"):
+        ratio = np.sqrt(energy_i / energy_x)
+    if not np.all(np.isfinite(ratio)):
+        raise ValueError(
+            "rms(i) / rms(x) overflows: x is vanishingly small against i (I7 undefined)"
+        )
+    return ratio
 
 
 def flight_features(

@@ -283,6 +283,19 @@ def _empty() -> np.ndarray:
     return np.empty(0)
 
 
+#: Largest |severity| or |feature| a fit accepts: squared residuals summed stay finite.
+MAX_ABS_FIT_VALUE = 1e100
+
+
+def _finite(name: str, values: Any) -> np.ndarray:
+    """``values`` as float64, or ValueError naming the first non-finite entry."""
+    arr = np.asarray(values, dtype=np.float64)
+    if not np.all(np.isfinite(arr)):
+        bad = arr.ravel()[~np.isfinite(arr.ravel())][0]
+        raise ValueError(f"{name} contains {bad}: every value must be finite")
+    return arr
+
+
 def _float_array(name: str, values: Any, min_size: int = 0) -> np.ndarray:
     arr = np.array(values, dtype=np.float64).ravel()
     if arr.size < min_size or not np.all(np.isfinite(arr)):
@@ -368,27 +381,38 @@ class MeasurementModel:
 
     def mean(self, x: np.ndarray) -> np.ndarray:
         """Mean feature ``h(x)`` at severities ``x`` (any shape)."""
-        xa = np.ascontiguousarray(x, dtype=np.float64)
+        xa = np.ascontiguousarray(_finite("x", x))
         out = np.empty_like(xa)
         _mean_array(*self.kernel_args[:7], xa.ravel(), out.ravel())
+        if not np.all(np.isfinite(out)):
+            raise ValueError(
+                f"the mean curve overflows at severities up to {float(np.abs(xa).max())}"
+            )
         return out
 
     def sigma(self, x: np.ndarray) -> np.ndarray:
         """Noise std ``sigma_v(x)`` at severities ``x`` (any shape)."""
-        xa = np.ascontiguousarray(x, dtype=np.float64)
+        xa = np.ascontiguousarray(_finite("x", x))
         out = np.empty_like(xa)
         _sigma_array(self.sigma_knots, self.sigma_values, xa.ravel(), out.ravel())
         return out
 
     def log_likelihood(self, y: np.ndarray, x: np.ndarray) -> np.ndarray:
         """``log N(y; h(x), sigma_v(x)^2)``, broadcasting ``y`` against ``x``."""
-        ya, xa = np.broadcast_arrays(np.asarray(y, dtype=np.float64), np.asarray(x, np.float64))
-        z = (ya - self.mean(xa)) / self.sigma(xa)
-        return -0.5 * z * z - np.log(self.sigma(xa)) - _HALF_LOG_2PI
+        ya, xa = np.broadcast_arrays(_finite("y", y), _finite("x", x))
+        with np.errstate(over="ignore", invalid="ignore"):
+            z = (ya - self.mean(xa)) / self.sigma(xa)
+            out = -0.5 * z * z - np.log(self.sigma(xa)) - _HALF_LOG_2PI
+        if not np.all(np.isfinite(out)):
+            raise ValueError(
+                "log-likelihood overflows: y lies too many standard deviations from the "
+                f"model mean (|y| up to {float(np.abs(ya).max()) if ya.size else 0.0})"
+            )
+        return out
 
     def sample(self, x: np.ndarray, rng: np.random.Generator) -> np.ndarray:
         """Synthetic measurements ``h(x) + sigma_v(x) eps``, ``eps ~ N(0, 1)`` from ``rng``."""
-        xa = np.asarray(x, dtype=np.float64)
+        xa = _finite("x", x)
         return self.mean(xa) + self.sigma(xa) * rng.standard_normal(xa.shape)
 
     def to_dict(self) -> dict[str, Any]:
@@ -441,6 +465,12 @@ def fit_measurement_model(
         )
     if not (np.all(np.isfinite(sev)) and np.all(np.isfinite(feat))):
         raise ValueError("severity and feature must be finite")
+    for name, arr in (("severity", sev), ("feature", feat)):
+        if np.any(np.abs(arr) > MAX_ABS_FIT_VALUE):
+            raise ValueError(
+                f"{name} holds |values| up to {float(np.abs(arr).max())}: at most "
+                f"{MAX_ABS_FIT_VALUE:g} is allowed (sums of squares would overflow)"
+            )
     if mean_kind not in MEAN_KINDS:
         raise ValueError(f"mean_kind = {mean_kind!r} is not one of {MEAN_KINDS}")
     if sigma_kind not in SIGMA_KINDS:

@@ -44,15 +44,47 @@ def _positive(name: str, value: float) -> float:
 def point_prediction(
     rul_samples: np.ndarray, weights: np.ndarray | None = None, estimator: str = "mean"
 ) -> float:
-    """``<r>``: weighted mean, or weighted median (smallest r with CDF >= 1/2)."""
+    """``<r>``: weighted mean, or weighted median (smallest r with CDF >= 1/2).
+
+    The median compares the weight at or below each sample with the weight above it in
+    exact arithmetic (:func:`math.fsum` of the differences gives the exact sign), so a CDF
+    of exactly 1/2 counts: the lower middle of an even, unweighted sample.
+
+    >>> point_prediction(np.array([4.0, 1.0, 3.0, 2.0]), estimator="median")
+    2.0
+    """
     r, w = _samples(rul_samples, weights)
     if estimator == "mean":
         return float(w @ r)
     if estimator == "median":
-        order = np.argsort(r)
-        cdf = np.cumsum(w[order])
-        return float(r[order[min(np.searchsorted(cdf, 0.5), r.size - 1)]])
+        raw = np.ones(r.size) if weights is None else np.asarray(weights, dtype=np.float64)
+        order = np.argsort(r, kind="stable")
+        return float(r[order[_first_half_index(raw[order])]])
     raise ValueError(f"estimator = {estimator!r} is not one of {ESTIMATORS}")
+
+
+def _first_half_index(w: np.ndarray) -> int:
+    """Smallest k with ``sum(w[:k+1]) >= sum(w[k+1:])`` (CDF >= 1/2), exactly.
+
+    The condition is monotone in k (weights >= 0), so a bisection over k with one exact
+    ``math.fsum`` per probe (O(n log n)) finds it; a rounded cumulative sum would miss a
+    tie by one ulp.
+    """
+    signed = np.concatenate((w, -w))
+    n = w.size
+
+    def at_least_half(k: int) -> bool:
+        # w[0..k] minus w[k+1..n-1]: the slice of `signed` that holds +w[:k+1], -w[k+1:]
+        return math.fsum(signed[: k + 1].tolist() + signed[n + k + 1 :].tolist()) >= 0.0
+
+    lo, hi = 0, n - 1  # at_least_half(n - 1) holds: the whole weight is >= 0
+    while lo < hi:
+        mid = (lo + hi) // 2
+        if at_least_half(mid):
+            hi = mid
+        else:
+            lo = mid + 1
+    return lo
 
 
 def relative_accuracy(
@@ -63,7 +95,15 @@ def relative_accuracy(
 ) -> float:
     """``RA = 1 - |r* - <r>| / r*`` (Saxena 2010; ref §6.2), ``<r>`` mean or median."""
     rt = _positive("true_rul", true_rul)
-    return 1.0 - abs(rt - point_prediction(rul_samples, weights, estimator)) / rt
+    point = point_prediction(rul_samples, weights, estimator)
+    with np.errstate(over="ignore"):
+        ra = 1.0 - abs(rt - point) / rt
+    if not math.isfinite(ra):
+        raise ValueError(
+            f"relative accuracy overflows: true_rul = {true_rul} is too small against the "
+            f"prediction {point}"
+        )
+    return ra
 
 
 def cumulative_relative_accuracy(ra_values: np.ndarray, weights: np.ndarray | None = None) -> float:
@@ -178,18 +218,29 @@ def convergence(times: np.ndarray, metric: np.ndarray) -> float:
     """
     t = np.asarray(times, dtype=np.float64)
     m = np.asarray(metric, dtype=np.float64)
-    if t.ndim != 1 or t.size < 2 or m.shape != t.shape or np.any(np.diff(t) <= 0.0):
-        raise ValueError("times (strictly increasing) and metric need one shape, >= 2 points")
+    if t.ndim != 1 or t.size < 2 or m.shape != t.shape:
+        raise ValueError(
+            f"times and metric need one 1-D shape with >= 2 points, got {t.shape}, {m.shape}"
+        )
+    if not np.all(np.isfinite(t)) or np.any(np.diff(t) <= 0.0):
+        raise ValueError(f"times must be finite and strictly increasing, got {t.tolist()}")
     if not np.all(np.isfinite(m)) or np.any(m < 0.0):
         raise ValueError("metric values must be finite and >= 0")
-    dt = np.diff(t)
-    mi = m[:-1]
-    area = float(dt @ mi)
-    if area == 0.0:
-        return 0.0
-    x_c = 0.5 * float((t[1:] ** 2 - t[:-1] ** 2) @ mi) / area
-    y_c = 0.5 * float(dt @ mi**2) / area
-    return math.hypot(x_c - t[0], y_c)
+    with np.errstate(over="ignore", invalid="ignore"):
+        dt = np.diff(t)
+        mi = m[:-1]
+        area = float(dt @ mi)
+        if area == 0.0:
+            return 0.0
+        x_c = 0.5 * float((t[1:] ** 2 - t[:-1] ** 2) @ mi) / area
+        y_c = 0.5 * float(dt @ mi**2) / area
+        result = math.hypot(x_c - t[0], y_c)
+    if not math.isfinite(result):
+        raise ValueError(
+            f"convergence overflows for times up to {t[-1]} and metric up to {m.max()}: "
+            "rescale the time or metric units"
+        )
+    return result
 
 
 @dataclass(frozen=True)

@@ -65,6 +65,12 @@ from prognostics.normals import Handle, NormalStream, random, standard_normal
 from prognostics.resampling import SCHEMES, resample, systematic_indices
 
 KERNELS: tuple[str, ...] = ("epanechnikov", "gaussian")
+#: Largest |severity| a particle may hold: squares and weighted sums of the cloud stay finite
+#: (estimate's variance), far beyond any physical state. Beyond it a step raises.
+MAX_ABS_SEVERITY = 1e150
+#: Largest |log theta| a particle may hold (theta within exp(+-300) ~ 1e+-130): theta and its
+#: square stay finite.
+MAX_ABS_LOG_THETA = 300.0
 _STATE_DIM = 2
 _SCRATCH_ROWS = max(PROCESS_SCRATCH_ROWS, LIKELIHOOD_SCRATCH_ROWS)
 
@@ -280,6 +286,17 @@ def _gather_regularise(
         log_w[i] = -math.log(n)
 
 
+@njit(cache=True)
+def _first_out_of_range(
+    x: np.ndarray, log_theta: np.ndarray, max_abs_x: float, max_abs_log_theta: float
+) -> int:
+    """Index of the first particle with a non-finite or too large state, or -1."""
+    for i in range(x.size):
+        if not (abs(x[i]) <= max_abs_x and abs(log_theta[i]) <= max_abs_log_theta):
+            return i
+    return -1
+
+
 @dataclass(frozen=True)
 class StateEstimate:
     """Weighted posterior summary: means and standard deviations, and N_eff."""
@@ -448,6 +465,7 @@ class ParticleFilter:
         if not np.all(self._log_theta > 0.0):
             raise ValueError("theta0 must be > 0 for every particle")
         np.log(self._log_theta, out=self._log_theta)
+        self._check_cloud("reset", "x0, theta0")
         self._w.fill(1.0 / n)
         self._log_w.fill(-math.log(n))
         self._ess = float(n)
@@ -474,6 +492,22 @@ class ParticleFilter:
                 self._scratch,
                 *self._process_args,
             )
+        self._check_cloud("predict", usage)
+
+    def _check_cloud(self, method: str, *args: object) -> None:
+        """Raise (and require a reset) if a particle left the representable range; the
+        message shows ``method(*args)`` (formatted only on failure: a hot path)."""
+        i = _first_out_of_range(self._x, self._log_theta, MAX_ABS_SEVERITY, MAX_ABS_LOG_THETA)
+        if i < 0:
+            return
+        self._ready = False
+        shown = ", ".join(a if isinstance(a, str) else repr(a) for a in args)
+        raise FloatingPointError(
+            f"{method}({shown}) put particle {i} at severity {float(self._x[i])!r}, log theta "
+            f"{float(self._log_theta[i])!r}: outside |severity| <= {MAX_ABS_SEVERITY:g} and "
+            f"|log theta| <= {MAX_ABS_LOG_THETA:g} (an overflowing step or initial state); "
+            "call reset(x0, theta0) before using the filter again"
+        )
 
     def update(self, y: float, measurement: MeasurementModel | None = None) -> bool:
         """Weight by the likelihood of feature ``y``; NaN = no measurement (no change).
@@ -520,6 +554,7 @@ class ParticleFilter:
                 y,
                 *self._likelihood_args,
             )
+        self._check_cloud("step", usage, y)
         return self._after_update()
 
     def _after_update(self) -> bool:

@@ -26,6 +26,7 @@ which is then set to exactly 1.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 
 import numpy as np
@@ -86,7 +87,12 @@ def effective_sample_size(weights: np.ndarray) -> float:
     and N (uniform weights).
     """
     w = _check_weights(weights)
-    return float(w.sum() ** 2 / np.dot(w, w))
+    with np.errstate(over="ignore", under="ignore", invalid="ignore"):
+        ess = float(w.sum() ** 2 / np.dot(w, w))
+    if not math.isfinite(ess):  # huge or tiny weights: the same ratio on rescaled weights
+        ws = w / w.max()
+        ess = float(ws.sum() ** 2 / np.dot(ws, ws))
+    return ess
 
 
 def _uniforms(

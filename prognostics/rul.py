@@ -75,6 +75,10 @@ def _check_particles(
         raise ValueError(f"x and theta must be 1-D of one length, got {xa.shape}, {th.shape}")
     if weights is not None and np.shape(weights) != xa.shape:
         raise ValueError(f"weights must have shape {xa.shape}, got {np.shape(weights)}")
+    if not np.all(np.isfinite(xa)):
+        raise ValueError(f"x (particle severities) must be finite, got {xa[~np.isfinite(xa)][0]}")
+    if not (np.all(np.isfinite(th)) and np.all(th > 0.0)):
+        raise ValueError("theta (growth multipliers) must be finite and > 0")
     return xa, th
 
 
@@ -190,7 +194,17 @@ def _summary_or_raise(
         raise ValueError("weights must be finite, >= 0, with a positive sum")
     if status == 2:
         raise ValueError("RUL values must be finite")
+    _check_moments(mean, std, ra)
     return out, mean, std, risk
+
+
+def _check_moments(mean: float, std: float, r: np.ndarray) -> None:
+    """Finite values can still overflow the variance (|r| near 1e154 and beyond)."""
+    if not (math.isfinite(mean) and math.isfinite(std)):
+        raise ValueError(
+            f"RUL values up to {float(np.abs(r).max())} overflow the weighted mean or "
+            "variance (or the weights overflow their sum): rescale the usage unit or weights"
+        )
 
 
 def weighted_quantile(values: np.ndarray, weights: np.ndarray, q: np.ndarray) -> np.ndarray:
@@ -314,6 +328,10 @@ class RulPredictor:
                 f"need 0 <= low_quantile ({low_quantile}) <= 0.5 "
                 f"<= high_quantile ({high_quantile}) <= 1"
             )
+        if isinstance(n_particles, bool) or not (
+            isinstance(n_particles, int | np.integer) and n_particles >= 1
+        ):
+            raise ValueError(f"n_particles = {n_particles!r} must be an integer >= 1")
         self.model = model
         self.d_threshold = float(model.damage(np.array([threshold]))[0])
         self.horizon = float(horizon_steps)
@@ -322,8 +340,29 @@ class RulPredictor:
         self._rul = np.empty(n_particles)
         self._q = np.empty(3)
 
+    def _check_sizes(self, *arrays: np.ndarray) -> None:
+        """Every array must have one entry per particle the buffers were built for: the
+        kernels run unchecked, a shorter array would leave buffer entries unset."""
+        shape = self._rul.shape
+        try:  # the hot path: the filter's own arrays
+            if all(a.shape == shape for a in arrays):
+                return
+        except AttributeError:
+            pass
+        for name, arr in zip(("x", "log_theta", "weights"), arrays, strict=False):
+            if np.shape(arr) != shape:
+                raise ValueError(
+                    f"RulPredictor built for {shape[0]} particles got {name} of shape "
+                    f"{np.shape(arr)}; need shape {shape}"
+                )
+        raise ValueError("x, log_theta and weights must be numpy arrays")
+
     def values(self, x: np.ndarray, log_theta: np.ndarray) -> np.ndarray:
         """RUL of every particle (steps; a read-only view of a buffer reused by the next call)."""
+        self._check_sizes(x, log_theta)
+        return self._fill(x, log_theta)
+
+    def _fill(self, x: np.ndarray, log_theta: np.ndarray) -> np.ndarray:
         damage_array(*self.model.table_args, x, self._d)
         _rul_from_damage(self._d, log_theta, self.d_threshold, self._rul)
         view = self._rul.view()
@@ -332,12 +371,15 @@ class RulPredictor:
 
     def summary(self, x: np.ndarray, log_theta: np.ndarray, weights: np.ndarray) -> RulSummary:
         """Weighted RUL summary of particles ``x`` with log multipliers ``log_theta``."""
-        self.values(x, log_theta)
+        self._check_sizes(x, log_theta, weights)
+        self._fill(x, log_theta)
         status, mean, std, risk = _weighted_summary(
             self._rul, weights, self.levels, self.horizon, self._q
         )
         if status:
             raise ValueError("particle weights or RUL values are not finite")
+        if not (math.isfinite(mean) and math.isfinite(std)):
+            _check_moments(mean, std, self._rul)
         low, median, high = self._q
         return RulSummary(
             mean=mean,

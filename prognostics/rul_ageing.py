@@ -195,15 +195,18 @@ class AgeingRul:
 
     def mean(self, k: float) -> float:
         """``E[max(R - k, 0)]`` (steps)."""
+        _check_steps(k)
         j = int(np.searchsorted(self._r, k, side="right"))
         return max(float(self._suffix_wr[j] - k * self._suffix_w[j]), 0.0)
 
     def low(self, k: float) -> float:
         """Quantile of ``max(R - k, 0)`` at ``low_quantile`` (steps)."""
+        _check_steps(k)
         return max(self._low - k, 0.0)
 
     def summary(self, k: float, horizon: float) -> tuple[float, float, float]:
         """``(mean(k), low(k), prob_failure(k, horizon))`` in one call (the same numbers)."""
+        _check_steps(k)
         if not (math.isfinite(horizon) and horizon >= 0.0):
             raise ValueError(f"horizon = {horizon} must be finite and >= 0")
         return ageing_summary(
@@ -212,10 +215,16 @@ class AgeingRul:
 
     def prob_failure(self, k: float, horizon: float) -> float:
         """``P(max(R - k, 0) <= horizon) = P(R <= horizon + k)``, ``horizon >= 0``."""
+        _check_steps(k)
         if not (math.isfinite(horizon) and horizon >= 0.0):
             raise ValueError(f"horizon = {horizon} must be finite and >= 0")
         j = int(np.searchsorted(self._r, horizon + k, side="right"))
         return min(float(self._cum_w[j]), 1.0)
+
+
+def _check_steps(k: float) -> None:
+    if not (math.isfinite(k) and k >= 0.0):
+        raise ValueError(f"k = {k} steps since the build must be finite and >= 0")
 
 
 __all__ = ["AgeingRul", "ageing_summary"]

@@ -3,7 +3,9 @@
 Results depend only on the tasks (each carries its own seed), never on the number of
 workers or the chunking. Workers start with "spawn" (a numba threading layer already
 running in the parent is never forked), so calling scripts need the usual
-``if __name__ == "__main__":`` guard, and each worker runs one numba (and torch) thread.
+``if __name__ == "__main__":`` guard, and each worker runs one numba, one BLAS and one torch
+thread. With one worker the chunks run in the calling process with the same single-thread
+settings (:func:`single_threaded`), restored when :func:`map_chunks` returns.
 """
 
 from __future__ import annotations
@@ -11,11 +13,13 @@ from __future__ import annotations
 import math
 import multiprocessing
 import sys
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import ProcessPoolExecutor, as_completed
+from contextlib import contextmanager
 from typing import Any, TypeVar
 
 import numba
+import threadpoolctl
 from tqdm.auto import tqdm
 
 T = TypeVar("T")
@@ -27,6 +31,18 @@ MAX_CHUNK = 16
 _IN_WORKER = False
 
 
+class _Scope:
+    """Thread settings to restore when a :func:`single_threaded` block ends."""
+
+    def __init__(self) -> None:
+        self.numba_threads = numba.get_num_threads()
+        self.torch_threads: int | None = None  # recorded when torch is first pinned
+        self.limiters: list[threadpoolctl.threadpool_limits] = []
+
+
+_SCOPES: list[_Scope] = []
+
+
 def init_worker() -> None:
     """Initializer of every worker process (and of Ray tasks): see :func:`single_thread`."""
     global _IN_WORKER
@@ -35,19 +51,56 @@ def init_worker() -> None:
 
 
 def in_worker() -> bool:
-    """Whether this process is a worker started by :func:`map_chunks` (or a Ray task)."""
-    return _IN_WORKER
+    """Whether tasks of :func:`map_chunks` run single-threaded here: a worker process (or a
+    Ray task), or the calling process inside a :func:`single_threaded` block (as
+    ``map_chunks(n_workers=1)`` runs its chunks)."""
+    return _IN_WORKER or bool(_SCOPES)
 
 
 def single_thread() -> None:
-    """One numba thread, and one torch thread if torch is loaded: the workers already fill
-    the cores (two workers with torch's default of one thread per core ran PPO batches 1.4x
-    slower). Call it again after importing torch in a worker (torch ignores an
-    ``OMP_NUM_THREADS`` set after the process started)."""
+    """One numba thread, one BLAS/OpenMP thread (threadpoolctl) and one torch thread if torch
+    is loaded: the workers already fill the cores (two workers with torch's default of one
+    thread per core ran PPO batches 1.4x slower; a 20,000-particle estimate took 77 ms with
+    OpenBLAS's default threads on a busy 2-core machine against ~1 ms with one). Call it
+    again after importing torch (torch ignores an ``OMP_NUM_THREADS`` set after the process
+    started, and threadpoolctl only sees the libraries already loaded).
+
+    In a worker it lasts for the process; inside a :func:`single_threaded` block it is undone
+    when the block ends."""
+    scope = _SCOPES[-1] if _SCOPES else None
     numba.set_num_threads(1)
     torch = sys.modules.get("torch")
     if torch is not None:
+        if scope is not None and scope.torch_threads is None:
+            scope.torch_threads = torch.get_num_threads()
         torch.set_num_threads(1)
+    limiter = threadpoolctl.threadpool_limits(limits=1)
+    if scope is not None:
+        scope.limiters.append(limiter)
+
+
+@contextmanager
+def single_threaded() -> Iterator[None]:
+    """Run a block with :func:`single_thread`'s settings, restoring numba's, the BLAS
+    libraries' and torch's thread counts afterwards (also on an exception).
+
+    >>> with single_threaded():
+    ...     numba.get_num_threads()
+    1
+    """
+    scope = _Scope()
+    _SCOPES.append(scope)
+    try:
+        single_thread()
+        yield
+    finally:
+        _SCOPES.remove(scope)
+        for limiter in reversed(scope.limiters):
+            limiter.restore_original_limits()
+        numba.set_num_threads(scope.numba_threads)
+        torch = sys.modules.get("torch")
+        if torch is not None and scope.torch_threads is not None:
+            torch.set_num_threads(scope.torch_threads)
 
 
 def map_chunks(
@@ -74,9 +127,10 @@ def map_chunks(
     done: list[list[R]] = [[] for _ in chunks]
     with tqdm(total=len(items), disable=not progress, desc=desc, unit="run") as bar:
         if n_workers == 1:
-            for k, chunk in enumerate(chunks):
-                done[k] = fn(*shared, chunk)
-                bar.update(len(chunk))
+            with single_threaded():  # as a worker would: one thread per library
+                for k, chunk in enumerate(chunks):
+                    done[k] = fn(*shared, chunk)
+                    bar.update(len(chunk))
         else:
             context = multiprocessing.get_context("spawn")
             with ProcessPoolExecutor(

@@ -99,3 +99,63 @@ def test_bad_inputs_raise() -> None:
         evaluate_predictions(np.array([1.0, 0.0]), [np.ones(1)] * 2, None, eol=10.0)
     with pytest.raises(ValueError, match="metric"):
         convergence(np.array([0.0, 1.0]), np.array([-1.0, 1.0]))
+
+
+def _exact_weighted_median(r: np.ndarray, w: np.ndarray) -> float:
+    """Smallest r with CDF >= 1/2 in exact rational arithmetic (the definition)."""
+    from fractions import Fraction
+
+    total = sum(Fraction(x) for x in w)
+    cum = Fraction(0)
+    for k in np.argsort(r, kind="stable"):
+        cum += Fraction(w[k])
+        if 2 * cum >= total:
+            return float(r[k])
+    raise AssertionError("unreachable")
+
+
+def test_median_is_the_lower_middle_of_every_even_unweighted_sample() -> None:
+    """An exact CDF tie at 1/2 counts: numpy's inverted-CDF quantile, for n = 2 .. 2000."""
+    for n in range(2, 2001, 2):
+        r = np.random.default_rng(n).normal(size=n)
+        expected = np.quantile(r, 0.5, method="inverted_cdf")
+        assert point_prediction(r, estimator="median") == expected == np.sort(r)[n // 2 - 1]
+
+
+def test_weighted_median_matches_exact_arithmetic_at_ties() -> None:
+    """Weights mirrored around a split give an exact tie that rounded cumulative sums miss."""
+    rng = np.random.default_rng(7)
+    misses_of_rounded_cumsum = 0
+    for trial in range(300):
+        half = rng.choice([0.1, 0.2, 0.3, 0.7, 1.1, 1 / 3], size=int(rng.integers(1, 12)))
+        w = np.concatenate([half, rng.permutation(half)])  # the same multiset on each side
+        r = np.sort(rng.normal(size=w.size)) if trial % 2 else rng.normal(size=w.size)
+        order = np.argsort(r, kind="stable")
+        w_sorted_like_r = np.empty_like(w)
+        w_sorted_like_r[order] = w  # the first half (in r order) carries exactly half
+        exact = _exact_weighted_median(r, w_sorted_like_r)
+        assert point_prediction(r, w_sorted_like_r, "median") == exact
+        cdf = np.cumsum(w_sorted_like_r[order] / w_sorted_like_r.sum())
+        rounded = float(r[order[min(np.searchsorted(cdf, 0.5), r.size - 1)]])
+        misses_of_rounded_cumsum += rounded != exact
+    assert misses_of_rounded_cumsum > 0  # the old rule fails on this set: the test can fail
+
+
+def test_weighted_median_matches_exact_arithmetic_on_random_weights() -> None:
+    rng = np.random.default_rng(11)
+    for _ in range(200):
+        n = int(rng.integers(1, 40))
+        r = rng.integers(0, 10, size=n).astype(float)  # repeated values
+        w = rng.random(n) * (rng.random(n) < 0.8)  # some zero weights
+        if w.sum() == 0:
+            w[0] = 1.0
+        assert point_prediction(r, w, "median") == _exact_weighted_median(r, w)
+
+
+def test_overflowing_metrics_raise_instead_of_returning_inf() -> None:
+    with pytest.raises(ValueError, match="relative accuracy overflows"):
+        relative_accuracy(5e-324, np.array([1.0]))
+    with pytest.raises(ValueError, match="convergence overflows"):
+        convergence(np.array([0.0, 1e200]), np.array([1.0, 1.0]))
+    with pytest.raises(ValueError, match="times must be finite"):
+        convergence(np.array([0.0, math.nan]), np.array([1.0, 1.0]))

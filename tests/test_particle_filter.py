@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 import pickle
+import re
 
 import numpy as np
 import pytest
@@ -163,3 +164,33 @@ def test_read_only_views_follow_the_cloud_and_survive_pickling() -> None:
     assert np.array_equal(clone.x, pf.x) and np.array_equal(clone.weights, pf.weights)
     clone.predict(1.0)
     assert np.array_equal(clone.x, clone._x) and not np.array_equal(clone.x, pf.x)
+
+
+@pytest.mark.parametrize("usage", [1e300, 1e200, 1e160])
+def test_an_overflowing_step_raises_and_requires_a_reset(usage: float) -> None:
+    """predict(1e300) used to return (1e300, inf, inf, nan) from estimate()."""
+    process = linear_wear_model(1.0, process_noise_std=0.1, log_theta_noise_std=0.1)
+    meas = MeasurementModel("poly", [0.0], [0.5], coef=[0.0, 1.0])
+    pf = ParticleFilter(process, meas, 100, np.random.default_rng(0))
+    pf.reset(0.0, 1.0)
+    with pytest.raises(FloatingPointError, match=re.escape(f"predict({usage!r}) put particle 0")):
+        pf.predict(usage)
+    with pytest.raises(RuntimeError, match="call reset"):
+        pf.estimate()
+    pf.reset(0.0, 1.0)
+    with pytest.raises(FloatingPointError, match=r"step\(.*, 0\.5\) put particle"):
+        pf.step(usage, 0.5)
+    pf.reset(0.0, 1.0)
+    pf.step(1.0, 1.0)  # usable again after the reset
+    est = pf.estimate()
+    assert all(math.isfinite(v) for v in (est.x_mean, est.x_std, est.theta_mean, est.theta_std))
+
+
+def test_an_unrepresentable_initial_cloud_is_refused() -> None:
+    pf = _linear_gaussian_pf(50, 0)
+    with pytest.raises(FloatingPointError, match=r"reset\(x0, theta0\) put particle 0"):
+        pf.reset(1e200, 1.0)
+    with pytest.raises(FloatingPointError, match="log theta"):
+        pf.reset(0.0, 1e-300)
+    pf.reset(0.0, 1.0)
+    assert pf.estimate().x_mean == 0.0

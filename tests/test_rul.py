@@ -170,3 +170,38 @@ def test_rul_predictor_matches_rul_summary() -> None:
     )
     for name in ("mean", "std", "median", "low", "high", "prob_failure"):
         assert getattr(got, name) == pytest.approx(getattr(ref, name), rel=1e-9, abs=1e-9), name
+
+
+def test_rul_predictor_refuses_arrays_of_another_size() -> None:
+    """A shorter cloud used to leave buffer entries unset (std = 2.6e-155 from garbage)."""
+    model = linear_wear_model(0.01)
+    fast = RulPredictor(model, 1.0, 10, horizon_steps=5.0)
+    x, lt, w = np.linspace(0, 0.5, 10), np.zeros(10), np.full(10, 0.1)
+    full = fast.summary(x, lt, w)
+    reference = summarize_rul((1.0 - x) / 0.01, w, horizon_steps=5.0)
+    assert full.mean == pytest.approx(reference.mean, rel=1e-12)
+    assert full.std == pytest.approx(reference.std, rel=1e-12)
+    for args in ((x[:5], lt[:5], w[:5]), (x, lt[:9], w), (x, lt, w[:9])):
+        with pytest.raises(ValueError, match=r"RulPredictor built for 10 particles got"):
+            fast.summary(*args)
+    with pytest.raises(ValueError, match=r"got x of shape \(11,\)"):
+        fast.values(np.zeros(11), np.zeros(11))
+    for n in (0, -3, 2.5, True):
+        with pytest.raises(ValueError, match="n_particles"):
+            RulPredictor(model, 1.0, n, horizon_steps=5.0)
+
+
+def test_non_finite_particles_and_overflowing_summaries_raise() -> None:
+    model = linear_wear_model(0.01)
+    with pytest.raises(ValueError, match=r"x \(particle severities\) must be finite"):
+        rul_summary(
+            np.array([0.0, np.nan]), np.ones(2), np.ones(2), model, HazardZone(1.0),
+            horizon_steps=1.0,
+        )  # fmt: skip
+    with pytest.raises(ValueError, match="theta"):
+        predict_rul(np.zeros(2), np.array([1.0, -1.0]), model, HazardZone(1.0, 0.1),
+                    rng=np.random.default_rng(0))  # fmt: skip
+    with pytest.raises(ValueError, match="overflow the weighted mean or variance"):
+        summarize_rul(np.array([1e300, 0.0]), np.ones(2), horizon_steps=0.0)
+    with pytest.raises(ValueError, match="every value must be finite"):
+        model.damage(np.array([np.nan]))

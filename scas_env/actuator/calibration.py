@@ -24,7 +24,6 @@ import json
 import math
 from dataclasses import asdict, dataclass
 from functools import lru_cache
-from importlib import resources
 from pathlib import Path
 
 import numpy as np
@@ -32,6 +31,7 @@ import numpy.typing as npt
 from tqdm.auto import tqdm
 
 from prognostics.degradation_models import paris_crack_model
+from scas_env.actuator.atomic_file import write_text_atomic
 from scas_env.actuator.bandwidth import seal_criterion
 from scas_env.actuator.flight_damage import (
     crack_increment_m,
@@ -45,6 +45,13 @@ from scas_env.actuator.health import actuator_config
 from scas_env.actuator.missions import flight_profile, link_force_n
 from scas_env.actuator.params import ScasParams
 from scas_env.actuator.physics.actuator import simulate
+from scas_env.actuator.shipped_files import shipped_path, verify_shipped_file
+from scas_env.actuator.table_checks import (
+    finite_array,
+    finite_scalar,
+    load_json_table,
+    whole_number,
+)
 from scas_env.actuator.uncertainty import draw_units, nominal_unit
 
 FloatArray = npt.NDArray[np.float64]
@@ -95,15 +102,65 @@ class Calibration:
     version: int = CALIBRATION_VERSION
 
     def __post_init__(self) -> None:
-        for name in ("crack_depth_m", "crack_rate_m_per_flight", "crack_cv_depth_m", "crack_cv"):
-            arr = np.array(getattr(self, name), dtype=np.float64)
-            arr.setflags(write=False)
-            object.__setattr__(self, name, arr)
-        if self.version != CALIBRATION_VERSION:
+        own = "Calibration"
+        if not isinstance(self.version, int) or self.version != CALIBRATION_VERSION:
             raise ValueError(
-                f"calibration version {self.version} is not the supported {CALIBRATION_VERSION}; "
-                "rebuild it with scripts/build_calibration.py"
+                f"calibration version {self.version!r} is not the supported "
+                f"{CALIBRATION_VERSION}; rebuild it with scripts/build_calibration.py"
             )
+        if not isinstance(self.params_digest, str):
+            raise ValueError(f"{own}.params_digest = {self.params_digest!r} must be a string")
+        object.__setattr__(self, "seed", whole_number(own, "seed", self.seed, lo=0))
+        positive = (
+            "flight_duration_s",
+            "seal_critical_wear_m",
+            "healthy_cutoff_hz",
+            "critical_cutoff_hz",
+            "spring_failure_depth_m",
+            "wear_rate_m_per_flight",
+        )
+        scalars = {
+            name: finite_scalar(own, name, getattr(self, name), lo=0.0, lo_open=True)
+            for name in positive
+        }
+        for name in ("crack_dormant_below_m", "wear_cv"):
+            scalars[name] = finite_scalar(own, name, getattr(self, name), lo=0.0)
+        arrays = {
+            "crack_depth_m": finite_array(
+                own,
+                "crack_depth_m",
+                self.crack_depth_m,
+                ndim=1,
+                lo=0.0,
+                lo_open=True,
+                min_size=2,
+                increasing=True,
+            ),
+            "crack_rate_m_per_flight": finite_array(
+                own, "crack_rate_m_per_flight", self.crack_rate_m_per_flight, ndim=1, lo=0.0
+            ),
+            "crack_cv_depth_m": finite_array(
+                own,
+                "crack_cv_depth_m",
+                self.crack_cv_depth_m,
+                ndim=1,
+                lo=0.0,
+                lo_open=True,
+                increasing=True,
+            ),
+            "crack_cv": finite_array(own, "crack_cv", self.crack_cv, ndim=1, lo=0.0),
+        }
+        for table, grid in (
+            ("crack_rate_m_per_flight", "crack_depth_m"),
+            ("crack_cv", "crack_cv_depth_m"),
+        ):
+            if arrays[table].shape != arrays[grid].shape:
+                raise ValueError(
+                    f"{own}.{table} has {arrays[table].size} values but {own}.{grid} has "
+                    f"{arrays[grid].size}: one value per grid point is required"
+                )
+        for name, value in (scalars | arrays).items():  # Python floats, read-only arrays
+            object.__setattr__(self, name, value)
 
     def crack_cv_at(self, depth_m: float | FloatArray) -> FloatArray:
         """Flight-to-flight CV of the crack increment at ``depth_m`` (log-depth interpolation)."""
@@ -117,12 +174,14 @@ class Calibration:
         return out
 
     def save(self, path: str | Path) -> None:
-        Path(path).write_text(json.dumps(self.to_dict(), indent=1) + "\n")
+        write_text_atomic(path, json.dumps(self.to_dict(), indent=1) + "\n")
 
     @classmethod
     def load(cls, path: str | Path) -> Calibration:
-        data = json.loads(Path(path).read_text())
-        return cls(**data)
+        """Read a calibration file; every error names the file, and a shipped file is
+        checked against the SHA-256 manifest (:mod:`scas_env.actuator.shipped_files`)."""
+        verify_shipped_file(path)
+        return load_json_table(path, lambda data: cls(**data), "calibration")
 
 
 def build_calibration(
@@ -186,8 +245,7 @@ def build_calibration(
 @lru_cache(maxsize=1)
 def default_calibration() -> Calibration:
     """The shipped calibration of the default :class:`ScasParams`."""
-    text = resources.files("scas_env.actuator").joinpath("data", DATA_FILE).read_text()
-    return Calibration(**json.loads(text))
+    return Calibration.load(shipped_path(DATA_FILE))
 
 
 def calibration_for(params: ScasParams) -> Calibration:

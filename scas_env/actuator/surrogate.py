@@ -34,11 +34,14 @@ from bisect import bisect_right
 from collections.abc import Sequence
 from dataclasses import asdict, dataclass
 from functools import lru_cache
-from importlib import resources
 from pathlib import Path
 
 import numpy as np
 import numpy.typing as npt
+
+from scas_env.actuator.atomic_file import write_text_atomic
+from scas_env.actuator.shipped_files import shipped_path, verify_shipped_file
+from scas_env.actuator.table_checks import finite_array, load_json_table, whole_number
 
 FloatArray = npt.NDArray[np.float64]
 SURROGATE_VERSION = 1
@@ -73,32 +76,46 @@ class SurrogateModel:
     version: int = SURROGATE_VERSION
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "features", tuple(self.features))
-        for name in ("crack_grid", "wear_grid", "mean", "unit_std", "run_std"):
-            arr = np.array(getattr(self, name), dtype=np.float64)
-            arr.setflags(write=False)
-            object.__setattr__(self, name, arr)
-        shape = (len(self.features), self.crack_grid.size, self.wear_grid.size)
-        for name in ("mean", "unit_std", "run_std"):
-            if getattr(self, name).shape != shape:
-                raise ValueError(f"SurrogateModel.{name} must have shape {shape}")
+        own = "SurrogateModel"
+        if not isinstance(self.version, int) or self.version != SURROGATE_VERSION:
+            raise ValueError(
+                f"surrogate version {self.version!r} is not the supported {SURROGATE_VERSION}; "
+                "rebuild it with scripts/build_surrogate.py"
+            )
+        if isinstance(self.features, str) or not all(isinstance(f, str) for f in self.features):
+            raise ValueError(f"{own}.features = {self.features!r} must be a list of feature ids")
+        features = tuple(self.features)
+        if not features or len(set(features)) != len(features):
+            raise ValueError(f"{own}.features = {features!r} must be non-empty, without repeats")
+        object.__setattr__(self, "features", features)
+        if not isinstance(self.params_digest, str):
+            raise ValueError(f"{own}.params_digest = {self.params_digest!r} must be a string")
+        for name, lo in (("seed", 0), ("units_per_point", 1), ("runs_per_unit", 1)):
+            object.__setattr__(self, name, whole_number(own, name, getattr(self, name), lo=lo))
         for name in ("crack_grid", "wear_grid"):
-            grid = getattr(self, name)
-            if grid[0] != 0.0 or grid[-1] != 1.0 or np.any(np.diff(grid) <= 0.0):
-                raise ValueError(f"SurrogateModel.{name} must rise strictly from 0 to 1")
-        if np.any(self.unit_std < 0.0) or np.any(self.run_std <= 0.0):
-            raise ValueError("SurrogateModel: unit_std must be >= 0 and run_std > 0")
+            grid = finite_array(own, name, getattr(self, name), ndim=1, min_size=2, increasing=True)
+            if grid[0] != 0.0 or grid[-1] != 1.0:
+                raise ValueError(
+                    f"{own}.{name} runs from {float(grid[0])!r} to {float(grid[-1])!r}; "
+                    "it must rise strictly from 0 to 1 (fractions of critical)"
+                )
+            object.__setattr__(self, name, grid)
+        shape = (len(features), self.crack_grid.size, self.wear_grid.size)
+        lows = {"mean": (None, False), "unit_std": (0.0, False), "run_std": (0.0, True)}
+        for name, (lo, lo_open) in lows.items():
+            arr = finite_array(own, name, getattr(self, name), ndim=3, lo=lo, lo_open=lo_open)
+            if arr.shape != shape:
+                raise ValueError(
+                    f"{own}.{name} has shape {arr.shape}; it must have shape {shape} "
+                    "(features, crack grid, wear grid)"
+                )
+            object.__setattr__(self, name, arr)
         stack = np.stack([self.mean, self.unit_std, self.run_std])
         stack.setflags(write=False)
         object.__setattr__(self, "_stack", stack)
         object.__setattr__(self, "_crack_list", self.crack_grid.tolist())
         object.__setattr__(self, "_wear_list", self.wear_grid.tolist())
         object.__setattr__(self, "_stack_lists", stack.tolist())
-        if self.version != SURROGATE_VERSION:
-            raise ValueError(
-                f"surrogate version {self.version} is not the supported {SURROGATE_VERSION}; "
-                "rebuild it with scripts/build_surrogate.py"
-            )
 
     def index(self, feature: str) -> int:
         """Position of ``feature`` in :attr:`features`."""
@@ -234,15 +251,17 @@ class SurrogateModel:
         return out
 
     def save(self, path: str | Path) -> None:
-        Path(path).write_text(json.dumps(self.to_dict()) + "\n")
+        write_text_atomic(path, json.dumps(self.to_dict()) + "\n")
 
     @classmethod
     def load(cls, path: str | Path) -> SurrogateModel:
-        return cls(**json.loads(Path(path).read_text()))
+        """Read a surrogate file; every error names the file, and a shipped file is checked
+        against the SHA-256 manifest (:mod:`scas_env.actuator.shipped_files`)."""
+        verify_shipped_file(path)
+        return load_json_table(path, lambda data: cls(**data), "surrogate")
 
 
 @lru_cache(maxsize=1)
 def default_surrogate() -> SurrogateModel:
     """The shipped surrogate of the default :class:`~scas_env.actuator.params.ScasParams`."""
-    text = resources.files("scas_env.actuator").joinpath("data", DATA_FILE).read_text()
-    return SurrogateModel(**json.loads(text))
+    return SurrogateModel.load(shipped_path(DATA_FILE))

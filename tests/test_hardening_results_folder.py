@@ -1,0 +1,174 @@
+"""Atomic results folders: complete or absent, never mixed, refused unless asked, checked first."""
+
+from __future__ import annotations
+
+import datetime as dt
+import hashlib
+import json
+import os
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from scas_env.results_folder import (
+    MANIFEST,
+    ResultsFolderError,
+    check_destination,
+    library_versions,
+    results_folder,
+    timestamped,
+    verify_results_folder,
+)
+
+
+def _write(folder: Path, files: dict[str, bytes]) -> None:
+    for rel, data in files.items():
+        (folder / rel).parent.mkdir(parents=True, exist_ok=True)
+        (folder / rel).write_bytes(data)
+
+
+def _siblings(dest: Path) -> list[str]:
+    return sorted(p.name for p in dest.parent.iterdir())
+
+
+def test_success_renames_into_place_with_a_complete_manifest(tmp_path: Path) -> None:
+    dest = tmp_path / "out" / "bench"  # parents created
+    files = {"rows.csv": b"a,b\n1,2\n", "plots/reward.png": b"\x89PNG..."}
+    config = {"episodes": np.int64(40), "policies": ("age", "ppo"), "path": Path("x")}
+    with results_folder(dest, config=config, seeds={"root": 0, "env": np.arange(3)}) as tmp:
+        assert tmp.parent == dest.parent and tmp.name.startswith(".bench.partial-")
+        assert not dest.exists()  # nothing at the destination until the block succeeds
+        _write(tmp, files)
+    assert _siblings(dest) == ["bench"]  # no temporary folder left
+    manifest = json.loads((dest / MANIFEST).read_text())
+    assert manifest["complete"] is True
+    assert manifest["config"] == {"episodes": 40, "policies": ["age", "ppo"], "path": "x"}
+    assert manifest["seeds"] == {"root": 0, "env": [0, 1, 2]}
+    for name in ("numpy", "scipy", "gymnasium", "stable-baselines3", "scas-maintenance-gym"):
+        assert manifest["versions"][name] == library_versions()[name]
+    assert manifest["versions"]["numpy"] == np.__version__
+    for rel, data in files.items():  # independent hashes
+        assert manifest["files"][rel] == {
+            "sha256": hashlib.sha256(data).hexdigest(),
+            "bytes": len(data),
+        }
+    assert verify_results_folder(dest) == sorted(files)
+
+
+@pytest.mark.parametrize("error", [RuntimeError("boom"), KeyboardInterrupt()])
+def test_an_exception_leaves_no_partial_folder(tmp_path: Path, error: BaseException) -> None:
+    dest = tmp_path / "bench"
+    with pytest.raises(type(error)), results_folder(dest, config={}, seeds=[1]) as tmp:
+        _write(tmp, {"rows.csv": b"partial"})
+        raise error
+    assert _siblings(dest) == []
+
+
+def test_an_existing_folder_is_refused_before_the_block_runs(tmp_path: Path) -> None:
+    dest = tmp_path / "bench"
+    dest.mkdir()
+    (dest / "old.png").write_bytes(b"old")
+    ran = []
+    with (
+        pytest.raises(ResultsFolderError, match=rf"{dest} already exists; pass overwrite=True"),
+        results_folder(dest, config={}, seeds=[]),
+    ):
+        ran.append(True)
+    assert ran == [] and _siblings(dest) == ["bench"]
+    assert sorted(p.name for p in dest.iterdir()) == ["old.png"]
+
+
+def test_overwrite_replaces_the_folder_whole(tmp_path: Path) -> None:
+    dest = tmp_path / "bench"
+    with results_folder(dest, config={"run": 1}, seeds=[]) as tmp:
+        _write(tmp, {"rows.csv": b"old rows", "reward.png": b"old plot"})
+    with results_folder(dest, config={"run": 2}, seeds=[], overwrite=True) as tmp:
+        _write(tmp, {"rows.csv": b"new rows"})
+    assert sorted(p.name for p in dest.iterdir()) == [MANIFEST, "rows.csv"]  # no old PNG
+    assert (dest / "rows.csv").read_bytes() == b"new rows"
+    assert json.loads((dest / MANIFEST).read_text())["config"] == {"run": 2}
+    assert _siblings(dest) == ["bench"]
+
+
+def test_an_interrupted_overwrite_keeps_the_old_folder_intact(tmp_path: Path) -> None:
+    dest = tmp_path / "bench"
+    with results_folder(dest, config={"run": 1}, seeds=[]) as tmp:
+        _write(tmp, {"rows.csv": b"old rows", "reward.png": b"old plot"})
+    with (
+        pytest.raises(KeyboardInterrupt),
+        results_folder(dest, config={"run": 2}, seeds=[], overwrite=True) as tmp,
+    ):
+        _write(tmp, {"rows.csv": b"new rows"})
+        raise KeyboardInterrupt
+    assert verify_results_folder(dest) == ["reward.png", "rows.csv"]
+    assert (dest / "rows.csv").read_bytes() == b"old rows"
+    assert _siblings(dest) == ["bench"]
+
+
+def test_check_destination_validates_before_any_work(tmp_path: Path) -> None:
+    assert check_destination(tmp_path / "a" / "b") == tmp_path / "a" / "b"
+    assert not (tmp_path / "a").exists()  # a check only
+    blocker = tmp_path / "file.txt"
+    blocker.write_text("x")
+    with pytest.raises(ResultsFolderError, match=rf"{blocker} exists and is not a folder"):
+        check_destination(blocker / "sub")
+    with pytest.raises(ResultsFolderError, match="exists and is not a folder"):
+        check_destination(blocker, overwrite=True)
+    with pytest.raises(TypeError, match="overwrite = 'yes' must be True or False"):
+        check_destination(tmp_path / "c", overwrite="yes")  # type: ignore[arg-type]
+    assert _siblings(blocker) == ["file.txt"]  # the write probe is removed
+
+
+@pytest.mark.skipif(os.geteuid() == 0, reason="root writes into read-only folders")
+def test_a_read_only_parent_is_refused(tmp_path: Path) -> None:
+    parent = tmp_path / "ro"
+    parent.mkdir()
+    parent.chmod(0o500)
+    try:
+        with pytest.raises(ResultsFolderError, match="is not writable"):
+            check_destination(parent / "bench")
+    finally:
+        parent.chmod(0o700)
+
+
+def test_bad_config_or_seeds_are_refused_before_the_block(tmp_path: Path) -> None:
+    with (
+        pytest.raises(TypeError, match="config must be JSON serialisable"),
+        results_folder(tmp_path / "x", config={"f": object()}, seeds=[]),
+    ):
+        pass
+    with (
+        pytest.raises(TypeError, match="seeds must be JSON serialisable"),
+        results_folder(tmp_path / "x", config={}, seeds=[float("nan")]),
+    ):
+        pass
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_verify_detects_changed_extra_and_missing_files(tmp_path: Path) -> None:
+    dest = tmp_path / "bench"
+    with results_folder(dest, config={}, seeds=[]) as tmp:
+        _write(tmp, {"rows.csv": b"rows", "summary.json": b"{}"})
+    (dest / "rows.csv").write_bytes(b"rowz")
+    with pytest.raises(ResultsFolderError, match=r"rows\.csv differs from its manifest hash"):
+        verify_results_folder(dest)
+    (dest / "rows.csv").write_bytes(b"rows")
+    (dest / "stale.png").write_bytes(b"")
+    with pytest.raises(ResultsFolderError, match=r"\['stale.png'\] are not in the manifest"):
+        verify_results_folder(dest)
+    (dest / "stale.png").unlink()
+    (dest / "summary.json").unlink()
+    with pytest.raises(ResultsFolderError, match=r"\['summary.json'\] are missing"):
+        verify_results_folder(dest)
+
+
+def test_timestamped_names_a_fresh_sibling() -> None:
+    when = dt.datetime(2026, 11, 23, 20, 15, 0, tzinfo=dt.timezone.utc)
+    assert timestamped("results/benchmark", when) == Path("results/benchmark-20261123T201500Z")
+
+
+@pytest.mark.skipif(not Path("/proc/self").is_dir(), reason="needs Linux /proc")
+def test_an_unwritable_parent_is_refused_even_for_root() -> None:
+    with pytest.raises(ResultsFolderError, match=r"cannot create results folder /proc/bench"):
+        check_destination("/proc/bench")
