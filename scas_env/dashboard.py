@@ -15,9 +15,12 @@ Three pieces, so that drawing never reaches into the env:
 matplotlib is imported inside :class:`HealthDashboard` only (the env layer does not need
 it otherwise). Frame cost: :func:`benchmark_frame_ms` (``scripts``: see docs/dashboard.md).
 
-The env's internals are read by four small functions (:func:`critical_levels`,
-:func:`unit_growth_multipliers`, :func:`rul_distribution`, :func:`episode_totals`): the
-only places to change if the env's attributes move.
+The env is read through ``env.unwrapped`` attributes that exist today (``world``: crack,
+wear, their fractions, critical depth, true RUL; ``calibration``; ``monitor``: the
+filters' RUL distributions; ``builder.last``: latest features; ``stats``, ``slot``,
+``downtime``, ``scenario``), all in the small functions :func:`critical_levels`,
+:func:`unit_growth_multipliers`, :func:`rul_distribution`, :func:`episode_totals`,
+:func:`true_state` and :func:`latest_features`: the only places to change if they move.
 """
 
 from __future__ import annotations
@@ -194,6 +197,26 @@ def episode_totals(env: Any) -> dict[str, Any]:
     }
 
 
+def true_state(env: Any) -> dict[str, float]:
+    """The truth now: crack depth and wear (m), their fractions of critical, true RUL of
+    each part (flights, ``inf`` if the fault never grows)."""
+    w = env.unwrapped.world
+    spring_rul, seal_rul = w.true_rul_flights()
+    return {
+        "crack_depth_m": float(w.crack_m),
+        "seal_wear_m": float(w.wear_m),
+        "crack_fraction": float(w.crack_fraction),
+        "wear_fraction": float(w.wear_fraction),
+        "spring_rul_flights": float(spring_rul),
+        "seal_rul_flights": float(seal_rul),
+    }
+
+
+def latest_features(env: Any) -> dict[str, float]:
+    """Latest measured features (SI units; healthy means before the first measurement)."""
+    return {f: float(v) for f, v in env.unwrapped.builder.last.items()}
+
+
 class HealthTrace:
     """History of the true crack and wear fractions, one point per :meth:`record`."""
 
@@ -209,12 +232,13 @@ class HealthTrace:
 
     def record(self, env: Any) -> None:
         """Append the env's current state (a new episode, slot 0, clears the history)."""
-        u = env.unwrapped
-        if u.slot == 0:
+        slot = int(env.unwrapped.slot)
+        if slot == 0:
             self.clear()
-        self.slots.append(int(u.slot))
-        self.crack.append(float(u.world.crack_fraction))
-        self.wear.append(float(u.world.wear_fraction))
+        truth = true_state(env)
+        self.slots.append(slot)
+        self.crack.append(truth["crack_fraction"])
+        self.wear.append(truth["wear_fraction"])
 
 
 def frame_record_from_env(
@@ -224,29 +248,27 @@ def frame_record_from_env(
     current point only)."""
     u = env.unwrapped
     spring_crit, seal_crit = critical_levels(env)
-    w = u.world
+    truth = true_state(env)
+    t = episode_totals(env)
     if trace is None or not trace.slots:
-        slots, crack, wear = [u.slot], [w.crack_fraction], [w.wear_fraction]
+        slots = [t["slot"]]
+        crack, wear = [truth["crack_fraction"]], [truth["wear_fraction"]]
     else:
         slots, crack, wear = trace.slots, trace.crack, trace.wear
     rul = None
     if u.scenario.obs_mode in ("features+rul", "dict"):
-        truth = w.true_rul_flights()
         rul = {
-            part: PartRul(*rul_distribution(env, part), true_flights=truth[k])
-            for k, part in enumerate(PARTS)
+            part: PartRul(*rul_distribution(env, part), true_flights=truth[f"{part}_rul_flights"])
+            for part in PARTS
         }
-    last = u.builder.last
-    features = tuple(
-        (f, float(last[f]) * FEATURE_UNITS[f][1], FEATURE_UNITS[f][0]) for f in FEATURES
-    )
-    t = episode_totals(env)
+    last = latest_features(env)
+    features = tuple((f, last[f] * FEATURE_UNITS[f][1], FEATURE_UNITS[f][0]) for f in FEATURES)
     return HealthRecord(
         slots=np.asarray(slots),
         crack_fraction=np.asarray(crack),
         wear_fraction=np.asarray(wear),
-        crack_depth_m=float(w.crack_m),
-        seal_wear_m=float(w.wear_m),
+        crack_depth_m=truth["crack_depth_m"],
+        seal_wear_m=truth["seal_wear_m"],
         spring_critical_m=spring_crit,
         seal_critical_m=seal_crit,
         rul=rul,
@@ -504,7 +526,14 @@ class DashboardRenderer:
             self._dashboard = HealthDashboard(interactive=self.render_mode == "human")
         return self._dashboard
 
+    def __getstate__(self) -> dict[str, Any]:
+        """Pickles (and deep copies) without the figure; it is rebuilt on the next frame."""
+        state = dict(self.__dict__)
+        state["_dashboard"] = None
+        return state
+
     def observe(self, env: Any) -> None:
+        """Record the env's state (call at the end of ``reset()`` and of ``step()``)."""
         self.trace.record(env)
 
     def render(self, env: Any) -> np.ndarray | None:
@@ -520,20 +549,39 @@ class DashboardRenderer:
             self._dashboard = None
 
 
-def benchmark_frame_ms(env: Any, *, frames: int = 50, warmup: int = 3) -> float:
-    """Median wall time (ms) of one ``rgb_array`` frame (record + draw) of ``env`` (reset
-    and stepped by the caller), over ``frames`` frames after ``warmup`` ones."""
-    trace = HealthTrace()
-    trace.record(env)
+def benchmark_frame_ms(
+    env: Any, trace: HealthTrace | None = None, *, frames: int = 100, test_every: int = 10
+) -> dict[str, float]:
+    """Time (ms) of ``rgb_array`` frames (record + draw) of ``env`` along an episode.
+
+    ``env`` is reset by the caller and possibly flown for a while, recorded in ``trace``
+    (default: a history that starts now). Between two timed frames the env flies one slot
+    untimed (a test every ``test_every`` slots), so records change as in an episode and the
+    cached background is redrawn when an axis limit moves. Returns the median, mean and max
+    wall time over ``frames`` frames, and the median CPU time of this process
+    (``cpu_median``: less sensitive to other jobs on a shared machine).
+    """
+    if trace is None:
+        trace = HealthTrace()
+        trace.record(env)
     dash = HealthDashboard()
-    times = []
-    for k in range(warmup + frames):
-        start = time.perf_counter()
+    dash.draw(frame_record_from_env(env, trace))  # first frame: the figure's own setup
+    wall, cpu = [], []
+    for k in range(frames):
+        env.step(1 if k % test_every == 0 else 0)
+        trace.record(env)
+        start, start_cpu = time.perf_counter(), time.process_time()
         dash.draw(frame_record_from_env(env, trace))
-        if k >= warmup:
-            times.append(time.perf_counter() - start)
+        wall.append(time.perf_counter() - start)
+        cpu.append(time.process_time() - start_cpu)
     dash.close()
-    return 1e3 * float(np.median(times))
+    ms = 1e3 * np.asarray(wall)
+    return {
+        "median": float(np.median(ms)),
+        "mean": float(ms.mean()),
+        "max": float(ms.max()),
+        "cpu_median": 1e3 * float(np.median(cpu)),
+    }
 
 
 __all__ = [
@@ -546,6 +594,8 @@ __all__ = [
     "critical_levels",
     "episode_totals",
     "frame_record_from_env",
+    "latest_features",
     "rul_distribution",
+    "true_state",
     "unit_growth_multipliers",
 ]

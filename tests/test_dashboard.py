@@ -3,6 +3,9 @@ in pixels against the axis transform, the record against the env's own observati
 
 from __future__ import annotations
 
+import copy
+import pickle
+
 import gymnasium as gym
 import numpy as np
 import pytest
@@ -136,6 +139,10 @@ def test_renderer_without_filter_and_new_episode() -> None:
         renderer.observe(env)
     assert frame_record_from_env(env, renderer.trace).rul is None
     assert renderer.render(env).shape == SHAPE
+    frame = renderer.render(env)
+    clone = pickle.loads(pickle.dumps(renderer))  # the figure is dropped and rebuilt
+    np.testing.assert_array_equal(clone.render(env), frame)
+    assert copy.deepcopy(renderer).trace.slots == renderer.trace.slots
     env.reset(seed=1)
     renderer.observe(env)
     assert renderer.trace.slots == [0]
@@ -164,3 +171,37 @@ def test_bad_part_rul_raises() -> None:
         PartRul(np.ones(3), np.ones(3), true_flights=1.0)
     with pytest.raises(ValueError, match="true_flights"):
         PartRul(np.ones(2), np.full(2, 0.5), true_flights=float("nan"))
+
+
+class _Fly:
+    """A policy that flies every slot (SB3-style predict)."""
+
+    def predict(self, obs, state=None, deterministic=True):
+        return 0, state
+
+
+def test_episode_animation_files(tmp_path) -> None:
+    from PIL import Image
+
+    from scas_env.studies.dashboard_animation import episode_frames, save_gif
+
+    env = gym.make(scas_env.ENV_ID, episode_slots=25)
+    episode = episode_frames(env, _Fly(), seed=0, every=10)
+    assert [n["slot"] for n in episode.numbers] == [0, 10, 20, 25]
+    assert all(f.shape == SHAPE for f in episode.frames)
+    gif, numbers = save_gif(episode, tmp_path / "a.gif", fps=5, scale=0.5)
+    with Image.open(gif) as im:
+        assert im.n_frames == 4 and im.size == (SHAPE[1] // 2, SHAPE[0] // 2)
+    assert numbers.read_text().count('"slot"') == 4
+    with pytest.raises(FileExistsError, match="overwrite"):
+        save_gif(episode, gif, fps=5)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["a.gif", "a.json"]
+
+
+def test_benchmark_function_runs() -> None:
+    """The frame benchmark (timings are reported by scripts/bench_dashboard.py, not tested)."""
+    from scas_env.dashboard import benchmark_frame_ms
+
+    env = gym.make(scas_env.ENV_ID)
+    env.reset(seed=0)
+    assert set(benchmark_frame_ms(env, frames=3)) == {"median", "mean", "max", "cpu_median"}

@@ -216,3 +216,21 @@ def test_physics_fidelity_short_horizon() -> None:
     assert np.isfinite(flights["G1"][0]) and np.isfinite(flights["I7"]).all()
     # the physics spring fails at the unit's own depth, not the nominal one
     assert flights["spring_critical_depth_m"][0] == units["spring_critical_depth_m"][0]
+
+
+@pytest.mark.slow
+def test_workers_do_not_change_the_rows() -> None:
+    """Two spawned workers give the rows of one process, bit for bit."""
+    one = simulate_units(6, seed=9, max_slots=300, n_workers=1)
+    two = simulate_units(6, seed=9, max_slots=300, n_workers=2)
+    for a, b in zip(one, two, strict=True):
+        for key in a:
+            np.testing.assert_array_equal(a[key], b[key], err_msg=key)
+
+
+def test_docs_list_every_column() -> None:
+    from scas_env.studies.run_to_failure_data import UNIT_COLUMNS
+
+    text = (Path(__file__).resolve().parents[1] / "docs" / "dataset.md").read_text()
+    for c in (*FLIGHT_COLUMNS, *UNIT_COLUMNS):
+        assert f"| `{c.name}` | {c.dtype} | {c.unit} | {c.description} |" in text, c.name
