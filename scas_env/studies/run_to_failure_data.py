@@ -240,7 +240,9 @@ def check_output(out: str | os.PathLike[str], overwrite: bool) -> Path:
     """The output folder; FileExistsError if it exists and ``overwrite`` is false."""
     path = Path(out)
     if path.exists() and not overwrite:
-        raise FileExistsError(f"out = {str(path)!r} exists; pass overwrite=True to replace it")
+        raise FileExistsError(
+            f"out = {str(path)!r} exists; pass overwrite=True (--overwrite) to replace it"
+        )
     if path.exists() and not path.is_dir():
         raise ValueError(f"out = {str(path)!r} exists and is not a folder")
     return path
