@@ -62,10 +62,10 @@ FORBIDDEN_THIRD_PARTY: dict[str, set[str]] = {
     "physics": {"gymnasium", "matplotlib", "torch", "stable_baselines3"},
     "actuator": {"gymnasium", "matplotlib", "torch", "stable_baselines3"},
     "prognostics": {"gymnasium", "torch", "stable_baselines3"},
-    "env": {"matplotlib", "torch", "stable_baselines3"},
+    "env": {"torch", "stable_baselines3"},
 }
 #: third-party modules a layer may import only inside functions (lazily)
-LAZY_ONLY: dict[str, set[str]] = {"prognostics": {"matplotlib"}}
+LAZY_ONLY: dict[str, set[str]] = {"prognostics": {"matplotlib"}, "env": {"matplotlib"}}
 
 
 def _imports(path: Path) -> list[tuple[str, bool]]:

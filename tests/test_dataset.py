@@ -1,0 +1,236 @@
+"""Run-to-failure dataset: rows against an independent replay of the env, leakage against
+eq. 9 by hand, seeding, atomic files, loader round trip, split by unit, bad inputs."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import gymnasium as gym
+import numpy as np
+import pytest
+
+import scas_env
+from scas_env.actuator.params import ScasParams
+from scas_env.actuator.physics.fluid import dynamic_viscosity
+from scas_env.scenario import Scenario
+from scas_env.studies.run_to_failure import (
+    export_run_to_failure,
+    leakage_fraction,
+    simulate_units,
+    unit_seeds,
+)
+from scas_env.studies.run_to_failure_data import (
+    FLIGHT_COLUMNS,
+    load_run_to_failure,
+    split_by_unit,
+    to_table,
+    write_dataset,
+)
+
+pytest.importorskip("pyarrow")
+
+
+@pytest.fixture(scope="module")
+def small() -> tuple[dict, dict]:
+    """Four units flown to failure (test every 7 slots)."""
+    return simulate_units(4, seed=11, test_every=7)
+
+
+def _folder_bytes(path: Path) -> dict[str, bytes]:
+    return {p.name: p.read_bytes() for p in sorted(path.iterdir())}
+
+
+def test_leakage_fraction_is_eq9_by_hand() -> None:
+    """Below the lip wear only the laminar annulus leaks: Q = pi D h^3 dp / (12 mu L); at the
+    critical wear (past the lip) the orifice adds C_d phi pi D (lambda - lip) sqrt(2 dp/rho)."""
+    p = ScasParams()
+    s, fl = p.seal, p.fluid
+    mu = float(
+        dynamic_viscosity(
+            fl.temperature_c, fl.viscosity_40c_m2_s, fl.viscosity_100c_m2_s, fl.density_kg_m3
+        )
+    )
+    dp = fl.supply_pressure_pa - fl.return_pressure_pa
+    crit = 10.7e-6
+    assert crit > s.lip_wear_m
+
+    def q(w: float) -> float:
+        lam = math.pi * s.diameter_m * (s.initial_gap_m + w) ** 3 / (12 * mu * s.land_length_m)
+        orifice = (
+            s.orifice_discharge_coeff * s.orifice_fraction * math.pi * s.diameter_m
+            * max(w - s.lip_wear_m, 0.0) * math.sqrt(2 * dp / fl.density_kg_m3)
+        )  # fmt: skip
+        return lam * dp + orifice
+
+    wear = np.array([0.0, 3e-6, 9.9e-6, 10.3e-6, crit])
+    got = leakage_fraction(wear, crit, p)
+    np.testing.assert_allclose(got, [q(w) / q(crit) for w in wear], rtol=1e-12)
+    assert got[-1] == pytest.approx(1.0)
+
+
+def test_rows_match_a_replay_of_the_env(small) -> None:
+    """Each unit replayed from its stored seed with the same actions fails at the stored flight
+    with the stored part, and its truth matches the rows."""
+    flights, units = small
+    assert len(units["unit"]) == 4
+    env = gym.make(scas_env.ENV_ID, scenario=Scenario(episode_slots=20_000))
+    for u in range(4):
+        rows = flights["unit"] == u
+        assert rows.sum() == units["slots"][u]
+        env.reset(seed=int(units["seed"][u]))
+        crack = []
+        failed = ()
+        for slot in range(1, units["slots"][u] + 2):
+            _, _, _, _, info = env.step(1 if (slot - 1) % 7 == 0 else 0)
+            if info["failures"]["spring"] or info["failures"]["seal"]:
+                failed = tuple(p for p in ("spring", "seal") if info["failures"][p])
+                break
+            crack.append(info["true_state"]["crack_depth_m"])
+        assert slot == units["slots"][u] + 1  # the failing slot is the one after the last row
+        assert info["flights"] == units["flights"][u]
+        mode = "both" if len(failed) == 2 else failed[0]
+        assert units["failure_mode"][u] == mode
+        np.testing.assert_array_equal(flights["crack_depth_m"][rows], crack)
+
+
+def test_row_semantics(small) -> None:
+    flights, units = small
+    for u in range(len(units["unit"])):
+        r = {k: v[flights["unit"] == u] for k, v in flights.items()}
+        n = len(r["slot"])
+        np.testing.assert_array_equal(r["slot"], np.arange(1, n + 1))
+        np.testing.assert_array_equal(r["tested"], (r["slot"] - 1) % 7 == 0)
+        np.testing.assert_array_equal(r["flight"], np.cumsum(r["flown"]))
+        assert np.all(np.isnan(r["I2"]) == ~r["flown"])
+        assert np.all(np.isnan(r["G1"]) == ~r["tested"])
+        assert not np.any(r["flown"] & r["no_go"])
+        # realised RUL: flights still completed before the failing flight
+        np.testing.assert_array_equal(r["rul_flights"], units["flights"][u] - r["flight"])
+        assert r["rul_flights"][-1] == 0
+        assert units["failure_flight"][u] == units["flights"][u] + 1
+        np.testing.assert_allclose(
+            r["crack_fraction"], r["crack_depth_m"] / r["spring_critical_depth_m"], rtol=1e-12
+        )
+        assert np.all(r["crack_fraction"] < 1) and np.all(r["wear_fraction"] < 1)
+        # no maintenance: damage only grows
+        assert np.all(np.diff(r["seal_wear_m"]) >= 0) and np.all(np.diff(r["crack_depth_m"]) >= 0)
+
+
+def test_unit_seeds_are_seedsequence_children() -> None:
+    seeds = unit_seeds(3, 5)
+    child = np.random.SeedSequence(5).spawn(3)[2]
+    assert seeds[2] == int(child.generate_state(1, dtype=np.uint64)[0]) >> 1
+    assert unit_seeds(2, 5) == seeds[:2]
+
+
+def test_censored_units_have_no_rul() -> None:
+    flights, units = simulate_units(2, seed=0, max_slots=30, test_every=0)
+    assert units["censored"].all() and list(units["failure_mode"]) == ["none", "none"]
+    assert np.isnan(flights["rul_flights"]).all() and (units["failure_flight"] == -1).all()
+    assert np.isnan(flights["G1"]).all()
+
+
+def test_same_seed_same_files_and_loader_round_trip(tmp_path: Path) -> None:
+    a, b = tmp_path / "a", tmp_path / "b"
+    export_run_to_failure(3, out=a, seed=2, test_every=5, progress=False)
+    export_run_to_failure(3, out=b, seed=2, test_every=5, progress=False)
+    assert _folder_bytes(a) == _folder_bytes(b)
+    flights, units = simulate_units(3, seed=2, test_every=5)
+    from_parquet = load_run_to_failure(a)
+    from_csv = load_run_to_failure(a, file_format="csv")
+    for data in (from_parquet, from_csv):
+        assert data.flights.schema.names == [c.name for c in FLIGHT_COLUMNS]
+        for name, columns in (("flights", flights), ("units", units)):
+            got = data.to_numpy(name)
+            for key, value in columns.items():
+                np.testing.assert_array_equal(got[key], value, err_msg=f"{name}.{key}")
+    assert from_parquet.card["counts"]["flights_rows"] == len(flights["unit"])
+    assert from_csv.flights.schema.equals(to_table("flights", flights).schema)
+    assert not [p for p in tmp_path.iterdir() if p.name.startswith(".")]  # no temp left
+
+
+def test_existing_output_refused_before_work_and_replaced_on_request(tmp_path: Path) -> None:
+    out = tmp_path / "data"
+    out.mkdir()
+    (out / "keep.txt").write_text("mine")
+    with pytest.raises(FileExistsError, match="overwrite=True"):
+        export_run_to_failure(10_000, out=out, progress=False)  # refused at once
+    assert (out / "keep.txt").read_text() == "mine"
+    export_run_to_failure(1, out=out, seed=0, max_slots=20, overwrite=True, progress=False)
+    assert sorted(p.name for p in out.iterdir()) == [
+        "datacard.json", "datacard.md", "flights.csv", "flights.parquet", "units.csv",
+        "units.parquet",
+    ]  # fmt: skip
+    assert not [p for p in tmp_path.iterdir() if p.name.startswith(".")]
+
+
+def test_failed_write_leaves_nothing(tmp_path: Path) -> None:
+    flights, units = simulate_units(1, seed=0, max_slots=5)
+    tables = {"flights": to_table("flights", flights), "units": to_table("units", units)}
+    bad = dict(tables, units=tables["flights"])
+    with pytest.raises(ValueError, match="schema"):
+        write_dataset(bad, {"n_units": 1}, tmp_path / "x")
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_split_by_unit(tmp_path: Path) -> None:
+    export_run_to_failure(10, out=tmp_path / "d", seed=1, max_slots=40, progress=False)
+    data = load_run_to_failure(tmp_path / "d")
+    train, test = split_by_unit(data, test_fraction=0.3, seed=4)
+    tr, te = set(train.units["unit"].to_pylist()), set(test.units["unit"].to_pylist())
+    assert len(te) == 3 and not tr & te and tr | te == set(range(10))
+    assert set(train.flights["unit"].to_pylist()) == tr
+    assert set(test.flights["unit"].to_pylist()) == te
+    assert train.flights.num_rows + test.flights.num_rows == data.flights.num_rows
+    again = split_by_unit(data, test_fraction=0.3, seed=4)[1]
+    assert again.units["unit"].to_pylist() == test.units["unit"].to_pylist()
+    with pytest.raises(ValueError, match="test_fraction"):
+        split_by_unit(data, test_fraction=1.0)
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "match"),
+    [
+        ({"n_units": 0}, "n_units"),
+        ({"test_every": -1}, "test_every"),
+        ({"seed": -3}, "seed"),
+        ({"max_slots": 0}, "max_slots"),
+        ({"fidelity": "fast"}, "fidelity"),
+        ({"scenario": "physics"}, "scenario"),
+        ({"formats": ("xlsx",)}, "formats"),
+    ],
+)
+def test_bad_arguments_raise(tmp_path: Path, kwargs: dict, match: str) -> None:
+    args = {"n_units": 1, "max_slots": 5, **kwargs}
+    with pytest.raises(ValueError, match=match):
+        export_run_to_failure(args.pop("n_units"), out=tmp_path / "o", progress=False, **args)
+    assert not (tmp_path / "o").exists()
+
+
+def test_physics_fidelity_short_horizon() -> None:
+    """The physics env gives the same columns (2 slots, one test)."""
+    flights, units = simulate_units(1, fidelity="physics", seed=0, max_slots=2, test_every=2)
+    assert list(units["failure_mode"]) == ["none"]
+    assert list(flights["tested"]) == [True, False]
+    assert np.isfinite(flights["G1"][0]) and np.isfinite(flights["I7"]).all()
+    # the physics spring fails at the unit's own depth, not the nominal one
+    assert flights["spring_critical_depth_m"][0] == units["spring_critical_depth_m"][0]
+
+
+@pytest.mark.slow
+def test_workers_do_not_change_the_rows() -> None:
+    """Two spawned workers give the rows of one process, bit for bit."""
+    one = simulate_units(6, seed=9, max_slots=300, n_workers=1)
+    two = simulate_units(6, seed=9, max_slots=300, n_workers=2)
+    for a, b in zip(one, two, strict=True):
+        for key in a:
+            np.testing.assert_array_equal(a[key], b[key], err_msg=key)
+
+
+def test_docs_list_every_column() -> None:
+    from scas_env.studies.run_to_failure_data import UNIT_COLUMNS
+
+    text = (Path(__file__).resolve().parents[1] / "docs" / "dataset.md").read_text()
+    for c in (*FLIGHT_COLUMNS, *UNIT_COLUMNS):
+        assert f"| `{c.name}` | {c.dtype} | {c.unit} | {c.description} |" in text, c.name
