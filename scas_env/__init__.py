@@ -13,10 +13,16 @@ Layout (imports point down only; ``tests/test_layers.py`` enforces it):
 Environment ids are registered here, once, on import.
 """
 
-from gymnasium.envs.registration import register, registry
+from prognostics.numba_cache import register_package as _register_numba_package
 
-from scas_env._version import __version__
-from scas_env.actuator.params import ScasParams
+# before any kernel of this package is compiled: a kernel's cache is stamped with the hash
+# of every numba-using module it may inline (prognostics.numba_cache)
+_register_numba_package(__name__, __path__[0])
+
+from gymnasium.envs.registration import register, registry  # noqa: E402
+
+from scas_env._version import __version__  # noqa: E402
+from scas_env.actuator.params import ScasParams  # noqa: E402
 
 __all__ = ["ENV_ID", "ENV_ID_V1", "ScasParams", "__version__"]
 

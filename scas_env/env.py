@@ -14,6 +14,7 @@ from scas_env.actuator.params import ScasParams
 from scas_env.actuator.surrogate import SurrogateModel, default_surrogate
 from scas_env.block_draws import NormalBuffer
 from scas_env.costs import CostModel
+from scas_env.dashboard import DashboardRenderer
 from scas_env.fleet_state import PARTS, REWARD_TERMS, FleetState
 from scas_env.info import StepInfo, build_info
 from scas_env.monitor import HealthMonitor
@@ -60,6 +61,16 @@ class ScasMaintenanceEnv(gym.Env):
 
     While the aircraft is on the ground for earlier downtime, 0 and 1 do nothing and 2, 3
     replace the part at no extra downtime beyond the longest pending one.
+
+    The go/no-go (``Scenario.go_no_go``, :mod:`scas_env.acceptance`): in v0 every ground
+    feature must lie inside the healthy population's band (a detector's band, false no-go
+    rate ``go_no_go_false_alarm``); the next slot may fly untested. In v1 the test fails when
+    a ground feature has moved from the installation's reference (recorded at fitting) as
+    far as a part at its critical level would move it (P(no-go) = ``acceptance_catch`` = 0.9
+    for a part at critical, ~0 for a healthy unit), and the aircraft then stays on the
+    ground (actions 0 fly nothing) until a passing re-test (action 1) or a replacement.
+    ``Scenario.preflight="every_flight"`` runs the test before every flight at no cost
+    (the paper's power-up test); action 1 then equals action 0.
 
     ## Observation Space
 
@@ -143,10 +154,21 @@ class ScasMaintenanceEnv(gym.Env):
     (``scas_env.vector_env``): the episodes of N single envs seeded ``seed + i``, bit for
     bit, next-step autoreset, info as a dict of arrays.
 
+    ## Rendering
+
+    ``render_mode="ansi"``: one line of text. ``"rgb_array"``: the health dashboard
+    (:mod:`scas_env.dashboard`: crack and wear against their critical levels, the filters'
+    RUL distributions, the latest features, costs and availability) as a (400, 640, 3)
+    uint8 frame; ``"human"``: the same in a matplotlib window. ``metadata["render_fps"]``
+    is 10.
+
     ## Version History
 
     * v0: initial release (18-entry observation with the go/no-go flag; ``info`` of fixed
       size: wasted life as this step's value plus running sum and count).
+    * v1: the go/no-go is an airworthiness limit on the deviation from the installation's
+      reference and a failed test holds the aircraft on the ground until cleared
+      (``go_no_go="airworthiness"``); everything else as v0, which stays registered.
 
     ## Example
 
@@ -161,7 +183,10 @@ class ScasMaintenanceEnv(gym.Env):
     2400.0
     """
 
-    metadata: ClassVar[dict[str, Any]] = {"render_modes": ["ansi"]}
+    metadata: ClassVar[dict[str, Any]] = {
+        "render_modes": ["ansi", "rgb_array", "human"],
+        "render_fps": 10,
+    }
 
     def __init__(
         self,
@@ -189,9 +214,16 @@ class ScasMaintenanceEnv(gym.Env):
         ):
             if not isinstance(value, cls):
                 raise ValueError(f"{name} must be a {cls.__name__}, got {type(value).__name__}")
-        if render_mode not in (None, "ansi"):
-            raise ValueError(f"render_mode = {render_mode!r} must be None or 'ansi'")
+        if render_mode not in (None, *self.metadata["render_modes"]):
+            raise ValueError(
+                f"render_mode = {render_mode!r} must be None or one of "
+                f"{self.metadata['render_modes']}"
+            )
         self.render_mode = render_mode
+        #: the health dashboard (scas_env.dashboard) of the "rgb_array" and "human" modes
+        self._renderer = (
+            DashboardRenderer(render_mode) if render_mode in DashboardRenderer.MODES else None
+        )
         for name, value, cls in (
             ("calibration", calibration, Calibration),
             ("surrogate", surrogate, SurrogateModel),
@@ -263,7 +295,10 @@ class ScasMaintenanceEnv(gym.Env):
         self.stats = _Stats()
         self._wasted_now = dict.fromkeys(PARTS, 0.0)
         self.builder.reset()
-        return self._outputs(dict.fromkeys(REWARD_TERMS, 0.0))
+        outputs = self._outputs(dict.fromkeys(REWARD_TERMS, 0.0))
+        if self._renderer is not None:
+            self._renderer.observe(self)
+        return outputs
 
     def step(self, action: Any) -> tuple[Any, float, bool, bool, dict[str, Any]]:
         if self.monitor is None:
@@ -321,9 +356,20 @@ class ScasMaintenanceEnv(gym.Env):
         self.stats.revenue += terms["flight"]
         truncated = self.slot >= self.scenario.episode_slots
         obs, info = self._outputs(terms)
+        if self._renderer is not None:
+            self._renderer.observe(self)
         return obs, reward, False, truncated, info
 
-    def render(self) -> str | None:
+    def close(self) -> None:
+        if self._renderer is not None:
+            self._renderer.close()
+        super().close()
+
+    def render(self) -> str | np.ndarray | None:
+        """``"ansi"``: one line of text; ``"rgb_array"``: the health dashboard as an
+        (H, W, 3) uint8 frame; ``"human"``: the dashboard in a window (returns None)."""
+        if self._renderer is not None:
+            return self._renderer.render(self)
         if self.render_mode != "ansi":
             return None
         w = self.world
