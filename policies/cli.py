@@ -38,7 +38,7 @@ from scas_env.scenario import FIDELITIES, Scenario
 
 log = logging.getLogger(__name__)
 
-__all__ = ["benchmark_main", "train_main", "tune_main", "value_main"]
+__all__ = ["PARSERS", "benchmark_main", "train_main", "tune_main", "value_main"]
 
 BENCHMARK_DOC = """\
 Policy benchmark: every policy on the same seeds -> table, CSV, JSON, Markdown and plots.
@@ -413,3 +413,12 @@ def value_main(argv: Sequence[str] | None = None) -> int:
     for name, path in paths.items():
         log.info(f"{name}: {path}")
     return 0
+
+
+#: command name -> function building its parser (for documentation and tests).
+PARSERS = {
+    "scas-benchmark": benchmark_parser,
+    "scas-train": train_parser,
+    "scas-tune": tune_parser,
+    "scas-value": value_parser,
+}

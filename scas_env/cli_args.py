@@ -311,8 +311,24 @@ class _Formatter(logging.Formatter):
         return text if record.levelno == logging.INFO else f"{record.levelname.lower()}: {text}"
 
 
+class _StderrHandler(logging.StreamHandler):  # type: ignore[type-arg]
+    """Writes to the current ``sys.stderr`` (also when it is replaced after setup)."""
+
+    @property  # type: ignore[override]
+    def stream(self) -> Any:
+        return sys.stderr
+
+    @stream.setter
+    def stream(self, value: Any) -> None:
+        pass
+
+
 def configure_logging(args: argparse.Namespace) -> None:
-    """Log to stderr at INFO (``-v``: DEBUG, ``-q``: WARNING) and announce numba compiles."""
+    """Log to stderr at INFO (``-v``: DEBUG, ``-q``: WARNING) and announce numba compiles.
+
+    Adds one handler to the root logger (replacing one added by an earlier call) and leaves
+    other handlers alone.
+    """
     level = (
         logging.DEBUG
         if getattr(args, "verbose", False)
@@ -320,10 +336,12 @@ def configure_logging(args: argparse.Namespace) -> None:
         if getattr(args, "quiet", False)
         else logging.INFO
     )
-    handler = logging.StreamHandler(sys.stderr)
-    handler.setFormatter(_Formatter("%(message)s"))
     root = logging.getLogger()
-    root.handlers[:] = [handler]
+    for old in [h for h in root.handlers if isinstance(h, _StderrHandler)]:
+        root.removeHandler(old)
+    handler = _StderrHandler()
+    handler.setFormatter(_Formatter("%(message)s"))
+    root.addHandler(handler)
     root.setLevel(level)
     for noisy in ("numba", "matplotlib", "PIL", "filelock"):
         logging.getLogger(noisy).setLevel(max(level, logging.WARNING))

@@ -394,7 +394,20 @@ def _toml_table(data: Mapping[str, Any], prefix: tuple[str, ...], lines: list[st
 
 def _toml_key(key: Any) -> str:
     key = str(key)
-    return key if _BARE_KEY.match(key) else json.dumps(key)
+    return key if _BARE_KEY.match(key) else _toml_string(key)
+
+
+def _toml_string(text: str) -> str:
+    """TOML basic string: backslash, quote and control characters escaped."""
+    out = []
+    for ch in text:
+        if ch in '"\\':
+            out.append("\\" + ch)
+        elif ord(ch) < 0x20 or ord(ch) == 0x7F:
+            out.append(f"\\u{ord(ch):04x}")
+        else:
+            out.append(ch)
+    return '"' + "".join(out) + '"'
 
 
 def _toml_value(value: Any, where: tuple[str, ...]) -> str:
@@ -407,7 +420,7 @@ def _toml_value(value: Any, where: tuple[str, ...]) -> str:
             raise ValueError(f"{'.'.join(where)} = {value} cannot be written: not finite")
         return repr(value)
     if isinstance(value, str):
-        return json.dumps(value, ensure_ascii=False)  # JSON escapes are valid TOML escapes
+        return _toml_string(value)
     if isinstance(value, (list, tuple)):
         return "[" + ", ".join(_toml_value(v, where) for v in value) + "]"
     raise ValueError(

@@ -39,6 +39,7 @@ from scas_env.cli_args import (
 log = logging.getLogger(__name__)
 
 __all__ = [
+    "PARSERS",
     "bench_env_main",
     "bench_integrator_main",
     "bench_main",
@@ -53,6 +54,8 @@ __all__ = [
 
 Parser = argparse.ArgumentParser
 Args = argparse.Namespace
+#: command name -> function building its parser (for documentation and tests).
+PARSERS: dict[str, Callable[[], Parser]] = {}
 
 
 def _command(
@@ -60,16 +63,21 @@ def _command(
 ) -> Callable[[Sequence[str] | None], int]:
     """A ``main(argv)`` from an argument builder and a runner (parse, log, run)."""
 
-    def main(argv: Sequence[str] | None = None) -> int:
+    def build() -> Parser:
         parser = make_parser(prog, doc)
         add(parser)
         add_logging_args(parser)
+        return parser
+
+    def main(argv: Sequence[str] | None = None) -> int:
+        parser = build()
         args = parser.parse_args(argv)
         configure_logging(args)
         return run(parser, args)
 
     main.__name__ = main.__qualname__ = prog.replace("scas-", "").replace("-", "_") + "_main"
     main.__doc__ = f"``{prog}``: {doc.splitlines()[0]}"
+    PARSERS[prog] = build
     return main
 
 
@@ -554,8 +562,8 @@ Speed benchmarks, each beside a reference measured in the same run.
 """
 
 
-def bench_main(argv: Sequence[str] | None = None) -> int:
-    """``scas-bench {integrator,prognostics,env} [options]``."""
+def bench_parser() -> tuple[Parser, dict[str, tuple[Parser, Callable[[Parser, Args], int]]]]:
+    """The ``scas-bench`` parser and, per benchmark, its sub-parser and runner."""
     parser = make_parser("scas-bench", BENCH_DOC)
     sub = parser.add_subparsers(dest="bench", required=True, metavar="{" + ",".join(BENCHES) + "}")
     runners = {}
@@ -566,7 +574,16 @@ def bench_main(argv: Sequence[str] | None = None) -> int:
         add(p)
         add_logging_args(p)
         runners[name] = (p, run)
+    return parser, runners
+
+
+def bench_main(argv: Sequence[str] | None = None) -> int:
+    """``scas-bench {integrator,prognostics,env} [options]``."""
+    parser, runners = bench_parser()
     args = parser.parse_args(argv)
     configure_logging(args)
     p, run = runners[args.bench]
     return run(p, args)
+
+
+PARSERS["scas-bench"] = lambda: bench_parser()[0]
