@@ -348,7 +348,9 @@ def configure_logging(args: argparse.Namespace) -> None:
     announce_numba_compilation()
 
 
-_announced = False
+_listener_installed = False
+#: the notice was shown in this process (reset by tests)
+_notice_shown = False
 
 
 def announce_numba_compilation() -> None:
@@ -359,21 +361,17 @@ def announce_numba_compilation() -> None:
     stale (first run after installing or editing). Uses numba's event API
     (``numba.core.event``); no result depends on it.
     """
-    global _announced
-    if _announced:
+    global _listener_installed
+    if _listener_installed:
         return
-    _announced = True
-    try:
-        from numba.core import event
-    except ImportError:  # pragma: no cover - numba is a dependency
-        return
+    _listener_installed = True
+    from numba.core import event
 
     class _Notice(event.Listener):
-        done = False
-
         def on_start(self, ev: Any) -> None:
-            if not self.done:
-                self.done = True
+            global _notice_shown
+            if not _notice_shown:
+                _notice_shown = True
                 log.warning(
                     "compiling numba kernels (first run only, ~30 s; later runs load them "
                     "from numba's cache)"
@@ -382,4 +380,4 @@ def announce_numba_compilation() -> None:
         def on_end(self, ev: Any) -> None:
             pass
 
-    event.install_listener("numba:compile", _Notice())
+    event.register("numba:compile", _Notice())

@@ -75,9 +75,12 @@ def _command(
         configure_logging(args)
         return run(parser, args)
 
-    main.__name__ = main.__qualname__ = prog.replace("scas-", "").replace("-", "_") + "_main"
+    main.__name__ = main.__qualname__ = (
+        prog.replace("scas-", "").replace("-", "_").replace(" ", "_") + "_main"
+    )
     main.__doc__ = f"``{prog}``: {doc.splitlines()[0]}"
-    PARSERS[prog] = build
+    if " " not in prog:  # sub-commands are documented by their command's parser
+        PARSERS[prog] = build
     return main
 
 
@@ -549,9 +552,9 @@ BENCHES = {
     "prognostics": (BENCH_PROGNOSTICS_DOC, _bench_prognostics_args, _bench_prognostics_run),
     "env": (BENCH_ENV_DOC, _bench_env_args, _bench_env_run),
 }
-bench_integrator_main = _command("scas-bench-integrator", *BENCHES["integrator"])
-bench_prognostics_main = _command("scas-bench-prognostics", *BENCHES["prognostics"])
-bench_env_main = _command("scas-bench-env", *BENCHES["env"])
+bench_integrator_main = _command("scas-bench integrator", *BENCHES["integrator"])
+bench_prognostics_main = _command("scas-bench prognostics", *BENCHES["prognostics"])
+bench_env_main = _command("scas-bench env", *BENCHES["env"])
 
 BENCH_DOC = """\
 Speed benchmarks, each beside a reference measured in the same run.
