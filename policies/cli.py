@@ -23,6 +23,7 @@ from typing import Any
 from scas_env.cli_args import (
     add_env_config_args,
     add_logging_args,
+    announce_uncached_kernels,
     check_out_dir,
     check_out_file,
     configure_logging,
@@ -134,6 +135,8 @@ def benchmark_main(argv: Sequence[str] | None = None) -> int:
 
     from policies.benchmark import run_benchmark
     from policies.benchmark_report import format_table, write_outputs
+
+    announce_uncached_kernels()  # the workers compile them
 
     result = run_benchmark(
         args.policies,
@@ -315,6 +318,7 @@ def tune_main(argv: Sequence[str] | None = None) -> int:
 
     from policies.tuning import tune
 
+    announce_uncached_kernels()
     report: dict[str, Any] = {}
     for name in args.policies:
         start = time.perf_counter()
@@ -387,6 +391,8 @@ def value_main(argv: Sequence[str] | None = None) -> int:
         run_value_study,
         write_value_outputs,
     )
+
+    announce_uncached_kernels()
 
     size: dict[str, Any] = (
         dict(QUICK) if args.quick else {"episodes": args.episodes, "slots": args.slots}

@@ -31,12 +31,19 @@ from scas_env.costs import CostModel
 from scas_env.scenario import Scenario
 
 log = logging.getLogger(__name__)
+#: Logged once per process when numba compiles (instead of sitting silent for ~30 s).
+COMPILE_NOTICE = (
+    "compiling numba kernels (first run only, ~30 s; later runs load them from numba's cache)"
+)
 
 __all__ = [
+    "COMPILE_NOTICE",
     "HelpFormatter",
     "add_env_config_args",
     "add_logging_args",
     "add_params_arg",
+    "announce_numba_compilation",
+    "announce_uncached_kernels",
     "check_out_dir",
     "check_out_file",
     "check_out_stem",
@@ -49,6 +56,7 @@ __all__ = [
     "make_parser",
     "name_list",
     "nonneg_int",
+    "numba_cache_missing",
     "positive_float",
     "positive_int",
     "scenario_changes",
@@ -312,7 +320,16 @@ class _Formatter(logging.Formatter):
 
 
 class _StderrHandler(logging.StreamHandler):  # type: ignore[type-arg]
-    """Writes to the current ``sys.stderr`` (also when it is replaced after setup)."""
+    """Writes to the current ``sys.stderr`` (also when it is replaced after setup), through
+    ``tqdm.write`` so that a message does not break a progress bar's line."""
+
+    def emit(self, record: logging.LogRecord) -> None:
+        try:
+            from tqdm import tqdm
+
+            tqdm.write(self.format(record), file=sys.stderr)
+        except Exception:
+            self.handleError(record)
 
     @property  # type: ignore[override]
     def stream(self) -> Any:
@@ -348,6 +365,37 @@ def configure_logging(args: argparse.Namespace) -> None:
     announce_numba_compilation()
 
 
+def numba_cache_missing(packages: Sequence[str] = ("scas_env", "prognostics", "policies")) -> bool:
+    """Whether none of the cached (``cache=True``) numba kernels of the imported project
+    modules has a cache index on disk: a first run, whose kernels will compile at their
+    first call (in this process or in workers). Helpers only ever inlined into other kernels
+    never get an index of their own, hence "none" rather than "any"; a stale cache after an
+    edit is not detected here (the compile listener reports compiles in this process)."""
+    from numba.core.dispatcher import Dispatcher
+
+    indexes = []
+    for name, module in list(sys.modules.items()):
+        if module is None or not name.startswith(tuple(packages)):
+            continue
+        for obj in list(vars(module).values()):
+            if isinstance(obj, Dispatcher):
+                cache_file = getattr(getattr(obj, "_cache", None), "_cache_file", None)
+                index = getattr(cache_file, "_index_path", None)
+                if index is not None:
+                    indexes.append(Path(index))
+    return bool(indexes) and not any(p.exists() for p in indexes)
+
+
+def announce_uncached_kernels() -> None:
+    """Log the compile notice now if kernels are uncached: for runs whose kernels compile in
+    worker processes, where the event listener of :func:`announce_numba_compilation` does
+    not run. Call it after the work's modules are imported."""
+    global _notice_shown
+    if not _notice_shown and numba_cache_missing():
+        _notice_shown = True
+        log.warning(COMPILE_NOTICE)
+
+
 _listener_installed = False
 #: the notice was shown in this process (reset by tests)
 _notice_shown = False
@@ -372,10 +420,7 @@ def announce_numba_compilation() -> None:
             global _notice_shown
             if not _notice_shown:
                 _notice_shown = True
-                log.warning(
-                    "compiling numba kernels (first run only, ~30 s; later runs load them "
-                    "from numba's cache)"
-                )
+                log.warning(COMPILE_NOTICE)
 
         def on_end(self, ev: Any) -> None:
             pass

@@ -334,3 +334,22 @@ def test_numba_compile_is_announced_once(
         fresh(2.0)  # already compiled: no event
     notices = [r for r in caplog.records if "compiling numba kernels" in r.getMessage()]
     assert len(first) == 1 and len(notices) == 1
+
+
+def test_uncached_kernels_are_detected(tmp_path: Path) -> None:
+    """In a process whose numba cache folder is empty, every kernel is uncached; once one
+    kernel compiled (and wrote its cache), the run is no longer a first run."""
+    code = (
+        "import numpy as np\n"
+        "from prognostics import resampling\n"
+        "from scas_env.cli_args import numba_cache_missing as m\n"
+        "before = m(('prognostics.resampling',))\n"
+        "out = np.empty(3, np.int64)\n"
+        "resampling.systematic_indices(np.array([0.2, 0.5, 1.0]), 0.5, out)\n"
+        "print(before, m(('prognostics.resampling',)))\n"
+    )
+    env = {**os.environ, "PYTHONPATH": str(ROOT), "NUMBA_CACHE_DIR": str(tmp_path)}
+    run = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, env=env, check=True
+    )
+    assert run.stdout.split() == ["True", "False"]

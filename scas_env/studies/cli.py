@@ -24,6 +24,7 @@ from scas_env.cli_args import (
     HelpFormatter,
     add_logging_args,
     add_params_arg,
+    announce_uncached_kernels,
     check_out_dir,
     check_out_file,
     check_out_stem,
@@ -153,6 +154,7 @@ def _campaign_run(parser: Parser, args: Args) -> int:
         )
     except ValueError as exc:
         parser.error(str(exc))
+    announce_uncached_kernels()
     start = time.perf_counter()
     result = run_campaign(
         params, config, seed=args.seed, n_workers=args.workers, progress=not args.no_progress
@@ -228,6 +230,7 @@ def _reproduce_run(parser: Parser, args: Args) -> int:
             config = config.replace(n_paths=args.paths)
         except ValueError as exc:
             parser.error(f"--paths: {exc}")
+    announce_uncached_kernels()
     start = time.perf_counter()
     rep = run_reproduction(
         params,
@@ -368,6 +371,7 @@ def _build_surrogate_run(parser: Parser, args: Args) -> int:
 
     check_out_file(parser, args.out, args.overwrite)
     params = load_params(parser, args)
+    announce_uncached_kernels()
     model = build_surrogate(
         params,
         seed=args.seed,
