@@ -279,6 +279,7 @@ def test_scenario_file_with_costs_table_sets_both(tmp_path: Path) -> None:
 # --- runs -----------------------------------------------------------------------------
 
 
+@pytest.mark.filterwarnings("ignore:No artists with labels:UserWarning")  # no removals to plot
 def test_benchmark_runs_the_scenario_file_and_records_it(tmp_path: Path) -> None:
     """Same rows as run_benchmark called with the file's values by hand; the summary keeps
     the exact Scenario and CostModel, and a second run into the same folder is refused."""
