@@ -63,14 +63,17 @@ def _env_kwargs(scenario: Scenario, costs: CostModel, exclude: Sequence[str]) ->
     return kwargs
 
 
-def _config_record(args: Any, scenario: Scenario, costs: CostModel) -> dict[str, Any]:
+def _config_record(
+    prog: str, argv: Sequence[str] | None, args: Any, scenario: Scenario, costs: CostModel
+) -> dict[str, Any]:
     """The exact configuration of a run, for its results (files and full values)."""
+    words = [prog, *(sys.argv[1:] if argv is None else argv)]
     return {
         "scenario": scenario.to_dict(),
         "costs": costs.to_dict(),
         "scenario_file": None if args.scenario is None else str(args.scenario),
         "costs_file": None if args.costs is None else str(args.costs),
-        "command": " ".join(shlex.quote(a) for a in [Path(sys.argv[0]).name, *sys.argv[1:]]),
+        "command": " ".join(shlex.quote(str(a)) for a in words),
     }
 
 
@@ -148,7 +151,7 @@ def benchmark_main(argv: Sequence[str] | None = None) -> int:
         progress=not args.quiet,
         ray_address=args.ray_address or None,
     )
-    result.config.update(_config_record(args, scenario, costs))
+    result.config.update(_config_record(parser.prog, argv, args, scenario, costs))
     print(format_table(result.summary))
     paths = write_outputs(result, out)
     n = len(result.rows)
@@ -341,7 +344,7 @@ def tune_main(argv: Sequence[str] | None = None) -> int:
             f"{dflt.mean:.0f} ± {dflt.half_width:.0f}"
         )
     if env_kwargs:
-        report["config"] = _config_record(args, scenario, costs)
+        report["config"] = _config_record(parser.prog, argv, args, scenario, costs)
     out.parent.mkdir(parents=True, exist_ok=True)
     out.write_text(json.dumps(report, indent=2) + "\n")
     log.info(f"wrote {out}")
@@ -411,7 +414,7 @@ def value_main(argv: Sequence[str] | None = None) -> int:
         seed=args.seed, n_workers=args.workers, progress=not args.quiet, **size
     )
     if common and isinstance(getattr(result, "config", None), dict):
-        result.config.update(_config_record(args, scenario, costs))
+        result.config.update(_config_record(parser.prog, argv, args, scenario, costs))
     print(markdown_report(result))
     paths = write_value_outputs(result, out)
     n = len(result.rows)

@@ -296,6 +296,7 @@ def test_benchmark_runs_the_scenario_file_and_records_it(tmp_path: Path) -> None
     )
     assert CostModel.from_dict(config["costs"]) == CostModel.load(example)
     assert config["scenario_file"] == str(example)
+    assert config["command"].startswith("scas-benchmark --episodes 2 --slots 30")
     costs = CostModel.load(example)
     direct = run_benchmark(
         ["corrective", "oracle"],
