@@ -136,8 +136,17 @@ def benchmark_main(argv: Sequence[str] | None = None) -> int:
         **_env_kwargs(scenario, costs, exclude=("obs_mode", "episode_slots")),
     }
 
-    from policies.benchmark import run_benchmark
+    from policies.benchmark import resolve_spec, run_benchmark
     from policies.benchmark_report import format_table, write_outputs
+
+    for name in args.policies:  # plug-ins import their modules (e.g. SB3) here, not in workers
+        try:
+            resolve_spec(name).build_mode()
+        except ImportError as exc:
+            parser.error(
+                f"--policies: {name!r} cannot be loaded ({exc}); install what it needs or "
+                "leave it out of --policies"
+            )
 
     announce_uncached_kernels()  # the workers compile them
 

@@ -225,6 +225,22 @@ def test_scripts_are_wrappers(script: str) -> None:
     assert ast.unparse(guard.body[0]) == f"raise SystemExit({WRAPPERS[script]}())"
 
 
+def test_policy_whose_module_is_missing_is_a_usage_error(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    from policies.benchmark import PLUGINS, PolicySpec
+
+    monkeypatch.setitem(PLUGINS, "ghost", PolicySpec("sb3", label="ghost", module="no_such_mod"))
+    with pytest.raises(SystemExit) as exit_:
+        policies_cli.benchmark_main(
+            ["--policies", "corrective,ghost", "--out", str(tmp_path / "o")]
+        )
+    assert exit_.value.code == 2
+    err = capsys.readouterr().err
+    assert "--policies: 'ghost' cannot be loaded (No module named 'no_such_mod')" in err
+    assert not (tmp_path / "o").exists()
+
+
 def test_algo_names_match_the_rl_module() -> None:
     rl = pytest.importorskip("policies.rl")
     assert sorted(rl.ALGOS) == sorted(policies_cli.ALGO_NAMES)
