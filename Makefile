@@ -47,19 +47,6 @@ format: install
 	$(PY) -m ruff format .
 	$(PY) -m ruff check --fix .
 
-## Speed, each beside a reference measured in the same run.
-bench: install
-	$(PY) scripts/bench_integrator.py
-	$(PY) scripts/bench_prognostics.py
-	$(PY) scripts/bench_env.py
-
-figures: install
-	$(PY) scripts/paper_figures.py --out $(RESULTS)/figures
-
-## The paper's sections 4-5 from our physics (quick mode; `--full` for the paper's sizes).
-reproduce: install
-	$(PY) scripts/reproduce_paper.py --quick
-
 ## What a user gets from `pip install .` (no extras): build the wheel, install it into a
 ## fresh venv (CPU torch first), run a small benchmark and the README's Python snippets
 ## there, outside the source tree so that only the installed package can be imported.
@@ -73,6 +60,19 @@ check-install:
 	cd $(CHECK_DIR) && venv/bin/scas-benchmark --episodes 4 --slots 200 --out $(CHECK_DIR)/bench
 	$(PYTHON) .ci/readme_python.py README.md > $(CHECK_DIR)/readme_snippets.py
 	cd $(CHECK_DIR) && venv/bin/python readme_snippets.py
+
+## Speed, each beside a reference measured in the same run.
+bench: install
+	$(PY) scripts/bench_integrator.py
+	$(PY) scripts/bench_prognostics.py
+	$(PY) scripts/bench_env.py
+
+figures: install
+	$(PY) scripts/paper_figures.py --out $(RESULTS)/figures
+
+## The paper's sections 4-5 from our physics (quick mode; `--full` for the paper's sizes).
+reproduce: install
+	$(PY) scripts/reproduce_paper.py --quick
 
 clean:
 	rm -rf $(RESULTS) .pytest_cache .ruff_cache
