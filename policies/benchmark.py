@@ -8,11 +8,12 @@ only as long as the policies act alike (a test draws measurement noise), so the 
 differences are of policies on the same units, not on the same sample paths.
 
 Tasks are batches of up to :data:`BATCH_EPISODES` consecutive episodes of one policy, run
-side by side in the native vectorised env (:mod:`policies.batch_runner`; the physics
-fidelity runs them one by one). Each episode gives exactly what :func:`run_episode` gives
-on its seeds (tested), the batches are fixed by episode index, and tasks carry their seeds,
-so the results do not depend on the number of workers or on running locally
-(:func:`map_chunks`) or on a Ray cluster (``ray_address``; ``ray`` is imported only then).
+side by side in a vector env by the one episode runner (:mod:`policies.episode_runner`;
+the physics fidelity's vector env steps single envs one after the other). Each episode
+gives exactly what :func:`run_episode` gives on its seeds (tested), the batches are fixed
+by episode index, and tasks carry their seeds, so the results do not depend on the number
+of workers or on running locally (:func:`map_chunks`) or on a Ray cluster
+(``ray_address``; ``ray`` is imported only then).
 
 Per episode (one row of results.csv): flight hours ``FH = flights * flight_duration_s /
 3600``; ``cost_per_fh = cost_usd / FH`` (costs only, the value of flights excluded);
@@ -37,11 +38,10 @@ from tqdm.auto import tqdm
 
 import policies  # noqa: F401  (registers the built-in policies)
 from policies.base import make_policy, policy_family, policy_obs_mode
-from policies.batch_runner import TERMS, episode_row, run_batch
 from policies.benchmark_stats import summarize
+from policies.episode_runner import TERMS, run_episode, run_episodes
 from scas_env import ENV_ID
 from scas_env.parallel import in_worker, init_worker, map_chunks, single_thread
-from scas_env.world import PARTS
 
 #: Named plug-ins: a benchmark name that needs a module imported first (trained agents).
 PLUGINS: dict[str, PolicySpec] = {}
@@ -60,6 +60,7 @@ BATCH_EPISODES = 32
 __all__ = [
     "DEFAULT_POLICIES",
     "PLUGINS",
+    "TERMS",
     "BenchmarkResult",
     "PolicySpec",
     "episode_seeds",
@@ -120,53 +121,6 @@ def episode_seeds(seed: int, episodes: int) -> list[tuple[int, int]]:
     return [tuple(int(v) for v in c.generate_state(2, np.uint64)) for c in children]
 
 
-def run_episode(env: gym.Env, policy: Any, env_seed: int, policy_seed: int) -> dict[str, Any]:
-    """Run one episode to truncation; returns ``{"row": results row, "events": [...]}``."""
-    reset = getattr(policy, "reset", None)
-    if callable(reset):
-        reset(seed=policy_seed)
-    obs, info = env.reset(seed=env_seed)
-    terms = dict.fromkeys(TERMS, 0.0)
-    reward_sum = 0.0
-    fitted_at = dict.fromkeys(PARTS, 0)
-    events: list[dict[str, Any]] = []
-    state, start, done = None, True, False
-    while not done:
-        action, state = policy.predict(obs, state=state, episode_start=start, deterministic=True)
-        before = info
-        obs, reward, terminated, truncated, info = env.step(int(action))
-        start, done = False, terminated or truncated
-        reward_sum += float(reward)
-        for k in TERMS:
-            terms[k] += info["reward_terms"].get(k, 0.0)
-        for part in PARTS:
-            if info["replacements"][part] > before["replacements"][part]:
-                failed = info["failures"][part] > before["failures"][part]
-                events.append(
-                    {
-                        "part": part,
-                        "age_flights": info["flights"] - fitted_at[part],
-                        "kind": "failure" if failed else "preventive",
-                    }
-                )
-                fitted_at[part] = info["flights"]
-    for part in PARTS:
-        age = info["flights"] - fitted_at[part]
-        events.append({"part": part, "age_flights": age, "kind": "censored"})
-    return {"row": _row(env, info, terms, reward_sum), "events": events}
-
-
-def _row(
-    env: gym.Env, info: Mapping[str, Any], terms: Mapping[str, float], reward: float
-) -> dict[str, Any]:
-    wasted = {
-        p: (float(info["wasted_life_sum_flights"][p]), int(info["wasted_life_count"][p]))
-        for p in PARTS
-    }
-    duration = env.unwrapped.params.mission.flight_duration_s
-    return episode_row(info, terms, reward, wasted, duration)
-
-
 Batch = tuple[int, tuple[tuple[int, int, int], ...]]
 
 
@@ -174,38 +128,27 @@ def _run_chunk(
     specs: tuple[PolicySpec, ...], env_kwargs: Mapping[str, Any], chunk: Sequence[Batch]
 ) -> list[dict[str, Any]]:
     """Batches ``(policy index, ((episode, env seed, policy seed), ...))``."""
-    physics = env_kwargs.get("fidelity", "surrogate") == "physics"
     envs: dict[tuple[str, int], Any] = {}
     built: dict[int, Any] = {}
     out = []
     for p, batch in chunk:
         spec = specs[p]
         mode = spec.build_mode()
-        n = 1 if physics else len(batch)
+        n = len(batch)
         if (mode, n) not in envs:
-            if physics:
-                envs[mode, n] = gym.make(
-                    ENV_ID, obs_mode=mode, disable_env_checker=True, **env_kwargs
-                )
-            else:
-                envs[mode, n] = gym.make_vec(
-                    ENV_ID,
-                    num_envs=n,
-                    vectorization_mode="vector_entry_point",
-                    obs_mode=mode,
-                    **env_kwargs,
-                )
+            envs[mode, n] = gym.make_vec(
+                ENV_ID,
+                num_envs=n,
+                vectorization_mode="vector_entry_point",
+                obs_mode=mode,
+                **env_kwargs,
+            )
         env = envs[mode, n]
         if p not in built:
-            names = env.unwrapped.obs_names if physics else env.obs_names
-            built[p] = make_policy(spec.name, names, **dict(spec.params))
+            built[p] = make_policy(spec.name, env.obs_names, **dict(spec.params))
             if in_worker():
                 single_thread()  # the policy may have loaded torch
-        if physics:
-            results = [run_episode(env, built[p], es, ps) for _, es, ps in batch]
-        else:
-            duration = env.envs[0].params.mission.flight_duration_s
-            results = run_batch(env, built[p], [(es, ps) for _, es, ps in batch], duration)
+        results = run_episodes(env, built[p], [(es, ps) for _, es, ps in batch])
         for (e, env_seed, _), result in zip(batch, results, strict=True):
             result["row"] = {
                 "policy": spec.key,

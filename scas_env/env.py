@@ -13,16 +13,15 @@ from scas_env.actuator.params import ScasParams
 from scas_env.actuator.surrogate import SurrogateModel, default_surrogate
 from scas_env.block_draws import NormalBuffer
 from scas_env.costs import CostModel
-from scas_env.info import StepInfo
+from scas_env.fleet_state import PARTS, REWARD_TERMS, FleetState
+from scas_env.info import StepInfo, build_info
 from scas_env.monitor import HealthMonitor
-from scas_env.observation import ObservationBuilder
+from scas_env.observation import FEATURES, ObservationBuilder
 from scas_env.scenario import Scenario
-from scas_env.world import PARTS, ActuatorWorld
+from scas_env.world import ActuatorWorld
 
 #: action types checked without ``Discrete.contains`` (SB3 passes numpy int64)
 _PLAIN_INTS = (int, np.int64)
-#: keys of ``info["reward_terms"]`` (USD this step)
-REWARD_TERMS = ("flight", "test", "no_go", "replacement", "failure")
 
 FLY, TEST_AND_FLY, REPLACE_SPRING, REPLACE_SEAL = range(4)
 #: Random streams of an episode: new units and parts, per-flight degradation, measurement
@@ -192,6 +191,14 @@ class ScasMaintenanceEnv(gym.Env):
         if render_mode not in (None, "ansi"):
             raise ValueError(f"render_mode = {render_mode!r} must be None or 'ansi'")
         self.render_mode = render_mode
+        for name, value, cls in (
+            ("calibration", calibration, Calibration),
+            ("surrogate", surrogate, SurrogateModel),
+        ):
+            if value is not None and not isinstance(value, cls):
+                raise ValueError(
+                    f"{name} = {value!r} must be None (the default) or a {cls.__name__}"
+                )
         self.calibration = calibration if calibration is not None else calibration_for(self.params)
         self.surrogate = surrogate if surrogate is not None else default_surrogate()
         self.world = ActuatorWorld(self.params, self.scenario, self.calibration, self.surrogate)
@@ -200,6 +207,9 @@ class ScasMaintenanceEnv(gym.Env):
         self.action_space = spaces.Discrete(4)
         self.obs_names, self.obs_units = self.builder.names, self.builder.units
         self.monitor: HealthMonitor | None = None
+        #: this actuator as a fleet of one: observation and info are assembled from it by
+        #: the same code as the vector env's (scas_env.fleet_state)
+        self.fleet = new_fleet_state(self, 1)
         #: where the surrogate's normal buffers live (the vectorised env points them at rows
         #: of its tables): stream name -> (values, position) arrays
         self.buffer_storage: dict[str, tuple[np.ndarray, np.ndarray]] = {}
@@ -208,13 +218,13 @@ class ScasMaintenanceEnv(gym.Env):
     def reset(
         self, *, seed: int | None = None, options: dict[str, Any] | None = None
     ) -> tuple[Any, dict[str, Any]]:
-        if seed is not None and (
-            isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0
-        ):
-            raise ValueError(f"seed = {seed!r} must be None or an integer >= 0")
+        if seed is not None:
+            if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
+                raise ValueError(f"seed = {seed!r} must be None or an integer >= 0")
+            seed = int(seed)  # numpy integers are valid seeds; Gymnasium wants a Python int
+        if options is not None and (not isinstance(options, dict) or options):
+            raise ValueError(f"options = {options!r}: this env takes no options (None or {{}})")
         super().reset(seed=seed)
-        if options:
-            raise ValueError(f"options are not supported, got {sorted(options)}")
         # Independent streams, all seeded from np_random, so that two policies run on the
         # same seed share the units, the parts fitted, and each flight's degradation draw
         # (common random numbers), whatever they test or replace.
@@ -239,13 +249,21 @@ class ScasMaintenanceEnv(gym.Env):
         self.stats = _Stats()
         self._wasted_now = dict.fromkeys(PARTS, 0.0)
         self.builder.reset()
-        return self._observation(), self._info(dict.fromkeys(REWARD_TERMS, 0.0))
+        return self._outputs(dict.fromkeys(REWARD_TERMS, 0.0))
 
     def step(self, action: Any) -> tuple[Any, float, bool, bool, dict[str, Any]]:
         if self.monitor is None:
             raise RuntimeError("call reset() before step()")
+        if self.slot >= self.scenario.episode_slots:
+            raise RuntimeError(
+                f"the episode was truncated at slot {self.slot} (episode_slots = "
+                f"{self.scenario.episode_slots}): call reset() before step()"
+            )
         if not (type(action) in _PLAIN_INTS and 0 <= action < 4) and not (
             self.action_space.contains(action)  # the general check (0-d arrays, ...)
+            or (  # any numpy integer scalar in range (np.uint64 fails Discrete's cast check)
+                isinstance(action, np.integer) and 0 <= action < 4
+            )
         ):
             raise ValueError(f"action = {action!r} is not in Discrete(4): {ACTION_NAMES}")
         action = int(action)
@@ -286,7 +304,8 @@ class ScasMaintenanceEnv(gym.Env):
         self.stats.cost -= sum(v for k, v in terms.items() if k != "flight")
         self.stats.revenue += terms["flight"]
         truncated = self.slot >= self.scenario.episode_slots
-        return self._observation(), reward, False, truncated, self._info(terms)
+        obs, info = self._outputs(terms)
+        return obs, reward, False, truncated, info
 
     def render(self) -> str | None:
         if self.render_mode != "ansi":
@@ -336,37 +355,61 @@ class ScasMaintenanceEnv(gym.Env):
         self.builder.part_replaced()
         self.part_age[part] = 0
 
-    def _observation(self) -> Any:
-        return self.builder.observation(self)
+    # ------------------------------------------------------------------ snapshots
+    def export_state(self, fleet: FleetState, row: int) -> None:
+        """Write this actuator's whole state into row ``row`` of ``fleet``: the world, the
+        monitor, the feature memory and the episode counters (not this step's reward terms)."""
+        a, s = fleet.a, self.stats
+        self.world.export_state(a, row)
+        self.monitor.export_state(a, row, fleet.table_source[row])
+        self.builder.export_state(a, row)
+        for p, part in enumerate(PARTS):
+            a["part_age"][row, p] = self.part_age[part]
+            a["failures"][row, p] = s.failures[part]
+            a["replacements"][row, p] = s.replacements[part]
+            a["wasted_sum"][row, p] = s.wasted_life_sum[part]
+            a["wasted_count"][row, p] = s.wasted_life_count[part]
+        a["downtime"][row], a["slot"][row] = self.downtime, self.slot
+        a["flown"][row], a["tests"][row], a["no_go_count"][row] = s.flown, s.tests, s.no_go
+        a["cost"][row], a["revenue"][row] = s.cost, s.revenue
 
-    def _info(self, terms: dict[str, float]) -> StepInfo:
-        s, w = self.stats, self.world
-        spring_rul, seal_rul = w.true_rul_flights()
-        return StepInfo(
-            slot=self.slot,
-            availability=s.flown / self.slot if self.slot else 1.0,
-            flights=s.flown,
-            cost_usd=s.cost,
-            revenue_usd=s.revenue,
-            failures=StepInfo(s.failures),
-            replacements=StepInfo(s.replacements),
-            tests=s.tests,
-            no_go=s.no_go,
-            wasted_life_flights=StepInfo(self._wasted_now),
-            wasted_life_sum_flights=StepInfo(s.wasted_life_sum),
-            wasted_life_count=StepInfo(s.wasted_life_count),
-            reward_terms=StepInfo(terms),
-            features=StepInfo(self.builder.last),
-            true_state=StepInfo(
-                crack_depth_m=w.crack_m,
-                seal_wear_m=w.wear_m,
-                crack_fraction=w.crack_fraction,
-                wear_fraction=w.wear_fraction,
-                spring_rul_flights=spring_rul,
-                seal_rul_flights=seal_rul,
-            ),
-            downtime=self.downtime,
-        )
+    def import_flight_state(self, fleet: FleetState, row: int) -> None:
+        """Take back from row ``row`` of ``fleet`` what the vector env's fast flight path
+        changes (crack, wear, flights pending, in-flight features, ages, slot, downtime,
+        flights flown, revenue)."""
+        a = fleet.a
+        self.world.import_flight_state(a, row)
+        self.monitor.import_flight_state(a, row)
+        self.builder.import_flight_state(a, row)
+        for p, part in enumerate(PARTS):
+            self.part_age[part] = int(a["part_age"][row, p])
+        self.downtime, self.slot = int(a["downtime"][row]), int(a["slot"][row])
+        self.stats.flown, self.stats.revenue = int(a["flown"][row]), float(a["revenue"][row])
+
+    def _outputs(self, terms: dict[str, float]) -> tuple[Any, StepInfo]:
+        """Observation and info of this step, assembled from the fleet of one."""
+        fleet = self.fleet
+        self.export_state(fleet, 0)
+        for t, v in terms.items():
+            fleet.terms[t][0] = v
+        for p, part in enumerate(PARTS):
+            fleet.wasted_now[0, p] = self._wasted_now[part]
+        rul = fleet.true_rul()
+        obs = self.builder.observe(fleet, rul)
+        obs = {k: v[0] for k, v in obs.items()} if isinstance(obs, dict) else obs[0]
+        return obs, build_info(fleet, rul, FEATURES, row=0)
+
+
+def new_fleet_state(env: ScasMaintenanceEnv, n: int) -> FleetState:
+    """An ``n``-row :class:`FleetState` sized for ``env``'s surrogate, filters and features."""
+    return FleetState(
+        n,
+        n_unit_features=len(env.surrogate.features),
+        n_particles=env.scenario.n_particles,
+        n_features=len(FEATURES),
+        seal_critical_m=env.calibration.seal_critical_wear_m,
+        kernel_tables=env.world.kernel_tables,
+    )
 
 
 class _Stats:
@@ -384,4 +427,4 @@ class _Stats:
         self.wasted_life_count = dict.fromkeys(PARTS, 0)
 
 
-__all__ = ["ACTION_NAMES", "ScasMaintenanceEnv"]
+__all__ = ["ACTION_NAMES", "REWARD_TERMS", "ScasMaintenanceEnv", "new_fleet_state"]

@@ -20,6 +20,10 @@ from __future__ import annotations
 import copy
 from typing import Any
 
+import numpy as np
+
+from scas_env.fleet_state import PARTS, FleetState
+
 #: leaf types that are immutable, so a deep copy may share them
 _IMMUTABLE = frozenset({int, float, bool, str, type(None)})
 
@@ -41,4 +45,63 @@ class StepInfo(dict):
         return out
 
 
-__all__ = ["StepInfo"]
+def build_info(
+    fleet: FleetState, rul: np.ndarray, feature_names: tuple[str, ...], row: int | None = None
+) -> dict[str, Any]:
+    """The ``info`` of one actuator (``row``: a :class:`StepInfo` of Python scalars, as the
+    single env returns) or of all (``row=None``: a dict of (n,) arrays, as the native vector
+    env returns before its info masks are added), from the same fleet columns.
+
+    ``rul``: (n, 2) true RUL (flights) of spring and seal; ``feature_names``: the columns of
+    ``fleet.a["last"]``. Keys and meaning: :class:`scas_env.env.ScasMaintenanceEnv`.
+    """
+    a = fleet.a
+    if row is None:
+        kind: type[dict] = dict
+
+        def one(arr: np.ndarray, col: int | None = None) -> Any:
+            return (arr if col is None else arr[:, col]).copy()
+
+        slot = a["slot"]
+        availability: Any = np.where(slot > 0, a["flown"] / np.maximum(slot, 1), 1.0)
+    else:
+        kind = StepInfo
+
+        def one(arr: np.ndarray, col: int | None = None) -> Any:
+            return arr.item(row) if col is None else arr.item(row, col)
+
+        slot_n = a["slot"].item(row)
+        availability = a["flown"].item(row) / slot_n if slot_n else 1.0
+
+    def per_part(arr: np.ndarray) -> dict[str, Any]:
+        return kind((p, one(arr, k)) for k, p in enumerate(PARTS))
+
+    crack, wear = one(a["crack"]), one(a["wear"])
+    return kind(
+        slot=one(a["slot"]),
+        availability=availability,
+        flights=one(a["flown"]),
+        cost_usd=one(a["cost"]),
+        revenue_usd=one(a["revenue"]),
+        failures=per_part(a["failures"]),
+        replacements=per_part(a["replacements"]),
+        tests=one(a["tests"]),
+        no_go=one(a["no_go_count"]),
+        wasted_life_flights=per_part(fleet.wasted_now),
+        wasted_life_sum_flights=per_part(a["wasted_sum"]),
+        wasted_life_count=per_part(a["wasted_count"]),
+        reward_terms=kind((t, one(v)) for t, v in fleet.terms.items()),
+        features=kind((f, one(a["last"], k)) for k, f in enumerate(feature_names)),
+        true_state=kind(
+            crack_depth_m=crack,
+            seal_wear_m=wear,
+            crack_fraction=crack / one(a["fail"]),
+            wear_fraction=wear / fleet.seal_critical_m,
+            spring_rul_flights=one(rul, 0),
+            seal_rul_flights=one(rul, 1),
+        ),
+        downtime=one(a["downtime"]),
+    )
+
+
+__all__ = ["StepInfo", "build_info"]

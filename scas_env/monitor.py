@@ -33,6 +33,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from scipy.stats import norm
@@ -254,6 +255,31 @@ class HealthMonitor:
         self.seal_filter.update(g3)
         self.crack_detected = self.crack_detector.update(g1) or self.crack_detected
         self.seal_detected = self.seal_detector.update(g3) or self.seal_detected
+
+    # ------------------------------------------------------------------ snapshots
+    def export_state(self, a: dict[str, np.ndarray], row: int, sources: list[Any]) -> None:
+        """Write the monitor's state into row ``row`` of a fleet's arrays
+        (:class:`scas_env.fleet_state.FleetState`): flights since each filter update,
+        detector flags and each part's RUL tables. ``sources`` (that row's
+        ``table_source``) remembers which tables the row holds: unchanged ones are not copied.
+        """
+        a["pending"][row, 0], a["pending"][row, 1] = self.pending["spring"], self.pending["seal"]
+        a["detected"][row, 0], a["detected"][row, 1] = self.crack_detected, self.seal_detected
+        for p, part in enumerate(("spring", "seal")):
+            ageing = self._ageing[part]
+            if sources[p] is not ageing:
+                r, cum_w, suffix_w, suffix_wr, low = ageing.tables()
+                a["rul_sorted"][row, p] = r
+                a["rul_cum_w"][row, p] = cum_w
+                a["rul_suffix_w"][row, p] = suffix_w
+                a["rul_suffix_wr"][row, p] = suffix_wr
+                a["rul_low"][row, p] = low
+                sources[p] = ageing
+
+    def import_flight_state(self, a: dict[str, np.ndarray], row: int) -> None:
+        """Take back what flights on the fleet's fast path changed: the flights pending."""
+        self.pending["spring"] = int(a["pending"][row, 0])
+        self.pending["seal"] = int(a["pending"][row, 1])
 
     # ------------------------------------------------------------------ outputs
     def ageing(self, part: str) -> AgeingRul:

@@ -6,7 +6,7 @@ at their documented bounds (the raw values travel in ``info["features"]``).
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 from gymnasium import spaces
@@ -15,11 +15,10 @@ from scipy.stats import norm
 from scas_env.actuator.params import ScasParams
 from scas_env.actuator.surrogate import SurrogateModel
 from scas_env.costs import CostModel
+from scas_env.fleet_kernels import ageing_estimates
+from scas_env.fleet_state import FleetState
 from scas_env.scenario import Scenario
 from scas_env.world import FLIGHT_FEATURES, GROUND_FEATURES
-
-if TYPE_CHECKING:
-    from scas_env.env import ScasMaintenanceEnv
 
 #: feature -> (display unit, factor from SI, lower bound, upper bound) in display units
 FEATURE_UNITS = {
@@ -31,6 +30,9 @@ FEATURE_UNITS = {
 }
 
 
+#: features in the column order of ``FleetState.a["last"]``
+FEATURES = (*FLIGHT_FEATURES, *GROUND_FEATURES)
+
 #: Groups of each flat observation mode, in order (``"dict"`` holds every group).
 GROUP_ORDER: dict[str, tuple[str, ...]] = {
     "features+rul": ("features", "filter", "monitor"),
@@ -40,12 +42,20 @@ GROUP_ORDER: dict[str, tuple[str, ...]] = {
 
 
 class ObservationBuilder:
-    """Keeps the last measured features and assembles observations for one env."""
+    """The observation's layout (names, units, bounds, space), the go/no-go acceptance band,
+    one actuator's feature memory (last features, test age, no-go flag), and the assembly of
+    observations from :class:`~scas_env.fleet_state.FleetState` rows (single and vector env
+    alike)."""
 
     def __init__(
-        self, scenario: Scenario, costs: CostModel, surrogate: SurrogateModel, params: ScasParams
+        self,
+        scenario: Scenario,
+        costs: CostModel,
+        surrogate: SurrogateModel,
+        params: ScasParams,
     ) -> None:
         self.scenario = scenario
+        self._factor = np.array([FEATURE_UNITS[f][1] for f in FEATURES])
         slots = float(scenario.episode_slots)
         cap = float(scenario.rul_cap_flights)
         max_down = 1.0 + max(
@@ -133,46 +143,57 @@ class ObservationBuilder:
     def within_acceptance(self, feats: dict[str, float]) -> bool:
         return all(lo <= feats[f] <= hi for f, (lo, hi) in self.acceptance.items())
 
-    def _values(self, env: ScasMaintenanceEnv) -> dict[str, list[float]]:
-        out: dict[str, list[float]] = {}
-        if self.scenario.obs_mode in ("features+rul", "features", "dict"):
-            out["features"] = [
-                self.last[f] * FEATURE_UNITS[f][1] for f in (*FLIGHT_FEATURES, *GROUND_FEATURES)
-            ] + [float(self.test_age), float(self.no_go)]
-            m = env.monitor
-            out["monitor"] = [
-                float(m.crack_detected),
-                float(m.seal_detected),
-                float(env.part_age["spring"]),
-                float(env.part_age["seal"]),
-                float(env.downtime),
-            ]
-        if self.scenario.obs_mode in ("features+rul", "dict"):
-            filt = []
-            for part in ("spring", "seal"):
-                e = env.monitor.estimate(part)
-                filt += [e.rul_mean, e.rul_low, e.prob_failure]
-            out["filter"] = filt
-        if self.scenario.obs_mode in ("state", "dict"):
-            w = env.world
-            spring_rul, seal_rul = w.true_rul_flights()
-            out["state"] = [
-                w.crack_fraction,
-                w.wear_fraction,
-                spring_rul,
-                seal_rul,
-                float(env.part_age["spring"]),
-                float(env.part_age["seal"]),
-                float(env.downtime),
-            ]
+    def export_state(self, a: dict[str, np.ndarray], row: int) -> None:
+        """Write the feature memory into row ``row`` of a fleet's arrays."""
+        last = self.last
+        for k, f in enumerate(FEATURES):
+            a["last"][row, k] = last[f]
+        a["test_age"][row], a["no_go"][row] = self.test_age, self.no_go
+
+    def import_flight_state(self, a: dict[str, np.ndarray], row: int) -> None:
+        """Take back what flights on the fleet's fast path changed: in-flight features and
+        the test's age."""
+        for k, f in enumerate(FLIGHT_FEATURES):
+            self.last[f] = float(a["last"][row, k])
+        self.test_age = int(a["test_age"][row])
+
+    def groups_of(self, fleet: FleetState, rul: np.ndarray) -> dict[str, np.ndarray]:
+        """Float64 values of every observation group of this mode, one row per actuator
+        (``rul``: (n, 2) true RUL in flights, used by the ``"state"`` group)."""
+        a, s = fleet.a, self.scenario
+        mode = s.obs_mode
+        out: dict[str, np.ndarray] = {}
+        if mode in ("features+rul", "features", "dict"):
+            out["features"] = np.column_stack(
+                [a["last"] * self._factor, a["test_age"], a["no_go"]]
+            ).astype(np.float64)
+            out["monitor"] = np.column_stack([a["detected"], a["part_age"], a["downtime"]]).astype(
+                np.float64
+            )
+        if mode in ("features+rul", "dict"):
+            est = np.empty((fleet.n, 2, 3))
+            ageing_estimates(
+                a["rul_sorted"], a["rul_cum_w"], a["rul_suffix_w"], a["rul_suffix_wr"],
+                a["rul_low"], a["pending"], float(s.risk_horizon_flights),
+                float(s.rul_cap_flights), est,
+            )  # fmt: skip
+            out["filter"] = est.reshape(fleet.n, 6)
+        if mode in ("state", "dict"):
+            out["state"] = np.column_stack(
+                [a["crack"] / a["fail"], a["wear"] / fleet.seal_critical_m, rul, a["part_age"],
+                 a["downtime"]]
+            ).astype(np.float64)  # fmt: skip
         return out
 
-    def observation(self, env: ScasMaintenanceEnv) -> Any:
-        values = self._values(env)
+    def observe(self, fleet: FleetState, rul: np.ndarray) -> Any:
+        """The observations of every actuator of ``fleet`` (a batch: one row each), float32,
+        saturated at the documented bounds."""
+        values = self.groups_of(fleet, rul)
         if self.scenario.obs_mode == "dict":
             return {k: clip_to_bounds(values[k], *self.bounds[k]) for k in self.groups}
         order = GROUP_ORDER[self.scenario.obs_mode]
-        return clip_to_bounds([v for k in order for v in values[k]], *self.bounds["flat"])
+        flat = np.concatenate([values[k] for k in order], axis=1)
+        return clip_to_bounds(flat, *self.bounds["flat"])
 
 
 def _box(rows: list[tuple[str, str, float, float]]) -> spaces.Box:

@@ -31,12 +31,12 @@ from gymnasium.vector import AutoresetMode, SyncVectorEnv, VectorEnv
 from gymnasium.vector.utils import batch_space
 
 from scas_env.block_draws import DEFAULT_BLOCK
-from scas_env.env import REWARD_TERMS, ScasMaintenanceEnv
-from scas_env.fleet_kernels import ageing_estimates, surrogate_flights, true_rul
-from scas_env.observation import FEATURE_UNITS, GROUP_ORDER, clip_to_bounds
-from scas_env.world import FLIGHT_FEATURES, GROUND_FEATURES, PARTS
+from scas_env.env import REWARD_TERMS, ScasMaintenanceEnv, new_fleet_state
+from scas_env.fleet_kernels import surrogate_flights
+from scas_env.info import build_info
+from scas_env.observation import FEATURES
+from scas_env.world import FLIGHT_FEATURES, PARTS
 
-_FEATURES = (*FLIGHT_FEATURES, *GROUND_FEATURES)
 _STREAMS = ("measure", "degradation")
 
 
@@ -56,13 +56,28 @@ def _check_num_envs(num_envs: Any) -> int:
 
 
 class ScasMaintenanceSyncVectorEnv(SyncVectorEnv):
-    """``num_envs`` copies of :class:`ScasMaintenanceEnv` stepped one after the other."""
+    """``num_envs`` copies of :class:`ScasMaintenanceEnv` stepped one after the other (the
+    physics fidelity's vector env), with the native vector env's surface."""
 
     def __init__(self, num_envs: int, **kwargs: Any) -> None:
         n = _check_num_envs(num_envs)
         super().__init__(
             [partial(ScasMaintenanceEnv, **kwargs)] * n, autoreset_mode=AutoresetMode.NEXT_STEP
         )
+        _expose_surface(self, self.envs[0].unwrapped)
+
+    @classmethod
+    def of(cls, envs: list[Any]) -> ScasMaintenanceSyncVectorEnv:
+        """A vector env over existing envs (each a ``ScasMaintenanceEnv``, possibly wrapped),
+        e.g. to run one given env through the batch episode runner."""
+        if not envs or not all(isinstance(e.unwrapped, ScasMaintenanceEnv) for e in envs):
+            raise ValueError("envs must be a non-empty list of ScasMaintenanceEnv")
+        self = cls.__new__(cls)
+        SyncVectorEnv.__init__(
+            self, [lambda e=e: e for e in envs], autoreset_mode=AutoresetMode.NEXT_STEP
+        )
+        _expose_surface(self, envs[0].unwrapped)
+        return self
 
 
 class ScasMaintenanceVectorEnv(VectorEnv):
@@ -77,112 +92,61 @@ class ScasMaintenanceVectorEnv(VectorEnv):
         if first.scenario.fidelity != "surrogate":
             raise ValueError("ScasMaintenanceVectorEnv is the surrogate's; use make_vector_env")
         self.num_envs = n
-        self.scenario, self.costs = first.scenario, first.costs
         self.single_observation_space = first.observation_space
         self.single_action_space = first.action_space
         self.observation_space = batch_space(first.observation_space, n)
         self.action_space = batch_space(first.action_space, n)
-        self.obs_names, self.obs_units = first.obs_names, first.obs_units
+        _expose_surface(self, first)
         self._tables = first.world.kernel_tables
-        self._crit = first.calibration.seal_critical_wear_m
-        n_part = first.scenario.n_particles
-        f = len(first.surrogate.features)
         self._buf = {s: np.empty((n, DEFAULT_BLOCK)) for s in _STREAMS}
         self._pos = {s: np.zeros((n, 1), dtype=np.int64) for s in _STREAMS}
         for e, env in enumerate(self.envs):
             env.buffer_storage = {s: (self._buf[s][e], self._pos[s][e]) for s in _STREAMS}
-        self.a = {  # the batched state (synchronised with self.envs around slow steps)
-            "crack": np.zeros(n),
-            "wear": np.zeros(n),
-            "fail": np.zeros(n),
-            "theta": np.ones(n),
-            "wmult": np.ones(n),
-            "unit_z": np.zeros((n, f)),
-            "pending": np.zeros((n, 2), dtype=np.int64),
-            "last": np.zeros((n, len(_FEATURES))),
-            "test_age": np.zeros(n, dtype=np.int64),
-            "no_go": np.zeros(n, dtype=np.bool_),
-            "detected": np.zeros((n, 2), dtype=np.bool_),
-            "part_age": np.zeros((n, 2), dtype=np.int64),
-            "downtime": np.zeros(n, dtype=np.int64),
-            "slot": np.zeros(n, dtype=np.int64),
-            "flown": np.zeros(n, dtype=np.int64),
-            "tests": np.zeros(n, dtype=np.int64),
-            "no_go_count": np.zeros(n, dtype=np.int64),
-            "cost": np.zeros(n),
-            "revenue": np.zeros(n),
-            "failures": np.zeros((n, 2), dtype=np.int64),
-            "replacements": np.zeros((n, 2), dtype=np.int64),
-            "wasted_sum": np.zeros((n, 2)),
-            "wasted_count": np.zeros((n, 2), dtype=np.int64),
-            "rul_sorted": np.zeros((n, 2, n_part)),
-            "rul_cum_w": np.zeros((n, 2, n_part + 1)),
-            "rul_suffix_w": np.zeros((n, 2, n_part + 1)),
-            "rul_suffix_wr": np.zeros((n, 2, n_part + 1)),
-            "rul_low": np.zeros((n, 2)),
-        }
+        #: the batched state: each actuator's env exports into its row around slow steps
+        self.fleet = new_fleet_state(first, n)
+        self.a = self.fleet.a
         self._autoreset = np.zeros(n, dtype=np.bool_)
-        self._terms = {t: np.zeros(n) for t in REWARD_TERMS}
+        self._terms = self.fleet.terms
         #: true RUL thrown away by each actuator's preventive replacement this step (0: none)
-        self._wasted_now = np.zeros((n, len(PARTS)))
+        self._wasted_now = self.fleet.wasted_now
         self._scratch = {
             "new": np.empty((2, n)),
             "feats": np.empty((n, len(FLIGHT_FEATURES))),
             "failed": np.zeros((n, 2), dtype=np.bool_),
             "meas": np.empty((n, len(FLIGHT_FEATURES))),
             "deg": np.empty((n, 2)),
-            "est": np.empty((n, 2, 3)),
-            "rul": np.empty((n, 2)),
         }
-        self._factor = np.array([FEATURE_UNITS[f][1] for f in _FEATURES])
-        self._bounds = first.builder.bounds
+        self._builder = first.builder
+
+    # ------------------------------------------------------------------ copies
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        """After ``pickle`` or ``copy.deepcopy``: each actuator's normal buffers become rows
+        of the tables again (a copy turns numpy views into separate arrays with the same
+        numbers; the fast path reads the tables, the slow path the buffers)."""
+        self.__dict__.update(state)
+        for e, env in enumerate(self.envs):
+            env.buffer_storage = {s: (self._buf[s][e], self._pos[s][e]) for s in _STREAMS}
+            for s in _STREAMS:
+                draws = getattr(env, "rngs", {}).get(s)
+                if draws is not None:
+                    draws.values, draws.position = self._buf[s][e], self._pos[s][e]
 
     # ------------------------------------------------------------------ sync
     def _pull(self, e: int) -> None:
-        """Copy actuator ``e``'s state from its env object into the arrays."""
-        env, a = self.envs[e], self.a
-        w, m, b, s = env.world, env.monitor, env.builder, env.stats
-        a["crack"][e], a["wear"][e], a["fail"][e] = w.crack_m, w.wear_m, w.spring_failure_m
-        a["theta"][e], a["wmult"][e] = w.theta, w.wear_multiplier
-        a["unit_z"][e] = w.unit_z
-        for p, part in enumerate(PARTS):
-            a["pending"][e, p] = m.pending[part]
-            a["part_age"][e, p] = env.part_age[part]
-            a["failures"][e, p] = s.failures[part]
-            a["replacements"][e, p] = s.replacements[part]
-            a["wasted_sum"][e, p] = s.wasted_life_sum[part]
-            a["wasted_count"][e, p] = s.wasted_life_count[part]
-            r, cum_w, suffix_w, suffix_wr, low = m.ageing(part).tables()
-            a["rul_sorted"][e, p] = r
-            a["rul_cum_w"][e, p] = cum_w
-            a["rul_suffix_w"][e, p] = suffix_w
-            a["rul_suffix_wr"][e, p] = suffix_wr
-            a["rul_low"][e, p] = low
-        a["detected"][e] = (m.crack_detected, m.seal_detected)
-        a["last"][e] = [b.last[f] for f in _FEATURES]
-        a["test_age"][e], a["no_go"][e] = b.test_age, b.no_go
-        a["downtime"][e], a["slot"][e] = env.downtime, env.slot
-        a["flown"][e], a["tests"][e], a["no_go_count"][e] = s.flown, s.tests, s.no_go
-        a["cost"][e], a["revenue"][e] = s.cost, s.revenue
+        """Actuator ``e``'s env exports its state into row ``e`` of the fleet."""
+        self.envs[e].export_state(self.fleet, e)
 
     def _push(self, e: int) -> None:
-        """Copy what the fast path changes from the arrays into actuator ``e``'s env."""
-        env, a = self.envs[e], self.a
-        env.world.crack_m, env.world.wear_m = float(a["crack"][e]), float(a["wear"][e])
-        for p, part in enumerate(PARTS):
-            env.monitor.pending[part] = int(a["pending"][e, p])
-            env.part_age[part] = int(a["part_age"][e, p])
-        for k, f in enumerate(FLIGHT_FEATURES):
-            env.builder.last[f] = float(a["last"][e, k])
-        env.builder.test_age = int(a["test_age"][e])
-        env.downtime, env.slot = int(a["downtime"][e]), int(a["slot"][e])
-        env.stats.flown, env.stats.revenue = int(a["flown"][e]), float(a["revenue"][e])
+        """Actuator ``e``'s env takes back what the fast path changed in row ``e``."""
+        self.envs[e].import_flight_state(self.fleet, e)
 
     # ------------------------------------------------------------------ gym API
     def reset(
         self, *, seed: int | list[int | None] | None = None, options: dict[str, Any] | None = None
     ) -> tuple[Any, dict[str, Any]]:
         if seed is None or (isinstance(seed, int | np.integer) and not isinstance(seed, bool)):
+            if seed is not None and seed < 0:
+                raise ValueError(f"seed = {seed!r} must be None or an integer >= 0")
             seeds = [None if seed is None else int(seed) + e for e in range(self.num_envs)]
         elif isinstance(seed, list | tuple) and len(seed) == self.num_envs:
             seeds = list(seed)
@@ -194,13 +158,13 @@ class ScasMaintenanceVectorEnv(VectorEnv):
             env.reset(seed=seeds[e], options=options)
             self._pull(e)
         self._autoreset[:] = False
-        for t in self._terms.values():
-            t.fill(0.0)
-        self._wasted_now.fill(0.0)
-        rul = self._true_rul()
+        self.fleet.clear_step()
+        rul = self.fleet.true_rul()
         return self._observation(rul), self._info(rul)
 
     def step(self, actions: Any) -> tuple[Any, np.ndarray, np.ndarray, np.ndarray, dict]:
+        if self.envs[0].monitor is None:
+            raise RuntimeError("call reset() before step()")
         act = np.asarray(actions)
         if (
             act.shape != (self.num_envs,)
@@ -213,9 +177,7 @@ class ScasMaintenanceVectorEnv(VectorEnv):
             )
         a, n = self.a, self.num_envs
         rewards = np.zeros(n)
-        for t in self._terms.values():
-            t.fill(0.0)
-        self._wasted_now.fill(0.0)
+        self.fleet.clear_step()
         resetting = self._autoreset.copy()
         grounded = a["downtime"] > 0
         fly = (act == 0) & ~grounded & ~resetting
@@ -253,7 +215,7 @@ class ScasMaintenanceVectorEnv(VectorEnv):
         truncated = (a["slot"] >= self.scenario.episode_slots) & ~resetting
         terminated = np.zeros(n, dtype=np.bool_)
         self._autoreset = truncated.copy()
-        rul = self._true_rul()
+        rul = self.fleet.true_rul()
         return self._observation(rul), rewards, terminated, truncated, self._info(rul)
 
     def _fly(self, idx: np.ndarray) -> np.ndarray:
@@ -283,82 +245,32 @@ class ScasMaintenanceVectorEnv(VectorEnv):
         return ok
 
     # ------------------------------------------------------------------ outputs
-    def _true_rul(self) -> np.ndarray:
-        a, t = self.a, self._tables
-        out = self._scratch["rul"]
-        true_rul(
-            a["crack"], a["wear"], a["fail"], a["theta"], a["wmult"], *t["damage"],
-            *t["rul_consts"], out,
-        )  # fmt: skip
-        return out
-
-    def _groups(self, rul: np.ndarray) -> dict[str, np.ndarray]:
-        a, s = self.a, self.scenario
-        mode = s.obs_mode
-        out: dict[str, np.ndarray] = {}
-        if mode in ("features+rul", "features", "dict"):
-            out["features"] = np.column_stack(
-                [a["last"] * self._factor, a["test_age"], a["no_go"]]
-            ).astype(np.float64)
-            out["monitor"] = np.column_stack([a["detected"], a["part_age"], a["downtime"]]).astype(
-                np.float64
-            )
-        if mode in ("features+rul", "dict"):
-            est = self._scratch["est"]
-            ageing_estimates(
-                a["rul_sorted"], a["rul_cum_w"], a["rul_suffix_w"], a["rul_suffix_wr"],
-                a["rul_low"], a["pending"], float(s.risk_horizon_flights),
-                float(s.rul_cap_flights), est,
-            )  # fmt: skip
-            out["filter"] = est.reshape(self.num_envs, 6)
-        if mode in ("state", "dict"):
-            out["state"] = np.column_stack(
-                [a["crack"] / a["fail"], a["wear"] / self._crit, rul, a["part_age"], a["downtime"]]
-            ).astype(np.float64)
-        return out
-
     def _observation(self, rul: np.ndarray) -> Any:
-        values = self._groups(rul)
-        if self.scenario.obs_mode == "dict":
-            return {k: clip_to_bounds(values[k], *self._bounds[k]) for k in self._bounds}
-        flat = np.concatenate([values[k] for k in GROUP_ORDER[self.scenario.obs_mode]], axis=1)
-        return clip_to_bounds(flat, *self._bounds["flat"])
+        return self._builder.observe(self.fleet, rul)
 
     def _info(self, rul: np.ndarray) -> dict[str, Any]:
-        a = self.a
-        slot = a["slot"]
-        info: dict[str, Any] = {
-            "slot": slot.copy(),
-            "availability": np.where(slot > 0, a["flown"] / np.maximum(slot, 1), 1.0),
-            "flights": a["flown"].copy(),
-            "cost_usd": a["cost"].copy(),
-            "revenue_usd": a["revenue"].copy(),
-            "failures": {p: a["failures"][:, k].copy() for k, p in enumerate(PARTS)},
-            "replacements": {p: a["replacements"][:, k].copy() for k, p in enumerate(PARTS)},
-            "tests": a["tests"].copy(),
-            "no_go": a["no_go_count"].copy(),
-            "wasted_life_flights": {p: self._wasted_now[:, k].copy() for k, p in enumerate(PARTS)},
-            "wasted_life_sum_flights": {
-                p: a["wasted_sum"][:, k].copy() for k, p in enumerate(PARTS)
-            },
-            "wasted_life_count": {p: a["wasted_count"][:, k].copy() for k, p in enumerate(PARTS)},
-            "reward_terms": {t: v.copy() for t, v in self._terms.items()},
-            "features": {f: a["last"][:, k].copy() for k, f in enumerate(_FEATURES)},
-            "true_state": {
-                "crack_depth_m": a["crack"].copy(),
-                "seal_wear_m": a["wear"].copy(),
-                "crack_fraction": a["crack"] / a["fail"],
-                "wear_fraction": a["wear"] / self._crit,
-                "spring_rul_flights": rul[:, 0].copy(),
-                "seal_rul_flights": rul[:, 1].copy(),
-            },
-            "downtime": a["downtime"].copy(),
-        }
-        return info
+        return with_info_masks(build_info(self.fleet, rul, FEATURES), self.num_envs)
 
     def close_extras(self, **kwargs: Any) -> None:
         for env in self.envs:
             env.close()
+
+
+def with_info_masks(info: dict[str, Any], n: int) -> dict[str, Any]:
+    """``info`` with Gymnasium's ``_key`` masks (every actuator has every key), nested dicts
+    included, in the order ``SyncVectorEnv`` builds them (key, then ``_key``)."""
+    out: dict[str, Any] = {}
+    for key, value in info.items():
+        out[key] = with_info_masks(value, n) if isinstance(value, dict) else value
+        out[f"_{key}"] = np.ones(n, dtype=np.bool_)
+    return out
+
+
+def _expose_surface(vec: VectorEnv, first: ScasMaintenanceEnv) -> None:
+    """The attributes both vector forms share: ``obs_names``, ``obs_units``, ``scenario``,
+    ``costs``, ``params``."""
+    vec.obs_names, vec.obs_units = first.obs_names, first.obs_units
+    vec.scenario, vec.costs, vec.params = first.scenario, first.costs, first.params
 
 
 __all__ = [

@@ -48,9 +48,9 @@ from scas_env.actuator.sensing import FlightWindow, draw_window, flight_window, 
 from scas_env.actuator.surrogate import SurrogateModel
 from scas_env.actuator.uncertainty import UnitSample, draw_run_conditions, draw_unit
 from scas_env.fleet_kernels import surrogate_flights, true_rul
+from scas_env.fleet_state import PARTS
 from scas_env.scenario import Scenario
 
-PARTS = ("spring", "seal")
 GROUND_FEATURES = ("G1", "G3")
 FLIGHT_FEATURES = ("I2", "I6", "I7")
 
@@ -137,6 +137,18 @@ class ActuatorWorld:
         t = self.kernel_tables
         true_rul(x[0], x[1], x[2], x[3], x[4], *t["damage"], *t["rul_consts"], out)
         return float(out[0, 0]), float(out[0, 1])
+
+    def export_state(self, a: dict[str, np.ndarray], row: int) -> None:
+        """Write this actuator's state into row ``row`` of a fleet's arrays
+        (:class:`scas_env.fleet_state.FleetState`)."""
+        a["crack"][row], a["wear"][row] = self.crack_m, self.wear_m
+        a["fail"][row] = self.spring_failure_m
+        a["theta"][row], a["wmult"][row] = self.theta, self.wear_multiplier
+        a["unit_z"][row] = self.unit_z
+
+    def import_flight_state(self, a: dict[str, np.ndarray], row: int) -> None:
+        """Take back what flights on the fleet's fast path changed: crack and wear."""
+        self.crack_m, self.wear_m = float(a["crack"][row]), float(a["wear"][row])
 
     # ------------------------------------------------------------------ life cycle
     def reset(self, rng: np.random.Generator) -> None:

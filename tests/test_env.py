@@ -104,7 +104,9 @@ def test_bad_actions_raise(action) -> None:
         env.step(action)
 
 
-@pytest.mark.parametrize("action", [1, np.int64(1), np.int32(1), np.uint8(1), np.array(1)])
+@pytest.mark.parametrize(
+    "action", [1, np.int64(1), np.int32(1), np.uint8(1), np.uint64(1), np.array(1)]
+)
 def test_integer_actions_of_any_kind_are_accepted(action) -> None:
     env = ScasMaintenanceEnv()
     env.reset(seed=0)
@@ -121,7 +123,34 @@ def test_step_before_reset_and_bad_seeds_raise() -> None:
             env.reset(seed=seed)
 
 
+def test_numpy_integer_seeds_give_the_python_seeds_episode() -> None:
+    a, b = ScasMaintenanceEnv(), ScasMaintenanceEnv()
+    np.testing.assert_array_equal(a.reset(seed=np.uint32(7))[0], b.reset(seed=7)[0])
+    np.testing.assert_array_equal(a.step(1)[0], b.step(1)[0])
+
+
+@pytest.mark.parametrize("options", [[], 0, "", {"x": 1}, ("a",)])
+def test_options_other_than_none_or_empty_raise(options) -> None:
+    env = ScasMaintenanceEnv()
+    with pytest.raises(ValueError, match="options"):
+        env.reset(seed=0, options=options)
+    env.reset(seed=0, options={})  # an empty dict is no option
+
+
+def test_stepping_past_truncation_raises_until_reset() -> None:
+    env = ScasMaintenanceEnv(episode_slots=2)
+    env.reset(seed=0)
+    assert [env.step(0)[3] for _ in range(2)] == [False, True]
+    with pytest.raises(RuntimeError, match="truncated at slot 2"):
+        env.step(0)
+    env.reset()
+    assert env.step(0)[3] is False
+
+
 def test_bad_configs_raise_clear_errors() -> None:
+    for name in ("calibration", "surrogate"):
+        with pytest.raises(ValueError, match=name):
+            ScasMaintenanceEnv(**{name: "x"})
     with pytest.raises(ValueError, match="unknown key"):
         gym.make(ENV_ID, episode_slot=10)
     with pytest.raises(ValueError, match="obs_mode"):

@@ -95,11 +95,73 @@ def test_vector_episodes_do_not_depend_on_the_batch_size() -> None:
         assert r4[2] == r1[0]
 
 
-def test_physics_fidelity_falls_back_to_sync_stepping() -> None:
-    envs = gym.make_vec(
-        scas_env.ENV_ID, num_envs=2, vectorization_mode="vector_entry_point", fidelity="physics"
+def _info_form(info: dict) -> dict:
+    """Key order, dtypes and shapes of a vector info (nested dicts included)."""
+    return {
+        k: _info_form(v) if isinstance(v, dict) else (np.asarray(v).dtype, np.shape(v))
+        for k, v in info.items()
+    }
+
+
+def _assert_infos_equal(a: dict, b: dict) -> None:
+    assert list(a) == list(b)
+    for k in a:
+        if isinstance(a[k], dict):
+            _assert_infos_equal(a[k], b[k])
+        else:
+            assert a[k].dtype == b[k].dtype, k
+            np.testing.assert_array_equal(a[k], b[k], err_msg=k)
+
+
+def test_native_and_sync_vector_envs_have_one_contract() -> None:
+    """Gymnasium's SyncVectorEnv over single envs builds its info with ``_key`` masks from the
+    single envs' infos; the native env must give the same tree, dtypes and values, and the
+    same surface (obs_names, units, scenario, costs, params), across an autoreset."""
+    kwargs = {"episode_slots": 60, "initial_health": "random"}
+    native = gym.make_vec(
+        scas_env.ENV_ID, num_envs=3, vectorization_mode="vector_entry_point", **kwargs
     )
-    assert isinstance(envs, ScasMaintenanceSyncVectorEnv)
+    sync = ScasMaintenanceSyncVectorEnv(3, **kwargs)
+    for attr in ("obs_names", "obs_units", "scenario", "costs", "params"):
+        assert getattr(native, attr) == getattr(sync, attr), attr
+    actions = np.random.default_rng(5).choice(4, size=(130, 3), p=[0.85, 0.11, 0.02, 0.02])
+    o_n, i_n = native.reset(seed=21)
+    o_s, i_s = sync.reset(seed=21)
+    np.testing.assert_array_equal(o_n, o_s)
+    _assert_infos_equal(i_n, i_s)
+    for t in range(130):  # two truncations: next-step autoresets on both sides
+        o_n, r_n, te_n, tr_n, i_n = native.step(actions[t])
+        o_s, r_s, te_s, tr_s, i_s = sync.step(actions[t])
+        np.testing.assert_array_equal(o_n, o_s)
+        np.testing.assert_array_equal(r_n, r_s)
+        np.testing.assert_array_equal(te_n, te_s)
+        np.testing.assert_array_equal(tr_n, tr_s)
+        _assert_infos_equal(i_n, i_s)
+    assert i_n["_slot"].all() and i_n["failures"]["_spring"].all()
+
+
+def test_physics_fallback_steps_with_the_native_surface_and_info_form() -> None:
+    kwargs = {"episode_slots": 5, "window_library": 2}
+    physics = gym.make_vec(
+        scas_env.ENV_ID,
+        num_envs=2,
+        vectorization_mode="vector_entry_point",
+        fidelity="physics",
+        **kwargs,
+    )
+    native = gym.make_vec(
+        scas_env.ENV_ID, num_envs=2, vectorization_mode="vector_entry_point", **kwargs
+    )
+    assert isinstance(physics, ScasMaintenanceSyncVectorEnv)
+    assert physics.obs_names == native.obs_names and physics.params == native.params
+    physics.reset(seed=1)
+    native.reset(seed=1)
+    for action in ([1, 0], [0, 1]):
+        o_p, r_p, _, _, i_p = physics.step(np.array(action))
+        o_n, _, _, _, i_n = native.step(np.array(action))
+        assert o_p.shape == o_n.shape and o_p.dtype == o_n.dtype
+        assert _info_form(i_p) == _info_form(i_n)
+        assert np.isfinite(o_p).all() and (r_p > 0).all()  # a flight (and a test) paid
 
 
 def test_bad_num_envs_actions_and_seeds_raise() -> None:
@@ -114,3 +176,31 @@ def test_bad_num_envs_actions_and_seeds_raise() -> None:
             envs.step(np.array(bad))
     with pytest.raises(ValueError, match=r"unknown|not a field|Scenario"):
         ScasMaintenanceVectorEnv(num_envs=2, not_a_field=1)
+
+
+@pytest.mark.parametrize("how", ["pickle", "deepcopy"])
+def test_copies_of_the_vector_env_continue_bit_identically(how: str) -> None:
+    """Copies keep each actuator's normal buffers as rows of the shared tables (they used to
+    drift apart at the second step and fail at ~200, past the buffers' first refill)."""
+    import copy
+    import pickle
+
+    envs = gym.make_vec(scas_env.ENV_ID, num_envs=3, vectorization_mode="vector_entry_point")
+    envs.reset(seed=4)
+    actions = np.random.default_rng(1).choice(4, size=(1200, 3), p=[0.9, 0.08, 0.01, 0.01])
+    for t in range(5):
+        envs.step(actions[t])
+    twin = pickle.loads(pickle.dumps(envs)) if how == "pickle" else copy.deepcopy(envs)
+    for t in range(5, 1200):
+        a, b = envs.step(actions[t]), twin.step(actions[t])
+        for x, y in zip(a[:4], b[:4], strict=True):
+            np.testing.assert_array_equal(x, y)
+        _assert_infos_equal(a[4], b[4])
+
+
+def test_vector_step_before_reset_raises() -> None:
+    envs = gym.make_vec(scas_env.ENV_ID, num_envs=2, vectorization_mode="vector_entry_point")
+    with pytest.raises(RuntimeError, match="reset"):
+        envs.step(np.zeros(2, dtype=np.int64))
+    with pytest.raises(ValueError, match="seed"):
+        envs.reset(seed=-1)

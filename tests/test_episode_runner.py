@@ -1,4 +1,5 @@
-"""Episodes run side by side in the vector env give run_episode's rows and events."""
+"""The one episode runner: batches in the native vector env give the rows and events of single
+envs run through it one by one, whatever the batch or the number of workers."""
 
 from __future__ import annotations
 
@@ -9,8 +10,8 @@ import pytest
 
 import scas_env
 from policies.base import make_policy
-from policies.batch_runner import run_batch
-from policies.benchmark import episode_seeds, run_benchmark, run_episode
+from policies.benchmark import episode_seeds, run_benchmark
+from policies.episode_runner import run_episode, run_episodes
 
 
 @pytest.mark.parametrize("name", ["corrective", "detection", "rul_risk", "random", "oracle"])
@@ -24,7 +25,7 @@ def test_batch_rows_and_events_equal_single_episodes(name: str) -> None:
         scas_env.ENV_ID, num_envs=3, vectorization_mode="vector_entry_point", **kwargs
     )
     policy = make_policy(name, venv.obs_names)
-    batch = run_batch(venv, policy, seeds, venv.envs[0].params.mission.flight_duration_s)
+    batch = run_episodes(venv, policy, seeds)
     env = gym.make(scas_env.ENV_ID, disable_env_checker=True, **kwargs)
     single_policy = make_policy(name, env.unwrapped.obs_names)
     for (es, ps), got in zip(seeds, batch, strict=True):
@@ -51,4 +52,4 @@ def test_batch_size_must_match_the_vector_env() -> None:
     venv = gym.make_vec(scas_env.ENV_ID, num_envs=2, vectorization_mode="vector_entry_point")
     policy = make_policy("corrective", venv.obs_names)
     with pytest.raises(ValueError, match="envs for 3 seeds"):
-        run_batch(venv, policy, episode_seeds(0, 3), 5400.0)
+        run_episodes(venv, policy, episode_seeds(0, 3))

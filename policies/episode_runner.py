@@ -1,13 +1,14 @@
-"""Episodes of one policy run side by side in the native vectorised environment.
+"""The one episode runner: episodes of one policy, side by side in a vector env.
 
-:func:`run_batch` steps ``len(seeds)`` episodes together through
-:class:`scas_env.vector_env.ScasMaintenanceVectorEnv` and asks the policy for a batch of
-actions per slot (one forward pass for a network). The vectorised env gives each actuator
-exactly the episode of a single env with the same seed (tested), and the benchmark's
-policies act row by row (rules on their row, the random policy with one generator per
-episode, a network deterministically), so each episode's row and events are those of
-:func:`policies.benchmark.run_episode` on the same seeds (tested); the batches are fixed by
-episode index, whatever the number of workers.
+:func:`run_episodes` steps ``len(seeds)`` episodes together through a vector env of
+``ScasMaintenance-v0`` (the native :class:`scas_env.vector_env.ScasMaintenanceVectorEnv`,
+or the physics fidelity's :class:`~scas_env.vector_env.ScasMaintenanceSyncVectorEnv`; both
+have the same surface) and asks the policy for a batch of actions per slot (one forward
+pass for a network). Each actuator's episode is exactly that of a single env with the same
+seed (tested), and policies act row by row (rules on their row, the random policy with one
+generator per episode, a network deterministically), so an episode's row and events do not
+depend on its batch (tested). The benchmark, RL evaluation and the value study all run
+their episodes here; :func:`run_episode` runs one given env through it.
 """
 
 from __future__ import annotations
@@ -18,8 +19,9 @@ from typing import Any
 
 import numpy as np
 
-from scas_env.env import REWARD_TERMS as TERMS
-from scas_env.world import PARTS
+from scas_env.fleet_state import PARTS
+from scas_env.fleet_state import REWARD_TERMS as TERMS
+from scas_env.vector_env import ScasMaintenanceSyncVectorEnv
 
 
 def episode_row(
@@ -64,14 +66,24 @@ def episode_row(
     return row
 
 
-def run_batch(
-    venv: Any, policy: Any, seeds: Sequence[tuple[int, int]], flight_duration_s: float
-) -> list[dict[str, Any]]:
+def run_episode(env: Any, policy: Any, env_seed: int, policy_seed: int) -> dict[str, Any]:
+    """One episode of ``policy`` on a given single ``env`` (a ``ScasMaintenanceEnv``, possibly
+    wrapped), through :func:`run_episodes`: ``{"row": ..., "events": [...]}``."""
+    return run_episodes(ScasMaintenanceSyncVectorEnv.of([env]), policy, [(env_seed, policy_seed)])[
+        0
+    ]
+
+
+def run_episodes(venv: Any, policy: Any, seeds: Sequence[tuple[int, int]]) -> list[dict[str, Any]]:
     """Run one episode per ``(env_seed, policy_seed)`` to truncation, all at once.
 
-    ``venv`` is a vectorised env with ``len(seeds)`` actuators. Returns, per episode,
-    ``{"row": results row, "events": [removal events]}`` as ``run_episode`` does.
+    ``venv`` is a vector env of ``ScasMaintenance-v0`` with ``len(seeds)`` actuators; the
+    policy follows the protocol of :class:`policies.base.Policy` (``predict`` on a batch,
+    ``reset(seed=[...])`` if it has one). Returns, per episode, ``{"row": results row,
+    "events": [removal events: part, age in flights, kind]}``; parts still fitted at the end
+    are ``"censored"`` events.
     """
+    flight_duration_s = venv.params.mission.flight_duration_s
     n = len(seeds)
     if venv.num_envs != n:
         raise ValueError(f"the vector env has {venv.num_envs} envs for {n} seeds")
@@ -138,4 +150,4 @@ def _info_row(info: Mapping[str, Any], e: int) -> dict[str, Any]:
     return row
 
 
-__all__ = ["TERMS", "episode_row", "run_batch"]
+__all__ = ["TERMS", "episode_row", "run_episode", "run_episodes"]
