@@ -286,7 +286,7 @@ def _nested_type(cls: type, key: str) -> type[Validated] | None:
 
 #: File suffix -> format name.
 FORMATS = {".toml": "toml", ".yaml": "yaml", ".yml": "yaml", ".json": "json"}
-_BARE_KEY = re.compile(r"^[A-Za-z0-9_-]+$")
+_BARE_KEY = re.compile(r"[A-Za-z0-9_-]+")
 
 
 def file_format(path: str | Path) -> str:
@@ -394,7 +394,7 @@ def _toml_table(data: Mapping[str, Any], prefix: tuple[str, ...], lines: list[st
 
 def _toml_key(key: Any) -> str:
     key = str(key)
-    return key if _BARE_KEY.match(key) else _toml_string(key)
+    return key if _BARE_KEY.fullmatch(key) else _toml_string(key)
 
 
 def _toml_string(text: str) -> str:
