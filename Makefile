@@ -5,7 +5,8 @@ PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed-stamp
 RESULTS ?= results
 
-.PHONY: install benchmark demo test test-slow test-all lint format bench figures reproduce clean
+.PHONY: install benchmark demo test test-slow test-all lint format bench figures reproduce clean \
+	check-install
 
 $(STAMP): pyproject.toml
 	test -x $(PY) || $(PYTHON) -m venv $(VENV)
@@ -13,6 +14,7 @@ $(STAMP): pyproject.toml
 	$(PY) -m pip install --disable-pip-version-check -q torch==2.13.0
 	$(PY) -m pip install --disable-pip-version-check -q -e ".[dev,ray]"
 	touch $(STAMP)
+	@echo "installed; the first run compiles the numba kernels once (~30 s, announced)"
 
 install: $(STAMP)
 
@@ -44,6 +46,20 @@ lint: install
 format: install
 	$(PY) -m ruff format .
 	$(PY) -m ruff check --fix .
+
+## What a user gets from `pip install .` (no extras): build the wheel, install it into a
+## fresh venv (CPU torch first), run a small benchmark and the README's Python snippets
+## there, outside the source tree so that only the installed package can be imported.
+CHECK_DIR ?= $(abspath $(RESULTS))/check-install
+check-install:
+	rm -rf $(CHECK_DIR)
+	$(PYTHON) -m venv $(CHECK_DIR)/venv
+	$(CHECK_DIR)/venv/bin/pip install --disable-pip-version-check -q torch==2.13.0
+	$(CHECK_DIR)/venv/bin/pip wheel --disable-pip-version-check -q --no-deps -w $(CHECK_DIR)/dist .
+	$(CHECK_DIR)/venv/bin/pip install --disable-pip-version-check -q $(CHECK_DIR)/dist/*.whl
+	cd $(CHECK_DIR) && venv/bin/scas-benchmark --episodes 4 --slots 200 --out $(CHECK_DIR)/bench
+	$(PYTHON) .ci/readme_python.py README.md > $(CHECK_DIR)/readme_snippets.py
+	cd $(CHECK_DIR) && venv/bin/python readme_snippets.py
 
 ## Speed, each beside a reference measured in the same run.
 bench: install

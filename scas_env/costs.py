@@ -2,7 +2,9 @@
 
 Figures are 2024 USD, from ``physics-reference.md`` §8.2 (their sources and ranges are quoted
 per field). They are assumptions for sensitivity studies, not facts: change them with
-``CostModel(...)`` or ``CostModel.from_dict``.
+``CostModel(...)``, ``CostModel.from_dict`` or a file, ``CostModel.load("costs.toml")``
+(TOML, YAML or JSON; the fields at the top level or in a ``[costs]`` table;
+docs/configs.md; ``examples/`` holds two documented operators).
 
     >>> c = CostModel()
     >>> c.failure_total_usd  # unscheduled removal + mission abort

@@ -1,5 +1,8 @@
 """Scenario of a maintenance episode: fidelity, observation, horizon, filters, active faults.
 
+Files: ``Scenario.load("case.toml")`` / ``scenario.save("s.yaml")`` (TOML, YAML or JSON; the
+fields at the top level or in a ``[scenario]`` table; docs/configs.md).
+
 >>> s = Scenario()
 >>> s.fidelity, s.obs_mode, s.episode_slots
 ('surrogate', 'features+rul', 2000)

@@ -5,6 +5,16 @@ range and its source. ``__post_init__`` checks each value (finite, in range) and
 ``ValueError`` that names the field, the value and what is allowed. Unknown keys raise in
 :meth:`Validated.from_dict` and :meth:`Validated.replace`. Nothing is clipped.
 
+Files: :meth:`Validated.load` and :meth:`Validated.save` read and write TOML, YAML or JSON
+(by suffix) with the same validation; errors name the file, the table and the field. A file
+holds either the fields of one group at its top level, or tables named after
+:data:`FILE_SECTIONS` (``[scenario]``, ``[costs]``, ``[params]``), each read by its class,
+so one file can describe a whole case. Readers: :mod:`tomllib`, PyYAML's ``safe_load`` (no
+object construction, so a file cannot run code) and :mod:`json`; writers: a small TOML
+writer for such mappings (:func:`toml_text`), PyYAML's ``safe_dump`` and :mod:`json`. Files
+are written atomically (a temporary file renamed into place); an existing file is refused
+unless ``overwrite=True``.
+
 Example:
     >>> from dataclasses import dataclass
     >>> @dataclass(frozen=True)
@@ -18,16 +28,40 @@ Example:
     Traceback (most recent call last):
     ...
     ValueError: Pipe: unknown key(s) ['lenght_m']; allowed: ['length_m']
+    >>> print(toml_text({"scenario": {"episode_slots": 500}, "costs": {"test_usd": 100.0}}))
+    [scenario]
+    episode_slots = 500
+    <BLANKLINE>
+    [costs]
+    test_usd = 100.0
+    <BLANKLINE>
 """
 
 from __future__ import annotations
 
 import dataclasses
+import json
 import math
+import os
+import re
+import sys
+import tempfile
+from collections.abc import Mapping
 from dataclasses import dataclass, field, fields
+from pathlib import Path
 from typing import Any, TypeVar
 
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # pragma: no cover - Python 3.10: the tomli backport (a declared dependency there)
+    import tomli as tomllib
+
 T = TypeVar("T", bound="Validated")
+
+#: Tables a configuration file may hold instead of one group's fields, and the class read
+#: from each: the episode (``scas_env.scenario.Scenario``), the cost model
+#: (``scas_env.costs.CostModel``) and the actuator design (``scas_env.actuator.params``).
+FILE_SECTIONS = {"scenario": "Scenario", "costs": "CostModel", "params": "ScasParams"}
 
 
 def param(
@@ -155,6 +189,45 @@ class Validated:
         return dataclasses.asdict(self)
 
     @classmethod
+    def load(cls: type[T], path: str | Path, *, section: str | None = None) -> T:
+        """Read a TOML/YAML/JSON file (by suffix) and build the object with full validation.
+
+        The file holds this class's fields at its top level, or tables named after
+        :data:`FILE_SECTIONS`, of which ``section`` (default: this class's table) is read.
+        Unknown keys, out-of-range values, a missing table, bad syntax: ``ValueError`` naming
+        the file (and the table) and the field; a missing file: ``FileNotFoundError``.
+        """
+        data = read_mapping(path)
+        table = ""
+        if any(key in FILE_SECTIONS for key in data):
+            table = section or _section_of(cls) or ""
+            others = sorted(set(data) - set(FILE_SECTIONS))
+            if others:
+                raise ValueError(
+                    f"{path}: top-level key(s) {others} beside the tables "
+                    f"{sorted(set(data) & set(FILE_SECTIONS))}; a file holds either the fields "
+                    f"of one group or only the tables {list(FILE_SECTIONS)}"
+                )
+            if table not in data:
+                raise ValueError(
+                    f"{path}: no [{table}] table for {cls.__name__}; the file has {sorted(data)}"
+                )
+            data = data[table]
+        return _build(cls, data, path, table)
+
+    def save(
+        self, path: str | Path, *, section: str | None = None, overwrite: bool = False
+    ) -> Path:
+        """Write the values to a TOML/YAML/JSON file (by suffix), atomically; returns the path.
+
+        ``section`` puts them under that table (e.g. ``"costs"``) instead of the top level.
+        An existing file raises ``FileExistsError`` unless ``overwrite``. :meth:`load` gives
+        back an equal object.
+        """
+        data = self.to_dict()
+        return save_sections(path, {section: self} if section else data, overwrite=overwrite)
+
+    @classmethod
     def describe(cls) -> list[tuple[str, Any, str, str, str]]:
         """Rows ``(name, default, unit, allowed range, source)`` for documentation."""
         rows = []
@@ -165,6 +238,40 @@ class Validated:
         return rows
 
 
+def save_sections(path: str | Path, groups: Mapping[str, Any], *, overwrite: bool = False) -> Path:
+    """Write ``{table: group}`` (groups are :class:`Validated` or plain dicts) to one file.
+
+    Example: ``save_sections("case.toml", {"scenario": Scenario(), "costs": CostModel()})``;
+    each table is read back by ``Scenario.load`` / ``CostModel.load``.
+    """
+    data = {k: v.to_dict() if isinstance(v, Validated) else v for k, v in groups.items()}
+    return write_mapping(path, data, overwrite=overwrite)
+
+
+def _build(cls: type[T], data: Any, path: str | Path, table: str) -> T:
+    """``cls.from_dict(data)``; errors name the file and the table (``[params.spring]``)."""
+    if isinstance(data, dict):
+        names = {f.name for f in fields(cls)}
+        for key, value in data.items():
+            ftype = _nested_type(cls, key) if key in names else None
+            if ftype is not None and isinstance(value, dict):
+                _build(ftype, value, path, f"{table}.{key}" if table else key)
+    try:
+        return cls.from_dict(data)
+    except (ValueError, TypeError) as exc:
+        where = f"{path} [{table}]" if table else str(path)
+        raise ValueError(f"{where}: {exc}") from None
+
+
+def _section_of(cls: type) -> str | None:
+    """The :data:`FILE_SECTIONS` table of ``cls`` (or of a base class), else ``None``."""
+    for klass in cls.__mro__:
+        for table, name in FILE_SECTIONS.items():
+            if klass.__name__ == name:
+                return table
+    return None
+
+
 def _nested_type(cls: type, key: str) -> type[Validated] | None:
     import typing
 
@@ -173,3 +280,150 @@ def _nested_type(cls: type, key: str) -> type[Validated] | None:
     if isinstance(t, type) and issubclass(t, Validated):
         return t
     return None
+
+
+# --- configuration files: TOML, YAML or JSON by suffix --------------------------------
+
+#: File suffix -> format name.
+FORMATS = {".toml": "toml", ".yaml": "yaml", ".yml": "yaml", ".json": "json"}
+_BARE_KEY = re.compile(r"[A-Za-z0-9_-]+")
+
+
+def file_format(path: str | Path) -> str:
+    """Format name (``"toml"``, ``"yaml"`` or ``"json"``) from the suffix of ``path``."""
+    suffix = Path(path).suffix.lower()
+    if suffix not in FORMATS:
+        raise ValueError(
+            f"{path}: unknown configuration file type {suffix!r}; "
+            f"allowed suffixes: {sorted(FORMATS)}"
+        )
+    return FORMATS[suffix]
+
+
+def read_mapping(path: str | Path) -> dict[str, Any]:
+    """Parse ``path`` (TOML, YAML or JSON by suffix) into a dict.
+
+    Raises ``FileNotFoundError`` for a missing file and ``ValueError`` naming the file for a
+    syntax error or a document that is not a mapping (an empty YAML file is ``{}``).
+    """
+    path = Path(path)
+    kind = file_format(path)
+    if not path.is_file():
+        raise FileNotFoundError(f"{path}: configuration file not found")
+    text = path.read_text(encoding="utf-8")
+    try:
+        if kind == "toml":
+            data: Any = tomllib.loads(text)
+        elif kind == "yaml":
+            import yaml
+
+            data = yaml.safe_load(text)
+            data = {} if data is None else data
+        else:
+            data = json.loads(text)
+    except Exception as exc:  # each parser has its own error class; all mean "bad syntax"
+        raise ValueError(f"{path}: not valid {kind.upper()}: {exc}") from None
+    if not isinstance(data, dict):
+        raise ValueError(
+            f"{path}: expected a mapping of field names to values, got {type(data).__name__}"
+        )
+    return data
+
+
+def write_mapping(path: str | Path, data: Mapping[str, Any], *, overwrite: bool = False) -> Path:
+    """Write ``data`` to ``path`` in the format of its suffix, atomically; returns the path.
+
+    An existing file raises ``FileExistsError`` unless ``overwrite``; the folder must exist.
+    """
+    path = Path(path)
+    kind = file_format(path)
+    if path.exists() and not overwrite:
+        raise FileExistsError(f"{path}: exists; pass overwrite=True to replace it")
+    if not path.parent.is_dir():
+        raise FileNotFoundError(f"{path}: folder {path.parent} does not exist")
+    if kind == "toml":
+        text = toml_text(data)
+    elif kind == "yaml":
+        import yaml
+
+        text = yaml.safe_dump(_plain(data), sort_keys=False, allow_unicode=True)
+    else:
+        text = json.dumps(_plain(data), indent=2) + "\n"
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    try:
+        with os.fdopen(fd, "w", encoding="utf-8") as fh:
+            fh.write(text)
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+    return path
+
+
+def _plain(data: Any) -> Any:
+    """Tuples -> lists, recursively (YAML's safe dumper and TOML know lists only)."""
+    if isinstance(data, Mapping):
+        return {str(k): _plain(v) for k, v in data.items()}
+    if isinstance(data, (list, tuple)):
+        return [_plain(v) for v in data]
+    return data
+
+
+def toml_text(data: Mapping[str, Any]) -> str:
+    """TOML document of a nested mapping of str, bool, int, finite float and lists of them.
+
+    Scalars of a table come before its sub-tables (``[a]``, ``[a.b]``), as TOML requires.
+    Floats are written with :func:`repr`, which round-trips exactly. ``None`` and non-finite
+    floats raise ``ValueError`` (TOML has no null; configurations are finite).
+    """
+    lines: list[str] = []
+    _toml_table(data, (), lines)
+    return "\n".join(lines).lstrip("\n") + "\n"
+
+
+def _toml_table(data: Mapping[str, Any], prefix: tuple[str, ...], lines: list[str]) -> None:
+    tables = {k: v for k, v in data.items() if isinstance(v, Mapping)}
+    if prefix and (len(tables) < len(data) or not data):
+        lines.append(f"\n[{'.'.join(_toml_key(p) for p in prefix)}]")
+    for key, value in data.items():
+        if key not in tables:
+            lines.append(f"{_toml_key(key)} = {_toml_value(value, (*prefix, key))}")
+    for key, value in tables.items():
+        _toml_table(value, (*prefix, str(key)), lines)
+
+
+def _toml_key(key: Any) -> str:
+    key = str(key)
+    return key if _BARE_KEY.fullmatch(key) else _toml_string(key)
+
+
+def _toml_string(text: str) -> str:
+    """TOML basic string: backslash, quote and control characters escaped."""
+    out = []
+    for ch in text:
+        if ch in '"\\':
+            out.append("\\" + ch)
+        elif ord(ch) < 0x20 or ord(ch) == 0x7F:
+            out.append(f"\\u{ord(ch):04x}")
+        else:
+            out.append(ch)
+    return '"' + "".join(out) + '"'
+
+
+def _toml_value(value: Any, where: tuple[str, ...]) -> str:
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, int):
+        return str(value)
+    if isinstance(value, float):
+        if not math.isfinite(value):
+            raise ValueError(f"{'.'.join(where)} = {value} cannot be written: not finite")
+        return repr(value)
+    if isinstance(value, str):
+        return _toml_string(value)
+    if isinstance(value, (list, tuple)):
+        return "[" + ", ".join(_toml_value(v, where) for v in value) + "]"
+    raise ValueError(
+        f"{'.'.join(where)} = {value!r} cannot be written to TOML "
+        f"(allowed: str, bool, int, finite float, lists and tables of them)"
+    )

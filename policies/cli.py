@@ -1,0 +1,442 @@
+"""Command-line programs of the policy side: ``scas-benchmark``, ``scas-train``, ``scas-tune``,
+``scas-value`` (console entry points of pyproject.toml; ``scripts/*.py`` call the same
+functions).
+
+Each ``*_main(argv)`` parses its arguments (``argv`` defaults to ``sys.argv[1:]``), checks
+every value and the output place before any work (usage errors, exit status 2), calls one
+library function and returns the exit status. The heavy modules (the benchmark's workers,
+stable-baselines3, the tuning and value studies) are imported only after the arguments are
+valid, so ``--help`` and usage errors are quick. Shared options: :mod:`scas_env.cli_args`.
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+import os
+import shlex
+import sys
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+from scas_env.cli_args import (
+    add_env_config_args,
+    add_logging_args,
+    announce_uncached_kernels,
+    check_out_dir,
+    check_out_file,
+    configure_logging,
+    load_env_config,
+    make_parser,
+    name_list,
+    nonneg_int,
+    positive_int,
+    scenario_changes,
+)
+from scas_env.costs import CostModel
+from scas_env.scenario import FIDELITIES, Scenario
+
+log = logging.getLogger(__name__)
+
+__all__ = ["PARSERS", "benchmark_main", "train_main", "tune_main", "value_main"]
+
+BENCHMARK_DOC = """\
+Policy benchmark: every policy on the same seeds -> table, CSV, JSON, Markdown and plots.
+
+Episode e of every policy starts from the same actuator unit (common random numbers); the
+table gives means with 95% intervals and paired differences against the best rule. Outputs in
+--out: results.csv, events.csv, summary.json (statistics and the exact configuration: the
+Scenario and CostModel used), summary.md and plots. --ray-address runs the episodes as Ray
+tasks (auto, local or ray://host:10001; '' runs locally even when RAY_ADDRESS is set);
+--workers is then unused. Example:
+
+    scas-benchmark --episodes 40 --scenario examples/offshore_operator.toml --out results/off
+"""
+
+
+def _env_kwargs(scenario: Scenario, costs: CostModel, exclude: Sequence[str]) -> dict[str, Any]:
+    """Env keywords that give ``scenario`` and ``costs`` (only what differs from defaults)."""
+    kwargs = scenario_changes(scenario, exclude=exclude)
+    if costs != CostModel():
+        kwargs["cost_model"] = costs
+    return kwargs
+
+
+def _config_record(
+    prog: str, argv: Sequence[str] | None, args: Any, scenario: Scenario, costs: CostModel
+) -> dict[str, Any]:
+    """The exact configuration of a run, for its results (files and full values)."""
+    words = [prog, *(sys.argv[1:] if argv is None else argv)]
+    return {
+        "scenario": scenario.to_dict(),
+        "costs": costs.to_dict(),
+        "scenario_file": None if args.scenario is None else str(args.scenario),
+        "costs_file": None if args.costs is None else str(args.costs),
+        "command": " ".join(shlex.quote(str(a)) for a in words),
+    }
+
+
+def benchmark_parser() -> Any:
+    from policies.base import POLICIES
+    from policies.benchmark import DEFAULT_POLICIES, PLUGINS
+
+    parser = make_parser("scas-benchmark", BENCHMARK_DOC)
+    parser.add_argument("--episodes", type=positive_int, default=40, help="episodes per policy")
+    parser.add_argument(
+        "--slots",
+        type=positive_int,
+        default=None,
+        help="flight slots per episode (default: the scenario's episode_slots, 2000)",
+    )
+    parser.add_argument("--workers", type=positive_int, default=2, help="local worker processes")
+    parser.add_argument("--seed", type=nonneg_int, default=0, help="root seed of the episode seeds")
+    parser.add_argument(
+        "--policies",
+        type=name_list(set(POLICIES) | set(PLUGINS), "policy"),
+        default=",".join(DEFAULT_POLICIES),
+        help="comma-separated policy names",
+    )
+    parser.add_argument("--out", type=Path, default=Path("results/benchmark"), help="folder")
+    parser.add_argument("--overwrite", action="store_true", help="replace an existing --out")
+    parser.add_argument(
+        "--fidelity",
+        choices=FIDELITIES,
+        default=None,
+        help="feature model (default: the scenario's fidelity, surrogate)",
+    )
+    parser.add_argument(
+        "--ray-address",
+        default=os.environ.get("RAY_ADDRESS") or None,
+        help="run on Ray: auto, local or ray://host:port (default: $RAY_ADDRESS, else local)",
+    )
+    add_env_config_args(parser)
+    add_logging_args(parser)
+    return parser
+
+
+def benchmark_main(argv: Sequence[str] | None = None) -> int:
+    """``scas-benchmark``: :func:`policies.benchmark.run_benchmark`, then its writer."""
+    parser = benchmark_parser()
+    args = parser.parse_args(argv)
+    configure_logging(args)
+    out = check_out_dir(parser, args.out, args.overwrite)
+    scenario, costs = load_env_config(parser, args)
+    if scenario.obs_mode != Scenario().obs_mode:
+        parser.error(
+            f"{args.scenario}: obs_mode = {scenario.obs_mode!r}: the benchmark gives each "
+            "policy the observation it needs; leave obs_mode out of the scenario file"
+        )
+    scenario = scenario.replace(
+        episode_slots=args.slots or scenario.episode_slots,
+        fidelity=args.fidelity or scenario.fidelity,
+    )
+    env_kwargs = {
+        "fidelity": scenario.fidelity,
+        **_env_kwargs(scenario, costs, exclude=("obs_mode", "episode_slots")),
+    }
+
+    from policies.benchmark import resolve_spec, run_benchmark
+    from policies.benchmark_report import format_table, write_outputs
+
+    for name in args.policies:  # plug-ins import their modules (e.g. SB3) here, not in workers
+        try:
+            resolve_spec(name).build_mode()
+        except ImportError as exc:
+            parser.error(
+                f"--policies: {name!r} cannot be loaded ({exc}); install what it needs or "
+                "leave it out of --policies"
+            )
+
+    announce_uncached_kernels()  # the workers compile them
+
+    result = run_benchmark(
+        args.policies,
+        episodes=args.episodes,
+        slots=scenario.episode_slots,
+        seed=args.seed,
+        n_workers=args.workers,
+        env_kwargs=env_kwargs,
+        progress=not args.quiet,
+        ray_address=args.ray_address or None,
+    )
+    result.config.update(_config_record(parser.prog, argv, args, scenario, costs))
+    print(format_table(result.summary))
+    paths = write_outputs(result, out)
+    n = len(result.rows)
+    where = (
+        f"on Ray at {args.ray_address!r}"
+        if args.ray_address
+        else f"{n / result.wall_s / args.workers:.2f} per worker"
+    )
+    log.info(f"{n} episodes in {result.wall_s:.1f} s ({n / result.wall_s:.2f} episodes/s, {where})")
+    for name, path in paths.items():
+        log.info(f"{name}: {path}")
+    return 0
+
+
+TRAIN_DOC = """\
+Train an SB3 agent on ScasMaintenance-v0 and compare it with two inline baselines.
+
+Writes <out>/<name>.zip, <name>_vecnormalize.pkl and <name>.json, then prints mean reward,
+availability, cost per flight hour and in-flight failures over --compare-episodes episodes
+(seeds --compare-seed + i) of the agent, always-fly and the risk rule (policies.rl.train,
+policies.rl.evaluate). The shipped agent was trained with:
+
+    scas-train --algo ppo --timesteps 400000 --seed 0 --n-envs 4 --out policies/data \\
+        --name ppo_default --log-dir results/rl/ppo_default
+"""
+
+#: The algorithms of :data:`policies.rl.ALGOS` (listed here so ``--help`` needs no torch).
+ALGO_NAMES = ("a2c", "dqn", "maskable_ppo", "ppo", "recurrent_ppo")
+
+
+def train_parser() -> Any:
+    parser = make_parser("scas-train", TRAIN_DOC)
+    parser.add_argument("--algo", default="ppo", choices=ALGO_NAMES, help="algorithm")
+    parser.add_argument("--timesteps", type=positive_int, default=400_000, help="env steps")
+    parser.add_argument("--seed", type=nonneg_int, default=0, help="seed of everything")
+    parser.add_argument("--n-envs", type=positive_int, default=4, help="parallel envs")
+    parser.add_argument("--out", default="results/rl", help="output folder of the agent")
+    parser.add_argument("--name", default=None, help="file stem of the agent (default: algo)")
+    parser.add_argument("--log-dir", default=None, help="logs (default: <out>/<name>_logs)")
+    parser.add_argument(
+        "--eval-freq",
+        type=nonneg_int,
+        default=50_000,
+        help="env steps between evaluations, 0: none",
+    )
+    parser.add_argument(
+        "--eval-episodes", type=positive_int, default=5, help="episodes per evaluation"
+    )
+    parser.add_argument("--subprocess", action="store_true", help="SubprocVecEnv")
+    parser.add_argument(
+        "--episode-slots",
+        type=positive_int,
+        default=None,
+        help="scenario horizon (default: the scenario's episode_slots, 2000)",
+    )
+    parser.add_argument(
+        "--compare-episodes", type=positive_int, default=10, help="final comparison episodes"
+    )
+    parser.add_argument(
+        "--compare-seed", type=nonneg_int, default=1000, help="first env seed of the comparison"
+    )
+    parser.add_argument("--overwrite", action="store_true", help="replace an existing agent")
+    add_env_config_args(parser)
+    add_logging_args(parser)
+    return parser
+
+
+def train_main(argv: Sequence[str] | None = None) -> int:
+    """``scas-train``: :func:`policies.rl.train`, then a comparison with two baselines."""
+    parser = train_parser()
+    args = parser.parse_args(argv)
+    configure_logging(args)
+    name = args.name or args.algo
+    check_out_file(parser, Path(args.out) / f"{name}.zip", args.overwrite)
+    scenario, costs = load_env_config(parser, args)
+    if costs != CostModel():
+        parser.error(
+            "--costs: the agent's metadata (policies.rl.save_agent) cannot record a cost model "
+            "yet; train with the default costs"
+        )
+    if args.episode_slots is not None:
+        scenario = scenario.replace(episode_slots=args.episode_slots)
+    env = scenario_changes(scenario)
+
+    from policies.rl import always_fly, evaluate, load_agent, risk_rule, train
+
+    path = train(
+        args.algo,
+        args.timesteps,
+        args.seed,
+        args.n_envs,
+        args.out,
+        name=args.name,
+        eval_freq=args.eval_freq,
+        n_eval_episodes=args.eval_episodes,
+        log_dir=args.log_dir,
+        subprocess=args.subprocess,
+        verbose=0 if args.quiet else 1,
+        **env,
+    )
+    log.info(f"saved {path}")
+    agent = load_agent(path)
+    print(f"{'policy':12s} {'reward':>12s} {'availability':>12s} {'USD/FH':>8s} {'failures':>8s}")
+    for label, policy in (
+        (args.algo, agent),
+        ("always_fly", always_fly(agent.obs_names)),
+        ("risk_rule", risk_rule(agent.obs_names)),
+    ):
+        m = evaluate(policy, args.compare_episodes, args.compare_seed, **env).summary()
+        print(
+            f"{label:12s} {m['reward']:12.0f} {m['availability']:12.4f} "
+            f"{m['cost_per_fh']:8.1f} {m['failures']:8.2f}"
+        )
+    return 0
+
+
+TUNE_DOC = """\
+Grid-search the rule-based policies on training seeds; report held-out rewards.
+
+Each policy's grid (policies.tuning.GRIDS) is run on --episodes training episodes; the best
+point and the shipped defaults are then run on --held-out episodes with other seeds. Writes
+one JSON file with every grid point (policies.tuning.tune).
+"""
+
+
+def tune_parser() -> Any:
+    from policies.tuning import GRIDS
+
+    parser = make_parser("scas-tune", TUNE_DOC)
+    parser.add_argument(
+        "--policies",
+        type=name_list(GRIDS, "tunable policy"),
+        default=",".join(GRIDS),
+        help="comma-separated names",
+    )
+    parser.add_argument("--workers", type=positive_int, default=2, help="local worker processes")
+    parser.add_argument("--episodes", type=positive_int, default=12, help="training episodes")
+    parser.add_argument("--slots", type=positive_int, default=2000, help="slots per episode")
+    parser.add_argument("--held-out", type=positive_int, default=12, help="held-out episodes")
+    parser.add_argument(
+        "--quick",
+        action="store_true",
+        help="tiny grids, short episodes (policies.tuning.QUICK sets the sizes; then "
+        "--episodes, --slots and --held-out are not used)",
+    )
+    parser.add_argument(
+        "--out", type=Path, default=Path("results/tuning.json"), help="JSON of every grid point"
+    )
+    parser.add_argument("--overwrite", action="store_true", help="replace an existing --out")
+    add_env_config_args(parser)
+    add_logging_args(parser)
+    return parser
+
+
+def tune_main(argv: Sequence[str] | None = None) -> int:
+    """``scas-tune``: :func:`policies.tuning.tune` per policy, one JSON report."""
+    import time
+
+    parser = tune_parser()
+    args = parser.parse_args(argv)
+    configure_logging(args)
+    out = check_out_file(parser, args.out, args.overwrite)
+    scenario, costs = load_env_config(parser, args)
+    if scenario.obs_mode != Scenario().obs_mode:
+        parser.error(f"{args.scenario}: obs_mode is set per policy; leave it out of the file")
+    env_kwargs = _env_kwargs(scenario, costs, exclude=("obs_mode", "episode_slots")) or None
+
+    from policies.tuning import tune
+
+    announce_uncached_kernels()
+    report: dict[str, Any] = {}
+    for name in args.policies:
+        start = time.perf_counter()
+        res = tune(
+            name,
+            episodes=args.episodes,
+            slots=args.slots,
+            held_out_episodes=args.held_out,
+            quick=args.quick,
+            n_workers=args.workers,
+            env_kwargs=env_kwargs,
+            progress=not args.quiet,
+        )
+        report[name] = res.to_dict()
+        best, dflt = res.held_out_best, res.held_out_default
+        print(
+            f"{name}: best {res.best_params} ({len(res.train)} points, "
+            f"{time.perf_counter() - start:.0f} s); held-out reward best "
+            f"{best.mean:.0f} ± {best.half_width:.0f}, shipped default "
+            f"{dflt.mean:.0f} ± {dflt.half_width:.0f}"
+        )
+    if env_kwargs:
+        report["config"] = _config_record(parser.prog, argv, args, scenario, costs)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    out.write_text(json.dumps(report, indent=2) + "\n")
+    log.info(f"wrote {out}")
+    return 0
+
+
+VALUE_DOC = """\
+Value of prognostics: information levels and filter quality on the same episodes.
+
+--quick runs 3 episodes x 200 slots from parts at a random fraction of their life
+(policies.value.QUICK). Writes value.csv, value.json, value.md and value.png to --out
+(policies.value.run_value_study).
+"""
+
+
+def value_parser() -> Any:
+    parser = make_parser("scas-value", VALUE_DOC)
+    parser.add_argument("--episodes", type=positive_int, default=40, help="episodes per arm")
+    parser.add_argument("--slots", type=positive_int, default=2000, help="flight slots per episode")
+    parser.add_argument("--workers", type=positive_int, default=2, help="local worker processes")
+    parser.add_argument("--seed", type=nonneg_int, default=0, help="root seed of the episode seeds")
+    parser.add_argument("--out", type=Path, default=Path("results/value"), help="output folder")
+    parser.add_argument("--overwrite", action="store_true", help="replace an existing --out")
+    parser.add_argument(
+        "--quick",
+        action="store_true",
+        help="quick mode (policies.value.QUICK; then --episodes and --slots are not used)",
+    )
+    add_env_config_args(parser)
+    add_logging_args(parser)
+    return parser
+
+
+def value_main(argv: Sequence[str] | None = None) -> int:
+    """``scas-value``: :func:`policies.value.run_value_study` and its writer."""
+    parser = value_parser()
+    args = parser.parse_args(argv)
+    configure_logging(args)
+    out = check_out_dir(parser, args.out, args.overwrite)
+    scenario, costs = load_env_config(parser, args)
+    common = _env_kwargs(scenario, costs, exclude=("episode_slots",))
+
+    from policies.value import (
+        QUICK,
+        default_arms,
+        markdown_report,
+        run_value_study,
+        write_value_outputs,
+    )
+
+    announce_uncached_kernels()
+
+    size: dict[str, Any] = (
+        dict(QUICK) if args.quick else {"episodes": args.episodes, "slots": args.slots}
+    )
+    env_kwargs = {**size.pop("env_kwargs", {}), **common}
+    for arm in default_arms():
+        clash = sorted(set(arm.env_kwargs) & set(env_kwargs))
+        if clash:
+            parser.error(
+                f"{args.scenario}: sets {clash}, which the study's arm {arm.label!r} varies; "
+                "leave them out of the scenario file"
+            )
+    if env_kwargs:
+        size["env_kwargs"] = env_kwargs
+    result = run_value_study(
+        seed=args.seed, n_workers=args.workers, progress=not args.quiet, **size
+    )
+    if common and isinstance(getattr(result, "config", None), dict):
+        result.config.update(_config_record(parser.prog, argv, args, scenario, costs))
+    print(markdown_report(result))
+    paths = write_value_outputs(result, out)
+    n = len(result.rows)
+    log.info(f"{n} arm-episodes in {result.wall_s:.1f} s on {args.workers} worker(s)")
+    for name, path in paths.items():
+        log.info(f"{name}: {path}")
+    return 0
+
+
+#: command name -> function building its parser (for documentation and tests).
+PARSERS = {
+    "scas-benchmark": benchmark_parser,
+    "scas-train": train_parser,
+    "scas-tune": tune_parser,
+    "scas-value": value_parser,
+}

@@ -1,0 +1,428 @@
+"""Shared pieces of the command-line programs: argument types, common options, logging.
+
+Every ``scas-*`` command (:mod:`policies.cli`, :mod:`scas_env.studies.cli`) builds its parser
+with :func:`make_parser` (``--help`` shows every option's default), validates values with the
+argument types below (a bad value is a usage error naming the option, its value and what is
+allowed, exit status 2, before any work starts), and checks its outputs with
+:func:`check_out_dir` / :func:`check_out_file` (an existing result is refused unless
+``--overwrite``; an unwritable place is refused at once, not after the run).
+
+>>> positive_int("3")
+3
+>>> positive_int("0")
+Traceback (most recent call last):
+...
+argparse.ArgumentTypeError: '0' is not an integer >= 1
+"""
+
+from __future__ import annotations
+
+import argparse
+import logging
+import sys
+import tempfile
+from collections.abc import Iterable, Sequence
+from pathlib import Path
+from typing import Any
+
+from scas_env.actuator.config import FORMATS
+from scas_env.actuator.params import ScasParams
+from scas_env.costs import CostModel
+from scas_env.scenario import Scenario
+
+log = logging.getLogger(__name__)
+#: Logged once per process when numba compiles (instead of sitting silent for ~30 s).
+COMPILE_NOTICE = (
+    "compiling numba kernels (first run only, ~30 s; later runs load them from numba's cache)"
+)
+
+__all__ = [
+    "COMPILE_NOTICE",
+    "HelpFormatter",
+    "add_env_config_args",
+    "add_logging_args",
+    "add_params_arg",
+    "announce_numba_compilation",
+    "announce_uncached_kernels",
+    "check_out_dir",
+    "check_out_file",
+    "check_out_stem",
+    "config_file",
+    "configure_logging",
+    "existing_file",
+    "int_at_least",
+    "load_env_config",
+    "load_params",
+    "make_parser",
+    "name_list",
+    "nonneg_int",
+    "numba_cache_missing",
+    "positive_float",
+    "positive_int",
+    "scenario_changes",
+]
+
+
+class HelpFormatter(argparse.ArgumentDefaultsHelpFormatter, argparse.RawDescriptionHelpFormatter):
+    """Shows ``(default: ...)`` after every option's help, except where the default is
+    ``None`` (the help then says what happens), and keeps the description's line breaks."""
+
+    def _get_help_string(self, action: argparse.Action) -> str | None:
+        if action.default is None or isinstance(action, argparse._HelpAction):
+            return action.help
+        return super()._get_help_string(action)
+
+
+def make_parser(prog: str, doc: str | None) -> argparse.ArgumentParser:
+    """Parser of one command: ``doc`` (a module docstring) is its description."""
+    return argparse.ArgumentParser(
+        prog=prog, description=(doc or "").strip(), formatter_class=HelpFormatter
+    )
+
+
+# --- argument types: each raises ArgumentTypeError with the value and what is allowed ---
+
+
+def _integer(text: str) -> int:
+    try:
+        return int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not an integer") from None
+
+
+def positive_int(text: str) -> int:
+    """An integer >= 1 (episodes, steps, units, workers...)."""
+    value = _integer(text)
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"{text!r} is not an integer >= 1")
+    return value
+
+
+def nonneg_int(text: str) -> int:
+    """An integer >= 0 (seeds, frequencies where 0 means "never")."""
+    value = _integer(text)
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"{text!r} is not an integer >= 0")
+    return value
+
+
+def int_at_least(lo: int) -> Any:
+    """Type of an integer >= ``lo`` (e.g. grid points per axis >= 2)."""
+
+    def parse(text: str) -> int:
+        value = _integer(text)
+        if value < lo:
+            raise argparse.ArgumentTypeError(f"{text!r} is not an integer >= {lo}")
+        return value
+
+    parse.__name__ = f"integer >= {lo}"
+    return parse
+
+
+def positive_float(text: str) -> float:
+    """A finite real number > 0 (durations, step sizes)."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
+    if not (value > 0.0 and value < float("inf")):
+        raise argparse.ArgumentTypeError(f"{text!r} is not a finite number > 0")
+    return value
+
+
+def existing_file(text: str) -> Path:
+    """Path of a file that exists."""
+    path = Path(text)
+    if not path.is_file():
+        why = "is a folder" if path.is_dir() else "does not exist"
+        raise argparse.ArgumentTypeError(f"{text!r} {why}; expected an existing file")
+    return path
+
+
+def config_file(text: str) -> Path:
+    """Path of an existing TOML, YAML or JSON configuration file."""
+    path = existing_file(text)
+    if path.suffix.lower() not in FORMATS:
+        raise argparse.ArgumentTypeError(
+            f"{text!r} is not a configuration file; allowed suffixes: {sorted(FORMATS)}"
+        )
+    return path
+
+
+def name_list(known: Iterable[str], what: str = "name") -> Any:
+    """Type of a comma-separated list of names, each one of ``known``, without repeats."""
+    allowed = sorted(known)
+
+    def parse(text: str) -> list[str]:
+        names = [n.strip() for n in text.split(",") if n.strip()]
+        if not names:
+            raise argparse.ArgumentTypeError(f"{text!r} names no {what}; known: {allowed}")
+        bad = [n for n in names if n not in allowed]
+        if bad:
+            raise argparse.ArgumentTypeError(f"unknown {what}(s) {bad}; known: {allowed}")
+        repeated = sorted({n for n in names if names.count(n) > 1})
+        if repeated:
+            raise argparse.ArgumentTypeError(f"{what}(s) {repeated} given more than once")
+        return names
+
+    parse.__name__ = f"{what} list"
+    return parse
+
+
+# --- common options ---------------------------------------------------------------------
+
+
+def add_logging_args(parser: argparse.ArgumentParser) -> None:
+    """``-v`` (debug messages) and ``-q`` (warnings and errors only)."""
+    group = parser.add_mutually_exclusive_group()
+    group.add_argument("-v", "--verbose", action="store_true", help="also show debug messages")
+    group.add_argument("-q", "--quiet", action="store_true", help="show only warnings and errors")
+
+
+def add_env_config_args(parser: argparse.ArgumentParser) -> None:
+    """``--scenario FILE`` and ``--costs FILE`` (TOML, YAML or JSON; docs/configs.md)."""
+    parser.add_argument(
+        "--scenario",
+        type=config_file,
+        metavar="FILE",
+        help="episode settings (Scenario fields, or a [scenario] table; a [costs] table in the "
+        "same file sets the cost model too). Default: the built-in Scenario()",
+    )
+    parser.add_argument(
+        "--costs",
+        type=config_file,
+        metavar="FILE",
+        help="cost model (CostModel fields, or a [costs] table); replaces a [costs] table of "
+        "--scenario. Default: the built-in CostModel()",
+    )
+
+
+def add_params_arg(parser: argparse.ArgumentParser) -> None:
+    """``--params FILE``: the actuator design (ScasParams groups, or a [params] table)."""
+    parser.add_argument(
+        "--params",
+        type=config_file,
+        metavar="FILE",
+        help="actuator design (ScasParams groups such as [spring], or a [params] table). "
+        "Default: the built-in ScasParams()",
+    )
+
+
+def load_params(parser: argparse.ArgumentParser, args: argparse.Namespace) -> ScasParams:
+    """The ScasParams of ``--params`` (defaults without it); a bad file is a usage error."""
+    if args.params is None:
+        return ScasParams()
+    try:
+        return ScasParams.load(args.params)
+    except (ValueError, FileNotFoundError) as exc:
+        parser.error(str(exc))
+
+
+def load_env_config(
+    parser: argparse.ArgumentParser, args: argparse.Namespace
+) -> tuple[Scenario, CostModel]:
+    """The Scenario and CostModel of ``--scenario`` / ``--costs`` (defaults without them).
+
+    A ``[costs]`` table in the ``--scenario`` file sets the costs unless ``--costs`` is given.
+    A bad file is a usage error naming the file, the table and the field.
+    """
+    from scas_env.actuator.config import read_mapping
+
+    scenario, costs = Scenario(), CostModel()
+    try:
+        if args.scenario is not None:
+            scenario = Scenario.load(args.scenario)
+            if args.costs is None and "costs" in read_mapping(args.scenario):
+                costs = CostModel.load(args.scenario)
+        if args.costs is not None:
+            costs = CostModel.load(args.costs)
+    except (ValueError, FileNotFoundError) as exc:
+        parser.error(str(exc))
+    return scenario, costs
+
+
+def scenario_changes(scenario: Scenario, *, exclude: Sequence[str] = ()) -> dict[str, Any]:
+    """Fields of ``scenario`` that differ from ``Scenario()``: the env keywords that give it.
+
+    >>> scenario_changes(Scenario(episode_slots=500, initial_health="random"))
+    {'initial_health': 'random', 'episode_slots': 500}
+    """
+    default = Scenario().to_dict()
+    return {k: v for k, v in scenario.to_dict().items() if v != default[k] and k not in exclude}
+
+
+def check_out_dir(parser: argparse.ArgumentParser, path: str | Path, overwrite: bool) -> Path:
+    """Validate an output folder before any work: an existing non-empty folder needs
+    ``--overwrite``; a file in its place or an unwritable parent is a usage error."""
+    path = Path(path)
+    if path.exists():
+        if not path.is_dir():
+            parser.error(f"--out {path} is a file; expected a folder")
+        if any(path.iterdir()) and not overwrite:
+            parser.error(f"--out {path} exists and is not empty; pass --overwrite to replace it")
+        _check_writable(parser, path)
+    else:
+        _check_writable(parser, _existing_ancestor(parser, path))
+    return path
+
+
+def check_out_file(
+    parser: argparse.ArgumentParser, path: str | Path, overwrite: bool, option: str = "--out"
+) -> Path:
+    """Validate an output file before any work: an existing file needs ``--overwrite``."""
+    path = Path(path)
+    if path.is_dir():
+        parser.error(f"{option} {path} is a folder; expected a file name")
+    if path.exists() and not overwrite:
+        parser.error(f"{option} {path} exists; pass --overwrite to replace it")
+    _check_writable(parser, _existing_ancestor(parser, path.parent, option), option)
+    return path
+
+
+def check_out_stem(
+    parser: argparse.ArgumentParser, stem: str | Path, suffixes: Sequence[str], overwrite: bool
+) -> Path:
+    """Validate the files ``<stem><suffix>`` of one output (e.g. a campaign's CSV + JSON)."""
+    stem = Path(stem)
+    for suffix in suffixes:
+        check_out_file(parser, stem.with_suffix(suffix), overwrite)
+    return stem
+
+
+def _existing_ancestor(parser: argparse.ArgumentParser, path: Path, option: str = "--out") -> Path:
+    for parent in (path, *path.parents):
+        if parent.exists():
+            if not parent.is_dir():
+                parser.error(f"{option} {path}: {parent} is a file, not a folder")
+            return parent
+    return Path.cwd()  # pragma: no cover - a relative path's ancestors end at "."
+
+
+def _check_writable(parser: argparse.ArgumentParser, folder: Path, option: str = "--out") -> None:
+    """Create and delete a temporary file in ``folder`` (permission bits alone miss read-only
+    file systems and root's rights)."""
+    try:
+        with tempfile.TemporaryFile(dir=folder):
+            pass
+    except OSError as exc:
+        parser.error(f"{option}: cannot write in {folder} ({exc.strerror or exc})")
+
+
+# --- logging and the numba notice -------------------------------------------------------
+
+
+class _Formatter(logging.Formatter):
+    """Info as plain lines; other levels prefixed (``warning: ...``)."""
+
+    def format(self, record: logging.LogRecord) -> str:
+        text = super().format(record)
+        return text if record.levelno == logging.INFO else f"{record.levelname.lower()}: {text}"
+
+
+class _StderrHandler(logging.StreamHandler):  # type: ignore[type-arg]
+    """Writes to the current ``sys.stderr`` (also when it is replaced after setup), through
+    ``tqdm.write`` so that a message does not break a progress bar's line."""
+
+    def emit(self, record: logging.LogRecord) -> None:
+        try:
+            from tqdm import tqdm
+
+            tqdm.write(self.format(record), file=sys.stderr)
+        except Exception:
+            self.handleError(record)
+
+    @property  # type: ignore[override]
+    def stream(self) -> Any:
+        return sys.stderr
+
+    @stream.setter
+    def stream(self, value: Any) -> None:
+        pass
+
+
+def configure_logging(args: argparse.Namespace) -> None:
+    """Log to stderr at INFO (``-v``: DEBUG, ``-q``: WARNING) and announce numba compiles.
+
+    Adds one handler to the root logger (replacing one added by an earlier call) and leaves
+    other handlers alone.
+    """
+    level = (
+        logging.DEBUG
+        if getattr(args, "verbose", False)
+        else logging.WARNING
+        if getattr(args, "quiet", False)
+        else logging.INFO
+    )
+    root = logging.getLogger()
+    for old in [h for h in root.handlers if isinstance(h, _StderrHandler)]:
+        root.removeHandler(old)
+    handler = _StderrHandler()
+    handler.setFormatter(_Formatter("%(message)s"))
+    root.addHandler(handler)
+    root.setLevel(level)
+    for noisy in ("numba", "matplotlib", "PIL", "filelock"):
+        logging.getLogger(noisy).setLevel(max(level, logging.WARNING))
+    announce_numba_compilation()
+
+
+def numba_cache_missing(packages: Sequence[str] = ("scas_env", "prognostics", "policies")) -> bool:
+    """Whether none of the cached (``cache=True``) numba kernels of the imported project
+    modules has a cache index on disk: a first run, whose kernels will compile at their
+    first call (in this process or in workers). Helpers only ever inlined into other kernels
+    never get an index of their own, hence "none" rather than "any"; a stale cache after an
+    edit is not detected here (the compile listener reports compiles in this process)."""
+    from numba.core.dispatcher import Dispatcher
+
+    indexes = []
+    for name, module in list(sys.modules.items()):
+        if module is None or not name.startswith(tuple(packages)):
+            continue
+        for obj in list(vars(module).values()):
+            if isinstance(obj, Dispatcher):
+                cache_file = getattr(getattr(obj, "_cache", None), "_cache_file", None)
+                index = getattr(cache_file, "_index_path", None)
+                if index is not None:
+                    indexes.append(Path(index))
+    return bool(indexes) and not any(p.exists() for p in indexes)
+
+
+def announce_uncached_kernels() -> None:
+    """Log the compile notice now if kernels are uncached: for runs whose kernels compile in
+    worker processes, where the event listener of :func:`announce_numba_compilation` does
+    not run. Call it after the work's modules are imported."""
+    global _notice_shown
+    if not _notice_shown and numba_cache_missing():
+        _notice_shown = True
+        log.warning(COMPILE_NOTICE)
+
+
+_listener_installed = False
+#: the notice was shown in this process (reset by tests)
+_notice_shown = False
+
+
+def announce_numba_compilation() -> None:
+    """Log once, when numba first compiles a kernel in this process, that it is doing so.
+
+    Kernels are compiled at their first call and cached on disk (``cache=True``); a cache hit
+    triggers no compile event, so the message appears only when the cache is missing or
+    stale (first run after installing or editing). Uses numba's event API
+    (``numba.core.event``); no result depends on it.
+    """
+    global _listener_installed
+    if _listener_installed:
+        return
+    _listener_installed = True
+    from numba.core import event
+
+    class _Notice(event.Listener):
+        def on_start(self, ev: Any) -> None:
+            global _notice_shown
+            if not _notice_shown:
+                _notice_shown = True
+                log.warning(COMPILE_NOTICE)
+
+        def on_end(self, ev: Any) -> None:
+            pass
+
+    event.register("numba:compile", _Notice())
