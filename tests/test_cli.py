@@ -46,6 +46,8 @@ MAINS: dict[str, Callable[..., int]] = {
     "scas-build-surrogate": studies_cli.build_surrogate_main,
     "scas-build-calibration": studies_cli.build_calibration_main,
     "scas-bench": studies_cli.bench_main,
+    "scas-export-dataset": studies_cli.export_dataset_main,
+    "scas-go-no-go": studies_cli.go_no_go_main,
 }
 #: scripts this package's CLI modules serve (the others' scripts are owned elsewhere)
 WRAPPERS = {
@@ -55,6 +57,8 @@ WRAPPERS = {
     "benchmark.py": "benchmark_main",
     "build_calibration.py": "build_calibration_main",
     "build_surrogate.py": "build_surrogate_main",
+    "export_dataset.py": "export_dataset_main",
+    "go_no_go.py": "go_no_go_main",
     "paper_figures.py": "figures_main",
     "reproduce_paper.py": "reproduce_main",
     "run_campaign.py": "campaign_main",

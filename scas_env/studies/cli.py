@@ -48,7 +48,9 @@ __all__ = [
     "build_calibration_main",
     "build_surrogate_main",
     "campaign_main",
+    "export_dataset_main",
     "figures_main",
+    "go_no_go_main",
     "reproduce_main",
     "simulate_main",
 ]
@@ -594,3 +596,110 @@ def bench_main(argv: Sequence[str] | None = None) -> int:
 
 
 PARSERS["scas-bench"] = lambda: bench_parser()[0]
+
+
+# --- scas-export-dataset ----------------------------------------------------------------
+
+EXPORT_DATASET_DOC = """\
+Export a run-to-failure dataset: N simulated units flown to failure, Parquet + CSV + card.
+
+See scas_env.studies.run_to_failure.export_run_to_failure and docs/dataset.md. Example:
+
+    scas-export-dataset --units 1000 --out results/rtf --workers 2
+"""
+
+
+def _export_dataset_args(parser: Parser) -> None:
+    from scas_env.studies.run_to_failure import DEFAULT_MAX_SLOTS
+
+    parser.add_argument("--units", type=positive_int, default=1000, help="units to fly")
+    parser.add_argument("--out", type=Path, required=True, help="output folder")
+    parser.add_argument("--overwrite", action="store_true", help="replace an existing --out")
+    parser.add_argument("--seed", type=nonneg_int, default=0, help="root seed (SeedSequence)")
+    parser.add_argument(
+        "--fidelity", choices=("surrogate", "physics"), default="surrogate", help="env fidelity"
+    )
+    parser.add_argument(
+        "--test-every", type=nonneg_int, default=10, help="pre-flight test every k slots (0: never)"
+    )
+    parser.add_argument(
+        "--max-slots", type=positive_int, default=DEFAULT_MAX_SLOTS, help="censor a unit after"
+    )
+    parser.add_argument("--workers", type=positive_int, default=2, help="worker processes")
+    parser.add_argument(
+        "--formats",
+        default="parquet,csv",
+        help="comma-separated file formats: parquet (needs the `data` extra), csv",
+    )
+
+
+def _export_dataset_run(parser: Parser, args: Args) -> int:
+    from scas_env.studies.run_to_failure import export_run_to_failure
+
+    check_out_dir(parser, args.out, args.overwrite)
+    formats = tuple(f.strip() for f in args.formats.split(",") if f.strip())
+    if not formats or set(formats) - {"parquet", "csv"}:
+        parser.error(f"--formats {args.formats!r}: allowed parquet, csv")
+    try:
+        result = export_run_to_failure(
+            args.units,
+            out=args.out,
+            fidelity=args.fidelity,
+            seed=args.seed,
+            test_every=args.test_every,
+            max_slots=args.max_slots,
+            n_workers=args.workers,
+            formats=formats,
+            overwrite=args.overwrite,
+        )
+    except (ValueError, FileExistsError, ModuleNotFoundError) as err:
+        parser.error(str(err))
+    print(f"{result.n_units} units, {result.n_rows} rows in {result.wall_s:.1f} s")
+    for name, path in result.paths.items():
+        print(f"{name}: {path}")
+    return 0
+
+
+export_dataset_main = _command(
+    "scas-export-dataset", EXPORT_DATASET_DOC, _export_dataset_args, _export_dataset_run
+)
+
+
+# --- scas-go-no-go ----------------------------------------------------------------------
+
+GO_NO_GO_DOC = """\
+Pre-flight test at known severities: no-go shares of both go/no-go meanings vs targets.
+
+See scas_env.studies.go_no_go and scas_env.acceptance. Example:
+
+    scas-go-no-go --units 2000 --out results/go_no_go
+"""
+
+
+def _go_no_go_args(parser: Parser) -> None:
+    parser.add_argument("--units", type=positive_int, default=2000, help="tests per cell")
+    parser.add_argument("--seed", type=nonneg_int, default=0, help="root seed")
+    parser.add_argument(
+        "--out", type=Path, default=None, help="folder for go_no_go.json (default: print only)"
+    )
+    parser.add_argument("--overwrite", action="store_true", help="replace an existing --out")
+
+
+def _go_no_go_run(parser: Parser, args: Args) -> int:
+    from scas_env.studies.go_no_go import format_rates, no_go_rates
+
+    if args.out is not None:
+        check_out_dir(parser, args.out, args.overwrite)
+    rows = no_go_rates(args.units, seed=args.seed)
+    print(format_rates(rows))
+    if args.out is not None:
+        from scas_env.results_folder import results_folder
+
+        config = {"units": args.units, "seed": args.seed}
+        seeds = {"root": args.seed}
+        with results_folder(args.out, config=config, seeds=seeds, overwrite=args.overwrite) as tmp:
+            (tmp / "go_no_go.json").write_text(json.dumps(rows, indent=1))
+    return 0
+
+
+go_no_go_main = _command("scas-go-no-go", GO_NO_GO_DOC, _go_no_go_args, _go_no_go_run)

@@ -100,11 +100,25 @@ def format_rates(rows: list[dict[str, float | str]]) -> str:
     for r in rows:
         target = ""
         if r["severity"] == 0.0:
-            ok = float(r["ci_high"]) <= TARGETS["healthy_max"] or float(r["share"]) == 0.0
-            target = f"<= {TARGETS['healthy_max']:g} ({'met' if ok else 'not met'})"
+            hi = TARGETS["healthy_max"]
+            verdict = (
+                "met"
+                if float(r["ci_high"]) <= hi
+                else "within CI"
+                if float(r["ci_low"]) <= hi
+                else "not met"
+            )
+            target = f"<= {hi:g} ({verdict})"
         elif r["severity"] == 1.0:
-            ok = float(r["share"]) >= TARGETS["critical_min"]
-            target = f">= {TARGETS['critical_min']:g} ({'met' if ok else 'not met'})"
+            lo = TARGETS["critical_min"]
+            verdict = (
+                "met"
+                if float(r["share"]) >= lo
+                else "within CI"
+                if float(r["ci_high"]) >= lo
+                else "not met"
+            )
+            target = f">= {lo:g} ({verdict})"
         lines.append(
             f"{r['go_no_go']:15s} {r['part']:6s} {float(r['severity']):8.2f} "
             f"{float(r['share']):11.4f} [{float(r['ci_low']):.4f}, {float(r['ci_high']):.4f}] "
