@@ -21,6 +21,10 @@ from dataclasses import dataclass
 
 from scas_env.actuator.config import Validated, param
 
+#: upper bound of every amount (USD): far beyond any actuator's economics, and small enough
+#: that an episode's sum over 1e7 slots stays a finite float (1e308 used to give -inf)
+MAX_USD = 1e12
+
 
 @dataclass(frozen=True)
 class CostModel(Validated):
@@ -30,28 +34,50 @@ class CostModel(Validated):
         2500.0,
         "USD",
         lo=0.0,
+        hi=MAX_USD,
         source="value of lost availability $5,000 per grounded day at 2 flights/day (ref §8.2)",
     )
     test_usd: float = param(
-        100.0, "USD", lo=0.0, source="pre-flight SCAS test: minutes of crew and ground run [B]"
+        100.0,
+        "USD",
+        lo=0.0,
+        hi=MAX_USD,
+        source="pre-flight SCAS test: minutes of crew and ground run [B]",
     )
     no_go_inspection_usd: float = param(
         500.0,
         "USD",
         lo=0.0,
+        hi=MAX_USD,
         source="troubleshooting after a failed pre-flight test, before any replacement [B]",
     )
     spring_replacement_usd: float = param(
-        1500.0, "USD", lo=0.0, source="scheduled centering-spring replacement (ref §8.2)"
+        1500.0,
+        "USD",
+        lo=0.0,
+        hi=MAX_USD,
+        source="scheduled centering-spring replacement (ref §8.2)",
     )
     seal_replacement_usd: float = param(
-        6000.0, "USD", lo=0.0, source="scheduled SCAS reseal / actuator exchange (ref §8.2)"
+        6000.0,
+        "USD",
+        lo=0.0,
+        hi=MAX_USD,
+        source="scheduled SCAS reseal / actuator exchange (ref §8.2)",
     )
     unscheduled_removal_usd: float = param(
-        25000.0, "USD", lo=0.0, source="unscheduled removal after an in-service failure (ref §8.2)"
+        25000.0,
+        "USD",
+        lo=0.0,
+        hi=MAX_USD,
+        source="unscheduled removal after an in-service failure (ref §8.2)",
     )
     mission_abort_usd: float = param(
-        20000.0, "USD", lo=0.0, source="in-flight SCAS failure: return/divert (ref §8.2)"
+        20000.0,
+        "USD",
+        lo=0.0,
+        hi=MAX_USD,
+        source="in-flight SCAS failure: return/divert (ref §8.2)",
     )
     spring_downtime_slots: float = param(
         0, "slots", lo=0, hi=1000, integer=True, source="spring change fits in the slot [B]"

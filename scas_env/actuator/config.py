@@ -122,7 +122,11 @@ def check_value(owner: str, name: str, value: Any, md: dict[str, Any]) -> None:
                 f"{owner}.{name} = {value!r} is not a number; expected a real value in "
                 f"{_range_text(md)} {unit}"
             ) from None
-    if not math.isfinite(value):
+    try:
+        finite = math.isfinite(value)
+    except OverflowError:  # an int beyond float range
+        finite = False
+    if not finite:
         raise ValueError(
             f"{owner}.{name} = {value} {unit} is not finite; allowed range {_range_text(md)}"
         )
@@ -150,7 +154,8 @@ class Validated:
                 if not f.metadata.get("integer"):
                     object.__setattr__(self, f.name, float(value))
                 else:
-                    object.__setattr__(self, f.name, int(value))
+                    # float() first: a string such as "2e3" is a valid whole number
+                    object.__setattr__(self, f.name, int(float(value)))
         self._check()
 
     def _check(self) -> None:

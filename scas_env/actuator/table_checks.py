@@ -54,7 +54,10 @@ def finite_scalar(
     allowed = "a finite number" + (f" {bounds}" if bounds else "")
     if isinstance(value, bool) or not isinstance(value, int | float | np.integer | np.floating):
         raise ValueError(f"{owner}.{name} = {value!r} must be {allowed}")
-    v = float(value)
+    try:
+        v = float(value)
+    except OverflowError:  # an int beyond float range
+        raise ValueError(f"{owner}.{name} = {value!r} must be {allowed}") from None
     ok = math.isfinite(v)
     if ok and lo is not None:
         ok = v > lo if lo_open else v >= lo
