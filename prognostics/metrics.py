@@ -95,13 +95,21 @@ def relative_accuracy(
 ) -> float:
     """``RA = 1 - |r* - <r>| / r*`` (Saxena 2010; ref §6.2), ``<r>`` mean or median."""
     rt = _positive("true_rul", true_rul)
-    point = point_prediction(rul_samples, weights, estimator)
+    return float(
+        _ra(np.array([rt]), np.array([point_prediction(rul_samples, weights, estimator)]))[0]
+    )
+
+
+def _ra(true_rul: np.ndarray, points: np.ndarray) -> np.ndarray:
+    """``1 - |r* - <r>| / r*`` elementwise; ``ValueError`` where it overflows."""
     with np.errstate(over="ignore"):
-        ra = 1.0 - abs(rt - point) / rt
-    if not math.isfinite(ra):
+        ra = 1.0 - np.abs(true_rul - points) / true_rul
+    bad = np.flatnonzero(~np.isfinite(ra))
+    if bad.size:
+        k = bad[0]
         raise ValueError(
-            f"relative accuracy overflows: true_rul = {true_rul} is too small against the "
-            f"prediction {point}"
+            f"relative accuracy overflows: true_rul = {true_rul[k]} is too small against the "
+            f"prediction {points[k]}"
         )
     return ra
 
@@ -283,7 +291,7 @@ def evaluate_predictions(
     points = np.array(
         [point_prediction(r, w, estimator) for r, w in zip(rul_samples, ws, strict=True)]
     )
-    ra = 1.0 - np.abs(true_rul - points) / true_rul
+    ra = _ra(true_rul, points)
     al: dict[float, bool] = {}
     for lam in lambdas:
         if not 0.0 <= lam <= 1.0:

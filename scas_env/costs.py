@@ -1,6 +1,7 @@
 """Cost model of the maintenance problem: the value of a flight and what maintenance costs.
 
-Figures are 2024 USD, from ``physics-reference.md`` §8.2 (their sources and ranges are quoted
+Figures are 2024 USD, from the physics reference sheet (``docs/physics.md``) §8.2 (their sources
+and ranges are quoted
 per field). They are assumptions for sensitivity studies, not facts: change them with
 ``CostModel(...)``, ``CostModel.from_dict`` or a file, ``CostModel.load("costs.toml")``
 (TOML, YAML or JSON; the fields at the top level or in a ``[costs]`` table;
@@ -12,7 +13,7 @@ docs/configs.md; ``examples/`` holds two documented operators).
     >>> CostModel(test_usd=-1.0)
     Traceback (most recent call last):
     ...
-    ValueError: CostModel.test_usd = -1.0 USD is outside the allowed range [0, inf)
+    ValueError: CostModel.test_usd = -1.0 USD is outside the allowed range [0, 1e+12]
 """
 
 from __future__ import annotations

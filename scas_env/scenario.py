@@ -59,7 +59,7 @@ class Scenario(Validated):
         lo=1,
         hi=10_000_000,
         integer=True,
-        source="about 1.7 spring and seal lives without maintenance (README calibration)",
+        source="about 1.7 spring and seal lives without maintenance (docs/physics.md, calibration)",
     )
     n_particles: float = param(
         200, "-", lo=10, hi=100_000, integer=True, source="particles per filter (per part)"

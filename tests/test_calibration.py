@@ -28,7 +28,8 @@ SHIPPED = default_calibration()
 
 def test_shipped_calibration_matches_default_parameters() -> None:
     assert SHIPPED.params_digest == params_digest(P), (
-        "scas_env/data/calibration.json is stale: run `python scripts/build_calibration.py`"
+        "scas_env/actuator/data/calibration.json is stale: "
+        "run `python scripts/build_calibration.py`"
     )
 
 

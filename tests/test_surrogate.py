@@ -16,7 +16,7 @@ MODEL = default_surrogate()
 
 def test_shipped_surrogate_matches_default_parameters() -> None:
     assert MODEL.params_digest == params_digest(P), (
-        "scas_env/data/surrogate.json is stale: run `python scripts/build_surrogate.py`"
+        "scas_env/actuator/data/surrogate.json is stale: run `python scripts/build_surrogate.py`"
     )
 
 

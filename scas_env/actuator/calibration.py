@@ -1,7 +1,7 @@
 """Calibration of the default actuator: failure thresholds, growth per flight and unit lives.
 
 Everything the fast (surrogate) world and the particle filters need about degradation,
-computed once from the physics and shipped as ``scas_env/data/calibration.json``
+computed once from the physics and shipped as ``scas_env/actuator/data/calibration.json``
 (rebuild: ``python scripts/build_calibration.py``; ``tests/test_calibration.py`` fails
 when the shipped file no longer matches the default parameters):
 
@@ -14,7 +14,7 @@ when the shipped file no longer matches the default parameters):
   flight windows, which differ in regime order, amplitudes and noise).
 
 :func:`sample_lives` draws the flights to failure of random units (their Paris C, initial
-flaw and wear rate) from these tables: the life distribution stated in the README.
+flaw and wear rate) from these tables: the life distribution stated in docs/physics.md.
 """
 
 from __future__ import annotations

@@ -1,7 +1,8 @@
 """Physical parameters of the SCAS actuator, its faults and its missions.
 
 SI units throughout (Pa, m, s, N, A, kg, K or degC where named). Each field names its unit
-and source; "ref §9" is the default table of ``shared/reference/physics-reference.md``,
+and source; "ref §9" is the default table of the physics reference sheet (sources summarised in
+``docs/physics.md``),
 "[DJS20]" the source paper (De Martin, Jacazio, Sorli et al., Aerospace 2020, 7(3), 20).
 Values tagged [B] there are engineering defaults, not measurements: they are exposed here so
 users can change them. Derived quantities (areas, rates, coefficients) are properties.
@@ -96,7 +97,7 @@ class ServovalveParams(Validated):
         hi=1e-9,
         source="valve flow-pressure coefficient K_c of a wide-null SCAS valve (pressure gain "
         "K_q/K_c = 2.9e9 Pa/A) [B]; sets how much null-bias current a spring bias force needs: "
-        "11 uA at the critical crack (1.4 uA with 1e-13, ref §9), see README calibration",
+        "11 uA at the critical crack (1.4 uA with 1e-13, ref §9), see docs/physics.md",
     )
     laminar_transition_pa: float = param(
         2e5,
@@ -212,7 +213,7 @@ class SpringParams(Validated):
         lo=0.0,
         hi=1e-6,
         lo_open=True,
-        source="Barsom martensitic C/20 for mode III, ref §2.2 [B]; calibrated in README",
+        source="Barsom martensitic C/20 for mode III, ref §2.2 [B]; calibrated in docs/physics.md",
     )
     paris_m: float = param(2.25, "-", lo=1.0, hi=6.0, source="ref §2.2 [B]")
     delta_k_threshold_mpa_sqrt_m: float = param(
@@ -280,7 +281,7 @@ class SealParams(Validated):
         lo=0.0,
         hi=1e-10,
         lo_open=True,
-        source="specific wear rate k_w (filled PTFE), ref §4.2 [B]; calibrated in README",
+        source="specific wear rate k_w (filled PTFE), ref §4.2 [B]; calibrated in docs/physics.md",
     )
     friction_coefficient: float = param(0.1, "-", lo=0.0, hi=2.0, lo_open=True, source="ref §9")
     contact_width_m: float = param(0.001, "m", lo=0.0, hi=0.05, lo_open=True, source="ref §9")
@@ -379,7 +380,7 @@ class MissionParams(Validated):
         lo=1.0,
         hi=3600.0,
         source="simulated representative window (all Table-1 regimes in proportion); its "
-        "features are the flight's, its damage is scaled to flight_duration_s (README)",
+        "features are the flight's, its damage is scaled to flight_duration_s (docs/physics.md)",
     )
     amplitude_variation_frac: float = param(
         0.10, "-", lo=0.0, hi=1.0, source="random variation, 10% of amplitude ([DJS20] Table 1)"

@@ -1,7 +1,8 @@
 """SCAS actuator dynamics: position loop, servovalve, chambers, piston, springs, LVDT.
 
 Python API over the compiled kernels of :mod:`scas_env.actuator.physics.actuator_kernels`. Gauge
-pressures (Pa), SI units; "ref" = ``shared/reference/physics-reference.md``, "eq." = [DJS20].
+pressures (Pa), SI units; "ref" = the physics reference sheet (sources summarised in
+``docs/physics.md``), "eq." = [DJS20].
 
 Model (ref §1.2, paper §2-3)
 ----------------------------

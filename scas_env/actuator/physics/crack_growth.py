@@ -1,6 +1,7 @@
 """Spring-crack growth: rainflow cycle counting and block-wise Paris-law integration.
 
-Procedure of ref §3.2 (``shared/reference/physics-reference.md``), [DJS20] §2.2.1:
+Procedure of ref §3.2 (the physics reference sheet (sources summarised in ``docs/physics.md``)),
+[DJS20] §2.2.1:
 
 1. Rainflow-count the spring FORCE history of a simulated window once
    (:func:`count_cycles`, ASTM E1049-85 via the ``rainflow`` package), scale the counts to a

@@ -1,7 +1,8 @@
 """Cracked centering-spring coil: section, stiffness, stress, mode-III SIF and failure depth.
 
 Model of [DJS20] eqs. 1-7 with the corrections of the reference sheet (``ref``):
-``shared/reference/physics-reference.md`` §0.2 (paper equations), §0.11 (derived checks,
+the physics reference sheet (sources summarised in ``docs/physics.md``) §0.2 (paper equations),
+§0.11 (derived checks,
 exact polar moment) and §2.2 (geometry factor F_T, plastic collapse, toughness).
 
 One coil of a helical compression spring (wire radius r = d/2, coil radius R = D/2, spring
