@@ -208,7 +208,9 @@ def wilson_interval(successes: int, trials: int, confidence: float = 0.95) -> In
     """Wilson score interval of a binomial proportion (stays in [0, 1])."""
     _confidence(confidence)
     if trials < 1 or not 0 <= successes <= trials:
-        raise ValueError(f"successes = {successes!r}, trials = {trials!r}: need 0 <= s <= t, t >= 1")
+        raise ValueError(
+            f"successes = {successes!r}, trials = {trials!r}: need 0 <= s <= t, t >= 1"
+        )
     z = float(stats.norm.ppf(0.5 + 0.5 * confidence))
     p = successes / trials
     den = 1.0 + z * z / trials

@@ -61,9 +61,7 @@ class NoisyOraclePolicy(NestedRule):
 
     def __init__(self, obs_names: Sequence[str], **kwargs: Any) -> None:
         super().__init__(obs_names, **kwargs)
-        self.rngs: list[np.random.Generator] = [
-            np.random.default_rng(int(self.values["seed"]))
-        ]
+        self.rngs: list[np.random.Generator] = [np.random.default_rng(int(self.values["seed"]))]
         self.z: np.ndarray | None = None
         self.last_age: np.ndarray | None = None
 

@@ -7,8 +7,8 @@ life to within about 1 %, ``docs/value.md``). It counts the slots of the episode
 
 * A part must be replaced before the flight that would reach its critical value: when its
   true RUL falls to ``margin`` flights (the per-flight growth scatter near failure is small,
-  CV about 0.08), unless it cannot fail before the episode ends (``rul - margin >= slots
-  left``): at the end of the horizon nothing is replaced that would outlive it.
+  CV about 0.08), unless it outlives the episode (true RUL above the slots left): at the
+  end of the horizon nothing is replaced that would not fail within it.
 * When a part is due, the other part may be replaced in the same grounded period
   (opportunistic grouping: seals first, then the spring in the seals' downtime slot): the
   dynamic program :func:`plan_cost` compares the expected cost to the end of the episode
@@ -59,6 +59,7 @@ def plan_cost(
     seal_left: int,
     costs: tuple[float, float, float, int, int],
     lives: tuple[tuple[int, ...], tuple[int, ...]],
+    step: int = 1,
 ) -> float:
     """Least expected cost (USD) to fly the next ``slots_left`` slots without a failure.
 
@@ -68,7 +69,9 @@ def plan_cost(
     ``lives``: per part, equally likely lives (flights) of a part fitted later (quantiles
     of the life distribution): the expectation over them replaces the unknown future. At
     each forced replacement the program compares replacing that part alone with replacing
-    both (seals first, the spring in their downtime).
+    both (seals first, the spring in their downtime). ``step``: the slots left after each
+    replacement are rounded to a multiple of it (1: exact; the oracle uses
+    :data:`HORIZON_STEP` so that few distinct states need caching).
 
     >>> c = (2500.0, 1500.0, 6000.0, 0, 1)
     >>> plan_cost(100, 500, 500, c, ((1000,), (1000,)))  # nothing fails within 100 slots
@@ -86,8 +89,8 @@ def plan_cost(
     h = slots_left - k
     after = (left[0] - k, left[1] - k)
     return min(
-        _option_cost(h, after, a, False, costs, lives),
-        _option_cost(h, after, a, True, costs, lives),
+        _option_cost(h, after, a, False, costs, lives, step),
+        _option_cost(h, after, a, True, costs, lives, step),
     )
 
 
@@ -98,23 +101,26 @@ def _option_cost(
     both: bool,
     costs: tuple[float, float, float, int, int],
     lives: tuple[tuple[int, ...], tuple[int, ...]],
+    step: int = 1,
 ) -> float:
     """Expected cost of replacing part ``a`` (and the other one if ``both``) now, ``h``
     slots before the end, then following :func:`plan_cost`."""
     value, price, down = costs[0], costs[1:3], costs[3:5]
     if both:
         slots = 1 + max(down)
-        rest = _round(h - slots)
-        tail = sum(plan_cost(rest, ls, lw, costs, lives) for ls in lives[0] for lw in lives[1])
+        rest = _round(h - slots, step)
+        tail = sum(
+            plan_cost(rest, ls, lw, costs, lives, step) for ls in lives[0] for lw in lives[1]
+        )
         tail /= len(lives[0]) * len(lives[1])
         return price[0] + price[1] + value * min(slots, h) + tail
     slots = 1 + down[a]
-    rest = _round(h - slots)
+    rest = _round(h - slots, step)
     total = 0.0
     for life in lives[a]:
         new = list(left)
         new[a] = life
-        total += plan_cost(rest, new[0], new[1], costs, lives)
+        total += plan_cost(rest, new[0], new[1], costs, lives, step)
     return price[a] + value * min(slots, h) + total / len(lives[a])
 
 
@@ -122,8 +128,8 @@ def _option_cost(
 HORIZON_STEP = 10
 
 
-def _round(h: int) -> int:
-    return int(HORIZON_STEP * round(h / HORIZON_STEP))
+def _round(h: int, step: int) -> int:
+    return h if step == 1 else int(step * round(h / step))
 
 
 @register
@@ -207,11 +213,11 @@ class OraclePolicy(Policy):
     def _decide(self, h: int, rul: np.ndarray) -> bool:
         """Whether to replace both parts now (the due one and the other) rather than the
         due one alone, ``h`` slots before the end (:func:`plan_cost`)."""
-        left = tuple(int(math.floor(r - self.margin)) for r in rul)
+        left = tuple(math.floor(r - self.margin) for r in rul)
         a = 0 if left[0] <= left[1] else 1
         if left[1 - a] >= h:  # the other part outlives the episode: nothing to group
             return False
-        args = (self.costs, self.lives)
+        args = (self.costs, self.lives, HORIZON_STEP)
         both = _option_cost(h, left, a, True, *args)
         return both < _option_cost(h, left, a, False, *args)
 
@@ -224,7 +230,7 @@ class OraclePolicy(Policy):
         rul = np.stack([self.column(obs, "spring_rul_true"), self.column(obs, "seal_rul_true")], 1)
         age = np.stack([self.column(obs, "spring_age"), self.column(obs, "seal_age")], 1)
         down = self.column(obs, "downtime") > 0
-        due = (age > 0) & (rul <= self.margin) & (rul - self.margin < h_all[:, None])
+        due = (age > 0) & (rul <= self.margin) & (rul <= h_all[:, None])
         actions = np.full(n, FLY, dtype=np.int64)
         for r in np.flatnonzero(due.any(axis=1) | (down & self.pending.any(axis=1))):
             if down[r] and self.pending[r].any():

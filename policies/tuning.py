@@ -178,8 +178,10 @@ def edge_report(params: Mapping[str, Any], box: Box) -> dict[str, str]:
         if name not in params:
             continue
         v = float(params[name])
-        f = (math.log(v) - math.log(lo)) / (math.log(hi) - math.log(lo)) if log else (
-            (v - lo) / (hi - lo)
+        f = (
+            (math.log(v) - math.log(lo)) / (math.log(hi) - math.log(lo))
+            if log
+            else ((v - lo) / (hi - lo))
         )
         out[name] = "low" if f < EDGE_FRACTION else "high" if f > 1 - EDGE_FRACTION else "inside"
     return out

@@ -30,6 +30,7 @@ sensing knob. It is not run here (docs/value.md says what is missing).
 from __future__ import annotations
 
 import csv
+import itertools
 import json
 import math
 import time
@@ -225,8 +226,7 @@ def summarize_ladder(
     if REFERENCE not in arms:
         raise ValueError(f"arms {list(arms)} must include the reference {REFERENCE!r}")
     by_arm = {
-        a: sorted((r for r in rows if r["arm"] == a), key=lambda r: int(r["episode"]))
-        for a in arms
+        a: sorted((r for r in rows if r["arm"] == a), key=lambda r: int(r["episode"])) for a in arms
     }
     episodes = {a: [int(r["episode"]) for r in by_arm[a]] for a in arms}
     for a in arms:
@@ -252,7 +252,7 @@ def summarize_ladder(
                 "to": b,
                 **paired_comparison(reward(b), reward(a), confidence),
             }
-            for (_, a), (_, b) in zip(noisy, noisy[1:], strict=False)
+            for (_, a), (_, b) in itertools.pairwise(noisy)
         ]
     return out
 

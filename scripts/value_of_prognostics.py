@@ -38,7 +38,9 @@ def main() -> None:
     result = run_ladder(n_workers=args.workers, progress=True, **size)
     print(markdown_report(result))
     paths = write_outputs(result, args.out, overwrite=args.overwrite)
-    print(f"{len(result.rows)} arm-episodes, wall {result.wall_s:.1f} s on {args.workers} worker(s)")
+    print(
+        f"{len(result.rows)} arm-episodes, wall {result.wall_s:.1f} s on {args.workers} worker(s)"
+    )
     for name, path in paths.items():
         print(f"{name}: {path}")
 
