@@ -182,7 +182,7 @@ def _plot_survival(
             label = f"{policy} ({fails} failures / {removed} removals)"
             t = np.r_[0.0, sf.quantiles]
             ax.step(t, np.r_[1.0, sf.probabilities], where="post", label=label)
-        ax.set_title(f"{part}: age at removal (Kaplan-Meier, censored at episode end)")
+        ax.set_title(f"{part}: age at removal (Kaplan-Meier, end censored)", fontsize=10)
         ax.set_xlabel("flights since fitted")
         ax.grid(alpha=0.3)
         ax.legend(fontsize=7)

@@ -85,23 +85,32 @@ class NestedRule(Policy):
     override_params: ClassVar[dict[str, float]] = {}
     #: whether the observation carries test results (test_age, no_go, G1, G3)
     can_test: ClassVar[bool] = True
+    #: defaults of the age backstop, grouping and test interval (subclass: its tuned point)
+    defaults: ClassVar[dict[str, float]] = {**PREVENTIVE_DEFAULTS, "test_every": math.inf}
 
     def __init__(
         self,
         obs_names: Sequence[str],
         *,
-        spring_age: float = PREVENTIVE_DEFAULTS["spring_age"],
-        seal_age: float = PREVENTIVE_DEFAULTS["seal_age"],
-        opportunity: float = PREVENTIVE_DEFAULTS["opportunity"],
-        test_every: float = math.inf,
+        spring_age: float | None = None,
+        seal_age: float | None = None,
+        opportunity: float | None = None,
+        test_every: float | None = None,
         override: bool = True,
         **override_values: float,
     ) -> None:
         super().__init__(obs_names)
-        self.spring_age = _positive("spring_age", spring_age)
-        self.seal_age = _positive("seal_age", seal_age)
-        self.opportunity = _fraction("opportunity", opportunity)
-        self.test_every = _positive("test_every", test_every)
+        d = self.defaults
+        self.spring_age = _positive(
+            "spring_age", d["spring_age"] if spring_age is None else spring_age
+        )
+        self.seal_age = _positive("seal_age", d["seal_age"] if seal_age is None else seal_age)
+        self.opportunity = _fraction(
+            "opportunity", d["opportunity"] if opportunity is None else opportunity
+        )
+        self.test_every = _positive(
+            "test_every", d["test_every"] if test_every is None else test_every
+        )
         if not self.can_test and math.isfinite(self.test_every):
             raise ValueError(
                 f"test_every = {test_every!r}: policy {self.name!r} reads no test results "

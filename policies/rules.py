@@ -10,18 +10,15 @@ conventions:
 * **Never replace a part that has not flown** (age 0): a part just fitted is new.
 * **Opportunistic replacement** (``opportunity`` in [0, 1)): while the aircraft is on the
   ground anyway (observation ``downtime > 0``), a part is replaced when it is within the
-  fraction ``opportunity`` of its own trigger (age >= (1 - opportunity) T for the
-  preventive rule; RUL low quantile <= lead / (1 - opportunity) and risk >=
-  (1 - opportunity) threshold for the RUL-risk rule). ``0`` turns it off.
+  fraction ``opportunity`` of its own trigger (age >= (1 - opportunity) T). ``0`` turns it
+  off. The prognostic rules (:mod:`policies.nested`, :mod:`policies.prognostic`) extend
+  the age rule with the same grouping.
 * Tests are never requested while grounded (``test_and_fly`` does nothing then).
 
-Default parameters are the constants ``*_DEFAULTS`` below: grid-searched with
-``scripts/tune_policies.py`` (:mod:`policies.tuning`, objective: mean reward per
-episode on training seeds, checked on held-out seeds); see that module for the grids and
-the command. Results (held-out reward per 2000-slot episode, 12 episodes, ± 95% half-width):
-preventive 4.962e6 ± 0.028e6, detection 4.836e6 ± 0.033e6, RUL-risk 4.926e6 ± 0.033e6. The
-RUL-risk optimum lies on the grid's edge (shortest leads, fewest tests): each pre-flight test
-risks a no-go (a lost flight), which the filters' information does not pay back here.
+Default parameters are the constants ``*_DEFAULTS`` below: tuned with Optuna TPE on
+training seeds, one budget per family (:mod:`policies.tuning`,
+``python scripts/value_of_prognostics.py``; docs/value.md and docs/value_ladder.md give the
+held-out figures).
 """
 
 from __future__ import annotations

@@ -131,6 +131,7 @@ __all__ = [
     "Family",
     "TuningResult",
     "edge_report",
+    "relevant_box",
     "tune_families",
     "tune_family",
 ]
@@ -185,6 +186,18 @@ def edge_report(params: Mapping[str, Any], box: Box) -> dict[str, str]:
         )
         out[name] = "low" if f < EDGE_FRACTION else "high" if f > 1 - EDGE_FRACTION else "inside"
     return out
+
+
+def relevant_box(family: Family, params: Mapping[str, Any], slots: int) -> Box:
+    """The part of the family's box that acts at ``params``: the override's parameters
+    only when the override is on, the test interval only when it is shorter than the
+    episode (a longer one means "never test", a legitimate optimum, not an edge)."""
+    box = dict(family.box)
+    if family.nested and params.get("override") is False:
+        box = {k: v for k, v in box.items() if k in AGE_BOX or k == "test_every"}
+    if float(params.get("test_every", 0.0)) >= slots:
+        box.pop("test_every", None)
+    return box
 
 
 def _suggest(trial: Any, family: Family) -> dict[str, Any]:
@@ -265,7 +278,7 @@ def tune_family(
         best_params,
         float(study.best_value),
         history,
-        edge_report(best_params, family.box),
+        edge_report(best_params, relevant_box(family, best_params, slots)),
         trials * episodes,
         time.perf_counter() - t0,
     )

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from policies.tuning import FAMILIES, edge_report, tune_family
+from policies.tuning import FAMILIES, edge_report, relevant_box, tune_family
 from policies.value import (
     LADDER,
     QUICK,
@@ -87,3 +87,12 @@ def test_edges_are_flagged_in_the_parameter_scale():
     box = {"t": (1.0, 1000.0, True), "o": (0.0, 0.9, False)}
     assert edge_report({"t": 1.3, "o": 0.88}, box) == {"t": "low", "o": "high"}
     assert edge_report({"t": 31.6, "o": 0.45}, box) == {"t": "inside", "o": "inside"}
+
+
+def test_only_parameters_that_act_are_checked_for_edges():
+    fam = FAMILIES["filter"]
+    off = {"spring_age": 900.0, "seal_age": 800.0, "opportunity": 0.2, "override": False}
+    box = relevant_box(fam, {**off, "test_every": 4000.0, "spring_lead": 1.0}, slots=2000)
+    assert set(box) == {"spring_age", "seal_age", "opportunity"}
+    on = relevant_box(fam, {**off, "override": True, "test_every": 50.0}, slots=2000)
+    assert set(on) == set(fam.box)
