@@ -27,14 +27,27 @@ import numpy as np
 from policies.base import register
 from policies.nested import NestedRule
 
-__all__ = ["RUL_RISK_DEFAULTS", "FeatureRulePolicy", "RulRiskPolicy", "flight_reference"]
+__all__ = [
+    "RUL_RISK_AGE_DEFAULTS",
+    "RUL_RISK_DEFAULTS",
+    "FeatureRulePolicy",
+    "RulRiskPolicy",
+    "flight_reference",
+]
 
-#: Defaults of the filter rule (policies.tuning; override parameters only, the age
-#: backstop defaults are the preventive rule's).
+#: Defaults of the filter rule: the tuned point of the family with the override forced on
+#: (docs/value.md, "search sensitivity"; the family with the override free prefers it off,
+#: i.e. an age rule). Age backstop and test interval, then the override's thresholds.
+RUL_RISK_AGE_DEFAULTS: dict[str, float] = {
+    "spring_age": 2133.805,
+    "seal_age": 1354.313,
+    "opportunity": 0.7008807,
+    "test_every": 844.3342,
+}
 RUL_RISK_DEFAULTS: dict[str, float] = {
-    "risk_threshold": 0.05,
-    "spring_lead": 10.0,
-    "seal_lead": 20.0,
+    "risk_threshold": 0.03093727,
+    "spring_lead": 12.11473,
+    "seal_lead": 9.070705,
 }
 
 
@@ -58,6 +71,7 @@ class RulRiskPolicy(NestedRule):
         "downtime",
     )
     override_params: ClassVar[dict[str, float]] = RUL_RISK_DEFAULTS
+    defaults: ClassVar[dict[str, float]] = RUL_RISK_AGE_DEFAULTS
 
     def _check_value(self, name: str, value: float) -> float:
         if name == "risk_threshold" and not 0.0 < value <= 1.0:

@@ -39,9 +39,13 @@ from policies.base import (
     register,
 )
 
-#: Tuned defaults (policies.tuning, `python scripts/tune_policies.py`, see module docstring).
-PREVENTIVE_DEFAULTS: dict[str, float] = {"spring_age": 800.0, "seal_age": 700.0, "opportunity": 0.2}
-DETECTION_DEFAULTS: dict[str, float] = {"test_every": 10.0}
+#: Tuned defaults (policies.tuning; docs/value_ladder.md: family ``age`` and ``detection``).
+PREVENTIVE_DEFAULTS: dict[str, float] = {
+    "spring_age": 691.6326,
+    "seal_age": 526.2141,
+    "opportunity": 0.6087008,
+}
+DETECTION_DEFAULTS: dict[str, float] = {"test_every": 732.2079}
 RANDOM_DEFAULTS: tuple[float, float, float, float] = (0.96, 0.02, 0.01, 0.01)
 
 __all__ = [

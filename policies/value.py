@@ -99,7 +99,7 @@ def break_even_sigma(sigmas: Sequence[float], values: Sequence[float]) -> float:
     positive to <= 0, linearly interpolated; NaN if it never does (or starts <= 0: then
     the first sigma if the first value is <= 0).
 
-    >>> break_even_sigma([0.0, 0.1, 0.2, 0.3], [30.0, 10.0, -10.0, -20.0])
+    >>> round(break_even_sigma([0.0, 0.1, 0.2, 0.3], [30.0, 10.0, -10.0, -20.0]), 6)
     0.15
     """
     order = np.argsort(sigmas)
