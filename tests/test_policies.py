@@ -105,7 +105,7 @@ def test_rul_risk_is_the_age_rule_plus_an_override_and_acts_on_the_implicated_pa
     assert act(p, no_go=1.0, seal_risk=0.09, spring_risk=0.0, **crack) == 2
     assert act(p, no_go=1.0, spring_risk=0.09, **wear) == 3
     assert act(p, no_go=1.0, seal_age=0.0, **wear) == 0  # new seals stay
-    off = RulRiskPolicy(FULL, spring_age=1000, seal_age=1200, override=False)
+    off = RulRiskPolicy(FULL, spring_age=1000, seal_age=1200, override=False, test_every=math.inf)
     assert act(off, spring_risk=1.0, spring_rul_low=0.0, test_age=1e4) == 0  # the age rule
 
 
