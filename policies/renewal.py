@@ -25,6 +25,7 @@ tests/test_renewal.py bounds their effect.
 
 from __future__ import annotations
 
+import re
 from collections.abc import Mapping, Sequence
 from typing import Any
 
@@ -37,7 +38,7 @@ from scas_env import ENV_ID
 from scas_env.costs import CostModel
 from scas_env.world import PARTS
 
-__all__ = ["age_rule_rate", "long_run_rates", "sample_lives"]
+__all__ = ["age_rule_rate", "long_run_for_arms", "long_run_rates", "sample_lives"]
 
 
 def sample_lives(n: int, seed: int, *, max_slots: int = 20_000) -> dict[str, np.ndarray]:
@@ -157,3 +158,49 @@ def _ratio_bootstrap(num: np.ndarray, den: np.ndarray, confidence: float) -> Int
     low, high = np.quantile(boot, [a / 2, 1 - a / 2])
     ratio = float(num.sum() / den.sum())
     return Interval(ratio, float(low), float(high), n)
+
+
+def long_run_for_arms(
+    arms: Sequence[Mapping[str, Any]],
+    *,
+    episodes: int = 16,
+    warmup: int = 2000,
+    window: int = 18_000,
+    n_workers: int = 1,
+) -> dict[str, dict[str, Any]]:
+    """:func:`long_run_rates` for the arms of a ladder run (``ladder.json``'s
+    ``config["arms"]``: arm, policy, params, env_kwargs as repr). The planning oracle plans
+    to its own horizon, so it does not act alike on the two runs: it is left out."""
+    groups: dict[str, list[PolicySpec]] = {}
+    kwargs_of: dict[str, dict[str, Any]] = {}
+    for a in arms:
+        if a["policy"] == "oracle":
+            continue
+        params = {
+            k: (float(v) if isinstance(v, str) and v in ("inf", "-inf") else v)
+            for k, v in a["params"].items()
+        }
+        key = repr(sorted(a["env_kwargs"].items()))
+        kwargs_of[key] = {k: _parse_cost_model(k, v) for k, v in a["env_kwargs"].items()}
+        groups.setdefault(key, []).append(PolicySpec(a["policy"], params, label=a["arm"]))
+    out: dict[str, dict[str, Any]] = {}
+    for key, specs in groups.items():
+        out.update(
+            long_run_rates(
+                specs,
+                episodes=episodes,
+                warmup=warmup,
+                window=window,
+                n_workers=n_workers,
+                env_kwargs=kwargs_of[key] or None,
+            )
+        )
+    return out
+
+
+def _parse_cost_model(key: str, text: str) -> CostModel:
+    """The ``CostModel`` of its repr in ``ladder.json`` (the only env keyword an arm sets)."""
+    if key != "cost_model" or not text.startswith("CostModel("):
+        raise ValueError(f"env keyword {key} = {text!r}: only a CostModel repr is understood")
+    fields = dict(re.findall(r"(\w+)=([-+0-9.e]+)", text))
+    return CostModel(**{k: float(v) for k, v in fields.items()})

@@ -46,3 +46,16 @@ def test_renewal_reward_matches_long_simulation_for_corrective_and_age_rules():
         ]
         sd = math.hypot(float(np.std(boot)), (got["high"] - got["low"]) / 3.92)
         assert abs(theory["cost_per_fh"] - got["mean"]) < 3.0 * sd, spec.key
+
+
+def test_long_run_window_is_the_difference_of_two_runs_on_the_same_seeds():
+    spec = PolicySpec("preventive")
+    out = long_run_rates([spec], episodes=2, warmup=300, window=300, seed=5)
+    from policies.benchmark import run_benchmark
+
+    a = run_benchmark([spec], episodes=2, slots=300, seed=5).rows
+    b = run_benchmark([spec], episodes=2, slots=600, seed=5).rows
+    cost = sum(r["cost_usd"] for r in b) - sum(r["cost_usd"] for r in a)
+    fh = sum(r["flight_hours"] for r in b) - sum(r["flight_hours"] for r in a)
+    assert out["preventive"]["cost_per_fh"]["mean"] == pytest.approx(cost / fh)
+    assert out["preventive"]["flight_hours"] == pytest.approx(fh)
