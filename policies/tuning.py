@@ -3,7 +3,7 @@
 Every family (:data:`FAMILIES`) is tuned the same way:
 
 * **Budget**: ``trials x episodes`` simulated episodes of ``slots`` slots, the same for
-  every family (default 48 x 64 = 3072 episodes of 2000 slots).
+  every family (default 40 x 40 = 1600 episodes of 2000 slots).
 * **Optimiser**: Optuna's TPE sampler (seeded, :data:`SAMPLER_SEED`), objective the mean
   reward per episode (USD: value of the flights flown minus every cost).
 * **Common random numbers**: every trial runs on the same training episodes, seeds
@@ -225,8 +225,8 @@ def _age_point(family: Family, age_params: Mapping[str, Any] | None) -> dict[str
 def tune_family(
     family: Family,
     *,
-    trials: int = 48,
-    episodes: int = 64,
+    trials: int = 40,
+    episodes: int = 40,
     slots: int = 2000,
     age_params: Mapping[str, Any] | None = None,
     progress: bool = False,
@@ -293,8 +293,8 @@ def _tune_chunk(
 def tune_families(
     labels: Sequence[str] | None = None,
     *,
-    trials: int = 48,
-    episodes: int = 64,
+    trials: int = 40,
+    episodes: int = 40,
     slots: int = 2000,
     n_workers: int = 1,
     progress: bool = False,
