@@ -11,19 +11,22 @@ from policies.base import (
     policy_obs_mode,
     register_policy,
 )
+from policies.noisy_oracle import NoisyOraclePolicy
 from policies.oracle import OraclePolicy
+from policies.prognostic import FeatureRulePolicy, RulRiskPolicy
 from policies.rules import (
     CorrectivePolicy,
     DetectionPolicy,
     PreventivePolicy,
     RandomPolicy,
-    RulRiskPolicy,
 )
 
 __all__ = [
     "POLICIES",
     "CorrectivePolicy",
     "DetectionPolicy",
+    "FeatureRulePolicy",
+    "NoisyOraclePolicy",
     "OraclePolicy",
     "Policy",
     "PreventivePolicy",

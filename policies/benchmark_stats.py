@@ -1,13 +1,28 @@
-"""Statistics of the benchmark: t-intervals per policy and paired differences.
+"""Statistics of the benchmark: intervals that stay in range and paired differences with power.
 
 Episode ``e`` of every policy starts from the same seed (common random numbers), so the
 difference of a metric between two policies is taken episode by episode and its mean gets a
-t-interval over episodes (a paired comparison, narrower than comparing two means when the
-episodes are positively correlated).
+t-interval over episodes (a paired comparison). Beside every paired difference stands the
+**minimum detectable difference** (:func:`minimum_detectable_difference`): the true mean
+difference a two-sided paired t-test at level ``alpha`` would detect with probability
+``power`` given the paired standard deviation and ``n``.
+
+Per-policy intervals are chosen so that they never leave the metric's possible range:
+
+* rare counts per 1000 FH (failures, preventive replacements, tests): the pooled count over
+  all episodes divided by the pooled flight hours, with the exact Poisson (Garwood 1936)
+  interval (:func:`garwood_rate`): never below zero;
+* bounded or positive per-episode quantities (availability in [0, 1], cost per FH >= 0,
+  wasted life >= 0): percentile bootstrap of the mean (:func:`bootstrap_mean`,
+  ``scipy.stats.bootstrap``), which lies inside the range of the observed values;
+* the reward per episode (unbounded, near-normal over hundreds of episodes): t-interval.
 
 >>> iv = t_interval([1.0, 2.0, 3.0])
 >>> round(iv.mean, 3), round(iv.half_width, 3)  # t_{0.975, 2} * 1 / sqrt(3)
 (2.0, 2.484)
+>>> low, high = garwood_interval(0)
+>>> low, round(high, 3)  # 0 events: [0, -ln(0.025)]
+(0.0, 3.689)
 """
 
 from __future__ import annotations
@@ -18,6 +33,7 @@ from dataclasses import asdict, dataclass
 from typing import Any
 
 import numpy as np
+from scipy import optimize, stats
 from scipy.stats import t as student_t
 
 #: Per-episode metrics summarised per policy (results.csv columns).
@@ -30,18 +46,46 @@ METRICS = (
     "wasted_life",
     "reward",
 )
+#: Rate metric -> the results.csv count column(s) it pools (exact Poisson intervals).
+POOLED_COUNTS: dict[str, tuple[str, ...]] = {
+    "failures_per_1000fh": ("failures_spring", "failures_seal"),
+    "replacements_per_1000fh": ("replacements_spring", "replacements_seal"),
+    "tests_per_1000fh": ("tests",),
+}
+#: Metrics bounded below (or in [0, 1]) with a percentile-bootstrap interval of the mean.
+BOOTSTRAPPED = ("availability", "cost_per_fh", "wasted_life")
+#: Resamples of the bootstrap intervals, and their fixed seed (reproducible tables).
+BOOTSTRAP_RESAMPLES = 4999
+BOOTSTRAP_SEED = 20260
 
-__all__ = ["METRICS", "Interval", "best_policy", "paired_difference", "summarize", "t_interval"]
+__all__ = [
+    "BOOTSTRAPPED",
+    "METRICS",
+    "POOLED_COUNTS",
+    "Interval",
+    "best_policy",
+    "bootstrap_mean",
+    "garwood_interval",
+    "garwood_rate",
+    "minimum_detectable_difference",
+    "paired_comparison",
+    "paired_difference",
+    "summarize",
+    "t_interval",
+    "wilson_interval",
+]
 
 
 @dataclass(frozen=True)
 class Interval:
-    """Mean with its two-sided t-interval over ``n`` finite values (NaN if ``n < 2``)."""
+    """Mean (or rate) with a two-sided interval over ``n`` values (NaN if undefined);
+    ``mdd``: minimum detectable difference of a paired comparison (NaN otherwise)."""
 
     mean: float
     low: float
     high: float
     n: int
+    mdd: float = math.nan
 
     @property
     def half_width(self) -> float:
@@ -51,16 +95,24 @@ class Interval:
         return asdict(self)
 
 
+def _confidence(confidence: float) -> None:
+    if not 0.0 < confidence < 1.0:
+        raise ValueError(f"confidence = {confidence!r} must be in (0, 1)")
+
+
+def _finite(values: Sequence[float] | np.ndarray) -> np.ndarray:
+    x = np.asarray(values, dtype=np.float64)
+    return x[np.isfinite(x)]
+
+
 def t_interval(values: Sequence[float] | np.ndarray, confidence: float = 0.95) -> Interval:
     """``mean +- t_{(1+confidence)/2, n-1} s / sqrt(n)`` over the finite ``values``.
 
     ``s`` is the sample standard deviation (ddof = 1); non-finite values (a metric that is
     undefined in an episode, e.g. wasted life without a preventive replacement) are left out.
     """
-    if not 0.0 < confidence < 1.0:
-        raise ValueError(f"confidence = {confidence!r} must be in (0, 1)")
-    x = np.asarray(values, dtype=np.float64)
-    x = x[np.isfinite(x)]
+    _confidence(confidence)
+    x = _finite(values)
     n = int(x.size)
     if n == 0:
         return Interval(math.nan, math.nan, math.nan, 0)
@@ -71,14 +123,132 @@ def t_interval(values: Sequence[float] | np.ndarray, confidence: float = 0.95) -
     return Interval(mean, mean - half, mean + half, n)
 
 
+def minimum_detectable_difference(
+    sd: float, n: int, *, alpha: float = 0.05, power: float = 0.8
+) -> float:
+    """Smallest true mean of paired differences that a two-sided one-sample t-test at level
+    ``alpha`` detects with probability ``power`` (``n`` pairs, paired sd ``sd``).
+
+    Solved exactly on the noncentral t distribution: the noncentrality ``delta`` with
+    ``P(|T'| > t_{1-alpha/2, n-1}) = power`` for ``T' ~ nct(n-1, delta)``; MDD =
+    ``delta sd / sqrt(n)`` (for large ``n`` about ``(z_{1-alpha/2} + z_power) sd / sqrt(n)``,
+    2.80 sd / sqrt(n) at the defaults). NaN if ``n < 2`` or ``sd`` is not finite.
+    """
+    if not 0.0 < alpha < 1.0 or not 0.0 < power < 1.0:
+        raise ValueError(f"alpha = {alpha!r} and power = {power!r} must be in (0, 1)")
+    if n < 2 or not math.isfinite(sd):
+        return math.nan
+    if sd == 0.0:
+        return 0.0
+    df = n - 1
+    crit = float(student_t.ppf(1.0 - alpha / 2.0, df))
+
+    def gap(delta: float) -> float:
+        dist = stats.nct(df, delta)
+        reach = float(dist.sf(crit) + dist.cdf(-crit))
+        return (1.0 if math.isnan(reach) else reach) - power  # NaN only far in the tail
+
+    high = float(stats.norm.ppf(1.0 - alpha / 2.0) + stats.norm.ppf(power))
+    while gap(high) < 0.0:  # the normal approximation is below the t answer; widen
+        high *= 1.5
+    delta = optimize.brentq(gap, 0.0, high, xtol=1e-10)
+    return float(delta * sd / math.sqrt(n))
+
+
 def paired_difference(
     x: Sequence[float] | np.ndarray, y: Sequence[float] | np.ndarray, confidence: float = 0.95
 ) -> Interval:
-    """t-interval of the mean of ``x_e - y_e`` over episodes where both are finite."""
+    """t-interval of the mean of ``x_e - y_e`` over episodes where both are finite, with
+    the minimum detectable difference at 80 % power and ``alpha = 1 - confidence``."""
     a, b = np.asarray(x, dtype=np.float64), np.asarray(y, dtype=np.float64)
     if a.shape != b.shape:
         raise ValueError(f"paired samples need equal shapes, got {a.shape} and {b.shape}")
-    return t_interval(a - b, confidence)
+    d = _finite(a - b)
+    iv = t_interval(d, confidence)
+    sd = float(d.std(ddof=1)) if d.size > 1 else math.nan
+    mdd = minimum_detectable_difference(sd, int(d.size), alpha=1.0 - confidence)
+    return Interval(iv.mean, iv.low, iv.high, iv.n, mdd)
+
+
+def paired_comparison(
+    x: Sequence[float] | np.ndarray, y: Sequence[float] | np.ndarray, confidence: float = 0.95
+) -> dict[str, float]:
+    """:func:`paired_difference` as a dict with the paired sd and the t-test's p-value."""
+    d = _finite(np.asarray(x, dtype=np.float64) - np.asarray(y, dtype=np.float64))
+    iv = paired_difference(x, y, confidence)
+    p = float(stats.ttest_1samp(d, 0.0).pvalue) if d.size > 1 and d.std() > 0 else math.nan
+    sd = float(d.std(ddof=1)) if d.size > 1 else math.nan
+    return {**iv.to_dict(), "sd": sd, "p_value": p}
+
+
+def garwood_interval(count: int, confidence: float = 0.95) -> tuple[float, float]:
+    """Exact (Garwood) interval of a Poisson mean after observing ``count`` events:
+    ``[chi2_{a/2}(2k) / 2, chi2_{1-a/2}(2k + 2) / 2]`` with ``a = 1 - confidence``
+    (lower bound 0 when ``count = 0``)."""
+    _confidence(confidence)
+    k = int(count)
+    if k != count or k < 0:
+        raise ValueError(f"count = {count!r} must be an integer >= 0")
+    a = 1.0 - confidence
+    low = 0.0 if k == 0 else float(stats.chi2.ppf(a / 2.0, 2 * k) / 2.0)
+    high = float(stats.chi2.ppf(1.0 - a / 2.0, 2 * k + 2) / 2.0)
+    return low, high
+
+
+def garwood_rate(count: int, exposure: float, confidence: float = 0.95, *, n: int = 0) -> Interval:
+    """Rate ``count / exposure`` with the exact Poisson interval (:func:`garwood_interval`
+    divided by ``exposure``); ``n`` is recorded as the interval's sample size."""
+    if not (exposure > 0.0 and math.isfinite(exposure)):
+        raise ValueError(f"exposure = {exposure!r} must be finite and > 0")
+    low, high = garwood_interval(count, confidence)
+    return Interval(count / exposure, low / exposure, high / exposure, n)
+
+
+def wilson_interval(successes: int, trials: int, confidence: float = 0.95) -> Interval:
+    """Wilson score interval of a binomial proportion (stays in [0, 1])."""
+    _confidence(confidence)
+    if trials < 1 or not 0 <= successes <= trials:
+        raise ValueError(
+            f"successes = {successes!r}, trials = {trials!r}: need 0 <= s <= t, t >= 1"
+        )
+    z = float(stats.norm.ppf(0.5 + 0.5 * confidence))
+    p = successes / trials
+    den = 1.0 + z * z / trials
+    centre = (p + z * z / (2 * trials)) / den
+    half = z * math.sqrt(p * (1 - p) / trials + z * z / (4 * trials * trials)) / den
+    return Interval(p, max(0.0, centre - half), min(1.0, centre + half), trials)
+
+
+def bootstrap_mean(
+    values: Sequence[float] | np.ndarray,
+    confidence: float = 0.95,
+    *,
+    resamples: int = BOOTSTRAP_RESAMPLES,
+    seed: int = BOOTSTRAP_SEED,
+) -> Interval:
+    """Percentile-bootstrap interval of the mean of the finite ``values``
+    (``scipy.stats.bootstrap``, fixed seed): inside [min, max] of the data, so a metric in
+    [0, 1] or >= 0 keeps its range. A constant sample gives a zero-width interval."""
+    _confidence(confidence)
+    x = _finite(values)
+    n = int(x.size)
+    if n == 0:
+        return Interval(math.nan, math.nan, math.nan, 0)
+    mean = float(x.mean())
+    if n < 2:
+        return Interval(mean, math.nan, math.nan, n)
+    if np.all(x == x[0]):
+        return Interval(mean, mean, mean, n)
+    res = stats.bootstrap(
+        (x,),
+        np.mean,
+        confidence_level=confidence,
+        n_resamples=resamples,
+        method="percentile",
+        rng=np.random.default_rng(seed),
+    )
+    ci = res.confidence_interval
+    return Interval(mean, float(ci.low), float(ci.high), n)
 
 
 def best_policy(per_policy: Mapping[str, Mapping[str, Interval]], candidates: Sequence[str]) -> str:
@@ -88,22 +258,41 @@ def best_policy(per_policy: Mapping[str, Mapping[str, Interval]], candidates: Se
     return max(candidates, key=lambda p: per_policy[p]["reward"].mean)
 
 
+def metric_interval(
+    rows: Sequence[Mapping[str, Any]], metric: str, confidence: float = 0.95
+) -> Interval:
+    """The interval of one policy's ``metric`` over its ``rows`` (results.csv rows), by the
+    rule of the module docstring. Pooled rates are per 1000 FH, their mean is the pooled
+    rate (total count / total FH), not the mean of per-episode rates."""
+    if metric in POOLED_COUNTS and rows and all(c in rows[0] for c in POOLED_COUNTS[metric]):
+        count = sum(int(r[c]) for r in rows for c in POOLED_COUNTS[metric])
+        fh = sum(float(r["flight_hours"]) for r in rows)
+        if fh > 0:
+            return garwood_rate(count, fh / 1000.0, confidence, n=len(rows))
+    values = np.array([float(r[metric]) for r in rows], dtype=np.float64)
+    if metric in BOOTSTRAPPED:
+        return bootstrap_mean(values, confidence)
+    return t_interval(values, confidence)
+
+
 def summarize(
     rows: Sequence[Mapping[str, Any]],
     policies: Sequence[str],
     reference_candidates: Sequence[str],
     confidence: float = 0.95,
 ) -> dict[str, Any]:
-    """Per-policy intervals of :data:`METRICS` and paired differences against the best of
+    """Per-policy intervals of :data:`METRICS` (:func:`metric_interval`) and paired
+    differences (t-interval and minimum detectable difference) against the best of
     ``reference_candidates`` (highest mean reward); rows are results.csv rows."""
+    mine: dict[str, list[Mapping[str, Any]]] = {}
     by_policy: dict[str, dict[str, np.ndarray]] = {}
     for p in policies:
-        mine = sorted((r for r in rows if r["policy"] == p), key=lambda r: r["episode"])
+        mine[p] = sorted((r for r in rows if r["policy"] == p), key=lambda r: r["episode"])
         by_policy[p] = {
-            m: np.array([r[m] for r in mine], dtype=np.float64) for m in (*METRICS, "episode")
+            m: np.array([r[m] for r in mine[p]], dtype=np.float64) for m in (*METRICS, "episode")
         }
     per_policy = {
-        p: {m: t_interval(by_policy[p][m], confidence) for m in METRICS} for p in policies
+        p: {m: metric_interval(mine[p], m, confidence) for m in METRICS} for p in policies
     }
     candidates = [p for p in reference_candidates if p in per_policy]
     ref = best_policy(per_policy, candidates) if candidates else None

@@ -1,40 +1,140 @@
-"""Oracle policy: replaces each part just in time from the true state (a bound).
+"""Planning oracle: replacements planned over the rest of the episode from the true lives.
 
-It reads the true RUL of each part (``obs_mode="state"``: expected flights to failure at the
-unit's own growth rate) and replaces a part before the flight that would reach it:
-``rul_true <= margin`` flights. The per-flight scatter of growth is small near failure (CV
-about 0.08 for a deep crack, 0.07 for wear: ``calibration.json``), so a margin of 2 flights
-never lets a part fail in flight when its life exceeds that margin. Seals go first when both
-are due (as in :mod:`policies.rules`); while grounded, a part whose true RUL is within
-``margin + opportunity`` flights is replaced too. The default margin (5 flights) is the best
-of the grid {1, 2, 5} in :mod:`policies.tuning` (all three within noise of each other).
+The oracle reads the true state (``obs_mode="state"``): the true RUL of each part
+(expected flights to failure at the unit's own growth rate; at fitting it is the part's
+life to within about 1 %, ``docs/value.md``). It counts the slots of the episode itself
+(``episode_slots``, the env's horizon) and plans with a small dynamic program:
+
+* A part must be replaced before the flight that would reach its critical value: when its
+  true RUL falls to ``margin`` flights (the per-flight growth scatter near failure is small,
+  CV about 0.08), unless it outlives the episode (true RUL above the slots left): at the
+  end of the horizon nothing is replaced that would not fail within it.
+* When a part is due, the other part may be replaced in the same grounded period
+  (opportunistic grouping: seals first, then the spring in the seals' downtime slot): the
+  dynamic program :func:`plan_cost` compares the expected cost to the end of the episode
+  of both choices, with the known remaining lives of the fitted parts and the life
+  distribution of the parts fitted later (quartile midpoints :data:`LIFE_QUANTILES`: the
+  oracle knows the parts fitted, not the draws of the parts to come).
+  Costs are the replacement prices and ``flight_value`` per slot spent on the ground.
+
+It never tests (the state needs no test) and never lets a part fail when its life exceeds
+the margin, so it is an upper bound for the benchmark's policies; the bound is checked
+episode by episode against every other policy (tests/test_oracle_bound.py).
 
 >>> names = ("crack_fraction", "wear_fraction", "spring_rul_true", "seal_rul_true",
 ...          "spring_age", "seal_age", "downtime")
 >>> oracle = OraclePolicy(names)
+>>> oracle.reset()
 >>> oracle.predict([0.5, 0.5, 1.5, 900.0, 800.0, 800.0, 0.0])[0]  # spring due
 2
 """
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Sequence
 from typing import Any, ClassVar
 
 import numpy as np
 
-from policies.base import IntArray, Policy, register
-from policies.rules import choose
+from policies.base import FLY, REPLACE_SEAL, REPLACE_SPRING, IntArray, Policy, register
+from scas_env.costs import CostModel
 
-__all__ = ["ORACLE_DEFAULTS", "OraclePolicy"]
+__all__ = ["LIFE_QUANTILES", "ORACLE_DEFAULTS", "OraclePolicy", "plan_cost"]
 
-ORACLE_DEFAULTS: dict[str, float] = {"margin": 5.0, "opportunity": 0.0}
+ORACLE_DEFAULTS: dict[str, float] = {"margin": 3.0, "episode_slots": 2000.0}
+#: Lives (flights) of new parts at the quartile midpoints (12.5, 37.5, 62.5, 87.5 %) of
+#: 4000 new units' true RUL at fitting (default scenario; docs/value.md).
+LIFE_QUANTILES: dict[str, tuple[int, ...]] = {
+    "spring": (725, 962, 1184, 1609),
+    "seal": (836, 1071, 1301, 1678),
+}
+
+
+@functools.lru_cache(maxsize=500_000)
+def plan_cost(
+    slots_left: int,
+    spring_left: int,
+    seal_left: int,
+    costs: tuple[float, float, float, int, int],
+    lives: tuple[tuple[int, ...], tuple[int, ...]],
+    step: int = 1,
+) -> float:
+    """Least expected cost (USD) to fly the next ``slots_left`` slots without a failure.
+
+    ``spring_left`` / ``seal_left``: flights each fitted part may still fly before it must
+    be replaced (known); ``costs = (flight_value, spring_price, seal_price, spring_down,
+    seal_down)`` (downtime: extra slots on the ground after the replacement slot);
+    ``lives``: per part, equally likely lives (flights) of a part fitted later (quantiles
+    of the life distribution): the expectation over them replaces the unknown future. At
+    each forced replacement the program compares replacing that part alone with replacing
+    both (seals first, the spring in their downtime). ``step``: the slots left after each
+    replacement are rounded to a multiple of it (1: exact; the oracle uses
+    :data:`HORIZON_STEP` so that few distinct states need caching).
+
+    >>> c = (2500.0, 1500.0, 6000.0, 0, 1)
+    >>> plan_cost(100, 500, 500, c, ((1000,), (1000,)))  # nothing fails within 100 slots
+    0.0
+    >>> plan_cost(100, 10, 500, c, ((1000,), (1000,))) == 1500.0 + 2500.0  # one spring
+    True
+    """
+    if slots_left <= 0:
+        return 0.0
+    left = (spring_left, seal_left)
+    k = max(0, min(left))
+    if k >= slots_left:
+        return 0.0
+    a = 0 if spring_left <= seal_left else 1
+    h = slots_left - k
+    after = (left[0] - k, left[1] - k)
+    return min(
+        _option_cost(h, after, a, False, costs, lives, step),
+        _option_cost(h, after, a, True, costs, lives, step),
+    )
+
+
+def _option_cost(
+    h: int,
+    left: tuple[int, int],
+    a: int,
+    both: bool,
+    costs: tuple[float, float, float, int, int],
+    lives: tuple[tuple[int, ...], tuple[int, ...]],
+    step: int = 1,
+) -> float:
+    """Expected cost of replacing part ``a`` (and the other one if ``both``) now, ``h``
+    slots before the end, then following :func:`plan_cost`."""
+    value, price, down = costs[0], costs[1:3], costs[3:5]
+    if both:
+        slots = 1 + max(down)
+        rest = _round(h - slots, step)
+        tail = sum(
+            plan_cost(rest, ls, lw, costs, lives, step) for ls in lives[0] for lw in lives[1]
+        )
+        tail /= len(lives[0]) * len(lives[1])
+        return price[0] + price[1] + value * min(slots, h) + tail
+    slots = 1 + down[a]
+    rest = _round(h - slots, step)
+    total = 0.0
+    for life in lives[a]:
+        new = list(left)
+        new[a] = life
+        total += plan_cost(rest, new[0], new[1], costs, lives, step)
+    return price[a] + value * min(slots, h) + total / len(lives[a])
+
+
+#: The program's horizon is rounded to this many slots (few distinct states to cache).
+HORIZON_STEP = 10
+
+
+def _round(h: int, step: int) -> int:
+    return h if step == 1 else int(step * round(h / step))
 
 
 @register
 class OraclePolicy(Policy):
-    """Just-in-time replacement on the true RUL (module docstring)."""
+    """Planning oracle on the true RUL (module docstring)."""
 
     name: ClassVar[str] = "oracle"
     obs_mode: ClassVar[str] = "state"
@@ -52,23 +152,103 @@ class OraclePolicy(Policy):
         obs_names: Sequence[str],
         *,
         margin: float = ORACLE_DEFAULTS["margin"],
-        opportunity: float = ORACLE_DEFAULTS["opportunity"],
+        episode_slots: float = ORACLE_DEFAULTS["episode_slots"],
+        spring_lives: Sequence[float] = LIFE_QUANTILES["spring"],
+        seal_lives: Sequence[float] = LIFE_QUANTILES["seal"],
+        cost_model: CostModel | None = None,
     ) -> None:
         super().__init__(obs_names)
         self.margin = float(margin)
         if not (self.margin >= 0.0 and math.isfinite(self.margin)):
             raise ValueError(f"margin = {margin!r} flights must be finite and >= 0")
-        self.opportunity = float(opportunity)
-        if not (self.opportunity >= 0.0 and math.isfinite(self.opportunity)):
-            raise ValueError(f"opportunity = {opportunity!r} flights must be finite and >= 0")
+        if not (math.isfinite(float(episode_slots)) and float(episode_slots) >= 1.0):
+            raise ValueError(f"episode_slots = {episode_slots!r} must be finite and >= 1")
+        self.episode_slots = int(episode_slots)
+        lives = []
+        for name, v in (("spring_lives", spring_lives), ("seal_lives", seal_lives)):
+            arr = np.asarray(v, dtype=np.float64)
+            if arr.ndim != 1 or arr.size == 0 or not np.all(np.isfinite(arr) & (arr >= 1.0)):
+                raise ValueError(f"{name} = {v!r} must be a non-empty list of lives >= 1")
+            lives.append(tuple(int(x) for x in arr))
+        self.lives = (lives[0], lives[1])
+        c = cost_model if cost_model is not None else CostModel()
+        self.cost_model = c
+        self.costs = (
+            float(c.flight_value_usd),
+            float(c.spring_replacement_usd),
+            float(c.seal_replacement_usd),
+            int(c.spring_downtime_slots),
+            int(c.seal_downtime_slots),
+        )
+        self.slot: np.ndarray | None = None
+        self.pending: np.ndarray | None = None
 
     def params(self) -> dict[str, Any]:
-        return {"margin": self.margin, "opportunity": self.opportunity}
+        return {
+            "margin": self.margin,
+            "episode_slots": self.episode_slots,
+            "spring_lives": list(self.lives[0]),
+            "seal_lives": list(self.lives[1]),
+        }
+
+    def reset(self, seed: int | Sequence[int] | None = None) -> None:
+        """A new episode (or batch): the slot counters and planned groupings start over."""
+        self.slot, self.pending = None, None
+
+    def predict(
+        self,
+        observation: Any,
+        state: Any = None,
+        episode_start: Any = None,
+        deterministic: bool = True,
+    ) -> tuple[int | IntArray, Any]:
+        """As :meth:`Policy.predict`; rows with ``episode_start`` set start over."""
+        if episode_start is not None and self.slot is not None:
+            start = np.atleast_1d(np.asarray(episode_start, dtype=bool))
+            if start.shape == self.slot.shape:
+                self.slot[start] = 0
+                self.pending[start] = False
+        return super().predict(observation, state, episode_start, deterministic)
+
+    def _decide(self, h: int, rul: np.ndarray) -> bool:
+        """Whether to replace both parts now (the due one and the other) rather than the
+        due one alone, ``h`` slots before the end (:func:`plan_cost`)."""
+        left = tuple(math.floor(r - self.margin) for r in rul)
+        a = 0 if left[0] <= left[1] else 1
+        if left[1 - a] >= h:  # the other part outlives the episode: nothing to group
+            return False
+        args = (self.costs, self.lives, HORIZON_STEP)
+        both = _option_cost(h, left, a, True, *args)
+        return both < _option_cost(h, left, a, False, *args)
 
     def _act(self, obs: np.ndarray) -> IntArray:
-        limit = self.margin + np.where(self.column(obs, "downtime") > 0, self.opportunity, 0.0)
-        due = [
-            (self.column(obs, f"{p}_age") > 0) & (self.column(obs, f"{p}_rul_true") <= limit)
-            for p in ("spring", "seal")
-        ]
-        return choose(*due)
+        n = obs.shape[0]
+        if self.slot is None or self.slot.shape[0] != n:
+            self.slot = np.zeros(n, dtype=np.int64)
+            self.pending = np.zeros((n, 2), dtype=bool)
+        h_all = self.episode_slots - self.slot
+        rul = np.stack([self.column(obs, "spring_rul_true"), self.column(obs, "seal_rul_true")], 1)
+        age = np.stack([self.column(obs, "spring_age"), self.column(obs, "seal_age")], 1)
+        down = self.column(obs, "downtime") > 0
+        due = (age > 0) & (rul <= self.margin) & (rul <= h_all[:, None])
+        actions = np.full(n, FLY, dtype=np.int64)
+        for r in np.flatnonzero(due.any(axis=1) | (down & self.pending.any(axis=1))):
+            if down[r] and self.pending[r].any():
+                k = int(np.flatnonzero(self.pending[r])[0])
+                self.pending[r, k] = False
+                if age[r, k] > 0:
+                    actions[r] = REPLACE_SPRING + k
+                    continue
+            if not due[r].any():
+                continue
+            if due[r].all():
+                both = True
+            else:
+                both = (age[r] > 0).all() and self._decide(int(h_all[r]), rul[r])
+            if both:  # seals first; the spring in their downtime slot
+                actions[r] = REPLACE_SEAL
+                self.pending[r, 0] = True
+            else:
+                actions[r] = REPLACE_SPRING + int(np.flatnonzero(due[r])[0])
+        self.slot += 1
+        return actions

@@ -10,18 +10,15 @@ conventions:
 * **Never replace a part that has not flown** (age 0): a part just fitted is new.
 * **Opportunistic replacement** (``opportunity`` in [0, 1)): while the aircraft is on the
   ground anyway (observation ``downtime > 0``), a part is replaced when it is within the
-  fraction ``opportunity`` of its own trigger (age >= (1 - opportunity) T for the
-  preventive rule; RUL low quantile <= lead / (1 - opportunity) and risk >=
-  (1 - opportunity) threshold for the RUL-risk rule). ``0`` turns it off.
+  fraction ``opportunity`` of its own trigger (age >= (1 - opportunity) T). ``0`` turns it
+  off. The prognostic rules (:mod:`policies.nested`, :mod:`policies.prognostic`) extend
+  the age rule with the same grouping.
 * Tests are never requested while grounded (``test_and_fly`` does nothing then).
 
-Default parameters are the constants ``*_DEFAULTS`` below: grid-searched with
-``scripts/tune_policies.py`` (:mod:`policies.tuning`, objective: mean reward per
-episode on training seeds, checked on held-out seeds); see that module for the grids and
-the command. Results (held-out reward per 2000-slot episode, 12 episodes, ± 95% half-width):
-preventive 4.962e6 ± 0.028e6, detection 4.836e6 ± 0.033e6, RUL-risk 4.926e6 ± 0.033e6. The
-RUL-risk optimum lies on the grid's edge (shortest leads, fewest tests): each pre-flight test
-risks a no-go (a lost flight), which the filters' information does not pay back here.
+Default parameters are the constants ``*_DEFAULTS`` below: tuned with Optuna TPE on
+training seeds, one budget per family (:mod:`policies.tuning`,
+``python scripts/value_of_prognostics.py``; docs/value.md and docs/value_ladder.md give the
+held-out figures).
 """
 
 from __future__ import annotations
@@ -42,30 +39,23 @@ from policies.base import (
     register,
 )
 
-#: Tuned defaults (policies.tuning, `python scripts/tune_policies.py`, see module docstring).
-PREVENTIVE_DEFAULTS: dict[str, float] = {"spring_age": 800.0, "seal_age": 700.0, "opportunity": 0.2}
-DETECTION_DEFAULTS: dict[str, float] = {"test_every": 10.0}
-RUL_RISK_DEFAULTS: dict[str, float] = {
-    "risk_threshold": 0.05,
-    "spring_lead": 10.0,
-    "seal_lead": 20.0,
-    "test_every": 100.0,
-    "uncertainty": math.inf,
-    "min_test_gap": 5.0,
-    "opportunity": 0.2,
+#: Tuned defaults (policies.tuning; docs/value_ladder.md: family ``age`` and ``detection``).
+PREVENTIVE_DEFAULTS: dict[str, float] = {
+    "spring_age": 691.6326,
+    "seal_age": 526.2141,
+    "opportunity": 0.6087008,
 }
+DETECTION_DEFAULTS: dict[str, float] = {"test_every": 732.2079}
 RANDOM_DEFAULTS: tuple[float, float, float, float] = (0.96, 0.02, 0.01, 0.01)
 
 __all__ = [
     "DETECTION_DEFAULTS",
     "PREVENTIVE_DEFAULTS",
     "RANDOM_DEFAULTS",
-    "RUL_RISK_DEFAULTS",
     "CorrectivePolicy",
     "DetectionPolicy",
     "PreventivePolicy",
     "RandomPolicy",
-    "RulRiskPolicy",
     "choose",
 ]
 
@@ -183,95 +173,6 @@ class DetectionPolicy(Policy):
         seal = (self.column(obs, "seal_alarm") > 0.5) & (self.column(obs, "seal_age") > 0)
         test = flying & (self.column(obs, "test_age") >= self.test_every)
         return choose(spring, seal, test)
-
-
-@register
-class RulRiskPolicy(Policy):
-    """Prognostic rule on the particle filters' RUL summaries.
-
-    Replace a part when its risk of failing within the scenario's horizon
-    (``spring_risk`` / ``seal_risk``) reaches ``risk_threshold``, or when its RUL low
-    quantile (``*_rul_low``, flights) falls to its lead time (``spring_lead`` /
-    ``seal_lead``). Test when ``test_age >= test_every`` slots, or when a filter is
-    uncertain, ``(rul_mean - rul_low) / rul_mean > uncertainty`` for either part, and the
-    last test is at least ``min_test_gap`` slots old (``uncertainty = inf``: off). After a
-    failed go/no-go (``no_go``), replace the part the filters find closer to failure (the
-    higher risk; on a tie, the shorter low-quantile RUL) instead of flying on.
-    """
-
-    name: ClassVar[str] = "rul_risk"
-    obs_mode: ClassVar[str] = "features+rul"
-    reads: ClassVar[tuple[str, ...]] = (
-        "test_age",
-        "no_go",
-        "spring_rul_mean",
-        "spring_rul_low",
-        "spring_risk",
-        "seal_rul_mean",
-        "seal_rul_low",
-        "seal_risk",
-        "spring_age",
-        "seal_age",
-        "downtime",
-    )
-
-    def __init__(
-        self,
-        obs_names: Sequence[str],
-        *,
-        risk_threshold: float = RUL_RISK_DEFAULTS["risk_threshold"],
-        spring_lead: float = RUL_RISK_DEFAULTS["spring_lead"],
-        seal_lead: float = RUL_RISK_DEFAULTS["seal_lead"],
-        test_every: float = RUL_RISK_DEFAULTS["test_every"],
-        uncertainty: float = RUL_RISK_DEFAULTS["uncertainty"],
-        min_test_gap: float = RUL_RISK_DEFAULTS["min_test_gap"],
-        opportunity: float = RUL_RISK_DEFAULTS["opportunity"],
-    ) -> None:
-        super().__init__(obs_names)
-        self.risk_threshold = float(risk_threshold)
-        if not 0.0 < self.risk_threshold <= 1.0:
-            raise ValueError(f"risk_threshold = {risk_threshold!r} must be in (0, 1]")
-        self.spring_lead = _positive("spring_lead", spring_lead, allow_inf=False)
-        self.seal_lead = _positive("seal_lead", seal_lead, allow_inf=False)
-        self.test_every = _positive("test_every", test_every)
-        self.uncertainty = _positive("uncertainty", uncertainty)
-        self.min_test_gap = _positive("min_test_gap", min_test_gap, allow_inf=False)
-        self.opportunity = _fraction("opportunity", opportunity)
-
-    def params(self) -> dict[str, Any]:
-        return {
-            "risk_threshold": self.risk_threshold,
-            "spring_lead": self.spring_lead,
-            "seal_lead": self.seal_lead,
-            "test_every": self.test_every,
-            "uncertainty": self.uncertainty,
-            "min_test_gap": self.min_test_gap,
-            "opportunity": self.opportunity,
-        }
-
-    def _act(self, obs: np.ndarray) -> IntArray:
-        flying = self.column(obs, "downtime") <= 0
-        scale = np.where(flying, 1.0, 1.0 - self.opportunity)
-        due, uncertain = [], np.zeros(obs.shape[0], dtype=bool)
-        for part, lead in (("spring", self.spring_lead), ("seal", self.seal_lead)):
-            mean = self.column(obs, f"{part}_rul_mean")
-            low = self.column(obs, f"{part}_rul_low")
-            risky = self.column(obs, f"{part}_risk") >= scale * self.risk_threshold
-            short = low * scale <= lead
-            due.append((self.column(obs, f"{part}_age") > 0) & (risky | short))
-            spread = (mean - low) / np.maximum(mean, 1.0)
-            uncertain |= spread > self.uncertainty
-        age = self.column(obs, "test_age")
-        test = flying & ((age >= self.test_every) | (uncertain & (age >= self.min_test_gap)))
-        failed = flying & (self.column(obs, "no_go") > 0)
-        spring_risk, seal_risk = self.column(obs, "spring_risk"), self.column(obs, "seal_risk")
-        spring_first = (spring_risk > seal_risk) | (
-            (spring_risk == seal_risk)
-            & (self.column(obs, "spring_rul_low") < self.column(obs, "seal_rul_low"))
-        )
-        due[0] |= failed & spring_first & (self.column(obs, "spring_age") > 0)
-        due[1] |= failed & ~spring_first & (self.column(obs, "seal_age") > 0)
-        return choose(*due, test)
 
 
 @register

@@ -1,152 +1,332 @@
-"""Grid search of the rule-based policies' thresholds on training seeds, checked on held-out
-seeds.
+"""Fair tuning of the rule families: one budget, Optuna TPE, common random numbers.
 
-Objective: the mean reward per episode (USD: value of the flights flown minus every cost)
-over ``episodes`` training episodes of ``slots`` slots, seeds from
-``SeedSequence(TRAIN_SEED)``; every grid point runs on the same episodes (common random
-numbers), so the comparison between points is paired. The best point is then run, with the
-shipped defaults beside it, on ``held_out_episodes`` episodes from
-``SeedSequence(HELD_OUT_SEED)``, which the search never saw (the benchmark's default seed
-0 is a third, independent stream).
+Every family (:data:`FAMILIES`) is tuned the same way:
 
-The grids (:data:`GRIDS`) are small on purpose (a grid, since optuna is not available):
-ages around the part lives (spring about 1140 flights mean, P10 680; seals about 1240,
-P10 810), test intervals from 5 to 100 slots, RUL lead times from 10 to 200 flights. Quick
-mode (:data:`QUICK`) keeps two values per parameter and a few short episodes, for tests.
-The shipped defaults (``policies.rules.*_DEFAULTS``, ``policies.oracle.ORACLE_DEFAULTS``)
-come from ``python scripts/tune_policies.py --workers 2`` (full grids, 12 training and 12
-held-out episodes of 2000 slots).
+* **Budget**: ``trials x episodes`` simulated episodes of ``slots`` slots, the same for
+  every family (default 40 x 40 = 1600 episodes of 2000 slots).
+* **Optimiser**: Optuna's TPE sampler (seeded, :data:`SAMPLER_SEED`), objective the mean
+  reward per episode (USD: value of the flights flown minus every cost).
+* **Common random numbers**: every trial runs on the same training episodes, seeds
+  :func:`policies.benchmark.episode_seeds` of :data:`TRAIN_SEED` (env and policy seeds),
+  so trials are compared on the same units and the same degradation draws.
+* **Nesting**: for the nested families the first trial is the age rule's tuned point with
+  the override off (``override=False``, no tests): the family's best can only match or
+  beat the age rule on the training seeds.
+* **Edges**: each numeric parameter's best value is checked against its search box
+  (:func:`edge_report`): within 5 % of an end of the box (in the parameter's own scale,
+  log or linear) it is flagged, and the box should be widened.
+* **Held-out**: the chosen parameters are evaluated only on :data:`HELD_OUT_SEED`
+  episodes, which no trial saw (:mod:`policies.value`).
+
+Trials run in this process on one vectorised env of ``episodes`` actuators
+(:func:`policies.batch_runner.run_batch`); families run in parallel workers
+(:func:`tune_families`).
 """
 
 from __future__ import annotations
 
-import itertools
 import math
-from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+import time
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field
 from typing import Any
 
-from policies.base import POLICIES
-from policies.benchmark import PolicySpec, run_benchmark
-from policies.benchmark_stats import Interval
+import gymnasium as gym
+import numpy as np
+
+import policies  # noqa: F401  (registers the policies)
+from policies.base import make_policy, policy_obs_mode
+from policies.batch_runner import run_batch
+from policies.benchmark import episode_seeds
+from scas_env import ENV_ID
+from scas_env.costs import CostModel
+from scas_env.parallel import map_chunks
 
 TRAIN_SEED = 1
 HELD_OUT_SEED = 2
+SAMPLER_SEED = 7
+#: Fraction of a box (in the parameter's scale) that counts as its edge.
+EDGE_FRACTION = 0.05
 
-#: policy -> parameter -> values searched (every combination).
-GRIDS: dict[str, dict[str, list[float]]] = {
-    "preventive": {
-        "spring_age": [400.0, 600.0, 800.0, 1000.0, math.inf],
-        "seal_age": [500.0, 700.0, 900.0],
-        "opportunity": [0.0, 0.2],
-    },
-    "detection": {"test_every": [5.0, 10.0, 20.0, 50.0, 100.0]},
-    "rul_risk": {
-        "spring_lead": [10.0, 50.0, 200.0],
-        "seal_lead": [20.0, 60.0, 150.0],
-        "test_every": [20.0, 100.0],
-        "uncertainty": [math.inf, 0.6],
-    },
-    "oracle": {"margin": [1.0, 2.0, 5.0]},
+#: name -> (low, high, log): the search box of a numeric parameter.
+Box = dict[str, tuple[float, float, bool]]
+
+AGE_BOX: Box = {
+    "spring_age": (200.0, 4000.0, True),
+    "seal_age": (200.0, 4000.0, True),
+    "opportunity": (0.0, 0.9, False),
 }
 
-#: Settings of the quick mode (tests, CI): two values per parameter, short episodes.
-QUICK: dict[str, int] = {"episodes": 2, "slots": 200, "held_out_episodes": 2}
 
-__all__ = ["GRIDS", "HELD_OUT_SEED", "QUICK", "TRAIN_SEED", "TuningResult", "grid_points", "tune"]
+@dataclass(frozen=True)
+class Family:
+    """A rule family to tune.
+
+    Attributes
+    ----------
+    label : unique name (the ladder's arm).
+    policy : registry name of the policy.
+    box : numeric parameters searched, ``name -> (low, high, log)``.
+    fixed : parameters held fixed (e.g. the noisy oracle's ``sigma``).
+    nested : the family has an ``override`` switch (searched as a category, the age
+        rule's point enqueued first).
+    env_kwargs : env keywords (e.g. a cost model with free tests).
+    """
+
+    label: str
+    policy: str
+    box: Box
+    fixed: Mapping[str, Any] = field(default_factory=dict)
+    nested: bool = True
+    env_kwargs: Mapping[str, Any] = field(default_factory=dict)
+
+
+def _families() -> dict[str, Family]:
+    filt = {
+        **AGE_BOX,
+        "risk_threshold": (0.002, 1.0, True),
+        "spring_lead": (1.0, 1000.0, True),
+        "seal_lead": (1.0, 1000.0, True),
+    }
+    fams = [
+        Family("age", "preventive", AGE_BOX, nested=False),
+        Family("detection", "detection", {"test_every": (1.0, 1000.0, True)}, nested=False),
+        Family(
+            "features",
+            "feature_rule",
+            {**AGE_BOX, "spring_z": (0.5, 20.0, True), "seal_z": (0.5, 20.0, True)},
+        ),
+        Family("filter", "rul_risk", {**filt, "test_every": (2.0, 4000.0, True)}),
+        Family(
+            "filter+tests every flight",
+            "rul_risk",
+            filt,
+            fixed={"test_every": 1.0},
+            env_kwargs={"cost_model": CostModel(test_usd=0.0)},
+        ),
+    ]
+    for sigma in (0.0, 0.1, 0.2, 0.3, 0.5):
+        fams.append(
+            Family(
+                f"noisy oracle sigma={sigma:g}",
+                "noisy_oracle",
+                {**AGE_BOX, "spring_lead": (0.5, 1000.0, True), "seal_lead": (0.5, 1000.0, True)},
+                fixed={"sigma": sigma},
+            )
+        )
+    return {f.label: f for f in fams}
+
+
+#: The families of the value-of-information ladder, by label.
+FAMILIES: dict[str, Family] = _families()
+#: Quick mode (tests, smoke runs).
+QUICK: dict[str, int] = {"trials": 3, "episodes": 3, "slots": 150}
+
+__all__ = [
+    "AGE_BOX",
+    "FAMILIES",
+    "HELD_OUT_SEED",
+    "QUICK",
+    "TRAIN_SEED",
+    "Family",
+    "TuningResult",
+    "edge_report",
+    "relevant_box",
+    "tune_families",
+    "tune_family",
+]
 
 
 @dataclass(frozen=True)
 class TuningResult:
-    """Outcome of one policy's grid search.
+    """One family's search: the chosen parameters and every trial.
 
-    Attributes
-    ----------
-    policy : registry name.
-    best_params : grid point with the highest mean training reward.
-    train : every grid point with its training reward interval, in grid order.
-    held_out_best, held_out_default : reward intervals on the held-out seeds of the best
-        point and of the shipped defaults.
+    ``history``: one dict per trial (number, parameters, mean training reward, its
+    standard error); ``edges``: :func:`edge_report` of the best parameters.
     """
 
+    family: str
     policy: str
-    best_params: dict[str, float]
-    train: list[tuple[dict[str, float], Interval]]
-    held_out_best: Interval
-    held_out_default: Interval
+    best_params: dict[str, Any]
+    best_reward: float
+    history: list[dict[str, Any]]
+    edges: dict[str, str]
+    episodes_simulated: int
+    wall_s: float
 
     def to_dict(self) -> dict[str, Any]:
         return {
+            "family": self.family,
             "policy": self.policy,
             "best_params": self.best_params,
-            "train": [{"params": p, "reward": iv.to_dict()} for p, iv in self.train],
-            "held_out_best": self.held_out_best.to_dict(),
-            "held_out_default": self.held_out_default.to_dict(),
+            "best_reward": self.best_reward,
+            "edges": self.edges,
+            "episodes_simulated": self.episodes_simulated,
+            "wall_s": self.wall_s,
+            "history": self.history,
         }
 
 
-def grid_points(grid: Mapping[str, Sequence[float]], *, quick: bool = False) -> list[dict]:
-    """Every combination of the grid's values (the first and last value of each in quick
-    mode).
+def edge_report(params: Mapping[str, Any], box: Box) -> dict[str, str]:
+    """``"low"``/``"high"`` for every boxed parameter within :data:`EDGE_FRACTION` of an
+    end of its box (log scale for log parameters), ``"inside"`` otherwise.
 
-    >>> grid_points({"a": [1, 2, 3], "b": [0]}, quick=True)
-    [{'a': 1, 'b': 0}, {'a': 3, 'b': 0}]
+    >>> edge_report({"a": 1.02, "b": 50.0}, {"a": (1.0, 100.0, True), "b": (0.0, 100.0, False)})
+    {'a': 'low', 'b': 'inside'}
     """
-    if not grid:
-        raise ValueError("grid is empty: give at least one parameter with values")
-    names = list(grid)
-    values = []
-    for n in names:
-        v = list(grid[n])
-        if not v:
-            raise ValueError(f"grid[{n!r}] has no values")
-        values.append(sorted({v[0], v[-1]}, key=v.index) if quick else v)
-    return [dict(zip(names, combo, strict=True)) for combo in itertools.product(*values)]
-
-
-def _reward(result: Any, label: str) -> Interval:
-    return Interval(**result.summary["policies"][label]["reward"])
-
-
-def tune(
-    policy: str,
-    grid: Mapping[str, Sequence[float]] | None = None,
-    *,
-    episodes: int = 12,
-    slots: int = 2000,
-    held_out_episodes: int = 12,
-    quick: bool = False,
-    n_workers: int = 1,
-    env_kwargs: Mapping[str, Any] | None = None,
-    progress: bool = False,
-) -> TuningResult:
-    """Grid-search ``policy`` (default grid :data:`GRIDS`) and check it on held-out seeds.
-
-    ``quick=True`` overrides ``episodes``, ``slots`` and ``held_out_episodes`` with
-    :data:`QUICK` and searches two values per parameter.
-    """
-    if policy not in POLICIES:
-        raise ValueError(f"policy = {policy!r} is not registered; known: {sorted(POLICIES)}")
-    if grid is None:
-        if policy not in GRIDS:
-            raise ValueError(f"policy = {policy!r} has no default grid; known: {sorted(GRIDS)}")
-        grid = GRIDS[policy]
-    if quick:
-        episodes, slots, held_out_episodes = (
-            QUICK["episodes"],
-            QUICK["slots"],
-            QUICK["held_out_episodes"],
+    out = {}
+    for name, (lo, hi, log) in box.items():
+        if name not in params:
+            continue
+        v = float(params[name])
+        f = (
+            (math.log(v) - math.log(lo)) / (math.log(hi) - math.log(lo))
+            if log
+            else ((v - lo) / (hi - lo))
         )
-    points = grid_points(grid, quick=quick)
-    specs = [PolicySpec(policy, p, label=f"{policy}#{k}") for k, p in enumerate(points)]
-    common = {"slots": slots, "n_workers": n_workers, "env_kwargs": env_kwargs}
-    train = run_benchmark(specs, episodes=episodes, seed=TRAIN_SEED, progress=progress, **common)
-    scored = [(p, _reward(train, s.key)) for p, s in zip(points, specs, strict=True)]
-    best = max(range(len(points)), key=lambda k: scored[k][1].mean)
-    check = [PolicySpec(policy, points[best], label="best"), PolicySpec(policy, label="default")]
-    held = run_benchmark(
-        check, episodes=held_out_episodes, seed=HELD_OUT_SEED, progress=progress, **common
+        out[name] = "low" if f < EDGE_FRACTION else "high" if f > 1 - EDGE_FRACTION else "inside"
+    return out
+
+
+def relevant_box(family: Family, params: Mapping[str, Any], slots: int) -> Box:
+    """The part of the family's box that acts at ``params``: the override's parameters
+    only when the override is on, the test interval only when it is shorter than the
+    episode (a longer one means "never test", a legitimate optimum, not an edge)."""
+    box = dict(family.box)
+    if family.nested and params.get("override") is False:
+        box = {k: v for k, v in box.items() if k in AGE_BOX or k == "test_every"}
+    if float(params.get("test_every", 0.0)) >= slots:
+        box.pop("test_every", None)
+    return box
+
+
+def _suggest(trial: Any, family: Family) -> dict[str, Any]:
+    params: dict[str, Any] = {}
+    for name, (lo, hi, log) in family.box.items():
+        params[name] = trial.suggest_float(name, lo, hi, log=log)
+    if family.nested:
+        params["override"] = trial.suggest_categorical("override", [True, False])
+    return {**params, **dict(family.fixed)}
+
+
+def _age_point(family: Family, age_params: Mapping[str, Any] | None) -> dict[str, Any] | None:
+    if not family.nested or age_params is None:
+        return None
+    point = {k: float(age_params[k]) for k in AGE_BOX}
+    for name, (lo, hi, _) in family.box.items():
+        if name not in point:
+            point[name] = math.sqrt(lo * hi) if lo > 0 else 0.5 * (lo + hi)
+    if "test_every" in family.box:  # the box's top is beyond any episode here: no tests
+        point["test_every"] = family.box["test_every"][1]
+    point["override"] = False
+    return point
+
+
+def tune_family(
+    family: Family,
+    *,
+    trials: int = 40,
+    episodes: int = 40,
+    slots: int = 2000,
+    age_params: Mapping[str, Any] | None = None,
+    progress: bool = False,
+    sampler_seed: int = SAMPLER_SEED,
+) -> TuningResult:
+    """Tune one family with TPE (module docstring); ``age_params``: the tuned age rule,
+    enqueued with the override off as the first trial of a nested family."""
+    import optuna
+
+    for name, value in (("trials", trials), ("episodes", episodes), ("slots", slots)):
+        if isinstance(value, bool) or not isinstance(value, int) or value < 1:
+            raise ValueError(f"{name} = {value!r} must be an integer >= 1")
+    optuna.logging.set_verbosity(optuna.logging.WARNING)
+    t0 = time.perf_counter()
+    mode = policy_obs_mode(family.policy)
+    env = gym.make_vec(
+        ENV_ID,
+        num_envs=episodes,
+        vectorization_mode="vector_entry_point",
+        obs_mode=mode,
+        episode_slots=slots,
+        **dict(family.env_kwargs),
     )
+    seeds = episode_seeds(TRAIN_SEED, episodes)
+    duration = env.envs[0].params.mission.flight_duration_s
+    history: list[dict[str, Any]] = []
+
+    def objective(trial: Any) -> float:
+        params = _suggest(trial, family)
+        policy = make_policy(family.policy, env.obs_names, **params)
+        rewards = np.array([r["row"]["reward"] for r in run_batch(env, policy, seeds, duration)])
+        mean = float(rewards.mean())
+        sem = float(rewards.std(ddof=1) / math.sqrt(rewards.size)) if rewards.size > 1 else 0.0
+        history.append({"trial": trial.number, **params, "reward": mean, "reward_sem": sem})
+        return mean
+
+    sampler = optuna.samplers.TPESampler(seed=sampler_seed)
+    study = optuna.create_study(direction="maximize", sampler=sampler)
+    start = _age_point(family, age_params)
+    if start is not None:
+        study.enqueue_trial(start)
+    study.optimize(objective, n_trials=trials, show_progress_bar=progress)
+    env.close()
+    best = history[study.best_trial.number]
+    best_params = {k: v for k, v in best.items() if k not in ("trial", "reward", "reward_sem")}
     return TuningResult(
-        policy, points[best], scored, _reward(held, "best"), _reward(held, "default")
+        family.label,
+        family.policy,
+        best_params,
+        float(study.best_value),
+        history,
+        edge_report(best_params, relevant_box(family, best_params, slots)),
+        trials * episodes,
+        time.perf_counter() - t0,
     )
+
+
+def _tune_chunk(
+    settings: Mapping[str, Any], chunk: Sequence[tuple[Family, dict[str, Any] | None]]
+) -> list[TuningResult]:
+    return [tune_family(f, age_params=a, **settings) for f, a in chunk]
+
+
+def tune_families(
+    labels: Sequence[str] | None = None,
+    *,
+    trials: int = 40,
+    episodes: int = 40,
+    slots: int = 2000,
+    n_workers: int = 1,
+    progress: bool = False,
+    families: Mapping[str, Family] | None = None,
+    on_result: Callable[[TuningResult], None] | None = None,
+) -> dict[str, TuningResult]:
+    """Tune the age rule first, then every other family in ``labels`` (default: all of
+    :data:`FAMILIES`) on ``n_workers`` processes, the nested ones starting from the age
+    rule's point. Same budget for all: ``trials x episodes`` episodes."""
+    fams = dict(FAMILIES if families is None else families)
+    labels = list(fams) if labels is None else list(labels)
+    unknown = [k for k in labels if k not in fams]
+    if unknown:
+        raise ValueError(f"unknown families {unknown}; known: {sorted(fams)}")
+    settings = {"trials": trials, "episodes": episodes, "slots": slots}
+    out: dict[str, TuningResult] = {}
+    if "age" not in labels:
+        labels = ["age", *labels]
+    out["age"] = tune_family(fams["age"], **settings)
+    if on_result is not None:
+        on_result(out["age"])
+    rest = [(fams[k], out["age"].best_params) for k in labels if k != "age"]
+    for res in map_chunks(
+        _tune_chunk,
+        (settings,),
+        rest,
+        n_workers=n_workers,
+        chunk_size=1,
+        progress=progress,
+        desc="families",
+    ):
+        out[res.family] = res
+        if on_result is not None:
+            on_result(res)
+    return {k: out[k] for k in labels}

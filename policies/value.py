@@ -1,448 +1,387 @@
-"""Value of prognostics: what the particle filters buy in cost and availability.
+"""Value of prognostics: the same nested rule family re-tuned at each information level.
 
-The study (DESIGN.md section 6) runs *arms* on the same episodes (common random numbers,
-:func:`policies.benchmark.episode_seeds`), so every comparison is a paired difference over
-episodes. Four studies:
+The study's spine is a **value-of-information ladder** (docs/value.md). Each rung is one
+family of :mod:`policies.tuning` (:data:`LADDER`), i.e. the age rule plus an override fed
+by the information of that rung, tuned with the same budget on training seeds and then run
+on held-out episodes (:data:`policies.tuning.HELD_OUT_SEED`) that no trial saw:
 
-* ``information``: how much the decision rule knows. ``none`` (run to failure:
-  ``corrective``), ``features`` (no filter: the age-based ``preventive`` rule and the
-  alarm-triggered ``detection`` rule), ``features+rul`` (the ``rul_risk`` rule on the
-  particle filters' RUL summaries) and ``state`` (the ``oracle``: perfect prognostics).
-* ``particles``, ``noise``, ``growth``: the ``rul_risk`` rule with a worse or better filter:
-  ``Scenario.n_particles`` (particles per filter), ``Scenario.filter_noise_scale`` (the
-  filters assume that much more measurement noise) and ``Scenario.filter_growth_bias`` (the
-  filters assume growth rates that much faster (> 1) or slower (< 1) than the truth).
+* ``age``: age only (the preventive rule), the reference of every paired difference;
+* ``features``: the in-flight features only (no filter, no tests);
+* ``filter``: features plus the particle filters, tests every ``test_every`` slots (tuned);
+* ``filter+tests every flight``: the same with a test before every flight, emulated by the
+  test action every slot at zero test cost (the env has no free every-flight test mode);
+* ``noisy oracle sigma=s``: each part's life known up to ``exp(s z)``, s in {0, 0.1, 0.2,
+  0.3, 0.5} (controls: the value must fall as s grows);
+* ``oracle``: the planning oracle (:mod:`policies.oracle`), not tuned;
+* ``corrective`` (run to failure) and ``detection`` as context.
 
-:func:`policies.benchmark.run_benchmark` takes one set of env keywords per call, so the
-arms are grouped by their env keywords and each group is one call with the same ``seed``
-and ``episodes`` (hence the same episode seeds). Arms with the same configuration (policy,
-parameters, observation mode and env keywords, Scenario defaults left out), e.g. the default
-filter that is a level of every filter study, are run once and their rows shared: a run
-depends only on its configuration and its seeds.
+Every arm of a held-out run uses the same episode seeds (common random numbers). Per arm:
+the intervals of :func:`policies.benchmark_stats.metric_interval` and the paired difference
+of the reward against ``age`` with its t-interval and minimum detectable difference; the
+**break-even sigma** is where the noisy oracle's paired value against the age rule crosses
+zero (linear interpolation between the two sigmas that bracket it).
 
-Statistics per arm (:mod:`policies.benchmark_stats`): mean and t-interval over episodes of
-every metric of :data:`~policies.benchmark_stats.METRICS`; the paired difference
-``arm_e - reference_e`` (default reference ``preventive``, the best rule without a filter)
-and the paired difference against the arm's study baseline (``preventive`` for the
-information study, the default filter for the filter studies).
-
->>> [a.label for a in default_arms() if a.study == "noise"]
-['noise_scale=1', 'noise_scale=2', 'noise_scale=4']
+A sensing-quality sweep (sensor noise x0.1 ... x3, per-unit tolerances on/off) needs a
+feature surrogate rebuilt per sensing setting: the surrogate fidelity reads its noise and
+unit scatter from the shipped surrogate, not from ``ScasParams``, and ``Scenario`` has no
+sensing knob. It is not run here (docs/value.md says what is missing).
 """
 
 from __future__ import annotations
 
 import csv
+import itertools
 import json
 import math
 import time
-from collections.abc import Iterable, Mapping, Sequence
-from dataclasses import dataclass, field, fields
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-import matplotlib
-
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt
 import numpy as np
-from tqdm.auto import tqdm
 
 from policies.benchmark import PolicySpec, run_benchmark
-from policies.benchmark_stats import METRICS, paired_difference, t_interval
-from scas_env.scenario import Scenario
+from policies.benchmark_stats import METRICS, metric_interval, paired_comparison
+from policies.tuning import FAMILIES, HELD_OUT_SEED, TuningResult, tune_families
 
-#: Studies in table and plot order.
-STUDIES = ("information", "particles", "noise", "growth")
-#: Filter studies: the Scenario field each one varies and the label prefix of its arms.
-FILTER_STUDIES = {
-    "particles": ("n_particles", "particles"),
-    "noise": ("filter_noise_scale", "noise_scale"),
-    "growth": ("filter_growth_bias", "growth_bias"),
-}
-#: Quick mode (tests, smoke runs): keywords of :func:`run_value_study`. Parts start at a
-#: random fraction of their life (a fleet in service), so that 200-slot episodes see
-#: failures and replacements (a new part lasts about 1200 flights: 2000 slots are
-#: about 1.7 mean lives, env docstring).
-QUICK: dict[str, Any] = {
-    "episodes": 3,
-    "slots": 200,
-    "env_kwargs": {"initial_health": "random"},
-}
-#: metric -> (column title, format) of the Markdown tables.
-TABLE_COLUMNS = {
-    "reward": ("reward USD/episode", "{:.0f}"),
-    "cost_per_fh": ("cost USD/FH", "{:.2f}"),
-    "availability": ("availability", "{:.4f}"),
-    "failures_per_1000fh": ("failures/1000FH", "{:.3f}"),
-    "replacements_per_1000fh": ("prev. repl./1000FH", "{:.3f}"),
-}
+#: Rungs in order of information (labels of policies.tuning.FAMILIES, plus "oracle").
+LADDER = (
+    "age",
+    "features",
+    "filter",
+    "filter+tests every flight",
+    "noisy oracle sigma=0.5",
+    "noisy oracle sigma=0.3",
+    "noisy oracle sigma=0.2",
+    "noisy oracle sigma=0.1",
+    "noisy oracle sigma=0",
+    "oracle",
+)
+#: Context arms (not rungs): run to failure and the detection rule.
+CONTEXT = ("corrective", "detection")
+REFERENCE = "age"
+#: Quick mode (tests, smoke runs).
+QUICK: dict[str, int] = {"episodes": 4, "slots": 150, "trials": 2, "train_episodes": 3}
 
 __all__ = [
-    "FILTER_STUDIES",
+    "CONTEXT",
+    "LADDER",
     "QUICK",
-    "STUDIES",
-    "Arm",
-    "ValueResult",
-    "default_arms",
+    "REFERENCE",
+    "LadderResult",
+    "break_even_sigma",
     "markdown_report",
-    "run_value_study",
-    "summarize_arms",
-    "write_value_outputs",
+    "run_ladder",
+    "summarize_ladder",
+    "write_outputs",
 ]
 
 
 @dataclass(frozen=True)
-class Arm:
-    """One arm of the study: a policy with its env keywords.
-
-    Attributes
-    ----------
-    label : unique name in the tables (also the ``arm`` column of value.csv).
-    study : one of :data:`STUDIES`.
-    level : what the arm sets within its study (information level or filter setting).
-    spec : the policy (:class:`policies.benchmark.PolicySpec`; its label is replaced by
-        ``label``).
-    env_kwargs : Scenario keywords of this arm (added to the study's common env keywords).
-    baseline : label of the arm it is compared with inside its study.
-    """
-
-    label: str
-    study: str
-    level: str
-    spec: PolicySpec
-    env_kwargs: Mapping[str, Any] = field(default_factory=dict)
-    baseline: str = "preventive"
-
-    def __post_init__(self) -> None:
-        if self.study not in STUDIES:
-            raise ValueError(f"Arm {self.label!r}: study = {self.study!r} must be in {STUDIES}")
-
-    def config_key(self, common: Mapping[str, Any]) -> tuple[Any, ...]:
-        """Identity of the run: arms with equal keys give equal rows (Scenario defaults
-        left out, so ``n_particles=200`` is the default filter)."""
-        env = _effective_kwargs({**common, **self.env_kwargs})
-        return (
-            self.spec.name,
-            repr(sorted(dict(self.spec.params).items())),
-            self.spec.module,
-            self.spec.obs_mode,
-            repr(sorted(env.items())),
-        )
-
-
-def _effective_kwargs(kwargs: Mapping[str, Any]) -> dict[str, Any]:
-    defaults = {f.name: f.default for f in fields(Scenario)}
-    return {k: v for k, v in kwargs.items() if not (k in defaults and defaults[k] == v)}
-
-
-def _level(value: float) -> str:
-    return f"{value:g}"
-
-
-def default_arms(
-    *,
-    particles: Sequence[int] = (50, 200, 1000),
-    noise_scales: Sequence[float] = (1.0, 2.0, 4.0),
-    growth_biases: Sequence[float] = (0.7, 1.0, 1.4),
-) -> tuple[Arm, ...]:
-    """The arms of the module docstring; each filter study's baseline is the Scenario's
-    default filter (200 particles, noise scale 1, growth bias 1), which must be a level."""
-    arms = [
-        Arm("corrective", "information", "none", PolicySpec("corrective")),
-        Arm("preventive", "information", "features", PolicySpec("preventive")),
-        Arm("detection", "information", "features", PolicySpec("detection")),
-        Arm("rul_risk", "information", "features+rul", PolicySpec("rul_risk")),
-        Arm("oracle", "information", "state", PolicySpec("oracle")),
-    ]
-    for study, levels in (
-        ("particles", particles),
-        ("noise", noise_scales),
-        ("growth", growth_biases),
-    ):
-        key, prefix = FILTER_STUDIES[study]
-        default = getattr(Scenario(), key)
-        if default not in levels:
-            raise ValueError(
-                f"{key} levels {list(levels)} must include the default {default!r} (baseline)"
-            )
-        baseline = f"{prefix}={_level(default)}"
-        for v in levels:
-            label, level = f"{prefix}={_level(v)}", f"{key}={_level(v)}"
-            spec = PolicySpec("rul_risk")
-            arms.append(Arm(label, study, level, spec, {key: v}, baseline=baseline))
-    return tuple(arms)
-
-
-@dataclass(frozen=True)
-class ValueResult:
-    """Rows (one per arm and episode), statistics per arm and the run's configuration."""
+class LadderResult:
+    """Held-out rows (one per arm and episode), statistics, tuning results, config."""
 
     rows: list[dict[str, Any]]
     summary: dict[str, Any]
+    tuning: dict[str, TuningResult]
     config: dict[str, Any]
     wall_s: float
 
 
-def _check_arms(arms: Sequence[Arm], reference: str) -> None:
-    labels = [a.label for a in arms]
-    if not labels or len(set(labels)) != len(labels):
-        raise ValueError(f"arms = {labels} must be a non-empty list of unique labels")
-    if reference not in labels:
-        raise ValueError(f"reference = {reference!r} must be one of the arms {labels}")
-    for a in arms:
-        if a.baseline not in labels:
-            raise ValueError(f"Arm {a.label!r}: baseline {a.baseline!r} is not an arm")
+def _sigma(label: str) -> float | None:
+    prefix = "noisy oracle sigma="
+    return float(label[len(prefix) :]) if label.startswith(prefix) else None
 
 
-def _run_arms(
-    arms: Sequence[Arm],
-    common: Mapping[str, Any],
+def break_even_sigma(sigmas: Sequence[float], values: Sequence[float]) -> float:
+    """Smallest sigma at which the value (paired reward vs the age rule) crosses from
+    positive to <= 0, linearly interpolated; NaN if it never does (or starts <= 0: then
+    the first sigma if the first value is <= 0).
+
+    >>> round(break_even_sigma([0.0, 0.1, 0.2, 0.3], [30.0, 10.0, -10.0, -20.0]), 6)
+    0.15
+    """
+    order = np.argsort(sigmas)
+    s = np.asarray(sigmas, dtype=np.float64)[order]
+    v = np.asarray(values, dtype=np.float64)[order]
+    if v.size == 0:
+        return math.nan
+    if v[0] <= 0:
+        return float(s[0])
+    for k in range(1, v.size):
+        if v[k] <= 0:
+            return float(s[k - 1] + (s[k] - s[k - 1]) * v[k - 1] / (v[k - 1] - v[k]))
+    return math.nan
+
+
+def _specs(
+    tuning: Mapping[str, TuningResult], slots: int
+) -> list[tuple[str, PolicySpec, dict[str, Any]]]:
+    """(arm label, policy spec, env keywords) of every held-out arm."""
+    out = [("corrective", PolicySpec("corrective", label="corrective"), {})]
+    for label in (*LADDER, "detection"):
+        if label == "oracle":
+            spec = PolicySpec("oracle", {"episode_slots": slots}, label="oracle")
+            out.append((label, spec, {}))
+            continue
+        if label not in tuning:
+            continue
+        fam = FAMILIES[label]
+        spec = PolicySpec(fam.policy, tuning[label].best_params, label=label)
+        out.append((label, spec, dict(fam.env_kwargs)))
+    return out
+
+
+def run_ladder(
     *,
-    episodes: int,
-    slots: int,
-    seed: int,
-    n_workers: int,
-    progress: bool,
-) -> dict[str, list[dict[str, Any]]]:
-    """Benchmark rows of each arm (distinct configurations): one
-    :func:`~policies.benchmark.run_benchmark` call per set of env keywords, all with the
-    same ``seed`` and ``episodes`` (hence the same episode seeds)."""
-    groups: dict[str, list[Arm]] = {}
-    for a in arms:
-        groups.setdefault(repr(sorted(_effective_kwargs(a.env_kwargs).items())), []).append(a)
-    rows_of: dict[str, list[dict[str, Any]]] = {}
-    with tqdm(total=len(arms), disable=not progress, desc="arms", unit="arm") as bar:
-        for group in groups.values():
-            res = run_benchmark(
-                [
-                    PolicySpec(a.spec.name, a.spec.params, a.label, a.spec.module, a.spec.obs_mode)
-                    for a in group
-                ],
-                episodes=episodes,
-                slots=slots,
-                seed=seed,
-                n_workers=n_workers,
-                env_kwargs={**common, **group[0].env_kwargs},
-            )
-            for a in group:
-                rows_of[a.label] = [r for r in res.rows if r["policy"] == a.label]
-            bar.update(len(group))
-    return rows_of
-
-
-def run_value_study(
-    arms: Sequence[Arm] | None = None,
-    *,
-    episodes: int = 40,
+    episodes: int = 1000,
     slots: int = 2000,
-    seed: int = 0,
+    trials: int = 40,
+    train_episodes: int = 40,
     n_workers: int = 1,
-    env_kwargs: Mapping[str, Any] | None = None,
-    reference: str = "preventive",
     progress: bool = False,
     confidence: float = 0.95,
-) -> ValueResult:
-    """Run every arm on episodes ``0..episodes-1`` of ``seed`` and summarise.
-
-    ``env_kwargs`` are common to every arm (e.g. ``fidelity``, ``initial_health``); an
-    arm's own keywords must not set the same key. One
-    :func:`~policies.benchmark.run_benchmark` call per distinct set of env keywords (a
-    progress bar over arms when ``progress``).
-    """
-    arms = tuple(default_arms() if arms is None else arms)
-    _check_arms(arms, reference)
-    common = dict(env_kwargs or {})
-    for a in arms:
-        clash = sorted(set(a.env_kwargs) & set(common))
-        if clash:
-            raise ValueError(f"env_kwargs set {clash}, which arm {a.label!r} sets too")
-    owner: dict[tuple[Any, ...], Arm] = {}
-    for a in arms:
-        owner.setdefault(a.config_key(common), a)
+    families: Sequence[str] | None = None,
+) -> LadderResult:
+    """Tune every family (:func:`policies.tuning.tune_families`, ``trials x
+    train_episodes`` training episodes each), then run every arm on ``episodes`` held-out
+    episodes and summarise (:func:`summarize_ladder`)."""
     t0 = time.perf_counter()
-    rows_of = _run_arms(
-        list(owner.values()),
-        common,
-        episodes=episodes,
+    labels = [k for k in FAMILIES if families is None or k in families or k == REFERENCE]
+    tuning = tune_families(
+        labels,
+        trials=trials,
+        episodes=train_episodes,
         slots=slots,
-        seed=seed,
         n_workers=n_workers,
         progress=progress,
     )
-    wall = time.perf_counter() - t0
-    rows = []
-    for a in arms:
-        for r in rows_of[owner[a.config_key(common)].label]:
-            rest = {k: v for k, v in r.items() if k != "policy"}
-            rows.append(
-                {"arm": a.label, "study": a.study, "level": a.level, "policy": a.spec.name, **rest}
-            )
+    arms = _specs(tuning, slots)
+    groups: dict[str, list[tuple[str, PolicySpec, dict[str, Any]]]] = {}
+    for arm in arms:
+        groups.setdefault(repr(sorted(arm[2].items())), []).append(arm)
+    rows: list[dict[str, Any]] = []
+    events: list[dict[str, Any]] = []
+    for group in groups.values():
+        res = run_benchmark(
+            [spec for _, spec, _ in group],
+            episodes=episodes,
+            slots=slots,
+            seed=HELD_OUT_SEED,
+            n_workers=n_workers,
+            env_kwargs=group[0][2],
+            progress=progress,
+            confidence=confidence,
+        )
+        rows += [{"arm": r["policy"], **r} for r in res.rows]
+        events += res.events
+    order = [a for a, _, _ in arms]
+    rows.sort(key=lambda r: (order.index(r["arm"]), r["episode"]))
+    summary = summarize_ladder(rows, order, confidence)
+    summary["events"] = _event_counts(events)
     config = {
         "episodes": episodes,
         "slots": slots,
-        "seed": seed,
+        "held_out_seed": HELD_OUT_SEED,
+        "trials": trials,
+        "train_episodes": train_episodes,
         "n_workers": n_workers,
-        "reference": reference,
-        "env_kwargs": {
-            k: v if isinstance(v, int | float | str) else repr(v) for k, v in common.items()
-        },
         "arms": [
             {
-                "label": a.label,
-                "study": a.study,
-                "level": a.level,
-                "policy": a.spec.name,
-                "params": dict(a.spec.params),
-                "env_kwargs": dict(a.env_kwargs),
-                "baseline": a.baseline,
-                "run_of": owner[a.config_key(common)].label,
+                "arm": a,
+                "policy": s.name,
+                "params": {k: _jsonable(v) for k, v in dict(s.params).items()},
+                "env_kwargs": {k: repr(v) for k, v in e.items()},
             }
-            for a in arms
+            for a, s, e in arms
         ],
     }
-    summary = summarize_arms(rows, arms, reference, confidence)
-    return ValueResult(rows, summary, config, wall)
+    return LadderResult(rows, summary, tuning, config, time.perf_counter() - t0)
 
 
-def _column(rows: Iterable[Mapping[str, Any]], arm: str, metric: str) -> np.ndarray:
-    mine = sorted((r for r in rows if r["arm"] == arm), key=lambda r: int(r["episode"]))
-    return np.array([float(r[metric]) for r in mine], dtype=np.float64)
+def _jsonable(v: Any) -> Any:
+    if isinstance(v, bool | int | str) or v is None:
+        return v
+    if isinstance(v, float):
+        return v if math.isfinite(v) else repr(v)
+    return repr(v)
 
 
-def summarize_arms(
-    rows: Sequence[Mapping[str, Any]],
-    arms: Sequence[Arm],
-    reference: str = "preventive",
-    confidence: float = 0.95,
+def _event_counts(events: Sequence[Mapping[str, Any]]) -> dict[str, dict[str, int]]:
+    out: dict[str, dict[str, int]] = {}
+    for ev in events:
+        d = out.setdefault(ev["policy"], {})
+        key = f"{ev['part']}_{ev['kind']}"
+        d[key] = d.get(key, 0) + 1
+    return out
+
+
+def summarize_ladder(
+    rows: Sequence[Mapping[str, Any]], arms: Sequence[str], confidence: float = 0.95
 ) -> dict[str, Any]:
-    """Per arm: t-intervals of :data:`METRICS`, paired differences against ``reference``
-    and against the arm's ``baseline`` (rows: value.csv rows, keyed by ``arm``)."""
-    _check_arms(arms, reference)
-    episodes = {a.label: _column(rows, a.label, "episode") for a in arms}
-    for a in arms:
-        for other in (reference, a.baseline):
-            if not np.array_equal(episodes[a.label], episodes[other]):
-                raise ValueError(
-                    f"arms {a.label!r} and {other!r} were not run on the same episodes"
-                )
-    data = {a.label: {m: _column(rows, a.label, m) for m in METRICS} for a in arms}
-
-    def paired(x: str, y: str) -> dict[str, dict[str, float]]:
-        return {m: paired_difference(data[x][m], data[y][m], confidence).to_dict() for m in METRICS}
-
-    return {
-        "confidence": confidence,
-        "reference": reference,
-        "arms": {
-            a.label: {
-                "study": a.study,
-                "level": a.level,
-                "policy": a.spec.name,
-                "baseline": a.baseline,
-                "metrics": {m: t_interval(data[a.label][m], confidence).to_dict() for m in METRICS},
-                "paired_vs_reference": paired(a.label, reference),
-                "paired_vs_baseline": paired(a.label, a.baseline),
-            }
-            for a in arms
-        },
+    """Per arm: intervals of every metric, the paired reward difference vs ``age`` (with
+    sd, p-value and minimum detectable difference); the break-even sigma and the paired
+    differences between consecutive noisy-oracle sigmas (the monotonicity control)."""
+    if REFERENCE not in arms:
+        raise ValueError(f"arms {list(arms)} must include the reference {REFERENCE!r}")
+    by_arm = {
+        a: sorted((r for r in rows if r["arm"] == a), key=lambda r: int(r["episode"])) for a in arms
     }
+    episodes = {a: [int(r["episode"]) for r in by_arm[a]] for a in arms}
+    for a in arms:
+        if episodes[a] != episodes[REFERENCE]:
+            raise ValueError(f"arms {a!r} and {REFERENCE!r} were not run on the same episodes")
+
+    def reward(a: str) -> np.ndarray:
+        return np.array([float(r["reward"]) for r in by_arm[a]])
+
+    out: dict[str, Any] = {"confidence": confidence, "reference": REFERENCE, "arms": {}}
+    for a in arms:
+        out["arms"][a] = {
+            "metrics": {m: metric_interval(by_arm[a], m, confidence).to_dict() for m in METRICS},
+            "value_vs_age": paired_comparison(reward(a), reward(REFERENCE), confidence),
+        }
+    noisy = sorted((s, a) for a in arms if (s := _sigma(a)) is not None)
+    if noisy:
+        values = [out["arms"][a]["value_vs_age"]["mean"] for _, a in noisy]
+        out["break_even_sigma"] = break_even_sigma([s for s, _ in noisy], values)
+        out["monotone_steps"] = [
+            {
+                "from": a,
+                "to": b,
+                **paired_comparison(reward(b), reward(a), confidence),
+            }
+            for (_, a), (_, b) in itertools.pairwise(noisy)
+        ]
+    return out
 
 
-def _cell(iv: Mapping[str, float], fmt: str) -> str:
-    if math.isnan(iv["mean"]):
-        return "-"
-    if math.isnan(iv["low"]):
-        return fmt.format(iv["mean"])
-    return f"{fmt.format(iv['mean'])} ± {fmt.format(0.5 * (iv['high'] - iv['low']))}"
+def _money(x: float) -> str:
+    return "-" if not math.isfinite(x) else f"{x:+,.0f}"
 
 
-def _table(summary: Mapping[str, Any], key: str, title: str) -> list[str]:
-    header = ["study", "arm", "level", *(TABLE_COLUMNS[m][0] for m in TABLE_COLUMNS)]
-    lines = [f"## {title}", "", "| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
-    for label, d in summary["arms"].items():
-        cells = [_cell(d[key][m], fmt) for m, (_, fmt) in TABLE_COLUMNS.items()]
-        lines.append("| " + " | ".join([d["study"], label, d["level"], *cells]) + " |")
-    return [*lines, ""]
-
-
-def markdown_report(result: ValueResult) -> str:
-    """value.md: per-arm means and the paired differences (no wall time: the file of a
-    given seed is reproducible)."""
+def markdown_report(result: LadderResult) -> str:
+    """ladder.md: the ladder table, the controls and the tuning summary."""
     s, c = result.summary, result.config
-    out = [
-        "# Value of prognostics",
+    pct = f"{100 * s['confidence']:.0f}%"
+    lines = [
+        "# Value of prognostics: the information ladder",
         "",
-        f"{c['episodes']} episodes x {c['slots']} slots per arm, seed {c['seed']} (the same "
-        f"episode seeds for every arm), env keywords {c['env_kwargs']}. Cells: mean ± "
-        f"half-width of the {100 * s['confidence']:.0f}% t-interval over episodes.",
+        f"Held-out: {c['episodes']} episodes x {c['slots']} slots per arm, seed "
+        f"{c['held_out_seed']} (the same episodes for every arm; no trial saw them). Tuning: "
+        f"{c['trials']} Optuna TPE trials x {c['train_episodes']} training episodes per family. "
+        f"Value = paired reward difference vs the tuned age rule (USD per episode), {pct} "
+        "t-interval, MDD = minimum detectable difference (80 % power, two-sided 5 %). "
+        "Cost per FH and rates are finite-horizon figures (episodes from new parts, "
+        f"{c['slots']} slots): not long-run rates (docs/value.md).",
         "",
-        *_table(s, "metrics", "Per arm"),
-        *_table(s, "paired_vs_reference", f"Paired difference vs `{s['reference']}`"),
-        *_table(s, "paired_vs_baseline", "Paired difference vs the study baseline"),
-        "## Arms",
-        "",
+        "| arm | value USD/episode | 95% CI | MDD | p | reward USD/episode | cost USD/FH "
+        "(finite horizon) | availability | failures/1000 FH (Garwood) |",
+        "|---|---|---|---|---|---|---|---|---|",
     ]
-    for a in c["arms"]:
-        shared = "" if a["run_of"] == a["label"] else f"; same run as `{a['run_of']}`"
-        out.append(
-            f"- `{a['label']}` ({a['study']}): `{a['policy']}` {a['params']}, env "
-            f"{a['env_kwargs']}, baseline `{a['baseline']}`{shared}"
+    for arm, d in s["arms"].items():
+        v, m = d["value_vs_age"], d["metrics"]
+        av, cf, fl, rw = m["availability"], m["cost_per_fh"], m["failures_per_1000fh"], m["reward"]
+        lines.append(
+            f"| {arm} | {_money(v['mean'])} | [{_money(v['low'])}, {_money(v['high'])}] | "
+            f"{v['mdd']:,.0f} | {v['p_value']:.3g} | {rw['mean']:,.0f} | "
+            f"{cf['mean']:.2f} [{cf['low']:.2f}, {cf['high']:.2f}] | "
+            f"{av['mean']:.4f} [{av['low']:.4f}, {av['high']:.4f}] | "
+            f"{fl['mean']:.3f} [{fl['low']:.3f}, {fl['high']:.3f}] |"
         )
-    return "\n".join(out) + "\n"
+    if "break_even_sigma" in s:
+        lines += ["", f"Break-even sigma (noisy oracle = age rule): {s['break_even_sigma']:.3f}"]
+        lines += ["", "Monotonicity control (paired, next sigma minus previous, USD/episode):", ""]
+        for st in s["monotone_steps"]:
+            lines.append(
+                f"- {st['to']} - {st['from']}: {_money(st['mean'])} "
+                f"[{_money(st['low'])}, {_money(st['high'])}], MDD {st['mdd']:,.0f}"
+            )
+    lines += ["", "## Tuned parameters (training seeds)", ""]
+    for label, t in result.tuning.items():
+        edges = {k: v for k, v in t.edges.items() if v != "inside"}
+        params = {k: (round(v, 4) if isinstance(v, float) else v) for k, v in t.best_params.items()}
+        lines.append(
+            f"- `{label}` ({t.policy}): {params}; training reward {t.best_reward:,.0f}; "
+            f"{t.episodes_simulated} episodes; at box edge: {edges or 'none'}"
+        )
+    return "\n".join(lines) + "\n"
 
 
 def _plot(summary: Mapping[str, Any], path: Path) -> None:
-    """Per study (columns): paired reward difference vs the reference, cost per FH and
-    availability (rows), mean ± t-interval half-width per arm."""
-    panels = (
-        ("paired_vs_reference", "reward", f"Δ reward vs {summary['reference']} (USD/episode)"),
-        ("metrics", "cost_per_fh", "cost (USD/FH)"),
-        ("metrics", "availability", "availability"),
-    )
-    studies = [s for s in STUDIES if any(d["study"] == s for d in summary["arms"].values())]
-    fig, axes = plt.subplots(
-        len(panels), len(studies), figsize=(3.3 * len(studies), 8.0), sharey="row", squeeze=False
-    )
-    for j, study in enumerate(studies):
-        labels = [k for k, d in summary["arms"].items() if d["study"] == study]
-        x = np.arange(len(labels))
-        for i, (key, metric, ylabel) in enumerate(panels):
-            ax = axes[i, j]
-            ivs = [summary["arms"][k][key][metric] for k in labels]
-            mean = np.array([iv["mean"] for iv in ivs])
-            half = np.nan_to_num(np.array([0.5 * (iv["high"] - iv["low"]) for iv in ivs]))
-            ax.errorbar(x, mean, yerr=half, fmt="o", capsize=4)
-            if key == "paired_vs_reference":
-                ax.axhline(0.0, color="grey", lw=0.8)
-            ax.set_xticks(x, labels if i == len(panels) - 1 else [], rotation=30, ha="right")
-            ax.grid(alpha=0.3)
-            if j == 0:
-                ax.set_ylabel(ylabel)
-            if i == 0:
-                ax.set_title(study)
-    fig.suptitle(f"Value of prognostics ({100 * summary['confidence']:.0f}% t-intervals)")
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    arms = [a for a in LADDER if a in summary["arms"]]
+    v = [summary["arms"][a]["value_vs_age"] for a in arms]
+    mean = np.array([d["mean"] for d in v])
+    err = np.nan_to_num(np.array([[d["mean"] - d["low"], d["high"] - d["mean"]] for d in v]).T)
+    mdd = np.array([d["mdd"] for d in v])
+    fig, ax = plt.subplots(figsize=(9, 4.8))
+    x = np.arange(len(arms))
+    ax.errorbar(x, mean, yerr=err, fmt="o", capsize=4, label="value, 95% CI")
+    ax.fill_between(x, -mdd, mdd, color="grey", alpha=0.15, label="± MDD (80% power)")
+    ax.axhline(0.0, color="black", lw=0.8)
+    ax.set_xticks(x, arms, rotation=30, ha="right")
+    ax.set_ylabel("value per episode vs tuned age rule (USD)")
+    ax.set_title("Value per episode vs information (held-out, paired)")
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8)
     fig.tight_layout()
     fig.savefig(path, dpi=120)
     plt.close(fig)
 
 
-def write_value_outputs(
-    result: ValueResult, out_dir: str | Path, *, plots: bool = True
+def _atomic_write(path: Path, text: str) -> None:
+    tmp = path.with_suffix(path.suffix + ".tmp")
+    tmp.write_text(text)
+    tmp.replace(path)
+
+
+def write_outputs(
+    result: LadderResult, out_dir: str | Path, *, plots: bool = True, overwrite: bool = False
 ) -> dict[str, Path]:
-    """Write value.csv (one row per arm and episode), value.json (statistics,
-    configuration, wall time), value.md and value.png; returns their paths by name."""
+    """Write ladder.csv (held-out rows), ladder.json (statistics, tuning, config, wall
+    time), ladder.md, tuning_history.csv and value_vs_information.png (+ its numbers in
+    ladder.json). Refuses to overwrite existing files unless ``overwrite``."""
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    paths = {"csv": out / "value.csv", "json": out / "value.json", "md": out / "value.md"}
-    with paths["csv"].open("w", newline="") as f:
+    paths = {
+        "csv": out / "ladder.csv",
+        "json": out / "ladder.json",
+        "md": out / "ladder.md",
+        "history": out / "tuning_history.csv",
+    }
+    if plots:
+        paths["png"] = out / "value_vs_information.png"
+    existing = [str(p) for p in paths.values() if p.exists()]
+    if existing and not overwrite:
+        raise FileExistsError(f"{existing} exist; pass overwrite=True (--overwrite) to replace")
+    with paths["csv"].with_suffix(".tmp").open("w", newline="") as f:
         writer = csv.DictWriter(f, fieldnames=list(result.rows[0]))
         writer.writeheader()
         writer.writerows(result.rows)
-    payload = {**result.summary, "config": result.config, "wall_s": result.wall_s}
-    paths["json"].write_text(json.dumps(payload, indent=2) + "\n")
-    paths["md"].write_text(markdown_report(result))
+    paths["csv"].with_suffix(".tmp").replace(paths["csv"])
+    hist = [{"family": k, **h} for k, t in result.tuning.items() for h in t.history]
+    fields: list[str] = []
+    for h in hist:
+        fields += [k for k in h if k not in fields]
+    with paths["history"].with_suffix(".tmp").open("w", newline="") as f:
+        writer = csv.DictWriter(f, fieldnames=fields)
+        writer.writeheader()
+        writer.writerows(hist)
+    paths["history"].with_suffix(".tmp").replace(paths["history"])
+    payload = {
+        **result.summary,
+        "tuning": {k: t.to_dict() for k, t in result.tuning.items()},
+        "config": result.config,
+        "wall_s": result.wall_s,
+    }
+    _atomic_write(paths["json"], json.dumps(payload, indent=2, default=_jsonable) + "\n")
+    _atomic_write(paths["md"], markdown_report(result))
     if plots:
-        paths["png"] = out / "value.png"
         _plot(result.summary, paths["png"])
     return paths

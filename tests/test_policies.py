@@ -13,8 +13,11 @@ from stable_baselines3.common.monitor import Monitor
 import scas_env
 from policies import make_policy, policy_obs_mode
 from policies.benchmark import run_episode
+from policies.nested import ground_test_reference
+from policies.noisy_oracle import NoisyOraclePolicy
 from policies.oracle import OraclePolicy
-from policies.rules import DetectionPolicy, PreventivePolicy, RandomPolicy, RulRiskPolicy
+from policies.prognostic import FeatureRulePolicy, RulRiskPolicy
+from policies.rules import DetectionPolicy, PreventivePolicy, RandomPolicy
 
 FULL = (
     "I2", "I6", "I7", "G1", "G3", "test_age", "no_go", "spring_rul_mean", "spring_rul_low",
@@ -77,12 +80,14 @@ def test_detection_tests_every_k_and_replaces_on_alarm():
     assert act(p, seal_alarm=1.0, seal_age=0.0) == 0  # a new part is never replaced
 
 
-def test_rul_risk_replaces_on_risk_or_low_rul_and_tests_when_uncertain():
+def test_rul_risk_is_the_age_rule_plus_an_override_and_acts_on_the_implicated_part():
     p = RulRiskPolicy(
-        FULL, risk_threshold=0.1, spring_lead=50, seal_lead=80, test_every=30,
-        uncertainty=0.5, min_test_gap=5, opportunity=0.5,
+        FULL, spring_age=1000, seal_age=1200, opportunity=0.5, risk_threshold=0.1,
+        spring_lead=50, seal_lead=80, test_every=30,
     )  # fmt: skip
     assert act(p) == 0
+    assert act(p, spring_age=1000) == 2  # the age backstop
+    assert act(p, seal_age=600, downtime=1) == 3  # grouping as the age rule: 1200 * 0.5
     assert act(p, spring_risk=0.1) == 2
     assert act(p, seal_risk=0.2) == 3
     assert act(p, spring_rul_low=50.0) == 2
@@ -91,23 +96,75 @@ def test_rul_risk_replaces_on_risk_or_low_rul_and_tests_when_uncertain():
     assert act(p, seal_rul_low=160.0, downtime=1) == 3  # 160 * (1 - 0.5) <= 80
     assert act(p, spring_risk=0.05, downtime=1) == 2  # 0.05 >= 0.5 * 0.1
     assert act(p, test_age=30) == 1
-    # spread (900 - 300) / 900 = 0.67 > 0.5: test once the last test is 5 slots old
-    assert act(p, spring_rul_low=300.0, test_age=4) == 0
-    assert act(p, spring_rul_low=300.0, test_age=5) == 1
-    # a failed go/no-go: replace the part closer to failure rather than fly on
-    assert act(p, no_go=1.0, seal_risk=0.05, spring_risk=0.01) == 3
-    assert act(p, no_go=1.0, spring_risk=0.05) == 2
-    assert act(p, no_go=1.0, spring_rul_low=200.0) == 2  # tie on risk: shorter RUL
-    assert act(p, no_go=1.0, seal_risk=0.05, seal_age=0.0) == 0  # new seals stay
+    assert act(p, test_age=30, downtime=1) == 0  # no test while grounded
+    # a failed go/no-go: the part whose ground feature is further outside its band,
+    # whatever the filters' risks say
+    g1, g3 = ground_test_reference()["G1"], ground_test_reference()["G3"]
+    crack = {"G1": g1[0] + 6 * g1[1], "G3": g3[0] + 1 * g3[1]}
+    wear = {"G1": g1[0] + 1 * g1[1], "G3": g3[0] - 6 * g3[1]}
+    assert act(p, no_go=1.0, seal_risk=0.09, spring_risk=0.0, **crack) == 2
+    assert act(p, no_go=1.0, spring_risk=0.09, **wear) == 3
+    assert act(p, no_go=1.0, seal_age=0.0, **wear) == 0  # new seals stay
+    off = RulRiskPolicy(FULL, spring_age=1000, seal_age=1200, override=False, test_every=math.inf)
+    assert act(off, spring_risk=1.0, spring_rul_low=0.0, test_age=1e4) == 0  # the age rule
 
 
-def test_oracle_replaces_at_margin():
-    p = OraclePolicy(STATE, margin=2.0, opportunity=10.0)
+def test_nested_rules_without_override_are_the_age_rule_on_any_observation():
+    rng = np.random.default_rng(3)
+    age = {"spring_age": 700.0, "seal_age": 900.0, "opportunity": 0.3}
+    rows = np.array([obs() for _ in range(500)])
+    for name, hi in (("spring_age", 1500), ("seal_age", 1500), ("downtime", 3),
+                     ("spring_risk", 1), ("spring_rul_low", 900), ("no_go", None),
+                     ("I7", 600), ("spring_alarm", None)):  # fmt: skip
+        col = FULL.index(name)
+        rows[:, col] = rng.integers(0, 2, 500) if hi is None else rng.uniform(0, hi, 500)
+    want = PreventivePolicy(FULL, **age).predict(rows)[0]
+    assert len(set(want.tolist())) == 3  # fly, spring, seals: the check is not vacuous
+    for cls in (RulRiskPolicy, FeatureRulePolicy):
+        assert np.array_equal(cls(FULL, override=False, **age).predict(rows)[0], want)
+    cols = [FULL.index(n) if n in FULL else FULL.index("spring_rul_low") for n in STATE]
+    state = rows[:, cols]
+    noisy = NoisyOraclePolicy(STATE, override=False, sigma=0.5, **age)
+    noisy.reset(seed=list(range(500)))
+    assert np.array_equal(noisy.predict(state)[0], PreventivePolicy(STATE, **age).predict(state)[0])
+
+
+def test_noisy_oracle_draws_one_factor_per_part_fitted():
+    inf = math.inf
+    p = NoisyOraclePolicy(STATE, sigma=0.3, spring_lead=0.0, seal_lead=0.0,
+                          spring_age=inf, seal_age=inf)  # fmt: skip
+    p.reset(seed=[5])
+    z0 = np.random.default_rng(5).standard_normal(3)
+    p.predict(obs(STATE, spring_age=10.0, seal_age=10.0)[None])
+    assert np.allclose(p.z[0], z0[:2])
+    p.predict(obs(STATE, spring_age=11.0, seal_age=11.0)[None])  # same parts: same z
+    assert np.allclose(p.z[0], z0[:2])
+    p.predict(obs(STATE, spring_age=0.0, seal_age=12.0)[None])  # a new spring: next draw
+    assert np.allclose(p.z[0], [z0[2], z0[1]])
+    # believed RUL = (age + rul) exp(sigma z) - age; replaced at <= lead
+    rul = float(np.float32(900.0))
+    believed = (12.0 + rul) * math.exp(0.3 * z0[1]) - 12.0
+    for lead, want in ((believed + 1e-3, 3), (believed - 1e-3, 0)):
+        q = NoisyOraclePolicy(STATE, sigma=0.3, spring_lead=0.0, seal_lead=lead,
+                              spring_age=inf, seal_age=inf)  # fmt: skip
+        q.reset(seed=[5])
+        assert q.predict(obs(STATE, spring_age=10.0, seal_age=12.0)[None])[0][0] == want
+
+
+def test_oracle_replaces_at_margin_and_groups_when_it_pays():
+    p = OraclePolicy(STATE, margin=2.0, episode_slots=2000)
+    p.reset()
     assert act(p, spring_rul_true=2.5) == 0
-    assert act(p, spring_rul_true=2.0) == 2
-    assert act(p, seal_rul_true=1.0, spring_rul_true=1.0) == 3
-    assert act(p, seal_rul_true=12.0, downtime=1) == 3
-    assert act(p, seal_rul_true=12.0, downtime=0) == 0
+    assert act(p, spring_rul_true=2.0) == 2  # seals 900 flights from failure: not grouped
+    p.reset()
+    assert act(p, seal_rul_true=1.0, spring_rul_true=1.0) == 3  # both due: seals first
+    assert act(p, seal_age=0.0, downtime=1.0) == 2  # then the spring in their downtime
+    p.reset()
+    assert act(p, spring_rul_true=2.0, seal_rul_true=30.0) == 3  # seals 28 flights on: group
+    # near the end nothing is replaced that outlives the episode
+    late = OraclePolicy(STATE, margin=2.0, episode_slots=1)
+    late.reset()
+    assert act(late, spring_rul_true=2.0) == 0
 
 
 def test_random_policy_frequencies_and_reseeding():
@@ -179,6 +236,4 @@ def test_oracle_never_fails_in_flight():
         row = out["row"]
         assert row["failures_spring"] == 0 and row["failures_seal"] == 0
         replaced += row["replacements_spring"] + row["replacements_seal"]
-        # just in time: the true RUL at replacement is within the margin
-        assert 0.0 < row["wasted_life"] <= oracle.margin
     assert replaced >= 2  # 2000 slots outlast most parts: the check is not vacuous
