@@ -250,28 +250,38 @@ def _plot_cost_breakdown(
 
 
 def write_outputs(
-    result: BenchmarkResult, out_dir: str | Path, *, plots: bool = True
+    result: BenchmarkResult, out_dir: str | Path, *, plots: bool = True, overwrite: bool = False
 ) -> dict[str, Path]:
-    """Write the files of the module docstring; returns their paths by name."""
+    """Write the files of the module docstring into the folder ``out_dir``, atomically: into
+    a temporary sibling renamed into place when complete, with ``manifest.json`` (config,
+    seeds, versions, SHA-256 of every file; :mod:`scas_env.results_folder`). An existing
+    folder is refused unless ``overwrite`` (then replaced whole). Returns paths by name."""
+    from scas_env.results_folder import results_folder
+
     out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
     policies = list(result.summary["policies"])
-    paths = {
-        "results": out / "results.csv",
-        "events": out / "events.csv",
-        "summary_json": out / "summary.json",
-        "summary_md": out / "summary.md",
+    names = {
+        "results": "results.csv",
+        "events": "events.csv",
+        "summary_json": "summary.json",
+        "summary_md": "summary.md",
     }
-    _write_csv(paths["results"], result.rows)
-    _write_csv(paths["events"], result.events)
-    payload = {**result.summary, "config": result.config, "wall_s": result.wall_s}
-    paths["summary_json"].write_text(json.dumps(payload, indent=2) + "\n")
-    paths["summary_md"].write_text(markdown_summary(result))
     if plots:
-        paths["cost_vs_availability"] = out / "cost_vs_availability.png"
-        paths["survival"] = out / "survival.png"
-        paths["cost_breakdown"] = out / "cost_breakdown.png"
-        _plot_cost_availability(result.summary, paths["cost_vs_availability"])
-        _plot_survival(result.events, policies, paths["survival"])
-        _plot_cost_breakdown(result.rows, policies, paths["cost_breakdown"])
-    return paths
+        names |= {
+            "cost_vs_availability": "cost_vs_availability.png",
+            "survival": "survival.png",
+            "cost_breakdown": "cost_breakdown.png",
+        }
+    seeds = {"root": result.config.get("seed"), "episodes": result.config.get("episodes")}
+    with results_folder(out, config=result.config, seeds=seeds, overwrite=overwrite) as tmp:
+        at = {k: tmp / v for k, v in names.items()}
+        _write_csv(at["results"], result.rows)
+        _write_csv(at["events"], result.events)
+        payload = {**result.summary, "config": result.config, "wall_s": result.wall_s}
+        at["summary_json"].write_text(json.dumps(payload, indent=2, default=repr) + "\n")
+        at["summary_md"].write_text(markdown_summary(result))
+        if plots:
+            _plot_cost_availability(result.summary, at["cost_vs_availability"])
+            _plot_survival(result.events, policies, at["survival"])
+            _plot_cost_breakdown(result.rows, policies, at["cost_breakdown"])
+    return {k: out / v for k, v in names.items()}

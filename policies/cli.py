@@ -11,7 +11,6 @@ valid, so ``--help`` and usage errors are quick. Shared options: :mod:`scas_env.
 
 from __future__ import annotations
 
-import json
 import logging
 import os
 import shlex
@@ -162,7 +161,7 @@ def benchmark_main(argv: Sequence[str] | None = None) -> int:
     )
     result.config.update(_config_record(parser.prog, argv, args, scenario, costs))
     print(format_table(result.summary))
-    paths = write_outputs(result, out)
+    paths = write_outputs(result, out, overwrite=args.overwrite)
     n = len(result.rows)
     where = (
         f"on Ray at {args.ray_address!r}"
@@ -278,37 +277,35 @@ def train_main(argv: Sequence[str] | None = None) -> int:
 
 
 TUNE_DOC = """\
-Grid-search the rule-based policies on training seeds; report held-out rewards.
+Tune the rule families with Optuna TPE on training seeds (the same budget for every family).
 
-Each policy's grid (policies.tuning.GRIDS) is run on --episodes training episodes; the best
-point and the shipped defaults are then run on --held-out episodes with other seeds. Writes
-one JSON file with every grid point (policies.tuning.tune).
+Every family gets --trials trials of --episodes training episodes (the same episodes in
+every trial: common random numbers); the nested families start from the tuned age rule.
+Writes tuning.json (chosen parameters, edge flags, every trial), tuning_history.csv and
+tuning_history.png to --out (policies.tuning). Held-out evaluation: scas-value.
 """
 
 
 def tune_parser() -> Any:
-    from policies.tuning import GRIDS
+    from policies.tuning import FAMILIES
 
     parser = make_parser("scas-tune", TUNE_DOC)
     parser.add_argument(
-        "--policies",
-        type=name_list(GRIDS, "tunable policy"),
-        default=",".join(GRIDS),
-        help="comma-separated names",
+        "--families",
+        type=name_list(FAMILIES, "rule family"),
+        default=",".join(FAMILIES),
+        help="comma-separated family labels (the age rule is always tuned first)",
     )
-    parser.add_argument("--workers", type=positive_int, default=2, help="local worker processes")
-    parser.add_argument("--episodes", type=positive_int, default=12, help="training episodes")
+    parser.add_argument("--trials", type=positive_int, default=40, help="TPE trials per family")
+    parser.add_argument("--episodes", type=positive_int, default=40, help="episodes per trial")
     parser.add_argument("--slots", type=positive_int, default=2000, help="slots per episode")
-    parser.add_argument("--held-out", type=positive_int, default=12, help="held-out episodes")
+    parser.add_argument("--workers", type=positive_int, default=2, help="local worker processes")
     parser.add_argument(
         "--quick",
         action="store_true",
-        help="tiny grids, short episodes (policies.tuning.QUICK sets the sizes; then "
-        "--episodes, --slots and --held-out are not used)",
+        help="tiny budget (policies.tuning.QUICK; then --trials, --episodes, --slots unused)",
     )
-    parser.add_argument(
-        "--out", type=Path, default=Path("results/tuning.json"), help="JSON of every grid point"
-    )
+    parser.add_argument("--out", type=Path, default=Path("results/tuning"), help="output folder")
     parser.add_argument("--overwrite", action="store_true", help="replace an existing --out")
     add_env_config_args(parser)
     add_logging_args(parser)
@@ -316,71 +313,66 @@ def tune_parser() -> Any:
 
 
 def tune_main(argv: Sequence[str] | None = None) -> int:
-    """``scas-tune``: :func:`policies.tuning.tune` per policy, one JSON report."""
-    import time
-
+    """``scas-tune``: :func:`policies.tuning.tune_families` and its writer."""
     parser = tune_parser()
     args = parser.parse_args(argv)
     configure_logging(args)
-    out = check_out_file(parser, args.out, args.overwrite)
+    out = check_out_dir(parser, args.out, args.overwrite)
     scenario, costs = load_env_config(parser, args)
     if scenario.obs_mode != Scenario().obs_mode:
         parser.error(f"{args.scenario}: obs_mode is set per policy; leave it out of the file")
-    env_kwargs = _env_kwargs(scenario, costs, exclude=("obs_mode", "episode_slots")) or None
+    env_kwargs = _env_kwargs(scenario, costs, exclude=("obs_mode", "episode_slots"))
 
-    from policies.tuning import tune
+    from policies.tuning import QUICK, tune_families, write_tuning_outputs
 
     announce_uncached_kernels()
-    report: dict[str, Any] = {}
-    for name in args.policies:
-        start = time.perf_counter()
-        res = tune(
-            name,
-            episodes=args.episodes,
-            slots=args.slots,
-            held_out_episodes=args.held_out,
-            quick=args.quick,
-            n_workers=args.workers,
-            env_kwargs=env_kwargs,
-            progress=not args.quiet,
-        )
-        report[name] = res.to_dict()
-        best, dflt = res.held_out_best, res.held_out_default
-        print(
-            f"{name}: best {res.best_params} ({len(res.train)} points, "
-            f"{time.perf_counter() - start:.0f} s); held-out reward best "
-            f"{best.mean:.0f} ± {best.half_width:.0f}, shipped default "
-            f"{dflt.mean:.0f} ± {dflt.half_width:.0f}"
-        )
-    if env_kwargs:
-        report["config"] = _config_record(parser.prog, argv, args, scenario, costs)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    out.write_text(json.dumps(report, indent=2) + "\n")
-    log.info(f"wrote {out}")
+    size = (
+        dict(QUICK)
+        if args.quick
+        else {"trials": args.trials, "episodes": args.episodes, "slots": args.slots}
+    )
+    results = tune_families(
+        args.families,
+        n_workers=args.workers,
+        progress=not args.quiet,
+        env_kwargs=env_kwargs,
+        **size,
+    )
+    config = {"size": size, **_config_record(parser.prog, argv, args, scenario, costs)}
+    paths = write_tuning_outputs(results, out, config=config, overwrite=args.overwrite)
+    for k, r in results.items():
+        edges = {p: e for p, e in r.edges.items() if e != "inside"}
+        print(f"{k}: {r.best_params} training reward {r.best_reward:,.0f}; edges {edges or 'none'}")
+    for path in paths.values():
+        log.info(f"wrote {path}")
     return 0
 
 
 VALUE_DOC = """\
-Value of prognostics: information levels and filter quality on the same episodes.
+Value of prognostics: the nested rule family re-tuned at each information level.
 
---quick runs 3 episodes x 200 slots from parts at a random fraction of their life
-(policies.value.QUICK). Writes value.csv, value.json, value.md and value.png to --out
-(policies.value.run_value_study).
+Tunes every family on training seeds (Optuna TPE, the same budget), then runs every arm on
+--episodes held-out episodes (the same episodes for every arm) and writes the ladder
+(CSV/JSON/Markdown), the tuning history and value_vs_information.png to --out
+(policies.value.run_ladder). --quick: policies.value.QUICK sizes.
 """
 
 
 def value_parser() -> Any:
     parser = make_parser("scas-value", VALUE_DOC)
-    parser.add_argument("--episodes", type=positive_int, default=40, help="episodes per arm")
+    parser.add_argument("--episodes", type=positive_int, default=1000, help="held-out episodes")
     parser.add_argument("--slots", type=positive_int, default=2000, help="flight slots per episode")
+    parser.add_argument("--trials", type=positive_int, default=40, help="TPE trials per family")
+    parser.add_argument(
+        "--train-episodes", type=positive_int, default=40, help="training episodes per trial"
+    )
     parser.add_argument("--workers", type=positive_int, default=2, help="local worker processes")
-    parser.add_argument("--seed", type=nonneg_int, default=0, help="root seed of the episode seeds")
     parser.add_argument("--out", type=Path, default=Path("results/value"), help="output folder")
     parser.add_argument("--overwrite", action="store_true", help="replace an existing --out")
     parser.add_argument(
         "--quick",
         action="store_true",
-        help="quick mode (policies.value.QUICK; then --episodes and --slots are not used)",
+        help="quick mode (policies.value.QUICK; then the size options are not used)",
     )
     add_env_config_args(parser)
     add_logging_args(parser)
@@ -388,44 +380,35 @@ def value_parser() -> Any:
 
 
 def value_main(argv: Sequence[str] | None = None) -> int:
-    """``scas-value``: :func:`policies.value.run_value_study` and its writer."""
+    """``scas-value``: :func:`policies.value.run_ladder` and its writer."""
     parser = value_parser()
     args = parser.parse_args(argv)
     configure_logging(args)
     out = check_out_dir(parser, args.out, args.overwrite)
     scenario, costs = load_env_config(parser, args)
-    common = _env_kwargs(scenario, costs, exclude=("episode_slots",))
+    if scenario.obs_mode != Scenario().obs_mode:
+        parser.error(f"{args.scenario}: obs_mode is set per arm; leave it out of the file")
+    env_kwargs = _env_kwargs(scenario, costs, exclude=("obs_mode", "episode_slots"))
 
-    from policies.value import (
-        QUICK,
-        default_arms,
-        markdown_report,
-        run_value_study,
-        write_value_outputs,
-    )
+    from policies.value import QUICK, markdown_report, run_ladder, write_outputs
 
     announce_uncached_kernels()
-
     size: dict[str, Any] = (
-        dict(QUICK) if args.quick else {"episodes": args.episodes, "slots": args.slots}
+        dict(QUICK)
+        if args.quick
+        else {
+            "episodes": args.episodes,
+            "slots": args.slots,
+            "trials": args.trials,
+            "train_episodes": args.train_episodes,
+        }
     )
-    env_kwargs = {**size.pop("env_kwargs", {}), **common}
-    for arm in default_arms():
-        clash = sorted(set(arm.env_kwargs) & set(env_kwargs))
-        if clash:
-            parser.error(
-                f"{args.scenario}: sets {clash}, which the study's arm {arm.label!r} varies; "
-                "leave them out of the scenario file"
-            )
-    if env_kwargs:
-        size["env_kwargs"] = env_kwargs
-    result = run_value_study(
-        seed=args.seed, n_workers=args.workers, progress=not args.quiet, **size
+    result = run_ladder(
+        n_workers=args.workers, progress=not args.quiet, env_kwargs=env_kwargs, **size
     )
-    if common and isinstance(getattr(result, "config", None), dict):
-        result.config.update(_config_record(parser.prog, argv, args, scenario, costs))
+    result.config.update(_config_record(parser.prog, argv, args, scenario, costs))
     print(markdown_report(result))
-    paths = write_value_outputs(result, out)
+    paths = write_outputs(result, out, overwrite=args.overwrite)
     n = len(result.rows)
     log.info(f"{n} arm-episodes in {result.wall_s:.1f} s on {args.workers} worker(s)")
     for name, path in paths.items():

@@ -19,7 +19,7 @@ Every family (:data:`FAMILIES`) is tuned the same way:
   episodes, which no trial saw (:mod:`policies.value`).
 
 Trials run in this process on one vectorised env of ``episodes`` actuators
-(:func:`policies.batch_runner.run_batch`); families run in parallel workers
+(:func:`policies.episode_runner.run_episodes`); families run in parallel workers
 (:func:`tune_families`).
 """
 
@@ -29,6 +29,7 @@ import math
 import time
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any
 
 import gymnasium as gym
@@ -36,8 +37,8 @@ import numpy as np
 
 import policies  # noqa: F401  (registers the policies)
 from policies.base import make_policy, policy_obs_mode
-from policies.batch_runner import run_batch
 from policies.benchmark import episode_seeds
+from policies.episode_runner import run_episodes
 from scas_env import ENV_ID
 from scas_env.costs import CostModel
 from scas_env.parallel import map_chunks
@@ -134,6 +135,7 @@ __all__ = [
     "relevant_box",
     "tune_families",
     "tune_family",
+    "write_tuning_outputs",
 ]
 
 
@@ -231,9 +233,11 @@ def tune_family(
     age_params: Mapping[str, Any] | None = None,
     progress: bool = False,
     sampler_seed: int = SAMPLER_SEED,
+    env_kwargs: Mapping[str, Any] | None = None,
 ) -> TuningResult:
     """Tune one family with TPE (module docstring); ``age_params``: the tuned age rule,
-    enqueued with the override off as the first trial of a nested family."""
+    enqueued with the override off as the first trial of a nested family; ``env_kwargs``:
+    the user's scenario and costs (``gym.make`` keywords), under the family's own."""
     import optuna
 
     for name, value in (("trials", trials), ("episodes", episodes), ("slots", slots)):
@@ -248,16 +252,15 @@ def tune_family(
         vectorization_mode="vector_entry_point",
         obs_mode=mode,
         episode_slots=slots,
-        **dict(family.env_kwargs),
+        **{**dict(env_kwargs or {}), **dict(family.env_kwargs)},
     )
     seeds = episode_seeds(TRAIN_SEED, episodes)
-    duration = env.envs[0].params.mission.flight_duration_s
     history: list[dict[str, Any]] = []
 
     def objective(trial: Any) -> float:
         params = _suggest(trial, family)
         policy = make_policy(family.policy, env.obs_names, **params)
-        rewards = np.array([r["row"]["reward"] for r in run_batch(env, policy, seeds, duration)])
+        rewards = np.array([r["row"]["reward"] for r in run_episodes(env, policy, seeds)])
         mean = float(rewards.mean())
         sem = float(rewards.std(ddof=1) / math.sqrt(rewards.size)) if rewards.size > 1 else 0.0
         history.append({"trial": trial.number, **params, "reward": mean, "reward_sem": sem})
@@ -300,6 +303,7 @@ def tune_families(
     progress: bool = False,
     families: Mapping[str, Family] | None = None,
     on_result: Callable[[TuningResult], None] | None = None,
+    env_kwargs: Mapping[str, Any] | None = None,
 ) -> dict[str, TuningResult]:
     """Tune the age rule first, then every other family in ``labels`` (default: all of
     :data:`FAMILIES`) on ``n_workers`` processes, the nested ones starting from the age
@@ -309,7 +313,12 @@ def tune_families(
     unknown = [k for k in labels if k not in fams]
     if unknown:
         raise ValueError(f"unknown families {unknown}; known: {sorted(fams)}")
-    settings = {"trials": trials, "episodes": episodes, "slots": slots}
+    settings = {
+        "trials": trials,
+        "episodes": episodes,
+        "slots": slots,
+        "env_kwargs": dict(env_kwargs or {}),
+    }
     out: dict[str, TuningResult] = {}
     if "age" not in labels:
         labels = ["age", *labels]
@@ -330,3 +339,57 @@ def tune_families(
         if on_result is not None:
             on_result(res)
     return {k: out[k] for k in labels}
+
+
+def write_tuning_outputs(
+    results: Mapping[str, TuningResult],
+    out: str | Path,
+    *,
+    config: Mapping[str, Any] | None = None,
+    overwrite: bool = False,
+) -> dict[str, Path]:
+    """Write ``tuning.json`` (chosen parameters, edge flags, every trial),
+    ``tuning_history.csv`` (one row per trial) and ``tuning_history.png`` (best training
+    reward so far per trial) into the folder ``out``, atomically with a manifest
+    (:func:`scas_env.results_folder.results_folder`; an existing folder is refused unless
+    ``overwrite``)."""
+    import csv
+    import json
+
+    from scas_env.results_folder import results_folder
+
+    names = {"json": "tuning.json", "csv": "tuning_history.csv", "png": "tuning_history.png"}
+    seeds = {"train_seed": TRAIN_SEED, "sampler_seed": SAMPLER_SEED}
+    with results_folder(out, config=dict(config or {}), seeds=seeds, overwrite=overwrite) as tmp:
+        payload = {k: r.to_dict() for k, r in results.items()}
+        (tmp / names["json"]).write_text(json.dumps(payload, indent=2, default=repr) + "\n")
+        rows = [{"family": k, **h} for k, r in results.items() for h in r.history]
+        fields: list[str] = []
+        for row in rows:
+            fields += [k for k in row if k not in fields]
+        with (tmp / names["csv"]).open("w", newline="") as f:
+            writer = csv.DictWriter(f, fieldnames=fields)
+            writer.writeheader()
+            writer.writerows(rows)
+        _plot_history(results, tmp / names["png"])
+    return {k: Path(out) / v for k, v in names.items()}
+
+
+def _plot_history(results: Mapping[str, TuningResult], path: Path) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(9, 5))
+    for label, res in results.items():
+        r = np.array([h["reward"] for h in res.history])
+        ax.plot(np.maximum.accumulate(r) - r[0], label=label)
+    ax.set_xlabel("trial")
+    ax.set_ylabel("best training reward so far minus trial 0 (USD/episode)")
+    ax.set_title("Optuna TPE search per family (common training episodes)")
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)

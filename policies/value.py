@@ -143,11 +143,14 @@ def run_ladder(
     progress: bool = False,
     confidence: float = 0.95,
     families: Sequence[str] | None = None,
+    env_kwargs: Mapping[str, Any] | None = None,
 ) -> LadderResult:
     """Tune every family (:func:`policies.tuning.tune_families`, ``trials x
     train_episodes`` training episodes each), then run every arm on ``episodes`` held-out
-    episodes and summarise (:func:`summarize_ladder`)."""
+    episodes and summarise (:func:`summarize_ladder`). ``env_kwargs``: the user's scenario
+    and costs, under each arm's own keywords."""
     t0 = time.perf_counter()
+    base = dict(env_kwargs or {})
     labels = [k for k in FAMILIES if families is None or k in families or k == REFERENCE]
     tuning = tune_families(
         labels,
@@ -156,6 +159,7 @@ def run_ladder(
         slots=slots,
         n_workers=n_workers,
         progress=progress,
+        env_kwargs=base,
     )
     arms = _specs(tuning, slots)
     groups: dict[str, list[tuple[str, PolicySpec, dict[str, Any]]]] = {}
@@ -170,7 +174,7 @@ def run_ladder(
             slots=slots,
             seed=HELD_OUT_SEED,
             n_workers=n_workers,
-            env_kwargs=group[0][2],
+            env_kwargs={**base, **group[0][2]},
             progress=progress,
             confidence=confidence,
         )

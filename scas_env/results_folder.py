@@ -86,9 +86,10 @@ def _nearest_existing(path: Path) -> Path:
 def check_destination(path: str | Path, overwrite: bool = False) -> Path:
     """Check that ``path`` can receive a results folder; returns it absolute. Does nothing.
 
-    Raises :class:`ResultsFolderError` naming the path when it exists and ``overwrite`` is
-    False, when it exists and is not a folder, or when its nearest existing ancestor is not
-    a writable folder (tried by creating and removing a temporary folder there).
+    Raises :class:`ResultsFolderError` naming the path when it exists, is not empty and
+    ``overwrite`` is False, when it exists and is not a folder, or when its nearest
+    existing ancestor is not a writable folder (tried by creating and removing a temporary
+    folder there).
     """
     if not isinstance(overwrite, bool):
         raise TypeError(f"overwrite = {overwrite!r} must be True or False")
@@ -98,7 +99,7 @@ def check_destination(path: str | Path, overwrite: bool = False) -> Path:
             raise ResultsFolderError(
                 f"results destination {dest} exists and is not a folder; choose another path"
             )
-        if not overwrite:
+        if not overwrite and any(dest.iterdir()):  # an empty folder holds nothing to lose
             raise ResultsFolderError(
                 f"results destination {dest} already exists; pass overwrite=True "
                 "(--overwrite) to replace it whole, or choose a new folder (e.g. timestamped)"
@@ -217,6 +218,12 @@ def _move_into_place(tmp: Path, dest: Path, overwrite: bool) -> None:
     if not (dest.exists() or dest.is_symlink()):
         try:
             os.rename(tmp, dest)  # fails if a non-empty folder appeared meanwhile
+        except OSError as err:
+            raise ResultsFolderError(f"cannot move results into {dest}: {err}") from None
+        return
+    if not overwrite and not any(dest.iterdir()):  # an empty folder: replaced by the rename
+        try:
+            os.rename(tmp, dest)
         except OSError as err:
             raise ResultsFolderError(f"cannot move results into {dest}: {err}") from None
         return
