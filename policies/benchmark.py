@@ -29,7 +29,7 @@ from __future__ import annotations
 import importlib
 import time
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import gymnasium as gym
@@ -261,6 +261,13 @@ def run_benchmark(
     if ray_address is not None and not isinstance(ray_address, str):
         raise ValueError(f"ray_address = {ray_address!r} must be a string or None")
     specs = tuple(resolve_spec(s) if isinstance(s, str) else s for s in specs)
+    # the planning oracle plans over the episode's horizon: give it this run's
+    specs = tuple(
+        replace(s, params={**s.params, "episode_slots": slots})
+        if s.name == "oracle" and "episode_slots" not in s.params
+        else s
+        for s in specs
+    )
     keys = [s.key for s in specs]
     if not specs or len(set(keys)) != len(keys):
         raise ValueError(f"policies = {keys} must be a non-empty list of unique labels")
