@@ -111,7 +111,9 @@ def _zip_data(path: Path) -> dict[str, Any]:
                     raise ValueError(f"{path}: not an SB3 model zip (no {needed!r}; has {names})")
             return json.loads(zf.read("data"))
     except zipfile.BadZipFile as exc:
-        raise ValueError(f"{path}: not a readable zip file (truncated or corrupted): {exc}") from exc
+        raise ValueError(
+            f"{path}: not a readable zip file (truncated or corrupted): {exc}"
+        ) from exc
 
 
 # ---------------------------------------------------------------------------- algorithms
@@ -348,7 +350,7 @@ def _read_zoo_config(path: Path) -> Any:
         "tag:yaml.org,2002:python/object/apply:collections.OrderedDict", ordered
     )
     try:
-        return yaml.load(path.read_text(), Loader=ZooLoader)  # noqa: S506  (safe subclass)
+        return yaml.load(path.read_text(), Loader=ZooLoader)
     except yaml.YAMLError as exc:
         raise ValueError(f"{path}: not a readable RL-Zoo config.yml: {exc}") from exc
 
@@ -360,7 +362,7 @@ def _load_normalizer(path: Path, obs_dim: int) -> Any:
     try:
         with path.open("rb") as fh:
             normalizer = pickle.load(fh)  # SB3's own format (VecNormalize.load does the same)
-    except Exception as exc:  # noqa: BLE001  (any unpickling failure: name the file)
+    except Exception as exc:
         raise ValueError(f"{path}: cannot read VecNormalize statistics: {exc!r}") from exc
     if not isinstance(normalizer, VecNormalize):
         raise ValueError(f"{path}: holds a {type(normalizer).__name__}, not VecNormalize")
@@ -414,15 +416,18 @@ def load_sb3_policy(
         check_manifest(meta_path)
     algo = algo if algo is not None else meta.get("algo")
     cls = algo_class(algo, data)
-    if obs_names is not None and "obs_names" in meta:
-        if tuple(obs_names) != tuple(meta["obs_names"]):
-            raise ValueError(
-                f"obs_names = {tuple(obs_names)} differ from the agent's {tuple(meta['obs_names'])}"
-            )
+    if (
+        obs_names is not None
+        and "obs_names" in meta
+        and tuple(obs_names) != tuple(meta["obs_names"])
+    ):
+        raise ValueError(
+            f"obs_names = {tuple(obs_names)} differ from the agent's {tuple(meta['obs_names'])}"
+        )
     names = tuple(obs_names if obs_names is not None else meta.get("obs_names", ()))
     try:
         model = cls.load(path, device="cpu")
-    except Exception as exc:  # noqa: BLE001  (SB3/torch raise many types: name the file)
+    except Exception as exc:
         raise ValueError(f"{path}: SB3 cannot load this {cls.__name__} zip: {exc!r}") from exc
     for p in model.policy.parameters():
         if not bool(p.isfinite().all()):

@@ -4,11 +4,11 @@ against the ``DummyVecEnv`` setup, side by side in one run.
 Setups (:data:`SETUPS`), each ``VecNormalize`` over a monitored vector env, PPO on the CPU
 with one torch thread and the same hyper-parameters (:data:`FPS_CONFIGS`):
 
-| label | vector env |
-|---|---|
-| ``dummy-4`` | 4 single ``ScasMaintenance-v0`` in SB3's ``DummyVecEnv`` (each in ``Monitor``): the setup of ``policies.rl.train`` |
-| ``native-64`` | ``NativeVecEnv(gym.make_vec(..., num_envs=64, vectorization_mode="vector_entry_point"), info_keys=())`` in ``VecMonitor`` |
-| ``cartpole-4`` | 4 ``CartPole-v1`` in ``DummyVecEnv``: PPO's own cost with a near-free env |
+- ``dummy-4``: 4 single ``ScasMaintenance-v0`` in SB3's ``DummyVecEnv`` (each in
+  ``Monitor``): the setup of ``policies.rl.train``;
+- ``native-64``: ``NativeVecEnv(gym.make_vec(..., num_envs=64,
+  vectorization_mode="vector_entry_point"), info_keys=())`` in ``VecMonitor``;
+- ``cartpole-4``: 4 ``CartPole-v1`` in ``DummyVecEnv``: PPO's own cost with a near-free env.
 
 Frames per second = env steps summed over envs / wall time of ``model.learn``. Runs alternate
 between the setups (A, B, A, B, ...) so a drift of the machine's speed (it is shared) hits
@@ -65,9 +65,7 @@ def make_setup(label: str, seed: int = 0) -> Any:
     from stable_baselines3.common.vec_env import VecMonitor, VecNormalize
 
     if label == "dummy-4":
-        venv = make_vec_env(
-            lambda: gym.make(ENV_ID, disable_env_checker=True), n_envs=4, seed=seed
-        )
+        venv = make_vec_env(lambda: gym.make(ENV_ID, disable_env_checker=True), n_envs=4, seed=seed)
     elif label == "native-64":
         from policies.sb3_vec_env import NativeVecEnv
 

@@ -8,14 +8,18 @@ same seeds, over episode boundaries (tested).
 
 Semantics (SB3's ``VecEnv`` contract):
 
-| item | value |
-|---|---|
-| ``reset()`` | ``(N, n_obs)`` float32; seeds from ``seed(s)`` (``s + i`` for env ``i``), then none |
-| ``step_wait()`` | ``obs, rewards (N,) float32, dones (N,) bool, infos`` (list of N dicts) |
-| autoreset | at a done, ``obs[i]`` is already the next episode's first observation; the last one is in ``infos[i]["terminal_observation"]``, ``infos[i]["TimeLimit.truncated"]`` says truncation |
-| ``infos[i]`` | the vector info's entries of env ``i`` (``info_keys``; default all, nested dicts kept) |
-| ``env_method("action_masks")`` | per env the bool mask of :func:`scas_env.decision_epochs.maintenance_mask` (MaskablePPO) |
-| ``get_attr``/``set_attr``/``env_method`` | on the vector env itself (attributes shared by its N actuators): the value once per index |
+- ``reset()``: ``(N, n_obs)`` float32; seeds from ``seed(s)`` (``s + i`` for env ``i``)
+  for that reset only, then none (each actuator continues its own generator).
+- ``step_wait()``: ``obs, rewards (N,) float32, dones (N,) bool, infos`` (N dicts).
+- autoreset: at a done, ``obs[i]`` is already the next episode's first observation; the
+  last one is in ``infos[i]["terminal_observation"]``, and ``infos[i]["TimeLimit.truncated"]``
+  says truncation.
+- ``infos[i]``: the vector info's entries of env ``i`` (``info_keys``; default all, nested
+  dicts kept).
+- ``env_method("action_masks")``: per env the bool mask of
+  :func:`scas_env.decision_epochs.maintenance_mask` (MaskablePPO).
+- ``get_attr`` / ``set_attr`` / ``env_method``: on the vector env itself (attributes shared
+  by its N actuators), the value once per index.
 
 The native env autoresets on the step *after* a done (Gymnasium 1.x next-step); SB3 wants the
 new observation at once. ``ScasMaintenance-v0`` has no termination and every actuator

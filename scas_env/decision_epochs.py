@@ -134,9 +134,7 @@ class DecisionEpochs(gym.Wrapper):
     gamma : per-flight discount in ``[0, 1]`` applied inside a step (1: plain sum).
     """
 
-    def __init__(
-        self, env: gym.Env, ks: Sequence[int] = DEFAULT_KS, gamma: float = 1.0
-    ) -> None:
+    def __init__(self, env: gym.Env, ks: Sequence[int] = DEFAULT_KS, gamma: float = 1.0) -> None:
         super().__init__(env)
         self.ks = _check_ks(ks)
         if not isinstance(gamma, int | float) or not 0.0 <= float(gamma) <= 1.0:

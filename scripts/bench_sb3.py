@@ -21,7 +21,9 @@ def main() -> None:
     parser.add_argument("--timesteps", type=int, default=65_536, help="PPO steps per run")
     parser.add_argument("--seed", type=int, default=0, help="seed of every run")
     parser.add_argument("--repeats", type=int, default=2, help="rounds over the setups")
-    parser.add_argument("--setups", default=",".join(SETUPS), help="comma-separated, baseline first")
+    parser.add_argument(
+        "--setups", default=",".join(SETUPS), help="comma-separated, baseline first"
+    )
     parser.add_argument("--config", default="project", choices=FPS_CONFIGS, help="PPO settings")
     parser.add_argument("--out", default="results/bench_sb3", help="new or empty folder")
     args = parser.parse_args()
