@@ -108,7 +108,10 @@ def _zip_data(path: Path) -> dict[str, Any]:
             names = zf.namelist()
             for needed in ("data", "policy.pth"):
                 if needed not in names:
-                    raise ValueError(f"{path}: not an SB3 model zip (no {needed!r}; has {names})")
+                    raise ValueError(
+                        f"{path}: not a complete SB3 model zip (truncated or corrupted?): no "
+                        f"{needed!r} member; found {names[:4]}{'...' if len(names) > 4 else ''}"
+                    )
             return json.loads(zf.read("data"))
     except zipfile.BadZipFile as exc:
         raise ValueError(

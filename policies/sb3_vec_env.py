@@ -145,6 +145,13 @@ class NativeVecEnv(VecEnv):
             return [int(indices)]
         return [int(i) for i in indices]
 
+    def has_attr(self, attr_name: str) -> bool:
+        """``action_masks`` (when the observation has what the mask reads) or an attribute of
+        the vector env (MaskablePPO asks for ``action_masks``)."""
+        if attr_name == "action_masks":
+            return self._mask_cols is not None
+        return hasattr(self.venv, attr_name)
+
     def get_attr(self, attr_name: str, indices: Any = None) -> list[Any]:
         value = getattr(self.venv, attr_name)
         return [value for _ in self._indices(indices)]
