@@ -38,6 +38,7 @@ __all__ = [
     "VALIDATION_SEED",
     "checkpoints",
     "held_out_comparison",
+    "select_ship_evaluate",
     "ship_best",
     "update_manifest",
     "validate_checkpoints",
@@ -309,3 +310,33 @@ def held_out_comparison(
         writer.writeheader()
         writer.writerows(result.rows)
     return result.summary
+
+
+def select_ship_evaluate(
+    runs_root: str | Path,
+    name: str,
+    out: str | Path,
+    *,
+    validation_episodes: int = 32,
+    held_out_episodes: int = 1000,
+    n_workers: int = 2,
+) -> dict[str, Any]:
+    """The whole selection: validate every checkpoint under ``runs_root`` (runs of
+    :func:`policies.epoch_training.train_epochs`), ship the best as ``policies/data/<name>``
+    and compare it on held-out seeds with the age rule and the shipped per-flight agent;
+    writes ``out/validation.csv`` and ``out/held_out.json``; returns the held-out summary."""
+    from policies.sb3_agents import DEFAULT_AGENT
+
+    runs_root, out = Path(runs_root), Path(out)
+    runs = sorted(p for p in runs_root.iterdir() if (p / "progress.csv").is_file())
+    if not runs:
+        raise ValueError(f"runs_root = {str(runs_root)!r} holds no training run")
+    validation = out / "validation.csv"
+    validate_checkpoints(runs, validation, episodes=validation_episodes, n_workers=n_workers)
+    shipped = ship_best(validation, runs_root, name)
+    return held_out_comparison(
+        {name: shipped, "ppo_default": DEFAULT_AGENT},
+        out,
+        episodes=held_out_episodes,
+        n_workers=n_workers,
+    )
