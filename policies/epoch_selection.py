@@ -320,11 +320,13 @@ def select_ship_evaluate(
     validation_episodes: int = 32,
     held_out_episodes: int = 1000,
     n_workers: int = 2,
+    compare_default: bool = True,
 ) -> dict[str, Any]:
     """The whole selection: validate every checkpoint under ``runs_root`` (runs of
     :func:`policies.epoch_training.train_epochs`), ship the best as ``policies/data/<name>``
-    and compare it on held-out seeds with the age rule and the shipped per-flight agent;
-    writes ``out/validation.csv`` and ``out/held_out.json``; returns the held-out summary."""
+    and compare it on held-out seeds with the age rule and (``compare_default``) the shipped
+    per-flight agent; writes ``out/validation.csv`` and ``out/held_out.json``; returns the
+    held-out summary."""
     from policies.sb3_agents import DEFAULT_AGENT
 
     runs_root, out = Path(runs_root), Path(out)
@@ -334,8 +336,9 @@ def select_ship_evaluate(
     validation = out / "validation.csv"
     validate_checkpoints(runs, validation, episodes=validation_episodes, n_workers=n_workers)
     shipped = ship_best(validation, runs_root, name)
+    agents = {name: shipped, "ppo_default": DEFAULT_AGENT} if compare_default else {name: shipped}
     return held_out_comparison(
-        {name: shipped, "ppo_default": DEFAULT_AGENT},
+        agents,
         out,
         episodes=held_out_episodes,
         n_workers=n_workers,

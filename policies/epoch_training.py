@@ -29,7 +29,7 @@ from scas_env import ENV_ID
 from scas_env.decision_epochs import DEFAULT_KS, DecisionEpochs
 
 #: id of the decision-epoch formulation in the hyper-parameter YAML files
-EPOCH_ENV_ID = "scas_env/ScasMaintenanceEpochs"
+EPOCH_ENV_ID = "scas_env/ScasMaintenanceEpochs-v0"
 HYPERPARAMS_DIR = Path(__file__).resolve().parent / "data" / "hyperparams"
 #: keys of an RL-Zoo entry that are not algorithm keywords
 ZOO_KEYS = ("n_envs", "n_timesteps", "policy", "normalize")

@@ -30,3 +30,10 @@ if ENV_ID not in registry:
         entry_point="scas_env.env:ScasMaintenanceEnv",
         vector_entry_point="scas_env.vector_env:make_vector_env",
     )
+
+if "scas_env/ScasMaintenanceEpochs-v0" not in registry:
+    # Decision epochs over v0 (act now, then fly k flights): scas_env.decision_epochs.
+    register(
+        id="scas_env/ScasMaintenanceEpochs-v0",
+        entry_point="scas_env.decision_epochs:make_decision_epoch_env",
+    )

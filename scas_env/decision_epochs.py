@@ -87,9 +87,14 @@ MASK_READS = ("downtime", "spring_age", "seal_age")
 
 __all__ = [
     "DEFAULT_KS",
+    "EPOCHS_ENV_ID",
     "DecisionEpochs",
     "maintenance_mask",
+    "make_decision_epoch_env",
 ]
+
+#: registered id: ``gym.make(EPOCHS_ENV_ID, ks=..., gamma=..., **v0 keywords)``
+EPOCHS_ENV_ID = "scas_env/ScasMaintenanceEpochs-v0"
 
 
 def maintenance_mask(downtime: Any, spring_age: Any, seal_age: Any) -> np.ndarray:
@@ -200,3 +205,13 @@ class DecisionEpochs(gym.Wrapper):
         u = self.env.unwrapped
         m = maintenance_mask(u.downtime, u.part_age["spring"], u.part_age["seal"])
         return np.repeat(m, len(self.ks))
+
+
+def make_decision_epoch_env(
+    ks: Sequence[int] = DEFAULT_KS, gamma: float = 1.0, **kwargs: Any
+) -> DecisionEpochs:
+    """Entry point of :data:`EPOCHS_ENV_ID`: a v0 env (``kwargs``: its keywords) in
+    :class:`DecisionEpochs` (so RL-Zoo can train on it by id)."""
+    from scas_env.env import ScasMaintenanceEnv
+
+    return DecisionEpochs(ScasMaintenanceEnv(**kwargs), ks=ks, gamma=gamma)

@@ -26,6 +26,9 @@ def main() -> None:
     parser.add_argument("--validation-episodes", type=int, default=32, help="per checkpoint")
     parser.add_argument("--held-out-episodes", type=int, default=1000, help="paired episodes")
     parser.add_argument("--workers", type=int, default=2, help="worker processes")
+    parser.add_argument(
+        "--skip-default", action="store_true", help="leave ppo_default out of the held-out run"
+    )
     args = parser.parse_args()
     for opt in ("validation_episodes", "held_out_episodes", "workers"):
         if getattr(args, opt) < 1:
@@ -38,6 +41,7 @@ def main() -> None:
             validation_episodes=args.validation_episodes,
             held_out_episodes=args.held_out_episodes,
             n_workers=args.workers,
+            compare_default=not args.skip_default,
         )
     except ValueError as exc:
         parser.error(str(exc))

@@ -127,3 +127,21 @@ def test_epoch_agent_on_v0_replays_the_decision_epoch_episode() -> None:
     assert rewards[0] == rewards[1] == total
     expected = [m if j == 0 else FLY for m, k in plan for j in range(k)][:SLOTS]
     assert actions == expected
+
+
+def test_registered_id_and_the_checkers() -> None:
+    import warnings
+
+    from gymnasium.utils.env_checker import check_env
+    from stable_baselines3.common.env_checker import check_env as sb3_check_env
+
+    from scas_env.decision_epochs import EPOCHS_ENV_ID, make_decision_epoch_env
+
+    env = gym.make(EPOCHS_ENV_ID, ks=(1, 10), episode_slots=40)
+    assert env.action_space.n == 8 and env.observation_space.shape == (19,)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        check_env(make_decision_epoch_env(episode_slots=40), skip_render_check=True)
+        sb3_check_env(make_decision_epoch_env(episode_slots=40))
+    # the only remark: the checker is run on a wrapper (by design)
+    assert all("different from the unwrapped" in str(w.message) for w in caught)
