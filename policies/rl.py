@@ -5,26 +5,34 @@ Algorithms (:data:`ALGOS`): ``ppo``, ``a2c``, ``dqn`` (stable-baselines3) and
 with small-MLP defaults for this task (:class:`AlgoSpec`).
 
 Training pipeline (:func:`train`): ``n_envs`` copies of the env (``DummyVecEnv``, or
-``SubprocVecEnv`` with ``subprocess=True``), each in a ``Monitor``, under ``VecNormalize``:
+``SubprocVecEnv`` with ``subprocess=True``, each in a ``Monitor``; or with ``native=True`` the
+natively batched vector env through :class:`policies.sb3_vec_env.NativeVecEnv` in a
+``VecMonitor``), under ``VecNormalize``:
 observations (physical units: RULs up to 5000 flights, features in uA, uA/mm, mm) are
 standardised by running statistics (clipped at +-10 sigma) and rewards (USD per slot:
 +2500 per flight, -45000 per in-flight failure...) are divided by the running standard
 deviation of the discounted return (SB3's reward normalisation, ``gamma`` of the algorithm).
 The evaluation callback (:class:`MaintenanceEvalCallback`) runs the current agent on raw
-envs every ``eval_freq`` steps and logs ``eval/mean_reward``, ``eval/availability``,
+envs (:func:`evaluate`: the benchmark's episode runner, :func:`policies.benchmark.run_episode`)
+every ``eval_freq`` steps and logs ``eval/mean_reward``, ``eval/availability``,
 ``eval/cost_per_fh`` (maintenance cost per flight hour, USD/FH, costs only) and
-``eval/failures`` (in-flight failures per episode) to TensorBoard when ``tensorboard`` is
-installed, and always to CSV and stdout.
+``eval/failures_per_1000fh`` (in-flight failures per 1000 flight hours) to TensorBoard
+when ``tensorboard`` is installed, and always to CSV and stdout.
 
 Saved agent ``<out>/<name>.zip`` (the SB3 model), ``<name>_vecnormalize.pkl`` (the
 ``VecNormalize`` statistics, pickled by SB3; load only files you trust) and ``<name>.json``
 (algorithm, observation names, scenario, seeds, hyperparameters, library versions).
-:func:`load_agent` returns an :class:`SB3Agent` that applies the observation
-normalisation inside ``predict`` so it acts on **raw** observations of a plain env, the
-policy protocol of :mod:`policies.base` (the benchmark's ``PolicySpec("sb3",
-module="policies.rl")`` loads the shipped agent).
+:func:`load_agent` (:func:`policies.sb3_agents.load_sb3_policy`) returns an
+:class:`~policies.sb3_agents.SB3Agent` that applies the observation normalisation inside
+``predict`` so it acts on **raw** observations of a plain env, the policy protocol of
+:mod:`policies.base` (the benchmark's ``PolicySpec("sb3", module="policies.rl")`` loads the
+shipped agent). Loading runs code from the files (pickles): load only files you trust.
 
-Action mask (``maskable_ppo``, :func:`action_mask`): ``fly`` is always allowed (while the
+Decision epochs (act, then fly k flights) are trained by :mod:`policies.epoch_training`;
+sb3-contrib (``maskable_ppo``, ``recurrent_ppo``) is optional: the ``rl`` extra.
+
+Action mask (``maskable_ppo``, :func:`action_mask` =
+:func:`scas_env.decision_epochs.maintenance_mask`): ``fly`` is always allowed (while the
 aircraft is grounded it means *wait*); ``test_and_fly`` only when not grounded (on the ground
 it does the same as ``fly``); ``replace_spring`` / ``replace_seal`` only when that part has
 flown (age > 0 flights: replacing a part that is new is pure cost).
@@ -47,10 +55,9 @@ from __future__ import annotations
 
 import importlib.util
 import json
-import pickle
 import sys
 import time
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from functools import partial
 from pathlib import Path
@@ -58,47 +65,47 @@ from typing import Any
 
 import gymnasium as gym
 import numpy as np
-import sb3_contrib
 import stable_baselines3
 import torch
-from sb3_contrib import MaskablePPO, RecurrentPPO
-from sb3_contrib.common.wrappers import ActionMasker
-from stable_baselines3 import A2C, DQN, PPO
 from stable_baselines3.common.base_class import BaseAlgorithm
 from stable_baselines3.common.callbacks import BaseCallback
 from stable_baselines3.common.env_util import make_vec_env as sb3_make_vec_env
 from stable_baselines3.common.logger import configure
 from stable_baselines3.common.utils import set_random_seed
-from stable_baselines3.common.vec_env import DummyVecEnv, SubprocVecEnv, VecEnv, VecNormalize
+from stable_baselines3.common.vec_env import (
+    DummyVecEnv,
+    SubprocVecEnv,
+    VecEnv,
+    VecMonitor,
+    VecNormalize,
+)
 
-from policies.base import FLY, REPLACE_SEAL, REPLACE_SPRING, TEST_AND_FLY, register_policy
+from policies.benchmark import episode_seeds, run_episode
+from policies.sb3_agents import (
+    DEFAULT_AGENT,
+    SB3Agent,
+    _import,
+    load_sb3_policy,
+    require_contrib,
+)
 from scas_env import ENV_ID
-
-DATA_DIR = Path(__file__).resolve().parent / "data"
-#: The shipped PPO agent (model zip; its statistics and metadata sit beside it).
-DEFAULT_AGENT = DATA_DIR / "ppo_default.zip"
-MASK_READS = ("downtime", "spring_age", "seal_age")
+from scas_env.decision_epochs import maintenance_mask as action_mask
 
 __all__ = [
     "ALGOS",
     "DEFAULT_AGENT",
-    "FPS_CONFIGS",
     "AlgoSpec",
     "EvalResult",
     "MaintenanceEvalCallback",
     "SB3Agent",
     "action_mask",
-    "always_fly",
     "env_action_mask",
     "evaluate",
-    "fps_ppo_kwargs",
     "load_agent",
     "make_env",
     "make_vec_env",
-    "risk_rule",
     "save_agent",
     "train",
-    "training_fps",
 ]
 
 
@@ -108,16 +115,21 @@ class AlgoSpec:
 
     Attributes
     ----------
-    cls : SB3 / sb3-contrib algorithm class.
+    target : ``"package:Class"`` of the algorithm (sb3-contrib ones imported only when used).
     policy : policy name (``"MlpPolicy"``, ``"MlpLstmPolicy"``).
     kwargs : default keyword arguments (overridden by ``train(hyperparams=...)``).
     masked : the env is wrapped in ``ActionMasker`` and ``predict`` gets action masks.
     """
 
-    cls: type[BaseAlgorithm]
+    target: str
     policy: str
     kwargs: Mapping[str, Any] = field(default_factory=dict)
     masked: bool = False
+
+    @property
+    def cls(self) -> type[BaseAlgorithm]:
+        """The algorithm class (``ImportError`` naming the ``rl`` extra for sb3-contrib)."""
+        return _import(self.target)
 
 
 _SMALL = {"net_arch": [64, 64]}
@@ -133,10 +145,10 @@ _PPO = {
 }
 #: name -> algorithm and defaults (n_steps is per env: PPO collects 512 x n_envs per update).
 ALGOS: dict[str, AlgoSpec] = {
-    "ppo": AlgoSpec(PPO, "MlpPolicy", _PPO),
-    "maskable_ppo": AlgoSpec(MaskablePPO, "MlpPolicy", _PPO, masked=True),
+    "ppo": AlgoSpec("stable_baselines3:PPO", "MlpPolicy", _PPO),
+    "maskable_ppo": AlgoSpec("sb3_contrib:MaskablePPO", "MlpPolicy", _PPO, masked=True),
     "recurrent_ppo": AlgoSpec(
-        RecurrentPPO,
+        "sb3_contrib:RecurrentPPO",
         "MlpLstmPolicy",
         {
             **_PPO,
@@ -145,10 +157,12 @@ ALGOS: dict[str, AlgoSpec] = {
         },
     ),
     "a2c": AlgoSpec(
-        A2C, "MlpPolicy", {"n_steps": 16, "gamma": 0.99, "ent_coef": 0.01, "policy_kwargs": _SMALL}
+        "stable_baselines3:A2C",
+        "MlpPolicy",
+        {"n_steps": 16, "gamma": 0.99, "ent_coef": 0.01, "policy_kwargs": _SMALL},
     ),
     "dqn": AlgoSpec(
-        DQN,
+        "stable_baselines3:DQN",
         "MlpPolicy",
         {
             "buffer_size": 100_000,
@@ -171,29 +185,6 @@ def _algo(name: str) -> AlgoSpec:
     return ALGOS[name]
 
 
-# ---------------------------------------------------------------------------- action mask
-def action_mask(downtime: Any, spring_age: Any, seal_age: Any) -> np.ndarray:
-    """Valid actions (bool, shape ``(..., 4)``) from downtime (slots) and part ages (flights).
-
-    ``fly`` always (it waits while grounded); ``test_and_fly`` iff ``downtime == 0``;
-    ``replace_spring`` iff ``spring_age > 0``; ``replace_seal`` iff ``seal_age > 0``.
-
-    >>> action_mask(0, 0, 0).tolist()
-    [True, True, False, False]
-    >>> action_mask([1, 0], [5, 5], [0, 7]).tolist()
-    [[True, False, True, False], [True, True, True, True]]
-    """
-    down, spring, seal = np.broadcast_arrays(
-        *(np.asarray(v, dtype=np.float64) for v in (downtime, spring_age, seal_age))
-    )
-    mask = np.empty((*down.shape, 4), dtype=bool)
-    mask[..., FLY] = True
-    mask[..., TEST_AND_FLY] = down <= 0
-    mask[..., REPLACE_SPRING] = spring > 0
-    mask[..., REPLACE_SEAL] = seal > 0
-    return mask
-
-
 def env_action_mask(env: gym.Env) -> np.ndarray:
     """:func:`action_mask` of the env's current state (the ``ActionMasker`` function)."""
     u = env.unwrapped
@@ -205,7 +196,12 @@ def make_env(masked: bool = False, **scenario: Any) -> gym.Env:
     """One ``ScasMaintenance-v0`` (``scenario``: its keywords), in an ``ActionMasker`` if
     ``masked``. Module-level so ``SubprocVecEnv`` workers can unpickle it."""
     env = gym.make(ENV_ID, disable_env_checker=True, **scenario)
-    return ActionMasker(env, env_action_mask) if masked else env
+    if not masked:
+        return env
+    require_contrib("mask actions (maskable_ppo)")
+    from sb3_contrib.common.wrappers import ActionMasker
+
+    return ActionMasker(env, env_action_mask)
 
 
 def make_vec_env(
@@ -213,135 +209,54 @@ def make_vec_env(
     seed: int,
     *,
     subprocess: bool = False,
+    native: bool = False,
     masked: bool = False,
     normalize: bool = True,
     gamma: float = 0.99,
     **scenario: Any,
 ) -> VecEnv:
     """``n_envs`` monitored envs seeded ``seed + rank``, under ``VecNormalize`` (observations
-    and rewards, discount ``gamma``) when ``normalize``."""
+    and rewards, discount ``gamma``) when ``normalize``. ``native``: one natively batched
+    vector env through :class:`policies.sb3_vec_env.NativeVecEnv` (action masks through its
+    ``env_method("action_masks")``, so ``masked`` needs no wrapper)."""
     if isinstance(n_envs, bool) or not isinstance(n_envs, int) or n_envs < 1:
         raise ValueError(f"n_envs = {n_envs!r} must be an integer >= 1")
-    venv = sb3_make_vec_env(
-        partial(make_env, masked, **scenario),
-        n_envs=n_envs,
-        seed=seed,
-        vec_env_cls=SubprocVecEnv if subprocess else DummyVecEnv,
-    )
+    if native and subprocess:
+        raise ValueError("native=True and subprocess=True exclude each other")
+    if native:
+        from policies.sb3_vec_env import NativeVecEnv
+
+        vec = gym.make_vec(
+            ENV_ID, num_envs=n_envs, vectorization_mode="vector_entry_point", **scenario
+        )
+        venv: VecEnv = VecMonitor(NativeVecEnv(vec, info_keys=()))
+        venv.seed(seed)
+    else:
+        venv = sb3_make_vec_env(
+            partial(make_env, masked, **scenario),
+            n_envs=n_envs,
+            seed=seed,
+            vec_env_cls=SubprocVecEnv if subprocess else DummyVecEnv,
+        )
     return VecNormalize(venv, norm_obs=True, norm_reward=True, gamma=gamma) if normalize else venv
 
 
-# ---------------------------------------------------------------------------- agent
-class SB3Agent:
-    """A trained SB3 model that acts on raw observations (policy protocol of
-    :mod:`policies.base`): ``predict`` normalises with the saved ``VecNormalize`` statistics
-    (if any) and, for masked algorithms, passes :func:`action_mask` of the raw observation.
-
-    Parameters
-    ----------
-    model : the SB3 model.
-    normalizer : ``VecNormalize`` whose ``obs_rms`` is used (not updated), or ``None``.
-    obs_names : names of the observation entries (the env's ``obs_names``).
-    masked : pass action masks to ``model.predict``.
-    """
-
-    def __init__(
-        self,
-        model: BaseAlgorithm,
-        normalizer: VecNormalize | None,
-        obs_names: Sequence[str],
-        *,
-        masked: bool = False,
-    ) -> None:
-        self.model = model
-        self.normalizer = normalizer
-        self.obs_names = tuple(obs_names)
-        self.masked = masked
-        if masked:
-            missing = [n for n in MASK_READS if n not in self.obs_names]
-            if missing:
-                raise ValueError(f"obs_names lack {missing} that the action mask reads")
-            self._mask_cols = [self.obs_names.index(n) for n in MASK_READS]
-
-    def predict(
-        self,
-        observation: Any,
-        state: Any = None,
-        episode_start: Any = None,
-        deterministic: bool = True,
-    ) -> tuple[int | np.ndarray, Any]:
-        """Action for one raw observation (``int``) or a batch (``int64`` array)."""
-        obs = np.asarray(observation, dtype=np.float32)
-        n = len(self.obs_names)
-        if obs.ndim not in (1, 2) or obs.shape[-1] != n:
-            raise ValueError(f"observation has shape {obs.shape}; expected ({n},) or (n_envs, {n})")
-        norm = self.normalizer.normalize_obs(obs) if self.normalizer is not None else obs
-        kwargs: dict[str, Any] = {}
-        if self.masked:
-            kwargs["action_masks"] = action_mask(*(obs[..., c] for c in self._mask_cols))
-        actions, state = self.model.predict(
-            norm, state=state, episode_start=episode_start, deterministic=deterministic, **kwargs
-        )
-        actions = np.asarray(actions, dtype=np.int64)
-        return (int(actions) if obs.ndim == 1 else actions.reshape(-1)), state
-
-    def reset(self, seed: int | Sequence[int] | None = None) -> None:
-        """New episode. ``seed`` re-seeds the global Python, NumPy and torch generators (SB3's
-        ``set_random_seed``) for reproducible ``deterministic=False`` actions; for a batch
-        (a sequence of seeds) the first one is used."""
-        if seed is not None:
-            first = seed[0] if isinstance(seed, Sequence) else seed
-            self.model.set_random_seed(int(first) % 2**32)
-
-
-def _paths(out_dir: Path, name: str) -> tuple[Path, Path, Path]:
-    return out_dir / f"{name}.zip", out_dir / f"{name}_vecnormalize.pkl", out_dir / f"{name}.json"
-
-
-def load_agent(
-    path: str | Path = DEFAULT_AGENT, obs_names: Sequence[str] | None = None
-) -> SB3Agent:
-    """Load ``<name>.zip`` with its ``<name>_vecnormalize.pkl`` and ``<name>.json`` (saved by
-    :func:`train`); ``obs_names`` (the env's) must match the training ones if given."""
-    path = Path(path)
-    model_path, norm_path, meta_path = _paths(path.parent, path.name.removesuffix(".zip"))
-    for p in (model_path, meta_path):
-        if not p.is_file():
-            raise ValueError(f"path = {str(path)!r}: {p} does not exist")
-    meta = json.loads(meta_path.read_text())
-    spec = _algo(meta["algo"])
-    if obs_names is not None and tuple(obs_names) != tuple(meta["obs_names"]):
-        raise ValueError(
-            f"obs_names = {tuple(obs_names)} differ from the agent's {tuple(meta['obs_names'])}"
-        )
-    model = spec.cls.load(model_path, device="cpu")
-    normalizer = None
-    if norm_path.is_file():
-        with norm_path.open("rb") as fh:
-            normalizer = pickle.load(fh)  # SB3's own format (VecNormalize.load does the same)
-    return SB3Agent(model, normalizer, meta["obs_names"], masked=spec.masked)
-
-
-def _load_default(obs_names: Sequence[str], path: str | Path = DEFAULT_AGENT) -> SB3Agent:
-    return load_agent(path, obs_names=obs_names)
-
-
-register_policy("sb3", _load_default, obs_mode="features+rul", family="external")
+def load_agent(path: str | Path = DEFAULT_AGENT, obs_names: Any = None) -> SB3Agent:
+    """:func:`policies.sb3_agents.load_sb3_policy` (kept for existing callers)."""
+    return load_sb3_policy(path, obs_names)
 
 
 # ---------------------------------------------------------------------------- evaluation
 @dataclass(frozen=True)
 class EvalResult:
-    """Per-episode metrics of :func:`evaluate` (arrays of length ``n_episodes``).
-
-    ``cost_per_fh`` is maintenance cost (flight value excluded) per flight hour, USD/FH,
-    flight hours = flights x ``params.mission.flight_duration_s`` / 3600.
-    """
+    """Per-episode metrics of :func:`evaluate` (arrays of length ``n_episodes``), the
+    benchmark's results columns: ``reward`` (USD), ``availability``, ``cost_per_fh``
+    (maintenance cost per flight hour, USD/FH) and ``failures_per_1000fh``."""
 
     reward: np.ndarray
     availability: np.ndarray
     cost_per_fh: np.ndarray
-    failures: np.ndarray
+    failures_per_1000fh: np.ndarray
 
     def summary(self) -> dict[str, float]:
         """Means over episodes."""
@@ -349,93 +264,29 @@ class EvalResult:
 
 
 def evaluate(agent: Any, n_episodes: int = 10, seed: int = 0, **scenario: Any) -> EvalResult:
-    """Run ``agent`` (anything with ``predict``; its ``reset()`` is called first, without a
-    seed) for ``n_episodes`` deterministic episodes on raw envs seeded ``seed, seed + 1,
-    ...``, stepped in lockstep with one batched ``predict`` per slot."""
+    """Run ``agent`` (anything with ``predict``) for ``n_episodes`` deterministic episodes
+    with the benchmark's episode runner (:func:`policies.benchmark.run_episode`) on the
+    benchmark's seeds ``episode_seeds(seed, n_episodes)``."""
     if isinstance(n_episodes, bool) or not isinstance(n_episodes, int) or n_episodes < 1:
         raise ValueError(f"n_episodes = {n_episodes!r} must be an integer >= 1")
-    envs = [gym.make(ENV_ID, disable_env_checker=True, **scenario) for _ in range(n_episodes)]
-    reset = getattr(agent, "reset", None)
-    if callable(reset):
-        reset()
-    first = [env.reset(seed=seed + i) for i, env in enumerate(envs)]
-    obs = np.stack([o for o, _ in first])
-    infos: list[dict[str, Any]] = [i for _, i in first]
-    rewards = np.zeros(n_episodes)
-    active = np.ones(n_episodes, dtype=bool)
-    state, start = None, np.ones(n_episodes, dtype=bool)
-    while active.any():
-        actions, state = agent.predict(obs, state=state, episode_start=start, deterministic=True)
-        start = np.zeros(n_episodes, dtype=bool)
-        for i in np.flatnonzero(active):
-            o, r, terminated, truncated, infos[i] = envs[i].step(int(actions[i]))
-            obs[i] = o
-            rewards[i] += r
-            active[i] = not (terminated or truncated)
-    hours = envs[0].unwrapped.params.mission.flight_duration_s / 3600.0
-    for env in envs:
-        env.close()
-    fh = np.array([i["flights"] * hours for i in infos])
-    cost = np.array([i["cost_usd"] for i in infos])
+    env = gym.make(ENV_ID, disable_env_checker=True, **scenario)
+    rows = [run_episode(env, agent, es, ps)["row"] for es, ps in episode_seeds(seed, n_episodes)]
+    env.close()
     return EvalResult(
-        reward=rewards,
-        availability=np.array([i["availability"] for i in infos]),
-        cost_per_fh=np.divide(cost, fh, out=np.full_like(cost, np.nan), where=fh > 0),
-        failures=np.array([float(sum(i["failures"].values())) for i in infos]),
+        **{
+            k: np.array([r[k] for r in rows], dtype=np.float64)
+            for k in EvalResult.__dataclass_fields__
+        }
     )
-
-
-class _Rule:
-    """A rule baseline for the evaluation table, on the ``features+rul`` layout."""
-
-    def __init__(self, obs_names: Sequence[str], act: Callable[[dict[str, np.ndarray]], Any]):
-        self._col = {n: i for i, n in enumerate(obs_names)}
-        self._act = act
-
-    def predict(
-        self, observation: Any, state: Any = None, episode_start: Any = None, **_: Any
-    ) -> tuple[np.ndarray, Any]:
-        obs = np.atleast_2d(np.asarray(observation, dtype=np.float64))
-        return np.asarray(self._act({n: obs[:, i] for n, i in self._col.items()})), state
-
-
-def always_fly(obs_names: Sequence[str]) -> _Rule:
-    """Baseline: action 0 (fly) at every slot."""
-    return _Rule(obs_names, lambda c: np.full(len(c["downtime"]), FLY, dtype=np.int64))
-
-
-def risk_rule(obs_names: Sequence[str], test_every: float = 10.0, risk: float = 0.1) -> _Rule:
-    """Baseline: wait while grounded; replace the spring, else the seals, when its filter risk
-    exceeds ``risk`` (and it has flown); else test when the last test is ``test_every`` slots
-    old; else fly.
-
-    >>> names = ("test_age", "spring_risk", "seal_risk", "spring_age", "seal_age", "downtime")
-    >>> obs = [[3, 0.5, 0.0, 9, 9, 0], [12, 0, 0, 9, 9, 0], [3, 0, 0, 9, 9, 1]]
-    >>> risk_rule(names).predict(obs)[0]
-    array([2, 1, 0])
-    """
-
-    def act(c: dict[str, np.ndarray]) -> np.ndarray:
-        return np.select(
-            [
-                c["downtime"] > 0,
-                (c["spring_risk"] > risk) & (c["spring_age"] > 0),
-                (c["seal_risk"] > risk) & (c["seal_age"] > 0),
-                c["test_age"] >= test_every,
-            ],
-            [FLY, REPLACE_SPRING, REPLACE_SEAL, TEST_AND_FLY],
-            default=FLY,
-        ).astype(np.int64)
-
-    return _Rule(obs_names, act)
 
 
 class MaintenanceEvalCallback(BaseCallback):
     """Every ``eval_freq`` calls (one call = one step of all ``n_envs``), evaluate the current
-    model on raw envs (:func:`evaluate`, episodes seeded ``eval_seed + i``, the same every
-    time) with the training ``VecNormalize`` statistics, log ``eval/*`` and keep
-    :attr:`history`. Deterministic actions: evaluating draws nothing from the global
-    random generators, so training does not depend on ``eval_freq``."""
+    model on raw envs (:func:`evaluate`, the same episodes every time, seeds
+    ``episode_seeds(eval_seed, n_eval_episodes)``) with the training ``VecNormalize``
+    statistics, log ``eval/*`` and keep :attr:`history`. Deterministic actions: evaluating
+    draws nothing from the global random generators, so training does not depend on
+    ``eval_freq``."""
 
     def __init__(
         self,
@@ -464,9 +315,16 @@ class MaintenanceEvalCallback(BaseCallback):
         """Evaluate, log and record now; returns the mean metrics."""
         venv = self.model.get_env()
         normalizer = venv if isinstance(venv, VecNormalize) else None
-        masked = isinstance(self.model, MaskablePPO)
+        masked = type(self.model).__name__ == "MaskablePPO"
         agent = SB3Agent(self.model, normalizer, self.obs_names, masked=masked)
-        means = evaluate(agent, self.n_eval_episodes, self.eval_seed, **self.scenario).summary()
+        state = normalizer.training if normalizer is not None else None
+        if normalizer is not None:
+            normalizer.training = False
+        try:
+            means = evaluate(agent, self.n_eval_episodes, self.eval_seed, **self.scenario).summary()
+        finally:
+            if normalizer is not None:
+                normalizer.training = state
         for key, value in means.items():
             self.logger.record(f"eval/{'mean_reward' if key == 'reward' else key}", value)
         self.logger.record("time/total_timesteps", self.num_timesteps)
@@ -476,6 +334,10 @@ class MaintenanceEvalCallback(BaseCallback):
 
 
 # ---------------------------------------------------------------------------- training
+def _paths(out_dir: Path, name: str) -> tuple[Path, Path, Path]:
+    return out_dir / f"{name}.zip", out_dir / f"{name}_vecnormalize.pkl", out_dir / f"{name}.json"
+
+
 def save_agent(
     model: BaseAlgorithm,
     normalizer: VecNormalize | None,
@@ -487,8 +349,8 @@ def save_agent(
     extra: Mapping[str, Any] | None = None,
 ) -> Path:
     """Save ``<out_dir>/<name>.zip``, ``<name>_vecnormalize.pkl`` (if ``normalizer``) and
-    ``<name>.json`` (``algo``, the env's ``obs_names`` under ``scenario``, library versions
-    and ``extra``) for :func:`load_agent`; returns the zip path."""
+    ``<name>.json`` (``algo``, ``normalize``, the env's ``obs_names`` under ``scenario``,
+    library versions and ``extra``) for :func:`load_agent`; returns the zip path."""
     _algo(algo)
     scenario = dict(scenario or {})
     out_dir = Path(out_dir)
@@ -497,15 +359,20 @@ def save_agent(
     model.save(model_path)
     if normalizer is not None:
         normalizer.save(str(norm_path))
+    try:
+        contrib = _import("sb3_contrib:__version__")
+    except ImportError:
+        contrib = None
     meta = {
         "algo": algo,
+        "normalize": normalizer is not None,
         "scenario": scenario,
         "obs_names": list(make_env(**scenario).unwrapped.obs_names),
         **(extra or {}),
         "versions": {
             "python": sys.version.split()[0],
             "stable_baselines3": stable_baselines3.__version__,
-            "sb3_contrib": sb3_contrib.__version__,
+            "sb3_contrib": contrib,
             "torch": torch.__version__,
             "numpy": np.__version__,
         },
@@ -532,8 +399,10 @@ def train(
     n_eval_episodes: int = 5,
     log_dir: str | Path | None = None,
     subprocess: bool = False,
+    native: bool = False,
     hyperparams: Mapping[str, Any] | None = None,
     verbose: int = 0,
+    progress_bar: bool = False,
     **scenario: Any,
 ) -> Path:
     """Train ``algo`` (:data:`ALGOS`) for ``total_timesteps`` env steps and save
@@ -541,6 +410,7 @@ def train(
 
     ``eval_freq`` is in env steps (0: no evaluation callback); logs go to ``log_dir``
     (default ``<out_dir>/<name>_logs``); ``hyperparams`` override :data:`ALGOS` defaults;
+    ``native``: train on the natively batched vector env (:func:`make_vec_env`);
     ``scenario`` are the env's keywords.
     """
     spec = _algo(algo)
@@ -550,6 +420,7 @@ def train(
         raise ValueError(f"total_timesteps = {total_timesteps} must be >= 1")
     if isinstance(eval_freq, bool) or not isinstance(eval_freq, int) or eval_freq < 0:
         raise ValueError(f"eval_freq = {eval_freq!r} must be an integer >= 0")
+    cls = spec.cls
     name = name or algo
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
@@ -561,11 +432,12 @@ def train(
         n_envs,
         seed,
         subprocess=subprocess,
-        masked=spec.masked,
+        native=native,
+        masked=spec.masked and not native,
         gamma=kwargs.get("gamma", 0.99),
         **scenario,
     )
-    model = spec.cls(spec.policy, venv, seed=seed, device="cpu", verbose=verbose, **kwargs)
+    model = cls(spec.policy, venv, seed=seed, device="cpu", verbose=verbose, **kwargs)
     model.set_logger(configure(str(log_dir), _log_formats()))
     callback = (
         MaintenanceEvalCallback(max(eval_freq // n_envs, 1), n_eval_episodes, scenario=scenario)
@@ -573,56 +445,16 @@ def train(
         else None
     )
     start = time.perf_counter()
-    model.learn(total_timesteps, callback=callback)
+    model.learn(total_timesteps, callback=callback, progress_bar=progress_bar)
     wall = time.perf_counter() - start
     venv.close()
     extra = {
         "seed": seed,
         "n_envs": n_envs,
+        "native": native,
         "total_timesteps": total_timesteps,
         "hyperparams": {k: repr(v) for k, v in kwargs.items()},
         "train_wall_s": round(wall, 1),
         "eval_history": callback.history if callback is not None else [],
     }
     return save_agent(model, venv, out_dir, name, algo=algo, scenario=scenario, extra=extra)
-
-
-#: PPO hyperparameters of :func:`training_fps`: SB3's own defaults (``PPO("MlpPolicy",
-#: env)``: n_steps 2048, batch 64, 10 epochs, a 64-64 MLP) or this project's (:data:`ALGOS`)
-FPS_CONFIGS = ("sb3-default", "project")
-
-
-def fps_ppo_kwargs(config: str) -> dict[str, Any]:
-    """PPO keyword arguments of :func:`training_fps` for ``config`` (:data:`FPS_CONFIGS`):
-    none for SB3's defaults, :data:`ALGOS` ``"ppo"``'s for the project's."""
-    if config not in FPS_CONFIGS:
-        raise ValueError(f"config = {config!r} must be one of {FPS_CONFIGS}")
-    return dict(ALGOS["ppo"].kwargs) if config == "project" else {}
-
-
-def training_fps(
-    env_fn: Callable[[], gym.Env],
-    total_timesteps: int,
-    n_envs: int = 4,
-    seed: int = 0,
-    *,
-    config: str = "project",
-) -> float:
-    """Frames per second of PPO learning ``total_timesteps`` on ``n_envs`` ``DummyVecEnv``
-    copies of ``env_fn()`` under ``VecNormalize``, one torch thread, on the CPU.
-
-    ``config`` (:data:`FPS_CONFIGS`): ``"sb3-default"``, SB3's default PPO hyperparameters;
-    ``"project"``, :data:`ALGOS` ``"ppo"`` (batches of 256: fewer gradient steps per frame,
-    so the env's share of the time is larger).
-    """
-    spec = ALGOS["ppo"]
-    kwargs = fps_ppo_kwargs(config)
-    torch.set_num_threads(1)
-    set_random_seed(seed)
-    venv = VecNormalize(sb3_make_vec_env(env_fn, n_envs=n_envs, seed=seed))
-    model = spec.cls(spec.policy, venv, seed=seed, device="cpu", **kwargs)
-    start = time.perf_counter()
-    model.learn(total_timesteps)
-    fps = model.num_timesteps / (time.perf_counter() - start)
-    venv.close()
-    return fps

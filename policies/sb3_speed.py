@@ -1,80 +1,194 @@
-"""SB3 PPO training speed on ``ScasMaintenance-v0`` against CartPole-v1, on one machine.
+"""SB3 PPO training speed: the native vector env (:class:`policies.sb3_vec_env.NativeVecEnv`)
+against the ``DummyVecEnv`` setup, side by side in one run.
 
-The ratio ``fps(ScasMaintenance) / fps(CartPole)`` says how much the environment slows
-PPO down. It depends on PPO's own cost per frame, so it is measured for two sets of
-hyperparameters (:data:`policies.rl.FPS_CONFIGS`): SB3's defaults and this project's
-(batches of 256, hence fewer gradient steps per frame and a larger share for the env).
-Runs alternate between the two environments (CartPole, ours, CartPole, ours, ...) so a
-drift of the machine's speed hits both; each ratio is taken within one pair and the
-median over the repeats is reported.
+Setups (:data:`SETUPS`), each ``VecNormalize`` over a monitored vector env, PPO on the CPU
+with one torch thread and the same hyper-parameters (:data:`FPS_CONFIGS`):
+
+- ``dummy-4``: 4 single ``ScasMaintenance-v0`` in SB3's ``DummyVecEnv`` (each in
+  ``Monitor``): the setup of ``policies.rl.train``;
+- ``native-64``: ``NativeVecEnv(gym.make_vec(..., num_envs=64,
+  vectorization_mode="vector_entry_point"), info_keys=())`` in ``VecMonitor``;
+- ``cartpole-4``: 4 ``CartPole-v1`` in ``DummyVecEnv``: PPO's own cost with a near-free env.
+
+Frames per second = env steps summed over envs / wall time of ``model.learn``. Runs alternate
+between the setups (A, B, A, B, ...) so a drift of the machine's speed (it is shared) hits
+each; each speed-up is taken within one round and the median over the rounds is reported.
 """
 
 from __future__ import annotations
 
+import csv
+import json
 import statistics
+import time
 from collections.abc import Callable, Sequence
-from functools import partial
+from pathlib import Path
 from typing import Any
 
 import gymnasium as gym
 from tqdm.auto import tqdm
 
-from policies.rl import FPS_CONFIGS, make_env, training_fps
+from scas_env import ENV_ID
 
-#: the reference env (a Gymnasium id) and the label of ours
-REFERENCE_ID = "CartPole-v1"
-ENV_LABEL = "ScasMaintenance-v0"
+#: PPO settings: SB3's own defaults (``PPO("MlpPolicy", env)``: n_steps 2048, batch 64, 10
+#: epochs, a 64-64 MLP) or this project's (``policies.rl.ALGOS["ppo"]``: n_steps 512, batch 256)
+FPS_CONFIGS = ("sb3-default", "project")
+#: setups, the first is the baseline of the speed-ups
+SETUPS = ("dummy-4", "native-64", "cartpole-4")
+
+__all__ = [
+    "FPS_CONFIGS",
+    "SETUPS",
+    "fps_ppo_kwargs",
+    "fps_rounds",
+    "make_setup",
+    "run_sb3_bench",
+    "summarise",
+    "training_fps",
+]
 
 
-def fps_pairs(
+def fps_ppo_kwargs(config: str) -> dict[str, Any]:
+    """PPO keyword arguments for ``config`` (:data:`FPS_CONFIGS`)."""
+    if config not in FPS_CONFIGS:
+        raise ValueError(f"config = {config!r} must be one of {FPS_CONFIGS}")
+    if config == "sb3-default":
+        return {}
+    from policies.rl import ALGOS
+
+    return dict(ALGOS["ppo"].kwargs)
+
+
+def make_setup(label: str, seed: int = 0) -> Any:
+    """The monitored, normalised SB3 vector env of setup ``label`` (:data:`SETUPS`)."""
+    from stable_baselines3.common.env_util import make_vec_env
+    from stable_baselines3.common.vec_env import VecMonitor, VecNormalize
+
+    if label == "dummy-4":
+        venv = make_vec_env(lambda: gym.make(ENV_ID, disable_env_checker=True), n_envs=4, seed=seed)
+    elif label == "native-64":
+        from policies.sb3_vec_env import NativeVecEnv
+
+        native = gym.make_vec(ENV_ID, num_envs=64, vectorization_mode="vector_entry_point")
+        venv = VecMonitor(NativeVecEnv(native, info_keys=()))
+        venv.seed(seed)
+    elif label == "cartpole-4":
+        venv = make_vec_env("CartPole-v1", n_envs=4, seed=seed)
+    else:
+        raise ValueError(f"setup = {label!r} must be one of {SETUPS}")
+    return VecNormalize(venv)
+
+
+def training_fps(
+    venv_fn: Callable[[], Any], total_timesteps: int, seed: int = 0, *, config: str = "project"
+) -> float:
+    """Frames per second of PPO learning ``total_timesteps`` on ``venv_fn()``, one torch
+    thread, on the CPU (``config``: :data:`FPS_CONFIGS`)."""
+    import torch
+    from stable_baselines3 import PPO
+    from stable_baselines3.common.utils import set_random_seed
+
+    if isinstance(total_timesteps, bool) or not isinstance(total_timesteps, int):
+        raise ValueError(f"total_timesteps = {total_timesteps!r} must be an integer >= 1")
+    if total_timesteps < 1:
+        raise ValueError(f"total_timesteps = {total_timesteps!r} must be an integer >= 1")
+    kwargs = fps_ppo_kwargs(config)
+    torch.set_num_threads(1)
+    set_random_seed(seed)
+    venv = venv_fn()
+    model = PPO("MlpPolicy", venv, seed=seed, device="cpu", **kwargs)
+    start = time.perf_counter()
+    model.learn(total_timesteps)
+    fps = model.num_timesteps / (time.perf_counter() - start)
+    venv.close()
+    return fps
+
+
+def fps_rounds(
     timesteps: int,
     *,
-    n_envs: int = 4,
+    setups: Sequence[str] = SETUPS,
     seed: int = 0,
     repeats: int = 3,
-    configs: Sequence[str] = FPS_CONFIGS,
+    config: str = "project",
     fps_fn: Callable[..., float] = training_fps,
 ) -> list[dict[str, Any]]:
-    """One row per (config, repeat): both frame rates and their ratio."""
+    """One row per (round, setup) with its frame rate and speed-up over ``setups[0]`` in the
+    same round."""
     if isinstance(repeats, bool) or not isinstance(repeats, int) or repeats < 1:
         raise ValueError(f"repeats = {repeats!r} must be an integer >= 1")
-    for config in configs:
-        if config not in FPS_CONFIGS:
-            raise ValueError(f"config = {config!r} must be one of {FPS_CONFIGS}")
-    envs = {REFERENCE_ID: partial(gym.make, REFERENCE_ID), ENV_LABEL: make_env}
-    rows = []
-    runs = [(c, r) for r in range(repeats) for c in configs]
-    for config, rep in tqdm(runs, desc="PPO runs (pairs)"):
-        fps = {
-            label: fps_fn(fn, timesteps, n_envs, seed, config=config) for label, fn in envs.items()
-        }
-        rows.append(
-            {
-                "config": config,
-                "repeat": rep,
-                "fps_cartpole": fps[REFERENCE_ID],
-                "fps_scas": fps[ENV_LABEL],
-                "ratio": fps[ENV_LABEL] / fps[REFERENCE_ID],
-            }
-        )
+    if not setups or any(s not in SETUPS for s in setups) or len(set(setups)) != len(setups):
+        raise ValueError(f"setups = {list(setups)} must be distinct names from {SETUPS}")
+    fps_ppo_kwargs(config)
+    rows: list[dict[str, Any]] = []
+    runs = [(r, s) for r in range(repeats) for s in setups]
+    base: dict[int, float] = {}
+    for rep, label in tqdm(runs, desc="PPO runs"):
+        fps = fps_fn(lambda label=label: make_setup(label, seed), timesteps, seed, config=config)
+        base.setdefault(rep, fps)
+        rows.append({"round": rep, "setup": label, "fps": fps, "speedup": fps / base[rep]})
     return rows
 
 
 def summarise(rows: Sequence[dict[str, Any]]) -> dict[str, dict[str, float]]:
-    """Per config: median frame rates and median ratio over the repeats, and the range."""
+    """Per setup: median frame rate and median speed-up over the rounds, and its range."""
     out = {}
-    for config in dict.fromkeys(r["config"] for r in rows):
-        mine = [r for r in rows if r["config"] == config]
-        ratios = [r["ratio"] for r in mine]
-        out[config] = {
-            "fps_cartpole": statistics.median(r["fps_cartpole"] for r in mine),
-            "fps_scas": statistics.median(r["fps_scas"] for r in mine),
-            "ratio": statistics.median(ratios),
-            "ratio_min": min(ratios),
-            "ratio_max": max(ratios),
-            "repeats": len(mine),
+    for setup in dict.fromkeys(r["setup"] for r in rows):
+        mine = [r for r in rows if r["setup"] == setup]
+        speedups = [r["speedup"] for r in mine]
+        out[setup] = {
+            "fps": statistics.median(r["fps"] for r in mine),
+            "speedup": statistics.median(speedups),
+            "speedup_min": min(speedups),
+            "speedup_max": max(speedups),
+            "rounds": len(mine),
         }
     return out
 
 
-__all__ = ["ENV_LABEL", "REFERENCE_ID", "fps_pairs", "summarise"]
+def run_sb3_bench(
+    out: str | Path,
+    timesteps: int = 65_536,
+    *,
+    setups: Sequence[str] = SETUPS,
+    seed: int = 0,
+    repeats: int = 2,
+    config: str = "project",
+) -> dict[str, dict[str, float]]:
+    """Run :func:`fps_rounds`, write ``bench_sb3.json`` (arguments, summary, runs),
+    ``bench_sb3.csv`` (runs) and ``bench_sb3.png`` (median fps per setup) into ``out`` (a
+    new or empty folder, checked first); returns the summary."""
+    out = Path(out)
+    if out.exists() and (not out.is_dir() or any(out.iterdir())):
+        raise ValueError(f"out = {str(out)!r} exists and is not an empty folder")
+    rows = fps_rounds(timesteps, setups=setups, seed=seed, repeats=repeats, config=config)
+    summary = summarise(rows)
+    out.mkdir(parents=True, exist_ok=True)
+    args = {
+        "timesteps": timesteps,
+        "setups": list(setups),
+        "seed": seed,
+        "repeats": repeats,
+        "config": config,
+    }
+    (out / "bench_sb3.json").write_text(
+        json.dumps({"args": args, "summary": summary, "runs": rows}, indent=2)
+    )
+    with (out / "bench_sb3.csv").open("w", newline="") as fh:
+        writer = csv.DictWriter(fh, fieldnames=list(rows[0]))
+        writer.writeheader()
+        writer.writerows(rows)
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(6.0, 3.2), layout="constrained")
+    ax = fig.add_subplot()
+    labels = list(summary)
+    ax.bar(labels, [summary[s]["fps"] for s in labels])
+    for i, s in enumerate(labels):
+        ax.annotate(
+            f"x{summary[s]['speedup']:.1f}", (i, summary[s]["fps"]), ha="center", va="bottom"
+        )
+    ax.set_ylabel("PPO frames / s (median)")
+    ax.set_title(f"SB3 PPO ({config}), {timesteps} steps per run, {repeats} rounds")
+    fig.savefig(out / "bench_sb3.png", dpi=120)
+    return summary

@@ -24,7 +24,7 @@ from gymnasium.envs.registration import register, registry  # noqa: E402
 from scas_env._version import __version__  # noqa: E402
 from scas_env.actuator.params import ScasParams  # noqa: E402
 
-__all__ = ["ENV_ID", "ENV_ID_V1", "ScasParams", "__version__"]
+__all__ = ["ENV_ID", "ENV_ID_EPOCHS", "ENV_ID_V1", "ScasParams", "__version__"]
 
 ENV_ID = "scas_env/ScasMaintenance-v0"
 #: v1: the pre-flight test's go/no-go is an airworthiness limit (scas_env.acceptance)
@@ -40,3 +40,8 @@ for _id, _kwargs in ((ENV_ID, {}), (ENV_ID_V1, {"go_no_go": "airworthiness"})):
             vector_entry_point="scas_env.vector_env:make_vector_env",
             kwargs=_kwargs,
         )
+
+#: decision epochs over v0 (act now, then fly k flights): scas_env.decision_epochs
+ENV_ID_EPOCHS = "scas_env/ScasMaintenanceEpochs-v0"
+if ENV_ID_EPOCHS not in registry:
+    register(id=ENV_ID_EPOCHS, entry_point="scas_env.decision_epochs:make_decision_epoch_env")

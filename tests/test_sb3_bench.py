@@ -1,44 +1,51 @@
-"""The SB3 throughput benchmark's bookkeeping (policies.sb3_speed) and training_fps."""
+"""The SB3 speed benchmark's bookkeeping (policies.sb3_speed) and training_fps."""
 
 from __future__ import annotations
 
+import json
+from pathlib import Path
+
 import pytest
 
-from policies.rl import ALGOS, fps_ppo_kwargs, make_env, training_fps
-from policies.sb3_speed import fps_pairs, summarise
+import policies.sb3_speed as speed
+from policies.rl import ALGOS
+from policies.sb3_speed import fps_ppo_kwargs, fps_rounds, make_setup, summarise, training_fps
 
 
-def test_runs_alternate_and_ratios_are_taken_within_a_pair() -> None:
-    calls = []
+def test_rounds_alternate_and_speedups_are_taken_within_a_round(monkeypatch) -> None:
+    calls: list[str] = []
 
-    def fake_fps(env_fn, timesteps, n_envs, seed, *, config):
-        calls.append((config, env_fn is make_env))
-        # a machine that slows down over time: each run 1% slower than the previous one
-        speed = 0.99 ** len(calls)
-        base = 500.0 if env_fn is make_env else 1000.0
-        return base * (2.0 if config == "sb3-default" else 1.0) * speed
+    def fake(venv_fn, timesteps, seed, *, config):
+        label = venv_fn()  # make_setup is replaced below: the label itself
+        calls.append(label)
+        return {"dummy-4": 100.0, "native-64": 700.0}[label] * 0.99 ** len(calls)
 
-    rows = fps_pairs(1000, repeats=3, fps_fn=fake_fps)
-    assert [c for c, _ in calls] == ["sb3-default"] * 2 + ["project"] * 2 + ["sb3-default"] * 2 + [
-        "project"
-    ] * 2 + ["sb3-default"] * 2 + ["project"] * 2
-    assert [is_ours for _, is_ours in calls] == [False, True] * 6  # CartPole first, then ours
+    monkeypatch.setattr(speed, "make_setup", lambda label, seed=0: label)
+    rows = fps_rounds(1000, setups=("dummy-4", "native-64"), repeats=3, fps_fn=fake)
+    assert calls == ["dummy-4", "native-64"] * 3  # alternating: drift hits both
     for row in rows:
-        assert row["ratio"] == pytest.approx(0.5 * 0.99)  # drift within a pair only
+        expected = 1.0 if row["setup"] == "dummy-4" else 7.0 * 0.99
+        assert row["speedup"] == pytest.approx(expected)  # drift of one run within a round
     summary = summarise(rows)
-    assert set(summary) == {"sb3-default", "project"}
-    for s in summary.values():
-        assert s["repeats"] == 3 and s["ratio_min"] <= s["ratio"] <= s["ratio_max"]
-    assert summary["sb3-default"]["fps_cartpole"] == pytest.approx(2000.0 * 0.99**5)  # median
+    assert summary["native-64"]["rounds"] == 3
+    assert summary["native-64"]["fps"] == pytest.approx(700.0 * 0.99**4)  # median of 3
 
 
-def test_bad_arguments_raise() -> None:
+def test_bad_arguments_raise(tmp_path: Path) -> None:
     with pytest.raises(ValueError, match="repeats"):
-        fps_pairs(100, repeats=0)
+        fps_rounds(100, repeats=0)
+    with pytest.raises(ValueError, match="setups"):
+        fps_rounds(100, setups=("dummy-8",))
     with pytest.raises(ValueError, match="config"):
-        fps_pairs(100, configs=["tuned"])
-    with pytest.raises(ValueError, match="config"):
-        training_fps(make_env, 100, config="tuned")
+        fps_ppo_kwargs("tuned")
+    with pytest.raises(ValueError, match="setup"):
+        make_setup("dummy-8")
+    with pytest.raises(ValueError, match="total_timesteps"):
+        training_fps(lambda: None, 0)
+    (tmp_path / "full").mkdir()
+    (tmp_path / "full" / "x").write_text("")
+    with pytest.raises(ValueError, match="not an empty folder"):
+        speed.run_sb3_bench(tmp_path / "full", 10)
 
 
 def test_configs_are_sb3_defaults_and_the_project_settings() -> None:
@@ -49,6 +56,28 @@ def test_configs_are_sb3_defaults_and_the_project_settings() -> None:
     assert ALGOS["ppo"].kwargs["batch_size"] == 256
 
 
-def test_training_fps_runs_ppo_for_real() -> None:
-    fps = training_fps(make_env, 512, n_envs=1, seed=0, config="project")
-    assert 0.0 < fps < 1e6  # 512 frames of PPO take well over a microsecond
+def test_setups_are_what_they_say() -> None:
+    dummy, native = make_setup("dummy-4"), make_setup("native-64")
+    assert (dummy.num_envs, native.num_envs) == (4, 64)
+    assert dummy.observation_space == native.observation_space
+    dummy.close()
+    native.close()
+
+
+def test_bench_writes_json_csv_png(tmp_path: Path, monkeypatch) -> None:
+    monkeypatch.setattr(speed, "training_fps", lambda fn, t, seed, config: 10.0)
+    monkeypatch.setattr(speed, "make_setup", lambda label, seed=0: label)
+
+    def rounds(timesteps, **kw):
+        return [
+            {"round": 0, "setup": s, "fps": 10.0 * (i + 1), "speedup": float(i + 1)}
+            for i, s in enumerate(kw["setups"])
+        ]
+
+    monkeypatch.setattr(speed, "fps_rounds", rounds)
+    summary = speed.run_sb3_bench(tmp_path / "b", 10, setups=("dummy-4", "native-64"))
+    assert summary["native-64"]["speedup"] == 2.0
+    doc = json.loads((tmp_path / "b" / "bench_sb3.json").read_text())
+    assert doc["summary"] == summary
+    assert (tmp_path / "b" / "bench_sb3.png").stat().st_size > 0
+    assert (tmp_path / "b" / "bench_sb3.csv").read_text().startswith("round,setup,fps,speedup")

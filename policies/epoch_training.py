@@ -1,0 +1,193 @@
+"""Training of SB3 agents on decision epochs (:class:`scas_env.decision_epochs.DecisionEpochs`).
+
+One run (:func:`train_epochs`): ``n_envs`` decision-epoch envs (``DummyVecEnv``, each in a
+``Monitor``, seeded ``seed * 1000 + rank`` at the first reset) under ``VecNormalize``
+(observations standardised, rewards scaled by the running std of the discounted return with
+the algorithm's ``gamma``), trained for ``total_timesteps`` *decisions* or until ``max_wall_s``
+seconds of wall time, whichever comes first. A checkpoint (model zip + VecNormalize
+statistics) is written every ``checkpoint_every`` decisions; the best one is chosen later on
+validation seeds (:mod:`policies.epoch_selection`), never on the held-out ones.
+
+Hyper-parameters come from an RL-Zoo-format YAML (:func:`load_zoo_hyperparams`): a mapping
+``env id -> {n_envs, n_timesteps, policy, normalize, <algorithm keywords>}``.
+
+sb3-contrib (MaskablePPO) is an optional dependency: the ``rl`` extra.
+"""
+
+from __future__ import annotations
+
+import json
+import time
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+import gymnasium as gym
+
+from policies.sb3_agents import require_contrib
+from scas_env import ENV_ID
+from scas_env.decision_epochs import DEFAULT_KS, DecisionEpochs
+
+#: id of the decision-epoch formulation in the hyper-parameter YAML files
+EPOCH_ENV_ID = "scas_env/ScasMaintenanceEpochs-v0"
+HYPERPARAMS_DIR = Path(__file__).resolve().parent / "data" / "hyperparams"
+#: keys of an RL-Zoo entry that are not algorithm keywords
+ZOO_KEYS = ("n_envs", "n_timesteps", "policy", "normalize")
+
+__all__ = [
+    "EPOCH_ENV_ID",
+    "HYPERPARAMS_DIR",
+    "candidate_hyperparams",
+    "load_zoo_hyperparams",
+    "make_epoch_env",
+    "train_epochs",
+]
+
+
+def load_zoo_hyperparams(path: str | Path, env_id: str = EPOCH_ENV_ID) -> dict[str, Any]:
+    """The entry ``env_id`` of an RL-Zoo-format YAML file (a copy, unknown keys kept for the
+    algorithm). Raises ``ValueError`` naming the file if it or the entry is missing."""
+    path = Path(path)
+    if not path.is_file():
+        raise ValueError(f"hyper-parameter file {str(path)!r} does not exist")
+    import yaml  # PyYAML: the rl extra
+
+    data = yaml.safe_load(path.read_text())
+    if not isinstance(data, dict) or env_id not in data:
+        keys = sorted(data) if isinstance(data, dict) else type(data).__name__
+        raise ValueError(f"{path}: no entry {env_id!r} (found {keys})")
+    return dict(data[env_id])
+
+
+def candidate_hyperparams(search: str | Path, candidate: str) -> dict[str, Any]:
+    """Hyper-parameters of ``candidate`` in a search YAML (``base``: an RL-Zoo file beside it,
+    ``candidates``: name -> overrides)."""
+    import yaml  # PyYAML: the rl extra
+
+    search = Path(search)
+    if not search.is_file():
+        raise ValueError(f"search file {str(search)!r} does not exist")
+    spec = yaml.safe_load(search.read_text())
+    candidates = spec.get("candidates", {}) if isinstance(spec, dict) else {}
+    if candidate not in candidates:
+        raise ValueError(f"candidate = {candidate!r} must be one of {sorted(candidates)}")
+    base = load_zoo_hyperparams(search.parent / spec["base"])
+    return {**base, **candidates[candidate]}
+
+
+def make_epoch_env(ks: Sequence[int] = DEFAULT_KS, **scenario: Any) -> gym.Env:
+    """One ``ScasMaintenance-v0`` (``scenario`` keywords) in :class:`DecisionEpochs`."""
+    return DecisionEpochs(gym.make(ENV_ID, disable_env_checker=True, **scenario), ks=ks)
+
+
+class _WallClock:
+    """SB3 callback factory: stop learning after ``limit_s`` seconds (None: never)."""
+
+    @staticmethod
+    def make(limit_s: float | None) -> Any:
+        from stable_baselines3.common.callbacks import BaseCallback
+
+        class WallClockStop(BaseCallback):
+            def __init__(self) -> None:
+                super().__init__()
+                self.start = time.perf_counter()
+
+            def _on_step(self) -> bool:
+                return limit_s is None or time.perf_counter() - self.start < limit_s
+
+        return WallClockStop()
+
+
+def train_epochs(
+    hyperparams: Mapping[str, Any],
+    out_dir: str | Path,
+    *,
+    seed: int = 0,
+    algo: str = "maskable_ppo",
+    ks: Sequence[int] = DEFAULT_KS,
+    checkpoint_every: int = 20_000,
+    max_wall_s: float | None = None,
+    total_timesteps: int | None = None,
+    progress_bar: bool = False,
+    **scenario: Any,
+) -> Path:
+    """Train one agent on decision epochs; returns ``out_dir``.
+
+    ``hyperparams``: an RL-Zoo entry (:func:`load_zoo_hyperparams`); ``total_timesteps``
+    overrides its ``n_timesteps`` (decisions, summed over envs). Writes ``out_dir/ckpt_<n>``
+    checkpoints (``model.zip``, ``vecnormalize.pkl``), ``progress.csv`` (SB3's logger:
+    training episode rewards of the Monitor) and ``run.json`` (config, decisions and wall
+    time reached).
+    """
+    contrib = require_contrib("train on decision epochs")
+    import torch
+    from stable_baselines3 import PPO
+    from stable_baselines3.common.callbacks import CallbackList, CheckpointCallback
+    from stable_baselines3.common.env_util import make_vec_env
+    from stable_baselines3.common.logger import configure
+    from stable_baselines3.common.utils import set_random_seed
+    from stable_baselines3.common.vec_env import VecNormalize
+
+    classes = {"maskable_ppo": contrib.MaskablePPO, "ppo": PPO}
+    if algo not in classes:
+        raise ValueError(f"algo = {algo!r} must be one of {sorted(classes)}")
+    hp = dict(hyperparams)
+    n_envs = int(hp.pop("n_envs", 4))
+    n_timesteps = int(float(hp.pop("n_timesteps", 1_000_000)))
+    policy = hp.pop("policy", "MlpPolicy")
+    normalize = hp.pop("normalize", True)
+    total = n_timesteps if total_timesteps is None else total_timesteps
+    if isinstance(total, bool) or not isinstance(total, int) or total < 1:
+        raise ValueError(f"total_timesteps = {total!r} must be an integer >= 1")
+    if isinstance(checkpoint_every, bool) or not isinstance(checkpoint_every, int):
+        raise ValueError(f"checkpoint_every = {checkpoint_every!r} must be an integer >= 1")
+    if checkpoint_every < 1:
+        raise ValueError(f"checkpoint_every = {checkpoint_every!r} must be an integer >= 1")
+    out = Path(out_dir)
+    if out.exists() and any(out.iterdir()):
+        raise ValueError(f"out_dir = {str(out)!r} exists and is not empty; choose a new one")
+    out.mkdir(parents=True, exist_ok=True)
+    torch.set_num_threads(1)
+    set_random_seed(seed)
+    venv = make_vec_env(
+        make_epoch_env,
+        n_envs=n_envs,
+        seed=seed * 1000,
+        env_kwargs={"ks": tuple(ks), **scenario},
+        monitor_dir=str(out / "monitor"),
+    )
+    gamma = float(hp.get("gamma", 0.99))
+    if normalize:
+        venv = VecNormalize(venv, norm_obs=True, norm_reward=True, gamma=gamma)
+    model = classes[algo](policy, venv, seed=seed, device="cpu", verbose=0, **hp)
+    model.set_logger(configure(str(out), ["csv"]))
+    checkpoints = CheckpointCallback(
+        max(checkpoint_every // n_envs, 1),
+        str(out),
+        name_prefix="ckpt",
+        save_vecnormalize=bool(normalize),
+    )
+    start = time.perf_counter()
+    model.learn(
+        total,
+        callback=CallbackList([checkpoints, _WallClock.make(max_wall_s)]),
+        progress_bar=progress_bar,
+    )
+    wall = time.perf_counter() - start
+    model.save(out / f"ckpt_{model.num_timesteps}_steps.zip")
+    if normalize:
+        venv.save(str(out / f"ckpt_vecnormalize_{model.num_timesteps}_steps.pkl"))
+    run = {
+        "algo": algo,
+        "seed": seed,
+        "ks": list(ks),
+        "scenario": scenario,
+        "hyperparams": {k: repr(v) for k, v in dict(hyperparams).items()},
+        "decisions": int(model.num_timesteps),
+        "decisions_requested": total,
+        "wall_s": round(wall, 1),
+        "stopped_by_wall_clock": model.num_timesteps < total,
+    }
+    (out / "run.json").write_text(json.dumps(run, indent=1))
+    venv.close()
+    return out

@@ -1,0 +1,178 @@
+"""SB3 on the native vector env: a ``stable_baselines3`` ``VecEnv`` over a Gymnasium ``VectorEnv``.
+
+``NativeVecEnv(gym.make_vec("scas_env/ScasMaintenance-v0", num_envs=N,
+vectorization_mode="vector_entry_point"))`` trains SB3 on the natively batched env
+(:class:`scas_env.vector_env.ScasMaintenanceVectorEnv`) instead of N single envs in a
+``DummyVecEnv``. It gives the same observations, rewards and dones as ``DummyVecEnv`` on the
+same seeds, over episode boundaries (tested).
+
+Semantics (SB3's ``VecEnv`` contract):
+
+- ``reset()``: ``(N, n_obs)`` float32; seeds from ``seed(s)`` (``s + i`` for env ``i``)
+  for that reset only, then none (each actuator continues its own generator).
+- ``step_wait()``: ``obs, rewards (N,) float32, dones (N,) bool, infos`` (N dicts).
+- autoreset: at a done, ``obs[i]`` is already the next episode's first observation; the
+  last one is in ``infos[i]["terminal_observation"]``, and ``infos[i]["TimeLimit.truncated"]``
+  says truncation.
+- ``infos[i]``: the vector info's entries of env ``i`` (``info_keys``; default all, nested
+  dicts kept).
+- ``env_method("action_masks")``: per env the bool mask of
+  :func:`scas_env.decision_epochs.maintenance_mask` (MaskablePPO).
+- ``get_attr`` / ``set_attr`` / ``env_method``: on the vector env itself (attributes shared
+  by its N actuators), the value once per index.
+
+The native env autoresets on the step *after* a done (Gymnasium 1.x next-step); SB3 wants the
+new observation at once. ``ScasMaintenance-v0`` has no termination and every actuator
+truncates at the same slot, so all envs end together and the adapter resets them all at once
+(``reset()`` without seeds: each actuator continues its own generator, as ``DummyVecEnv``'s
+resets do). Done envs that are not all of them raise ``RuntimeError`` (a future env with
+terminations needs a per-env reset in the vector env's API).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Sequence
+from typing import Any
+
+import numpy as np
+from gymnasium import spaces
+from stable_baselines3.common.vec_env.base_vec_env import VecEnv
+
+from scas_env.decision_epochs import MASK_READS, maintenance_mask
+
+__all__ = ["NativeVecEnv"]
+
+
+def _split(info: dict[str, Any], n: int, keys: Sequence[str] | None) -> list[dict[str, Any]]:
+    """A dict of arrays (nested dicts of arrays) as ``n`` per-env dicts of scalars."""
+    out: list[dict[str, Any]] = [{} for _ in range(n)]
+    for key in keys if keys is not None else info:
+        value = info[key]
+        if isinstance(value, dict):
+            rows = _split(value, n, None)
+            for e in range(n):
+                out[e][key] = rows[e]
+        else:
+            arr = np.asarray(value)
+            if arr.ndim == 0 or len(arr) != n:
+                for e in range(n):
+                    out[e][key] = value
+            else:
+                items = arr.tolist()
+                for e in range(n):
+                    out[e][key] = items[e]
+    return out
+
+
+class NativeVecEnv(VecEnv):
+    """SB3 ``VecEnv`` over a Gymnasium vector env with flat Box observations.
+
+    Parameters
+    ----------
+    venv : ``gym.make_vec(..., vectorization_mode="vector_entry_point")``.
+    info_keys : keys of the vector info copied into each env's info dict (None: all;
+        ``()``: none, the fastest; ``terminal_observation`` and ``TimeLimit.truncated`` are
+        always set at a done).
+    """
+
+    def __init__(self, venv: Any, info_keys: Iterable[str] | None = None) -> None:
+        self.venv = venv
+        space = venv.single_observation_space
+        if not isinstance(space, spaces.Box) or len(space.shape) != 1:
+            raise ValueError(f"the vector env's observation space {space} must be a flat Box")
+        self.info_keys = None if info_keys is None else tuple(info_keys)
+        names = tuple(getattr(venv, "obs_names", ()))
+        self._mask_cols = (
+            [names.index(n) for n in MASK_READS] if all(n in names for n in MASK_READS) else None
+        )
+        self._obs = np.zeros((venv.num_envs, *space.shape), dtype=space.dtype)
+        self._actions: np.ndarray | None = None
+        super().__init__(venv.num_envs, space, venv.single_action_space)
+
+    # ------------------------------------------------------------------ core
+    def reset(self) -> np.ndarray:
+        seeds = [None if s is None else int(s) for s in self._seeds]
+        seed_arg = None if all(s is None for s in seeds) else seeds
+        opts = self._options[0] if self._options and self._options[0] else None
+        obs, info = self.venv.reset(seed=seed_arg, options=opts)
+        self._reset_seeds()
+        self._reset_options()
+        self.reset_infos = _split(info, self.num_envs, self.info_keys)
+        self._obs = np.array(obs, copy=True)
+        return self._obs.copy()
+
+    def step_async(self, actions: np.ndarray) -> None:
+        self._actions = np.asarray(actions, dtype=np.int64).reshape(self.num_envs)
+
+    def step_wait(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, list[dict[str, Any]]]:
+        if self._actions is None:
+            raise RuntimeError("step_wait() called without step_async(actions)")
+        obs, rewards, terminated, truncated, info = self.venv.step(self._actions)
+        self._actions = None
+        dones = np.asarray(terminated) | np.asarray(truncated)
+        infos = _split(info, self.num_envs, self.info_keys)
+        obs = np.array(obs, copy=True)
+        if dones.any():
+            if not dones.all():
+                raise RuntimeError(
+                    f"envs {np.flatnonzero(dones).tolist()} ended alone; the adapter resets "
+                    "all envs together (ScasMaintenance-v0: all truncate at the same slot)"
+                )
+            for e in range(self.num_envs):
+                infos[e]["terminal_observation"] = obs[e]
+                infos[e]["TimeLimit.truncated"] = bool(truncated[e] and not terminated[e])
+            obs, reset_info = self.venv.reset()
+            self.reset_infos = _split(reset_info, self.num_envs, self.info_keys)
+            obs = np.array(obs, copy=True)
+        self._obs = obs
+        return obs.copy(), np.asarray(rewards, dtype=np.float32), dones, infos
+
+    def close(self) -> None:
+        self.venv.close()
+
+    # ------------------------------------------------------------------ masks
+    def action_masks(self) -> np.ndarray:
+        """``(N, 4)`` valid actions of the current observations (MaskablePPO)."""
+        if self._mask_cols is None:
+            raise ValueError(f"the observation lacks {MASK_READS} that the action mask reads")
+        return maintenance_mask(*(self._obs[:, c] for c in self._mask_cols))
+
+    # ------------------------------------------------------------------ attributes
+    def _indices(self, indices: Any) -> list[int]:
+        if indices is None:
+            return list(range(self.num_envs))
+        if isinstance(indices, int | np.integer):
+            return [int(indices)]
+        return [int(i) for i in indices]
+
+    def has_attr(self, attr_name: str) -> bool:
+        """``action_masks`` (when the observation has what the mask reads) or an attribute of
+        the vector env (MaskablePPO asks for ``action_masks``)."""
+        if attr_name == "action_masks":
+            return self._mask_cols is not None
+        return hasattr(self.venv, attr_name)
+
+    def get_attr(self, attr_name: str, indices: Any = None) -> list[Any]:
+        value = getattr(self.venv, attr_name)
+        return [value for _ in self._indices(indices)]
+
+    def set_attr(self, attr_name: str, value: Any, indices: Any = None) -> None:
+        if len(self._indices(indices)) != self.num_envs:
+            raise ValueError(f"set_attr({attr_name!r}) sets the vector env's; indices must be all")
+        setattr(self.venv, attr_name, value)
+
+    def env_method(
+        self, method_name: str, *method_args: Any, indices: Any = None, **method_kwargs: Any
+    ) -> list[Any]:
+        idx = self._indices(indices)
+        if method_name == "action_masks":
+            masks = self.action_masks()
+            return [masks[i] for i in idx]
+        result = getattr(self.venv, method_name)(*method_args, **method_kwargs)
+        return [result for _ in idx]
+
+    def env_is_wrapped(self, wrapper_class: type, indices: Any = None) -> list[bool]:
+        return [False for _ in self._indices(indices)]
+
+    def get_images(self) -> Sequence[np.ndarray | None]:
+        return [None for _ in range(self.num_envs)]

@@ -1,0 +1,217 @@
+"""Decision epochs over ``ScasMaintenance-v0``: "act now, then fly k flights" (a semi-MDP).
+
+Of the 2000 per-flight decisions of a v0 episode only a handful matter (a replacement, a
+test); the rest are "fly". :class:`DecisionEpochs` lets an agent decide when to look again:
+one step applies a maintenance action at the current slot, then flies (action ``fly``; on
+the ground it waits) until ``k`` slots have passed, ``k`` chosen by the agent from a small
+set. The v0 env underneath is unchanged; a v0 episode and a decision-epoch episode on the
+same seed and the same per-slot actions are the same episode bit for bit (tested).
+
+## Action space
+
+``Discrete(4 * len(ks))``; action ``a`` means maintenance action ``a // len(ks)`` then
+``k = ks[a % len(ks)]`` slots in all (the first one included):
+
+| a // len(ks) | v0 action | at the first slot |
+|---|---|---|
+| 0 | fly | fly (wait while grounded) |
+| 1 | test_and_fly | pre-flight test, fly if it passes go/no-go |
+| 2 | replace_spring | new centering-spring pair (ground time) |
+| 3 | replace_seal | new seal set (ground time) |
+
+The remaining ``k - 1`` slots are ``fly``. A step ends early when the v0 episode truncates.
+
+## Observation space
+
+``Box(n + 1,)`` float32: the v0 flat observation (``obs_mode`` ``"features+rul"``,
+``"features"`` or ``"state"``; names in ``obs_names``) followed by:
+
+| name | unit | bounds | meaning |
+|---|---|---|---|
+| flights_left | slots | [0, episode_slots] | slots left before the episode truncates |
+
+## Reward and discount
+
+``reward = sum_{j < n} gamma**j * r_j`` (USD), the v0 rewards ``r_j`` of the ``n`` slots
+flown in this step, discounted per flight with ``gamma`` (default 1: the plain sum, so an
+episode's total is v0's total). ``info`` is the v0 info of the last slot plus:
+
+| key | unit | meaning |
+|---|---|---|
+| epoch_slots | slots | ``n``, the slots this step took (``k``, or fewer at truncation) |
+| epoch_discount | - | ``gamma ** n``: the discount to apply to the next step's value |
+| epoch_action | - | the v0 action taken at the first slot |
+| epoch_k | slots | the ``k`` chosen |
+
+Semi-MDP discounting with SB3: SB3's algorithms apply one fixed ``gamma`` per step, so they
+cannot use ``epoch_discount``. With ``gamma=1`` here (finite 2000-slot episodes, the slots
+left in the observation) the episode return is exactly v0's undiscounted return, which is
+what the benchmark scores; SB3's own ``gamma`` then only weighs decisions, not flights (use
+one close to 1, e.g. 0.99-0.999 per decision). A custom algorithm can bootstrap with
+``epoch_discount`` instead.
+
+## Action masks
+
+:meth:`DecisionEpochs.action_masks` (MaskablePPO's ``action_masks()`` protocol): bool of
+shape ``(4 * len(ks),)``, every ``k`` of a maintenance action sharing its validity:
+``fly`` always; ``test_and_fly`` only when not on the ground (``downtime == 0``: on the
+ground it would do the same as ``fly``); ``replace_*`` only when the part has flown
+(``age > 0`` flights: replacing a new part is pure cost).
+
+>>> import gymnasium as gym
+>>> import scas_env
+>>> env = DecisionEpochs(gym.make("scas_env/ScasMaintenance-v0", episode_slots=100))
+>>> obs, info = env.reset(seed=0)
+>>> obs.shape, env.action_space, float(obs[-1])
+((19,), Discrete(20), 100.0)
+>>> obs, reward, terminated, truncated, info = env.step(env.encode(0, 20))
+>>> info["epoch_slots"], float(obs[-1])
+(20, 80.0)
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+from gymnasium import spaces
+
+FLY, TEST_AND_FLY, REPLACE_SPRING, REPLACE_SEAL = range(4)
+N_MAINTENANCE = 4
+#: default choices of k (slots per decision)
+DEFAULT_KS: tuple[int, ...] = (1, 5, 20, 50, 100)
+#: observation entries the mask reads
+MASK_READS = ("downtime", "spring_age", "seal_age")
+
+__all__ = [
+    "DEFAULT_KS",
+    "EPOCHS_ENV_ID",
+    "DecisionEpochs",
+    "maintenance_mask",
+    "make_decision_epoch_env",
+]
+
+#: registered id: ``gym.make(EPOCHS_ENV_ID, ks=..., gamma=..., **v0 keywords)``
+EPOCHS_ENV_ID = "scas_env/ScasMaintenanceEpochs-v0"
+
+
+def maintenance_mask(downtime: Any, spring_age: Any, seal_age: Any) -> np.ndarray:
+    """Valid v0 actions (bool, shape ``(..., 4)``) from downtime (slots) and part ages
+    (flights): ``fly`` always; ``test_and_fly`` iff ``downtime == 0``; ``replace_spring`` iff
+    ``spring_age > 0``; ``replace_seal`` iff ``seal_age > 0``.
+
+    >>> maintenance_mask(0, 0, 0).tolist()
+    [True, True, False, False]
+    >>> maintenance_mask([1, 0], [5, 5], [0, 7]).tolist()
+    [[True, False, True, False], [True, True, True, True]]
+    """
+    down, spring, seal = np.broadcast_arrays(
+        *(np.asarray(v, dtype=np.float64) for v in (downtime, spring_age, seal_age))
+    )
+    mask = np.empty((*down.shape, N_MAINTENANCE), dtype=bool)
+    mask[..., FLY] = True
+    mask[..., TEST_AND_FLY] = down <= 0
+    mask[..., REPLACE_SPRING] = spring > 0
+    mask[..., REPLACE_SEAL] = seal > 0
+    return mask
+
+
+def _check_ks(ks: Sequence[int]) -> tuple[int, ...]:
+    out = tuple(ks)
+    if (
+        not out
+        or any(isinstance(k, bool) or not isinstance(k, int | np.integer) or k < 1 for k in out)
+        or len(set(out)) != len(out)
+    ):
+        raise ValueError(f"ks = {ks!r} must be distinct integers >= 1 (slots per decision)")
+    return tuple(int(k) for k in out)
+
+
+class DecisionEpochs(gym.Wrapper):
+    """Act now, then fly ``k`` slots; see the module docstring for the spec.
+
+    Parameters
+    ----------
+    env : a ``ScasMaintenance-v0`` env with a flat (``Box``) observation.
+    ks : choices of ``k`` (slots per decision), distinct integers >= 1.
+    gamma : per-flight discount in ``[0, 1]`` applied inside a step (1: plain sum).
+    """
+
+    def __init__(self, env: gym.Env, ks: Sequence[int] = DEFAULT_KS, gamma: float = 1.0) -> None:
+        super().__init__(env)
+        self.ks = _check_ks(ks)
+        if not isinstance(gamma, int | float) or not 0.0 <= float(gamma) <= 1.0:
+            raise ValueError(f"gamma = {gamma!r} must be a number in [0, 1] (per flight)")
+        self.gamma = float(gamma)
+        inner = env.observation_space
+        if not isinstance(inner, spaces.Box) or len(inner.shape) != 1:
+            raise ValueError(
+                f"env's observation space {inner} must be a flat Box "
+                "(obs_mode 'features+rul', 'features' or 'state')"
+            )
+        u = env.unwrapped
+        self.episode_slots = int(u.scenario.episode_slots)
+        self.observation_space = spaces.Box(
+            np.append(inner.low, 0.0).astype(np.float32),
+            np.append(inner.high, float(self.episode_slots)).astype(np.float32),
+            dtype=np.float32,
+        )
+        self.action_space = spaces.Discrete(N_MAINTENANCE * len(self.ks))
+        self.obs_names = (*u.obs_names, "flights_left")
+        self.obs_units = (*u.obs_units, "slots")
+
+    def encode(self, maintenance: int, k: int) -> int:
+        """The action for v0 action ``maintenance`` then ``k`` slots in all."""
+        if k not in self.ks:
+            raise ValueError(f"k = {k!r} must be one of {self.ks}")
+        if maintenance not in range(N_MAINTENANCE):
+            raise ValueError(f"maintenance = {maintenance!r} must be in 0..3")
+        return int(maintenance) * len(self.ks) + self.ks.index(k)
+
+    def decode(self, action: Any) -> tuple[int, int]:
+        """``(v0 action, k)`` of a decision-epoch action."""
+        a = int(action)
+        if not 0 <= a < self.action_space.n:
+            raise ValueError(f"action = {action!r} must be in 0..{self.action_space.n - 1}")
+        return a // len(self.ks), self.ks[a % len(self.ks)]
+
+    def _obs(self, obs: np.ndarray) -> np.ndarray:
+        left = self.episode_slots - int(self.env.unwrapped.slot)
+        return np.append(obs, np.float32(left)).astype(np.float32)
+
+    def reset(self, **kwargs: Any) -> tuple[np.ndarray, dict[str, Any]]:
+        obs, info = self.env.reset(**kwargs)
+        return self._obs(obs), info
+
+    def step(self, action: Any) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
+        maintenance, k = self.decode(action)
+        total, weight, n = 0.0, 1.0, 0
+        act = maintenance
+        terminated = truncated = False
+        while n < k and not (terminated or truncated):
+            obs, reward, terminated, truncated, info = self.env.step(act)
+            total += weight * float(reward)
+            weight *= self.gamma
+            n += 1
+            act = FLY
+        info = dict(info)
+        info.update(epoch_slots=n, epoch_discount=weight, epoch_action=maintenance, epoch_k=k)
+        return self._obs(obs), total, terminated, truncated, info
+
+    def action_masks(self) -> np.ndarray:
+        """Valid actions now (bool, ``(4 * len(ks),)``); see the module docstring."""
+        u = self.env.unwrapped
+        m = maintenance_mask(u.downtime, u.part_age["spring"], u.part_age["seal"])
+        return np.repeat(m, len(self.ks))
+
+
+def make_decision_epoch_env(
+    ks: Sequence[int] = DEFAULT_KS, gamma: float = 1.0, **kwargs: Any
+) -> DecisionEpochs:
+    """Entry point of :data:`EPOCHS_ENV_ID`: a v0 env (``kwargs``: its keywords) in
+    :class:`DecisionEpochs` (so RL-Zoo can train on it by id)."""
+    from scas_env.env import ScasMaintenanceEnv
+
+    return DecisionEpochs(ScasMaintenanceEnv(**kwargs), ks=ks, gamma=gamma)

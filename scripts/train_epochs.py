@@ -1,0 +1,43 @@
+"""Train one MaskablePPO (or PPO) agent on decision epochs (policies.epoch_training).
+
+Example (one candidate of policies/data/hyperparams/search.yml, one seed)::
+
+    python scripts/train_epochs.py --candidate gamma099 --seed 0 --max-wall-s 3300 \\
+        --out results/rl/epochs/gamma099_s0
+"""
+
+from __future__ import annotations
+
+import argparse
+
+from policies.epoch_training import HYPERPARAMS_DIR, candidate_hyperparams, train_epochs
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(
+        description=__doc__, formatter_class=argparse.ArgumentDefaultsHelpFormatter
+    )
+    parser.add_argument("--search", default=str(HYPERPARAMS_DIR / "search.yml"), help="search YAML")
+    parser.add_argument("--candidate", required=True, help="candidate name in the search YAML")
+    parser.add_argument("--seed", type=int, default=0, help="training seed")
+    parser.add_argument("--algo", default="maskable_ppo", choices=("maskable_ppo", "ppo"))
+    parser.add_argument("--timesteps", type=int, default=None, help="decisions (default: YAML)")
+    parser.add_argument("--max-wall-s", type=float, default=None, help="stop after this wall time")
+    parser.add_argument("--checkpoint-every", type=int, default=25_000, help="decisions")
+    parser.add_argument("--out", required=True, help="new, empty output folder")
+    args = parser.parse_args()
+    if args.max_wall_s is not None and args.max_wall_s <= 0:
+        parser.error(f"--max-wall-s {args.max_wall_s} must be > 0")
+    train_epochs(
+        candidate_hyperparams(args.search, args.candidate),
+        args.out,
+        seed=args.seed,
+        algo=args.algo,
+        checkpoint_every=args.checkpoint_every,
+        max_wall_s=args.max_wall_s,
+        total_timesteps=args.timesteps,
+    )
+
+
+if __name__ == "__main__":
+    main()
