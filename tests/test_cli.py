@@ -49,7 +49,7 @@ MAINS: dict[str, Callable[..., int]] = {
     "scas-export-dataset": studies_cli.export_dataset_main,
     "scas-go-no-go": studies_cli.go_no_go_main,
 }
-#: scripts this package's CLI modules serve (the others' scripts are owned elsewhere)
+#: scripts that are thin wrappers of a CLI main
 WRAPPERS = {
     "bench_env.py": "bench_env_main",
     "bench_integrator.py": "bench_integrator_main",
@@ -63,6 +63,9 @@ WRAPPERS = {
     "reproduce_paper.py": "reproduce_main",
     "run_campaign.py": "campaign_main",
     "simulate.py": "simulate_main",
+    "train.py": "train_main",
+    "tune_policies.py": "tune_main",
+    "value_of_prognostics.py": "value_main",
 }
 
 
