@@ -173,7 +173,11 @@ def ship_best(
     steps = int(best["decisions"])
     out_dir = Path(out_dir)
     zip_dst = out_dir / f"{name}.zip"
-    shutil.copyfile(run_dir / f"ckpt_{steps}_steps.zip", zip_dst)
+    plain = run["algo"] == "maskable_ppo"
+    if plain:  # the same weights in a plain PPO zip: loadable without sb3-contrib
+        as_plain_ppo(run_dir / f"ckpt_{steps}_steps.zip", zip_dst, run["ks"])
+    else:
+        shutil.copyfile(run_dir / f"ckpt_{steps}_steps.zip", zip_dst)
     shutil.copyfile(
         run_dir / f"ckpt_vecnormalize_{steps}_steps.pkl", out_dir / f"{name}_vecnormalize.pkl"
     )
@@ -183,7 +187,9 @@ def ship_best(
 
     env = gym.make(ENV_ID, disable_env_checker=True, episode_slots=slots)
     meta = {
-        "algo": run["algo"],
+        "algo": "ppo" if plain else run["algo"],
+        "trained_as": run["algo"],
+        "action_masks": plain,
         "formulation": "decision_epochs",
         "ks": run["ks"],
         "episode_slots": slots,
@@ -200,6 +206,24 @@ def ship_best(
     if out_dir.resolve() == DATA_DIR:
         update_manifest([f"{name}.zip", f"{name}_vecnormalize.pkl", f"{name}.json"])
     return zip_dst
+
+
+def as_plain_ppo(maskable_zip: Path, out_zip: Path, ks: Sequence[int]) -> None:
+    """Save a MaskablePPO model's weights as a plain SB3 PPO zip (same network: the masked
+    policy only sets the logits of invalid actions to -inf, which
+    :class:`policies.sb3_agents.EpochAgent` does itself), so that using the shipped agent needs
+    no sb3-contrib."""
+    from sb3_contrib import MaskablePPO
+    from stable_baselines3 import PPO
+
+    from scas_env.decision_epochs import make_decision_epoch_env
+
+    masked = MaskablePPO.load(maskable_zip, device="cpu")
+    env = make_decision_epoch_env(ks=tuple(ks))
+    kwargs = dict(masked.policy_kwargs)
+    plain = PPO("MlpPolicy", env, policy_kwargs=kwargs, device="cpu", gamma=masked.gamma)
+    plain.policy.load_state_dict(masked.policy.state_dict())
+    plain.save(out_zip)
 
 
 def _versions() -> dict[str, str]:
@@ -265,12 +289,12 @@ def _curves(validation: list[dict[str, Any]], runs_root: Path, stem: Path) -> No
             )
             if mine:
                 ax.plot(
-                    [p["decisions"] for p in mine],
+                    [p["decisions"] / 1e3 for p in mine],
                     [p["reward"] / 1e6 for p in mine],
                     marker="o" if kind == "validation" else None,
                     label=run,
                 )
-        ax.set_xlabel("decisions (all envs)")
+        ax.set_xlabel("thousand decisions (all envs)")
         ax.set_title(kind.replace("_", " "))
     axes[0].set_ylabel("reward per episode (M USD)")
     axes[1].legend(fontsize=7)

@@ -145,3 +145,30 @@ def test_registered_id_and_the_checkers() -> None:
         sb3_check_env(make_decision_epoch_env(episode_slots=40))
     # the only remark: the checker is run on a wrapper (by design)
     assert all("different from the unwrapped" in str(w.message) for w in caught)
+
+
+def test_plain_ppo_copy_of_a_maskable_agent_decides_the_same(tmp_path) -> None:
+    from sb3_contrib import MaskablePPO
+    from stable_baselines3 import PPO
+
+    from policies.epoch_selection import as_plain_ppo
+
+    env, plain = _pair()
+    model = MaskablePPO("MlpPolicy", env, seed=1, device="cpu", n_steps=64, batch_size=64)
+    model.learn(64)
+    model.save(tmp_path / "masked.zip")
+    as_plain_ppo(tmp_path / "masked.zip", tmp_path / "plain.zip", DEFAULT_KS)
+    names = plain.unwrapped.obs_names
+    copies = [
+        EpochAgent(m, None, names, ks=DEFAULT_KS, episode_slots=SLOTS, masked=True)
+        for m in (model, PPO.load(tmp_path / "plain.zip", device="cpu"))
+    ]
+    # observations along an episode with replacements (masks vary)
+    obs, _ = plain.reset(seed=3)
+    rows = [obs]
+    for k in range(40):
+        rows.append(plain.step((0, 3, 0, 2, 1)[k % 5])[0])
+    batch = np.stack(rows)
+    first, second = (c.predict(batch, episode_start=np.ones(len(batch), bool)) for c in copies)
+    np.testing.assert_array_equal(first[0], second[0])
+    np.testing.assert_array_equal(first[1][1], second[1][1])  # the same k chosen
