@@ -100,7 +100,7 @@ class PolicySpec:
         return self.obs_mode or policy_obs_mode(self.name)
 
 
-PLUGINS["ppo"] = PolicySpec("sb3", label="ppo", module="policies.rl")
+PLUGINS["ppo"] = PolicySpec("sb3", label="ppo", module="policies.sb3_agents")
 
 
 def resolve_spec(name: str) -> PolicySpec:

@@ -26,6 +26,7 @@ from scas_env.cli_args import (
     check_out_dir,
     check_out_file,
     configure_logging,
+    existing_file,
     load_env_config,
     make_parser,
     name_list,
@@ -96,6 +97,21 @@ def benchmark_parser() -> Any:
         default=",".join(DEFAULT_POLICIES),
         help="comma-separated policy names",
     )
+    parser.add_argument(
+        "--agent",
+        type=existing_file,
+        action="append",
+        default=[],
+        help="an SB3 zip to benchmark besides --policies (its VecNormalize statistics and "
+        "metadata beside it, RL-Zoo layouts too); repeatable; loading runs the file's code",
+    )
+    parser.add_argument(
+        "--policy",
+        action="append",
+        default=[],
+        metavar="MODULE:FACTORY",
+        help="a factory(obs_names) returning an object with SB3's predict; repeatable",
+    )
     parser.add_argument("--out", type=Path, default=Path("results/benchmark"), help="folder")
     parser.add_argument("--overwrite", action="store_true", help="replace an existing --out")
     parser.add_argument(
@@ -135,22 +151,36 @@ def benchmark_main(argv: Sequence[str] | None = None) -> int:
         **_env_kwargs(scenario, costs, exclude=("obs_mode", "episode_slots")),
     }
 
-    from policies.benchmark import resolve_spec, run_benchmark
+    from policies.benchmark import PolicySpec, resolve_spec, run_benchmark
     from policies.benchmark_report import format_table, write_outputs
 
-    for name in args.policies:  # plug-ins import their modules (e.g. SB3) here, not in workers
+    specs = [resolve_spec(name) for name in args.policies]
+    for path in args.agent:
+        label = Path(path).stem
+        specs.append(
+            PolicySpec("sb3", {"path": str(path)}, label=label, module="policies.sb3_agents")
+        )
+    for target in args.policy:
+        if target.count(":") != 1 or not all(target.split(":")):
+            parser.error(f"--policy {target!r}: expected MODULE:FACTORY")
+        specs.append(
+            PolicySpec("factory", {"target": target}, label=target, module="policies.sb3_agents")
+        )
+    labels = [s.key for s in specs]
+    if len(set(labels)) != len(labels):
+        parser.error(f"policy labels {labels} must be unique")
+    for spec in specs:  # plug-ins import their modules (e.g. SB3) here, not in workers
         try:
-            resolve_spec(name).build_mode()
+            spec.build_mode()
         except ImportError as exc:
             parser.error(
-                f"--policies: {name!r} cannot be loaded ({exc}); install what it needs or "
-                "leave it out of --policies"
+                f"{spec.key!r} cannot be loaded ({exc}); install what it needs or leave it out"
             )
 
     announce_uncached_kernels()  # the workers compile them
 
     result = run_benchmark(
-        args.policies,
+        specs,
         episodes=args.episodes,
         slots=scenario.episode_slots,
         seed=args.seed,

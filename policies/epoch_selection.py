@@ -27,7 +27,8 @@ from pathlib import Path
 from typing import Any
 
 from policies.benchmark import PolicySpec, run_benchmark
-from policies.sb3_agents import DATA_DIR, MANIFEST, sha256
+from policies.sb3_agents import DATA_DIR
+from scas_env.actuator.shipped_files import write_manifest
 
 VALIDATION_SEED = 101
 HELD_OUT_SEED = 202
@@ -144,13 +145,12 @@ def _run_meta(run_dir: Path) -> dict[str, Any]:
 
 
 def update_manifest(names: Sequence[str]) -> None:
-    """Write the SHA-256 of ``policies/data/<name>`` for each name into the manifest."""
-    manifest = json.loads(MANIFEST.read_text()) if MANIFEST.is_file() else {}
-    for name in names:
-        manifest[name] = sha256(DATA_DIR / name)
-    tmp = MANIFEST.with_suffix(".tmp")
-    tmp.write_text(json.dumps(dict(sorted(manifest.items())), indent=1) + "\n")
-    tmp.replace(MANIFEST)
+    """Rebuild the package's manifest of shipped files after writing ``names`` into
+    ``policies/data`` (:func:`scas_env.actuator.shipped_files.write_manifest`)."""
+    missing = [n for n in names if not (DATA_DIR / n).is_file()]
+    if missing:
+        raise FileNotFoundError(f"{missing} are not in {DATA_DIR}")
+    write_manifest()
 
 
 def ship_best(

@@ -20,7 +20,8 @@ Security: an SB3 zip holds pickled Python objects (SB3 unpickles parts of it, e.
 rate schedules) and a ``*_vecnormalize.pkl`` is a pickle; ``module:factory`` imports and runs
 code. **Loading any of them runs code chosen by whoever made the file: load only files you
 trust.** The shipped agents in ``policies/data`` are checked against the SHA-256 manifest
-``policies/data/manifest.json`` before loading (a corrupted or altered copy is refused).
+of shipped files (``scas_env/actuator/data/shipped_files.json``) before loading (a
+corrupted or altered copy is refused).
 """
 
 from __future__ import annotations
@@ -38,11 +39,10 @@ from typing import Any
 import numpy as np
 
 from policies.base import register_policy
+from scas_env.actuator.shipped_files import verify_shipped_file
 from scas_env.decision_epochs import MASK_READS, N_MAINTENANCE, maintenance_mask
 
 DATA_DIR = Path(__file__).resolve().parent / "data"
-#: SHA-256 of every shipped agent file (name -> hex digest)
-MANIFEST = DATA_DIR / "manifest.json"
 #: The shipped agent (model zip; its statistics and metadata sit beside it): the
 #: decision-epoch agent, better than ``ppo_default.zip`` (per flight) on held-out seeds by
 #: +15.6 k USD/episode (1000 paired episodes; ``policies/data/README.md``).
@@ -52,7 +52,6 @@ PER_FLIGHT_AGENT = DATA_DIR / "ppo_default.zip"
 
 __all__ = [
     "DEFAULT_AGENT",
-    "MANIFEST",
     "PER_FLIGHT_AGENT",
     "EpochAgent",
     "SB3Agent",
@@ -87,20 +86,10 @@ def sha256(path: Path) -> str:
 
 
 def check_manifest(path: Path) -> None:
-    """Refuse a file of ``policies/data`` whose SHA-256 differs from :data:`MANIFEST` (files
-    elsewhere are not checked: they are the user's)."""
-    path = Path(path).resolve()
-    if path.parent != DATA_DIR or not MANIFEST.is_file():
-        return
-    expected = json.loads(MANIFEST.read_text()).get(path.name)
-    if expected is None:
-        raise ValueError(f"{path}: a shipped file not listed in {MANIFEST}; refusing to load it")
-    got = sha256(path)
-    if got != expected:
-        raise ValueError(
-            f"{path}: SHA-256 {got} differs from the manifest's {expected} "
-            "(corrupted or altered copy); reinstall the package"
-        )
+    """Refuse a shipped file (``policies/data``) whose SHA-256 differs from the package's
+    manifest of shipped files (:func:`scas_env.actuator.shipped_files.verify_shipped_file`);
+    files elsewhere are not checked: they are the user's."""
+    verify_shipped_file(path)
 
 
 def _zip_data(path: Path) -> dict[str, Any]:

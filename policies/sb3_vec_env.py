@@ -44,23 +44,24 @@ __all__ = ["NativeVecEnv"]
 
 
 def _split(info: dict[str, Any], n: int, keys: Sequence[str] | None) -> list[dict[str, Any]]:
-    """A dict of arrays (nested dicts of arrays) as ``n`` per-env dicts of scalars."""
+    """A dict of arrays (nested dicts of arrays) as ``n`` per-env dicts of scalars.
+
+    Gymnasium's ``_key`` masks are read, not copied: env ``e`` gets ``key`` only where
+    ``info["_key"][e]`` is true (every key, for this env's infos)."""
     out: list[dict[str, Any]] = [{} for _ in range(n)]
     for key in keys if keys is not None else info:
+        if key.startswith("_") and key[1:] in info:
+            continue  # a mask
         value = info[key]
+        mask = np.asarray(info.get(f"_{key}", np.ones(n, dtype=bool)))
         if isinstance(value, dict):
             rows = _split(value, n, None)
-            for e in range(n):
-                out[e][key] = rows[e]
         else:
             arr = np.asarray(value)
-            if arr.ndim == 0 or len(arr) != n:
-                for e in range(n):
-                    out[e][key] = value
-            else:
-                items = arr.tolist()
-                for e in range(n):
-                    out[e][key] = items[e]
+            rows = [value] * n if arr.ndim == 0 or len(arr) != n else arr.tolist()
+        for e in range(n):
+            if mask[e]:
+                out[e][key] = rows[e]
     return out
 
 

@@ -118,14 +118,20 @@ def test_truncated_and_corrupted_zips_are_refused_with_the_file_name(
 
 
 def test_shipped_files_are_checked_against_the_manifest(tmp_path: Path, monkeypatch) -> None:
+    import scas_env.actuator.shipped_files as shipped
+
     check_manifest(DEFAULT_AGENT)  # the shipped copy passes
     # a rezipped policy.pth with one weight changed has valid CRCs: only the manifest sees it
-    monkeypatch.setattr(agents, "DATA_DIR", tmp_path.resolve())
-    monkeypatch.setattr(agents, "MANIFEST", tmp_path / "manifest.json")
-    copy = tmp_path / "ppo_default.zip"
+    root = tmp_path.resolve()
+    (root / "policies" / "data").mkdir(parents=True)
+    (root / "scas_env" / "actuator" / "data").mkdir(parents=True)
+    monkeypatch.setattr(shipped, "package_root", lambda: root)
+    copy = root / "policies" / "data" / "ppo_default.zip"
     shutil.copyfile(DEFAULT_AGENT, copy)
-    digest = agents.sha256(copy)
-    (tmp_path / "manifest.json").write_text(f'{{"ppo_default.zip": "{digest}"}}')
+    shipped.write_manifest(root)
+    listed = root / "scas_env" / "actuator" / "data" / shipped.MANIFEST_NAME
+    monkeypatch.setattr(shipped, "manifest_path", lambda: listed)
+    shipped.load_manifest.cache_clear()
     check_manifest(copy)
     with zipfile.ZipFile(DEFAULT_AGENT) as src, zipfile.ZipFile(copy, "w") as dst:
         for item in src.infolist():
@@ -133,11 +139,13 @@ def test_shipped_files_are_checked_against_the_manifest(tmp_path: Path, monkeypa
             if item.filename == "policy.pth":
                 blob[-100] ^= 0x01
             dst.writestr(item, bytes(blob))
-    with pytest.raises(ValueError, match=r"ppo_default\.zip: SHA-256"):
+    with pytest.raises(ValueError, match=r"ppo_default\.zip is corrupted"):
         check_manifest(copy)
-    (tmp_path / "other.zip").write_bytes(b"")
+    (root / "policies" / "data" / "other.zip").write_bytes(b"")
     with pytest.raises(ValueError, match="not listed"):
-        check_manifest(tmp_path / "other.zip")
+        check_manifest(root / "policies" / "data" / "other.zip")
+    check_manifest(tmp_path / "mine.zip")  # a user's own file elsewhere: not checked
+    shipped.load_manifest.cache_clear()  # the real manifest again for the other tests
 
 
 def test_module_factory_policies_and_registry() -> None:
