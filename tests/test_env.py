@@ -148,6 +148,10 @@ def test_stepping_past_truncation_raises_until_reset() -> None:
 
 
 def test_bad_configs_raise_clear_errors() -> None:
+    from scas_env.actuator.params import ActuatorParams
+
+    with pytest.raises(ValueError, match=r"seal_friction_n = 0.0 N is outside .* \(0, "):
+        ActuatorParams(seal_friction_n=0.0)  # no friction, no Archard wear: refused up front
     for name in ("calibration", "surrogate"):
         with pytest.raises(ValueError, match=name):
             ScasMaintenanceEnv(**{name: "x"})

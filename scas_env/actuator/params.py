@@ -144,7 +144,13 @@ class ActuatorParams(Validated):
     )
     viscous_friction_n_s_m: float = param(200.0, "N s/m", lo=0.0, hi=1e5, source="ref §9 [B]")
     seal_friction_n: float = param(
-        20.0, "N", lo=0.0, hi=1e4, source="seal Coulomb friction F_c, ref §9 [B]"
+        20.0,
+        "N",
+        lo=0.0,
+        hi=1e4,
+        lo_open=True,
+        source="seal Coulomb friction F_c, ref §9 [B]; > 0: Archard wear is friction work, "
+        "so 0 N would mean seals that never wear",
     )
     friction_velocity_m_s: float = param(
         2e-3,
