@@ -105,20 +105,32 @@ def _finite(values: Sequence[float] | np.ndarray) -> np.ndarray:
     return x[np.isfinite(x)]
 
 
+def _sample(
+    values: Sequence[float] | np.ndarray, confidence: float
+) -> tuple[np.ndarray, float] | Interval:
+    """The finite values and their mean, or the interval itself when there are fewer than
+    two (no spread to estimate: NaN bounds)."""
+    _confidence(confidence)
+    x = _finite(values)
+    if x.size == 0:
+        return Interval(math.nan, math.nan, math.nan, 0)
+    mean = float(x.mean())
+    if x.size < 2:
+        return Interval(mean, math.nan, math.nan, int(x.size))
+    return x, mean
+
+
 def t_interval(values: Sequence[float] | np.ndarray, confidence: float = 0.95) -> Interval:
     """``mean +- t_{(1+confidence)/2, n-1} s / sqrt(n)`` over the finite ``values``.
 
     ``s`` is the sample standard deviation (ddof = 1); non-finite values (a metric that is
     undefined in an episode, e.g. wasted life without a preventive replacement) are left out.
     """
-    _confidence(confidence)
-    x = _finite(values)
+    sample = _sample(values, confidence)
+    if isinstance(sample, Interval):
+        return sample
+    x, mean = sample
     n = int(x.size)
-    if n == 0:
-        return Interval(math.nan, math.nan, math.nan, 0)
-    mean = float(x.mean())
-    if n < 2:
-        return Interval(mean, math.nan, math.nan, n)
     half = float(student_t.ppf(0.5 + 0.5 * confidence, n - 1) * x.std(ddof=1) / math.sqrt(n))
     return Interval(mean, mean - half, mean + half, n)
 
@@ -229,14 +241,11 @@ def bootstrap_mean(
     """Percentile-bootstrap interval of the mean of the finite ``values``
     (``scipy.stats.bootstrap``, fixed seed): inside [min, max] of the data, so a metric in
     [0, 1] or >= 0 keeps its range. A constant sample gives a zero-width interval."""
-    _confidence(confidence)
-    x = _finite(values)
+    sample = _sample(values, confidence)
+    if isinstance(sample, Interval):
+        return sample
+    x, mean = sample
     n = int(x.size)
-    if n == 0:
-        return Interval(math.nan, math.nan, math.nan, 0)
-    mean = float(x.mean())
-    if n < 2:
-        return Interval(mean, math.nan, math.nan, n)
     if np.all(x == x[0]):
         return Interval(mean, mean, mean, n)
     res = stats.bootstrap(
