@@ -59,6 +59,7 @@ class FleetState:
         seal_critical_m: float,
         kernel_tables: dict[str, tuple],
         exact_lives: bool = False,
+        n_upcoming: int = 3,
     ) -> None:
         if n < 1:
             raise ValueError(f"n = {n} must be >= 1")
@@ -79,6 +80,8 @@ class FleetState:
             "unit_z": np.zeros((n, n_unit_features)),
             # flights each part will still fly, the failing one included ("per_part"; else inf)
             "life": np.full((n, 2), np.inf),
+            # whole lives of the next parts of each kind ("per_part"; else inf)
+            "upcoming": np.full((n, 2, n_upcoming), np.inf),
             # the monitor: flights since each filter's last update, detector flags, RUL tables
             "pending": np.zeros((n, 2), dtype=i8),
             "detected": np.zeros((n, 2), dtype=b),

@@ -124,6 +124,10 @@ class ActuatorWorld:
         self.buffer_storage: dict[str, tuple[np.ndarray, np.ndarray]] = {}
         #: ``"per_part"``: flights each fitted part will still fly, the failing one included
         self.life_left = {"spring": math.inf, "seal": math.inf}
+        #: ``"per_part"``: whole lives of the next :data:`UPCOMING_PARTS` parts of each kind
+        #: (the clairvoyant oracle's view; refreshed when a part of that kind is fitted)
+        self.upcoming = {part: [math.inf] * UPCOMING_PARTS for part in PARTS}
+        self._look_ahead = True
         self._scratch = {
             "envs": np.zeros(1, dtype=np.int64),
             "x": np.empty((8, 1)),
@@ -176,6 +180,7 @@ class ActuatorWorld:
         a["theta"][row], a["wmult"][row] = self.theta, self.wear_multiplier
         a["unit_z"][row] = self.unit_z
         a["life"][row] = self.life_left["spring"], self.life_left["seal"]
+        a["upcoming"][row] = self.upcoming["spring"], self.upcoming["seal"]
 
     def import_flight_state(self, a: dict[str, np.ndarray], row: int) -> None:
         """Take back what flights on the fleet's fast path changed: crack, wear, lives left."""
@@ -267,6 +272,8 @@ class ActuatorWorld:
         values, position = self.buffer_storage.get(f"{part}_growth", (None, None))
         self.growth[part] = NormalBuffer(np.random.default_rng(seed), values, position)
         self.life_left[part] = self.flights_to_failure(part)
+        if self._look_ahead:
+            self.upcoming[part] = self.next_lives(part, rng, UPCOMING_PARTS)
 
     def next_lives(self, part: str, rng: np.random.Generator, count: int) -> list[float]:
         """``"per_part"``: the whole lives (flights) of the next ``count`` parts of this kind
@@ -278,7 +285,7 @@ class ActuatorWorld:
             raise ValueError(f"count = {count!r} must be an integer >= 0")
         clone = copy.copy(self)
         clone.growth, clone.buffer_storage = dict(self.growth), {}
-        clone.life_left = dict(self.life_left)
+        clone.life_left, clone._look_ahead = dict(self.life_left), False
         rng = copy.deepcopy(rng)
         lives = []
         for _ in range(count):
@@ -427,6 +434,8 @@ class ActuatorWorld:
         return FlightResult(feats, tuple(failed))
 
 
+#: Parts of each kind whose lives the clairvoyant view holds ahead of the fitted one.
+UPCOMING_PARTS = 3
 #: Flights after which a life counts as infinite (far beyond any episode).
 _MAX_LIFE_FLIGHTS = 10_000_000
 
