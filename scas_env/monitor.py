@@ -32,7 +32,7 @@ turns them into RUL summaries. It sees only features, never the truth.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
@@ -40,7 +40,7 @@ from scipy.stats import norm
 
 from prognostics.degradation_models import linear_wear_model, paris_crack_model
 from prognostics.detection import DetectorConfig, PercentileDetector
-from prognostics.measurement import measurement_from_curve
+from prognostics.measurement import MeasurementModel, measurement_from_curve
 from prognostics.normals import NormalStream
 from prognostics.particle_filter import ParticleFilter
 from prognostics.rul import RulPredictor
@@ -52,6 +52,12 @@ from scas_env.actuator.uncertainty import truncated_normal
 from scas_env.scenario import Scenario
 
 BASELINE_TESTS = 3
+#: In-flight features the filters learn from, and the part whose filter each one feeds.
+LEARNING_FEATURES = {"I8": "spring", "I9": "seal"}
+#: Flights after a fitting whose features estimate the installation offsets (module docstring).
+BASELINE_FLIGHTS = 20
+#: Step (fraction of critical) of the central differences of the surrogate's mean curves.
+_SLOPE_STEP = 0.02
 #: Artificial-evolution random walk of log theta per flight (lets the filters track the unit).
 THETA_WALK = 0.005
 #: Quantiles of the healthy distribution the detectors are fitted on (deterministic).
@@ -148,6 +154,29 @@ class HealthMonitor:
         #: flights flown since each filter was last predicted
         self.pending = {"spring": 0, "seal": 0}
         self._ageing: dict[str, AgeingRul] = {}
+        names = getattr(scenario, "flight_feature_names", ())
+        #: in-flight features the filters learn from (``LEARNING_FEATURES`` measured), in the
+        #: order of ``flight_sum``; empty: the filters learn at tests only (v0, v1)
+        self.learning = tuple(f for f in LEARNING_FEATURES if f in names)
+        #: flights per in-flight update (``Scenario.flight_update_flights``)
+        self.flight_interval = int(getattr(scenario, "flight_update_flights", 1))
+        #: sum of each learning feature over the flights of the batch under way (SI units)
+        self.flight_sum = np.zeros(len(self.learning))
+        #: flights in that sum (aborted flights, NaN features, are not counted)
+        self.flight_count = 0
+        self._flight: dict[str, _FlightFeature] = {}
+        for f in self.learning:
+            k = surrogate.index(f)
+            if LEARNING_FEATURES[f] == "spring":
+                grid, mean, run = c_grid, surrogate.mean[k, :, 0], surrogate.run_std[k, :, 0]
+            else:
+                grid, mean, run = w_grid, surrogate.mean[k, 0, :], surrogate.run_std[k, 0, :]
+            self._flight[f] = _FlightFeature(
+                part=LEARNING_FEATURES[f],
+                k=k,
+                model=measurement_from_curve(grid, mean, noise * run),
+                run_var=(noise * run) ** 2,
+            )
 
     # ------------------------------------------------------------------ events
     def reset(self) -> None:
@@ -185,13 +214,20 @@ class HealthMonitor:
             def prior_a(rng: np.random.Generator, n: int) -> np.ndarray:
                 return truncated_normal(rng, a0, s0, lower=0.0, upper=self.a_fail, size=n)
 
+            self.learn_from_flights()  # the batch flown with the old pair first
             self.spring_filter.reset(prior_a, _lognormal_sampler(unc.paris_c_log_sigma))
             self._baseline: dict[str, list[float]] = {"G1": [], "G3": []}
             self._offset = {"G1": 0.0, "G3": 0.0}
+            for ff in self._flight.values():  # a new installation: new offsets
+                ff.restart_baseline()
             self.crack_detector.reset()
             self.crack_detected = False
         elif part == "seal":
+            self.learn_from_flights()
             self.seal_filter.reset(0.0, _lognormal_sampler(unc.wear_rate_log_sigma))
+            for ff in self._flight.values():  # re-estimated with the wear known (zero)
+                if ff.part == "seal":
+                    ff.restart_baseline()
             self.seal_detector.reset()
             self.seal_detected = False
         else:
@@ -214,19 +250,101 @@ class HealthMonitor:
                 self.pending[part] = 0
 
     def flown(self, features: dict[str, float]) -> None:
-        """One flight of usage for both filters.
+        """One flight of usage for both filters, and its learning features into the batch.
 
-        The in-flight features are not fed to the filters: I2 and I6 do not respond to the
-        faults in this physics, and I7's installation offset (between-unit spread, not
-        removable without a long flight baseline) biased the seal filter by ~2 um over a
-        life in tests. What the filters learn comes from the pre-flight tests, so testing
-        is the price of information.
+        I2, I6 and I7 are not fed to the filters: I2 and I6 do not respond to the faults in
+        this physics, and I7 moves by less than its run-to-run noise at critical wear. With
+        I8 and I9 measured (``Scenario.flight_features``) their values are summed over the
+        batch; when it holds ``flight_interval`` flights the filters learn from its mean
+        (:meth:`learn_from_flights`). An aborted flight (NaN features) adds usage only.
         """
         self.pending["spring"] += 1
         self.pending["seal"] += 1
+        if not self.learning:
+            return
+        values = [features[f] for f in self.learning]
+        if not all(math.isfinite(v) for v in values):
+            return
+        for j, v in enumerate(values):
+            self.flight_sum[j] += v
+        self.flight_count += 1
+        if self.flight_count >= self.flight_interval:
+            self.learn_from_flights()
+
+    def flight_batch_due(self) -> bool:
+        """Whether the batch of in-flight features is full (the vector env's fast path then
+        hands this actuator to :meth:`learn_from_flights`)."""
+        return self.flight_count >= self.flight_interval > 0 and bool(self.learning)
+
+    def learn_from_flights(self) -> None:
+        """Update the filters with the mean of the batch's learning features, then empty it.
+
+        The batch's ``m`` flights were flown at states from ``m`` flights ago to one flight
+        ago; the mean of a feature that is linear in the state over the batch refers to the
+        mid-batch state. Each filter is predicted to ``m // 2`` flights into the batch (the
+        mean state time ``(m - 1) / 2`` rounded up: within half a flight of a life of ~10^3
+        flights), updated there, and the remaining ``m - m // 2`` flights stay pending (the
+        RUL tables age by them, as between tests). The likelihood of the batch mean has the
+        run noise divided by ``sqrt(m)`` (run noise independent from flight to flight) plus
+        the variance of the installation offset's estimate and of the cross-fault
+        correction (module docstring). Nothing happens on an empty batch.
+        """
+        m = self.flight_count
+        if m == 0:
+            return
+        means = self.flight_sum / m
+        self.flight_sum[:] = 0.0
+        self.flight_count = 0
+        after = m - m // 2
+        for part, pf in self._filters.items():
+            d = self.pending[part] - after
+            if d > 0:
+                pf.predict(float(d))
+                self.pending[part] -= d
+        c_hat, c_var = _fraction_moments(self.spring_filter, self.a_fail)
+        w_hat, w_var = _fraction_moments(self.seal_filter, self.w_crit)
+        try:
+            for j, f in enumerate(self.learning):
+                self._learn_one(self._flight[f], float(means[j]), m, c_hat, c_var, w_hat, w_var)
+        finally:
+            self._refresh("spring")
+            self._refresh("seal")
+
+    def _learn_one(
+        self,
+        ff: _FlightFeature,
+        y: float,
+        m: int,
+        c_hat: float,
+        c_var: float,
+        w_hat: float,
+        w_var: float,
+    ) -> None:
+        """One learning feature's batch mean ``y`` of ``m`` flights: baseline or update."""
+        mu, k = self.sur.feature_mean, ff.k
+        mean = mu(k, c_hat, w_hat)
+        slope_c = _slope(lambda c: mu(k, c, w_hat), c_hat)
+        slope_w = _slope(lambda w: mu(k, c_hat, w), w_hat)
+        if ff.baseline_flights < BASELINE_FLIGHTS:
+            run_var = float(self.sur.tables_at(c_hat, w_hat)[2, k]) ** 2
+            run_var *= self.scenario.filter_noise_scale**2
+            ff.add_baseline(y - mean, m, run_var, slope_c**2 * c_var + slope_w**2 * w_var)
+            return
+        if ff.part == "spring":
+            cross = mean - mu(k, c_hat, 0.0)
+            cross_var = slope_w**2 * w_var
+            pf = self.spring_filter
+        else:
+            cross = mean - mu(k, 0.0, w_hat)
+            cross_var = slope_c**2 * c_var
+            pf = self.seal_filter
+        sigma = np.sqrt(ff.run_var / m + (ff.offset_var + cross_var))
+        pf.update(y - ff.offset - cross, replace(ff.model, sigma_values=sigma))
 
     def tested(self, features: dict[str, float]) -> None:
-        """A pre-flight test: baseline first, then offset- and cross-corrected updates."""
+        """A pre-flight test: baseline first, then offset- and cross-corrected updates
+        (the in-flight batch under way is learnt from first)."""
+        self.learn_from_flights()
         self._catch_up()
         try:
             self._measured(features)
@@ -265,6 +383,9 @@ class HealthMonitor:
         """
         a["pending"][row, 0], a["pending"][row, 1] = self.pending["spring"], self.pending["seal"]
         a["detected"][row, 0], a["detected"][row, 1] = self.crack_detected, self.seal_detected
+        if self.learning:
+            a["flight_sum"][row] = self.flight_sum
+            a["flight_count"][row] = self.flight_count
         for p, part in enumerate(("spring", "seal")):
             ageing = self._ageing[part]
             if sources[p] is not ageing:
@@ -277,9 +398,13 @@ class HealthMonitor:
                 sources[p] = ageing
 
     def import_flight_state(self, a: dict[str, np.ndarray], row: int) -> None:
-        """Take back what flights on the fleet's fast path changed: the flights pending."""
+        """Take back what flights on the fleet's fast path changed: the flights pending and
+        the batch of in-flight features (``flight_sum``, ``flight_count``)."""
         self.pending["spring"] = int(a["pending"][row, 0])
         self.pending["seal"] = int(a["pending"][row, 1])
+        if self.learning:
+            self.flight_sum[:] = a["flight_sum"][row]
+            self.flight_count = int(a["flight_count"][row])
 
     # ------------------------------------------------------------------ outputs
     def ageing(self, part: str) -> AgeingRul:
@@ -304,6 +429,50 @@ class HealthMonitor:
         )
 
 
+class _FlightFeature:
+    """A learning in-flight feature: its part, surrogate index, measurement model (the curve
+    against its own part's severity, the other part new; run noise) and installation
+    offset with the variance of its estimate."""
+
+    def __init__(self, part: str, k: int, model: MeasurementModel, run_var: np.ndarray) -> None:
+        self.part, self.k, self.model = part, k, model
+        #: run-to-run variance at the model's knots (one flight)
+        self.run_var = run_var
+        self.restart_baseline()
+
+    def restart_baseline(self) -> None:
+        """A new installation (or a new part): the offset is estimated again."""
+        self.baseline_flights = 0
+        self._baseline_sum = 0.0
+        self.offset = 0.0
+        self.offset_var = 0.0
+
+    def add_baseline(self, residual: float, m: int, run_var: float, state_var: float) -> None:
+        """A baseline batch of ``m`` flights whose mean is ``residual`` above the model's
+        mean at the filters' estimate: the offset is the flight-weighted mean of the
+        residuals, its variance the run variance over the flights plus ``state_var`` (the
+        filters' spread through the curve's slopes, the same error in every batch)."""
+        self._baseline_sum += m * residual
+        self.baseline_flights += m
+        self.offset = self._baseline_sum / self.baseline_flights
+        self.offset_var = run_var / self.baseline_flights + state_var
+
+
+def _fraction_moments(pf: ParticleFilter, critical: float) -> tuple[float, float]:
+    """Weighted mean (clipped to [0, 1]) and variance of a filter's severity as a fraction
+    of ``critical``."""
+    w, x = pf.weights, pf.x
+    mean = float(w @ x)
+    var = max(float(w @ (x - mean) ** 2), 0.0) / critical**2
+    return min(max(mean / critical, 0.0), 1.0), var
+
+
+def _slope(curve: Any, at: float) -> float:
+    """Central difference of ``curve`` on [0, 1] at ``at`` (one-sided at the ends)."""
+    lo, hi = max(at - _SLOPE_STEP, 0.0), min(at + _SLOPE_STEP, 1.0)
+    return (curve(hi) - curve(lo)) / (hi - lo)
+
+
 def _baselined(run_std: np.ndarray) -> np.ndarray:
     """Noise of an offset-corrected measurement: run noise plus the offset's own error."""
     return run_std * math.sqrt(1.0 + 1.0 / BASELINE_TESTS)
@@ -317,4 +486,10 @@ def _lognormal_sampler(sigma: float):
     return sample
 
 
-__all__ = ["BASELINE_TESTS", "HealthMonitor", "PartEstimate"]
+__all__ = [
+    "BASELINE_FLIGHTS",
+    "BASELINE_TESTS",
+    "LEARNING_FEATURES",
+    "HealthMonitor",
+    "PartEstimate",
+]
