@@ -509,11 +509,20 @@ class ParticleFilter:
             "call reset(x0, theta0) before using the filter again"
         )
 
-    def update(self, y: float, measurement: MeasurementModel | None = None) -> bool:
+    def update(
+        self,
+        y: float,
+        measurement: MeasurementModel | None = None,
+        *,
+        sigma_values: np.ndarray | None = None,
+    ) -> bool:
         """Weight by the likelihood of feature ``y``; NaN = no measurement (no change).
 
         ``measurement`` overrides the filter's model for this update (a filter fed by
-        several features, each with its own model). Returns True if the filter resampled.
+        several features, each with its own model). ``sigma_values`` (one value > 0 per
+        ``sigma_knots`` entry of the model used) replaces the model's noise for this update
+        only, e.g. the noise of a mean of several measurements with extra variance, without
+        building a new model. Returns True if the filter resampled.
         """
         self._check_ready()
         y = float(y)
@@ -529,6 +538,14 @@ class ParticleFilter:
             raise ValueError(
                 f"measurement must be a MeasurementModel, got {type(measurement).__name__}"
             )
+        if sigma_values is not None:
+            sig = np.ascontiguousarray(sigma_values, dtype=np.float64)
+            if sig.shape != args[-1].shape or not bool(np.all(sig > 0.0) & np.all(sig < np.inf)):
+                raise ValueError(
+                    f"sigma_values = {sigma_values!r} must hold {args[-1].size} finite values "
+                    "> 0 (one per sigma knot of the measurement model)"
+                )
+            args = (*args[:-1], sig)
         self._ess = _update_kernel(y, self._x, self._log_w, self._w, self._scratch, *args)
         return self._after_update()
 

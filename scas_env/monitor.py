@@ -32,7 +32,7 @@ turns them into RUL summaries. It sees only features, never the truth.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -339,7 +339,7 @@ class HealthMonitor:
             cross_var = slope_c**2 * c_var
             pf = self.seal_filter
         sigma = np.sqrt(ff.run_var / m + (ff.offset_var + cross_var))
-        pf.update(y - ff.offset - cross, replace(ff.model, sigma_values=sigma))
+        pf.update(y - ff.offset - cross, ff.model, sigma_values=sigma)
 
     def tested(self, features: dict[str, float]) -> None:
         """A pre-flight test: baseline first, then offset- and cross-corrected updates
