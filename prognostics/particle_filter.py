@@ -217,6 +217,16 @@ def _step_kernel(
 
 
 @njit(cache=True)
+def _add_log_likelihood(log_w: np.ndarray, w: np.ndarray, ll: np.ndarray) -> float:
+    """``log w += ll`` then normalise; returns N_eff."""
+    peak = -np.inf
+    for i in range(log_w.size):
+        log_w[i] += ll[i]
+        peak = max(peak, log_w[i])
+    return _normalise(log_w, w, peak)
+
+
+@njit(cache=True)
 def _systematic_from_weights(w: np.ndarray, cumsum: np.ndarray, u: float, idx: np.ndarray) -> None:
     """Normalised cumulative weights into ``cumsum``, then systematic indices into ``idx``."""
     acc = 0.0
@@ -399,6 +409,9 @@ class ParticleFilter:
         self._ess = float(n)
         self._ready = False
         self.n_resamples = 0
+        #: per-particle auxiliary arrays (name -> (N,) float64) that resampling carries
+        #: along with their particles (e.g. a Rao-Blackwellised Gaussian per particle)
+        self.aux: dict[str, np.ndarray] = {}
         self._make_views()
 
     def _make_views(self) -> None:
@@ -574,6 +587,30 @@ class ParticleFilter:
         self._check_cloud("step", usage, y)
         return self._after_update()
 
+    def add_auxiliary(self, name: str, value: float = 0.0) -> np.ndarray:
+        """Register a per-particle array ``aux[name]`` (filled with ``value``) that
+        resampling permutes with the particles; returns it (write into it in place)."""
+        if not isinstance(name, str) or name in self.aux:
+            raise ValueError(f"name = {name!r} must be a new string (have {sorted(self.aux)})")
+        if not math.isfinite(value):
+            raise ValueError(f"value = {value} must be finite")
+        self.aux[name] = np.full(self.n_particles, float(value))
+        return self.aux[name]
+
+    def update_log_likelihood(self, log_likelihood: np.ndarray) -> bool:
+        """Weight by per-particle log-likelihoods computed by the caller (a measurement
+        model the filter does not hold, e.g. with per-particle offsets):
+        ``log w_i <- log w_i + l_i``, normalised; resamples as :meth:`update`. All values
+        must be finite. Returns True if the filter resampled."""
+        self._check_ready()
+        ll = np.ascontiguousarray(log_likelihood, dtype=np.float64)
+        if ll.shape != self._w.shape or not bool(np.all(np.isfinite(ll))):
+            raise ValueError(
+                f"log_likelihood must hold {self.n_particles} finite values, got shape {ll.shape}"
+            )
+        self._ess = _add_log_likelihood(self._log_w, self._w, ll)
+        return self._after_update()
+
     def _after_update(self) -> bool:
         if not math.isfinite(self._ess):
             raise FloatingPointError("particle weights degenerated (non-finite likelihoods)")
@@ -602,6 +639,8 @@ class ParticleFilter:
                 self.shrink,
                 self._stream.handle,
             )
+        for arr in self.aux.values():
+            arr[:] = arr[self._idx]
         self._ess = float(self.n_particles)
         self.n_resamples += 1
 

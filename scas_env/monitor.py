@@ -43,6 +43,7 @@ from prognostics.detection import DetectorConfig, PercentileDetector
 from prognostics.measurement import MeasurementModel, measurement_from_curve
 from prognostics.normals import NormalStream
 from prognostics.particle_filter import ParticleFilter
+from prognostics.random_effect import random_effect_update
 from prognostics.rul import RulPredictor
 from prognostics.rul_ageing import AgeingRul
 from scas_env.actuator.calibration import Calibration
@@ -177,6 +178,27 @@ class HealthMonitor:
                 model=measurement_from_curve(grid, mean, noise * run),
                 run_var=(noise * run) ** 2,
             )
+        #: how the filters treat installation effects: "baseline" (v0, v1: ground-feature
+        #: offsets from the first tests, flight-feature offsets from the first flights) or
+        #: "states" (a Gaussian effect per feature and particle, module docstring)
+        self.installation = "states" if self.learning else "baseline"
+        self._effects: dict[str, _Effect] = {}
+        if self.installation == "states":
+            self._enable_effect_states()
+
+    def _enable_effect_states(self) -> None:
+        """Register each measured feature's installation effect as per-particle Gaussian
+        states of its part's filter (``aux`` arrays carried through resampling)."""
+        self.installation = "states"
+        parts = {"G1": "spring", "G3": "seal", **{f: LEARNING_FEATURES[f] for f in self.learning}}
+        for f, part in parts.items():
+            pf = self._filters[part]
+            self._effects[f] = _Effect(
+                part=part,
+                k=self.sur.index(f),
+                z_mean=pf.add_auxiliary(f"{f}_z_mean", 0.0),
+                z_var=pf.add_auxiliary(f"{f}_z_var", 1.0),
+            )
 
     # ------------------------------------------------------------------ events
     def reset(self) -> None:
@@ -216,6 +238,9 @@ class HealthMonitor:
 
             self.learn_from_flights()  # the batch flown with the old pair first
             self.spring_filter.reset(prior_a, _lognormal_sampler(unc.paris_c_log_sigma))
+            for eff in self._effects.values():  # a new installation: effects unknown
+                eff.z_mean.fill(0.0)
+                eff.z_var.fill(1.0)
             self._baseline: dict[str, list[float]] = {"G1": [], "G3": []}
             self._offset = {"G1": 0.0, "G3": 0.0}
             for ff in self._flight.values():  # a new installation: new offsets
@@ -224,7 +249,17 @@ class HealthMonitor:
             self.crack_detected = False
         elif part == "seal":
             self.learn_from_flights()
+            # the installation is unchanged: its effects' knowledge, collapsed to one
+            # Gaussian (the cloud's mixture moments), passes to the new cloud
+            kept = {
+                f: _mixture_moments(self.seal_filter.weights, e.z_mean, e.z_var)
+                for f, e in self._effects.items()
+                if e.part == "seal"
+            }
             self.seal_filter.reset(0.0, _lognormal_sampler(unc.wear_rate_log_sigma))
+            for f, (mean, var) in kept.items():
+                self._effects[f].z_mean.fill(mean)
+                self._effects[f].z_var.fill(var)
             for ff in self._flight.values():  # re-estimated with the wear known (zero)
                 if ff.part == "seal":
                     ff.restart_baseline()
@@ -305,7 +340,10 @@ class HealthMonitor:
         w_hat, w_var = _fraction_moments(self.seal_filter, self.w_crit)
         try:
             for j, f in enumerate(self.learning):
-                self._learn_one(self._flight[f], float(means[j]), m, c_hat, c_var, w_hat, w_var)
+                if self.installation == "states":
+                    self._effect_update(f, float(means[j]), m, c_hat, c_var, w_hat, w_var)
+                else:
+                    self._learn_one(self._flight[f], float(means[j]), m, c_hat, c_var, w_hat, w_var)
         finally:
             self._refresh("spring")
             self._refresh("seal")
@@ -341,6 +379,50 @@ class HealthMonitor:
         sigma = np.sqrt(ff.run_var / m + (ff.offset_var + cross_var))
         pf.update(y - ff.offset - cross, ff.model, sigma_values=sigma)
 
+    def _effect_update(
+        self,
+        f: str,
+        y: float,
+        m: int,
+        c_hat: float,
+        c_var: float,
+        w_hat: float,
+        w_var: float,
+    ) -> float:
+        """Feature ``f``'s mean ``y`` over ``m`` runs into its part's filter, with the
+        installation effect as per-particle Gaussian states (module docstring).
+
+        The surrogate's model along the part's own severity, the other part at its filter's
+        estimate: ``y = mu_i + tau_i z + sigma_i / sqrt(m) eps`` with ``mu``, ``tau``,
+        ``sigma`` the surrogate's tables (bilinear, as the world draws them) at each
+        particle; the other part's uncertainty adds ``(d/d other (mu + tau z_bar))^2 var``.
+        Returns ``y`` corrected to a healthy new installation (for the detectors).
+        """
+        eff = self._effects[f]
+        sur, k = self.sur, eff.k
+        if eff.part == "spring":
+            pf, crit, own, other, other_var = self.spring_filter, self.a_fail, c_hat, w_hat, w_var
+            grid = sur.crack_grid
+        else:
+            pf, crit, own, other, other_var = self.seal_filter, self.w_crit, w_hat, c_hat, c_var
+            grid = sur.wear_grid
+        tables = _axis_tables(sur, k, eff.part, other)
+        frac = np.clip(pf.x / crit, 0.0, 1.0)
+        mu = np.interp(frac, grid, tables[0])
+        tau = np.interp(frac, grid, tables[1])
+        run = np.interp(frac, grid, tables[2]) * self.scenario.filter_noise_scale
+        z_bar = float(pf.weights @ eff.z_mean)
+        slope = _slope(lambda o: _effect_mean(sur, k, eff.part, own, o, z_bar), other)
+        noise_var = run * run / m + slope * slope * other_var
+        log_lik = np.empty(frac.size)
+        random_effect_update(y, mu, tau, noise_var, eff.z_mean, eff.z_var, log_lik)
+        shift = float(pf.weights @ (tau * eff.z_mean))
+        cross = _effect_mean(sur, k, eff.part, own, other, 0.0) - _effect_mean(
+            sur, k, eff.part, own, 0.0, 0.0
+        )
+        pf.update_log_likelihood(log_lik)
+        return y - shift - cross
+
     def tested(self, features: dict[str, float]) -> None:
         """A pre-flight test: baseline first, then offset- and cross-corrected updates
         (the in-flight batch under way is learnt from first)."""
@@ -353,6 +435,14 @@ class HealthMonitor:
             self._refresh("seal")
 
     def _measured(self, features: dict[str, float]) -> None:
+        if self.installation == "states":
+            c_hat, c_var = _fraction_moments(self.spring_filter, self.a_fail)
+            w_hat, w_var = _fraction_moments(self.seal_filter, self.w_crit)
+            g1 = self._effect_update("G1", features["G1"], 1, c_hat, c_var, w_hat, w_var)
+            g3 = self._effect_update("G3", features["G3"], 1, c_hat, c_var, w_hat, w_var)
+            self.crack_detected = self.crack_detector.update(g1) or self.crack_detected
+            self.seal_detected = self.seal_detector.update(g3) or self.seal_detected
+            return
         sf, wf = self.spring_filter, self.seal_filter
         c_hat = float(sf.weights @ sf.x) / self.a_fail
         w_hat = float(wf.weights @ wf.x) / self.w_crit
@@ -456,6 +546,44 @@ class _FlightFeature:
         self.baseline_flights += m
         self.offset = self._baseline_sum / self.baseline_flights
         self.offset_var = run_var / self.baseline_flights + state_var
+
+
+@dataclass(frozen=True)
+class _Effect:
+    """A feature's installation effect as filter states: its part, surrogate index, and
+    the per-particle mean and variance of its standardised effect ``z`` (``aux`` arrays)."""
+
+    part: str
+    k: int
+    z_mean: np.ndarray
+    z_var: np.ndarray
+
+
+def _axis_tables(sur: SurrogateModel, k: int, part: str, other: float) -> np.ndarray:
+    """(mean, unit std, run std) of feature ``k`` on ``part``'s own grid, the other part's
+    fraction at ``other`` (linear between the other grid's nodes, as the bilinear tables)."""
+    stack = np.stack([sur.mean[k], sur.unit_std[k], sur.run_std[k]])  # (3, n_crack, n_wear)
+    other_grid = sur.wear_grid if part == "spring" else sur.crack_grid
+    j = min(max(int(np.searchsorted(other_grid, other, side="right")) - 1, 0), other_grid.size - 2)
+    t = (other - other_grid[j]) / (other_grid[j + 1] - other_grid[j])
+    if part == "spring":
+        return stack[:, :, j] * (1.0 - t) + stack[:, :, j + 1] * t
+    return stack[:, j, :] * (1.0 - t) + stack[:, j + 1, :] * t
+
+
+def _effect_mean(
+    sur: SurrogateModel, k: int, part: str, own: float, other: float, z: float
+) -> float:
+    """``mu + tau z`` of feature ``k`` with ``part`` at fraction ``own``, the other at ``other``."""
+    c, w = (own, other) if part == "spring" else (other, own)
+    t = sur.tables_at(c, w)
+    return float(t[0, k] + t[1, k] * z)
+
+
+def _mixture_moments(w: np.ndarray, mean: np.ndarray, var: np.ndarray) -> tuple[float, float]:
+    """Mean and variance of the weighted mixture of Gaussians N(mean_i, var_i)."""
+    mu = float(w @ mean)
+    return mu, float(w @ var + w @ (mean - mu) ** 2)
 
 
 def _fraction_moments(pf: ParticleFilter, critical: float) -> tuple[float, float]:
