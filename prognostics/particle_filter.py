@@ -172,6 +172,7 @@ def _step_kernel(
     inv_cell: float,
     sigma_x: float,
     sigma_log_theta: float,
+    damage_cv: float,
     y: float,
     shared_knots: bool,
     is_poly: bool,
@@ -186,8 +187,9 @@ def _step_kernel(
 ) -> float:
     """``predict_particles`` then ``_update_kernel`` in one call; returns N_eff."""
     advance_severities(
-        x, log_theta, usage, handle, scratch, exact, grid, rate, cum, cells, inv_cell, sigma_x
-    )
+        x, log_theta, usage, handle, scratch, exact, grid, rate, cum, cells, inv_cell, sigma_x,
+        damage_cv,
+    )  # fmt: skip
     log_likelihood_terms(
         y,
         x,
@@ -223,6 +225,25 @@ def _add_log_likelihood(log_w: np.ndarray, w: np.ndarray, ll: np.ndarray) -> flo
     for i in range(log_w.size):
         log_w[i] += ll[i]
         peak = max(peak, log_w[i])
+    return _normalise(log_w, w, peak)
+
+
+@njit(cache=True)
+def _condition_below(x: np.ndarray, log_w: np.ndarray, w: np.ndarray, threshold: float) -> float:
+    """Zero the weights of particles with ``x >= threshold`` and renormalise; returns N_eff,
+    or -1 (nothing changed) when no particle lies below or none lies at or past it."""
+    peak = -np.inf
+    dead = 0
+    for i in range(x.size):
+        if x[i] < threshold:
+            peak = max(peak, log_w[i])
+        else:
+            dead += 1
+    if dead == 0 or peak == -np.inf:
+        return -1.0
+    for i in range(x.size):
+        if x[i] >= threshold:
+            log_w[i] = -np.inf
     return _normalise(log_w, w, peak)
 
 
@@ -609,6 +630,20 @@ class ParticleFilter:
                 f"log_likelihood must hold {self.n_particles} finite values, got shape {ll.shape}"
             )
         self._ess = _add_log_likelihood(self._log_w, self._w, ll)
+        return self._after_update()
+
+    def condition_below(self, threshold: float) -> bool:
+        """Condition on ``severity < threshold`` (e.g. the part is known not to have failed):
+        particles at or past it lose their weight, the rest are renormalised; resamples as
+        :meth:`update`. If no particle lies below, nothing changes (returns False; the
+        caller decides). Returns True if the filter resampled."""
+        self._check_ready()
+        if not math.isfinite(threshold):
+            raise ValueError(f"threshold = {threshold} must be finite")
+        ess = _condition_below(self._x, self._log_w, self._w, float(threshold))
+        if ess < 0.0:
+            return False
+        self._ess = ess
         return self._after_update()
 
     def _after_update(self) -> bool:

@@ -27,6 +27,28 @@ turns them into RUL summaries. It sees only features, never the truth.
   distribution of the surrogate.
 * ``filter_noise_scale`` and ``filter_growth_bias`` of the scenario make the filters assume
   more noise or faster/slower growth than the truth (filter-quality studies).
+
+**Learning in flight** (``Scenario.flight_features`` with I8 and I9, v2): the filters also
+learn from the in-flight features, I8 (DC current offset, the crack) into the spring filter
+and I9 (command-normalised current, the wear) into the seal filter, every
+``Scenario.flight_update_flights`` flights from the batch's mean (:meth:`flown`,
+:meth:`learn_from_flights`; a test or a replacement first learns from the batch under way).
+In this mode every feature's installation effect is a filter state instead of a fixed
+offset (``installation = "states"``): the surrogate draws a feature as
+``mu(c, w) + tau(c, w) z + sigma(c, w) eps`` with ``z ~ N(0, 1)`` drawn when a spring pair is
+fitted, and ``tau`` (the between-installation spread) changes with the parts' state, so a
+constant offset recorded at fitting does not remove it. Given a particle's path, ``z`` is
+Gaussian: each particle carries its own mean and variance of ``z`` per feature
+(Rao-Blackwellised, :mod:`prognostics.random_effect`), and each measurement is weighted by
+its predictive density ``N(y; mu_i + tau_i m_i, sigma_i^2 / n + tau_i^2 P_i + cross)``, with
+``mu``, ``tau``, ``sigma`` the surrogate's tables along the part's own severity at the other
+part's estimate (bilinear, as the world draws them) and ``cross`` the other filter's
+variance through the feature's slope against the other part (the cross-fault correction's
+uncertainty). A new spring pair (new installation) resets every ``z`` to N(0, 1); new seals
+keep the installation's ``z`` knowledge (the cloud's mixture moments).
+The earlier ``"baseline"`` treatment (offsets from the first tests or flights, their
+estimation variance added to the noise) stays for v0 and v1 (bit for bit) and is kept as an
+option for comparison (docs/beliefs.md).
 """
 
 from __future__ import annotations
@@ -53,6 +75,8 @@ from scas_env.actuator.uncertainty import truncated_normal
 from scas_env.scenario import Scenario
 
 BASELINE_TESTS = 3
+#: Treatments of the installation effects and growth scatter (``HealthMonitor.installation``).
+INSTALLATION_MODELS = ("baseline", "states")
 #: In-flight features the filters learn from, and the part whose filter each one feeds.
 LEARNING_FEATURES = {"I8": "spring", "I9": "seal"}
 #: Flights after a fitting whose features estimate the installation offsets (module docstring).
@@ -85,9 +109,25 @@ class HealthMonitor:
         calibration: Calibration,
         surrogate: SurrogateModel,
         rng: np.random.Generator,
+        *,
+        installation: str | None = None,
     ) -> None:
         self.params, self.scenario, self.cal, self.sur = params, scenario, calibration, surrogate
         self.rng = rng
+        names = getattr(scenario, "flight_feature_names", ())
+        #: in-flight features the filters learn from (``LEARNING_FEATURES`` measured), in the
+        #: order of ``flight_sum``; empty: the filters learn at tests only (v0, v1)
+        self.learning = tuple(f for f in LEARNING_FEATURES if f in names)
+        if installation is None:
+            installation = "states" if self.learning else "baseline"
+        if installation not in INSTALLATION_MODELS:
+            raise ValueError(
+                f"installation = {installation!r} must be None or one of {INSTALLATION_MODELS}"
+            )
+        #: how the filters treat installation effects and growth scatter (module docstring):
+        #: "baseline" (v0, v1) or "states" (the default when learning in flight)
+        self.installation = installation
+        states = installation == "states"
         self.a_fail = calibration.spring_failure_depth_m
         self.w_crit = calibration.seal_critical_wear_m
         noise = scenario.filter_noise_scale
@@ -110,7 +150,8 @@ class HealthMonitor:
             paris_crack_model(
                 calibration.crack_depth_m,
                 bias * calibration.crack_rate_m_per_flight,
-                process_noise_std_m=float(calibration.crack_cv_at(a0)) * rate_a0,
+                process_noise_std_m=0.0 if states else float(calibration.crack_cv_at(a0)) * rate_a0,
+                damage_noise_cv=float(calibration.crack_cv_at(a0)) if states else 0.0,
                 log_theta_noise_std=THETA_WALK,
                 scheme="exact",
             ),
@@ -121,7 +162,10 @@ class HealthMonitor:
         self.seal_filter = ParticleFilter(
             linear_wear_model(
                 bias * calibration.wear_rate_m_per_flight,
-                process_noise_std=calibration.wear_cv * calibration.wear_rate_m_per_flight,
+                process_noise_std=0.0
+                if states
+                else calibration.wear_cv * calibration.wear_rate_m_per_flight,
+                damage_noise_cv=calibration.wear_cv if states else 0.0,
                 log_theta_noise_std=THETA_WALK,
             ),
             self.g3_model,
@@ -155,10 +199,6 @@ class HealthMonitor:
         #: flights flown since each filter was last predicted
         self.pending = {"spring": 0, "seal": 0}
         self._ageing: dict[str, AgeingRul] = {}
-        names = getattr(scenario, "flight_feature_names", ())
-        #: in-flight features the filters learn from (``LEARNING_FEATURES`` measured), in the
-        #: order of ``flight_sum``; empty: the filters learn at tests only (v0, v1)
-        self.learning = tuple(f for f in LEARNING_FEATURES if f in names)
         #: flights per in-flight update (``Scenario.flight_update_flights``)
         self.flight_interval = int(getattr(scenario, "flight_update_flights", 1))
         #: sum of each learning feature over the flights of the batch under way (SI units)
@@ -178,18 +218,13 @@ class HealthMonitor:
                 model=measurement_from_curve(grid, mean, noise * run),
                 run_var=(noise * run) ** 2,
             )
-        #: how the filters treat installation effects: "baseline" (v0, v1: ground-feature
-        #: offsets from the first tests, flight-feature offsets from the first flights) or
-        #: "states" (a Gaussian effect per feature and particle, module docstring)
-        self.installation = "states" if self.learning else "baseline"
         self._effects: dict[str, _Effect] = {}
-        if self.installation == "states":
+        if states:
             self._enable_effect_states()
 
     def _enable_effect_states(self) -> None:
         """Register each measured feature's installation effect as per-particle Gaussian
         states of its part's filter (``aux`` arrays carried through resampling)."""
-        self.installation = "states"
         parts = {"G1": "spring", "G3": "seal", **{f: LEARNING_FEATURES[f] for f in self.learning}}
         for f, part in parts.items():
             pf = self._filters[part]
@@ -336,6 +371,7 @@ class HealthMonitor:
             if d > 0:
                 pf.predict(float(d))
                 self.pending[part] -= d
+        self._condition_on_survival()
         c_hat, c_var = _fraction_moments(self.spring_filter, self.a_fail)
         w_hat, w_var = _fraction_moments(self.seal_filter, self.w_crit)
         try:
@@ -378,6 +414,14 @@ class HealthMonitor:
             pf = self.seal_filter
         sigma = np.sqrt(ff.run_var / m + (ff.offset_var + cross_var))
         pf.update(y - ff.offset - cross, ff.model, sigma_values=sigma)
+
+    def _condition_on_survival(self) -> None:
+        """Both parts are flying, so neither has reached its critical value: particles
+        past it lose their weight (``"states"`` treatment)."""
+        if self.scenario.crack_active:
+            self.spring_filter.condition_below(self.a_fail)
+        if self.scenario.wear_active:
+            self.seal_filter.condition_below(self.w_crit)
 
     def _effect_update(
         self,
@@ -436,6 +480,7 @@ class HealthMonitor:
 
     def _measured(self, features: dict[str, float]) -> None:
         if self.installation == "states":
+            self._condition_on_survival()
             c_hat, c_var = _fraction_moments(self.spring_filter, self.a_fail)
             w_hat, w_var = _fraction_moments(self.seal_filter, self.w_crit)
             g1 = self._effect_update("G1", features["G1"], 1, c_hat, c_var, w_hat, w_var)

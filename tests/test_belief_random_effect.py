@@ -84,3 +84,18 @@ def test_auxiliary_arrays_follow_their_particles_through_resampling() -> None:
     parents = pf.aux["tag"]
     assert np.all(np.abs(parents - 1.0) < 0.3)
     assert np.unique(parents).size < 300  # copies of the heavier parents
+
+
+def test_condition_below_is_bayes_with_a_survival_likelihood() -> None:
+    """Zeroing the weights past a threshold equals an update with likelihood 1[x < H]."""
+    pf, ref = _filter(9), _filter(9)
+    x = np.array(pf.x)
+    alive = x < 1.2
+    pf.condition_below(1.2)
+    expected = np.where(alive, 1.0, 0.0)
+    np.testing.assert_allclose(pf.weights, expected / expected.sum(), rtol=1e-12)
+    assert pf.ess == pytest.approx(1.0 / np.sum((expected / expected.sum()) ** 2), rel=1e-12)
+    ref.condition_below(5.0)  # nothing past it: unchanged
+    np.testing.assert_array_equal(ref.weights, np.full(300, 1.0 / 300))
+    ref.condition_below(-1.0)  # nothing below it: unchanged (the caller decides)
+    np.testing.assert_array_equal(ref.weights, np.full(300, 1.0 / 300))
