@@ -27,6 +27,28 @@ turns them into RUL summaries. It sees only features, never the truth.
   distribution of the surrogate.
 * ``filter_noise_scale`` and ``filter_growth_bias`` of the scenario make the filters assume
   more noise or faster/slower growth than the truth (filter-quality studies).
+
+**Learning in flight** (``Scenario.flight_features`` with I8 and I9, v2): the filters also
+learn from the in-flight features, I8 (DC current offset, the crack) into the spring filter
+and I9 (command-normalised current, the wear) into the seal filter, every
+``Scenario.flight_update_flights`` flights from the batch's mean (:meth:`flown`,
+:meth:`learn_from_flights`; a test or a replacement first learns from the batch under way).
+In this mode every feature's installation effect is a filter state instead of a fixed
+offset (``installation = "states"``): the surrogate draws a feature as
+``mu(c, w) + tau(c, w) z + sigma(c, w) eps`` with ``z ~ N(0, 1)`` drawn when a spring pair is
+fitted, and ``tau`` (the between-installation spread) changes with the parts' state, so a
+constant offset recorded at fitting does not remove it. Given a particle's path, ``z`` is
+Gaussian: each particle carries its own mean and variance of ``z`` per feature
+(Rao-Blackwellised, :mod:`prognostics.random_effect`), and each measurement is weighted by
+its predictive density ``N(y; mu_i + tau_i m_i, sigma_i^2 / n + tau_i^2 P_i + cross)``, with
+``mu``, ``tau``, ``sigma`` the surrogate's tables along the part's own severity at the other
+part's estimate (bilinear, as the world draws them) and ``cross`` the other filter's
+variance through the feature's slope against the other part (the cross-fault correction's
+uncertainty). A new spring pair (new installation) resets every ``z`` to N(0, 1); new seals
+keep the installation's ``z`` knowledge (the cloud's mixture moments).
+The earlier ``"baseline"`` treatment (offsets from the first tests or flights, their
+estimation variance added to the noise) stays for v0 and v1 (bit for bit) and is kept as an
+option for comparison (docs/beliefs.md).
 """
 
 from __future__ import annotations
@@ -40,9 +62,10 @@ from scipy.stats import norm
 
 from prognostics.degradation_models import linear_wear_model, paris_crack_model
 from prognostics.detection import DetectorConfig, PercentileDetector
-from prognostics.measurement import measurement_from_curve
+from prognostics.measurement import MeasurementModel, measurement_from_curve
 from prognostics.normals import NormalStream
 from prognostics.particle_filter import ParticleFilter
+from prognostics.random_effect import random_effect_update
 from prognostics.rul import RulPredictor
 from prognostics.rul_ageing import AgeingRul
 from scas_env.actuator.calibration import Calibration
@@ -52,8 +75,20 @@ from scas_env.actuator.uncertainty import truncated_normal
 from scas_env.scenario import Scenario
 
 BASELINE_TESTS = 3
+#: Treatments of the installation effects and growth scatter (``HealthMonitor.installation``).
+INSTALLATION_MODELS = ("baseline", "states")
+#: In-flight features the filters learn from, and the part whose filter each one feeds.
+LEARNING_FEATURES = {"I8": "spring", "I9": "seal"}
+#: Flights after a fitting whose features estimate the installation offsets (module docstring).
+BASELINE_FLIGHTS = 20
+#: Step (fraction of critical) of the central differences of the surrogate's mean curves.
+_SLOPE_STEP = 0.02
 #: Artificial-evolution random walk of log theta per flight (lets the filters track the unit).
 THETA_WALK = 0.005
+#: The walk in the ``"states"`` treatment: none. A unit's growth multiplier is constant (drawn
+#: at fitting), the regularised resampling keeps the cloud diverse, and on training seeds
+#: (0-39) the walk of 0.005 made the seal's 90 % interval cover 98-100 % (0.85-0.93 without).
+STATES_THETA_WALK = 0.0
 #: Quantiles of the healthy distribution the detectors are fitted on (deterministic).
 _BASELINE_Z = norm.ppf(np.linspace(0.0005, 0.9995, 2000))
 
@@ -78,9 +113,25 @@ class HealthMonitor:
         calibration: Calibration,
         surrogate: SurrogateModel,
         rng: np.random.Generator,
+        *,
+        installation: str | None = None,
     ) -> None:
         self.params, self.scenario, self.cal, self.sur = params, scenario, calibration, surrogate
         self.rng = rng
+        names = getattr(scenario, "flight_feature_names", ())
+        #: in-flight features the filters learn from (``LEARNING_FEATURES`` measured), in the
+        #: order of ``flight_sum``; empty: the filters learn at tests only (v0, v1)
+        self.learning = tuple(f for f in LEARNING_FEATURES if f in names)
+        if installation is None:
+            installation = "states" if self.learning else "baseline"
+        if installation not in INSTALLATION_MODELS:
+            raise ValueError(
+                f"installation = {installation!r} must be None or one of {INSTALLATION_MODELS}"
+            )
+        #: how the filters treat installation effects and growth scatter (module docstring):
+        #: "baseline" (v0, v1) or "states" (the default when learning in flight)
+        self.installation = installation
+        states = installation == "states"
         self.a_fail = calibration.spring_failure_depth_m
         self.w_crit = calibration.seal_critical_wear_m
         noise = scenario.filter_noise_scale
@@ -103,8 +154,9 @@ class HealthMonitor:
             paris_crack_model(
                 calibration.crack_depth_m,
                 bias * calibration.crack_rate_m_per_flight,
-                process_noise_std_m=float(calibration.crack_cv_at(a0)) * rate_a0,
-                log_theta_noise_std=THETA_WALK,
+                process_noise_std_m=0.0 if states else float(calibration.crack_cv_at(a0)) * rate_a0,
+                damage_noise_cv=float(calibration.crack_cv_at(a0)) if states else 0.0,
+                log_theta_noise_std=STATES_THETA_WALK if states else THETA_WALK,
                 scheme="exact",
             ),
             self.g1_model,
@@ -114,8 +166,11 @@ class HealthMonitor:
         self.seal_filter = ParticleFilter(
             linear_wear_model(
                 bias * calibration.wear_rate_m_per_flight,
-                process_noise_std=calibration.wear_cv * calibration.wear_rate_m_per_flight,
-                log_theta_noise_std=THETA_WALK,
+                process_noise_std=0.0
+                if states
+                else calibration.wear_cv * calibration.wear_rate_m_per_flight,
+                damage_noise_cv=calibration.wear_cv if states else 0.0,
+                log_theta_noise_std=STATES_THETA_WALK if states else THETA_WALK,
             ),
             self.g3_model,
             scenario.n_particles,
@@ -148,6 +203,41 @@ class HealthMonitor:
         #: flights flown since each filter was last predicted
         self.pending = {"spring": 0, "seal": 0}
         self._ageing: dict[str, AgeingRul] = {}
+        #: flights per in-flight update (``Scenario.flight_update_flights``)
+        self.flight_interval = int(getattr(scenario, "flight_update_flights", 1))
+        #: sum of each learning feature over the flights of the batch under way (SI units)
+        self.flight_sum = np.zeros(len(self.learning))
+        #: flights in that sum (aborted flights, NaN features, are not counted)
+        self.flight_count = 0
+        self._flight: dict[str, _FlightFeature] = {}
+        for f in self.learning:
+            k = surrogate.index(f)
+            if LEARNING_FEATURES[f] == "spring":
+                grid, mean, run = c_grid, surrogate.mean[k, :, 0], surrogate.run_std[k, :, 0]
+            else:
+                grid, mean, run = w_grid, surrogate.mean[k, 0, :], surrogate.run_std[k, 0, :]
+            self._flight[f] = _FlightFeature(
+                part=LEARNING_FEATURES[f],
+                k=k,
+                model=measurement_from_curve(grid, mean, noise * run),
+                run_var=(noise * run) ** 2,
+            )
+        self._effects: dict[str, _Effect] = {}
+        if states:
+            self._enable_effect_states()
+
+    def _enable_effect_states(self) -> None:
+        """Register each measured feature's installation effect as per-particle Gaussian
+        states of its part's filter (``aux`` arrays carried through resampling)."""
+        parts = {"G1": "spring", "G3": "seal", **{f: LEARNING_FEATURES[f] for f in self.learning}}
+        for f, part in parts.items():
+            pf = self._filters[part]
+            self._effects[f] = _Effect(
+                part=part,
+                k=self.sur.index(f),
+                z_mean=pf.add_auxiliary(f"{f}_z_mean", 0.0),
+                z_var=pf.add_auxiliary(f"{f}_z_var", 1.0),
+            )
 
     # ------------------------------------------------------------------ events
     def reset(self) -> None:
@@ -185,13 +275,33 @@ class HealthMonitor:
             def prior_a(rng: np.random.Generator, n: int) -> np.ndarray:
                 return truncated_normal(rng, a0, s0, lower=0.0, upper=self.a_fail, size=n)
 
+            self.learn_from_flights()  # the batch flown with the old pair first
             self.spring_filter.reset(prior_a, _lognormal_sampler(unc.paris_c_log_sigma))
+            for eff in self._effects.values():  # a new installation: effects unknown
+                eff.z_mean.fill(0.0)
+                eff.z_var.fill(1.0)
             self._baseline: dict[str, list[float]] = {"G1": [], "G3": []}
             self._offset = {"G1": 0.0, "G3": 0.0}
+            for ff in self._flight.values():  # a new installation: new offsets
+                ff.restart_baseline()
             self.crack_detector.reset()
             self.crack_detected = False
         elif part == "seal":
+            self.learn_from_flights()
+            # the installation is unchanged: its effects' knowledge, collapsed to one
+            # Gaussian (the cloud's mixture moments), passes to the new cloud
+            kept = {
+                f: _mixture_moments(self.seal_filter.weights, e.z_mean, e.z_var)
+                for f, e in self._effects.items()
+                if e.part == "seal"
+            }
             self.seal_filter.reset(0.0, _lognormal_sampler(unc.wear_rate_log_sigma))
+            for f, (mean, var) in kept.items():
+                self._effects[f].z_mean.fill(mean)
+                self._effects[f].z_var.fill(var)
+            for ff in self._flight.values():  # re-estimated with the wear known (zero)
+                if ff.part == "seal":
+                    ff.restart_baseline()
             self.seal_detector.reset()
             self.seal_detected = False
         else:
@@ -214,19 +324,157 @@ class HealthMonitor:
                 self.pending[part] = 0
 
     def flown(self, features: dict[str, float]) -> None:
-        """One flight of usage for both filters.
+        """One flight of usage for both filters, and its learning features into the batch.
 
-        The in-flight features are not fed to the filters: I2 and I6 do not respond to the
-        faults in this physics, and I7's installation offset (between-unit spread, not
-        removable without a long flight baseline) biased the seal filter by ~2 um over a
-        life in tests. What the filters learn comes from the pre-flight tests, so testing
-        is the price of information.
+        I2, I6 and I7 are not fed to the filters: I2 and I6 do not respond to the faults in
+        this physics, and I7 moves by less than its run-to-run noise at critical wear. With
+        I8 and I9 measured (``Scenario.flight_features``) their values are summed over the
+        batch; when it holds ``flight_interval`` flights the filters learn from its mean
+        (:meth:`learn_from_flights`). An aborted flight (NaN features) adds usage only.
         """
         self.pending["spring"] += 1
         self.pending["seal"] += 1
+        if not self.learning:
+            return
+        values = [features[f] for f in self.learning]
+        if not all(math.isfinite(v) for v in values):
+            return
+        for j, v in enumerate(values):
+            self.flight_sum[j] += v
+        self.flight_count += 1
+        if self.flight_count >= self.flight_interval:
+            self.learn_from_flights()
+
+    def flight_batch_due(self) -> bool:
+        """Whether the batch of in-flight features is full (the vector env's fast path then
+        hands this actuator to :meth:`learn_from_flights`)."""
+        return self.flight_count >= self.flight_interval > 0 and bool(self.learning)
+
+    def learn_from_flights(self) -> None:
+        """Update the filters with the mean of the batch's learning features, then empty it.
+
+        The batch's ``m`` flights were flown at states from ``m`` flights ago to one flight
+        ago; the mean of a feature that is linear in the state over the batch refers to the
+        mid-batch state. Each filter is predicted to ``m // 2`` flights into the batch (the
+        mean state time ``(m - 1) / 2`` rounded up: within half a flight of a life of ~10^3
+        flights), updated there, and the remaining ``m - m // 2`` flights stay pending (the
+        RUL tables age by them, as between tests). The likelihood of the batch mean has the
+        run noise divided by ``sqrt(m)`` (run noise independent from flight to flight) plus
+        the variance of the installation offset's estimate and of the cross-fault
+        correction (module docstring). Nothing happens on an empty batch.
+        """
+        m = self.flight_count
+        if m == 0:
+            return
+        means = self.flight_sum / m
+        self.flight_sum[:] = 0.0
+        self.flight_count = 0
+        after = m - m // 2
+        for part, pf in self._filters.items():
+            d = self.pending[part] - after
+            if d > 0:
+                pf.predict(float(d))
+                self.pending[part] -= d
+        self._condition_on_survival()
+        c_hat, c_var = _fraction_moments(self.spring_filter, self.a_fail)
+        w_hat, w_var = _fraction_moments(self.seal_filter, self.w_crit)
+        try:
+            for j, f in enumerate(self.learning):
+                if self.installation == "states":
+                    self._effect_update(f, float(means[j]), m, c_hat, c_var, w_hat, w_var)
+                else:
+                    self._learn_one(self._flight[f], float(means[j]), m, c_hat, c_var, w_hat, w_var)
+        finally:
+            self._refresh("spring")
+            self._refresh("seal")
+
+    def _learn_one(
+        self,
+        ff: _FlightFeature,
+        y: float,
+        m: int,
+        c_hat: float,
+        c_var: float,
+        w_hat: float,
+        w_var: float,
+    ) -> None:
+        """One learning feature's batch mean ``y`` of ``m`` flights: baseline or update."""
+        mu, k = self.sur.feature_mean, ff.k
+        mean = mu(k, c_hat, w_hat)
+        slope_c = _slope(lambda c: mu(k, c, w_hat), c_hat)
+        slope_w = _slope(lambda w: mu(k, c_hat, w), w_hat)
+        if ff.baseline_flights < BASELINE_FLIGHTS:
+            run_var = float(self.sur.tables_at(c_hat, w_hat)[2, k]) ** 2
+            run_var *= self.scenario.filter_noise_scale**2
+            ff.add_baseline(y - mean, m, run_var, slope_c**2 * c_var + slope_w**2 * w_var)
+            return
+        if ff.part == "spring":
+            cross = mean - mu(k, c_hat, 0.0)
+            cross_var = slope_w**2 * w_var
+            pf = self.spring_filter
+        else:
+            cross = mean - mu(k, 0.0, w_hat)
+            cross_var = slope_c**2 * c_var
+            pf = self.seal_filter
+        sigma = np.sqrt(ff.run_var / m + (ff.offset_var + cross_var))
+        pf.update(y - ff.offset - cross, ff.model, sigma_values=sigma)
+
+    def _condition_on_survival(self) -> None:
+        """Both parts are flying, so neither has reached its critical value: particles
+        past it lose their weight (``"states"`` treatment)."""
+        if self.scenario.crack_active:
+            self.spring_filter.condition_below(self.a_fail)
+        if self.scenario.wear_active:
+            self.seal_filter.condition_below(self.w_crit)
+
+    def _effect_update(
+        self,
+        f: str,
+        y: float,
+        m: int,
+        c_hat: float,
+        c_var: float,
+        w_hat: float,
+        w_var: float,
+    ) -> float:
+        """Feature ``f``'s mean ``y`` over ``m`` runs into its part's filter, with the
+        installation effect as per-particle Gaussian states (module docstring).
+
+        The surrogate's model along the part's own severity, the other part at its filter's
+        estimate: ``y = mu_i + tau_i z + sigma_i / sqrt(m) eps`` with ``mu``, ``tau``,
+        ``sigma`` the surrogate's tables (bilinear, as the world draws them) at each
+        particle; the other part's uncertainty adds ``(d/d other (mu + tau z_bar))^2 var``.
+        Returns ``y`` corrected to a healthy new installation (for the detectors).
+        """
+        eff = self._effects[f]
+        sur, k = self.sur, eff.k
+        if eff.part == "spring":
+            pf, crit, own, other, other_var = self.spring_filter, self.a_fail, c_hat, w_hat, w_var
+            grid = sur.crack_grid
+        else:
+            pf, crit, own, other, other_var = self.seal_filter, self.w_crit, w_hat, c_hat, c_var
+            grid = sur.wear_grid
+        tables = _axis_tables(sur, k, eff.part, other)
+        frac = np.clip(pf.x / crit, 0.0, 1.0)
+        mu = np.interp(frac, grid, tables[0])
+        tau = np.interp(frac, grid, tables[1])
+        run = np.interp(frac, grid, tables[2]) * self.scenario.filter_noise_scale
+        z_bar = float(pf.weights @ eff.z_mean)
+        slope = _slope(lambda o: _effect_mean(sur, k, eff.part, own, o, z_bar), other)
+        noise_var = run * run / m + slope * slope * other_var
+        log_lik = np.empty(frac.size)
+        random_effect_update(y, mu, tau, noise_var, eff.z_mean, eff.z_var, log_lik)
+        shift = float(pf.weights @ (tau * eff.z_mean))
+        cross = _effect_mean(sur, k, eff.part, own, other, 0.0) - _effect_mean(
+            sur, k, eff.part, own, 0.0, 0.0
+        )
+        pf.update_log_likelihood(log_lik)
+        return y - shift - cross
 
     def tested(self, features: dict[str, float]) -> None:
-        """A pre-flight test: baseline first, then offset- and cross-corrected updates."""
+        """A pre-flight test: baseline first, then offset- and cross-corrected updates
+        (the in-flight batch under way is learnt from first)."""
+        self.learn_from_flights()
         self._catch_up()
         try:
             self._measured(features)
@@ -235,6 +483,15 @@ class HealthMonitor:
             self._refresh("seal")
 
     def _measured(self, features: dict[str, float]) -> None:
+        if self.installation == "states":
+            self._condition_on_survival()
+            c_hat, c_var = _fraction_moments(self.spring_filter, self.a_fail)
+            w_hat, w_var = _fraction_moments(self.seal_filter, self.w_crit)
+            g1 = self._effect_update("G1", features["G1"], 1, c_hat, c_var, w_hat, w_var)
+            g3 = self._effect_update("G3", features["G3"], 1, c_hat, c_var, w_hat, w_var)
+            self.crack_detected = self.crack_detector.update(g1) or self.crack_detected
+            self.seal_detected = self.seal_detector.update(g3) or self.seal_detected
+            return
         sf, wf = self.spring_filter, self.seal_filter
         c_hat = float(sf.weights @ sf.x) / self.a_fail
         w_hat = float(wf.weights @ wf.x) / self.w_crit
@@ -265,6 +522,9 @@ class HealthMonitor:
         """
         a["pending"][row, 0], a["pending"][row, 1] = self.pending["spring"], self.pending["seal"]
         a["detected"][row, 0], a["detected"][row, 1] = self.crack_detected, self.seal_detected
+        if self.learning and "flight_sum" in a:  # a fleet that batches learning flights
+            a["flight_sum"][row] = self.flight_sum
+            a["flight_count"][row] = self.flight_count
         for p, part in enumerate(("spring", "seal")):
             ageing = self._ageing[part]
             if sources[p] is not ageing:
@@ -277,9 +537,13 @@ class HealthMonitor:
                 sources[p] = ageing
 
     def import_flight_state(self, a: dict[str, np.ndarray], row: int) -> None:
-        """Take back what flights on the fleet's fast path changed: the flights pending."""
+        """Take back what flights on the fleet's fast path changed: the flights pending and
+        the batch of in-flight features (``flight_sum``, ``flight_count``)."""
         self.pending["spring"] = int(a["pending"][row, 0])
         self.pending["seal"] = int(a["pending"][row, 1])
+        if self.learning and "flight_sum" in a:
+            self.flight_sum[:] = a["flight_sum"][row]
+            self.flight_count = int(a["flight_count"][row])
 
     # ------------------------------------------------------------------ outputs
     def ageing(self, part: str) -> AgeingRul:
@@ -304,6 +568,88 @@ class HealthMonitor:
         )
 
 
+class _FlightFeature:
+    """A learning in-flight feature: its part, surrogate index, measurement model (the curve
+    against its own part's severity, the other part new; run noise) and installation
+    offset with the variance of its estimate."""
+
+    def __init__(self, part: str, k: int, model: MeasurementModel, run_var: np.ndarray) -> None:
+        self.part, self.k, self.model = part, k, model
+        #: run-to-run variance at the model's knots (one flight)
+        self.run_var = run_var
+        self.restart_baseline()
+
+    def restart_baseline(self) -> None:
+        """A new installation (or a new part): the offset is estimated again."""
+        self.baseline_flights = 0
+        self._baseline_sum = 0.0
+        self.offset = 0.0
+        self.offset_var = 0.0
+
+    def add_baseline(self, residual: float, m: int, run_var: float, state_var: float) -> None:
+        """A baseline batch of ``m`` flights whose mean is ``residual`` above the model's
+        mean at the filters' estimate: the offset is the flight-weighted mean of the
+        residuals, its variance the run variance over the flights plus ``state_var`` (the
+        filters' spread through the curve's slopes, the same error in every batch)."""
+        self._baseline_sum += m * residual
+        self.baseline_flights += m
+        self.offset = self._baseline_sum / self.baseline_flights
+        self.offset_var = run_var / self.baseline_flights + state_var
+
+
+@dataclass(frozen=True)
+class _Effect:
+    """A feature's installation effect as filter states: its part, surrogate index, and
+    the per-particle mean and variance of its standardised effect ``z`` (``aux`` arrays)."""
+
+    part: str
+    k: int
+    z_mean: np.ndarray
+    z_var: np.ndarray
+
+
+def _axis_tables(sur: SurrogateModel, k: int, part: str, other: float) -> np.ndarray:
+    """(mean, unit std, run std) of feature ``k`` on ``part``'s own grid, the other part's
+    fraction at ``other`` (linear between the other grid's nodes, as the bilinear tables)."""
+    stack = np.stack([sur.mean[k], sur.unit_std[k], sur.run_std[k]])  # (3, n_crack, n_wear)
+    other_grid = sur.wear_grid if part == "spring" else sur.crack_grid
+    j = min(max(int(np.searchsorted(other_grid, other, side="right")) - 1, 0), other_grid.size - 2)
+    t = (other - other_grid[j]) / (other_grid[j + 1] - other_grid[j])
+    if part == "spring":
+        return stack[:, :, j] * (1.0 - t) + stack[:, :, j + 1] * t
+    return stack[:, j, :] * (1.0 - t) + stack[:, j + 1, :] * t
+
+
+def _effect_mean(
+    sur: SurrogateModel, k: int, part: str, own: float, other: float, z: float
+) -> float:
+    """``mu + tau z`` of feature ``k`` with ``part`` at fraction ``own``, the other at ``other``."""
+    c, w = (own, other) if part == "spring" else (other, own)
+    t = sur.tables_at(c, w)
+    return float(t[0, k] + t[1, k] * z)
+
+
+def _mixture_moments(w: np.ndarray, mean: np.ndarray, var: np.ndarray) -> tuple[float, float]:
+    """Mean and variance of the weighted mixture of Gaussians N(mean_i, var_i)."""
+    mu = float(w @ mean)
+    return mu, float(w @ var + w @ (mean - mu) ** 2)
+
+
+def _fraction_moments(pf: ParticleFilter, critical: float) -> tuple[float, float]:
+    """Weighted mean (clipped to [0, 1]) and variance of a filter's severity as a fraction
+    of ``critical``."""
+    w, x = pf.weights, pf.x
+    mean = float(w @ x)
+    var = max(float(w @ (x - mean) ** 2), 0.0) / critical**2
+    return min(max(mean / critical, 0.0), 1.0), var
+
+
+def _slope(curve: Any, at: float) -> float:
+    """Central difference of ``curve`` on [0, 1] at ``at`` (one-sided at the ends)."""
+    lo, hi = max(at - _SLOPE_STEP, 0.0), min(at + _SLOPE_STEP, 1.0)
+    return (curve(hi) - curve(lo)) / (hi - lo)
+
+
 def _baselined(run_std: np.ndarray) -> np.ndarray:
     """Noise of an offset-corrected measurement: run noise plus the offset's own error."""
     return run_std * math.sqrt(1.0 + 1.0 / BASELINE_TESTS)
@@ -317,4 +663,10 @@ def _lognormal_sampler(sigma: float):
     return sample
 
 
-__all__ = ["BASELINE_TESTS", "HealthMonitor", "PartEstimate"]
+__all__ = [
+    "BASELINE_FLIGHTS",
+    "BASELINE_TESTS",
+    "LEARNING_FEATURES",
+    "HealthMonitor",
+    "PartEstimate",
+]
