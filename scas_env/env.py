@@ -17,7 +17,7 @@ from scas_env.costs import CostModel
 from scas_env.dashboard import DashboardRenderer
 from scas_env.fleet_state import PARTS, REWARD_TERMS, FleetState
 from scas_env.info import StepInfo, build_info
-from scas_env.monitor import HealthMonitor
+from scas_env.monitor import LEARNING_FEATURES, HealthMonitor
 from scas_env.observation import ObservationBuilder
 from scas_env.scenario import Scenario
 from scas_env.world import ActuatorWorld
@@ -516,6 +516,12 @@ class ScasMaintenanceEnv(gym.Env):
         return obs, build_info(fleet, rul, self.builder.features, row=0)
 
 
+def learning_features(scenario: Scenario) -> tuple[str, ...]:
+    """The in-flight features the monitor's filters learn from under ``scenario``, in the
+    order of ``HealthMonitor.flight_sum`` (empty: they learn at tests only)."""
+    return tuple(f for f in LEARNING_FEATURES if f in scenario.flight_feature_names)
+
+
 def new_fleet_state(env: ScasMaintenanceEnv, n: int) -> FleetState:
     """An ``n``-row :class:`FleetState` sized for ``env``'s surrogate, filters and features."""
     return FleetState(
@@ -526,6 +532,7 @@ def new_fleet_state(env: ScasMaintenanceEnv, n: int) -> FleetState:
         seal_critical_m=env.calibration.seal_critical_wear_m,
         kernel_tables=env.world.kernel_tables,
         exact_lives=env.world.per_part,
+        n_learning=len(learning_features(env.scenario)),
     )
 
 

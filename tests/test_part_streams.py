@@ -61,11 +61,16 @@ def test_the_kth_part_is_the_same_whatever_the_policy_did() -> None:
         )
 
 
-def test_vector_env_equals_single_envs_and_pickles() -> None:
+@pytest.mark.parametrize("v2", [False, True])
+def test_vector_env_equals_single_envs_and_pickles(v2: bool) -> None:
+    # v2: the filters learn from in-flight batches, summed on the fleet's fast path
+    from scas_env import V2_KWARGS
+
+    kw = {**V2_KWARGS, "episode_slots": 2500} if v2 else KW
     n = 3
-    venv = ScasMaintenanceVectorEnv(n, **KW)
+    venv = ScasMaintenanceVectorEnv(n, **kw)
     obs, _ = venv.reset(seed=5)
-    singles = [ScasMaintenanceEnv(**KW) for _ in range(n)]
+    singles = [ScasMaintenanceEnv(**kw) for _ in range(n)]
     for e, env in enumerate(singles):
         assert np.array_equal(env.reset(seed=5 + e)[0], obs[e])
     rng = np.random.default_rng(0)
