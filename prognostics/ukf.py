@@ -17,12 +17,16 @@ The same state, process and measurement as :class:`~prognostics.particle_filter.
 The unscented transform is filterpy's :class:`~filterpy.kalman.UnscentedKalmanFilter` with
 :class:`~filterpy.kalman.MerweScaledSigmaPoints` (van der Merwe 2004, "Sigma-point Kalman
 filters for probabilistic inference in dynamic state-space models", PhD thesis, OGI;
-Julier & Uhlmann 2004, Proc. IEEE 92(3)). Defaults ``alpha = 1, beta = 2, kappa = 3 - n = 1``:
-all weights positive (``R`` stays a variance) and the sigma points match the Gaussian's
-fourth moment (Julier's choice). The matrix square root is a closed-form 2 x 2 Cholesky that
-accepts a zero variance (:func:`psd_sqrt_2x2`): a known multiplier (``sigma_theta = 0`` and a
-point prior on ``l``) is a valid state, and then a linear-wear, linear-feature model is
-linear-Gaussian and the filter is the Kalman filter exactly (tested against one).
+Julier & Uhlmann 2004, Proc. IEEE 92(3)). Defaults ``alpha = 1, beta = 0, kappa = 3 - n = 1``:
+Julier's symmetric set, all weights positive (``R`` stays a variance), the sigma points
+matching the Gaussian's moments up to the fourth. (Merwe's ``beta = 2`` is the kurtosis
+correction for a small ``alpha``; with ``alpha = 1`` and ``kappa = 1`` the fourth moment is
+already exact and ``beta = 2`` would count it twice: the variance of ``x^2`` comes out as
+``4 m^2 s^2 + 4 s^4`` instead of ``+ 2 s^4``, tested.) The matrix square root is a
+closed-form 2 x 2 Cholesky that accepts a zero variance (:func:`psd_sqrt_2x2`): a known
+multiplier (``sigma_theta = 0`` and a point prior on ``l``) is a valid state, and then a
+linear-wear, linear-feature model is linear-Gaussian and the filter is the Kalman filter
+exactly (tested against one).
 
 RUL summaries come from the Gaussian state through the same damage integral
 (:class:`~prognostics.gaussian_rul.GaussianRul`). Deterministic: no random numbers at all.
@@ -91,7 +95,7 @@ class UnscentedFilter:
         measurement: MeasurementModel,
         *,
         alpha: float = 1.0,
-        beta: float = 2.0,
+        beta: float = 0.0,
         kappa: float = 3.0 - _DIM,
     ) -> None:
         if not isinstance(process, TabulatedRateModel):
