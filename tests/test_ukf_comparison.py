@@ -53,7 +53,8 @@ def test_summary_metrics_match_direct_formulas() -> None:
         low, high = mean * (1 - 0.5 * scale), mean * (1 + 0.5 * scale)
         for u in range(n):
             rows.append({"part": "seal", "stage": 0.8, "estimator": est, "unit": u,
-                         "true_rul": truth[u], "rul_mean": mean[u], "rul_low": low[u],
+                         "true_rul": truth[u], "rul_mean": mean[u], "rul_median": mean[u],
+                         "rul_low": low[u],
                          "rul_high": high[u], "us_per_update": 1.0, "us_per_rul": 2.0})  # fmt: skip
     summary = summarise(rows)
     assert [r["estimator"] for r in summary] == list(ESTIMATORS)

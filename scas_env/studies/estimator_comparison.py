@@ -251,6 +251,7 @@ def run_estimators(
                     "flight": t,
                     "true_rul": float(life.true_rul[i]),
                     "rul_mean": summ.mean,
+                    "rul_median": summ.median,
                     "rul_low": summ.low,
                     "rul_high": summ.high,
                     "prob_failure": summ.prob_failure,
@@ -309,8 +310,11 @@ def summarise(rows: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
             low = np.array([r["rul_low"] for r in rs])
             high = np.array([r["rul_high"] for r in rs])
             mean = np.array([r["rul_mean"] for r in rs])
+            median = np.array([r["rul_median"] for r in rs])
             ok = (truth > 0.0) & (mean > 0.0)
             log_ratio = np.log(mean[ok] / truth[ok])
+            ok_med = (truth > 0.0) & (median > 0.0)
+            log_median_ratio = np.log(median[ok_med] / truth[ok_med])
             cov = (low <= truth) & (truth <= high)
             covered[est] = cov
             under = truth < low
@@ -327,6 +331,7 @@ def summarise(rows: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
                     "undercut05_ci": _wilson(int(under.sum()), n),
                     "log_ratio_bias": float(log_ratio.mean()),
                     "log_ratio_sd": float(log_ratio.std(ddof=1)),
+                    "log_median_ratio_sd": float(log_median_ratio.std(ddof=1)),
                     "us_per_update": float(np.mean([r["us_per_update"] for r in rs])),
                     "us_per_rul": float(np.mean([r["us_per_rul"] for r in rs])),
                 }
@@ -341,17 +346,21 @@ def summarise(rows: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
 def format_table(summary: Sequence[dict[str, Any]]) -> str:
     """Markdown table of :func:`summarise` rows."""
     head = (
-        "| part | stage | estimator | n | 90 % coverage [95 % CI] | 5 % undercut | "
-        "bias log(mean/true) | sd log(mean/true) | us/update | us/RUL |\n"
-        "|---|---|---|---|---|---|---|---|---|---|"
+        "| part | stage | estimator | n | 90 % coverage [95 % CI] | UKF - PF coverage "
+        "[paired 95 % CI] | 5 % undercut | bias log(mean/true) | sd log(mean/true) | "
+        "sd log(median/true) | us/update | us/RUL |\n"
+        "|---|---|---|---|---|---|---|---|---|---|---|---|"
     )
     lines = [head]
     for r in summary:
         lo, hi = r["coverage90_ci"]
+        d, d_lo, d_hi = r["coverage_diff_ukf_minus_pf"]
+        diff = f"{d:+.3f} [{d_lo:+.3f}, {d_hi:+.3f}]" if r["estimator"] == "ukf" else ""
         lines.append(
             f"| {r['part']} | {r['stage']:.1f} | {r['estimator']} | {r['n']} | "
-            f"{r['coverage90']:.3f} [{lo:.3f}, {hi:.3f}] | {r['undercut05']:.3f} | "
+            f"{r['coverage90']:.3f} [{lo:.3f}, {hi:.3f}] | {diff} | {r['undercut05']:.3f} | "
             f"{r['log_ratio_bias']:+.3f} | {r['log_ratio_sd']:.3f} | "
+            f"{r['log_median_ratio_sd']:.3f} | "
             f"{r['us_per_update']:.0f} | {r['us_per_rul']:.0f} |"
         )
     return "\n".join(lines)
