@@ -76,6 +76,8 @@ def test_summary_metrics_match_direct_formulas() -> None:
         summary[0]["coverage_diff_ukf_minus_pf"], (d.mean(), d.mean() - half, d.mean() + half),
         rtol=1e-6,
     )  # fmt: skip
+    mdd = (norm.ppf(0.975) + norm.ppf(0.8)) * d.std(ddof=1) / math.sqrt(n)
+    np.testing.assert_allclose(summary[1]["coverage_diff_mdd"], mdd, rtol=1e-12)
 
 
 def test_study_is_seeded_and_stage_rows_are_consistent() -> None:
