@@ -353,8 +353,8 @@ def format_table(summary: Sequence[dict[str, Any]]) -> str:
     """Markdown table of :func:`summarise` rows."""
     head = (
         "| part | stage | estimator | n | 90 % coverage [95 % CI] | UKF - PF coverage "
-        "[paired 95 % CI] (min. detectable) | 5 % undercut | bias log(mean/true) | sd log(mean/true) | "
-        "sd log(median/true) | us/update | us/RUL |\n"
+        "[paired 95 % CI] (min. detectable) | 5 % undercut | bias log(mean/true) | "
+        "sd log(mean/true) | sd log(median/true) | us/update | us/RUL |\n"
         "|---|---|---|---|---|---|---|---|---|---|---|---|"
     )
     lines = [head]
