@@ -5,11 +5,18 @@ Each unit is one life of one part, simulated by :class:`scas_env.world.ActuatorW
 from new until the flight it fails on (``T`` flights, that flight included). Every
 ``every`` flights the ground station gets one reading (``source``):
 
-- ``"tests"``: a pre-flight test (G3 for the seals, G1 for the spring);
+- ``"tests"``: a pre-flight test (G3 for the seals, G1 for the spring), minus the
+  installation's reference offset (:meth:`ActuatorWorld.installation_reference` at fitting,
+  ``BASELINE_TESTS`` healthy tests, minus the model's healthy mean); measurement model: the
+  monitor's (surrogate curve, run noise times ``sqrt(1 + 1 / BASELINE_TESTS)``);
+- ``"flight"``: the mean of an in-flight feature over the ``every`` flights since the last
+  reading (I9 = rms(i) / rms(i_h) for the seals, I8 = mean(i - i_h) for the spring), minus an
+  installation baseline: the first ``BASELINE_TESTS`` batches after fitting are not fed to the
+  filters; their mean residual against the model curve along the prior's nominal path
+  (``theta = 1``, from the prior mean) is the offset. Measurement model: the surrogate's
+  curve of the feature, noise ``run_std / sqrt(every) * sqrt(1 + 1 / BASELINE_TESTS)``.
 
-minus the installation's reference offset (:meth:`ActuatorWorld.installation_reference`
-at fitting, ``BASELINE_TESTS`` healthy tests, minus the model's healthy mean). Both
-estimators see exactly these readings, with the monitor's models
+Both estimators see exactly these readings, with the monitor's models
 (:class:`scas_env.monitor.HealthMonitor`: process = calibrated growth table / linear wear with
 the calibrated flight scatter and the log-theta walk; measurement = the surrogate's curve
 with the baselined run noise; priors of a new part):
@@ -51,6 +58,7 @@ from scipy.stats import binomtest, norm
 from scipy.stats import t as student_t
 from tqdm import tqdm
 
+from prognostics.measurement import measurement_from_curve
 from prognostics.particle_filter import ParticleFilter
 from prognostics.rul import RulPredictor
 from prognostics.ukf import UnscentedFilter
@@ -63,10 +71,14 @@ from scas_env.world import ActuatorWorld
 
 PARTS: tuple[str, ...] = ("seal", "spring")
 ESTIMATORS: tuple[str, ...] = ("pf", "ukf")
-SOURCES: tuple[str, ...] = ("tests",)
+SOURCES: tuple[str, ...] = ("tests", "flight")
 STAGES: tuple[float, ...] = (0.2, 0.4, 0.6, 0.8, 0.9)
 #: feature read by each part's filter from a pre-flight test
 TEST_FEATURE = {"seal": "G3", "spring": "G1"}
+#: in-flight feature averaged over each batch of flights (source "flight")
+FLIGHT_FEATURE = {"seal": "I9", "spring": "I8"}
+#: in-flight features the world draws for source "flight" (Scenario.flight_features)
+FLIGHT_FEATURES_ON = "I2,I6,I7,I8,I9"
 LOW_Q, HIGH_Q = 0.05, 0.95
 _PART_INDEX = {"spring": 0, "seal": 1}  # order of ActuatorWorld.true_rul_flights
 
@@ -116,30 +128,62 @@ class Life:
 
 
 class _Context:
-    """Params, calibration, surrogate and the scenario of one part (only its fault on)."""
+    """Params, calibration, surrogate, the scenario of one part (only its fault on) and the
+    measurement model of its readings."""
 
-    def __init__(self, part: str, surrogate: SurrogateModel | None = None) -> None:
+    def __init__(
+        self, part: str, cfg: ComparisonConfig, surrogate: SurrogateModel | None = None
+    ) -> None:
         self.part = part
         self.params = ScasParams()
         self.cal = default_calibration()
         self.sur = surrogate if surrogate is not None else default_surrogate()
-        self.scenario = Scenario(
-            crack_active=int(part == "spring"), wear_active=int(part == "seal")
-        )
+        fields: dict[str, Any] = {
+            "crack_active": int(part == "spring"),
+            "wear_active": int(part == "seal"),
+        }
+        if cfg.source == "flight":
+            fields["flight_features"] = FLIGHT_FEATURES_ON
+        self.scenario = Scenario(**fields)
         self.threshold = (
             self.cal.seal_critical_wear_m if part == "seal" else self.cal.spring_failure_depth_m
         )
-        template = HealthMonitor(
-            self.params, self.scenario, self.cal, self.sur, np.random.default_rng(0)
-        )
-        #: the monitor's measurement model of this part's feature
-        self.measurement = template.g3_model if part == "seal" else template.g1_model
+        template = self.monitor(np.random.default_rng(0))
+        self.process = (template.seal_filter if part == "seal" else template.spring_filter).process
+        if cfg.source == "tests":
+            self.feature = TEST_FEATURE[part]
+            #: the monitor's measurement model of this part's feature
+            self.measurement = template.g3_model if part == "seal" else template.g1_model
+        else:
+            self.feature = FLIGHT_FEATURE[part]
+            k = self.sur.index(self.feature)
+            if part == "seal":
+                grid, mean, run = (
+                    self.sur.wear_grid * self.threshold,
+                    self.sur.mean[k, 0, :],
+                    (self.sur.run_std[k, 0, :]),
+                )
+            else:
+                grid, mean, run = (
+                    self.sur.crack_grid * self.threshold,
+                    self.sur.mean[k, :, 0],
+                    (self.sur.run_std[k, :, 0]),
+                )
+            noise = run / math.sqrt(cfg.every) * math.sqrt(1.0 + 1.0 / BASELINE_TESTS)
+            self.measurement = measurement_from_curve(grid, mean, noise)
+        #: prior mean severity of a new part (m)
+        self.x0 = self.params.spring.initial_crack_m if part == "spring" else 0.0
 
     def monitor(self, rng: np.random.Generator) -> HealthMonitor:
         """A monitor with a new part's prior (its filter is the PF under study)."""
         mon = HealthMonitor(self.params, self.scenario, self.cal, self.sur, rng)
         mon.replaced(self.part)
         return mon
+
+    def nominal_path(self, flights: float) -> float:
+        """Severity after ``flights`` flights from the prior mean at ``theta = 1`` (m)."""
+        d0 = self.process.damage(np.array([self.x0]))[0]
+        return float(self.process.inverse_damage(np.array([d0 + flights]))[0])
 
 
 def simulate_life(
@@ -149,19 +193,24 @@ def simulate_life(
     world_ss, ref_ss, meas_ss, deg_ss = seq.spawn(4)
     world = ActuatorWorld(ctx.params, ctx.scenario, ctx.cal, ctx.sur)
     world.reset(np.random.default_rng(world_ss))
-    feature = TEST_FEATURE[ctx.part]
-    model = ctx.measurement
-    ref = world.installation_reference(np.random.default_rng(ref_ss), BASELINE_TESTS)
-    offset = ref[feature] - float(model.mean(np.array([0.0]))[0])
+    feature, model = ctx.feature, ctx.measurement
     meas, deg = np.random.default_rng(meas_ss), np.random.default_rng(deg_ss)
+    if cfg.source == "tests":
+        ref = world.installation_reference(np.random.default_rng(ref_ss), BASELINE_TESTS)
+        offset = ref[feature] - float(model.mean(np.array([0.0]))[0])
+    else:
+        offset = math.nan  # from the first batches
+    baseline: list[float] = []
+    batch: list[float] = []
     times, ys, truth = [], [], []
     k = _PART_INDEX[ctx.part]
     for flight in range(cfg.max_flights):
-        if flight > 0 and flight % cfg.every == 0:
+        if cfg.source == "tests" and flight > 0 and flight % cfg.every == 0:
             times.append(flight)
             ys.append(world.test(meas)[feature] - offset)
             truth.append(world.true_rul_flights()[k])
-        if ctx.part in world.fly(meas, deg).failed:
+        result = world.fly(meas, deg)
+        if ctx.part in result.failed:
             return Life(
                 ctx.part,
                 unit,
@@ -170,6 +219,21 @@ def simulate_life(
                 np.array(ys),
                 np.array(truth),
             )
+        if cfg.source == "flight":
+            batch.append(result.features[feature])
+            if len(batch) < cfg.every:
+                continue
+            y = math.fsum(batch) / len(batch)
+            batch.clear()
+            if len(baseline) < BASELINE_TESTS:
+                middle = flight + 1 - 0.5 * (cfg.every - 1)
+                expected = float(model.mean(np.array([ctx.nominal_path(middle)]))[0])
+                baseline.append(y - expected)
+                offset = math.fsum(baseline) / len(baseline)
+                continue
+            times.append(flight + 1)
+            ys.append(y - offset)
+            truth.append(world.true_rul_flights()[k])
     raise RuntimeError(
         f"unit {unit}: the {ctx.part} has not failed after max_flights = {cfg.max_flights}"
     )
@@ -188,11 +252,10 @@ def _stage_updates(life: Life) -> list[tuple[float, int]]:
 def _ukf_for(ctx: _Context, mon: HealthMonitor) -> UnscentedFilter:
     """UKF with the monitor's models and the Gaussian version of its new-part prior."""
     unc = ctx.params.uncertainty
+    f = UnscentedFilter(ctx.process, ctx.measurement)
     if ctx.part == "seal":
-        f = UnscentedFilter(mon.seal_filter.process, mon.g3_model)
         f.reset(0.0, 0.0, 0.0, unc.wear_rate_log_sigma)
     else:
-        f = UnscentedFilter(mon.spring_filter.process, mon.g1_model)
         f.reset(
             ctx.params.spring.initial_crack_m, unc.initial_crack_sigma_m, 0.0, unc.paris_c_log_sigma
         )
@@ -223,7 +286,7 @@ def run_estimators(
         last = t
         t0 = clock()
         pf.predict(usage)
-        pf.update(y)
+        pf.update(y, ctx.measurement)  # the readings' model (the monitor's for "tests")
         t1 = clock()
         ukf.predict(usage)
         ukf.update(y)
@@ -272,7 +335,7 @@ def compare_estimators(
     """Simulate ``cfg.units`` lives per part and run both estimators on each (rows)."""
     rows: list[dict[str, Any]] = []
     for part in cfg.parts:
-        ctx = _Context(part, surrogate)
+        ctx = _Context(part, cfg, surrogate)
         children = np.random.SeedSequence((cfg.seed, PARTS.index(part))).spawn(cfg.units)
         for u in tqdm(range(cfg.units), desc=f"{part} lives", disable=not progress):
             life_seq, pf_seq = children[u].spawn(2)
