@@ -117,3 +117,26 @@ def test_cli_writes_table_csv_json_and_plot(tmp_path, capsys) -> None:
     assert len(rows) == sum(r["n"] for r in summary)
     with pytest.raises(SystemExit):  # an existing result is refused before any work
         main(["--units", "2", "--parts", "seal", "--out", str(out)])
+
+
+def test_flight_source_reads_batch_means_after_the_baseline_batches() -> None:
+    from scas_env.monitor import BASELINE_TESTS
+    from scas_env.studies.estimator_comparison import _Context, simulate_life
+
+    cfg = ComparisonConfig(units=2, seed=2, source="flight", every=7, parts=("seal",))
+    ctx = _Context("seal", cfg)
+    assert ctx.feature == "I9" and "I9" in ctx.scenario.flight_feature_names
+    k = ctx.sur.index("I9")
+    w = ctx.sur.wear_grid * ctx.threshold
+    np.testing.assert_allclose(ctx.measurement.mean(w), ctx.sur.mean[k, 0, :], rtol=1e-12)
+    sigma = ctx.sur.run_std[k, 0, :] * math.sqrt((1 + 1 / BASELINE_TESTS) / 7)
+    np.testing.assert_allclose(ctx.measurement.sigma(w), sigma, rtol=1e-12)
+    rate = ctx.cal.wear_rate_m_per_flight * ctx.scenario.filter_growth_bias
+    np.testing.assert_allclose(ctx.nominal_path(123.0), 123.0 * rate, rtol=1e-12)
+    life = simulate_life(ctx, 0, np.random.SeedSequence(9), cfg)
+    first = 7 * (BASELINE_TESTS + 1)
+    expected = np.arange(first, life.flights_to_failure, 7)
+    np.testing.assert_array_equal(life.update_flights, expected[: life.update_flights.size])
+    assert life.update_flights[-1] + 7 >= life.flights_to_failure
+    rows = compare_estimators(cfg, progress=False)
+    assert {r["part"] for r in rows} == {"seal"} and len(rows) > 0

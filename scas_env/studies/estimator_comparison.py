@@ -80,7 +80,9 @@ FLIGHT_FEATURE = {"seal": "I9", "spring": "I8"}
 #: in-flight features the world draws for source "flight" (Scenario.flight_features)
 FLIGHT_FEATURES_ON = "I2,I6,I7,I8,I9"
 LOW_Q, HIGH_Q = 0.05, 0.95
-_PART_INDEX = {"spring": 0, "seal": 1}  # order of ActuatorWorld.true_rul_flights
+_PART_INDEX = {"spring": 0, "seal": 1}
+#: default flights per reading: the scenario's batch of in-flight data per filter update
+DEFAULT_EVERY = int(Scenario().flight_update_flights)  # order of ActuatorWorld.true_rul_flights
 
 
 @dataclass(frozen=True)
@@ -89,7 +91,7 @@ class ComparisonConfig:
 
     units : lives per part (>= 2).
     seed : root seed (>= 0).
-    every : flights between readings (>= 1).
+    every : flights between readings (>= 1; default ``Scenario.flight_update_flights``).
     source : where the readings come from, one of :data:`SOURCES`.
     parts : parts to study, a subset of :data:`PARTS`.
     max_flights : a life still running after this many flights is an error.
@@ -97,7 +99,7 @@ class ComparisonConfig:
 
     units: int = 200
     seed: int = 0
-    every: int = 10
+    every: int = DEFAULT_EVERY
     source: str = "tests"
     parts: tuple[str, ...] = PARTS
     max_flights: int = 100_000
@@ -424,11 +426,9 @@ def format_table(summary: Sequence[dict[str, Any]]) -> str:
     for r in summary:
         lo, hi = r["coverage90_ci"]
         d, d_lo, d_hi = r["coverage_diff_ukf_minus_pf"]
-        diff = (
-            f"{d:+.3f} [{d_lo:+.3f}, {d_hi:+.3f}] (MDD {r['coverage_diff_mdd']:.3f})"
-            if r["estimator"] == "ukf"
-            else ""
-        )
+        mdd = r["coverage_diff_mdd"]
+        shown = f"MDD {mdd:.3f}" if mdd > 0.0 else "same on every life"
+        diff = f"{d:+.3f} [{d_lo:+.3f}, {d_hi:+.3f}] ({shown})" if r["estimator"] == "ukf" else ""
         lines.append(
             f"| {r['part']} | {r['stage']:.1f} | {r['estimator']} | {r['n']} | "
             f"{r['coverage90']:.3f} [{lo:.3f}, {hi:.3f}] | {diff} | {r['undercut05']:.3f} | "
@@ -509,7 +509,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser = make_parser("compare_estimators", __doc__)
     parser.add_argument("--units", type=positive_int, default=200, help="lives per part")
     parser.add_argument("--seed", type=nonneg_int, default=0, help="root seed")
-    parser.add_argument("--every", type=positive_int, default=10, help="flights per reading")
+    parser.add_argument(
+        "--every", type=positive_int, default=DEFAULT_EVERY, help="flights per reading"
+    )
     parser.add_argument("--source", choices=SOURCES, default="tests", help="readings from")
     parser.add_argument("--parts", nargs="+", choices=PARTS, default=list(PARTS))
     parser.add_argument("--out", type=Path, default=None, help="results folder")
