@@ -95,6 +95,7 @@ class ComparisonConfig:
     source : where the readings come from, one of :data:`SOURCES`.
     parts : parts to study, a subset of :data:`PARTS`.
     max_flights : a life still running after this many flights is an error.
+    particles : particles of the PF (default: the monitor's, ``Scenario.n_particles``).
     """
 
     units: int = 200
@@ -103,9 +104,12 @@ class ComparisonConfig:
     source: str = "tests"
     parts: tuple[str, ...] = PARTS
     max_flights: int = 100_000
+    particles: int = int(Scenario().n_particles)
 
     def __post_init__(self) -> None:
-        for name, lo in (("units", 2), ("seed", 0), ("every", 1), ("max_flights", 1)):
+        for name, lo in (
+            ("units", 2), ("seed", 0), ("every", 1), ("max_flights", 1), ("particles", 2)
+        ):  # fmt: skip
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, int) or value < lo:
                 raise ValueError(f"{name} = {value!r} must be an integer >= {lo}")
@@ -143,6 +147,7 @@ class _Context:
         fields: dict[str, Any] = {
             "crack_active": int(part == "spring"),
             "wear_active": int(part == "seal"),
+            "n_particles": cfg.particles,
         }
         if cfg.source == "flight":
             fields["flight_features"] = FLIGHT_FEATURES_ON
@@ -514,6 +519,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     )
     parser.add_argument("--source", choices=SOURCES, default="tests", help="readings from")
     parser.add_argument("--parts", nargs="+", choices=PARTS, default=list(PARTS))
+    parser.add_argument(
+        "--particles", type=positive_int, default=ComparisonConfig.particles, help="PF particles"
+    )
     parser.add_argument("--out", type=Path, default=None, help="results folder")
     parser.add_argument("--overwrite", action="store_true", help="replace an existing --out")
     args: argparse.Namespace = parser.parse_args(argv)
@@ -523,7 +531,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         check_out_dir(parser, args.out, args.overwrite)
     cfg = ComparisonConfig(
         units=args.units, seed=args.seed, every=args.every, source=args.source,
-        parts=tuple(args.parts),
+        parts=tuple(args.parts), particles=args.particles,
     )  # fmt: skip
     rows = compare_estimators(cfg)
     summary = summarise(rows)
