@@ -48,7 +48,6 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from filterpy.kalman import MerweScaledSigmaPoints, UnscentedKalmanFilter
 
 from prognostics.degradation_models import TabulatedRateModel, advance_scalar
 from prognostics.gaussian_rul import GaussianRul, check_gaussian_state
@@ -111,6 +110,12 @@ class UnscentedFilter:
         ):
             if not (math.isfinite(value) and ok):
                 raise ValueError(f"{name} = {value} is outside the allowed range (see docstring)")
+        try:  # an optional dependency: only this estimator needs it
+            from filterpy.kalman import MerweScaledSigmaPoints, UnscentedKalmanFilter
+        except ImportError as err:
+            raise ImportError(
+                "prognostics.ukf needs filterpy (pip install 'filterpy>=1.4.5')"
+            ) from err
         points = MerweScaledSigmaPoints(_DIM, alpha, beta, kappa, sqrt_method=psd_sqrt_2x2)
         if np.any(points.Wm < 0.0):
             raise ValueError(
