@@ -58,6 +58,7 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+from numba import njit
 from scipy.stats import norm
 
 from prognostics.degradation_models import linear_wear_model, paris_crack_model
@@ -232,11 +233,19 @@ class HealthMonitor:
         parts = {"G1": "spring", "G3": "seal", **{f: LEARNING_FEATURES[f] for f in self.learning}}
         for f, part in parts.items():
             pf = self._filters[part]
+            k = self.sur.index(f)
+            stack = np.stack([self.sur.mean[k], self.sur.unit_std[k], self.sur.run_std[k]])
+            grids = (self.sur.crack_grid, self.sur.wear_grid)
+            if part == "seal":  # own severity on axis 1, the other part's on axis 2
+                stack, grids = stack.transpose(0, 2, 1), grids[::-1]
             self._effects[f] = _Effect(
                 part=part,
-                k=self.sur.index(f),
+                k=k,
                 z_mean=pf.add_auxiliary(f"{f}_z_mean", 0.0),
                 z_var=pf.add_auxiliary(f"{f}_z_var", 1.0),
+                stack=np.ascontiguousarray(stack),
+                own_grid=np.asarray(grids[0], dtype=np.float64),
+                other_grid=np.asarray(grids[1], dtype=np.float64),
             )
 
     # ------------------------------------------------------------------ events
@@ -447,27 +456,26 @@ class HealthMonitor:
         Returns ``y`` corrected to a healthy new installation (for the detectors).
         """
         eff = self._effects[f]
-        sur, k = self.sur, eff.k
         if eff.part == "spring":
             pf, crit, own, other, other_var = self.spring_filter, self.a_fail, c_hat, w_hat, w_var
-            grid = sur.crack_grid
         else:
             pf, crit, own, other, other_var = self.seal_filter, self.w_crit, w_hat, c_hat, c_var
-            grid = sur.wear_grid
-        tables = _axis_tables(sur, k, eff.part, other)
-        frac = np.clip(pf.x / crit, 0.0, 1.0)
-        mu = np.interp(frac, grid, tables[0])
-        tau = np.interp(frac, grid, tables[1])
-        run = np.interp(frac, grid, tables[2]) * self.scenario.filter_noise_scale
+        st, g_own, g_other = eff.stack, eff.own_grid, eff.other_grid
         z_bar = float(pf.weights @ eff.z_mean)
-        slope = _slope(lambda o: _effect_mean(sur, k, eff.part, own, o, z_bar), other)
-        noise_var = run * run / m + slope * slope * other_var
-        log_lik = np.empty(frac.size)
-        random_effect_update(y, mu, tau, noise_var, eff.z_mean, eff.z_var, log_lik)
-        shift = float(pf.weights @ (tau * eff.z_mean))
-        cross = _effect_mean(sur, k, eff.part, own, other, 0.0) - _effect_mean(
-            sur, k, eff.part, own, 0.0, 0.0
+        lo, hi = max(other - _SLOPE_STEP, 0.0), min(other + _SLOPE_STEP, 1.0)
+        slope = (
+            _effect_at(st, g_own, g_other, own, hi, z_bar)
+            - _effect_at(st, g_own, g_other, own, lo, z_bar)
+        ) / (hi - lo)
+        cross = _effect_at(st, g_own, g_other, own, other, 0.0) - _effect_at(
+            st, g_own, g_other, own, 0.0, 0.0
         )
+        log_lik = np.empty(pf.n_particles)
+        shift = _effect_likelihood(
+            y, float(m), pf.x, pf.weights, crit, st, g_own, g_other, other,
+            self.scenario.filter_noise_scale, slope * slope * other_var,
+            eff.z_mean, eff.z_var, log_lik,
+        )  # fmt: skip
         pf.update_log_likelihood(log_lik)
         return y - shift - cross
 
@@ -599,34 +607,89 @@ class _FlightFeature:
 
 @dataclass(frozen=True)
 class _Effect:
-    """A feature's installation effect as filter states: its part, surrogate index, and
-    the per-particle mean and variance of its standardised effect ``z`` (``aux`` arrays)."""
+    """A feature's installation effect as filter states: its part, surrogate index, the
+    per-particle mean and variance of its standardised effect ``z`` (``aux`` arrays), and the
+    surrogate's (mean, unit std, run std) tables with the part's own severity on axis 1 and
+    the other part's on axis 2, with their grids (fractions of critical)."""
 
     part: str
     k: int
     z_mean: np.ndarray
     z_var: np.ndarray
+    stack: np.ndarray
+    own_grid: np.ndarray
+    other_grid: np.ndarray
 
 
-def _axis_tables(sur: SurrogateModel, k: int, part: str, other: float) -> np.ndarray:
-    """(mean, unit std, run std) of feature ``k`` on ``part``'s own grid, the other part's
-    fraction at ``other`` (linear between the other grid's nodes, as the bilinear tables)."""
-    stack = np.stack([sur.mean[k], sur.unit_std[k], sur.run_std[k]])  # (3, n_crack, n_wear)
-    other_grid = sur.wear_grid if part == "spring" else sur.crack_grid
-    j = min(max(int(np.searchsorted(other_grid, other, side="right")) - 1, 0), other_grid.size - 2)
-    t = (other - other_grid[j]) / (other_grid[j + 1] - other_grid[j])
-    if part == "spring":
-        return stack[:, :, j] * (1.0 - t) + stack[:, :, j + 1] * t
-    return stack[:, j, :] * (1.0 - t) + stack[:, j + 1, :] * t
+@njit(cache=True)
+def _cell_of(grid: np.ndarray, v: float) -> tuple[int, float]:
+    """Cell j of ``grid`` holding ``v`` (clamped to [grid[0], grid[-1]]) and its fraction in it,
+    as the surrogate's bilinear tables (``bisect_right - 1``, the last cell at the end)."""
+    v = min(max(v, grid[0]), grid[-1])
+    j = 0
+    while j < grid.size - 2 and grid[j + 1] <= v:
+        j += 1
+    return j, (v - grid[j]) / (grid[j + 1] - grid[j])
 
 
-def _effect_mean(
-    sur: SurrogateModel, k: int, part: str, own: float, other: float, z: float
+@njit(cache=True)
+def _bilinear_at(stack: np.ndarray, q: int, i: int, ti: float, j: int, tj: float) -> float:
+    return (
+        stack[q, i, j] * ((1 - ti) * (1 - tj))
+        + stack[q, i + 1, j] * (ti * (1 - tj))
+        + stack[q, i, j + 1] * ((1 - ti) * tj)
+        + stack[q, i + 1, j + 1] * (ti * tj)
+    )
+
+
+@njit(cache=True)
+def _effect_at(
+    stack: np.ndarray, own_grid: np.ndarray, other_grid: np.ndarray, own: float, other: float,
+    z: float,
+) -> float:  # fmt: skip
+    """``mu + tau z`` of the tables at (own, other) fractions."""
+    i, ti = _cell_of(own_grid, own)
+    j, tj = _cell_of(other_grid, other)
+    return _bilinear_at(stack, 0, i, ti, j, tj) + _bilinear_at(stack, 1, i, ti, j, tj) * z
+
+
+@njit(cache=True)
+def _effect_likelihood(
+    y: float,
+    m: float,
+    x: np.ndarray,
+    w: np.ndarray,
+    critical: float,
+    stack: np.ndarray,
+    own_grid: np.ndarray,
+    other_grid: np.ndarray,
+    other: float,
+    noise_scale: float,
+    extra_var: float,
+    z_mean: np.ndarray,
+    z_var: np.ndarray,
+    log_lik: np.ndarray,
 ) -> float:
-    """``mu + tau z`` of feature ``k`` with ``part`` at fraction ``own``, the other at ``other``."""
-    c, w = (own, other) if part == "spring" else (other, own)
-    t = sur.tables_at(c, w)
-    return float(t[0, k] + t[1, k] * z)
+    """Per particle: ``mu``, ``tau``, ``sigma`` of the tables at its own severity
+    (``x / critical`` clipped to [0, 1]) and the other part at ``other``; predictive density
+    of ``y`` (the mean of ``m`` runs, extra variance ``extra_var``) into ``log_lik`` and the
+    effect conditioned on it (:func:`prognostics.random_effect.random_effect_update`).
+    Returns the weighted mean effect ``sum w_i tau_i m_i`` before conditioning."""
+    n = x.size
+    j, tj = _cell_of(other_grid, other)
+    mu = np.empty(n)
+    tau = np.empty(n)
+    var = np.empty(n)
+    shift = 0.0
+    for p in range(n):
+        i, ti = _cell_of(own_grid, min(max(x[p] / critical, 0.0), 1.0))
+        mu[p] = _bilinear_at(stack, 0, i, ti, j, tj)
+        tau[p] = _bilinear_at(stack, 1, i, ti, j, tj)
+        run = _bilinear_at(stack, 2, i, ti, j, tj) * noise_scale
+        var[p] = run * run / m + extra_var
+        shift += w[p] * tau[p] * z_mean[p]
+    random_effect_update(y, mu, tau, var, z_mean, z_var, log_lik)
+    return shift
 
 
 def _mixture_moments(w: np.ndarray, mean: np.ndarray, var: np.ndarray) -> tuple[float, float]:
