@@ -119,7 +119,7 @@ class HealthMonitor:
     ) -> None:
         self.params, self.scenario, self.cal, self.sur = params, scenario, calibration, surrogate
         self.rng = rng
-        names = getattr(scenario, "flight_feature_names", ())
+        names = scenario.flight_feature_names
         #: in-flight features the filters learn from (``LEARNING_FEATURES`` measured), in the
         #: order of ``flight_sum``; empty: the filters learn at tests only (v0, v1)
         self.learning = tuple(f for f in LEARNING_FEATURES if f in names)
@@ -205,7 +205,7 @@ class HealthMonitor:
         self.pending = {"spring": 0, "seal": 0}
         self._ageing: dict[str, AgeingRul] = {}
         #: flights per in-flight update (``Scenario.flight_update_flights``)
-        self.flight_interval = int(getattr(scenario, "flight_update_flights", 1))
+        self.flight_interval = int(scenario.flight_update_flights)
         #: sum of each learning feature over the flights of the batch under way (SI units)
         self.flight_sum = np.zeros(len(self.learning))
         #: flights in that sum (aborted flights, NaN features, are not counted)
