@@ -13,8 +13,9 @@ turns them into RUL summaries. It sees only features, never the truth.
   tolerances). After a spring pair is fitted, the first ``BASELINE_TESTS`` tests estimate
   that offset (feature minus the model mean at the current estimate) and are not used by the
   filters; later tests use the offset-corrected value with the run-to-run noise.
-* **Event-driven prediction**: a flight only counts usage. The filters are predicted over
-  all the flights since their last update in one step, at the next test (``scheme="exact"``:
+* **Event-driven prediction**: a flight only counts usage (v0, v1; with I8, I9 below). The
+  filters are predicted over all the flights since their last update in one step, at the
+  next test (``scheme="exact"``:
   the damage integral, so one step of k flights lands where k flights would without noise;
   process noise with variance k times the per-flight one). Between tests the RUL summary of
   the frozen cloud is aged by the flights flown (:class:`prognostics.rul_ageing.AgeingRul`,
@@ -336,7 +337,8 @@ class HealthMonitor:
         """One flight of usage for both filters, and its learning features into the batch.
 
         I2, I6 and I7 are not fed to the filters: I2 and I6 do not respond to the faults in
-        this physics, and I7 moves by less than its run-to-run noise at critical wear. With
+        this physics, and I7 moves by only 1.6 run-to-run sd at critical wear (I9 sees the
+        wear far earlier) and carries an installation offset. With
         I8 and I9 measured (``Scenario.flight_features``) their values are summed over the
         batch; when it holds ``flight_interval`` flights the filters learn from its mean
         (:meth:`learn_from_flights`). An aborted flight (NaN features) adds usage only.
@@ -367,10 +369,12 @@ class HealthMonitor:
         mid-batch state. Each filter is predicted to ``m // 2`` flights into the batch (the
         mean state time ``(m - 1) / 2`` rounded up: within half a flight of a life of ~10^3
         flights), updated there, and the remaining ``m - m // 2`` flights stay pending (the
-        RUL tables age by them, as between tests). The likelihood of the batch mean has the
-        run noise divided by ``sqrt(m)`` (run noise independent from flight to flight) plus
-        the variance of the installation offset's estimate and of the cross-fault
-        correction (module docstring). Nothing happens on an empty batch.
+        RUL tables age by them, as between tests). Particles past a critical value lose
+        their weight first (the parts flew). The likelihood of the batch mean has the run
+        noise divided by ``sqrt(m)`` (run noise independent from flight to flight) plus the
+        installation effect's variance (a filter state; in the ``"baseline"`` treatment the
+        offset estimate's) and the cross-fault correction's (module docstring). Nothing
+        happens on an empty batch.
         """
         m = self.flight_count
         if m == 0:
