@@ -13,8 +13,9 @@ turns them into RUL summaries. It sees only features, never the truth.
   tolerances). After a spring pair is fitted, the first ``BASELINE_TESTS`` tests estimate
   that offset (feature minus the model mean at the current estimate) and are not used by the
   filters; later tests use the offset-corrected value with the run-to-run noise.
-* **Event-driven prediction**: a flight only counts usage. The filters are predicted over
-  all the flights since their last update in one step, at the next test (``scheme="exact"``:
+* **Event-driven prediction**: a flight only counts usage (v0, v1; with I8, I9 below). The
+  filters are predicted over all the flights since their last update in one step, at the
+  next test (``scheme="exact"``:
   the damage integral, so one step of k flights lands where k flights would without noise;
   process noise with variance k times the per-flight one). Between tests the RUL summary of
   the frozen cloud is aged by the flights flown (:class:`prognostics.rul_ageing.AgeingRul`,
@@ -58,6 +59,7 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+from numba import njit
 from scipy.stats import norm
 
 from prognostics.degradation_models import linear_wear_model, paris_crack_model
@@ -118,7 +120,7 @@ class HealthMonitor:
     ) -> None:
         self.params, self.scenario, self.cal, self.sur = params, scenario, calibration, surrogate
         self.rng = rng
-        names = getattr(scenario, "flight_feature_names", ())
+        names = scenario.flight_feature_names
         #: in-flight features the filters learn from (``LEARNING_FEATURES`` measured), in the
         #: order of ``flight_sum``; empty: the filters learn at tests only (v0, v1)
         self.learning = tuple(f for f in LEARNING_FEATURES if f in names)
@@ -204,7 +206,7 @@ class HealthMonitor:
         self.pending = {"spring": 0, "seal": 0}
         self._ageing: dict[str, AgeingRul] = {}
         #: flights per in-flight update (``Scenario.flight_update_flights``)
-        self.flight_interval = int(getattr(scenario, "flight_update_flights", 1))
+        self.flight_interval = int(scenario.flight_update_flights)
         #: sum of each learning feature over the flights of the batch under way (SI units)
         self.flight_sum = np.zeros(len(self.learning))
         #: flights in that sum (aborted flights, NaN features, are not counted)
@@ -232,11 +234,19 @@ class HealthMonitor:
         parts = {"G1": "spring", "G3": "seal", **{f: LEARNING_FEATURES[f] for f in self.learning}}
         for f, part in parts.items():
             pf = self._filters[part]
+            k = self.sur.index(f)
+            stack = np.stack([self.sur.mean[k], self.sur.unit_std[k], self.sur.run_std[k]])
+            grids = (self.sur.crack_grid, self.sur.wear_grid)
+            if part == "seal":  # own severity on axis 1, the other part's on axis 2
+                stack, grids = stack.transpose(0, 2, 1), grids[::-1]
             self._effects[f] = _Effect(
                 part=part,
-                k=self.sur.index(f),
+                k=k,
                 z_mean=pf.add_auxiliary(f"{f}_z_mean", 0.0),
                 z_var=pf.add_auxiliary(f"{f}_z_var", 1.0),
+                stack=np.ascontiguousarray(stack),
+                own_grid=np.asarray(grids[0], dtype=np.float64),
+                other_grid=np.asarray(grids[1], dtype=np.float64),
             )
 
     # ------------------------------------------------------------------ events
@@ -327,7 +337,8 @@ class HealthMonitor:
         """One flight of usage for both filters, and its learning features into the batch.
 
         I2, I6 and I7 are not fed to the filters: I2 and I6 do not respond to the faults in
-        this physics, and I7 moves by less than its run-to-run noise at critical wear. With
+        this physics, and I7 moves by only 1.6 run-to-run sd at critical wear (I9 sees the
+        wear far earlier) and carries an installation offset. With
         I8 and I9 measured (``Scenario.flight_features``) their values are summed over the
         batch; when it holds ``flight_interval`` flights the filters learn from its mean
         (:meth:`learn_from_flights`). An aborted flight (NaN features) adds usage only.
@@ -358,10 +369,12 @@ class HealthMonitor:
         mid-batch state. Each filter is predicted to ``m // 2`` flights into the batch (the
         mean state time ``(m - 1) / 2`` rounded up: within half a flight of a life of ~10^3
         flights), updated there, and the remaining ``m - m // 2`` flights stay pending (the
-        RUL tables age by them, as between tests). The likelihood of the batch mean has the
-        run noise divided by ``sqrt(m)`` (run noise independent from flight to flight) plus
-        the variance of the installation offset's estimate and of the cross-fault
-        correction (module docstring). Nothing happens on an empty batch.
+        RUL tables age by them, as between tests). Particles past a critical value lose
+        their weight first (the parts flew). The likelihood of the batch mean has the run
+        noise divided by ``sqrt(m)`` (run noise independent from flight to flight) plus the
+        installation effect's variance (a filter state; in the ``"baseline"`` treatment the
+        offset estimate's) and the cross-fault correction's (module docstring). Nothing
+        happens on an empty batch.
         """
         m = self.flight_count
         if m == 0:
@@ -447,27 +460,26 @@ class HealthMonitor:
         Returns ``y`` corrected to a healthy new installation (for the detectors).
         """
         eff = self._effects[f]
-        sur, k = self.sur, eff.k
         if eff.part == "spring":
             pf, crit, own, other, other_var = self.spring_filter, self.a_fail, c_hat, w_hat, w_var
-            grid = sur.crack_grid
         else:
             pf, crit, own, other, other_var = self.seal_filter, self.w_crit, w_hat, c_hat, c_var
-            grid = sur.wear_grid
-        tables = _axis_tables(sur, k, eff.part, other)
-        frac = np.clip(pf.x / crit, 0.0, 1.0)
-        mu = np.interp(frac, grid, tables[0])
-        tau = np.interp(frac, grid, tables[1])
-        run = np.interp(frac, grid, tables[2]) * self.scenario.filter_noise_scale
+        st, g_own, g_other = eff.stack, eff.own_grid, eff.other_grid
         z_bar = float(pf.weights @ eff.z_mean)
-        slope = _slope(lambda o: _effect_mean(sur, k, eff.part, own, o, z_bar), other)
-        noise_var = run * run / m + slope * slope * other_var
-        log_lik = np.empty(frac.size)
-        random_effect_update(y, mu, tau, noise_var, eff.z_mean, eff.z_var, log_lik)
-        shift = float(pf.weights @ (tau * eff.z_mean))
-        cross = _effect_mean(sur, k, eff.part, own, other, 0.0) - _effect_mean(
-            sur, k, eff.part, own, 0.0, 0.0
+        lo, hi = max(other - _SLOPE_STEP, 0.0), min(other + _SLOPE_STEP, 1.0)
+        slope = (
+            _effect_at(st, g_own, g_other, own, hi, z_bar)
+            - _effect_at(st, g_own, g_other, own, lo, z_bar)
+        ) / (hi - lo)
+        cross = _effect_at(st, g_own, g_other, own, other, 0.0) - _effect_at(
+            st, g_own, g_other, own, 0.0, 0.0
         )
+        log_lik = np.empty(pf.n_particles)
+        shift = _effect_likelihood(
+            y, float(m), pf.x, pf.weights, crit, st, g_own, g_other, other,
+            self.scenario.filter_noise_scale, slope * slope * other_var,
+            eff.z_mean, eff.z_var, log_lik,
+        )  # fmt: skip
         pf.update_log_likelihood(log_lik)
         return y - shift - cross
 
@@ -599,34 +611,89 @@ class _FlightFeature:
 
 @dataclass(frozen=True)
 class _Effect:
-    """A feature's installation effect as filter states: its part, surrogate index, and
-    the per-particle mean and variance of its standardised effect ``z`` (``aux`` arrays)."""
+    """A feature's installation effect as filter states: its part, surrogate index, the
+    per-particle mean and variance of its standardised effect ``z`` (``aux`` arrays), and the
+    surrogate's (mean, unit std, run std) tables with the part's own severity on axis 1 and
+    the other part's on axis 2, with their grids (fractions of critical)."""
 
     part: str
     k: int
     z_mean: np.ndarray
     z_var: np.ndarray
+    stack: np.ndarray
+    own_grid: np.ndarray
+    other_grid: np.ndarray
 
 
-def _axis_tables(sur: SurrogateModel, k: int, part: str, other: float) -> np.ndarray:
-    """(mean, unit std, run std) of feature ``k`` on ``part``'s own grid, the other part's
-    fraction at ``other`` (linear between the other grid's nodes, as the bilinear tables)."""
-    stack = np.stack([sur.mean[k], sur.unit_std[k], sur.run_std[k]])  # (3, n_crack, n_wear)
-    other_grid = sur.wear_grid if part == "spring" else sur.crack_grid
-    j = min(max(int(np.searchsorted(other_grid, other, side="right")) - 1, 0), other_grid.size - 2)
-    t = (other - other_grid[j]) / (other_grid[j + 1] - other_grid[j])
-    if part == "spring":
-        return stack[:, :, j] * (1.0 - t) + stack[:, :, j + 1] * t
-    return stack[:, j, :] * (1.0 - t) + stack[:, j + 1, :] * t
+@njit(cache=True)
+def _cell_of(grid: np.ndarray, v: float) -> tuple[int, float]:
+    """Cell j of ``grid`` holding ``v`` (clamped to [grid[0], grid[-1]]) and its fraction in it,
+    as the surrogate's bilinear tables (``bisect_right - 1``, the last cell at the end)."""
+    v = min(max(v, grid[0]), grid[-1])
+    j = 0
+    while j < grid.size - 2 and grid[j + 1] <= v:
+        j += 1
+    return j, (v - grid[j]) / (grid[j + 1] - grid[j])
 
 
-def _effect_mean(
-    sur: SurrogateModel, k: int, part: str, own: float, other: float, z: float
+@njit(cache=True)
+def _bilinear_at(stack: np.ndarray, q: int, i: int, ti: float, j: int, tj: float) -> float:
+    return (
+        stack[q, i, j] * ((1 - ti) * (1 - tj))
+        + stack[q, i + 1, j] * (ti * (1 - tj))
+        + stack[q, i, j + 1] * ((1 - ti) * tj)
+        + stack[q, i + 1, j + 1] * (ti * tj)
+    )
+
+
+@njit(cache=True)
+def _effect_at(
+    stack: np.ndarray, own_grid: np.ndarray, other_grid: np.ndarray, own: float, other: float,
+    z: float,
+) -> float:  # fmt: skip
+    """``mu + tau z`` of the tables at (own, other) fractions."""
+    i, ti = _cell_of(own_grid, own)
+    j, tj = _cell_of(other_grid, other)
+    return _bilinear_at(stack, 0, i, ti, j, tj) + _bilinear_at(stack, 1, i, ti, j, tj) * z
+
+
+@njit(cache=True)
+def _effect_likelihood(
+    y: float,
+    m: float,
+    x: np.ndarray,
+    w: np.ndarray,
+    critical: float,
+    stack: np.ndarray,
+    own_grid: np.ndarray,
+    other_grid: np.ndarray,
+    other: float,
+    noise_scale: float,
+    extra_var: float,
+    z_mean: np.ndarray,
+    z_var: np.ndarray,
+    log_lik: np.ndarray,
 ) -> float:
-    """``mu + tau z`` of feature ``k`` with ``part`` at fraction ``own``, the other at ``other``."""
-    c, w = (own, other) if part == "spring" else (other, own)
-    t = sur.tables_at(c, w)
-    return float(t[0, k] + t[1, k] * z)
+    """Per particle: ``mu``, ``tau``, ``sigma`` of the tables at its own severity
+    (``x / critical`` clipped to [0, 1]) and the other part at ``other``; predictive density
+    of ``y`` (the mean of ``m`` runs, extra variance ``extra_var``) into ``log_lik`` and the
+    effect conditioned on it (:func:`prognostics.random_effect.random_effect_update`).
+    Returns the weighted mean effect ``sum w_i tau_i m_i`` before conditioning."""
+    n = x.size
+    j, tj = _cell_of(other_grid, other)
+    mu = np.empty(n)
+    tau = np.empty(n)
+    var = np.empty(n)
+    shift = 0.0
+    for p in range(n):
+        i, ti = _cell_of(own_grid, min(max(x[p] / critical, 0.0), 1.0))
+        mu[p] = _bilinear_at(stack, 0, i, ti, j, tj)
+        tau[p] = _bilinear_at(stack, 1, i, ti, j, tj)
+        run = _bilinear_at(stack, 2, i, ti, j, tj) * noise_scale
+        var[p] = run * run / m + extra_var
+        shift += w[p] * tau[p] * z_mean[p]
+    random_effect_update(y, mu, tau, var, z_mean, z_var, log_lik)
+    return shift
 
 
 def _mixture_moments(w: np.ndarray, mean: np.ndarray, var: np.ndarray) -> tuple[float, float]:
