@@ -35,6 +35,7 @@ Pipeline (:func:`run_reproduction`; the report and plots are in
 from __future__ import annotations
 
 import time
+from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -50,6 +51,7 @@ from scas_env.actuator.config import Validated, param
 from scas_env.actuator.params import ScasParams
 from scas_env.studies.campaign import CampaignConfig, run_campaign
 from scas_env.studies.campaign_table import CampaignResult, load
+from scas_env.studies.reproduction_conventions import EXCLUDED_FEATURES
 from scas_env.studies.reproduction_prognosis import (
     HealthySet,
     PathPrognosis,
@@ -164,14 +166,33 @@ def _level_runs(campaign: CampaignResult, fault: str) -> tuple[FloatArray, int]:
 
 
 # ----------------------------------------------------------------------------- selection
-def select_features(campaign: CampaignResult) -> dict[str, Any]:
-    """Redundancy, ranking and selected features per fault and condition (module doc, 2)."""
+def select_features(
+    campaign: CampaignResult, excluded: Mapping[str, str] = EXCLUDED_FEATURES
+) -> dict[str, Any]:
+    """Redundancy, ranking and selected features per fault and condition (module doc, 2).
+
+    Every feature the campaign holds is a candidate (Table 2's ten and any further in-flight
+    feature such as I8/I9) except ``excluded`` (name -> reason, reported as
+    ``out["excluded"]``; default: G2, see
+    :mod:`scas_env.studies.reproduction_conventions`).
+    """
     complexity = {k: float(v.complexity) for k, v in FEATURE_INFO.items()}
-    out: dict[str, Any] = {"redundancy": {}, "scores": {}, "pruned": {}, "selected": {}}
+    out: dict[str, Any] = {
+        "redundancy": {},
+        "scores": {},
+        "pruned": {},
+        "selected": {},
+        "excluded": dict(excluded),
+    }
+
+    def candidates(fault: str, cond: str) -> tuple[FloatArray, dict[str, FloatArray]]:
+        sev, feats = campaign.select(fault, cond)
+        return sev, {k: v for k, v in feats.items() if k not in excluded}
+
     for cond in ("ground", "flight"):
         flagged: dict[str, set[str]] = {}
         for fault in FAULTS:
-            sev, feats = campaign.select(fault, cond)
+            sev, feats = candidates(fault, cond)
             names, matrix = redundancy_matrix(feats, sev)
             corr = np.corrcoef(np.stack([feats[n] for n in names]))
             pairs = []
@@ -189,7 +210,7 @@ def select_features(campaign: CampaignResult) -> dict[str, Any]:
         pruned = sorted(set.intersection(*flagged.values()))
         out["pruned"][cond] = pruned
         for fault in FAULTS:
-            sev, feats = campaign.select(fault, cond)
+            sev, feats = candidates(fault, cond)
             pool = {k: v for k, v in feats.items() if k not in pruned}
             out["scores"][f"{fault}/{cond}"] = rank_features(pool, sev)
     ground = out["scores"]
