@@ -80,6 +80,27 @@ def paper_severity(rep: Reproduction, fault: str, value: float) -> float:
     return float(leakage_fraction(value, seal, rep.calibration.seal_critical_wear_m))
 
 
+def paper_mean(rep: Reproduction, fault: str, values: list[float]) -> float:
+    """Mean over paths of the severities in the paper's convention, each converted before
+    averaging (the leakage fraction is convex in the worn depth); NaN if any path is NaN."""
+    return float(np.mean([paper_severity(rep, fault, v) for v in values]))
+
+
+def path_detections(paths: list[PathPrognosis], variant: str) -> list[float]:
+    """Severity at the first alarm of each path (fraction of its threshold; NaN: none)."""
+    out = []
+    for p in paths:
+        i = p.variants[variant].detection_index
+        out.append(math.nan if i is None else float(p.test_severity_m[i] / p.path.threshold_m))
+    return out
+
+
+def _detected_mean(rep: Reproduction, fault: str, variant: str) -> float:
+    """Paper-convention mean over the paths of ``variant`` that detect (NaN if none)."""
+    values = [v for v in path_detections(rep.prognosis[fault], variant) if math.isfinite(v)]
+    return paper_mean(rep, fault, values) if values else math.nan
+
+
 def detection_severity(rep: Reproduction, fault: str) -> float:
     """Mean severity at detection over the campaign paths; a path that never alarms counts
     as NaN, so the mean is NaN unless every path detects (see :func:`detected_share`)."""
@@ -91,7 +112,7 @@ def detected_share(rep: Reproduction, fault: str) -> str:
     convention (:func:`paper_severity`)."""
     values = np.array(rep.detection[fault]["combined_severity_at_detection"])
     hit = values[np.isfinite(values)]
-    mean = paper_severity(rep, fault, float(hit.mean())) if hit.size else math.nan
+    mean = paper_mean(rep, fault, hit.tolist()) if hit.size else math.nan
     return f"{_fmt(mean)} ({hit.size}/{values.size} paths)"
 
 
@@ -274,7 +295,9 @@ def verdicts(rep: Reproduction) -> list[dict[str, Any]]:
                 reasons[fault],
             )
         )
-    det = {f: paper_severity(rep, f, detection_severity(rep, f)) for f in FAULTS}
+    det = {
+        f: paper_mean(rep, f, rep.detection[f]["combined_severity_at_detection"]) for f in FAULTS
+    }
     prog = {v: {f: prognosis_summary(rep.prognosis[f], v) for f in FAULTS} for v in VARIANTS}
     for fault in FAULTS:
         paper = PAPER[fault]["detect"]
@@ -284,7 +307,7 @@ def verdicts(rep: Reproduction) -> list[dict[str, Any]]:
                 f"{_NAMES[fault]}: severity at detection",
                 paper,
                 f"campaign paths {detected_share(rep, fault)}; prognosis paths "
-                f"{_fmt(paper_severity(rep, fault, detected))} "
+                f"{_fmt(_detected_mean(rep, fault, 'paper'))} "
                 f"({prog['paper'][fault]['detected_paths']:.0%} of paths)",
                 math.isfinite(det[fault]) and abs(det[fault] - paper) <= DETECTION_TOLERANCE,
                 "population baseline: unit-to-unit scatter of G3 (spring tolerances, fluid "
@@ -296,7 +319,7 @@ def verdicts(rep: Reproduction) -> list[dict[str, Any]]:
     for fault in FAULTS:
         rows.append(_installation_detection_row(rep, fault, prog["installation"][fault]))
     inst = {
-        f: paper_severity(rep, f, prog["installation"][f]["severity_at_detection"]) for f in FAULTS
+        f: paper_mean(rep, f, path_detections(rep.prognosis[f], "installation")) for f in FAULTS
     }
     rows.append(_earlier_row(f" {_SUFFIX['installation']}", inst["wear"], inst["crack"], rep))
     for variant in VARIANTS:
@@ -367,13 +390,13 @@ def _installation_detection_row(rep: Reproduction, fault: str, s: dict[str, floa
     k = int(p0.reference["n_reference"])
     scale, unit = _scale(p0.feature)
     run = rep.healthy.run_std(p0.feature) * scale
-    value = paper_severity(rep, fault, s["severity_at_detection"])
+    value = paper_mean(rep, fault, path_detections(rep.prognosis[fault], "installation"))
     early = math.isfinite(value) and value < paper - DETECTION_TOLERANCE
     detected = s["severity_at_detection_detected"]
     return _row(
         f"{_NAMES[fault]}: severity at detection {_SUFFIX['installation']}",
         paper,
-        f"prognosis paths {_fmt(paper_severity(rep, fault, detected))} "
+        f"prognosis paths {_fmt(_detected_mean(rep, fault, 'installation'))} "
         f"({s['detected_paths']:.0%} of paths)",
         math.isfinite(value) and abs(value - paper) <= DETECTION_TOLERANCE,
         f"{p0.feature} ({INSTALLATION_EFFECT[p0.feature]}) from the first {k} tests, healthy "
