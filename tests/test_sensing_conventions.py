@@ -77,3 +77,31 @@ def test_paper_preset_applies_each_override_and_nothing_else() -> None:
 def test_unknown_preset_is_refused() -> None:
     with pytest.raises(ValueError, match="preset = 'nope'"):
         preset_params("nope")
+
+
+def _report(ours: str, verdict: str, claim: str = "seal wear: severity at detection") -> dict:
+    row = {"claim": claim, "paper": 0.09, "ours": ours, "verdict": verdict}
+    return {"verdicts": [{**row, "ours_worn_depth": "prognosis 0.51"}]}
+
+
+def test_preset_table_has_a_column_per_preset(tmp_path) -> None:
+    import json
+
+    from scas_env.studies.reproduction_presets import preset_table, read_reports
+
+    paths = {}
+    for name, ours, verdict in (("realistic", "0.27", "differs"), ("paper", "0.10", "holds")):
+        paths[name] = tmp_path / f"{name}.json"
+        paths[name].write_text(json.dumps(_report(ours, verdict)))
+    lines = preset_table(read_reports(paths)).splitlines()
+    assert (
+        lines[0] == "| result | paper | realistic | realistic: verdict | paper | paper: verdict |"
+    )
+    assert lines[2] == (
+        "| seal wear: severity at detection | 0.09 | 0.27 [worn depth: prognosis 0.51] | "
+        "differs | 0.10 [worn depth: prognosis 0.51] | holds |"
+    )
+    paths["other"] = tmp_path / "other.json"
+    paths["other"].write_text(json.dumps(_report("x", "holds", claim="another claim")))
+    with pytest.raises(ValueError, match="different claims"):
+        read_reports(paths)
