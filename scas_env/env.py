@@ -18,7 +18,7 @@ from scas_env.dashboard import DashboardRenderer
 from scas_env.fleet_state import PARTS, REWARD_TERMS, FleetState
 from scas_env.info import StepInfo, build_info
 from scas_env.monitor import HealthMonitor
-from scas_env.observation import FEATURES, ObservationBuilder
+from scas_env.observation import ObservationBuilder
 from scas_env.scenario import Scenario
 from scas_env.world import ActuatorWorld
 
@@ -472,7 +472,7 @@ class ScasMaintenanceEnv(gym.Env):
         rul = fleet.true_rul()
         obs = self.builder.observe(fleet, rul)
         obs = {k: v[0] for k, v in obs.items()} if isinstance(obs, dict) else obs[0]
-        return obs, build_info(fleet, rul, FEATURES, row=0)
+        return obs, build_info(fleet, rul, self.builder.features, row=0)
 
 
 def new_fleet_state(env: ScasMaintenanceEnv, n: int) -> FleetState:
@@ -481,7 +481,7 @@ def new_fleet_state(env: ScasMaintenanceEnv, n: int) -> FleetState:
         n,
         n_unit_features=len(env.surrogate.features),
         n_particles=env.scenario.n_particles,
-        n_features=len(FEATURES),
+        n_features=len(env.builder.features),
         seal_critical_m=env.calibration.seal_critical_wear_m,
         kernel_tables=env.world.kernel_tables,
     )

@@ -34,8 +34,7 @@ from scas_env.block_draws import DEFAULT_BLOCK
 from scas_env.env import REWARD_TERMS, ScasMaintenanceEnv, new_fleet_state
 from scas_env.fleet_kernels import surrogate_flights
 from scas_env.info import build_info
-from scas_env.observation import FEATURES
-from scas_env.world import FLIGHT_FEATURES, PARTS
+from scas_env.world import PARTS
 
 _STREAMS = ("measure", "degradation")
 
@@ -109,16 +108,19 @@ class ScasMaintenanceVectorEnv(VectorEnv):
         self._terms = self.fleet.terms
         #: true RUL thrown away by each actuator's preventive replacement this step (0: none)
         self._wasted_now = self.fleet.wasted_now
+        n_flight = len(first.world.flight_features)
         self._scratch = {
             "new": np.empty((2, n)),
-            "feats": np.empty((n, len(FLIGHT_FEATURES))),
+            "feats": np.empty((n, n_flight)),
             "failed": np.zeros((n, 2), dtype=np.bool_),
-            "meas": np.empty((n, len(FLIGHT_FEATURES))),
+            "meas": np.empty((n, n_flight)),
             "deg": np.empty((n, 2)),
         }
         self._builder = first.builder
         self._every_flight = first.scenario.preflight == "every_flight"
         self._holds = first.limits is not None
+        # filters that learn from in-flight features: every flight goes through its env
+        self._learns_in_flight = first.scenario.learns_in_flight
 
     # ------------------------------------------------------------------ copies
     def __setstate__(self, state: dict[str, Any]) -> None:
@@ -185,7 +187,7 @@ class ScasMaintenanceVectorEnv(VectorEnv):
         # the fast path flies untested flights; a test (asked for, or before every flight),
         # a hold by a failed airworthiness test, a replacement or a reset go the slow path
         fly = (act == 0) & ~grounded & ~resetting
-        if self._every_flight:
+        if self._every_flight or self._learns_in_flight:
             fly[:] = False
         elif self._holds:
             fly &= ~a["no_go"]
@@ -229,7 +231,7 @@ class ScasMaintenanceVectorEnv(VectorEnv):
     def _fly(self, idx: np.ndarray) -> np.ndarray:
         """Candidate flights of ``idx`` (draws peeked); commits those that did not fail."""
         a, sc = self.a, self._scratch
-        n_meas = len(FLIGHT_FEATURES)
+        n_meas = self._scratch["meas"].shape[1]
         for s, k in (("measure", n_meas), ("degradation", 2)):
             short = idx[self._pos[s][idx, 0] + k > DEFAULT_BLOCK]
             for e in short:
@@ -257,7 +259,7 @@ class ScasMaintenanceVectorEnv(VectorEnv):
         return self._builder.observe(self.fleet, rul)
 
     def _info(self, rul: np.ndarray) -> dict[str, Any]:
-        return with_info_masks(build_info(self.fleet, rul, FEATURES), self.num_envs)
+        return with_info_masks(build_info(self.fleet, rul, self._builder.features), self.num_envs)
 
     def close_extras(self, **kwargs: Any) -> None:
         for env in self.envs:

@@ -52,6 +52,8 @@ from scas_env.fleet_state import PARTS
 from scas_env.scenario import Scenario
 
 GROUND_FEATURES = ("G1", "G3")
+#: The in-flight features of the default scenario (v0, v1); ``Scenario.flight_features``
+#: chooses the set a world measures (:attr:`ActuatorWorld.flight_features`).
 FLIGHT_FEATURES = ("I2", "I6", "I7")
 
 
@@ -86,8 +88,13 @@ class ActuatorWorld:
         self._table = paris_crack_model(
             calibration.crack_depth_m, calibration.crack_rate_m_per_flight
         )
-        self._flight_feature_idx = [surrogate.index(f) for f in FLIGHT_FEATURES]
+        #: in-flight features measured every flight (``Scenario.flight_features``)
+        self.flight_features = scenario.flight_feature_names
+        self._flight_feature_idx = [surrogate.index(f) for f in self.flight_features]
         self._ground_feature_idx = [surrogate.index(f) for f in GROUND_FEATURES]
+        # installation effects are drawn for the surrogate's features up to the last one this
+        # world measures (v0 and v1 draw the five they drew before I8 and I9 existed)
+        self._unit_z_draws = 1 + max(self._flight_feature_idx + self._ground_feature_idx)
         self.unit: UnitSample | None = None
         self.crack_m = 0.0
         self.wear_m = 0.0
@@ -98,9 +105,9 @@ class ActuatorWorld:
             "envs": np.zeros(1, dtype=np.int64),
             "x": np.empty((8, 1)),
             "z": np.empty((1, len(surrogate.features))),
-            "meas": np.empty((1, len(FLIGHT_FEATURES))),
+            "meas": np.empty((1, len(self.flight_features))),
             "deg": np.empty((1, 2)),
-            "feats": np.empty((1, len(FLIGHT_FEATURES))),
+            "feats": np.empty((1, len(self.flight_features))),
             "failed": np.zeros((1, 2), dtype=np.bool_),
             "rul": np.empty((1, 2)),
         }
@@ -185,7 +192,7 @@ class ActuatorWorld:
             initial_crack_m=donor.initial_crack_m,
         )
         self.crack_m = donor.initial_crack_m if self.scenario.crack_active else 0.0
-        self.unit_z = self.surrogate.draw_unit_z(rng)
+        self.unit_z = self.surrogate.draw_unit_z(rng, self._unit_z_draws)
         if self.physics:
             self.spring_failure_m = failure_depth_from_params(
                 self.params,
@@ -265,7 +272,7 @@ class ActuatorWorld:
                 self.params.mission.flight_window_s,
                 window=self._library_window(rng),
             )
-            feats = {f: window.features[f] for f in FLIGHT_FEATURES}
+            feats = {f: window.features[f] for f in self.flight_features}
             loads = flight_loads_from_run(
                 window.run, self.params.mission.flight_duration_s, config.spring_rate_1_n_m
             )
@@ -283,7 +290,7 @@ class ActuatorWorld:
             new_wear = self.wear_m + d_wear
         else:
             sc = self._scratch
-            sc["meas"][0] = rng.standard_normal(len(FLIGHT_FEATURES))
+            sc["meas"][0] = rng.standard_normal(len(self.flight_features))
             sc["deg"][0] = degradation_rng.standard_normal(2)
             sc["z"][0] = self.unit_z
             x = sc["x"]
@@ -296,7 +303,7 @@ class ActuatorWorld:
                 x[5], x[6], sc["feats"], sc["failed"],
             )  # fmt: skip
             new_crack, new_wear = float(x[5, 0]), float(x[6, 0])
-            feats = dict(zip(FLIGHT_FEATURES, sc["feats"][0].tolist(), strict=True))
+            feats = dict(zip(self.flight_features, sc["feats"][0].tolist(), strict=True))
         failed = []
         if new_crack >= self.spring_failure_m:
             failed.append("spring")
@@ -304,7 +311,7 @@ class ActuatorWorld:
             failed.append("seal")
         self.crack_m, self.wear_m = new_crack, new_wear
         if failed:
-            feats = {f: math.nan for f in FLIGHT_FEATURES}
+            feats = {f: math.nan for f in self.flight_features}
         return FlightResult(feats, tuple(failed))
 
 
@@ -317,7 +324,7 @@ def kernel_tables(
     """Argument groups of :mod:`scas_env.fleet_kernels` for one world configuration
     (``table``: the calibrated crack-growth table)."""
     cal = calibration
-    idx = np.array([surrogate.index(f) for f in FLIGHT_FEATURES], dtype=np.int64)
+    idx = np.array([surrogate.index(f) for f in scenario.flight_feature_names], dtype=np.int64)
     stack = np.stack([surrogate.mean, surrogate.unit_std, surrogate.run_std])
     active = (bool(scenario.crack_active), bool(scenario.wear_active))
     return {

@@ -44,7 +44,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from prognostics.detection import DetectorConfig, PercentileDetector, severity_at_detection
-from prognostics.features import FEATURE_INFO
+from prognostics.features import CANDIDATE_INFO
 from prognostics.selection import FeatureScore, rank_features, redundancy_matrix, redundant_pairs
 from scas_env.actuator.calibration import Calibration, calibration_for
 from scas_env.actuator.config import Validated, param
@@ -176,7 +176,7 @@ def select_features(
     ``out["excluded"]``; default: G2, see
     :mod:`scas_env.studies.reproduction_conventions`).
     """
-    complexity = {k: float(v.complexity) for k, v in FEATURE_INFO.items()}
+    complexity = {k: float(v.complexity) for k, v in CANDIDATE_INFO.items()}
     out: dict[str, Any] = {
         "redundancy": {},
         "scores": {},
