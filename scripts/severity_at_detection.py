@@ -23,6 +23,13 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--campaign", type=Path, required=True, help="saved campaign stem")
     parser.add_argument("--paths", type=int, default=40, help="paths per fault (>= 2)")
     parser.add_argument("--seed", type=int, default=0, help="root seed (the reproduction's)")
+    parser.add_argument(
+        "--tests-per-path",
+        type=int,
+        default=None,
+        help="pre-flight tests over a nominal life (default: the reproduction's 150; about "
+        "1100 is one test per flight, the paper's test at every power-up)",
+    )
     parser.add_argument("--out", type=Path, required=True, help="output JSON")
     parser.add_argument("--overwrite", action="store_true", help="replace an existing --out")
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
@@ -38,14 +45,22 @@ def main(argv: list[str] | None = None) -> int:
     check_out_file(parser, args.out, args.overwrite)
     params = load_params(parser, args)
 
-    from scas_env.studies.campaign_table import load
     from scas_env.studies.reproduction import ReproductionConfig
+
+    config = ReproductionConfig()
+    if args.tests_per_path is not None:
+        try:
+            config = config.replace(tests_per_path=args.tests_per_path)
+        except ValueError as exc:
+            parser.error(f"--tests-per-path: {exc}")
+
+    from scas_env.studies.campaign_table import load
     from scas_env.studies.reproduction_detection import format_targets, installation_detection
 
     result = installation_detection(
         params,
         load(args.campaign),
-        ReproductionConfig(),
+        config,
         seed=args.seed,
         n_paths=args.paths,
         progress=not args.no_progress,

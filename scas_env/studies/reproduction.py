@@ -15,8 +15,12 @@ Pipeline (:func:`run_reproduction`; the report and plots are in
    pool is shared by both faults, so a feature is pruned only when redundant in every mode.
    Selected features: the **ground** feature is the one pre-flight feature serving both
    faults (as the paper's G3): the maximin over the faults of accuracy x |Spearman|; the
-   **flight** feature is the top of each fault's ranking, flagged non-responsive when
-   |Spearman| < ``RESPONSIVE_MIN_SPEARMAN`` or SNR <= 0 dB.
+   **flight** feature is the top of each fault's ranking over all candidates (Table 2's
+   in-flight features and I8, I9), flagged non-responsive when
+   |Spearman| < ``RESPONSIVE_MIN_SPEARMAN`` or SNR <= 0 dB; ``flight_table2`` is the top
+   among Table 2's alone (the paper's pool, compared with the paper). G2 is left out of
+   every ranking (:data:`~scas_env.studies.reproduction_conventions.EXCLUDED_FEATURES`: it
+   measures no overshoot).
 3. **Detection** (§5.1): :class:`~prognostics.detection.PercentileDetector` (P95 of the
    population of healthy runs of both modes, 95% of a running window of W values beyond it)
    on campaign degradation paths: path p takes, at each level in order, runs
@@ -44,7 +48,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from prognostics.detection import DetectorConfig, PercentileDetector, severity_at_detection
-from prognostics.features import CANDIDATE_INFO
+from prognostics.features import CANDIDATE_INFO, FEATURE_INFO
 from prognostics.selection import FeatureScore, rank_features, redundancy_matrix, redundant_pairs
 from scas_env.actuator.calibration import Calibration, calibration_for
 from scas_env.actuator.config import Validated, param
@@ -223,11 +227,14 @@ def select_features(
     }
     best_ground = max(merit, key=lambda k: merit[k])
     for fault in FAULTS:
-        top = out["scores"][f"{fault}/flight"][0]
+        ranking = out["scores"][f"{fault}/flight"]
+        top = ranking[0]
+        table2 = next((s.name for s in ranking if s.name in FEATURE_INFO), None)
         out["selected"][fault] = {
             "ground": best_ground,
             "ground_per_fault_top": out["scores"][f"{fault}/ground"][0].name,
             "flight": top.name,
+            "flight_table2": table2,
             "flight_responsive": bool(
                 abs(top.spearman) >= RESPONSIVE_MIN_SPEARMAN and top.snr_db > 0.0
             ),

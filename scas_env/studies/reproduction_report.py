@@ -31,9 +31,10 @@ import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
+from prognostics.features import CANDIDATE_INFO
 from prognostics.selection import plot_accuracy_sensitivity
 from scas_env.actuator.surrogate import default_surrogate
-from scas_env.studies.reproduction import FAULTS, Reproduction
+from scas_env.studies.reproduction import FAULTS, RESPONSIVE_MIN_SPEARMAN, Reproduction
 from scas_env.studies.reproduction_conventions import leakage_fraction
 from scas_env.studies.reproduction_prognosis import INSTALLATION_EFFECT, VARIANTS, PathPrognosis
 
@@ -251,23 +252,36 @@ def verdicts(rep: Reproduction) -> list[dict[str, Any]]:
                 f"per-fault ranking puts {top} first",
             )
         )
-        flight = next(s for s in sel["scores"][f"{fault}/flight"] if s.name == chosen["flight"])
-        reason = (
-            f"{flight.name}: rho={flight.spearman:.2f}, SNR={flight.snr_db:.1f} dB"
-            + ("" if chosen["flight_responsive"] else "; no in-flight feature responds")
-            + (
-                ": random-amplitude flight commands swamp the crack's small null bias"
+        scores = {s.name: s for s in sel["scores"][f"{fault}/flight"]}
+        t2 = scores[chosen["flight_table2"]]
+        t2_responds = abs(t2.spearman) >= RESPONSIVE_MIN_SPEARMAN and t2.snr_db > 0.0
+        reason = f"{t2.name}: rho={t2.spearman:.2f}, SNR={t2.snr_db:.1f} dB" + (
+            ""
+            if t2_responds
+            else (
+                "; no Table-2 in-flight feature responds: random-amplitude flight commands "
+                "swamp the crack's small null bias"
                 if fault == "crack"
-                else ": leakage barely changes the in-flight motion below critical"
+                else "; leakage barely changes the in-flight motion below critical"
             )
         )
         rows.append(
             _row(
                 f"{_NAMES[fault]}: flight feature",
                 paper["flight"],
-                chosen["flight"],
-                chosen["flight"] == paper["flight"],
+                t2.name,
+                t2.name == paper["flight"],
                 reason,
+            )
+        )
+        top = scores[chosen["flight"]]
+        rows.append(
+            _row(
+                f"{_NAMES[fault]}: an in-flight feature responds (Table 2 + I8, I9)",
+                f"yes ({paper['flight']})",
+                f"{top.name} (rho={top.spearman:.2f}, SNR={top.snr_db:.1f} dB)",
+                chosen["flight_responsive"],
+                f"winner over all candidates: {top.name}, {CANDIDATE_INFO[top.name].description}",
             )
         )
     g3 = {f: next(s for s in sel["scores"][f"{f}/ground"] if s.name == "G3") for f in FAULTS}
