@@ -32,6 +32,11 @@ def main(argv: list[str] | None = None) -> int:
     )
     parser.add_argument("--out", type=Path, required=True, help="output JSON")
     parser.add_argument("--overwrite", action="store_true", help="replace an existing --out")
+    parser.add_argument(
+        "--flight",
+        action="store_true",
+        help="also detect with each fault's in-flight winner (I8/I9), one window per test",
+    )
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
     add_params_arg(parser)
     args = parser.parse_args(argv)
@@ -63,6 +68,7 @@ def main(argv: list[str] | None = None) -> int:
         config,
         seed=args.seed,
         n_paths=args.paths,
+        flight=args.flight,
         progress=not args.no_progress,
     )
     command = " ".join([Path(sys.argv[0]).name, *sys.argv[1:]])

@@ -296,3 +296,17 @@ def test_detection_study_reproduces_the_prognosis_paths(quick_reproduction) -> N
         got = study[fault]["depth_fraction"][0]
         assert (math.isnan(expected) and math.isnan(got)) or got == pytest.approx(expected)
         assert study[fault]["feature"] == rep.selection["selected"][fault]["ground_per_fault_top"]
+
+
+@pytest.mark.slow
+def test_detection_study_in_flight_keeps_the_ground_result(quick_reproduction) -> None:
+    # the in-flight detection draws from its own generators: the ground result is unchanged
+    rep = quick_reproduction
+    kwargs = {"seed": rep.seed, "n_paths": 1}
+    ground = installation_detection(ScasParams(), rep.campaign, rep.config, **kwargs)
+    both = installation_detection(ScasParams(), rep.campaign, rep.config, flight=True, **kwargs)
+    for fault in FAULTS:
+        assert both[fault]["depth_fraction"] == ground[fault]["depth_fraction"]
+        assert both[fault]["flight_feature"] == rep.selection["selected"][fault]["flight"]
+        value = both[fault]["flight_depth_fraction"][0]
+        assert math.isnan(value) or 0.0 <= value <= 1.0
