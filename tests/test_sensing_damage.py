@@ -137,3 +137,23 @@ def test_shipped_whole_flight_scatter_is_reproduced_by_the_physics() -> None:
     )
     np.testing.assert_allclose(fresh.crack_cv, SHIPPED.crack_cv_whole_flight, rtol=1e-9)
     assert fresh.wear_cv == pytest.approx(SHIPPED.wear_cv_whole_flight, rel=1e-9)
+
+
+def test_whole_flight_cv_interpolates_in_log_depth_like_the_window_cv() -> None:
+    grid = SHIPPED.crack_cv_depth_m
+    np.testing.assert_allclose(
+        SHIPPED.crack_cv_whole_flight_at(grid), SHIPPED.crack_cv_whole_flight, rtol=1e-12
+    )
+    mid = np.sqrt(grid[0] * grid[1])  # geometric midpoint: the mean of the two ends
+    expected = 0.5 * (SHIPPED.crack_cv_whole_flight[0] + SHIPPED.crack_cv_whole_flight[1])
+    assert float(SHIPPED.crack_cv_whole_flight_at(mid)) == pytest.approx(expected, rel=1e-12)
+    bare = Calibration(
+        **{
+            **SHIPPED.to_dict(),
+            "whole_flights": 0,
+            "crack_cv_whole_flight": None,
+            "wear_cv_whole_flight": None,
+        }
+    )
+    with pytest.raises(ValueError, match="no whole-flight scatter"):
+        bare.crack_cv_whole_flight_at(1e-4)

@@ -207,6 +207,16 @@ class Calibration:
         """Flight-to-flight CV of the crack increment at ``depth_m`` (log-depth interpolation)."""
         return np.interp(np.log(depth_m), np.log(self.crack_cv_depth_m), self.crack_cv)
 
+    def crack_cv_whole_flight_at(self, depth_m: float | FloatArray) -> FloatArray:
+        """Whole-flight CV of the crack increment at ``depth_m`` (log-depth interpolation);
+        ``ValueError`` if this calibration has no whole-flight fields (``whole_flights = 0``)."""
+        if self.crack_cv_whole_flight is None:
+            raise ValueError(
+                "this calibration has no whole-flight scatter (whole_flights = 0): rebuild it "
+                "with build_calibration(..., whole_flights=40)"
+            )
+        return np.interp(np.log(depth_m), np.log(self.crack_cv_depth_m), self.crack_cv_whole_flight)
+
     def to_dict(self) -> dict:
         out = asdict(self)
         for key, value in out.items():
