@@ -152,12 +152,15 @@ class HealthMonitor:
         rate_a0 = float(
             np.interp(a0, calibration.crack_depth_m, calibration.crack_rate_m_per_flight)
         )
+        # flight-to-flight growth scatter the world grows with (Scenario.damage_scatter)
+        crack_cvs, wear_cv = calibration.flight_scatter(scenario.damage_scatter)
+        crack_cv_a0 = float(np.interp(np.log(a0), np.log(calibration.crack_cv_depth_m), crack_cvs))
         self.spring_filter = ParticleFilter(
             paris_crack_model(
                 calibration.crack_depth_m,
                 bias * calibration.crack_rate_m_per_flight,
-                process_noise_std_m=0.0 if states else float(calibration.crack_cv_at(a0)) * rate_a0,
-                damage_noise_cv=float(calibration.crack_cv_at(a0)) if states else 0.0,
+                process_noise_std_m=0.0 if states else crack_cv_a0 * rate_a0,
+                damage_noise_cv=crack_cv_a0 if states else 0.0,
                 log_theta_noise_std=STATES_THETA_WALK if states else THETA_WALK,
                 scheme="exact",
             ),
@@ -168,10 +171,8 @@ class HealthMonitor:
         self.seal_filter = ParticleFilter(
             linear_wear_model(
                 bias * calibration.wear_rate_m_per_flight,
-                process_noise_std=0.0
-                if states
-                else calibration.wear_cv * calibration.wear_rate_m_per_flight,
-                damage_noise_cv=calibration.wear_cv if states else 0.0,
+                process_noise_std=0.0 if states else wear_cv * calibration.wear_rate_m_per_flight,
+                damage_noise_cv=wear_cv if states else 0.0,
                 log_theta_noise_std=STATES_THETA_WALK if states else THETA_WALK,
             ),
             self.g3_model,

@@ -117,6 +117,7 @@ class ActuatorWorld:
         self.spring_failure_m = calibration.spring_failure_depth_m
         self.unit_z = np.zeros(len(surrogate.features))
         self.kernel_tables = kernel_tables(calibration, surrogate, scenario, self._table)
+        self._wear_cv = calibration.flight_scatter(scenario.damage_scatter)[1]
         self.per_part = scenario.degradation_draws == "per_part"
         #: per-part growth factor streams (``"per_part"``), and the storage rows a vector
         #: env lends them (name -> (values, position), as ``ScasMaintenanceEnv.buffer_storage``)
@@ -318,7 +319,7 @@ class ActuatorWorld:
             else:
                 k = wear_flights_to_failure(
                     float(state[0]), cal.wear_rate_m_per_flight * self.wear_multiplier,
-                    float(cal.wear_cv), cal.seal_critical_wear_m, z, state,
+                    self._wear_cv, cal.seal_critical_wear_m, z, state,
                 )  # fmt: skip
             if k > 0:
                 return float(flown + k)
@@ -459,6 +460,7 @@ def kernel_tables(
     """Argument groups of :mod:`scas_env.fleet_kernels` for one world configuration
     (``table``: the calibrated crack-growth table)."""
     cal = calibration
+    crack_cv, wear_cv = cal.flight_scatter(scenario.damage_scatter)
     idx = np.array([surrogate.index(f) for f in scenario.flight_feature_names], dtype=np.int64)
     stack = np.stack([surrogate.mean, surrogate.unit_std, surrogate.run_std])
     active = (bool(scenario.crack_active), bool(scenario.wear_active))
@@ -467,9 +469,9 @@ def kernel_tables(
         "damage": table.table_args,
         "flight_consts": (
             np.log(cal.crack_cv_depth_m),
-            np.asarray(cal.crack_cv, dtype=np.float64),
+            np.asarray(crack_cv, dtype=np.float64),
             float(cal.crack_dormant_below_m),
-            float(cal.wear_cv),
+            wear_cv,
             float(cal.wear_rate_m_per_flight),
             float(cal.seal_critical_wear_m),
             *active,

@@ -111,3 +111,23 @@ def test_v2_passes_the_gymnasium_and_sb3_checkers() -> None:
         warnings.simplefilter("error")
         gym_check_env(ScasMaintenanceEnv(**V2_KWARGS, episode_slots=50), skip_render_check=True)
         sb3_check_env(ScasMaintenanceEnv(**V2_KWARGS, episode_slots=50), warn=True)
+
+
+def test_whole_flight_scatter_grows_parts_with_the_calibrated_cv() -> None:
+    # the world's per-flight wear factor has the calibration's whole-flight CV (v2) or the
+    # window CV (v0, v1): the sample CV of many factors of one part's stream matches it
+    from scas_env import V2_KWARGS
+
+    for scatter in ("window", "whole_flight"):
+        env = ScasMaintenanceEnv(**{**V2_KWARGS, "damage_scatter": scatter, "crack_active": 0})
+        env.reset(seed=1)
+        world = env.world
+        expected = env.calibration.flight_scatter(scatter)[1]
+        steps = []
+        for _ in range(400):
+            before = world.wear_m
+            world.fly(np.random.default_rng(0), None)
+            steps.append(world.wear_m - before)
+        cv = np.std(steps, ddof=1) / np.mean(steps)
+        # sample CV of 400 lognormal factors: standard error about cv / sqrt(2 * 400)
+        assert abs(cv - expected) < 4 * expected / np.sqrt(800), scatter

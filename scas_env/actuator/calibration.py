@@ -217,6 +217,18 @@ class Calibration:
             )
         return np.interp(np.log(depth_m), np.log(self.crack_cv_depth_m), self.crack_cv_whole_flight)
 
+    def flight_scatter(self, source: str) -> tuple[FloatArray, float]:
+        """(crack CV at ``crack_cv_depth_m``, wear CV) of one flight's increments, from
+        ``source`` = ``"window"`` (one 20 s window scaled to the flight) or
+        ``"whole_flight"`` (whole simulated flights; ``ValueError`` if not computed)."""
+        if source == "window":
+            return self.crack_cv, float(self.wear_cv)
+        if source != "whole_flight":
+            raise ValueError(f"source = {source!r} must be 'window' or 'whole_flight'")
+        if self.crack_cv_whole_flight is None or self.wear_cv_whole_flight is None:
+            self.crack_cv_whole_flight_at(self.crack_cv_depth_m[0])  # raises with the reason
+        return self.crack_cv_whole_flight, float(self.wear_cv_whole_flight)
+
     def to_dict(self) -> dict:
         out = asdict(self)
         for key, value in out.items():
