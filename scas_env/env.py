@@ -102,9 +102,9 @@ class ScasMaintenanceEnv(gym.Env):
     (seals) every ``flight_update_flights`` flights (docs/beliefs.md). Between updates the
     RUL entries are those of the last update aged by the flights flown since (each
     particle's RUL falls by one per flight; ``scas_env.monitor``). Feature values before the
-    first flight or test are the healthy surrogate means. RUL entries saturate at ``rul_cap_flights``; feature entries saturate at their bounds (the
-    raw values are in ``info["features"]``). ``"features"``: entries 0-6 and 13-17 (no
-    filter). ``"state"``: the truth (an oracle's view): crack fraction of critical, wear
+    first flight or test are the healthy surrogate means. RUL entries saturate at
+    ``rul_cap_flights``; feature entries saturate at their bounds (the raw values are in
+    ``info["features"]``). ``"features"``: entries 0-6 and 13-17 (no filter). ``"state"``: the truth (an oracle's view): crack fraction of critical, wear
     fraction, true spring RUL, true seal RUL (flights, capped), spring age, seal age,
     downtime. ``"dict"``: a ``Dict`` of all of the above.
 
