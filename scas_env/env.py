@@ -97,16 +97,16 @@ class ScasMaintenanceEnv(gym.Env):
     | 17 | downtime | slots | [0, max] | slots still to spend on the ground |
 
     v2 (``flight_features="I2,I6,I7,I8,I9"``) adds I8 (uA, mean(i - i_h): the crack's DC
-    null-bias current) and I9 (-, rms(i)/rms(i_h): seal wear) after I7, ``Box(20,)``. In v0
-    and v1 the filters learn at tests only; in v2 they also learn from I8 (spring) and I9
-    (seals) every ``flight_update_flights`` flights (docs/beliefs.md). Between updates the
-    RUL entries are those of the last update aged by the flights flown since (each
-    particle's RUL falls by one per flight; ``scas_env.monitor``). Feature values before the
-    first flight or test are the healthy surrogate means. RUL entries saturate at
-    ``rul_cap_flights``; feature entries saturate at their bounds (the raw values are in
-    ``info["features"]``). ``"features"``: entries 0-6 and 13-17 (no filter). ``"state"``: the truth (an oracle's view): crack fraction of critical, wear
-    fraction, true spring RUL, true seal RUL (flights, capped), spring age, seal age,
-    downtime. ``"dict"``: a ``Dict`` of all of the above.
+    null-bias current) and I9 (-, rms(i)/rms(i_h): seal wear) after I7, ``Box(20,)``. In v0 and
+    v1 the filters learn at tests only; in v2 they also learn from I8 (spring) and I9 (seals)
+    every ``flight_update_flights`` flights (docs/beliefs.md). Between updates the RUL entries
+    are those of the last update aged by the flights flown since (each particle's RUL falls by
+    one per flight; ``scas_env.monitor``). Feature values before the first flight or test are
+    the healthy surrogate means. RUL entries saturate at ``rul_cap_flights``; feature entries
+    saturate at their bounds (the raw values are in ``info["features"]``). ``"features"``:
+    entries 0-6 and 13-17 (no filter). ``"state"``: the truth (an oracle's view): crack fraction
+    of critical, wear fraction, true spring RUL, true seal RUL (flights, capped), spring age,
+    seal age, downtime. ``"dict"``: a ``Dict`` of all of the above.
 
     ## Rewards
 
