@@ -4,15 +4,19 @@ At every sensing level (a sensing variant of the design: its sensor noise, its p
 tolerances and its own feature surrogate, built by
 :mod:`scas_env.studies.sensing_variants`; given here as env keywords) the same nested
 families of the value ladder (:data:`SWEPT`: ``features`` and ``filter``) are re-tuned with
-the same budget and training seeds (:func:`policies.tuning.tune_families`) and run on the
+the same budget and training seeds (:func:`policies.tuning.tune_family`, each starting
+from the tuned age rule's point) and run on the
 same held-out episodes as the tuned age rule. The rules compare features with the healthy
 population of the level's own surrogate (``reference``,
 :func:`policies.nested.surrogate_reference`).
 
-* **Reference**: the tuned age rule reads ages only. It is tuned once per degradation (the
-  calibration): with the degradation held fixed across levels (the variants' default) its
-  held-out episodes are the same at every level, and it is still run at every level so that
-  each value is a paired difference on that level's own env.
+* **Reference**: the tuned age rule reads ages only. It is tuned and run on the held-out
+  episodes once per degradation (the calibration): with the degradation held fixed across
+  levels (the variants' default) its held-out episodes are the same at every level (tested
+  against a run on a variant's own env), so its rows are shared by the levels and each value
+  is a paired difference on the same episodes.
+* **Work**: the (level, family) tunings of a replicate run in one pool of workers, one task
+  each; the held-out runs use :func:`policies.benchmark.run_benchmark` per level.
 * **Value** at a level: the paired reward difference ``family - age`` per held-out episode
   (USD per episode) with its t-interval, p-value and minimum detectable difference
   (:func:`policies.benchmark_stats.paired_comparison`).
@@ -50,9 +54,11 @@ from policies.tuning import (
     HELD_OUT_SEED,
     SAMPLER_SEED,
     TRAIN_SEED,
+    Family,
     TuningResult,
-    tune_families,
+    tune_family,
 )
+from scas_env.parallel import map_chunks
 
 #: The nested families re-tuned at every sensing level (they read the measurements).
 SWEPT: tuple[str, ...] = ("features", "filter")
@@ -124,6 +130,18 @@ def _level_families(families: Sequence[str], kwargs: Mapping[str, Any]) -> dict[
     return fams
 
 
+def _tune_task(
+    settings: Mapping[str, Any],
+    kwargs: Mapping[str, Mapping[str, Any]],
+    chunk: Sequence[tuple[str, Family, Mapping[str, Any]]],
+) -> list[TuningResult]:
+    """Worker: tune each (level, family, age point) of ``chunk`` on the level's env."""
+    return [
+        tune_family(fam, age_params=age, env_kwargs=kwargs[level], **settings)
+        for level, fam, age in chunk
+    ]
+
+
 def run_sensing_sweep(
     levels: Mapping[str, Mapping[str, Any]],
     *,
@@ -164,43 +182,64 @@ def run_sensing_sweep(
     t0 = time.perf_counter()
     timings = {"tuning_s": 0.0, "held_out_s": 0.0}
     size = {"trials": trials, "episodes": train_episodes, "slots": slots}
+    kwargs = {level: {**base, **dict(kw)} for level, kw in levels.items()}
+    keys = {level: _degradation_key(kw) for level, kw in kwargs.items()}
     tuning: dict[str, dict[str, TuningResult]] = {}
     rows: list[dict[str, Any]] = []
     for r in range(replicates):
         train_seed, sampler_seed = replicate_seeds(r)
+        seeds = {"train_seed": train_seed, "sampler_seed": sampler_seed}
+        t = time.perf_counter()
+        # the age rule: once per degradation (it reads ages only), in this process
         ages: dict[str, TuningResult] = {}
-        for level, kw in levels.items():
-            kwargs = {**base, **dict(kw)}
-            key = _degradation_key(kwargs)
-            t = time.perf_counter()
-            res = tune_families(
-                [REFERENCE, *families],
-                **size,
-                n_workers=n_workers,
-                progress=progress,
-                families=_level_families(families, kw),
-                env_kwargs=kwargs,
-                age=ages.get(key),
-                train_seed=train_seed,
-                sampler_seed=sampler_seed,
-            )
-            ages.setdefault(key, res[REFERENCE])
-            timings["tuning_s"] += time.perf_counter() - t
-            tuning[f"{r}|{level}"] = res
-            specs = [PolicySpec(FAMILIES[a].policy, res[a].best_params, label=a) for a in res]
-            t = time.perf_counter()
+        for level, key in keys.items():
+            if key not in ages:
+                ages[key] = tune_family(
+                    FAMILIES[REFERENCE], **size, **seeds, env_kwargs=kwargs[level]
+                )
+        # every (level, family) in one pool of workers
+        tasks = [
+            (level, fam, ages[keys[level]].best_params)
+            for level in levels
+            for fam in _level_families(families, levels[level]).values()
+            if fam.label != REFERENCE
+        ]
+        settings = {**size, **seeds}
+        tuned = map_chunks(
+            _tune_task,
+            (settings, kwargs),
+            tasks,
+            n_workers=n_workers,
+            chunk_size=1,
+            progress=progress,
+            desc=f"tuning (replicate {r})",
+        )
+        for level in levels:
+            tuning[f"{r}|{level}"] = {REFERENCE: ages[keys[level]]}
+        for (level, fam, _), res in zip(tasks, tuned, strict=True):
+            tuning[f"{r}|{level}"][fam.label] = res
+        timings["tuning_s"] += time.perf_counter() - t
+        t = time.perf_counter()
+        # held-out: the age rule once per degradation (its episodes do not depend on the
+        # sensing: tested), the families at every level, all on HELD_OUT_SEED
+        reference_rows: dict[str, list[dict[str, Any]]] = {}
+        for level in levels:
+            res = tuning[f"{r}|{level}"]
+            arms = [a for a in res if a != REFERENCE]
+            if keys[level] not in reference_rows:
+                arms.insert(0, REFERENCE)
+            specs = [PolicySpec(FAMILIES[a].policy, res[a].best_params, label=a) for a in arms]
             bench = run_benchmark(
                 specs,
                 episodes=episodes,
                 slots=slots,
                 seed=HELD_OUT_SEED,
                 n_workers=n_workers,
-                env_kwargs=kwargs,
+                env_kwargs=kwargs[level],
                 progress=progress,
                 confidence=confidence,
             )
-            timings["held_out_s"] += time.perf_counter() - t
-            rows += [
+            new = [
                 {
                     "replicate": r,
                     "level": level,
@@ -210,6 +249,12 @@ def run_sensing_sweep(
                 }
                 for row in bench.rows
             ]
+            if keys[level] not in reference_rows:
+                reference_rows[keys[level]] = [x for x in new if x["arm"] == REFERENCE]
+            else:
+                new = [{**x, "level": level} for x in reference_rows[keys[level]]] + new
+            rows += new
+        timings["held_out_s"] += time.perf_counter() - t
     summary = summarize_sweep(rows, list(levels), [REFERENCE, *families], confidence)
     config = {
         "episodes": episodes,

@@ -312,16 +312,13 @@ def tune_families(
     families: Mapping[str, Family] | None = None,
     on_result: Callable[[TuningResult], None] | None = None,
     env_kwargs: Mapping[str, Any] | None = None,
-    age: TuningResult | None = None,
     train_seed: int = TRAIN_SEED,
     sampler_seed: int = SAMPLER_SEED,
 ) -> dict[str, TuningResult]:
     """Tune the age rule first, then every other family in ``labels`` (default: all of
     :data:`FAMILIES`) on ``n_workers`` processes, the nested ones starting from the age
-    rule's point. Same budget for all: ``trials x episodes`` episodes. ``age``: an age
-    rule already tuned with these settings (reused, not tuned again: e.g. the same
-    degradation under another sensing); ``train_seed``, ``sampler_seed``: the tuning
-    replicate (:func:`tune_family`)."""
+    rule's point. Same budget for all: ``trials x episodes`` episodes. ``train_seed``,
+    ``sampler_seed``: the tuning replicate (:func:`tune_family`)."""
     fams = dict(FAMILIES if families is None else families)
     labels = list(fams) if labels is None else list(labels)
     unknown = [k for k in labels if k not in fams]
@@ -338,17 +335,9 @@ def tune_families(
     out: dict[str, TuningResult] = {}
     if "age" not in labels:
         labels = ["age", *labels]
-    if age is not None:
-        if age.family != "age" or age.episodes_simulated != trials * episodes:
-            raise ValueError(
-                f"age = {age.family!r} result of {age.episodes_simulated} episodes: must be "
-                f"the age family tuned with this budget ({trials} x {episodes})"
-            )
-        out["age"] = age
-    else:
-        out["age"] = tune_family(fams["age"], **settings)
-        if on_result is not None:
-            on_result(out["age"])
+    out["age"] = tune_family(fams["age"], **settings)
+    if on_result is not None:
+        on_result(out["age"])
     rest = [(fams[k], out["age"].best_params) for k in labels if k != "age"]
     for res in map_chunks(
         _tune_chunk,
