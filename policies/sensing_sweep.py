@@ -38,6 +38,7 @@ import csv
 import hashlib
 import json
 import math
+import os
 import time
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, replace
@@ -130,6 +131,12 @@ def _level_families(families: Sequence[str], kwargs: Mapping[str, Any]) -> dict[
     return fams
 
 
+def _cpu_s() -> float:
+    """CPU seconds of this process and of its worker processes that have finished."""
+    t = os.times()
+    return t.user + t.system + t.children_user + t.children_system
+
+
 def _tune_task(
     settings: Mapping[str, Any],
     kwargs: Mapping[str, Mapping[str, Any]],
@@ -180,7 +187,7 @@ def run_sensing_sweep(
     if clash:
         raise ValueError(f"env_kwargs {clash} are set per level; leave them out of env_kwargs")
     t0 = time.perf_counter()
-    timings = {"tuning_s": 0.0, "held_out_s": 0.0}
+    timings = dict.fromkeys(("tuning_s", "held_out_s", "tuning_cpu_s", "held_out_cpu_s"), 0.0)
     size = {"trials": trials, "episodes": train_episodes, "slots": slots}
     kwargs = {level: {**base, **dict(kw)} for level, kw in levels.items()}
     keys = {level: _degradation_key(kw) for level, kw in kwargs.items()}
@@ -189,7 +196,7 @@ def run_sensing_sweep(
     for r in range(replicates):
         train_seed, sampler_seed = replicate_seeds(r)
         seeds = {"train_seed": train_seed, "sampler_seed": sampler_seed}
-        t = time.perf_counter()
+        t, c = time.perf_counter(), _cpu_s()
         # the age rule: once per degradation (it reads ages only), in this process
         ages: dict[str, TuningResult] = {}
         for level, key in keys.items():
@@ -219,7 +226,8 @@ def run_sensing_sweep(
         for (level, fam, _), res in zip(tasks, tuned, strict=True):
             tuning[f"{r}|{level}"][fam.label] = res
         timings["tuning_s"] += time.perf_counter() - t
-        t = time.perf_counter()
+        timings["tuning_cpu_s"] += _cpu_s() - c
+        t, c = time.perf_counter(), _cpu_s()
         # held-out: the age rule once per degradation (its episodes do not depend on the
         # sensing: tested), the families at every level, all on HELD_OUT_SEED
         reference_rows: dict[str, list[dict[str, Any]]] = {}
@@ -255,6 +263,7 @@ def run_sensing_sweep(
                 new = [{**x, "level": level} for x in reference_rows[keys[level]]] + new
             rows += new
         timings["held_out_s"] += time.perf_counter() - t
+        timings["held_out_cpu_s"] += _cpu_s() - c
     summary = summarize_sweep(rows, list(levels), [REFERENCE, *families], confidence)
     config = {
         "episodes": episodes,

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import argparse
 import logging
+import os
 import shlex
 import sys
 import time
@@ -141,6 +142,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         env_kwargs=env_kwargs,
         **size,
     )
+    cpu = os.times()
     words = ["scripts/sensing_sweep.py", *(sys.argv[1:] if argv is None else argv)]
     extra = {
         "command": " ".join(shlex.quote(str(a)) for a in words),
@@ -148,12 +150,18 @@ def main(argv: Sequence[str] | None = None) -> int:
         "scenario": scenario.to_dict(),
         "costs": costs.to_dict(),
         "variants_s": variants_s,
+        # CPU seconds of this process and its (finished) worker processes
+        "cpu_s": cpu.user + cpu.system + cpu.children_user + cpu.children_system,
+        "load_average_1min_at_end": os.getloadavg()[0],
     }
     info = {v.label: v.describe() for v in variants}
     paths = write_sweep_outputs(
         result, out, levels_info=info, extra_config=extra, overwrite=args.overwrite
     )
-    log.info(f"variants {variants_s:.1f} s, sweep {result.wall_s:.1f} s {result.timings}")
+    log.info(
+        f"variants {variants_s:.1f} s, sweep {result.wall_s:.1f} s {result.timings}, "
+        f"CPU {extra['cpu_s']:.0f} s"
+    )
     for name, path in paths.items():
         log.info(f"{name}: {path}")
     return 0
