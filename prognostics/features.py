@@ -1,4 +1,11 @@
-"""The ten feature candidates of [DJS20] Table 2, from plain signal arrays.
+"""The ten feature candidates of [DJS20] Table 2 and two in-flight additions, from arrays.
+
+Table 2's ten (G1-G3, I1-I7, :data:`FEATURE_INFO`) are as the paper lists them. Two in-flight
+candidates are added beside them (:data:`EXTRA_FEATURE_INFO`), because none of I1-I7 sees the
+spring crack and I7 sees seal wear only weakly (docs/prognostics.md, "In-flight features"):
+I8 = mean(i - i_h) keeps the DC null-bias current the crack creates, which I2's normalised
+correlation removes, and I9 = rms(i)/rms(i_h) divides the command out of the current.
+:data:`CANDIDATE_INFO` holds all twelve for the selection procedure.
 
 Signals (SI units): ``t`` time (s, uniform sampling), ``i`` servovalve current (A), ``x`` SCAS
 actuator LVDT position (m); ``i_h``, ``x_h`` the same signals recorded on a healthy unit for
@@ -32,7 +39,9 @@ import scipy.fft
 from numpy.typing import ArrayLike, NDArray
 
 __all__ = [
+    "CANDIDATE_INFO",
     "DEFAULT_MAX_LAG_S",
+    "EXTRA_FEATURE_INFO",
     "FEATURE_INFO",
     "FeatureInfo",
     "flight_features",
@@ -47,6 +56,8 @@ __all__ = [
     "i5_rms_fft",
     "i6_rms_position",
     "i7_current_position_rms_ratio",
+    "i8_dc_current_offset",
+    "i9_current_ratio",
     "step_windows",
 ]
 
@@ -103,6 +114,16 @@ FEATURE_INFO: dict[str, FeatureInfo] = {
         FeatureInfo("I7", "rms(i)/rms(x)", "flight", "A/m", "RMS current / RMS position", 2),
     )
 }
+#: In-flight candidates added beside Table 2 (not in [DJS20]); both need the healthy record i_h.
+EXTRA_FEATURE_INFO: dict[str, FeatureInfo] = {
+    f.id: f
+    for f in (
+        FeatureInfo("I8", "mean(i-i_h)", "flight", "A", "DC current offset from healthy", 1),
+        FeatureInfo("I9", "rms(i)/rms(i_h)", "flight", "-", "RMS current / healthy RMS", 2),
+    )
+}
+#: Every candidate the selection procedure ranks: Table 2's ten, then I8 and I9.
+CANDIDATE_INFO: dict[str, FeatureInfo] = FEATURE_INFO | EXTRA_FEATURE_INFO
 
 
 # ----------------------------------------------------------------------------- validation
@@ -533,6 +554,56 @@ def i7_current_position_rms_ratio(i: ArrayLike, x: ArrayLike) -> FloatArray:
     return _i7(_energy(i_arr), _energy(x_arr))
 
 
+def i8_dc_current_offset(i: ArrayLike, i_h: ArrayLike) -> FloatArray:
+    """I8: mean(i - i_h) (A), the DC current offset from the healthy unit's current.
+
+    The crack lowers one spring's stiffness, so the centering springs no longer balance at
+    null and the loop holds the actuator there with a constant (null-bias) current. I2's
+    normalised correlation removes that DC term; I8 keeps it. Subtracting the healthy
+    response ``i_h`` to the same command record removes what the command itself puts into
+    the mean. What remains also holds the installation's own offset (spring-pair and valve
+    null tolerances, microamperes), which a monitor removes with a baseline recorded after
+    fitting.
+
+    >>> float(i8_dc_current_offset([2e-6, 4e-6], [1e-6, 1e-6]))  # mean of (1, 3) uA
+    2e-06
+    """
+    i_arr = _signal("i", i)
+    ih_arr = _baseline("i_h", i_h, "i", i_arr)
+    return _i8(i_arr, ih_arr)
+
+
+def _i8(i_arr: FloatArray, ih_arr: FloatArray) -> FloatArray:
+    return np.mean(i_arr - ih_arr, axis=-1)
+
+
+def i9_current_ratio(i: ArrayLike, i_h: ArrayLike) -> FloatArray:
+    """I9: rms(i)/rms(i_h) (-), the current relative to the healthy unit's for the same command.
+
+    Seal wear opens a leakage path across the piston, so the valve must pass more flow,
+    hence more current, for the same motion. Dividing by the healthy current for the same
+    command record removes the command's amplitude from the ratio (I7 divides by the
+    measured position instead, which the loop keeps close to the command whatever the
+    wear, so I7 moves less). I9 = 1 for a unit identical to the healthy one.
+
+    >>> float(i9_current_ratio([3.0, -4.0], [0.6, -0.8]))
+    5.0
+    """
+    i_arr = _signal("i", i)
+    ih_arr = _baseline("i_h", i_h, "i", i_arr)
+    return _i9(_energy(i_arr), _energy(ih_arr))
+
+
+def _i9(energy_i: FloatArray, energy_ih: FloatArray) -> FloatArray:
+    if np.any(energy_ih == 0.0):
+        raise ValueError("i_h is identically zero in at least one record: I9 undefined")
+    with np.errstate(over="ignore"):
+        ratio = np.sqrt(energy_i / energy_ih)
+    if not np.all(np.isfinite(ratio)):
+        raise ValueError("rms(i) / rms(i_h) overflows: i_h is vanishingly small (I9 undefined)")
+    return ratio
+
+
 def _i7(energy_i: FloatArray, energy_x: FloatArray) -> FloatArray:
     if np.any(energy_x <= 0.0):
         raise ValueError("x is identically zero in at least one record: I7 undefined")
@@ -555,7 +626,7 @@ def flight_features(
     freq_hz: float = 2.0,
     max_lag_s: float = DEFAULT_MAX_LAG_S,
 ) -> dict[str, FloatArray]:
-    """I1-I7 of one flight window (or a batch of windows), keyed "I1".."I7".
+    """I1-I9 of one flight window (or a batch of windows), keyed "I1".."I9".
 
     Same definitions as the single-feature functions, validating the inputs and computing
     the shared energies once. ``i_h``, ``x_h``: healthy-unit responses to the same command
@@ -579,4 +650,6 @@ def flight_features(
         "I5": i5_rms_fft(x_arr),
         "I6": np.sqrt(e_x / n_samples),
         "I7": _i7(e_i, e_x),
+        "I8": _i8(i_arr, ih_arr),
+        "I9": _i9(e_i, e_ih),
     }

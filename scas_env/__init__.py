@@ -24,15 +24,36 @@ from gymnasium.envs.registration import register, registry  # noqa: E402
 from scas_env._version import __version__  # noqa: E402
 from scas_env.actuator.params import ScasParams  # noqa: E402
 
-__all__ = ["ENV_ID", "ENV_ID_EPOCHS", "ENV_ID_V1", "ScasParams", "__version__"]
+__all__ = [
+    "ENV_ID",
+    "ENV_ID_EPOCHS",
+    "ENV_ID_V1",
+    "ENV_ID_V2",
+    "V2_KWARGS",
+    "ScasParams",
+    "__version__",
+]
 
 ENV_ID = "scas_env/ScasMaintenance-v0"
 #: v1: the pre-flight test's go/no-go is an airworthiness limit (scas_env.acceptance)
 ENV_ID_V1 = "scas_env/ScasMaintenance-v1"
+#: v2: v1 plus the in-flight features I8 and I9 (observed, and learnt from by the filters
+#: every ``flight_update_flights`` flights) and per-part degradation draws (each part's life
+#: fixed at fitting: common random numbers per part, exact true RUL)
+ENV_ID_V2 = "scas_env/ScasMaintenance-v2"
+V2_KWARGS = {
+    "go_no_go": "airworthiness",
+    "flight_features": "I2,I6,I7,I8,I9",
+    "degradation_draws": "per_part",
+}
 
 # Episode length is the scenario's ``episode_slots`` (2000 by default): the env truncates
 # itself, so no TimeLimit wrapper is added.
-for _id, _kwargs in ((ENV_ID, {}), (ENV_ID_V1, {"go_no_go": "airworthiness"})):
+for _id, _kwargs in (
+    (ENV_ID, {}),
+    (ENV_ID_V1, {"go_no_go": "airworthiness"}),
+    (ENV_ID_V2, V2_KWARGS),
+):
     if _id not in registry:
         register(
             id=_id,

@@ -18,7 +18,7 @@ from scas_env.dashboard import DashboardRenderer
 from scas_env.fleet_state import PARTS, REWARD_TERMS, FleetState
 from scas_env.info import StepInfo, build_info
 from scas_env.monitor import HealthMonitor
-from scas_env.observation import FEATURES, ObservationBuilder
+from scas_env.observation import ObservationBuilder
 from scas_env.scenario import Scenario
 from scas_env.world import ActuatorWorld
 
@@ -169,6 +169,15 @@ class ScasMaintenanceEnv(gym.Env):
     * v1: the go/no-go is an airworthiness limit on the deviation from the installation's
       reference and a failed test holds the aircraft on the ground until cleared
       (``go_no_go="airworthiness"``); everything else as v0, which stays registered.
+    * v2: v1 plus two in-flight features that see the faults, I8 = mean(i - i_h) (uA, the
+      crack's DC null-bias current) and I9 = rms(i)/rms(i_h) (-, seal wear), after I7 in the
+      observation (``Box(20,)``), and learnt from by the filters every
+      ``flight_update_flights`` flights (``flight_features="I2,I6,I7,I8,I9"``); per-part
+      degradation draws (``degradation_draws="per_part"``): each part's life is fixed when
+      it is fitted, whatever the policy does (common random numbers per part), the true RUL
+      in ``info`` and the ``"state"`` observation is the exact remaining life, and
+      :meth:`part_lives` tells a clairvoyant oracle the lives to come. v0 and v1 stay
+      registered and unchanged.
 
     ## Example
 
@@ -283,7 +292,19 @@ class ScasMaintenanceEnv(gym.Env):
             for name in ("measure", "degradation"):
                 values, position = self.buffer_storage.get(name, (None, None))
                 self.rngs[name] = NormalBuffer(self.rngs[name], values, position)
-        self.world.reset(self.rngs["parts"])
+        part_rngs = None
+        if self.scenario.degradation_draws == "per_part":
+            # springs and seals from their own parts streams (drawn after the four above,
+            # so "per_slot" episodes keep their seeds)
+            part_seeds = self.np_random.integers(0, 2**63 - 1, size=len(PARTS))
+            part_rngs = {
+                part: np.random.default_rng(int(s))
+                for part, s in zip(PARTS, part_seeds, strict=True)
+            }
+            for part in PARTS:
+                self.rngs[f"{part}_parts"] = part_rngs[part]
+            self.world.buffer_storage = self.buffer_storage
+        self.world.reset(self.rngs["parts"], part_rngs)
         self._record_reference()
         self.monitor = HealthMonitor(
             self.params, self.scenario, self.calibration, self.surrogate, self.rngs["filter"]
@@ -379,6 +400,23 @@ class ScasMaintenanceEnv(gym.Env):
             f"availability {self.stats.flown / max(self.slot, 1):.3f}"
         )
 
+    def part_lives(self, count: int = 2) -> dict[str, list[float]]:
+        """Clairvoyance (``Scenario(degradation_draws="per_part")`` only): per part, the
+        flights the fitted one will still fly (the failing one included), then the whole
+        lives of the next ``count`` replacements, as this episode will hand them out
+        whatever the policy does. Nothing in the episode is moved."""
+        if self.monitor is None:
+            raise RuntimeError("call reset() before part_lives()")
+        if not self.world.per_part:
+            raise ValueError("part_lives needs Scenario.degradation_draws = 'per_part'")
+        return {
+            part: [
+                self.world.life_left[part],
+                *self.world.next_lives(part, self.rngs[f"{part}_parts"], count),
+            ]
+            for part in PARTS
+        }
+
     # ------------------------------------------------------------------ internals
     def _go(self, feats: dict[str, float]) -> bool:
         """Go/no-go (``Scenario.go_no_go``): every ground feature inside its healthy
@@ -410,7 +448,10 @@ class ScasMaintenanceEnv(gym.Env):
         return True
 
     def _replace(self, part: str, terms: dict[str, float], *, failed: bool) -> None:
-        rul = self.world.true_rul_flights()[PARTS.index(part)]
+        if self.world.per_part:  # the part's own remaining life
+            rul = self.world.life_left[part]
+        else:
+            rul = self.world.true_rul_flights()[PARTS.index(part)]
         if not failed:
             cost = (
                 self.costs.spring_replacement_usd
@@ -423,7 +464,7 @@ class ScasMaintenanceEnv(gym.Env):
             self.stats.wasted_life_count[part] += 1
             self._wasted_now[part] = wasted
         self.stats.replacements[part] += 1
-        self.world.replace(part, self.rngs["parts"])
+        self.world.replace(part, self.rngs.get(f"{part}_parts", self.rngs["parts"]))
         if part == "spring":
             self._record_reference()
         self.monitor.replaced(part)
@@ -472,7 +513,7 @@ class ScasMaintenanceEnv(gym.Env):
         rul = fleet.true_rul()
         obs = self.builder.observe(fleet, rul)
         obs = {k: v[0] for k, v in obs.items()} if isinstance(obs, dict) else obs[0]
-        return obs, build_info(fleet, rul, FEATURES, row=0)
+        return obs, build_info(fleet, rul, self.builder.features, row=0)
 
 
 def new_fleet_state(env: ScasMaintenanceEnv, n: int) -> FleetState:
@@ -481,9 +522,10 @@ def new_fleet_state(env: ScasMaintenanceEnv, n: int) -> FleetState:
         n,
         n_unit_features=len(env.surrogate.features),
         n_particles=env.scenario.n_particles,
-        n_features=len(FEATURES),
+        n_features=len(env.builder.features),
         seal_critical_m=env.calibration.seal_critical_wear_m,
         kernel_tables=env.world.kernel_tables,
+        exact_lives=env.world.per_part,
     )
 
 

@@ -189,4 +189,67 @@ def true_rul(
             out[e, 1] = max(seal_critical_m - wear_m[e], 0.0) / (wear_rate_m * wear_mult[e])
 
 
-__all__ = ["ageing_estimates", "lognormal_factor", "surrogate_flights", "true_rul"]
+@njit(cache=True)
+def crack_flights_to_failure(
+    crack_m: float,
+    fail_depth_m: float,
+    theta: float,
+    normals: np.ndarray,
+    dmg_grid: np.ndarray,
+    dmg_rate: np.ndarray,
+    dmg_cum: np.ndarray,
+    dmg_cells: np.ndarray,
+    dmg_inv_cell: float,
+    cv_log_depth: np.ndarray,
+    cv_values: np.ndarray,
+    dormant_m: float,
+    state: np.ndarray,
+) -> int:
+    """Flights until the crack reaches ``fail_depth_m``, the k-th flight growing it with the
+    factor of ``normals[k - 1]`` exactly as :func:`surrogate_flights` does; the count k of
+    the failing flight, or -1 if ``normals`` run out first (``state[0]`` then holds the
+    crack to continue from)."""
+    crack = crack_m
+    for k in range(normals.size):
+        if crack >= dormant_m:
+            cv = np.interp(math.log(crack), cv_log_depth, cv_values)
+            factor = lognormal_factor(cv, normals[k])
+            damage = damage_scalar(dmg_grid, dmg_rate, dmg_cum, dmg_cells, dmg_inv_cell, crack)
+            damage += theta * factor
+            crack = inverse_damage_scalar(dmg_grid, dmg_rate, dmg_cum, damage)
+        if crack >= fail_depth_m:
+            return k + 1
+    state[0] = crack
+    return -1
+
+
+@njit(cache=True)
+def wear_flights_to_failure(
+    wear_m: float,
+    rate_m: float,
+    wear_cv: float,
+    critical_m: float,
+    normals: np.ndarray,
+    state: np.ndarray,
+) -> int:
+    """Flights until the wear reaches ``critical_m``, the k-th flight adding
+    ``rate_m * lognormal(wear_cv, normals[k - 1])`` as :func:`surrogate_flights` does
+    (``rate_m``: the unit's mean wear per flight); -1 and ``state[0]`` as
+    :func:`crack_flights_to_failure`."""
+    wear = wear_m
+    for k in range(normals.size):
+        wear += rate_m * lognormal_factor(wear_cv, normals[k])
+        if wear >= critical_m:
+            return k + 1
+    state[0] = wear
+    return -1
+
+
+__all__ = [
+    "ageing_estimates",
+    "crack_flights_to_failure",
+    "lognormal_factor",
+    "surrogate_flights",
+    "true_rul",
+    "wear_flights_to_failure",
+]

@@ -36,7 +36,9 @@ class FleetState:
 
     Parameters: ``n`` rows; ``n_unit_features`` surrogate features (installation effects),
     ``n_particles`` per filter, ``n_features`` observed features, ``seal_critical_m`` (m),
-    ``kernel_tables`` (:func:`scas_env.world.kernel_tables`).
+    ``kernel_tables`` (:func:`scas_env.world.kernel_tables`); ``exact_lives``
+    (``Scenario.degradation_draws = "per_part"``): the true RUL is each part's own remaining
+    life (``life``: flights left, the failing one included), not the expected flights to failure.
 
     Attributes
     ----------
@@ -56,6 +58,7 @@ class FleetState:
         n_features: int,
         seal_critical_m: float,
         kernel_tables: dict[str, tuple],
+        exact_lives: bool = False,
     ) -> None:
         if n < 1:
             raise ValueError(f"n = {n} must be >= 1")
@@ -64,6 +67,7 @@ class FleetState:
         #: critical seal wear (m) of the wear fraction; growth tables of the true RUL
         self.seal_critical_m = float(seal_critical_m)
         self._tables = kernel_tables
+        self.exact_lives = bool(exact_lives)
         self._rul = np.empty((n, 2))
         self.a: dict[str, np.ndarray] = {
             # the actuator (world): m, m, m, -, -, standard normals of the installation effects
@@ -73,6 +77,8 @@ class FleetState:
             "theta": np.ones(n),
             "wmult": np.ones(n),
             "unit_z": np.zeros((n, n_unit_features)),
+            # flights each part will still fly, the failing one included ("per_part"; else inf)
+            "life": np.full((n, 2), np.inf),
             # the monitor: flights since each filter's last update, detector flags, RUL tables
             "pending": np.zeros((n, 2), dtype=i8),
             "detected": np.zeros((n, 2), dtype=b),
@@ -104,9 +110,14 @@ class FleetState:
         self.table_source: list[list[Any]] = [[None, None] for _ in range(n)]
 
     def true_rul(self) -> np.ndarray:
-        """(n, 2) expected flights to failure of spring and seal at the units' own rates
-        (:func:`scas_env.fleet_kernels.true_rul`; a scratch array, overwritten next call)."""
+        """(n, 2) flights to failure of spring and seal: the expected ones at the units' own
+        rates (:func:`scas_env.fleet_kernels.true_rul`), or with ``exact_lives`` each part's
+        own remaining life (the failing flight included); a scratch array, overwritten next
+        call."""
         a, t = self.a, self._tables
+        if self.exact_lives:
+            self._rul[:] = a["life"]
+            return self._rul
         true_rul(
             a["crack"], a["wear"], a["fail"], a["theta"], a["wmult"], *t["damage"],
             *t["rul_consts"], self._rul,

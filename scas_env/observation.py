@@ -25,13 +25,23 @@ FEATURE_UNITS = {
     "I2": ("-", 1.0, -1.0, 1.0),
     "I6": ("mm", 1e3, 0.0, 5.2),
     "I7": ("uA/mm", 1e3, 0.0, 1e5),
+    "I8": ("uA", 1e6, -1e4, 1e4),
+    "I9": ("-", 1.0, 0.0, 100.0),
     "G1": ("uA", 1e6, -1e4, 1e4),
     "G3": ("uA/mm", 1e3, -4e4, 4e4),
 }
 
 
-#: features in the column order of ``FleetState.a["last"]``
+#: features of the default scenario in the column order of ``FleetState.a["last"]``
+#: (an env's own: ``ObservationBuilder.features``)
 FEATURES = (*FLIGHT_FEATURES, *GROUND_FEATURES)
+
+
+def observed_features(scenario: Scenario) -> tuple[str, ...]:
+    """The features an env with ``scenario`` observes, in the column order of
+    ``FleetState.a["last"]``: its in-flight features, then the pre-flight test's."""
+    return (*scenario.flight_feature_names, *GROUND_FEATURES)
+
 
 #: Groups of each flat observation mode, in order (``"dict"`` holds every group).
 GROUP_ORDER: dict[str, tuple[str, ...]] = {
@@ -55,13 +65,16 @@ class ObservationBuilder:
         params: ScasParams,
     ) -> None:
         self.scenario = scenario
-        self._factor = np.array([FEATURE_UNITS[f][1] for f in FEATURES])
+        #: observed features, in the column order of ``FleetState.a["last"]``
+        self.features = observed_features(scenario)
+        self.flight_features = scenario.flight_feature_names
+        self._factor = np.array([FEATURE_UNITS[f][1] for f in self.features])
         slots = float(scenario.episode_slots)
         cap = float(scenario.rul_cap_flights)
         max_down = 1.0 + max(
             costs.failure_downtime_slots, costs.seal_downtime_slots, costs.spring_downtime_slots
         )
-        feats = [*FLIGHT_FEATURES, *GROUND_FEATURES]
+        feats = self.features
         rows: list[tuple[str, str, float, float]] = [
             (f, FEATURE_UNITS[f][0], FEATURE_UNITS[f][2], FEATURE_UNITS[f][3]) for f in feats
         ]
@@ -106,7 +119,7 @@ class ObservationBuilder:
             self.space = _box(self.layout)
             self.names = tuple(r[0] for r in self.layout)
             self.units = tuple(r[1] for r in self.layout)
-        k = {f: surrogate.index(f) for f in (*FLIGHT_FEATURES, *GROUND_FEATURES)}
+        k = {f: surrogate.index(f) for f in self.features}
         self.healthy = {f: float(surrogate.mean[k[f], 0, 0]) for f in k}
         total = {
             f: float(np.hypot(surrogate.unit_std[k[f], 0, 0], surrogate.run_std[k[f], 0, 0]))
@@ -146,14 +159,14 @@ class ObservationBuilder:
     def export_state(self, a: dict[str, np.ndarray], row: int) -> None:
         """Write the feature memory into row ``row`` of a fleet's arrays."""
         last = self.last
-        for k, f in enumerate(FEATURES):
+        for k, f in enumerate(self.features):
             a["last"][row, k] = last[f]
         a["test_age"][row], a["no_go"][row] = self.test_age, self.no_go
 
     def import_flight_state(self, a: dict[str, np.ndarray], row: int) -> None:
         """Take back what flights on the fleet's fast path changed: in-flight features and
         the test's age."""
-        for k, f in enumerate(FLIGHT_FEATURES):
+        for k, f in enumerate(self.flight_features):
             self.last[f] = float(a["last"][row, k])
         self.test_age = int(a["test_age"][row])
 

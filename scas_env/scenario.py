@@ -23,6 +23,11 @@ OBS_MODES = ("features+rul", "features", "state", "dict")
 INITIAL_HEALTH = ("new", "random")
 GO_NO_GO = ("detection_band", "airworthiness")
 PREFLIGHT = ("on_demand", "every_flight")
+#: In-flight features the world measures and the observation shows (comma-separated, in
+#: observation order): Table 2's selected three, or those plus I8 and I9
+#: (prognostics.features, docs/prognostics.md "In-flight features").
+FLIGHT_FEATURE_SETS = ("I2,I6,I7", "I2,I6,I7,I8,I9")
+DEGRADATION_DRAWS = ("per_slot", "per_part")
 
 
 @dataclass(frozen=True)
@@ -46,6 +51,19 @@ class Scenario(Validated):
     preflight : ``"on_demand"`` (the test runs when action 1 asks for it and costs
         ``test_usd``) or ``"every_flight"`` (the paper's concept: the test runs at every
         power-up, before every flight, at no cost; action 1 then equals action 0).
+    flight_features : in-flight features measured every flight, one of
+        ``FLIGHT_FEATURE_SETS``: ``"I2,I6,I7"`` (v0, v1: the paper's selection, none of which
+        sees the crack) or ``"I2,I6,I7,I8,I9"`` (v2: plus the DC current offset I8, which sees
+        the crack, and the command-normalised current I9, which sees seal wear; the filters
+        then learn from them every ``flight_update_flights`` flights).
+    degradation_draws : where each flight's growth factors come from (surrogate fidelity).
+        ``"per_slot"`` (v0, v1): one stream hands each flown slot its two factors, and one
+        parts stream hands the k-th replacement of either part its new part, so a policy that
+        flies or replaces at other times flies other lives. ``"per_part"`` (v2): each part
+        carries its own stream of growth factors, and springs and seals come from their own
+        parts streams, so the k-th spring (seal) fitted in an episode is the same part with
+        the same life whatever the policy did: common random numbers per part, and a
+        clairvoyant oracle can know every life (``ScasMaintenanceEnv.part_lives``).
     """
 
     fidelity: str = "surrogate"
@@ -53,6 +71,8 @@ class Scenario(Validated):
     initial_health: str = "new"
     go_no_go: str = "detection_band"
     preflight: str = "on_demand"
+    flight_features: str = "I2,I6,I7"
+    degradation_draws: str = "per_slot"
     episode_slots: float = param(
         2000,
         "slots",
@@ -133,6 +153,15 @@ class Scenario(Validated):
         source="airworthiness go/no-go: probability that a part at its critical level fails "
         "the test (the limit sits at that quantile of its reading)",
     )
+    flight_update_flights: float = param(
+        10,
+        "flights",
+        lo=1,
+        hi=1000,
+        integer=True,
+        source="filters fed by in-flight features (flight_features with I8, I9): flights per "
+        "update, the ground station processing the flight-data downloads in batches",
+    )
     window_library: float = param(
         64,
         "windows",
@@ -150,9 +179,26 @@ class Scenario(Validated):
             ("initial_health", INITIAL_HEALTH),
             ("go_no_go", GO_NO_GO),
             ("preflight", PREFLIGHT),
+            ("flight_features", FLIGHT_FEATURE_SETS),
+            ("degradation_draws", DEGRADATION_DRAWS),
         ):
             value = getattr(self, name)
             if value not in allowed:
                 raise ValueError(f"Scenario.{name} = {value!r} must be one of {allowed}")
         if not (self.crack_active or self.wear_active):
             raise ValueError("Scenario: at least one of crack_active, wear_active must be 1")
+        if self.degradation_draws == "per_part" and self.fidelity == "physics":
+            raise ValueError(
+                "Scenario.degradation_draws = 'per_part' needs fidelity 'surrogate' (the "
+                "physics takes each flight's damage from its simulated window)"
+            )
+
+    @property
+    def flight_feature_names(self) -> tuple[str, ...]:
+        """The in-flight features measured every flight, in observation order."""
+        return tuple(self.flight_features.split(","))
+
+    @property
+    def learns_in_flight(self) -> bool:
+        """Whether the monitor's filters learn from the in-flight features (I8 and I9 on)."""
+        return "I8" in self.flight_feature_names

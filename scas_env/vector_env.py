@@ -34,10 +34,9 @@ from scas_env.block_draws import DEFAULT_BLOCK
 from scas_env.env import REWARD_TERMS, ScasMaintenanceEnv, new_fleet_state
 from scas_env.fleet_kernels import surrogate_flights
 from scas_env.info import build_info
-from scas_env.observation import FEATURES
-from scas_env.world import FLIGHT_FEATURES, PARTS
+from scas_env.world import PARTS
 
-_STREAMS = ("measure", "degradation")
+_STREAMS = ("measure", "degradation", "spring_growth", "seal_growth")
 
 
 def make_vector_env(num_envs: int, **kwargs: Any) -> VectorEnv:
@@ -109,16 +108,24 @@ class ScasMaintenanceVectorEnv(VectorEnv):
         self._terms = self.fleet.terms
         #: true RUL thrown away by each actuator's preventive replacement this step (0: none)
         self._wasted_now = self.fleet.wasted_now
+        n_flight = len(first.world.flight_features)
         self._scratch = {
             "new": np.empty((2, n)),
-            "feats": np.empty((n, len(FLIGHT_FEATURES))),
+            "feats": np.empty((n, n_flight)),
             "failed": np.zeros((n, 2), dtype=np.bool_),
-            "meas": np.empty((n, len(FLIGHT_FEATURES))),
+            "meas": np.empty((n, n_flight)),
             "deg": np.empty((n, 2)),
         }
         self._builder = first.builder
         self._every_flight = first.scenario.preflight == "every_flight"
         self._holds = first.limits is not None
+        # filters that learn from in-flight features: every flight goes through its env
+        self._learns_in_flight = first.scenario.learns_in_flight
+        # where each flight's two growth factors come from (Scenario.degradation_draws)
+        self._per_part = first.world.per_part
+        self._deg_streams = (
+            (("spring_growth", 1), ("seal_growth", 1)) if self._per_part else (("degradation", 2),)
+        )
 
     # ------------------------------------------------------------------ copies
     def __setstate__(self, state: dict[str, Any]) -> None:
@@ -128,8 +135,11 @@ class ScasMaintenanceVectorEnv(VectorEnv):
         self.__dict__.update(state)
         for e, env in enumerate(self.envs):
             env.buffer_storage = {s: (self._buf[s][e], self._pos[s][e]) for s in _STREAMS}
+            env.world.buffer_storage = env.buffer_storage
             for s in _STREAMS:
                 draws = getattr(env, "rngs", {}).get(s)
+                if draws is None:
+                    draws = env.world.growth.get(s.removesuffix("_growth"))
                 if draws is not None:
                     draws.values, draws.position = self._buf[s][e], self._pos[s][e]
 
@@ -185,7 +195,7 @@ class ScasMaintenanceVectorEnv(VectorEnv):
         # the fast path flies untested flights; a test (asked for, or before every flight),
         # a hold by a failed airworthiness test, a replacement or a reset go the slow path
         fly = (act == 0) & ~grounded & ~resetting
-        if self._every_flight:
+        if self._every_flight or self._learns_in_flight:
             fly[:] = False
         elif self._holds:
             fly &= ~a["no_go"]
@@ -229,14 +239,20 @@ class ScasMaintenanceVectorEnv(VectorEnv):
     def _fly(self, idx: np.ndarray) -> np.ndarray:
         """Candidate flights of ``idx`` (draws peeked); commits those that did not fail."""
         a, sc = self.a, self._scratch
-        n_meas = len(FLIGHT_FEATURES)
-        for s, k in (("measure", n_meas), ("degradation", 2)):
+        n_meas = self._scratch["meas"].shape[1]
+        deg_streams = self._deg_streams
+        for s, k in (("measure", n_meas), *deg_streams):
             short = idx[self._pos[s][idx, 0] + k > DEFAULT_BLOCK]
             for e in short:
-                self.envs[e].rngs[s].refill()
-        pm, pd = self._pos["measure"][idx, 0], self._pos["degradation"][idx, 0]
+                self._draws(e, s).refill()
+        pm = self._pos["measure"][idx, 0]
         sc["meas"][idx] = self._buf["measure"][idx[:, None], pm[:, None] + np.arange(n_meas)]
-        sc["deg"][idx] = self._buf["degradation"][idx[:, None], pd[:, None] + np.arange(2)]
+        if self._per_part:
+            for p, (s, _) in enumerate(deg_streams):
+                sc["deg"][idx, p] = self._buf[s][idx, self._pos[s][idx, 0]]
+        else:
+            pd = self._pos["degradation"][idx, 0]
+            sc["deg"][idx] = self._buf["degradation"][idx[:, None], pd[:, None] + np.arange(2)]
         t = self._tables
         new = sc["new"]
         surrogate_flights(
@@ -249,15 +265,24 @@ class ScasMaintenanceVectorEnv(VectorEnv):
         a["crack"][done], a["wear"][done] = new[0, done], new[1, done]
         a["last"][done, :n_meas] = sc["feats"][done]
         self._pos["measure"][done, 0] += n_meas
-        self._pos["degradation"][done, 0] += 2
+        for s, k in deg_streams:
+            self._pos[s][done, 0] += k
+        if self._per_part:
+            a["life"][done] -= 1.0
         return ok
+
+    def _draws(self, e: int, stream: str) -> Any:
+        """Actuator ``e``'s normal buffer of ``stream`` (a growth stream: its fitted part's)."""
+        if stream.endswith("_growth"):
+            return self.envs[e].world.growth[stream.removesuffix("_growth")]
+        return self.envs[e].rngs[stream]
 
     # ------------------------------------------------------------------ outputs
     def _observation(self, rul: np.ndarray) -> Any:
         return self._builder.observe(self.fleet, rul)
 
     def _info(self, rul: np.ndarray) -> dict[str, Any]:
-        return with_info_masks(build_info(self.fleet, rul, FEATURES), self.num_envs)
+        return with_info_masks(build_info(self.fleet, rul, self._builder.features), self.num_envs)
 
     def close_extras(self, **kwargs: Any) -> None:
         for env in self.envs:

@@ -21,6 +21,15 @@ Two fidelities, one interface:
   cycles scaled to the flight, the wear by Archard on its friction work
   (:mod:`scas_env.actuator.flight_damage`).
 
+Degradation draws (``Scenario.degradation_draws``): ``"per_slot"`` takes each flight's two
+growth factors from the ``degradation_rng`` given to :meth:`ActuatorWorld.fly`;
+``"per_part"`` gives each fitted part its own stream of factors (a
+:class:`~scas_env.block_draws.NormalBuffer` seeded from the part's parts stream when it is
+fitted), so a part's whole life is fixed when it is fitted: :attr:`ActuatorWorld.life_left`
+holds what is left of it (flights up to and including the failing one), computed at fitting
+by replaying the part's own draws with the flight's arithmetic (:mod:`scas_env.fleet_kernels`)
+and counted down by every flight, an aborted one included (its growth happened).
+
 The spring failure depth is the nominal one (calibration) in the surrogate and the unit's
 own (its wire and coil diameters) in the physics; the seal fails at the calibrated
 critical wear in both. Everything random comes from the ``rng`` passed to each call.
@@ -28,6 +37,7 @@ critical wear in both. Everything random comes from the ``rng`` passed to each c
 
 from __future__ import annotations
 
+import copy
 import math
 from dataclasses import dataclass, replace
 
@@ -47,11 +57,19 @@ from scas_env.actuator.physics.spring import failure_depth_from_params
 from scas_env.actuator.sensing import FlightWindow, draw_window, flight_window, ground_test
 from scas_env.actuator.surrogate import SurrogateModel
 from scas_env.actuator.uncertainty import UnitSample, draw_run_conditions, draw_unit
-from scas_env.fleet_kernels import surrogate_flights, true_rul
+from scas_env.block_draws import NormalBuffer
+from scas_env.fleet_kernels import (
+    crack_flights_to_failure,
+    surrogate_flights,
+    true_rul,
+    wear_flights_to_failure,
+)
 from scas_env.fleet_state import PARTS
 from scas_env.scenario import Scenario
 
 GROUND_FEATURES = ("G1", "G3")
+#: The in-flight features of the default scenario (v0, v1); ``Scenario.flight_features``
+#: chooses the set a world measures (:attr:`ActuatorWorld.flight_features`).
 FLIGHT_FEATURES = ("I2", "I6", "I7")
 
 
@@ -86,21 +104,33 @@ class ActuatorWorld:
         self._table = paris_crack_model(
             calibration.crack_depth_m, calibration.crack_rate_m_per_flight
         )
-        self._flight_feature_idx = [surrogate.index(f) for f in FLIGHT_FEATURES]
+        #: in-flight features measured every flight (``Scenario.flight_features``)
+        self.flight_features = scenario.flight_feature_names
+        self._flight_feature_idx = [surrogate.index(f) for f in self.flight_features]
         self._ground_feature_idx = [surrogate.index(f) for f in GROUND_FEATURES]
+        # installation effects are drawn for the surrogate's features up to the last one this
+        # world measures (v0 and v1 draw the five they drew before I8 and I9 existed)
+        self._unit_z_draws = 1 + max(self._flight_feature_idx + self._ground_feature_idx)
         self.unit: UnitSample | None = None
         self.crack_m = 0.0
         self.wear_m = 0.0
         self.spring_failure_m = calibration.spring_failure_depth_m
         self.unit_z = np.zeros(len(surrogate.features))
         self.kernel_tables = kernel_tables(calibration, surrogate, scenario, self._table)
+        self.per_part = scenario.degradation_draws == "per_part"
+        #: per-part growth factor streams (``"per_part"``), and the storage rows a vector
+        #: env lends them (name -> (values, position), as ``ScasMaintenanceEnv.buffer_storage``)
+        self.growth: dict[str, NormalBuffer] = {}
+        self.buffer_storage: dict[str, tuple[np.ndarray, np.ndarray]] = {}
+        #: ``"per_part"``: flights each fitted part will still fly, the failing one included
+        self.life_left = {"spring": math.inf, "seal": math.inf}
         self._scratch = {
             "envs": np.zeros(1, dtype=np.int64),
             "x": np.empty((8, 1)),
             "z": np.empty((1, len(surrogate.features))),
-            "meas": np.empty((1, len(FLIGHT_FEATURES))),
+            "meas": np.empty((1, len(self.flight_features))),
             "deg": np.empty((1, 2)),
-            "feats": np.empty((1, len(FLIGHT_FEATURES))),
+            "feats": np.empty((1, len(self.flight_features))),
             "failed": np.zeros((1, 2), dtype=np.bool_),
             "rul": np.empty((1, 2)),
         }
@@ -145,21 +175,40 @@ class ActuatorWorld:
         a["fail"][row] = self.spring_failure_m
         a["theta"][row], a["wmult"][row] = self.theta, self.wear_multiplier
         a["unit_z"][row] = self.unit_z
+        a["life"][row] = self.life_left["spring"], self.life_left["seal"]
 
     def import_flight_state(self, a: dict[str, np.ndarray], row: int) -> None:
-        """Take back what flights on the fleet's fast path changed: crack and wear."""
+        """Take back what flights on the fleet's fast path changed: crack, wear, lives left."""
         self.crack_m, self.wear_m = float(a["crack"][row]), float(a["wear"][row])
+        self.life_left["spring"], self.life_left["seal"] = a["life"][row].tolist()
 
     # ------------------------------------------------------------------ life cycle
-    def reset(self, rng: np.random.Generator) -> None:
-        """A new actuator: new unit, new parts (or parts part-way through life)."""
+    def reset(
+        self,
+        rng: np.random.Generator,
+        part_rngs: dict[str, np.random.Generator] | None = None,
+    ) -> None:
+        """A new actuator: new unit, new parts (or parts part-way through life).
+
+        ``part_rngs`` (``"per_part"`` draws): the parts streams of springs and seals, which
+        supply the fitted spring pair and seal set (and their growth streams).
+        """
+        if self.per_part != (part_rngs is not None):
+            raise ValueError(
+                "part_rngs must be given exactly when Scenario.degradation_draws is 'per_part'"
+            )
         self.unit = draw_unit(self.params, rng)
         if self.physics:
             # the episode's window library (scenario.window_library): windows drawn lazily
             # from their own seeds, each with its healthy baseline simulated once
             self._library_seed = int(rng.integers(0, 2**63 - 1))
             self._windows: dict[int, FlightWindow] = {}
-        self._fit_spring(self.unit, rng)
+        if part_rngs is None:
+            self._fit_spring(self.unit, rng)
+        else:
+            self._fit_spring(draw_unit(self.params, part_rngs["spring"]), part_rngs["spring"])
+            seal = draw_unit(self.params, part_rngs["seal"])
+            self.unit = replace(self.unit, wear_rate_m3_n_m=seal.wear_rate_m3_n_m)
         self.wear_m = 0.0
         if self.scenario.initial_health == "random":
             life_used = rng.random(2)
@@ -174,6 +223,9 @@ class ActuatorWorld:
                 )
             if self.scenario.wear_active:
                 self.wear_m = life_used[1] * self.calibration.seal_critical_wear_m
+        if part_rngs is not None:
+            for part in PARTS:
+                self._new_growth(part, part_rngs[part])
 
     def _fit_spring(self, donor: UnitSample, rng: np.random.Generator) -> None:
         """Fit the spring pair (geometry, Paris C, initial flaw) of ``donor``."""
@@ -185,7 +237,7 @@ class ActuatorWorld:
             initial_crack_m=donor.initial_crack_m,
         )
         self.crack_m = donor.initial_crack_m if self.scenario.crack_active else 0.0
-        self.unit_z = self.surrogate.draw_unit_z(rng)
+        self.unit_z = self.surrogate.draw_unit_z(rng, self._unit_z_draws)
         if self.physics:
             self.spring_failure_m = failure_depth_from_params(
                 self.params,
@@ -195,15 +247,76 @@ class ActuatorWorld:
             self._growth = growth_model(self.params, self.unit)
 
     def replace(self, part: str, rng: np.random.Generator) -> None:
-        """Fit a new spring pair (``"spring"``) or a new seal set (``"seal"``)."""
+        """Fit a new spring pair (``"spring"``) or a new seal set (``"seal"``), drawn from
+        ``rng`` (``"per_part"``: that part's parts stream, which also seeds its growth)."""
+        if part not in PARTS:
+            raise ValueError(f"part = {part!r} must be one of {PARTS}")
         donor = draw_unit(self.params, rng)
         if part == "spring":
             self._fit_spring(donor, rng)
-        elif part == "seal":
+        else:
             self.unit = replace(self.unit, wear_rate_m3_n_m=donor.wear_rate_m3_n_m)
             self.wear_m = 0.0
-        else:
-            raise ValueError(f"part = {part!r} must be one of {PARTS}")
+        if self.per_part:
+            self._new_growth(part, rng)
+
+    # ------------------------------------------------------------------ per-part lives
+    def _new_growth(self, part: str, rng: np.random.Generator) -> None:
+        """The fitted ``part``'s own growth-factor stream, seeded from ``rng``, and its life."""
+        seed = int(rng.integers(0, 2**63 - 1))
+        values, position = self.buffer_storage.get(f"{part}_growth", (None, None))
+        self.growth[part] = NormalBuffer(np.random.default_rng(seed), values, position)
+        self.life_left[part] = self.flights_to_failure(part)
+
+    def next_lives(self, part: str, rng: np.random.Generator, count: int) -> list[float]:
+        """``"per_part"``: the whole lives (flights) of the next ``count`` parts of this kind
+        that ``rng`` (the kind's parts stream; not moved) will supply: what a clairvoyant
+        oracle knows. The world itself is not changed."""
+        if not self.per_part:
+            raise ValueError("next_lives needs Scenario.degradation_draws = 'per_part'")
+        if isinstance(count, bool) or not isinstance(count, int) or count < 0:
+            raise ValueError(f"count = {count!r} must be an integer >= 0")
+        clone = copy.copy(self)
+        clone.growth, clone.buffer_storage = dict(self.growth), {}
+        clone.life_left = dict(self.life_left)
+        rng = copy.deepcopy(rng)
+        lives = []
+        for _ in range(count):
+            clone.replace(part, rng)
+            lives.append(clone.life_left[part])
+        return lives
+
+    def flights_to_failure(self, part: str) -> float:
+        """``"per_part"``: the flights ``part`` will still fly, the failing one included, at
+        its own future growth draws (a copy of its stream is replayed; inf if the fault is
+        inactive or the crack dormant)."""
+        if not self.per_part:
+            raise ValueError("flights_to_failure needs Scenario.degradation_draws = 'per_part'")
+        cal, t = self.calibration, self.kernel_tables
+        if part == "spring":
+            if not self.scenario.crack_active or self.crack_m < cal.crack_dormant_below_m:
+                return math.inf
+        elif not self.scenario.wear_active:
+            return math.inf
+        draws = _copy_buffer(self.growth[part])
+        state = np.array([self.crack_m if part == "spring" else self.wear_m])
+        flown = 0
+        while flown < _MAX_LIFE_FLIGHTS:
+            z = draws.standard_normal(draws.values.size)
+            if part == "spring":
+                k = crack_flights_to_failure(
+                    float(state[0]), self.spring_failure_m, self.theta, z, *t["damage"],
+                    *t["flight_consts"][:3], state,
+                )  # fmt: skip
+            else:
+                k = wear_flights_to_failure(
+                    float(state[0]), cal.wear_rate_m_per_flight * self.wear_multiplier,
+                    float(cal.wear_cv), cal.seal_critical_wear_m, z, state,
+                )  # fmt: skip
+            if k > 0:
+                return float(flown + k)
+            flown += z.size
+        return math.inf
 
     def _library_window(self, rng: np.random.Generator) -> FlightWindow | None:
         """This flight's window from the library (None: draw a new one from ``rng``)."""
@@ -265,7 +378,7 @@ class ActuatorWorld:
                 self.params.mission.flight_window_s,
                 window=self._library_window(rng),
             )
-            feats = {f: window.features[f] for f in FLIGHT_FEATURES}
+            feats = {f: window.features[f] for f in self.flight_features}
             loads = flight_loads_from_run(
                 window.run, self.params.mission.flight_duration_s, config.spring_rate_1_n_m
             )
@@ -283,8 +396,14 @@ class ActuatorWorld:
             new_wear = self.wear_m + d_wear
         else:
             sc = self._scratch
-            sc["meas"][0] = rng.standard_normal(len(FLIGHT_FEATURES))
-            sc["deg"][0] = degradation_rng.standard_normal(2)
+            sc["meas"][0] = rng.standard_normal(len(self.flight_features))
+            if self.per_part:
+                sc["deg"][0, 0] = self.growth["spring"].standard_normal(1)[0]
+                sc["deg"][0, 1] = self.growth["seal"].standard_normal(1)[0]
+                for part in PARTS:
+                    self.life_left[part] -= 1.0
+            else:
+                sc["deg"][0] = degradation_rng.standard_normal(2)
             sc["z"][0] = self.unit_z
             x = sc["x"]
             x[0, 0], x[1, 0], x[2, 0] = self.crack_m, self.wear_m, self.spring_failure_m
@@ -296,7 +415,7 @@ class ActuatorWorld:
                 x[5], x[6], sc["feats"], sc["failed"],
             )  # fmt: skip
             new_crack, new_wear = float(x[5, 0]), float(x[6, 0])
-            feats = dict(zip(FLIGHT_FEATURES, sc["feats"][0].tolist(), strict=True))
+            feats = dict(zip(self.flight_features, sc["feats"][0].tolist(), strict=True))
         failed = []
         if new_crack >= self.spring_failure_m:
             failed.append("spring")
@@ -304,8 +423,22 @@ class ActuatorWorld:
             failed.append("seal")
         self.crack_m, self.wear_m = new_crack, new_wear
         if failed:
-            feats = {f: math.nan for f in FLIGHT_FEATURES}
+            feats = {f: math.nan for f in self.flight_features}
         return FlightResult(feats, tuple(failed))
+
+
+#: Flights after which a life counts as infinite (far beyond any episode).
+_MAX_LIFE_FLIGHTS = 10_000_000
+
+
+def _copy_buffer(buffer: NormalBuffer) -> NormalBuffer:
+    """An independent copy of ``buffer`` (values, position and generator state) that hands
+    out the same future normals without moving the original."""
+    clone = NormalBuffer.__new__(NormalBuffer)
+    clone.rng = copy.deepcopy(buffer.rng)
+    clone.values = buffer.values.copy()
+    clone.position = buffer.position.copy()
+    return clone
 
 
 def kernel_tables(
@@ -317,7 +450,7 @@ def kernel_tables(
     """Argument groups of :mod:`scas_env.fleet_kernels` for one world configuration
     (``table``: the calibrated crack-growth table)."""
     cal = calibration
-    idx = np.array([surrogate.index(f) for f in FLIGHT_FEATURES], dtype=np.int64)
+    idx = np.array([surrogate.index(f) for f in scenario.flight_feature_names], dtype=np.int64)
     stack = np.stack([surrogate.mean, surrogate.unit_std, surrogate.run_std])
     active = (bool(scenario.crack_active), bool(scenario.wear_active))
     return {

@@ -135,7 +135,7 @@ def test_g3_moves_in_the_physical_direction() -> None:
 
 def test_select_and_level_means(small: CampaignResult) -> None:
     severity, features = small.select("both", "flight")
-    assert list(features) == ["I1", "I2", "I3", "I4", "I5", "I6", "I7"]
+    assert list(features) == ["I1", "I2", "I3", "I4", "I5", "I6", "I7", "I8", "I9"]
     rows = small.table["fault_mode"] == "both"
     np.testing.assert_array_equal(severity, small.table["severity"][rows])
     np.testing.assert_array_equal(features["I6"], small.table["I6"][rows])

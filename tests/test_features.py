@@ -124,7 +124,7 @@ def test_flight_features_batch_equals_single_records():
         single = F.flight_features(t, i[idx], x[idx], i_h, x_h)
         for key, value in single.items():
             assert batch[key][idx] == pytest.approx(float(value), rel=1e-10), key
-    assert set(batch) == {f"I{k}" for k in range(1, 8)}
+    assert set(batch) == {f"I{k}" for k in range(1, 10)}
 
 
 def test_flight_features_equal_single_feature_functions():
@@ -140,6 +140,34 @@ def test_flight_features_equal_single_feature_functions():
     assert got["I4"] == pytest.approx(float(F.i4_position_autocorr(t, x)), rel=1e-12)
     assert got["I6"] == pytest.approx(float(F.i6_rms_position(x)), rel=1e-12)
     assert got["I7"] == pytest.approx(float(F.i7_current_position_rms_ratio(i, x)), rel=1e-12)
+    assert got["I8"] == pytest.approx(float(F.i8_dc_current_offset(i, i_h)), rel=1e-12)
+    assert got["I9"] == pytest.approx(float(F.i9_current_ratio(i, i_h)), rel=1e-12)
+
+
+def test_i8_is_the_dc_offset_and_ignores_any_zero_mean_waveform():
+    # i = i_h + b + (zero-mean record): I8 = b exactly, whatever the waveform; I2 of the same
+    # pair is blind to b once the normalisation absorbs it (why I8 was added).
+    t = _time(10.0)  # 20 whole periods of the 2 Hz sine: the sine's mean is 0 to rounding
+    i_h = 3.0 * _sine(t, 1e-3, 2.0)
+    wave = 1e-4 * _sine(t, 1.0, 4.0)
+    for bias in (-11e-6, 0.0, 5e-6):
+        assert float(F.i8_dc_current_offset(i_h + bias + wave, i_h)) == pytest.approx(
+            bias, abs=1e-15
+        )
+
+
+def test_i9_is_the_gain_of_a_scaled_current():
+    # i = g i_h: rms(i)/rms(i_h) = |g|; an added uncorrelated record r of rms s raises it to
+    # sqrt(g^2 + s^2 / rms(i_h)^2) (cross term zero for orthogonal records).
+    t = _time(10.0)
+    i_h = 3e-3 * _sine(t, 1.0, 2.0)
+    for g in (0.5, 1.0, 1.14):
+        assert float(F.i9_current_ratio(g * i_h, i_h)) == pytest.approx(g, rel=1e-12)
+    r = 1e-3 * _sine(t, 1.0, 6.0)  # orthogonal to the 2 Hz record over whole periods
+    expected = np.sqrt(1.0 + np.mean(r**2) / np.mean(i_h**2))
+    assert float(F.i9_current_ratio(i_h + r, i_h)) == pytest.approx(expected, rel=1e-9)
+    with pytest.raises(ValueError, match="i_h is identically zero"):
+        F.i9_current_ratio(i_h, np.zeros_like(i_h))
 
 
 # ----------------------------------------------------------------------------- on ground
@@ -239,6 +267,7 @@ def test_feature_info_table():
     assert list(F.FEATURE_INFO) == ["G1", "G2", "G3", *(f"I{k}" for k in range(1, 8))]
     assert {k for k, v in F.FEATURE_INFO.items() if v.condition == "ground"} == {"G1", "G2", "G3"}
     assert F.FEATURE_INFO["I5"].complexity > F.FEATURE_INFO["I6"].complexity
+    assert list(F.CANDIDATE_INFO) == [*F.FEATURE_INFO, "I8", "I9"]
 
 
 # ----------------------------------------------------------------------------- bad inputs

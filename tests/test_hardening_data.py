@@ -148,7 +148,7 @@ def test_bad_surrogate_tables_are_refused(
         ("crack_grid", [0.0, 0.5, 0.5, 0.75, 1.0], r"crack_grid must rise strictly"),
         ("wear_grid", [0.1, 0.25, 0.5, 0.75, 1.0], r"wear_grid runs from 0\.1 to 1\.0"),
         ("crack_grid", [0.0, math.nan, 0.5, 0.75, 1.0], r"crack_grid\[1\] = nan"),
-        ("mean", [[[0.0]]], r"mean has shape \(1, 1, 1\); it must have shape \(5, 5, 5\)"),
+        ("mean", [[[0.0]]], r"mean has shape \(1, 1, 1\); it must have shape \(7, 5, 5\)"),
         ("features", ["G3", "G3", "I2", "I6", "I7"], r"without repeats"),
         ("units_per_point", 0, r"units_per_point = 0 must be an integer >= 1"),
     ],

@@ -94,3 +94,26 @@ def test_sampling_fast_path_equals_interpolation_and_bad_inputs_raise() -> None:
     bad = MODEL.to_dict() | {"run_std": (-np.asarray(MODEL.run_std)).tolist()}
     with pytest.raises(ValueError, match="run_std"):
         SurrogateModel(**bad)
+
+
+@pytest.mark.parametrize("feature,crack,wear", [("I8", 0.5, 0.0), ("I9", 0.0, 0.75)])
+def test_paired_features_shift_from_healthy_as_fresh_physics(
+    feature: str, crack: float, wear: float
+) -> None:
+    # I8 and I9 are read as changes from the installation's own baseline: the surrogate's
+    # change from healthy must match the paired change of fresh units (same unit, same run
+    # conditions and noise at both health states), within 4 standard errors of that change
+    k = MODEL.index(feature)
+    seal_crit = default_calibration().seal_critical_wear_m
+    diffs = []
+    for u in range(6):
+        seq = np.random.SeedSequence(555_000, spawn_key=(u,))
+        healthy = unit_runs(P, 0.0, 0.0, seq, 2, seal_crit)[:, k]
+        faulty = unit_runs(P, crack, wear, seq, 2, seal_crit)[:, k]
+        diffs.extend(faulty - healthy)
+    diffs = np.array(diffs)
+    expected = MODEL.mean_at(crack, wear)[k] - MODEL.mean_at(0.0, 0.0)[k]
+    se = diffs.std(ddof=1) / np.sqrt(diffs.size)
+    assert abs(diffs.mean() - expected) < 4.0 * se  # (0.5, 0) and (0, 0.75) are grid points
+    assert abs(expected) > 5.0 * se  # the change is resolved, not noise
+    assert MODEL.feature_designs[feature].startswith("paired")

@@ -22,7 +22,7 @@ and spreads only).
 
     >>> model = default_surrogate()
     >>> model.features
-    ('G3', 'G1', 'I2', 'I6', 'I7')
+    ('G3', 'G1', 'I2', 'I6', 'I7', 'I8', 'I9')
     >>> bool(model.mean_at(0.0, 1.0)[0] > model.mean_at(0.0, 0.0)[0])  # G3 rises with wear
     True
 """
@@ -32,7 +32,7 @@ from __future__ import annotations
 import json
 from bisect import bisect_right
 from collections.abc import Sequence
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, field, replace
 from functools import lru_cache
 from pathlib import Path
 
@@ -47,7 +47,15 @@ FloatArray = npt.NDArray[np.float64]
 SURROGATE_VERSION = 1
 DATA_FILE = "surrogate.json"
 #: Features the surrogate models and the condition each is measured in.
-FEATURE_CONDITION = {"G3": "ground", "G1": "ground", "I2": "flight", "I6": "flight", "I7": "flight"}
+FEATURE_CONDITION = {
+    "G3": "ground",
+    "G1": "ground",
+    "I2": "flight",
+    "I6": "flight",
+    "I7": "flight",
+    "I8": "flight",
+    "I9": "flight",
+}
 
 
 @dataclass(frozen=True, eq=False)
@@ -61,6 +69,8 @@ class SurrogateModel:
     mean, unit_std, run_std : tables of shape (features, crack, wear), feature units.
     params_digest : digest of the parameters the physics ran with.
     seed, units_per_point, runs_per_unit : the design it was built from.
+    feature_designs : features whose tables come from another design, with that design
+        (``scas_env.studies.surrogate_builder``: I8 and I9 from a paired design).
     """
 
     features: tuple[str, ...]
@@ -74,6 +84,7 @@ class SurrogateModel:
     units_per_point: int
     runs_per_unit: int
     version: int = SURROGATE_VERSION
+    feature_designs: dict[str, str] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         own = "SurrogateModel"
@@ -88,6 +99,17 @@ class SurrogateModel:
         if not features or len(set(features)) != len(features):
             raise ValueError(f"{own}.features = {features!r} must be non-empty, without repeats")
         object.__setattr__(self, "features", features)
+        designs = self.feature_designs
+        if (
+            not isinstance(designs, dict)
+            or not all(isinstance(v, str) for v in designs.values())
+            or not set(designs) <= set(features)
+        ):
+            raise ValueError(
+                f"{own}.feature_designs = {designs!r} must map modelled features {features} "
+                "to design descriptions (strings)"
+            )
+        object.__setattr__(self, "feature_designs", dict(designs))
         if not isinstance(self.params_digest, str):
             raise ValueError(f"{own}.params_digest = {self.params_digest!r} must be a string")
         for name, lo in (("seed", 0), ("units_per_point", 1), ("runs_per_unit", 1)):
@@ -116,6 +138,31 @@ class SurrogateModel:
         object.__setattr__(self, "_crack_list", self.crack_grid.tolist())
         object.__setattr__(self, "_wear_list", self.wear_grid.tolist())
         object.__setattr__(self, "_stack_lists", stack.tolist())
+
+    def with_features_from(
+        self, other: SurrogateModel, features: Sequence[str], design: str
+    ) -> SurrogateModel:
+        """This model with the tables of ``features`` taken from ``other`` (same features,
+        grids and parameters), recorded in :attr:`feature_designs` as ``design``."""
+        if (
+            other.features != self.features
+            or not np.array_equal(other.crack_grid, self.crack_grid)
+            or not np.array_equal(other.wear_grid, self.wear_grid)
+            or other.params_digest != self.params_digest
+        ):
+            raise ValueError(
+                "with_features_from: the other model must have the same features, grids and "
+                f"parameters (features {other.features} vs {self.features}, params "
+                f"{other.params_digest} vs {self.params_digest})"
+            )
+        rows = [self.index(f) for f in features]
+        tables = {}
+        for name in ("mean", "unit_std", "run_std"):
+            table = np.array(getattr(self, name))
+            table[rows] = getattr(other, name)[rows]
+            tables[name] = table
+        designs = self.feature_designs | dict.fromkeys(features, design)
+        return replace(self, **tables, feature_designs=designs)
 
     def index(self, feature: str) -> int:
         """Position of ``feature`` in :attr:`features`."""
@@ -238,9 +285,21 @@ class SurrogateModel:
         z = rng.standard_normal(n).tolist()
         return [t[m] + t[n + m] * float(unit_z[k]) + t[2 * n + m] * z[m] for m, k in enumerate(idx)]
 
-    def draw_unit_z(self, rng: np.random.Generator) -> FloatArray:
-        """Standardised installation effects, one per modelled feature."""
-        return rng.standard_normal(len(self.features))
+    def draw_unit_z(self, rng: np.random.Generator, n_drawn: int | None = None) -> FloatArray:
+        """Standardised installation effects, one per modelled feature.
+
+        ``n_drawn``: draw the effects of the first ``n_drawn`` features only (the others are
+        0), so that a user of the first features draws as many normals as before later
+        features were added to the surrogate. Default: all.
+        """
+        n = len(self.features)
+        if n_drawn is None:
+            return rng.standard_normal(n)
+        if not 1 <= n_drawn <= n:
+            raise ValueError(f"n_drawn = {n_drawn!r} must lie in [1, {n}] (modelled features)")
+        z = np.zeros(n)
+        z[:n_drawn] = rng.standard_normal(n_drawn)
+        return z
 
     def to_dict(self) -> dict:
         out = asdict(self)

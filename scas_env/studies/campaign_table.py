@@ -10,7 +10,7 @@ A campaign (:mod:`scas_env.studies.campaign`) gives one row per run. Columns, in
   supply-pressure offset (Pa), the unit's servovalve null bias (A) and the wire and mean
   coil diameters of the cracked spring (m);
 * the Table-2 features of the simulated conditions (float64): G1-G3 for ``"ground"``
-  (pre-flight test), I1-I7 for ``"flight"`` (units in ``prognostics.features.FEATURE_INFO``).
+  (pre-flight test), I1-I9 for ``"flight"`` (units in ``prognostics.features.CANDIDATE_INFO``).
 
 Files (:meth:`CampaignResult.save`): ``<stem>.csv`` holds the table (header row, floats
 written with ``repr`` so they read back bit for bit); ``<stem>.json`` holds the metadata
@@ -34,7 +34,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from prognostics.features import FEATURE_INFO
+from prognostics.features import CANDIDATE_INFO
 from scas_env.actuator.params import ScasParams
 
 __all__ = [
@@ -72,10 +72,10 @@ _INT_COLUMNS = ("level", "run_index")
 
 
 def condition_features(condition: str) -> tuple[str, ...]:
-    """Feature ids of one operating condition, in Table-2 order (G1-G3 or I1-I7)."""
+    """Feature ids of one operating condition, in Table-2 order then I8, I9 (G1-G3 or I1-I9)."""
     if condition not in CONDITIONS:
         raise ValueError(f"condition = {condition!r} must be one of {CONDITIONS}")
-    return tuple(k for k, info in FEATURE_INFO.items() if info.condition == condition)
+    return tuple(k for k, info in CANDIDATE_INFO.items() if info.condition == condition)
 
 
 def campaign_columns(conditions: Sequence[str]) -> tuple[str, ...]:

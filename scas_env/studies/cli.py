@@ -342,8 +342,9 @@ BUILD_SURROGATE_DOC = """\
 Rebuild the feature surrogate of an actuator design (shipped: scas_env/actuator/data).
 
 Runs the nested design (grid x grid fault levels, units, runs) on the physics model and fits
-the tables (scas_env.studies.surrogate_builder.build_surrogate). The shipped file is
-replaced only with --overwrite.
+the tables (scas_env.studies.surrogate_builder.build_shipped_surrogate: Table 2's features
+from independent units per point, I8 and I9 from --paired-units units shared by every
+point). The shipped file is replaced only with --overwrite.
 """
 
 
@@ -361,6 +362,12 @@ def _build_surrogate_args(parser: Parser) -> None:
     parser.add_argument("--units", type=positive_int, default=8, help="units per grid point")
     parser.add_argument("--runs", type=positive_int, default=5, help="runs per unit")
     parser.add_argument(
+        "--paired-seed", type=nonneg_int, default=2021, help="root seed of the paired design"
+    )
+    parser.add_argument(
+        "--paired-units", type=int_at_least(2), default=16, help="units of the paired design"
+    )
+    parser.add_argument(
         "--workers", type=positive_int, default=os.cpu_count() or 1, help="worker processes"
     )
     parser.add_argument("--out", type=Path, default=_shipped(DATA_FILE), help="output JSON")
@@ -369,16 +376,18 @@ def _build_surrogate_args(parser: Parser) -> None:
 
 
 def _build_surrogate_run(parser: Parser, args: Args) -> int:
-    from scas_env.studies.surrogate_builder import build_surrogate
+    from scas_env.studies.surrogate_builder import build_shipped_surrogate
 
     check_out_file(parser, args.out, args.overwrite)
     params = load_params(parser, args)
     announce_uncached_kernels()
-    model = build_surrogate(
+    model = build_shipped_surrogate(
         params,
         seed=args.seed,
+        paired_seed=args.paired_seed,
         grid=args.grid,
         units_per_point=args.units,
+        paired_units=args.paired_units,
         runs_per_unit=args.runs,
         n_workers=args.workers,
         progress=not args.quiet,

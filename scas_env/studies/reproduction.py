@@ -43,7 +43,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from prognostics.detection import DetectorConfig, PercentileDetector, severity_at_detection
-from prognostics.features import FEATURE_INFO
+from prognostics.features import CANDIDATE_INFO
 from prognostics.selection import FeatureScore, rank_features, redundancy_matrix, redundant_pairs
 from scas_env.actuator.calibration import Calibration, calibration_for
 from scas_env.actuator.config import Validated, param
@@ -166,7 +166,7 @@ def _level_runs(campaign: CampaignResult, fault: str) -> tuple[FloatArray, int]:
 # ----------------------------------------------------------------------------- selection
 def select_features(campaign: CampaignResult) -> dict[str, Any]:
     """Redundancy, ranking and selected features per fault and condition (module doc, 2)."""
-    complexity = {k: float(v.complexity) for k, v in FEATURE_INFO.items()}
+    complexity = {k: float(v.complexity) for k, v in CANDIDATE_INFO.items()}
     out: dict[str, Any] = {"redundancy": {}, "scores": {}, "pruned": {}, "selected": {}}
     for cond in ("ground", "flight"):
         flagged: dict[str, set[str]] = {}

@@ -5,6 +5,17 @@ units are drawn (``draw_unit``), and each runs ``runs_per_unit`` times (new run 
 and noise every run): a pre-flight test and a flight window. The run of (point p, unit u,
 run r) draws from ``SeedSequence(seed, spawn_key=(p, u))`` (the unit, then its runs in
 order), so the result does not depend on the number of workers.
+
+Paired design (``paired=True``): the run of (point p, unit u, run r) draws from
+``SeedSequence(seed, spawn_key=(u,))`` instead: the same units, run conditions and noise at
+every grid point (common random numbers). The tables' changes from point to point are then
+free of unit sampling, which matters for features a monitor reads as a change from the
+installation's own baseline (I8, I9: their installation spread is ten times their run noise).
+
+The shipped surrogate (:func:`build_shipped_surrogate`) takes Table 2's features from the
+independent design (``seed=2020``, 8 units per point, as built before I8 and I9 existed) and
+I8, I9 from a paired design (``seed=2021``, 16 units); ``SurrogateModel.feature_designs`` says
+which feature came from which.
 """
 
 from __future__ import annotations
@@ -55,13 +66,14 @@ def _chunk(
     points: list[tuple[float, float]],
     runs_per_unit: int,
     seal_critical_m: float,
+    paired: bool,
     specs: list[tuple[int, int]],
 ) -> list[np.ndarray]:
     return [
         unit_runs(
             params,
             *points[p],
-            np.random.SeedSequence(seed, spawn_key=(p, u)),
+            np.random.SeedSequence(seed, spawn_key=(u,) if paired else (p, u)),
             runs_per_unit,
             seal_critical_m,
         )
@@ -94,8 +106,10 @@ def build_surrogate(
     runs_per_unit: int = 5,
     n_workers: int = 1,
     progress: bool = False,
+    paired: bool = False,
 ) -> SurrogateModel:
-    """Run the nested design on a ``grid x grid`` lattice of [0, 1]^2 and fit the tables."""
+    """Run the nested design on a ``grid x grid`` lattice of [0, 1]^2 and fit the tables
+    (``paired``: the same units and runs at every point; module docstring)."""
     if grid < 2:
         raise ValueError(f"grid = {grid} must be >= 2")
     crack_grid = np.linspace(0.0, 1.0, grid)
@@ -105,11 +119,11 @@ def build_surrogate(
     specs = [(p, u) for p in range(len(points)) for u in range(units_per_point)]
     results = map_chunks(
         _chunk,
-        (params, seed, points, runs_per_unit, seal_critical_m),
+        (params, seed, points, runs_per_unit, seal_critical_m, paired),
         specs,
         n_workers=n_workers,
         progress=progress,
-        desc="surrogate",
+        desc="surrogate (paired)" if paired else "surrogate",
     )
     n_feat = len(FEATURE_CONDITION)
     mean = np.empty((n_feat, grid, grid))
@@ -132,3 +146,44 @@ def build_surrogate(
         units_per_point=units_per_point,
         runs_per_unit=runs_per_unit,
     )
+
+
+#: Features of the shipped surrogate taken from the paired design (module docstring).
+PAIRED_FEATURES = ("I8", "I9")
+
+
+def build_shipped_surrogate(
+    params: ScasParams,
+    *,
+    seed: int = 2020,
+    paired_seed: int = 2021,
+    grid: int = 5,
+    units_per_point: int = 8,
+    paired_units: int = 16,
+    runs_per_unit: int = 5,
+    n_workers: int = 1,
+    progress: bool = False,
+) -> SurrogateModel:
+    """The shipped surrogate's recipe: Table 2's features from the independent design,
+    :data:`PAIRED_FEATURES` from the paired one (module docstring)."""
+    main = build_surrogate(
+        params,
+        seed=seed,
+        grid=grid,
+        units_per_point=units_per_point,
+        runs_per_unit=runs_per_unit,
+        n_workers=n_workers,
+        progress=progress,
+    )
+    paired = build_surrogate(
+        params,
+        seed=paired_seed,
+        grid=grid,
+        units_per_point=paired_units,
+        runs_per_unit=runs_per_unit,
+        n_workers=n_workers,
+        progress=progress,
+        paired=True,
+    )
+    design = f"paired: seed {paired_seed}, {paired_units} units x {runs_per_unit} runs"
+    return main.with_features_from(paired, PAIRED_FEATURES, design)
