@@ -17,6 +17,7 @@ from policies.nested import shipped_reference, surrogate_reference
 from policies.sensing_sweep import QUICK, REFERENCE, replicate_seeds, run_sensing_sweep
 from policies.sensing_sweep import write_sweep_outputs as write_sweep
 from policies.tuning import HELD_OUT_SEED
+from scas_env import V2_KWARGS
 from scas_env.actuator.calibration import default_calibration, params_digest
 from scas_env.actuator.params import ScasParams
 from scas_env.actuator.surrogate import default_surrogate
@@ -32,7 +33,7 @@ from scas_env.studies.sensing_variants import (
 )
 
 #: A small surrogate design (2 x 2 grid, 2 units x 2 runs): seconds, not minutes.
-TINY = {"grid": 2, "units_per_point": 2, "runs_per_unit": 2}
+TINY = {"grid": 2, "units_per_point": 2, "paired_units": 2, "runs_per_unit": 2}
 
 
 def _flat(d: dict, prefix: str = "") -> dict:
@@ -125,7 +126,7 @@ def test_more_sensor_noise_widens_the_run_scatter(tiny_variant):
 def sweep(tiny_variant, tmp_path_factory):
     built, _ = tiny_variant
     levels = {"default": {}, built.label: built.env_kwargs()}
-    result = run_sensing_sweep(levels, replicates=2, **QUICK)
+    result = run_sensing_sweep(levels, replicates=2, env_kwargs=V2_KWARGS, **QUICK)
     out = tmp_path_factory.mktemp("sweep") / "out"
     paths = write_sweep(result, out, levels_info={built.label: built.describe()})
     return result, paths
@@ -162,7 +163,7 @@ def test_sweep_levels_share_the_age_rule_and_replicates_their_seeds(sweep, tiny_
     result, _ = sweep
     built = tiny_variant[0]
     # the age rule's held-out rows are shared by the levels (degradation held): they equal
-    # a run of the same tuned rule on the variant's own env
+    # a run of the same tuned rule on the variant's own env (v2: per-part draws, I8/I9)
     for r in (0, 1):
         age = result.tuning[f"{r}|{built.label}"][REFERENCE]
         own = run_benchmark(
@@ -170,7 +171,7 @@ def test_sweep_levels_share_the_age_rule_and_replicates_their_seeds(sweep, tiny_
             episodes=QUICK["episodes"],
             slots=QUICK["slots"],
             seed=HELD_OUT_SEED,
-            env_kwargs=built.env_kwargs(),
+            env_kwargs={**V2_KWARGS, **built.env_kwargs()},
         )
         shared = [
             x["reward"]
