@@ -401,7 +401,8 @@ def _plot(result: SweepResult, levels_info: Mapping[str, Any] | None, path: Path
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    values = [v for v in result.summary["values"] if v["replicate"] == 0]
+    all_values = result.summary["values"]
+    replicates = sorted({v["replicate"] for v in all_values})
     info = dict(levels_info or {})
     levels = list(result.config["levels"])
     groups: dict[str, list[str]] = {}
@@ -417,15 +418,24 @@ def _plot(result: SweepResult, levels_info: Mapping[str, Any] | None, path: Path
         numeric = all(isinstance(g, float | int) for g in scale)
         x = np.array(scale, dtype=float) if numeric else np.arange(len(group), dtype=float)
         mdd = np.zeros(len(group))
-        for k, arm in enumerate(result.config["families"]):
-            v = [next(d for d in values if d["level"] == lv and d["arm"] == arm) for lv in group]
+        series = [(r, arm) for r in replicates for arm in result.config["families"]]
+        for k, (r, arm) in enumerate(series):
+            v = [
+                next(
+                    d
+                    for d in all_values
+                    if d["level"] == lv and d["arm"] == arm and d["replicate"] == r
+                )
+                for lv in group
+            ]
             mean = np.array([d["mean"] for d in v])
-            err = np.nan_to_num(
-                np.array([[d["mean"] - d["low"], d["high"] - d["mean"]] for d in v]).T
-            )
+            half = [[d["mean"] - d["low"], d["high"] - d["mean"]] for d in v]
+            err = np.nan_to_num(np.array(half).T)
             mdd = np.maximum(mdd, [d["mdd"] for d in v])
-            shift = (1.0 + 0.04 * (k - 0.5)) if numeric else 1.0
-            ax.errorbar(x * shift, mean, yerr=err, fmt="o-", capsize=4, label=f"{arm}, 95% CI")
+            shift = (1.0 + 0.03 * (k - (len(series) - 1) / 2)) if numeric else 1.0
+            style = {"fmt": "o-"} if r == 0 else {"fmt": "s--", "mfc": "none", "alpha": 0.7}
+            what = arm if len(replicates) == 1 else f"{arm}, tuning replicate {r}"
+            ax.errorbar(x * shift, mean, yerr=err, capsize=4, label=f"{what}, 95% CI", **style)
         ax.fill_between(x, -mdd, mdd, color="grey", alpha=0.15, label="± MDD (80% power)")
         ax.axhline(0.0, color="black", lw=0.8)
         if numeric:
