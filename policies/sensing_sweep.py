@@ -162,13 +162,15 @@ def run_sensing_sweep(
     progress: bool = False,
     confidence: float = 0.95,
     env_kwargs: Mapping[str, Any] | None = None,
+    base_level: str | None = None,
 ) -> SweepResult:
     """Tune and evaluate ``families`` at every level (module docstring).
 
     ``levels``: level label -> the level's env keywords (``params``, ``calibration``,
     ``surrogate``: :meth:`scas_env.studies.sensing_variants.SensingVariant.env_kwargs`),
     in the order of the table; ``env_kwargs``: the scenario and costs shared by every
-    level (e.g. ``go_no_go="airworthiness"``)."""
+    level (e.g. ``go_no_go="airworthiness"``); ``base_level``: the level the others are
+    compared with family by family (default: the first)."""
     if not levels:
         raise ValueError("levels is empty: give at least one sensing level")
     unknown = [f for f in families if f not in FAMILIES or f == REFERENCE]
@@ -264,7 +266,9 @@ def run_sensing_sweep(
             rows += new
         timings["held_out_s"] += time.perf_counter() - t
         timings["held_out_cpu_s"] += _cpu_s() - c
-    summary = summarize_sweep(rows, list(levels), [REFERENCE, *families], confidence)
+    summary = summarize_sweep(
+        rows, list(levels), [REFERENCE, *families], confidence, base_level=base_level
+    )
     config = {
         "episodes": episodes,
         "slots": slots,
@@ -287,11 +291,18 @@ def summarize_sweep(
     levels: Sequence[str],
     arms: Sequence[str],
     confidence: float = 0.95,
+    base_level: str | None = None,
 ) -> dict[str, Any]:
     """Per replicate, level and arm other than the reference: the paired reward difference
     against the reference (``value``); per level and arm with two or more replicates: the
     paired difference of replicate r's value minus replicate 0's (``tuning_spread``: the
-    same held-out episodes, another tuning) beside the larger of their MDDs."""
+    same held-out episodes, another tuning) beside the larger of their MDDs; per replicate,
+    level other than ``base_level`` (default: the first) and arm: the paired reward
+    difference of the arm at that level minus the same arm at the base level
+    (``vs_base``: what the sensing change is worth to that family, same episodes)."""
+    base_level = levels[0] if base_level is None else base_level
+    if base_level not in levels:
+        raise ValueError(f"base_level = {base_level!r} is not one of the levels {list(levels)}")
     if REFERENCE not in arms:
         raise ValueError(f"arms {list(arms)} must include the reference {REFERENCE!r}")
     reward: dict[tuple[int, str, str], dict[int, float]] = {}
@@ -334,11 +345,27 @@ def summarize_sweep(
                 c = paired_comparison(d[r], d[0], confidence)
                 mdd = max(v["mdd"] for v in values if v["level"] == level and v["arm"] == arm)
                 spread.append({"replicate": r, "level": level, "arm": arm, **c, "value_mdd": mdd})
+    vs_base: list[dict[str, Any]] = []
+    for r in replicates:
+        for level in levels:
+            if level == base_level:
+                continue
+            for arm in arms:
+                if arm == REFERENCE:
+                    continue
+                x, _ = diff(r, level, arm)
+                y, _ = diff(r, base_level, arm)
+                c = paired_comparison(x, y, confidence)
+                vs_base.append(
+                    {"replicate": r, "level": level, "base": base_level, "arm": arm, **c}
+                )
     return {
         "confidence": confidence,
         "reference": REFERENCE,
+        "base_level": base_level,
         "values": values,
         "tuning_spread": spread,
+        "vs_base": vs_base,
     }
 
 
@@ -379,6 +406,19 @@ def markdown_sweep(result: SweepResult, levels_info: Mapping[str, Any] | None = 
             lines.append(
                 f"| {v['level']} | {v['arm']} | {v['replicate']} | {_money(v['mean'])} | "
                 f"[{_money(v['low'])}, {_money(v['high'])}] | {v['value_mdd']:,.0f} |"
+            )
+    if s.get("vs_base"):
+        lines += [
+            "",
+            f"## Same family, level minus {s['base_level']} (same held-out episodes)",
+            "",
+            "| replicate | level | arm | difference | 95% CI | MDD |",
+            "|---|---|---|---|---|---|",
+        ]
+        for v in s["vs_base"]:
+            lines.append(
+                f"| {v['replicate']} | {v['level']} | {v['arm']} | {_money(v['mean'])} | "
+                f"[{_money(v['low'])}, {_money(v['high'])}] | {v['mdd']:,.0f} |"
             )
     lines += ["", "## Tuned parameters (training seeds)", ""]
     for key, res in result.tuning.items():

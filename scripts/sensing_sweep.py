@@ -68,11 +68,13 @@ def parser() -> argparse.ArgumentParser:
     p.add_argument("--noise", type=_floats, default=[0.1, 0.3, 1.0, 3.0], help="noise factors")
     p.add_argument("--tolerances", type=_switches, default=[True, False], help="on,off")
     p.add_argument(
-        "--families", default="features,filter", help="nested families re-tuned per level"
+        "--families",
+        default="filter",
+        help="nested families re-tuned per level, comma-separated (e.g. features,filter)",
     )
     p.add_argument(
         "--env-id",
-        default="scas_env/ScasMaintenance-v1",
+        default="scas_env/ScasMaintenance-v2",
         help="registered env whose keywords every level starts from",
     )
     p.add_argument(
@@ -140,6 +142,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         n_workers=args.workers,
         progress=not args.quiet,
         env_kwargs=env_kwargs,
+        base_level=next((v.label for v in variants if v.surrogate_path is None), None),
         **size,
     )
     cpu = os.times()

@@ -157,6 +157,11 @@ def test_sweep_paired_values_match_an_independent_computation(sweep):
         d0 = rewards(0, s["level"], s["arm"]) - rewards(0, s["level"], REFERENCE)
         assert s["mean"] == pytest.approx(float(np.mean(d1 - d0)))
     assert len(data["tuning_spread"]) == 2 * 2
+    for s in data["vs_base"]:  # the tiny level minus the default level, same family
+        x = rewards(s["replicate"], s["level"], s["arm"])
+        y = rewards(s["replicate"], "default", s["arm"])
+        assert s["base"] == "default" and s["mean"] == pytest.approx(float(np.mean(x - y)))
+    assert len(data["vs_base"]) == 2 * 2  # replicates x families
 
 
 def test_sweep_levels_share_the_age_rule_and_replicates_their_seeds(sweep, tiny_variant):
