@@ -18,10 +18,11 @@ $(STAMP): pyproject.toml
 
 install: $(STAMP)
 
-## Main job: every maintenance policy on the same 40 episodes of 2000 flight slots (default
-## scenario, 2 workers); prints the table, writes CSV/JSON/Markdown and plots.
+## Main job: every maintenance policy on the same 40 episodes of 2000 flight slots of
+## ScasMaintenance-v2 (examples/v2.toml, 2 workers); prints the table, writes
+## CSV/JSON/Markdown and plots. v0: `$(PY) scripts/benchmark.py --out $(RESULTS)/benchmark_v0`.
 benchmark: install
-	$(PY) scripts/benchmark.py --out $(RESULTS)/benchmark
+	$(PY) scripts/benchmark.py --scenario examples/v2.toml --out $(RESULTS)/benchmark
 
 ## Physics demonstration: a pre-flight test and a flight window at three health states
 ## (signals as CSV, plots) and the paper's physics figures.

@@ -124,6 +124,23 @@ def episode_seeds(seed: int, episodes: int) -> list[tuple[int, int]]:
 Batch = tuple[int, tuple[tuple[int, int, int], ...]]
 
 
+def check_specs(specs: Sequence[PolicySpec], env_kwargs: Mapping[str, Any]) -> None:
+    """Build every policy once against its env's observation, before any episode runs: a
+    policy that cannot act on this scenario (e.g. an agent trained on another observation
+    layout) raises its ``ValueError`` here, naming the policy."""
+    names: dict[str, tuple[str, ...]] = {}
+    for spec in specs:
+        mode = spec.build_mode()
+        if mode not in names:
+            env = gym.make(ENV_ID, disable_env_checker=True, obs_mode=mode, **env_kwargs)
+            names[mode] = tuple(env.unwrapped.obs_names)
+            env.close()
+        try:
+            make_policy(spec.name, names[mode], **dict(spec.params))
+        except ValueError as exc:
+            raise ValueError(f"policy {spec.key!r} cannot run on this scenario: {exc}") from exc
+
+
 def _run_chunk(
     specs: tuple[PolicySpec, ...], env_kwargs: Mapping[str, Any], chunk: Sequence[Batch]
 ) -> list[dict[str, Any]]:
@@ -276,6 +293,7 @@ def run_benchmark(
         if reserved in kwargs:
             raise ValueError(f"env_kwargs must not set {reserved!r} (set per policy / slots)")
     kwargs["episode_slots"] = slots
+    check_specs(specs, kwargs)
     seeds = episode_seeds(seed, episodes)
     tasks: list[Batch] = [
         (p, tuple((e, *seeds[e]) for e in range(b, min(b + BATCH_EPISODES, episodes))))

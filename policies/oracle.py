@@ -21,6 +21,15 @@ It never tests (the state needs no test) and never lets a part fail when its lif
 the margin, so it is an upper bound for the benchmark's policies; the bound is checked
 episode by episode against every other policy (tests/test_oracle_bound.py).
 
+**Clairvoyant mode.** With per-part degradation draws (``Scenario(degradation_draws=
+"per_part")``, v2) every part's life is fixed when it is fitted, the true RUL is the exact
+remaining life, and the state holds the whole lives of the next parts of each kind
+(``spring_next_life_1`` ...). The oracle then plans with those lives instead of quantiles
+(:func:`plan_cost_known`, exact in every slot) and replaces a part at ``margin = 1`` (the
+flight before the failing one) unless told otherwise: no policy can fly a part longer,
+group replacements better or reach the episode's end cheaper, so it bounds every policy
+episode by episode (tests/test_oracle_bound.py).
+
 >>> names = ("crack_fraction", "wear_fraction", "spring_rul_true", "seal_rul_true",
 ...          "spring_age", "seal_age", "downtime")
 >>> oracle = OraclePolicy(names)
@@ -41,7 +50,7 @@ import numpy as np
 from policies.base import FLY, REPLACE_SEAL, REPLACE_SPRING, IntArray, Policy, register
 from scas_env.costs import CostModel
 
-__all__ = ["LIFE_QUANTILES", "ORACLE_DEFAULTS", "OraclePolicy", "plan_cost"]
+__all__ = ["LIFE_QUANTILES", "ORACLE_DEFAULTS", "OraclePolicy", "plan_cost", "plan_cost_known"]
 
 ORACLE_DEFAULTS: dict[str, float] = {"margin": 3.0, "episode_slots": 2000.0}
 #: Lives (flights) of new parts at the quartile midpoints (12.5, 37.5, 62.5, 87.5 %) of
@@ -124,6 +133,50 @@ def _option_cost(
     return price[a] + value * min(slots, h) + total / len(lives[a])
 
 
+@functools.lru_cache(maxsize=200_000)
+def plan_cost_known(
+    slots_left: int,
+    spring_left: int,
+    seal_left: int,
+    costs: tuple[float, float, float, int, int],
+    upcoming: tuple[tuple[int, ...], tuple[int, ...]],
+    lives: tuple[tuple[int, ...], tuple[int, ...]],
+) -> float:
+    """:func:`plan_cost` when the lives of the parts to come are known: ``upcoming[p]`` are
+    the whole lives (flights) of the next parts of kind ``p``, in the order they will be
+    fitted; once a kind's known lives are used up the program continues with
+    :func:`plan_cost` on the equally likely ``lives`` (exact, ``step=1``).
+
+    >>> c = (2500.0, 1500.0, 6000.0, 0, 1)
+    >>> plan_cost_known(100, 10, 500, c, ((1000,), (1000,)), ((1,), (1,))) == 1500.0 + 2500.0
+    True
+    """
+    if slots_left <= 0:
+        return 0.0
+    left = (spring_left, seal_left)
+    k = max(0, min(left))
+    if k >= slots_left:
+        return 0.0
+    a = 0 if spring_left <= seal_left else 1
+    h = slots_left - k
+    after = (left[0] - k, left[1] - k)
+    value, price, down = costs[0], costs[1:3], costs[3:5]
+    options = []
+    for both in (False, True):
+        kinds = (0, 1) if both else (a,)
+        if any(not upcoming[p] for p in kinds):
+            options.append(_option_cost(h, after, a, both, costs, lives, 1))
+            continue
+        slots = 1 + (max(down) if both else down[a])
+        new = list(after)
+        rest = [upcoming[0], upcoming[1]]
+        for p in kinds:
+            new[p], rest[p] = upcoming[p][0], upcoming[p][1:]
+        tail = plan_cost_known(h - slots, new[0], new[1], costs, (rest[0], rest[1]), lives)
+        options.append(sum(price[p] for p in kinds) + value * min(slots, h) + tail)
+    return min(options)
+
+
 #: The program's horizon is rounded to this many slots (few distinct states to cache).
 HORIZON_STEP = 10
 
@@ -151,13 +204,24 @@ class OraclePolicy(Policy):
         self,
         obs_names: Sequence[str],
         *,
-        margin: float = ORACLE_DEFAULTS["margin"],
+        margin: float | None = None,
         episode_slots: float = ORACLE_DEFAULTS["episode_slots"],
         spring_lives: Sequence[float] = LIFE_QUANTILES["spring"],
         seal_lives: Sequence[float] = LIFE_QUANTILES["seal"],
         cost_model: CostModel | None = None,
     ) -> None:
         super().__init__(obs_names)
+        #: clairvoyant mode: the state holds the lives of the parts to come (module docstring)
+        self.clairvoyant = "spring_next_life_1" in self.obs_names
+        if self.clairvoyant:
+            self.upcoming_names = [
+                tuple(n for n in self.obs_names if n.startswith(f"{part}_next_life_"))
+                for part in ("spring", "seal")
+            ]
+            for names in self.upcoming_names:
+                self._col.update({n: self.obs_names.index(n) for n in names})
+        if margin is None:
+            margin = 1.0 if self.clairvoyant else ORACLE_DEFAULTS["margin"]
         self.margin = float(margin)
         if not (self.margin >= 0.0 and math.isfinite(self.margin)):
             raise ValueError(f"margin = {margin!r} flights must be finite and >= 0")
@@ -210,16 +274,45 @@ class OraclePolicy(Policy):
                 self.pending[start] = False
         return super().predict(observation, state, episode_start, deterministic)
 
-    def _decide(self, h: int, rul: np.ndarray) -> bool:
+    def _decide(self, h: int, rul: np.ndarray, upcoming: Any = None) -> bool:
         """Whether to replace both parts now (the due one and the other) rather than the
-        due one alone, ``h`` slots before the end (:func:`plan_cost`)."""
+        due one alone, ``h`` slots before the end (:func:`plan_cost`; with the lives to
+        come, ``upcoming``, :func:`plan_cost_known`)."""
         left = tuple(math.floor(r - self.margin) for r in rul)
         a = 0 if left[0] <= left[1] else 1
         if left[1 - a] >= h:  # the other part outlives the episode: nothing to group
             return False
+        if upcoming is not None:
+            return self._decide_known(h, left, a, upcoming)
         args = (self.costs, self.lives, HORIZON_STEP)
         both = _option_cost(h, left, a, True, *args)
         return both < _option_cost(h, left, a, False, *args)
+
+    def _decide_known(
+        self, h: int, left: tuple[int, int], a: int, upcoming: tuple[tuple[int, ...], ...]
+    ) -> bool:
+        """:meth:`_decide` with known lives: both options priced by :func:`plan_cost_known`
+        (a part of life L flies L - margin flights before it is replaced)."""
+        usable = tuple(
+            tuple(math.floor(x - self.margin) for x in u if math.isfinite(x)) for u in upcoming
+        )
+        costs, down, price, value = self.costs, self.costs[3:5], self.costs[1:3], self.costs[0]
+        total = {}
+        for both in (False, True):
+            kinds = (0, 1) if both else (a,)
+            if any(not usable[p] for p in kinds):
+                return self._decide_quantiles(h, left, a)
+            slots = 1 + (max(down) if both else down[a])
+            new, rest = list(left), [usable[0], usable[1]]
+            for p in kinds:
+                new[p], rest[p] = usable[p][0], usable[p][1:]
+            tail = plan_cost_known(h - slots, new[0], new[1], costs, (rest[0], rest[1]), self.lives)
+            total[both] = sum(price[p] for p in kinds) + value * min(slots, h) + tail
+        return total[True] < total[False]
+
+    def _decide_quantiles(self, h: int, left: tuple[int, int], a: int) -> bool:
+        args = (self.costs, self.lives, 1)
+        return _option_cost(h, left, a, True, *args) < _option_cost(h, left, a, False, *args)
 
     def _act(self, obs: np.ndarray) -> IntArray:
         n = obs.shape[0]
@@ -244,7 +337,13 @@ class OraclePolicy(Policy):
             if due[r].all():
                 both = True
             else:
-                both = (age[r] > 0).all() and self._decide(int(h_all[r]), rul[r])
+                upcoming = None
+                if self.clairvoyant:
+                    upcoming = tuple(
+                        tuple(float(self.column(obs[r : r + 1], name)[0]) for name in names)
+                        for names in self.upcoming_names
+                    )
+                both = (age[r] > 0).all() and self._decide(int(h_all[r]), rul[r], upcoming)
             if both:  # seals first; the spring in their downtime slot
                 actions[r] = REPLACE_SEAL
                 self.pending[r, 0] = True

@@ -145,12 +145,18 @@ class PreventivePolicy(Policy):
 class DetectionPolicy(Policy):
     """Detection-triggered: test when ``test_age >= test_every`` slots, replace the part
     whose section-5.1 alarm is on (the spring on ``spring_alarm``, the seals on
-    ``seal_alarm``). The alarm is binary, so there is no opportunistic variant."""
+    ``seal_alarm``), and after a failed go/no-go test the part the test implicates
+    (:func:`policies.nested.implicated_spring`), as the nested rules do: under the
+    airworthiness go/no-go (v1, v2) a failed test holds the aircraft until a part is
+    replaced. The alarm is binary, so there is no opportunistic variant."""
 
     name: ClassVar[str] = "detection"
     obs_mode: ClassVar[str] = "features"
     reads: ClassVar[tuple[str, ...]] = (
         "test_age",
+        "no_go",
+        "G1",
+        "G3",
         "spring_alarm",
         "seal_alarm",
         "spring_age",
@@ -169,8 +175,14 @@ class DetectionPolicy(Policy):
 
     def _act(self, obs: np.ndarray) -> IntArray:
         flying = self.column(obs, "downtime") <= 0
-        spring = (self.column(obs, "spring_alarm") > 0.5) & (self.column(obs, "spring_age") > 0)
-        seal = (self.column(obs, "seal_alarm") > 0.5) & (self.column(obs, "seal_age") > 0)
+        from policies.nested import implicated_spring
+
+        failed = flying & (self.column(obs, "no_go") > 0.5)
+        blame = implicated_spring(self.column(obs, "G1"), self.column(obs, "G3"))
+        spring = (self.column(obs, "spring_alarm") > 0.5) | (failed & blame)
+        seal = (self.column(obs, "seal_alarm") > 0.5) | (failed & ~blame)
+        spring &= self.column(obs, "spring_age") > 0
+        seal &= self.column(obs, "seal_age") > 0
         test = flying & (self.column(obs, "test_age") >= self.test_every)
         return choose(spring, seal, test)
 

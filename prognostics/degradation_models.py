@@ -185,20 +185,24 @@ def _predict_kernel(
     sigma_x: float,
     sigma_log_theta: float,
     noise: np.ndarray,
+    damage_cv: float = 0.0,
 ) -> None:
     """In-place Euler step of the module-level process model for every particle.
 
-    ``noise`` holds the standard normals: ``noise[:n]`` for x (if ``sigma_x > 0``), then
-    ``noise[n:2n]`` for log theta (if ``sigma_log_theta > 0``); drawn by the caller with
-    numpy (passing a Generator into numba costs more per call than the whole step).
+    ``noise`` holds the standard normals: ``noise[:n]`` for x (if ``sigma_x > 0`` or
+    ``damage_cv > 0``), then ``noise[n:2n]`` for log theta (if ``sigma_log_theta > 0``);
+    drawn by the caller with numpy (passing a Generator into numba costs more per call than
+    the whole step).
     """
     n = x.size
     sx = sigma_x * math.sqrt(usage)
+    sd = damage_cv * math.sqrt(usage)
     sth = sigma_log_theta * math.sqrt(usage)
-    k_th = n if sigma_x > 0.0 else 0
+    k_th = n if (sigma_x > 0.0 or damage_cv > 0.0) else 0
     for i in range(n):
         g = rate_at_scalar(grid, rate, cells, inv_cell, x[i])
-        x[i] += math.exp(log_theta[i]) * g * usage
+        u = usage + sd * noise[i] if damage_cv > 0.0 else usage
+        x[i] += math.exp(log_theta[i]) * g * u
         if sigma_x > 0.0:
             x[i] += sx * noise[i]
         if sigma_log_theta > 0.0:
@@ -218,16 +222,19 @@ def _predict_exact_kernel(
     sigma_x: float,
     sigma_log_theta: float,
     noise: np.ndarray,
+    damage_cv: float = 0.0,
 ) -> None:
     """As :func:`_predict_kernel` with the exact deterministic step ``I^{-1}(I(x) + theta u)``
     (the multiplier of the step is the one at its start, as in the Euler step)."""
     n = x.size
     sx = sigma_x * math.sqrt(usage)
+    sd = damage_cv * math.sqrt(usage)
     sth = sigma_log_theta * math.sqrt(usage)
-    k_th = n if sigma_x > 0.0 else 0
+    k_th = n if (sigma_x > 0.0 or damage_cv > 0.0) else 0
     for i in range(n):
         d = damage_scalar(grid, rate, cum, cells, inv_cell, x[i])
-        x[i] = inverse_damage_scalar(grid, rate, cum, d + math.exp(log_theta[i]) * usage)
+        u = usage + sd * noise[i] if damage_cv > 0.0 else usage
+        x[i] = inverse_damage_scalar(grid, rate, cum, d + math.exp(log_theta[i]) * u)
         if sigma_x > 0.0:
             x[i] += sx * noise[i]
         if sigma_log_theta > 0.0:
@@ -280,6 +287,7 @@ def advance_severities(
     cells: np.ndarray,
     inv_cell: float,
     sigma_x: float,
+    damage_cv: float,
 ) -> None:
     """x-part of a filter step for every particle (log theta is read, not changed).
 
@@ -293,11 +301,13 @@ def advance_severities(
     noise = scratch[1]
     for i in range(n):
         theta[i] = math.exp(log_theta[i])
-        if sigma_x > 0.0:
+        if sigma_x > 0.0 or damage_cv > 0.0:
             noise[i] = standard_normal(handle)
     sx = sigma_x * math.sqrt(usage)
+    sd = damage_cv * math.sqrt(usage)
     for i in range(n):
-        xi = advance_scalar(exact, grid, rate, cum, cells, inv_cell, x[i], theta[i], usage)
+        u = usage + sd * noise[i] if damage_cv > 0.0 else usage
+        xi = advance_scalar(exact, grid, rate, cum, cells, inv_cell, x[i], theta[i], u)
         if sigma_x > 0.0:
             xi += sx * noise[i]
         x[i] = xi
@@ -318,14 +328,16 @@ def predict_particles(
     inv_cell: float,
     sigma_x: float,
     sigma_log_theta: float,
+    damage_cv: float,
 ) -> None:
     """:meth:`TabulatedRateModel.predict` with the normals drawn inside numba from
     ``handle``: the same draws in the same order and the same arithmetic, so the same
     result bit for bit. Arguments after ``scratch`` (float64, shape (>= 2, N)) are
     :attr:`TabulatedRateModel.kernel_args`."""
     advance_severities(
-        x, log_theta, usage, handle, scratch, exact, grid, rate, cum, cells, inv_cell, sigma_x
-    )
+        x, log_theta, usage, handle, scratch, exact, grid, rate, cum, cells, inv_cell, sigma_x,
+        damage_cv,
+    )  # fmt: skip
     if sigma_log_theta > 0.0:
         sth = sigma_log_theta * math.sqrt(usage)
         for i in range(x.size):
@@ -376,6 +388,10 @@ class TabulatedRateModel:
         sqrt(usage unit) (0 freezes theta).
     scheme : deterministic step, ``"euler"`` (one Euler step) or ``"exact"`` (the damage
         integral; see the module docstring).
+    damage_noise_cv : growth scatter as noise on the usage instead of the state: a step of
+        ``u`` advances by ``theta (u + cv sqrt(u) eps)`` usage units of damage (a per-usage
+        growth factor of mean 1 and CV ``cv``, e.g. flight-to-flight load scatter), so the
+        noise scales with the growth rate. Exclusive with ``process_noise_std``.
     """
 
     grid: np.ndarray
@@ -383,6 +399,7 @@ class TabulatedRateModel:
     process_noise_std: float = 0.0
     log_theta_noise_std: float = 0.0
     scheme: str = "euler"
+    damage_noise_cv: float = 0.0
     cumulative: np.ndarray = field(init=False, repr=False)
     cells: np.ndarray = field(init=False, repr=False)
     inv_cell: float = field(init=False, repr=False)
@@ -404,10 +421,15 @@ class TabulatedRateModel:
             raise ValueError(f"rate must be > 0 everywhere, min is {rate.min()}")
         if self.scheme not in SCHEMES:
             raise ValueError(f"scheme = {self.scheme!r} is not one of {SCHEMES}")
-        for name in ("process_noise_std", "log_theta_noise_std"):
+        for name in ("process_noise_std", "log_theta_noise_std", "damage_noise_cv"):
             value = getattr(self, name)
             if not (math.isfinite(value) and value >= 0.0):
                 raise ValueError(f"{name} = {value} must be finite and >= 0")
+        if self.process_noise_std > 0.0 and self.damage_noise_cv > 0.0:
+            raise ValueError(
+                f"process_noise_std = {self.process_noise_std} and damage_noise_cv = "
+                f"{self.damage_noise_cv}: use one of the two growth noises"
+            )
         with np.errstate(over="ignore", divide="ignore", invalid="ignore"):
             slopes = np.diff(rate) / np.diff(grid)
             inv_cell = _CELLS_PER_SEGMENT * (grid.size - 1) / (grid[-1] - grid[0])
@@ -445,14 +467,15 @@ class TabulatedRateModel:
     @property
     def kernel_args(
         self,
-    ) -> tuple[bool, np.ndarray, np.ndarray, np.ndarray, np.ndarray, float, float, float]:
-        """``(exact, grid, rate, cumulative, cells, inv_cell, sigma_x, sigma_log_theta)``:
-        the model arguments of :func:`predict_particles` (after ``scratch``)."""
+    ) -> tuple[bool, np.ndarray, np.ndarray, np.ndarray, np.ndarray, float, float, float, float]:
+        """``(exact, grid, rate, cumulative, cells, inv_cell, sigma_x, sigma_log_theta,
+        damage_cv)``: the model arguments of :func:`predict_particles` (after ``scratch``)."""
         return (
             self.scheme == "exact",
             *self.table_args,
             float(self.process_noise_std),
             float(self.log_theta_noise_std),
+            float(self.damage_noise_cv),
         )
 
     @property
@@ -504,7 +527,8 @@ class TabulatedRateModel:
         """
         if not (math.isfinite(usage) and usage >= 0.0):
             raise ValueError(f"usage = {usage} must be finite and >= 0")
-        n_draws = x.size * ((self.process_noise_std > 0.0) + (self.log_theta_noise_std > 0.0))
+        x_noise = self.process_noise_std > 0.0 or self.damage_noise_cv > 0.0
+        n_draws = x.size * (x_noise + (self.log_theta_noise_std > 0.0))
         if work is None or work.size < n_draws:
             work = np.empty(max(n_draws, 1))
         noise = work[:n_draws]
@@ -519,6 +543,7 @@ class TabulatedRateModel:
                 self.process_noise_std,
                 self.log_theta_noise_std,
                 noise,
+                self.damage_noise_cv,
             )
             return
         _predict_kernel(
@@ -532,6 +557,7 @@ class TabulatedRateModel:
             self.process_noise_std,
             self.log_theta_noise_std,
             noise,
+            self.damage_noise_cv,
         )
 
     def simulate_steps_to_threshold(
@@ -573,12 +599,14 @@ def paris_crack_model(
     process_noise_std_m: float = 0.0,
     log_theta_noise_std: float = 0.0,
     scheme: str = "euler",
+    damage_noise_cv: float = 0.0,
 ) -> TabulatedRateModel:
     """Paris-type crack growth in flight units: ``a_{k+1} = a_k + theta g(a_k) u_k + noise``.
 
     ``g(a) = da/dflight`` at the nominal Paris constant (ref §3.2: rainflow + Paris per flight,
     tabulated by the simulator); ``theta`` multiplies the unit's Paris C (per-unit scatter,
     ref §9 ``paris_c_log_sigma``); ``u_k`` is the number of flights in the step.
+    ``damage_noise_cv``: flight-to-flight growth scatter (:class:`TabulatedRateModel`).
     """
     return TabulatedRateModel(
         grid=depth_grid_m,
@@ -586,6 +614,7 @@ def paris_crack_model(
         process_noise_std=process_noise_std_m,
         log_theta_noise_std=log_theta_noise_std,
         scheme=scheme,
+        damage_noise_cv=damage_noise_cv,
     )
 
 
@@ -594,6 +623,7 @@ def linear_wear_model(
     *,
     process_noise_std: float = 0.0,
     log_theta_noise_std: float = 0.0,
+    damage_noise_cv: float = 0.0,
 ) -> TabulatedRateModel:
     """Usage-driven wear ``lambda_{k+1} = lambda_k + theta r u_k + noise`` (Archard, ref §4.2).
 
@@ -607,4 +637,5 @@ def linear_wear_model(
         rate=np.array([wear_rate_per_usage, wear_rate_per_usage]),
         process_noise_std=process_noise_std,
         log_theta_noise_std=log_theta_noise_std,
+        damage_noise_cv=damage_noise_cv,
     )

@@ -172,6 +172,7 @@ def _step_kernel(
     inv_cell: float,
     sigma_x: float,
     sigma_log_theta: float,
+    damage_cv: float,
     y: float,
     shared_knots: bool,
     is_poly: bool,
@@ -186,8 +187,9 @@ def _step_kernel(
 ) -> float:
     """``predict_particles`` then ``_update_kernel`` in one call; returns N_eff."""
     advance_severities(
-        x, log_theta, usage, handle, scratch, exact, grid, rate, cum, cells, inv_cell, sigma_x
-    )
+        x, log_theta, usage, handle, scratch, exact, grid, rate, cum, cells, inv_cell, sigma_x,
+        damage_cv,
+    )  # fmt: skip
     log_likelihood_terms(
         y,
         x,
@@ -213,6 +215,35 @@ def _step_kernel(
     for i in range(x.size):
         log_w[i] += log_density(q[i], sig[i])
         peak = max(peak, log_w[i])
+    return _normalise(log_w, w, peak)
+
+
+@njit(cache=True)
+def _add_log_likelihood(log_w: np.ndarray, w: np.ndarray, ll: np.ndarray) -> float:
+    """``log w += ll`` then normalise; returns N_eff."""
+    peak = -np.inf
+    for i in range(log_w.size):
+        log_w[i] += ll[i]
+        peak = max(peak, log_w[i])
+    return _normalise(log_w, w, peak)
+
+
+@njit(cache=True)
+def _condition_below(x: np.ndarray, log_w: np.ndarray, w: np.ndarray, threshold: float) -> float:
+    """Zero the weights of particles with ``x >= threshold`` and renormalise; returns N_eff,
+    or -1 (nothing changed) when no particle lies below or none lies at or past it."""
+    peak = -np.inf
+    dead = 0
+    for i in range(x.size):
+        if x[i] < threshold:
+            peak = max(peak, log_w[i])
+        else:
+            dead += 1
+    if dead == 0 or peak == -np.inf:
+        return -1.0
+    for i in range(x.size):
+        if x[i] >= threshold:
+            log_w[i] = -np.inf
     return _normalise(log_w, w, peak)
 
 
@@ -399,6 +430,9 @@ class ParticleFilter:
         self._ess = float(n)
         self._ready = False
         self.n_resamples = 0
+        #: per-particle auxiliary arrays (name -> (N,) float64) that resampling carries
+        #: along with their particles (e.g. a Rao-Blackwellised Gaussian per particle)
+        self.aux: dict[str, np.ndarray] = {}
         self._make_views()
 
     def _make_views(self) -> None:
@@ -509,11 +543,20 @@ class ParticleFilter:
             "call reset(x0, theta0) before using the filter again"
         )
 
-    def update(self, y: float, measurement: MeasurementModel | None = None) -> bool:
+    def update(
+        self,
+        y: float,
+        measurement: MeasurementModel | None = None,
+        *,
+        sigma_values: np.ndarray | None = None,
+    ) -> bool:
         """Weight by the likelihood of feature ``y``; NaN = no measurement (no change).
 
         ``measurement`` overrides the filter's model for this update (a filter fed by
-        several features, each with its own model). Returns True if the filter resampled.
+        several features, each with its own model). ``sigma_values`` (one value > 0 per
+        ``sigma_knots`` entry of the model used) replaces the model's noise for this update
+        only, e.g. the noise of a mean of several measurements with extra variance, without
+        building a new model. Returns True if the filter resampled.
         """
         self._check_ready()
         y = float(y)
@@ -529,6 +572,14 @@ class ParticleFilter:
             raise ValueError(
                 f"measurement must be a MeasurementModel, got {type(measurement).__name__}"
             )
+        if sigma_values is not None:
+            sig = np.ascontiguousarray(sigma_values, dtype=np.float64)
+            if sig.shape != args[-1].shape or not bool(np.all(sig > 0.0) & np.all(sig < np.inf)):
+                raise ValueError(
+                    f"sigma_values = {sigma_values!r} must hold {args[-1].size} finite values "
+                    "> 0 (one per sigma knot of the measurement model)"
+                )
+            args = (*args[:-1], sig)
         self._ess = _update_kernel(y, self._x, self._log_w, self._w, self._scratch, *args)
         return self._after_update()
 
@@ -555,6 +606,44 @@ class ParticleFilter:
                 *self._likelihood_args,
             )
         self._check_cloud("step", usage, y)
+        return self._after_update()
+
+    def add_auxiliary(self, name: str, value: float = 0.0) -> np.ndarray:
+        """Register a per-particle array ``aux[name]`` (filled with ``value``) that
+        resampling permutes with the particles; returns it (write into it in place)."""
+        if not isinstance(name, str) or name in self.aux:
+            raise ValueError(f"name = {name!r} must be a new string (have {sorted(self.aux)})")
+        if not math.isfinite(value):
+            raise ValueError(f"value = {value} must be finite")
+        self.aux[name] = np.full(self.n_particles, float(value))
+        return self.aux[name]
+
+    def update_log_likelihood(self, log_likelihood: np.ndarray) -> bool:
+        """Weight by per-particle log-likelihoods computed by the caller (a measurement
+        model the filter does not hold, e.g. with per-particle offsets):
+        ``log w_i <- log w_i + l_i``, normalised; resamples as :meth:`update`. All values
+        must be finite. Returns True if the filter resampled."""
+        self._check_ready()
+        ll = np.ascontiguousarray(log_likelihood, dtype=np.float64)
+        if ll.shape != self._w.shape or not bool(np.all(np.isfinite(ll))):
+            raise ValueError(
+                f"log_likelihood must hold {self.n_particles} finite values, got shape {ll.shape}"
+            )
+        self._ess = _add_log_likelihood(self._log_w, self._w, ll)
+        return self._after_update()
+
+    def condition_below(self, threshold: float) -> bool:
+        """Condition on ``severity < threshold`` (e.g. the part is known not to have failed):
+        particles at or past it lose their weight, the rest are renormalised; resamples as
+        :meth:`update`. If no particle lies below, nothing changes (returns False; the
+        caller decides). Returns True if the filter resampled."""
+        self._check_ready()
+        if not math.isfinite(threshold):
+            raise ValueError(f"threshold = {threshold} must be finite")
+        ess = _condition_below(self._x, self._log_w, self._w, float(threshold))
+        if ess < 0.0:
+            return False
+        self._ess = ess
         return self._after_update()
 
     def _after_update(self) -> bool:
@@ -585,6 +674,8 @@ class ParticleFilter:
                 self.shrink,
                 self._stream.handle,
             )
+        for arr in self.aux.values():
+            arr[:] = arr[self._idx]
         self._ess = float(self.n_particles)
         self.n_resamples += 1
 

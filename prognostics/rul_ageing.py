@@ -213,6 +213,21 @@ class AgeingRul:
             self._r, self._cum_w, self._suffix_w, self._suffix_wr, self._low, float(k), horizon
         )
 
+    def quantile(self, k: float, level: float) -> float:
+        """Quantile of ``max(R - k, 0)`` at ``level`` in [0, 1] (inverted weighted CDF, as
+        :func:`prognostics.rul.weighted_quantile`; steps).
+
+        >>> AgeingRul(np.array([10.0, 30.0]), np.array([0.5, 0.5]), low_quantile=0.05).quantile(
+        ...     4.0, 0.9)
+        26.0
+        """
+        _check_steps(k)
+        if not 0.0 <= level <= 1.0:
+            raise ValueError(f"level = {level} must lie in [0, 1]")
+        n = self._r.size
+        j = int(np.searchsorted(self._cum_w[1:], level, side="left"))
+        return max(float(self._r[min(j, n - 1)]) - k, 0.0)
+
     def prob_failure(self, k: float, horizon: float) -> float:
         """``P(max(R - k, 0) <= horizon) = P(R <= horizon + k)``, ``horizon >= 0``."""
         _check_steps(k)

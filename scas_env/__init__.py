@@ -38,13 +38,15 @@ ENV_ID = "scas_env/ScasMaintenance-v0"
 #: v1: the pre-flight test's go/no-go is an airworthiness limit (scas_env.acceptance)
 ENV_ID_V1 = "scas_env/ScasMaintenance-v1"
 #: v2: v1 plus the in-flight features I8 and I9 (observed, and learnt from by the filters
-#: every ``flight_update_flights`` flights) and per-part degradation draws (each part's life
-#: fixed at fitting: common random numbers per part, exact true RUL)
+#: every ``flight_update_flights`` flights), per-part degradation draws (each part's life
+#: fixed at fitting: common random numbers per part, exact true RUL) and the flight-to-flight
+#: growth scatter of whole simulated flights
 ENV_ID_V2 = "scas_env/ScasMaintenance-v2"
 V2_KWARGS = {
     "go_no_go": "airworthiness",
     "flight_features": "I2,I6,I7,I8,I9",
     "degradation_draws": "per_part",
+    "damage_scatter": "whole_flight",
 }
 
 # Episode length is the scenario's ``episode_slots`` (2000 by default): the env truncates

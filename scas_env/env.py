@@ -17,7 +17,7 @@ from scas_env.costs import CostModel
 from scas_env.dashboard import DashboardRenderer
 from scas_env.fleet_state import PARTS, REWARD_TERMS, FleetState
 from scas_env.info import StepInfo, build_info
-from scas_env.monitor import HealthMonitor
+from scas_env.monitor import LEARNING_FEATURES, HealthMonitor
 from scas_env.observation import ObservationBuilder
 from scas_env.scenario import Scenario
 from scas_env.world import ActuatorWorld
@@ -96,15 +96,17 @@ class ScasMaintenanceEnv(gym.Env):
     | 16 | seal_age | flights | [0, slots] | flights since the seals were fitted |
     | 17 | downtime | slots | [0, max] | slots still to spend on the ground |
 
-    The filters learn at tests only: between two tests the RUL entries are those of the last
-    update aged by the flights flown since (each particle's RUL falls by one per flight;
-    ``scas_env.monitor``). Feature values before the first flight or test are the healthy
-    surrogate means. RUL
-    entries saturate at ``rul_cap_flights``; feature entries saturate at their bounds (the
-    raw values are in ``info["features"]``). ``"features"``: entries 0-6 and 13-17 (no
-    filter). ``"state"``: the truth (an oracle's view): crack fraction of critical, wear
-    fraction, true spring RUL, true seal RUL (flights, capped), spring age, seal age,
-    downtime. ``"dict"``: a ``Dict`` of all of the above.
+    v2 (``flight_features="I2,I6,I7,I8,I9"``) adds I8 (uA, mean(i - i_h): the crack's DC
+    null-bias current) and I9 (-, rms(i)/rms(i_h): seal wear) after I7, ``Box(20,)``. In v0 and
+    v1 the filters learn at tests only; in v2 they also learn from I8 (spring) and I9 (seals)
+    every ``flight_update_flights`` flights (docs/beliefs.md). Between updates the RUL entries
+    are those of the last update aged by the flights flown since (each particle's RUL falls by
+    one per flight; ``scas_env.monitor``). Feature values before the first flight or test are
+    the healthy surrogate means. RUL entries saturate at ``rul_cap_flights``; feature entries
+    saturate at their bounds (the raw values are in ``info["features"]``). ``"features"``:
+    entries 0-6 and 13-17 (no filter). ``"state"``: the truth (an oracle's view): crack fraction
+    of critical, wear fraction, true spring RUL, true seal RUL (flights, capped), spring age,
+    seal age, downtime. ``"dict"``: a ``Dict`` of all of the above.
 
     ## Rewards
 
@@ -516,6 +518,12 @@ class ScasMaintenanceEnv(gym.Env):
         return obs, build_info(fleet, rul, self.builder.features, row=0)
 
 
+def learning_features(scenario: Scenario) -> tuple[str, ...]:
+    """The in-flight features the monitor's filters learn from under ``scenario``, in the
+    order of ``HealthMonitor.flight_sum`` (empty: they learn at tests only)."""
+    return tuple(f for f in LEARNING_FEATURES if f in scenario.flight_feature_names)
+
+
 def new_fleet_state(env: ScasMaintenanceEnv, n: int) -> FleetState:
     """An ``n``-row :class:`FleetState` sized for ``env``'s surrogate, filters and features."""
     return FleetState(
@@ -526,6 +534,7 @@ def new_fleet_state(env: ScasMaintenanceEnv, n: int) -> FleetState:
         seal_critical_m=env.calibration.seal_critical_wear_m,
         kernel_tables=env.world.kernel_tables,
         exact_lives=env.world.per_part,
+        n_learning=len(learning_features(env.scenario)),
     )
 
 

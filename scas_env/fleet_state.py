@@ -38,7 +38,8 @@ class FleetState:
     ``n_particles`` per filter, ``n_features`` observed features, ``seal_critical_m`` (m),
     ``kernel_tables`` (:func:`scas_env.world.kernel_tables`); ``exact_lives``
     (``Scenario.degradation_draws = "per_part"``): the true RUL is each part's own remaining
-    life (``life``: flights left, the failing one included), not the expected flights to failure.
+    life (``life``: flights left, the failing one included), not the expected flights to failure;
+    ``n_learning`` in-flight features the monitor learns from (their batch sums and count).
 
     Attributes
     ----------
@@ -59,6 +60,8 @@ class FleetState:
         seal_critical_m: float,
         kernel_tables: dict[str, tuple],
         exact_lives: bool = False,
+        n_upcoming: int = 3,
+        n_learning: int = 0,
     ) -> None:
         if n < 1:
             raise ValueError(f"n = {n} must be >= 1")
@@ -79,6 +82,8 @@ class FleetState:
             "unit_z": np.zeros((n, n_unit_features)),
             # flights each part will still fly, the failing one included ("per_part"; else inf)
             "life": np.full((n, 2), np.inf),
+            # whole lives of the next parts of each kind ("per_part"; else inf)
+            "upcoming": np.full((n, 2, n_upcoming), np.inf),
             # the monitor: flights since each filter's last update, detector flags, RUL tables
             "pending": np.zeros((n, 2), dtype=i8),
             "detected": np.zeros((n, 2), dtype=b),
@@ -105,6 +110,10 @@ class FleetState:
             "wasted_sum": np.zeros((n, 2)),
             "wasted_count": np.zeros((n, 2), dtype=i8),
         }
+        if n_learning:
+            # the monitor's batch of in-flight learning features under way: sums (SI), flights
+            self.a["flight_sum"] = np.zeros((n, n_learning))
+            self.a["flight_count"] = np.zeros(n, dtype=i8)
         self.terms = {t: np.zeros(n) for t in REWARD_TERMS}
         self.wasted_now = np.zeros((n, len(PARTS)))
         self.table_source: list[list[Any]] = [[None, None] for _ in range(n)]

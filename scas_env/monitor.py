@@ -13,8 +13,9 @@ turns them into RUL summaries. It sees only features, never the truth.
   tolerances). After a spring pair is fitted, the first ``BASELINE_TESTS`` tests estimate
   that offset (feature minus the model mean at the current estimate) and are not used by the
   filters; later tests use the offset-corrected value with the run-to-run noise.
-* **Event-driven prediction**: a flight only counts usage. The filters are predicted over
-  all the flights since their last update in one step, at the next test (``scheme="exact"``:
+* **Event-driven prediction**: a flight only counts usage (v0, v1; with I8, I9 below). The
+  filters are predicted over all the flights since their last update in one step, at the
+  next test (``scheme="exact"``:
   the damage integral, so one step of k flights lands where k flights would without noise;
   process noise with variance k times the per-flight one). Between tests the RUL summary of
   the frozen cloud is aged by the flights flown (:class:`prognostics.rul_ageing.AgeingRul`,
@@ -27,6 +28,28 @@ turns them into RUL summaries. It sees only features, never the truth.
   distribution of the surrogate.
 * ``filter_noise_scale`` and ``filter_growth_bias`` of the scenario make the filters assume
   more noise or faster/slower growth than the truth (filter-quality studies).
+
+**Learning in flight** (``Scenario.flight_features`` with I8 and I9, v2): the filters also
+learn from the in-flight features, I8 (DC current offset, the crack) into the spring filter
+and I9 (command-normalised current, the wear) into the seal filter, every
+``Scenario.flight_update_flights`` flights from the batch's mean (:meth:`flown`,
+:meth:`learn_from_flights`; a test or a replacement first learns from the batch under way).
+In this mode every feature's installation effect is a filter state instead of a fixed
+offset (``installation = "states"``): the surrogate draws a feature as
+``mu(c, w) + tau(c, w) z + sigma(c, w) eps`` with ``z ~ N(0, 1)`` drawn when a spring pair is
+fitted, and ``tau`` (the between-installation spread) changes with the parts' state, so a
+constant offset recorded at fitting does not remove it. Given a particle's path, ``z`` is
+Gaussian: each particle carries its own mean and variance of ``z`` per feature
+(Rao-Blackwellised, :mod:`prognostics.random_effect`), and each measurement is weighted by
+its predictive density ``N(y; mu_i + tau_i m_i, sigma_i^2 / n + tau_i^2 P_i + cross)``, with
+``mu``, ``tau``, ``sigma`` the surrogate's tables along the part's own severity at the other
+part's estimate (bilinear, as the world draws them) and ``cross`` the other filter's
+variance through the feature's slope against the other part (the cross-fault correction's
+uncertainty). A new spring pair (new installation) resets every ``z`` to N(0, 1); new seals
+keep the installation's ``z`` knowledge (the cloud's mixture moments).
+The earlier ``"baseline"`` treatment (offsets from the first tests or flights, their
+estimation variance added to the noise) stays for v0 and v1 (bit for bit) and is kept as an
+option for comparison (docs/beliefs.md).
 """
 
 from __future__ import annotations
@@ -36,13 +59,15 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+from numba import njit
 from scipy.stats import norm
 
 from prognostics.degradation_models import linear_wear_model, paris_crack_model
 from prognostics.detection import DetectorConfig, PercentileDetector
-from prognostics.measurement import measurement_from_curve
+from prognostics.measurement import MeasurementModel, measurement_from_curve
 from prognostics.normals import NormalStream
 from prognostics.particle_filter import ParticleFilter
+from prognostics.random_effect import random_effect_update
 from prognostics.rul import RulPredictor
 from prognostics.rul_ageing import AgeingRul
 from scas_env.actuator.calibration import Calibration
@@ -52,8 +77,20 @@ from scas_env.actuator.uncertainty import truncated_normal
 from scas_env.scenario import Scenario
 
 BASELINE_TESTS = 3
+#: Treatments of the installation effects and growth scatter (``HealthMonitor.installation``).
+INSTALLATION_MODELS = ("baseline", "states")
+#: In-flight features the filters learn from, and the part whose filter each one feeds.
+LEARNING_FEATURES = {"I8": "spring", "I9": "seal"}
+#: Flights after a fitting whose features estimate the installation offsets (module docstring).
+BASELINE_FLIGHTS = 20
+#: Step (fraction of critical) of the central differences of the surrogate's mean curves.
+_SLOPE_STEP = 0.02
 #: Artificial-evolution random walk of log theta per flight (lets the filters track the unit).
 THETA_WALK = 0.005
+#: The walk in the ``"states"`` treatment: none. A unit's growth multiplier is constant (drawn
+#: at fitting), the regularised resampling keeps the cloud diverse, and on training seeds
+#: (0-39) the walk of 0.005 made the seal's 90 % interval cover 98-100 % (0.85-0.93 without).
+STATES_THETA_WALK = 0.0
 #: Quantiles of the healthy distribution the detectors are fitted on (deterministic).
 _BASELINE_Z = norm.ppf(np.linspace(0.0005, 0.9995, 2000))
 
@@ -78,9 +115,25 @@ class HealthMonitor:
         calibration: Calibration,
         surrogate: SurrogateModel,
         rng: np.random.Generator,
+        *,
+        installation: str | None = None,
     ) -> None:
         self.params, self.scenario, self.cal, self.sur = params, scenario, calibration, surrogate
         self.rng = rng
+        names = scenario.flight_feature_names
+        #: in-flight features the filters learn from (``LEARNING_FEATURES`` measured), in the
+        #: order of ``flight_sum``; empty: the filters learn at tests only (v0, v1)
+        self.learning = tuple(f for f in LEARNING_FEATURES if f in names)
+        if installation is None:
+            installation = "states" if self.learning else "baseline"
+        if installation not in INSTALLATION_MODELS:
+            raise ValueError(
+                f"installation = {installation!r} must be None or one of {INSTALLATION_MODELS}"
+            )
+        #: how the filters treat installation effects and growth scatter (module docstring):
+        #: "baseline" (v0, v1) or "states" (the default when learning in flight)
+        self.installation = installation
+        states = installation == "states"
         self.a_fail = calibration.spring_failure_depth_m
         self.w_crit = calibration.seal_critical_wear_m
         noise = scenario.filter_noise_scale
@@ -99,12 +152,16 @@ class HealthMonitor:
         rate_a0 = float(
             np.interp(a0, calibration.crack_depth_m, calibration.crack_rate_m_per_flight)
         )
+        # flight-to-flight growth scatter the world grows with (Scenario.damage_scatter)
+        crack_cvs, wear_cv = calibration.flight_scatter(scenario.damage_scatter)
+        crack_cv_a0 = float(np.interp(np.log(a0), np.log(calibration.crack_cv_depth_m), crack_cvs))
         self.spring_filter = ParticleFilter(
             paris_crack_model(
                 calibration.crack_depth_m,
                 bias * calibration.crack_rate_m_per_flight,
-                process_noise_std_m=float(calibration.crack_cv_at(a0)) * rate_a0,
-                log_theta_noise_std=THETA_WALK,
+                process_noise_std_m=0.0 if states else crack_cv_a0 * rate_a0,
+                damage_noise_cv=crack_cv_a0 if states else 0.0,
+                log_theta_noise_std=STATES_THETA_WALK if states else THETA_WALK,
                 scheme="exact",
             ),
             self.g1_model,
@@ -114,8 +171,9 @@ class HealthMonitor:
         self.seal_filter = ParticleFilter(
             linear_wear_model(
                 bias * calibration.wear_rate_m_per_flight,
-                process_noise_std=calibration.wear_cv * calibration.wear_rate_m_per_flight,
-                log_theta_noise_std=THETA_WALK,
+                process_noise_std=0.0 if states else wear_cv * calibration.wear_rate_m_per_flight,
+                damage_noise_cv=wear_cv if states else 0.0,
+                log_theta_noise_std=STATES_THETA_WALK if states else THETA_WALK,
             ),
             self.g3_model,
             scenario.n_particles,
@@ -148,6 +206,49 @@ class HealthMonitor:
         #: flights flown since each filter was last predicted
         self.pending = {"spring": 0, "seal": 0}
         self._ageing: dict[str, AgeingRul] = {}
+        #: flights per in-flight update (``Scenario.flight_update_flights``)
+        self.flight_interval = int(scenario.flight_update_flights)
+        #: sum of each learning feature over the flights of the batch under way (SI units)
+        self.flight_sum = np.zeros(len(self.learning))
+        #: flights in that sum (aborted flights, NaN features, are not counted)
+        self.flight_count = 0
+        self._flight: dict[str, _FlightFeature] = {}
+        for f in self.learning:
+            k = surrogate.index(f)
+            if LEARNING_FEATURES[f] == "spring":
+                grid, mean, run = c_grid, surrogate.mean[k, :, 0], surrogate.run_std[k, :, 0]
+            else:
+                grid, mean, run = w_grid, surrogate.mean[k, 0, :], surrogate.run_std[k, 0, :]
+            self._flight[f] = _FlightFeature(
+                part=LEARNING_FEATURES[f],
+                k=k,
+                model=measurement_from_curve(grid, mean, noise * run),
+                run_var=(noise * run) ** 2,
+            )
+        self._effects: dict[str, _Effect] = {}
+        if states:
+            self._enable_effect_states()
+
+    def _enable_effect_states(self) -> None:
+        """Register each measured feature's installation effect as per-particle Gaussian
+        states of its part's filter (``aux`` arrays carried through resampling)."""
+        parts = {"G1": "spring", "G3": "seal", **{f: LEARNING_FEATURES[f] for f in self.learning}}
+        for f, part in parts.items():
+            pf = self._filters[part]
+            k = self.sur.index(f)
+            stack = np.stack([self.sur.mean[k], self.sur.unit_std[k], self.sur.run_std[k]])
+            grids = (self.sur.crack_grid, self.sur.wear_grid)
+            if part == "seal":  # own severity on axis 1, the other part's on axis 2
+                stack, grids = stack.transpose(0, 2, 1), grids[::-1]
+            self._effects[f] = _Effect(
+                part=part,
+                k=k,
+                z_mean=pf.add_auxiliary(f"{f}_z_mean", 0.0),
+                z_var=pf.add_auxiliary(f"{f}_z_var", 1.0),
+                stack=np.ascontiguousarray(stack),
+                own_grid=np.asarray(grids[0], dtype=np.float64),
+                other_grid=np.asarray(grids[1], dtype=np.float64),
+            )
 
     # ------------------------------------------------------------------ events
     def reset(self) -> None:
@@ -185,13 +286,33 @@ class HealthMonitor:
             def prior_a(rng: np.random.Generator, n: int) -> np.ndarray:
                 return truncated_normal(rng, a0, s0, lower=0.0, upper=self.a_fail, size=n)
 
+            self.learn_from_flights()  # the batch flown with the old pair first
             self.spring_filter.reset(prior_a, _lognormal_sampler(unc.paris_c_log_sigma))
+            for eff in self._effects.values():  # a new installation: effects unknown
+                eff.z_mean.fill(0.0)
+                eff.z_var.fill(1.0)
             self._baseline: dict[str, list[float]] = {"G1": [], "G3": []}
             self._offset = {"G1": 0.0, "G3": 0.0}
+            for ff in self._flight.values():  # a new installation: new offsets
+                ff.restart_baseline()
             self.crack_detector.reset()
             self.crack_detected = False
         elif part == "seal":
+            self.learn_from_flights()
+            # the installation is unchanged: its effects' knowledge, collapsed to one
+            # Gaussian (the cloud's mixture moments), passes to the new cloud
+            kept = {
+                f: _mixture_moments(self.seal_filter.weights, e.z_mean, e.z_var)
+                for f, e in self._effects.items()
+                if e.part == "seal"
+            }
             self.seal_filter.reset(0.0, _lognormal_sampler(unc.wear_rate_log_sigma))
+            for f, (mean, var) in kept.items():
+                self._effects[f].z_mean.fill(mean)
+                self._effects[f].z_var.fill(var)
+            for ff in self._flight.values():  # re-estimated with the wear known (zero)
+                if ff.part == "seal":
+                    ff.restart_baseline()
             self.seal_detector.reset()
             self.seal_detected = False
         else:
@@ -214,19 +335,159 @@ class HealthMonitor:
                 self.pending[part] = 0
 
     def flown(self, features: dict[str, float]) -> None:
-        """One flight of usage for both filters.
+        """One flight of usage for both filters, and its learning features into the batch.
 
-        The in-flight features are not fed to the filters: I2 and I6 do not respond to the
-        faults in this physics, and I7's installation offset (between-unit spread, not
-        removable without a long flight baseline) biased the seal filter by ~2 um over a
-        life in tests. What the filters learn comes from the pre-flight tests, so testing
-        is the price of information.
+        I2, I6 and I7 are not fed to the filters: I2 and I6 do not respond to the faults in
+        this physics, and I7 moves by only 1.6 run-to-run sd at critical wear (I9 sees the
+        wear far earlier) and carries an installation offset. With
+        I8 and I9 measured (``Scenario.flight_features``) their values are summed over the
+        batch; when it holds ``flight_interval`` flights the filters learn from its mean
+        (:meth:`learn_from_flights`). An aborted flight (NaN features) adds usage only.
         """
         self.pending["spring"] += 1
         self.pending["seal"] += 1
+        if not self.learning:
+            return
+        values = [features[f] for f in self.learning]
+        if not all(math.isfinite(v) for v in values):
+            return
+        for j, v in enumerate(values):
+            self.flight_sum[j] += v
+        self.flight_count += 1
+        if self.flight_count >= self.flight_interval:
+            self.learn_from_flights()
+
+    def flight_batch_due(self) -> bool:
+        """Whether the batch of in-flight features is full (the vector env's fast path then
+        hands this actuator to :meth:`learn_from_flights`)."""
+        return self.flight_count >= self.flight_interval > 0 and bool(self.learning)
+
+    def learn_from_flights(self) -> None:
+        """Update the filters with the mean of the batch's learning features, then empty it.
+
+        The batch's ``m`` flights were flown at states from ``m`` flights ago to one flight
+        ago; the mean of a feature that is linear in the state over the batch refers to the
+        mid-batch state. Each filter is predicted to ``m // 2`` flights into the batch (the
+        mean state time ``(m - 1) / 2`` rounded up: within half a flight of a life of ~10^3
+        flights), updated there, and the remaining ``m - m // 2`` flights stay pending (the
+        RUL tables age by them, as between tests). Particles past a critical value lose
+        their weight first (the parts flew). The likelihood of the batch mean has the run
+        noise divided by ``sqrt(m)`` (run noise independent from flight to flight) plus the
+        installation effect's variance (a filter state; in the ``"baseline"`` treatment the
+        offset estimate's) and the cross-fault correction's (module docstring). Nothing
+        happens on an empty batch.
+        """
+        m = self.flight_count
+        if m == 0:
+            return
+        means = self.flight_sum / m
+        self.flight_sum[:] = 0.0
+        self.flight_count = 0
+        after = m - m // 2
+        for part, pf in self._filters.items():
+            d = self.pending[part] - after
+            if d > 0:
+                pf.predict(float(d))
+                self.pending[part] -= d
+        self._condition_on_survival()
+        c_hat, c_var = _fraction_moments(self.spring_filter, self.a_fail)
+        w_hat, w_var = _fraction_moments(self.seal_filter, self.w_crit)
+        try:
+            for j, f in enumerate(self.learning):
+                if self.installation == "states":
+                    self._effect_update(f, float(means[j]), m, c_hat, c_var, w_hat, w_var)
+                else:
+                    self._learn_one(self._flight[f], float(means[j]), m, c_hat, c_var, w_hat, w_var)
+        finally:
+            self._refresh("spring")
+            self._refresh("seal")
+
+    def _learn_one(
+        self,
+        ff: _FlightFeature,
+        y: float,
+        m: int,
+        c_hat: float,
+        c_var: float,
+        w_hat: float,
+        w_var: float,
+    ) -> None:
+        """One learning feature's batch mean ``y`` of ``m`` flights: baseline or update."""
+        mu, k = self.sur.feature_mean, ff.k
+        mean = mu(k, c_hat, w_hat)
+        slope_c = _slope(lambda c: mu(k, c, w_hat), c_hat)
+        slope_w = _slope(lambda w: mu(k, c_hat, w), w_hat)
+        if ff.baseline_flights < BASELINE_FLIGHTS:
+            run_var = float(self.sur.tables_at(c_hat, w_hat)[2, k]) ** 2
+            run_var *= self.scenario.filter_noise_scale**2
+            ff.add_baseline(y - mean, m, run_var, slope_c**2 * c_var + slope_w**2 * w_var)
+            return
+        if ff.part == "spring":
+            cross = mean - mu(k, c_hat, 0.0)
+            cross_var = slope_w**2 * w_var
+            pf = self.spring_filter
+        else:
+            cross = mean - mu(k, 0.0, w_hat)
+            cross_var = slope_c**2 * c_var
+            pf = self.seal_filter
+        sigma = np.sqrt(ff.run_var / m + (ff.offset_var + cross_var))
+        pf.update(y - ff.offset - cross, ff.model, sigma_values=sigma)
+
+    def _condition_on_survival(self) -> None:
+        """Both parts are flying, so neither has reached its critical value: particles
+        past it lose their weight (``"states"`` treatment)."""
+        if self.scenario.crack_active:
+            self.spring_filter.condition_below(self.a_fail)
+        if self.scenario.wear_active:
+            self.seal_filter.condition_below(self.w_crit)
+
+    def _effect_update(
+        self,
+        f: str,
+        y: float,
+        m: int,
+        c_hat: float,
+        c_var: float,
+        w_hat: float,
+        w_var: float,
+    ) -> float:
+        """Feature ``f``'s mean ``y`` over ``m`` runs into its part's filter, with the
+        installation effect as per-particle Gaussian states (module docstring).
+
+        The surrogate's model along the part's own severity, the other part at its filter's
+        estimate: ``y = mu_i + tau_i z + sigma_i / sqrt(m) eps`` with ``mu``, ``tau``,
+        ``sigma`` the surrogate's tables (bilinear, as the world draws them) at each
+        particle; the other part's uncertainty adds ``(d/d other (mu + tau z_bar))^2 var``.
+        Returns ``y`` corrected to a healthy new installation (for the detectors).
+        """
+        eff = self._effects[f]
+        if eff.part == "spring":
+            pf, crit, own, other, other_var = self.spring_filter, self.a_fail, c_hat, w_hat, w_var
+        else:
+            pf, crit, own, other, other_var = self.seal_filter, self.w_crit, w_hat, c_hat, c_var
+        st, g_own, g_other = eff.stack, eff.own_grid, eff.other_grid
+        z_bar = float(pf.weights @ eff.z_mean)
+        lo, hi = max(other - _SLOPE_STEP, 0.0), min(other + _SLOPE_STEP, 1.0)
+        slope = (
+            _effect_at(st, g_own, g_other, own, hi, z_bar)
+            - _effect_at(st, g_own, g_other, own, lo, z_bar)
+        ) / (hi - lo)
+        cross = _effect_at(st, g_own, g_other, own, other, 0.0) - _effect_at(
+            st, g_own, g_other, own, 0.0, 0.0
+        )
+        log_lik = np.empty(pf.n_particles)
+        shift = _effect_likelihood(
+            y, float(m), pf.x, pf.weights, crit, st, g_own, g_other, other,
+            self.scenario.filter_noise_scale, slope * slope * other_var,
+            eff.z_mean, eff.z_var, log_lik,
+        )  # fmt: skip
+        pf.update_log_likelihood(log_lik)
+        return y - shift - cross
 
     def tested(self, features: dict[str, float]) -> None:
-        """A pre-flight test: baseline first, then offset- and cross-corrected updates."""
+        """A pre-flight test: baseline first, then offset- and cross-corrected updates
+        (the in-flight batch under way is learnt from first)."""
+        self.learn_from_flights()
         self._catch_up()
         try:
             self._measured(features)
@@ -235,6 +496,15 @@ class HealthMonitor:
             self._refresh("seal")
 
     def _measured(self, features: dict[str, float]) -> None:
+        if self.installation == "states":
+            self._condition_on_survival()
+            c_hat, c_var = _fraction_moments(self.spring_filter, self.a_fail)
+            w_hat, w_var = _fraction_moments(self.seal_filter, self.w_crit)
+            g1 = self._effect_update("G1", features["G1"], 1, c_hat, c_var, w_hat, w_var)
+            g3 = self._effect_update("G3", features["G3"], 1, c_hat, c_var, w_hat, w_var)
+            self.crack_detected = self.crack_detector.update(g1) or self.crack_detected
+            self.seal_detected = self.seal_detector.update(g3) or self.seal_detected
+            return
         sf, wf = self.spring_filter, self.seal_filter
         c_hat = float(sf.weights @ sf.x) / self.a_fail
         w_hat = float(wf.weights @ wf.x) / self.w_crit
@@ -265,6 +535,9 @@ class HealthMonitor:
         """
         a["pending"][row, 0], a["pending"][row, 1] = self.pending["spring"], self.pending["seal"]
         a["detected"][row, 0], a["detected"][row, 1] = self.crack_detected, self.seal_detected
+        if self.learning and "flight_sum" in a:  # a fleet that batches learning flights
+            a["flight_sum"][row] = self.flight_sum
+            a["flight_count"][row] = self.flight_count
         for p, part in enumerate(("spring", "seal")):
             ageing = self._ageing[part]
             if sources[p] is not ageing:
@@ -277,9 +550,13 @@ class HealthMonitor:
                 sources[p] = ageing
 
     def import_flight_state(self, a: dict[str, np.ndarray], row: int) -> None:
-        """Take back what flights on the fleet's fast path changed: the flights pending."""
+        """Take back what flights on the fleet's fast path changed: the flights pending and
+        the batch of in-flight features (``flight_sum``, ``flight_count``)."""
         self.pending["spring"] = int(a["pending"][row, 0])
         self.pending["seal"] = int(a["pending"][row, 1])
+        if self.learning and "flight_sum" in a:
+            self.flight_sum[:] = a["flight_sum"][row]
+            self.flight_count = int(a["flight_count"][row])
 
     # ------------------------------------------------------------------ outputs
     def ageing(self, part: str) -> AgeingRul:
@@ -304,6 +581,143 @@ class HealthMonitor:
         )
 
 
+class _FlightFeature:
+    """A learning in-flight feature: its part, surrogate index, measurement model (the curve
+    against its own part's severity, the other part new; run noise) and installation
+    offset with the variance of its estimate."""
+
+    def __init__(self, part: str, k: int, model: MeasurementModel, run_var: np.ndarray) -> None:
+        self.part, self.k, self.model = part, k, model
+        #: run-to-run variance at the model's knots (one flight)
+        self.run_var = run_var
+        self.restart_baseline()
+
+    def restart_baseline(self) -> None:
+        """A new installation (or a new part): the offset is estimated again."""
+        self.baseline_flights = 0
+        self._baseline_sum = 0.0
+        self.offset = 0.0
+        self.offset_var = 0.0
+
+    def add_baseline(self, residual: float, m: int, run_var: float, state_var: float) -> None:
+        """A baseline batch of ``m`` flights whose mean is ``residual`` above the model's
+        mean at the filters' estimate: the offset is the flight-weighted mean of the
+        residuals, its variance the run variance over the flights plus ``state_var`` (the
+        filters' spread through the curve's slopes, the same error in every batch)."""
+        self._baseline_sum += m * residual
+        self.baseline_flights += m
+        self.offset = self._baseline_sum / self.baseline_flights
+        self.offset_var = run_var / self.baseline_flights + state_var
+
+
+@dataclass(frozen=True)
+class _Effect:
+    """A feature's installation effect as filter states: its part, surrogate index, the
+    per-particle mean and variance of its standardised effect ``z`` (``aux`` arrays), and the
+    surrogate's (mean, unit std, run std) tables with the part's own severity on axis 1 and
+    the other part's on axis 2, with their grids (fractions of critical)."""
+
+    part: str
+    k: int
+    z_mean: np.ndarray
+    z_var: np.ndarray
+    stack: np.ndarray
+    own_grid: np.ndarray
+    other_grid: np.ndarray
+
+
+@njit(cache=True)
+def _cell_of(grid: np.ndarray, v: float) -> tuple[int, float]:
+    """Cell j of ``grid`` holding ``v`` (clamped to [grid[0], grid[-1]]) and its fraction in it,
+    as the surrogate's bilinear tables (``bisect_right - 1``, the last cell at the end)."""
+    v = min(max(v, grid[0]), grid[-1])
+    j = 0
+    while j < grid.size - 2 and grid[j + 1] <= v:
+        j += 1
+    return j, (v - grid[j]) / (grid[j + 1] - grid[j])
+
+
+@njit(cache=True)
+def _bilinear_at(stack: np.ndarray, q: int, i: int, ti: float, j: int, tj: float) -> float:
+    return (
+        stack[q, i, j] * ((1 - ti) * (1 - tj))
+        + stack[q, i + 1, j] * (ti * (1 - tj))
+        + stack[q, i, j + 1] * ((1 - ti) * tj)
+        + stack[q, i + 1, j + 1] * (ti * tj)
+    )
+
+
+@njit(cache=True)
+def _effect_at(
+    stack: np.ndarray, own_grid: np.ndarray, other_grid: np.ndarray, own: float, other: float,
+    z: float,
+) -> float:  # fmt: skip
+    """``mu + tau z`` of the tables at (own, other) fractions."""
+    i, ti = _cell_of(own_grid, own)
+    j, tj = _cell_of(other_grid, other)
+    return _bilinear_at(stack, 0, i, ti, j, tj) + _bilinear_at(stack, 1, i, ti, j, tj) * z
+
+
+@njit(cache=True)
+def _effect_likelihood(
+    y: float,
+    m: float,
+    x: np.ndarray,
+    w: np.ndarray,
+    critical: float,
+    stack: np.ndarray,
+    own_grid: np.ndarray,
+    other_grid: np.ndarray,
+    other: float,
+    noise_scale: float,
+    extra_var: float,
+    z_mean: np.ndarray,
+    z_var: np.ndarray,
+    log_lik: np.ndarray,
+) -> float:
+    """Per particle: ``mu``, ``tau``, ``sigma`` of the tables at its own severity
+    (``x / critical`` clipped to [0, 1]) and the other part at ``other``; predictive density
+    of ``y`` (the mean of ``m`` runs, extra variance ``extra_var``) into ``log_lik`` and the
+    effect conditioned on it (:func:`prognostics.random_effect.random_effect_update`).
+    Returns the weighted mean effect ``sum w_i tau_i m_i`` before conditioning."""
+    n = x.size
+    j, tj = _cell_of(other_grid, other)
+    mu = np.empty(n)
+    tau = np.empty(n)
+    var = np.empty(n)
+    shift = 0.0
+    for p in range(n):
+        i, ti = _cell_of(own_grid, min(max(x[p] / critical, 0.0), 1.0))
+        mu[p] = _bilinear_at(stack, 0, i, ti, j, tj)
+        tau[p] = _bilinear_at(stack, 1, i, ti, j, tj)
+        run = _bilinear_at(stack, 2, i, ti, j, tj) * noise_scale
+        var[p] = run * run / m + extra_var
+        shift += w[p] * tau[p] * z_mean[p]
+    random_effect_update(y, mu, tau, var, z_mean, z_var, log_lik)
+    return shift
+
+
+def _mixture_moments(w: np.ndarray, mean: np.ndarray, var: np.ndarray) -> tuple[float, float]:
+    """Mean and variance of the weighted mixture of Gaussians N(mean_i, var_i)."""
+    mu = float(w @ mean)
+    return mu, float(w @ var + w @ (mean - mu) ** 2)
+
+
+def _fraction_moments(pf: ParticleFilter, critical: float) -> tuple[float, float]:
+    """Weighted mean (clipped to [0, 1]) and variance of a filter's severity as a fraction
+    of ``critical``."""
+    w, x = pf.weights, pf.x
+    mean = float(w @ x)
+    var = max(float(w @ (x - mean) ** 2), 0.0) / critical**2
+    return min(max(mean / critical, 0.0), 1.0), var
+
+
+def _slope(curve: Any, at: float) -> float:
+    """Central difference of ``curve`` on [0, 1] at ``at`` (one-sided at the ends)."""
+    lo, hi = max(at - _SLOPE_STEP, 0.0), min(at + _SLOPE_STEP, 1.0)
+    return (curve(hi) - curve(lo)) / (hi - lo)
+
+
 def _baselined(run_std: np.ndarray) -> np.ndarray:
     """Noise of an offset-corrected measurement: run noise plus the offset's own error."""
     return run_std * math.sqrt(1.0 + 1.0 / BASELINE_TESTS)
@@ -317,4 +731,10 @@ def _lognormal_sampler(sigma: float):
     return sample
 
 
-__all__ = ["BASELINE_TESTS", "HealthMonitor", "PartEstimate"]
+__all__ = [
+    "BASELINE_FLIGHTS",
+    "BASELINE_TESTS",
+    "LEARNING_FEATURES",
+    "HealthMonitor",
+    "PartEstimate",
+]

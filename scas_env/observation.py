@@ -18,7 +18,7 @@ from scas_env.costs import CostModel
 from scas_env.fleet_kernels import ageing_estimates
 from scas_env.fleet_state import FleetState
 from scas_env.scenario import Scenario
-from scas_env.world import FLIGHT_FEATURES, GROUND_FEATURES
+from scas_env.world import FLIGHT_FEATURES, GROUND_FEATURES, UPCOMING_PARTS
 
 #: feature -> (display unit, factor from SI, lower bound, upper bound) in display units
 FEATURE_UNITS = {
@@ -105,6 +105,14 @@ class ObservationBuilder:
             ("seal_age", "flights", 0.0, slots),
             ("downtime", "slots", 0.0, max_down),
         ]
+        #: per-part draws: the state also holds the lives of the parts to come (clairvoyance)
+        self.upcoming = scenario.degradation_draws == "per_part"
+        if self.upcoming:
+            state += [
+                (f"{part}_next_life_{k + 1}", "flights", 0.0, cap)
+                for part in ("spring", "seal")
+                for k in range(UPCOMING_PARTS)
+            ]
         self.groups = {"features": rows, "filter": filt, "monitor": tail, "state": state}
         mode = scenario.obs_mode
         #: (low, high) float64 bounds per group, and of the flat layout ("flat")
@@ -192,10 +200,11 @@ class ObservationBuilder:
             )  # fmt: skip
             out["filter"] = est.reshape(fleet.n, 6)
         if mode in ("state", "dict"):
-            out["state"] = np.column_stack(
-                [a["crack"] / a["fail"], a["wear"] / fleet.seal_critical_m, rul, a["part_age"],
-                 a["downtime"]]
-            ).astype(np.float64)  # fmt: skip
+            columns = [a["crack"] / a["fail"], a["wear"] / fleet.seal_critical_m, rul,
+                       a["part_age"], a["downtime"]]  # fmt: skip
+            if self.upcoming:
+                columns.append(a["upcoming"].reshape(fleet.n, -1))
+            out["state"] = np.column_stack(columns).astype(np.float64)
         return out
 
     def observe(self, fleet: FleetState, rul: np.ndarray) -> Any:

@@ -31,7 +31,7 @@ from gymnasium.vector import AutoresetMode, SyncVectorEnv, VectorEnv
 from gymnasium.vector.utils import batch_space
 
 from scas_env.block_draws import DEFAULT_BLOCK
-from scas_env.env import REWARD_TERMS, ScasMaintenanceEnv, new_fleet_state
+from scas_env.env import REWARD_TERMS, ScasMaintenanceEnv, learning_features, new_fleet_state
 from scas_env.fleet_kernels import surrogate_flights
 from scas_env.info import build_info
 from scas_env.world import PARTS
@@ -119,8 +119,13 @@ class ScasMaintenanceVectorEnv(VectorEnv):
         self._builder = first.builder
         self._every_flight = first.scenario.preflight == "every_flight"
         self._holds = first.limits is not None
-        # filters that learn from in-flight features: every flight goes through its env
-        self._learns_in_flight = first.scenario.learns_in_flight
+        # filters that learn from in-flight features: the fast path sums each batch's
+        # features (columns of the flight features) and hands full batches to the monitor
+        learning = learning_features(first.scenario)
+        self._learn_cols = np.array(
+            [first.world.flight_features.index(f) for f in learning], dtype=np.int64
+        )
+        self._flight_interval = int(first.scenario.flight_update_flights)
         # where each flight's two growth factors come from (Scenario.degradation_draws)
         self._per_part = first.world.per_part
         self._deg_streams = (
@@ -195,7 +200,7 @@ class ScasMaintenanceVectorEnv(VectorEnv):
         # the fast path flies untested flights; a test (asked for, or before every flight),
         # a hold by a failed airworthiness test, a replacement or a reset go the slow path
         fly = (act == 0) & ~grounded & ~resetting
-        if self._every_flight or self._learns_in_flight:
+        if self._every_flight:
             fly[:] = False
         elif self._holds:
             fly &= ~a["no_go"]
@@ -213,6 +218,8 @@ class ScasMaintenanceVectorEnv(VectorEnv):
             a["revenue"][done] += value
             rewards[done] = value
             self._terms["flight"][done] = value
+            if self._learn_cols.size:
+                self._learn_from_full_batches(done)
         idle_idx = np.flatnonzero(idle)
         a["downtime"][idle_idx] -= 1
         quick = np.flatnonzero((fly | idle) & ~slow)
@@ -269,7 +276,19 @@ class ScasMaintenanceVectorEnv(VectorEnv):
             self._pos[s][done, 0] += k
         if self._per_part:
             a["life"][done] -= 1.0
+        if self._learn_cols.size:
+            a["flight_sum"][done] += sc["feats"][done][:, self._learn_cols]
+            a["flight_count"][done] += 1
         return ok
+
+    def _learn_from_full_batches(self, flown: np.ndarray) -> None:
+        """The actuators of ``flown`` whose batch of learning flights is full learn from it,
+        as the single env's monitor does inside the flight (``HealthMonitor.flown``)."""
+        a = self.a
+        for e in flown[a["flight_count"][flown] >= self._flight_interval]:
+            self._push(e)
+            self.envs[e].monitor.learn_from_flights()
+            self._pull(e)
 
     def _draws(self, e: int, stream: str) -> Any:
         """Actuator ``e``'s normal buffer of ``stream`` (a growth stream: its fitted part's)."""

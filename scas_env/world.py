@@ -117,6 +117,7 @@ class ActuatorWorld:
         self.spring_failure_m = calibration.spring_failure_depth_m
         self.unit_z = np.zeros(len(surrogate.features))
         self.kernel_tables = kernel_tables(calibration, surrogate, scenario, self._table)
+        self._wear_cv = calibration.flight_scatter(scenario.damage_scatter)[1]
         self.per_part = scenario.degradation_draws == "per_part"
         #: per-part growth factor streams (``"per_part"``), and the storage rows a vector
         #: env lends them (name -> (values, position), as ``ScasMaintenanceEnv.buffer_storage``)
@@ -124,6 +125,10 @@ class ActuatorWorld:
         self.buffer_storage: dict[str, tuple[np.ndarray, np.ndarray]] = {}
         #: ``"per_part"``: flights each fitted part will still fly, the failing one included
         self.life_left = {"spring": math.inf, "seal": math.inf}
+        #: ``"per_part"``: whole lives of the next :data:`UPCOMING_PARTS` parts of each kind
+        #: (the clairvoyant oracle's view; refreshed when a part of that kind is fitted)
+        self.upcoming = {part: [math.inf] * UPCOMING_PARTS for part in PARTS}
+        self._look_ahead = True
         self._scratch = {
             "envs": np.zeros(1, dtype=np.int64),
             "x": np.empty((8, 1)),
@@ -176,6 +181,7 @@ class ActuatorWorld:
         a["theta"][row], a["wmult"][row] = self.theta, self.wear_multiplier
         a["unit_z"][row] = self.unit_z
         a["life"][row] = self.life_left["spring"], self.life_left["seal"]
+        a["upcoming"][row] = self.upcoming["spring"], self.upcoming["seal"]
 
     def import_flight_state(self, a: dict[str, np.ndarray], row: int) -> None:
         """Take back what flights on the fleet's fast path changed: crack, wear, lives left."""
@@ -267,6 +273,8 @@ class ActuatorWorld:
         values, position = self.buffer_storage.get(f"{part}_growth", (None, None))
         self.growth[part] = NormalBuffer(np.random.default_rng(seed), values, position)
         self.life_left[part] = self.flights_to_failure(part)
+        if self._look_ahead:
+            self.upcoming[part] = self.next_lives(part, rng, UPCOMING_PARTS)
 
     def next_lives(self, part: str, rng: np.random.Generator, count: int) -> list[float]:
         """``"per_part"``: the whole lives (flights) of the next ``count`` parts of this kind
@@ -278,7 +286,7 @@ class ActuatorWorld:
             raise ValueError(f"count = {count!r} must be an integer >= 0")
         clone = copy.copy(self)
         clone.growth, clone.buffer_storage = dict(self.growth), {}
-        clone.life_left = dict(self.life_left)
+        clone.life_left, clone._look_ahead = dict(self.life_left), False
         rng = copy.deepcopy(rng)
         lives = []
         for _ in range(count):
@@ -311,7 +319,7 @@ class ActuatorWorld:
             else:
                 k = wear_flights_to_failure(
                     float(state[0]), cal.wear_rate_m_per_flight * self.wear_multiplier,
-                    float(cal.wear_cv), cal.seal_critical_wear_m, z, state,
+                    self._wear_cv, cal.seal_critical_wear_m, z, state,
                 )  # fmt: skip
             if k > 0:
                 return float(flown + k)
@@ -427,6 +435,8 @@ class ActuatorWorld:
         return FlightResult(feats, tuple(failed))
 
 
+#: Parts of each kind whose lives the clairvoyant view holds ahead of the fitted one.
+UPCOMING_PARTS = 3
 #: Flights after which a life counts as infinite (far beyond any episode).
 _MAX_LIFE_FLIGHTS = 10_000_000
 
@@ -450,6 +460,7 @@ def kernel_tables(
     """Argument groups of :mod:`scas_env.fleet_kernels` for one world configuration
     (``table``: the calibrated crack-growth table)."""
     cal = calibration
+    crack_cv, wear_cv = cal.flight_scatter(scenario.damage_scatter)
     idx = np.array([surrogate.index(f) for f in scenario.flight_feature_names], dtype=np.int64)
     stack = np.stack([surrogate.mean, surrogate.unit_std, surrogate.run_std])
     active = (bool(scenario.crack_active), bool(scenario.wear_active))
@@ -458,9 +469,9 @@ def kernel_tables(
         "damage": table.table_args,
         "flight_consts": (
             np.log(cal.crack_cv_depth_m),
-            np.asarray(cal.crack_cv, dtype=np.float64),
+            np.asarray(crack_cv, dtype=np.float64),
             float(cal.crack_dormant_below_m),
-            float(cal.wear_cv),
+            wear_cv,
             float(cal.wear_rate_m_per_flight),
             float(cal.seal_critical_wear_m),
             *active,

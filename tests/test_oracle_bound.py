@@ -9,7 +9,8 @@ import pytest
 
 from policies.benchmark import PolicySpec, run_benchmark
 from policies.benchmark_stats import paired_difference
-from policies.oracle import plan_cost
+from policies.oracle import plan_cost, plan_cost_known
+from scas_env import V2_KWARGS
 
 COSTS = (2500.0, 1500.0, 6000.0, 0, 1)  # flight value, spring, seal, downtimes (CostModel)
 
@@ -37,6 +38,70 @@ def _forward(h: int, left: list[int], lives: tuple[int, int], plan: tuple[bool, 
     return cost
 
 
+def _forward_known(
+    h: int, left: list[int], upcoming: tuple[tuple[int, ...], ...], plan: tuple[bool, ...]
+) -> float:
+    """:func:`_forward` with the k-th new part of each kind living ``upcoming[p][k]``."""
+    value, price, down = COSTS[0], COSTS[1:3], COSTS[3:5]
+    cost, i, left, fitted = 0.0, 0, list(left), [0, 0]
+    while h > 0:
+        k = max(0, min(left))
+        if k >= h:
+            break
+        h -= k
+        left = [x - k for x in left]
+        a = int(np.argmin(left))
+        both = plan[i] if i < len(plan) else False
+        i += 1
+        slots = 1 + (max(down) if both else down[a])
+        cost += price[a] + (price[1 - a] if both else 0.0) + value * min(slots, h)
+        h -= slots
+        for p in (0, 1) if both else (a,):
+            left[p] = upcoming[p][fitted[p]]
+            fitted[p] += 1
+    return cost
+
+
+@pytest.mark.parametrize(
+    ("h", "left", "upcoming"),
+    [
+        (2000, (30, 600), ((700, 450, 900, 1200, 800, 900), (900, 300, 1000, 700, 900, 900))),
+        (1500, (5, 40), ((1000, 200, 650, 900, 900, 900), (800, 810, 90, 700, 900, 900))),
+        (900, (400, 420), ((300, 500, 120, 600, 600, 600), (500, 60, 700, 300, 600, 600))),
+    ],
+)
+def test_plan_cost_known_is_the_best_grouping_plan(h, left, upcoming):
+    # enough known lives that no plan runs out of them within the horizon
+    best = min(
+        _forward_known(h, list(left), upcoming, p)
+        for p in itertools.product([False, True], repeat=8)
+    )
+    got = plan_cost_known(h, left[0], left[1], COSTS, upcoming, ((1,), (1,)))
+    assert got == pytest.approx(best)
+
+
+def test_clairvoyant_oracle_is_never_beaten_in_any_episode():
+    # v2 (per-part draws): the oracle knows every life, so per episode no policy earns more
+    names = ["corrective", "preventive", "rul_risk", "random"]
+    jit = PolicySpec(
+        "noisy_oracle",
+        {"sigma": 0.0, "spring_age": 1e9, "seal_age": 1e9, "opportunity": 0.0},
+        label="just-in-time oracle",
+    )
+    res = run_benchmark(
+        [*names, jit, "oracle"], episodes=4, slots=1200, seed=3, env_kwargs=dict(V2_KWARGS)
+    )
+    reward = {
+        p: np.array([r["reward"] for r in res.rows if r["policy"] == p])
+        for p in [*names, jit.key, "oracle"]
+    }
+    assert all(
+        r["failures_spring"] + r["failures_seal"] == 0 for r in res.rows if r["policy"] == "oracle"
+    )
+    for p in [*names, jit.key]:
+        assert np.all(reward[p] <= reward["oracle"]), p
+
+
 @pytest.mark.parametrize(
     ("h", "left", "lives"),
     [(2000, (30, 600), (700, 900)), (1500, (5, 40), (1000, 800)), (900, (400, 420), (300, 500))],
@@ -55,6 +120,25 @@ def test_plan_cost_averages_over_future_lives():
     got = plan_cost(200, 0, 10_000, COSTS, ((100, 300), (10_000,)))
     one = COSTS[1] + COSTS[0]
     assert got == pytest.approx(one + 0.5 * one)
+
+
+@pytest.mark.slow
+def test_clairvoyant_oracle_bounds_every_policy_in_every_episode():
+    names = ["corrective", "preventive", "detection", "rul_risk", "random"]
+    jit = PolicySpec(
+        "noisy_oracle",
+        {"sigma": 0.0, "spring_age": 1e9, "seal_age": 1e9, "opportunity": 0.0},
+        label="just-in-time oracle",
+    )
+    res = run_benchmark(
+        [*names, jit, "oracle"], episodes=64, seed=0, n_workers=2, env_kwargs=dict(V2_KWARGS)
+    )
+    reward = {
+        p: np.array([r["reward"] for r in res.rows if r["policy"] == p])
+        for p in [*names, jit.key, "oracle"]
+    }
+    for p in [*names, jit.key]:
+        assert np.all(reward[p] <= reward["oracle"]), p
 
 
 @pytest.mark.slow

@@ -61,11 +61,16 @@ def test_the_kth_part_is_the_same_whatever_the_policy_did() -> None:
         )
 
 
-def test_vector_env_equals_single_envs_and_pickles() -> None:
+@pytest.mark.parametrize("v2", [False, True])
+def test_vector_env_equals_single_envs_and_pickles(v2: bool) -> None:
+    # v2: the filters learn from in-flight batches, summed on the fleet's fast path
+    from scas_env import V2_KWARGS
+
+    kw = {**V2_KWARGS, "episode_slots": 2500} if v2 else KW
     n = 3
-    venv = ScasMaintenanceVectorEnv(n, **KW)
+    venv = ScasMaintenanceVectorEnv(n, **kw)
     obs, _ = venv.reset(seed=5)
-    singles = [ScasMaintenanceEnv(**KW) for _ in range(n)]
+    singles = [ScasMaintenanceEnv(**kw) for _ in range(n)]
     for e, env in enumerate(singles):
         assert np.array_equal(env.reset(seed=5 + e)[0], obs[e])
     rng = np.random.default_rng(0)
@@ -106,3 +111,23 @@ def test_v2_passes_the_gymnasium_and_sb3_checkers() -> None:
         warnings.simplefilter("error")
         gym_check_env(ScasMaintenanceEnv(**V2_KWARGS, episode_slots=50), skip_render_check=True)
         sb3_check_env(ScasMaintenanceEnv(**V2_KWARGS, episode_slots=50), warn=True)
+
+
+def test_whole_flight_scatter_grows_parts_with_the_calibrated_cv() -> None:
+    # the world's per-flight wear factor has the calibration's whole-flight CV (v2) or the
+    # window CV (v0, v1): the sample CV of many factors of one part's stream matches it
+    from scas_env import V2_KWARGS
+
+    for scatter in ("window", "whole_flight"):
+        env = ScasMaintenanceEnv(**{**V2_KWARGS, "damage_scatter": scatter, "crack_active": 0})
+        env.reset(seed=1)
+        world = env.world
+        expected = env.calibration.flight_scatter(scatter)[1]
+        steps = []
+        for _ in range(400):
+            before = world.wear_m
+            world.fly(np.random.default_rng(0), None)
+            steps.append(world.wear_m - before)
+        cv = np.std(steps, ddof=1) / np.mean(steps)
+        # sample CV of 400 lognormal factors: standard error about cv / sqrt(2 * 400)
+        assert abs(cv - expected) < 4 * expected / np.sqrt(800), scatter

@@ -194,3 +194,29 @@ def test_an_unrepresentable_initial_cloud_is_refused() -> None:
         pf.reset(0.0, 1e-300)
     pf.reset(0.0, 1.0)
     assert pf.estimate().x_mean == 0.0
+
+
+def test_sigma_values_override_equals_a_model_with_that_noise() -> None:
+    """update(y, sigma_values=s) weighs as a model whose noise table is s, bit for bit."""
+    from prognostics.measurement import measurement_from_curve
+
+    levels = np.linspace(0.0, 2.0, 6)
+    base = measurement_from_curve(levels, levels**1.5, np.full(6, 0.3))
+    noisier = np.linspace(0.5, 0.9, 6)
+    model = measurement_from_curve(levels, levels**1.5, noisier)
+    clouds = []
+    for kwargs in ({"sigma_values": noisier}, {}):
+        pf = ParticleFilter(linear_wear_model(0.01), base, 400, np.random.default_rng(5))
+        pf.reset(lambda rng, k: rng.uniform(0.0, 2.0, k), 1.0)
+        if kwargs:
+            pf.update(1.1, **kwargs)
+        else:
+            pf.update(1.1, model)
+        clouds.append((np.array(pf.x), np.array(pf.weights)))
+    np.testing.assert_array_equal(clouds[0][0], clouds[1][0])
+    np.testing.assert_array_equal(clouds[0][1], clouds[1][1])
+    pf = ParticleFilter(linear_wear_model(0.01), base, 10, np.random.default_rng(5))
+    pf.reset(0.5, 1.0)
+    for bad in (np.full(5, 0.3), np.array([0.3, 0.3, 0.0, 0.3, 0.3, 0.3]), np.full(6, np.nan)):
+        with pytest.raises(ValueError, match="sigma_values"):
+            pf.update(1.0, sigma_values=bad)

@@ -237,3 +237,25 @@ def test_oracle_never_fails_in_flight():
         assert row["failures_spring"] == 0 and row["failures_seal"] == 0
         replaced += row["replacements_spring"] + row["replacements_seal"]
     assert replaced >= 2  # 2000 slots outlast most parts: the check is not vacuous
+
+
+def test_detection_rule_answers_a_failed_test_with_the_implicated_part() -> None:
+    from policies.nested import ground_test_reference
+    from policies.rules import DetectionPolicy
+    from scas_env.env import ScasMaintenanceEnv
+
+    names = ScasMaintenanceEnv(obs_mode="features").obs_names
+    col = {n: k for k, n in enumerate(names)}
+    ref = ground_test_reference()
+    rule = DetectionPolicy(names, test_every=50)
+    obs = np.zeros(len(names))
+    obs[col["G1"]], obs[col["G3"]] = ref["G1"][0], ref["G3"][0]
+    obs[col["spring_age"]], obs[col["seal_age"]], obs[col["test_age"]] = 100, 100, 0
+    assert rule.predict(obs)[0] == 0  # nothing wrong: fly
+    obs[col["no_go"]] = 1
+    obs[col["G1"]] = ref["G1"][0] + 8 * ref["G1"][1]  # G1 far out: the spring
+    assert rule.predict(obs)[0] == 2
+    obs[col["G1"]], obs[col["G3"]] = ref["G1"][0], ref["G3"][0] + 8 * ref["G3"][1]
+    assert rule.predict(obs)[0] == 3
+    obs[col["downtime"]] = 2  # on the ground: the flag is an old one, nothing to answer
+    assert rule.predict(obs)[0] == 0

@@ -24,10 +24,14 @@ from prognostics.rul import HazardZone
 from scas_env.actuator.params import ScasParams
 from scas_env.actuator.surrogate import default_surrogate
 from scas_env.studies.reproduction import FAULTS, ReproductionConfig, run_reproduction
+from scas_env.studies.reproduction_conventions import G2_REASON, leakage_fraction
+from scas_env.studies.reproduction_detection import installation_detection
 from scas_env.studies.reproduction_prognosis import INSTALLATION_EFFECT, VARIANTS
 from scas_env.studies.reproduction_report import (
     PAPER,
     detection_severity,
+    paper_mean,
+    path_detections,
     prognosis_summary,
     verdicts,
     write_report,
@@ -212,7 +216,8 @@ def test_quick_reproduction_verdict_structure(quick_reproduction, tmp_path) -> N
         for claim in ("ground feature", "flight feature"):
             row = by_claim[f"{name}: {claim}"]
             assert (row["verdict"] == "holds") == (row["paper"] == row["ours"])
-        det = detection_severity(rep, fault)
+        # the paper's convention: seal severity as a fraction of critical leakage growth
+        det = paper_mean(rep, fault, rep.detection[fault]["combined_severity_at_detection"])
         holds = math.isfinite(det) and abs(det - PAPER[fault]["detect"]) <= 0.10
         assert (by_claim[f"{name}: severity at detection"]["verdict"] == "holds") == holds
         for variant, suffix in (("paper", ""), ("installation", " (installation baseline)")):
@@ -259,3 +264,49 @@ def test_quick_reproduction_installation_variant(quick_reproduction) -> None:
         corrected = v.reference["scale"] * v.measurements[:k] - v.reference["offset"]
         assert corrected.mean() == pytest.approx(v.reference["level"], rel=1e-9)
         assert rep.healthy_unit_alarm_share["installation"][fault] <= 0.25
+
+
+def test_quick_reproduction_drops_g2_with_its_reason(quick_reproduction) -> None:
+    sel = quick_reproduction.selection
+    assert sel["excluded"] == {"G2": G2_REASON}
+    for key, scores in sel["scores"].items():
+        assert "G2" not in {s.name for s in scores}, key
+    assert "G1" in {s.name for s in sel["scores"]["crack/ground"]}
+
+
+def test_quick_reproduction_reports_seal_severity_as_leakage(quick_reproduction) -> None:
+    rep = quick_reproduction
+    rows = {r["claim"]: r for r in verdicts(rep)}
+    depth = path_detections(rep.prognosis["wear"], "installation")
+    leak = leakage_fraction(
+        np.array(depth), rep.campaign.params.seal, rep.calibration.seal_critical_wear_m
+    )
+    row = rows["seal wear: severity at detection (installation baseline)"]
+    assert f"{np.nanmean(leak):.2f}" in row["ours"]
+    assert row["ours_worn_depth"] == f"prognosis {np.nanmean(depth):.2f}"
+    assert rows["spring crack: severity at detection"]["ours_worn_depth"] == ""
+
+
+def test_detection_study_reproduces_the_prognosis_paths(quick_reproduction) -> None:
+    # same seeds, same tests, same detector: path 0's first installation alarm
+    rep = quick_reproduction
+    study = installation_detection(ScasParams(), rep.campaign, rep.config, seed=rep.seed, n_paths=1)
+    for fault in FAULTS:
+        expected = path_detections(rep.prognosis[fault][:1], "installation")[0]
+        got = study[fault]["depth_fraction"][0]
+        assert (math.isnan(expected) and math.isnan(got)) or got == pytest.approx(expected)
+        assert study[fault]["feature"] == rep.selection["selected"][fault]["ground_per_fault_top"]
+
+
+@pytest.mark.slow
+def test_detection_study_in_flight_keeps_the_ground_result(quick_reproduction) -> None:
+    # the in-flight detection draws from its own generators: the ground result is unchanged
+    rep = quick_reproduction
+    kwargs = {"seed": rep.seed, "n_paths": 1}
+    ground = installation_detection(ScasParams(), rep.campaign, rep.config, **kwargs)
+    both = installation_detection(ScasParams(), rep.campaign, rep.config, flight=True, **kwargs)
+    for fault in FAULTS:
+        assert both[fault]["depth_fraction"] == ground[fault]["depth_fraction"]
+        assert both[fault]["flight_feature"] == rep.selection["selected"][fault]["flight"]
+        value = both[fault]["flight_depth_fraction"][0]
+        assert math.isnan(value) or 0.0 <= value <= 1.0

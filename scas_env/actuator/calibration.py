@@ -34,11 +34,13 @@ from prognostics.degradation_models import paris_crack_model
 from scas_env.actuator.atomic_file import write_text_atomic
 from scas_env.actuator.bandwidth import seal_criterion
 from scas_env.actuator.flight_damage import (
+    FlightDamage,
     crack_increment_m,
     crack_rate_table,
     flight_loads_from_run,
     growth_model,
     load_spectrum_from_physics,
+    simulated_flight_damage,
     wear_increment_m,
 )
 from scas_env.actuator.health import actuator_config
@@ -83,6 +85,11 @@ class Calibration:
     crack_cv_depth_m, crack_cv : flight-to-flight coefficient of variation of the crack
         increment at a few depths.
     wear_cv : flight-to-flight coefficient of variation of the wear increment.
+    whole_flights : number of whole simulated flights behind the two fields below (0: not
+        computed, both None).
+    crack_cv_whole_flight : flight-to-flight CV of the crack increment at
+        ``crack_cv_depth_m`` from whole simulated flights (:func:`whole_flight_scatter`).
+    wear_cv_whole_flight : the same for the seal wear.
     """
 
     params_digest: str
@@ -100,6 +107,9 @@ class Calibration:
     crack_cv: FloatArray
     wear_cv: float
     version: int = CALIBRATION_VERSION
+    whole_flights: int = 0
+    crack_cv_whole_flight: FloatArray | None = None
+    wear_cv_whole_flight: float | None = None
 
     def __post_init__(self) -> None:
         own = "Calibration"
@@ -159,12 +169,65 @@ class Calibration:
                     f"{own}.{table} has {arrays[table].size} values but {own}.{grid} has "
                     f"{arrays[grid].size}: one value per grid point is required"
                 )
+        scalars["whole_flights"] = whole_number(own, "whole_flights", self.whole_flights, lo=0)
+        self._check_whole_flight(arrays["crack_cv_depth_m"], scalars, arrays)
         for name, value in (scalars | arrays).items():  # Python floats, read-only arrays
             object.__setattr__(self, name, value)
+
+    def _check_whole_flight(
+        self, grid: FloatArray, scalars: dict[str, object], arrays: dict[str, FloatArray]
+    ) -> None:
+        own = "Calibration"
+        given = (self.crack_cv_whole_flight is not None, self.wear_cv_whole_flight is not None)
+        if self.whole_flights == 0:
+            if any(given):
+                raise ValueError(
+                    f"{own}.whole_flights = 0 but whole-flight CVs are given: set whole_flights "
+                    "to the number of flights they come from"
+                )
+            return
+        if self.whole_flights < 2 or not all(given):
+            raise ValueError(
+                f"{own}.whole_flights = {self.whole_flights}: needs >= 2 flights and both "
+                "crack_cv_whole_flight and wear_cv_whole_flight"
+            )
+        arrays["crack_cv_whole_flight"] = finite_array(
+            own, "crack_cv_whole_flight", self.crack_cv_whole_flight, ndim=1, lo=0.0
+        )
+        if arrays["crack_cv_whole_flight"].shape != grid.shape:
+            raise ValueError(
+                f"{own}.crack_cv_whole_flight has {arrays['crack_cv_whole_flight'].size} values "
+                f"but {own}.crack_cv_depth_m has {grid.size}: one value per grid point"
+            )
+        scalars["wear_cv_whole_flight"] = finite_scalar(
+            own, "wear_cv_whole_flight", self.wear_cv_whole_flight, lo=0.0
+        )
 
     def crack_cv_at(self, depth_m: float | FloatArray) -> FloatArray:
         """Flight-to-flight CV of the crack increment at ``depth_m`` (log-depth interpolation)."""
         return np.interp(np.log(depth_m), np.log(self.crack_cv_depth_m), self.crack_cv)
+
+    def crack_cv_whole_flight_at(self, depth_m: float | FloatArray) -> FloatArray:
+        """Whole-flight CV of the crack increment at ``depth_m`` (log-depth interpolation);
+        ``ValueError`` if this calibration has no whole-flight fields (``whole_flights = 0``)."""
+        if self.crack_cv_whole_flight is None:
+            raise ValueError(
+                "this calibration has no whole-flight scatter (whole_flights = 0): rebuild it "
+                "with build_calibration(..., whole_flights=40)"
+            )
+        return np.interp(np.log(depth_m), np.log(self.crack_cv_depth_m), self.crack_cv_whole_flight)
+
+    def flight_scatter(self, source: str) -> tuple[FloatArray, float]:
+        """(crack CV at ``crack_cv_depth_m``, wear CV) of one flight's increments, from
+        ``source`` = ``"window"`` (one 20 s window scaled to the flight) or
+        ``"whole_flight"`` (whole simulated flights; ``ValueError`` if not computed)."""
+        if source == "window":
+            return self.crack_cv, float(self.wear_cv)
+        if source != "whole_flight":
+            raise ValueError(f"source = {source!r} must be 'window' or 'whole_flight'")
+        if self.crack_cv_whole_flight is None or self.wear_cv_whole_flight is None:
+            self.crack_cv_whole_flight_at(self.crack_cv_depth_m[0])  # raises with the reason
+        return self.crack_cv_whole_flight, float(self.wear_cv_whole_flight)
 
     def to_dict(self) -> dict:
         out = asdict(self)
@@ -192,9 +255,17 @@ def build_calibration(
     window_s: float | None = None,
     spectrum_window_s: float = 120.0,
     cv_depths_m: tuple[float, ...] = (60e-6, 100e-6, 200e-6, 400e-6, 800e-6),
+    whole_flights: int = 0,
     progress: bool = True,
 ) -> Calibration:
-    """Compute the calibration of ``params`` from physics (a few seconds with defaults)."""
+    """Compute the calibration of ``params`` from physics (a few seconds with defaults).
+
+    ``whole_flights`` > 0 also simulates that many whole flights for the whole-flight
+    scatter fields (:func:`whole_flight_scatter`, about 6 s per flight); the other fields do
+    not depend on it.
+    """
+    if whole_flights != 0:
+        whole_number("build_calibration", "whole_flights", whole_flights, lo=2)
     if n_windows < 2:
         raise ValueError(f"n_windows = {n_windows} must be >= 2 to estimate a scatter")
     window_s = params.mission.flight_window_s if window_s is None else window_s
@@ -224,6 +295,14 @@ def build_calibration(
         cracks[k] = [crack_increment_m(params, unit, model, a, window_loads) for a in depths]
         wears[k] = wear_increment_m(params, unit, window_loads)
     crack_cv = cracks.std(axis=0, ddof=1) / cracks.mean(axis=0)
+    whole: dict[str, object] = {}
+    if whole_flights:
+        damage = whole_flight_scatter(params, seed, whole_flights, depths, progress=progress)
+        whole = {
+            "whole_flights": whole_flights,
+            "crack_cv_whole_flight": damage.crack_cv,
+            "wear_cv_whole_flight": damage.wear_cv,
+        }
     return Calibration(
         params_digest=params_digest(params),
         seed=seed,
@@ -239,6 +318,39 @@ def build_calibration(
         crack_cv_depth_m=depths,
         crack_cv=crack_cv,
         wear_cv=float(wears.std(ddof=1) / wears.mean()),
+        **whole,  # type: ignore[arg-type]
+    )
+
+
+def whole_flight_scatter(
+    params: ScasParams,
+    seed: int,
+    n_flights: int,
+    depths_m: npt.ArrayLike,
+    *,
+    progress: bool = True,
+) -> FlightDamage:
+    """Damage of ``n_flights`` whole simulated flights (no window-to-flight scaling).
+
+    The 20 s window behind ``crack_cv`` holds about 1.6 s of the damaging manoeuvre regime
+    (8 % of the flight, 1-2 segments of random amplitude); scaled to a 1.5 h flight, its
+    scatter stands for a whole flight's. A whole flight holds ~86 such segments, whose
+    amplitude scatter averages out: this is the flight-to-flight scatter of the physics
+    (:func:`~scas_env.actuator.flight_damage.simulated_flight_damage`). Flight ``k`` draws
+    from child ``k`` of ``SeedSequence(seed, spawn_key=(2,))`` (children 0 and 1 of the
+    root seed feed the load spectrum and the windows of :func:`build_calibration`).
+    """
+    whole_number("whole_flight_scatter", "n_flights", n_flights, lo=2)
+    children = np.random.SeedSequence(seed, spawn_key=(2,)).spawn(n_flights)
+    rows = [
+        simulated_flight_damage(params, depths_m, [np.random.default_rng(child)])
+        for child in tqdm(children, desc="whole flights", disable=not progress)
+    ]
+    return FlightDamage(
+        rows[0].depth_m,
+        np.vstack([r.crack_m for r in rows]),
+        np.concatenate([r.wear_m for r in rows]),
+        rows[0].duration_s,
     )
 
 

@@ -31,7 +31,7 @@ import numpy as np
 import numpy.typing as npt
 
 from scas_env.actuator.health import HealthState, actuator_config
-from scas_env.actuator.missions import REGIMES, link_force_n, regime_profile
+from scas_env.actuator.missions import REGIMES, flight_profile, link_force_n, regime_profile
 from scas_env.actuator.params import ScasParams
 from scas_env.actuator.physics.actuator import ActuatorRun, simulate
 from scas_env.actuator.physics.crack_growth import (
@@ -236,3 +236,106 @@ def crack_rate_table(
     depth = np.geomspace(hi, a_fail, n_grid)
     rates = np.array([rate(a) for a in depth])
     return CrackRateTable(depth, rates, a_fail, dormant)
+
+
+# ----------------------------------------------------------------------------- whole flights
+@dataclass(frozen=True, eq=False)
+class FlightDamage:
+    """Damage of simulated flights of the nominal unit (one row per flight).
+
+    Attributes
+    ----------
+    depth_m : crack depths at which the crack increment is evaluated (m).
+    crack_m : crack growth per flight at each depth, shape (n_flights, n_depths) (m).
+    wear_m : seal wear per flight, shape (n_flights,) (m).
+    duration_s : simulated length of each flight (s).
+    """
+
+    depth_m: FloatArray
+    crack_m: FloatArray
+    wear_m: FloatArray
+    duration_s: float
+
+    @property
+    def crack_cv(self) -> FloatArray:
+        """Flight-to-flight coefficient of variation of the crack increment per depth."""
+        return self.crack_m.std(axis=0, ddof=1) / self.crack_m.mean(axis=0)
+
+    @property
+    def wear_cv(self) -> float:
+        """Flight-to-flight coefficient of variation of the seal wear."""
+        return float(self.wear_m.std(ddof=1) / self.wear_m.mean())
+
+
+def simulated_flight_damage(
+    params: ScasParams,
+    depths_m: npt.ArrayLike,
+    rngs: list[np.random.Generator],
+    *,
+    duration_s: float | None = None,
+    regime: int | None = None,
+) -> FlightDamage:
+    """Crack growth and seal wear of one simulated flight per generator, without scaling.
+
+    Each flight is a Table-1 mission of ``duration_s`` (default
+    ``MissionParams.flight_duration_s``: the whole 1.5 h flight, 1080 segments of ~5 s with
+    their own amplitude draws) on the nominal unit at nominal conditions, noise on; its
+    cracked-spring force cycles (rainflow over the whole record) and friction work give the
+    damage directly, with no window-to-flight scaling. With ``regime`` set, the record holds
+    that Table-1 regime alone (:func:`~scas_env.actuator.missions.regime_profile`).
+
+    A whole flight is ~5.4 million samples (about 6 s of simulation each).
+    """
+    depths = np.asarray(depths_m, dtype=np.float64)
+    if depths.ndim != 1 or depths.size == 0 or not np.all(np.isfinite(depths) & (depths > 0)):
+        raise ValueError(f"depths_m = {depths_m!r} must be a non-empty 1-D array of depths > 0 m")
+    if len(rngs) < 1:
+        raise ValueError("rngs must hold at least one generator (one per flight)")
+    duration = params.mission.flight_duration_s if duration_s is None else float(duration_s)
+    if not (math.isfinite(duration) and duration > 0.0):
+        raise ValueError(f"duration_s = {duration_s} s must be > 0")
+    unit = nominal_unit(params)
+    model = growth_model(params, unit)
+    cfg = actuator_config(params)
+    fs = params.sensors.sample_rate_hz
+    crack = np.empty((len(rngs), depths.size))
+    wear = np.empty(len(rngs))
+    for k, rng in enumerate(rngs):
+        if regime is None:
+            prof = flight_profile(params.mission, rng, fs, duration_s=duration)
+        else:
+            prof = regime_profile(regime, params.mission, rng, fs, duration)
+        force = link_force_n(prof.pilot_command_m, params.actuator.link_force_amplitude_n)
+        run = simulate(cfg, prof.scas_command_m, rng=rng, link_force_n=force)
+        loads = flight_loads_from_run(run, run.t_s.size / fs, cfg.spring_rate_1_n_m)
+        crack[k] = [crack_increment_m(params, unit, model, a, loads) for a in depths]
+        wear[k] = wear_increment_m(params, unit, loads)
+    return FlightDamage(depths, crack, wear, duration)
+
+
+def summed_cv(means: npt.ArrayLike, variances: npt.ArrayLike, counts: npt.ArrayLike) -> FloatArray:
+    """Coefficient of variation of a sum of independent blocks.
+
+    Block type ``r`` (e.g. a window of one Table-1 regime) has mean ``means[r]`` and
+    variance ``variances[r]`` and occurs ``counts[r]`` times; the sum has mean
+    ``sum_r n_r m_r`` and variance ``sum_r n_r v_r``, so for one block type the CV falls as
+    ``1 / sqrt(n)``. Axis 0 runs over block types; further axes (e.g. crack depths) are
+    kept.
+
+    >>> float(summed_cv([2.0], [1.0], [4.0])[()])
+    0.25
+    """
+    m = np.asarray(means, dtype=np.float64)
+    v = np.asarray(variances, dtype=np.float64)
+    n = np.asarray(counts, dtype=np.float64)
+    if m.shape != v.shape or m.shape[:1] != n.shape:
+        raise ValueError(
+            f"means {m.shape}, variances {v.shape} and counts {n.shape} must share axis 0"
+        )
+    if np.any(v < 0.0) or np.any(n < 0.0):
+        raise ValueError("variances and counts must be >= 0")
+    n = n.reshape(n.shape + (1,) * (m.ndim - 1))
+    total = (n * m).sum(axis=0)
+    if np.any(total <= 0.0):
+        raise ValueError(f"the summed mean {total} must be > 0 to define a CV")
+    return np.sqrt((n * v).sum(axis=0)) / total

@@ -428,6 +428,12 @@ def _build_calibration_args(parser: Parser) -> None:
     parser.add_argument(
         "--lives", type=positive_int, default=100_000, help="units for the life summary"
     )
+    parser.add_argument(
+        "--whole-flights",
+        type=nonneg_int,
+        default=40,
+        help="whole simulated flights for the whole-flight scatter (0: leave it out)",
+    )
     add_params_arg(parser)
 
 
@@ -438,7 +444,9 @@ def _build_calibration_run(parser: Parser, args: Args) -> int:
 
     check_out_file(parser, args.out, args.overwrite)
     params = load_params(parser, args)
-    cal = build_calibration(params, seed=args.seed, n_windows=args.windows)
+    cal = build_calibration(
+        params, seed=args.seed, n_windows=args.windows, whole_flights=args.whole_flights
+    )
     cal.save(args.out)
     lives = sample_lives(params, cal, np.random.default_rng(args.seed), args.lives)
     log.info(f"wrote {args.out}")

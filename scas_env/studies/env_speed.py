@@ -93,6 +93,7 @@ def env_timings(
     surrogate = _per_call(_stepper(ScasMaintenanceEnv(), 0), n_steps)
     features_only = _per_call(_stepper(ScasMaintenanceEnv(obs_mode="features"), 0), n_steps)
     random_actions = _per_call(_random_stepper(ScasMaintenanceEnv(), 0), n_steps)
+    v2 = _per_call(_stepper(ScasMaintenanceEnv(**scas_env.V2_KWARGS), 0), n_steps)
     physics_env = ScasMaintenanceEnv(fidelity="physics")
     physics_step = _stepper(physics_env, 0, test_every=1)
     t0 = time.perf_counter()
@@ -107,6 +108,7 @@ def env_timings(
         Timing("surrogate step, features+rul (PF)", surrogate, "CartPole-v1 step", cart),
         Timing("surrogate step, features only", features_only, "CartPole-v1 step", cart),
         Timing("surrogate step, uniform random actions", random_actions, "CartPole-v1 step", cart),
+        Timing("v2 step, filters learning from I8/I9", v2, "CartPole-v1 step", cart),
         Timing("physics step, test + 20 s window + PF", physics, "CartPole-v1 step", cart),
         Timing("physics step, first 200 of an episode", warm, "CartPole-v1 step", cart),
         Timing("in-flight features of a 20 s window", features, "CartPole-v1 step", cart),
@@ -117,6 +119,7 @@ def env_timings(
 ACTION_MIXES: dict[str, tuple[float, float, float, float]] = {
     "fly only": (1.0, 0.0, 0.0, 0.0),
     "test every ~10 slots": (0.9, 0.1, 0.0, 0.0),
+    "trained-policy mix (90/9/1)": (0.9, 0.09, 0.005, 0.005),
     "uniform random": (0.25, 0.25, 0.25, 0.25),
 }
 
@@ -140,9 +143,11 @@ def vector_throughput(num_envs: int = 64, n_steps: int = 200) -> dict[str, float
     out["CartPole-v1 (reference)"] = _vector_rate(
         cart, rng.integers(0, 2, (n_steps + 10, num_envs))
     )
-    envs = gym.make_vec(scas_env.ENV_ID, num_envs=num_envs, vectorization_mode="vector_entry_point")
-    for name, p in ACTION_MIXES.items():
-        out[name] = _vector_rate(envs, rng.choice(4, size=(n_steps + 10, num_envs), p=p))
+    for version, env_id in (("v0", scas_env.ENV_ID), ("v2", scas_env.ENV_ID_V2)):
+        envs = gym.make_vec(env_id, num_envs=num_envs, vectorization_mode="vector_entry_point")
+        for name, p in ACTION_MIXES.items():
+            actions = rng.choice(4, size=(n_steps + 10, num_envs), p=p)
+            out[f"{version}: {name}"] = _vector_rate(envs, actions)
     return out
 
 

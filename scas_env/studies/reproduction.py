@@ -15,8 +15,12 @@ Pipeline (:func:`run_reproduction`; the report and plots are in
    pool is shared by both faults, so a feature is pruned only when redundant in every mode.
    Selected features: the **ground** feature is the one pre-flight feature serving both
    faults (as the paper's G3): the maximin over the faults of accuracy x |Spearman|; the
-   **flight** feature is the top of each fault's ranking, flagged non-responsive when
-   |Spearman| < ``RESPONSIVE_MIN_SPEARMAN`` or SNR <= 0 dB.
+   **flight** feature is the top of each fault's ranking over all candidates (Table 2's
+   in-flight features and I8, I9), flagged non-responsive when
+   |Spearman| < ``RESPONSIVE_MIN_SPEARMAN`` or SNR <= 0 dB; ``flight_table2`` is the top
+   among Table 2's alone (the paper's pool, compared with the paper). G2 is left out of
+   every ranking (:data:`~scas_env.studies.reproduction_conventions.EXCLUDED_FEATURES`: it
+   measures no overshoot).
 3. **Detection** (§5.1): :class:`~prognostics.detection.PercentileDetector` (P95 of the
    population of healthy runs of both modes, 95% of a running window of W values beyond it)
    on campaign degradation paths: path p takes, at each level in order, runs
@@ -35,6 +39,7 @@ Pipeline (:func:`run_reproduction`; the report and plots are in
 from __future__ import annotations
 
 import time
+from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -43,13 +48,14 @@ import numpy as np
 from numpy.typing import NDArray
 
 from prognostics.detection import DetectorConfig, PercentileDetector, severity_at_detection
-from prognostics.features import CANDIDATE_INFO
+from prognostics.features import CANDIDATE_INFO, FEATURE_INFO
 from prognostics.selection import FeatureScore, rank_features, redundancy_matrix, redundant_pairs
 from scas_env.actuator.calibration import Calibration, calibration_for
 from scas_env.actuator.config import Validated, param
 from scas_env.actuator.params import ScasParams
 from scas_env.studies.campaign import CampaignConfig, run_campaign
 from scas_env.studies.campaign_table import CampaignResult, load
+from scas_env.studies.reproduction_conventions import EXCLUDED_FEATURES
 from scas_env.studies.reproduction_prognosis import (
     HealthySet,
     PathPrognosis,
@@ -164,14 +170,33 @@ def _level_runs(campaign: CampaignResult, fault: str) -> tuple[FloatArray, int]:
 
 
 # ----------------------------------------------------------------------------- selection
-def select_features(campaign: CampaignResult) -> dict[str, Any]:
-    """Redundancy, ranking and selected features per fault and condition (module doc, 2)."""
+def select_features(
+    campaign: CampaignResult, excluded: Mapping[str, str] = EXCLUDED_FEATURES
+) -> dict[str, Any]:
+    """Redundancy, ranking and selected features per fault and condition (module doc, 2).
+
+    Every feature the campaign holds is a candidate (Table 2's ten and any further in-flight
+    feature such as I8/I9) except ``excluded`` (name -> reason, reported as
+    ``out["excluded"]``; default: G2, see
+    :mod:`scas_env.studies.reproduction_conventions`).
+    """
     complexity = {k: float(v.complexity) for k, v in CANDIDATE_INFO.items()}
-    out: dict[str, Any] = {"redundancy": {}, "scores": {}, "pruned": {}, "selected": {}}
+    out: dict[str, Any] = {
+        "redundancy": {},
+        "scores": {},
+        "pruned": {},
+        "selected": {},
+        "excluded": dict(excluded),
+    }
+
+    def candidates(fault: str, cond: str) -> tuple[FloatArray, dict[str, FloatArray]]:
+        sev, feats = campaign.select(fault, cond)
+        return sev, {k: v for k, v in feats.items() if k not in excluded}
+
     for cond in ("ground", "flight"):
         flagged: dict[str, set[str]] = {}
         for fault in FAULTS:
-            sev, feats = campaign.select(fault, cond)
+            sev, feats = candidates(fault, cond)
             names, matrix = redundancy_matrix(feats, sev)
             corr = np.corrcoef(np.stack([feats[n] for n in names]))
             pairs = []
@@ -189,7 +214,7 @@ def select_features(campaign: CampaignResult) -> dict[str, Any]:
         pruned = sorted(set.intersection(*flagged.values()))
         out["pruned"][cond] = pruned
         for fault in FAULTS:
-            sev, feats = campaign.select(fault, cond)
+            sev, feats = candidates(fault, cond)
             pool = {k: v for k, v in feats.items() if k not in pruned}
             out["scores"][f"{fault}/{cond}"] = rank_features(pool, sev)
     ground = out["scores"]
@@ -202,11 +227,14 @@ def select_features(campaign: CampaignResult) -> dict[str, Any]:
     }
     best_ground = max(merit, key=lambda k: merit[k])
     for fault in FAULTS:
-        top = out["scores"][f"{fault}/flight"][0]
+        ranking = out["scores"][f"{fault}/flight"]
+        top = ranking[0]
+        table2 = next((s.name for s in ranking if s.name in FEATURE_INFO), None)
         out["selected"][fault] = {
             "ground": best_ground,
             "ground_per_fault_top": out["scores"][f"{fault}/ground"][0].name,
             "flight": top.name,
+            "flight_table2": table2,
             "flight_responsive": bool(
                 abs(top.spearman) >= RESPONSIVE_MIN_SPEARMAN and top.snr_db > 0.0
             ),

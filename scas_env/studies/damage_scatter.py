@@ -1,0 +1,69 @@
+"""Flight-to-flight damage scatter: one scaled window, whole flights, and the closed form.
+
+:func:`damage_scatter` measures the three estimates of docs/physics.md ("That window scatter
+is not a flight's"): the calibration's scaled-window CV, the CV over whole simulated
+flights (:func:`scas_env.actuator.calibration.whole_flight_scatter`, the calibration's
+seeds) and the closed form of a flight as a sum of independent regime windows
+(:func:`scas_env.actuator.flight_damage.summed_cv`, each Table-1 regime simulated alone in
+``n_windows`` windows of ``window_s``).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+from tqdm.auto import tqdm
+
+from scas_env.actuator.calibration import calibration_for, whole_flight_scatter
+from scas_env.actuator.flight_damage import simulated_flight_damage, summed_cv
+from scas_env.actuator.missions import REGIMES
+from scas_env.actuator.params import ScasParams
+
+__all__ = ["damage_scatter"]
+
+
+def damage_scatter(
+    params: ScasParams,
+    *,
+    n_flights: int,
+    n_windows: int,
+    window_s: float = 20.0,
+    seed: int | None = None,
+    progress: bool = True,
+) -> dict[str, Any]:
+    """The three CV estimates per crack depth and for wear, and the mean growth checks.
+
+    ``seed`` defaults to the calibration's (the whole flights are then the shipped ones);
+    regime r's windows draw from ``SeedSequence(seed, spawn_key=(3, r))``.
+    """
+    cal = calibration_for(params)
+    seed = cal.seed if seed is None else seed
+    depths = cal.crack_cv_depth_m
+    whole = whole_flight_scatter(params, seed, n_flights, depths, progress=progress)
+    regimes = []
+    for r in tqdm(range(len(REGIMES)), desc="regime windows", disable=not progress):
+        children = np.random.SeedSequence(seed, spawn_key=(3, r)).spawn(n_windows)
+        rngs = [np.random.default_rng(c) for c in children]
+        regimes.append(simulated_flight_damage(params, depths, rngs, duration_s=window_s, regime=r))
+    counts = np.array([g.occurrence * cal.flight_duration_s / window_s for g in REGIMES])
+    crack_m = np.array([d.crack_m.mean(axis=0) for d in regimes])
+    crack_v = np.array([d.crack_m.var(axis=0, ddof=1) for d in regimes])
+    wear_m = np.array([d.wear_m.mean() for d in regimes])
+    wear_v = np.array([d.wear_m.var(ddof=1) for d in regimes])
+    table = np.interp(depths, cal.crack_depth_m, cal.crack_rate_m_per_flight)
+    return {
+        "depth_m": depths.tolist(),
+        "n_flights": n_flights,
+        "n_windows_per_regime": n_windows,
+        "window_cv": {"crack": cal.crack_cv.tolist(), "wear": cal.wear_cv},
+        "whole_flight_cv": {"crack": whole.crack_cv.tolist(), "wear": whole.wear_cv},
+        "closed_form_cv": {
+            "crack": summed_cv(crack_m, crack_v, counts).tolist(),
+            "wear": float(summed_cv(wear_m, wear_v, counts)),
+        },
+        "whole_flight_mean_over_table": {
+            "crack": (whole.crack_m.mean(axis=0) / table).tolist(),
+            "wear": float(whole.wear_m.mean() / cal.wear_rate_m_per_flight),
+        },
+    }

@@ -1,0 +1,41 @@
+"""One table of reproduction verdicts with a column per sensing preset.
+
+Input: the ``report.json`` of one reproduction per preset
+(:func:`scas_env.studies.reproduction_report.write_report`, e.g. the default parameters and
+``--params`` of :func:`scas_env.actuator.presets.preset_params` saved to a file). Output: a
+markdown table, one row per claim of [DJS20], per preset its "ours" value (the seal's
+worn-depth fraction in brackets where reported) and its verdict.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Any
+
+__all__ = ["preset_table", "read_reports"]
+
+
+def read_reports(paths: dict[str, str | Path]) -> dict[str, dict[str, Any]]:
+    """``{preset: report.json content}``; every file must hold the same claims in order."""
+    reports = {name: json.loads(Path(p).read_text()) for name, p in paths.items()}
+    claims = [[r["claim"] for r in rep["verdicts"]] for rep in reports.values()]
+    if any(c != claims[0] for c in claims[1:]):
+        raise ValueError(f"reports {list(paths)} hold different claims: compare like with like")
+    return reports
+
+
+def preset_table(reports: dict[str, dict[str, Any]]) -> str:
+    """Markdown table: claim, paper, then ``ours`` and verdict per preset (module doc)."""
+    names = list(reports)
+    head = "| result | paper | " + " | ".join(f"{n} | {n}: verdict" for n in names) + " |"
+    lines = [head, "|---|---|" + "---|---|" * len(names)]
+    first = reports[names[0]]["verdicts"]
+    for k, row in enumerate(first):
+        cells = []
+        for n in names:
+            r = reports[n]["verdicts"][k]
+            depth = r.get("ours_worn_depth", "")
+            cells += [f"{r['ours']}" + (f" [worn depth: {depth}]" if depth else ""), r["verdict"]]
+        lines.append(f"| {row['claim']} | {row['paper']} | " + " | ".join(cells) + " |")
+    return "\n".join(lines) + "\n"

@@ -1,0 +1,66 @@
+"""Calibration and sharpness of the monitor's RUL and risk outputs (issue #12).
+
+Runs :func:`scas_env.studies.belief_calibration.run_study`, prints the per-stage table and the
+reliability diagram, and writes CSV/JSON/PNG into ``--out`` (docs/beliefs.md).
+
+    python scripts/belief_calibration.py --episodes 200 --seed 1000 --out results/beliefs
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+from collections.abc import Sequence
+
+from scas_env.studies.belief_calibration import (
+    POLICIES,
+    PRESETS,
+    format_reliability,
+    format_stages,
+    run_study,
+    write_study,
+)
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--episodes", type=int, default=100, help="episodes per policy (100)")
+    parser.add_argument("--seed", type=int, default=1000, help="first episode seed (1000)")
+    parser.add_argument("--policies", nargs="+", default=list(POLICIES), choices=POLICIES)
+    parser.add_argument("--presets", nargs="+", default=["default"], choices=list(PRESETS))
+    parser.add_argument(
+        "--scenario",
+        type=json.loads,
+        default={},
+        help='scenario fields as JSON, e.g. \'{"flight_features": "I2,I6,I7,I8,I9"}\'',
+    )
+    parser.add_argument("--out", default=None, help="results folder (none: print only)")
+    parser.add_argument("--overwrite", action="store_true", help="replace an existing --out")
+    parser.add_argument("--no-progress", action="store_true")
+    args = parser.parse_args(argv)
+    if args.out is not None:
+        from scas_env.results_folder import check_destination
+
+        check_destination(args.out, args.overwrite)
+    result = run_study(
+        episodes=args.episodes,
+        seed=args.seed,
+        policies=args.policies,
+        presets=args.presets,
+        scenario_fields=args.scenario,
+        progress=not args.no_progress,
+    )
+    print("RUL calibration per life stage (truth: info's expected RUL)")
+    print(format_stages(result, "info"))
+    print("\nthe same against the realised RUL (lives that failed in the episode)")
+    print(format_stages(result, "realised"))
+    print("\nreliability of P(fail within the risk horizon)")
+    print(format_reliability(result))
+    if args.out is not None:
+        for path in write_study(result, args.out, overwrite=args.overwrite):
+            print(path)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

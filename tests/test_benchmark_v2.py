@@ -1,0 +1,25 @@
+"""The benchmark on v2: policies checked against the scenario's observation before work."""
+
+from __future__ import annotations
+
+import pytest
+
+from policies.benchmark import PolicySpec, check_specs, run_benchmark
+from policies.cli import benchmark_main
+from scas_env import V2_KWARGS
+
+
+def test_an_agent_for_another_observation_is_refused_before_any_episode() -> None:
+    with pytest.raises(ValueError, match="policy 'ppo' cannot run on this scenario"):
+        run_benchmark(["preventive", "ppo"], episodes=1, slots=10, env_kwargs=dict(V2_KWARGS))
+    check_specs([PolicySpec("preventive"), PolicySpec("oracle")], dict(V2_KWARGS))
+
+
+def test_default_cli_run_on_v2_leaves_the_v0_agents_out(tmp_path, caplog) -> None:
+    scenario = tmp_path / "v2.toml"
+    scenario.write_text("".join(f'{k} = "{v}"\n' for k, v in V2_KWARGS.items()))
+    out = tmp_path / "bench"
+    args = ["--scenario", str(scenario), "--episodes", "1", "--slots", "20", "--workers", "1"]
+    assert benchmark_main([*args, "--out", str(out), "-q"]) == 0
+    assert "ppo left out" in caplog.text
+    assert "ppo" not in (out / "results.csv").read_text()
