@@ -10,22 +10,22 @@
   flight's in-flight features as z-scores against the healthy population (shipped
   surrogate: mean, unit and run scatter): the seals are due when ``z(I7) >= scale *
   seal_z`` (I7 = rms(i)/rms(x) rises with wear), the spring when ``|z(I2)| >= scale *
-  spring_z``; with tests on, a section-5.1 alarm (``spring_alarm`` / ``seal_alarm``)
-  makes its part due too.
+  spring_z`` (keyword ``reference``: the healthy population of a sensing variant's own
+  surrogate, :func:`policies.nested.surrogate_reference`); with tests on, a section-5.1
+  alarm (``spring_alarm`` / ``seal_alarm``) makes its part due too.
 
 ``override=False`` and ``test_every=inf`` give the age rule exactly (tested).
 """
 
 from __future__ import annotations
 
-import functools
 import math
 from typing import ClassVar
 
 import numpy as np
 
 from policies.base import register
-from policies.nested import NestedRule
+from policies.nested import NestedRule, shipped_reference
 
 __all__ = [
     "RUL_RISK_AGE_DEFAULTS",
@@ -87,19 +87,11 @@ class RulRiskPolicy(NestedRule):
         return out[0], out[1]
 
 
-@functools.cache
 def flight_reference() -> dict[str, tuple[float, float]]:
     """Healthy mean and total sd of the in-flight features I2 (-) and I7 (uA/mm, the
     observation's unit) from the shipped surrogate."""
-    from scas_env.actuator.surrogate import default_surrogate
-
-    s = default_surrogate()
-    out = {}
-    for f, unit in (("I2", 1.0), ("I7", 1e3)):
-        k = s.index(f)
-        sd = math.hypot(float(s.unit_std[k, 0, 0]), float(s.run_std[k, 0, 0]))
-        out[f] = (float(s.mean[k, 0, 0]) * unit, sd * unit)
-    return out
+    ref = shipped_reference()
+    return {f: ref[f] for f in ("I2", "I7")}
 
 
 @register
@@ -124,7 +116,7 @@ class FeatureRulePolicy(NestedRule):
     override_params: ClassVar[dict[str, float]] = {"spring_z": math.inf, "seal_z": 3.0}
 
     def _override(self, obs: np.ndarray, scale: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        ref = flight_reference()
+        ref = shipped_reference() if self.reference is None else self.reference
         z2 = (self.column(obs, "I2") - ref["I2"][0]) / ref["I2"][1]
         z7 = (self.column(obs, "I7") - ref["I7"][0]) / ref["I7"][1]
         spring = np.abs(z2) >= scale * self.values["spring_z"]

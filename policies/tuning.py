@@ -234,15 +234,23 @@ def tune_family(
     progress: bool = False,
     sampler_seed: int = SAMPLER_SEED,
     env_kwargs: Mapping[str, Any] | None = None,
+    train_seed: int = TRAIN_SEED,
 ) -> TuningResult:
     """Tune one family with TPE (module docstring); ``age_params``: the tuned age rule,
     enqueued with the override off as the first trial of a nested family; ``env_kwargs``:
-    the user's scenario and costs (``gym.make`` keywords), under the family's own."""
+    the user's scenario and costs (``gym.make`` keywords), under the family's own;
+    ``train_seed``: root seed of the training episodes (another tuning replicate: another
+    seed, never :data:`HELD_OUT_SEED`)."""
     import optuna
 
     for name, value in (("trials", trials), ("episodes", episodes), ("slots", slots)):
         if isinstance(value, bool) or not isinstance(value, int) or value < 1:
             raise ValueError(f"{name} = {value!r} must be an integer >= 1")
+    if train_seed == HELD_OUT_SEED:
+        raise ValueError(
+            f"train_seed = {train_seed!r} is the held-out seed: tuning must not see the "
+            "evaluation episodes"
+        )
     optuna.logging.set_verbosity(optuna.logging.WARNING)
     t0 = time.perf_counter()
     mode = policy_obs_mode(family.policy)
@@ -254,7 +262,7 @@ def tune_family(
         episode_slots=slots,
         **{**dict(env_kwargs or {}), **dict(family.env_kwargs)},
     )
-    seeds = episode_seeds(TRAIN_SEED, episodes)
+    seeds = episode_seeds(train_seed, episodes)
     history: list[dict[str, Any]] = []
 
     def objective(trial: Any) -> float:
@@ -304,10 +312,13 @@ def tune_families(
     families: Mapping[str, Family] | None = None,
     on_result: Callable[[TuningResult], None] | None = None,
     env_kwargs: Mapping[str, Any] | None = None,
+    train_seed: int = TRAIN_SEED,
+    sampler_seed: int = SAMPLER_SEED,
 ) -> dict[str, TuningResult]:
     """Tune the age rule first, then every other family in ``labels`` (default: all of
     :data:`FAMILIES`) on ``n_workers`` processes, the nested ones starting from the age
-    rule's point. Same budget for all: ``trials x episodes`` episodes."""
+    rule's point. Same budget for all: ``trials x episodes`` episodes. ``train_seed``,
+    ``sampler_seed``: the tuning replicate (:func:`tune_family`)."""
     fams = dict(FAMILIES if families is None else families)
     labels = list(fams) if labels is None else list(labels)
     unknown = [k for k in labels if k not in fams]
@@ -318,6 +329,8 @@ def tune_families(
         "episodes": episodes,
         "slots": slots,
         "env_kwargs": dict(env_kwargs or {}),
+        "train_seed": train_seed,
+        "sampler_seed": sampler_seed,
     }
     out: dict[str, TuningResult] = {}
     if "age" not in labels:

@@ -21,10 +21,10 @@ of the reward against ``age`` with its t-interval and minimum detectable differe
 **break-even sigma** is where the noisy oracle's paired value against the age rule crosses
 zero (linear interpolation between the two sigmas that bracket it).
 
-A sensing-quality sweep (sensor noise x0.1 ... x3, per-unit tolerances on/off) needs a
-feature surrogate rebuilt per sensing setting: the surrogate fidelity reads its noise and
-unit scatter from the shipped surrogate, not from ``ScasParams``, and ``Scenario`` has no
-sensing knob. It is not run here (docs/value.md says what is missing).
+The sensing-quality sweep (sensor noise x0.1 ... x3, per-unit tolerances on/off) re-tunes
+the same nested families at each sensing variant of the design, each with its own feature
+surrogate: :mod:`policies.sensing_sweep` (variants: :mod:`scas_env.studies.sensing_variants`;
+command ``scripts/sensing_sweep.py``).
 """
 
 from __future__ import annotations

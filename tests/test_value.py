@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from policies.tuning import FAMILIES, edge_report, relevant_box, tune_family
+from policies.tuning import FAMILIES, HELD_OUT_SEED, edge_report, relevant_box, tune_family
 from policies.value import (
     LADDER,
     QUICK,
@@ -96,3 +96,8 @@ def test_only_parameters_that_act_are_checked_for_edges():
     assert set(box) == {"spring_age", "seal_age", "opportunity"}
     on = relevant_box(fam, {**off, "override": True, "test_every": 50.0}, slots=2000)
     assert set(on) == set(fam.box)
+
+
+def test_tuning_never_trains_on_the_held_out_episodes():
+    with pytest.raises(ValueError, match="held-out"):
+        tune_family(FAMILIES["age"], trials=1, episodes=1, slots=10, train_seed=HELD_OUT_SEED)
