@@ -260,6 +260,10 @@ def build_calibration(
 ) -> Calibration:
     """Compute the calibration of ``params`` from physics (a few seconds with defaults).
 
+    The shipped ``data/calibration.json`` is ``scas-build-calibration``'s output: seed 2020,
+    ``n_windows=60``, ``whole_flights=40`` (its defaults; this function's ``n_windows=30``
+    keeps tests fast and gives other scatter estimates).
+
     ``whole_flights`` > 0 also simulates that many whole flights for the whole-flight
     scatter fields (:func:`whole_flight_scatter`, about 6 s per flight); the other fields do
     not depend on it.
