@@ -64,7 +64,13 @@ for _id, _kwargs in (
             kwargs=_kwargs,
         )
 
-#: decision epochs over v0 (act now, then fly k flights): scas_env.decision_epochs
+#: decision epochs (act now, then fly k flights; scas_env.decision_epochs) over v0, and over v2
 ENV_ID_EPOCHS = "scas_env/ScasMaintenanceEpochs-v0"
-if ENV_ID_EPOCHS not in registry:
-    register(id=ENV_ID_EPOCHS, entry_point="scas_env.decision_epochs:make_decision_epoch_env")
+ENV_ID_EPOCHS_V2 = "scas_env/ScasMaintenanceEpochs-v1"
+for _id, _kwargs in ((ENV_ID_EPOCHS, {}), (ENV_ID_EPOCHS_V2, V2_KWARGS)):
+    if _id not in registry:
+        register(
+            id=_id,
+            entry_point="scas_env.decision_epochs:make_decision_epoch_env",
+            kwargs=_kwargs,
+        )

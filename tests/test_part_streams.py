@@ -131,3 +131,14 @@ def test_whole_flight_scatter_grows_parts_with_the_calibrated_cv() -> None:
         cv = np.std(steps, ddof=1) / np.mean(steps)
         # sample CV of 400 lognormal factors: standard error about cv / sqrt(2 * 400)
         assert abs(cv - expected) < 4 * expected / np.sqrt(800), scatter
+
+
+def test_decision_epochs_over_v2_are_registered() -> None:
+    import gymnasium as gym
+
+    from scas_env import ENV_ID_EPOCHS_V2, V2_KWARGS
+
+    env = gym.make(ENV_ID_EPOCHS_V2)
+    assert env.unwrapped.scenario.flight_features == V2_KWARGS["flight_features"]
+    obs, _ = env.reset(seed=0)
+    assert obs.shape == (21,)  # v2's 20 entries and flights_left
