@@ -11,7 +11,6 @@ valid, so ``--help`` and usage errors are quick. Shared options: :mod:`scas_env.
 
 from __future__ import annotations
 
-import argparse
 import logging
 import os
 import shlex
@@ -421,6 +420,8 @@ Tunes every family on training seeds (Optuna TPE, the same budget), then runs ev
 
 
 def value_parser() -> Any:
+    from policies.tuning import FAMILIES
+
     parser = make_parser("scas-value", VALUE_DOC)
     parser.add_argument("--episodes", type=positive_int, default=1000, help="held-out episodes")
     parser.add_argument("--slots", type=positive_int, default=2000, help="flight slots per episode")
@@ -438,7 +439,7 @@ def value_parser() -> Any:
     )
     parser.add_argument(
         "--families",
-        type=_family_list,
+        type=name_list(FAMILIES, "rule family"),
         default=None,
         help="comma-separated rungs to tune and run (labels of policies.tuning.FAMILIES; the "
         "age rule, corrective and the oracle always run). Default: every rung",
@@ -446,18 +447,6 @@ def value_parser() -> Any:
     add_env_config_args(parser)
     add_logging_args(parser)
     return parser
-
-
-def _family_list(text: str) -> list[str]:
-    from policies.tuning import FAMILIES
-
-    labels = [t.strip() for t in text.split(",") if t.strip()]
-    unknown = [t for t in labels if t not in FAMILIES]
-    if not labels or unknown:
-        raise argparse.ArgumentTypeError(
-            f"families {text!r}: {unknown or 'none given'} not among {sorted(FAMILIES)}"
-        )
-    return labels
 
 
 def value_main(argv: Sequence[str] | None = None) -> int:

@@ -13,7 +13,8 @@ and the answer to a failed test. Per row and slot:
    subclass's :meth:`NestedRule._override` says so at that ``scale`` (thresholds relaxed by
    the same fraction while grounded).
 4. After a failed go/no-go test (``no_go`` set, flying), the part the test's evidence
-   implicates (:func:`implicated_spring`) is replaced.
+   implicates (:func:`implicated_spring`) is replaced, whoever asked for the test (this
+   rule's interval or the scenario's test before every flight).
 5. A test is requested when flying and ``test_age >= test_every`` (``inf``: never).
 6. One action per slot, seals first (:func:`policies.rules.choose`).
 
@@ -213,7 +214,9 @@ class NestedRule(Policy):
             for k, flag in enumerate(self._override(obs, scale)):
                 due[k] |= (ages[k] > 0) & flag
         test = None
-        if self.can_test and math.isfinite(self.test_every):
+        if self.can_test:
+            # a failed test is answered whoever asked for it (this rule's interval, or the
+            # scenario's test before every flight)
             flying = ~down
             failed = flying & (self.column(obs, "no_go") > 0.5)
             spring = implicated_spring(
@@ -221,5 +224,6 @@ class NestedRule(Policy):
             )
             due[0] |= failed & spring & (ages[0] > 0)
             due[1] |= failed & ~spring & (ages[1] > 0)
-            test = flying & (self.column(obs, "test_age") >= self.test_every)
+            if math.isfinite(self.test_every):
+                test = flying & (self.column(obs, "test_age") >= self.test_every)
         return choose(due[0], due[1], test)

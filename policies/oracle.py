@@ -88,19 +88,29 @@ def plan_cost(
     >>> plan_cost(100, 10, 500, c, ((1000,), (1000,))) == 1500.0 + 2500.0  # one spring
     True
     """
-    if slots_left <= 0:
+    forced = _next_forced(slots_left, spring_left, seal_left)
+    if forced is None:
         return 0.0
-    left = (spring_left, seal_left)
-    k = max(0, min(left))
-    if k >= slots_left:
-        return 0.0
-    a = 0 if spring_left <= seal_left else 1
-    h = slots_left - k
-    after = (left[0] - k, left[1] - k)
+    h, after, a = forced
     return min(
         _option_cost(h, after, a, False, costs, lives, step),
         _option_cost(h, after, a, True, costs, lives, step),
     )
+
+
+def _next_forced(
+    slots_left: int, spring_left: int, seal_left: int
+) -> tuple[int, tuple[int, int], int] | None:
+    """The next forced replacement within ``slots_left`` slots: (slots left after flying up
+    to it, flights each part may still fly then, the part due: 0 spring, 1 seal), or None
+    when no part must go before the end."""
+    if slots_left <= 0:
+        return None
+    k = max(0, min(spring_left, seal_left))
+    if k >= slots_left:
+        return None
+    a = 0 if spring_left <= seal_left else 1
+    return slots_left - k, (spring_left - k, seal_left - k), a
 
 
 def _option_cost(
@@ -151,30 +161,37 @@ def plan_cost_known(
     >>> plan_cost_known(100, 10, 500, c, ((1000,), (1000,)), ((1,), (1,))) == 1500.0 + 2500.0
     True
     """
-    if slots_left <= 0:
+    forced = _next_forced(slots_left, spring_left, seal_left)
+    if forced is None:
         return 0.0
-    left = (spring_left, seal_left)
-    k = max(0, min(left))
-    if k >= slots_left:
-        return 0.0
-    a = 0 if spring_left <= seal_left else 1
-    h = slots_left - k
-    after = (left[0] - k, left[1] - k)
+    h, after, a = forced
+    return min(
+        _option_cost_known(h, after, a, both, costs, upcoming, lives) for both in (False, True)
+    )
+
+
+def _option_cost_known(
+    h: int,
+    left: tuple[int, int],
+    a: int,
+    both: bool,
+    costs: tuple[float, float, float, int, int],
+    upcoming: tuple[tuple[int, ...], tuple[int, ...]],
+    lives: tuple[tuple[int, ...], tuple[int, ...]],
+) -> float:
+    """:func:`_option_cost` with the known lives ``upcoming`` of the parts to come (then
+    following :func:`plan_cost_known`); once a replaced kind has no known life left, the
+    expectation over ``lives`` (:func:`_option_cost`, exact)."""
+    kinds = (0, 1) if both else (a,)
+    if any(not upcoming[p] for p in kinds):
+        return _option_cost(h, left, a, both, costs, lives, 1)
     value, price, down = costs[0], costs[1:3], costs[3:5]
-    options = []
-    for both in (False, True):
-        kinds = (0, 1) if both else (a,)
-        if any(not upcoming[p] for p in kinds):
-            options.append(_option_cost(h, after, a, both, costs, lives, 1))
-            continue
-        slots = 1 + (max(down) if both else down[a])
-        new = list(after)
-        rest = [upcoming[0], upcoming[1]]
-        for p in kinds:
-            new[p], rest[p] = upcoming[p][0], upcoming[p][1:]
-        tail = plan_cost_known(h - slots, new[0], new[1], costs, (rest[0], rest[1]), lives)
-        options.append(sum(price[p] for p in kinds) + value * min(slots, h) + tail)
-    return min(options)
+    slots = 1 + (max(down) if both else down[a])
+    new, rest = list(left), [upcoming[0], upcoming[1]]
+    for p in kinds:
+        new[p], rest[p] = upcoming[p][0], upcoming[p][1:]
+    tail = plan_cost_known(h - slots, new[0], new[1], costs, (rest[0], rest[1]), lives)
+    return sum(price[p] for p in kinds) + value * min(slots, h) + tail
 
 
 #: The program's horizon is rounded to this many slots (few distinct states to cache).
@@ -289,30 +306,18 @@ class OraclePolicy(Policy):
         return both < _option_cost(h, left, a, False, *args)
 
     def _decide_known(
-        self, h: int, left: tuple[int, int], a: int, upcoming: tuple[tuple[int, ...], ...]
+        self, h: int, left: tuple[int, int], a: int, upcoming: tuple[tuple[float, ...], ...]
     ) -> bool:
-        """:meth:`_decide` with known lives: both options priced by :func:`plan_cost_known`
-        (a part of life L flies L - margin flights before it is replaced)."""
+        """:meth:`_decide` with known lives: both options priced by
+        :func:`_option_cost_known` (a part of life L flies L - margin flights before it is
+        replaced)."""
         usable = tuple(
             tuple(math.floor(x - self.margin) for x in u if math.isfinite(x)) for u in upcoming
         )
-        costs, down, price, value = self.costs, self.costs[3:5], self.costs[1:3], self.costs[0]
-        total = {}
-        for both in (False, True):
-            kinds = (0, 1) if both else (a,)
-            if any(not usable[p] for p in kinds):
-                return self._decide_quantiles(h, left, a)
-            slots = 1 + (max(down) if both else down[a])
-            new, rest = list(left), [usable[0], usable[1]]
-            for p in kinds:
-                new[p], rest[p] = usable[p][0], usable[p][1:]
-            tail = plan_cost_known(h - slots, new[0], new[1], costs, (rest[0], rest[1]), self.lives)
-            total[both] = sum(price[p] for p in kinds) + value * min(slots, h) + tail
-        return total[True] < total[False]
-
-    def _decide_quantiles(self, h: int, left: tuple[int, int], a: int) -> bool:
-        args = (self.costs, self.lives, 1)
-        return _option_cost(h, left, a, True, *args) < _option_cost(h, left, a, False, *args)
+        args = (self.costs, (usable[0], usable[1]), self.lives)
+        return _option_cost_known(h, left, a, True, *args) < _option_cost_known(
+            h, left, a, False, *args
+        )
 
     def _act(self, obs: np.ndarray) -> IntArray:
         n = obs.shape[0]

@@ -27,8 +27,6 @@ from scas_env.vector_env import ScasMaintenanceVectorEnv
 
 __all__ = ["RULES", "age_rule_answering_no_go", "preflight_availability"]
 
-#: A test interval no episode reaches (slots): the rule asks for no test itself.
-NEVER = 1e12
 #: The two rules compared: the plain age rule, and the same ages answering a no-go.
 RULES = ("age rule", "age rule answering a no-go")
 
@@ -36,9 +34,8 @@ RULES = ("age rule", "age rule answering a no-go")
 def age_rule_answering_no_go(obs_names: Sequence[str], **ages: float) -> RulRiskPolicy:
     """The age rule (``ages``: spring_age, seal_age, opportunity) that replaces the
     implicated part after a failed test and asks for no test itself (nested rule, no
-    override: ``policies.nested`` step 4). The nested rules answer a no-go only when their
-    test interval is finite; :data:`NEVER` slots is finite and never reached."""
-    return RulRiskPolicy(obs_names, override=False, test_every=NEVER, **ages)
+    override: ``policies.nested`` step 4)."""
+    return RulRiskPolicy(obs_names, override=False, test_every=math.inf, **ages)
 
 
 def preflight_availability(

@@ -17,7 +17,7 @@ from scas_env.costs import CostModel
 from scas_env.dashboard import DashboardRenderer
 from scas_env.fleet_state import PARTS, REWARD_TERMS, FleetState
 from scas_env.info import StepInfo, build_info
-from scas_env.monitor import LEARNING_FEATURES, HealthMonitor
+from scas_env.monitor import HealthMonitor, learning_features
 from scas_env.observation import ObservationBuilder
 from scas_env.scenario import Scenario
 from scas_env.world import ActuatorWorld
@@ -516,12 +516,6 @@ class ScasMaintenanceEnv(gym.Env):
         obs = self.builder.observe(fleet, rul)
         obs = {k: v[0] for k, v in obs.items()} if isinstance(obs, dict) else obs[0]
         return obs, build_info(fleet, rul, self.builder.features, row=0)
-
-
-def learning_features(scenario: Scenario) -> tuple[str, ...]:
-    """The in-flight features the monitor's filters learn from under ``scenario``, in the
-    order of ``HealthMonitor.flight_sum`` (empty: they learn at tests only)."""
-    return tuple(f for f in LEARNING_FEATURES if f in scenario.flight_feature_names)
 
 
 def new_fleet_state(env: ScasMaintenanceEnv, n: int) -> FleetState:

@@ -53,6 +53,38 @@ def lognormal_factor(cv: float, z: float) -> float:
     return math.exp(math.sqrt(s2) * z - 0.5 * s2)
 
 
+@njit(cache=True, inline="always")
+def crack_after_flight(
+    crack: float,
+    theta: float,
+    z: float,
+    dmg_grid: np.ndarray,
+    dmg_rate: np.ndarray,
+    dmg_cum: np.ndarray,
+    dmg_cells: np.ndarray,
+    dmg_inv_cell: float,
+    cv_log_depth: np.ndarray,
+    cv_values: np.ndarray,
+    dormant_m: float,
+) -> float:
+    """Crack depth (m) after one flight whose growth-factor draw is ``z``: the damage
+    integral advanced by ``theta`` times a lognormal factor of the depth's CV (a crack below
+    ``dormant_m`` does not grow)."""
+    if crack < dormant_m:
+        return crack
+    cv = np.interp(math.log(crack), cv_log_depth, cv_values)
+    damage = damage_scalar(dmg_grid, dmg_rate, dmg_cum, dmg_cells, dmg_inv_cell, crack)
+    damage += theta * lognormal_factor(cv, z)
+    return inverse_damage_scalar(dmg_grid, dmg_rate, dmg_cum, damage)
+
+
+@njit(cache=True, inline="always")
+def wear_after_flight(wear: float, rate_m: float, wear_cv: float, z: float) -> float:
+    """Seal wear (m) after one flight: ``rate_m`` (the unit's mean per flight) times a
+    lognormal factor of CV ``wear_cv`` drawn with ``z``."""
+    return wear + rate_m * lognormal_factor(wear_cv, z)
+
+
 @njit(cache=True)
 def surrogate_flights(
     envs: np.ndarray,
@@ -108,15 +140,14 @@ def surrogate_flights(
             run = _bilinear(stack, 2, f, i, j, tc, tw)
             features[e, m] = mean + unit * unit_z[e, f] + run * meas_normals[e, m]
         crack = crack_m[e]
-        if crack_active and crack >= dormant_m:
-            cv = np.interp(math.log(crack), cv_log_depth, cv_values)
-            factor = lognormal_factor(cv, deg_normals[e, 0])
-            damage = damage_scalar(dmg_grid, dmg_rate, dmg_cum, dmg_cells, dmg_inv_cell, crack)
-            damage += theta[e] * factor
-            crack = inverse_damage_scalar(dmg_grid, dmg_rate, dmg_cum, damage)
+        if crack_active:
+            crack = crack_after_flight(
+                crack, theta[e], deg_normals[e, 0], dmg_grid, dmg_rate, dmg_cum, dmg_cells,
+                dmg_inv_cell, cv_log_depth, cv_values, dormant_m,
+            )  # fmt: skip
         wear = wear_m[e]
         if wear_active:
-            wear += wear_rate_m * wear_mult[e] * lognormal_factor(wear_cv, deg_normals[e, 1])
+            wear = wear_after_flight(wear, wear_rate_m * wear_mult[e], wear_cv, deg_normals[e, 1])
         new_crack_m[e] = crack
         new_wear_m[e] = wear
         failed[e, 0] = crack >= fail_depth_m[e]
@@ -211,12 +242,10 @@ def crack_flights_to_failure(
     crack to continue from)."""
     crack = crack_m
     for k in range(normals.size):
-        if crack >= dormant_m:
-            cv = np.interp(math.log(crack), cv_log_depth, cv_values)
-            factor = lognormal_factor(cv, normals[k])
-            damage = damage_scalar(dmg_grid, dmg_rate, dmg_cum, dmg_cells, dmg_inv_cell, crack)
-            damage += theta * factor
-            crack = inverse_damage_scalar(dmg_grid, dmg_rate, dmg_cum, damage)
+        crack = crack_after_flight(
+            crack, theta, normals[k], dmg_grid, dmg_rate, dmg_cum, dmg_cells, dmg_inv_cell,
+            cv_log_depth, cv_values, dormant_m,
+        )  # fmt: skip
         if crack >= fail_depth_m:
             return k + 1
     state[0] = crack
@@ -238,7 +267,7 @@ def wear_flights_to_failure(
     :func:`crack_flights_to_failure`."""
     wear = wear_m
     for k in range(normals.size):
-        wear += rate_m * lognormal_factor(wear_cv, normals[k])
+        wear = wear_after_flight(wear, rate_m, wear_cv, normals[k])
         if wear >= critical_m:
             return k + 1
     state[0] = wear

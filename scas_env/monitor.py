@@ -105,6 +105,13 @@ class PartEstimate:
     detected: bool
 
 
+def learning_features(scenario: Scenario) -> tuple[str, ...]:
+    """The in-flight features the filters learn from under ``scenario``
+    (:data:`LEARNING_FEATURES` among those measured), in the order of
+    ``HealthMonitor.flight_sum``; empty: they learn at tests only."""
+    return tuple(f for f in LEARNING_FEATURES if f in scenario.flight_feature_names)
+
+
 class HealthMonitor:
     """Particle filters, baselines and detectors of one actuator (module docstring)."""
 
@@ -120,10 +127,9 @@ class HealthMonitor:
     ) -> None:
         self.params, self.scenario, self.cal, self.sur = params, scenario, calibration, surrogate
         self.rng = rng
-        names = scenario.flight_feature_names
-        #: in-flight features the filters learn from (``LEARNING_FEATURES`` measured), in the
-        #: order of ``flight_sum``; empty: the filters learn at tests only (v0, v1)
-        self.learning = tuple(f for f in LEARNING_FEATURES if f in names)
+        #: in-flight features the filters learn from, in the order of ``flight_sum``; empty:
+        #: the filters learn at tests only (v0, v1)
+        self.learning = learning_features(scenario)
         if installation is None:
             installation = "states" if self.learning else "baseline"
         if installation not in INSTALLATION_MODELS:
@@ -153,8 +159,8 @@ class HealthMonitor:
             np.interp(a0, calibration.crack_depth_m, calibration.crack_rate_m_per_flight)
         )
         # flight-to-flight growth scatter the world grows with (Scenario.damage_scatter)
-        crack_cvs, wear_cv = calibration.flight_scatter(scenario.damage_scatter)
-        crack_cv_a0 = float(np.interp(np.log(a0), np.log(calibration.crack_cv_depth_m), crack_cvs))
+        crack_cv_a0 = float(calibration.crack_cv_at(a0, scenario.damage_scatter))
+        wear_cv = calibration.flight_scatter(scenario.damage_scatter)[1]
         self.spring_filter = ParticleFilter(
             paris_crack_model(
                 calibration.crack_depth_m,

@@ -205,8 +205,3 @@ class Scenario(Validated):
     def flight_feature_names(self) -> tuple[str, ...]:
         """The in-flight features measured every flight, in observation order."""
         return tuple(self.flight_features.split(","))
-
-    @property
-    def learns_in_flight(self) -> bool:
-        """Whether the monitor's filters learn from the in-flight features (I8 and I9 on)."""
-        return "I8" in self.flight_feature_names

@@ -31,9 +31,10 @@ from gymnasium.vector import AutoresetMode, SyncVectorEnv, VectorEnv
 from gymnasium.vector.utils import batch_space
 
 from scas_env.block_draws import DEFAULT_BLOCK
-from scas_env.env import REWARD_TERMS, ScasMaintenanceEnv, learning_features, new_fleet_state
+from scas_env.env import REWARD_TERMS, ScasMaintenanceEnv, new_fleet_state
 from scas_env.fleet_kernels import surrogate_flights
 from scas_env.info import build_info
+from scas_env.monitor import learning_features
 from scas_env.world import PARTS
 
 _STREAMS = ("measure", "degradation", "spring_growth", "seal_growth")

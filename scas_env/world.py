@@ -306,7 +306,7 @@ class ActuatorWorld:
                 return math.inf
         elif not self.scenario.wear_active:
             return math.inf
-        draws = _copy_buffer(self.growth[part])
+        draws = copy.deepcopy(self.growth[part])  # the same future normals, original unmoved
         state = np.array([self.crack_m if part == "spring" else self.wear_m])
         flown = 0
         while flown < _MAX_LIFE_FLIGHTS:
@@ -439,16 +439,6 @@ class ActuatorWorld:
 UPCOMING_PARTS = 3
 #: Flights after which a life counts as infinite (far beyond any episode).
 _MAX_LIFE_FLIGHTS = 10_000_000
-
-
-def _copy_buffer(buffer: NormalBuffer) -> NormalBuffer:
-    """An independent copy of ``buffer`` (values, position and generator state) that hands
-    out the same future normals without moving the original."""
-    clone = NormalBuffer.__new__(NormalBuffer)
-    clone.rng = copy.deepcopy(buffer.rng)
-    clone.values = buffer.values.copy()
-    clone.position = buffer.position.copy()
-    return clone
 
 
 def kernel_tables(

@@ -9,6 +9,7 @@ from scas_env.actuator.calibration import default_calibration
 from scas_env.actuator.params import ScasParams
 from scas_env.actuator.surrogate import default_surrogate
 from scas_env.env import ScasMaintenanceEnv
+from scas_env.monitor import learning_features
 from scas_env.scenario import FLIGHT_FEATURE_SETS, Scenario
 from scas_env.world import ActuatorWorld
 
@@ -23,8 +24,8 @@ def _world(flight_features: str) -> ActuatorWorld:
 def test_scenario_names_the_allowed_sets() -> None:
     assert Scenario().flight_feature_names == ("I2", "I6", "I7")
     assert Scenario(flight_features=EXTENDED).flight_feature_names[-2:] == ("I8", "I9")
-    assert Scenario(flight_features=EXTENDED).learns_in_flight
-    assert not Scenario().learns_in_flight
+    assert learning_features(Scenario(flight_features=EXTENDED)) == ("I8", "I9")
+    assert learning_features(Scenario()) == ()
     with pytest.raises(ValueError, match="flight_features = 'I8' must be one of"):
         Scenario(flight_features="I8")
     assert set(FLIGHT_FEATURE_SETS) == {"I2,I6,I7", EXTENDED}

@@ -15,33 +15,12 @@ from scas_env import V2_KWARGS
 COSTS = (2500.0, 1500.0, 6000.0, 0, 1)  # flight value, spring, seal, downtimes (CostModel)
 
 
-def _forward(h: int, left: list[int], lives: tuple[int, int], plan: tuple[bool, ...]) -> float:
-    """Cost of flying ``h`` slots replacing each part when it must go, grouping the other
-    one at the i-th forced replacement iff ``plan[i]`` (a direct simulation)."""
-    value, price, down = COSTS[0], COSTS[1:3], COSTS[3:5]
-    cost, i, left = 0.0, 0, list(left)
-    while h > 0:
-        k = max(0, min(left))
-        if k >= h:
-            break
-        h -= k
-        left = [x - k for x in left]
-        a = int(np.argmin(left))
-        both = plan[i] if i < len(plan) else False
-        i += 1
-        slots = 1 + (max(down) if both else down[a])
-        cost += price[a] + (price[1 - a] if both else 0.0) + value * min(slots, h)
-        h -= slots
-        left[a] = lives[a]
-        if both:
-            left[1 - a] = lives[1 - a]
-    return cost
-
-
 def _forward_known(
     h: int, left: list[int], upcoming: tuple[tuple[int, ...], ...], plan: tuple[bool, ...]
 ) -> float:
-    """:func:`_forward` with the k-th new part of each kind living ``upcoming[p][k]``."""
+    """Cost of flying ``h`` slots replacing each part when it must go, grouping the other
+    one at the i-th forced replacement iff ``plan[i]``, the k-th new part of kind ``p``
+    living ``upcoming[p][k]`` (a direct simulation)."""
     value, price, down = COSTS[0], COSTS[1:3], COSTS[3:5]
     cost, i, left, fitted = 0.0, 0, list(left), [0, 0]
     while h > 0:
@@ -60,6 +39,11 @@ def _forward_known(
             left[p] = upcoming[p][fitted[p]]
             fitted[p] += 1
     return cost
+
+
+def _forward(h: int, left: list[int], lives: tuple[int, int], plan: tuple[bool, ...]) -> float:
+    """:func:`_forward_known` with every new part of kind ``p`` living ``lives[p]``."""
+    return _forward_known(h, left, ((lives[0],) * 64, (lives[1],) * 64), plan)
 
 
 @pytest.mark.parametrize(

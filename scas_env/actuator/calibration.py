@@ -203,19 +203,16 @@ class Calibration:
             own, "wear_cv_whole_flight", self.wear_cv_whole_flight, lo=0.0
         )
 
-    def crack_cv_at(self, depth_m: float | FloatArray) -> FloatArray:
-        """Flight-to-flight CV of the crack increment at ``depth_m`` (log-depth interpolation)."""
-        return np.interp(np.log(depth_m), np.log(self.crack_cv_depth_m), self.crack_cv)
+    def crack_cv_at(self, depth_m: float | FloatArray, source: str = "window") -> FloatArray:
+        """Flight-to-flight CV of the crack increment at ``depth_m`` (log-depth
+        interpolation) of ``source`` (:meth:`flight_scatter`)."""
+        cvs = self.flight_scatter(source)[0]
+        return np.interp(np.log(depth_m), np.log(self.crack_cv_depth_m), cvs)
 
     def crack_cv_whole_flight_at(self, depth_m: float | FloatArray) -> FloatArray:
         """Whole-flight CV of the crack increment at ``depth_m`` (log-depth interpolation);
         ``ValueError`` if this calibration has no whole-flight fields (``whole_flights = 0``)."""
-        if self.crack_cv_whole_flight is None:
-            raise ValueError(
-                "this calibration has no whole-flight scatter (whole_flights = 0): rebuild it "
-                "with build_calibration(..., whole_flights=40)"
-            )
-        return np.interp(np.log(depth_m), np.log(self.crack_cv_depth_m), self.crack_cv_whole_flight)
+        return self.crack_cv_at(depth_m, "whole_flight")
 
     def flight_scatter(self, source: str) -> tuple[FloatArray, float]:
         """(crack CV at ``crack_cv_depth_m``, wear CV) of one flight's increments, from
@@ -226,7 +223,10 @@ class Calibration:
         if source != "whole_flight":
             raise ValueError(f"source = {source!r} must be 'window' or 'whole_flight'")
         if self.crack_cv_whole_flight is None or self.wear_cv_whole_flight is None:
-            self.crack_cv_whole_flight_at(self.crack_cv_depth_m[0])  # raises with the reason
+            raise ValueError(
+                "this calibration has no whole-flight scatter (whole_flights = 0): rebuild it "
+                "with build_calibration(..., whole_flights=40)"
+            )
         return self.crack_cv_whole_flight, float(self.wear_cv_whole_flight)
 
     def to_dict(self) -> dict:
