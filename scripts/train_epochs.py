@@ -4,6 +4,11 @@ Example (one candidate of policies/data/hyperparams/search.yml, one seed)::
 
     python scripts/train_epochs.py --candidate gamma099 --seed 0 --max-wall-s 3300 \\
         --out results/rl/epochs/gamma099_s0
+
+On ScasMaintenance-v2 (decision epochs over v2, ``ScasMaintenanceEpochs-v1``)::
+
+    python scripts/train_epochs.py --candidate gamma099 --seed 0 --scenario examples/v2.toml \\
+        --max-wall-s 4800 --out results/rl_v2/epochs/gamma099_s0
 """
 
 from __future__ import annotations
@@ -11,6 +16,7 @@ from __future__ import annotations
 import argparse
 
 from policies.epoch_training import HYPERPARAMS_DIR, candidate_hyperparams, train_epochs
+from scas_env.cli_args import add_env_config_args, load_env_config, scenario_changes
 
 
 def main() -> None:
@@ -25,7 +31,11 @@ def main() -> None:
     parser.add_argument("--max-wall-s", type=float, default=None, help="stop after this wall time")
     parser.add_argument("--checkpoint-every", type=int, default=25_000, help="decisions")
     parser.add_argument("--out", required=True, help="new, empty output folder")
+    add_env_config_args(parser)
     args = parser.parse_args()
+    scenario, costs = load_env_config(parser, args)
+    if costs.to_dict() != type(costs)().to_dict():
+        parser.error("--costs / a [costs] table: training uses the default cost model")
     if args.max_wall_s is not None and args.max_wall_s <= 0:
         parser.error(f"--max-wall-s {args.max_wall_s} must be > 0")
     train_epochs(
@@ -36,6 +46,7 @@ def main() -> None:
         checkpoint_every=args.checkpoint_every,
         max_wall_s=args.max_wall_s,
         total_timesteps=args.timesteps,
+        **scenario_changes(scenario),
     )
 
 
