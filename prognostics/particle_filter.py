@@ -318,6 +318,47 @@ def _gather_regularise(
 
 
 @njit(cache=True)
+def resample_if_degenerate(
+    ess: float,
+    threshold_n: float,
+    x: np.ndarray,
+    log_theta: np.ndarray,
+    w: np.ndarray,
+    log_w: np.ndarray,
+    aux: np.ndarray,
+    cumsum: np.ndarray,
+    idx: np.ndarray,
+    buf_x: np.ndarray,
+    buf_lt: np.ndarray,
+    h: float,
+    kappa: float,
+    gaussian: bool,
+    shrink: bool,
+    handle: Handle,
+) -> int:
+    """What :meth:`ParticleFilter._after_update` does after a weight update, for batched
+    kernels (systematic resampling): -1 if ``ess`` is not finite (nothing done), 0 if
+    ``ess >= threshold_n`` (= ``resample_threshold * N``), else resample with the uniform
+    drawn from ``handle``, regularise (:func:`_gather_regularise`), permute the rows of
+    ``aux`` (n_aux, N) with the particles, and return 1. Same draws and numbers as the
+    method (tested)."""
+    if not math.isfinite(ess):
+        return -1
+    if ess >= threshold_n:
+        return 0
+    _systematic_from_weights(w, cumsum, random(handle), idx)
+    _gather_regularise(
+        x, log_theta, w, log_w, idx, buf_x, buf_lt, h, kappa, gaussian, shrink, handle
+    )
+    for k in range(aux.shape[0]):
+        for i in range(idx.size):
+            buf_x[i] = aux[k, idx[i]]
+        for i in range(idx.size):
+            aux[k, i] = buf_x[i]
+    return 1
+
+
+@njit(cache=True)
 def _first_out_of_range(
     x: np.ndarray, log_theta: np.ndarray, max_abs_x: float, max_abs_log_theta: float
 ) -> int:
@@ -607,6 +648,42 @@ class ParticleFilter:
             )
         self._check_cloud("step", usage, y)
         return self._after_update()
+
+    def attach(
+        self,
+        x: np.ndarray,
+        log_theta: np.ndarray,
+        w: np.ndarray,
+        log_w: np.ndarray,
+        aux: dict[str, np.ndarray] | None = None,
+    ) -> None:
+        """Keep the particles in the given arrays from now on (e.g. views of a row of a
+        :class:`~prognostics.particle_bank.ParticleBank`): the current values are copied
+        into them, then the filter reads and writes them. ``aux`` maps every name of
+        :attr:`aux` to its new array. Each array: float64, C-contiguous, shape (N,)."""
+        n = self.n_particles
+        new = {"_x": x, "_log_theta": log_theta, "_w": w, "_log_w": log_w}
+        aux = {} if aux is None else aux
+        if sorted(aux) != sorted(self.aux):
+            raise ValueError(
+                f"aux must map exactly the names {sorted(self.aux)}, got {sorted(aux)}"
+            )
+        for name, arr in (*new.items(), *aux.items()):
+            if not (
+                isinstance(arr, np.ndarray)
+                and arr.shape == (n,)
+                and arr.dtype == np.float64
+                and arr.flags.c_contiguous
+                and arr.flags.writeable
+            ):
+                raise ValueError(f"{name} must be a writeable C-contiguous float64 array of {n}")
+        for attr, arr in new.items():
+            arr[:] = getattr(self, attr)
+            setattr(self, attr, arr)
+        for name, arr in aux.items():
+            arr[:] = self.aux[name]
+            self.aux[name] = arr
+        self._make_views()
 
     def add_auxiliary(self, name: str, value: float = 0.0) -> np.ndarray:
         """Register a per-particle array ``aux[name]`` (filled with ``value``) that

@@ -181,6 +181,35 @@ class AgeingRul:
         self.low_quantile = float(low_quantile)
         return self
 
+    @classmethod
+    def from_tables(
+        cls,
+        sorted_rul: np.ndarray,
+        cum_w: np.ndarray,
+        suffix_w: np.ndarray,
+        suffix_wr: np.ndarray,
+        low: float,
+        *,
+        low_quantile: float,
+    ) -> AgeingRul:
+        """An AgeingRul holding copies of tables :meth:`tables` returned (e.g. built by a
+        batched kernel with ``_build_from_cloud``): the inverse of :meth:`tables`."""
+        r = np.array(sorted_rul, dtype=np.float64)
+        sums = [np.array(a, dtype=np.float64) for a in (cum_w, suffix_w, suffix_wr)]
+        n = r.shape[0] if r.ndim == 1 else 0
+        if n < 1 or any(a.shape != (n + 1,) for a in sums):
+            raise ValueError(
+                f"sorted_rul must be 1-D of N >= 1 values and the sums of N + 1, got "
+                f"{r.shape}, {[a.shape for a in sums]}"
+            )
+        if not 0.0 <= low_quantile <= 1.0:
+            raise ValueError(f"low_quantile = {low_quantile} must lie in [0, 1]")
+        self = cls.__new__(cls)
+        self._r, (self._cum_w, self._suffix_w, self._suffix_wr) = r, sums
+        self._low = float(low)
+        self.low_quantile = float(low_quantile)
+        return self
+
     @staticmethod
     def _check(status: int) -> None:
         if status == 1:

@@ -55,25 +55,31 @@ option for comparison (docs/beliefs.md).
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
-from numba import njit
 from scipy.stats import norm
 
 from prognostics.degradation_models import linear_wear_model, paris_crack_model
 from prognostics.detection import DetectorConfig, PercentileDetector
 from prognostics.measurement import MeasurementModel, measurement_from_curve
 from prognostics.normals import NormalStream
+from prognostics.particle_bank import ParticleBank
 from prognostics.particle_filter import ParticleFilter
-from prognostics.random_effect import random_effect_update
 from prognostics.rul import RulPredictor
 from prognostics.rul_ageing import AgeingRul
 from scas_env.actuator.calibration import Calibration
 from scas_env.actuator.params import ScasParams
 from scas_env.actuator.surrogate import SurrogateModel
 from scas_env.actuator.uncertainty import truncated_normal
+from scas_env.learning_kernel import (
+    SLOPE_STEP,
+    STATUS_MESSAGES,
+    effect_at,
+    effect_likelihood,
+    learn_batch,
+)
 from scas_env.scenario import Scenario
 
 BASELINE_TESTS = 3
@@ -84,7 +90,7 @@ LEARNING_FEATURES = {"I8": "spring", "I9": "seal"}
 #: Flights after a fitting whose features estimate the installation offsets (module docstring).
 BASELINE_FLIGHTS = 20
 #: Step (fraction of critical) of the central differences of the surrogate's mean curves.
-_SLOPE_STEP = 0.02
+_SLOPE_STEP = SLOPE_STEP
 #: Artificial-evolution random walk of log theta per flight (lets the filters track the unit).
 THETA_WALK = 0.005
 #: The walk in the ``"states"`` treatment: none. A unit's growth multiplier is constant (drawn
@@ -232,8 +238,104 @@ class HealthMonitor:
                 run_var=(noise * run) ** 2,
             )
         self._effects: dict[str, _Effect] = {}
+        #: the bank whose row ``row`` holds both filters' particles (spring 0, seal 1) when
+        #: the learning update runs as the batched kernel (``"states"`` and learning in
+        #: flight); None: the Python form (:meth:`learn_from_flights_python`)
+        self.bank: ParticleBank | None = None
+        self.row = 0
         if states:
             self._enable_effect_states()
+        if states and self.learning:
+            #: constants of :func:`scas_env.learning_kernel.learn_batch` (one per scenario)
+            self.learning_model = self._learning_model()
+            n_aux = max(len(pf.aux) for pf in self._filters.values())
+            self.attach(ParticleBank(1, 2, scenario.n_particles, n_aux), 0)
+            n = scenario.n_particles
+            self._tables = (
+                np.empty((1, 2, n)),
+                np.empty((1, 2, n + 1)),
+                np.empty((1, 2, n + 1)),
+                np.empty((1, 2, n + 1)),
+                np.empty((1, 2)),
+            )
+
+    def _learning_model(self) -> tuple:
+        """The constants :func:`scas_env.learning_kernel.learn_batch` reads (its ``model``)."""
+        sf, wf = self.spring_filter, self.seal_filter
+        if sf.resampler != "systematic" or wf.resampler != "systematic":
+            raise ValueError("the batched learning update resamples systematically")
+        feats = [self._effects[f] for f in self.learning]
+        for f, eff in zip(self.learning, feats, strict=True):
+            names = list(self._filters[eff.part].aux)
+            if names.index(f"{f}_z_var") != names.index(f"{f}_z_mean") + 1:
+                raise ValueError(f"the aux states of {f} must be adjacent")
+        s = self.scenario
+        return (
+            sf.process.kernel_args,
+            wf.process.kernel_args,
+            self._rul["spring"].model.table_args,
+            self._rul["seal"].model.table_args,
+            np.array([self._rul["spring"].d_threshold, self._rul["seal"].d_threshold]),
+            float(s.rul_quantile),
+            np.array([self.a_fail, self.w_crit]),
+            np.array([bool(s.crack_active), bool(s.wear_active)]),
+            np.array([0 if e.part == "spring" else 1 for e in feats], dtype=np.int64),
+            np.array(
+                [
+                    list(self._filters[e.part].aux).index(f"{f}_z_mean")
+                    for f, e in zip(self.learning, feats, strict=True)
+                ],
+                dtype=np.int64,
+            ),
+            tuple(e.stack for e in feats),
+            tuple(e.own_grid for e in feats),
+            tuple(e.other_grid for e in feats),
+            float(s.filter_noise_scale),
+            (
+                sf.resample_threshold * sf.n_particles,
+                sf._h,
+                sf._kappa,
+                sf.kernel == "gaussian",
+                sf.shrink,
+            ),
+        )
+
+    def attach(self, bank: ParticleBank, row: int) -> None:
+        """Keep both filters' particles (and their installation-effect states) in row
+        ``row`` of ``bank`` from now on (values copied there), and the filters' random stream
+        in ``bank.handles[row]``: the batched learning kernel then updates this monitor with
+        others (a native vector env's bank, one row per actuator)."""
+        if bank.n_particles != self.spring_filter.n_particles or not 0 <= row < bank.n_rows:
+            raise ValueError(
+                f"row = {row!r} of a bank of {bank.n_rows} rows x {bank.n_particles} particles: "
+                f"need a row in range and {self.spring_filter.n_particles} particles"
+            )
+        for p, pf in enumerate((self.spring_filter, self.seal_filter)):
+            names = list(pf.aux)
+            if len(names) > bank.n_aux:
+                raise ValueError(f"the bank holds {bank.n_aux} aux states, the filter {len(names)}")
+            pf.attach(
+                bank.x[row, p],
+                bank.log_theta[row, p],
+                bank.w[row, p],
+                bank.log_w[row, p],
+                {name: bank.aux[row, p, k] for k, name in enumerate(names)},
+            )
+        handle = self.spring_filter._stream.handle
+        if self.seal_filter._stream.handle != handle:
+            raise ValueError("both filters must draw from one Generator to share a bank row")
+        bank.handles[row] = handle
+        for f, eff in self._effects.items():
+            aux = self._filters[eff.part].aux
+            self._effects[f] = replace(eff, z_mean=aux[f"{f}_z_mean"], z_var=aux[f"{f}_z_var"])
+        self.bank, self.row = bank, int(row)
+
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        """After ``pickle`` or ``copy.deepcopy`` the filters' arrays are copies of the bank's
+        rows: they become views of them again (with this process's stream addresses)."""
+        self.__dict__.update(state)
+        if self.bank is not None:
+            self.attach(self.bank, self.row)
 
     def _enable_effect_states(self) -> None:
         """Register each measured feature's installation effect as per-particle Gaussian
@@ -369,6 +471,59 @@ class HealthMonitor:
         return self.flight_count >= self.flight_interval > 0 and bool(self.learning)
 
     def learn_from_flights(self) -> None:
+        """:meth:`learn_from_flights_python` as the batched numba kernel
+        (:func:`scas_env.learning_kernel.learn_batch`, a batch of one) when the filters live
+        in a bank (``"states"``, learning in flight), the same numbers (tested); else the
+        Python form."""
+        if self.bank is None:
+            self.learn_from_flights_python()
+            return
+        if self.flight_count == 0:
+            return
+        pending = np.array([[self.pending["spring"], self.pending["seal"]]], dtype=np.int64)
+        count = np.array([self.flight_count], dtype=np.int64)
+        ess = np.array([[self.spring_filter._ess, self.seal_filter._ess]])
+        resampled = np.zeros((1, 2), dtype=np.int64)
+        status = np.zeros(1, dtype=np.int64)
+        b = self.bank
+        learn_batch(
+            np.array([self.row], dtype=np.int64), np.zeros(1, dtype=np.int64), pending,
+            self.flight_sum.reshape(1, -1), count, (b.x, b.log_theta, b.w, b.log_w, b.aux),
+            b.handles, ess, resampled, status, self._tables, self.learning_model,
+        )  # fmt: skip
+        self.pending["spring"], self.pending["seal"] = int(pending[0, 0]), int(pending[0, 1])
+        self.flight_count = 0
+        self.adopt_learning(0, ess, resampled, status, self._tables)
+
+    def adopt_learning(
+        self,
+        slot: int,
+        ess: np.ndarray,
+        resampled: np.ndarray,
+        status: np.ndarray,
+        tables: tuple,
+        sources: list[Any] | None = None,
+    ) -> None:
+        """After :func:`~scas_env.learning_kernel.learn_batch` updated this monitor's bank row:
+        take the filters' N_eff (NaN: unchanged) and resampling counts and the RUL tables at
+        index ``slot`` of its outputs (``sources``: a fleet row's ``table_source``, told that
+        the fleet's row holds these tables); raise what the Python form would have raised."""
+        for p, (part, pf) in enumerate(self._filters.items()):
+            if not math.isnan(ess[slot, p]):  # NaN: no weight update in the batch
+                pf._ess = float(ess[slot, p])
+            pf.n_resamples += int(resampled[slot, p])
+            self._ageing[part] = AgeingRul.from_tables(
+                tables[0][slot, p], tables[1][slot, p], tables[2][slot, p], tables[3][slot, p],
+                float(tables[4][slot, p]), low_quantile=self.scenario.rul_quantile,
+            )  # fmt: skip
+            if sources is not None:
+                sources[p] = self._ageing[part]
+        code = int(status[slot])
+        if code:
+            error, message = STATUS_MESSAGES[code]
+            raise error(f"learning from the in-flight batch: {message}")
+
+    def learn_from_flights_python(self) -> None:
         """Update the filters with the mean of the batch's learning features, then empty it.
 
         The batch's ``m`` flights were flown at states from ``m`` flights ago to one flight
@@ -475,14 +630,14 @@ class HealthMonitor:
         z_bar = float(pf.weights @ eff.z_mean)
         lo, hi = max(other - _SLOPE_STEP, 0.0), min(other + _SLOPE_STEP, 1.0)
         slope = (
-            _effect_at(st, g_own, g_other, own, hi, z_bar)
-            - _effect_at(st, g_own, g_other, own, lo, z_bar)
+            effect_at(st, g_own, g_other, own, hi, z_bar)
+            - effect_at(st, g_own, g_other, own, lo, z_bar)
         ) / (hi - lo)
-        cross = _effect_at(st, g_own, g_other, own, other, 0.0) - _effect_at(
+        cross = effect_at(st, g_own, g_other, own, other, 0.0) - effect_at(
             st, g_own, g_other, own, 0.0, 0.0
         )
         log_lik = np.empty(pf.n_particles)
-        shift = _effect_likelihood(
+        shift = effect_likelihood(
             y, float(m), pf.x, pf.weights, crit, st, g_own, g_other, other,
             self.scenario.filter_noise_scale, slope * slope * other_var,
             eff.z_mean, eff.z_var, log_lik,
@@ -630,77 +785,6 @@ class _Effect:
     stack: np.ndarray
     own_grid: np.ndarray
     other_grid: np.ndarray
-
-
-@njit(cache=True)
-def _cell_of(grid: np.ndarray, v: float) -> tuple[int, float]:
-    """Cell j of ``grid`` holding ``v`` (clamped to [grid[0], grid[-1]]) and its fraction in it,
-    as the surrogate's bilinear tables (``bisect_right - 1``, the last cell at the end)."""
-    v = min(max(v, grid[0]), grid[-1])
-    j = 0
-    while j < grid.size - 2 and grid[j + 1] <= v:
-        j += 1
-    return j, (v - grid[j]) / (grid[j + 1] - grid[j])
-
-
-@njit(cache=True)
-def _bilinear_at(stack: np.ndarray, q: int, i: int, ti: float, j: int, tj: float) -> float:
-    return (
-        stack[q, i, j] * ((1 - ti) * (1 - tj))
-        + stack[q, i + 1, j] * (ti * (1 - tj))
-        + stack[q, i, j + 1] * ((1 - ti) * tj)
-        + stack[q, i + 1, j + 1] * (ti * tj)
-    )
-
-
-@njit(cache=True)
-def _effect_at(
-    stack: np.ndarray, own_grid: np.ndarray, other_grid: np.ndarray, own: float, other: float,
-    z: float,
-) -> float:  # fmt: skip
-    """``mu + tau z`` of the tables at (own, other) fractions."""
-    i, ti = _cell_of(own_grid, own)
-    j, tj = _cell_of(other_grid, other)
-    return _bilinear_at(stack, 0, i, ti, j, tj) + _bilinear_at(stack, 1, i, ti, j, tj) * z
-
-
-@njit(cache=True)
-def _effect_likelihood(
-    y: float,
-    m: float,
-    x: np.ndarray,
-    w: np.ndarray,
-    critical: float,
-    stack: np.ndarray,
-    own_grid: np.ndarray,
-    other_grid: np.ndarray,
-    other: float,
-    noise_scale: float,
-    extra_var: float,
-    z_mean: np.ndarray,
-    z_var: np.ndarray,
-    log_lik: np.ndarray,
-) -> float:
-    """Per particle: ``mu``, ``tau``, ``sigma`` of the tables at its own severity
-    (``x / critical`` clipped to [0, 1]) and the other part at ``other``; predictive density
-    of ``y`` (the mean of ``m`` runs, extra variance ``extra_var``) into ``log_lik`` and the
-    effect conditioned on it (:func:`prognostics.random_effect.random_effect_update`).
-    Returns the weighted mean effect ``sum w_i tau_i m_i`` before conditioning."""
-    n = x.size
-    j, tj = _cell_of(other_grid, other)
-    mu = np.empty(n)
-    tau = np.empty(n)
-    var = np.empty(n)
-    shift = 0.0
-    for p in range(n):
-        i, ti = _cell_of(own_grid, min(max(x[p] / critical, 0.0), 1.0))
-        mu[p] = _bilinear_at(stack, 0, i, ti, j, tj)
-        tau[p] = _bilinear_at(stack, 1, i, ti, j, tj)
-        run = _bilinear_at(stack, 2, i, ti, j, tj) * noise_scale
-        var[p] = run * run / m + extra_var
-        shift += w[p] * tau[p] * z_mean[p]
-    random_effect_update(y, mu, tau, var, z_mean, z_var, log_lik)
-    return shift
 
 
 def _mixture_moments(w: np.ndarray, mean: np.ndarray, var: np.ndarray) -> tuple[float, float]:

@@ -30,10 +30,12 @@ from gymnasium import spaces
 from gymnasium.vector import AutoresetMode, SyncVectorEnv, VectorEnv
 from gymnasium.vector.utils import batch_space
 
+from prognostics.particle_bank import ParticleBank
 from scas_env.block_draws import DEFAULT_BLOCK
 from scas_env.env import REWARD_TERMS, ScasMaintenanceEnv, new_fleet_state
 from scas_env.fleet_kernels import surrogate_flights
 from scas_env.info import build_info
+from scas_env.learning_kernel import learn_batch
 from scas_env.monitor import learning_features
 from scas_env.world import PARTS
 
@@ -127,6 +129,14 @@ class ScasMaintenanceVectorEnv(VectorEnv):
             [first.world.flight_features.index(f) for f in learning], dtype=np.int64
         )
         self._flight_interval = int(first.scenario.flight_update_flights)
+        #: every actuator's filters in one bank (row = actuator) when they learn in flight
+        #: through the batched kernel (made at the first reset; None: per-actuator Python)
+        self._bank: ParticleBank | None = None
+        self._learn_out = {
+            "ess": np.full((n, 2), np.nan),
+            "resampled": np.zeros((n, 2), dtype=np.int64),
+            "status": np.zeros(n, dtype=np.int64),
+        }
         # where each flight's two growth factors come from (Scenario.degradation_draws)
         self._per_part = first.world.per_part
         self._deg_streams = (
@@ -150,6 +160,18 @@ class ScasMaintenanceVectorEnv(VectorEnv):
                     draws.values, draws.position = self._buf[s][e], self._pos[s][e]
 
     # ------------------------------------------------------------------ sync
+    def _attach(self, e: int) -> None:
+        """After actuator ``e``'s env made a new monitor (a reset): its filters move into row
+        ``e`` of the vector env's bank, where the batched learning kernel reaches them."""
+        monitor = self.envs[e].monitor
+        if monitor.bank is None:
+            return
+        if self._bank is None:
+            self._bank = ParticleBank(
+                self.num_envs, 2, monitor.bank.n_particles, monitor.bank.n_aux
+            )
+        monitor.attach(self._bank, e)
+
     def _pull(self, e: int) -> None:
         """Actuator ``e``'s env exports its state into row ``e`` of the fleet."""
         self.envs[e].export_state(self.fleet, e)
@@ -174,6 +196,7 @@ class ScasMaintenanceVectorEnv(VectorEnv):
             )
         for e, env in enumerate(self.envs):
             env.reset(seed=seeds[e], options=options)
+            self._attach(e)
             self._pull(e)
         self._autoreset[:] = False
         self.fleet.clear_step()
@@ -231,6 +254,7 @@ class ScasMaintenanceVectorEnv(VectorEnv):
             self._push(e)
             if resetting[e]:
                 env.reset()
+                self._attach(e)
             else:
                 _, r, _, _, info = env.step(int(act[e]))
                 rewards[e] = r
@@ -284,12 +308,37 @@ class ScasMaintenanceVectorEnv(VectorEnv):
 
     def _learn_from_full_batches(self, flown: np.ndarray) -> None:
         """The actuators of ``flown`` whose batch of learning flights is full learn from it,
-        as the single env's monitor does inside the flight (``HealthMonitor.flown``)."""
+        as the single env's monitor does inside the flight (``HealthMonitor.flown``): all in
+        one call of the batched kernel when their filters live in the bank, else one by one."""
         a = self.a
-        for e in flown[a["flight_count"][flown] >= self._flight_interval]:
-            self._push(e)
-            self.envs[e].monitor.learn_from_flights()
-            self._pull(e)
+        due = flown[a["flight_count"][flown] >= self._flight_interval]
+        if not due.size:
+            return
+        if self._bank is None:
+            for e in due:
+                self._push(e)
+                self.envs[e].monitor.learn_from_flights()
+                self._pull(e)
+            return
+        out, b = self._learn_out, self._bank
+        out["ess"][due] = np.nan
+        out["resampled"][due] = 0
+        tables = (
+            a["rul_sorted"],
+            a["rul_cum_w"],
+            a["rul_suffix_w"],
+            a["rul_suffix_wr"],
+            a["rul_low"],
+        )
+        learn_batch(
+            due, due, a["pending"], a["flight_sum"], a["flight_count"],
+            (b.x, b.log_theta, b.w, b.log_w, b.aux), b.handles, out["ess"], out["resampled"],
+            out["status"], tables, self.envs[due[0]].monitor.learning_model,
+        )  # fmt: skip
+        for e in due:
+            self.envs[e].monitor.adopt_learning(
+                e, out["ess"], out["resampled"], out["status"], tables, self.fleet.table_source[e]
+            )
 
     def _draws(self, e: int, stream: str) -> Any:
         """Actuator ``e``'s normal buffer of ``stream`` (a growth stream: its fitted part's)."""

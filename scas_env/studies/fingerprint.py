@@ -17,7 +17,7 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
-from scas_env import ENV_ID
+from scas_env import ENV_ID, ENV_ID_V2
 from scas_env.actuator.params import ScasParams
 from scas_env.studies.campaign import CampaignConfig, run_campaign
 
@@ -59,12 +59,13 @@ def episodes_digest(
     seeds: Sequence[int] = (0, 1, 2),
     slots: int = 2000,
     steps: int | None = None,
+    env_id: str = ENV_ID,
 ) -> str:
-    """Digest of single-env episodes under seeded random actions (``steps`` per episode,
-    default all ``slots``)."""
+    """Digest of single-env episodes of ``env_id`` under seeded random actions (``steps``
+    per episode, default all ``slots``)."""
     h = hashlib.sha256()
     for s in seeds:
-        env = gym.make(ENV_ID, obs_mode=obs_mode, fidelity=fidelity, episode_slots=slots)
+        env = gym.make(env_id, obs_mode=obs_mode, fidelity=fidelity, episode_slots=slots)
         rng = np.random.default_rng(1000 + s)
         obs, info = env.reset(seed=s)
         feed(h, obs)
@@ -81,11 +82,13 @@ def episodes_digest(
     return h.hexdigest()
 
 
-def vector_digest(num_envs: int = 4, slots: int = 300, steps: int = 700, seed: int = 3) -> str:
-    """Digest of the native vector env over ``steps`` (several autoresets)."""
+def vector_digest(
+    num_envs: int = 4, slots: int = 300, steps: int = 700, seed: int = 3, env_id: str = ENV_ID
+) -> str:
+    """Digest of ``env_id``'s native vector env over ``steps`` (several autoresets)."""
     h = hashlib.sha256()
     envs = gym.make_vec(
-        ENV_ID, num_envs=num_envs, vectorization_mode="vector_entry_point", episode_slots=slots
+        env_id, num_envs=num_envs, vectorization_mode="vector_entry_point", episode_slots=slots
     )
     rng = np.random.default_rng(7)
     obs, _ = envs.reset(seed=seed)
@@ -131,6 +134,9 @@ PARTS: dict[str, Callable[[], str]] = {
     "vector": vector_digest,
     "physics": lambda: episodes_digest("features+rul", fidelity="physics", seeds=(4,), steps=40),
     "campaign": campaign_digest,
+    # v2: filters learning in flight, per-part draws (the batched learning path)
+    "v2": lambda: episodes_digest("features+rul", env_id=ENV_ID_V2),
+    "vector v2": lambda: vector_digest(num_envs=6, env_id=ENV_ID_V2),
 }
 
 

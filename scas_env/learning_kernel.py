@@ -1,0 +1,279 @@
+"""The monitor's in-flight learning update as one numba kernel over a batch of actuators.
+
+:meth:`scas_env.monitor.HealthMonitor.learn_from_flights` (installation effects as filter
+states, v2) does, for one actuator: predict both filters to the middle of the batch of
+learning flights, condition them on survival, then weight each filter by its learning
+feature's batch mean (Rao-Blackwellised installation effect, cross-fault variance), resample
+where the weights degenerated, and rebuild both parts' RUL tables. :func:`learn_batch` does
+exactly that, in the same order with the same draws, for every listed row of a
+:class:`~prognostics.particle_bank.ParticleBank` (each row an actuator's two filters,
+spring = 0, seal = 1), writing the RUL tables into the fleet's arrays
+(:class:`scas_env.fleet_state.FleetState`). The single env calls it with a batch of one, the
+native vector env with every actuator whose batch is full, so both give the same floats
+(tested, and against the readable Python form ``HealthMonitor.learn_from_flights_python``).
+
+The table helpers (``cell_of``, ``effect_at``, ``effect_likelihood``) are the surrogate's
+bilinear interpolation as the world draws features (``SurrogateModel.tables_at``).
+Status codes of a row (``status[row]``): 0 ok; 1 a prediction left the representable range;
+2 a non-finite log-likelihood; 3 degenerate weights; 4 invalid RUL-table weights; 5 invalid
+RUL values (``STATUS_MESSAGES``).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from prognostics.degradation_models import predict_particles
+from prognostics.particle_filter import (
+    MAX_ABS_LOG_THETA,
+    MAX_ABS_SEVERITY,
+    _add_log_likelihood,
+    _condition_below,
+    _first_out_of_range,
+    resample_if_degenerate,
+)
+from prognostics.random_effect import random_effect_update
+from prognostics.rul_ageing import _build_from_cloud
+
+#: Step (fraction of critical) of the central differences of the surrogate's mean curves.
+SLOPE_STEP = 0.02
+#: what a row's non-zero status means (the exception the Python form raises)
+STATUS_MESSAGES = {
+    1: (FloatingPointError, "a filter prediction put a particle outside the representable range"),
+    2: (ValueError, "a learning feature gave a non-finite log-likelihood"),
+    3: (FloatingPointError, "particle weights degenerated (non-finite likelihoods)"),
+    4: (ValueError, "weights must be finite, >= 0, with a positive sum"),
+    5: (ValueError, "RUL values must be finite and >= 0"),
+}
+
+
+@njit(cache=True)
+def cell_of(grid: np.ndarray, v: float) -> tuple[int, float]:
+    """Cell j of ``grid`` holding ``v`` (clamped to [grid[0], grid[-1]]) and its fraction in it,
+    as the surrogate's bilinear tables (``bisect_right - 1``, the last cell at the end)."""
+    v = min(max(v, grid[0]), grid[-1])
+    j = 0
+    while j < grid.size - 2 and grid[j + 1] <= v:
+        j += 1
+    return j, (v - grid[j]) / (grid[j + 1] - grid[j])
+
+
+@njit(cache=True)
+def bilinear_at(stack: np.ndarray, q: int, i: int, ti: float, j: int, tj: float) -> float:
+    """Table ``stack[q]`` at (i + ti, j + tj)."""
+    return (
+        stack[q, i, j] * ((1 - ti) * (1 - tj))
+        + stack[q, i + 1, j] * (ti * (1 - tj))
+        + stack[q, i, j + 1] * ((1 - ti) * tj)
+        + stack[q, i + 1, j + 1] * (ti * tj)
+    )
+
+
+@njit(cache=True)
+def effect_at(
+    stack: np.ndarray, own_grid: np.ndarray, other_grid: np.ndarray, own: float, other: float,
+    z: float,
+) -> float:  # fmt: skip
+    """``mu + tau z`` of the tables at (own, other) fractions."""
+    i, ti = cell_of(own_grid, own)
+    j, tj = cell_of(other_grid, other)
+    return bilinear_at(stack, 0, i, ti, j, tj) + bilinear_at(stack, 1, i, ti, j, tj) * z
+
+
+@njit(cache=True)
+def effect_likelihood(
+    y: float,
+    m: float,
+    x: np.ndarray,
+    w: np.ndarray,
+    critical: float,
+    stack: np.ndarray,
+    own_grid: np.ndarray,
+    other_grid: np.ndarray,
+    other: float,
+    noise_scale: float,
+    extra_var: float,
+    z_mean: np.ndarray,
+    z_var: np.ndarray,
+    log_lik: np.ndarray,
+) -> float:
+    """Per particle: ``mu``, ``tau``, ``sigma`` of the tables at its own severity
+    (``x / critical`` clipped to [0, 1]) and the other part at ``other``; predictive density
+    of ``y`` (the mean of ``m`` runs, extra variance ``extra_var``) into ``log_lik`` and the
+    effect conditioned on it (:func:`prognostics.random_effect.random_effect_update`).
+    Returns the weighted mean effect ``sum w_i tau_i m_i`` before conditioning."""
+    n = x.size
+    j, tj = cell_of(other_grid, other)
+    mu = np.empty(n)
+    tau = np.empty(n)
+    var = np.empty(n)
+    shift = 0.0
+    for p in range(n):
+        i, ti = cell_of(own_grid, min(max(x[p] / critical, 0.0), 1.0))
+        mu[p] = bilinear_at(stack, 0, i, ti, j, tj)
+        tau[p] = bilinear_at(stack, 1, i, ti, j, tj)
+        run = bilinear_at(stack, 2, i, ti, j, tj) * noise_scale
+        var[p] = run * run / m + extra_var
+        shift += w[p] * tau[p] * z_mean[p]
+    random_effect_update(y, mu, tau, var, z_mean, z_var, log_lik)
+    return shift
+
+
+@njit(cache=True)
+def fraction_moments(x: np.ndarray, w: np.ndarray, critical: float, sq: np.ndarray) -> tuple:
+    """Weighted mean (clipped to [0, 1]) and variance of a severity as a fraction of
+    ``critical`` (``sq``: scratch of N). ``np.dot`` as numpy's ``@`` (the same BLAS sum)."""
+    mean = np.dot(w, x)
+    for i in range(x.size):
+        d = x[i] - mean
+        sq[i] = d * d
+    var = max(np.dot(w, sq), 0.0) / critical**2
+    return min(max(mean / critical, 0.0), 1.0), var
+
+
+@njit(cache=True)
+def _resampled(
+    n_eff: float, e: int, s: int, p: int, bank: tuple, ess: np.ndarray, resampled: np.ndarray,
+    work: tuple, filt: tuple, handle: tuple,
+) -> bool:  # fmt: skip
+    """Record N_eff of filter p of bank row e (slot s) and resample it if needed; False:
+    degenerate weights."""
+    bx, blt, bw, blw, baux = bank
+    cumsum, idx, buf_x, buf_lt = work
+    thr_n, h, kappa, gaussian, shrink = filt
+    ess[s, p] = n_eff
+    k = resample_if_degenerate(
+        n_eff, thr_n, bx[e, p], blt[e, p], bw[e, p], blw[e, p], baux[e, p], cumsum, idx, buf_x,
+        buf_lt, h, kappa, gaussian, shrink, handle,
+    )  # fmt: skip
+    if k == 1:
+        resampled[s, p] += 1
+        ess[s, p] = float(idx.size)
+    return k >= 0
+
+
+@njit(cache=True)
+def learn_batch(
+    rows: np.ndarray,
+    slots: np.ndarray,
+    pending: np.ndarray,
+    flight_sum: np.ndarray,
+    flight_count: np.ndarray,
+    bank: tuple,
+    handles: np.ndarray,
+    ess: np.ndarray,
+    resampled: np.ndarray,
+    status: np.ndarray,
+    tables: tuple,
+    model: tuple,
+) -> None:
+    """``HealthMonitor.learn_from_flights`` for the filters of each bank row ``rows[r]``
+    (module docstring), whose other arrays are at index ``s = slots[r]``.
+
+    In place: the filters' particles ``bank = (x, log_theta, w, log_w, aux)`` (a
+    :class:`~prognostics.particle_bank.ParticleBank`'s arrays; ``handles``: its streams);
+    ``pending[s]`` (flights since each filter's prediction), ``flight_sum[s]``,
+    ``flight_count[s]`` (the batch, emptied), ``ess[s, p]`` (N_eff after the last weight
+    update; unchanged without one), ``resampled[s, p]`` (+1 per resampling), ``status[s]``,
+    and the RUL tables ``tables = (sorted, cum_w, suffix_w, suffix_wr, low)`` (e.g. a fleet's
+    ``rul_*`` arrays). ``model`` is ``HealthMonitor.learning_model``: what every row shares.
+    """
+    bx, blt, bw, blw, baux = bank
+    rul_sorted, rul_cum_w, rul_suffix_w, rul_suffix_wr, rul_low = tables
+    (
+        proc_spring, proc_seal, rul_spring, rul_seal, d_threshold, low_q, critical, active,
+        feat_part, feat_aux, stacks, own_grids, other_grids, noise_scale, filt,
+    ) = model  # fmt: skip
+    n = bx.shape[2]
+    n_learn = feat_part.size
+    scratch = np.zeros((10, n))
+    work = (np.empty(n), np.empty(n, dtype=np.intp), np.empty(n), np.empty(n))
+    log_lik = np.empty(n)
+    sq = np.empty(n)
+    means = np.empty(n_learn)
+    for r in range(rows.size):
+        e, s = rows[r], slots[r]
+        status[s] = 0
+        m = flight_count[s]
+        if m == 0:
+            continue
+        handle = (handles[e, 0], handles[e, 1], handles[e, 2])
+        for j in range(n_learn):
+            means[j] = flight_sum[s, j] / m
+            flight_sum[s, j] = 0.0
+        flight_count[s] = 0
+        after = m - m // 2
+        for p in range(2):
+            d = pending[s, p] - after
+            if d > 0 and status[s] == 0:
+                if p == 0:
+                    predict_particles(bx[e, 0], blt[e, 0], float(d), handle, scratch, *proc_spring)
+                else:
+                    predict_particles(bx[e, 1], blt[e, 1], float(d), handle, scratch, *proc_seal)
+                if (
+                    _first_out_of_range(bx[e, p], blt[e, p], MAX_ABS_SEVERITY, MAX_ABS_LOG_THETA)
+                    >= 0
+                ):
+                    status[s] = 1
+                pending[s, p] -= d
+        for p in range(2):  # both parts fly: neither has reached its critical value
+            if active[p] and status[s] == 0:
+                nf = _condition_below(bx[e, p], blw[e, p], bw[e, p], critical[p])
+                if nf >= 0.0 and not _resampled(
+                    nf, e, s, p, bank, ess, resampled, work, filt, handle
+                ):
+                    status[s] = 3
+        if status[s] == 0:
+            c_hat, c_var = fraction_moments(bx[e, 0], bw[e, 0], critical[0], sq)
+            w_hat, w_var = fraction_moments(bx[e, 1], bw[e, 1], critical[1], sq)
+            for j in range(n_learn):
+                if status[s] != 0:
+                    break
+                p, k = feat_part[j], feat_aux[j]
+                own, other, other_var = (c_hat, w_hat, w_var) if p == 0 else (w_hat, c_hat, c_var)
+                st, g_own, g_other = stacks[j], own_grids[j], other_grids[j]
+                z_mean, z_var = baux[e, p, k], baux[e, p, k + 1]
+                z_bar = np.dot(bw[e, p], z_mean)
+                lo, hi = max(other - SLOPE_STEP, 0.0), min(other + SLOPE_STEP, 1.0)
+                slope = (
+                    effect_at(st, g_own, g_other, own, hi, z_bar)
+                    - effect_at(st, g_own, g_other, own, lo, z_bar)
+                ) / (hi - lo)
+                effect_likelihood(
+                    means[j], float(m), bx[e, p], bw[e, p], critical[p], st, g_own, g_other,
+                    other, noise_scale, slope * slope * other_var, z_mean, z_var, log_lik,
+                )  # fmt: skip
+                for i in range(n):
+                    if not math.isfinite(log_lik[i]):
+                        status[s] = 2
+                        break
+                if status[s] != 0:
+                    break
+                nf = _add_log_likelihood(blw[e, p], bw[e, p], log_lik)
+                if not _resampled(nf, e, s, p, bank, ess, resampled, work, filt, handle):
+                    status[s] = 3
+        for p in range(2):  # the RUL tables are rebuilt whatever happened (as `finally`)
+            rul = rul_spring if p == 0 else rul_seal
+            code, q = _build_from_cloud(
+                rul[0], rul[1], rul[2], rul[3], rul[4], d_threshold[p], bx[e, p], blt[e, p],
+                bw[e, p], low_q, sq, rul_sorted[s, p], rul_cum_w[s, p], rul_suffix_w[s, p],
+                rul_suffix_wr[s, p],
+            )  # fmt: skip
+            rul_low[s, p] = q
+            if code != 0 and status[s] == 0:
+                status[s] = 3 + code
+
+
+__all__ = [
+    "SLOPE_STEP",
+    "STATUS_MESSAGES",
+    "bilinear_at",
+    "cell_of",
+    "effect_at",
+    "effect_likelihood",
+    "fraction_moments",
+    "learn_batch",
+]
