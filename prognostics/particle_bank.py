@@ -47,6 +47,11 @@ class ParticleBank:
         self.handles = np.zeros((shape[0], 3), dtype=np.int64)
 
     @property
+    def arrays(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """``(x, log_theta, w, log_w, aux)``: what batched kernels take."""
+        return self.x, self.log_theta, self.w, self.log_w, self.aux
+
+    @property
     def n_rows(self) -> int:
         return self.x.shape[0]
 

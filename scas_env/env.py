@@ -338,7 +338,22 @@ class ScasMaintenanceEnv(gym.Env):
             )
         ):
             raise ValueError(f"action = {action!r} is not in Discrete(4): {ACTION_NAMES}")
-        action = int(action)
+        reward, terms = self.advance(int(action))
+        truncated = self.slot >= self.scenario.episode_slots
+        obs, info = self._outputs(terms)
+        if self._renderer is not None:
+            self._renderer.observe(self)
+        return obs, reward, False, truncated, info
+
+    def wasted_now(self, part: str) -> float:
+        """True RUL (flights) thrown away by this slot's preventive replacement of ``part``
+        (0 without one): ``info["wasted_life_flights"][part]``."""
+        return self._wasted_now[part]
+
+    def advance(self, action: int) -> tuple[float, dict[str, float]]:
+        """One slot of a checked ``action`` (int in 0..3) without assembling the observation
+        and info: the reward (USD) and its terms. ``step`` is this plus the outputs; the
+        native vector env calls it for its slow steps (it assembles its own outputs)."""
         terms = dict.fromkeys(REWARD_TERMS, 0.0)
         self._wasted_now = dict.fromkeys(PARTS, 0.0)
         grounded = self.downtime > 0
@@ -377,11 +392,7 @@ class ScasMaintenanceEnv(gym.Env):
         reward = float(sum(terms.values()))
         self.stats.cost -= sum(v for k, v in terms.items() if k != "flight")
         self.stats.revenue += terms["flight"]
-        truncated = self.slot >= self.scenario.episode_slots
-        obs, info = self._outputs(terms)
-        if self._renderer is not None:
-            self._renderer.observe(self)
-        return obs, reward, False, truncated, info
+        return reward, terms
 
     def close(self) -> None:
         if self._renderer is not None:

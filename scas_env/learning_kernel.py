@@ -135,14 +135,13 @@ def fraction_moments(x: np.ndarray, w: np.ndarray, critical: float, sq: np.ndarr
 
 
 @njit(cache=True)
-def _resampled(
-    n_eff: float, e: int, s: int, p: int, bank: tuple, ess: np.ndarray, resampled: np.ndarray,
-    work: tuple, filt: tuple, handle: tuple,
-) -> bool:  # fmt: skip
-    """Record N_eff of filter p of bank row e (slot s) and resample it if needed; False:
-    degenerate weights."""
+def _resampled(n_eff: float, e: int, s: int, p: int, bank: tuple, out: tuple, work: tuple,
+               filt: tuple, handle: tuple) -> bool:  # fmt: skip
+    """Record N_eff of filter p of bank row e (slot s) and resample it if needed (as
+    ``ParticleFilter._after_update``); False: degenerate weights."""
     bx, blt, bw, blw, baux = bank
-    cumsum, idx, buf_x, buf_lt = work
+    ess, resampled = out[0], out[1]
+    cumsum, idx, buf_x, buf_lt = work[0], work[1], work[2], work[3]
     thr_n, h, kappa, gaussian, shrink = filt
     ess[s, p] = n_eff
     k = resample_if_degenerate(
@@ -156,17 +155,151 @@ def _resampled(
 
 
 @njit(cache=True)
+def _predict(e: int, s: int, p: int, d: int, bank: tuple, state: tuple, out: tuple,
+             work: tuple, model: tuple, handle: tuple) -> None:  # fmt: skip
+    """Filter p of row e predicted over ``d`` flights (``ParticleFilter.predict``), the
+    flights taken off ``pending``; status 1 if a particle left the representable range."""
+    bx, blt = bank[0], bank[1]
+    pending, status = state[0], out[2]
+    scratch = work[4]
+    if p == 0:
+        predict_particles(bx[e, 0], blt[e, 0], float(d), handle, scratch, *model[0])
+    else:
+        predict_particles(bx[e, 1], blt[e, 1], float(d), handle, scratch, *model[1])
+    if _first_out_of_range(bx[e, p], blt[e, p], MAX_ABS_SEVERITY, MAX_ABS_LOG_THETA) >= 0:
+        status[s] = 1
+    pending[s, p] -= d
+
+
+@njit(cache=True)
+def _survive(e: int, s: int, bank: tuple, out: tuple, work: tuple, model: tuple,
+             handle: tuple) -> None:  # fmt: skip
+    """Both parts fly, so neither has reached its critical value: particles past it lose
+    their weight (``ParticleFilter.condition_below``; status 3 if degenerate)."""
+    bx, bw, blw = bank[0], bank[2], bank[3]
+    critical, active, filt = model[6], model[7], model[14]
+    for p in range(2):
+        if active[p] and out[2][s] == 0:
+            n_eff = _condition_below(bx[e, p], blw[e, p], bw[e, p], critical[p])
+            if n_eff >= 0.0 and not _resampled(n_eff, e, s, p, bank, out, work, filt, handle):
+                out[2][s] = 3
+
+
+@njit(cache=True)
+def _effect_update(e: int, s: int, p: int, k: int, y: float, m: float, moments: tuple,
+                   st: np.ndarray, g_own: np.ndarray, g_other: np.ndarray, bank: tuple,
+                   out: tuple, work: tuple, model: tuple, handle: tuple) -> float:  # fmt: skip
+    """``HealthMonitor._effect_update``: the mean ``y`` of ``m`` runs of a feature whose
+    installation effect is aux states ``k``, ``k + 1`` of filter p, into that filter; returns
+    ``y`` corrected to a healthy new installation. Status 2 (non-finite likelihood) or 3."""
+    bx, bw, blw, baux = bank[0], bank[2], bank[3], bank[4]
+    critical, noise_scale, filt = model[6], model[13], model[14]
+    c_hat, c_var, w_hat, w_var = moments
+    own, other, other_var = (c_hat, w_hat, w_var) if p == 0 else (w_hat, c_hat, c_var)
+    log_lik = work[5]
+    z_mean, z_var = baux[e, p, k], baux[e, p, k + 1]
+    z_bar = np.dot(bw[e, p], z_mean)
+    lo, hi = max(other - SLOPE_STEP, 0.0), min(other + SLOPE_STEP, 1.0)
+    slope = (
+        effect_at(st, g_own, g_other, own, hi, z_bar)
+        - effect_at(st, g_own, g_other, own, lo, z_bar)
+    ) / (hi - lo)
+    cross = effect_at(st, g_own, g_other, own, other, 0.0) - effect_at(
+        st, g_own, g_other, own, 0.0, 0.0
+    )
+    shift = effect_likelihood(
+        y, m, bx[e, p], bw[e, p], critical[p], st, g_own, g_other, other, noise_scale,
+        slope * slope * other_var, z_mean, z_var, log_lik,
+    )  # fmt: skip
+    for i in range(log_lik.size):
+        if not math.isfinite(log_lik[i]):
+            out[2][s] = 2
+            return y - shift - cross
+    n_eff = _add_log_likelihood(blw[e, p], bw[e, p], log_lik)
+    if not _resampled(n_eff, e, s, p, bank, out, work, filt, handle):
+        out[2][s] = 3
+    return y - shift - cross
+
+
+@njit(cache=True)
+def _moments(e: int, bank: tuple, model: tuple, work: tuple) -> tuple:
+    """(c_hat, c_var, w_hat, w_var): both filters' severities as fractions of critical."""
+    bx, bw, critical, sq = bank[0], bank[2], model[6], work[6]
+    c_hat, c_var = fraction_moments(bx[e, 0], bw[e, 0], critical[0], sq)
+    w_hat, w_var = fraction_moments(bx[e, 1], bw[e, 1], critical[1], sq)
+    return c_hat, c_var, w_hat, w_var
+
+
+@njit(cache=True)
+def _learn(e: int, s: int, bank: tuple, state: tuple, out: tuple, work: tuple, model: tuple,
+           handle: tuple) -> None:  # fmt: skip
+    """The learning update of row e on its batch (``learn_from_flights_python`` without the
+    RUL tables); the batch is emptied."""
+    pending, flight_sum, flight_count = state
+    status = out[2]
+    feat_part, feat_aux, stacks, own_grids, other_grids = model[8:13]
+    m = flight_count[s]
+    means = work[7]
+    for j in range(feat_part.size):
+        means[j] = flight_sum[s, j] / m
+        flight_sum[s, j] = 0.0
+    flight_count[s] = 0
+    after = m - m // 2
+    for p in range(2):
+        d = pending[s, p] - after
+        if d > 0 and status[s] == 0:
+            _predict(e, s, p, d, bank, state, out, work, model, handle)
+    _survive(e, s, bank, out, work, model, handle)
+    if status[s] != 0:
+        return
+    moments = _moments(e, bank, model, work)
+    for j in range(feat_part.size):
+        if status[s] != 0:
+            return
+        _effect_update(
+            e, s, feat_part[j], feat_aux[j], means[j], float(m), moments, stacks[j],
+            own_grids[j], other_grids[j], bank, out, work, model, handle,
+        )  # fmt: skip
+
+
+@njit(cache=True)
+def _refresh(e: int, s: int, bank: tuple, out: tuple, work: tuple, tables: tuple,
+             model: tuple) -> None:  # fmt: skip
+    """Both parts' RUL tables of row e's clouds (``AgeingRul.from_cloud``) into slot s of
+    ``tables``; status 4 or 5 if the cloud is invalid."""
+    bx, blt, bw = bank[0], bank[1], bank[2]
+    rul_sorted, rul_cum_w, rul_suffix_w, rul_suffix_wr, rul_low = tables
+    d_threshold, low_q = model[4], model[5]
+    for p in range(2):
+        rul = model[2] if p == 0 else model[3]
+        code, q = _build_from_cloud(
+            rul[0], rul[1], rul[2], rul[3], rul[4], d_threshold[p], bx[e, p], blt[e, p],
+            bw[e, p], low_q, work[6], rul_sorted[s, p], rul_cum_w[s, p], rul_suffix_w[s, p],
+            rul_suffix_wr[s, p],
+        )  # fmt: skip
+        rul_low[s, p] = q
+        if code != 0 and out[2][s] == 0:
+            out[2][s] = 3 + code
+
+
+@njit(cache=True)
+def _work(n: int, n_learn: int) -> tuple:
+    """Scratch: cumsum, indices, two buffers, the process scratch, log-likelihoods, squares,
+    batch means."""
+    return (
+        np.empty(n), np.empty(n, dtype=np.intp), np.empty(n), np.empty(n), np.zeros((10, n)),
+        np.empty(n), np.empty(n), np.empty(max(n_learn, 1)),
+    )  # fmt: skip
+
+
+@njit(cache=True)
 def learn_batch(
     rows: np.ndarray,
     slots: np.ndarray,
-    pending: np.ndarray,
-    flight_sum: np.ndarray,
-    flight_count: np.ndarray,
+    state: tuple,
+    out: tuple,
     bank: tuple,
     handles: np.ndarray,
-    ess: np.ndarray,
-    resampled: np.ndarray,
-    status: np.ndarray,
     tables: tuple,
     model: tuple,
 ) -> None:
@@ -175,96 +308,66 @@ def learn_batch(
 
     In place: the filters' particles ``bank = (x, log_theta, w, log_w, aux)`` (a
     :class:`~prognostics.particle_bank.ParticleBank`'s arrays; ``handles``: its streams);
-    ``pending[s]`` (flights since each filter's prediction), ``flight_sum[s]``,
-    ``flight_count[s]`` (the batch, emptied), ``ess[s, p]`` (N_eff after the last weight
-    update; unchanged without one), ``resampled[s, p]`` (+1 per resampling), ``status[s]``,
-    and the RUL tables ``tables = (sorted, cum_w, suffix_w, suffix_wr, low)`` (e.g. a fleet's
-    ``rul_*`` arrays). ``model`` is ``HealthMonitor.learning_model``: what every row shares.
+    ``state = (pending, flight_sum, flight_count)``: flights since each filter's prediction
+    and the batch (emptied); ``out = (ess, resampled, status)``: N_eff after the last weight
+    update (unchanged without one), +1 per resampling, the status; the RUL tables
+    ``tables = (sorted, cum_w, suffix_w, suffix_wr, low)`` (e.g. a fleet's ``rul_*`` arrays).
+    ``model`` is ``HealthMonitor.learning_model``: what every row shares.
     """
-    bx, blt, bw, blw, baux = bank
-    rul_sorted, rul_cum_w, rul_suffix_w, rul_suffix_wr, rul_low = tables
-    (
-        proc_spring, proc_seal, rul_spring, rul_seal, d_threshold, low_q, critical, active,
-        feat_part, feat_aux, stacks, own_grids, other_grids, noise_scale, filt,
-    ) = model  # fmt: skip
-    n = bx.shape[2]
-    n_learn = feat_part.size
-    scratch = np.zeros((10, n))
-    work = (np.empty(n), np.empty(n, dtype=np.intp), np.empty(n), np.empty(n))
-    log_lik = np.empty(n)
-    sq = np.empty(n)
-    means = np.empty(n_learn)
+    work = _work(bank[0].shape[2], model[8].size)
+    for r in range(rows.size):
+        e, s = rows[r], slots[r]
+        out[2][s] = 0
+        if state[2][s] == 0:
+            continue
+        handle = (handles[e, 0], handles[e, 1], handles[e, 2])
+        _learn(e, s, bank, state, out, work, model, handle)
+        _refresh(e, s, bank, out, work, tables, model)
+
+
+@njit(cache=True)
+def test_batch(
+    rows: np.ndarray,
+    slots: np.ndarray,
+    ground: np.ndarray,
+    corrected: np.ndarray,
+    state: tuple,
+    out: tuple,
+    bank: tuple,
+    handles: np.ndarray,
+    tables: tuple,
+    model: tuple,
+) -> None:
+    """``HealthMonitor.tested`` for each bank row ``rows[r]`` (slot ``s = slots[r]``, as
+    :func:`learn_batch`) without its detectors: learn from the in-flight batch under way,
+    predict both filters over the flights pending, condition on survival, then update with
+    the test's G1 (spring) and G3 (seal) in ``ground[s]``; ``corrected[s]`` = both
+    corrected to a healthy new installation (what the detectors read). The RUL tables are
+    built once at the end (the learning update's own tables would be replaced unread)."""
+    work = _work(bank[0].shape[2], model[8].size)
+    g_aux, g_stacks, g_own, g_other = model[15], model[16], model[17], model[18]
+    pending, status = state[0], out[2]
     for r in range(rows.size):
         e, s = rows[r], slots[r]
         status[s] = 0
-        m = flight_count[s]
-        if m == 0:
-            continue
         handle = (handles[e, 0], handles[e, 1], handles[e, 2])
-        for j in range(n_learn):
-            means[j] = flight_sum[s, j] / m
-            flight_sum[s, j] = 0.0
-        flight_count[s] = 0
-        after = m - m // 2
+        if state[2][s] > 0:
+            _learn(e, s, bank, state, out, work, model, handle)
         for p in range(2):
-            d = pending[s, p] - after
+            d = pending[s, p]
             if d > 0 and status[s] == 0:
-                if p == 0:
-                    predict_particles(bx[e, 0], blt[e, 0], float(d), handle, scratch, *proc_spring)
-                else:
-                    predict_particles(bx[e, 1], blt[e, 1], float(d), handle, scratch, *proc_seal)
-                if (
-                    _first_out_of_range(bx[e, p], blt[e, p], MAX_ABS_SEVERITY, MAX_ABS_LOG_THETA)
-                    >= 0
-                ):
-                    status[s] = 1
-                pending[s, p] -= d
-        for p in range(2):  # both parts fly: neither has reached its critical value
-            if active[p] and status[s] == 0:
-                nf = _condition_below(bx[e, p], blw[e, p], bw[e, p], critical[p])
-                if nf >= 0.0 and not _resampled(
-                    nf, e, s, p, bank, ess, resampled, work, filt, handle
-                ):
-                    status[s] = 3
+                _predict(e, s, p, d, bank, state, out, work, model, handle)
         if status[s] == 0:
-            c_hat, c_var = fraction_moments(bx[e, 0], bw[e, 0], critical[0], sq)
-            w_hat, w_var = fraction_moments(bx[e, 1], bw[e, 1], critical[1], sq)
-            for j in range(n_learn):
-                if status[s] != 0:
-                    break
-                p, k = feat_part[j], feat_aux[j]
-                own, other, other_var = (c_hat, w_hat, w_var) if p == 0 else (w_hat, c_hat, c_var)
-                st, g_own, g_other = stacks[j], own_grids[j], other_grids[j]
-                z_mean, z_var = baux[e, p, k], baux[e, p, k + 1]
-                z_bar = np.dot(bw[e, p], z_mean)
-                lo, hi = max(other - SLOPE_STEP, 0.0), min(other + SLOPE_STEP, 1.0)
-                slope = (
-                    effect_at(st, g_own, g_other, own, hi, z_bar)
-                    - effect_at(st, g_own, g_other, own, lo, z_bar)
-                ) / (hi - lo)
-                effect_likelihood(
-                    means[j], float(m), bx[e, p], bw[e, p], critical[p], st, g_own, g_other,
-                    other, noise_scale, slope * slope * other_var, z_mean, z_var, log_lik,
-                )  # fmt: skip
-                for i in range(n):
-                    if not math.isfinite(log_lik[i]):
-                        status[s] = 2
-                        break
-                if status[s] != 0:
-                    break
-                nf = _add_log_likelihood(blw[e, p], bw[e, p], log_lik)
-                if not _resampled(nf, e, s, p, bank, ess, resampled, work, filt, handle):
-                    status[s] = 3
-        for p in range(2):  # the RUL tables are rebuilt whatever happened (as `finally`)
-            rul = rul_spring if p == 0 else rul_seal
-            code, q = _build_from_cloud(
-                rul[0], rul[1], rul[2], rul[3], rul[4], d_threshold[p], bx[e, p], blt[e, p],
-                bw[e, p], low_q, sq, rul_sorted[s, p], rul_cum_w[s, p], rul_suffix_w[s, p],
-                rul_suffix_wr[s, p],
-            )  # fmt: skip
-            rul_low[s, p] = q
-            if code != 0 and status[s] == 0:
-                status[s] = 3 + code
+            _survive(e, s, bank, out, work, model, handle)
+        if status[s] == 0:
+            moments = _moments(e, bank, model, work)
+            for p in range(2):
+                if status[s] == 0:
+                    corrected[s, p] = _effect_update(
+                        e, s, p, g_aux[p], ground[s, p], 1.0, moments, g_stacks[p], g_own[p],
+                        g_other[p], bank, out, work, model, handle,
+                    )  # fmt: skip
+        _refresh(e, s, bank, out, work, tables, model)
 
 
 __all__ = [
@@ -276,4 +379,5 @@ __all__ = [
     "effect_likelihood",
     "fraction_moments",
     "learn_batch",
+    "test_batch",
 ]

@@ -79,6 +79,7 @@ from scas_env.learning_kernel import (
     effect_at,
     effect_likelihood,
     learn_batch,
+    test_batch,
 )
 from scas_env.scenario import Scenario
 
@@ -298,6 +299,17 @@ class HealthMonitor:
                 sf.kernel == "gaussian",
                 sf.shrink,
             ),
+            # the ground features of a test: G1 into the spring filter, G3 into the seal's
+            np.array(
+                [
+                    list(self._filters[self._effects[f].part].aux).index(f"{f}_z_mean")
+                    for f in ("G1", "G3")
+                ],
+                dtype=np.int64,
+            ),
+            (self._effects["G1"].stack, self._effects["G3"].stack),
+            (self._effects["G1"].own_grid, self._effects["G3"].own_grid),
+            (self._effects["G1"].other_grid, self._effects["G3"].other_grid),
         )
 
     def attach(self, bank: ParticleBank, row: int) -> None:
@@ -329,6 +341,8 @@ class HealthMonitor:
             aux = self._filters[eff.part].aux
             self._effects[f] = replace(eff, z_mean=aux[f"{f}_z_mean"], z_var=aux[f"{f}_z_var"])
         self.bank, self.row = bank, int(row)
+        #: (rows, slots) of a kernel call on this monitor alone
+        self._one = (np.array([row], dtype=np.int64), np.zeros(1, dtype=np.int64))
 
     def __setstate__(self, state: dict[str, Any]) -> None:
         """After ``pickle`` or ``copy.deepcopy`` the filters' arrays are copies of the bank's
@@ -480,20 +494,30 @@ class HealthMonitor:
             return
         if self.flight_count == 0:
             return
-        pending = np.array([[self.pending["spring"], self.pending["seal"]]], dtype=np.int64)
-        count = np.array([self.flight_count], dtype=np.int64)
-        ess = np.array([[self.spring_filter._ess, self.seal_filter._ess]])
-        resampled = np.zeros((1, 2), dtype=np.int64)
-        status = np.zeros(1, dtype=np.int64)
-        b = self.bank
-        learn_batch(
-            np.array([self.row], dtype=np.int64), np.zeros(1, dtype=np.int64), pending,
-            self.flight_sum.reshape(1, -1), count, (b.x, b.log_theta, b.w, b.log_w, b.aux),
-            b.handles, ess, resampled, status, self._tables, self.learning_model,
-        )  # fmt: skip
-        self.pending["spring"], self.pending["seal"] = int(pending[0, 0]), int(pending[0, 1])
-        self.flight_count = 0
-        self.adopt_learning(0, ess, resampled, status, self._tables)
+        state, out = self._kernel_io()
+        learn_batch(*self._one, state, out, self.bank.arrays, self.bank.handles, self._tables,
+                    self.learning_model)  # fmt: skip
+        self._adopt_one(state, out)
+
+    def _kernel_io(self) -> tuple[tuple, tuple]:
+        """(pending, flight_sum, flight_count) and (ess, resampled, status) of this monitor as
+        the kernels' one-slot arrays (``flight_sum`` is this monitor's own array)."""
+        state = (
+            np.array([[self.pending["spring"], self.pending["seal"]]], dtype=np.int64),
+            self.flight_sum.reshape(1, -1),
+            np.array([self.flight_count], dtype=np.int64),
+        )
+        out = (
+            np.array([[self.spring_filter._ess, self.seal_filter._ess]]),
+            np.zeros((1, 2), dtype=np.int64),
+            np.zeros(1, dtype=np.int64),
+        )
+        return state, out
+
+    def _adopt_one(self, state: tuple, out: tuple) -> None:
+        self.pending["spring"], self.pending["seal"] = int(state[0][0, 0]), int(state[0][0, 1])
+        self.flight_count = int(state[2][0])
+        self.adopt_learning(0, *out, self._tables)
 
     def adopt_learning(
         self,
@@ -647,8 +671,30 @@ class HealthMonitor:
 
     def tested(self, features: dict[str, float]) -> None:
         """A pre-flight test: baseline first, then offset- and cross-corrected updates
-        (the in-flight batch under way is learnt from first)."""
-        self.learn_from_flights()
+        (the in-flight batch under way is learnt from first). With the filters in a bank:
+        the batched kernel (:func:`scas_env.learning_kernel.test_batch`, a batch of one),
+        the same numbers as :meth:`tested_python` (tested)."""
+        if self.bank is None:
+            self.tested_python(features)
+            return
+        ground = np.array([[features["G1"], features["G3"]]])
+        corrected = np.empty((1, 2))
+        state, out = self._kernel_io()
+        test_batch(*self._one, ground, corrected, state, out, self.bank.arrays,
+                   self.bank.handles, self._tables, self.learning_model)  # fmt: skip
+        self._adopt_one(state, out)
+        self.detect(0, corrected)
+
+    def detect(self, slot: int, corrected: np.ndarray) -> None:
+        """The detectors read a test's G1 and G3 corrected to a healthy new installation
+        (``corrected[slot]``, from :func:`scas_env.learning_kernel.test_batch`)."""
+        g1, g3 = float(corrected[slot, 0]), float(corrected[slot, 1])
+        self.crack_detected = self.crack_detector.update(g1) or self.crack_detected
+        self.seal_detected = self.seal_detector.update(g3) or self.seal_detected
+
+    def tested_python(self, features: dict[str, float]) -> None:
+        """:meth:`tested` in Python (the v0/v1 treatment, and the reference of the kernel)."""
+        self.learn_from_flights_python()
         self._catch_up()
         try:
             self._measured(features)

@@ -256,11 +256,10 @@ class ScasMaintenanceVectorEnv(VectorEnv):
                 env.reset()
                 self._attach(e)
             else:
-                _, r, _, _, info = env.step(int(act[e]))
-                rewards[e] = r
+                rewards[e], terms = env.advance(int(act[e]))
                 for t in REWARD_TERMS:
-                    self._terms[t][e] = info["reward_terms"][t]
-                self._wasted_now[e] = [info["wasted_life_flights"][part] for part in PARTS]
+                    self._terms[t][e] = terms[t]
+                self._wasted_now[e] = [env.wasted_now(part) for part in PARTS]
             self._pull(e)
         truncated = (a["slot"] >= self.scenario.episode_slots) & ~resetting
         terminated = np.zeros(n, dtype=np.bool_)
@@ -330,15 +329,13 @@ class ScasMaintenanceVectorEnv(VectorEnv):
             a["rul_suffix_wr"],
             a["rul_low"],
         )
+        outs = (out["ess"], out["resampled"], out["status"])
         learn_batch(
-            due, due, a["pending"], a["flight_sum"], a["flight_count"],
-            (b.x, b.log_theta, b.w, b.log_w, b.aux), b.handles, out["ess"], out["resampled"],
-            out["status"], tables, self.envs[due[0]].monitor.learning_model,
+            due, due, (a["pending"], a["flight_sum"], a["flight_count"]), outs, b.arrays,
+            b.handles, tables, self.envs[due[0]].monitor.learning_model,
         )  # fmt: skip
         for e in due:
-            self.envs[e].monitor.adopt_learning(
-                e, out["ess"], out["resampled"], out["status"], tables, self.fleet.table_source[e]
-            )
+            self.envs[e].monitor.adopt_learning(e, *outs, tables, self.fleet.table_source[e])
 
     def _draws(self, e: int, stream: str) -> Any:
         """Actuator ``e``'s normal buffer of ``stream`` (a growth stream: its fitted part's)."""

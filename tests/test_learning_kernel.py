@@ -66,6 +66,35 @@ def test_kernel_equals_the_python_form_along_an_episode() -> None:
     assert compared >= 100 and resamplings >= 5, (compared, resamplings)
 
 
+def test_test_kernel_equals_the_python_form_along_an_episode() -> None:
+    """Every 25 slots of a v2 episode, a pre-flight test (features the world draws) taken by
+    the kernel and by ``tested_python`` from one state: the same filters, tables, counters,
+    Generator state and detector outputs (parts flown to failure: detections, resamplings)."""
+    env = ScasMaintenanceEnv(**V2_KWARGS, episode_slots=3000)
+    env.reset(seed=8)
+    rng = np.random.default_rng(5)
+    compared = resamplings = detected = 0
+    for t in range(3000):
+        if t % 25 == 3:
+            monitor = env.monitor
+            feats = env.world.test(copy.deepcopy(env.rngs["measure"]))
+            twin = copy.deepcopy(monitor)
+            before = twin.spring_filter.n_resamples + twin.seal_filter.n_resamples
+            monitor.tested(feats)
+            twin.tested_python(feats)
+            for a, b in zip(_state(monitor), _state(twin), strict=True):
+                np.testing.assert_array_equal(a, b)
+            assert (monitor.crack_detected, monitor.seal_detected) == (
+                twin.crack_detected,
+                twin.seal_detected,
+            )
+            compared += 1
+            resamplings += twin.spring_filter.n_resamples + twin.seal_filter.n_resamples - before
+            detected += monitor.crack_detected + monitor.seal_detected
+        env.step(int(rng.choice(4, p=[0.98, 0.02, 0.0, 0.0])))
+    assert compared == 120 and resamplings >= 3 and detected >= 1, (resamplings, detected)
+
+
 def test_a_non_finite_batch_raises_in_both_forms() -> None:
     env = ScasMaintenanceEnv(**V2_KWARGS)
     env.reset(seed=2)
