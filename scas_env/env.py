@@ -20,7 +20,7 @@ from scas_env.info import StepInfo, build_info
 from scas_env.monitor import HealthMonitor, learning_features
 from scas_env.observation import ObservationBuilder
 from scas_env.scenario import Scenario
-from scas_env.world import ActuatorWorld
+from scas_env.world import GROUND_FEATURES, ActuatorWorld
 
 #: action types checked without ``Discrete.contains`` (SB3 passes numpy int64)
 _PLAIN_INTS = (int, np.int64)
@@ -498,14 +498,16 @@ class ScasMaintenanceEnv(gym.Env):
             a["replacements"][row, p] = s.replacements[part]
             a["wasted_sum"][row, p] = s.wasted_life_sum[part]
             a["wasted_count"][row, p] = s.wasted_life_count[part]
+        if self.limits is not None:
+            a["reference"][row] = [self.reference[f] for f in GROUND_FEATURES]
         a["downtime"][row], a["slot"][row] = self.downtime, self.slot
         a["flown"][row], a["tests"][row], a["no_go_count"][row] = s.flown, s.tests, s.no_go
         a["cost"][row], a["revenue"][row] = s.cost, s.revenue
 
     def import_flight_state(self, fleet: FleetState, row: int) -> None:
-        """Take back from row ``row`` of ``fleet`` what the vector env's fast flight path
-        changes (crack, wear, flights pending, in-flight features, ages, slot, downtime,
-        flights flown, revenue)."""
+        """Take back from row ``row`` of ``fleet`` what the vector env's fast path changes
+        (crack, wear, flights pending, the last features, ages, slot, downtime, flights
+        flown, revenue; a batched test's counters, cost and no-go)."""
         a = fleet.a
         self.world.import_flight_state(a, row)
         self.monitor.import_flight_state(a, row)
@@ -514,6 +516,8 @@ class ScasMaintenanceEnv(gym.Env):
             self.part_age[part] = int(a["part_age"][row, p])
         self.downtime, self.slot = int(a["downtime"][row]), int(a["slot"][row])
         self.stats.flown, self.stats.revenue = int(a["flown"][row]), float(a["revenue"][row])
+        self.stats.tests, self.stats.no_go = int(a["tests"][row]), int(a["no_go_count"][row])
+        self.stats.cost = float(a["cost"][row])
 
     def _outputs(self, terms: dict[str, float]) -> tuple[Any, StepInfo]:
         """Observation and info of this step, assembled from the fleet of one."""

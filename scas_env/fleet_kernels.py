@@ -85,6 +85,62 @@ def wear_after_flight(wear: float, rate_m: float, wear_cv: float, z: float) -> f
     return wear + rate_m * lognormal_factor(wear_cv, z)
 
 
+@njit(cache=True, inline="always")
+def _features_of(
+    e: int,
+    crack_m: np.ndarray,
+    wear_m: np.ndarray,
+    fail_depth_m: np.ndarray,
+    unit_z: np.ndarray,
+    normals: np.ndarray,
+    crack_grid: np.ndarray,
+    wear_grid: np.ndarray,
+    stack: np.ndarray,
+    feature_idx: np.ndarray,
+    seal_critical_m: float,
+    features: np.ndarray,
+) -> None:
+    """Actuator e's features ``feature_idx`` at its crack and wear fractions (capped at 1):
+    ``mean + unit_std z_unit + run_std z_run``, bilinear as ``SurrogateModel.sample``."""
+    c = min(crack_m[e] / fail_depth_m[e], 1.0)
+    w = min(wear_m[e] / seal_critical_m, 1.0)
+    i = _cell(crack_grid, c)
+    j = _cell(wear_grid, w)
+    tc = (c - crack_grid[i]) / (crack_grid[i + 1] - crack_grid[i])
+    tw = (w - wear_grid[j]) / (wear_grid[j + 1] - wear_grid[j])
+    for m in range(feature_idx.size):
+        f = feature_idx[m]
+        mean = _bilinear(stack, 0, f, i, j, tc, tw)
+        unit = _bilinear(stack, 1, f, i, j, tc, tw)
+        run = _bilinear(stack, 2, f, i, j, tc, tw)
+        features[e, m] = mean + unit * unit_z[e, f] + run * normals[e, m]
+
+
+@njit(cache=True)
+def surrogate_features(
+    envs: np.ndarray,
+    crack_m: np.ndarray,
+    wear_m: np.ndarray,
+    fail_depth_m: np.ndarray,
+    unit_z: np.ndarray,
+    normals: np.ndarray,
+    crack_grid: np.ndarray,
+    wear_grid: np.ndarray,
+    stack: np.ndarray,
+    feature_idx: np.ndarray,
+    seal_critical_m: float,
+    features: np.ndarray,
+) -> None:
+    """One run's features ``feature_idx`` of each actuator e of ``envs`` (e.g. a pre-flight
+    test's G1 and G3) into ``features[e]``, the run noise from ``normals[e]``: the numbers of
+    ``SurrogateModel.sample_list`` (tested)."""
+    for e in envs:
+        _features_of(
+            e, crack_m, wear_m, fail_depth_m, unit_z, normals, crack_grid, wear_grid, stack,
+            feature_idx, seal_critical_m, features,
+        )  # fmt: skip
+
+
 @njit(cache=True)
 def surrogate_flights(
     envs: np.ndarray,
@@ -127,18 +183,10 @@ def surrogate_flights(
     """
     nf = feature_idx.size
     for e in envs:
-        c = min(crack_m[e] / fail_depth_m[e], 1.0)
-        w = min(wear_m[e] / seal_critical_m, 1.0)
-        i = _cell(crack_grid, c)
-        j = _cell(wear_grid, w)
-        tc = (c - crack_grid[i]) / (crack_grid[i + 1] - crack_grid[i])
-        tw = (w - wear_grid[j]) / (wear_grid[j + 1] - wear_grid[j])
-        for m in range(nf):
-            f = feature_idx[m]
-            mean = _bilinear(stack, 0, f, i, j, tc, tw)
-            unit = _bilinear(stack, 1, f, i, j, tc, tw)
-            run = _bilinear(stack, 2, f, i, j, tc, tw)
-            features[e, m] = mean + unit * unit_z[e, f] + run * meas_normals[e, m]
+        _features_of(
+            e, crack_m, wear_m, fail_depth_m, unit_z, meas_normals, crack_grid, wear_grid,
+            stack, feature_idx, seal_critical_m, features,
+        )  # fmt: skip
         crack = crack_m[e]
         if crack_active:
             crack = crack_after_flight(
@@ -278,6 +326,7 @@ __all__ = [
     "ageing_estimates",
     "crack_flights_to_failure",
     "lognormal_factor",
+    "surrogate_features",
     "surrogate_flights",
     "true_rul",
     "wear_flights_to_failure",

@@ -95,6 +95,8 @@ class FleetState:
             # the feature memory: last features (SI), slots since the last test, its no-go
             "last": np.zeros((n, n_features)),
             "test_age": np.zeros(n, dtype=i8),
+            # the installation's reference reading of G1, G3 (airworthiness limits; else NaN)
+            "reference": np.full((n, 2), np.nan),
             "no_go": np.zeros(n, dtype=b),
             # the episode counters
             "part_age": np.zeros((n, 2), dtype=i8),

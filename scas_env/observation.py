@@ -172,11 +172,12 @@ class ObservationBuilder:
         a["test_age"][row], a["no_go"][row] = self.test_age, self.no_go
 
     def import_flight_state(self, a: dict[str, np.ndarray], row: int) -> None:
-        """Take back what flights on the fleet's fast path changed: in-flight features and
-        the test's age."""
-        for k, f in enumerate(self.flight_features):
+        """Take back what the fleet's fast path changed: the last features (in flight, and a
+        batched test's), the test's age and its no-go."""
+        for k, f in enumerate(self.features):
             self.last[f] = float(a["last"][row, k])
         self.test_age = int(a["test_age"][row])
+        self.no_go = bool(a["no_go"][row])
 
     def groups_of(self, fleet: FleetState, rul: np.ndarray) -> dict[str, np.ndarray]:
         """Float64 values of every observation group of this mode, one row per actuator

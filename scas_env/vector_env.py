@@ -33,11 +33,11 @@ from gymnasium.vector.utils import batch_space
 from prognostics.particle_bank import ParticleBank
 from scas_env.block_draws import DEFAULT_BLOCK
 from scas_env.env import REWARD_TERMS, ScasMaintenanceEnv, new_fleet_state
-from scas_env.fleet_kernels import surrogate_flights
+from scas_env.fleet_kernels import surrogate_features, surrogate_flights
 from scas_env.info import build_info
-from scas_env.learning_kernel import learn_batch
+from scas_env.learning_kernel import learn_batch, test_batch
 from scas_env.monitor import learning_features
-from scas_env.world import PARTS
+from scas_env.world import GROUND_FEATURES, PARTS
 
 _STREAMS = ("measure", "degradation", "spring_growth", "seal_growth")
 
@@ -118,6 +118,9 @@ class ScasMaintenanceVectorEnv(VectorEnv):
             "failed": np.zeros((n, 2), dtype=np.bool_),
             "meas": np.empty((n, n_flight)),
             "deg": np.empty((n, 2)),
+            "ground_normals": np.empty((n, 2)),
+            "ground": np.empty((n, 2)),
+            "corrected": np.empty((n, 2)),
         }
         self._builder = first.builder
         self._every_flight = first.scenario.preflight == "every_flight"
@@ -132,6 +135,17 @@ class ScasMaintenanceVectorEnv(VectorEnv):
         #: every actuator's filters in one bank (row = actuator) when they learn in flight
         #: through the batched kernel (made at the first reset; None: per-actuator Python)
         self._bank: ParticleBank | None = None
+        # batched pre-flight tests (on demand, filters in the bank): the ground features'
+        # surrogate indices, their columns in "last", and the go/no-go's bounds
+        builder = first.builder
+        self._ground_idx = np.array(first.world._ground_feature_idx, dtype=np.int64)
+        self._ground_cols = np.array([builder.features.index(f) for f in GROUND_FEATURES])
+        if first.limits is not None:
+            lim = first.limits.limits
+            self._go_limits = np.array([lim.get(f, np.inf) for f in GROUND_FEATURES])
+        else:
+            band = builder.acceptance
+            self._go_band = np.array([band.get(f, (-np.inf, np.inf)) for f in GROUND_FEATURES])
         self._learn_out = {
             "ess": np.full((n, 2), np.nan),
             "resampled": np.zeros((n, 2), dtype=np.int64),
@@ -230,6 +244,12 @@ class ScasMaintenanceVectorEnv(VectorEnv):
             fly &= ~a["no_go"]
         idle = (act <= 1) & grounded & ~resetting
         slow = resetting | (act >= 2) | ((act <= 1) & ~grounded & ~fly)
+        tested = np.zeros(0, dtype=np.int64)
+        if self._bank is not None and not self._every_flight:
+            # on-demand tests in a batch; the actuators that go fly on the fast path below
+            tested, go = self._tests(np.flatnonzero((act == 1) & ~grounded & ~resetting))
+            slow[tested] = False
+            fly[tested[go]] = True
         fly_idx = np.flatnonzero(fly)
         if fly_idx.size:
             ok = self._fly(fly_idx)
@@ -244,6 +264,9 @@ class ScasMaintenanceVectorEnv(VectorEnv):
             self._terms["flight"][done] = value
             if self._learn_cols.size:
                 self._learn_from_full_batches(done)
+        if tested.size:
+            self._test_rewards(tested, rewards)
+            fly[tested] = True  # a slot passed on the fast path
         idle_idx = np.flatnonzero(idle)
         a["downtime"][idle_idx] -= 1
         quick = np.flatnonzero((fly | idle) & ~slow)
@@ -278,12 +301,7 @@ class ScasMaintenanceVectorEnv(VectorEnv):
                 self._draws(e, s).refill()
         pm = self._pos["measure"][idx, 0]
         sc["meas"][idx] = self._buf["measure"][idx[:, None], pm[:, None] + np.arange(n_meas)]
-        if self._per_part:
-            for p, (s, _) in enumerate(deg_streams):
-                sc["deg"][idx, p] = self._buf[s][idx, self._pos[s][idx, 0]]
-        else:
-            pd = self._pos["degradation"][idx, 0]
-            sc["deg"][idx] = self._buf["degradation"][idx[:, None], pd[:, None] + np.arange(2)]
+        self._peek_degradation(idx)
         t = self._tables
         new = sc["new"]
         surrogate_flights(
@@ -304,6 +322,100 @@ class ScasMaintenanceVectorEnv(VectorEnv):
             a["flight_sum"][done] += sc["feats"][done][:, self._learn_cols]
             a["flight_count"][done] += 1
         return ok
+
+    def _tests(self, idx: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Pre-flight tests of the actuators ``idx`` (on demand, not grounded), as the single
+        env's ``advance(test_and_fly)`` up to its flight: the world's G1 and G3 (surrogate,
+        run noise from the measure stream), the monitor's update (one
+        :func:`~scas_env.learning_kernel.test_batch` call) and detectors, the go/no-go, the
+        feature memory and counters. Actuators whose flight would end in a failure are left
+        to the slow path (returned arrays exclude them). Returns the tested actuators and
+        whether each may fly (go)."""
+        if not idx.size:
+            return idx, np.zeros(0, dtype=np.bool_)
+        a, sc = self.a, self._scratch
+        # a failing flight goes the slow path whole: peek at the flight's growth draws
+        for s, k in self._deg_streams:
+            for e in idx[self._pos[s][idx, 0] + k > DEFAULT_BLOCK]:
+                self._draws(e, s).refill()
+        self._peek_degradation(idx)
+        t = self._tables
+        surrogate_flights(
+            idx, a["crack"], a["wear"], a["fail"], a["theta"], a["wmult"], a["unit_z"],
+            sc["meas"], sc["deg"], *t["flight"], *t["damage"], *t["flight_consts"],
+            sc["new"][0], sc["new"][1], sc["feats"], sc["failed"],
+        )  # fmt: skip
+        idx = idx[~sc["failed"][idx].any(axis=1)]
+        if not idx.size:
+            return idx, np.zeros(0, dtype=np.bool_)
+        # the test's run noise: two normals of the measure stream
+        for e in idx[self._pos["measure"][idx, 0] + 2 > DEFAULT_BLOCK]:
+            self._draws(e, "measure").refill()
+        pm = self._pos["measure"][idx, 0]
+        normals = sc["ground_normals"]
+        normals[idx] = self._buf["measure"][idx[:, None], pm[:, None] + np.arange(2)]
+        self._pos["measure"][idx, 0] += 2
+        ground = sc["ground"]
+        surrogate_features(
+            idx, a["crack"], a["wear"], a["fail"], a["unit_z"], normals, t["flight"][0],
+            t["flight"][1], t["flight"][2], self._ground_idx, self.fleet.seal_critical_m, ground,
+        )  # fmt: skip
+        # the monitors
+        out, b = self._learn_out, self._bank
+        out["ess"][idx] = np.nan
+        out["resampled"][idx] = 0
+        tables = (
+            a["rul_sorted"],
+            a["rul_cum_w"],
+            a["rul_suffix_w"],
+            a["rul_suffix_wr"],
+            a["rul_low"],
+        )
+        outs = (out["ess"], out["resampled"], out["status"])
+        corrected = sc["corrected"]
+        test_batch(
+            idx, idx, ground, corrected, (a["pending"], a["flight_sum"], a["flight_count"]),
+            outs, b.arrays, b.handles, tables, self.envs[idx[0]].monitor.learning_model,
+        )  # fmt: skip
+        for e in idx:
+            monitor = self.envs[e].monitor
+            monitor.adopt_learning(e, *outs, tables, self.fleet.table_source[e])
+            monitor.detect(e, corrected)
+            a["detected"][e] = monitor.crack_detected, monitor.seal_detected
+        # go / no-go: the airworthiness limits around the installation's reference, or the
+        # healthy acceptance band (ScasMaintenanceEnv._go)
+        g = ground[idx]
+        if self._holds:
+            go = np.all(np.abs(g - a["reference"][idx]) <= self._go_limits, axis=1)
+        else:
+            go = np.all((self._go_band[:, 0] <= g) & (g <= self._go_band[:, 1]), axis=1)
+        a["last"][idx[:, None], self._ground_cols] = g
+        a["test_age"][idx] = 0
+        a["no_go"][idx] = ~go
+        a["tests"][idx] += 1
+        a["no_go_count"][idx[~go]] += 1
+        return idx, go
+
+    def _peek_degradation(self, idx: np.ndarray) -> None:
+        """The next flight's two growth-factor normals of ``idx`` into the scratch (not
+        consumed)."""
+        sc = self._scratch
+        if self._per_part:
+            for p, (s, _) in enumerate(self._deg_streams):
+                sc["deg"][idx, p] = self._buf[s][idx, self._pos[s][idx, 0]]
+        else:
+            pd = self._pos["degradation"][idx, 0]
+            sc["deg"][idx] = self._buf["degradation"][idx[:, None], pd[:, None] + np.arange(2)]
+
+    def _test_rewards(self, tested: np.ndarray, rewards: np.ndarray) -> None:
+        """Rewards, cost and reward terms of tested actuators (after their flights), summed
+        in the single env's order (flight, test, no-go, replacement, failure)."""
+        a, terms = self.a, self._terms
+        test = np.full(tested.size, -self.costs.test_usd)
+        no_go = np.where(a["no_go"][tested], -self.costs.no_go_inspection_usd, 0.0)
+        terms["test"][tested], terms["no_go"][tested] = test, no_go
+        rewards[tested] = (((rewards[tested] + test) + no_go) + 0.0) + 0.0
+        a["cost"][tested] -= (((0.0 + test) + no_go) + 0.0) + 0.0
 
     def _learn_from_full_batches(self, flown: np.ndarray) -> None:
         """The actuators of ``flown`` whose batch of learning flights is full learn from it,

@@ -126,9 +126,11 @@ class ActuatorWorld:
         #: ``"per_part"``: flights each fitted part will still fly, the failing one included
         self.life_left = {"spring": math.inf, "seal": math.inf}
         #: ``"per_part"``: whole lives of the next :data:`UPCOMING_PARTS` parts of each kind
-        #: (the clairvoyant oracle's view; refreshed when a part of that kind is fitted)
+        #: (the clairvoyant oracle's view; refreshed when a part of that kind is fitted, in
+        #: the observation modes that show them, ``"state"`` and ``"dict"``; else inf: the
+        #: look-ahead replays three lives per replacement and moves no draw)
         self.upcoming = {part: [math.inf] * UPCOMING_PARTS for part in PARTS}
-        self._look_ahead = True
+        self._look_ahead = scenario.obs_mode in ("state", "dict")
         self._scratch = {
             "envs": np.zeros(1, dtype=np.int64),
             "x": np.empty((8, 1)),
