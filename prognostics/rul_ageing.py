@@ -204,8 +204,23 @@ class AgeingRul:
             )
         if not 0.0 <= low_quantile <= 1.0:
             raise ValueError(f"low_quantile = {low_quantile} must lie in [0, 1]")
+        return cls._copied(r, *sums, low, low_quantile)
+
+    @classmethod
+    def _copied(
+        cls,
+        sorted_rul: np.ndarray,
+        cum_w: np.ndarray,
+        suffix_w: np.ndarray,
+        suffix_wr: np.ndarray,
+        low: float,
+        low_quantile: float,
+    ) -> AgeingRul:
+        """:meth:`from_tables` without the checks, for float64 tables a kernel built (the
+        monitor's hot path, once per filter update)."""
         self = cls.__new__(cls)
-        self._r, (self._cum_w, self._suffix_w, self._suffix_wr) = r, sums
+        self._r, self._cum_w = sorted_rul.copy(), cum_w.copy()
+        self._suffix_w, self._suffix_wr = suffix_w.copy(), suffix_wr.copy()
         self._low = float(low)
         self.low_quantile = float(low_quantile)
         return self

@@ -536,9 +536,9 @@ class HealthMonitor:
             if not math.isnan(ess[slot, p]):  # NaN: no weight update in the batch
                 pf._ess = float(ess[slot, p])
             pf.n_resamples += int(resampled[slot, p])
-            self._ageing[part] = AgeingRul.from_tables(
+            self._ageing[part] = AgeingRul._copied(
                 tables[0][slot, p], tables[1][slot, p], tables[2][slot, p], tables[3][slot, p],
-                float(tables[4][slot, p]), low_quantile=self.scenario.rul_quantile,
+                tables[4][slot, p], self.scenario.rul_quantile,
             )  # fmt: skip
             if sources is not None:
                 sources[p] = self._ageing[part]

@@ -469,12 +469,27 @@ class ScasMaintenanceVectorEnv(VectorEnv):
 
 def with_info_masks(info: dict[str, Any], n: int) -> dict[str, Any]:
     """``info`` with Gymnasium's ``_key`` masks (every actuator has every key), nested dicts
-    included, in the order ``SyncVectorEnv`` builds them (key, then ``_key``)."""
+    included, in the order ``SyncVectorEnv`` builds them (key, then ``_key``); the masks are
+    one shared read-only array of True."""
     out: dict[str, Any] = {}
+    mask = _all_true(n)
     for key, value in info.items():
         out[key] = with_info_masks(value, n) if isinstance(value, dict) else value
-        out[f"_{key}"] = np.ones(n, dtype=np.bool_)
+        out[f"_{key}"] = mask
     return out
+
+
+_ALL_TRUE: dict[int, np.ndarray] = {}
+
+
+def _all_true(n: int) -> np.ndarray:
+    """One read-only (n,) array of True shared by every mask (masks never change here)."""
+    mask = _ALL_TRUE.get(n)
+    if mask is None:
+        mask = np.ones(n, dtype=np.bool_)
+        mask.flags.writeable = False
+        _ALL_TRUE[n] = mask
+    return mask
 
 
 def _expose_surface(vec: VectorEnv, first: ScasMaintenanceEnv) -> None:
