@@ -8,7 +8,11 @@ with one torch thread and the same hyper-parameters (:data:`FPS_CONFIGS`):
   ``Monitor``): the setup of ``policies.rl.train``;
 - ``native-64``: ``NativeVecEnv(gym.make_vec(..., num_envs=64,
   vectorization_mode="vector_entry_point"), info_keys=())`` in ``VecMonitor``;
-- ``cartpole-4``: 4 ``CartPole-v1`` in ``DummyVecEnv``: PPO's own cost with a near-free env.
+- ``cartpole-4``: 4 ``CartPole-v1`` in ``DummyVecEnv``: PPO's own cost with a near-free env;
+- ``epochs-dummy-4``: MaskablePPO on 4 decision-epoch v2 envs in ``DummyVecEnv`` (the setup of
+  ``policies.epoch_training``); ``epochs-native-64``: MaskablePPO on
+  ``NativeVecEnv(DecisionEpochsVectorEnv(64, **V2_KWARGS))``. Their frames are flights (a
+  decision flies k of them), counted from ``info["epoch_slots"]``.
 
 Frames per second = env steps summed over envs / wall time of ``model.learn``. Runs alternate
 between the setups (A, B, A, B, ...) so a drift of the machine's speed (it is shared) hits
@@ -33,8 +37,9 @@ from scas_env import ENV_ID
 #: PPO settings: SB3's own defaults (``PPO("MlpPolicy", env)``: n_steps 2048, batch 64, 10
 #: epochs, a 64-64 MLP) or this project's (``policies.rl.ALGOS["ppo"]``: n_steps 512, batch 256)
 FPS_CONFIGS = ("sb3-default", "project")
-#: setups, the first is the baseline of the speed-ups
-SETUPS = ("dummy-4", "native-64", "cartpole-4")
+#: setups, the first is the baseline of the speed-ups; ``epochs-*``: MaskablePPO on decision
+#: epochs over v2 (``ScasMaintenanceEpochs-v1``), frames = flights flown
+SETUPS = ("dummy-4", "native-64", "cartpole-4", "epochs-dummy-4", "epochs-native-64")
 
 __all__ = [
     "FPS_CONFIGS",
@@ -74,16 +79,60 @@ def make_setup(label: str, seed: int = 0) -> Any:
         venv.seed(seed)
     elif label == "cartpole-4":
         venv = make_vec_env("CartPole-v1", n_envs=4, seed=seed)
+    elif label == "epochs-dummy-4":
+        from policies.epoch_training import make_epoch_env
+        from scas_env import V2_KWARGS
+
+        venv = _flight_counter(
+            make_vec_env(make_epoch_env, n_envs=4, seed=seed, env_kwargs=V2_KWARGS)
+        )
+    elif label == "epochs-native-64":
+        from policies.sb3_vec_env import NativeVecEnv
+        from scas_env import ENV_ID_EPOCHS_V2
+
+        native = gym.make_vec(
+            ENV_ID_EPOCHS_V2, num_envs=64, vectorization_mode="vector_entry_point"
+        )
+        venv = _flight_counter(VecMonitor(NativeVecEnv(native, info_keys=("epoch_slots",))))
+        venv.seed(seed)
     else:
         raise ValueError(f"setup = {label!r} must be one of {SETUPS}")
     return VecNormalize(venv)
+
+
+def _flight_counter_class() -> type:
+    from stable_baselines3.common.vec_env import VecEnvWrapper
+
+    class FlightCounter(VecEnvWrapper):
+        """Counts the flights of decision-epoch steps (``info["epoch_slots"]``)."""
+
+        def __init__(self, venv: Any) -> None:
+            super().__init__(venv)
+            self.flights = 0
+
+        def reset(self) -> Any:
+            return self.venv.reset()
+
+        def step_wait(self) -> Any:
+            obs, rewards, dones, infos = self.venv.step_wait()
+            self.flights += sum(int(i["epoch_slots"]) for i in infos)
+            return obs, rewards, dones, infos
+
+    return FlightCounter
+
+
+def _flight_counter(venv: Any) -> Any:
+    """``venv`` in a flight counter (its class is made on first use: SB3 is imported lazily)."""
+    return _flight_counter_class()(venv)
 
 
 def training_fps(
     venv_fn: Callable[[], Any], total_timesteps: int, seed: int = 0, *, config: str = "project"
 ) -> float:
     """Frames per second of PPO learning ``total_timesteps`` on ``venv_fn()``, one torch
-    thread, on the CPU (``config``: :data:`FPS_CONFIGS`)."""
+    thread, on the CPU (``config``: :data:`FPS_CONFIGS`). On a decision-epoch setup (a flight
+    counter inside): MaskablePPO with the trainings' settings (:func:`epoch_ppo_kwargs`),
+    and the frames are the flights flown."""
     import torch
     from stable_baselines3 import PPO
     from stable_baselines3.common.utils import set_random_seed
@@ -96,12 +145,40 @@ def training_fps(
     torch.set_num_threads(1)
     set_random_seed(seed)
     venv = venv_fn()
-    model = PPO("MlpPolicy", venv, seed=seed, device="cpu", **kwargs)
+    counter = _find_counter(venv)
+    algo: Any = PPO
+    if counter is not None:
+        from policies.sb3_agents import require_contrib
+
+        algo = require_contrib("measure decision-epoch training").MaskablePPO
+        kwargs = epoch_ppo_kwargs()
+    model = algo("MlpPolicy", venv, seed=seed, device="cpu", **kwargs)
     start = time.perf_counter()
     model.learn(total_timesteps)
-    fps = model.num_timesteps / (time.perf_counter() - start)
+    wall = time.perf_counter() - start
+    frames = model.num_timesteps if counter is None else counter.flights
     venv.close()
-    return fps
+    return frames / wall
+
+
+def epoch_ppo_kwargs() -> dict[str, Any]:
+    """MaskablePPO keywords of the decision-epoch trainings (the ``gamma099`` candidate of
+    ``policies/data/hyperparams/search.yml``, without the run settings)."""
+    from policies.epoch_training import HYPERPARAMS_DIR, candidate_hyperparams
+
+    hp = dict(candidate_hyperparams(HYPERPARAMS_DIR / "search.yml", "gamma099"))
+    for key in ("n_envs", "n_timesteps", "policy", "normalize"):
+        hp.pop(key, None)
+    return hp
+
+
+def _find_counter(venv: Any) -> Any:
+    """The flight counter inside ``venv``'s wrappers, or None."""
+    while venv is not None:
+        if type(venv).__name__ == "FlightCounter":
+            return venv
+        venv = getattr(venv, "venv", None)
+    return None
 
 
 def fps_rounds(

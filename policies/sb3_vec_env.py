@@ -21,8 +21,12 @@ Semantics (SB3's ``VecEnv`` contract):
 - ``get_attr`` / ``set_attr`` / ``env_method``: on the vector env itself (attributes shared
   by its N actuators), the value once per index.
 
-The native env autoresets on the step *after* a done (Gymnasium 1.x next-step); SB3 wants the
-new observation at once. ``ScasMaintenance-v0`` has no termination and every actuator
+A vector env that autoresets in the same step (``AutoresetMode.SAME_STEP``, e.g.
+:class:`scas_env.decision_epochs_vector.DecisionEpochsVectorEnv`) already returns the new
+observations; the last ones come from its ``info["final_obs"]``, env by env.
+
+The per-flight native env autoresets on the step *after* a done (Gymnasium 1.x next-step);
+SB3 wants the new observation at once. ``ScasMaintenance-v0`` has no termination and every actuator
 truncates at the same slot, so all envs end together and the adapter resets them all at once
 (``reset()`` without seeds: each actuator continues its own generator, as ``DummyVecEnv``'s
 resets do). Done envs that are not all of them raise ``RuntimeError`` (a future env with
@@ -36,6 +40,7 @@ from typing import Any
 
 import numpy as np
 from gymnasium import spaces
+from gymnasium.vector import AutoresetMode
 from stable_baselines3.common.vec_env.base_vec_env import VecEnv
 
 from scas_env.decision_epochs import MASK_READS, maintenance_mask
@@ -50,8 +55,8 @@ def _split(info: dict[str, Any], n: int, keys: Sequence[str] | None) -> list[dic
     ``info["_key"][e]`` is true (every key, for this env's infos)."""
     out: list[dict[str, Any]] = [{} for _ in range(n)]
     for key in keys if keys is not None else info:
-        if key.startswith("_") and key[1:] in info:
-            continue  # a mask
+        if (key.startswith("_") and key[1:] in info) or key not in info:
+            continue  # a mask, or a key this info lacks (e.g. a step key at a reset)
         value = info[key]
         mask = np.asarray(info.get(f"_{key}", np.ones(n, dtype=bool)))
         if isinstance(value, dict):
@@ -87,6 +92,10 @@ class NativeVecEnv(VecEnv):
             [names.index(n) for n in MASK_READS] if all(n in names for n in MASK_READS) else None
         )
         self._obs = np.zeros((venv.num_envs, *space.shape), dtype=space.dtype)
+        #: the vector env resets done envs in the step itself (e.g. the decision-epoch
+        #: vector env) instead of on the next one (the per-flight native env)
+        mode = getattr(venv, "metadata", {}).get("autoreset_mode")
+        self._same_step = mode == AutoresetMode.SAME_STEP or str(mode) == "same-step"
         self._actions: np.ndarray | None = None
         super().__init__(venv.num_envs, space, venv.single_action_space)
 
@@ -113,7 +122,13 @@ class NativeVecEnv(VecEnv):
         dones = np.asarray(terminated) | np.asarray(truncated)
         infos = _split(info, self.num_envs, self.info_keys)
         obs = np.array(obs, copy=True)
-        if dones.any():
+        if dones.any() and self._same_step:
+            # the vector env reset the done envs already; their last observations are in
+            # info["final_obs"] (Gymnasium's same-step autoreset)
+            for e in np.flatnonzero(dones):
+                infos[e]["terminal_observation"] = np.asarray(info["final_obs"][e])
+                infos[e]["TimeLimit.truncated"] = bool(truncated[e] and not terminated[e])
+        elif dones.any():
             if not dones.all():
                 raise RuntimeError(
                     f"envs {np.flatnonzero(dones).tolist()} ended alone; the adapter resets "
@@ -133,7 +148,12 @@ class NativeVecEnv(VecEnv):
 
     # ------------------------------------------------------------------ masks
     def action_masks(self) -> np.ndarray:
-        """``(N, 4)`` valid actions of the current observations (MaskablePPO)."""
+        """Valid actions (MaskablePPO): the vector env's own ``action_masks()`` when it has
+        one (the decision-epoch vector env: ``(N, 4 * len(ks))``), else ``(N, 4)`` from the
+        current observations."""
+        own = getattr(self.venv, "action_masks", None)
+        if callable(own):
+            return np.asarray(own())
         if self._mask_cols is None:
             raise ValueError(f"the observation lacks {MASK_READS} that the action mask reads")
         return maintenance_mask(*(self._obs[:, c] for c in self._mask_cols))
@@ -150,7 +170,7 @@ class NativeVecEnv(VecEnv):
         """``action_masks`` (when the observation has what the mask reads) or an attribute of
         the vector env (MaskablePPO asks for ``action_masks``)."""
         if attr_name == "action_masks":
-            return self._mask_cols is not None
+            return self._mask_cols is not None or callable(getattr(self.venv, "action_masks", None))
         return hasattr(self.venv, attr_name)
 
     def get_attr(self, attr_name: str, indices: Any = None) -> list[Any]:

@@ -72,5 +72,6 @@ for _id, _kwargs in ((ENV_ID_EPOCHS, {}), (ENV_ID_EPOCHS_V2, V2_KWARGS)):
         register(
             id=_id,
             entry_point="scas_env.decision_epochs:make_decision_epoch_env",
+            vector_entry_point="scas_env.decision_epochs_vector:make_decision_epochs_vector_env",
             kwargs=_kwargs,
         )

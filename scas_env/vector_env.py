@@ -218,6 +218,16 @@ class ScasMaintenanceVectorEnv(VectorEnv):
         return self._observation(rul), self._info(rul)
 
     def step(self, actions: Any) -> tuple[Any, np.ndarray, np.ndarray, np.ndarray, dict]:
+        return self.step_active(actions, None)
+
+    def step_active(
+        self, actions: Any, active: np.ndarray | None, *, outputs: bool = True
+    ) -> tuple[Any, np.ndarray, np.ndarray, np.ndarray, dict]:
+        """``step`` for the actuators where ``active`` (bool, (N,); None: all) is true; the
+        others stay as they are (no slot passes, reward 0, not truncated, a pending autoreset
+        kept for their next active step). The decision-epoch vector env uses it to fly each
+        actuator its own number of slots. ``outputs=False``: the observation and info are
+        not assembled (None; :meth:`observe` gives the observation later)."""
         if self.envs[0].monitor is None:
             raise RuntimeError("call reset() before step()")
         act = np.asarray(actions)
@@ -231,23 +241,27 @@ class ScasMaintenanceVectorEnv(VectorEnv):
                 "(fly, test_and_fly, replace_spring, replace_seal)"
             )
         a, n = self.a, self.num_envs
+        if active is None:
+            active = np.ones(n, dtype=np.bool_)
+        elif not (isinstance(active, np.ndarray) and active.shape == (n,) and active.dtype == bool):
+            raise ValueError(f"active must be a bool array of shape ({n},), got {active!r}")
         rewards = np.zeros(n)
         self.fleet.clear_step()
-        resetting = self._autoreset.copy()
+        resetting = self._autoreset & active
         grounded = a["downtime"] > 0
         # the fast path flies untested flights; a test (asked for, or before every flight),
         # a hold by a failed airworthiness test, a replacement or a reset go the slow path
-        fly = (act == 0) & ~grounded & ~resetting
+        fly = (act == 0) & ~grounded & ~resetting & active
         if self._every_flight:
             fly[:] = False
         elif self._holds:
             fly &= ~a["no_go"]
-        idle = (act <= 1) & grounded & ~resetting
-        slow = resetting | (act >= 2) | ((act <= 1) & ~grounded & ~fly)
+        idle = (act <= 1) & grounded & ~resetting & active
+        slow = (resetting | (act >= 2) | ((act <= 1) & ~grounded & ~fly)) & active
         tested = np.zeros(0, dtype=np.int64)
         if self._bank is not None and not self._every_flight:
             # on-demand tests in a batch; the actuators that go fly on the fast path below
-            tested, go = self._tests(np.flatnonzero((act == 1) & ~grounded & ~resetting))
+            tested, go = self._tests(np.flatnonzero((act == 1) & ~grounded & ~resetting & active))
             slow[tested] = False
             fly[tested[go]] = True
         fly_idx = np.flatnonzero(fly)
@@ -284,11 +298,18 @@ class ScasMaintenanceVectorEnv(VectorEnv):
                     self._terms[t][e] = terms[t]
                 self._wasted_now[e] = [env.wasted_now(part) for part in PARTS]
             self._pull(e)
-        truncated = (a["slot"] >= self.scenario.episode_slots) & ~resetting
+        truncated = (a["slot"] >= self.scenario.episode_slots) & ~resetting & active
         terminated = np.zeros(n, dtype=np.bool_)
-        self._autoreset = truncated.copy()
+        self._autoreset = truncated | (self._autoreset & ~active)
+        if not outputs:
+            return None, rewards, terminated, truncated, None
         rul = self.fleet.true_rul()
         return self._observation(rul), rewards, terminated, truncated, self._info(rul)
+
+    def observe(self) -> Any:
+        """The observations of the current state (those the last step returned, or would
+        have returned with ``outputs=True``)."""
+        return self._observation(self.fleet.true_rul())
 
     def _fly(self, idx: np.ndarray) -> np.ndarray:
         """Candidate flights of ``idx`` (draws peeked); commits those that did not fail."""

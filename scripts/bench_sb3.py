@@ -22,7 +22,9 @@ def main() -> None:
     parser.add_argument("--seed", type=int, default=0, help="seed of every run")
     parser.add_argument("--repeats", type=int, default=2, help="rounds over the setups")
     parser.add_argument(
-        "--setups", default=",".join(SETUPS), help="comma-separated, baseline first"
+        "--setups",
+        default="dummy-4,native-64,cartpole-4",
+        help=f"comma-separated, baseline first, from {','.join(SETUPS)}",
     )
     parser.add_argument("--config", default="project", choices=FPS_CONFIGS, help="PPO settings")
     parser.add_argument("--out", default="results/bench_sb3", help="new or empty folder")

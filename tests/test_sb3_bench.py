@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 import policies.sb3_speed as speed
@@ -81,3 +82,24 @@ def test_bench_writes_json_csv_png(tmp_path: Path, monkeypatch) -> None:
     assert doc["summary"] == summary
     assert (tmp_path / "b" / "bench_sb3.png").stat().st_size > 0
     assert (tmp_path / "b" / "bench_sb3.csv").read_text().startswith("round,setup,fps,speedup")
+
+
+def test_epoch_setups_count_the_flights_flown() -> None:
+    """The decision-epoch setups: 4 single wrappers and the 64-actuator vector env, the same
+    spaces; their frames are flights, the sum of the steps' ``epoch_slots``."""
+    from policies.sb3_speed import _find_counter
+
+    dummy, native = make_setup("epochs-dummy-4"), make_setup("epochs-native-64")
+    assert (dummy.num_envs, native.num_envs) == (4, 64)
+    assert dummy.observation_space == native.observation_space
+    assert dummy.action_space == native.action_space
+    for venv in (dummy, native):
+        counter = _find_counter(venv)
+        venv.reset()
+        flights = 0
+        for _ in range(3):
+            actions = np.zeros(venv.num_envs, dtype=np.int64) + 2  # fly, k = 20
+            *_, infos = venv.step(actions)
+            flights += sum(i["epoch_slots"] for i in infos)
+        assert counter.flights == flights == 3 * 20 * venv.num_envs
+        venv.close()

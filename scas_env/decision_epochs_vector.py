@@ -1,0 +1,174 @@
+"""Decision epochs over the native vector env: N actuators, each flying its own k slots.
+
+:class:`DecisionEpochsVectorEnv` is :class:`scas_env.decision_epochs.DecisionEpochs` for N
+actuators of :class:`scas_env.vector_env.ScasMaintenanceVectorEnv` at once: one step applies
+each actuator's maintenance action at its current slot, then flies it until its own ``k``
+slots have passed (or its episode truncates). The batched env is stepped slot by slot with
+the actuators still inside their epoch active (``ScasMaintenanceVectorEnv.step_active``); an
+actuator whose epoch is over waits, unchanged, until the slowest one is done. Actuator ``e``
+gives exactly the decision-epoch episode of a single env seeded ``seed + e`` (observations,
+rewards, flags, epoch lengths; tested against ``DecisionEpochs`` over single envs).
+
+Spaces, reward, discount and masks are :class:`~scas_env.decision_epochs.DecisionEpochs`'s
+(its module docstring is the spec), batched. Differences, both for speed:
+
+* autoreset **in the same step** (Gymnasium's ``AutoresetMode.SAME_STEP``): an actuator
+  whose episode truncated is reset before the step returns; its last observation is in
+  ``info["final_obs"]`` (rows where ``info["_final_obs"]`` is true), as SB3 expects;
+* ``info`` holds the epoch keys only (``epoch_slots``, ``epoch_discount``, ``epoch_action``,
+  ``epoch_k``: arrays of N), not the per-slot info of the env underneath.
+
+Throughput: a step costs as many batched slots as the largest ``k`` chosen; the actuators
+that chose a smaller one wait (docs/rl.md measures SB3's frames per second against
+``DummyVecEnv``).
+
+>>> venv = DecisionEpochsVectorEnv(3, episode_slots=100)
+>>> obs, info = venv.reset(seed=0)
+>>> obs.shape, venv.single_action_space
+((3, 19), Discrete(20))
+>>> obs, rewards, terminated, truncated, info = venv.step(np.array([4, 2, 0]))
+>>> info["epoch_slots"].tolist(), truncated.tolist(), obs[:, -1].tolist()
+([100, 20, 1], [True, False, False], [100.0, 80.0, 99.0])
+>>> float(info["final_obs"][0][-1])  # actuator 0 ended its episode, and started the next
+0.0
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import Any
+
+import numpy as np
+from gymnasium import spaces
+from gymnasium.vector import AutoresetMode, VectorEnv
+from gymnasium.vector.utils import batch_space
+
+from scas_env.decision_epochs import (
+    DEFAULT_KS,
+    FLY,
+    N_MAINTENANCE,
+    _check_ks,
+    maintenance_mask,
+)
+from scas_env.vector_env import ScasMaintenanceVectorEnv
+
+__all__ = ["DecisionEpochsVectorEnv", "make_decision_epochs_vector_env"]
+
+
+class DecisionEpochsVectorEnv(VectorEnv):
+    """N decision-epoch actuators over one native vector env (module docstring).
+
+    Parameters
+    ----------
+    num_envs : actuators N.
+    ks : choices of ``k`` (slots per decision), distinct integers >= 1.
+    gamma : per-flight discount in ``[0, 1]`` inside a step (1: plain sum).
+    **kwargs : keywords of ``ScasMaintenanceEnv`` (surrogate fidelity, flat observation).
+    """
+
+    metadata = {"autoreset_mode": AutoresetMode.SAME_STEP}  # noqa: RUF012
+
+    def __init__(
+        self, num_envs: int, ks: Sequence[int] = DEFAULT_KS, gamma: float = 1.0, **kwargs: Any
+    ) -> None:
+        self.ks = _check_ks(ks)
+        if not isinstance(gamma, int | float) or not 0.0 <= float(gamma) <= 1.0:
+            raise ValueError(f"gamma = {gamma!r} must be a number in [0, 1] (per flight)")
+        self.gamma = float(gamma)
+        self.inner = ScasMaintenanceVectorEnv(num_envs, **kwargs)
+        inner = self.inner.single_observation_space
+        if not isinstance(inner, spaces.Box) or len(inner.shape) != 1:
+            raise ValueError(
+                f"the observation space {inner} must be a flat Box "
+                "(obs_mode 'features+rul', 'features' or 'state')"
+            )
+        self.num_envs = self.inner.num_envs
+        self.episode_slots = int(self.inner.scenario.episode_slots)
+        self.single_observation_space = spaces.Box(
+            np.append(inner.low, 0.0).astype(np.float32),
+            np.append(inner.high, float(self.episode_slots)).astype(np.float32),
+            dtype=np.float32,
+        )
+        self.single_action_space = spaces.Discrete(N_MAINTENANCE * len(self.ks))
+        self.observation_space = batch_space(self.single_observation_space, self.num_envs)
+        self.action_space = batch_space(self.single_action_space, self.num_envs)
+        self.obs_names = (*self.inner.obs_names, "flights_left")
+        self.obs_units = (*self.inner.obs_units, "slots")
+        self.scenario, self.costs, self.params = (
+            self.inner.scenario,
+            self.inner.costs,
+            self.inner.params,
+        )
+        self._ks = np.array(self.ks, dtype=np.int64)
+
+    def _obs(self, obs: np.ndarray) -> np.ndarray:
+        left = (self.episode_slots - self.inner.a["slot"]).astype(np.float32)
+        return np.column_stack([obs, left]).astype(np.float32)
+
+    def reset(
+        self, *, seed: int | list[int | None] | None = None, options: dict[str, Any] | None = None
+    ) -> tuple[np.ndarray, dict[str, Any]]:
+        obs, _ = self.inner.reset(seed=seed, options=options)
+        return self._obs(obs), {}
+
+    def step(self, actions: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, dict]:
+        a = np.asarray(actions)
+        n_act = self.single_action_space.n
+        if (
+            a.shape != (self.num_envs,)
+            or not np.issubdtype(a.dtype, np.integer)
+            or np.any((a < 0) | (a >= n_act))
+        ):
+            raise ValueError(
+                f"actions = {actions!r} must be {self.num_envs} integers in 0..{n_act - 1}"
+            )
+        n = self.num_envs
+        maintenance = a // len(self.ks)
+        k = self._ks[a % len(self.ks)]
+        total, weight = np.zeros(n), np.ones(n)
+        slots = np.zeros(n, dtype=np.int64)
+        truncated = np.zeros(n, dtype=np.bool_)
+        active = np.ones(n, dtype=np.bool_)
+        act = maintenance.astype(np.int64)
+        while active.any():
+            _, reward, term, trunc, _ = self.inner.step_active(act, active, outputs=False)
+            total[active] += weight[active] * reward[active]
+            weight[active] *= self.gamma
+            slots[active] += 1
+            truncated |= trunc
+            active &= ~((slots >= k) | term | trunc)
+            act[:] = FLY
+        out = self._obs(self.inner.observe())
+        info: dict[str, Any] = {
+            "epoch_slots": slots,
+            "epoch_discount": weight,
+            "epoch_action": maintenance,
+            "epoch_k": k,
+        }
+        if truncated.any():
+            # same-step autoreset: the truncated actuators start their next episode now
+            final = np.empty(n, dtype=object)
+            for e in np.flatnonzero(truncated):
+                final[e] = out[e]
+            info["final_obs"] = final
+            info["_final_obs"] = truncated.copy()
+            self.inner.step_active(np.zeros(n, dtype=np.int64), truncated, outputs=False)
+            out = self._obs(self.inner.observe())
+        return out, total, np.zeros(n, dtype=np.bool_), truncated, info
+
+    def action_masks(self) -> np.ndarray:
+        """Valid actions of every actuator now (bool, ``(N, 4 * len(ks))``)."""
+        a = self.inner.a
+        m = maintenance_mask(a["downtime"], a["part_age"][:, 0], a["part_age"][:, 1])
+        return np.repeat(m, len(self.ks), axis=1)
+
+    def close_extras(self, **kwargs: Any) -> None:
+        self.inner.close()
+
+
+def make_decision_epochs_vector_env(
+    num_envs: int, ks: Sequence[int] = DEFAULT_KS, gamma: float = 1.0, **kwargs: Any
+) -> DecisionEpochsVectorEnv:
+    """``vector_entry_point`` of the decision-epoch ids (``gym.make_vec(...,
+    vectorization_mode="vector_entry_point")``)."""
+    return DecisionEpochsVectorEnv(num_envs, ks=ks, gamma=gamma, **kwargs)
