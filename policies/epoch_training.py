@@ -98,6 +98,22 @@ class _WallClock:
         return WallClockStop()
 
 
+def _native_epochs(
+    num_envs: int, seed: int, monitor_dir: Path, ks: Sequence[int], scenario: dict[str, Any]
+) -> Any:
+    """``num_envs`` decision-epoch actuators on the native vector env, monitored (one CSV,
+    ``monitor_dir/0.monitor.csv``), seeded ``seed + e``."""
+    from stable_baselines3.common.vec_env import VecMonitor
+
+    from policies.sb3_vec_env import NativeVecEnv
+    from scas_env.decision_epochs_vector import DecisionEpochsVectorEnv
+
+    monitor_dir.mkdir(parents=True, exist_ok=True)
+    native = NativeVecEnv(DecisionEpochsVectorEnv(num_envs, ks=tuple(ks), **scenario), info_keys=())
+    native.seed(seed)
+    return VecMonitor(native, filename=str(monitor_dir / "0"))
+
+
 def train_epochs(
     hyperparams: Mapping[str, Any],
     out_dir: str | Path,
@@ -109,12 +125,17 @@ def train_epochs(
     max_wall_s: float | None = None,
     total_timesteps: int | None = None,
     progress_bar: bool = False,
+    native_envs: int | None = None,
     **scenario: Any,
 ) -> Path:
     """Train one agent on decision epochs; returns ``out_dir``.
 
     ``hyperparams``: an RL-Zoo entry (:func:`load_zoo_hyperparams`); ``total_timesteps``
-    overrides its ``n_timesteps`` (decisions, summed over envs). Writes ``out_dir/ckpt_<n>``
+    overrides its ``n_timesteps`` (decisions, summed over envs). ``native_envs``: train on
+    that many actuators of the decision-epoch vector env
+    (:class:`scas_env.decision_epochs_vector.DecisionEpochsVectorEnv` through
+    :class:`policies.sb3_vec_env.NativeVecEnv`) instead of the YAML's ``n_envs`` single envs
+    in a ``DummyVecEnv``. Writes ``out_dir/ckpt_<n>``
     checkpoints (``model.zip``, ``vecnormalize.pkl``), ``progress.csv`` (SB3's logger:
     training episode rewards of the Monitor) and ``run.json`` (config, decisions and wall
     time reached).
@@ -128,6 +149,10 @@ def train_epochs(
     from stable_baselines3.common.utils import set_random_seed
     from stable_baselines3.common.vec_env import VecNormalize
 
+    if native_envs is not None and (
+        isinstance(native_envs, bool) or not isinstance(native_envs, int) or native_envs < 1
+    ):
+        raise ValueError(f"native_envs = {native_envs!r} must be None or an integer >= 1")
     classes = {"maskable_ppo": contrib.MaskablePPO, "ppo": PPO}
     if algo not in classes:
         raise ValueError(f"algo = {algo!r} must be one of {sorted(classes)}")
@@ -149,13 +174,17 @@ def train_epochs(
     out.mkdir(parents=True, exist_ok=True)
     torch.set_num_threads(1)
     set_random_seed(seed)
-    venv = make_vec_env(
-        make_epoch_env,
-        n_envs=n_envs,
-        seed=seed * 1000,
-        env_kwargs={"ks": tuple(ks), **scenario},
-        monitor_dir=str(out / "monitor"),
-    )
+    if native_envs is None:
+        venv = make_vec_env(
+            make_epoch_env,
+            n_envs=n_envs,
+            seed=seed * 1000,
+            env_kwargs={"ks": tuple(ks), **scenario},
+            monitor_dir=str(out / "monitor"),
+        )
+    else:
+        venv = _native_epochs(native_envs, seed * 1000, out / "monitor", ks, scenario)
+        n_envs = venv.num_envs
     gamma = float(hp.get("gamma", 0.99))
     if normalize:
         venv = VecNormalize(venv, norm_obs=True, norm_reward=True, gamma=gamma)
@@ -187,6 +216,10 @@ def train_epochs(
         "decisions_requested": total,
         "wall_s": round(wall, 1),
         "stopped_by_wall_clock": model.num_timesteps < total,
+        "vec_env": "DummyVecEnv"
+        if native_envs is None
+        else "NativeVecEnv(DecisionEpochsVectorEnv)",
+        "n_envs": n_envs,
     }
     (out / "run.json").write_text(json.dumps(run, indent=1))
     venv.close()

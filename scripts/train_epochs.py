@@ -30,12 +30,21 @@ def main() -> None:
     parser.add_argument("--timesteps", type=int, default=None, help="decisions (default: YAML)")
     parser.add_argument("--max-wall-s", type=float, default=None, help="stop after this wall time")
     parser.add_argument("--checkpoint-every", type=int, default=25_000, help="decisions")
+    parser.add_argument(
+        "--native-envs",
+        type=int,
+        default=None,
+        help="train on this many actuators of the decision-epoch vector env (default: the "
+        "YAML's n_envs single envs in a DummyVecEnv)",
+    )
     parser.add_argument("--out", required=True, help="new, empty output folder")
     add_env_config_args(parser)
     args = parser.parse_args()
     scenario, costs = load_env_config(parser, args)
     if costs.to_dict() != type(costs)().to_dict():
         parser.error("--costs / a [costs] table: training uses the default cost model")
+    if args.native_envs is not None and args.native_envs < 1:
+        parser.error(f"--native-envs {args.native_envs} must be >= 1")
     if args.max_wall_s is not None and args.max_wall_s <= 0:
         parser.error(f"--max-wall-s {args.max_wall_s} must be > 0")
     train_epochs(
@@ -46,6 +55,7 @@ def main() -> None:
         checkpoint_every=args.checkpoint_every,
         max_wall_s=args.max_wall_s,
         total_timesteps=args.timesteps,
+        native_envs=args.native_envs,
         **scenario_changes(scenario),
     )
 

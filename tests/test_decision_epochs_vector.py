@@ -105,3 +105,27 @@ def test_bad_actions_raise() -> None:
         DecisionEpochsVectorEnv(2, ks=(5, 5))
     with pytest.raises(ValueError, match="active"):
         venv.inner.step_active(np.zeros(2, dtype=np.int64), np.ones(3, dtype=bool))
+
+
+def test_train_epochs_on_the_native_vector_env(tmp_path) -> None:
+    """A short MaskablePPO run on 8 native actuators writes checkpoints, one monitor CSV with
+    finished episodes, and says which vector env it used."""
+    import json
+
+    from policies.epoch_training import HYPERPARAMS_DIR, candidate_hyperparams, train_epochs
+
+    pytest.importorskip("sb3_contrib")
+    hp = {**candidate_hyperparams(HYPERPARAMS_DIR / "search.yml", "gamma099"), "n_steps": 16}
+    out = train_epochs(
+        hp, tmp_path / "run", seed=1, total_timesteps=256, checkpoint_every=128,
+        native_envs=8, **{**V2_KWARGS, "episode_slots": 100},
+    )  # fmt: skip
+    run = json.loads((out / "run.json").read_text())
+    assert run["vec_env"].startswith("NativeVecEnv") and run["n_envs"] == 8
+    assert run["decisions"] >= 256
+    assert sorted(p.name for p in out.glob("ckpt_*_steps.zip"))
+    rows = (out / "monitor" / "0.monitor.csv").read_text().splitlines()
+    assert len(rows) > 2  # header lines and at least one finished episode
+    with pytest.raises(ValueError, match="native_envs"):
+        train_epochs(hp, tmp_path / "bad", native_envs=0)
+    assert not (tmp_path / "bad").exists()
