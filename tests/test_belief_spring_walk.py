@@ -119,3 +119,23 @@ def test_study_options_are_checked() -> None:
             env_factory=lambda sc: ScasMaintenanceEnv(scenario=sc),
             progress=False,
         )
+
+
+def test_cloud_records_follow_the_world_and_refuse_a_shared_draw_scenario() -> None:
+    """The spring-cloud study: the true RUL it compares with is the world's exact remaining
+    life (so a record's stage is age / (age + life left) of that spring), its PITs are
+    shares in [0, 1]; a scenario without per-part draws (no exact life) is refused."""
+    from scas_env.studies.spring_cloud import cloud_records, stage_summary
+
+    recs = cloud_records(
+        episodes=1, seed=7, scenario_fields={**V2_KWARGS, "episode_slots": 400}, progress=False
+    )
+    assert recs and all(r["age"] % 5 == 0 for r in recs)
+    for r in recs:
+        assert 0.0 <= r["pit_x"] <= 1.0 and 0.0 <= r["pit_rul"] <= 1.0
+    # the summary's shares are plain counts over the window's records
+    rows = stage_summary(recs, [(0.0, 1.0)])
+    below = np.mean([r["pit_rul"] < 0.05 for r in recs])
+    assert rows[0]["records"] == len(recs) and rows[0]["pit_rul_below_0.05"] == below
+    with pytest.raises(ValueError, match="per_part"):
+        cloud_records(episodes=1, seed=0, progress=False)
