@@ -98,6 +98,9 @@ THETA_WALK = 0.005
 #: at fitting), the regularised resampling keeps the cloud diverse, and on training seeds
 #: (0-39) the walk of 0.005 made the seal's 90 % interval cover 98-100 % (0.85-0.93 without).
 STATES_THETA_WALK = 0.0
+#: Largest ``spring_theta_walk`` accepted (per sqrt(flight): 0.05 is a factor e^1.6 in 1,000
+#: flights, far beyond any unit's scatter).
+MAX_THETA_WALK = 0.05
 #: Quantiles of the healthy distribution the detectors are fitted on (deterministic).
 _BASELINE_Z = norm.ppf(np.linspace(0.0005, 0.9995, 2000))
 
@@ -131,6 +134,7 @@ class HealthMonitor:
         rng: np.random.Generator,
         *,
         installation: str | None = None,
+        spring_theta_walk: float | None = None,
     ) -> None:
         self.params, self.scenario, self.cal, self.sur = params, scenario, calibration, surrogate
         self.rng = rng
@@ -147,6 +151,21 @@ class HealthMonitor:
         #: "baseline" (v0, v1) or "states" (the default when learning in flight)
         self.installation = installation
         states = installation == "states"
+        walk = STATES_THETA_WALK if states else THETA_WALK
+        if spring_theta_walk is not None and not (
+            isinstance(spring_theta_walk, int | float)
+            and not isinstance(spring_theta_walk, bool)
+            and math.isfinite(spring_theta_walk)
+            and 0.0 <= spring_theta_walk <= MAX_THETA_WALK
+        ):
+            raise ValueError(
+                f"spring_theta_walk = {spring_theta_walk!r} must be None or a number in "
+                f"[0, {MAX_THETA_WALK}] (std of log theta per sqrt(flight))"
+            )
+        #: random walk of the spring filter's log theta per sqrt(flight) (the treatment's
+        #: default unless ``spring_theta_walk`` is given; docs/beliefs.md, "Spring
+        #: calibration: cause and fix")
+        self.spring_theta_walk = walk if spring_theta_walk is None else float(spring_theta_walk)
         self.a_fail = calibration.spring_failure_depth_m
         self.w_crit = calibration.seal_critical_wear_m
         noise = scenario.filter_noise_scale
@@ -174,7 +193,7 @@ class HealthMonitor:
                 bias * calibration.crack_rate_m_per_flight,
                 process_noise_std_m=0.0 if states else crack_cv_a0 * rate_a0,
                 damage_noise_cv=crack_cv_a0 if states else 0.0,
-                log_theta_noise_std=STATES_THETA_WALK if states else THETA_WALK,
+                log_theta_noise_std=self.spring_theta_walk,
                 scheme="exact",
             ),
             self.g1_model,

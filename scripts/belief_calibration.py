@@ -34,6 +34,12 @@ def main(argv: Sequence[str] | None = None) -> int:
         default={},
         help='scenario fields as JSON, e.g. \'{"flight_features": "I2,I6,I7,I8,I9"}\'',
     )
+    parser.add_argument(
+        "--monitor",
+        type=json.loads,
+        default={},
+        help="HealthMonitor keywords as JSON, e.g. '{\"spring_theta_walk\": 0.005}'",
+    )
     parser.add_argument("--out", default=None, help="results folder (none: print only)")
     parser.add_argument("--overwrite", action="store_true", help="replace an existing --out")
     parser.add_argument("--no-progress", action="store_true")
@@ -48,6 +54,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         policies=args.policies,
         presets=args.presets,
         scenario_fields=args.scenario,
+        monitor_options=args.monitor,
         progress=not args.no_progress,
     )
     print("RUL calibration per life stage (truth: info's expected RUL)")

@@ -51,6 +51,7 @@ from tqdm.auto import tqdm
 
 from scas_env.env import FLY, TEST_AND_FLY, ScasMaintenanceEnv
 from scas_env.fleet_state import PARTS
+from scas_env.monitor import HealthMonitor
 from scas_env.results_folder import results_folder
 from scas_env.scenario import Scenario
 
@@ -73,6 +74,44 @@ PRESETS: dict[str, dict[str, Any]] = {
     "default": {},
     "paper": {"preflight": "every_flight"},
 }
+
+
+class MonitorOptionsEnv(ScasMaintenanceEnv):
+    """:class:`ScasMaintenanceEnv` whose health monitor takes extra keywords
+    (``monitor_options``, e.g. ``spring_theta_walk``): opt-in monitor variants that no
+    :class:`Scenario` field selects yet, for this study only.
+
+    After the env's own reset the monitor is rebuilt with the options and reset on the same
+    filter stream (``rngs["filter"]``, continuing where the env's monitor left it): episodes
+    are seeded and reproducible, the world's draws are the env's own, but the filters' draws
+    differ from those of an env that would build the option in itself. The observation
+    returned by :meth:`reset` is the env's monitor's (a prior, like the rebuilt one's).
+    """
+
+    def __init__(self, monitor_options: Mapping[str, Any], **kwargs: Any) -> None:
+        _check_monitor_options(monitor_options)
+        self.monitor_options = dict(monitor_options)
+        super().__init__(**kwargs)
+
+    def reset(self, *, seed: int | None = None, options: dict | None = None) -> tuple:
+        obs, info = super().reset(seed=seed, options=options)
+        self.monitor = HealthMonitor(
+            self.params,
+            self.scenario,
+            self.calibration,
+            self.surrogate,
+            self.rngs["filter"],
+            **self.monitor_options,
+        )
+        self.monitor.reset()
+        return obs, info
+
+
+def _check_monitor_options(options: Mapping[str, Any]) -> None:
+    allowed = ("installation", "spring_theta_walk")
+    bad = sorted(k for k in options if k not in allowed)
+    if bad:
+        raise ValueError(f"monitor_options {bad} are not among the allowed keywords {allowed}")
 
 
 def policy_action(policy: str, slot: int) -> int:
@@ -286,13 +325,19 @@ def run_study(
     stages: Sequence[float] = STAGES,
     progress: bool = True,
     env_factory: Callable[[Scenario], ScasMaintenanceEnv] | None = None,
+    monitor_options: Mapping[str, Any] | None = None,
 ) -> StudyResult:
     """Run ``episodes`` seeded episodes (seeds ``seed .. seed + episodes - 1``) per policy and
     preset; the per-stage and reliability tables (module docstring).
 
     ``scenario_fields`` override the preset's scenario (e.g. ``flight_features``);
-    ``env_factory`` builds the env from the scenario (default :class:`ScasMaintenanceEnv`).
+    ``env_factory`` builds the env from the scenario (default :class:`ScasMaintenanceEnv`);
+    ``monitor_options`` (keywords of :class:`scas_env.monitor.HealthMonitor`, e.g.
+    ``{"spring_theta_walk": 0.005}``) run the episodes with :class:`MonitorOptionsEnv`
+    (not together with ``env_factory``).
     """
+    if monitor_options and env_factory is not None:
+        raise ValueError("monitor_options and env_factory cannot be combined: pass one of them")
     if isinstance(episodes, bool) or not isinstance(episodes, int) or episodes < 1:
         raise ValueError(f"episodes = {episodes!r} must be an integer >= 1")
     if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
@@ -310,7 +355,12 @@ def run_study(
         raise ValueError(f"stages = {list(stages)!r} must be fractions of life in (0, 1)")
     extra = dict(scenario_fields or {})
     scenarios = {p: Scenario.from_dict({**PRESETS[p], **extra}) for p in presets}
-    make = env_factory or (lambda sc: ScasMaintenanceEnv(scenario=sc))
+    options = dict(monitor_options or {})
+    if options:
+        _check_monitor_options(options)
+        make = lambda sc: MonitorOptionsEnv(options, scenario=sc)  # noqa: E731
+    else:
+        make = env_factory or (lambda sc: ScasMaintenanceEnv(scenario=sc))
     stage_tables: dict[tuple[str, str, str], list] = {}
     rel_tables: dict[tuple[str, str, str], list] = {}
     jobs = [(pr, po) for pr in presets for po in policies]
@@ -335,6 +385,7 @@ def run_study(
         "policies": list(policies),
         "presets": list(presets),
         "scenario_fields": extra,
+        "monitor_options": options,
         "stages": list(stages),
         "interval": list(INTERVAL),
         "risk_bins": list(RISK_BINS),
