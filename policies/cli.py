@@ -154,6 +154,7 @@ def benchmark_main(argv: Sequence[str] | None = None) -> int:
 
     from policies.benchmark import (
         DEFAULT_POLICIES,
+        SCENARIO_AGENTS,
         PolicySpec,
         check_specs,
         resolve_spec,
@@ -163,17 +164,21 @@ def benchmark_main(argv: Sequence[str] | None = None) -> int:
 
     specs = [resolve_spec(name) for name in args.policies]
     if list(args.policies) == list(DEFAULT_POLICIES):
-        # the shipped agents were trained on one observation layout: left out, with a note,
-        # of a default run on a scenario whose observation differs (e.g. v2)
+        # each shipped agent was trained on one observation layout: a default run keeps those
+        # that can act on its scenario (ppo on v0, ppo_v2 on v2); a default policy left out
+        # is a warning, an agent of another scenario that does not fit is only noted
+        extra = [resolve_spec(name) for name in SCENARIO_AGENTS]
         kept = []
-        for spec in specs:
+        for spec in specs + extra:
             try:
                 check_specs([spec], {**env_kwargs, "episode_slots": scenario.episode_slots})
             except ValueError as exc:
-                log.warning(f"{spec.key} left out: {exc}")
+                (log.info if spec in extra else log.warning)(f"{spec.key} left out: {exc}")
                 continue
             except ImportError:
-                pass  # reported below with its install hint
+                if spec in extra:
+                    continue  # an optional extra: not needed to run the defaults
+                # a default policy: reported below with its install hint
             kept.append(spec)
         specs = kept
     for path in args.agent:
