@@ -165,3 +165,41 @@ def test_tuned_rules_read_the_ladder_at_full_precision(tmp_path) -> None:
     with pytest.raises(ValueError, match="no arm"):
         tuned_rules(ladder, ("age", "nope"))
     assert np.isfinite(age.params["spring_age"])
+
+
+def test_paired_vs_rules_matches_scipy_paired_t() -> None:
+    import scipy.stats
+
+    from policies.epoch_selection import paired_vs_rules
+
+    rng = np.random.default_rng(3)
+    n = 50
+    base = rng.normal(4.9e6, 3e4, n)
+    series = {"agent": base + rng.normal(-2e3, 5e3, n), "age": base, "filter": base + 1e3}
+    fails = {k: rng.poisson(0.3, n) * 0.25 for k in series}
+    rows = [
+        {"policy": k, "episode": e, "reward": series[k][e], "failures_per_1000fh": fails[k][e]}
+        for k in series
+        for e in rng.permutation(n)  # order must not matter: pairs are by episode
+    ]
+    got = paired_vs_rules(rows, ["agent"], ["age", "filter"])
+    for rule in ("age", "filter"):
+        for metric, values in (("reward", series), ("failures_per_1000fh", fails)):
+            d = values["agent"] - values[rule]
+            low, high = scipy.stats.t.interval(0.95, n - 1, d.mean(), scipy.stats.sem(d))
+            res = got["agent"][rule][metric]
+            assert res["mean"] == pytest.approx(d.mean())
+            assert (res["low"], res["high"]) == pytest.approx((low, high))
+            p = scipy.stats.ttest_rel(values["agent"], values[rule]).pvalue
+            assert res["p_value"] == pytest.approx(p)
+            assert res["mdd"] > 0
+    with pytest.raises(ValueError, match="not run on the same episodes"):
+        paired_vs_rules(rows[:-1], ["agent"], ["filter"])
+
+
+@pytest.mark.parametrize("seed", [VALIDATION_SEED, 1])
+def test_held_out_refuses_validation_and_tuning_seeds(seed, tmp_path) -> None:
+    from policies.epoch_selection import held_out_comparison
+
+    with pytest.raises(ValueError, match="not a held-out one"):
+        held_out_comparison({}, tmp_path, seed=seed, episodes=1)
