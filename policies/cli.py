@@ -50,7 +50,9 @@ table gives means with 95% intervals and paired differences against the best rul
 --out: results.csv, events.csv, summary.json (statistics and the exact configuration: the
 Scenario and CostModel used), summary.md and plots. --ray-address runs the episodes as Ray
 tasks (auto, local or ray://host:10001; '' runs locally even when RAY_ADDRESS is set);
---workers is then unused. Example:
+--workers is then unused. The shipped RL agent of the default list is the one trained on
+the scenario's observation: ppo on v0, ppo_v2 on v2 (an agent for another observation is
+left out). Example:
 
     scas-benchmark --episodes 40 --scenario examples/offshore_operator.toml --out results/off
 """
