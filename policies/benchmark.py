@@ -30,6 +30,7 @@ import importlib
 import time
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field, replace
+from pathlib import Path
 from typing import Any
 
 import gymnasium as gym
@@ -60,6 +61,7 @@ BATCH_EPISODES = 32
 __all__ = [
     "DEFAULT_POLICIES",
     "PLUGINS",
+    "SCENARIO_AGENTS",
     "TERMS",
     "BenchmarkResult",
     "PolicySpec",
@@ -101,6 +103,16 @@ class PolicySpec:
 
 
 PLUGINS["ppo"] = PolicySpec("sb3", label="ppo", module="policies.sb3_agents")
+#: the decision-epoch agent trained on ScasMaintenance-v2 (acts on v2's observation only)
+PLUGINS["ppo_v2"] = PolicySpec(
+    "sb3",
+    params={"path": str(Path(__file__).resolve().parent / "data" / "maskable_ppo_epochs_v2.zip")},
+    label="ppo_v2",
+    module="policies.sb3_agents",
+)
+#: shipped agents for other observation layouts than v0's: a default CLI run
+#: (:func:`policies.cli.benchmark_main`) adds those that can act on its scenario
+SCENARIO_AGENTS = ("ppo_v2",)
 
 
 def resolve_spec(name: str) -> PolicySpec:

@@ -50,7 +50,9 @@ table gives means with 95% intervals and paired differences against the best rul
 --out: results.csv, events.csv, summary.json (statistics and the exact configuration: the
 Scenario and CostModel used), summary.md and plots. --ray-address runs the episodes as Ray
 tasks (auto, local or ray://host:10001; '' runs locally even when RAY_ADDRESS is set);
---workers is then unused. Example:
+--workers is then unused. The shipped RL agent of the default list is the one trained on
+the scenario's observation: ppo on v0, ppo_v2 on v2 (an agent for another observation is
+left out). Example:
 
     scas-benchmark --episodes 40 --scenario examples/offshore_operator.toml --out results/off
 """
@@ -154,6 +156,7 @@ def benchmark_main(argv: Sequence[str] | None = None) -> int:
 
     from policies.benchmark import (
         DEFAULT_POLICIES,
+        SCENARIO_AGENTS,
         PolicySpec,
         check_specs,
         resolve_spec,
@@ -163,17 +166,21 @@ def benchmark_main(argv: Sequence[str] | None = None) -> int:
 
     specs = [resolve_spec(name) for name in args.policies]
     if list(args.policies) == list(DEFAULT_POLICIES):
-        # the shipped agents were trained on one observation layout: left out, with a note,
-        # of a default run on a scenario whose observation differs (e.g. v2)
+        # each shipped agent was trained on one observation layout: a default run keeps those
+        # that can act on its scenario (ppo on v0, ppo_v2 on v2); a default policy left out
+        # is a warning, an agent of another scenario that does not fit is only noted
+        extra = [resolve_spec(name) for name in SCENARIO_AGENTS]
         kept = []
-        for spec in specs:
+        for spec in specs + extra:
             try:
                 check_specs([spec], {**env_kwargs, "episode_slots": scenario.episode_slots})
             except ValueError as exc:
-                log.warning(f"{spec.key} left out: {exc}")
+                (log.info if spec in extra else log.warning)(f"{spec.key} left out: {exc}")
                 continue
             except ImportError:
-                pass  # reported below with its install hint
+                if spec in extra:
+                    continue  # an optional extra: not needed to run the defaults
+                # a default policy: reported below with its install hint
             kept.append(spec)
         specs = kept
     for path in args.agent:

@@ -49,10 +49,14 @@ DATA_DIR = Path(__file__).resolve().parent / "data"
 DEFAULT_AGENT = DATA_DIR / "maskable_ppo_epochs.zip"
 #: The earlier per-flight PPO agent, still shipped.
 PER_FLIGHT_AGENT = DATA_DIR / "ppo_default.zip"
+#: The decision-epoch agent trained on ``ScasMaintenance-v2`` (``scas_env.V2_KWARGS``; the
+#: benchmark's ``ppo_v2``): it acts only on v2's observation (``policies/data/README.md``).
+V2_AGENT = DATA_DIR / "maskable_ppo_epochs_v2.zip"
 
 __all__ = [
     "DEFAULT_AGENT",
     "PER_FLIGHT_AGENT",
+    "V2_AGENT",
     "EpochAgent",
     "SB3Agent",
     "algo_class",
@@ -436,8 +440,10 @@ def load_sb3_policy(
         and "obs_names" in meta
         and tuple(obs_names) != tuple(meta["obs_names"])
     ):
+        trained_on = meta.get("scenario") or "v0's default scenario"
         raise ValueError(
             f"obs_names = {tuple(obs_names)} differ from the agent's {tuple(meta['obs_names'])}"
+            f" (it was trained on {trained_on})"
         )
     names = tuple(obs_names if obs_names is not None else meta.get("obs_names", ()))
     try:
@@ -470,6 +476,11 @@ def load_sb3_policy(
             raise ValueError(f"{path}: a decision-epoch agent needs episode_slots")
         if not names:
             raise ValueError(f"{path}: pass obs_names (the v0 env's) for a decision-epoch agent")
+        if obs_dim != len(names) + 1:
+            raise ValueError(
+                f"{path}: the model observes {obs_dim} entries, the env {len(names)} "
+                "(+ flights_left): it was trained on another observation (scenario)"
+            )
         return EpochAgent(
             model,
             normalizer,

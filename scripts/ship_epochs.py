@@ -5,6 +5,13 @@ Example (after the six runs of ``scripts/train_epochs.py`` under ``results/rl/ep
     python scripts/ship_epochs.py --runs results/rl/epochs --name maskable_ppo_epochs \\
         --out results/rl/epochs_selection --held-out-episodes 1000
 
+On ScasMaintenance-v2 (runs of ``scripts/train_epochs.py --scenario examples/v2.toml``; the
+rules tuned on v2's training seeds read from the v2 value study, held-out on its seeds)::
+
+    python scripts/ship_epochs.py --runs results/rl_v2/epochs --name maskable_ppo_epochs_v2 \\
+        --scenario examples/v2.toml --rules-from docs/value_v2/ladder.json \\
+        --held-out-seed 2 --out results/rl_v2/selection
+
 Calls :func:`policies.epoch_selection.select_ship_evaluate`.
 """
 
@@ -13,7 +20,8 @@ from __future__ import annotations
 import argparse
 import json
 
-from policies.epoch_selection import select_ship_evaluate
+from policies.epoch_selection import HELD_OUT_SEED, select_ship_evaluate, tuned_rules
+from scas_env.cli_args import add_env_config_args, load_env_config, scenario_changes
 
 
 def main() -> None:
@@ -25,27 +33,44 @@ def main() -> None:
     parser.add_argument("--out", required=True, help="folder for validation.csv, held_out.json")
     parser.add_argument("--validation-episodes", type=int, default=32, help="per checkpoint")
     parser.add_argument("--held-out-episodes", type=int, default=1000, help="paired episodes")
+    parser.add_argument("--held-out-seed", type=int, default=HELD_OUT_SEED, help="root seed")
+    parser.add_argument(
+        "--rules-from",
+        default=None,
+        metavar="LADDER_JSON",
+        help="compare with the age and filter rules tuned in this value-study ladder.json "
+        "(validation against its age rule); default: the shipped age rule",
+    )
     parser.add_argument("--workers", type=int, default=2, help="worker processes")
     parser.add_argument(
         "--skip-default", action="store_true", help="leave ppo_default out of the held-out run"
     )
+    add_env_config_args(parser)
     args = parser.parse_args()
     for opt in ("validation_episodes", "held_out_episodes", "workers"):
         if getattr(args, opt) < 1:
             parser.error(f"--{opt.replace('_', '-')} {getattr(args, opt)} must be >= 1")
+    scenario, costs = load_env_config(parser, args)
+    if costs.to_dict() != type(costs)().to_dict():
+        parser.error("--costs / a [costs] table: the agents are trained on the default costs")
+    changes = scenario_changes(scenario)
     try:
+        rules = tuned_rules(args.rules_from) if args.rules_from else None
         summary = select_ship_evaluate(
             args.runs,
             args.name,
             args.out,
+            scenario=changes if args.scenario is not None else None,
+            rules=rules,
+            held_out_seed=args.held_out_seed,
             validation_episodes=args.validation_episodes,
             held_out_episodes=args.held_out_episodes,
             n_workers=args.workers,
-            compare_default=not args.skip_default,
+            compare_default=False if args.skip_default else None,
         )
     except ValueError as exc:
         parser.error(str(exc))
-    print(json.dumps(summary["paired_vs_reference"], indent=1))
+    print(json.dumps(summary["paired_vs_rules"], indent=1))
 
 
 if __name__ == "__main__":

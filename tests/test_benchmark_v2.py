@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import csv
+
 import pytest
 
 from policies.benchmark import PolicySpec, check_specs, run_benchmark
@@ -15,11 +17,30 @@ def test_an_agent_for_another_observation_is_refused_before_any_episode() -> Non
     check_specs([PolicySpec("preventive"), PolicySpec("oracle")], dict(V2_KWARGS))
 
 
-def test_default_cli_run_on_v2_leaves_the_v0_agents_out(tmp_path, caplog) -> None:
+def test_default_cli_run_on_v2_runs_the_v2_agent_and_leaves_the_v0_agents_out(
+    tmp_path, caplog
+) -> None:
     scenario = tmp_path / "v2.toml"
     scenario.write_text("".join(f'{k} = "{v}"\n' for k, v in V2_KWARGS.items()))
     out = tmp_path / "bench"
     args = ["--scenario", str(scenario), "--episodes", "1", "--slots", "20", "--workers", "1"]
     assert benchmark_main([*args, "--out", str(out), "-q"]) == 0
     assert "ppo left out" in caplog.text
-    assert "ppo" not in (out / "results.csv").read_text()
+    with (out / "results.csv").open() as fh:
+        ran = {row["policy"] for row in csv.DictReader(fh)}
+    assert "ppo" not in ran and "ppo_v2" in ran
+
+
+def test_default_cli_run_on_v0_keeps_ppo_and_only_notes_the_v2_agent(tmp_path, caplog) -> None:
+    import logging
+
+    out = tmp_path / "bench"
+    args = ["--episodes", "1", "--slots", "20", "--workers", "1", "--out", str(out)]
+    with caplog.at_level(logging.INFO):
+        assert benchmark_main(args) == 0
+    with (out / "results.csv").open() as fh:
+        ran = {row["policy"] for row in csv.DictReader(fh)}
+    assert "ppo" in ran and "ppo_v2" not in ran
+    notes = [r for r in caplog.records if "ppo_v2 left out" in r.getMessage()]
+    assert notes and all(r.levelno == logging.INFO for r in notes)
+    assert not [r for r in caplog.records if r.levelno >= logging.WARNING]

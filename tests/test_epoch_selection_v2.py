@@ -1,0 +1,205 @@
+"""Scenario-aware selection of decision-epoch checkpoints (policies.epoch_selection).
+
+Fake training runs whose checkpoints act by construction (one action logit far above the
+others): "fly for 20 slots" beats "test before every flight" and "replace the seal whenever
+it has flown" on short episodes from new parts, so the selection must pick the flying one.
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from policies.benchmark import PolicySpec, run_benchmark
+from policies.epoch_selection import (
+    VALIDATION_SEED,
+    resolve_scenario,
+    ship_best,
+    training_scale,
+    tuned_rules,
+    validate_checkpoints,
+)
+from scas_env import V2_KWARGS
+
+SLOTS = 40
+KS = (1, 20)
+V2 = {**V2_KWARGS, "episode_slots": SLOTS}
+V0 = {"episode_slots": SLOTS}
+FLY_20, TEST_EVERY_FLIGHT, REPLACE_SEAL_EACH = 0 * 2 + 1, 1 * 2 + 0, 3 * 2 + 0  # a = m*len(KS)+k
+EPISODES = 4
+
+
+def _fake_run(
+    root: Path, name: str, scenario: dict, ckpts: dict[int, int], *, finished: bool = True
+) -> Path:
+    """A run folder as train_epochs writes it, whose checkpoint ``steps`` always prefers
+    action ``ckpts[steps]`` (masked actions aside)."""
+    import torch
+    from sb3_contrib import MaskablePPO
+    from stable_baselines3.common.vec_env import DummyVecEnv, VecNormalize
+
+    from scas_env.decision_epochs import make_decision_epoch_env
+
+    run = root / name
+    (run / "monitor").mkdir(parents=True)
+    env = make_decision_epoch_env(ks=KS, **scenario)
+    model = MaskablePPO(
+        "MlpPolicy", env, n_steps=32, batch_size=32, seed=0, device="cpu",
+        policy_kwargs={"net_arch": [8, 8]},
+    )  # fmt: skip
+    norm = VecNormalize(DummyVecEnv([lambda: make_decision_epoch_env(ks=KS, **scenario)]))
+    for steps, action in ckpts.items():
+        with torch.no_grad():
+            model.policy.action_net.weight.zero_()
+            model.policy.action_net.bias.fill_(-10.0)
+            model.policy.action_net.bias[action] = 10.0
+        model.save(run / f"ckpt_{steps}_steps.zip")
+        norm.save(str(run / f"ckpt_vecnormalize_{steps}_steps.pkl"))
+    (run / "progress.csv").write_text(
+        "rollout/ep_rew_mean,time/total_timesteps\n4.9e6,100\n4.95e6,200\n"
+    )
+    (run / "monitor" / "0.monitor.csv").write_text('#{"t_start": 0}\nr,l,t\n1,2,3\n4,5,6\n')
+    (run / "monitor" / "1.monitor.csv").write_text('#{"t_start": 0}\nr,l,t\n7,8,9\n')
+    if finished:
+        meta = {"algo": "maskable_ppo", "ks": list(KS), "scenario": scenario, "wall_s": 1.0}
+        (run / "run.json").write_text(json.dumps({**meta, "decisions": max(ckpts)}))
+    return run
+
+
+@pytest.fixture(scope="module")
+def v2_runs(tmp_path_factory) -> Path:
+    root = tmp_path_factory.mktemp("runs")
+    _fake_run(root, "a", V2, {100: REPLACE_SEAL_EACH, 200: FLY_20})
+    _fake_run(root, "b", V2, {100: TEST_EVERY_FLIGHT})
+    return root
+
+
+def test_validation_on_the_runs_scenario_picks_the_best_checkpoint(v2_runs, tmp_path) -> None:
+    runs = [v2_runs / "a", v2_runs / "b"]
+    age = tuned_rules(Path(__file__).parents[1] / "docs/value_v2/ladder.json")[0]
+    out = tmp_path / "validation.csv"
+    rows = validate_checkpoints(
+        runs, out, reference=age, episodes=EPISODES, n_workers=1, progress=False
+    )
+    reward = {(r["run"], int(r["decisions"])): float(r["reward"]) for r in rows}
+    assert reward[("a", 200)] > max(reward[("a", 100)], reward[("b", 100)])
+    # paired against the rule on the same v2 episodes: the rule alone on those seeds
+    rule = run_benchmark(
+        [age], episodes=EPISODES, slots=SLOTS, seed=VALIDATION_SEED, env_kwargs=dict(V2_KWARGS)
+    ).summary["policies"][age.key]["reward"]["mean"]
+    for r in rows:
+        assert float(r["diff_vs_rule"]) == pytest.approx(float(r["reward"]) - rule, abs=1e-6)
+        assert json.loads(r["scenario"]) == V2 and r["rule"] == "preventive_tuned"
+    # rerun: nothing new to validate, the same rows come back
+    again = validate_checkpoints(runs, out, episodes=EPISODES, n_workers=1, progress=False)
+    assert [(r["run"], int(r["decisions"])) for r in again] == list(reward)
+
+    zip_path = ship_best(out, v2_runs, "agent_v2", out_dir=tmp_path)
+    meta = json.loads((tmp_path / "agent_v2.json").read_text())
+    assert meta["selected"]["run"] == "a" and meta["selected"]["decisions"] == 200
+    assert meta["scenario"] == V2 and meta["episode_slots"] == SLOTS
+    assert meta["training_scale"]["episodes"] == 6  # 3 monitor rows per run
+    assert meta["training_scale"]["flights"] == 6 * SLOTS
+    assert meta["training_scale"]["decisions"] == 300
+    with (tmp_path / "agent_v2_curves.csv").open() as fh:
+        assert {r["run"] for r in csv.DictReader(fh)} == {"a", "b"}
+    # the shipped copy acts on v2 and refuses v0's observation
+    ship = PolicySpec("sb3", {"path": str(zip_path)}, label="x", module="policies.sb3_agents")
+    res = run_benchmark([ship], episodes=1, slots=SLOTS, env_kwargs=dict(V2_KWARGS))
+    expected = run_benchmark(
+        [PolicySpec("sb3", {
+            "path": str(v2_runs / "a" / "ckpt_200_steps.zip"),
+            "vecnormalize": str(v2_runs / "a" / "ckpt_vecnormalize_200_steps.pkl"),
+            "ks": KS, "episode_slots": SLOTS,
+        }, label="x", module="policies.sb3_agents")],
+        episodes=1, slots=SLOTS, env_kwargs=dict(V2_KWARGS),
+    )  # fmt: skip
+    assert res.rows[0]["reward"] == expected.rows[0]["reward"]
+    with pytest.raises(ValueError, match=r"cannot run on this scenario.*differ from the agent"):
+        run_benchmark([ship], episodes=1, slots=SLOTS)
+
+
+def test_mixed_or_contradicted_scenarios_are_refused(v2_runs, tmp_path) -> None:
+    v0 = _fake_run(tmp_path, "v0", V0, {100: FLY_20})
+    with pytest.raises(ValueError, match="mix scenarios"):
+        validate_checkpoints([v2_runs / "a", v0], tmp_path / "x.csv", progress=False)
+    with pytest.raises(ValueError, match="differs from the one the runs"):
+        validate_checkpoints([v2_runs / "a"], tmp_path / "x.csv", scenario=V0, progress=False)
+    # a run still training (no run.json) is taken to be on the caller's scenario
+    training = _fake_run(tmp_path, "training", V2, {100: FLY_20}, finished=False)
+    assert resolve_scenario([training], V2) == V2
+    assert resolve_scenario([training, v2_runs / "b"]) == V2
+    assert resolve_scenario([training]) == {}  # nothing says otherwise: v0
+    with pytest.raises(ValueError, match="differs"):
+        resolve_scenario([training, v0], V2)
+    # a v2 checkpoint asked to act on v0's observation (no metadata): its size differs
+    with pytest.raises(ValueError, match=r"observes .* trained on another observation"):
+        validate_checkpoints([training], tmp_path / "y.csv", scenario=V0, progress=False)
+    # a validation CSV of another scenario is not extended
+    rows = validate_checkpoints([v0], tmp_path / "v0.csv", episodes=1, n_workers=1, progress=False)
+    assert json.loads(rows[0]["scenario"]) == V0
+    with pytest.raises(ValueError, match="holds validation rows of scenario"):
+        validate_checkpoints([v2_runs / "b"], tmp_path / "v0.csv", progress=False)
+
+
+def test_training_scale_counts_monitor_episodes(tmp_path) -> None:
+    run = tmp_path / "r"
+    (run / "monitor").mkdir(parents=True)
+    lines = ["r,l,t"] + [f"{i},{i},{i}" for i in range(7)]
+    (run / "monitor" / "0.monitor.csv").write_text('#{"t_start": 0}\n' + "\n".join(lines) + "\n")
+    scale = training_scale(run, 2000)
+    assert (scale["episodes"], scale["flights"], scale["finished"]) == (7, 14_000, False)
+
+
+def test_tuned_rules_read_the_ladder_at_full_precision(tmp_path) -> None:
+    ladder = Path(__file__).parents[1] / "docs/value_v2/ladder.json"
+    arms = {a["arm"]: a for a in json.loads(ladder.read_text())["config"]["arms"]}
+    age, filt = tuned_rules(ladder)
+    assert (age.name, age.key, dict(age.params)) == ("preventive", "preventive_tuned",
+                                                     arms["age"]["params"])  # fmt: skip
+    assert (filt.name, dict(filt.params)) == ("rul_risk", arms["filter"]["params"])
+    with pytest.raises(ValueError, match="no arm"):
+        tuned_rules(ladder, ("age", "nope"))
+    assert np.isfinite(age.params["spring_age"])
+
+
+def test_paired_vs_rules_matches_scipy_paired_t() -> None:
+    import scipy.stats
+
+    from policies.epoch_selection import paired_vs_rules
+
+    rng = np.random.default_rng(3)
+    n = 50
+    base = rng.normal(4.9e6, 3e4, n)
+    series = {"agent": base + rng.normal(-2e3, 5e3, n), "age": base, "filter": base + 1e3}
+    fails = {k: rng.poisson(0.3, n) * 0.25 for k in series}
+    rows = [
+        {"policy": k, "episode": e, "reward": series[k][e], "failures_per_1000fh": fails[k][e]}
+        for k in series
+        for e in rng.permutation(n)  # order must not matter: pairs are by episode
+    ]
+    got = paired_vs_rules(rows, ["agent"], ["age", "filter"])
+    for rule in ("age", "filter"):
+        for metric, values in (("reward", series), ("failures_per_1000fh", fails)):
+            d = values["agent"] - values[rule]
+            low, high = scipy.stats.t.interval(0.95, n - 1, d.mean(), scipy.stats.sem(d))
+            res = got["agent"][rule][metric]
+            assert res["mean"] == pytest.approx(d.mean())
+            assert (res["low"], res["high"]) == pytest.approx((low, high))
+            p = scipy.stats.ttest_rel(values["agent"], values[rule]).pvalue
+            assert res["p_value"] == pytest.approx(p)
+            assert res["mdd"] > 0
+    with pytest.raises(ValueError, match="not run on the same episodes"):
+        paired_vs_rules(rows[:-1], ["agent"], ["filter"])
+
+
+@pytest.mark.parametrize("seed", [VALIDATION_SEED, 1])
+def test_held_out_refuses_validation_and_tuning_seeds(seed, tmp_path) -> None:
+    from policies.epoch_selection import held_out_comparison
+
+    with pytest.raises(ValueError, match="not a held-out one"):
+        held_out_comparison({}, tmp_path, seed=seed, episodes=1)
