@@ -266,6 +266,12 @@ class BenchmarkResult:
     wall_s: float
 
 
+def _needs_horizon(spec: PolicySpec) -> bool:
+    """The oracle, and SB3 agents loaded by ``policies.sb3_agents`` (a decision-epoch agent's
+    ``flights_left`` counts down from the episode's length; other agents ignore it)."""
+    return spec.name == "oracle" or (spec.name == "sb3" and spec.module == "policies.sb3_agents")
+
+
 def run_benchmark(
     specs: Sequence[PolicySpec | str] = DEFAULT_POLICIES,
     *,
@@ -290,10 +296,11 @@ def run_benchmark(
     if ray_address is not None and not isinstance(ray_address, str):
         raise ValueError(f"ray_address = {ray_address!r} must be a string or None")
     specs = tuple(resolve_spec(s) if isinstance(s, str) else s for s in specs)
-    # the planning oracle plans over the episode's horizon: give it this run's
+    # the planning oracle plans over the episode's horizon, and a decision-epoch agent
+    # observes the slots left in it: give them this run's
     specs = tuple(
         replace(s, params={**s.params, "episode_slots": slots})
-        if s.name == "oracle" and "episode_slots" not in s.params
+        if _needs_horizon(s) and "episode_slots" not in s.params
         else s
         for s in specs
     )

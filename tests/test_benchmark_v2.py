@@ -44,3 +44,29 @@ def test_default_cli_run_on_v0_keeps_ppo_and_only_notes_the_v2_agent(tmp_path, c
     notes = [r for r in caplog.records if "ppo_v2 left out" in r.getMessage()]
     assert notes and all(r.levelno == logging.INFO for r in notes)
     assert not [r for r in caplog.records if r.levelno >= logging.WARNING]
+
+
+def test_decision_epoch_agents_see_the_run_s_horizon() -> None:
+    """A run of 300-slot episodes tells the v2 decision-epoch agent (and the oracle) its
+    length: the agent's ``flights_left`` counts down from 300, not from the 2000 it was
+    trained on (an explicit ``episode_slots`` in the spec is kept)."""
+    import gymnasium as gym
+
+    from policies.benchmark import PolicySpec, run_benchmark
+    from policies.sb3_agents import V2_AGENT, load_sb3_policy
+    from scas_env import ENV_ID_V2, V2_KWARGS
+
+    own = PolicySpec("sb3", {"path": str(V2_AGENT), "episode_slots": 2000}, label="own",
+                     module="policies.sb3_agents")  # fmt: skip
+    result = run_benchmark(
+        ["ppo_v2", own, "oracle", "preventive"], episodes=2, slots=300,
+        env_kwargs=V2_KWARGS, n_workers=1, progress=False,
+    )  # fmt: skip
+    params = {p["label"]: p["params"] for p in result.config["policies"]}
+    assert params["ppo_v2"]["episode_slots"] == 300 and params["oracle"]["episode_slots"] == 300
+    assert params["own"]["episode_slots"] == 2000
+    names = gym.make(ENV_ID_V2).unwrapped.obs_names
+    agent = load_sb3_policy(
+        V2_AGENT, names, **{k: v for k, v in params["ppo_v2"].items() if k != "path"}
+    )
+    assert agent.episode_slots == 300
