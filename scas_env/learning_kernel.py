@@ -1,4 +1,5 @@
-"""The monitor's in-flight learning update as one numba kernel over a batch of actuators.
+"""The monitor's in-flight learning and pre-flight test updates as numba kernels over a
+batch of actuators.
 
 :meth:`scas_env.monitor.HealthMonitor.learn_from_flights` (installation effects as filter
 states, v2) does, for one actuator: predict both filters to the middle of the batch of
@@ -11,6 +12,9 @@ spring = 0, seal = 1), writing the RUL tables into the fleet's arrays
 (:class:`scas_env.fleet_state.FleetState`). The single env calls it with a batch of one, the
 native vector env with every actuator whose batch is full, so both give the same floats
 (tested, and against the readable Python form ``HealthMonitor.learn_from_flights_python``).
+:func:`test_batch` is ``HealthMonitor.tested`` the same way (``tested_python``): the batch
+under way learnt from first, both filters predicted over the flights pending, then updated
+with the test's G1 and G3; the detectors stay in Python (they read the corrected values).
 
 The table helpers (``cell_of``, ``effect_at``, ``effect_likelihood``) are the surrogate's
 bilinear interpolation as the world draws features (``SurrogateModel.tables_at``).
