@@ -22,6 +22,7 @@ each; each speed-up is taken within one round and the median over the rounds is 
 from __future__ import annotations
 
 import csv
+import functools
 import json
 import statistics
 import time
@@ -100,6 +101,7 @@ def make_setup(label: str, seed: int = 0) -> Any:
     return VecNormalize(venv)
 
 
+@functools.cache
 def _flight_counter_class() -> type:
     from stable_baselines3.common.vec_env import VecEnvWrapper
 

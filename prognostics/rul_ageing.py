@@ -194,8 +194,8 @@ class AgeingRul:
     ) -> AgeingRul:
         """An AgeingRul holding copies of tables :meth:`tables` returned (e.g. built by a
         batched kernel with ``_build_from_cloud``): the inverse of :meth:`tables`."""
-        r = np.array(sorted_rul, dtype=np.float64)
-        sums = [np.array(a, dtype=np.float64) for a in (cum_w, suffix_w, suffix_wr)]
+        r = np.asarray(sorted_rul, dtype=np.float64)
+        sums = [np.asarray(a, dtype=np.float64) for a in (cum_w, suffix_w, suffix_wr)]
         n = r.shape[0] if r.ndim == 1 else 0
         if n < 1 or any(a.shape != (n + 1,) for a in sums):
             raise ValueError(

@@ -50,7 +50,7 @@ from scas_env.decision_epochs import (
     _check_ks,
     maintenance_mask,
 )
-from scas_env.vector_env import ScasMaintenanceVectorEnv
+from scas_env.vector_env import ScasMaintenanceVectorEnv, expose_surface
 
 __all__ = ["DecisionEpochsVectorEnv", "make_decision_epochs_vector_env"]
 
@@ -92,13 +92,9 @@ class DecisionEpochsVectorEnv(VectorEnv):
         self.single_action_space = spaces.Discrete(N_MAINTENANCE * len(self.ks))
         self.observation_space = batch_space(self.single_observation_space, self.num_envs)
         self.action_space = batch_space(self.single_action_space, self.num_envs)
+        expose_surface(self, self.inner.envs[0])
         self.obs_names = (*self.inner.obs_names, "flights_left")
         self.obs_units = (*self.inner.obs_units, "slots")
-        self.scenario, self.costs, self.params = (
-            self.inner.scenario,
-            self.inner.costs,
-            self.inner.params,
-        )
         self._ks = np.array(self.ks, dtype=np.int64)
 
     def _obs(self, obs: np.ndarray) -> np.ndarray:

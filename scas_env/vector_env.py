@@ -66,7 +66,7 @@ class ScasMaintenanceSyncVectorEnv(SyncVectorEnv):
         super().__init__(
             [partial(ScasMaintenanceEnv, **kwargs)] * n, autoreset_mode=AutoresetMode.NEXT_STEP
         )
-        _expose_surface(self, self.envs[0].unwrapped)
+        expose_surface(self, self.envs[0].unwrapped)
 
     @classmethod
     def of(cls, envs: list[Any]) -> ScasMaintenanceSyncVectorEnv:
@@ -78,7 +78,7 @@ class ScasMaintenanceSyncVectorEnv(SyncVectorEnv):
         SyncVectorEnv.__init__(
             self, [lambda e=e: e for e in envs], autoreset_mode=AutoresetMode.NEXT_STEP
         )
-        _expose_surface(self, envs[0].unwrapped)
+        expose_surface(self, envs[0].unwrapped)
         return self
 
 
@@ -98,7 +98,7 @@ class ScasMaintenanceVectorEnv(VectorEnv):
         self.single_action_space = first.action_space
         self.observation_space = batch_space(first.observation_space, n)
         self.action_space = batch_space(first.action_space, n)
-        _expose_surface(self, first)
+        expose_surface(self, first)
         self._tables = first.world.kernel_tables
         self._buf = {s: np.empty((n, DEFAULT_BLOCK)) for s in _STREAMS}
         self._pos = {s: np.zeros((n, 1), dtype=np.int64) for s in _STREAMS}
@@ -278,12 +278,13 @@ class ScasMaintenanceVectorEnv(VectorEnv):
             self._terms["flight"][done] = value
             if self._learn_cols.size:
                 self._learn_from_full_batches(done)
+        passed = fly | idle  # a slot passed on the fast path
         if tested.size:
             self._test_rewards(tested, rewards)
-            fly[tested] = True  # a slot passed on the fast path
+            passed[tested] = True
         idle_idx = np.flatnonzero(idle)
         a["downtime"][idle_idx] -= 1
-        quick = np.flatnonzero((fly | idle) & ~slow)
+        quick = np.flatnonzero(passed & ~slow)
         a["slot"][quick] += 1
         a["test_age"][quick] += 1
         for e in np.flatnonzero(slow):
@@ -382,25 +383,11 @@ class ScasMaintenanceVectorEnv(VectorEnv):
             t["flight"][1], t["flight"][2], self._ground_idx, self.fleet.seal_critical_m, ground,
         )  # fmt: skip
         # the monitors
-        out, b = self._learn_out, self._bank
-        out["ess"][idx] = np.nan
-        out["resampled"][idx] = 0
-        tables = (
-            a["rul_sorted"],
-            a["rul_cum_w"],
-            a["rul_suffix_w"],
-            a["rul_suffix_wr"],
-            a["rul_low"],
-        )
-        outs = (out["ess"], out["resampled"], out["status"])
         corrected = sc["corrected"]
-        test_batch(
-            idx, idx, ground, corrected, (a["pending"], a["flight_sum"], a["flight_count"]),
-            outs, b.arrays, b.handles, tables, self.envs[idx[0]].monitor.learning_model,
-        )  # fmt: skip
+        test_batch(idx, idx, ground, corrected, *self._kernel_io(idx))
+        self._adopt(idx)
         for e in idx:
             monitor = self.envs[e].monitor
-            monitor.adopt_learning(e, *outs, tables, self.fleet.table_source[e])
             monitor.detect(e, corrected)
             a["detected"][e] = monitor.crack_detected, monitor.seal_detected
         # go / no-go: the airworthiness limits around the installation's reference, or the
@@ -452,22 +439,41 @@ class ScasMaintenanceVectorEnv(VectorEnv):
                 self.envs[e].monitor.learn_from_flights()
                 self._pull(e)
             return
-        out, b = self._learn_out, self._bank
-        out["ess"][due] = np.nan
-        out["resampled"][due] = 0
-        tables = (
+        learn_batch(due, due, *self._kernel_io(due))
+        self._adopt(due)
+
+    def _kernel_io(self, idx: np.ndarray) -> tuple:
+        """The batched filter kernels' arguments after the rows and slots (both ``idx``):
+        the fleet's counters, the outputs (N_eff NaN = no update, resamplings 0), the bank,
+        its handles, the fleet's RUL tables and the model (every actuator's is the same)."""
+        a, out, b = self.a, self._learn_out, self._bank
+        out["ess"][idx] = np.nan
+        out["resampled"][idx] = 0
+        return (
+            (a["pending"], a["flight_sum"], a["flight_count"]),
+            (out["ess"], out["resampled"], out["status"]),
+            b.arrays,
+            b.handles,
+            self._tables_rul(),
+            self.envs[idx[0]].monitor.learning_model,
+        )
+
+    def _tables_rul(self) -> tuple:
+        a = self.a
+        return (
             a["rul_sorted"],
             a["rul_cum_w"],
             a["rul_suffix_w"],
             a["rul_suffix_wr"],
             a["rul_low"],
         )
+
+    def _adopt(self, idx: np.ndarray) -> None:
+        """Each monitor of ``idx`` takes what a kernel left in its fleet row (raising what
+        the Python form would have raised)."""
+        out, tables = self._learn_out, self._tables_rul()
         outs = (out["ess"], out["resampled"], out["status"])
-        learn_batch(
-            due, due, (a["pending"], a["flight_sum"], a["flight_count"]), outs, b.arrays,
-            b.handles, tables, self.envs[due[0]].monitor.learning_model,
-        )  # fmt: skip
-        for e in due:
+        for e in idx:
             self.envs[e].monitor.adopt_learning(e, *outs, tables, self.fleet.table_source[e])
 
     def _draws(self, e: int, stream: str) -> Any:
@@ -513,7 +519,7 @@ def _all_true(n: int) -> np.ndarray:
     return mask
 
 
-def _expose_surface(vec: VectorEnv, first: ScasMaintenanceEnv) -> None:
+def expose_surface(vec: VectorEnv, first: ScasMaintenanceEnv) -> None:
     """The attributes both vector forms share: ``obs_names``, ``obs_units``, ``scenario``,
     ``costs``, ``params``."""
     vec.obs_names, vec.obs_units = first.obs_names, first.obs_units
@@ -523,6 +529,7 @@ def _expose_surface(vec: VectorEnv, first: ScasMaintenanceEnv) -> None:
 __all__ = [
     "ScasMaintenanceSyncVectorEnv",
     "ScasMaintenanceVectorEnv",
+    "expose_surface",
     "make_vector_env",
     "spaces",
 ]
