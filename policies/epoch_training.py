@@ -38,6 +38,7 @@ __all__ = [
     "EPOCH_ENV_ID",
     "HYPERPARAMS_DIR",
     "candidate_hyperparams",
+    "clone_rule",
     "load_zoo_hyperparams",
     "make_epoch_env",
     "train_epochs",
@@ -73,6 +74,24 @@ def candidate_hyperparams(search: str | Path, candidate: str) -> dict[str, Any]:
         raise ValueError(f"candidate = {candidate!r} must be one of {sorted(candidates)}")
     base = load_zoo_hyperparams(search.parent / spec["base"])
     return {**base, **candidates[candidate]}
+
+
+def _schedule(name: str, value: Any) -> Any:
+    """RL-Zoo's ``lin_<x>`` strings (``learning_rate``, ``clip_range``): a linear decay from
+    ``x`` to 0 over training (SB3 calls it with the progress remaining, 1 -> 0)."""
+    if not isinstance(value, str):
+        return value
+    if not value.startswith("lin_"):
+        raise ValueError(f"{name} = {value!r}: a number or 'lin_<number>' (RL-Zoo schedule)")
+    try:
+        start = float(value[4:])
+    except ValueError:
+        raise ValueError(f"{name} = {value!r}: 'lin_<number>', e.g. 'lin_3e-4'") from None
+    if not start > 0:
+        raise ValueError(f"{name} = {value!r} must start above 0")
+    from stable_baselines3.common.utils import LinearSchedule
+
+    return LinearSchedule(start, 0.0, 1.0)
 
 
 def make_epoch_env(ks: Sequence[int] = DEFAULT_KS, **scenario: Any) -> gym.Env:
@@ -114,38 +133,22 @@ def _native_epochs(
     return VecMonitor(native, filename=str(monitor_dir / "0"))
 
 
-def train_epochs(
+def _prepared(
     hyperparams: Mapping[str, Any],
-    out_dir: str | Path,
+    out: Path,
     *,
-    seed: int = 0,
-    algo: str = "maskable_ppo",
-    ks: Sequence[int] = DEFAULT_KS,
-    checkpoint_every: int = 20_000,
-    max_wall_s: float | None = None,
-    total_timesteps: int | None = None,
-    progress_bar: bool = False,
-    native_envs: int | None = None,
-    **scenario: Any,
-) -> Path:
-    """Train one agent on decision epochs; returns ``out_dir``.
-
-    ``hyperparams``: an RL-Zoo entry (:func:`load_zoo_hyperparams`); ``total_timesteps``
-    overrides its ``n_timesteps`` (decisions, summed over envs). ``native_envs``: train on
-    that many actuators of the decision-epoch vector env
-    (:class:`scas_env.decision_epochs_vector.DecisionEpochsVectorEnv` through
-    :class:`policies.sb3_vec_env.NativeVecEnv`) instead of the YAML's ``n_envs`` single envs
-    in a ``DummyVecEnv``. Writes ``out_dir/ckpt_<n>``
-    checkpoints (``model.zip``, ``vecnormalize.pkl``), ``progress.csv`` (SB3's logger:
-    training episode rewards of the Monitor) and ``run.json`` (config, decisions and wall
-    time reached).
-    """
+    seed: int,
+    algo: str,
+    ks: Sequence[int],
+    native_envs: int | None,
+    scenario: dict[str, Any],
+) -> tuple[Any, Any, int, bool, dict[str, Any]]:
+    """The model, its (normalised) vector env, ``n_envs``, ``normalize`` and the algorithm
+    keywords of one run (:func:`train_epochs`), seeded as documented there."""
     contrib = require_contrib("train on decision epochs")
     import torch
     from stable_baselines3 import PPO
-    from stable_baselines3.common.callbacks import CallbackList, CheckpointCallback
     from stable_baselines3.common.env_util import make_vec_env
-    from stable_baselines3.common.logger import configure
     from stable_baselines3.common.utils import set_random_seed
     from stable_baselines3.common.vec_env import VecNormalize
 
@@ -158,20 +161,12 @@ def train_epochs(
         raise ValueError(f"algo = {algo!r} must be one of {sorted(classes)}")
     hp = dict(hyperparams)
     n_envs = int(hp.pop("n_envs", 4))
-    n_timesteps = int(float(hp.pop("n_timesteps", 1_000_000)))
+    hp.pop("n_timesteps", None)
     policy = hp.pop("policy", "MlpPolicy")
-    normalize = hp.pop("normalize", True)
-    total = n_timesteps if total_timesteps is None else total_timesteps
-    if isinstance(total, bool) or not isinstance(total, int) or total < 1:
-        raise ValueError(f"total_timesteps = {total!r} must be an integer >= 1")
-    if isinstance(checkpoint_every, bool) or not isinstance(checkpoint_every, int):
-        raise ValueError(f"checkpoint_every = {checkpoint_every!r} must be an integer >= 1")
-    if checkpoint_every < 1:
-        raise ValueError(f"checkpoint_every = {checkpoint_every!r} must be an integer >= 1")
-    out = Path(out_dir)
-    if out.exists() and any(out.iterdir()):
-        raise ValueError(f"out_dir = {str(out)!r} exists and is not empty; choose a new one")
-    out.mkdir(parents=True, exist_ok=True)
+    normalize = bool(hp.pop("normalize", True))
+    for key in ("learning_rate", "clip_range"):
+        if key in hp:
+            hp[key] = _schedule(key, hp[key])
     torch.set_num_threads(1)
     set_random_seed(seed)
     if native_envs is None:
@@ -189,12 +184,90 @@ def train_epochs(
     if normalize:
         venv = VecNormalize(venv, norm_obs=True, norm_reward=True, gamma=gamma)
     model = classes[algo](policy, venv, seed=seed, device="cpu", verbose=0, **hp)
+    return model, venv, n_envs, normalize, hp
+
+
+def _warm_start(model: Any, venv: Any, init: Path) -> None:
+    """Copy a saved run's policy weights (``init/model.zip``) and ``VecNormalize``
+    statistics (``init/vecnormalize.pkl``) into ``model`` and ``venv``; the architectures
+    must match (same ``policy_kwargs``)."""
+    import pickle
+
+    zip_path, pkl = init / "model.zip", init / "vecnormalize.pkl"
+    for f in (zip_path, pkl):
+        if not f.is_file():
+            raise ValueError(f"init = {str(init)!r} lacks {f.name} (a clone_rule output)")
+    saved = type(model).load(zip_path, device="cpu")
+    try:
+        model.policy.load_state_dict(saved.policy.state_dict())
+    except RuntimeError as err:
+        raise ValueError(f"init = {str(init)!r}: its network does not match ({err})") from None
+    with pkl.open("rb") as fh:
+        stats = pickle.load(fh)
+    venv.obs_rms, venv.ret_rms = stats.obs_rms, stats.ret_rms
+
+
+def train_epochs(
+    hyperparams: Mapping[str, Any],
+    out_dir: str | Path,
+    *,
+    seed: int = 0,
+    algo: str = "maskable_ppo",
+    ks: Sequence[int] = DEFAULT_KS,
+    checkpoint_every: int = 20_000,
+    max_wall_s: float | None = None,
+    total_timesteps: int | None = None,
+    progress_bar: bool = False,
+    native_envs: int | None = None,
+    init: str | Path | None = None,
+    **scenario: Any,
+) -> Path:
+    """Train one agent on decision epochs; returns ``out_dir``.
+
+    ``hyperparams``: an RL-Zoo entry (:func:`load_zoo_hyperparams`; ``learning_rate`` and
+    ``clip_range`` may be RL-Zoo's ``lin_<x>`` linear decays); ``total_timesteps``
+    overrides its ``n_timesteps`` (decisions, summed over envs). ``native_envs``: train on
+    that many actuators of the decision-epoch vector env
+    (:class:`scas_env.decision_epochs_vector.DecisionEpochsVectorEnv` through
+    :class:`policies.sb3_vec_env.NativeVecEnv`) instead of the YAML's ``n_envs`` single envs
+    in a ``DummyVecEnv``. ``init``: a folder written by :func:`clone_rule` (or any folder
+    with ``model.zip`` and ``vecnormalize.pkl`` of the same network) to start from; its
+    policy is also saved as checkpoint 0, so selection can keep it. Writes
+    ``out_dir/ckpt_<n>`` checkpoints (``model.zip``, ``vecnormalize.pkl``), ``progress.csv``
+    (SB3's logger: training episode rewards of the Monitor) and ``run.json`` (config,
+    decisions and wall time reached).
+    """
+    from stable_baselines3.common.callbacks import CallbackList, CheckpointCallback
+    from stable_baselines3.common.logger import configure
+
+    n_timesteps = int(float(dict(hyperparams).get("n_timesteps", 1_000_000)))
+    total = n_timesteps if total_timesteps is None else total_timesteps
+    if isinstance(total, bool) or not isinstance(total, int) or total < 1:
+        raise ValueError(f"total_timesteps = {total!r} must be an integer >= 1")
+    if isinstance(checkpoint_every, bool) or not isinstance(checkpoint_every, int):
+        raise ValueError(f"checkpoint_every = {checkpoint_every!r} must be an integer >= 1")
+    if checkpoint_every < 1:
+        raise ValueError(f"checkpoint_every = {checkpoint_every!r} must be an integer >= 1")
+    if init is not None and not Path(init).is_dir():
+        raise ValueError(f"init = {str(init)!r} is not a folder")
+    out = Path(out_dir)
+    if out.exists() and any(out.iterdir()):
+        raise ValueError(f"out_dir = {str(out)!r} exists and is not empty; choose a new one")
+    out.mkdir(parents=True, exist_ok=True)
+    model, venv, n_envs, normalize, _ = _prepared(
+        hyperparams, out, seed=seed, algo=algo, ks=ks, native_envs=native_envs, scenario=scenario
+    )
+    if init is not None:
+        _warm_start(model, venv, Path(init))
+        model.save(out / "ckpt_0_steps.zip")
+        if normalize:
+            venv.save(str(out / "ckpt_vecnormalize_0_steps.pkl"))
     model.set_logger(configure(str(out), ["csv"]))
     checkpoints = CheckpointCallback(
         max(checkpoint_every // n_envs, 1),
         str(out),
         name_prefix="ckpt",
-        save_vecnormalize=bool(normalize),
+        save_vecnormalize=normalize,
     )
     start = time.perf_counter()
     model.learn(
@@ -220,7 +293,76 @@ def train_epochs(
         if native_envs is None
         else "NativeVecEnv(DecisionEpochsVectorEnv)",
         "n_envs": n_envs,
+        "init": None if init is None else str(init),
     }
     (out / "run.json").write_text(json.dumps(run, indent=1))
     venv.close()
     return out
+
+
+def clone_rule(
+    hyperparams: Mapping[str, Any],
+    demos: Any,
+    out_dir: str | Path,
+    *,
+    seed: int = 0,
+    algo: str = "maskable_ppo",
+    epochs: int = 30,
+    batch_size: int = 4096,
+    learning_rate: float = 1e-3,
+    maintenance_weight: float = 100.0,
+    progress: bool = False,
+    **scenario: Any,
+) -> Any:
+    """Behaviour-clone ``demos`` (:class:`policies.epoch_demonstrations.Demonstrations`)
+    into a fresh model of ``hyperparams`` (the network a later :func:`train_epochs` with
+    ``init=out_dir`` trains) with :func:`policies.epoch_imitation.clone`; writes
+    ``out_dir/model.zip``, ``vecnormalize.pkl`` and ``clone.json`` (history, settings).
+    Returns the :class:`policies.epoch_imitation.CloneResult`."""
+    import dataclasses
+
+    import numpy as np
+
+    from policies.epoch_imitation import clone
+
+    out = Path(out_dir)
+    if out.exists() and any(out.iterdir()):
+        raise ValueError(f"out_dir = {str(out)!r} exists and is not empty; choose a new one")
+    out.mkdir(parents=True, exist_ok=True)
+    model, venv, _, normalize, _ = _prepared(
+        hyperparams, out, seed=seed, algo=algo, ks=demos.ks, native_envs=2, scenario=scenario
+    )
+    if not normalize:
+        raise ValueError(
+            "clone_rule needs normalize: true (the clone sets VecNormalize's statistics)"
+        )
+    result = clone(
+        model,
+        venv,
+        demos,
+        epochs=epochs,
+        batch_size=batch_size,
+        learning_rate=learning_rate,
+        maintenance_weight=maintenance_weight,
+        rng=np.random.default_rng(seed),
+        progress=progress,
+    )
+    model.save(out / "model.zip")
+    venv.save(str(out / "vecnormalize.pkl"))
+    summary = {
+        "algo": algo,
+        "seed": seed,
+        "ks": list(demos.ks),
+        "scenario": scenario,
+        "hyperparams": {k: repr(v) for k, v in dict(hyperparams).items()},
+        "epochs": epochs,
+        "batch_size": batch_size,
+        "learning_rate": learning_rate,
+        "maintenance_weight": maintenance_weight,
+        "samples": len(demos.actions),
+        "episodes": len(np.unique(demos.episode)),
+        "history": dataclasses.asdict(result),
+    }
+    (out / "clone.json").write_text(json.dumps(summary, indent=1))
+    venv.close()
+    return result

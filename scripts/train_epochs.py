@@ -9,6 +9,12 @@ On ScasMaintenance-v2 (decision epochs over v2, ``ScasMaintenanceEpochs-v1``)::
 
     python scripts/train_epochs.py --candidate gamma099 --seed 0 --scenario examples/v2.toml \\
         --max-wall-s 4800 --out results/rl_v2/epochs/gamma099_s0
+
+From a clone of the tuned filter rule (``scripts/imitate_rule.py``), on the native vector env::
+
+    python scripts/train_epochs.py --candidate imitation --seed 0 --scenario examples/v2.toml \
+        --init results/rl_v2/clone --native-envs 64 --max-wall-s 3600 \
+        --out results/rl_v2/finetune/s0
 """
 
 from __future__ import annotations
@@ -37,6 +43,11 @@ def main() -> None:
         help="train on this many actuators of the decision-epoch vector env (default: the "
         "YAML's n_envs single envs in a DummyVecEnv)",
     )
+    parser.add_argument(
+        "--init",
+        default=None,
+        help="start from this clone (scripts/imitate_rule.py's --out; same network)",
+    )
     parser.add_argument("--out", required=True, help="new, empty output folder")
     add_env_config_args(parser)
     args = parser.parse_args()
@@ -56,6 +67,7 @@ def main() -> None:
         max_wall_s=args.max_wall_s,
         total_timesteps=args.timesteps,
         native_envs=args.native_envs,
+        init=args.init,
         **scenario_changes(scenario),
     )
 

@@ -1,0 +1,71 @@
+"""Clone a tuned rule into a decision-epoch agent: the warm start of the RL training.
+
+Records the rule's per-flight episodes on training seeds, cuts them into decision epochs
+(policies.epoch_demonstrations) and behaviour-clones them into the network of a search
+candidate (policies.epoch_imitation); ``scripts/train_epochs.py --init OUT`` then trains
+PPO from the clone. Example (the v2 filter rule of the value study)::
+
+    python scripts/imitate_rule.py --scenario examples/v2.toml \\
+        --rules-from docs/value_v2/ladder.json --arm filter --candidate imitation \\
+        --out results/rl_v2/clone
+"""
+
+from __future__ import annotations
+
+import argparse
+
+from policies import tuning
+from policies.epoch_demonstrations import demonstrations, record_rule
+from policies.epoch_selection import HELD_OUT_SEED, VALIDATION_SEED, tuned_rules
+from policies.epoch_training import HYPERPARAMS_DIR, candidate_hyperparams, clone_rule
+from scas_env.cli_args import add_env_config_args, load_env_config, scenario_changes
+from scas_env.decision_epochs import DEFAULT_KS
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(
+        description=__doc__, formatter_class=argparse.ArgumentDefaultsHelpFormatter
+    )
+    parser.add_argument("--rules-from", required=True, help="value-study ladder.json")
+    parser.add_argument("--arm", default="filter", help="the ladder's arm to clone")
+    parser.add_argument("--episodes", type=int, default=300, help="recorded episodes")
+    parser.add_argument("--seed", type=int, default=tuning.TRAIN_SEED, help="training seed")
+    parser.add_argument("--safety", type=float, default=3.0, help="k margin (epoch_labels)")
+    parser.add_argument("--epochs", type=int, default=30, help="passes over the samples")
+    parser.add_argument("--clone-seed", type=int, default=0, help="network init and batches")
+    parser.add_argument("--search", default=str(HYPERPARAMS_DIR / "search.yml"), help="search YAML")
+    parser.add_argument("--candidate", default="imitation", help="network of this candidate")
+    parser.add_argument("--out", required=True, help="new, empty output folder")
+    add_env_config_args(parser)
+    args = parser.parse_args()
+    scenario, costs = load_env_config(parser, args)
+    if costs.to_dict() != type(costs)().to_dict():
+        parser.error("--costs / a [costs] table: training uses the default cost model")
+    if args.seed in (VALIDATION_SEED, HELD_OUT_SEED, tuning.HELD_OUT_SEED):
+        parser.error(f"--seed {args.seed} is a validation or held-out seed")
+    hp = candidate_hyperparams(args.search, args.candidate)
+    rule = tuned_rules(args.rules_from, [args.arm])[0]
+    changes = scenario_changes(scenario)
+    recorded = record_rule(
+        rule.name,
+        rule.params,
+        episodes=args.episodes,
+        seed=args.seed,
+        scenario=changes,
+        progress=True,
+    )
+    demos = demonstrations(
+        recorded, DEFAULT_KS, gamma=float(hp.get("gamma", 0.99)), safety=args.safety
+    )
+    result = clone_rule(
+        hp, demos, args.out, seed=args.clone_seed, epochs=args.epochs, progress=True, **changes
+    )
+    print(
+        f"validation: accuracy {result.accuracy[-1]:.3f} (decision slots "
+        f"{result.accuracy_on_path[-1]:.3f}), maintenance recall "
+        f"{result.maintenance_recall[-1]:.3f}; wrote {args.out}"
+    )
+
+
+if __name__ == "__main__":
+    main()
