@@ -6,7 +6,7 @@ STAMP := $(VENV)/.installed-stamp
 RESULTS ?= results
 
 .PHONY: install benchmark demo test test-slow test-all lint format bench figures reproduce clean \
-	check-install
+	check-install train-agent-v2
 
 $(STAMP): pyproject.toml
 	test -x $(PY) || $(PYTHON) -m venv $(VENV)
@@ -74,6 +74,27 @@ figures: install
 ## The paper's sections 4-5 from our physics (quick mode; `--full` for the paper's sizes).
 reproduce: install
 	$(PY) scripts/reproduce_paper.py --quick
+
+## The shipped v2 agent from scratch (docs/rl.md, "From the rule"; <= 2 h on 2 cores): clone
+## the tuned filter rule (demonstrations + DAgger), fine-tune 3 seeds with MaskablePPO on the
+## native decision-epoch env (two at a time), choose on validation seeds, ship to
+## policies/data/$(AGENT_NAME).*, compare on 1000 held-out episodes. TRAIN_S: wall s per seed.
+TRAIN_S ?= 1500
+AGENT_NAME ?= maskable_ppo_epochs_v2
+AGENT_DIR ?= $(RESULTS)/agent_v2
+TRAIN_ARGS = --candidate imitation --scenario examples/v2.toml --init $(AGENT_DIR)/clone \
+	--native-envs 64 --max-wall-s $(TRAIN_S) --timesteps 3000000 --checkpoint-every 200000
+train-agent-v2: install
+	$(PY) scripts/imitate_rule.py --scenario examples/v2.toml \
+		--rules-from docs/value_v2/ladder.json --out $(AGENT_DIR)/clone
+	$(PY) scripts/train_epochs.py $(TRAIN_ARGS) --seed 0 --out $(AGENT_DIR)/runs/s0 & a=$$!; \
+	$(PY) scripts/train_epochs.py $(TRAIN_ARGS) --seed 1 --out $(AGENT_DIR)/runs/s1; b=$$?; \
+	wait $$a && test $$b -eq 0
+	$(PY) scripts/train_epochs.py $(TRAIN_ARGS) --seed 2 --out $(AGENT_DIR)/runs/s2
+	$(PY) scripts/ship_epochs.py --runs $(AGENT_DIR)/runs --name $(AGENT_NAME) \
+		--scenario examples/v2.toml --rules-from docs/value_v2/ladder.json \
+		--held-out-seed 2 --validation-episodes 200 --held-out-episodes 1000 \
+		--out $(AGENT_DIR)/selection
 
 ## Results, tool caches and numba's compiled kernels (*.nbi index, *.nbc code in __pycache__).
 clean:

@@ -9,9 +9,10 @@ from a clone of the tuned filter rule (Hester et al. 2018, DQfD; Uchendu et al. 
 
 * the actor by cross-entropy of the demonstrated epoch action under the epoch env's action
   mask (the masked logits MaskablePPO samples from);
-* the critic by least squares on the demonstrations' returns in the units PPO's critic will
-  see: rewards divided by the std of the discounted running return, as ``VecNormalize``
-  scales them (its statistics are set from the demonstrations, :func:`set_statistics`);
+* the critic by least squares on the demonstrations' returns (where they have one: DAgger's
+  samples, :mod:`policies.epoch_dagger`, have none) in the units PPO's critic will see:
+  rewards divided by the std of the discounted running return, as ``VecNormalize`` scales
+  them (its statistics are set from the demonstrations, :func:`set_statistics`);
 * the observation statistics of ``VecNormalize`` from the expert's own decision slots (the
   states a decision-epoch agent visits).
 
@@ -123,7 +124,8 @@ def clone(
     policy = model.policy
     optimizer = torch.optim.Adam(policy.parameters(), lr=learning_rate)
     t_obs, t_act = torch.as_tensor(obs), torch.as_tensor(demos.actions)
-    t_mask, t_val = torch.as_tensor(demos.masks), torch.as_tensor(target)
+    t_mask, t_val = torch.as_tensor(demos.masks), torch.as_tensor(np.nan_to_num(target))
+    t_has = torch.as_tensor(np.isfinite(target).astype(np.float32))
     acting = demos.actions // len(demos.ks) != FLY
     t_weight = torch.as_tensor(np.where(acting, maintenance_weight, 1.0).astype(np.float32))
     train_idx = np.flatnonzero(~val)
@@ -138,23 +140,24 @@ def clone(
             b = torch.as_tensor(order[start : start + batch_size])
             values, log_prob, _ = policy.evaluate_actions(t_obs[b], t_act[b], t_mask[b])
             w = t_weight[b]
-            loss = -(w * log_prob).sum() / w.sum() + vf_coef * torch.mean(
-                (values.flatten() - t_val[b]) ** 2
-            )
+            has = t_has[b]
+            squared = has * (values.flatten() - t_val[b]) ** 2
+            value_loss = squared.sum() / has.sum().clamp(min=1.0)
+            loss = -(w * log_prob).sum() / w.sum() + vf_coef * value_loss
             optimizer.zero_grad()
             loss.backward()
             optimizer.step()
             total += loss.item()
             batches += 1
         history["loss"].append(total / batches)
-        for key, value in _validation(policy, t_obs, t_mask, t_val, demos, val).items():
+        for key, value in _validation(policy, t_obs, t_mask, target, demos, val).items():
             history[key].append(value)
     policy.set_training_mode(False)
     return CloneResult(**history, reward_scale=scale)
 
 
 def _validation(
-    policy: Any, obs: Any, masks: Any, target: Any, demos: Demonstrations, val: np.ndarray
+    policy: Any, obs: Any, masks: Any, target: np.ndarray, demos: Demonstrations, val: np.ndarray
 ) -> dict[str, float]:
     """Validation metrics of :func:`clone` on the slots ``val``."""
     import torch
@@ -164,7 +167,7 @@ def _validation(
     with torch.no_grad():
         dist = policy.get_distribution(obs[idx], action_masks=masks[idx].numpy())
         chosen = dist.distribution.probs.argmax(dim=1).numpy()
-        values = policy.predict_values(obs[idx]).flatten()
+        values = policy.predict_values(obs[idx]).flatten().numpy()
     truth = demos.actions[val]
     on_path = demos.on_path[val]
     acting = truth // len(demos.ks) != FLY
@@ -174,5 +177,5 @@ def _validation(
         "accuracy": float(hit.mean()),
         "accuracy_on_path": float(hit[on_path].mean()),
         "maintenance_recall": float(maintenance_hit[acting].mean()) if acting.any() else 1.0,
-        "value_rmse": float(torch.sqrt(torch.mean((values - target[idx]) ** 2))),
+        "value_rmse": float(np.sqrt(np.nanmean((values - target[val]) ** 2))),
     }

@@ -311,6 +311,7 @@ def clone_rule(
     batch_size: int = 4096,
     learning_rate: float = 1e-3,
     maintenance_weight: float = 100.0,
+    dagger: Any = None,
     progress: bool = False,
     **scenario: Any,
 ) -> Any:
@@ -318,7 +319,9 @@ def clone_rule(
     into a fresh model of ``hyperparams`` (the network a later :func:`train_epochs` with
     ``init=out_dir`` trains) with :func:`policies.epoch_imitation.clone`; writes
     ``out_dir/model.zip``, ``vecnormalize.pkl`` and ``clone.json`` (history, settings).
-    Returns the :class:`policies.epoch_imitation.CloneResult`."""
+    ``dagger``: a :class:`policies.epoch_dagger.DaggerPlan` (rounds of the rule labelling
+    the clone's own states, each followed by ``dagger.epochs`` more passes over all samples).
+    Returns the last :class:`policies.epoch_imitation.CloneResult`."""
     import dataclasses
 
     import numpy as np
@@ -336,17 +339,22 @@ def clone_rule(
         raise ValueError(
             "clone_rule needs normalize: true (the clone sets VecNormalize's statistics)"
         )
-    result = clone(
-        model,
-        venv,
-        demos,
-        epochs=epochs,
-        batch_size=batch_size,
-        learning_rate=learning_rate,
-        maintenance_weight=maintenance_weight,
-        rng=np.random.default_rng(seed),
-        progress=progress,
-    )
+    rng = np.random.default_rng(seed)
+    settings = {
+        "batch_size": batch_size,
+        "learning_rate": learning_rate,
+        "maintenance_weight": maintenance_weight,
+        "rng": rng,
+        "progress": progress,
+    }
+    result = clone(model, venv, demos, epochs=epochs, **settings)
+    rounds = [dataclasses.asdict(result)]
+    for seeds in () if dagger is None else dagger.rounds:
+        agent = dagger.agent(model, venv, scenario)
+        more = dagger.samples(agent, seeds, scenario, progress=progress)
+        demos = dagger.merged(demos, more)
+        result = clone(model, venv, demos, epochs=dagger.epochs, **settings)
+        rounds.append({**dataclasses.asdict(result), "new_samples": len(more.actions)})
     model.save(out / "model.zip")
     venv.save(str(out / "vecnormalize.pkl"))
     summary = {
@@ -361,7 +369,8 @@ def clone_rule(
         "maintenance_weight": maintenance_weight,
         "samples": len(demos.actions),
         "episodes": len(np.unique(demos.episode)),
-        "history": dataclasses.asdict(result),
+        "dagger": None if dagger is None else dagger.describe(),
+        "history": rounds,
     }
     (out / "clone.json").write_text(json.dumps(summary, indent=1))
     venv.close()

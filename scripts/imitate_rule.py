@@ -1,9 +1,11 @@
 """Clone a tuned rule into a decision-epoch agent: the warm start of the RL training.
 
 Records the rule's per-flight episodes on training seeds, cuts them into decision epochs
-(policies.epoch_demonstrations) and behaviour-clones them into the network of a search
-candidate (policies.epoch_imitation); ``scripts/train_epochs.py --init OUT`` then trains
-PPO from the clone. Example (the v2 filter rule of the value study)::
+(policies.epoch_demonstrations), behaviour-clones them into the network of a search
+candidate (policies.epoch_imitation), then runs DAgger rounds (policies.epoch_dagger: the
+rule labels the states the clone visits on further training episodes);
+``scripts/train_epochs.py --init OUT`` then trains PPO from the clone. Example (the v2
+filter rule of the value study)::
 
     python scripts/imitate_rule.py --scenario examples/v2.toml \\
         --rules-from docs/value_v2/ladder.json --arm filter --candidate imitation \\
@@ -15,6 +17,8 @@ from __future__ import annotations
 import argparse
 
 from policies import tuning
+from policies.benchmark import episode_seeds
+from policies.epoch_dagger import DaggerPlan
 from policies.epoch_demonstrations import demonstrations, record_rule
 from policies.epoch_selection import HELD_OUT_SEED, VALIDATION_SEED, tuned_rules
 from policies.epoch_training import HYPERPARAMS_DIR, candidate_hyperparams, clone_rule
@@ -32,6 +36,9 @@ def main() -> None:
     parser.add_argument("--seed", type=int, default=tuning.TRAIN_SEED, help="training seed")
     parser.add_argument("--safety", type=float, default=3.0, help="k margin (epoch_labels)")
     parser.add_argument("--epochs", type=int, default=30, help="passes over the samples")
+    parser.add_argument("--dagger-rounds", type=int, default=2, help="DAgger rounds")
+    parser.add_argument("--dagger-episodes", type=int, default=100, help="episodes per round")
+    parser.add_argument("--dagger-epochs", type=int, default=10, help="passes after a round")
     parser.add_argument("--clone-seed", type=int, default=0, help="network init and batches")
     parser.add_argument("--search", default=str(HYPERPARAMS_DIR / "search.yml"), help="search YAML")
     parser.add_argument("--candidate", default="imitation", help="network of this candidate")
@@ -41,6 +48,11 @@ def main() -> None:
     scenario, costs = load_env_config(parser, args)
     if costs.to_dict() != type(costs)().to_dict():
         parser.error("--costs / a [costs] table: training uses the default cost model")
+    for name in ("episodes", "dagger_episodes", "epochs", "dagger_epochs"):
+        if getattr(args, name) < 1:
+            parser.error(f"--{name.replace('_', '-')} {getattr(args, name)} must be >= 1")
+    if args.dagger_rounds < 0:
+        parser.error(f"--dagger-rounds {args.dagger_rounds} must be >= 0")
     if args.seed in (VALIDATION_SEED, HELD_OUT_SEED, tuning.HELD_OUT_SEED):
         parser.error(f"--seed {args.seed} is a validation or held-out seed")
     hp = candidate_hyperparams(args.search, args.candidate)
@@ -57,8 +69,26 @@ def main() -> None:
     demos = demonstrations(
         recorded, DEFAULT_KS, gamma=float(hp.get("gamma", 0.99)), safety=args.safety
     )
+    # DAgger rounds on the training seed's next episodes (after the recorded ones)
+    n, m = args.episodes, args.dagger_episodes
+    seeds = episode_seeds(args.seed, n + args.dagger_rounds * m)
+    plan = DaggerPlan(
+        rule.name,
+        rule.params,
+        rounds=tuple(tuple(seeds[n + r * m : n + (r + 1) * m]) for r in range(args.dagger_rounds)),
+        ks=DEFAULT_KS,
+        safety=args.safety,
+        epochs=args.dagger_epochs,
+    )
     result = clone_rule(
-        hp, demos, args.out, seed=args.clone_seed, epochs=args.epochs, progress=True, **changes
+        hp,
+        demos,
+        args.out,
+        seed=args.clone_seed,
+        epochs=args.epochs,
+        dagger=plan if args.dagger_rounds else None,
+        progress=True,
+        **changes,
     )
     print(
         f"validation: accuracy {result.accuracy[-1]:.3f} (decision slots "

@@ -269,3 +269,63 @@ def test_training_starts_from_the_clone(tmp_path, recorded: RuleEpisodes) -> Non
         train_epochs(hp, tmp_path / "x", init=tmp_path / "missing", **SCENARIO)
     with pytest.raises(ValueError, match="lin_<number>"):
         train_epochs({**hp, "learning_rate": "lin_x"}, tmp_path / "y", **SCENARIO)
+
+
+class _RulePerFlight:
+    """The rule itself as an agent that decides at every slot (k = 1)."""
+
+    def __init__(self, obs_names) -> None:
+        from policies.base import make_policy
+
+        self.rule = make_policy(RULE[0], obs_names, **RULE[1])
+
+    def predict(self, obs, state=None, episode_start=None, deterministic=True):
+        actions, _ = self.rule.predict(obs)
+        n = len(obs)
+        return actions, (np.zeros(n, np.int64), np.zeros(n, np.int64))
+
+
+@pytest.mark.parametrize("safety", [1.0, 3.0])
+def test_dagger_labels_of_the_rules_own_states_are_its_demonstrations(
+    recorded: RuleEpisodes, safety: float
+) -> None:
+    """Run on the rule's own path, DAgger's look-ahead labels (a copied env played forward,
+    cached along the path) equal the labels cut from the recorded episode (independent:
+    epoch_labels on the whole recorded episode)."""
+    from policies.epoch_dagger import dagger_samples
+
+    seeds = episode_seeds(1, 3)[:2]
+    got = dagger_samples(
+        _RulePerFlight(recorded.obs_names),
+        RULE[0],
+        RULE[1],
+        seeds=seeds,
+        scenario=SCENARIO,
+        ks=DEFAULT_KS,
+        safety=safety,
+    )
+    want = demonstrations(recorded, DEFAULT_KS, safety=safety)
+    first_two = want.episode < 2
+    np.testing.assert_array_equal(got.obs, want.obs[first_two])
+    np.testing.assert_array_equal(got.actions, want.actions[first_two])
+    np.testing.assert_array_equal(got.masks, want.masks[first_two])
+    assert np.isnan(got.returns).all() and not got.on_path.any()
+
+
+def test_lookahead_counts_the_slots_left_at_the_end_of_an_episode() -> None:
+    """With a rule that never acts, the look-ahead is the slots left (1 at the last slot),
+    never a step past truncation; and it stops at its limit."""
+    from policies.base import make_policy
+    from policies.epoch_dagger import _lookahead
+
+    env = gym.make(ENV_ID, disable_env_checker=True, **SCENARIO).unwrapped
+    never = make_policy("corrective", env.obs_names)
+    env.reset(seed=5)
+    for _ in range(SLOTS - 7):
+        env.step(0)
+    assert _lookahead(env, never, 0, 300) == 7
+    assert _lookahead(env, never, 0, 4) == 4
+    for _ in range(6):
+        env.step(0)
+    assert _lookahead(env, never, 0, 300) == 1
+    assert env.slot == SLOTS - 1  # the env itself did not move
