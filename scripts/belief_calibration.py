@@ -4,6 +4,9 @@ Runs :func:`scas_env.studies.belief_calibration.run_study`, prints the per-stage
 reliability diagram, and writes CSV/JSON/PNG into ``--out`` (docs/beliefs.md).
 
     python scripts/belief_calibration.py --episodes 200 --seed 1000 --out results/beliefs
+    python scripts/belief_calibration.py --episodes 40 --seed 0 --scenario \
+        '{"flight_features": "I2,I6,I7,I8,I9", "spring_theta_walk": 0.007,
+          "spring_effect_realign": true}'
 """
 
 from __future__ import annotations
@@ -38,7 +41,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         "--monitor",
         type=json.loads,
         default={},
-        help="HealthMonitor keywords as JSON, e.g. '{\"spring_theta_walk\": 0.005}'",
+        help='HealthMonitor keywords as JSON, e.g. \'{"installation": "baseline"}\' (the '
+        "spring options are --scenario fields)",
     )
     parser.add_argument("--out", default=None, help="results folder (none: print only)")
     parser.add_argument("--overwrite", action="store_true", help="replace an existing --out")

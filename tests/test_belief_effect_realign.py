@@ -204,3 +204,20 @@ def test_the_fields_round_trip_through_a_file(tmp_path) -> None:
         path = tmp_path / f"s.{suffix}"
         s.save(path)
         assert Scenario.load(path) == s
+
+
+def test_the_belief_study_takes_the_options_as_scenario_fields() -> None:
+    """``scripts/belief_calibration.py --scenario`` builds the env with the fields (its own
+    monitor): the records repeat with the seed and differ from today's filter's."""
+    from scas_env.studies.belief_calibration import run_episode, run_study
+
+    fields = {**V2_KWARGS, **OPTIONS, "episode_slots": 600}
+    result = run_study(episodes=1, seed=3, policies=["test10"], scenario_fields=fields,
+                       progress=False)  # fmt: skip
+    assert result.config["scenario_fields"] == fields
+    with_options = run_episode(ScasMaintenanceEnv(**fields), "test10", 3)["spring"]
+    today = {**fields, "spring_theta_walk": 0.0, "spring_effect_realign": False}
+    without = run_episode(ScasMaintenanceEnv(**today), "test10", 3)["spring"]
+    assert with_options.mean != without.mean
+    again = run_episode(ScasMaintenanceEnv(**fields), "test10", 3)["spring"]
+    assert with_options.mean == again.mean

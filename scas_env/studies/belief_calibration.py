@@ -78,8 +78,10 @@ PRESETS: dict[str, dict[str, Any]] = {
 
 class MonitorOptionsEnv(ScasMaintenanceEnv):
     """:class:`ScasMaintenanceEnv` whose health monitor takes extra keywords
-    (``monitor_options``, e.g. ``spring_theta_walk``): opt-in monitor variants that no
-    :class:`Scenario` field selects yet, for this study only.
+    (``monitor_options``, e.g. ``installation``): monitor variants that no :class:`Scenario`
+    field selects, for this study only. The spring calibration options are scenario fields
+    (``spring_theta_walk``, ``spring_effect_realign``): pass them with ``scenario_fields``,
+    so the env builds its monitor with them (the draws of a registered env with the fields).
 
     After the env's own reset the monitor is rebuilt with the options and reset on the same
     filter stream (``rngs["filter"]``, continuing where the env's monitor left it): episodes
@@ -108,7 +110,7 @@ class MonitorOptionsEnv(ScasMaintenanceEnv):
 
 
 def _check_monitor_options(options: Mapping[str, Any]) -> None:
-    allowed = ("installation", "spring_theta_walk")
+    allowed = ("installation", "spring_theta_walk", "spring_effect_realign")
     bad = sorted(k for k in options if k not in allowed)
     if bad:
         raise ValueError(f"monitor_options {bad} are not among the allowed keywords {allowed}")
@@ -333,8 +335,9 @@ def run_study(
     ``scenario_fields`` override the preset's scenario (e.g. ``flight_features``);
     ``env_factory`` builds the env from the scenario (default :class:`ScasMaintenanceEnv`);
     ``monitor_options`` (keywords of :class:`scas_env.monitor.HealthMonitor`, e.g.
-    ``{"spring_theta_walk": 0.005}``) run the episodes with :class:`MonitorOptionsEnv`
-    (not together with ``env_factory``).
+    ``{"installation": "baseline"}``) run the episodes with :class:`MonitorOptionsEnv`
+    (not together with ``env_factory``); the spring calibration options are scenario fields
+    (``{"spring_theta_walk": 0.007, "spring_effect_realign": True}`` in ``scenario_fields``).
     """
     if monitor_options and env_factory is not None:
         raise ValueError("monitor_options and env_factory cannot be combined: pass one of them")
