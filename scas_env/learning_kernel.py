@@ -16,6 +16,10 @@ native vector env with every actuator whose batch is full, so both give the same
 under way learnt from first, both filters predicted over the flights pending, then updated
 with the test's G1 and G3; the detectors stay in Python (they read the corrected values).
 
+With ``HealthMonitor(spring_effect_realign=True)`` every resampling of a spring filter is
+followed by :func:`realign_effect` on its jittered particles (in ``_resampled``; the Python
+form's ``ParticleFilter.resample_hook``).
+
 The table helpers (``cell_of``, ``effect_at``, ``effect_likelihood``) are the surrogate's
 bilinear interpolation as the world draws features (``SurrogateModel.tables_at``).
 Status codes of a row (``status[row]``): 0 ok; 1 a prediction left the representable range;

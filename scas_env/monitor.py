@@ -173,7 +173,7 @@ class HealthMonitor:
                 "True only with the installation effects as filter states (installation "
                 f"'states', here {installation!r})"
             )
-        #: re-align the spring particles' installation effects after each resampling
+        #: re-condition the jittered spring particles' installation effects after each resampling
         #: (:func:`scas_env.learning_kernel.realign_effect`; docs/beliefs.md)
         self.spring_effect_realign = spring_effect_realign
         if spring_theta_walk is not None and not (
@@ -426,7 +426,7 @@ class HealthMonitor:
 
     def _realign_spring_effects(self, parents: np.ndarray, x: np.ndarray) -> None:
         """The spring filter's resampling hook (``spring_effect_realign``): each jittered
-        particle's installation effects re-aligned to its new crack depth
+        particle's installation effects re-conditioned on its new crack depth
         (:func:`scas_env.learning_kernel.realign_effect`, the seal at its filter's mean)."""
         other = _fraction_moments(self.seal_filter, self.w_crit)[0]
         for eff in self._effects.values():

@@ -70,11 +70,12 @@ class Scenario(Validated):
         flight, CV 8-26 % for the crack, an artefact of scaling ~1.3 cycles of the damaging
         regime) or ``"whole_flight"`` (v2: whole simulated flights, CV 0.6-1.9 %;
         docs/physics.md). The world grows the parts and the filters model the growth with it.
-    spring_effect_realign : after each resampling of the spring filter, re-align each
-        jittered particle's installation-effect states to its new crack depth, so that it
-        predicts the feature level its parent predicted (docs/beliefs.md, "Spring
-        calibration"; default False: the v2 filter). Needs the filters learning in flight
-        (``flight_features`` with I8 and I9).
+    spring_effect_realign : after each resampling of the spring filter, re-condition each
+        jittered particle's installation-effect states on its new crack depth (the data's
+        information on them carried along a parallel shift of its path,
+        ``scas_env.learning_kernel.realign_effect``; docs/beliefs.md, "Spring calibration";
+        default False: the v2 filter; measured not to help). Needs the filters learning in
+        flight (``flight_features`` with I8 and I9).
     """
 
     fidelity: str = "surrogate"
