@@ -47,6 +47,10 @@ part's estimate (bilinear, as the world draws them) and ``cross`` the other filt
 variance through the feature's slope against the other part (the cross-fault correction's
 uncertainty). A new spring pair (new installation) resets every ``z`` to N(0, 1); new seals
 keep the installation's ``z`` knowledge (the cloud's mixture moments).
+Two opt-in options of the spring filter in this mode, from the scenario (or keywords):
+``spring_theta_walk`` (a random walk of its log theta) and ``spring_effect_realign`` (after
+each resampling, the jittered particles' effect states re-conditioned on their new depth,
+:func:`scas_env.learning_kernel.realign_effect`); docs/beliefs.md, "Spring calibration".
 The earlier ``"baseline"`` treatment (offsets from the first tests or flights, their
 estimation variance added to the noise) stays for v0 and v1 (bit for bit) and is kept as an
 option for comparison (docs/beliefs.md).
