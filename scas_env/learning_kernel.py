@@ -362,12 +362,14 @@ def _refresh(e: int, s: int, bank: tuple, out: tuple, work: tuple, tables: tuple
 
 
 @njit(cache=True)
-def _work(n: int, n_learn: int) -> tuple:
+def _work(n: int, n_learn: int, realign: bool) -> tuple:
     """Scratch: cumsum, indices, two buffers, the process scratch, log-likelihoods, squares,
-    batch means, the spring's severities before a resampling and its particles' parents."""
+    batch means, and (re-conditioning on, else empty) the spring's severities before a
+    resampling and its particles' parents."""
+    m = n if realign else 0
     return (
         np.empty(n), np.empty(n, dtype=np.intp), np.empty(n), np.empty(n), np.zeros((10, n)),
-        np.empty(n), np.empty(n), np.empty(max(n_learn, 1)), np.empty(n), np.empty(n),
+        np.empty(n), np.empty(n), np.empty(max(n_learn, 1)), np.empty(m), np.empty(m),
     )  # fmt: skip
 
 
@@ -393,7 +395,7 @@ def learn_batch(
     ``tables = (sorted, cum_w, suffix_w, suffix_wr, low)`` (e.g. a fleet's ``rul_*`` arrays).
     ``model`` is ``HealthMonitor.learning_model``: what every row shares.
     """
-    work = _work(bank[0].shape[2], model[8].size)
+    work = _work(bank[0].shape[2], model[8].size, model[19])
     for r in range(rows.size):
         e, s = rows[r], slots[r]
         out[2][s] = 0
@@ -423,7 +425,7 @@ def test_batch(
     the test's G1 (spring) and G3 (seal) in ``ground[s]``; ``corrected[s]`` = both
     corrected to a healthy new installation (what the detectors read). The RUL tables are
     built once at the end (the learning update's own tables would be replaced unread)."""
-    work = _work(bank[0].shape[2], model[8].size)
+    work = _work(bank[0].shape[2], model[8].size, model[19])
     g_aux, g_stacks, g_own, g_other = model[15], model[16], model[17], model[18]
     pending, status = state[0], out[2]
     for r in range(rows.size):
