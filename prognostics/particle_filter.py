@@ -474,6 +474,12 @@ class ParticleFilter:
         #: per-particle auxiliary arrays (name -> (N,) float64) that resampling carries
         #: along with their particles (e.g. a Rao-Blackwellised Gaussian per particle)
         self.aux: dict[str, np.ndarray] = {}
+        #: called after every resampling as ``resample_hook(parents, x)``, with read-only
+        #: views of the resampled parents' severities (before the regularisation jitter) and
+        #: of the particles' severities now (after it); :attr:`aux` is already permuted. The
+        #: caller's way to re-condition per-particle states on a moved particle (e.g. an
+        #: installation effect re-aligned to the jittered severity). None: nothing.
+        self.resample_hook: Callable[[np.ndarray, np.ndarray], None] | None = None
         self._make_views()
 
     def _make_views(self) -> None:
@@ -488,7 +494,7 @@ class ParticleFilter:
         return state
 
     def __setstate__(self, state: dict) -> None:
-        self.__dict__.update(state)
+        self.__dict__.update({"resample_hook": None, **state})  # hook: pickles without one
         self._scratch = np.zeros((_SCRATCH_ROWS, self._x.size))
         self._make_views()
 
@@ -755,6 +761,8 @@ class ParticleFilter:
             arr[:] = arr[self._idx]
         self._ess = float(self.n_particles)
         self.n_resamples += 1
+        if self.resample_hook is not None:  # _gather_regularise left the parents in _buf_x
+            self.resample_hook(_read_only(self._buf_x), self._views["_x"])
 
     def estimate(self) -> StateEstimate:
         """Weighted means and standard deviations of x and theta, and N_eff."""

@@ -16,6 +16,10 @@ native vector env with every actuator whose batch is full, so both give the same
 under way learnt from first, both filters predicted over the flights pending, then updated
 with the test's G1 and G3; the detectors stay in Python (they read the corrected values).
 
+With ``HealthMonitor(spring_effect_realign=True)`` every resampling of a spring filter is
+followed by :func:`realign_effect` on its jittered particles (in ``_resampled``; the Python
+form's ``ParticleFilter.resample_hook``).
+
 The table helpers (``cell_of``, ``effect_at``, ``effect_likelihood``) are the surrogate's
 bilinear interpolation as the world draws features (``SurrogateModel.tables_at``).
 Status codes of a row (``status[row]``): 0 ok; 1 a prediction left the representable range;
@@ -139,14 +143,74 @@ def fraction_moments(x: np.ndarray, w: np.ndarray, critical: float, sq: np.ndarr
 
 
 @njit(cache=True)
+def realign_effect(
+    parents: np.ndarray,
+    x: np.ndarray,
+    critical: float,
+    other: float,
+    stack: np.ndarray,
+    own_grid: np.ndarray,
+    other_grid: np.ndarray,
+    z_mean: np.ndarray,
+    z_var: np.ndarray,
+) -> None:
+    """Re-condition the installation-effect state ``z ~ N(m, P)`` (prior N(0, 1), a new
+    spring pair) of every particle the regularisation jitter moved from its parent's
+    severity ``parents[i]`` to ``x[i]`` (m), in place.
+
+    The particle inherited its parent's ``z``, fitted to the parent's path: at its new
+    severity it would predict another feature level and be penalised for the jitter alone.
+    Here the data's part of the state is carried to the new severity. With ``mu``, ``tau``
+    the tables at the own severity (fraction of ``critical``, clipped to [0, 1]; parent
+    ``p``, new ``n``) and the other part at ``other``, the data's information on ``z`` is
+    ``J = 1 / P - 1`` and ``b = m / P`` (``sum tau_k^2 / v_k`` and
+    ``sum tau_k (y_k - mu_k) / v_k`` over the measurements ``y_k`` of variance ``v_k``);
+    if the particle's whole path is shifted with it (the same ``mu`` shift and ``tau``
+    ratio at every measurement), the same measurements give
+
+        J' = J (tau_n / tau_p)^2,  b' = (tau_n / tau_p) (b + J (mu_p - mu_n) / tau_p),
+        P' = 1 / (1 + J'),  m' = b' P'.
+
+    Well-measured (``P -> 0``) this keeps the predicted level: ``mu_n + tau_n m' =
+    mu_p + tau_p m``; never measured (``P = 1``) the state stays the prior. Particles not
+    moved, with ``P >= 1`` or where ``tau <= 0`` keep their state.
+    """
+    j, tj = cell_of(other_grid, other)
+    for i in range(x.size):
+        if x[i] == parents[i] or not z_var[i] < 1.0:
+            continue
+        ip, tp = cell_of(own_grid, min(max(parents[i] / critical, 0.0), 1.0))
+        iq, tq = cell_of(own_grid, min(max(x[i] / critical, 0.0), 1.0))
+        tau_p = bilinear_at(stack, 1, ip, tp, j, tj)
+        tau_n = bilinear_at(stack, 1, iq, tq, j, tj)
+        if not (tau_p > 0.0 and tau_n > 0.0):
+            continue
+        info = 1.0 / z_var[i] - 1.0
+        b = z_mean[i] / z_var[i]
+        d_mu = bilinear_at(stack, 0, ip, tp, j, tj) - bilinear_at(stack, 0, iq, tq, j, tj)
+        ratio = tau_n / tau_p
+        info_new = info * ratio * ratio
+        b_new = ratio * (b + info * d_mu / tau_p)
+        z_var[i] = 1.0 / (1.0 + info_new)
+        z_mean[i] = b_new * z_var[i]
+
+
+@njit(cache=True)
 def _resampled(n_eff: float, e: int, s: int, p: int, bank: tuple, out: tuple, work: tuple,
-               filt: tuple, handle: tuple) -> bool:  # fmt: skip
+               model: tuple, handle: tuple) -> bool:  # fmt: skip
     """Record N_eff of filter p of bank row e (slot s) and resample it if needed (as
-    ``ParticleFilter._after_update``); False: degenerate weights."""
+    ``ParticleFilter._after_update``), then re-align the spring's installation effects if
+    the model asks (``HealthMonitor(spring_effect_realign=True)``: :func:`realign_effect`
+    with the seal filter's mean wear, as the monitor's resampling hook); False: degenerate
+    weights."""
     bx, blt, bw, blw, baux = bank
     ess, resampled = out[0], out[1]
     cumsum, idx, buf_x, buf_lt = work[0], work[1], work[2], work[3]
-    thr_n, h, kappa, gaussian, shrink = filt
+    thr_n, h, kappa, gaussian, shrink = model[14]
+    realign = p == 0 and model[19]
+    before, parents = work[8], work[9]
+    if realign:
+        before[:] = bx[e, 0]
     ess[s, p] = n_eff
     k = resample_if_degenerate(
         n_eff, thr_n, bx[e, p], blt[e, p], bw[e, p], blw[e, p], baux[e, p], cumsum, idx, buf_x,
@@ -155,6 +219,17 @@ def _resampled(n_eff: float, e: int, s: int, p: int, bank: tuple, out: tuple, wo
     if k == 1:
         resampled[s, p] += 1
         ess[s, p] = float(idx.size)
+        if realign:
+            for i in range(idx.size):
+                parents[i] = before[idx[i]]
+            critical = model[6]
+            other = fraction_moments(bx[e, 1], bw[e, 1], critical[1], work[6])[0]
+            r_aux, r_stacks, r_own, r_other = model[20], model[21], model[22], model[23]
+            for f in range(r_aux.size):
+                realign_effect(
+                    parents, bx[e, 0], critical[0], other, r_stacks[f], r_own[f], r_other[f],
+                    baux[e, 0, r_aux[f]], baux[e, 0, r_aux[f] + 1],
+                )  # fmt: skip
     return k >= 0
 
 
@@ -181,11 +256,11 @@ def _survive(e: int, s: int, bank: tuple, out: tuple, work: tuple, model: tuple,
     """Both parts fly, so neither has reached its critical value: particles past it lose
     their weight (``ParticleFilter.condition_below``; status 3 if degenerate)."""
     bx, bw, blw = bank[0], bank[2], bank[3]
-    critical, active, filt = model[6], model[7], model[14]
+    critical, active = model[6], model[7]
     for p in range(2):
         if active[p] and out[2][s] == 0:
             n_eff = _condition_below(bx[e, p], blw[e, p], bw[e, p], critical[p])
-            if n_eff >= 0.0 and not _resampled(n_eff, e, s, p, bank, out, work, filt, handle):
+            if n_eff >= 0.0 and not _resampled(n_eff, e, s, p, bank, out, work, model, handle):
                 out[2][s] = 3
 
 
@@ -197,7 +272,7 @@ def _effect_update(e: int, s: int, p: int, k: int, y: float, m: float, moments: 
     installation effect is aux states ``k``, ``k + 1`` of filter p, into that filter; returns
     ``y`` corrected to a healthy new installation. Status 2 (non-finite likelihood) or 3."""
     bx, bw, blw, baux = bank[0], bank[2], bank[3], bank[4]
-    critical, noise_scale, filt = model[6], model[13], model[14]
+    critical, noise_scale = model[6], model[13]
     c_hat, c_var, w_hat, w_var = moments
     own, other, other_var = (c_hat, w_hat, w_var) if p == 0 else (w_hat, c_hat, c_var)
     log_lik = work[5]
@@ -220,7 +295,7 @@ def _effect_update(e: int, s: int, p: int, k: int, y: float, m: float, moments: 
             out[2][s] = 2
             return y - shift - cross
     n_eff = _add_log_likelihood(blw[e, p], bw[e, p], log_lik)
-    if not _resampled(n_eff, e, s, p, bank, out, work, filt, handle):
+    if not _resampled(n_eff, e, s, p, bank, out, work, model, handle):
         out[2][s] = 3
     return y - shift - cross
 
@@ -287,12 +362,14 @@ def _refresh(e: int, s: int, bank: tuple, out: tuple, work: tuple, tables: tuple
 
 
 @njit(cache=True)
-def _work(n: int, n_learn: int) -> tuple:
+def _work(n: int, n_learn: int, realign: bool) -> tuple:
     """Scratch: cumsum, indices, two buffers, the process scratch, log-likelihoods, squares,
-    batch means."""
+    batch means, and (re-conditioning on, else empty) the spring's severities before a
+    resampling and its particles' parents."""
+    m = n if realign else 0
     return (
         np.empty(n), np.empty(n, dtype=np.intp), np.empty(n), np.empty(n), np.zeros((10, n)),
-        np.empty(n), np.empty(n), np.empty(max(n_learn, 1)),
+        np.empty(n), np.empty(n), np.empty(max(n_learn, 1)), np.empty(m), np.empty(m),
     )  # fmt: skip
 
 
@@ -318,7 +395,7 @@ def learn_batch(
     ``tables = (sorted, cum_w, suffix_w, suffix_wr, low)`` (e.g. a fleet's ``rul_*`` arrays).
     ``model`` is ``HealthMonitor.learning_model``: what every row shares.
     """
-    work = _work(bank[0].shape[2], model[8].size)
+    work = _work(bank[0].shape[2], model[8].size, model[19])
     for r in range(rows.size):
         e, s = rows[r], slots[r]
         out[2][s] = 0
@@ -348,7 +425,7 @@ def test_batch(
     the test's G1 (spring) and G3 (seal) in ``ground[s]``; ``corrected[s]`` = both
     corrected to a healthy new installation (what the detectors read). The RUL tables are
     built once at the end (the learning update's own tables would be replaced unread)."""
-    work = _work(bank[0].shape[2], model[8].size)
+    work = _work(bank[0].shape[2], model[8].size, model[19])
     g_aux, g_stacks, g_own, g_other = model[15], model[16], model[17], model[18]
     pending, status = state[0], out[2]
     for r in range(rows.size):
@@ -383,5 +460,6 @@ __all__ = [
     "effect_likelihood",
     "fraction_moments",
     "learn_batch",
+    "realign_effect",
     "test_batch",
 ]

@@ -47,6 +47,10 @@ part's estimate (bilinear, as the world draws them) and ``cross`` the other filt
 variance through the feature's slope against the other part (the cross-fault correction's
 uncertainty). A new spring pair (new installation) resets every ``z`` to N(0, 1); new seals
 keep the installation's ``z`` knowledge (the cloud's mixture moments).
+Two opt-in options of the spring filter in this mode, from the scenario (or keywords):
+``spring_theta_walk`` (a random walk of its log theta) and ``spring_effect_realign`` (after
+each resampling, the jittered particles' effect states re-conditioned on their new depth,
+:func:`scas_env.learning_kernel.realign_effect`); docs/beliefs.md, "Spring calibration".
 The earlier ``"baseline"`` treatment (offsets from the first tests or flights, their
 estimation variance added to the noise) stays for v0 and v1 (bit for bit) and is kept as an
 option for comparison (docs/beliefs.md).
@@ -79,6 +83,7 @@ from scas_env.learning_kernel import (
     effect_at,
     effect_likelihood,
     learn_batch,
+    realign_effect,
     test_batch,
 )
 from scas_env.scenario import Scenario
@@ -135,6 +140,7 @@ class HealthMonitor:
         *,
         installation: str | None = None,
         spring_theta_walk: float | None = None,
+        spring_effect_realign: bool | None = None,
     ) -> None:
         self.params, self.scenario, self.cal, self.sur = params, scenario, calibration, surrogate
         self.rng = rng
@@ -152,6 +158,28 @@ class HealthMonitor:
         self.installation = installation
         states = installation == "states"
         walk = STATES_THETA_WALK if states else THETA_WALK
+        for name, value in (
+            ("spring_theta_walk", scenario.spring_theta_walk),
+            ("spring_effect_realign", scenario.spring_effect_realign),
+        ):
+            if value and not states:
+                raise ValueError(
+                    f"Scenario.{name} = {value!r} needs the installation effects as filter "
+                    f"states (installation 'states'), not {installation!r}"
+                )
+        if spring_theta_walk is None and states:
+            spring_theta_walk = scenario.spring_theta_walk
+        if spring_effect_realign is None:
+            spring_effect_realign = scenario.spring_effect_realign
+        if not isinstance(spring_effect_realign, bool) or (spring_effect_realign and not states):
+            raise ValueError(
+                f"spring_effect_realign = {spring_effect_realign!r} must be None or a bool, "
+                "True only with the installation effects as filter states (installation "
+                f"'states', here {installation!r})"
+            )
+        #: re-condition the jittered spring particles' installation effects after each resampling
+        #: (:func:`scas_env.learning_kernel.realign_effect`; docs/beliefs.md)
+        self.spring_effect_realign = spring_effect_realign
         if spring_theta_walk is not None and not (
             isinstance(spring_theta_walk, int | float)
             and not isinstance(spring_theta_walk, bool)
@@ -265,6 +293,8 @@ class HealthMonitor:
         self.row = 0
         if states:
             self._enable_effect_states()
+        if spring_effect_realign:
+            self.spring_filter.resample_hook = self._realign_spring_effects
         if states and self.learning:
             #: constants of :func:`scas_env.learning_kernel.learn_batch` (one per scenario)
             self.learning_model = self._learning_model()
@@ -290,6 +320,7 @@ class HealthMonitor:
             if names.index(f"{f}_z_var") != names.index(f"{f}_z_mean") + 1:
                 raise ValueError(f"the aux states of {f} must be adjacent")
         s = self.scenario
+        spring = [f for f, e in self._effects.items() if e.part == "spring"]
         return (
             sf.process.kernel_args,
             wf.process.kernel_args,
@@ -329,6 +360,12 @@ class HealthMonitor:
             (self._effects["G1"].stack, self._effects["G3"].stack),
             (self._effects["G1"].own_grid, self._effects["G3"].own_grid),
             (self._effects["G1"].other_grid, self._effects["G3"].other_grid),
+            # the spring's effects re-aligned after its resamplings (spring_effect_realign)
+            bool(self.spring_effect_realign),
+            np.array([list(sf.aux).index(f"{f}_z_mean") for f in spring], dtype=np.int64),
+            tuple(self._effects[f].stack for f in spring),
+            tuple(self._effects[f].own_grid for f in spring),
+            tuple(self._effects[f].other_grid for f in spring),
         )
 
     def attach(self, bank: ParticleBank, row: int) -> None:
@@ -390,6 +427,18 @@ class HealthMonitor:
                 own_grid=np.asarray(grids[0], dtype=np.float64),
                 other_grid=np.asarray(grids[1], dtype=np.float64),
             )
+
+    def _realign_spring_effects(self, parents: np.ndarray, x: np.ndarray) -> None:
+        """The spring filter's resampling hook (``spring_effect_realign``): each jittered
+        particle's installation effects re-conditioned on its new crack depth
+        (:func:`scas_env.learning_kernel.realign_effect`, the seal at its filter's mean)."""
+        other = _fraction_moments(self.seal_filter, self.w_crit)[0]
+        for eff in self._effects.values():
+            if eff.part == "spring":
+                realign_effect(
+                    parents, x, self.a_fail, other, eff.stack, eff.own_grid, eff.other_grid,
+                    eff.z_mean, eff.z_var,
+                )  # fmt: skip
 
     # ------------------------------------------------------------------ events
     def reset(self) -> None:

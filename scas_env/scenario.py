@@ -70,6 +70,12 @@ class Scenario(Validated):
         flight, CV 8-26 % for the crack, an artefact of scaling ~1.3 cycles of the damaging
         regime) or ``"whole_flight"`` (v2: whole simulated flights, CV 0.6-1.9 %;
         docs/physics.md). The world grows the parts and the filters model the growth with it.
+    spring_effect_realign : after each resampling of the spring filter, re-condition each
+        jittered particle's installation-effect states on its new crack depth (the data's
+        information on them carried along a parallel shift of its path,
+        ``scas_env.learning_kernel.realign_effect``; docs/beliefs.md, "Spring calibration";
+        default False: the v2 filter; measured not to help). Needs the filters learning in
+        flight (``flight_features`` with I8 and I9).
     """
 
     fidelity: str = "surrogate"
@@ -178,6 +184,16 @@ class Scenario(Validated):
         source="physics fidelity: each flight flies one of this many Table-1 windows drawn at "
         "reset, each window's healthy baseline simulated once (0: a new window every flight)",
     )
+    spring_theta_walk: float = param(
+        0.0,
+        "1/sqrt(flight)",
+        lo=0.0,
+        hi=0.05,
+        source="random walk of the spring filter's log theta (std per sqrt(flight)) when the "
+        "filters learn in flight (flight_features with I8, I9; 0: none, the v2 filter; "
+        "docs/beliefs.md, 'Spring calibration'). v0/v1 keep their own fixed walk",
+    )
+    spring_effect_realign: bool = False
 
     def _check(self) -> None:
         for name, allowed in (
@@ -193,6 +209,19 @@ class Scenario(Validated):
             value = getattr(self, name)
             if value not in allowed:
                 raise ValueError(f"Scenario.{name} = {value!r} must be one of {allowed}")
+        if not isinstance(self.spring_effect_realign, bool):
+            raise ValueError(
+                f"Scenario.spring_effect_realign = {self.spring_effect_realign!r} must be "
+                "true or false"
+            )
+        learning = {"I8", "I9"} & set(self.flight_feature_names)
+        for name in ("spring_theta_walk", "spring_effect_realign"):
+            value = getattr(self, name)
+            if value and not learning:
+                raise ValueError(
+                    f"Scenario.{name} = {value!r} needs the filters learning in flight: "
+                    f"flight_features 'I2,I6,I7,I8,I9', not {self.flight_features!r}"
+                )
         if not (self.crack_active or self.wear_active):
             raise ValueError("Scenario: at least one of crack_active, wear_active must be 1")
         if self.degradation_draws == "per_part" and self.fidelity == "physics":

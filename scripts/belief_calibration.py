@@ -4,6 +4,10 @@ Runs :func:`scas_env.studies.belief_calibration.run_study`, prints the per-stage
 reliability diagram, and writes CSV/JSON/PNG into ``--out`` (docs/beliefs.md).
 
     python scripts/belief_calibration.py --episodes 200 --seed 1000 --out results/beliefs
+    python scripts/belief_calibration.py --compare results/today results/option  # paired
+    python scripts/belief_calibration.py --episodes 40 --seed 0 --scenario \
+        '{"flight_features": "I2,I6,I7,I8,I9", "spring_theta_walk": 0.007,
+          "spring_effect_realign": true}'
 """
 
 from __future__ import annotations
@@ -38,12 +42,35 @@ def main(argv: Sequence[str] | None = None) -> int:
         "--monitor",
         type=json.loads,
         default={},
-        help="HealthMonitor keywords as JSON, e.g. '{\"spring_theta_walk\": 0.005}'",
+        help='HealthMonitor keywords as JSON, e.g. \'{"installation": "baseline"}\' (the '
+        "spring options are --scenario fields)",
+    )
+    parser.add_argument(
+        "--compare",
+        nargs=2,
+        metavar=("A", "B"),
+        default=None,
+        help="no run: compare two results folders of the same seeds, life by life (paired "
+        "differences B - A with cluster-bootstrap 95%% intervals over episodes)",
     )
     parser.add_argument("--out", default=None, help="results folder (none: print only)")
     parser.add_argument("--overwrite", action="store_true", help="replace an existing --out")
     parser.add_argument("--no-progress", action="store_true")
     args = parser.parse_args(argv)
+    if args.compare is not None:
+        import numpy as np
+
+        from scas_env.studies.belief_comparison import (
+            compare_runs,
+            format_comparison,
+            read_lives,
+        )
+
+        a, b = (read_lives(folder) for folder in args.compare)
+        rows = compare_runs(a, b, np.random.default_rng(args.seed))
+        print(f"paired: A = {args.compare[0]}, B = {args.compare[1]} (info truth)")
+        print(format_comparison(rows))
+        return 0
     if args.out is not None:
         from scas_env.results_folder import check_destination
 

@@ -7,6 +7,8 @@ Runs :func:`scas_env.studies.spring_cloud.cloud_records` on ScasMaintenance-v2's
 
     python scripts/spring_cloud.py --episodes 40 --seed 0
     python scripts/spring_cloud.py --episodes 40 --seed 0 --monitor '{"spring_theta_walk": 0.003}'
+    python scripts/spring_cloud.py --episodes 40 --seed 0 --policy never \
+        --scenario '{"spring_theta_walk": 0.007, "spring_effect_realign": true}'
 """
 
 from __future__ import annotations

@@ -11,6 +11,7 @@ from scipy.stats import binomtest
 
 from scas_env.studies.belief_calibration import (
     PartTrace,
+    life_rows,
     reliability_rows,
     stage_rows,
     trace_table,
@@ -72,3 +73,65 @@ def test_reliability_rows_bin_known_outcomes() -> None:
     assert high["records"] == 3 and high["observed"] == 1.0
     assert high["predicted"] == pytest.approx(0.9)
     assert low["records"] == 7 + 2 and low["observed"] == 0.0
+
+
+def test_life_rows_are_the_records_stage_rows_count() -> None:
+    t = trace_table([_trace(), _trace()])  # four lives, two per episode
+    rows = life_rows(t, (0.2, 0.8))
+    at = [r for r in rows if r["stage"] == 0.8]
+    assert [(r["episode"], r["life"]) for r in at] == [(0, 0), (1, 0)]  # failed lives only
+    assert all(r["covered"] == 0 and r["undercut"] == 1 for r in at)
+    early = [r for r in rows if r["stage"] == 0.2]
+    assert [(r["episode"], r["life"]) for r in early] == [(0, 0), (0, 1), (1, 0), (1, 1)]
+    assert all(r["log_ratio"] == pytest.approx(math.log(1.1)) for r in early)
+    summary = {r["stage"]: r for r in stage_rows(t, (0.2, 0.8), 0.05) if r["truth"] == "info"}
+    for s in (0.2, 0.8):
+        mine = [r for r in rows if r["stage"] == s]
+        assert summary[s]["lives"] == len(mine)
+        assert summary[s]["coverage"] == np.mean([r["covered"] for r in mine])
+        assert summary[s]["undercut"] == np.mean([r["undercut"] for r in mine])
+
+
+def test_paired_difference_against_a_direct_cluster_bootstrap() -> None:
+    """The difference is the paired mean; its interval matches a hand-written percentile
+    bootstrap over episodes (numpy) within Monte Carlo error; with no spread it collapses
+    to the difference; the MDD is 2.8 standard errors."""
+    from scas_env.studies.belief_comparison import MDD_FACTOR, paired_difference
+
+    rng = np.random.default_rng(0)
+    episode = np.repeat(np.arange(150), 2)
+    a = (rng.random(300) < 0.85).astype(float)
+    b = np.where(rng.random(300) < 0.1, 1.0 - a, a)  # 10 % of the lives flip
+    out = paired_difference(a, b, episode, np.random.default_rng(1), n_resamples=4000)
+    assert out["diff"] == pytest.approx(np.mean(b - a)) and out["lives"] == 300
+    d = (b - a).reshape(150, 2).sum(axis=1)
+    boot = np.random.default_rng(2).integers(0, 150, (4000, 150))
+    stats = d[boot].sum(axis=1) / 300.0
+    lo, hi = np.quantile(stats, [0.025, 0.975])
+    assert out["ci_low"] == pytest.approx(lo, abs=0.006)
+    assert out["ci_high"] == pytest.approx(hi, abs=0.006)
+    assert out["mdd"] == pytest.approx(MDD_FACTOR * stats.std(ddof=1), rel=0.08)
+    same = paired_difference(a, a, episode, np.random.default_rng(1))
+    assert (same["diff"], same["ci_low"], same["ci_high"], same["mdd"]) == (0.0, 0.0, 0.0, 0.0)
+    with pytest.raises(ValueError, match="equal non-empty"):
+        paired_difference(a, b[:-1], episode, rng)
+
+
+def test_compare_runs_pairs_lives_and_pools_stages(tmp_path) -> None:
+    from scas_env.studies.belief_comparison import compare_runs, read_lives
+
+    header = "preset,policy,part,stage,episode,life,covered,undercut,log_ratio\n"
+    rows_a = [f"default,never,spring,{s},{e},0,1,0,0.1\n" for s in (0.2, 0.8) for e in range(4)]
+    rows_b = [f"default,never,spring,{s},{e},0,{int(e > 0 or s < 0.5)},1,0.1\n"
+              for s in (0.2, 0.8) for e in range(3)]  # fmt: skip
+    for name, rows in (("a", rows_a), ("b", rows_b)):
+        (tmp_path / name).mkdir()
+        (tmp_path / name / "lives.csv").write_text(header + "".join(rows))
+    out = compare_runs(read_lives(tmp_path / "a"), read_lives(tmp_path / "b"),
+                       np.random.default_rng(0))  # fmt: skip
+    got = {(r["stage"], r["metric"]): r for r in out}
+    assert got[("all", "covered")]["lives"] == 6  # episode 3 is only in run A
+    assert got[("0.8", "covered")]["diff"] == pytest.approx(-1 / 3)
+    assert got[("0.2", "undercut")]["diff"] == 1.0
+    with pytest.raises(FileNotFoundError, match=r"lives\.csv"):
+        read_lives(tmp_path)

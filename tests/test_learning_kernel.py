@@ -95,6 +95,46 @@ def test_test_kernel_equals_the_python_form_along_an_episode() -> None:
     assert compared == 120 and resamplings >= 3 and detected >= 1, (resamplings, detected)
 
 
+def test_kernels_equal_the_python_form_with_the_spring_options() -> None:
+    """``spring_effect_realign`` (and the walk) on: along a v2 episode, every learning batch
+    and every other slot's test give the same filters, effect states, tables and stream in
+    the kernels and the Python form (the resampling hook), spring resamplings included; a
+    twin without the re-alignment leaves other effect states after a spring resampling."""
+    env = ScasMaintenanceEnv(
+        **V2_KWARGS, episode_slots=3000, spring_theta_walk=0.003, spring_effect_realign=True
+    )
+    env.reset(seed=6)
+    compared = spring_resamplings = differed = 0
+    for t in range(3000):
+        monitor = env.monitor
+        due = monitor.flight_count == 9
+        if due or t % 50 == 0:
+            twin = copy.deepcopy(monitor)
+            plain = copy.deepcopy(monitor)
+            plain.learning_model = (*plain.learning_model[:19], False, *plain.learning_model[20:])
+            before = twin.spring_filter.n_resamples
+            if due:
+                for m in (monitor, plain):
+                    m.learn_from_flights()
+                twin.learn_from_flights_python()
+            else:
+                feats = env.world.test(copy.deepcopy(env.rngs["measure"]))
+                for m in (monitor, plain):
+                    m.tested(feats)
+                twin.tested_python(feats)
+            for a, b in zip(_state(monitor), _state(twin), strict=True):
+                np.testing.assert_array_equal(a, b)
+            compared += 1
+            if twin.spring_filter.n_resamples > before:
+                spring_resamplings += 1
+                differed += not np.array_equal(
+                    monitor.spring_filter.aux["I8_z_mean"], plain.spring_filter.aux["I8_z_mean"]
+                )
+        env.step(1 if t % 10 == 0 else 0)
+    assert compared >= 100 and spring_resamplings >= 5, (compared, spring_resamplings)
+    assert differed == spring_resamplings
+
+
 def test_a_non_finite_batch_raises_in_both_forms() -> None:
     env = ScasMaintenanceEnv(**V2_KWARGS)
     env.reset(seed=2)

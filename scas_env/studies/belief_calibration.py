@@ -69,6 +69,9 @@ TARGETS = {
     "reliability_tolerance": 0.05,
     "sd_log_at_0.8": 0.2,
 }
+#: columns of ``lives.csv`` (:func:`life_rows` with the key of its table)
+LIFE_COLUMNS = ("preset", "policy", "part", "stage", "episode", "life", "covered", "undercut",
+                "log_ratio")  # fmt: skip
 #: presets of the study: scenario fields over the defaults
 PRESETS: dict[str, dict[str, Any]] = {
     "default": {},
@@ -78,8 +81,10 @@ PRESETS: dict[str, dict[str, Any]] = {
 
 class MonitorOptionsEnv(ScasMaintenanceEnv):
     """:class:`ScasMaintenanceEnv` whose health monitor takes extra keywords
-    (``monitor_options``, e.g. ``spring_theta_walk``): opt-in monitor variants that no
-    :class:`Scenario` field selects yet, for this study only.
+    (``monitor_options``, e.g. ``installation``): monitor variants that no :class:`Scenario`
+    field selects, for this study only. The spring calibration options are scenario fields
+    (``spring_theta_walk``, ``spring_effect_realign``): pass them with ``scenario_fields``,
+    so the env builds its monitor with them (the draws of a registered env with the fields).
 
     After the env's own reset the monitor is rebuilt with the options and reset on the same
     filter stream (``rngs["filter"]``, continuing where the env's monitor left it): episodes
@@ -108,7 +113,7 @@ class MonitorOptionsEnv(ScasMaintenanceEnv):
 
 
 def _check_monitor_options(options: Mapping[str, Any]) -> None:
-    allowed = ("installation", "spring_theta_walk")
+    allowed = ("installation", "spring_theta_walk", "spring_effect_realign")
     bad = sorted(k for k in options if k not in allowed)
     if bad:
         raise ValueError(f"monitor_options {bad} are not among the allowed keywords {allowed}")
@@ -196,19 +201,21 @@ def _record(env: ScasMaintenanceEnv, tr: PartTrace, part: str, life: int, info: 
 
 def trace_table(traces: Sequence[PartTrace]) -> dict[str, np.ndarray]:
     """The records of several episodes' traces of one part as arrays, with each record's
-    life length ``L``, stage ``age / L``, realised RUL (NaN if unknown) and whether the
-    outcome within ``horizon`` is known (filled by :func:`add_outcomes`)."""
+    life length ``L``, stage ``age / L``, realised RUL (NaN if unknown), episode (index of
+    its trace) and life within that episode."""
     cols: dict[str, list] = {
         k: [] for k in ("life", "age", "mean", "low", "q_lo", "q_hi", "risk", "true_info")
     }
     life_len: list[float] = []
     fail_flight: list[float] = []
     end_age: list[float] = []
+    episode_of: list[int] = []
     offset = 0
-    for tr in traces:
+    for e, tr in enumerate(traces):
         for k in cols:
             values = getattr(tr, k)
             cols[k].extend(np.asarray(values) + offset if k == "life" else values)
+        episode_of += [e] * len(tr.fail_flight)
         for f, a, r in zip(tr.fail_flight, tr.end_age, tr.end_info, strict=True):
             life_len.append(float(f) if f > 0 else a + r)
             fail_flight.append(float(f) if f > 0 else math.nan)
@@ -221,6 +228,9 @@ def trace_table(traces: Sequence[PartTrace]) -> dict[str, np.ndarray]:
     out["life_length"] = lengths[life]
     out["realised"] = np.asarray(fail_flight)[life] - out["age"]
     out["end_age"] = np.asarray(end_age)[life]
+    first_life = np.cumsum([0] + [len(tr.fail_flight) for tr in traces])
+    out["episode"] = np.asarray(episode_of, dtype=np.int64)[life]
+    out["life_in_episode"] = life - first_life[out["episode"]]
     with np.errstate(invalid="ignore", divide="ignore"):
         out["stage"] = out["age"] / out["life_length"]
     return out
@@ -240,11 +250,8 @@ def stage_rows(
 ) -> list[dict[str, float | str]]:
     """Coverage, undercut and sd of the log ratio per stage and truth (module docstring)."""
     rows: list[dict[str, float | str]] = []
-    life, stage = table["life"], table["stage"]
     for s in stages:
-        # first record of each life at or past the stage
-        at = np.flatnonzero(stage >= s)
-        first = at[np.unique(life[at], return_index=True)[1]] if at.size else at
+        first = _first_at(table, s)
         for truth in TRUTHS:
             t = table["true_info" if truth == "info" else "realised"][first]
             keep = np.isfinite(t) & (t > 0.0)
@@ -269,6 +276,38 @@ def stage_rows(
                     "sd_log": float(np.std(ratio, ddof=1)) if ratio.size > 1 else math.nan,
                     "mean_log": float(np.mean(ratio)) if ratio.size else math.nan,
                     "median_true_rul": float(np.median(t)) if t.size else math.nan,
+                }
+            )
+    return rows
+
+
+def _first_at(table: dict[str, np.ndarray], stage: float) -> np.ndarray:
+    """Index of the first record of each life at or past ``stage`` of its life."""
+    at = np.flatnonzero(table["stage"] >= stage)
+    return at[np.unique(table["life"][at], return_index=True)[1]] if at.size else at
+
+
+def life_rows(table: dict[str, np.ndarray], stages: Sequence[float]) -> list[dict[str, float]]:
+    """Per stage and life, the record :func:`stage_rows` counts against the ``info`` truth:
+    episode, life within it, covered (0/1), undercut (0/1), ``log(mean / truth)``. Two runs
+    on the same seeds fly the same lives (``degradation_draws = "per_part"``, policies that
+    do not read the filters), so these rows pair them (:mod:`.belief_comparison`)."""
+    rows: list[dict[str, float]] = []
+    for s in stages:
+        first = _first_at(table, s)
+        t = table["true_info"][first]
+        keep = np.isfinite(t) & (t > 0.0)
+        for i, truth in zip(first[keep], t[keep], strict=True):
+            with np.errstate(divide="ignore"):
+                ratio = math.log(table["mean"][i] / truth) if table["mean"][i] > 0 else -math.inf
+            rows.append(
+                {
+                    "stage": s,
+                    "episode": int(table["episode"][i]),
+                    "life": int(table["life_in_episode"][i]),
+                    "covered": int(table["q_lo"][i] <= truth <= table["q_hi"][i]),
+                    "undercut": int(truth < table["low"][i]),
+                    "log_ratio": ratio,
                 }
             )
     return rows
@@ -307,12 +346,13 @@ def reliability_rows(
 
 @dataclass(frozen=True)
 class StudyResult:
-    """Tables of one study: ``stages`` and ``reliability`` rows keyed by
-    (preset, policy, part); ``config`` as run."""
+    """Tables of one study: ``stages``, ``reliability`` and per-life ``lives`` rows
+    (:func:`life_rows`) keyed by (preset, policy, part); ``config`` as run."""
 
     config: dict[str, Any]
     stages: dict[tuple[str, str, str], list[dict[str, float | str]]]
     reliability: dict[tuple[str, str, str], list[dict[str, float]]]
+    lives: dict[tuple[str, str, str], list[dict[str, float]]] = field(default_factory=dict)
 
 
 def run_study(
@@ -333,8 +373,9 @@ def run_study(
     ``scenario_fields`` override the preset's scenario (e.g. ``flight_features``);
     ``env_factory`` builds the env from the scenario (default :class:`ScasMaintenanceEnv`);
     ``monitor_options`` (keywords of :class:`scas_env.monitor.HealthMonitor`, e.g.
-    ``{"spring_theta_walk": 0.005}``) run the episodes with :class:`MonitorOptionsEnv`
-    (not together with ``env_factory``).
+    ``{"installation": "baseline"}``) run the episodes with :class:`MonitorOptionsEnv`
+    (not together with ``env_factory``); the spring calibration options are scenario fields
+    (``{"spring_theta_walk": 0.007, "spring_effect_realign": True}`` in ``scenario_fields``).
     """
     if monitor_options and env_factory is not None:
         raise ValueError("monitor_options and env_factory cannot be combined: pass one of them")
@@ -363,6 +404,7 @@ def run_study(
         make = env_factory or (lambda sc: ScasMaintenanceEnv(scenario=sc))
     stage_tables: dict[tuple[str, str, str], list] = {}
     rel_tables: dict[tuple[str, str, str], list] = {}
+    life_tables: dict[tuple[str, str, str], list] = {}
     jobs = [(pr, po) for pr in presets for po in policies]
     bar = tqdm(total=len(jobs) * episodes, desc="belief episodes", disable=not progress)
     for preset, policy in jobs:
@@ -378,6 +420,7 @@ def run_study(
             key = (preset, policy, p)
             stage_tables[key] = stage_rows(table, stages, float(sc.rul_quantile))
             rel_tables[key] = reliability_rows(table, float(sc.risk_horizon_flights))
+            life_tables[key] = life_rows(table, stages)
     bar.close()
     config = {
         "episodes": episodes,
@@ -391,7 +434,7 @@ def run_study(
         "risk_bins": list(RISK_BINS),
         "targets": TARGETS,
     }
-    return StudyResult(config, stage_tables, rel_tables)
+    return StudyResult(config, stage_tables, rel_tables, life_tables)
 
 
 def format_stages(result: StudyResult, truth: str = "info") -> str:
@@ -451,14 +494,23 @@ def _write_csv(path: Path, rows: list[dict]) -> None:
 
 
 def write_study(result: StudyResult, out: str | Path, *, overwrite: bool = False) -> list[Path]:
-    """``stages.csv``, ``reliability.csv``, ``study.json``, ``coverage.png`` and
-    ``reliability.png`` in the results folder ``out`` (written atomically)."""
-    names = ["stages.csv", "reliability.csv", "study.json", "coverage.png", "reliability.png"]
+    """``stages.csv``, ``reliability.csv``, ``lives.csv`` (per-life rows, for paired
+    comparisons), ``study.json``, ``coverage.png`` and ``reliability.png`` in the results
+    folder ``out`` (written atomically)."""
+    names = [
+        "stages.csv", "reliability.csv", "lives.csv", "study.json", "coverage.png",
+        "reliability.png",
+    ]  # fmt: skip
     seeds = {"first": result.config["seed"], "episodes": result.config["episodes"]}
     with results_folder(out, config=result.config, seeds=seeds, overwrite=overwrite) as tmp:
         stages, rel = _flat(result.stages), _flat(result.reliability)
         _write_csv(tmp / "stages.csv", stages)
         _write_csv(tmp / "reliability.csv", rel)
+        lives = _flat(result.lives)
+        if lives:
+            _write_csv(tmp / "lives.csv", lives)
+        else:  # no life reached a stage: the header only
+            (tmp / "lives.csv").write_text(",".join(LIFE_COLUMNS) + "\n")
         (tmp / "study.json").write_text(
             json.dumps({"config": result.config, "stages": stages, "reliability": rel}, indent=1)
             + "\n"
@@ -537,6 +589,7 @@ __all__ = [
     "StudyResult",
     "format_reliability",
     "format_stages",
+    "life_rows",
     "policy_action",
     "reliability_rows",
     "run_episode",
