@@ -10,9 +10,9 @@ decides in, and adds those labels to the data.
 
 The expert here is the same as in :mod:`policies.epoch_demonstrations`: the rule's action
 now (a function of the observation) with the largest ``k`` that keeps the margin
-``safety`` against the rule's next non-``fly`` action, found by playing the rule forward on
-a copy of the env (``copy.deepcopy``: the same draws, so the look-ahead is the rule's
-actual future from this state). A look-ahead stays valid while the clone flies along it,
+``safety`` against the rule's next non-``fly`` action (1 after a test), found by playing the
+rule forward on a copy of the env (``copy.deepcopy``: the same draws, so the look-ahead is
+the rule's actual future from this state). A look-ahead stays valid while the clone flies along it,
 so it is recomputed only where the clone leaves the rule's path; it stops after
 ``safety * max(ks)`` slots (every ``k`` is safe then).
 
@@ -32,7 +32,7 @@ import numpy as np
 
 from policies.base import make_policy
 from policies.epoch_demonstrations import Demonstrations
-from scas_env.decision_epochs import FLY, MASK_READS, _check_ks, maintenance_mask
+from scas_env.decision_epochs import FLY, MASK_READS, TEST_AND_FLY, _check_ks, maintenance_mask
 
 __all__ = ["DaggerPlan", "dagger_samples", "merged"]
 
@@ -97,6 +97,8 @@ def dagger_samples(
                     cache_end = t + _lookahead(env, rule, expert, limit)
                 gap = (cache_end - t) / float(safety)
                 k = int(ks_sorted[max(np.searchsorted(ks_sorted, gap, side="right") - 1, 0)])
+                if expert == TEST_AND_FLY:
+                    k = 1  # the expert sees the test's outcome first (epoch_labels)
                 obs_rows.append(np.append(obs, np.float32(slots - t)))
                 actions.append(expert * len(ks) + index_of_k[k])
                 episode_ids.append(e)

@@ -3,7 +3,8 @@
 A rule acts flight by flight; a decision-epoch agent (:mod:`scas_env.decision_epochs`) acts,
 then flies ``k`` slots. The rule's own episode can be cut into epochs without changing it:
 at slot ``t`` the demonstrated action is the rule's action there with the largest
-``k in ks`` that does not pass the rule's next non-``fly`` action (:func:`epoch_labels`).
+``k in ks`` that does not pass the rule's next non-``fly`` action (:func:`epoch_labels`;
+``k = 1`` after a test, whose outcome the expert must see before committing).
 Played from slot 0, these epochs reproduce the rule's episode bit for bit (``1 in ks``
 always lands on the next action; tested), so they are an exact expert for the epoch
 formulation, with the look-ahead a rule's episode gives for free. Every slot of a recorded
@@ -31,7 +32,14 @@ import numpy as np
 
 from policies.base import make_policy
 from policies.benchmark import episode_seeds
-from scas_env.decision_epochs import FLY, MASK_READS, N_MAINTENANCE, _check_ks, maintenance_mask
+from scas_env.decision_epochs import (
+    FLY,
+    MASK_READS,
+    N_MAINTENANCE,
+    TEST_AND_FLY,
+    _check_ks,
+    maintenance_mask,
+)
 
 __all__ = [
     "Demonstrations",
@@ -44,18 +52,31 @@ __all__ = [
 ]
 
 
-def epoch_labels(actions: np.ndarray, ks: Sequence[int], safety: float = 1.0) -> np.ndarray:
+def epoch_labels(
+    actions: np.ndarray,
+    ks: Sequence[int],
+    safety: float = 1.0,
+    look_after: Sequence[int] = (TEST_AND_FLY,),
+) -> np.ndarray:
     """Per slot ``t`` of one episode of per-flight ``actions`` (ints, ``fly`` = 0), the
     largest ``k in ks`` with ``safety * k <= next - t`` (else 1), ``next`` the first slot
     after ``t`` whose action is not ``fly`` (the episode's length if none). Needs
     ``1 in ks``. Any such ``k`` replays the rule exactly; ``safety > 1`` keeps a margin, so
     that a clone choosing the next larger ``k`` by mistake still stops near the rule's next
     action (with ``safety = 2`` and ks 1, 5, 20, 50, 100: within 10 flights after it).
+    After an action of ``look_after`` (default the pre-flight test) ``k = 1``: its outcome
+    is seen at once and decides what comes next (a failed go/no-go test holds the aircraft
+    until a replacement), so an expert that does not know the outcome in advance decides
+    again right after it. (The recorded episode knows the outcome; a label that used it,
+    e.g. "test, then fly 50" because this test passed, would teach a clone to commit
+    50 slots after tests that fail, held on the ground.)
 
     >>> epoch_labels(np.array([0, 0, 0, 2, 0, 0, 0, 0]), (1, 2, 5)).tolist()
     [2, 2, 1, 5, 2, 2, 2, 1]
     >>> epoch_labels(np.array([0, 0, 0, 2, 0, 0, 0, 0]), (1, 2, 5), safety=2).tolist()
     [1, 1, 1, 2, 2, 1, 1, 1]
+    >>> epoch_labels(np.array([1, 0, 0, 0, 0, 0, 0, 0]), (1, 2, 5)).tolist()
+    [1, 5, 5, 5, 2, 2, 2, 1]
     """
     if not (isinstance(safety, int | float) and math.isfinite(safety) and safety >= 1.0):
         raise ValueError(f"safety = {safety!r} must be a finite number >= 1")
@@ -72,7 +93,8 @@ def epoch_labels(actions: np.ndarray, ks: Sequence[int], safety: float = 1.0) ->
     after = np.minimum.accumulate(acting[::-1])[::-1]
     nxt = np.append(after[1:], n)
     gap = (nxt - idx) / float(safety)
-    return ks_sorted[np.maximum(np.searchsorted(ks_sorted, gap, side="right") - 1, 0)]
+    k = ks_sorted[np.maximum(np.searchsorted(ks_sorted, gap, side="right") - 1, 0)]
+    return np.where(np.isin(a, np.asarray(look_after)), 1, k)
 
 
 def epoch_path(k: np.ndarray) -> np.ndarray:

@@ -133,6 +133,19 @@ def _native_epochs(
     return VecMonitor(native, filename=str(monitor_dir / "0"))
 
 
+ALGOS = ("maskable_ppo", "ppo")
+
+
+def _check_run(algo: str, native_envs: int | None) -> None:
+    """Refuse an unknown ``algo`` or a bad ``native_envs`` (before any folder is made)."""
+    if native_envs is not None and (
+        isinstance(native_envs, bool) or not isinstance(native_envs, int) or native_envs < 1
+    ):
+        raise ValueError(f"native_envs = {native_envs!r} must be None or an integer >= 1")
+    if algo not in ALGOS:
+        raise ValueError(f"algo = {algo!r} must be one of {sorted(ALGOS)}")
+
+
 def _prepared(
     hyperparams: Mapping[str, Any],
     out: Path,
@@ -152,13 +165,8 @@ def _prepared(
     from stable_baselines3.common.utils import set_random_seed
     from stable_baselines3.common.vec_env import VecNormalize
 
-    if native_envs is not None and (
-        isinstance(native_envs, bool) or not isinstance(native_envs, int) or native_envs < 1
-    ):
-        raise ValueError(f"native_envs = {native_envs!r} must be None or an integer >= 1")
+    _check_run(algo, native_envs)
     classes = {"maskable_ppo": contrib.MaskablePPO, "ppo": PPO}
-    if algo not in classes:
-        raise ValueError(f"algo = {algo!r} must be one of {sorted(classes)}")
     hp = dict(hyperparams)
     n_envs = int(hp.pop("n_envs", 4))
     hp.pop("n_timesteps", None)
@@ -250,6 +258,7 @@ def train_epochs(
         raise ValueError(f"checkpoint_every = {checkpoint_every!r} must be an integer >= 1")
     if init is not None and not Path(init).is_dir():
         raise ValueError(f"init = {str(init)!r} is not a folder")
+    _check_run(algo, native_envs)
     out = Path(out_dir)
     if out.exists() and any(out.iterdir()):
         raise ValueError(f"out_dir = {str(out)!r} exists and is not empty; choose a new one")
@@ -328,6 +337,7 @@ def clone_rule(
 
     from policies.epoch_imitation import clone
 
+    _check_run(algo, None)
     out = Path(out_dir)
     if out.exists() and any(out.iterdir()):
         raise ValueError(f"out_dir = {str(out)!r} exists and is not empty; choose a new one")

@@ -41,7 +41,8 @@ def _brute_labels(actions: list[int], ks: tuple[int, ...], safety: float) -> lis
     out = []
     for t in range(len(actions)):
         nxt = next((j for j in range(t + 1, len(actions)) if actions[j] != 0), len(actions))
-        out.append(max([k for k in ks if safety * k <= nxt - t], default=1))
+        longest = max([k for k in ks if safety * k <= nxt - t], default=1)
+        out.append(1 if actions[t] == 1 else longest)  # k = 1 after a test
     return out
 
 
