@@ -77,13 +77,11 @@ reproduce: install
 
 ## The shipped v2 agent from scratch (docs/rl.md, "From the rule"; <= 2 h on 2 cores): clone
 ## the tuned filter rule (demonstrations + DAgger), fine-tune 3 seeds with MaskablePPO on the
-## native decision-epoch env (two at a time), choose on validation seeds, ship to
-## policies/data/$(AGENT_NAME).*, compare on 1000 held-out episodes. TRAIN_S: wall s per seed.
-TRAIN_S ?= 1500
-AGENT_NAME ?= maskable_ppo_epochs_v2
+## native decision-epoch env (two at a time), choose on validation seeds, write the agent to
+## $(AGENT_DIR)/agent (the shipped one stays), compare on 1000 held-out episodes.
 AGENT_DIR ?= $(RESULTS)/agent_v2
 TRAIN_ARGS = --candidate imitation --scenario examples/v2.toml --init $(AGENT_DIR)/clone \
-	--native-envs 64 --max-wall-s $(TRAIN_S) --timesteps 3000000 --checkpoint-every 200000
+	--native-envs 64 --timesteps 1500000 --checkpoint-every 150000
 train-agent-v2: install
 	$(PY) scripts/imitate_rule.py --scenario examples/v2.toml \
 		--rules-from docs/value_v2/ladder.json --out $(AGENT_DIR)/clone
@@ -91,10 +89,11 @@ train-agent-v2: install
 	$(PY) scripts/train_epochs.py $(TRAIN_ARGS) --seed 1 --out $(AGENT_DIR)/runs/s1; b=$$?; \
 	wait $$a && test $$b -eq 0
 	$(PY) scripts/train_epochs.py $(TRAIN_ARGS) --seed 2 --out $(AGENT_DIR)/runs/s2
-	$(PY) scripts/ship_epochs.py --runs $(AGENT_DIR)/runs --name $(AGENT_NAME) \
+	mkdir -p $(AGENT_DIR)/agent
+	$(PY) scripts/ship_epochs.py --runs $(AGENT_DIR)/runs --name maskable_ppo_epochs_v2 \
 		--scenario examples/v2.toml --rules-from docs/value_v2/ladder.json \
 		--held-out-seed 2 --validation-episodes 200 --held-out-episodes 1000 \
-		--out $(AGENT_DIR)/selection
+		--ship-to $(AGENT_DIR)/agent --out $(AGENT_DIR)/selection
 
 ## Results, tool caches and numba's compiled kernels (*.nbi index, *.nbc code in __pycache__).
 clean:

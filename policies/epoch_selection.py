@@ -300,6 +300,16 @@ def training_scale(run_dir: str | Path, slots: int) -> dict[str, Any]:
     }
 
 
+def _refuse_existing(out_dir: str | Path, name: str, overwrite: bool) -> None:
+    """Raise ``ValueError`` naming the files of agent ``name`` already in ``out_dir``
+    (unless ``overwrite``)."""
+    suffixes = (".zip", "_vecnormalize.pkl", ".json", "_curves.csv", "_curves.png")
+    existing = [str(Path(out_dir) / f"{name}{x}") for x in suffixes]
+    existing = [f for f in existing if Path(f).exists()]
+    if existing and not overwrite:
+        raise ValueError(f"{existing} exist; pass overwrite=True (--overwrite) to replace them")
+
+
 def ship_best(
     validation_csv: str | Path,
     runs_root: str | Path,
@@ -308,14 +318,17 @@ def ship_best(
     slots: int | None = None,
     out_dir: str | Path = DATA_DIR,
     reference: str = "preventive",
+    overwrite: bool = False,
 ) -> Path:
     """Copy the best checkpoint (highest mean validation reward) to ``out_dir/<name>.*`` with
     metadata and the training curves (``<name>_curves.csv/.png``); returns the zip path.
+    Existing files of that name are refused unless ``overwrite`` (raised before any work).
 
     The validation rows must be of one scenario (the CSV of :func:`validate_checkpoints`);
     the metadata records it with the observation names of its env, which
     :func:`policies.sb3_agents.load_sb3_policy` checks against the env it is asked to act
     on, and the training scale of every validated run (:func:`training_scale`)."""
+    _refuse_existing(out_dir, name, overwrite)
     with Path(validation_csv).open() as fh:
         rows = list(csv.DictReader(fh))
     if not rows:
@@ -584,6 +597,8 @@ def select_ship_evaluate(
     held_out_episodes: int = 1000,
     n_workers: int = 2,
     compare_default: bool | None = None,
+    ship_to: str | Path = DATA_DIR,
+    overwrite: bool = False,
 ) -> dict[str, Any]:
     """The whole selection: validate every checkpoint under ``runs_root`` (runs of
     :func:`policies.epoch_training.train_epochs`, all of one scenario: :func:`resolve_scenario`)
@@ -591,7 +606,8 @@ def select_ship_evaluate(
     best as ``policies/data/<name>`` and compare it on held-out seeds ``held_out_seed`` with
     every rule and (``compare_default``; default: on v0's scenario only, where it can act)
     the shipped per-flight agent; writes ``out/validation.csv`` and ``out/held_out.json``;
-    returns the held-out summary."""
+    returns the held-out summary. ``ship_to``: where the agent goes (default the package's
+    ``policies/data``, refused if ``name`` is there unless ``overwrite``)."""
     from policies.sb3_agents import PER_FLIGHT_AGENT
 
     runs_root, out = Path(runs_root), Path(out)
@@ -600,6 +616,7 @@ def select_ship_evaluate(
         raise ValueError(f"runs_root = {str(runs_root)!r} holds no training run")
     scenario = resolve_scenario(runs, scenario)
     rules = list(rules) if rules else [PolicySpec("preventive")]
+    _refuse_existing(ship_to, name, overwrite)  # before the long validation
     validation = out / "validation.csv"
     validate_checkpoints(
         runs,
@@ -609,7 +626,14 @@ def select_ship_evaluate(
         episodes=validation_episodes,
         n_workers=n_workers,
     )
-    shipped = ship_best(validation, runs_root, name, reference=rules[0].key)
+    shipped = ship_best(
+        validation,
+        runs_root,
+        name,
+        reference=rules[0].key,
+        out_dir=ship_to,
+        overwrite=overwrite,
+    )
     if compare_default is None:
         compare_default = not scenario
     agents: dict[str, str | Path] = {name: shipped}

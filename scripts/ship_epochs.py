@@ -21,6 +21,7 @@ import argparse
 import json
 
 from policies.epoch_selection import HELD_OUT_SEED, select_ship_evaluate, tuned_rules
+from policies.sb3_agents import DATA_DIR
 from scas_env.cli_args import add_env_config_args, load_env_config, scenario_changes
 
 
@@ -42,6 +43,12 @@ def main() -> None:
         "(validation against its age rule); default: the shipped age rule",
     )
     parser.add_argument("--workers", type=int, default=2, help="worker processes")
+    parser.add_argument(
+        "--ship-to", default=None, help="folder for the agent's files (default policies/data)"
+    )
+    parser.add_argument(
+        "--overwrite", action="store_true", help="replace an agent of the same name there"
+    )
     parser.add_argument(
         "--skip-default", action="store_true", help="leave ppo_default out of the held-out run"
     )
@@ -67,6 +74,8 @@ def main() -> None:
             held_out_episodes=args.held_out_episodes,
             n_workers=args.workers,
             compare_default=False if args.skip_default else None,
+            ship_to=DATA_DIR if args.ship_to is None else args.ship_to,
+            overwrite=args.overwrite,
         )
     except ValueError as exc:
         parser.error(str(exc))

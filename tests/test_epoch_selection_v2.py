@@ -203,3 +203,13 @@ def test_held_out_refuses_validation_and_tuning_seeds(seed, tmp_path) -> None:
 
     with pytest.raises(ValueError, match="not a held-out one"):
         held_out_comparison({}, tmp_path, seed=seed, episodes=1)
+
+
+def test_shipping_refuses_to_overwrite_an_agent(tmp_path) -> None:
+    from policies.epoch_selection import _refuse_existing
+
+    _refuse_existing(tmp_path, "agent", overwrite=False)  # nothing there yet
+    (tmp_path / "agent.zip").write_bytes(b"x")
+    with pytest.raises(ValueError, match="agent.zip"):
+        _refuse_existing(tmp_path, "agent", overwrite=False)
+    _refuse_existing(tmp_path, "agent", overwrite=True)
