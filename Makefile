@@ -75,15 +75,15 @@ figures: install
 reproduce: install
 	$(PY) scripts/reproduce_paper.py --quick
 
-## The shipped v2 agent from scratch (docs/rl.md, "From the rule"; <= 2 h on 2 cores): clone
+## The shipped v2 agent from scratch (docs/rl.md, "From the rule"; about 30 min here): clone
 ## the tuned filter rule (demonstrations + DAgger), fine-tune 3 seeds with MaskablePPO on the
 ## native decision-epoch env (two at a time), choose on validation seeds, write the agent to
 ## $(AGENT_DIR)/agent (the shipped one stays), compare on 1000 held-out episodes.
 AGENT_DIR ?= $(RESULTS)/agent_v2
-TRAIN_ARGS = --candidate imitation --scenario examples/v2.toml --init $(AGENT_DIR)/clone \
+TRAIN_ARGS = --candidate imitation_g1 --scenario examples/v2.toml --init $(AGENT_DIR)/clone \
 	--native-envs 64 --timesteps 1500000 --checkpoint-every 150000
 train-agent-v2: install
-	$(PY) scripts/imitate_rule.py --scenario examples/v2.toml \
+	$(PY) scripts/imitate_rule.py --scenario examples/v2.toml --candidate imitation_g1 \
 		--rules-from docs/value_v2/ladder.json --out $(AGENT_DIR)/clone
 	$(PY) scripts/train_epochs.py $(TRAIN_ARGS) --seed 0 --out $(AGENT_DIR)/runs/s0 & a=$$!; \
 	$(PY) scripts/train_epochs.py $(TRAIN_ARGS) --seed 1 --out $(AGENT_DIR)/runs/s1; b=$$?; \

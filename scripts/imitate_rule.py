@@ -8,7 +8,7 @@ rule labels the states the clone visits on further training episodes);
 filter rule of the value study)::
 
     python scripts/imitate_rule.py --scenario examples/v2.toml \\
-        --rules-from docs/value_v2/ladder.json --arm filter --candidate imitation \\
+        --rules-from docs/value_v2/ladder.json --arm filter --candidate imitation_g1 \\
         --out results/rl_v2/clone
 """
 
@@ -41,7 +41,7 @@ def main() -> None:
     parser.add_argument("--dagger-epochs", type=int, default=10, help="passes after a round")
     parser.add_argument("--clone-seed", type=int, default=0, help="network init and batches")
     parser.add_argument("--search", default=str(HYPERPARAMS_DIR / "search.yml"), help="search YAML")
-    parser.add_argument("--candidate", default="imitation", help="network of this candidate")
+    parser.add_argument("--candidate", default="imitation_g1", help="network of this candidate")
     parser.add_argument("--out", required=True, help="new, empty output folder")
     add_env_config_args(parser)
     args = parser.parse_args()
