@@ -210,6 +210,6 @@ def test_shipping_refuses_to_overwrite_an_agent(tmp_path) -> None:
 
     _refuse_existing(tmp_path, "agent", overwrite=False)  # nothing there yet
     (tmp_path / "agent.zip").write_bytes(b"x")
-    with pytest.raises(ValueError, match="agent.zip"):
+    with pytest.raises(ValueError, match=r"agent\.zip"):
         _refuse_existing(tmp_path, "agent", overwrite=False)
     _refuse_existing(tmp_path, "agent", overwrite=True)
