@@ -129,12 +129,19 @@ def _flight_counter(venv: Any) -> Any:
 
 
 def training_fps(
-    venv_fn: Callable[[], Any], total_timesteps: int, seed: int = 0, *, config: str = "project"
+    venv_fn: Callable[[], Any],
+    total_timesteps: int,
+    seed: int = 0,
+    *,
+    config: str = "project",
+    init: str | None = None,
 ) -> float:
     """Frames per second of PPO learning ``total_timesteps`` on ``venv_fn()``, one torch
     thread, on the CPU (``config``: :data:`FPS_CONFIGS`). On a decision-epoch setup (a flight
     counter inside): MaskablePPO with the trainings' settings (:func:`epoch_ppo_kwargs`),
-    and the frames are the flights flown."""
+    and the frames are the flights flown; ``init``: start from this clone
+    (``scripts/imitate_rule.py``'s output) with the fine-tuning settings
+    (:func:`epoch_ppo_kwargs` of ``imitation_g1``), as the shipped agent's runs did."""
     import torch
     from stable_baselines3 import PPO
     from stable_baselines3.common.utils import set_random_seed
@@ -153,8 +160,14 @@ def training_fps(
         from policies.sb3_agents import require_contrib
 
         algo = require_contrib("measure decision-epoch training").MaskablePPO
-        kwargs = epoch_ppo_kwargs()
+        kwargs = epoch_ppo_kwargs("gamma099" if init is None else "imitation_g1")
+    elif init is not None:
+        raise ValueError(f"init = {init!r} is for the decision-epoch setups only")
     model = algo("MlpPolicy", venv, seed=seed, device="cpu", **kwargs)
+    if init is not None:
+        from policies.epoch_training import _warm_start
+
+        _warm_start(model, venv, Path(init))
     start = time.perf_counter()
     model.learn(total_timesteps)
     wall = time.perf_counter() - start
@@ -163,14 +176,17 @@ def training_fps(
     return frames / wall
 
 
-def epoch_ppo_kwargs() -> dict[str, Any]:
-    """MaskablePPO keywords of the decision-epoch trainings (the ``gamma099`` candidate of
-    ``policies/data/hyperparams/search.yml``, without the run settings)."""
-    from policies.epoch_training import HYPERPARAMS_DIR, candidate_hyperparams
+def epoch_ppo_kwargs(candidate: str = "gamma099") -> dict[str, Any]:
+    """MaskablePPO keywords of a decision-epoch training (a candidate of
+    ``policies/data/hyperparams/search.yml``, without the run settings; schedules built)."""
+    from policies.epoch_training import HYPERPARAMS_DIR, _schedule, candidate_hyperparams
 
-    hp = dict(candidate_hyperparams(HYPERPARAMS_DIR / "search.yml", "gamma099"))
+    hp = dict(candidate_hyperparams(HYPERPARAMS_DIR / "search.yml", candidate))
     for key in ("n_envs", "n_timesteps", "policy", "normalize"):
         hp.pop(key, None)
+    for key in ("learning_rate", "clip_range"):
+        if key in hp:
+            hp[key] = _schedule(key, hp[key])
     return hp
 
 
@@ -190,6 +206,7 @@ def fps_rounds(
     seed: int = 0,
     repeats: int = 3,
     config: str = "project",
+    init: str | None = None,
     fps_fn: Callable[..., float] = training_fps,
 ) -> list[dict[str, Any]]:
     """One row per (round, setup) with its frame rate and speed-up over ``setups[0]`` in the
@@ -203,7 +220,9 @@ def fps_rounds(
     runs = [(r, s) for r in range(repeats) for s in setups]
     base: dict[int, float] = {}
     for rep, label in tqdm(runs, desc="PPO runs"):
-        fps = fps_fn(lambda label=label: make_setup(label, seed), timesteps, seed, config=config)
+        fps = fps_fn(
+            lambda label=label: make_setup(label, seed), timesteps, seed, config=config, init=init
+        )
         base.setdefault(rep, fps)
         rows.append({"round": rep, "setup": label, "fps": fps, "speedup": fps / base[rep]})
     return rows
@@ -233,6 +252,7 @@ def run_sb3_bench(
     seed: int = 0,
     repeats: int = 2,
     config: str = "project",
+    init: str | None = None,
 ) -> dict[str, dict[str, float]]:
     """Run :func:`fps_rounds`, write ``bench_sb3.json`` (arguments, summary, runs),
     ``bench_sb3.csv`` (runs) and ``bench_sb3.png`` (median fps per setup) into ``out`` (a
@@ -240,7 +260,9 @@ def run_sb3_bench(
     out = Path(out)
     if out.exists() and (not out.is_dir() or any(out.iterdir())):
         raise ValueError(f"out = {str(out)!r} exists and is not an empty folder")
-    rows = fps_rounds(timesteps, setups=setups, seed=seed, repeats=repeats, config=config)
+    rows = fps_rounds(
+        timesteps, setups=setups, seed=seed, repeats=repeats, config=config, init=init
+    )
     summary = summarise(rows)
     out.mkdir(parents=True, exist_ok=True)
     args = {
@@ -249,6 +271,7 @@ def run_sb3_bench(
         "seed": seed,
         "repeats": repeats,
         "config": config,
+        "init": init,
     }
     (out / "bench_sb3.json").write_text(
         json.dumps({"args": args, "summary": summary, "runs": rows}, indent=2)

@@ -27,6 +27,9 @@ def main() -> None:
         help=f"comma-separated, baseline first, from {','.join(SETUPS)}",
     )
     parser.add_argument("--config", default="project", choices=FPS_CONFIGS, help="PPO settings")
+    parser.add_argument(
+        "--init", default=None, help="epoch setups: start from this clone (imitate_rule.py)"
+    )
     parser.add_argument("--out", default="results/bench_sb3", help="new or empty folder")
     args = parser.parse_args()
     for name in ("timesteps", "repeats"):
@@ -40,6 +43,7 @@ def main() -> None:
             seed=args.seed,
             repeats=args.repeats,
             config=args.config,
+            init=args.init,
         )
     except ValueError as exc:
         parser.error(str(exc))

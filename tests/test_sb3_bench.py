@@ -16,7 +16,7 @@ from policies.sb3_speed import fps_ppo_kwargs, fps_rounds, make_setup, summarise
 def test_rounds_alternate_and_speedups_are_taken_within_a_round(monkeypatch) -> None:
     calls: list[str] = []
 
-    def fake(venv_fn, timesteps, seed, *, config):
+    def fake(venv_fn, timesteps, seed, *, config, init=None):
         label = venv_fn()  # make_setup is replaced below: the label itself
         calls.append(label)
         return {"dummy-4": 100.0, "native-64": 700.0}[label] * 0.99 ** len(calls)
@@ -66,7 +66,7 @@ def test_setups_are_what_they_say() -> None:
 
 
 def test_bench_writes_json_csv_png(tmp_path: Path, monkeypatch) -> None:
-    monkeypatch.setattr(speed, "training_fps", lambda fn, t, seed, config: 10.0)
+    monkeypatch.setattr(speed, "training_fps", lambda fn, t, seed, config, init=None: 10.0)
     monkeypatch.setattr(speed, "make_setup", lambda label, seed=0: label)
 
     def rounds(timesteps, **kw):
@@ -103,3 +103,11 @@ def test_epoch_setups_count_the_flights_flown() -> None:
             flights += sum(i["epoch_slots"] for i in infos)
         assert counter.flights == flights == 3 * 20 * venv.num_envs
         venv.close()
+
+
+def test_a_clone_start_is_for_the_epoch_setups_only() -> None:
+    pytest.importorskip("sb3_contrib")
+    from policies.sb3_speed import make_setup, training_fps
+
+    with pytest.raises(ValueError, match="decision-epoch setups only"):
+        training_fps(lambda: make_setup("cartpole-4"), 64, init="results/none")
