@@ -75,7 +75,7 @@ figures: install
 reproduce: install
 	$(PY) scripts/reproduce_paper.py --quick
 
-## The shipped v2 agent from scratch (docs/rl.md, "From the rule"; about 30 min here): clone
+## The shipped v2 agent from scratch (docs/rl.md, "From the rule"; 20 min here): clone
 ## the tuned filter rule (demonstrations + DAgger), fine-tune 3 seeds with MaskablePPO on the
 ## native decision-epoch env (two at a time), choose on validation seeds, write the agent to
 ## $(AGENT_DIR)/agent (the shipped one stays), compare on 1000 held-out episodes.
