@@ -1,0 +1,74 @@
+"""Wall time of MaskablePPO on a decision-epoch setup, split into rollouts and updates.
+
+Where the training time goes (docs/rl.md, "Decision epochs on the native vector env")::
+
+    python scripts/split_epoch_training.py --setup epochs-native-64 --init results/agent_v2g1/clone
+    python scripts/split_epoch_training.py --setup epochs-dummy-4 --init results/agent_v2g1/clone
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+from pathlib import Path
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(
+        description=__doc__.splitlines()[0], formatter_class=argparse.ArgumentDefaultsHelpFormatter
+    )
+    parser.add_argument(
+        "--setup", default="epochs-native-64", choices=("epochs-dummy-4", "epochs-native-64")
+    )
+    parser.add_argument("--decisions", type=int, default=65_536, help="PPO steps")
+    parser.add_argument("--init", default=None, help="start from this clone (imitate_rule.py)")
+    parser.add_argument("--seed", type=int, default=0)
+    args = parser.parse_args()
+    if args.decisions < 1:
+        parser.error(f"--decisions {args.decisions} must be >= 1")
+    if args.init is not None and not Path(args.init).is_dir():
+        parser.error(f"--init {args.init!r} is not a folder")
+
+    import torch
+    from stable_baselines3.common.callbacks import BaseCallback
+
+    from policies.epoch_training import _warm_start
+    from policies.sb3_agents import require_contrib
+    from policies.sb3_speed import _find_counter, epoch_ppo_kwargs, make_setup
+
+    torch.set_num_threads(1)
+    venv = make_setup(args.setup, args.seed)
+    candidate = "gamma099" if args.init is None else "imitation_g1"
+    algo = require_contrib("time decision-epoch training").MaskablePPO
+    model = algo("MlpPolicy", venv, seed=args.seed, device="cpu", **epoch_ppo_kwargs(candidate))
+    if args.init is not None:
+        _warm_start(model, venv, Path(args.init))
+
+    class RolloutClock(BaseCallback):
+        def __init__(self) -> None:
+            super().__init__()
+            self.rollouts_s, self.started = 0.0, 0.0
+
+        def _on_rollout_start(self) -> None:
+            self.started = time.perf_counter()
+
+        def _on_rollout_end(self) -> None:
+            self.rollouts_s += time.perf_counter() - self.started
+
+        def _on_step(self) -> bool:
+            return True
+
+    clock = RolloutClock()
+    start = time.perf_counter()
+    model.learn(args.decisions, callback=clock)
+    wall = time.perf_counter() - start
+    flights = _find_counter(venv).flights
+    print(
+        f"{args.setup}: wall {wall:.1f} s, rollouts {clock.rollouts_s:.1f} s, updates "
+        f"{wall - clock.rollouts_s:.1f} s; {flights} flights: {flights / wall:,.0f} flights/s, "
+        f"{flights / clock.rollouts_s:,.0f} while collecting"
+    )
+
+
+if __name__ == "__main__":
+    main()
