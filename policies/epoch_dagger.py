@@ -192,8 +192,6 @@ class DaggerPlan:
             progress=progress,
         )
 
-    merged = staticmethod(merged)
-
     def describe(self) -> dict[str, Any]:
         """JSON-ready summary."""
         return {

@@ -335,6 +335,7 @@ def clone_rule(
 
     import numpy as np
 
+    from policies.epoch_dagger import merged
     from policies.epoch_imitation import clone
 
     _check_run(algo, None)
@@ -362,7 +363,7 @@ def clone_rule(
     for seeds in () if dagger is None else dagger.rounds:
         agent = dagger.agent(model, venv, scenario)
         more = dagger.samples(agent, seeds, scenario, progress=progress)
-        demos = dagger.merged(demos, more)
+        demos = merged(demos, more)
         result = clone(model, venv, demos, epochs=dagger.epochs, **settings)
         rounds.append({**dataclasses.asdict(result), "new_samples": len(more.actions)})
     model.save(out / "model.zip")

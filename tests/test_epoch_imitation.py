@@ -330,3 +330,27 @@ def test_lookahead_counts_the_slots_left_at_the_end_of_an_episode() -> None:
         env.step(0)
     assert _lookahead(env, never, 0, 300) == 1
     assert env.slot == SLOTS - 1  # the env itself did not move
+
+
+def test_clone_rule_runs_dagger_rounds_and_records_them(tmp_path, recorded: RuleEpisodes) -> None:
+    pytest.importorskip("sb3_contrib")
+    import json
+
+    from policies.epoch_dagger import DaggerPlan, merged
+    from policies.epoch_training import clone_rule
+
+    demos = demonstrations(recorded, DEFAULT_KS, safety=3.0)
+    both = merged(demos, demos)
+    assert len(both.actions) == 2 * len(demos.actions)
+    assert both.episode.max() == 2 * demos.episode.max() + 1  # the second set numbered after
+    plan = DaggerPlan(
+        RULE[0], RULE[1], rounds=(tuple(episode_seeds(1, 4)[3:]),), ks=DEFAULT_KS,
+        safety=3.0, epochs=1,
+    )  # fmt: skip
+    hp = {"n_steps": 32, "batch_size": 32, "policy_kwargs": {"net_arch": [16]}}
+    clone_rule(hp, demos, tmp_path / "bc", epochs=1, dagger=plan, **SCENARIO)
+    summary = json.loads((tmp_path / "bc" / "clone.json").read_text())
+    assert len(summary["history"]) == 2 and summary["history"][1]["new_samples"] > 0
+    assert summary["dagger"]["rounds"] == [1]
+    with pytest.raises(ValueError, match="ks differ"):
+        merged(demos, demonstrations(recorded, (1, 5)))
