@@ -31,8 +31,13 @@ from typing import Any
 import numpy as np
 
 from policies.base import make_policy
-from policies.epoch_demonstrations import Demonstrations
-from scas_env.decision_epochs import FLY, MASK_READS, TEST_AND_FLY, _check_ks, maintenance_mask
+from policies.epoch_demonstrations import (
+    Demonstrations,
+    _checked_labelling,
+    epoch_masks,
+    label_k,
+)
+from scas_env.decision_epochs import FLY, _check_ks
 
 __all__ = ["DaggerPlan", "dagger_samples", "merged"]
 
@@ -73,17 +78,15 @@ def dagger_samples(
     from scas_env import ENV_ID
 
     ks = _check_ks(ks)
-    if not (isinstance(safety, int | float) and safety >= 1.0):
-        raise ValueError(f"safety = {safety!r} must be a number >= 1")
-    ks_sorted = np.sort(np.asarray(ks))
+    ks_sorted = _checked_labelling(ks, safety)
     index_of_k = {k: i for i, k in enumerate(ks)}
     limit = int(np.ceil(safety * ks_sorted[-1]))
+    env = gym.make(ENV_ID, disable_env_checker=True, **dict(scenario)).unwrapped
+    rule = make_policy(rule_name, env.obs_names, **dict(rule_params))
+    slots = int(env.scenario.episode_slots)
     obs_rows, actions, episode_ids = [], [], []
     for e, (env_seed, _) in enumerate(tqdm(seeds, desc="DAgger", unit="ep", disable=not progress)):
-        env = gym.make(ENV_ID, disable_env_checker=True, **dict(scenario)).unwrapped
-        rule = make_policy(rule_name, env.obs_names, **dict(rule_params))
         obs, _ = env.reset(seed=int(env_seed))
-        slots = int(env.scenario.episode_slots)
         state, start = None, np.array([True])
         cache_end = -1  # absolute slot of the rule's next action on the current branch
         for t in range(slots):
@@ -95,10 +98,9 @@ def dagger_samples(
                 expert = int(np.asarray(rule.predict(obs[None, :])[0]).reshape(-1)[0])
                 if expert != FLY or t >= cache_end:
                     cache_end = t + _lookahead(env, rule, expert, limit)
-                gap = (cache_end - t) / float(safety)
-                k = int(ks_sorted[max(np.searchsorted(ks_sorted, gap, side="right") - 1, 0)])
-                if expert == TEST_AND_FLY:
-                    k = 1  # the expert sees the test's outcome first (epoch_labels)
+                k = int(
+                    label_k(np.array([cache_end - t]), np.array([expert]), ks_sorted, safety)[0]
+                )
                 obs_rows.append(np.append(obs, np.float32(slots - t)))
                 actions.append(expert * len(ks) + index_of_k[k])
                 episode_ids.append(e)
@@ -108,11 +110,9 @@ def dagger_samples(
             obs, _, _, truncated, _ = env.step(action)
         if not truncated:
             raise RuntimeError("the episode did not truncate at its last slot")
-        env.close()
+    env.close()
     o = np.asarray(obs_rows, dtype=np.float32)
-    names = (*env.obs_names, "flights_left")
-    cols = [names.index(c) for c in MASK_READS]
-    masks = np.repeat(maintenance_mask(*(o[:, c] for c in cols)), len(ks), axis=-1)
+    masks = epoch_masks(o, (*env.obs_names, "flights_left"), len(ks))
     return Demonstrations(
         obs=o,
         actions=np.asarray(actions, dtype=np.int64),

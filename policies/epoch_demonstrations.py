@@ -46,10 +46,44 @@ __all__ = [
     "RuleEpisodes",
     "demonstrations",
     "epoch_labels",
+    "epoch_masks",
     "epoch_path",
     "epoch_returns",
+    "label_k",
     "record_rule",
 ]
+
+
+def _checked_labelling(ks: Sequence[int], safety: float) -> np.ndarray:
+    """``ks`` sorted (int64) after checking them and ``safety`` for :func:`label_k`."""
+    if not (isinstance(safety, int | float) and math.isfinite(safety) and safety >= 1.0):
+        raise ValueError(f"safety = {safety!r} must be a finite number >= 1")
+    ks_sorted = np.sort(np.asarray(_check_ks(ks), dtype=np.int64))
+    if ks_sorted[0] != 1:
+        raise ValueError(f"ks = {tuple(ks)!r} must contain 1 (to land on every action)")
+    return ks_sorted
+
+
+def label_k(
+    gap: np.ndarray,
+    actions: np.ndarray,
+    ks_sorted: np.ndarray,
+    safety: float,
+    look_after: Sequence[int] = (TEST_AND_FLY,),
+) -> np.ndarray:
+    """The demonstrated ``k`` for slots whose rule action is ``actions`` and whose next
+    non-``fly`` action comes ``gap`` slots later: the largest ``k`` with ``safety * k <=
+    gap`` (else the smallest), 1 after an action of ``look_after`` (:func:`epoch_labels`)."""
+    at = np.searchsorted(ks_sorted, np.asarray(gap) / float(safety), side="right") - 1
+    k = ks_sorted[np.maximum(at, 0)]
+    return np.where(np.isin(actions, np.asarray(look_after)), 1, k)
+
+
+def epoch_masks(obs: np.ndarray, obs_names: Sequence[str], n_ks: int) -> np.ndarray:
+    """The epoch env's action masks (n, 4 n_ks) of epoch observations ``obs`` (n, ...)
+    named ``obs_names`` (:func:`scas_env.decision_epochs.maintenance_mask` per ``k``)."""
+    cols = [list(obs_names).index(c) for c in MASK_READS]
+    return np.repeat(maintenance_mask(*(obs[:, c] for c in cols)), n_ks, axis=-1)
 
 
 def epoch_labels(
@@ -78,11 +112,7 @@ def epoch_labels(
     >>> epoch_labels(np.array([1, 0, 0, 0, 0, 0, 0, 0]), (1, 2, 5)).tolist()
     [1, 5, 5, 5, 2, 2, 2, 1]
     """
-    if not (isinstance(safety, int | float) and math.isfinite(safety) and safety >= 1.0):
-        raise ValueError(f"safety = {safety!r} must be a finite number >= 1")
-    ks_sorted = np.sort(np.asarray(_check_ks(ks), dtype=np.int64))
-    if ks_sorted[0] != 1:
-        raise ValueError(f"ks = {tuple(ks)!r} must contain 1 (to land on every action)")
+    ks_sorted = _checked_labelling(ks, safety)
     a = np.asarray(actions)
     if a.ndim != 1 or a.size == 0:
         raise ValueError(f"actions must be a non-empty 1-D array, got shape {a.shape}")
@@ -92,9 +122,7 @@ def epoch_labels(
     # next acting slot strictly after t: reverse running minimum, shifted by one
     after = np.minimum.accumulate(acting[::-1])[::-1]
     nxt = np.append(after[1:], n)
-    gap = (nxt - idx) / float(safety)
-    k = ks_sorted[np.maximum(np.searchsorted(ks_sorted, gap, side="right") - 1, 0)]
-    return np.where(np.isin(a, np.asarray(look_after)), 1, k)
+    return label_k(nxt - idx, a, ks_sorted, safety, look_after)
 
 
 def epoch_path(k: np.ndarray) -> np.ndarray:
@@ -222,7 +250,6 @@ def demonstrations(
     the epoch env's mask there."""
     ks = _check_ks(ks)
     n_ep, slots, _ = recorded.obs.shape
-    cols = [recorded.obs_names.index(c) for c in MASK_READS]
     index_of_k = np.zeros(max(ks) + 1, dtype=np.int64)
     index_of_k[list(ks)] = np.arange(len(ks))
     obs, acts, rets, path = [], [], [], []
@@ -235,7 +262,7 @@ def demonstrations(
         rets.append(epoch_returns(recorded.rewards[e], k, gamma))
         path.append(epoch_path(k))
     o = np.concatenate(obs)
-    m = np.repeat(maintenance_mask(*(o[:, c] for c in cols)), len(ks), axis=-1)
+    m = epoch_masks(o, recorded.obs_names, len(ks))
     actions = np.concatenate(acts)
     bad = np.flatnonzero(~m[np.arange(len(actions)), actions])
     if bad.size:

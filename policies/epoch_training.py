@@ -42,6 +42,8 @@ __all__ = [
     "load_zoo_hyperparams",
     "make_epoch_env",
     "train_epochs",
+    "warm_start",
+    "with_schedules",
 ]
 
 
@@ -136,6 +138,25 @@ def _native_epochs(
 ALGOS = ("maskable_ppo", "ppo")
 
 
+def _new_out_dir(out_dir: str | Path) -> Path:
+    """``out_dir`` created, refused if it exists and is not empty (nothing overwritten)."""
+    out = Path(out_dir)
+    if out.exists() and any(out.iterdir()):
+        raise ValueError(f"out_dir = {str(out)!r} exists and is not empty; choose a new one")
+    out.mkdir(parents=True, exist_ok=True)
+    return out
+
+
+def with_schedules(hp: Mapping[str, Any]) -> dict[str, Any]:
+    """A copy of algorithm keywords with RL-Zoo's ``lin_<x>`` strings (``learning_rate``,
+    ``clip_range``) made schedules (:func:`_schedule`)."""
+    out = dict(hp)
+    for key in ("learning_rate", "clip_range"):
+        if key in out:
+            out[key] = _schedule(key, out[key])
+    return out
+
+
 def _check_run(algo: str, native_envs: int | None) -> None:
     """Refuse an unknown ``algo`` or a bad ``native_envs`` (before any folder is made)."""
     if native_envs is not None and (
@@ -172,9 +193,7 @@ def _prepared(
     hp.pop("n_timesteps", None)
     policy = hp.pop("policy", "MlpPolicy")
     normalize = bool(hp.pop("normalize", True))
-    for key in ("learning_rate", "clip_range"):
-        if key in hp:
-            hp[key] = _schedule(key, hp[key])
+    hp = with_schedules(hp)
     torch.set_num_threads(1)
     set_random_seed(seed)
     if native_envs is None:
@@ -195,7 +214,7 @@ def _prepared(
     return model, venv, n_envs, normalize, hp
 
 
-def _warm_start(model: Any, venv: Any, init: Path) -> None:
+def warm_start(model: Any, venv: Any, init: Path) -> None:
     """Copy a saved run's policy weights (``init/model.zip``) and ``VecNormalize``
     statistics (``init/vecnormalize.pkl``) into ``model`` and ``venv``; the architectures
     must match (same ``policy_kwargs``)."""
@@ -259,15 +278,12 @@ def train_epochs(
     if init is not None and not Path(init).is_dir():
         raise ValueError(f"init = {str(init)!r} is not a folder")
     _check_run(algo, native_envs)
-    out = Path(out_dir)
-    if out.exists() and any(out.iterdir()):
-        raise ValueError(f"out_dir = {str(out)!r} exists and is not empty; choose a new one")
-    out.mkdir(parents=True, exist_ok=True)
+    out = _new_out_dir(out_dir)
     model, venv, n_envs, normalize, _ = _prepared(
         hyperparams, out, seed=seed, algo=algo, ks=ks, native_envs=native_envs, scenario=scenario
     )
     if init is not None:
-        _warm_start(model, venv, Path(init))
+        warm_start(model, venv, Path(init))
         model.save(out / "ckpt_0_steps.zip")
         if normalize:
             venv.save(str(out / "ckpt_vecnormalize_0_steps.pkl"))
@@ -339,10 +355,7 @@ def clone_rule(
     from policies.epoch_imitation import clone
 
     _check_run(algo, None)
-    out = Path(out_dir)
-    if out.exists() and any(out.iterdir()):
-        raise ValueError(f"out_dir = {str(out)!r} exists and is not empty; choose a new one")
-    out.mkdir(parents=True, exist_ok=True)
+    out = _new_out_dir(out_dir)
     model, venv, _, normalize, _ = _prepared(
         hyperparams, out, seed=seed, algo=algo, ks=demos.ks, native_envs=2, scenario=scenario
     )

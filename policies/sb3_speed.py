@@ -49,6 +49,7 @@ __all__ = [
     "fps_rounds",
     "make_setup",
     "run_sb3_bench",
+    "speed_model",
     "summarise",
     "training_fps",
 ]
@@ -142,32 +143,13 @@ def training_fps(
     and the frames are the flights flown; ``init``: start from this clone
     (``scripts/imitate_rule.py``'s output) with the fine-tuning settings
     (:func:`epoch_ppo_kwargs` of ``imitation_g1``), as the shipped agent's runs did."""
-    import torch
-    from stable_baselines3 import PPO
-    from stable_baselines3.common.utils import set_random_seed
-
     if isinstance(total_timesteps, bool) or not isinstance(total_timesteps, int):
         raise ValueError(f"total_timesteps = {total_timesteps!r} must be an integer >= 1")
     if total_timesteps < 1:
         raise ValueError(f"total_timesteps = {total_timesteps!r} must be an integer >= 1")
-    kwargs = fps_ppo_kwargs(config)
-    torch.set_num_threads(1)
-    set_random_seed(seed)
-    venv = venv_fn()
+    model = speed_model(venv_fn(), seed, config=config, init=init)
+    venv = model.get_env()
     counter = _find_counter(venv)
-    algo: Any = PPO
-    if counter is not None:
-        from policies.sb3_agents import require_contrib
-
-        algo = require_contrib("measure decision-epoch training").MaskablePPO
-        kwargs = epoch_ppo_kwargs("gamma099" if init is None else "imitation_g1")
-    elif init is not None:
-        raise ValueError(f"init = {init!r} is for the decision-epoch setups only")
-    model = algo("MlpPolicy", venv, seed=seed, device="cpu", **kwargs)
-    if init is not None:
-        from policies.epoch_training import _warm_start
-
-        _warm_start(model, venv, Path(init))
     start = time.perf_counter()
     model.learn(total_timesteps)
     wall = time.perf_counter() - start
@@ -176,18 +158,48 @@ def training_fps(
     return frames / wall
 
 
+def speed_model(
+    venv: Any, seed: int = 0, *, config: str = "project", init: str | None = None
+) -> Any:
+    """The model :func:`training_fps` trains on ``venv`` (one torch thread, CPU, seeded): PPO
+    with ``config``'s settings, or on a decision-epoch setup MaskablePPO with
+    :func:`epoch_ppo_kwargs` (``imitation_g1`` and the clone's weights and statistics when
+    ``init`` is a clone folder)."""
+    import torch
+    from stable_baselines3 import PPO
+    from stable_baselines3.common.utils import set_random_seed
+
+    kwargs = fps_ppo_kwargs(config)
+    torch.set_num_threads(1)
+    set_random_seed(seed)
+    algo: Any = PPO
+    if _find_counter(venv) is not None:
+        from policies.sb3_agents import require_contrib
+
+        algo = require_contrib("measure decision-epoch training").MaskablePPO
+        kwargs = epoch_ppo_kwargs("gamma099" if init is None else "imitation_g1")
+    elif init is not None:
+        raise ValueError(f"init = {init!r} is for the decision-epoch setups only")
+    model = algo("MlpPolicy", venv, seed=seed, device="cpu", **kwargs)
+    if init is not None:
+        from policies.epoch_training import warm_start
+
+        warm_start(model, venv, Path(init))
+    return model
+
+
 def epoch_ppo_kwargs(candidate: str = "gamma099") -> dict[str, Any]:
     """MaskablePPO keywords of a decision-epoch training (a candidate of
     ``policies/data/hyperparams/search.yml``, without the run settings; schedules built)."""
-    from policies.epoch_training import HYPERPARAMS_DIR, _schedule, candidate_hyperparams
+    from policies.epoch_training import (
+        HYPERPARAMS_DIR,
+        ZOO_KEYS,
+        candidate_hyperparams,
+        with_schedules,
+    )
 
-    hp = dict(candidate_hyperparams(HYPERPARAMS_DIR / "search.yml", candidate))
-    for key in ("n_envs", "n_timesteps", "policy", "normalize"):
-        hp.pop(key, None)
-    for key in ("learning_rate", "clip_range"):
-        if key in hp:
-            hp[key] = _schedule(key, hp[key])
-    return hp
+    hp = candidate_hyperparams(HYPERPARAMS_DIR / "search.yml", candidate)
+    return with_schedules({k: v for k, v in hp.items() if k not in ZOO_KEYS})
 
 
 def _find_counter(venv: Any) -> Any:

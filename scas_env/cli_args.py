@@ -42,6 +42,7 @@ __all__ = [
     "add_env_config_args",
     "add_logging_args",
     "add_params_arg",
+    "agent_scenario",
     "announce_numba_compilation",
     "announce_uncached_kernels",
     "check_out_dir",
@@ -239,6 +240,15 @@ def load_env_config(
     except (ValueError, FileNotFoundError) as exc:
         parser.error(str(exc))
     return scenario, costs
+
+
+def agent_scenario(parser: argparse.ArgumentParser, args: argparse.Namespace) -> Scenario:
+    """The Scenario of ``--scenario`` for RL agents, which are trained and judged on the
+    default cost model: ``--costs`` or a ``[costs]`` table that changes it is a usage error."""
+    scenario, costs = load_env_config(parser, args)
+    if costs.to_dict() != CostModel().to_dict():
+        parser.error("--costs / a [costs] table: the agents are trained on the default costs")
+    return scenario
 
 
 def scenario_changes(scenario: Scenario, *, exclude: Sequence[str] = ()) -> dict[str, Any]:

@@ -22,7 +22,7 @@ from policies.epoch_dagger import DaggerPlan
 from policies.epoch_demonstrations import demonstrations, record_rule
 from policies.epoch_selection import HELD_OUT_SEED, VALIDATION_SEED, tuned_rules
 from policies.epoch_training import HYPERPARAMS_DIR, candidate_hyperparams, clone_rule
-from scas_env.cli_args import add_env_config_args, load_env_config, scenario_changes
+from scas_env.cli_args import add_env_config_args, agent_scenario, scenario_changes
 from scas_env.decision_epochs import DEFAULT_KS
 
 
@@ -45,9 +45,7 @@ def main() -> None:
     parser.add_argument("--out", required=True, help="new, empty output folder")
     add_env_config_args(parser)
     args = parser.parse_args()
-    scenario, costs = load_env_config(parser, args)
-    if costs.to_dict() != type(costs)().to_dict():
-        parser.error("--costs / a [costs] table: training uses the default cost model")
+    scenario = agent_scenario(parser, args)
     for name in ("episodes", "dagger_episodes", "epochs", "dagger_epochs"):
         if getattr(args, name) < 1:
             parser.error(f"--{name.replace('_', '-')} {getattr(args, name)} must be >= 1")

@@ -22,7 +22,7 @@ import json
 
 from policies.epoch_selection import HELD_OUT_SEED, select_ship_evaluate, tuned_rules
 from policies.sb3_agents import DATA_DIR
-from scas_env.cli_args import add_env_config_args, load_env_config, scenario_changes
+from scas_env.cli_args import add_env_config_args, agent_scenario, scenario_changes
 
 
 def main() -> None:
@@ -57,9 +57,7 @@ def main() -> None:
     for opt in ("validation_episodes", "held_out_episodes", "workers"):
         if getattr(args, opt) < 1:
             parser.error(f"--{opt.replace('_', '-')} {getattr(args, opt)} must be >= 1")
-    scenario, costs = load_env_config(parser, args)
-    if costs.to_dict() != type(costs)().to_dict():
-        parser.error("--costs / a [costs] table: the agents are trained on the default costs")
+    scenario = agent_scenario(parser, args)
     changes = scenario_changes(scenario)
     try:
         rules = tuned_rules(args.rules_from) if args.rules_from else None

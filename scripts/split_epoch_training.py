@@ -29,20 +29,12 @@ def main() -> None:
     if args.init is not None and not Path(args.init).is_dir():
         parser.error(f"--init {args.init!r} is not a folder")
 
-    import torch
     from stable_baselines3.common.callbacks import BaseCallback
 
-    from policies.epoch_training import _warm_start
-    from policies.sb3_agents import require_contrib
-    from policies.sb3_speed import _find_counter, epoch_ppo_kwargs, make_setup
+    from policies.sb3_speed import _find_counter, make_setup, speed_model
 
-    torch.set_num_threads(1)
     venv = make_setup(args.setup, args.seed)
-    candidate = "gamma099" if args.init is None else "imitation_g1"
-    algo = require_contrib("time decision-epoch training").MaskablePPO
-    model = algo("MlpPolicy", venv, seed=args.seed, device="cpu", **epoch_ppo_kwargs(candidate))
-    if args.init is not None:
-        _warm_start(model, venv, Path(args.init))
+    model = speed_model(venv, args.seed, init=args.init)
 
     class RolloutClock(BaseCallback):
         def __init__(self) -> None:

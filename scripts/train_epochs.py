@@ -22,7 +22,7 @@ from __future__ import annotations
 import argparse
 
 from policies.epoch_training import HYPERPARAMS_DIR, candidate_hyperparams, train_epochs
-from scas_env.cli_args import add_env_config_args, load_env_config, scenario_changes
+from scas_env.cli_args import add_env_config_args, agent_scenario, scenario_changes
 
 
 def main() -> None:
@@ -51,9 +51,7 @@ def main() -> None:
     parser.add_argument("--out", required=True, help="new, empty output folder")
     add_env_config_args(parser)
     args = parser.parse_args()
-    scenario, costs = load_env_config(parser, args)
-    if costs.to_dict() != type(costs)().to_dict():
-        parser.error("--costs / a [costs] table: training uses the default cost model")
+    scenario = agent_scenario(parser, args)
     if args.native_envs is not None and args.native_envs < 1:
         parser.error(f"--native-envs {args.native_envs} must be >= 1")
     if args.max_wall_s is not None and args.max_wall_s <= 0:

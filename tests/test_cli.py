@@ -401,3 +401,17 @@ def test_benchmark_takes_agents_and_factories_beside_named_policies(tmp_path: Pa
         with pytest.raises(SystemExit) as exit_:
             policies_cli.benchmark_main([*bad, "--out", str(tmp_path / "x")])
         assert exit_.value.code == 2, message
+
+
+def test_agent_scenario_refuses_other_costs(tmp_path) -> None:
+    from scas_env.cli_args import add_env_config_args, agent_scenario
+
+    parser = argparse.ArgumentParser()
+    add_env_config_args(parser)
+    costs = tmp_path / "c.toml"
+    costs.write_text("[costs]\nflight_value_usd = 1\n")
+    with pytest.raises(SystemExit):
+        agent_scenario(parser, parser.parse_args(["--costs", str(costs)]))
+    same = tmp_path / "s.toml"
+    same.write_text("[scenario]\nepisode_slots = 300\n[costs]\n")
+    assert agent_scenario(parser, parser.parse_args(["--scenario", str(same)])).episode_slots == 300
