@@ -33,6 +33,9 @@ EPOCH_ENV_ID = "scas_env/ScasMaintenanceEpochs-v0"
 HYPERPARAMS_DIR = Path(__file__).resolve().parent / "data" / "hyperparams"
 #: keys of an RL-Zoo entry that are not algorithm keywords
 ZOO_KEYS = ("n_envs", "n_timesteps", "policy", "normalize")
+#: this project's key for fine-tuning near the ``init`` policy: the uniform share of the
+#: reference (:mod:`policies.epoch_reference`; ``ent_coef`` is then the KL weight)
+REFERENCE_KEY = "reference_mix"
 
 __all__ = [
     "EPOCH_ENV_ID",
@@ -193,6 +196,15 @@ def _prepared(
     hp.pop("n_timesteps", None)
     policy = hp.pop("policy", "MlpPolicy")
     normalize = bool(hp.pop("normalize", True))
+    if hp.pop(REFERENCE_KEY, None) is not None:
+        if policy != "MlpPolicy" or algo != "maskable_ppo":
+            raise ValueError(
+                f"{REFERENCE_KEY} needs policy 'MlpPolicy' and algo 'maskable_ppo', got "
+                f"{policy!r} and {algo!r}"
+            )
+        from policies.epoch_reference import ReferenceKLPolicy
+
+        policy = ReferenceKLPolicy
     hp = with_schedules(hp)
     torch.set_num_threads(1)
     set_random_seed(seed)
@@ -259,7 +271,10 @@ def train_epochs(
     :class:`policies.sb3_vec_env.NativeVecEnv`) instead of the YAML's ``n_envs`` single envs
     in a ``DummyVecEnv``. ``init``: a folder written by :func:`clone_rule` (or any folder
     with ``model.zip`` and ``vecnormalize.pkl`` of the same network) to start from; its
-    policy is also saved as checkpoint 0, so selection can keep it. Writes
+    policy is also saved as checkpoint 0, so selection can keep it. With the hyper-parameter
+    ``reference_mix`` (needs ``init``) PPO is regularised towards the ``init`` policy
+    (:mod:`policies.epoch_reference`: ``ent_coef`` weighs ``KL(pi || rho)``, ``rho`` the
+    init policy mixed with ``reference_mix`` of the uniform one). Writes
     ``out_dir/ckpt_<n>`` checkpoints (``model.zip``, ``vecnormalize.pkl``), ``progress.csv``
     (SB3's logger: training episode rewards of the Monitor) and ``run.json`` (config,
     decisions and wall time reached).
@@ -277,6 +292,9 @@ def train_epochs(
         raise ValueError(f"checkpoint_every = {checkpoint_every!r} must be an integer >= 1")
     if init is not None and not Path(init).is_dir():
         raise ValueError(f"init = {str(init)!r} is not a folder")
+    mix = dict(hyperparams).get(REFERENCE_KEY)
+    if mix is not None and init is None:
+        raise ValueError(f"{REFERENCE_KEY} = {mix!r} needs init (the reference policy)")
     _check_run(algo, native_envs)
     out = _new_out_dir(out_dir)
     model, venv, n_envs, normalize, _ = _prepared(
@@ -284,6 +302,8 @@ def train_epochs(
     )
     if init is not None:
         warm_start(model, venv, Path(init))
+        if mix is not None:
+            model.policy.set_reference(model.policy, mix)
         model.save(out / "ckpt_0_steps.zip")
         if normalize:
             venv.save(str(out / "ckpt_vecnormalize_0_steps.pkl"))

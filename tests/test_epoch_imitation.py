@@ -266,6 +266,22 @@ def test_training_starts_from_the_clone(tmp_path, recorded: RuleEpisodes) -> Non
         stats_0 = pickle.load(fh)
     np.testing.assert_array_equal(stats_bc.obs_rms.mean, stats_0.obs_rms.mean)
     assert stats_bc.ret_rms.var == stats_0.ret_rms.var
+    # regularised towards the clone: the same start, a reference-free policy in every zip
+    from policies.epoch_reference import ReferenceKLPolicy
+
+    kl = train_epochs(
+        {**hp, "ent_coef": 0.1, "reference_mix": 0.05},
+        tmp_path / "kl",
+        init=tmp_path / "bc",
+        total_timesteps=64,
+        native_envs=2,
+        **SCENARIO,
+    )
+    for name in ("ckpt_0_steps.zip", "ckpt_64_steps.zip"):
+        loaded = MaskablePPO.load(kl / name, device="cpu").policy
+        assert isinstance(loaded, ReferenceKLPolicy) and loaded.reference_mix is None
+    start = MaskablePPO.load(kl / "ckpt_0_steps.zip", device="cpu").policy.state_dict()
+    assert all(torch.equal(value, start[key]) for key, value in bc.items())
     with pytest.raises(ValueError, match="is not a folder"):
         train_epochs(hp, tmp_path / "x", init=tmp_path / "missing", **SCENARIO)
     with pytest.raises(ValueError, match="lin_<number>"):
