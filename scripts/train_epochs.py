@@ -48,12 +48,20 @@ def main() -> None:
         default=None,
         help="start from this clone (scripts/imitate_rule.py's --out; same network)",
     )
+    parser.add_argument(
+        "--running-normalization",
+        action="store_true",
+        help="with --init: let VecNormalize's statistics follow the rollouts (default: keep "
+        "the clone's; moving them changes the clone's actions, see docs/rl.md)",
+    )
     parser.add_argument("--out", required=True, help="new, empty output folder")
     add_env_config_args(parser)
     args = parser.parse_args()
     scenario = agent_scenario(parser, args)
     if args.native_envs is not None and args.native_envs < 1:
         parser.error(f"--native-envs {args.native_envs} must be >= 1")
+    if args.running_normalization and args.init is None:
+        parser.error("--running-normalization needs --init")
     if args.max_wall_s is not None and args.max_wall_s <= 0:
         parser.error(f"--max-wall-s {args.max_wall_s} must be > 0")
     train_epochs(
@@ -66,6 +74,7 @@ def main() -> None:
         total_timesteps=args.timesteps,
         native_envs=args.native_envs,
         init=args.init,
+        freeze_normalization=None if args.init is None else not args.running_normalization,
         **scenario_changes(scenario),
     )
 

@@ -282,6 +282,27 @@ def test_training_starts_from_the_clone(tmp_path, recorded: RuleEpisodes) -> Non
         assert isinstance(loaded, ReferenceKLPolicy) and loaded.reference_mix is None
     start = MaskablePPO.load(kl / "ckpt_0_steps.zip", device="cpu").policy.state_dict()
     assert all(torch.equal(value, start[key]) for key, value in bc.items())
+    # the clone's VecNormalize statistics stay (they are part of its policy) unless asked
+    for folder in (run, kl):
+        with (folder / "ckpt_vecnormalize_64_steps.pkl").open("rb") as fh:
+            after = pickle.load(fh)
+        np.testing.assert_array_equal(after.obs_rms.mean, stats_bc.obs_rms.mean)
+        assert after.obs_rms.count == stats_bc.obs_rms.count
+        assert after.ret_rms.var == stats_bc.ret_rms.var
+    running = train_epochs(
+        hp,
+        tmp_path / "running",
+        init=tmp_path / "bc",
+        total_timesteps=64,
+        native_envs=2,
+        freeze_normalization=False,
+        **SCENARIO,
+    )
+    with (running / "ckpt_vecnormalize_64_steps.pkl").open("rb") as fh:
+        moved = pickle.load(fh)
+    assert moved.obs_rms.count == stats_bc.obs_rms.count + 2 + 64  # 2 resets, 64 steps
+    with pytest.raises(ValueError, match="freeze_normalization = True needs init"):
+        train_epochs(hp, tmp_path / "z", freeze_normalization=True, **SCENARIO)
     with pytest.raises(ValueError, match="is not a folder"):
         train_epochs(hp, tmp_path / "x", init=tmp_path / "missing", **SCENARIO)
     with pytest.raises(ValueError, match="lin_<number>"):
