@@ -201,28 +201,40 @@ def validate_checkpoints(
     slots: int | None = None,
     n_workers: int = 2,
     progress: bool = True,
+    decisions: Sequence[int] | None = None,
+    statistics: str | Path | None = None,
 ) -> list[dict[str, Any]]:
     """Validation reward of every checkpoint not yet in ``out_csv``; returns all rows
-    (``run, decisions, reward, reward_low, reward_high, diff_vs_rule, ..., scenario``).
+    (``run, decisions, reward, reward_low, reward_high, diff_vs_rule, ..., scenario,
+    statistics``).
 
     Episodes are of the runs' scenario (:func:`resolve_scenario` of ``run_dirs`` and
     ``scenario``), ``slots`` slots long (default the scenario's, else 2000), seeds
     ``SeedSequence(VALIDATION_SEED)``; ``diff_vs_rule`` is paired against ``reference``
     (default the age rule ``preventive`` with its shipped parameters) on the same episodes.
+    ``decisions``: only the checkpoints at these decision counts (default all).
+    ``statistics``: a ``VecNormalize`` pickle every checkpoint is run with instead of its
+    own (a diagnostic: the same weights under other observation statistics); its path is
+    the rows' ``statistics`` column (empty: the checkpoint's own) and part of what is
+    already done.
     """
+    if statistics is not None and not Path(statistics).is_file():
+        raise ValueError(f"statistics = {str(statistics)!r} is not a file")
+    tag = "" if statistics is None else str(statistics)
     out_csv = Path(out_csv)
     scenario = resolve_scenario(run_dirs, scenario)
     env_kwargs, slots = _split_slots(scenario, slots)
     done = _read_validation(out_csv, scenario)
-    seen = {(r["run"], int(r["decisions"])) for r in done}
+    seen = {(r["run"], int(r["decisions"]), r.get("statistics") or "") for r in done}
     reference = reference or PolicySpec("preventive", label="preventive")
     specs = [reference]
     for run_dir in map(Path, run_dirs):
         run = _run_json(run_dir) or _TRAINING_DEFAULTS
         for steps, zip_path, pkl in checkpoints(run_dir):
-            if (run_dir.name, steps) not in seen:
+            wanted = decisions is None or steps in decisions
+            if wanted and (run_dir.name, steps, tag) not in seen:
                 label = f"{run_dir.name}@{steps}"
-                specs.append(_spec(label, zip_path, pkl, run, slots))
+                specs.append(_spec(label, zip_path, Path(statistics or pkl), run, slots))
     if len(specs) == 1:
         return done
     result = run_benchmark(
@@ -255,6 +267,7 @@ def validate_checkpoints(
                 "episodes": episodes,
                 "rule": reference.key,
                 "scenario": _scenario_key(scenario),
+                "statistics": tag,
             }
         )
     rows = done + new
@@ -336,6 +349,12 @@ def ship_best(
     keys = sorted({r.get("scenario") or "{}" for r in rows})
     if len(keys) > 1:
         raise ValueError(f"{validation_csv}: rows of several scenarios {keys}")
+    swapped = sorted({r["statistics"] for r in rows if r.get("statistics")})
+    if swapped:
+        raise ValueError(
+            f"{validation_csv}: rows validated with other statistics {swapped} (a "
+            "diagnostic); ship from a validation of the checkpoints' own statistics"
+        )
     scenario = json.loads(keys[0])
     env_kwargs, slots = _split_slots(scenario, slots)
     best = max(rows, key=lambda r: float(r["reward"]))

@@ -146,6 +146,66 @@ def test_mixed_or_contradicted_scenarios_are_refused(v2_runs, tmp_path) -> None:
         validate_checkpoints([v2_runs / "b"], tmp_path / "v0.csv", progress=False)
 
 
+def _statistics_run(root: Path) -> tuple[Path, Path, Path]:
+    """A run whose one checkpoint flies 20 slots when the standardised ``flights_left`` is
+    positive and tests before every flight when it is negative (no hidden layer: the logits
+    are linear in the standardised observation); its own statistics (mean 0) make it fly,
+    the returned other ones (mean of ``flights_left`` 1000) make it test."""
+    import torch
+    from sb3_contrib import MaskablePPO
+    from stable_baselines3.common.vec_env import DummyVecEnv, VecNormalize
+
+    from scas_env.decision_epochs import make_decision_epoch_env
+
+    run = root / "stats"
+    run.mkdir()
+    env = make_decision_epoch_env(ks=KS, **V2)
+    model = MaskablePPO("MlpPolicy", env, n_steps=32, batch_size=32, device="cpu",
+                        policy_kwargs={"net_arch": []})  # fmt: skip
+    with torch.no_grad():
+        model.policy.action_net.weight.zero_()
+        model.policy.action_net.bias.zero_()
+        model.policy.action_net.weight[FLY_20, -1] = 5.0
+        model.policy.action_net.weight[TEST_EVERY_FLIGHT, -1] = -5.0
+    model.save(run / "ckpt_100_steps.zip")
+    norm = VecNormalize(DummyVecEnv([lambda: make_decision_epoch_env(ks=KS, **V2)]))
+    norm.obs_rms.mean[:], norm.obs_rms.var[:] = 0.0, 1.0
+    norm.save(str(run / "ckpt_vecnormalize_100_steps.pkl"))
+    norm.obs_rms.mean[-1] = 1000.0
+    other = root / "other.pkl"
+    norm.save(str(other))
+    meta = {"algo": "maskable_ppo", "ks": list(KS), "scenario": V2, "decisions": 100}
+    (run / "run.json").write_text(json.dumps(meta))
+    return run, run / "ckpt_vecnormalize_100_steps.pkl", other
+
+
+def test_checkpoints_can_be_validated_under_other_statistics(v2_runs, tmp_path) -> None:
+    """``statistics=`` gives what a copy of the checkpoint saved with those statistics gives
+    (an independent path), differs from its own, and such rows are never shipped."""
+    import shutil
+
+    run, _, other = _statistics_run(tmp_path)
+    settings = {"episodes": EPISODES, "n_workers": 1, "progress": False}
+    own = validate_checkpoints([run], tmp_path / "own.csv", **settings)
+    swapped = validate_checkpoints([run], tmp_path / "swap.csv", statistics=other, **settings)
+    copy = tmp_path / "copy" / "stats"
+    copy.mkdir(parents=True)
+    shutil.copy(run / "ckpt_100_steps.zip", copy)
+    shutil.copy(run / "run.json", copy)
+    shutil.copy(other, copy / "ckpt_vecnormalize_100_steps.pkl")
+    by_copy = validate_checkpoints([copy], tmp_path / "copy.csv", **settings)
+    assert float(swapped[0]["reward"]) == float(by_copy[0]["reward"])
+    assert float(swapped[0]["reward"]) != float(own[0]["reward"])
+    assert swapped[0]["statistics"] == str(other) and own[0]["statistics"] == ""
+    with pytest.raises(ValueError, match="validated with other statistics"):
+        ship_best(tmp_path / "swap.csv", tmp_path, "x", out_dir=tmp_path / "ship")
+    # only the checkpoints asked for; a missing pickle is refused before any work
+    none = validate_checkpoints([v2_runs / "a"], tmp_path / "d.csv", decisions=[200], **settings)
+    assert [int(r["decisions"]) for r in none] == [200]
+    with pytest.raises(ValueError, match="is not a file"):
+        validate_checkpoints([run], tmp_path / "e.csv", statistics=tmp_path / "no.pkl")
+
+
 def test_training_scale_counts_monitor_episodes(tmp_path) -> None:
     run = tmp_path / "r"
     (run / "monitor").mkdir(parents=True)
