@@ -36,7 +36,7 @@ from scas_env.env import REWARD_TERMS, ScasMaintenanceEnv, new_fleet_state
 from scas_env.fleet_kernels import surrogate_features, surrogate_flights
 from scas_env.info import build_info
 from scas_env.learning_kernel import learn_batch, test_batch
-from scas_env.monitor import learning_features
+from scas_env.monitor import FleetRowTables, learning_features, raise_status
 from scas_env.world import GROUND_FEATURES, PARTS
 
 _STREAMS = ("measure", "degradation", "spring_growth", "seal_growth")
@@ -146,6 +146,11 @@ class ScasMaintenanceVectorEnv(VectorEnv):
         else:
             band = builder.acceptance
             self._go_band = np.array([band.get(f, (-np.inf, np.inf)) for f in GROUND_FEATURES])
+        #: per row, the holders of its two parts' RUL tables in the fleet's arrays
+        tables = self._tables_rul()
+        self._held = [
+            (FleetRowTables(tables, e, 0), FleetRowTables(tables, e, 1)) for e in range(n)
+        ]
         self._learn_out = {
             "ess": np.full((n, 2), np.nan),
             "resampled": np.zeros((n, 2), dtype=np.int64),
@@ -258,15 +263,17 @@ class ScasMaintenanceVectorEnv(VectorEnv):
             fly &= ~a["no_go"]
         idle = (act <= 1) & grounded & ~resetting & active
         slow = (resetting | (act >= 2) | ((act <= 1) & ~grounded & ~fly)) & active
-        tested = np.zeros(0, dtype=np.int64)
+        tested = ready = np.zeros(0, dtype=np.int64)
         if self._bank is not None and not self._every_flight:
             # on-demand tests in a batch; the actuators that go fly on the fast path below
-            tested, go = self._tests(np.flatnonzero((act == 1) & ~grounded & ~resetting & active))
+            tested, go, ready = self._tests(
+                np.flatnonzero((act == 1) & ~grounded & ~resetting & active)
+            )
             slow[tested] = False
             fly[tested[go]] = True
         fly_idx = np.flatnonzero(fly)
         if fly_idx.size:
-            ok = self._fly(fly_idx)
+            ok = self._fly(fly_idx, ready)
             slow[fly_idx[~ok]] = True
             done = fly_idx[ok]
             a["pending"][done] += 1
@@ -312,25 +319,17 @@ class ScasMaintenanceVectorEnv(VectorEnv):
         have returned with ``outputs=True``)."""
         return self._observation(self.fleet.true_rul())
 
-    def _fly(self, idx: np.ndarray) -> np.ndarray:
-        """Candidate flights of ``idx`` (draws peeked); commits those that did not fail."""
+    def _fly(self, idx: np.ndarray, ready: np.ndarray) -> np.ndarray:
+        """Candidate flights of ``idx`` (draws peeked); commits those that did not fail.
+        The flights of ``ready`` (a sorted subset of ``idx``: tested this step, their draws
+        peeked and flight computed by :meth:`_tests`) are in the scratch already."""
         a, sc = self.a, self._scratch
         n_meas = self._scratch["meas"].shape[1]
         deg_streams = self._deg_streams
-        for s, k in (("measure", n_meas), *deg_streams):
-            short = idx[self._pos[s][idx, 0] + k > DEFAULT_BLOCK]
-            for e in short:
-                self._draws(e, s).refill()
-        pm = self._pos["measure"][idx, 0]
-        sc["meas"][idx] = self._buf["measure"][idx[:, None], pm[:, None] + np.arange(n_meas)]
-        self._peek_degradation(idx)
-        t = self._tables
+        todo = idx if not ready.size else idx[~np.isin(idx, ready, assume_unique=True)]
+        if todo.size:
+            self._peek_flights(todo, n_meas)
         new = sc["new"]
-        surrogate_flights(
-            idx, a["crack"], a["wear"], a["fail"], a["theta"], a["wmult"], a["unit_z"],
-            sc["meas"], sc["deg"], *t["flight"], *t["damage"], *t["flight_consts"],
-            new[0], new[1], sc["feats"], sc["failed"],
-        )  # fmt: skip
         ok = ~sc["failed"][idx].any(axis=1)
         done = idx[ok]
         a["crack"][done], a["wear"][done] = new[0, done], new[1, done]
@@ -345,22 +344,51 @@ class ScasMaintenanceVectorEnv(VectorEnv):
             a["flight_count"][done] += 1
         return ok
 
-    def _tests(self, idx: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def _peek_flights(self, idx: np.ndarray, n_meas: int) -> None:
+        """The next flights of ``idx`` into the scratch (``new``, ``feats``, ``failed``),
+        their measure and growth draws peeked (blocks refilled where they run short), not
+        consumed."""
+        a, sc = self.a, self._scratch
+        for s, k in (("measure", n_meas), *self._deg_streams):
+            for e in idx[self._pos[s][idx, 0] + k > DEFAULT_BLOCK]:
+                self._draws(e, s).refill()
+        pm = self._pos["measure"][idx, 0]
+        sc["meas"][idx] = self._buf["measure"][idx[:, None], pm[:, None] + np.arange(n_meas)]
+        self._peek_degradation(idx)
+        t = self._tables
+        surrogate_flights(
+            idx, a["crack"], a["wear"], a["fail"], a["theta"], a["wmult"], a["unit_z"],
+            sc["meas"], sc["deg"], *t["flight"], *t["damage"], *t["flight_consts"],
+            sc["new"][0], sc["new"][1], sc["feats"], sc["failed"],
+        )  # fmt: skip
+
+    def _tests(self, idx: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Pre-flight tests of the actuators ``idx`` (on demand, not grounded), as the single
         env's ``advance(test_and_fly)`` up to its flight: the world's G1 and G3 (surrogate,
         run noise from the measure stream), the monitor's update (one
         :func:`~scas_env.learning_kernel.test_batch` call) and detectors, the go/no-go, the
         feature memory and counters. Actuators whose flight would end in a failure are left
-        to the slow path (returned arrays exclude them). Returns the tested actuators and
-        whether each may fly (go)."""
+        to the slow path (returned arrays exclude them). Returns the tested actuators,
+        whether each may fly (go), and those whose flight is computed already (the scratch
+        holds it for :meth:`_fly`: its measure draws follow the test's in the same block)."""
+        no = np.zeros(0, dtype=np.int64)
         if not idx.size:
-            return idx, np.zeros(0, dtype=np.bool_)
+            return idx, np.zeros(0, dtype=np.bool_), no
         a, sc = self.a, self._scratch
-        # a failing flight goes the slow path whole: peek at the flight's growth draws
+        n_meas = sc["meas"].shape[1]
+        # a failing flight goes the slow path whole: peek at the flight's growth draws, and
+        # at its measure draws where they follow the test's two in the block (no refill:
+        # the flight computed here is the one flown); the others' features are recomputed
         for s, k in self._deg_streams:
             for e in idx[self._pos[s][idx, 0] + k > DEFAULT_BLOCK]:
                 self._draws(e, s).refill()
         self._peek_degradation(idx)
+        pm = self._pos["measure"][idx, 0] + 2
+        in_block = pm + n_meas <= DEFAULT_BLOCK
+        ready = idx[in_block]
+        sc["meas"][ready] = self._buf["measure"][
+            ready[:, None], pm[in_block, None] + np.arange(n_meas)
+        ]
         t = self._tables
         surrogate_flights(
             idx, a["crack"], a["wear"], a["fail"], a["theta"], a["wmult"], a["unit_z"],
@@ -369,7 +397,8 @@ class ScasMaintenanceVectorEnv(VectorEnv):
         )  # fmt: skip
         idx = idx[~sc["failed"][idx].any(axis=1)]
         if not idx.size:
-            return idx, np.zeros(0, dtype=np.bool_)
+            return idx, np.zeros(0, dtype=np.bool_), no
+        ready = ready[~sc["failed"][ready].any(axis=1)]
         # the test's run noise: two normals of the measure stream
         for e in idx[self._pos["measure"][idx, 0] + 2 > DEFAULT_BLOCK]:
             self._draws(e, "measure").refill()
@@ -386,10 +415,11 @@ class ScasMaintenanceVectorEnv(VectorEnv):
         corrected = sc["corrected"]
         test_batch(idx, idx, ground, corrected, *self._kernel_io(idx))
         self._adopt(idx)
-        for e in idx:
-            monitor = self.envs[e].monitor
-            monitor.detect(e, corrected)
-            a["detected"][e] = monitor.crack_detected, monitor.seal_detected
+        envs = self.envs
+        a["detected"][idx] = [
+            envs[e].monitor.detect_values(g1, g3)
+            for e, (g1, g3) in zip(idx.tolist(), corrected[idx].tolist(), strict=True)
+        ]
         # go / no-go: the airworthiness limits around the installation's reference, or the
         # healthy acceptance band (ScasMaintenanceEnv._go)
         g = ground[idx]
@@ -402,7 +432,7 @@ class ScasMaintenanceVectorEnv(VectorEnv):
         a["no_go"][idx] = ~go
         a["tests"][idx] += 1
         a["no_go_count"][idx[~go]] += 1
-        return idx, go
+        return idx, go, ready
 
     def _peek_degradation(self, idx: np.ndarray) -> None:
         """The next flight's two growth-factor normals of ``idx`` into the scratch (not
@@ -469,12 +499,17 @@ class ScasMaintenanceVectorEnv(VectorEnv):
         )
 
     def _adopt(self, idx: np.ndarray) -> None:
-        """Each monitor of ``idx`` takes what a kernel left in its fleet row (raising what
-        the Python form would have raised)."""
-        out, tables = self._learn_out, self._tables_rul()
-        outs = (out["ess"], out["resampled"], out["status"])
-        for e in idx:
-            self.envs[e].monitor.adopt_learning(e, *outs, tables, self.fleet.table_source[e])
+        """Each monitor of ``idx`` takes what a kernel left in its fleet row: N_eff and
+        resampling counts, and its RUL tables as holders of the row (not copied;
+        :meth:`~scas_env.monitor.HealthMonitor.adopt_rows`), raising what the Python form
+        would have raised, in row order."""
+        out, sources, held = self._learn_out, self.fleet.table_source, self._held
+        ess, resampled = out["ess"][idx].tolist(), out["resampled"][idx].tolist()
+        status = out["status"][idx].tolist()
+        for k, e in enumerate(idx.tolist()):
+            self.envs[e].monitor.adopt_rows(ess[k], resampled[k], held[e], sources[e])
+            if status[k]:
+                raise_status(status[k])
 
     def _draws(self, e: int, stream: str) -> Any:
         """Actuator ``e``'s normal buffer of ``stream`` (a growth stream: its fitted part's)."""
