@@ -121,6 +121,7 @@ class ScasMaintenanceVectorEnv(VectorEnv):
             "ground_normals": np.empty((n, 2)),
             "ground": np.empty((n, 2)),
             "corrected": np.empty((n, 2)),
+            "computed": np.zeros(n, dtype=np.bool_),
         }
         self._builder = first.builder
         self._every_flight = first.scenario.preflight == "every_flight"
@@ -326,7 +327,12 @@ class ScasMaintenanceVectorEnv(VectorEnv):
         a, sc = self.a, self._scratch
         n_meas = self._scratch["meas"].shape[1]
         deg_streams = self._deg_streams
-        todo = idx if not ready.size else idx[~np.isin(idx, ready, assume_unique=True)]
+        todo = idx
+        if ready.size:
+            computed = self._scratch["computed"]
+            computed[ready] = True
+            todo = idx[~computed[idx]]
+            computed[ready] = False
         if todo.size:
             self._peek_flights(todo, n_meas)
         new = sc["new"]
