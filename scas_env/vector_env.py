@@ -33,7 +33,13 @@ from gymnasium.vector.utils import batch_space
 from prognostics.particle_bank import ParticleBank
 from scas_env.block_draws import DEFAULT_BLOCK
 from scas_env.env import REWARD_TERMS, ScasMaintenanceEnv, new_fleet_state
-from scas_env.fleet_kernels import surrogate_features, surrogate_flights
+from scas_env.fleet_kernels import (
+    commit_flights,
+    gather_flight_draws,
+    short_of_draws,
+    surrogate_features,
+    surrogate_flights,
+)
 from scas_env.info import build_info
 from scas_env.learning_kernel import learn_batch, test_batch
 from scas_env.monitor import FleetRowTables, learning_features, raise_status
@@ -122,6 +128,9 @@ class ScasMaintenanceVectorEnv(VectorEnv):
             "ground": np.empty((n, 2)),
             "corrected": np.empty((n, 2)),
             "computed": np.zeros(n, dtype=np.bool_),
+            "ok": np.zeros(n, dtype=np.bool_),
+            "short_rows": np.zeros(3 * n, dtype=np.int64),
+            "short_streams": np.zeros(3 * n, dtype=np.int64),
         }
         self._builder = first.builder
         self._every_flight = first.scenario.preflight == "every_flight"
@@ -162,6 +171,14 @@ class ScasMaintenanceVectorEnv(VectorEnv):
         self._deg_streams = (
             (("spring_growth", 1), ("seal_growth", 1)) if self._per_part else (("degradation", 2),)
         )
+        #: the growth streams a and b of the flight kernels (one stream twice if not per part)
+        self._deg_pair = tuple(s for s, _ in self._deg_streams) * (2 // len(self._deg_streams))
+        #: a flight's streams and the normals each needs
+        streams = (("measure", n_flight), *self._deg_streams)
+        self._flight_streams = tuple(s for s, _ in streams)
+        self._flight_needs = np.array([k for _, k in streams], dtype=np.int64)
+        #: stand-ins of the batch under way's arrays when the filters do not learn in flight
+        self._no_batch = (np.zeros((n, 0)), np.zeros(n, dtype=np.int64))
 
     # ------------------------------------------------------------------ copies
     def __setstate__(self, state: dict[str, Any]) -> None:
@@ -321,46 +338,45 @@ class ScasMaintenanceVectorEnv(VectorEnv):
         return self._observation(self.fleet.true_rul())
 
     def _fly(self, idx: np.ndarray, ready: np.ndarray) -> np.ndarray:
-        """Candidate flights of ``idx`` (draws peeked); commits those that did not fail.
-        The flights of ``ready`` (a sorted subset of ``idx``: tested this step, their draws
-        peeked and flight computed by :meth:`_tests`) are in the scratch already."""
+        """Candidate flights of ``idx`` (draws peeked); commits those that did not fail
+        (:func:`~scas_env.fleet_kernels.commit_flights`). The flights of ``ready`` (a sorted
+        subset of ``idx``: tested this step, their draws peeked and flight computed by
+        :meth:`_tests`) are in the scratch already."""
         a, sc = self.a, self._scratch
-        n_meas = self._scratch["meas"].shape[1]
-        deg_streams = self._deg_streams
         todo = idx
         if ready.size:
-            computed = self._scratch["computed"]
+            computed = sc["computed"]
             computed[ready] = True
             todo = idx[~computed[idx]]
             computed[ready] = False
         if todo.size:
-            self._peek_flights(todo, n_meas)
-        new = sc["new"]
-        ok = ~sc["failed"][idx].any(axis=1)
-        done = idx[ok]
-        a["crack"][done], a["wear"][done] = new[0, done], new[1, done]
-        a["last"][done, :n_meas] = sc["feats"][done]
-        self._pos["measure"][done, 0] += n_meas
-        for s, k in deg_streams:
-            self._pos[s][done, 0] += k
-        if self._per_part:
-            a["life"][done] -= 1.0
-        if self._learn_cols.size:
-            a["flight_sum"][done] += sc["feats"][done][:, self._learn_cols]
-            a["flight_count"][done] += 1
-        return ok
+            self._peek_flights(todo)
+        ok = sc["ok"][: idx.size]
+        pos, (s_a, s_b) = self._pos, self._deg_pair
+        commit_flights(
+            idx, sc["failed"], sc["new"][0], sc["new"][1], sc["feats"], a["crack"], a["wear"],
+            a["last"], pos["measure"], pos[s_a], pos[s_b], self._per_part, a["life"],
+            self._learn_cols, a.get("flight_sum", self._no_batch[0]),
+            a.get("flight_count", self._no_batch[1]), ok,
+        )  # fmt: skip
+        return ok.copy()
 
-    def _peek_flights(self, idx: np.ndarray, n_meas: int) -> None:
+    def _peek_flights(self, idx: np.ndarray) -> None:
         """The next flights of ``idx`` into the scratch (``new``, ``feats``, ``failed``),
         their measure and growth draws peeked (blocks refilled where they run short), not
         consumed."""
         a, sc = self.a, self._scratch
-        for s, k in (("measure", n_meas), *self._deg_streams):
-            for e in idx[self._pos[s][idx, 0] + k > DEFAULT_BLOCK]:
-                self._draws(e, s).refill()
-        pm = self._pos["measure"][idx, 0]
-        sc["meas"][idx] = self._buf["measure"][idx[:, None], pm[:, None] + np.arange(n_meas)]
-        self._peek_degradation(idx)
+        (s_a, s_b), buf, pos = self._deg_pair, self._buf, self._pos
+        names, rows, streams = self._flight_streams, sc["short_rows"], sc["short_streams"]
+        positions = tuple(pos[s] for s in names)
+        for k in range(
+            short_of_draws(idx, positions, self._flight_needs, DEFAULT_BLOCK, rows, streams)
+        ):
+            self._draws(int(rows[k]), names[streams[k]]).refill()
+        gather_flight_draws(
+            idx, buf["measure"], pos["measure"], sc["meas"], buf[s_a], pos[s_a], buf[s_b],
+            pos[s_b], self._per_part, sc["deg"],
+        )  # fmt: skip
         t = self._tables
         surrogate_flights(
             idx, a["crack"], a["wear"], a["fail"], a["theta"], a["wmult"], a["unit_z"],
