@@ -228,16 +228,19 @@ def short_of_draws(
 def gather_flight_draws(
     envs: np.ndarray, meas_buf: np.ndarray, meas_pos: np.ndarray, meas: np.ndarray,
     deg_a_buf: np.ndarray, deg_a_pos: np.ndarray, deg_b_buf: np.ndarray, deg_b_pos: np.ndarray,
-    per_part: bool, deg: np.ndarray,
+    per_part: bool, deg: np.ndarray, meas_offset: int,
 ) -> None:  # fmt: skip
     """The next flight's draws of each row ``e`` of ``envs`` (peeked, not consumed): its
-    ``meas.shape[1]`` measure normals into ``meas[e]`` and its two growth normals into
-    ``deg[e]`` (``per_part``: one from each part's stream a, b; else two from stream a)."""
+    ``meas.shape[1]`` measure normals from ``meas_offset`` values past the measure stream's
+    position into ``meas[e]`` (left as they are where they would run past the block) and
+    its two growth normals into ``deg[e]`` (``per_part``: one from each part's stream a, b;
+    else two from stream a)."""
     n_meas = meas.shape[1]
     for e in envs:
-        p = meas_pos[e, 0]
-        for m in range(n_meas):
-            meas[e, m] = meas_buf[e, p + m]
+        p = meas_pos[e, 0] + meas_offset
+        if p + n_meas <= meas_buf.shape[1]:
+            for m in range(n_meas):
+                meas[e, m] = meas_buf[e, p + m]
         if per_part:
             deg[e, 0] = deg_a_buf[e, deg_a_pos[e, 0]]
             deg[e, 1] = deg_b_buf[e, deg_b_pos[e, 0]]

@@ -375,7 +375,7 @@ class ScasMaintenanceVectorEnv(VectorEnv):
             self._draws(int(rows[k]), names[streams[k]]).refill()
         gather_flight_draws(
             idx, buf["measure"], pos["measure"], sc["meas"], buf[s_a], pos[s_a], buf[s_b],
-            pos[s_b], self._per_part, sc["deg"],
+            pos[s_b], self._per_part, sc["deg"], 0,
         )  # fmt: skip
         t = self._tables
         surrogate_flights(
@@ -401,16 +401,17 @@ class ScasMaintenanceVectorEnv(VectorEnv):
         # a failing flight goes the slow path whole: peek at the flight's growth draws, and
         # at its measure draws where they follow the test's two in the block (no refill:
         # the flight computed here is the one flown); the others' features are recomputed
-        for s, k in self._deg_streams:
-            for e in idx[self._pos[s][idx, 0] + k > DEFAULT_BLOCK]:
-                self._draws(e, s).refill()
-        self._peek_degradation(idx)
-        pm = self._pos["measure"][idx, 0] + 2
-        in_block = pm + n_meas <= DEFAULT_BLOCK
-        ready = idx[in_block]
-        sc["meas"][ready] = self._buf["measure"][
-            ready[:, None], pm[in_block, None] + np.arange(n_meas)
-        ]
+        (s_a, s_b), buf, pos = self._deg_pair, self._buf, self._pos
+        names, rows, streams = self._flight_streams[1:], sc["short_rows"], sc["short_streams"]
+        positions = tuple(pos[s] for s in names)
+        needs = self._flight_needs[1:]
+        for k in range(short_of_draws(idx, positions, needs, DEFAULT_BLOCK, rows, streams)):
+            self._draws(int(rows[k]), names[streams[k]]).refill()
+        gather_flight_draws(
+            idx, buf["measure"], pos["measure"], sc["meas"], buf[s_a], pos[s_a], buf[s_b],
+            pos[s_b], self._per_part, sc["deg"], 2,
+        )  # fmt: skip
+        ready = idx[pos["measure"][idx, 0] + 2 + n_meas <= DEFAULT_BLOCK]
         t = self._tables
         surrogate_flights(
             idx, a["crack"], a["wear"], a["fail"], a["theta"], a["wmult"], a["unit_z"],
@@ -455,17 +456,6 @@ class ScasMaintenanceVectorEnv(VectorEnv):
         a["tests"][idx] += 1
         a["no_go_count"][idx[~go]] += 1
         return idx, go, ready
-
-    def _peek_degradation(self, idx: np.ndarray) -> None:
-        """The next flight's two growth-factor normals of ``idx`` into the scratch (not
-        consumed)."""
-        sc = self._scratch
-        if self._per_part:
-            for p, (s, _) in enumerate(self._deg_streams):
-                sc["deg"][idx, p] = self._buf[s][idx, self._pos[s][idx, 0]]
-        else:
-            pd = self._pos["degradation"][idx, 0]
-            sc["deg"][idx] = self._buf["degradation"][idx[:, None], pd[:, None] + np.arange(2)]
 
     def _test_rewards(self, tested: np.ndarray, rewards: np.ndarray) -> None:
         """Rewards, cost and reward terms of tested actuators (after their flights), summed
