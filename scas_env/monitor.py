@@ -59,6 +59,7 @@ option for comparison (docs/beliefs.md).
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, replace
 from typing import Any
 
@@ -127,6 +128,10 @@ def learning_features(scenario: Scenario) -> tuple[str, ...]:
     return tuple(f for f in LEARNING_FEATURES if f in scenario.flight_feature_names)
 
 
+#: ``learn_batch``'s ``stale`` argument that rebuilds the RUL tables at once
+_REFRESH_NOW = np.zeros(0, dtype=np.bool_)
+
+
 class FleetRowTables:
     """One part's RUL tables where a batched kernel left them: ``tables[k][row, p]`` of a
     fleet's ``(rul_sorted, rul_cum_w, rul_suffix_w, rul_suffix_wr, rul_low)`` arrays
@@ -134,15 +139,24 @@ class FleetRowTables:
     instead of an :class:`~prognostics.rul_ageing.AgeingRul` copy of the tables: the
     observation reads the fleet's arrays, and :meth:`HealthMonitor.ageing` copies them only
     when asked (the row changes only with this monitor's next update, which replaces the
-    holder)."""
+    holder). ``fresh(row)``, if given, is called before the row is read (the vector env
+    rebuilds tables it left stale)."""
 
-    __slots__ = ("p", "row", "tables")
+    __slots__ = ("fresh", "p", "row", "tables")
 
-    def __init__(self, tables: tuple[np.ndarray, ...], row: int, p: int) -> None:
-        self.tables, self.row, self.p = tables, int(row), int(p)
+    def __init__(
+        self,
+        tables: tuple[np.ndarray, ...],
+        row: int,
+        p: int,
+        fresh: Callable[[int], None] | None = None,
+    ) -> None:
+        self.tables, self.row, self.p, self.fresh = tables, int(row), int(p), fresh
 
     def ageing(self, low_quantile: float) -> AgeingRul:
         """A copy of the tables as an :class:`~prognostics.rul_ageing.AgeingRul`."""
+        if self.fresh is not None:
+            self.fresh(self.row)
         t, e, p = self.tables, self.row, self.p
         return AgeingRul._copied(
             t[0][e, p], t[1][e, p], t[2][e, p], t[3][e, p], t[4][e, p], low_quantile
@@ -599,7 +613,7 @@ class HealthMonitor:
             return
         state, out = self._kernel_io()
         learn_batch(*self._one, state, out, self.bank.arrays, self.bank.handles, self._tables,
-                    self.learning_model)  # fmt: skip
+                    self.learning_model, _REFRESH_NOW)  # fmt: skip
         self._adopt_one(state, out)
 
     def _kernel_io(self) -> tuple[tuple, tuple]:

@@ -41,11 +41,13 @@ from scas_env.fleet_kernels import (
     surrogate_flights,
 )
 from scas_env.info import build_info
-from scas_env.learning_kernel import learn_batch, test_batch
+from scas_env.learning_kernel import learn_batch, refresh_tables, test_batch
 from scas_env.monitor import FleetRowTables, learning_features, raise_status
 from scas_env.world import GROUND_FEATURES, PARTS
 
 _STREAMS = ("measure", "degradation", "spring_growth", "seal_growth")
+#: ``learn_batch``'s ``stale`` argument that rebuilds the RUL tables at once
+_REFRESH_NOW = np.zeros(0, dtype=np.bool_)
 
 
 def make_vector_env(num_envs: int, **kwargs: Any) -> VectorEnv:
@@ -159,8 +161,15 @@ class ScasMaintenanceVectorEnv(VectorEnv):
         #: per row, the holders of its two parts' RUL tables in the fleet's arrays
         tables = self._tables_rul()
         self._held = [
-            (FleetRowTables(tables, e, 0), FleetRowTables(tables, e, 1)) for e in range(n)
+            (
+                FleetRowTables(tables, e, 0, self._fresh_row),
+                FleetRowTables(tables, e, 1, self._fresh_row),
+            )
+            for e in range(n)
         ]
+        #: rows whose RUL tables a learning update left to be rebuilt before a read (steps
+        #: without outputs, as the decision-epoch env's: the next update may replace them)
+        self._stale = np.zeros(n, dtype=np.bool_)
         self._learn_out = {
             "ess": np.full((n, 2), np.nan),
             "resampled": np.zeros((n, 2), dtype=np.int64),
@@ -236,6 +245,7 @@ class ScasMaintenanceVectorEnv(VectorEnv):
             self._attach(e)
             self._pull(e)
         self._autoreset[:] = False
+        self._stale[:] = False
         self.fleet.clear_step()
         rul = self.fleet.true_rul()
         return self._observation(rul), self._info(rul)
@@ -302,7 +312,7 @@ class ScasMaintenanceVectorEnv(VectorEnv):
             rewards[done] = value
             self._terms["flight"][done] = value
             if self._learn_cols.size:
-                self._learn_from_full_batches(done)
+                self._learn_from_full_batches(done, defer=not outputs)
         passed = fly | idle  # a slot passed on the fast path
         if tested.size:
             self._test_rewards(tested, rewards)
@@ -312,7 +322,9 @@ class ScasMaintenanceVectorEnv(VectorEnv):
         quick = np.flatnonzero(passed & ~slow)
         a["slot"][quick] += 1
         a["test_age"][quick] += 1
-        for e in np.flatnonzero(slow):
+        slow_idx = np.flatnonzero(slow)
+        self._fresh(slow_idx)  # a slow step may read its monitor's tables
+        for e in slow_idx:
             env = self.envs[e]
             self._push(e)
             if resetting[e]:
@@ -336,6 +348,27 @@ class ScasMaintenanceVectorEnv(VectorEnv):
         """The observations of the current state (those the last step returned, or would
         have returned with ``outputs=True``)."""
         return self._observation(self.fleet.true_rul())
+
+    def _fresh(self, idx: np.ndarray | None = None) -> None:
+        """Rebuild the RUL tables left stale (:func:`~scas_env.learning_kernel.learn_batch`
+        with ``stale``) of the rows ``idx`` (None: all), raising what the update would have
+        raised for an invalid cloud."""
+        stale = self._stale
+        rows = np.flatnonzero(stale) if idx is None else idx[stale[idx]]
+        if not rows.size:
+            return
+        status = self._learn_out["status"]
+        refresh_tables(
+            rows, rows, status, self._bank.arrays, self._tables_rul(),
+            self.envs[rows[0]].monitor.learning_model, stale,
+        )  # fmt: skip
+        for code in status[rows].tolist():
+            raise_status(code)
+
+    def _fresh_row(self, e: int) -> None:
+        """:meth:`_fresh` of row ``e`` (a monitor reads its tables)."""
+        if self._stale[e]:
+            self._fresh(np.array([e], dtype=np.int64))
 
     def _fly(self, idx: np.ndarray, ready: np.ndarray) -> np.ndarray:
         """Candidate flights of ``idx`` (draws peeked); commits those that did not fail
@@ -437,6 +470,7 @@ class ScasMaintenanceVectorEnv(VectorEnv):
         # the monitors
         corrected = sc["corrected"]
         test_batch(idx, idx, ground, corrected, *self._kernel_io(idx))
+        self._stale[idx] = False  # the test rebuilt the tables
         self._adopt(idx)
         envs = self.envs
         a["detected"][idx] = [
@@ -467,10 +501,11 @@ class ScasMaintenanceVectorEnv(VectorEnv):
         rewards[tested] = (((rewards[tested] + test) + no_go) + 0.0) + 0.0
         a["cost"][tested] -= (((0.0 + test) + no_go) + 0.0) + 0.0
 
-    def _learn_from_full_batches(self, flown: np.ndarray) -> None:
+    def _learn_from_full_batches(self, flown: np.ndarray, *, defer: bool = False) -> None:
         """The actuators of ``flown`` whose batch of learning flights is full learn from it,
         as the single env's monitor does inside the flight (``HealthMonitor.flown``): all in
-        one call of the batched kernel when their filters live in the bank, else one by one."""
+        one call of the batched kernel when their filters live in the bank, else one by one.
+        ``defer``: their RUL tables are left stale, rebuilt only if read (:meth:`_fresh`)."""
         a = self.a
         due = flown[a["flight_count"][flown] >= self._flight_interval]
         if not due.size:
@@ -481,7 +516,7 @@ class ScasMaintenanceVectorEnv(VectorEnv):
                 self.envs[e].monitor.learn_from_flights()
                 self._pull(e)
             return
-        learn_batch(due, due, *self._kernel_io(due))
+        learn_batch(due, due, *self._kernel_io(due), self._stale if defer else _REFRESH_NOW)
         self._adopt(due)
 
     def _kernel_io(self, idx: np.ndarray) -> tuple:
@@ -531,6 +566,7 @@ class ScasMaintenanceVectorEnv(VectorEnv):
 
     # ------------------------------------------------------------------ outputs
     def _observation(self, rul: np.ndarray) -> Any:
+        self._fresh()
         return self._builder.observe(self.fleet, rul)
 
     def _info(self, rul: np.ndarray) -> dict[str, Any]:

@@ -108,3 +108,31 @@ def test_held_tables_survive_copies_and_reads(how: str) -> None:
         assert not trunc.any()
     for e, single in enumerate(singles):
         _assert_monitors_equal(venv, e, single)
+
+
+def test_tables_left_stale_without_outputs_are_rebuilt_before_reads() -> None:
+    """Steps without outputs (the decision-epoch env's) leave a learning update's RUL tables
+    to be rebuilt: a monitor's read, a slow step, a test or the next observation rebuilds
+    them, and every number is a single env's."""
+    n = 3
+    venv = ScasMaintenanceVectorEnv(n, **_KW)
+    singles = [ScasMaintenanceEnv(**_KW) for _ in range(n)]
+    venv.reset(seed=21)
+    for e, env in enumerate(singles):
+        env.reset(seed=21 + e)
+    rng = np.random.default_rng(21)
+    stale_seen = read_while_stale = 0
+    for t in range(280):  # within the 300-slot episode: no autoreset
+        actions = rng.choice(4, size=n, p=[0.86, 0.12, 0.01, 0.01])
+        venv.step_active(actions, None, outputs=False)
+        obs = [env.step(int(actions[e]))[0] for e, env in enumerate(singles)]
+        stale_seen += int(venv._stale.sum())
+        if t % 23 == 0:
+            for e in range(n):
+                read_while_stale += bool(venv._stale[e])
+                _assert_monitors_equal(venv, e, singles[e])  # reads the tables
+        if t % 31 == 0:
+            np.testing.assert_array_equal(venv.observe(), np.array(obs))
+            assert not venv._stale.any()
+    assert stale_seen > 50 and read_while_stale >= 1, (stale_seen, read_while_stale)
+    np.testing.assert_array_equal(venv.observe(), np.array(obs))

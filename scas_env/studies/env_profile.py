@@ -177,7 +177,7 @@ def kernel_breakdown(
             lambda io_, ph=phases: _test_phases(rows, ground, corrected, *io_, ph)
         )
     out["learning update (batch of 5 flights + both RUL tables)"] = timed(
-        lambda io_: learn_batch(rows, rows, *io_)
+        lambda io_: learn_batch(rows, rows, *io_, np.zeros(0, dtype=np.bool_))
     )
     r, s = np.empty(bank.n_particles), np.empty(bank.n_particles)
     c, sw, swr = (np.empty(bank.n_particles + 1) for _ in range(3))
