@@ -142,7 +142,8 @@ def kernel_breakdown(
     """Microseconds per actuator of each phase of the filters' batched kernels, on the v2
     vector env's state after ``warm_steps`` steps of the 90/9/1 mix: a test (phases
     cumulative), a learning update alone, and one part's RUL-table build split into the
-    particles' RUL values and the sort with its sums. Best of ``repeats``."""
+    particles' RUL values and the sort with its sums. Best of ``repeats``. Then
+    :func:`replacement_costs`."""
     envs = _vector_env(num_envs)
     envs.reset(seed=seed)
     for a in tqdm(_actions(DEFAULT_MIX, warm_steps, num_envs, seed), desc="warm-up", leave=False):
@@ -189,6 +190,30 @@ def kernel_breakdown(
             t0 = time.perf_counter()
             _tables_repeated(reps, *args, 0.05, r, s, c, sw, swr, only_sort)
             out[f"{part} RUL table: {label}"] = (time.perf_counter() - t0) / reps * 1e6
+    out.update(replacement_costs(seed=seed))
+    return out
+
+
+def replacement_costs(seed: int = 0, repeats: int = 100) -> dict[str, float]:
+    """Microseconds per replacement action on a single v2 env (the path the vector env
+    takes for it): the whole slot (``advance``) and the world's part of it (a new unit, its
+    growth stream and exact life), per part. The env keeps replacing: its parts stay new."""
+    env = gym.make(scas_env.ENV_ID_V2).unwrapped
+    env.reset(seed=seed)
+    for _ in range(50):
+        env.step(0)
+    out: dict[str, float] = {}
+    for action, part in ((2, "spring"), (3, "seal")):
+        rng = env.rngs[f"{part}_parts"]
+        for label, call in (
+            ("replacement slot", lambda a=action: env.advance(a)),
+            ("World.replace", lambda p=part, r=rng: env.world.replace(p, r)),
+        ):
+            call()
+            t0 = time.perf_counter()
+            for _ in range(repeats):
+                call()
+            out[f"{part} {label}"] = (time.perf_counter() - t0) / repeats * 1e6
     return out
 
 
@@ -198,4 +223,10 @@ def format_breakdown(breakdown: dict[str, float]) -> str:
     return "\n".join(f"{k:{width}s} {v:8.1f} us" for k, v in breakdown.items())
 
 
-__all__ = ["DEFAULT_MIX", "format_breakdown", "kernel_breakdown", "profile_steps"]
+__all__ = [
+    "DEFAULT_MIX",
+    "format_breakdown",
+    "kernel_breakdown",
+    "profile_steps",
+    "replacement_costs",
+]
