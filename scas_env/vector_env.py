@@ -160,16 +160,17 @@ class ScasMaintenanceVectorEnv(VectorEnv):
             self._go_band = np.array([band.get(f, (-np.inf, np.inf)) for f in GROUND_FEATURES])
         #: per row, the holders of its two parts' RUL tables in the fleet's arrays
         tables = self._tables_rul()
+        #: rows whose RUL tables a learning update left to be rebuilt before a read (steps
+        #: without outputs, as the decision-epoch env's: the next update may replace them)
+        self._stale_tables = StaleTables(n, tables)
+        self._stale = self._stale_tables.stale
         self._held = [
             (
-                FleetRowTables(tables, e, 0, self._fresh_row),
-                FleetRowTables(tables, e, 1, self._fresh_row),
+                FleetRowTables(tables, e, 0, self._stale_tables),
+                FleetRowTables(tables, e, 1, self._stale_tables),
             )
             for e in range(n)
         ]
-        #: rows whose RUL tables a learning update left to be rebuilt before a read (steps
-        #: without outputs, as the decision-epoch env's: the next update may replace them)
-        self._stale = np.zeros(n, dtype=np.bool_)
         self._learn_out = {
             "ess": np.full((n, 2), np.nan),
             "resampled": np.zeros((n, 2), dtype=np.int64),
@@ -216,6 +217,8 @@ class ScasMaintenanceVectorEnv(VectorEnv):
             self._bank = ParticleBank(
                 self.num_envs, 2, monitor.bank.n_particles, monitor.bank.n_aux
             )
+            self._stale_tables.bank = self._bank
+            self._stale_tables.model = monitor.learning_model
         monitor.attach(self._bank, e)
 
     def _pull(self, e: int) -> None:
@@ -350,25 +353,9 @@ class ScasMaintenanceVectorEnv(VectorEnv):
         return self._observation(self.fleet.true_rul())
 
     def _fresh(self, idx: np.ndarray | None = None) -> None:
-        """Rebuild the RUL tables left stale (:func:`~scas_env.learning_kernel.learn_batch`
-        with ``stale``) of the rows ``idx`` (None: all), raising what the update would have
-        raised for an invalid cloud."""
-        stale = self._stale
-        rows = np.flatnonzero(stale) if idx is None else idx[stale[idx]]
-        if not rows.size:
-            return
-        status = self._learn_out["status"]
-        refresh_tables(
-            rows, rows, status, self._bank.arrays, self._tables_rul(),
-            self.envs[rows[0]].monitor.learning_model, stale,
-        )  # fmt: skip
-        for code in status[rows].tolist():
-            raise_status(code)
-
-    def _fresh_row(self, e: int) -> None:
-        """:meth:`_fresh` of row ``e`` (a monitor reads its tables)."""
-        if self._stale[e]:
-            self._fresh(np.array([e], dtype=np.int64))
+        """Rebuild the RUL tables left stale of the rows ``idx`` (None: all)
+        (:meth:`StaleTables.refresh`)."""
+        self._stale_tables.refresh(idx)
 
     def _fly(self, idx: np.ndarray, ready: np.ndarray) -> np.ndarray:
         """Candidate flights of ``idx`` (draws peeked); commits those that did not fail
@@ -577,6 +564,41 @@ class ScasMaintenanceVectorEnv(VectorEnv):
             env.close()
 
 
+class StaleTables:
+    """The rows of a native vector env whose RUL tables a learning update left stale
+    (:func:`~scas_env.learning_kernel.learn_batch` with ``stale``), and what rebuilding
+    them takes: the filters' bank, the monitors' shared ``learning_model`` and the fleet's
+    ``rul_*`` tables. The holders of those tables (:class:`scas_env.monitor.FleetRowTables`)
+    call it before a read, without holding the vector env itself."""
+
+    __slots__ = ("bank", "model", "stale", "status", "tables")
+
+    def __init__(self, n: int, tables: tuple[np.ndarray, ...]) -> None:
+        self.stale = np.zeros(n, dtype=np.bool_)
+        self.status = np.zeros(n, dtype=np.int64)
+        self.tables = tables
+        self.bank: ParticleBank | None = None
+        self.model: tuple | None = None
+
+    def __call__(self, row: int) -> None:
+        """Rebuild row ``row``'s tables if stale (a monitor reads them)."""
+        if self.stale[row]:
+            self.refresh(np.array([row], dtype=np.int64))
+
+    def refresh(self, idx: np.ndarray | None = None) -> None:
+        """Rebuild the stale tables of the rows ``idx`` (None: all) from their clouds as
+        they are (:func:`~scas_env.learning_kernel.refresh_tables`; the clouds have not
+        changed since the update), raising what the update would have raised for an
+        invalid cloud."""
+        stale = self.stale
+        rows = np.flatnonzero(stale) if idx is None else idx[stale[idx]]
+        if not rows.size:
+            return
+        refresh_tables(rows, rows, self.status, self.bank.arrays, self.tables, self.model, stale)
+        for code in self.status[rows].tolist():
+            raise_status(code)
+
+
 def with_info_masks(info: dict[str, Any], n: int) -> dict[str, Any]:
     """``info`` with Gymnasium's ``_key`` masks (every actuator has every key), nested dicts
     included, in the order ``SyncVectorEnv`` builds them (key, then ``_key``); the masks are
@@ -612,6 +634,7 @@ def expose_surface(vec: VectorEnv, first: ScasMaintenanceEnv) -> None:
 __all__ = [
     "ScasMaintenanceSyncVectorEnv",
     "ScasMaintenanceVectorEnv",
+    "StaleTables",
     "expose_surface",
     "make_vector_env",
     "spaces",
