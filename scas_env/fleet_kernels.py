@@ -54,6 +54,35 @@ def lognormal_factor(cv: float, z: float) -> float:
 
 
 @njit(cache=True, inline="always")
+def interp_scalar(x: float, xp: np.ndarray, fp: np.ndarray) -> float:
+    """``np.interp(x, xp, fp)`` for one float ``x``, the same float bit for bit (numba's
+    ``np.interp``, a translation of numpy's ``arr_interp``: the same cell, the same slope
+    and the same NaN fall-backs), without the arrays numba's version allocates per call
+    (half the cost of a flight's crack growth). ``xp`` increasing, ``fp`` of its size."""
+    n = xp.size
+    if n == 1:
+        return fp[0]
+    if math.isnan(x):
+        return x
+    if x > xp[n - 1]:
+        return fp[n - 1]
+    if x < xp[0]:
+        return fp[0]
+    j = 0
+    while j < n - 1 and xp[j + 1] <= x:
+        j += 1
+    if j == n - 1 or xp[j] == x:
+        return fp[j]
+    slope = (fp[j + 1] - fp[j]) / (xp[j + 1] - xp[j])
+    out = slope * (x - xp[j]) + fp[j]
+    if math.isnan(out):  # numpy: if NaN one way, try the other
+        out = slope * (x - xp[j + 1]) + fp[j + 1]
+        if math.isnan(out) and fp[j] == fp[j + 1]:
+            out = fp[j]
+    return out
+
+
+@njit(cache=True, inline="always")
 def crack_after_flight(
     crack: float,
     theta: float,
@@ -72,7 +101,7 @@ def crack_after_flight(
     ``dormant_m`` does not grow)."""
     if crack < dormant_m:
         return crack
-    cv = np.interp(math.log(crack), cv_log_depth, cv_values)
+    cv = interp_scalar(math.log(crack), cv_log_depth, cv_values)
     damage = damage_scalar(dmg_grid, dmg_rate, dmg_cum, dmg_cells, dmg_inv_cell, crack)
     damage += theta * lognormal_factor(cv, z)
     return inverse_damage_scalar(dmg_grid, dmg_rate, dmg_cum, damage)
@@ -206,6 +235,90 @@ def surrogate_flights(
 
 
 @njit(cache=True)
+def short_of_draws(
+    envs: np.ndarray, positions: tuple, needs: np.ndarray, block: int, rows: np.ndarray,
+    streams: np.ndarray,
+) -> int:  # fmt: skip
+    """The (row, stream) pairs of ``envs`` whose normal buffer ``positions[k]`` (position
+    ``positions[k][e, 0]`` in a block of ``block``) holds fewer than ``needs[k]`` unread
+    values, in stream-major order, into ``rows`` and ``streams``; returns their count."""
+    count = 0
+    for k in range(len(positions)):
+        pos = positions[k]
+        for e in envs:
+            if pos[e, 0] + needs[k] > block:
+                rows[count] = e
+                streams[count] = k
+                count += 1
+    return count
+
+
+@njit(cache=True)
+def gather_flight_draws(
+    envs: np.ndarray, meas_buf: np.ndarray, meas_pos: np.ndarray, meas: np.ndarray,
+    deg_a_buf: np.ndarray, deg_a_pos: np.ndarray, deg_b_buf: np.ndarray, deg_b_pos: np.ndarray,
+    per_part: bool, deg: np.ndarray, meas_offset: int,
+) -> None:  # fmt: skip
+    """The next flight's draws of each row ``e`` of ``envs`` (peeked, not consumed): its
+    ``meas.shape[1]`` measure normals from ``meas_offset`` values past the measure stream's
+    position into ``meas[e]`` (left as they are where they would run past the block) and
+    its two growth normals into ``deg[e]`` (``per_part``: one from each part's stream a, b;
+    else two from stream a)."""
+    n_meas = meas.shape[1]
+    for e in envs:
+        p = meas_pos[e, 0] + meas_offset
+        if p + n_meas <= meas_buf.shape[1]:
+            for m in range(n_meas):
+                meas[e, m] = meas_buf[e, p + m]
+        if per_part:
+            deg[e, 0] = deg_a_buf[e, deg_a_pos[e, 0]]
+            deg[e, 1] = deg_b_buf[e, deg_b_pos[e, 0]]
+        else:
+            deg[e, 0] = deg_a_buf[e, deg_a_pos[e, 0]]
+            deg[e, 1] = deg_a_buf[e, deg_a_pos[e, 0] + 1]
+
+
+@njit(cache=True)
+def commit_flights(
+    envs: np.ndarray, failed: np.ndarray, new_crack_m: np.ndarray, new_wear_m: np.ndarray,
+    features: np.ndarray, crack_m: np.ndarray, wear_m: np.ndarray, last: np.ndarray,
+    meas_pos: np.ndarray, deg_a_pos: np.ndarray, deg_b_pos: np.ndarray, per_part: bool,
+    life: np.ndarray, learn_cols: np.ndarray, flight_sum: np.ndarray,
+    flight_count: np.ndarray, ok: np.ndarray,
+) -> int:  # fmt: skip
+    """Commit the candidate flights of ``envs`` (:func:`surrogate_flights`' outputs) that
+    did not fail: crack and wear, the features into ``last[e, :n]``, the draws consumed
+    (measure ``n``, growth one per part stream or two), a flight off each part's ``life``
+    (``per_part``) and the learning features into the batch under way (``learn_cols``:
+    their columns of the features; none: no batch). ``ok[r]``: row r flew; returns how many."""
+    n_meas = features.shape[1]
+    done = 0
+    for r in range(envs.size):
+        e = envs[r]
+        ok[r] = not (failed[e, 0] or failed[e, 1])
+        if not ok[r]:
+            continue
+        done += 1
+        crack_m[e] = new_crack_m[e]
+        wear_m[e] = new_wear_m[e]
+        for m in range(n_meas):
+            last[e, m] = features[e, m]
+        meas_pos[e, 0] += n_meas
+        if per_part:
+            deg_a_pos[e, 0] += 1
+            deg_b_pos[e, 0] += 1
+            life[e, 0] -= 1.0
+            life[e, 1] -= 1.0
+        else:
+            deg_a_pos[e, 0] += 2
+        if learn_cols.size:
+            for j in range(learn_cols.size):
+                flight_sum[e, j] += features[e, learn_cols[j]]
+            flight_count[e] += 1
+    return done
+
+
+@njit(cache=True)
 def ageing_estimates(
     sorted_rul: np.ndarray,
     cum_w: np.ndarray,
@@ -324,8 +437,12 @@ def wear_flights_to_failure(
 
 __all__ = [
     "ageing_estimates",
+    "commit_flights",
     "crack_flights_to_failure",
+    "gather_flight_draws",
+    "interp_scalar",
     "lognormal_factor",
+    "short_of_draws",
     "surrogate_features",
     "surrogate_flights",
     "true_rul",

@@ -383,6 +383,7 @@ def learn_batch(
     handles: np.ndarray,
     tables: tuple,
     model: tuple,
+    stale: np.ndarray,
 ) -> None:
     """``HealthMonitor.learn_from_flights`` for the filters of each bank row ``rows[r]``
     (module docstring), whose other arrays are at index ``s = slots[r]``.
@@ -393,7 +394,10 @@ def learn_batch(
     and the batch (emptied); ``out = (ess, resampled, status)``: N_eff after the last weight
     update (unchanged without one), +1 per resampling, the status; the RUL tables
     ``tables = (sorted, cum_w, suffix_w, suffix_wr, low)`` (e.g. a fleet's ``rul_*`` arrays).
-    ``model`` is ``HealthMonitor.learning_model``: what every row shares.
+    ``model`` is ``HealthMonitor.learning_model``: what every row shares. ``stale``: empty,
+    the RUL tables are rebuilt now; else (a flag per slot) they are not, and ``stale[s]``
+    is set: :func:`refresh_tables` rebuilds them before they are read (the same numbers:
+    the row's cloud does not change in between).
     """
     work = _work(bank[0].shape[2], model[8].size, model[19])
     for r in range(rows.size):
@@ -403,7 +407,29 @@ def learn_batch(
             continue
         handle = (handles[e, 0], handles[e, 1], handles[e, 2])
         _learn(e, s, bank, state, out, work, model, handle)
+        if stale.size:
+            stale[s] = True
+        else:
+            _refresh(e, s, bank, out, work, tables, model)
+
+
+@njit(cache=True)
+def refresh_tables(
+    rows: np.ndarray, slots: np.ndarray, status: np.ndarray, bank: tuple, tables: tuple,
+    model: tuple, stale: np.ndarray,
+) -> None:  # fmt: skip
+    """Both parts' RUL tables of each bank row ``rows[r]`` whose ``stale[s]`` is set (slot
+    ``s = slots[r]``, as :func:`learn_batch`), from its clouds as they are; the flag is
+    cleared and ``status[s]`` set (0, or 4/5 for an invalid cloud)."""
+    work = _work(bank[0].shape[2], model[8].size, model[19])
+    out = (np.empty((0, 2)), np.empty((0, 2), dtype=np.int64), status)
+    for r in range(rows.size):
+        e, s = rows[r], slots[r]
+        if not stale[s]:
+            continue
+        status[s] = 0
         _refresh(e, s, bank, out, work, tables, model)
+        stale[s] = False
 
 
 @njit(cache=True)
@@ -461,5 +487,6 @@ __all__ = [
     "fraction_moments",
     "learn_batch",
     "realign_effect",
+    "refresh_tables",
     "test_batch",
 ]

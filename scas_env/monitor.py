@@ -59,6 +59,7 @@ option for comparison (docs/beliefs.md).
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, replace
 from typing import Any
 
@@ -125,6 +126,53 @@ def learning_features(scenario: Scenario) -> tuple[str, ...]:
     (:data:`LEARNING_FEATURES` among those measured), in the order of
     ``HealthMonitor.flight_sum``; empty: they learn at tests only."""
     return tuple(f for f in LEARNING_FEATURES if f in scenario.flight_feature_names)
+
+
+#: ``learn_batch``'s ``stale`` argument that rebuilds the RUL tables at once
+_REFRESH_NOW = np.zeros(0, dtype=np.bool_)
+
+
+class FleetRowTables:
+    """One part's RUL tables where a batched kernel left them: ``tables[k][row, p]`` of a
+    fleet's ``(rul_sorted, rul_cum_w, rul_suffix_w, rul_suffix_wr, rul_low)`` arrays
+    (:class:`scas_env.fleet_state.FleetState`). A native vector env's monitor holds one
+    instead of an :class:`~prognostics.rul_ageing.AgeingRul` copy of the tables: the
+    observation reads the fleet's arrays, and :meth:`HealthMonitor.ageing` copies them only
+    when asked (the row changes only with this monitor's next update, which replaces the
+    holder). ``fresh(row)``, if given, is called before the row is read (the vector env
+    rebuilds tables it left stale)."""
+
+    __slots__ = ("fresh", "p", "row", "tables")
+
+    def __init__(
+        self,
+        tables: tuple[np.ndarray, ...],
+        row: int,
+        p: int,
+        fresh: Callable[[int], None] | None = None,
+    ) -> None:
+        self.tables, self.row, self.p, self.fresh = tables, int(row), int(p), fresh
+
+    def ageing(self, low_quantile: float) -> AgeingRul:
+        """A copy of the tables as an :class:`~prognostics.rul_ageing.AgeingRul`."""
+        if self.fresh is not None:
+            self.fresh(self.row)
+        t, e, p = self.tables, self.row, self.p
+        return AgeingRul._copied(
+            t[0][e, p], t[1][e, p], t[2][e, p], t[3][e, p], t[4][e, p], low_quantile
+        )
+
+    def holds(self, a: dict[str, np.ndarray], row: int, p: int) -> bool:
+        """Whether these are the tables of row ``row``, part ``p`` of the fleet arrays ``a``."""
+        return row == self.row and p == self.p and a["rul_sorted"] is self.tables[0]
+
+
+def raise_status(code: int) -> None:
+    """Raise what the Python form raises for a learning kernel's non-zero row status
+    (:data:`scas_env.learning_kernel.STATUS_MESSAGES`); nothing for 0."""
+    if code:
+        error, message = STATUS_MESSAGES[code]
+        raise error(f"learning from the in-flight batch: {message}")
 
 
 class HealthMonitor:
@@ -265,7 +313,8 @@ class HealthMonitor:
         self._filters = {"spring": self.spring_filter, "seal": self.seal_filter}
         #: flights flown since each filter was last predicted
         self.pending = {"spring": 0, "seal": 0}
-        self._ageing: dict[str, AgeingRul] = {}
+        #: each part's RUL tables (a :class:`FleetRowTables` until read, in a vector env)
+        self._ageing: dict[str, AgeingRul | FleetRowTables] = {}
         #: flights per in-flight update (``Scenario.flight_update_flights``)
         self.flight_interval = int(scenario.flight_update_flights)
         #: sum of each learning feature over the flights of the batch under way (SI units)
@@ -564,7 +613,7 @@ class HealthMonitor:
             return
         state, out = self._kernel_io()
         learn_batch(*self._one, state, out, self.bank.arrays, self.bank.handles, self._tables,
-                    self.learning_model)  # fmt: skip
+                    self.learning_model, _REFRESH_NOW)  # fmt: skip
         self._adopt_one(state, out)
 
     def _kernel_io(self) -> tuple[tuple, tuple]:
@@ -610,10 +659,26 @@ class HealthMonitor:
             )  # fmt: skip
             if sources is not None:
                 sources[p] = self._ageing[part]
-        code = int(status[slot])
-        if code:
-            error, message = STATUS_MESSAGES[code]
-            raise error(f"learning from the in-flight batch: {message}")
+        raise_status(int(status[slot]))
+
+    def adopt_rows(
+        self, ess: list[float], resampled: list[int], held: tuple[Any, Any], sources: list[Any]
+    ) -> None:
+        """:meth:`adopt_learning` for a native vector env, whose kernels left this monitor's
+        RUL tables in its fleet row: ``held`` (that row's two :class:`FleetRowTables`, spring
+        and seal) stands for them until someone reads them (:meth:`ageing` then copies them);
+        ``ess`` and ``resampled`` are this row's kernel outputs as Python numbers; ``sources``
+        (the row's ``table_source``) learns that the row holds them. The caller raises a
+        non-zero status (:func:`raise_status`)."""
+        sf, wf = self.spring_filter, self.seal_filter
+        if ess[0] == ess[0]:  # NaN: no weight update in the batch
+            sf._ess = ess[0]
+        if ess[1] == ess[1]:
+            wf._ess = ess[1]
+        sf.n_resamples += resampled[0]
+        wf.n_resamples += resampled[1]
+        self._ageing["spring"], self._ageing["seal"] = held
+        sources[0], sources[1] = held
 
     def learn_from_flights_python(self) -> None:
         """Update the filters with the mean of the batch's learning features, then empty it.
@@ -756,9 +821,14 @@ class HealthMonitor:
     def detect(self, slot: int, corrected: np.ndarray) -> None:
         """The detectors read a test's G1 and G3 corrected to a healthy new installation
         (``corrected[slot]``, from :func:`scas_env.learning_kernel.test_batch`)."""
-        g1, g3 = float(corrected[slot, 0]), float(corrected[slot, 1])
+        self.detect_values(float(corrected[slot, 0]), float(corrected[slot, 1]))
+
+    def detect_values(self, g1: float, g3: float) -> tuple[bool, bool]:
+        """:meth:`detect` with the corrected G1 and G3 given; returns both detector flags
+        (crack, seal)."""
         self.crack_detected = self.crack_detector.update(g1) or self.crack_detected
         self.seal_detected = self.seal_detector.update(g3) or self.seal_detected
+        return self.crack_detected, self.seal_detected
 
     def tested_python(self, features: dict[str, float]) -> None:
         """:meth:`tested` in Python (the v0/v1 treatment, and the reference of the kernel)."""
@@ -814,7 +884,13 @@ class HealthMonitor:
             a["flight_sum"][row] = self.flight_sum
             a["flight_count"][row] = self.flight_count
         for p, part in enumerate(("spring", "seal")):
-            ageing = self._ageing[part]
+            held = self._ageing[part]
+            if sources[p] is held:
+                continue
+            if isinstance(held, FleetRowTables) and held.holds(a, row, p):
+                sources[p] = held  # the row holds these tables already
+                continue
+            ageing = self.ageing(part)
             if sources[p] is not ageing:
                 r, cum_w, suffix_w, suffix_wr, low = ageing.tables()
                 a["rul_sorted"][row, p] = r
@@ -836,7 +912,10 @@ class HealthMonitor:
     # ------------------------------------------------------------------ outputs
     def ageing(self, part: str) -> AgeingRul:
         """``part``'s RUL distribution at its filter's last update (aged by ``pending``)."""
-        return self._ageing[part]
+        held = self._ageing[part]
+        if isinstance(held, FleetRowTables):  # tables a vector env's kernel left in its row
+            held = self._ageing[part] = held.ageing(self.scenario.rul_quantile)
+        return held
 
     def estimate(self, part: str) -> PartEstimate:
         """RUL summary (flights, capped at the scenario's ``rul_cap_flights``)."""
@@ -847,7 +926,7 @@ class HealthMonitor:
             detected = self.seal_detected
         else:
             raise ValueError(f"part = {part!r} must be 'spring' or 'seal'")
-        mean, low, risk = self._ageing[part].summary(
+        mean, low, risk = self.ageing(part).summary(
             float(self.pending[part]), float(s.risk_horizon_flights)
         )
         cap = s.rul_cap_flights
@@ -939,6 +1018,7 @@ __all__ = [
     "BASELINE_FLIGHTS",
     "BASELINE_TESTS",
     "LEARNING_FEATURES",
+    "FleetRowTables",
     "HealthMonitor",
     "PartEstimate",
 ]

@@ -33,13 +33,21 @@ from gymnasium.vector.utils import batch_space
 from prognostics.particle_bank import ParticleBank
 from scas_env.block_draws import DEFAULT_BLOCK
 from scas_env.env import REWARD_TERMS, ScasMaintenanceEnv, new_fleet_state
-from scas_env.fleet_kernels import surrogate_features, surrogate_flights
+from scas_env.fleet_kernels import (
+    commit_flights,
+    gather_flight_draws,
+    short_of_draws,
+    surrogate_features,
+    surrogate_flights,
+)
 from scas_env.info import build_info
-from scas_env.learning_kernel import learn_batch, test_batch
-from scas_env.monitor import learning_features
+from scas_env.learning_kernel import learn_batch, refresh_tables, test_batch
+from scas_env.monitor import FleetRowTables, learning_features, raise_status
 from scas_env.world import GROUND_FEATURES, PARTS
 
 _STREAMS = ("measure", "degradation", "spring_growth", "seal_growth")
+#: ``learn_batch``'s ``stale`` argument that rebuilds the RUL tables at once
+_REFRESH_NOW = np.zeros(0, dtype=np.bool_)
 
 
 def make_vector_env(num_envs: int, **kwargs: Any) -> VectorEnv:
@@ -121,6 +129,10 @@ class ScasMaintenanceVectorEnv(VectorEnv):
             "ground_normals": np.empty((n, 2)),
             "ground": np.empty((n, 2)),
             "corrected": np.empty((n, 2)),
+            "computed": np.zeros(n, dtype=np.bool_),
+            "ok": np.zeros(n, dtype=np.bool_),
+            "short_rows": np.zeros(3 * n, dtype=np.int64),
+            "short_streams": np.zeros(3 * n, dtype=np.int64),
         }
         self._builder = first.builder
         self._every_flight = first.scenario.preflight == "every_flight"
@@ -146,6 +158,19 @@ class ScasMaintenanceVectorEnv(VectorEnv):
         else:
             band = builder.acceptance
             self._go_band = np.array([band.get(f, (-np.inf, np.inf)) for f in GROUND_FEATURES])
+        #: per row, the holders of its two parts' RUL tables in the fleet's arrays
+        tables = self._tables_rul()
+        #: rows whose RUL tables a learning update left to be rebuilt before a read (steps
+        #: without outputs, as the decision-epoch env's: the next update may replace them)
+        self._stale_tables = StaleTables(n, tables)
+        self._stale = self._stale_tables.stale
+        self._held = [
+            (
+                FleetRowTables(tables, e, 0, self._stale_tables),
+                FleetRowTables(tables, e, 1, self._stale_tables),
+            )
+            for e in range(n)
+        ]
         self._learn_out = {
             "ess": np.full((n, 2), np.nan),
             "resampled": np.zeros((n, 2), dtype=np.int64),
@@ -156,6 +181,14 @@ class ScasMaintenanceVectorEnv(VectorEnv):
         self._deg_streams = (
             (("spring_growth", 1), ("seal_growth", 1)) if self._per_part else (("degradation", 2),)
         )
+        #: the growth streams a and b of the flight kernels (one stream twice if not per part)
+        self._deg_pair = tuple(s for s, _ in self._deg_streams) * (2 // len(self._deg_streams))
+        #: a flight's streams and the normals each needs
+        streams = (("measure", n_flight), *self._deg_streams)
+        self._flight_streams = tuple(s for s, _ in streams)
+        self._flight_needs = np.array([k for _, k in streams], dtype=np.int64)
+        #: stand-ins of the batch under way's arrays when the filters do not learn in flight
+        self._no_batch = (np.zeros((n, 0)), np.zeros(n, dtype=np.int64))
 
     # ------------------------------------------------------------------ copies
     def __setstate__(self, state: dict[str, Any]) -> None:
@@ -184,6 +217,8 @@ class ScasMaintenanceVectorEnv(VectorEnv):
             self._bank = ParticleBank(
                 self.num_envs, 2, monitor.bank.n_particles, monitor.bank.n_aux
             )
+            self._stale_tables.bank = self._bank
+            self._stale_tables.model = monitor.learning_model
         monitor.attach(self._bank, e)
 
     def _pull(self, e: int) -> None:
@@ -213,6 +248,7 @@ class ScasMaintenanceVectorEnv(VectorEnv):
             self._attach(e)
             self._pull(e)
         self._autoreset[:] = False
+        self._stale[:] = False
         self.fleet.clear_step()
         rul = self.fleet.true_rul()
         return self._observation(rul), self._info(rul)
@@ -258,15 +294,17 @@ class ScasMaintenanceVectorEnv(VectorEnv):
             fly &= ~a["no_go"]
         idle = (act <= 1) & grounded & ~resetting & active
         slow = (resetting | (act >= 2) | ((act <= 1) & ~grounded & ~fly)) & active
-        tested = np.zeros(0, dtype=np.int64)
+        tested = ready = np.zeros(0, dtype=np.int64)
         if self._bank is not None and not self._every_flight:
             # on-demand tests in a batch; the actuators that go fly on the fast path below
-            tested, go = self._tests(np.flatnonzero((act == 1) & ~grounded & ~resetting & active))
+            tested, go, ready = self._tests(
+                np.flatnonzero((act == 1) & ~grounded & ~resetting & active)
+            )
             slow[tested] = False
             fly[tested[go]] = True
         fly_idx = np.flatnonzero(fly)
         if fly_idx.size:
-            ok = self._fly(fly_idx)
+            ok = self._fly(fly_idx, ready)
             slow[fly_idx[~ok]] = True
             done = fly_idx[ok]
             a["pending"][done] += 1
@@ -277,7 +315,7 @@ class ScasMaintenanceVectorEnv(VectorEnv):
             rewards[done] = value
             self._terms["flight"][done] = value
             if self._learn_cols.size:
-                self._learn_from_full_batches(done)
+                self._learn_from_full_batches(done, defer=not outputs)
         passed = fly | idle  # a slot passed on the fast path
         if tested.size:
             self._test_rewards(tested, rewards)
@@ -287,7 +325,9 @@ class ScasMaintenanceVectorEnv(VectorEnv):
         quick = np.flatnonzero(passed & ~slow)
         a["slot"][quick] += 1
         a["test_age"][quick] += 1
-        for e in np.flatnonzero(slow):
+        slow_idx = np.flatnonzero(slow)
+        self._fresh(slow_idx)  # a slow step may read its monitor's tables
+        for e in slow_idx:
             env = self.envs[e]
             self._push(e)
             if resetting[e]:
@@ -312,55 +352,86 @@ class ScasMaintenanceVectorEnv(VectorEnv):
         have returned with ``outputs=True``)."""
         return self._observation(self.fleet.true_rul())
 
-    def _fly(self, idx: np.ndarray) -> np.ndarray:
-        """Candidate flights of ``idx`` (draws peeked); commits those that did not fail."""
+    def _fresh(self, idx: np.ndarray | None = None) -> None:
+        """Rebuild the RUL tables left stale of the rows ``idx`` (None: all)
+        (:meth:`StaleTables.refresh`)."""
+        self._stale_tables.refresh(idx)
+
+    def _fly(self, idx: np.ndarray, ready: np.ndarray) -> np.ndarray:
+        """Candidate flights of ``idx`` (draws peeked); commits those that did not fail
+        (:func:`~scas_env.fleet_kernels.commit_flights`). The flights of ``ready`` (a sorted
+        subset of ``idx``: tested this step, their draws peeked and flight computed by
+        :meth:`_tests`) are in the scratch already."""
         a, sc = self.a, self._scratch
-        n_meas = self._scratch["meas"].shape[1]
-        deg_streams = self._deg_streams
-        for s, k in (("measure", n_meas), *deg_streams):
-            short = idx[self._pos[s][idx, 0] + k > DEFAULT_BLOCK]
-            for e in short:
-                self._draws(e, s).refill()
-        pm = self._pos["measure"][idx, 0]
-        sc["meas"][idx] = self._buf["measure"][idx[:, None], pm[:, None] + np.arange(n_meas)]
-        self._peek_degradation(idx)
+        todo = idx
+        if ready.size:
+            computed = sc["computed"]
+            computed[ready] = True
+            todo = idx[~computed[idx]]
+            computed[ready] = False
+        if todo.size:
+            self._peek_flights(todo)
+        ok = sc["ok"][: idx.size]
+        pos, (s_a, s_b) = self._pos, self._deg_pair
+        commit_flights(
+            idx, sc["failed"], sc["new"][0], sc["new"][1], sc["feats"], a["crack"], a["wear"],
+            a["last"], pos["measure"], pos[s_a], pos[s_b], self._per_part, a["life"],
+            self._learn_cols, a.get("flight_sum", self._no_batch[0]),
+            a.get("flight_count", self._no_batch[1]), ok,
+        )  # fmt: skip
+        return ok.copy()
+
+    def _peek_flights(self, idx: np.ndarray) -> None:
+        """The next flights of ``idx`` into the scratch (``new``, ``feats``, ``failed``),
+        their measure and growth draws peeked (blocks refilled where they run short), not
+        consumed."""
+        a, sc = self.a, self._scratch
+        (s_a, s_b), buf, pos = self._deg_pair, self._buf, self._pos
+        names, rows, streams = self._flight_streams, sc["short_rows"], sc["short_streams"]
+        positions = tuple(pos[s] for s in names)
+        for k in range(
+            short_of_draws(idx, positions, self._flight_needs, DEFAULT_BLOCK, rows, streams)
+        ):
+            self._draws(int(rows[k]), names[streams[k]]).refill()
+        gather_flight_draws(
+            idx, buf["measure"], pos["measure"], sc["meas"], buf[s_a], pos[s_a], buf[s_b],
+            pos[s_b], self._per_part, sc["deg"], 0,
+        )  # fmt: skip
         t = self._tables
-        new = sc["new"]
         surrogate_flights(
             idx, a["crack"], a["wear"], a["fail"], a["theta"], a["wmult"], a["unit_z"],
             sc["meas"], sc["deg"], *t["flight"], *t["damage"], *t["flight_consts"],
-            new[0], new[1], sc["feats"], sc["failed"],
+            sc["new"][0], sc["new"][1], sc["feats"], sc["failed"],
         )  # fmt: skip
-        ok = ~sc["failed"][idx].any(axis=1)
-        done = idx[ok]
-        a["crack"][done], a["wear"][done] = new[0, done], new[1, done]
-        a["last"][done, :n_meas] = sc["feats"][done]
-        self._pos["measure"][done, 0] += n_meas
-        for s, k in deg_streams:
-            self._pos[s][done, 0] += k
-        if self._per_part:
-            a["life"][done] -= 1.0
-        if self._learn_cols.size:
-            a["flight_sum"][done] += sc["feats"][done][:, self._learn_cols]
-            a["flight_count"][done] += 1
-        return ok
 
-    def _tests(self, idx: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def _tests(self, idx: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Pre-flight tests of the actuators ``idx`` (on demand, not grounded), as the single
         env's ``advance(test_and_fly)`` up to its flight: the world's G1 and G3 (surrogate,
         run noise from the measure stream), the monitor's update (one
         :func:`~scas_env.learning_kernel.test_batch` call) and detectors, the go/no-go, the
         feature memory and counters. Actuators whose flight would end in a failure are left
-        to the slow path (returned arrays exclude them). Returns the tested actuators and
-        whether each may fly (go)."""
+        to the slow path (returned arrays exclude them). Returns the tested actuators,
+        whether each may fly (go), and those whose flight is computed already (the scratch
+        holds it for :meth:`_fly`: its measure draws follow the test's in the same block)."""
+        no = np.zeros(0, dtype=np.int64)
         if not idx.size:
-            return idx, np.zeros(0, dtype=np.bool_)
+            return idx, np.zeros(0, dtype=np.bool_), no
         a, sc = self.a, self._scratch
-        # a failing flight goes the slow path whole: peek at the flight's growth draws
-        for s, k in self._deg_streams:
-            for e in idx[self._pos[s][idx, 0] + k > DEFAULT_BLOCK]:
-                self._draws(e, s).refill()
-        self._peek_degradation(idx)
+        n_meas = sc["meas"].shape[1]
+        # a failing flight goes the slow path whole: peek at the flight's growth draws, and
+        # at its measure draws where they follow the test's two in the block (no refill:
+        # the flight computed here is the one flown); the others' features are recomputed
+        (s_a, s_b), buf, pos = self._deg_pair, self._buf, self._pos
+        names, rows, streams = self._flight_streams[1:], sc["short_rows"], sc["short_streams"]
+        positions = tuple(pos[s] for s in names)
+        needs = self._flight_needs[1:]
+        for k in range(short_of_draws(idx, positions, needs, DEFAULT_BLOCK, rows, streams)):
+            self._draws(int(rows[k]), names[streams[k]]).refill()
+        gather_flight_draws(
+            idx, buf["measure"], pos["measure"], sc["meas"], buf[s_a], pos[s_a], buf[s_b],
+            pos[s_b], self._per_part, sc["deg"], 2,
+        )  # fmt: skip
+        ready = idx[pos["measure"][idx, 0] + 2 + n_meas <= DEFAULT_BLOCK]
         t = self._tables
         surrogate_flights(
             idx, a["crack"], a["wear"], a["fail"], a["theta"], a["wmult"], a["unit_z"],
@@ -369,7 +440,8 @@ class ScasMaintenanceVectorEnv(VectorEnv):
         )  # fmt: skip
         idx = idx[~sc["failed"][idx].any(axis=1)]
         if not idx.size:
-            return idx, np.zeros(0, dtype=np.bool_)
+            return idx, np.zeros(0, dtype=np.bool_), no
+        ready = ready[~sc["failed"][ready].any(axis=1)]
         # the test's run noise: two normals of the measure stream
         for e in idx[self._pos["measure"][idx, 0] + 2 > DEFAULT_BLOCK]:
             self._draws(e, "measure").refill()
@@ -385,11 +457,13 @@ class ScasMaintenanceVectorEnv(VectorEnv):
         # the monitors
         corrected = sc["corrected"]
         test_batch(idx, idx, ground, corrected, *self._kernel_io(idx))
+        self._stale[idx] = False  # the test rebuilt the tables
         self._adopt(idx)
-        for e in idx:
-            monitor = self.envs[e].monitor
-            monitor.detect(e, corrected)
-            a["detected"][e] = monitor.crack_detected, monitor.seal_detected
+        envs = self.envs
+        a["detected"][idx] = [
+            envs[e].monitor.detect_values(g1, g3)
+            for e, (g1, g3) in zip(idx.tolist(), corrected[idx].tolist(), strict=True)
+        ]
         # go / no-go: the airworthiness limits around the installation's reference, or the
         # healthy acceptance band (ScasMaintenanceEnv._go)
         g = ground[idx]
@@ -402,18 +476,7 @@ class ScasMaintenanceVectorEnv(VectorEnv):
         a["no_go"][idx] = ~go
         a["tests"][idx] += 1
         a["no_go_count"][idx[~go]] += 1
-        return idx, go
-
-    def _peek_degradation(self, idx: np.ndarray) -> None:
-        """The next flight's two growth-factor normals of ``idx`` into the scratch (not
-        consumed)."""
-        sc = self._scratch
-        if self._per_part:
-            for p, (s, _) in enumerate(self._deg_streams):
-                sc["deg"][idx, p] = self._buf[s][idx, self._pos[s][idx, 0]]
-        else:
-            pd = self._pos["degradation"][idx, 0]
-            sc["deg"][idx] = self._buf["degradation"][idx[:, None], pd[:, None] + np.arange(2)]
+        return idx, go, ready
 
     def _test_rewards(self, tested: np.ndarray, rewards: np.ndarray) -> None:
         """Rewards, cost and reward terms of tested actuators (after their flights), summed
@@ -425,10 +488,11 @@ class ScasMaintenanceVectorEnv(VectorEnv):
         rewards[tested] = (((rewards[tested] + test) + no_go) + 0.0) + 0.0
         a["cost"][tested] -= (((0.0 + test) + no_go) + 0.0) + 0.0
 
-    def _learn_from_full_batches(self, flown: np.ndarray) -> None:
+    def _learn_from_full_batches(self, flown: np.ndarray, *, defer: bool = False) -> None:
         """The actuators of ``flown`` whose batch of learning flights is full learn from it,
         as the single env's monitor does inside the flight (``HealthMonitor.flown``): all in
-        one call of the batched kernel when their filters live in the bank, else one by one."""
+        one call of the batched kernel when their filters live in the bank, else one by one.
+        ``defer``: their RUL tables are left stale, rebuilt only if read (:meth:`_fresh`)."""
         a = self.a
         due = flown[a["flight_count"][flown] >= self._flight_interval]
         if not due.size:
@@ -439,7 +503,7 @@ class ScasMaintenanceVectorEnv(VectorEnv):
                 self.envs[e].monitor.learn_from_flights()
                 self._pull(e)
             return
-        learn_batch(due, due, *self._kernel_io(due))
+        learn_batch(due, due, *self._kernel_io(due), self._stale if defer else _REFRESH_NOW)
         self._adopt(due)
 
     def _kernel_io(self, idx: np.ndarray) -> tuple:
@@ -469,12 +533,17 @@ class ScasMaintenanceVectorEnv(VectorEnv):
         )
 
     def _adopt(self, idx: np.ndarray) -> None:
-        """Each monitor of ``idx`` takes what a kernel left in its fleet row (raising what
-        the Python form would have raised)."""
-        out, tables = self._learn_out, self._tables_rul()
-        outs = (out["ess"], out["resampled"], out["status"])
-        for e in idx:
-            self.envs[e].monitor.adopt_learning(e, *outs, tables, self.fleet.table_source[e])
+        """Each monitor of ``idx`` takes what a kernel left in its fleet row: N_eff and
+        resampling counts, and its RUL tables as holders of the row (not copied;
+        :meth:`~scas_env.monitor.HealthMonitor.adopt_rows`), raising what the Python form
+        would have raised, in row order."""
+        out, sources, held = self._learn_out, self.fleet.table_source, self._held
+        ess, resampled = out["ess"][idx].tolist(), out["resampled"][idx].tolist()
+        status = out["status"][idx].tolist()
+        for k, e in enumerate(idx.tolist()):
+            self.envs[e].monitor.adopt_rows(ess[k], resampled[k], held[e], sources[e])
+            if status[k]:
+                raise_status(status[k])
 
     def _draws(self, e: int, stream: str) -> Any:
         """Actuator ``e``'s normal buffer of ``stream`` (a growth stream: its fitted part's)."""
@@ -484,6 +553,7 @@ class ScasMaintenanceVectorEnv(VectorEnv):
 
     # ------------------------------------------------------------------ outputs
     def _observation(self, rul: np.ndarray) -> Any:
+        self._fresh()
         return self._builder.observe(self.fleet, rul)
 
     def _info(self, rul: np.ndarray) -> dict[str, Any]:
@@ -492,6 +562,41 @@ class ScasMaintenanceVectorEnv(VectorEnv):
     def close_extras(self, **kwargs: Any) -> None:
         for env in self.envs:
             env.close()
+
+
+class StaleTables:
+    """The rows of a native vector env whose RUL tables a learning update left stale
+    (:func:`~scas_env.learning_kernel.learn_batch` with ``stale``), and what rebuilding
+    them takes: the filters' bank, the monitors' shared ``learning_model`` and the fleet's
+    ``rul_*`` tables. The holders of those tables (:class:`scas_env.monitor.FleetRowTables`)
+    call it before a read, without holding the vector env itself."""
+
+    __slots__ = ("bank", "model", "stale", "status", "tables")
+
+    def __init__(self, n: int, tables: tuple[np.ndarray, ...]) -> None:
+        self.stale = np.zeros(n, dtype=np.bool_)
+        self.status = np.zeros(n, dtype=np.int64)
+        self.tables = tables
+        self.bank: ParticleBank | None = None
+        self.model: tuple | None = None
+
+    def __call__(self, row: int) -> None:
+        """Rebuild row ``row``'s tables if stale (a monitor reads them)."""
+        if self.stale[row]:
+            self.refresh(np.array([row], dtype=np.int64))
+
+    def refresh(self, idx: np.ndarray | None = None) -> None:
+        """Rebuild the stale tables of the rows ``idx`` (None: all) from their clouds as
+        they are (:func:`~scas_env.learning_kernel.refresh_tables`; the clouds have not
+        changed since the update), raising what the update would have raised for an
+        invalid cloud."""
+        stale = self.stale
+        rows = np.flatnonzero(stale) if idx is None else idx[stale[idx]]
+        if not rows.size:
+            return
+        refresh_tables(rows, rows, self.status, self.bank.arrays, self.tables, self.model, stale)
+        for code in self.status[rows].tolist():
+            raise_status(code)
 
 
 def with_info_masks(info: dict[str, Any], n: int) -> dict[str, Any]:
@@ -529,6 +634,7 @@ def expose_surface(vec: VectorEnv, first: ScasMaintenanceEnv) -> None:
 __all__ = [
     "ScasMaintenanceSyncVectorEnv",
     "ScasMaintenanceVectorEnv",
+    "StaleTables",
     "expose_surface",
     "make_vector_env",
     "spaces",

@@ -134,9 +134,27 @@ def _vector_rate(envs: gym.vector.VectorEnv, actions: np.ndarray) -> float:
     return actions[10:].size / (time.perf_counter() - t0)
 
 
-def vector_throughput(num_envs: int = 64, n_steps: int = 200) -> dict[str, float]:
+def _epoch_rate(envs: gym.vector.VectorEnv, actions: np.ndarray) -> float:
+    """Env-steps (slots flown by the actuators inside their epochs) per second of a
+    decision-epoch vector env over ``actions`` (the first 3 decision steps untimed)."""
+    envs.reset(seed=0)
+    for a in actions[:3]:
+        envs.step(a)
+    slots = 0
+    t0 = time.perf_counter()
+    for a in actions[3:]:
+        slots += int(envs.step(a)[4]["epoch_slots"].sum())
+    return slots / (time.perf_counter() - t0)
+
+
+def vector_throughput(
+    num_envs: int = 64, n_steps: int = 200, n_decisions: int = 30
+) -> dict[str, float]:
     """Env-steps per second of ``make_vec`` with ``num_envs`` environments per action mix,
-    beside Gymnasium's natively vectorised CartPole (random actions) in the same run."""
+    beside Gymnasium's natively vectorised CartPole (random actions) in the same run; and
+    of the v2 decision-epoch vector env (``ScasMaintenanceEpochs-v1``) over ``n_decisions``
+    decision steps, maintenance as the trained-policy mix, each epoch's length drawn
+    uniformly from its ``ks`` (env-steps = slots flown)."""
     rng = np.random.default_rng(0)
     out = {}
     cart = gym.make_vec("CartPole-v1", num_envs=num_envs, vectorization_mode="vector_entry_point")
@@ -148,6 +166,15 @@ def vector_throughput(num_envs: int = 64, n_steps: int = 200) -> dict[str, float
         for name, p in ACTION_MIXES.items():
             actions = rng.choice(4, size=(n_steps + 10, num_envs), p=p)
             out[f"{version}: {name}"] = _vector_rate(envs, actions)
+    epochs = gym.make_vec(
+        scas_env.ENV_ID_EPOCHS_V2, num_envs=num_envs, vectorization_mode="vector_entry_point"
+    )
+    n_ks = len(epochs.ks)
+    maintenance = rng.choice(
+        4, size=(n_decisions + 3, num_envs), p=ACTION_MIXES["trained-policy mix (90/9/1)"]
+    )
+    ks = rng.integers(0, n_ks, size=maintenance.shape)
+    out["v2 decision epochs: 90/9/1, k uniform"] = _epoch_rate(epochs, maintenance * n_ks + ks)
     return out
 
 
