@@ -75,20 +75,20 @@ figures: install
 reproduce: install
 	$(PY) scripts/reproduce_paper.py --quick
 
-## The shipped v2 agent from scratch (docs/rl.md, "From the rule"; 20 min here): clone
-## the tuned filter rule (demonstrations + DAgger), fine-tune 3 seeds with MaskablePPO on the
-## native decision-epoch env (two at a time), choose on validation seeds, write the agent to
-## $(AGENT_DIR)/agent (the shipped one stays), compare on 1000 held-out episodes.
+## The shipped v2 agent from scratch (docs/rl.md, "From the rule"): clone the tuned filter
+## rule (demonstrations + DAgger), fine-tune 3 seeds x 5 M decisions with MaskablePPO on the
+## native decision-epoch env (the three at once), choose on validation seeds, write the agent
+## to $(AGENT_DIR)/agent (the shipped one stays), compare on 1000 held-out episodes.
 AGENT_DIR ?= $(RESULTS)/agent_v2
 TRAIN_ARGS = --candidate imitation_g1 --scenario examples/v2.toml --init $(AGENT_DIR)/clone \
-	--native-envs 64 --timesteps 1500000 --checkpoint-every 150000
+	--native-envs 64 --timesteps 5000000 --checkpoint-every 500000
 train-agent-v2: install
 	$(PY) scripts/imitate_rule.py --scenario examples/v2.toml --candidate imitation_g1 \
 		--rules-from docs/value_v2/ladder.json --out $(AGENT_DIR)/clone
 	$(PY) scripts/train_epochs.py $(TRAIN_ARGS) --seed 0 --out $(AGENT_DIR)/runs/s0 & a=$$!; \
-	$(PY) scripts/train_epochs.py $(TRAIN_ARGS) --seed 1 --out $(AGENT_DIR)/runs/s1; b=$$?; \
-	wait $$a && test $$b -eq 0
-	$(PY) scripts/train_epochs.py $(TRAIN_ARGS) --seed 2 --out $(AGENT_DIR)/runs/s2
+	$(PY) scripts/train_epochs.py $(TRAIN_ARGS) --seed 1 --out $(AGENT_DIR)/runs/s1 & b=$$!; \
+	$(PY) scripts/train_epochs.py $(TRAIN_ARGS) --seed 2 --out $(AGENT_DIR)/runs/s2; c=$$?; \
+	wait $$a && wait $$b && test $$c -eq 0
 	mkdir -p $(AGENT_DIR)/agent
 	$(PY) scripts/ship_epochs.py --runs $(AGENT_DIR)/runs --name maskable_ppo_epochs_v2 \
 		--scenario examples/v2.toml --rules-from docs/value_v2/ladder.json \
