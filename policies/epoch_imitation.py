@@ -87,6 +87,7 @@ def clone(
     vf_coef: float = 0.5,
     maintenance_weight: float = 100.0,
     validation_share: float = 0.1,
+    label_smoothing: float = 0.0,
     rng: np.random.Generator,
     progress: bool = False,
 ) -> CloneResult:
@@ -95,6 +96,12 @@ def clone(
     ``maintenance_weight``: weight of a slot whose demonstrated action is not ``fly`` in the
     cross-entropy (they are about 1 % of the slots and nearly all of the cost: a clone
     that misses the replacement after a failed go/no-go test holds the aircraft).
+
+    ``label_smoothing`` (``alpha`` in ``[0, 1)``): the actor's target is ``1 - alpha`` on the
+    demonstrated action and ``alpha`` spread evenly over the valid ones (Szegedy et al. 2016,
+    "Rethinking the Inception Architecture", section 7), so the clone keeps about ``alpha``
+    of its probability on other actions: PPO from a clone trained to certainty never samples
+    anything else (its entropy is ~1e-8, and the entropy's gradient vanishes there).
 
     ``normalizer``: the ``VecNormalize`` the model will train under; its statistics are set
     here (:func:`set_statistics`, with the model's ``gamma``). ``rng`` shuffles the batches
@@ -109,6 +116,8 @@ def clone(
         raise ValueError(f"maintenance_weight = {maintenance_weight!r} must be > 0")
     if not 0.0 < validation_share < 1.0:
         raise ValueError(f"validation_share = {validation_share!r} must be in (0, 1)")
+    if not (isinstance(label_smoothing, int | float) and 0.0 <= label_smoothing < 1.0):
+        raise ValueError(f"label_smoothing = {label_smoothing!r} must be a number in [0, 1)")
     n_actions = int(model.action_space.n)
     if demos.masks.shape[1] != n_actions:
         raise ValueError(
@@ -143,7 +152,16 @@ def clone(
             has = t_has[b]
             squared = has * (values.flatten() - t_val[b]) ** 2
             value_loss = squared.sum() / has.sum().clamp(min=1.0)
-            loss = -(w * log_prob).sum() / w.sum() + vf_coef * value_loss
+            actor = -(w * log_prob).sum() / w.sum()
+            if label_smoothing > 0.0:
+                valid = t_mask[b].float()
+                dist = policy.get_distribution(t_obs[b], action_masks=t_mask[b].numpy())
+                log_p = dist.distribution.logits  # normalised log-probabilities
+                spread = -(log_p * valid).sum(dim=1) / valid.sum(dim=1)
+                actor = (1.0 - label_smoothing) * actor + label_smoothing * (
+                    (w * spread).sum() / w.sum()
+                )
+            loss = actor + vf_coef * value_loss
             optimizer.zero_grad()
             loss.backward()
             optimizer.step()

@@ -38,6 +38,7 @@ from typing import Any
 
 from policies.benchmark import PolicySpec, run_benchmark
 from policies.benchmark_stats import paired_comparison
+from policies.epoch_delegation import DelegateSpec
 from policies.sb3_agents import DATA_DIR
 from scas_env.actuator.atomic_file import write_text_atomic
 from scas_env.actuator.shipped_files import write_manifest
@@ -169,6 +170,8 @@ def _spec(label: str, zip_path: Path, pkl: Path, run: dict[str, Any], slots: int
         "ks": tuple(run["ks"]),
         "episode_slots": slots,
     }
+    if run.get("delegate"):
+        params["delegate"] = run["delegate"]
     return PolicySpec("sb3", params=params, label=label, module="policies.sb3_agents")
 
 
@@ -367,8 +370,15 @@ def ship_best(
     out_dir = Path(out_dir)
     zip_dst = out_dir / f"{name}.zip"
     plain = settings["algo"] == "maskable_ppo"
+    delegate = settings.get("delegate")
     if plain:  # the same weights in a plain PPO zip: loadable without sb3-contrib
-        as_plain_ppo(run_dir / f"ckpt_{steps}_steps.zip", zip_dst, settings["ks"], **scenario)
+        as_plain_ppo(
+            run_dir / f"ckpt_{steps}_steps.zip",
+            zip_dst,
+            settings["ks"],
+            delegate=DelegateSpec.from_json(delegate),
+            **scenario,
+        )
     else:
         shutil.copyfile(run_dir / f"ckpt_{steps}_steps.zip", zip_dst)
     shutil.copyfile(
@@ -389,6 +399,7 @@ def ship_best(
         "episode_slots": slots,
         "normalize": True,
         "obs_names": list(env.unwrapped.obs_names),
+        **({"delegate": delegate} if delegate else {}),
         "selected": {"run": best["run"], "decisions": steps, "validation": best},
         "validation_seed": VALIDATION_SEED,
         "training_run": run,
@@ -412,18 +423,25 @@ def ship_best(
     return zip_dst
 
 
-def as_plain_ppo(maskable_zip: Path, out_zip: Path, ks: Sequence[int], **scenario: Any) -> None:
+def as_plain_ppo(
+    maskable_zip: Path,
+    out_zip: Path,
+    ks: Sequence[int],
+    delegate: DelegateSpec | None = None,
+    **scenario: Any,
+) -> None:
     """Save a MaskablePPO model's weights as a plain SB3 PPO zip (same network: the masked
     policy only sets the logits of invalid actions to -inf, which
     :class:`policies.sb3_agents.EpochAgent` does itself), so that using the shipped agent needs
-    no sb3-contrib. ``scenario``: the env keywords it was trained on (its observation size)."""
+    no sb3-contrib. ``scenario``: the env keywords it was trained on (its observation size);
+    ``delegate``: a residual agent's rule (its action count)."""
     from sb3_contrib import MaskablePPO
     from stable_baselines3 import PPO
 
-    from scas_env.decision_epochs import make_decision_epoch_env
+    from policies.epoch_training import make_epoch_env
 
     masked = MaskablePPO.load(maskable_zip, device="cpu")
-    env = make_decision_epoch_env(ks=tuple(ks), **scenario)
+    env = make_epoch_env(ks=tuple(ks), delegate=delegate, **scenario)
     kwargs = dict(masked.policy_kwargs)
     plain = PPO("MlpPolicy", env, policy_kwargs=kwargs, device="cpu", gamma=masked.gamma)
     plain.policy.load_state_dict(masked.policy.state_dict())

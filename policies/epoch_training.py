@@ -24,6 +24,7 @@ from typing import Any
 
 import gymnasium as gym
 
+from policies.epoch_delegation import DelegateSpec, v0_obs_names
 from policies.sb3_agents import require_contrib
 from scas_env import ENV_ID
 from scas_env.decision_epochs import DEFAULT_KS, DecisionEpochs
@@ -42,6 +43,7 @@ __all__ = [
     "HYPERPARAMS_DIR",
     "candidate_hyperparams",
     "clone_rule",
+    "init_delegate",
     "load_zoo_hyperparams",
     "make_epoch_env",
     "train_epochs",
@@ -99,9 +101,14 @@ def _schedule(name: str, value: Any) -> Any:
     return LinearSchedule(start, 0.0, 1.0)
 
 
-def make_epoch_env(ks: Sequence[int] = DEFAULT_KS, **scenario: Any) -> gym.Env:
-    """One ``ScasMaintenance-v0`` (``scenario`` keywords) in :class:`DecisionEpochs`."""
-    return DecisionEpochs(gym.make(ENV_ID, disable_env_checker=True, **scenario), ks=ks)
+def make_epoch_env(
+    ks: Sequence[int] = DEFAULT_KS, delegate: DelegateSpec | None = None, **scenario: Any
+) -> gym.Env:
+    """One ``ScasMaintenance-v0`` (``scenario`` keywords) in :class:`DecisionEpochs`, with
+    ``delegate`` (:mod:`policies.epoch_delegation`) built for its observation if given."""
+    env = gym.make(ENV_ID, disable_env_checker=True, **scenario)
+    rule = None if delegate is None else delegate.build(env.unwrapped.obs_names)
+    return DecisionEpochs(env, ks=ks, delegate=rule)
 
 
 class _WallClock:
@@ -123,7 +130,12 @@ class _WallClock:
 
 
 def _native_epochs(
-    num_envs: int, seed: int, monitor_dir: Path, ks: Sequence[int], scenario: dict[str, Any]
+    num_envs: int,
+    seed: int,
+    monitor_dir: Path,
+    ks: Sequence[int],
+    scenario: dict[str, Any],
+    delegate: DelegateSpec | None = None,
 ) -> Any:
     """``num_envs`` decision-epoch actuators on the native vector env, monitored (one CSV,
     ``monitor_dir/0.monitor.csv``), seeded ``seed + e``."""
@@ -133,12 +145,25 @@ def _native_epochs(
     from scas_env.decision_epochs_vector import DecisionEpochsVectorEnv
 
     monitor_dir.mkdir(parents=True, exist_ok=True)
-    native = NativeVecEnv(DecisionEpochsVectorEnv(num_envs, ks=tuple(ks), **scenario), info_keys=())
+    rule = None if delegate is None else delegate.build(v0_obs_names(**scenario))
+    native = NativeVecEnv(
+        DecisionEpochsVectorEnv(num_envs, ks=tuple(ks), delegate=rule, **scenario), info_keys=()
+    )
     native.seed(seed)
     return VecMonitor(native, filename=str(monitor_dir / "0"))
 
 
 ALGOS = ("maskable_ppo", "ppo")
+
+
+def _check_delegate(delegate: Any, scenario: Mapping[str, Any]) -> None:
+    """Refuse a ``delegate`` that is not a :class:`DelegateSpec` (or None) or whose policy
+    cannot be built for the scenario's observation (before any folder is made)."""
+    if delegate is None:
+        return
+    if not isinstance(delegate, DelegateSpec):
+        raise ValueError(f"delegate = {delegate!r} must be a DelegateSpec or None")
+    delegate.build(v0_obs_names(**scenario))
 
 
 def _new_out_dir(out_dir: str | Path) -> Path:
@@ -179,6 +204,7 @@ def _prepared(
     ks: Sequence[int],
     native_envs: int | None,
     scenario: dict[str, Any],
+    delegate: DelegateSpec | None = None,
 ) -> tuple[Any, Any, int, bool, dict[str, Any]]:
     """The model, its (normalised) vector env, ``n_envs``, ``normalize`` and the algorithm
     keywords of one run (:func:`train_epochs`), seeded as documented there."""
@@ -213,11 +239,13 @@ def _prepared(
             make_epoch_env,
             n_envs=n_envs,
             seed=seed * 1000,
-            env_kwargs={"ks": tuple(ks), **scenario},
+            env_kwargs={"ks": tuple(ks), "delegate": delegate, **scenario},
             monitor_dir=str(out / "monitor"),
         )
     else:
-        venv = _native_epochs(native_envs, seed * 1000, out / "monitor", ks, scenario)
+        venv = _native_epochs(
+            native_envs, seed * 1000, out / "monitor", ks, scenario, delegate=delegate
+        )
         n_envs = venv.num_envs
     gamma = float(hp.get("gamma", 0.99))
     if normalize:
@@ -260,6 +288,7 @@ def train_epochs(
     native_envs: int | None = None,
     init: str | Path | None = None,
     freeze_normalization: bool | None = None,
+    delegate: DelegateSpec | None = None,
     **scenario: Any,
 ) -> Path:
     """Train one agent on decision epochs; returns ``out_dir``.
@@ -277,7 +306,10 @@ def train_epochs(
     (:mod:`policies.epoch_reference`: ``ent_coef`` weighs ``KL(pi || rho)``, ``rho`` the
     init policy mixed with ``reference_mix`` of the uniform one). ``freeze_normalization``
     (default: True with ``init``, else False; True needs ``init``): keep ``init``'s
-    ``VecNormalize`` statistics fixed. They are part of the policy: the network acts on
+    ``VecNormalize`` statistics fixed. ``delegate``: the rule the agent may hand ``k`` slots
+    to (:mod:`policies.epoch_delegation`; default: the one ``init``'s ``clone.json`` records,
+    if any: the warm start's network has its actions). They (the statistics) are part of
+    the policy: the network acts on
     observations standardised by them, and letting them follow the training rollouts
     changes its actions without a gradient step (measured: the clone with the statistics a
     fine-tuning run had accumulated after 1 M decisions lost 1,864 USD/episode on
@@ -309,9 +341,19 @@ def train_epochs(
     elif freeze_normalization and init is None:
         raise ValueError("freeze_normalization = True needs init (the statistics to keep)")
     _check_run(algo, native_envs)
+    if delegate is None and init is not None:
+        delegate = init_delegate(Path(init))
+    _check_delegate(delegate, scenario)
     out = _new_out_dir(out_dir)
     model, venv, n_envs, normalize, _ = _prepared(
-        hyperparams, out, seed=seed, algo=algo, ks=ks, native_envs=native_envs, scenario=scenario
+        hyperparams,
+        out,
+        seed=seed,
+        algo=algo,
+        ks=ks,
+        native_envs=native_envs,
+        scenario=scenario,
+        delegate=delegate,
     )
     if init is not None:
         warm_start(model, venv, Path(init))
@@ -355,10 +397,19 @@ def train_epochs(
         "n_envs": n_envs,
         "init": None if init is None else str(init),
         "freeze_normalization": freeze_normalization,
+        "delegate": None if delegate is None else delegate.to_json(),
     }
     (out / "run.json").write_text(json.dumps(run, indent=1))
     venv.close()
     return out
+
+
+def init_delegate(init: Path) -> DelegateSpec | None:
+    """The delegate a :func:`clone_rule` folder was cloned with (``clone.json``), or None."""
+    summary = init / "clone.json"
+    if not summary.is_file():
+        return None
+    return DelegateSpec.from_json(json.loads(summary.read_text()).get("delegate"))
 
 
 def clone_rule(
@@ -372,8 +423,10 @@ def clone_rule(
     batch_size: int = 4096,
     learning_rate: float = 1e-3,
     maintenance_weight: float = 100.0,
+    label_smoothing: float = 0.0,
     dagger: Any = None,
     progress: bool = False,
+    delegate: DelegateSpec | None = None,
     **scenario: Any,
 ) -> Any:
     """Behaviour-clone ``demos`` (:class:`policies.epoch_demonstrations.Demonstrations`)
@@ -382,6 +435,9 @@ def clone_rule(
     ``out_dir/model.zip``, ``vecnormalize.pkl`` and ``clone.json`` (history, settings).
     ``dagger``: a :class:`policies.epoch_dagger.DaggerPlan` (rounds of the rule labelling
     the clone's own states, each followed by ``dagger.epochs`` more passes over all samples).
+    ``delegate``: the network gets the delegation actions (demonstrations of
+    :func:`policies.epoch_delegation.delegation_demonstrations`); recorded in ``clone.json``
+    so that :func:`train_epochs` from this folder uses it too.
     Returns the last :class:`policies.epoch_imitation.CloneResult`."""
     import dataclasses
 
@@ -391,9 +447,19 @@ def clone_rule(
     from policies.epoch_imitation import clone
 
     _check_run(algo, None)
+    if delegate is not None and dagger is not None:
+        raise ValueError("dagger needs the rule's own labels; a delegate clone has none to add")
+    _check_delegate(delegate, scenario)
     out = _new_out_dir(out_dir)
     model, venv, _, normalize, _ = _prepared(
-        hyperparams, out, seed=seed, algo=algo, ks=demos.ks, native_envs=2, scenario=scenario
+        hyperparams,
+        out,
+        seed=seed,
+        algo=algo,
+        ks=demos.ks,
+        native_envs=2,
+        scenario=scenario,
+        delegate=delegate,
     )
     if not normalize:
         raise ValueError(
@@ -404,6 +470,7 @@ def clone_rule(
         "batch_size": batch_size,
         "learning_rate": learning_rate,
         "maintenance_weight": maintenance_weight,
+        "label_smoothing": label_smoothing,
         "rng": rng,
         "progress": progress,
     }
@@ -427,9 +494,11 @@ def clone_rule(
         "batch_size": batch_size,
         "learning_rate": learning_rate,
         "maintenance_weight": maintenance_weight,
+        "label_smoothing": label_smoothing,
         "samples": len(demos.actions),
         "episodes": len(np.unique(demos.episode)),
         "dagger": None if dagger is None else dagger.describe(),
+        "delegate": None if delegate is None else delegate.to_json(),
         "history": rounds,
     }
     (out / "clone.json").write_text(json.dumps(summary, indent=1))

@@ -40,7 +40,14 @@ import numpy as np
 
 from policies.base import register_policy
 from scas_env.actuator.shipped_files import verify_shipped_file
-from scas_env.decision_epochs import MASK_READS, N_MAINTENANCE, maintenance_mask
+from scas_env.decision_epochs import (
+    DELEGATE,
+    FLY,
+    MASK_READS,
+    N_MAINTENANCE,
+    delegate_actions,
+    maintenance_mask,
+)
 
 DATA_DIR = Path(__file__).resolve().parent / "data"
 #: The shipped agent (model zip; its statistics and metadata sit beside it): the
@@ -235,6 +242,9 @@ class EpochAgent(SB3Agent):
     decides again. The per-env counters travel in the returned ``state`` (pass it back, as
     the benchmark does; ``episode_start`` resets them), so the same object serves batches.
     A v0 episode played this way equals the decision-epoch episode on the same seed (tested).
+    With ``delegate`` (a stateless policy on the v0 observation: a residual agent, see
+    :mod:`policies.epoch_delegation`) the model has a fifth maintenance choice, "the
+    delegate for ``k`` slots": the delegate then acts at each of those slots.
     """
 
     def __init__(
@@ -246,16 +256,20 @@ class EpochAgent(SB3Agent):
         ks: Sequence[int],
         episode_slots: int,
         masked: bool = True,
+        delegate: Any = None,
     ) -> None:
         super().__init__(model, normalizer, obs_names, masked=False)
         self.ks = tuple(int(k) for k in ks)
         self.episode_slots = int(episode_slots)
         self.masked_epochs = masked
+        self.delegate = delegate
+        choices = N_MAINTENANCE + (delegate is not None)
         n_actions = getattr(model.action_space, "n", None)
-        if n_actions != N_MAINTENANCE * len(self.ks):
+        if n_actions != choices * len(self.ks):
             raise ValueError(
-                f"the model has {n_actions} actions; ks = {self.ks} needs "
-                f"{N_MAINTENANCE * len(self.ks)}"
+                f"the model has {n_actions} actions; ks = {self.ks} "
+                f"{'with' if delegate is not None else 'without'} a delegate needs "
+                f"{choices * len(self.ks)}"
             )
         missing = [n for n in MASK_READS if n not in self.obs_names]
         if missing:
@@ -269,17 +283,19 @@ class EpochAgent(SB3Agent):
         episode_start: Any = None,
         deterministic: bool = True,
     ) -> tuple[int | np.ndarray, Any]:
-        """v0 action(s); ``state`` = ``(slot, remaining)`` int arrays per env."""
+        """v0 action(s); ``state`` = ``(slot, remaining, delegating)`` arrays per env."""
         obs = self._check(observation)
         batch = np.atleast_2d(obs)
         n = len(batch)
         if state is None:
             slot, remaining = np.zeros(n, np.int64), np.zeros(n, np.int64)
+            delegating = np.zeros(n, dtype=bool)
         else:
-            slot, remaining = (np.array(s, dtype=np.int64) for s in state)
+            slot, remaining = (np.array(s, dtype=np.int64) for s in state[:2])
+            delegating = np.array(state[2], dtype=bool) if len(state) > 2 else np.zeros(n, bool)
         if episode_start is not None:
             start = np.broadcast_to(np.asarray(episode_start, dtype=bool), (n,))
-            slot[start], remaining[start] = 0, 0
+            slot[start], remaining[start], delegating[start] = 0, 0, False
         actions = np.zeros(n, np.int64)  # fly while committed
         due = np.flatnonzero(remaining <= 0)
         if due.size:
@@ -288,18 +304,24 @@ class EpochAgent(SB3Agent):
             norm = self.normalizer.normalize_obs(epoch_obs) if self.normalizer else epoch_obs
             if self.masked_epochs:
                 m = maintenance_mask(*(batch[due][:, c] for c in self._cols))
+                if self.delegate is not None:
+                    m = np.column_stack([m, np.ones(len(m), dtype=bool)])
                 chosen = self._masked_choice(
                     norm, np.repeat(m, len(self.ks), axis=-1), deterministic
                 )
             else:
                 chosen, _ = self.model.predict(norm, deterministic=deterministic)
             chosen = np.asarray(chosen, dtype=np.int64).reshape(-1)
-            actions[due] = chosen // len(self.ks)
+            maintenance = chosen // len(self.ks)
+            delegating[due] = maintenance == DELEGATE
+            actions[due] = np.where(delegating[due], FLY, maintenance)
             remaining[due] = np.asarray(self.ks)[chosen % len(self.ks)]
+        if delegating.any():
+            actions[delegating] = delegate_actions(self.delegate, batch[delegating])
         remaining -= 1
         slot += 1
         out = int(actions[0]) if obs.ndim == 1 else actions
-        return out, (slot, remaining)
+        return out, (slot, remaining, delegating)
 
     def _masked_choice(self, norm: np.ndarray, masks: np.ndarray, deterministic: bool) -> Any:
         """MaskablePPO's own ``predict`` with masks; for a plain PPO model carrying the same
@@ -407,6 +429,7 @@ def load_sb3_policy(
     ks: Sequence[int] | None = None,
     episode_slots: int | None = None,
     require_vecnormalize: bool | None = None,
+    delegate: Any = None,
 ) -> SB3Agent:
     """An SB3 zip as a policy on raw v0 observations; **runs code from the files: load only
     files you trust** (module docstring).
@@ -423,6 +446,9 @@ def load_sb3_policy(
     require_vecnormalize : True: a missing ``.pkl`` is an error; False: act without one;
         None (default): required if the metadata or RL-Zoo's ``config.yml`` says the agent was
         trained with VecNormalize.
+    delegate : a residual decision-epoch agent's rule (a
+        :class:`policies.epoch_delegation.DelegateSpec` or its JSON mapping); default from
+        the metadata (``"delegate"``).
     """
     path = Path(path)
     if not path.is_file():
@@ -481,6 +507,11 @@ def load_sb3_policy(
                 f"{path}: the model observes {obs_dim} entries, the env {len(names)} "
                 "(+ flights_left): it was trained on another observation (scenario)"
             )
+        from policies.epoch_delegation import DelegateSpec
+
+        spec = delegate if delegate is not None else meta.get("delegate")
+        if spec is not None and not isinstance(spec, DelegateSpec):
+            spec = DelegateSpec.from_json(spec)
         return EpochAgent(
             model,
             normalizer,
@@ -488,6 +519,7 @@ def load_sb3_policy(
             ks=ks,
             episode_slots=slots,
             masked=_masked(model) or bool(meta.get("action_masks", False)),
+            delegate=None if spec is None else spec.build(names),
         )
     if not names:
         raise ValueError(f"{path}: pass obs_names (the env's observation names)")

@@ -40,7 +40,7 @@ episode's total is v0's total). ``info`` is the v0 info of the last slot plus:
 |---|---|---|
 | epoch_slots | slots | ``n``, the slots this step took (``k``, or fewer at truncation) |
 | epoch_discount | - | ``gamma ** n``: the discount to apply to the next step's value |
-| epoch_action | - | the v0 action taken at the first slot |
+| epoch_action | - | the maintenance choice at the first slot (a v0 action; 4: delegate) |
 | epoch_k | slots | the ``k`` chosen |
 
 Semi-MDP discounting with SB3: SB3's algorithms apply one fixed ``gamma`` per step, so they
@@ -57,6 +57,20 @@ shape ``(4 * len(ks),)``, every ``k`` of a maintenance action sharing its validi
 ``fly`` always; ``test_and_fly`` only when not on the ground (``downtime == 0``: on the
 ground it would do the same as ``fly``); ``replace_*`` only when the part has flown
 (``age > 0`` flights: replacing a new part is pure cost).
+
+## Delegation (optional)
+
+With ``delegate`` (an object with the project's policy protocol, ``predict(obs)`` on the
+flat v0 observation, e.g. a tuned rule from :func:`policies.base.make_policy`), a fifth
+maintenance choice ``delegate`` (4) hands the step's ``k`` slots to it: at each of them the
+v0 action is ``delegate.predict(obs)`` of that slot's observation. The action space is then
+``Discrete(5 * len(ks))``, ``a // len(ks) == 4`` meaning "the delegate for ``k`` slots";
+it is always valid in the mask. An agent that always delegates plays the delegate's own
+per-flight episode, bit for bit (tested), so RL starts at the rule and learns when to
+overrule it (residual policy learning: Silver et al. 2018, "Residual Policy Learning";
+Johannink et al. 2019, "Residual Reinforcement Learning for Robot Control"). The delegate
+must be stateless (its action a function of the current observation), as the project's
+rules are; its actions must be v0 actions (0..3).
 
 >>> import gymnasium as gym
 >>> import scas_env
@@ -80,6 +94,8 @@ from gymnasium import spaces
 
 FLY, TEST_AND_FLY, REPLACE_SPRING, REPLACE_SEAL = range(4)
 N_MAINTENANCE = 4
+#: the maintenance choice "the delegate for k slots" (with ``delegate`` only)
+DELEGATE = 4
 #: default choices of k (slots per decision)
 DEFAULT_KS: tuple[int, ...] = (1, 5, 20, 50, 100)
 #: observation entries the mask reads
@@ -87,8 +103,10 @@ MASK_READS = ("downtime", "spring_age", "seal_age")
 
 __all__ = [
     "DEFAULT_KS",
+    "DELEGATE",
     "EPOCHS_ENV_ID",
     "DecisionEpochs",
+    "delegate_actions",
     "maintenance_mask",
     "make_decision_epoch_env",
 ]
@@ -118,6 +136,32 @@ def maintenance_mask(downtime: Any, spring_age: Any, seal_age: Any) -> np.ndarra
     return mask
 
 
+def _check_delegate(delegate: Any) -> Any:
+    """``delegate`` if it is None or has a callable ``predict`` (the policy protocol)."""
+    if delegate is not None and not callable(getattr(delegate, "predict", None)):
+        raise ValueError(
+            f"delegate = {delegate!r} must be None or a policy with predict(obs) "
+            "(e.g. policies.base.make_policy('rul_risk', obs_names))"
+        )
+    return delegate
+
+
+def delegate_actions(delegate: Any, obs: np.ndarray) -> np.ndarray:
+    """The v0 actions (int64, ``(n,)``) of ``delegate`` on the flat v0 observations ``obs``
+    (``(n, n_obs)``); raises ``ValueError`` if they are not ``n`` integers in 0..3."""
+    act, _ = delegate.predict(obs, deterministic=True)
+    out = np.asarray(act)
+    if (
+        out.shape != (len(obs),)
+        or not np.issubdtype(out.dtype, np.integer)
+        or np.any((out < 0) | (out > 3))
+    ):
+        raise ValueError(
+            f"the delegate's actions {act!r} must be {len(obs)} v0 actions (integers in 0..3)"
+        )
+    return out.astype(np.int64)
+
+
 def _check_ks(ks: Sequence[int]) -> tuple[int, ...]:
     out = tuple(ks)
     if (
@@ -137,11 +181,21 @@ class DecisionEpochs(gym.Wrapper):
     env : a ``ScasMaintenance-v0`` env with a flat (``Box``) observation.
     ks : choices of ``k`` (slots per decision), distinct integers >= 1.
     gamma : per-flight discount in ``[0, 1]`` applied inside a step (1: plain sum).
+    delegate : None, or a stateless policy on the flat v0 observation that the choice
+        ``delegate`` hands ``k`` slots to (module docstring, "Delegation").
     """
 
-    def __init__(self, env: gym.Env, ks: Sequence[int] = DEFAULT_KS, gamma: float = 1.0) -> None:
+    def __init__(
+        self,
+        env: gym.Env,
+        ks: Sequence[int] = DEFAULT_KS,
+        gamma: float = 1.0,
+        delegate: Any = None,
+    ) -> None:
         super().__init__(env)
         self.ks = _check_ks(ks)
+        self.delegate = _check_delegate(delegate)
+        self.n_maintenance = N_MAINTENANCE + (delegate is not None)
         if not isinstance(gamma, int | float) or not 0.0 <= float(gamma) <= 1.0:
             raise ValueError(f"gamma = {gamma!r} must be a number in [0, 1] (per flight)")
         self.gamma = float(gamma)
@@ -158,7 +212,8 @@ class DecisionEpochs(gym.Wrapper):
             np.append(inner.high, float(self.episode_slots)).astype(np.float32),
             dtype=np.float32,
         )
-        self.action_space = spaces.Discrete(N_MAINTENANCE * len(self.ks))
+        self.action_space = spaces.Discrete(self.n_maintenance * len(self.ks))
+        self._last: np.ndarray | None = None  # the v0 observation now (the delegate reads it)
         self.obs_names = (*u.obs_names, "flights_left")
         self.obs_units = (*u.obs_units, "slots")
 
@@ -166,8 +221,10 @@ class DecisionEpochs(gym.Wrapper):
         """The action for v0 action ``maintenance`` then ``k`` slots in all."""
         if k not in self.ks:
             raise ValueError(f"k = {k!r} must be one of {self.ks}")
-        if maintenance not in range(N_MAINTENANCE):
-            raise ValueError(f"maintenance = {maintenance!r} must be in 0..3")
+        if maintenance not in range(self.n_maintenance):
+            raise ValueError(
+                f"maintenance = {maintenance!r} must be in 0..{self.n_maintenance - 1}"
+            )
         return int(maintenance) * len(self.ks) + self.ks.index(k)
 
     def decode(self, action: Any) -> tuple[int, int]:
@@ -183,19 +240,29 @@ class DecisionEpochs(gym.Wrapper):
 
     def reset(self, **kwargs: Any) -> tuple[np.ndarray, dict[str, Any]]:
         obs, info = self.env.reset(**kwargs)
+        self._last = obs
         return self._obs(obs), info
+
+    def _delegated(self, obs: np.ndarray) -> int:
+        return int(delegate_actions(self.delegate, np.asarray(obs)[None, :])[0])
 
     def step(self, action: Any) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
         maintenance, k = self.decode(action)
+        delegated = maintenance == DELEGATE
+        if delegated and self._last is None:
+            raise RuntimeError("call reset() before step()")
         total, weight, n = 0.0, 1.0, 0
-        act = maintenance
+        act = self._delegated(self._last) if delegated else maintenance
         terminated = truncated = False
-        while n < k and not (terminated or truncated):
+        while True:
             obs, reward, terminated, truncated, info = self.env.step(act)
             total += weight * float(reward)
             weight *= self.gamma
             n += 1
-            act = FLY
+            if n >= k or terminated or truncated:
+                break
+            act = self._delegated(obs) if delegated else FLY
+        self._last = obs
         info = dict(info)
         info.update(epoch_slots=n, epoch_discount=weight, epoch_action=maintenance, epoch_k=k)
         return self._obs(obs), total, terminated, truncated, info
@@ -204,14 +271,16 @@ class DecisionEpochs(gym.Wrapper):
         """Valid actions now (bool, ``(4 * len(ks),)``); see the module docstring."""
         u = self.env.unwrapped
         m = maintenance_mask(u.downtime, u.part_age["spring"], u.part_age["seal"])
+        if self.delegate is not None:
+            m = np.append(m, True)
         return np.repeat(m, len(self.ks))
 
 
 def make_decision_epoch_env(
-    ks: Sequence[int] = DEFAULT_KS, gamma: float = 1.0, **kwargs: Any
+    ks: Sequence[int] = DEFAULT_KS, gamma: float = 1.0, delegate: Any = None, **kwargs: Any
 ) -> DecisionEpochs:
     """Entry point of :data:`EPOCHS_ENV_ID`: a v0 env (``kwargs``: its keywords) in
     :class:`DecisionEpochs` (so RL-Zoo can train on it by id)."""
     from scas_env.env import ScasMaintenanceEnv
 
-    return DecisionEpochs(ScasMaintenanceEnv(**kwargs), ks=ks, gamma=gamma)
+    return DecisionEpochs(ScasMaintenanceEnv(**kwargs), ks=ks, gamma=gamma, delegate=delegate)

@@ -45,9 +45,12 @@ from gymnasium.vector.utils import batch_space
 
 from scas_env.decision_epochs import (
     DEFAULT_KS,
+    DELEGATE,
     FLY,
     N_MAINTENANCE,
+    _check_delegate,
     _check_ks,
+    delegate_actions,
     maintenance_mask,
 )
 from scas_env.vector_env import ScasMaintenanceVectorEnv, expose_surface
@@ -63,15 +66,25 @@ class DecisionEpochsVectorEnv(VectorEnv):
     num_envs : actuators N.
     ks : choices of ``k`` (slots per decision), distinct integers >= 1.
     gamma : per-flight discount in ``[0, 1]`` inside a step (1: plain sum).
+    delegate : None, or a stateless policy the choice ``delegate`` hands ``k`` slots to
+        (:mod:`scas_env.decision_epochs`, "Delegation"); asked for all delegating actuators
+        at once, slot by slot.
     **kwargs : keywords of ``ScasMaintenanceEnv`` (surrogate fidelity, flat observation).
     """
 
     metadata = {"autoreset_mode": AutoresetMode.SAME_STEP}  # noqa: RUF012
 
     def __init__(
-        self, num_envs: int, ks: Sequence[int] = DEFAULT_KS, gamma: float = 1.0, **kwargs: Any
+        self,
+        num_envs: int,
+        ks: Sequence[int] = DEFAULT_KS,
+        gamma: float = 1.0,
+        delegate: Any = None,
+        **kwargs: Any,
     ) -> None:
         self.ks = _check_ks(ks)
+        self.delegate = _check_delegate(delegate)
+        self.n_maintenance = N_MAINTENANCE + (delegate is not None)
         if not isinstance(gamma, int | float) or not 0.0 <= float(gamma) <= 1.0:
             raise ValueError(f"gamma = {gamma!r} must be a number in [0, 1] (per flight)")
         self.gamma = float(gamma)
@@ -89,13 +102,14 @@ class DecisionEpochsVectorEnv(VectorEnv):
             np.append(inner.high, float(self.episode_slots)).astype(np.float32),
             dtype=np.float32,
         )
-        self.single_action_space = spaces.Discrete(N_MAINTENANCE * len(self.ks))
+        self.single_action_space = spaces.Discrete(self.n_maintenance * len(self.ks))
         self.observation_space = batch_space(self.single_observation_space, self.num_envs)
         self.action_space = batch_space(self.single_action_space, self.num_envs)
         expose_surface(self, self.inner.envs[0])
         self.obs_names = (*self.inner.obs_names, "flights_left")
         self.obs_units = (*self.inner.obs_units, "slots")
         self._ks = np.array(self.ks, dtype=np.int64)
+        self._last: np.ndarray | None = None  # the v0 observations now (the delegate reads them)
 
     def _obs(self, obs: np.ndarray) -> np.ndarray:
         left = (self.episode_slots - self.inner.a["slot"]).astype(np.float32)
@@ -105,6 +119,7 @@ class DecisionEpochsVectorEnv(VectorEnv):
         self, *, seed: int | list[int | None] | None = None, options: dict[str, Any] | None = None
     ) -> tuple[np.ndarray, dict[str, Any]]:
         obs, _ = self.inner.reset(seed=seed, options=options)
+        self._last = obs
         return self._obs(obs), {}
 
     def step(self, actions: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, dict]:
@@ -126,6 +141,11 @@ class DecisionEpochsVectorEnv(VectorEnv):
         truncated = np.zeros(n, dtype=np.bool_)
         active = np.ones(n, dtype=np.bool_)
         act = maintenance.astype(np.int64)
+        delegated = maintenance == DELEGATE
+        if delegated.any():
+            if self._last is None:
+                raise RuntimeError("call reset() before step()")
+            act[delegated] = delegate_actions(self.delegate, self._last[delegated])
         while active.any():
             _, reward, term, trunc, _ = self.inner.step_active(act, active, outputs=False)
             total[active] += weight[active] * reward[active]
@@ -134,7 +154,11 @@ class DecisionEpochsVectorEnv(VectorEnv):
             truncated |= trunc
             active &= ~((slots >= k) | term | trunc)
             act[:] = FLY
-        out = self._obs(self.inner.observe())
+            asked = active & delegated
+            if asked.any():
+                act[asked] = delegate_actions(self.delegate, self.inner.observe()[asked])
+        inner_obs = self.inner.observe()
+        out = self._obs(inner_obs)
         info: dict[str, Any] = {
             "epoch_slots": slots,
             "epoch_discount": weight,
@@ -149,13 +173,17 @@ class DecisionEpochsVectorEnv(VectorEnv):
             info["final_obs"] = final
             info["_final_obs"] = truncated.copy()
             self.inner.step_active(np.zeros(n, dtype=np.int64), truncated, outputs=False)
-            out = self._obs(self.inner.observe())
+            inner_obs = self.inner.observe()
+            out = self._obs(inner_obs)
+        self._last = inner_obs
         return out, total, np.zeros(n, dtype=np.bool_), truncated, info
 
     def action_masks(self) -> np.ndarray:
-        """Valid actions of every actuator now (bool, ``(N, 4 * len(ks))``)."""
+        """Valid actions of every actuator now (bool, ``(N, n_maintenance * len(ks))``)."""
         a = self.inner.a
         m = maintenance_mask(a["downtime"], a["part_age"][:, 0], a["part_age"][:, 1])
+        if self.delegate is not None:
+            m = np.column_stack([m, np.ones(len(m), dtype=bool)])
         return np.repeat(m, len(self.ks), axis=1)
 
     def close_extras(self, **kwargs: Any) -> None:
@@ -163,8 +191,12 @@ class DecisionEpochsVectorEnv(VectorEnv):
 
 
 def make_decision_epochs_vector_env(
-    num_envs: int, ks: Sequence[int] = DEFAULT_KS, gamma: float = 1.0, **kwargs: Any
+    num_envs: int,
+    ks: Sequence[int] = DEFAULT_KS,
+    gamma: float = 1.0,
+    delegate: Any = None,
+    **kwargs: Any,
 ) -> DecisionEpochsVectorEnv:
     """``vector_entry_point`` of the decision-epoch ids (``gym.make_vec(...,
     vectorization_mode="vector_entry_point")``)."""
-    return DecisionEpochsVectorEnv(num_envs, ks=ks, gamma=gamma, **kwargs)
+    return DecisionEpochsVectorEnv(num_envs, ks=ks, gamma=gamma, delegate=delegate, **kwargs)

@@ -10,6 +10,10 @@ filter rule of the value study)::
     python scripts/imitate_rule.py --scenario examples/v2.toml \\
         --rules-from docs/value_v2/ladder.json --arm filter --candidate imitation_g1 \\
         --out results/rl_v2/clone
+
+``--delegate-k K`` makes a residual agent instead (policies.epoch_delegation): the rule
+becomes an action ("the rule for k slots") and the clone takes it with ``k = K`` everywhere,
+its critic fitted to the rule's returns; no DAgger (the rule's labels add nothing there).
 """
 
 from __future__ import annotations
@@ -19,6 +23,7 @@ import argparse
 from policies import tuning
 from policies.benchmark import episode_seeds
 from policies.epoch_dagger import DaggerPlan
+from policies.epoch_delegation import DelegateSpec, delegation_demonstrations
 from policies.epoch_demonstrations import demonstrations, record_rule
 from policies.epoch_selection import HELD_OUT_SEED, VALIDATION_SEED, tuned_rules
 from policies.epoch_training import HYPERPARAMS_DIR, candidate_hyperparams, clone_rule
@@ -42,6 +47,15 @@ def main() -> None:
     parser.add_argument("--clone-seed", type=int, default=0, help="network init and batches")
     parser.add_argument("--search", default=str(HYPERPARAMS_DIR / "search.yml"), help="search YAML")
     parser.add_argument("--candidate", default="imitation_g1", help="network of this candidate")
+    parser.add_argument(
+        "--delegate-k", type=int, default=None, help="residual agent: clone 'the rule for K slots'"
+    )
+    parser.add_argument(
+        "--label-smoothing",
+        type=float,
+        default=0.0,
+        help="share of the actor's target spread over the valid actions (exploration for PPO)",
+    )
     parser.add_argument("--out", required=True, help="new, empty output folder")
     add_env_config_args(parser)
     args = parser.parse_args()
@@ -53,6 +67,8 @@ def main() -> None:
         parser.error(f"--dagger-rounds {args.dagger_rounds} must be >= 0")
     if args.seed in (VALIDATION_SEED, HELD_OUT_SEED, tuning.HELD_OUT_SEED):
         parser.error(f"--seed {args.seed} is a validation or held-out seed")
+    if args.delegate_k is not None and args.delegate_k not in DEFAULT_KS:
+        parser.error(f"--delegate-k {args.delegate_k} must be one of {DEFAULT_KS}")
     hp = candidate_hyperparams(args.search, args.candidate)
     rule = tuned_rules(args.rules_from, [args.arm])[0]
     changes = scenario_changes(scenario)
@@ -64,9 +80,22 @@ def main() -> None:
         scenario=changes,
         progress=True,
     )
-    demos = demonstrations(
-        recorded, DEFAULT_KS, gamma=float(hp.get("gamma", 0.99)), safety=args.safety
-    )
+    gamma = float(hp.get("gamma", 0.99))
+    if args.delegate_k is not None:
+        result = clone_rule(
+            hp,
+            delegation_demonstrations(recorded, DEFAULT_KS, args.delegate_k, gamma),
+            args.out,
+            seed=args.clone_seed,
+            epochs=args.epochs,
+            label_smoothing=args.label_smoothing,
+            delegate=DelegateSpec(rule.name, rule.params),
+            progress=True,
+            **changes,
+        )
+        print(f"validation accuracy {result.accuracy[-1]:.3f}; wrote {args.out}")
+        return
+    demos = demonstrations(recorded, DEFAULT_KS, gamma=gamma, safety=args.safety)
     # DAgger rounds on the training seed's next episodes (after the recorded ones)
     n, m = args.episodes, args.dagger_episodes
     seeds = episode_seeds(args.seed, n + args.dagger_rounds * m)
@@ -84,6 +113,7 @@ def main() -> None:
         args.out,
         seed=args.clone_seed,
         epochs=args.epochs,
+        label_smoothing=args.label_smoothing,
         dagger=plan if args.dagger_rounds else None,
         progress=True,
         **changes,
