@@ -1,8 +1,9 @@
 """Choose, ship and evaluate a decision-epoch agent (after :mod:`policies.epoch_training`).
 
 0. :func:`resolve_scenario`: the scenario (env keywords, e.g. ``scas_env.V2_KWARGS`` for
-   v2) that every run was trained on: each finished run's ``run.json`` says it; a run still
-   training has none yet and the caller passes it (``scenario=``); runs whose ``run.json``
+   v2) that every run was trained on: each run's ``run.json`` says it (written when the run
+   starts; a run of an older version had none until it finished, and the caller passes it,
+   ``scenario=``); runs whose ``run.json``
    disagree with each other or with ``scenario`` are refused. Default: the runs' own, else
    v0's default scenario ``{}``.
 1. :func:`validate_checkpoints`: every checkpoint of every run is replayed on per-flight
@@ -46,7 +47,7 @@ from scas_env.actuator.shipped_files import write_manifest
 VALIDATION_SEED = 101
 HELD_OUT_SEED = 202
 _CKPT = re.compile(r"ckpt_(\d+)_steps\.zip$")
-#: what a run still training (no ``run.json`` yet) is assumed to be, besides its scenario
+#: what a run without ``run.json`` (an older version's, still training) is assumed to be
 _TRAINING_DEFAULTS = {"algo": "maskable_ppo", "ks": [1, 5, 20, 50, 100]}
 
 __all__ = [
@@ -102,8 +103,8 @@ def resolve_scenario(
     """The scenario (env keywords besides ``obs_mode``) that every run in ``run_dirs`` was
     trained on.
 
-    A finished run's ``run.json`` holds it (``"scenario"``); a run still training has no
-    ``run.json`` and is taken to be on ``scenario`` (the caller's; default: the finished
+    A run's ``run.json`` holds it (``"scenario"``); a run without one (an older version's,
+    still training) is taken to be on ``scenario`` (the caller's; default: the other
     runs' own, else v0's ``{}``). Raises ``ValueError`` naming the runs if finished runs
     disagree with each other (mixed scenarios) or with ``scenario``.
     """
@@ -301,7 +302,9 @@ def training_scale(run_dir: str | Path, slots: int) -> dict[str, Any]:
     run_dir = Path(run_dir)
     run = _run_json(run_dir)
     ckpts = checkpoints(run_dir)
-    decisions = run["decisions"] if run else (ckpts[-1][0] if ckpts else 0)
+    finished = run is not None and run.get("finished", True)  # older run.json: at the end
+    last = ckpts[-1][0] if ckpts else 0
+    decisions = run["decisions"] if finished else last
     episodes = 0
     for monitor in sorted((run_dir / "monitor").glob("*.csv")):
         with monitor.open() as fh:
@@ -312,7 +315,7 @@ def training_scale(run_dir: str | Path, slots: int) -> dict[str, Any]:
         "episodes": episodes,
         "flights": episodes * slots,
         "wall_s": run.get("wall_s") if run else None,
-        "finished": run is not None,
+        "finished": finished,
     }
 
 

@@ -27,6 +27,7 @@ import gymnasium as gym
 from policies.epoch_delegation import DelegateSpec, v0_obs_names
 from policies.sb3_agents import require_contrib
 from scas_env import ENV_ID
+from scas_env.actuator.atomic_file import write_text_atomic
 from scas_env.decision_epochs import DEFAULT_KS, DecisionEpochs
 
 #: id of the decision-epoch formulation in the hyper-parameter YAML files
@@ -315,8 +316,9 @@ def train_epochs(
     fine-tuning run had accumulated after 1 M decisions lost 1,864 USD/episode on
     validation, all of the decline of that run). Writes
     ``out_dir/ckpt_<n>`` checkpoints (``model.zip``, ``vecnormalize.pkl``), ``progress.csv``
-    (SB3's logger: training episode rewards of the Monitor) and ``run.json`` (config,
-    decisions and wall time reached).
+    (SB3's logger: training episode rewards of the Monitor) and ``run.json`` (config, written
+    before training so that checkpoints can be validated while it runs, ``"finished":
+    false``; at the end the decisions and wall time reached, ``"finished": true``).
     """
     from stable_baselines3.common.callbacks import CallbackList, CheckpointCallback
     from stable_baselines3.common.logger import configure
@@ -364,6 +366,25 @@ def train_epochs(
         model.save(out / "ckpt_0_steps.zip")
         if normalize:
             venv.save(str(out / "ckpt_vecnormalize_0_steps.pkl"))
+    # the run's settings now (checkpoints can be validated while it trains), its end later
+    run = {
+        "algo": algo,
+        "seed": seed,
+        "ks": list(ks),
+        "scenario": scenario,
+        "hyperparams": {k: repr(v) for k, v in dict(hyperparams).items()},
+        "decisions": 0,
+        "decisions_requested": total,
+        "wall_s": None,
+        "stopped_by_wall_clock": False,
+        "finished": False,
+        "vec_env": "NativeVecEnv(DecisionEpochsVectorEnv)" if native_envs else "DummyVecEnv",
+        "n_envs": n_envs,
+        "init": None if init is None else str(init),
+        "freeze_normalization": freeze_normalization,
+        "delegate": None if delegate is None else delegate.to_json(),
+    }
+    write_text_atomic(out / "run.json", json.dumps(run, indent=1))
     model.set_logger(configure(str(out), ["csv"]))
     checkpoints = CheckpointCallback(
         max(checkpoint_every // n_envs, 1),
@@ -381,25 +402,13 @@ def train_epochs(
     model.save(out / f"ckpt_{model.num_timesteps}_steps.zip")
     if normalize:
         venv.save(str(out / f"ckpt_vecnormalize_{model.num_timesteps}_steps.pkl"))
-    run = {
-        "algo": algo,
-        "seed": seed,
-        "ks": list(ks),
-        "scenario": scenario,
-        "hyperparams": {k: repr(v) for k, v in dict(hyperparams).items()},
-        "decisions": int(model.num_timesteps),
-        "decisions_requested": total,
-        "wall_s": round(wall, 1),
-        "stopped_by_wall_clock": model.num_timesteps < total,
-        "vec_env": "DummyVecEnv"
-        if native_envs is None
-        else "NativeVecEnv(DecisionEpochsVectorEnv)",
-        "n_envs": n_envs,
-        "init": None if init is None else str(init),
-        "freeze_normalization": freeze_normalization,
-        "delegate": None if delegate is None else delegate.to_json(),
-    }
-    (out / "run.json").write_text(json.dumps(run, indent=1))
+    run.update(
+        decisions=int(model.num_timesteps),
+        wall_s=round(wall, 1),
+        stopped_by_wall_clock=model.num_timesteps < total,
+        finished=True,
+    )
+    write_text_atomic(out / "run.json", json.dumps(run, indent=1))
     venv.close()
     return out
 

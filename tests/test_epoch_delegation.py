@@ -293,5 +293,5 @@ def test_label_smoothing_leaves_the_closed_form_share_on_the_other_valid_actions
     mean = p.mean(dim=0).numpy()
     expected = np.array([alpha / 6] * 4 + [0.0, 0.0, alpha / 6, 1 - alpha + alpha / 6])
     np.testing.assert_allclose(mean, expected, atol=2e-3)
-    with pytest.raises(ValueError, match="label_smoothing = 1.0 must be a number in"):
+    with pytest.raises(ValueError, match=r"label_smoothing = 1\.0 must be a number in"):
         clone(model, venv, demos, label_smoothing=1.0, rng=np.random.default_rng(1))
