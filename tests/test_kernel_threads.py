@@ -1,0 +1,182 @@
+"""The batched filter kernels on several threads give the serial kernels' numbers bit for bit.
+
+``ScasMaintenanceVectorEnv(kernel_threads=T)`` splits the rows of each
+:func:`~scas_env.learning_kernel.test_batch`, ``learn_batch`` and ``refresh_tables`` call
+into chunks run in parallel (``*_threads`` kernels). Here a vector env with T threads and
+one with 1 are stepped with the same actions over a mix with many tests, some replacements
+and episode ends, and everything they output or keep is compared bit for bit: observations,
+rewards, terminations, infos, the fleet's arrays, the particle bank and every actuator's
+filter random stream (the same draws were taken from each). T = 3 forces three chunks per
+call (this machine's numba may run fewer threads: the chunks are then shared out), so the
+chunks are uneven; T = 2 uses the env's own choice of chunks, and the test checks that
+parallel calls happened.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numba
+import numpy as np
+import pytest
+
+from scas_env import V2_KWARGS
+from scas_env import vector_env as vector_env_module
+from scas_env.decision_epochs_vector import DecisionEpochsVectorEnv
+from scas_env.learning_kernel import chunk_bounds, chunk_count
+from scas_env.parallel import single_threaded
+from scas_env.vector_env import ScasMaintenanceVectorEnv, make_vector_env
+
+_KW = {**V2_KWARGS, "initial_health": "random", "episode_slots": 120}
+#: (fly, test_and_fly, replace_spring, replace_seal): many tests, some replacements
+_MIX = [0.6, 0.36, 0.02, 0.02]
+
+
+def assert_bits_equal(a: Any, b: Any, where: str) -> None:
+    """``a`` and ``b`` equal bit for bit (arrays: dtype, shape and bytes; dicts, tuples and
+    lists element-wise; anything else ``==``)."""
+    if isinstance(a, dict):
+        assert isinstance(b, dict) and list(a) == list(b), where
+        for k in a:
+            assert_bits_equal(a[k], b[k], f"{where}[{k!r}]")
+    elif isinstance(a, np.ndarray):
+        assert isinstance(b, np.ndarray), where
+        assert (a.dtype, a.shape) == (b.dtype, b.shape), where
+        if a.dtype == object:
+            for i, (x, y) in enumerate(zip(a.ravel(), b.ravel(), strict=True)):
+                assert_bits_equal(x, y, f"{where}.flat[{i}]")
+        else:
+            assert np.ascontiguousarray(a).tobytes() == np.ascontiguousarray(b).tobytes(), where
+    elif isinstance(a, tuple | list):
+        assert type(a) is type(b) and len(a) == len(b), where
+        for i, (x, y) in enumerate(zip(a, b, strict=True)):
+            assert_bits_equal(x, y, f"{where}[{i}]")
+    else:
+        assert type(a) is type(b), where
+        assert a == b or (a != a and b != b), where  # NaN == NaN here
+
+
+def _assert_states_equal(threaded: ScasMaintenanceVectorEnv, serial: ScasMaintenanceVectorEnv,
+                         where: str) -> None:  # fmt: skip
+    """The fleet arrays, the bank's particles and each actuator's filter stream."""
+    assert_bits_equal(dict(threaded.a.items()), dict(serial.a.items()), f"{where}: fleet")
+    assert_bits_equal(threaded._learn_out, serial._learn_out, f"{where}: kernel outputs")
+    assert_bits_equal(threaded._stale, serial._stale, f"{where}: stale tables")
+    assert_bits_equal(threaded._bank.arrays, serial._bank.arrays, f"{where}: bank")
+    for e, (x, y) in enumerate(zip(threaded.envs, serial.envs, strict=True)):
+        gx = x.monitor.spring_filter._stream.rng.bit_generator.state
+        gy = y.monitor.spring_filter._stream.rng.bit_generator.state
+        assert gx == gy, f"{where}: filter stream of actuator {e}"
+
+
+@pytest.fixture
+def chunk_spy(monkeypatch: pytest.MonkeyPatch):
+    """Record the chunk counts the vector env chose; ``force=T``: use min(T, rows) chunks
+    whatever numba's thread count (uneven chunks on any machine)."""
+    seen: list[int] = []
+
+    def install(force: int | None) -> list[int]:
+        def spy(n_rows: int, threads: int) -> int:
+            k = chunk_count(n_rows, threads) if force is None else max(1, min(force, n_rows))
+            seen.append(k)
+            return k
+
+        monkeypatch.setattr(vector_env_module, "chunk_count", spy)
+        return seen
+
+    return install
+
+
+@pytest.mark.parametrize("threads, force", [(2, None), (3, 3)])
+def test_threads_give_the_serial_numbers(chunk_spy, threads: int, force: int | None) -> None:
+    if force is None and numba.get_num_threads() < 2:
+        pytest.skip("numba runs one thread here: the env would call the serial kernels")
+    seen = chunk_spy(force)
+    n = 16
+    threaded = ScasMaintenanceVectorEnv(n, kernel_threads=threads, **_KW)
+    serial = ScasMaintenanceVectorEnv(n, **_KW)
+    assert serial.kernel_threads == 1 and threaded.kernel_threads == threads
+    assert_bits_equal(threaded.reset(seed=5), serial.reset(seed=5), "reset")
+    rng = np.random.default_rng(11)
+    ends = 0
+    for t in range(300):
+        actions = rng.choice(4, size=n, p=_MIX)
+        out_t, out_s = threaded.step(actions), serial.step(actions)
+        assert_bits_equal(out_t, out_s, f"step {t}")
+        ends += int(np.sum(out_s[2] | out_s[3]))
+        if t % 50 == 49:
+            _assert_states_equal(threaded, serial, f"step {t}")
+    _assert_states_equal(threaded, serial, "end")
+    assert ends >= n  # autoresets (new filters attached to the bank) happened
+    parallel_calls = sum(k > 1 for k in seen)
+    assert parallel_calls >= 100, seen  # the threaded kernels ran
+    if force is not None:
+        assert any(k == 3 for k in seen)
+
+
+def test_stale_tables_refreshed_on_threads(chunk_spy) -> None:
+    """The decision-epoch vector env (learning updates leave stale RUL tables, rebuilt by
+    ``refresh_tables_threads`` on read) with 3 forced chunks against the serial one."""
+    seen = chunk_spy(3)
+    n = 12
+    threaded = DecisionEpochsVectorEnv(n, kernel_threads=3, **_KW)
+    serial = DecisionEpochsVectorEnv(n, **_KW)
+    assert threaded.inner.kernel_threads == 3
+    assert_bits_equal(threaded.reset(seed=2), serial.reset(seed=2), "reset")
+    rng = np.random.default_rng(4)
+    for t in range(80):
+        masks = serial.action_masks()
+        assert_bits_equal(threaded.action_masks(), masks, f"masks {t}")
+        actions = np.array([rng.choice(np.flatnonzero(m)) for m in masks])
+        assert_bits_equal(threaded.step(actions), serial.step(actions), f"decision {t}")
+    _assert_states_equal(threaded.inner, serial.inner, "end")
+    assert sum(k > 1 for k in seen) >= 20, seen
+
+
+def test_make_vec_passes_kernel_threads() -> None:
+    import gymnasium as gym
+
+    from scas_env import ENV_ID_EPOCHS_V2, ENV_ID_V2
+
+    envs = gym.make_vec(
+        ENV_ID_V2, num_envs=2, vectorization_mode="vector_entry_point", kernel_threads=2
+    )
+    assert envs.unwrapped.kernel_threads == 2
+    epochs = gym.make_vec(
+        ENV_ID_EPOCHS_V2, num_envs=2, vectorization_mode="vector_entry_point", kernel_threads=2
+    )
+    assert epochs.unwrapped.inner.kernel_threads == 2
+    physics = make_vector_env(1, fidelity="physics", kernel_threads=2)
+    assert physics.kernel_threads == 2
+
+
+@pytest.mark.parametrize("bad", [0, -1, 1.5, 2.0, "2", True, None])
+def test_bad_kernel_threads_raise_naming_the_value(bad: Any) -> None:
+    with pytest.raises(ValueError, match=rf"kernel_threads = {bad!r} must be an integer >= 1"):
+        ScasMaintenanceVectorEnv(2, kernel_threads=bad, **_KW)
+    with pytest.raises(ValueError, match=rf"kernel_threads = {bad!r} must be"):
+        make_vector_env(1, fidelity="physics", kernel_threads=bad)
+
+
+def test_chunk_bounds_cover_the_rows_in_order() -> None:
+    for n_rows in range(12):
+        for n_chunks in range(1, 5):
+            b = chunk_bounds(n_rows, n_chunks)
+            sizes = np.diff(b)
+            assert b[0] == 0 and b[-1] == n_rows and np.all(sizes >= 0)
+            assert sizes.max() - sizes.min() <= 1, (n_rows, n_chunks, b)
+
+
+def test_chunk_count_respects_numba_threads() -> None:
+    assert chunk_count(64, 1) == 1
+    assert chunk_count(1, 4) == 1
+    with single_threaded():  # a worker's settings: numba.set_num_threads(1)
+        assert chunk_count(64, 4) == 1
+    available = numba.get_num_threads()
+    assert chunk_count(64, 64) == available
+    if available >= 2:
+        numba.set_num_threads(2)
+        try:
+            assert chunk_count(64, 8) == 2 and chunk_count(3, 2) == 2
+        finally:
+            numba.set_num_threads(available)
