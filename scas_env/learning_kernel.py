@@ -39,6 +39,8 @@ and no two rows may share a random stream (each actuator has its own Generator).
 from __future__ import annotations
 
 import math
+import os
+import warnings
 
 import numba
 import numpy as np
@@ -493,13 +495,52 @@ def test_batch(
 MIN_ROWS_PER_CHUNK = 1
 
 
+#: "forked": this process was forked from one whose numba threads run on GNU OpenMP (not
+#: fork-safe: numba terminates a forked child entering a parallel region), so the serial
+#: kernels run; "warned": the warning saying so was given.
+_FORK = {"forked": False, "warned": False}
+
+
+def _gnu_openmp_running() -> bool:
+    """Whether numba's threading layer is started here and is GNU OpenMP (libgomp)."""
+    from numba.np.ufunc import parallel
+
+    if not parallel._is_initialized or numba.threading_layer() != "omp":
+        return False
+    from numba.np.ufunc import omppool
+
+    return omppool.openmp_vendor == "GNU"
+
+
+def _note_fork() -> None:
+    if _gnu_openmp_running():
+        _FORK["forked"] = True
+
+
+os.register_at_fork(after_in_child=_note_fork)
+
+
 def chunk_count(n_rows: int, threads: int) -> int:
     """Chunks a kernel call over ``n_rows`` rows runs in with ``threads`` asked for: at most
     ``threads``, numba's current thread count (``numba.get_num_threads()``, which
     :func:`scas_env.parallel.single_thread` sets to 1 in workers) and one per
     :data:`MIN_ROWS_PER_CHUNK` rows; 1 means the serial kernel (numba's threads are not even
-    queried when ``threads`` is 1)."""
+    queried when ``threads`` is 1). Also 1, with a RuntimeWarning once, in a process forked
+    (``multiprocessing``'s "fork") from one whose numba threads run on GNU OpenMP: libgomp
+    is not fork-safe (start such workers with "spawn" or "forkserver", as
+    :mod:`scas_env.parallel` and SB3's ``SubprocVecEnv`` do)."""
     if threads <= 1 or n_rows < 2 * MIN_ROWS_PER_CHUNK:
+        return 1
+    if _FORK["forked"]:
+        if not _FORK["warned"]:
+            _FORK["warned"] = True
+            warnings.warn(
+                f"kernel_threads = {threads}: this process was forked from one running numba's "
+                "threads on GNU OpenMP (not fork-safe); the filter kernels run serially here "
+                "(the same numbers). Start workers with 'spawn' or 'forkserver'.",
+                RuntimeWarning,
+                stacklevel=2,
+            )
         return 1
     return max(1, min(threads, numba.get_num_threads(), n_rows // MIN_ROWS_PER_CHUNK))
 

@@ -14,13 +14,15 @@ parallel calls happened.
 
 from __future__ import annotations
 
+import multiprocessing
+import warnings
 from typing import Any
 
 import numba
 import numpy as np
 import pytest
 
-from scas_env import V2_KWARGS
+from scas_env import V2_KWARGS, learning_kernel
 from scas_env import vector_env as vector_env_module
 from scas_env.decision_epochs_vector import DecisionEpochsVectorEnv
 from scas_env.learning_kernel import chunk_bounds, chunk_count
@@ -180,3 +182,37 @@ def test_chunk_count_respects_numba_threads() -> None:
             assert chunk_count(64, 8) == 2 and chunk_count(3, 2) == 2
         finally:
             numba.set_num_threads(available)
+
+
+def _child_rewards(queue: Any) -> None:
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        rewards = _rewards(kernel_threads=2)
+    queue.put((rewards, [str(w.message) for w in caught]))
+
+
+def _rewards(kernel_threads: int) -> list[float]:
+    env = ScasMaintenanceVectorEnv(8, kernel_threads=kernel_threads, **_KW)
+    env.reset(seed=1)
+    rng = np.random.default_rng(0)
+    return [env.step(rng.choice(4, size=8, p=_MIX))[1].tolist() for _ in range(40)]
+
+
+@pytest.mark.skipif(
+    "fork" not in multiprocessing.get_all_start_methods(), reason="no fork start method"
+)
+def test_forked_child_of_gnu_openmp_runs_the_serial_kernels() -> None:
+    """libgomp is not fork-safe (numba kills a forked child entering a parallel region once
+    the parent ran one): such a child runs the serial kernels, warns, and gets the numbers."""
+    expected = _rewards(kernel_threads=2)  # the parent runs the threaded kernels
+    if not learning_kernel._gnu_openmp_running():
+        pytest.skip("numba's threading layer here is not GNU OpenMP")
+    context = multiprocessing.get_context("fork")
+    queue = context.Queue()
+    child = context.Process(target=_child_rewards, args=(queue,))
+    child.start()
+    child.join(120)
+    assert child.exitcode == 0
+    rewards, messages = queue.get(timeout=5)
+    assert rewards == expected
+    assert any("forked from one running numba's threads on GNU OpenMP" in m for m in messages)
