@@ -216,3 +216,19 @@ def test_forked_child_of_gnu_openmp_runs_the_serial_kernels() -> None:
     rewards, messages = queue.get(timeout=5)
     assert rewards == expected
     assert any("forked from one running numba's threads on GNU OpenMP" in m for m in messages)
+
+
+def test_sb3_speed_setup_with_two_kernel_threads() -> None:
+    """``epochs-native-64-t2`` is ``epochs-native-64`` with the filter kernels on 2 threads."""
+    from policies.sb3_speed import make_setup
+
+    def inner(venv: Any) -> Any:
+        while hasattr(venv, "venv"):
+            venv = venv.venv
+        return venv.unwrapped.inner
+
+    one, two = make_setup("epochs-native-64"), make_setup("epochs-native-64-t2")
+    assert (inner(one).kernel_threads, inner(two).kernel_threads) == (1, 2)
+    assert one.num_envs == two.num_envs == 64
+    one.close()
+    two.close()
