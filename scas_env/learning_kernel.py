@@ -520,6 +520,21 @@ def _note_fork() -> None:
 os.register_at_fork(after_in_child=_note_fork)
 
 
+def start_threads() -> None:
+    """Start numba's threads for the threaded kernels (a vector env with ``kernel_threads``
+    > 1 calls it when made): if they are not running yet, GNU OpenMP's idle threads are
+    first told to wait passively (``OMP_WAIT_POLICY=PASSIVE`` unless the environment sets
+    it; libgomp reads it when numba loads it). Its default, spinning for a while after each
+    parallel call, made the threaded kernels 10x slower than the serial ones on this 2-core
+    machine under load (the spinning thread takes the core the Python thread needs;
+    docs/speed.md). Threads already running keep their policy."""
+    from numba.np.ufunc import parallel
+
+    if not parallel._is_initialized:
+        os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
+        numba.get_num_threads()
+
+
 def chunk_count(n_rows: int, threads: int) -> int:
     """Chunks a kernel call over ``n_rows`` rows runs in with ``threads`` asked for: at most
     ``threads``, numba's current thread count (``numba.get_num_threads()``, which
@@ -642,6 +657,7 @@ __all__ = [
     "realign_effect",
     "refresh_tables",
     "refresh_tables_threads",
+    "start_threads",
     "test_batch",
     "test_batch_threads",
 ]

@@ -47,6 +47,7 @@ from scas_env.learning_kernel import (
     learn_batch_threads,
     refresh_tables,
     refresh_tables_threads,
+    start_threads,
     test_batch,
     test_batch_threads,
 )
@@ -129,6 +130,8 @@ class ScasMaintenanceVectorEnv(VectorEnv):
         n = _check_num_envs(num_envs)
         #: threads of the batched filter kernels (1: serial)
         self.kernel_threads = check_kernel_threads(kernel_threads)
+        if self.kernel_threads > 1:
+            start_threads()
         self.envs = [ScasMaintenanceEnv(**kwargs) for _ in range(n)]
         first = self.envs[0]
         if first.scenario.fidelity != "surrogate":
