@@ -40,6 +40,7 @@ from __future__ import annotations
 
 import math
 import os
+import sys
 import warnings
 
 import numba
@@ -524,15 +525,28 @@ def start_threads() -> None:
     """Start numba's threads for the threaded kernels (a vector env with ``kernel_threads``
     > 1 calls it when made): if they are not running yet, GNU OpenMP's idle threads are
     first told to wait passively (``OMP_WAIT_POLICY=PASSIVE`` unless the environment sets
-    it; libgomp reads it when numba loads it). Its default, spinning for a while after each
+    it; libgomp reads it when it is loaded). Its default, spinning for a while after each
     parallel call, made the threaded kernels 10x slower than the serial ones on this 2-core
     machine under load (the spinning thread takes the core the Python thread needs;
-    docs/speed.md). Threads already running keep their policy."""
+    docs/speed.md). Too late when torch is imported already: its own libgomp (loaded
+    globally) then runs numba's parallel regions with the policy it read at torch's import;
+    a UserWarning says so unless ``OMP_WAIT_POLICY`` was set (set it before importing torch,
+    as ``scripts/bench_sb3.py`` does). Threads already running keep their policy."""
     from numba.np.ufunc import parallel
 
-    if not parallel._is_initialized:
-        os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
-        numba.get_num_threads()
+    if parallel._is_initialized:
+        return
+    if "torch" in sys.modules and "OMP_WAIT_POLICY" not in os.environ:
+        warnings.warn(
+            "kernel_threads > 1 with torch imported before OMP_WAIT_POLICY was set: numba's "
+            "threads may run on torch's GNU OpenMP with its default spinning wait, which "
+            "made the threaded filter kernels up to 10x slower on a loaded machine. Set "
+            "OMP_WAIT_POLICY=PASSIVE before importing torch (docs/speed.md).",
+            UserWarning,
+            stacklevel=3,
+        )
+    os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
+    numba.get_num_threads()
 
 
 def chunk_count(n_rows: int, threads: int) -> int:
