@@ -490,10 +490,13 @@ def test_batch(
         _refresh(e, s, bank, out, work, tables, model)
 
 
-#: Fewest rows per chunk for which a parallel call pays (below: fewer chunks, or the serial
-#: kernel). A row costs 30-100 us (module docstring of docs/speed.md), a parallel region
-#: ~10 us to start on this machine: measured by ``scripts/bench_env.py`` (docs/speed.md).
-MIN_ROWS_PER_CHUNK = 1
+#: Fewest rows per chunk for which a parallel call pays (fewer rows: fewer chunks, or the
+#: serial kernel). Measured (:func:`scas_env.studies.env_speed.kernel_call_overhead`;
+#: docs/speed.md, "Filter kernels on threads"): a parallel call with idle threads waiting
+#: passively costs 12-85 us more than a serial one (5.5 us) on this shared 2-core VM (the
+#: more the load, the more), a row 68-99 us; two rows split in two would save ~40 us at
+#: best, four rows ~170 us.
+MIN_ROWS_PER_CHUNK = 2
 
 
 #: "forked": this process was forked from one whose numba threads run on GNU OpenMP (not

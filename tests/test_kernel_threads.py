@@ -170,16 +170,18 @@ def test_chunk_bounds_cover_the_rows_in_order() -> None:
 
 
 def test_chunk_count_respects_numba_threads() -> None:
+    least = learning_kernel.MIN_ROWS_PER_CHUNK
     assert chunk_count(64, 1) == 1
-    assert chunk_count(1, 4) == 1
+    assert chunk_count(2 * least - 1, 4) == 1  # too few rows for two chunks: serial
     with single_threaded():  # a worker's settings: numba.set_num_threads(1)
         assert chunk_count(64, 4) == 1
     available = numba.get_num_threads()
-    assert chunk_count(64, 64) == available
+    assert chunk_count(64 * least, 64) == available
     if available >= 2:
         numba.set_num_threads(2)
         try:
-            assert chunk_count(64, 8) == 2 and chunk_count(3, 2) == 2
+            assert chunk_count(64, 8) == 2 and chunk_count(2 * least, 2) == 2
+            assert chunk_count(3 * least - 1, 3) == 2  # at least `least` rows a chunk
         finally:
             numba.set_num_threads(available)
 

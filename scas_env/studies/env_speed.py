@@ -218,6 +218,31 @@ def kernel_threads_rates(
     return out
 
 
+def kernel_call_overhead(num_envs: int = 64, n_rows: int = 6, n_calls: int = 2000) -> dict:
+    """Microseconds per call of the learning kernel with nothing to do (no actuator's batch
+    is full: each row is skipped), serial (:func:`~scas_env.learning_kernel.learn_batch`) and
+    on two chunks (``learn_batch_threads``): the fixed cost of a call, best of 5 x
+    ``n_calls``, on the bank of a v2 vector env of ``num_envs`` after 5 flights."""
+    from scas_env.learning_kernel import learn_batch, learn_batch_threads, start_threads
+    from scas_env.vector_env import ScasMaintenanceVectorEnv
+
+    start_threads()
+    env = ScasMaintenanceVectorEnv(num_envs, **scas_env.V2_KWARGS)
+    env.reset(seed=0)
+    for _ in range(5):
+        env.step(np.zeros(num_envs, dtype=np.int64))
+    env.a["flight_count"][:] = 0
+    idx = np.arange(n_rows, dtype=np.int64)
+    args = (idx, idx, *env._kernel_io(idx), np.zeros(0, dtype=np.bool_))
+    out = {}
+    for name, call in (
+        ("serial", lambda: learn_batch(*args)),
+        ("2 chunks", lambda: learn_batch_threads(*args, 2)),
+    ):
+        out[name] = _per_call(call, n_calls, repeats=5) * 1e6
+    return out
+
+
 def format_timings(timings: list[Timing]) -> str:
     lines = [
         f"{'what':42s} {'per call':>12s} {'reference':>22s} {'ref per call':>12s} {'ratio':>7s}"
