@@ -229,8 +229,11 @@ class ScasMaintenanceVectorEnv(VectorEnv):
     def __setstate__(self, state: dict[str, Any]) -> None:
         """After ``pickle`` or ``copy.deepcopy``: each actuator's normal buffers become rows
         of the tables again (a copy turns numpy views into separate arrays with the same
-        numbers; the fast path reads the tables, the slow path the buffers)."""
+        numbers; the fast path reads the tables, the slow path the buffers). With
+        ``kernel_threads`` > 1, numba's threads are started as when the env was made."""
         self.__dict__.update(state)
+        if self.kernel_threads > 1:
+            start_threads()
         for e, env in enumerate(self.envs):
             env.buffer_storage = {s: (self._buf[s][e], self._pos[s][e]) for s in _STREAMS}
             env.world.buffer_storage = env.buffer_storage

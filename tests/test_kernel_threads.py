@@ -15,7 +15,12 @@ parallel calls happened.
 from __future__ import annotations
 
 import multiprocessing
+import os
+import pickle
+import subprocess
+import sys
 import warnings
+from pathlib import Path
 from typing import Any
 
 import numba
@@ -114,6 +119,62 @@ def test_threads_give_the_serial_numbers(chunk_spy, threads: int, force: int | N
     assert parallel_calls >= 100, seen  # the threaded kernels ran
     if force is not None:
         assert any(k == 3 for k in seen)
+
+
+def test_a_pickled_threaded_env_continues_with_the_serial_numbers(chunk_spy) -> None:
+    seen = chunk_spy(3)
+    n = 8
+    threaded = ScasMaintenanceVectorEnv(n, kernel_threads=3, **_KW)
+    serial = ScasMaintenanceVectorEnv(n, **_KW)
+    threaded.reset(seed=9)
+    serial.reset(seed=9)
+    rng = np.random.default_rng(1)
+    for _ in range(60):
+        actions = rng.choice(4, size=n, p=_MIX)
+        threaded.step(actions)
+        serial.step(actions)
+    copy = pickle.loads(pickle.dumps(threaded))
+    assert copy.kernel_threads == 3
+    for t in range(60):
+        actions = rng.choice(4, size=n, p=_MIX)
+        assert_bits_equal(copy.step(actions), serial.step(actions), f"after pickling, {t}")
+    _assert_states_equal(copy, serial, "end")
+    assert sum(k > 1 for k in seen) >= 20, seen
+
+
+def _python(code: str, **env: str) -> subprocess.CompletedProcess:
+    environ = {k: v for k, v in os.environ.items() if k != "OMP_WAIT_POLICY"}
+    return subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, timeout=300,
+        env={**environ, "PYTHONPATH": str(Path(__file__).parents[1]), **env},
+    )  # fmt: skip
+
+
+_MAKE_THREADED = (
+    "import os, warnings\n"
+    "warnings.simplefilter('always')\n"
+    "from scas_env import V2_KWARGS\n"
+    "from scas_env.vector_env import ScasMaintenanceVectorEnv\n"
+    "ScasMaintenanceVectorEnv(2, kernel_threads=2, **V2_KWARGS)\n"
+    "print('policy', os.environ.get('OMP_WAIT_POLICY'))\n"
+)
+
+
+def test_threads_start_with_a_passive_openmp_wait() -> None:
+    """A threaded env starts numba's threads with OMP_WAIT_POLICY=PASSIVE unless set; with
+    torch imported first (its libgomp runs numba's regions) it warns, unless the policy was
+    set before."""
+    plain = _python(_MAKE_THREADED)
+    assert plain.returncode == 0, plain.stderr
+    assert "policy PASSIVE" in plain.stdout and "OMP_WAIT_POLICY" not in plain.stderr
+    mine = _python(_MAKE_THREADED, OMP_WAIT_POLICY="ACTIVE")
+    assert "policy ACTIVE" in mine.stdout and "OMP_WAIT_POLICY" not in mine.stderr
+    pytest.importorskip("torch")
+    late = _python("import torch\n" + _MAKE_THREADED)
+    assert late.returncode == 0, late.stderr
+    assert "torch imported before OMP_WAIT_POLICY was set" in late.stderr
+    early = _python("import torch\n" + _MAKE_THREADED, OMP_WAIT_POLICY="PASSIVE")
+    assert early.returncode == 0 and "OMP_WAIT_POLICY" not in early.stderr, early.stderr
 
 
 def test_stale_tables_refreshed_on_threads(chunk_spy) -> None:
