@@ -20,6 +20,7 @@ import pickle
 import subprocess
 import sys
 import warnings
+from collections import Counter
 from pathlib import Path
 from typing import Any
 
@@ -37,6 +38,8 @@ from scas_env.vector_env import ScasMaintenanceVectorEnv, make_vector_env
 _KW = {**V2_KWARGS, "initial_health": "random", "episode_slots": 120}
 #: (fly, test_and_fly, replace_spring, replace_seal): many tests, some replacements
 _MIX = [0.6, 0.36, 0.02, 0.02]
+#: mostly flights: full in-flight batches of many actuators at once
+_FLY_MOSTLY = [0.95, 0.03, 0.01, 0.01]
 
 
 def assert_bits_equal(a: Any, b: Any, where: str) -> None:
@@ -77,29 +80,48 @@ def _assert_states_equal(threaded: ScasMaintenanceVectorEnv, serial: ScasMainten
 
 
 @pytest.fixture
-def chunk_spy(monkeypatch: pytest.MonkeyPatch):
-    """Record the chunk counts the vector env chose; ``force=T``: use min(T, rows) chunks
-    whatever numba's thread count (uneven chunks on any machine)."""
-    seen: list[int] = []
+def kernel_spy(monkeypatch: pytest.MonkeyPatch):
+    """Count the vector env's calls of each threaded kernel by its number of chunks;
+    ``force=T``: an env with ``kernel_threads`` > 1 uses min(T, rows) chunks whatever numba's
+    thread count (uneven chunks on any machine); a serial env stays serial."""
+    calls: Counter = Counter()
 
-    def install(force: int | None) -> list[int]:
-        def spy(n_rows: int, threads: int) -> int:
-            k = chunk_count(n_rows, threads) if force is None else max(1, min(force, n_rows))
-            seen.append(k)
-            return k
+    def install(force: int | None) -> Counter:
+        def chunks(n_rows: int, threads: int) -> int:
+            if force is None or threads == 1:
+                return chunk_count(n_rows, threads)
+            return max(1, min(force, n_rows))
 
-        monkeypatch.setattr(vector_env_module, "chunk_count", spy)
-        return seen
+        monkeypatch.setattr(vector_env_module, "chunk_count", chunks)
+        for name in ("learn_batch_threads", "test_batch_threads", "refresh_tables_threads"):
+            kernel = getattr(vector_env_module, name)
+
+            def counted(*args: Any, kernel: Any = kernel, name: str = name) -> None:
+                calls[name, args[-1]] += 1
+                kernel(*args)
+
+            monkeypatch.setattr(vector_env_module, name, counted)
+        return calls
 
     return install
 
 
+def _threaded_calls(calls: Counter, kernel: str) -> int:
+    return sum(n for (name, k), n in calls.items() if name == kernel and k > 1)
+
+
+def _actions(rng: np.random.Generator, t: int, n: int) -> np.ndarray:
+    """Many tests (batched test updates) for 150 steps, then mostly flights (in-flight
+    learning updates of many actuators at once)."""
+    return rng.choice(4, size=n, p=_MIX if t < 150 else _FLY_MOSTLY)
+
+
 @pytest.mark.parametrize("threads, force", [(2, None), (3, 3)])
-def test_threads_give_the_serial_numbers(chunk_spy, threads: int, force: int | None) -> None:
+def test_threads_give_the_serial_numbers(kernel_spy, threads: int, force: int | None) -> None:
     if force is None and numba.get_num_threads() < 2:
         pytest.skip("numba runs one thread here: the env would call the serial kernels")
-    seen = chunk_spy(force)
-    n = 16
+    calls = kernel_spy(force)
+    n = 48
     threaded = ScasMaintenanceVectorEnv(n, kernel_threads=threads, **_KW)
     serial = ScasMaintenanceVectorEnv(n, **_KW)
     assert serial.kernel_threads == 1 and threaded.kernel_threads == threads
@@ -107,7 +129,7 @@ def test_threads_give_the_serial_numbers(chunk_spy, threads: int, force: int | N
     rng = np.random.default_rng(11)
     ends = 0
     for t in range(300):
-        actions = rng.choice(4, size=n, p=_MIX)
+        actions = _actions(rng, t, n)
         out_t, out_s = threaded.step(actions), serial.step(actions)
         assert_bits_equal(out_t, out_s, f"step {t}")
         ends += int(np.sum(out_s[2] | out_s[3]))
@@ -115,31 +137,32 @@ def test_threads_give_the_serial_numbers(chunk_spy, threads: int, force: int | N
             _assert_states_equal(threaded, serial, f"step {t}")
     _assert_states_equal(threaded, serial, "end")
     assert ends >= n  # autoresets (new filters attached to the bank) happened
-    parallel_calls = sum(k > 1 for k in seen)
-    assert parallel_calls >= 100, seen  # the threaded kernels ran
+    # both threaded kernels ran, many times (the serial env never calls them)
+    assert _threaded_calls(calls, "test_batch_threads") >= 100, calls
+    assert _threaded_calls(calls, "learn_batch_threads") >= 20, calls
     if force is not None:
-        assert any(k == 3 for k in seen)
+        assert calls["test_batch_threads", 3] > 0 and calls["learn_batch_threads", 3] > 0
 
 
-def test_a_pickled_threaded_env_continues_with_the_serial_numbers(chunk_spy) -> None:
-    seen = chunk_spy(3)
-    n = 8
+def test_a_pickled_threaded_env_continues_with_the_serial_numbers(kernel_spy) -> None:
+    calls = kernel_spy(3)
+    n = 24
     threaded = ScasMaintenanceVectorEnv(n, kernel_threads=3, **_KW)
     serial = ScasMaintenanceVectorEnv(n, **_KW)
     threaded.reset(seed=9)
     serial.reset(seed=9)
     rng = np.random.default_rng(1)
-    for _ in range(60):
-        actions = rng.choice(4, size=n, p=_MIX)
+    for t in range(60):
+        actions = _actions(rng, t, n)
         threaded.step(actions)
         serial.step(actions)
     copy = pickle.loads(pickle.dumps(threaded))
     assert copy.kernel_threads == 3
     for t in range(60):
-        actions = rng.choice(4, size=n, p=_MIX)
+        actions = _actions(rng, 150 + t, n)
         assert_bits_equal(copy.step(actions), serial.step(actions), f"after pickling, {t}")
     _assert_states_equal(copy, serial, "end")
-    assert sum(k > 1 for k in seen) >= 20, seen
+    assert _threaded_calls(calls, "learn_batch_threads") >= 5, calls
 
 
 def _python(code: str, **env: str) -> subprocess.CompletedProcess:
@@ -177,10 +200,10 @@ def test_threads_start_with_a_passive_openmp_wait() -> None:
     assert early.returncode == 0 and "OMP_WAIT_POLICY" not in early.stderr, early.stderr
 
 
-def test_stale_tables_refreshed_on_threads(chunk_spy) -> None:
+def test_stale_tables_refreshed_on_threads(kernel_spy) -> None:
     """The decision-epoch vector env (learning updates leave stale RUL tables, rebuilt by
     ``refresh_tables_threads`` on read) with 3 forced chunks against the serial one."""
-    seen = chunk_spy(3)
+    calls = kernel_spy(3)
     n = 12
     threaded = DecisionEpochsVectorEnv(n, kernel_threads=3, **_KW)
     serial = DecisionEpochsVectorEnv(n, **_KW)
@@ -193,7 +216,8 @@ def test_stale_tables_refreshed_on_threads(chunk_spy) -> None:
         actions = np.array([rng.choice(np.flatnonzero(m)) for m in masks])
         assert_bits_equal(threaded.step(actions), serial.step(actions), f"decision {t}")
     _assert_states_equal(threaded.inner, serial.inner, "end")
-    assert sum(k > 1 for k in seen) >= 20, seen
+    assert _threaded_calls(calls, "refresh_tables_threads") >= 10, calls
+    assert _threaded_calls(calls, "learn_batch_threads") >= 10, calls
 
 
 def test_make_vec_passes_kernel_threads() -> None:
