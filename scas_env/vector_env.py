@@ -230,8 +230,11 @@ class ScasMaintenanceVectorEnv(VectorEnv):
         """After ``pickle`` or ``copy.deepcopy``: each actuator's normal buffers become rows
         of the tables again (a copy turns numpy views into separate arrays with the same
         numbers; the fast path reads the tables, the slow path the buffers). With
-        ``kernel_threads`` > 1, numba's threads are started as when the env was made."""
-        self.__dict__.update(state)
+        ``kernel_threads`` > 1, numba's threads are started as when the env was made (an env
+        pickled before the option existed is serial)."""
+        self.__dict__.update({"kernel_threads": 1, **state})
+        if not hasattr(self._stale_tables, "kernel_threads"):
+            self._stale_tables.kernel_threads = self.kernel_threads
         if self.kernel_threads > 1:
             start_threads()
         for e, env in enumerate(self.envs):

@@ -165,6 +165,15 @@ def test_a_pickled_threaded_env_continues_with_the_serial_numbers(kernel_spy) ->
     assert _threaded_calls(calls, "learn_batch_threads") >= 5, calls
 
 
+def test_an_env_pickled_before_the_option_loads_serial() -> None:
+    env = ScasMaintenanceVectorEnv(2, **_KW)
+    env.reset(seed=0)
+    del env.kernel_threads, env._stale_tables.kernel_threads  # as pickled before the option
+    old = pickle.loads(pickle.dumps(env))
+    assert old.kernel_threads == 1 and old._stale_tables.kernel_threads == 1
+    old.step(np.ones(2, dtype=np.int64))
+
+
 def _python(code: str, **env: str) -> subprocess.CompletedProcess:
     environ = {k: v for k, v in os.environ.items() if k != "OMP_WAIT_POLICY"}
     return subprocess.run(
