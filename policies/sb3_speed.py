@@ -12,7 +12,9 @@ with one torch thread and the same hyper-parameters (:data:`FPS_CONFIGS`):
 - ``epochs-dummy-4``: MaskablePPO on 4 decision-epoch v2 envs in ``DummyVecEnv`` (the setup of
   ``policies.epoch_training``); ``epochs-native-64``: MaskablePPO on
   ``NativeVecEnv(DecisionEpochsVectorEnv(64, **V2_KWARGS))``. Their frames are flights (a
-  decision flies k of them), counted from ``info["epoch_slots"]``.
+  decision flies k of them), counted from ``info["epoch_slots"]``; ``epochs-native-64-t2``:
+  the same with the vector env's filter kernels on two threads (``kernel_threads=2``: the
+  same numbers; torch keeps its one thread, so only the env's kernels differ).
 
 Frames per second = env steps summed over envs / wall time of ``model.learn``. Runs alternate
 between the setups (A, B, A, B, ...) so a drift of the machine's speed (it is shared) hits
@@ -40,7 +42,14 @@ from scas_env import ENV_ID
 FPS_CONFIGS = ("sb3-default", "project")
 #: setups, the first is the baseline of the speed-ups; ``epochs-*``: MaskablePPO on decision
 #: epochs over v2 (``ScasMaintenanceEpochs-v1``), frames = flights flown
-SETUPS = ("dummy-4", "native-64", "cartpole-4", "epochs-dummy-4", "epochs-native-64")
+SETUPS = (
+    "dummy-4",
+    "native-64",
+    "cartpole-4",
+    "epochs-dummy-4",
+    "epochs-native-64",
+    "epochs-native-64-t2",
+)
 
 __all__ = [
     "FPS_CONFIGS",
@@ -88,12 +97,15 @@ def make_setup(label: str, seed: int = 0) -> Any:
         venv = _flight_counter(
             make_vec_env(make_epoch_env, n_envs=4, seed=seed, env_kwargs=V2_KWARGS)
         )
-    elif label == "epochs-native-64":
+    elif label in ("epochs-native-64", "epochs-native-64-t2"):
         from policies.sb3_vec_env import NativeVecEnv
         from scas_env import ENV_ID_EPOCHS_V2
 
         native = gym.make_vec(
-            ENV_ID_EPOCHS_V2, num_envs=64, vectorization_mode="vector_entry_point"
+            ENV_ID_EPOCHS_V2,
+            num_envs=64,
+            vectorization_mode="vector_entry_point",
+            kernel_threads=2 if label.endswith("-t2") else 1,
         )
         venv = _flight_counter(VecMonitor(NativeVecEnv(native, info_keys=("epoch_slots",))))
         venv.seed(seed)

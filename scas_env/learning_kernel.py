@@ -25,14 +25,27 @@ bilinear interpolation as the world draws features (``SurrogateModel.tables_at``
 Status codes of a row (``status[row]``): 0 ok; 1 a prediction left the representable range;
 2 a non-finite log-likelihood; 3 degenerate weights; 4 invalid RUL-table weights; 5 invalid
 RUL values (``STATUS_MESSAGES``).
+
+Threads: the rows are independent (each its own particles, random streams ``handles[e]``
+and output slots ``s``), so :func:`learn_batch_threads`, :func:`test_batch_threads` and
+:func:`refresh_tables_threads` split ``rows`` into contiguous chunks run in parallel
+(numba ``prange`` over the chunks, each with its own scratch) and give every number of the
+serial kernels bit for bit: the same rows, the same draws in the same order within a row.
+:func:`chunk_count` says how many chunks a call should use (1: call the serial kernel). The
+slots of one call must be distinct (they are: the vector env passes its actuators' rows),
+and no two rows may share a random stream (each actuator has its own Generator).
 """
 
 from __future__ import annotations
 
 import math
+import os
+import sys
+import warnings
 
+import numba
 import numpy as np
-from numba import njit
+from numba import njit, prange
 
 from prognostics.degradation_models import predict_particles
 from prognostics.particle_filter import (
@@ -477,16 +490,191 @@ def test_batch(
         _refresh(e, s, bank, out, work, tables, model)
 
 
+#: Fewest rows per chunk for which a parallel call pays (fewer rows: fewer chunks, or the
+#: serial kernel). Measured (:func:`scas_env.studies.env_speed.kernel_call_overhead`;
+#: docs/speed.md, "Filter kernels on threads"): a parallel call with idle threads waiting
+#: passively costs 12-85 us more than a serial one (5.5 us) on this shared 2-core VM (the
+#: more the load, the more), a row 68-99 us; two rows split in two would save ~40 us at
+#: best, four rows ~170 us.
+MIN_ROWS_PER_CHUNK = 2
+
+
+#: "forked": this process was forked from one whose numba threads run on GNU OpenMP (not
+#: fork-safe: numba terminates a forked child entering a parallel region), so the serial
+#: kernels run; "warned": the warning saying so was given.
+_FORK = {"forked": False, "warned": False}
+
+
+def _gnu_openmp_running() -> bool:
+    """Whether numba's threading layer is started here and is GNU OpenMP (libgomp)."""
+    from numba.np.ufunc import parallel
+
+    if not parallel._is_initialized or numba.threading_layer() != "omp":
+        return False
+    from numba.np.ufunc import omppool
+
+    return omppool.openmp_vendor == "GNU"
+
+
+def _note_fork() -> None:
+    if _gnu_openmp_running():
+        _FORK["forked"] = True
+
+
+os.register_at_fork(after_in_child=_note_fork)
+
+
+def start_threads() -> None:
+    """Start numba's threads for the threaded kernels (a vector env with ``kernel_threads``
+    > 1 calls it when made): if they are not running yet, GNU OpenMP's idle threads are
+    first told to wait passively (``OMP_WAIT_POLICY=PASSIVE`` unless the environment sets
+    it; libgomp reads it when it is loaded). Its default, spinning for a while after each
+    parallel call, made the threaded kernels 10x slower than the serial ones on this 2-core
+    machine under load (the spinning thread takes the core the Python thread needs;
+    docs/speed.md). Too late when torch is imported already: its own libgomp (loaded
+    globally) then runs numba's parallel regions with the policy it read at torch's import;
+    a UserWarning says so unless ``OMP_WAIT_POLICY`` was set (set it before importing torch,
+    as ``scripts/bench_sb3.py`` does). Threads already running keep their policy."""
+    from numba.np.ufunc import parallel
+
+    if parallel._is_initialized:
+        return
+    if "torch" in sys.modules and "OMP_WAIT_POLICY" not in os.environ:
+        warnings.warn(
+            "kernel_threads > 1 with torch imported before OMP_WAIT_POLICY was set: numba's "
+            "threads may run on torch's GNU OpenMP with its default spinning wait, which "
+            "made the threaded filter kernels up to 10x slower on a loaded machine. Set "
+            "OMP_WAIT_POLICY=PASSIVE before importing torch (docs/speed.md).",
+            UserWarning,
+            stacklevel=3,
+        )
+    os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
+    numba.get_num_threads()
+
+
+def chunk_count(n_rows: int, threads: int) -> int:
+    """Chunks a kernel call over ``n_rows`` rows runs in with ``threads`` asked for: at most
+    ``threads``, numba's current thread count (``numba.get_num_threads()``, which
+    :func:`scas_env.parallel.single_thread` sets to 1 in workers) and one per
+    :data:`MIN_ROWS_PER_CHUNK` rows; 1 means the serial kernel (numba's threads are not even
+    queried when ``threads`` is 1). Also 1, with a RuntimeWarning once, in a process forked
+    (``multiprocessing``'s "fork") from one whose numba threads run on GNU OpenMP: libgomp
+    is not fork-safe (start such workers with "spawn" or "forkserver", as
+    :mod:`scas_env.parallel` and SB3's ``SubprocVecEnv`` do)."""
+    if threads <= 1 or n_rows < 2 * MIN_ROWS_PER_CHUNK:
+        return 1
+    if _FORK["forked"]:
+        if not _FORK["warned"]:
+            _FORK["warned"] = True
+            warnings.warn(
+                f"kernel_threads = {threads}: this process was forked from one running numba's "
+                "threads on GNU OpenMP (not fork-safe); the filter kernels run serially here "
+                "(the same numbers). Start workers with 'spawn' or 'forkserver'.",
+                RuntimeWarning,
+                stacklevel=2,
+            )
+        return 1
+    return max(1, min(threads, numba.get_num_threads(), n_rows // MIN_ROWS_PER_CHUNK))
+
+
+@njit(cache=True)
+def chunk_bounds(n_rows: int, n_chunks: int) -> np.ndarray:
+    """Bounds of ``n_chunks`` contiguous chunks of ``n_rows`` rows, sizes differing by at
+    most one: chunk c is ``[b[c], b[c + 1])``.
+
+    >>> chunk_bounds(7, 3).tolist()
+    [0, 2, 4, 7]
+    """
+    bounds = np.empty(n_chunks + 1, dtype=np.int64)
+    for c in range(n_chunks + 1):
+        bounds[c] = (c * n_rows) // n_chunks
+    return bounds
+
+
+# The threaded kernels box their tuple arguments in a one-item list before the ``prange``:
+# numba runs a parallel loop's body as a gufunc, whose arguments cannot be nested tuples
+# (numba issue #9098: "scalar type Tuple(...) given for non scalar argument"); a list
+# holding them is one opaque argument, unpacked inside the body (the same arrays, nothing
+# copied).
+
+
+@njit(cache=True, parallel=True)
+def learn_batch_threads(
+    rows: np.ndarray,
+    slots: np.ndarray,
+    state: tuple,
+    out: tuple,
+    bank: tuple,
+    handles: np.ndarray,
+    tables: tuple,
+    model: tuple,
+    stale: np.ndarray,
+    n_chunks: int,
+) -> None:
+    """:func:`learn_batch` on ``n_chunks`` contiguous chunks of the rows in parallel (the same
+    numbers; module docstring)."""
+    bounds = chunk_bounds(rows.size, n_chunks)
+    boxed = [(state, out, bank, tables, model)]  # nested tuples: see above
+    for c in prange(n_chunks):
+        lo, hi = bounds[c], bounds[c + 1]
+        st, ou, ba, ta, mo = boxed[0]
+        learn_batch(rows[lo:hi], slots[lo:hi], st, ou, ba, handles, ta, mo, stale)
+
+
+@njit(cache=True, parallel=True)
+def refresh_tables_threads(
+    rows: np.ndarray, slots: np.ndarray, status: np.ndarray, bank: tuple, tables: tuple,
+    model: tuple, stale: np.ndarray, n_chunks: int,
+) -> None:  # fmt: skip
+    """:func:`refresh_tables` on ``n_chunks`` contiguous chunks of the rows in parallel."""
+    bounds = chunk_bounds(rows.size, n_chunks)
+    boxed = [(bank, tables, model)]  # nested tuples: see above
+    for c in prange(n_chunks):
+        lo, hi = bounds[c], bounds[c + 1]
+        ba, ta, mo = boxed[0]
+        refresh_tables(rows[lo:hi], slots[lo:hi], status, ba, ta, mo, stale)
+
+
+@njit(cache=True, parallel=True)
+def test_batch_threads(
+    rows: np.ndarray,
+    slots: np.ndarray,
+    ground: np.ndarray,
+    corrected: np.ndarray,
+    state: tuple,
+    out: tuple,
+    bank: tuple,
+    handles: np.ndarray,
+    tables: tuple,
+    model: tuple,
+    n_chunks: int,
+) -> None:
+    """:func:`test_batch` on ``n_chunks`` contiguous chunks of the rows in parallel."""
+    bounds = chunk_bounds(rows.size, n_chunks)
+    boxed = [(state, out, bank, tables, model)]  # nested tuples: see above
+    for c in prange(n_chunks):
+        lo, hi = bounds[c], bounds[c + 1]
+        st, ou, ba, ta, mo = boxed[0]
+        test_batch(rows[lo:hi], slots[lo:hi], ground, corrected, st, ou, ba, handles, ta, mo)
+
+
 __all__ = [
+    "MIN_ROWS_PER_CHUNK",
     "SLOPE_STEP",
     "STATUS_MESSAGES",
     "bilinear_at",
     "cell_of",
+    "chunk_bounds",
+    "chunk_count",
     "effect_at",
     "effect_likelihood",
     "fraction_moments",
     "learn_batch",
+    "learn_batch_threads",
     "realign_effect",
     "refresh_tables",
+    "refresh_tables_threads",
+    "start_threads",
     "test_batch",
+    "test_batch_threads",
 ]

@@ -41,7 +41,16 @@ from scas_env.fleet_kernels import (
     surrogate_flights,
 )
 from scas_env.info import build_info
-from scas_env.learning_kernel import learn_batch, refresh_tables, test_batch
+from scas_env.learning_kernel import (
+    chunk_count,
+    learn_batch,
+    learn_batch_threads,
+    refresh_tables,
+    refresh_tables_threads,
+    start_threads,
+    test_batch,
+    test_batch_threads,
+)
 from scas_env.monitor import FleetRowTables, learning_features, raise_status
 from scas_env.world import GROUND_FEATURES, PARTS
 
@@ -59,6 +68,20 @@ def make_vector_env(num_envs: int, **kwargs: Any) -> VectorEnv:
     return ScasMaintenanceVectorEnv(num_envs, **kwargs)
 
 
+def check_kernel_threads(kernel_threads: Any) -> int:
+    """``kernel_threads`` of the vector envs: an integer >= 1 (ValueError otherwise)."""
+    if (
+        isinstance(kernel_threads, bool)
+        or not isinstance(kernel_threads, int | np.integer)
+        or kernel_threads < 1
+    ):
+        raise ValueError(
+            f"kernel_threads = {kernel_threads!r} must be an integer >= 1 (the threads of the "
+            "batched filter kernels; 1: serial)"
+        )
+    return int(kernel_threads)
+
+
 def _check_num_envs(num_envs: Any) -> int:
     if isinstance(num_envs, bool) or not isinstance(num_envs, int | np.integer) or num_envs < 1:
         raise ValueError(f"num_envs = {num_envs!r} must be an integer >= 1")
@@ -67,10 +90,13 @@ def _check_num_envs(num_envs: Any) -> int:
 
 class ScasMaintenanceSyncVectorEnv(SyncVectorEnv):
     """``num_envs`` copies of :class:`ScasMaintenanceEnv` stepped one after the other (the
-    physics fidelity's vector env), with the native vector env's surface."""
+    physics fidelity's vector env), with the native vector env's surface. ``kernel_threads``
+    is checked as the native env's and has no effect here (each env's filters are updated
+    on their own, a batch of one)."""
 
-    def __init__(self, num_envs: int, **kwargs: Any) -> None:
+    def __init__(self, num_envs: int, kernel_threads: int = 1, **kwargs: Any) -> None:
         n = _check_num_envs(num_envs)
+        self.kernel_threads = check_kernel_threads(kernel_threads)
         super().__init__(
             [partial(ScasMaintenanceEnv, **kwargs)] * n, autoreset_mode=AutoresetMode.NEXT_STEP
         )
@@ -91,12 +117,21 @@ class ScasMaintenanceSyncVectorEnv(SyncVectorEnv):
 
 
 class ScasMaintenanceVectorEnv(VectorEnv):
-    """N surrogate actuators in arrays (module docstring); keywords as the single env."""
+    """N surrogate actuators in arrays (module docstring); keywords as the single env, and
+    ``kernel_threads``: the threads of the batched filter kernels (the pre-flight tests'
+    and in-flight learning updates of all actuators due in a step). 1 (default): the serial
+    kernels; T > 1: their rows split into up to T chunks updated in parallel
+    (:func:`~scas_env.learning_kernel.chunk_count`: never more than numba's current thread
+    count), every number the same as with 1 (tested bit for bit)."""
 
     metadata = {"autoreset_mode": AutoresetMode.NEXT_STEP}  # noqa: RUF012
 
-    def __init__(self, num_envs: int, **kwargs: Any) -> None:
+    def __init__(self, num_envs: int, kernel_threads: int = 1, **kwargs: Any) -> None:
         n = _check_num_envs(num_envs)
+        #: threads of the batched filter kernels (1: serial)
+        self.kernel_threads = check_kernel_threads(kernel_threads)
+        if self.kernel_threads > 1:
+            start_threads()
         self.envs = [ScasMaintenanceEnv(**kwargs) for _ in range(n)]
         first = self.envs[0]
         if first.scenario.fidelity != "surrogate":
@@ -162,7 +197,7 @@ class ScasMaintenanceVectorEnv(VectorEnv):
         tables = self._tables_rul()
         #: rows whose RUL tables a learning update left to be rebuilt before a read (steps
         #: without outputs, as the decision-epoch env's: the next update may replace them)
-        self._stale_tables = StaleTables(n, tables)
+        self._stale_tables = StaleTables(n, tables, self.kernel_threads)
         self._stale = self._stale_tables.stale
         self._held = [
             (
@@ -194,8 +229,14 @@ class ScasMaintenanceVectorEnv(VectorEnv):
     def __setstate__(self, state: dict[str, Any]) -> None:
         """After ``pickle`` or ``copy.deepcopy``: each actuator's normal buffers become rows
         of the tables again (a copy turns numpy views into separate arrays with the same
-        numbers; the fast path reads the tables, the slow path the buffers)."""
-        self.__dict__.update(state)
+        numbers; the fast path reads the tables, the slow path the buffers). With
+        ``kernel_threads`` > 1, numba's threads are started as when the env was made (an env
+        pickled before the option existed is serial)."""
+        self.__dict__.update({"kernel_threads": 1, **state})
+        if not hasattr(self._stale_tables, "kernel_threads"):
+            self._stale_tables.kernel_threads = self.kernel_threads
+        if self.kernel_threads > 1:
+            start_threads()
         for e, env in enumerate(self.envs):
             env.buffer_storage = {s: (self._buf[s][e], self._pos[s][e]) for s in _STREAMS}
             env.world.buffer_storage = env.buffer_storage
@@ -456,7 +497,11 @@ class ScasMaintenanceVectorEnv(VectorEnv):
         )  # fmt: skip
         # the monitors
         corrected = sc["corrected"]
-        test_batch(idx, idx, ground, corrected, *self._kernel_io(idx))
+        chunks = chunk_count(idx.size, self.kernel_threads)
+        if chunks == 1:
+            test_batch(idx, idx, ground, corrected, *self._kernel_io(idx))
+        else:
+            test_batch_threads(idx, idx, ground, corrected, *self._kernel_io(idx), chunks)
         self._stale[idx] = False  # the test rebuilt the tables
         self._adopt(idx)
         envs = self.envs
@@ -503,7 +548,12 @@ class ScasMaintenanceVectorEnv(VectorEnv):
                 self.envs[e].monitor.learn_from_flights()
                 self._pull(e)
             return
-        learn_batch(due, due, *self._kernel_io(due), self._stale if defer else _REFRESH_NOW)
+        stale = self._stale if defer else _REFRESH_NOW
+        chunks = chunk_count(due.size, self.kernel_threads)
+        if chunks == 1:
+            learn_batch(due, due, *self._kernel_io(due), stale)
+        else:
+            learn_batch_threads(due, due, *self._kernel_io(due), stale, chunks)
         self._adopt(due)
 
     def _kernel_io(self, idx: np.ndarray) -> tuple:
@@ -569,11 +619,13 @@ class StaleTables:
     (:func:`~scas_env.learning_kernel.learn_batch` with ``stale``), and what rebuilding
     them takes: the filters' bank, the monitors' shared ``learning_model`` and the fleet's
     ``rul_*`` tables. The holders of those tables (:class:`scas_env.monitor.FleetRowTables`)
-    call it before a read, without holding the vector env itself."""
+    call it before a read, without holding the vector env itself. ``kernel_threads``: as
+    the vector env's."""
 
-    __slots__ = ("bank", "model", "stale", "status", "tables")
+    __slots__ = ("bank", "kernel_threads", "model", "stale", "status", "tables")
 
-    def __init__(self, n: int, tables: tuple[np.ndarray, ...]) -> None:
+    def __init__(self, n: int, tables: tuple[np.ndarray, ...], kernel_threads: int = 1) -> None:
+        self.kernel_threads = kernel_threads
         self.stale = np.zeros(n, dtype=np.bool_)
         self.status = np.zeros(n, dtype=np.int64)
         self.tables = tables
@@ -594,7 +646,12 @@ class StaleTables:
         rows = np.flatnonzero(stale) if idx is None else idx[stale[idx]]
         if not rows.size:
             return
-        refresh_tables(rows, rows, self.status, self.bank.arrays, self.tables, self.model, stale)
+        args = (rows, rows, self.status, self.bank.arrays, self.tables, self.model, stale)
+        chunks = chunk_count(rows.size, self.kernel_threads)
+        if chunks == 1:
+            refresh_tables(*args)
+        else:
+            refresh_tables_threads(*args, chunks)
         for code in self.status[rows].tolist():
             raise_status(code)
 
@@ -635,6 +692,7 @@ __all__ = [
     "ScasMaintenanceSyncVectorEnv",
     "ScasMaintenanceVectorEnv",
     "StaleTables",
+    "check_kernel_threads",
     "expose_surface",
     "make_vector_env",
     "spaces",

@@ -148,13 +148,17 @@ def _epoch_rate(envs: gym.vector.VectorEnv, actions: np.ndarray) -> float:
 
 
 def vector_throughput(
-    num_envs: int = 64, n_steps: int = 200, n_decisions: int = 30
-) -> dict[str, float]:
+    num_envs: int = 64, n_steps: int = 200, n_decisions: int = 30, kernel_threads: int = 2,
+    rounds: int = 3,
+) -> dict[str, float]:  # fmt: skip
     """Env-steps per second of ``make_vec`` with ``num_envs`` environments per action mix,
     beside Gymnasium's natively vectorised CartPole (random actions) in the same run; and
     of the v2 decision-epoch vector env (``ScasMaintenanceEpochs-v1``) over ``n_decisions``
     decision steps, maintenance as the trained-policy mix, each epoch's length drawn
-    uniformly from its ``ks`` (env-steps = slots flown)."""
+    uniformly from its ``ks`` (env-steps = slots flown). Then both v2 envs on the 90/9/1 mix
+    with the filter kernels serial and on ``kernel_threads`` threads
+    (:class:`~scas_env.vector_env.ScasMaintenanceVectorEnv`), the same actions, measured
+    alternately over ``rounds`` rounds, best of each (:func:`kernel_threads_rates`)."""
     rng = np.random.default_rng(0)
     out = {}
     cart = gym.make_vec("CartPole-v1", num_envs=num_envs, vectorization_mode="vector_entry_point")
@@ -175,6 +179,67 @@ def vector_throughput(
     )
     ks = rng.integers(0, n_ks, size=maintenance.shape)
     out["v2 decision epochs: 90/9/1, k uniform"] = _epoch_rate(epochs, maintenance * n_ks + ks)
+    out.update(kernel_threads_rates(num_envs, n_steps, n_decisions, kernel_threads, rounds))
+    return out
+
+
+def kernel_threads_rates(
+    num_envs: int = 64, n_steps: int = 200, n_decisions: int = 30, kernel_threads: int = 2,
+    rounds: int = 3,
+) -> dict[str, float]:  # fmt: skip
+    """Env-steps per second of the v2 vector env (90/9/1 mix, ``n_steps`` steps) and of the
+    v2 decision-epoch vector env (as :func:`vector_throughput`'s) with ``kernel_threads=1``
+    and ``kernel_threads``, the same actions, alternating over ``rounds`` rounds (a shared
+    machine's load drifts), best of each; the threads' run is bit for bit the serial one
+    (tests/test_kernel_threads.py)."""
+    rng = np.random.default_rng(1)
+    mix = ACTION_MIXES["trained-policy mix (90/9/1)"]
+    actions = rng.choice(4, size=(n_steps + 10, num_envs), p=mix)
+    out: dict[str, float] = {}
+    for t in (1, kernel_threads):
+        out[f"v2: 90/9/1, kernel_threads={t}"] = 0.0
+        out[f"v2 decision epochs: 90/9/1, kernel_threads={t}"] = 0.0
+    envs, epochs = {}, {}
+    for t in (1, kernel_threads):
+        make = {"vectorization_mode": "vector_entry_point", "kernel_threads": t}
+        envs[t] = gym.make_vec(scas_env.ENV_ID_V2, num_envs=num_envs, **make)
+        epochs[t] = gym.make_vec(scas_env.ENV_ID_EPOCHS_V2, num_envs=num_envs, **make)
+    n_ks = len(epochs[1].ks)
+    maintenance = rng.choice(4, size=(n_decisions + 3, num_envs), p=mix)
+    decisions = maintenance * n_ks + rng.integers(0, n_ks, size=maintenance.shape)
+    for t in (1, kernel_threads):  # warm-up: numba's caches, its threads
+        _vector_rate(envs[t], actions[:20])
+    for _ in range(rounds):
+        for t in (1, kernel_threads):
+            key = f"v2: 90/9/1, kernel_threads={t}"
+            out[key] = max(out[key], _vector_rate(envs[t], actions))
+            key = f"v2 decision epochs: 90/9/1, kernel_threads={t}"
+            out[key] = max(out[key], _epoch_rate(epochs[t], decisions))
+    return out
+
+
+def kernel_call_overhead(num_envs: int = 64, n_rows: int = 6, n_calls: int = 2000) -> dict:
+    """Microseconds per call of the learning kernel with nothing to do (no actuator's batch
+    is full: each row is skipped), serial (:func:`~scas_env.learning_kernel.learn_batch`) and
+    on two chunks (``learn_batch_threads``): the fixed cost of a call, best of 5 x
+    ``n_calls``, on the bank of a v2 vector env of ``num_envs`` after 5 flights."""
+    from scas_env.learning_kernel import learn_batch, learn_batch_threads, start_threads
+    from scas_env.vector_env import ScasMaintenanceVectorEnv
+
+    start_threads()
+    env = ScasMaintenanceVectorEnv(num_envs, **scas_env.V2_KWARGS)
+    env.reset(seed=0)
+    for _ in range(5):
+        env.step(np.zeros(num_envs, dtype=np.int64))
+    env.a["flight_count"][:] = 0
+    idx = np.arange(n_rows, dtype=np.int64)
+    args = (idx, idx, *env._kernel_io(idx), np.zeros(0, dtype=np.bool_))
+    out = {}
+    for name, call in (
+        ("serial", lambda: learn_batch(*args)),
+        ("2 chunks", lambda: learn_batch_threads(*args, 2)),
+    ):
+        out[name] = _per_call(call, n_calls, repeats=5) * 1e6
     return out
 
 
