@@ -29,6 +29,7 @@ from policies.sb3_agents import require_contrib
 from scas_env import ENV_ID
 from scas_env.actuator.atomic_file import write_text_atomic
 from scas_env.decision_epochs import DEFAULT_KS, DecisionEpochs
+from scas_env.vector_env import check_kernel_threads
 
 #: id of the decision-epoch formulation in the hyper-parameter YAML files
 EPOCH_ENV_ID = "scas_env/ScasMaintenanceEpochs-v0"
@@ -137,9 +138,11 @@ def _native_epochs(
     ks: Sequence[int],
     scenario: dict[str, Any],
     delegate: DelegateSpec | None = None,
+    kernel_threads: int = 1,
 ) -> Any:
     """``num_envs`` decision-epoch actuators on the native vector env, monitored (one CSV,
-    ``monitor_dir/0.monitor.csv``), seeded ``seed + e``."""
+    ``monitor_dir/0.monitor.csv``), seeded ``seed + e``; ``kernel_threads``: the vector
+    env's (its filter kernels on threads, the same numbers)."""
     from stable_baselines3.common.vec_env import VecMonitor
 
     from policies.sb3_vec_env import NativeVecEnv
@@ -148,7 +151,10 @@ def _native_epochs(
     monitor_dir.mkdir(parents=True, exist_ok=True)
     rule = None if delegate is None else delegate.build(v0_obs_names(**scenario))
     native = NativeVecEnv(
-        DecisionEpochsVectorEnv(num_envs, ks=tuple(ks), delegate=rule, **scenario), info_keys=()
+        DecisionEpochsVectorEnv(
+            num_envs, ks=tuple(ks), delegate=rule, kernel_threads=kernel_threads, **scenario
+        ),
+        info_keys=(),
     )
     native.seed(seed)
     return VecMonitor(native, filename=str(monitor_dir / "0"))
@@ -206,6 +212,7 @@ def _prepared(
     native_envs: int | None,
     scenario: dict[str, Any],
     delegate: DelegateSpec | None = None,
+    kernel_threads: int = 1,
 ) -> tuple[Any, Any, int, bool, dict[str, Any]]:
     """The model, its (normalised) vector env, ``n_envs``, ``normalize`` and the algorithm
     keywords of one run (:func:`train_epochs`), seeded as documented there."""
@@ -245,7 +252,13 @@ def _prepared(
         )
     else:
         venv = _native_epochs(
-            native_envs, seed * 1000, out / "monitor", ks, scenario, delegate=delegate
+            native_envs,
+            seed * 1000,
+            out / "monitor",
+            ks,
+            scenario,
+            delegate=delegate,
+            kernel_threads=kernel_threads,
         )
         n_envs = venv.num_envs
     gamma = float(hp.get("gamma", 0.99))
@@ -290,6 +303,7 @@ def train_epochs(
     init: str | Path | None = None,
     freeze_normalization: bool | None = None,
     delegate: DelegateSpec | None = None,
+    kernel_threads: int = 1,
     **scenario: Any,
 ) -> Path:
     """Train one agent on decision epochs; returns ``out_dir``.
@@ -309,7 +323,9 @@ def train_epochs(
     (default: True with ``init``, else False; True needs ``init``): keep ``init``'s
     ``VecNormalize`` statistics fixed. ``delegate``: the rule the agent may hand ``k`` slots
     to (:mod:`policies.epoch_delegation`; default: the one ``init``'s ``clone.json`` records,
-    if any: the warm start's network has its actions). They (the statistics) are part of
+    if any: the warm start's network has its actions). ``kernel_threads`` (with
+    ``native_envs``): the vector env's filter kernels on that many threads (the same
+    numbers; :mod:`scas_env.vector_env`). They (the statistics) are part of
     the policy: the network acts on
     observations standardised by them, and letting them follow the training rollouts
     changes its actions without a gradient step (measured: the clone with the statistics a
@@ -343,6 +359,9 @@ def train_epochs(
     elif freeze_normalization and init is None:
         raise ValueError("freeze_normalization = True needs init (the statistics to keep)")
     _check_run(algo, native_envs)
+    check_kernel_threads(kernel_threads)
+    if kernel_threads != 1 and native_envs is None:
+        raise ValueError(f"kernel_threads = {kernel_threads!r} needs native_envs")
     if delegate is None and init is not None:
         delegate = init_delegate(Path(init))
     _check_delegate(delegate, scenario)
@@ -356,6 +375,7 @@ def train_epochs(
         native_envs=native_envs,
         scenario=scenario,
         delegate=delegate,
+        kernel_threads=kernel_threads,
     )
     if init is not None:
         warm_start(model, venv, Path(init))
@@ -383,6 +403,7 @@ def train_epochs(
         "init": None if init is None else str(init),
         "freeze_normalization": freeze_normalization,
         "delegate": None if delegate is None else delegate.to_json(),
+        "kernel_threads": kernel_threads,
     }
     write_text_atomic(out / "run.json", json.dumps(run, indent=1))
     model.set_logger(configure(str(out), ["csv"]))

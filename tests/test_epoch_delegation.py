@@ -295,3 +295,33 @@ def test_label_smoothing_leaves_the_closed_form_share_on_the_other_valid_actions
     np.testing.assert_allclose(mean, expected, atol=2e-3)
     with pytest.raises(ValueError, match=r"label_smoothing = 1\.0 must be a number in"):
         clone(model, venv, demos, label_smoothing=1.0, rng=np.random.default_rng(1))
+
+
+def test_training_passes_kernel_threads_to_the_native_env(tmp_path) -> None:
+    """train_epochs(kernel_threads=2) builds its native env with them and records them; the
+    DummyVecEnv path refuses them."""
+    pytest.importorskip("sb3_contrib")
+    import json
+
+    from policies.epoch_training import _prepared, train_epochs
+
+    hp = {"n_steps": 16, "batch_size": 16, "n_epochs": 1, "policy_kwargs": {"net_arch": [8]}}
+    scenario = {**V2_KWARGS, "episode_slots": 60}
+    _, venv, *_ = _prepared(
+        hp, tmp_path / "p", seed=0, algo="maskable_ppo", ks=KS, native_envs=2,
+        scenario=scenario, kernel_threads=2,
+    )  # fmt: skip
+    inner = venv
+    while not hasattr(inner, "inner"):  # VecNormalize > VecMonitor > NativeVecEnv > epochs
+        inner = inner.venv
+    assert inner.inner.kernel_threads == 2
+    run = train_epochs(
+        hp, tmp_path / "run", ks=KS, total_timesteps=32, native_envs=2, kernel_threads=2,
+        **scenario,
+    )  # fmt: skip
+    assert json.loads((run / "run.json").read_text())["kernel_threads"] == 2
+    with pytest.raises(ValueError, match="kernel_threads = 2 needs native_envs"):
+        train_epochs(hp, tmp_path / "x", kernel_threads=2, **scenario)
+    with pytest.raises(ValueError, match="kernel_threads = 0 must be an integer"):
+        train_epochs(hp, tmp_path / "y", native_envs=2, kernel_threads=0, **scenario)
+    assert not (tmp_path / "x").exists() and not (tmp_path / "y").exists()
