@@ -106,13 +106,10 @@ def delegation_demonstrations(
     every = np.full(slots, k, dtype=np.int64)
     obs = np.concatenate([np.column_stack([recorded.obs[e], left]) for e in range(n_ep)])
     returns = np.concatenate([epoch_returns(r, every, gamma) for r in recorded.rewards])
-    masks = epoch_masks(obs, recorded.obs_names, len(ks))
-    n_ks = len(ks)
-    masks = np.concatenate([masks, np.ones((len(obs), n_ks), dtype=bool)], axis=1)
     return Demonstrations(
         obs=obs,
-        actions=np.full(len(obs), DELEGATE * n_ks + ks.index(k), dtype=np.int64),
-        masks=masks,
+        actions=np.full(len(obs), DELEGATE * len(ks) + ks.index(k), dtype=np.int64),
+        masks=epoch_masks(obs, recorded.obs_names, len(ks), delegate=True),
         returns=returns,
         on_path=np.tile(epoch_path(every), n_ep),
         episode=np.repeat(np.arange(n_ep, dtype=np.int64), slots),

@@ -39,6 +39,7 @@ from scas_env.decision_epochs import (
     TEST_AND_FLY,
     _check_ks,
     maintenance_mask,
+    with_delegation,
 )
 
 __all__ = [
@@ -79,11 +80,15 @@ def label_k(
     return np.where(np.isin(actions, np.asarray(look_after)), 1, k)
 
 
-def epoch_masks(obs: np.ndarray, obs_names: Sequence[str], n_ks: int) -> np.ndarray:
-    """The epoch env's action masks (n, 4 n_ks) of epoch observations ``obs`` (n, ...)
-    named ``obs_names`` (:func:`scas_env.decision_epochs.maintenance_mask` per ``k``)."""
+def epoch_masks(
+    obs: np.ndarray, obs_names: Sequence[str], n_ks: int, delegate: bool = False
+) -> np.ndarray:
+    """The epoch env's action masks (n, 4 n_ks; with ``delegate`` 5 n_ks) of epoch
+    observations ``obs`` (n, ...) named ``obs_names``
+    (:func:`scas_env.decision_epochs.maintenance_mask` per ``k``)."""
     cols = [list(obs_names).index(c) for c in MASK_READS]
-    return np.repeat(maintenance_mask(*(obs[:, c] for c in cols)), n_ks, axis=-1)
+    m = maintenance_mask(*(obs[:, c] for c in cols))
+    return np.repeat(with_delegation(m) if delegate else m, n_ks, axis=-1)
 
 
 def epoch_labels(

@@ -47,6 +47,7 @@ from scas_env.decision_epochs import (
     N_MAINTENANCE,
     delegate_actions,
     maintenance_mask,
+    with_delegation,
 )
 
 DATA_DIR = Path(__file__).resolve().parent / "data"
@@ -305,7 +306,7 @@ class EpochAgent(SB3Agent):
             if self.masked_epochs:
                 m = maintenance_mask(*(batch[due][:, c] for c in self._cols))
                 if self.delegate is not None:
-                    m = np.column_stack([m, np.ones(len(m), dtype=bool)])
+                    m = with_delegation(m)
                 chosen = self._masked_choice(
                     norm, np.repeat(m, len(self.ks), axis=-1), deterministic
                 )

@@ -109,6 +109,7 @@ __all__ = [
     "delegate_actions",
     "maintenance_mask",
     "make_decision_epoch_env",
+    "with_delegation",
 ]
 
 #: registered id: ``gym.make(EPOCHS_ENV_ID, ks=..., gamma=..., **v0 keywords)``
@@ -134,6 +135,17 @@ def maintenance_mask(downtime: Any, spring_age: Any, seal_age: Any) -> np.ndarra
     mask[..., REPLACE_SPRING] = spring > 0
     mask[..., REPLACE_SEAL] = seal > 0
     return mask
+
+
+def with_delegation(mask: np.ndarray) -> np.ndarray:
+    """``maintenance_mask``'s output with the choice ``delegate`` appended, always valid
+    (bool, shape ``(..., 5)``).
+
+    >>> with_delegation(maintenance_mask(0, 0, 0)).tolist()
+    [True, True, False, False, True]
+    """
+    m = np.asarray(mask, dtype=bool)
+    return np.concatenate([m, np.ones((*m.shape[:-1], 1), dtype=bool)], axis=-1)
 
 
 def _check_delegate(delegate: Any) -> Any:
@@ -272,7 +284,7 @@ class DecisionEpochs(gym.Wrapper):
         u = self.env.unwrapped
         m = maintenance_mask(u.downtime, u.part_age["spring"], u.part_age["seal"])
         if self.delegate is not None:
-            m = np.append(m, True)
+            m = with_delegation(m)
         return np.repeat(m, len(self.ks))
 
 

@@ -52,6 +52,7 @@ from scas_env.decision_epochs import (
     _check_ks,
     delegate_actions,
     maintenance_mask,
+    with_delegation,
 )
 from scas_env.vector_env import ScasMaintenanceVectorEnv, expose_surface
 
@@ -141,8 +142,8 @@ class DecisionEpochsVectorEnv(VectorEnv):
         truncated = np.zeros(n, dtype=np.bool_)
         active = np.ones(n, dtype=np.bool_)
         act = maintenance.astype(np.int64)
-        delegated = maintenance == DELEGATE
-        if delegated.any():
+        delegated = maintenance == DELEGATE if self.delegate is not None else None
+        if delegated is not None and delegated.any():
             if self._last is None:
                 raise RuntimeError("call reset() before step()")
             act[delegated] = delegate_actions(self.delegate, self._last[delegated])
@@ -154,6 +155,8 @@ class DecisionEpochsVectorEnv(VectorEnv):
             truncated |= trunc
             active &= ~((slots >= k) | term | trunc)
             act[:] = FLY
+            if delegated is None:
+                continue
             asked = active & delegated
             if asked.any():
                 act[asked] = delegate_actions(self.delegate, self.inner.observe()[asked])
@@ -183,7 +186,7 @@ class DecisionEpochsVectorEnv(VectorEnv):
         a = self.inner.a
         m = maintenance_mask(a["downtime"], a["part_age"][:, 0], a["part_age"][:, 1])
         if self.delegate is not None:
-            m = np.column_stack([m, np.ones(len(m), dtype=bool)])
+            m = with_delegation(m)
         return np.repeat(m, len(self.ks), axis=1)
 
     def close_extras(self, **kwargs: Any) -> None:

@@ -81,32 +81,25 @@ def main() -> None:
         progress=True,
     )
     gamma = float(hp.get("gamma", 0.99))
-    if args.delegate_k is not None:
-        result = clone_rule(
-            hp,
-            delegation_demonstrations(recorded, DEFAULT_KS, args.delegate_k, gamma),
-            args.out,
-            seed=args.clone_seed,
-            epochs=args.epochs,
-            label_smoothing=args.label_smoothing,
-            delegate=DelegateSpec(rule.name, rule.params),
-            progress=True,
-            **changes,
-        )
-        print(f"validation accuracy {result.accuracy[-1]:.3f}; wrote {args.out}")
-        return
-    demos = demonstrations(recorded, DEFAULT_KS, gamma=gamma, safety=args.safety)
-    # DAgger rounds on the training seed's next episodes (after the recorded ones)
-    n, m = args.episodes, args.dagger_episodes
-    seeds = episode_seeds(args.seed, n + args.dagger_rounds * m)
-    plan = DaggerPlan(
-        rule.name,
-        rule.params,
-        rounds=tuple(tuple(seeds[n + r * m : n + (r + 1) * m]) for r in range(args.dagger_rounds)),
-        ks=DEFAULT_KS,
-        safety=args.safety,
-        epochs=args.dagger_epochs,
-    )
+    delegate, plan = None, None
+    if args.delegate_k is not None:  # a residual agent: no DAgger (the rule's labels add nothing)
+        delegate = DelegateSpec(rule.name, rule.params)
+        demos = delegation_demonstrations(recorded, DEFAULT_KS, args.delegate_k, gamma)
+    else:
+        demos = demonstrations(recorded, DEFAULT_KS, gamma=gamma, safety=args.safety)
+        # DAgger rounds on the training seed's next episodes (after the recorded ones)
+        n, m = args.episodes, args.dagger_episodes
+        seeds = episode_seeds(args.seed, n + args.dagger_rounds * m)
+        rounds = tuple(tuple(seeds[n + r * m : n + (r + 1) * m]) for r in range(args.dagger_rounds))
+        if rounds:
+            plan = DaggerPlan(
+                rule.name,
+                rule.params,
+                rounds=rounds,
+                ks=DEFAULT_KS,
+                safety=args.safety,
+                epochs=args.dagger_epochs,
+            )
     result = clone_rule(
         hp,
         demos,
@@ -114,7 +107,8 @@ def main() -> None:
         seed=args.clone_seed,
         epochs=args.epochs,
         label_smoothing=args.label_smoothing,
-        dagger=plan if args.dagger_rounds else None,
+        dagger=plan,
+        delegate=delegate,
         progress=True,
         **changes,
     )

@@ -195,28 +195,11 @@ def _synthetic_demos(n_episodes: int = 20, slots: int = 50):
 
 def test_clone_learns_a_learnable_expert_and_rejects_bad_settings() -> None:
     pytest.importorskip("sb3_contrib")
-    from sb3_contrib import MaskablePPO
-    from stable_baselines3.common.vec_env import DummyVecEnv, VecNormalize
-
     from policies.epoch_imitation import clone
+    from tests.clone_cases import box3_model
 
     demos = _synthetic_demos()
-
-    class Box3(gym.Env):
-        observation_space = gym.spaces.Box(-np.inf, np.inf, (3,), np.float32)
-        action_space = gym.spaces.Discrete(8)
-
-        def reset(self, *, seed=None, options=None):
-            return np.zeros(3, np.float32), {}
-
-        def step(self, action):
-            return np.zeros(3, np.float32), 0.0, False, True, {}
-
-        def action_masks(self):
-            return np.ones(8, dtype=bool)
-
-    venv = VecNormalize(DummyVecEnv([Box3]))
-    model = MaskablePPO("MlpPolicy", venv, seed=0, device="cpu", n_steps=16, batch_size=16)
+    model, venv = box3_model()
     result = clone(
         model, venv, demos, epochs=60, batch_size=256, maintenance_weight=1.0,
         rng=np.random.default_rng(1),
