@@ -88,8 +88,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     print(format_stages(result, "info"))
     print("\nthe same against the realised RUL (lives that failed in the episode)")
     print(format_stages(result, "realised"))
-    print("\nreliability of P(fail within the risk horizon)")
-    print(format_reliability(result))
+    print("\nreliability of P(fail within the risk horizon): realised failures (censored)")
+    print(format_reliability(result, "realised"))
+    print("\nthe same against the info RUL (every record; exact under per-part draws)")
+    print(format_reliability(result, "info"))
     if args.out is not None:
         for path in write_study(result, args.out, overwrite=args.overwrite):
             print(path)

@@ -73,6 +73,20 @@ def test_reliability_rows_bin_known_outcomes() -> None:
     assert high["records"] == 3 and high["observed"] == 1.0
     assert high["predicted"] == pytest.approx(0.9)
     assert low["records"] == 7 + 2 and low["observed"] == 0.0
+    assert {r["truth"] for r in rows} == {"realised"}
+
+
+def test_reliability_rows_against_the_info_truth_count_every_record() -> None:
+    t = trace_table([_trace()])
+    rows = reliability_rows(t, horizon=3.0, bins=(0.0, 0.5, 1.0), truth="info")
+    low, high = rows
+    # every record counts, the cut life's five too: info RUL <= 3 at ages 7, 8, 9 of the
+    # failed life only (risk 0.9 there), never in the cut life (info 20 - age >= 16)
+    assert high["records"] == 3 and high["observed"] == 1.0
+    assert low["records"] == 7 + 5 and low["observed"] == 0.0
+    assert high["truth"] == low["truth"] == "info"
+    with pytest.raises(ValueError, match="truth = 'oracle'"):
+        reliability_rows(t, horizon=3.0, truth="oracle")
 
 
 def test_life_rows_are_the_records_stage_rows_count() -> None:

@@ -26,10 +26,18 @@ record at the first age >= stage x L gives, over lives:
   0.8 of life);
 * with the Wilson 95 % interval of each share (scipy.stats.binomtest).
 
-Reliability of the risk output ``P(fail within risk_horizon_flights)``: every record (one per
-life and age) whose outcome is known is binned by its predicted risk; per bin the mean
-prediction against the observed frequency of a realised failure within the horizon, with its
-Wilson interval (target: within +- 0.05).
+Reliability of the risk output ``P(fail within risk_horizon_flights)``: records (one per life
+and age) are binned by their predicted risk; per bin the mean prediction against the observed
+frequency of a failure within the horizon, with its Wilson interval (target: within +- 0.05),
+for each truth:
+
+* ``realised``: a failure within the horizon that happened, over the records whose outcome is
+  known (the life failed, or flew the horizon before the episode ended). The censoring is
+  informative where a no-go test grounds the aircraft near a part's end (the paper preset):
+  the records just before the grounding drop out, those of lives that flew on stay;
+* ``info``: the info RUL within the horizon, over every record. Under per-part degradation
+  draws (v2) the info RUL is the exact number of flights to failure, so this is the same
+  event without the censoring; otherwise it is an expectation, not an event.
 
 :func:`run_study` returns the tables; :func:`write_study` writes CSV/JSON and two PNGs into a
 results folder (:func:`scas_env.results_folder.results_folder`). ``scripts/belief_calibration.py``
@@ -314,14 +322,24 @@ def life_rows(table: dict[str, np.ndarray], stages: Sequence[float]) -> list[dic
 
 
 def reliability_rows(
-    table: dict[str, np.ndarray], horizon: float, bins: Sequence[float] = RISK_BINS
-) -> list[dict[str, float]]:
-    """Predicted risk binned against the observed frequency of a realised failure within
-    ``horizon`` flights (records whose outcome is known)."""
-    realised = table["realised"]
-    failed_in = np.isfinite(realised) & (realised <= horizon)
-    # outcome known: the life failed in the episode, or survived the horizon before it ended
-    known = np.isfinite(realised) | (table["end_age"] - table["age"] >= horizon)
+    table: dict[str, np.ndarray],
+    horizon: float,
+    bins: Sequence[float] = RISK_BINS,
+    truth: str = "realised",
+) -> list[dict[str, float | str]]:
+    """Predicted risk binned against the observed frequency of a failure within ``horizon``
+    flights: a realised failure over the records whose outcome is known (``"realised"``), or
+    an info RUL <= ``horizon`` over every record (``"info"``; module docstring)."""
+    if truth == "realised":
+        realised = table["realised"]
+        failed_in = np.isfinite(realised) & (realised <= horizon)
+        # outcome known: the life failed in the episode, or survived the horizon before it ended
+        known = np.isfinite(realised) | (table["end_age"] - table["age"] >= horizon)
+    elif truth == "info":
+        failed_in = table["true_info"] <= horizon
+        known = np.ones(failed_in.shape, dtype=bool)
+    else:
+        raise ValueError(f"truth = {truth!r} must be one of {TRUTHS}")
     risk = table["risk"][known]
     hit = failed_in[known]
     edges = np.asarray(bins)
@@ -332,6 +350,7 @@ def reliability_rows(
         share, lo, hi, n = _share(hit[sel])
         rows.append(
             {
+                "truth": truth,
                 "bin_low": float(edges[b]),
                 "bin_high": float(edges[b + 1]),
                 "records": n,
@@ -353,6 +372,18 @@ class StudyResult:
     stages: dict[tuple[str, str, str], list[dict[str, float | str]]]
     reliability: dict[tuple[str, str, str], list[dict[str, float]]]
     lives: dict[tuple[str, str, str], list[dict[str, float]]] = field(default_factory=dict)
+
+
+def check_episodes(episodes: int, seed: int, policies: Sequence[str]) -> None:
+    """Refuse a study's ``episodes`` (an integer >= 1), first ``seed`` (>= 0) and
+    ``policies`` (a non-empty subset of :data:`POLICIES`) before any work."""
+    if isinstance(episodes, bool) or not isinstance(episodes, int) or episodes < 1:
+        raise ValueError(f"episodes = {episodes!r} must be an integer >= 1")
+    if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
+        raise ValueError(f"seed = {seed!r} must be an integer >= 0")
+    bad = [p for p in policies if p not in POLICIES]
+    if bad or not policies:
+        raise ValueError(f"policies = {list(policies)!r} must be a non-empty subset of {POLICIES}")
 
 
 def run_study(
@@ -379,13 +410,7 @@ def run_study(
     """
     if monitor_options and env_factory is not None:
         raise ValueError("monitor_options and env_factory cannot be combined: pass one of them")
-    if isinstance(episodes, bool) or not isinstance(episodes, int) or episodes < 1:
-        raise ValueError(f"episodes = {episodes!r} must be an integer >= 1")
-    if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
-        raise ValueError(f"seed = {seed!r} must be an integer >= 0")
-    bad = [p for p in policies if p not in POLICIES]
-    if bad or not policies:
-        raise ValueError(f"policies = {list(policies)!r} must be a non-empty subset of {POLICIES}")
+    check_episodes(episodes, seed, policies)
     bad = [p for p in presets if p not in PRESETS]
     if bad or not presets:
         raise ValueError(
@@ -419,7 +444,10 @@ def run_study(
             table = trace_table(traces[p])
             key = (preset, policy, p)
             stage_tables[key] = stage_rows(table, stages, float(sc.rul_quantile))
-            rel_tables[key] = reliability_rows(table, float(sc.risk_horizon_flights))
+            horizon = float(sc.risk_horizon_flights)
+            rel_tables[key] = [
+                row for truth in TRUTHS for row in reliability_rows(table, horizon, truth=truth)
+            ]
             life_tables[key] = life_rows(table, stages)
     bar.close()
     config = {
@@ -458,15 +486,15 @@ def format_stages(result: StudyResult, truth: str = "info") -> str:
     return "\n".join(lines)
 
 
-def format_reliability(result: StudyResult) -> str:
-    """A text table of the reliability diagrams (bins with records only)."""
+def format_reliability(result: StudyResult, truth: str = "realised") -> str:
+    """A text table of the reliability diagrams against ``truth`` (bins with records only)."""
     lines = [
         f"{'preset':8s} {'policy':7s} {'part':6s} {'bin':>11s} {'records':>7s} "
         f"{'predicted':>9s} {'observed [95% CI]':>22s}"
     ]
     for (preset, policy, part), rows in result.reliability.items():
         for r in rows:
-            if not r["records"]:
+            if not r["records"] or r["truth"] != truth:
                 continue
             lines.append(
                 f"{preset:8s} {policy:7s} {part:6s} "
@@ -560,12 +588,16 @@ def _plot_reliability(result: StudyResult, path: Path) -> None:
         for (preset, policy, p), rows in result.reliability.items():
             if p != part:
                 continue
-            r = [x for x in rows if x["records"]]
-            x = np.array([x["predicted"] for x in r])
-            y = np.array([x["observed"] for x in r])
-            lo = y - np.array([x["observed_ci_low"] for x in r])
-            hi = np.array([x["observed_ci_high"] for x in r]) - y
-            ax.errorbar(x, y, yerr=[lo, hi], marker="o", capsize=3, label=f"{preset}/{policy}")
+            for truth, marker in (("realised", "o"), ("info", "s")):
+                r = [x for x in rows if x["records"] and x["truth"] == truth]
+                x = np.array([x["predicted"] for x in r])
+                y = np.array([x["observed"] for x in r])
+                lo = y - np.array([x["observed_ci_low"] for x in r])
+                hi = np.array([x["observed_ci_high"] for x in r]) - y
+                ax.errorbar(
+                    x, y, yerr=[lo, hi], marker=marker, capsize=3,
+                    label=f"{preset}/{policy} ({truth})",
+                )  # fmt: skip
         t = TARGETS["reliability_tolerance"]
         grid = np.linspace(0, 1, 2)
         ax.plot(grid, grid, "k--", lw=0.8)
@@ -587,6 +619,7 @@ __all__ = [
     "STAGES",
     "TARGETS",
     "StudyResult",
+    "check_episodes",
     "format_reliability",
     "format_stages",
     "life_rows",

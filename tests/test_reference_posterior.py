@@ -1,0 +1,182 @@
+"""The spring's reference posterior: its likelihood against the joint Gaussian density,
+its calibration on data drawn from its own model (and its failure on a mis-stated noise),
+its quantiles against numpy's, and the recorder against the monitor's own episode."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+from scipy.stats import kstest, multivariate_normal
+
+from scas_env import V2_KWARGS
+from scas_env.env import ScasMaintenanceEnv
+from scas_env.scenario import Scenario
+from scas_env.studies.belief_calibration import policy_action
+from scas_env.studies.reference_posterior import (
+    BATCH,
+    TEST,
+    RecordingEnv,
+    ReferencePosterior,
+    SpringModel,
+    weighted_quantiles,
+)
+from scas_env.studies.reference_synthetic import (
+    format_synthetic,
+    measurement_moments,
+    synthetic_stage_pits,
+)
+
+
+@pytest.fixture(scope="module")
+def model() -> SpringModel:
+    env = ScasMaintenanceEnv(scenario=Scenario.from_dict(V2_KWARGS))
+    env.reset(seed=0)
+    return SpringModel.of(env)
+
+
+def _events(rng: np.random.Generator) -> list[tuple[int, np.ndarray, np.ndarray]]:
+    """Batches of 10 flights with a test every third batch: (kind, ages, wear fractions)."""
+    out = []
+    for b in range(12):
+        ages = np.arange(10 * b, 10 * b + 10, dtype=np.float64) + 40.0
+        out.append((BATCH, ages, 0.2 + 1e-3 * ages))
+        if b % 3 == 2:
+            out.append((TEST, ages[-1:] + 1.0, 0.2 + 1e-3 * (ages[-1:] + 1.0)))
+    return out
+
+
+def test_log_weights_are_the_joint_gaussian_density_with_the_effects_integrated(model) -> None:
+    rng = np.random.default_rng(3)
+    ref = ReferencePosterior(model, rng, 6)
+    events = _events(rng)
+    ys = rng.normal(size=len(events)) * 1e-6
+    for (kind, ages, wear), y in zip(events, ys, strict=True):
+        # the data: the mean of the first point's features, plus noise
+        mu, _, var = measurement_moments(model, kind, ref.a0[0], ref.log_theta[0], ages, wear)
+        ref.update(kind, mu + y + np.sqrt(var) * rng.normal(), ages, wear)
+    for p in range(0, ref.a0.size, 9):
+        total = 0.0
+        for kind in (BATCH, TEST):
+            sel = [i for i, e in enumerate(events) if e[0] == kind]
+            mom = np.array(
+                [
+                    measurement_moments(model, kind, ref.a0[p], ref.log_theta[p], *events[i][1:])
+                    for i in sel
+                ]
+            )
+            cov = np.diag(mom[:, 2]) + np.outer(mom[:, 1], mom[:, 1])  # z ~ N(0, 1) shared
+            y = np.array([ref.history[i][1] for i in sel])
+            total += multivariate_normal(mom[:, 0], cov).logpdf(y)
+        assert ref.log_w[p] == pytest.approx(total, rel=1e-9, abs=1e-6)
+
+
+def _synthetic_pits(model: SpringModel, noise_factor: float, lives: int) -> np.ndarray:
+    """PIT of the true RUL after 300 flights in the posterior of lives drawn from the model
+    (prior, z ~ N(0, 1), run noise), surviving 300 flights; the posterior's model states the
+    run noise ``noise_factor`` times the truth's."""
+    rng = np.random.default_rng(11)
+    stated = dataclasses.replace(
+        model,
+        stacks=tuple(s * np.array([1.0, 1.0, noise_factor])[:, None, None] for s in model.stacks),
+    )
+    events = [(BATCH, np.arange(b, b + 10, dtype=np.float64), np.full(10, 0.3))
+              for b in range(0, 300, 10)]  # fmt: skip
+    events += [(TEST, np.array([299.0]), np.array([0.3]))]
+    pits = []
+    while len(pits) < lives:
+        u = rng.random((1, 2))
+        a0, log_theta = (float(v[0]) for v in model.prior_points(u))
+        life = model.lives(np.array([a0]), np.array([log_theta]))[1][0]
+        if life <= 300.0:
+            continue  # the posterior conditions on survival: so does the draw
+        z = rng.normal(size=2)
+        ref = ReferencePosterior(stated, rng, 11)
+        for kind, ages, wear in events:
+            mu, tau, var = measurement_moments(model, kind, a0, log_theta, ages, wear)
+            ref.update(kind, mu + tau * z[kind] + np.sqrt(var) * rng.normal(), ages, wear)
+        w = ref.weights(300.0)
+        pits.append(float(w[ref.life - 300.0 <= life - 300.0].sum()))
+    return np.array(pits)
+
+
+def test_the_posterior_is_calibrated_on_its_own_model_and_not_on_a_wrong_noise(model) -> None:
+    pits = _synthetic_pits(model, 1.0, 120)
+    assert kstest(pits, "uniform").pvalue > 1e-3
+    covered = np.mean((pits > 0.05) & (pits < 0.95))
+    assert 0.80 <= covered <= 0.98  # binomial 99.9 % range of 120 lives at 0.90
+    # stating a third of the run noise: over-confident, the PITs pile up at the ends
+    wrong = _synthetic_pits(model, 1.0 / 3.0, 120)
+    assert kstest(wrong, "uniform").pvalue < 1e-3
+
+
+def test_weighted_quantiles_are_numpys_inverted_cdf() -> None:
+    rng = np.random.default_rng(5)
+    v, w = rng.normal(size=500), rng.random(500)
+    levels = (0.05, 0.5, 0.95)
+    ours = weighted_quantiles(v, w / w.sum(), levels)
+    theirs = np.quantile(v, levels, weights=w, method="inverted_cdf")
+    np.testing.assert_allclose(ours, theirs, rtol=0, atol=0)
+
+
+def test_the_recorder_changes_nothing_and_records_what_the_monitor_learnt() -> None:
+    sc = Scenario.from_dict(V2_KWARGS)
+    plain, rec = ScasMaintenanceEnv(scenario=sc), RecordingEnv(scenario=sc)
+    learnt = []
+    obs_a, _ = plain.reset(seed=4)
+    obs_b, _ = rec.reset(seed=4)
+    monitor = rec.monitor
+    inner_learn, inner_test = monitor.learn_from_flights, monitor.tested
+
+    def batch_mean() -> None:  # what the monitor is about to learn from
+        if monitor.flight_count:
+            i8 = monitor.learning.index("I8")
+            learnt.append(monitor.flight_sum[i8] / monitor.flight_count)
+
+    def learn() -> None:
+        batch_mean()
+        inner_learn()
+
+    def test(features: dict[str, float]) -> None:
+        batch_mean()  # the test kernel learns the batch under way first
+        inner_test(features)
+
+    monitor.learn_from_flights, monitor.tested = learn, test
+    np.testing.assert_array_equal(obs_a, obs_b)
+    for _ in range(400):
+        a = policy_action("test10", plain.slot)
+        oa, ra, *_ = plain.step(a)
+        ob, rb, *_ = rec.step(a)
+        np.testing.assert_array_equal(oa, ob)
+        assert ra == rb
+    ev = rec.events
+    batches = [e for e in range(len(ev.kind)) if ev.kind[e] == BATCH]
+    tests = [e for e in range(len(ev.kind)) if ev.kind[e] == TEST]
+    assert len(tests) == rec.stats.tests > 30
+    assert [ev.y[e] for e in batches] == pytest.approx(learnt, rel=1e-12)
+    for e in batches:  # consecutive pre-flight ages, learnt at the last or the test after it
+        ages = np.asarray(ev.ages[ev.start[e] : ev.stop[e]])
+        np.testing.assert_array_equal(np.diff(ages), 1.0)
+        assert ages[-1] <= ev.known_after[e] <= ages[-1] + 1
+
+
+def test_bad_arguments_are_refused(model) -> None:
+    with pytest.raises(ValueError, match="log2_points = 3"):
+        ReferencePosterior(model, np.random.default_rng(0), 3)
+    with pytest.raises(ValueError, match="must include I8"):
+        RecordingEnv(scenario=Scenario())
+
+
+def test_synthetic_stage_pits_judge_each_life_once_per_stage(model) -> None:
+    pits = synthetic_stage_pits(model, 6, np.random.default_rng(2), stages=(0.2, 0.6),
+                                log2_points=8, min_ess=10.0)  # fmt: skip
+    assert list(pits) == [0.2, 0.6]
+    assert pits[0.2].size == pits[0.6].size == 6
+    assert np.all((pits[0.2] >= 0.0) & (pits[0.2] <= 1.0))
+    again = synthetic_stage_pits(model, 6, np.random.default_rng(2), stages=(0.2, 0.6),
+                                 log2_points=8, min_ess=10.0)  # fmt: skip
+    np.testing.assert_array_equal(pits[0.6], again[0.6])  # one seeded random path
+    assert "0.20" in format_synthetic(pits)
+    with pytest.raises(ValueError, match="stages"):
+        synthetic_stage_pits(model, 2, np.random.default_rng(0), stages=(1.2,))

@@ -1,0 +1,49 @@
+"""The reference study's stage table on hand-made rows, against direct counts."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from scas_env.studies.reference_report import format_table, stage_table
+
+
+def _row(seed: int, stage: float, truth: float, shift: float, risk: float) -> dict:
+    """A record whose filter interval is [truth - 10, truth + 10] moved by ``shift`` and
+    whose reference interval holds the truth, low quantile at truth - 5."""
+    return {
+        "policy": "test10", "seed": seed, "life": 0, "stage": stage, "age": 100.0,
+        "truth": truth, "horizon": 20.0,
+        "pf_mean": truth + shift, "pf_q_lo": truth - 10 + shift, "pf_q_hi": truth + 10 + shift,
+        "pf_low": truth - 5 + shift, "pf_risk": risk,
+        "ref_mean": truth * 1.1, "ref_q_lo": truth - 10, "ref_q_hi": truth + 10,
+        "ref_low": truth - 5, "ref_risk": 0.0, "ref_ess": 2000.0 - seed,
+    }  # fmt: skip
+
+
+def test_stage_table_counts_both_estimators_and_pairs_them() -> None:
+    rows = [
+        _row(1, 0.2, 50.0, 0.0, 0.0),  # both cover
+        _row(1, 0.2, 60.0, 20.0, 0.0),  # the filter misses above: truth below its low quantile
+        _row(2, 0.2, 15.0, 0.0, 0.5),  # both cover; truth <= horizon, filter risk 0.5
+        _row(2, 0.2, 80.0, -30.0, 0.0),  # the filter misses below
+    ]
+    table = {(r["policy"], r["stage"]): r for r in stage_table(rows, np.random.default_rng(0))}
+    r = table[("test10", "0.2")]
+    assert r["lives"] == 4
+    assert r["pf_coverage"] == 0.5 and r["ref_coverage"] == 1.0
+    assert r["pf_undercut"] == 0.25 and r["ref_undercut"] == 0.0
+    # Brier: (risk - 1[truth <= 20])^2 -> filter 0.25 once, reference 1 once
+    assert r["pf_brier"] == pytest.approx(0.25 / 4) and r["ref_brier"] == pytest.approx(1 / 4)
+    assert r["ref_sd_log"] == pytest.approx(0.0, abs=1e-12)
+    assert r["ref_mean_log"] == pytest.approx(math.log(1.1))
+    ratios = np.log(np.array([50.0, 80.0, 15.0, 50.0]) / np.array([50.0, 60.0, 15.0, 80.0]))
+    assert r["pf_sd_log"] == pytest.approx(np.std(ratios, ddof=1))
+    # paired ref - pf: +0.5 coverage (one extra covered life in each episode)
+    assert r["covered_ref_minus_pf_diff"] == pytest.approx(0.5)
+    assert r["covered_ref_minus_pf_ci_low"] == r["covered_ref_minus_pf_ci_high"] == 0.5
+    assert r["ref_min_ess"] == 1998.0
+    assert table[("test10", "all")]["lives"] == 4
+    assert "test10" in format_table(list(table.values()))
