@@ -180,3 +180,10 @@ def test_synthetic_stage_pits_judge_each_life_once_per_stage(model) -> None:
     assert "0.20" in format_synthetic(pits)
     with pytest.raises(ValueError, match="stages"):
         synthetic_stage_pits(model, 2, np.random.default_rng(0), stages=(1.2,))
+
+
+def test_the_recorder_wraps_the_world_once_however_many_resets() -> None:
+    rec = RecordingEnv(scenario=Scenario.from_dict(V2_KWARGS))
+    for seed in range(3):
+        rec.reset(seed=seed)
+    assert rec.world.fly.__wrapped__.__func__ is type(rec.world).fly  # one layer, not three

@@ -31,12 +31,16 @@ measured cross-fault effects show to be a small difference (docs/beliefs.md).
 :func:`run_reference_study` runs seeded episodes of the belief study's policies
 (:mod:`scas_env.studies.belief_calibration`), records both the filter's and the reference's
 RUL distribution at each spring life's stage records, and returns per-life rows;
-:func:`reference_stage_rows` reduces them to coverage, undercut and sd of the log ratio per
-stage for both. ``scripts/reference_posterior.py`` is the command line.
+:func:`scas_env.studies.reference_report.stage_table` reduces them to coverage, undercut,
+sd of the log ratio and Brier score per stage for both, paired. Late in life the posterior
+holds a small part of the prior's mass: :meth:`ReferencePosterior.refine` then redraws the
+points from a proposal fitted to it (importance sampling, every event replayed).
+``scripts/reference_posterior.py`` is the command line.
 """
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
@@ -128,9 +132,11 @@ class RecordingEnv(ScasMaintenanceEnv):
         out = super().reset(seed=seed, options=options)
         self.events = SpringEvents()
         self._life = 0
-        self._batch: list[tuple[float, float]] = []
-        monitor, world = self.monitor, self.world
+        self._batch: list[tuple[float, float]] = []  # (pre-flight age, true wear fraction)
+        self._values: list[float] = []  # the batch's I8 values
+        monitor, world = self.monitor, self.world  # the monitor is new at each reset
         flown, tested, replaced = monitor.flown, monitor.tested, monitor.replaced
+        world.__dict__.pop("fly", None)  # the world is not: unwrap the last episode's
         fly = world.fly
 
         def age() -> int:
@@ -142,8 +148,7 @@ class RecordingEnv(ScasMaintenanceEnv):
                 self.events.add(BATCH, y, self._life, age(), self._batch)
                 self._batch, self._values = [], []
 
-        self._values: list[float] = []
-
+        @functools.wraps(fly)
         def fly_recorded(*args: Any) -> Any:
             self._wear_before = min(world.wear_fraction, 1.0)
             return fly(*args)
@@ -404,8 +409,8 @@ class ReferencePosterior:
 
 
 def _stage_ages(table: dict[str, np.ndarray], life: int, stages: Sequence[float]) -> dict:
-    """Per stage, the age of the first record of ``life`` at or past that stage (as
-    :func:`scas_env.studies.belief_calibration.stage_rows` picks it), with its row."""
+    """Per stage, the row of ``table`` of the first record of ``life`` at or past that stage
+    (as :func:`scas_env.studies.belief_calibration.stage_rows` picks it)."""
     rows = np.flatnonzero(table["life"] == life)
     out = {}
     for s in stages:
@@ -425,8 +430,10 @@ def reference_lives(
     stages: Sequence[float] = REFERENCE_STAGES,
     min_ess: float = DEFAULT_MIN_ESS,
 ) -> list[dict[str, float]]:
-    """One episode: per spring life and stage, the truth, the filter's belief and the
-    reference's (rows of :data:`ROW_KEYS`)."""
+    """One episode: per spring life and stage, a row with the record (``policy``, ``seed``,
+    ``life``, ``stage``, ``age``), the ``truth`` (info RUL) and risk ``horizon``, the filter's
+    belief (``pf_mean``, ``pf_q_lo``, ``pf_q_hi``, ``pf_low``, ``pf_risk``) and the
+    reference's (the same with ``ref_``, and ``ref_ess``)."""
     trace = run_episode(env, policy, seed)["spring"]
     table = trace_table([trace])
     model = SpringModel.of(env)
