@@ -187,3 +187,18 @@ def test_the_recorder_wraps_the_world_once_however_many_resets() -> None:
     for seed in range(3):
         rec.reset(seed=seed)
     assert rec.world.fly.__wrapped__.__func__ is type(rec.world).fly  # one layer, not three
+
+
+def test_the_noise_free_life_of_the_true_spring_is_the_worlds_exact_life(model) -> None:
+    """The path the reference assumes (the filter's damage integral, no flight scatter) ends
+    where the world's spring fails: its life within 0.3 % of the world's exact one."""
+    env = ScasMaintenanceEnv(scenario=Scenario.from_dict(V2_KWARGS))
+    ratios = []
+    for seed in range(1000, 1012):
+        env.reset(seed=seed)
+        w = env.world
+        life = model.lives(np.array([w.crack_m]), np.array([np.log(w.theta)]))[1][0]
+        ratios.append(w.life_left["spring"] / life - 1.0)
+    assert np.all(np.abs(ratios) < 3e-3), ratios
+    # the world counts the failing flight, the model a continuous life: never shorter
+    assert np.all(np.array(ratios) > -1.0 / 500.0)
