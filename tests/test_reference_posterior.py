@@ -20,6 +20,7 @@ from scas_env.studies.reference_posterior import (
     RecordingEnv,
     ReferencePosterior,
     SpringModel,
+    run_reference_study,
     weighted_quantiles,
 )
 from scas_env.studies.reference_synthetic import (
@@ -166,6 +167,15 @@ def test_bad_arguments_are_refused(model) -> None:
         ReferencePosterior(model, np.random.default_rng(0), 3)
     with pytest.raises(ValueError, match="must include I8"):
         RecordingEnv(scenario=Scenario())
+    for bad, match in (
+        ({"log2_points": 30}, "log2_points = 30"),
+        ({"min_ess": 5000.0, "log2_points": 12}, "min_ess = 5000.0"),
+        ({"stages": (0.5, 1.0)}, "stages"),
+        ({"episodes": 0}, "episodes = 0"),
+    ):
+        kwargs = {"episodes": 1, "seed": 0, "scenario_fields": V2_KWARGS, **bad}
+        with pytest.raises(ValueError, match=match):
+            run_reference_study(**kwargs)
 
 
 def test_synthetic_stage_pits_judge_each_life_once_per_stage(model) -> None:

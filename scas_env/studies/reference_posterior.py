@@ -302,6 +302,23 @@ def weighted_quantiles(values: np.ndarray, weights: np.ndarray, levels: Sequence
     return [float(values[order][i]) for i in idx]
 
 
+def check_points(log2_points: int, min_ess: float | None = None) -> None:
+    """Refuse a point-set size ``2^log2_points`` outside [2^4, 2^22] and (if given) a
+    ``min_ess`` that is not a positive number below it."""
+    if (
+        isinstance(log2_points, bool)
+        or not isinstance(log2_points, int)
+        or not (4 <= log2_points <= 22)
+    ):
+        raise ValueError(f"log2_points = {log2_points!r} must be an integer in [4, 22]")
+    if min_ess is not None and not (
+        isinstance(min_ess, int | float) and 0.0 < min_ess < 2.0**log2_points
+    ):
+        raise ValueError(
+            f"min_ess = {min_ess!r} must be a number in (0, 2^log2_points = {2**log2_points})"
+        )
+
+
 @dataclass(frozen=True)
 class RulBelief:
     """A RUL distribution's summary at one record: mean, 5 % and 95 % quantiles, the low
@@ -331,12 +348,7 @@ class ReferencePosterior:
     T_DOF, INFLATE = 4.0, 1.5
 
     def __init__(self, model: SpringModel, rng: np.random.Generator, log2_points: int) -> None:
-        if (
-            isinstance(log2_points, bool)
-            or not isinstance(log2_points, int)
-            or not (4 <= log2_points <= 22)
-        ):
-            raise ValueError(f"log2_points = {log2_points!r} must be an integer in [4, 22]")
+        check_points(log2_points)
         self.model, self.rng, self.log2_points = model, rng, log2_points
         self.history: list[tuple[int, float, np.ndarray, np.ndarray]] = []
         u = qmc.Sobol(d=2, scramble=True, seed=rng).random_base2(log2_points)
@@ -489,6 +501,9 @@ def run_reference_study(
     """Per-life rows of :func:`reference_lives` over seeds ``seed .. seed + episodes - 1``
     per policy; the Sobol scrambling draws from ``SeedSequence(seed)``'s children."""
     check_episodes(episodes, seed, policies)
+    check_points(log2_points, min_ess)
+    if not stages or any(not 0.0 < s < 1.0 for s in stages):
+        raise ValueError(f"stages = {list(stages)!r} must be fractions of life in (0, 1)")
     env = RecordingEnv(scenario=Scenario.from_dict(dict(scenario_fields or {})))
     children = np.random.SeedSequence(seed).spawn(len(policies) * episodes)
     rows: list[dict[str, float]] = []
@@ -521,6 +536,7 @@ __all__ = [
     "RulBelief",
     "SpringEvents",
     "SpringModel",
+    "check_points",
     "event_update",
     "reference_lives",
     "run_reference_study",

@@ -29,6 +29,7 @@ from scas_env.studies.reference_posterior import (
     TEST,
     ReferencePosterior,
     SpringModel,
+    check_points,
 )
 
 #: flights of a seal's life in the synthetic lives (the wear fraction grows linearly)
@@ -76,6 +77,7 @@ def synthetic_stage_pits(
     bad = [s for s in stages if not 0.0 < s < 1.0]
     if bad or not stages:
         raise ValueError(f"stages = {list(stages)!r} must be fractions of life in (0, 1)")
+    check_points(log2_points, min_ess)
     pits: dict[float, list[float]] = {s: [] for s in sorted(stages)}
     for _ in tqdm(range(lives), desc="synthetic lives", disable=not progress):
         a0, log_theta = (float(v[0]) for v in model.prior_points(rng.random((1, 2))))
