@@ -20,7 +20,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from scas_env import V2_KWARGS
-from scas_env.studies.belief_calibration import POLICIES
+from scas_env.studies.belief_calibration import POLICIES, STAGES
 from scas_env.studies.reference_posterior import (
     DEFAULT_LOG2_POINTS,
     DEFAULT_MIN_ESS,
@@ -70,6 +70,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser.add_argument("--no-progress", action="store_true")
     args = parser.parse_args(argv)
     if args.synthetic is not None:
+        if args.out is not None:
+            parser.error("--synthetic prints its table only: drop --out")
         return _synthetic(args)
     if args.out is not None:
         from scas_env.results_folder import check_destination
@@ -110,7 +112,7 @@ def _synthetic(args: argparse.Namespace) -> int:
         SpringModel.of(env),
         args.synthetic,
         np.random.default_rng(args.seed),
-        stages=REFERENCE_STAGES[:5],
+        stages=STAGES,
         tests=not args.no_tests,
         log2_points=args.log2_points,
         min_ess=args.min_ess,
