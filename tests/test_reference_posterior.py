@@ -21,7 +21,6 @@ from scas_env.studies.reference_posterior import (
     ReferencePosterior,
     SpringModel,
     run_reference_study,
-    weighted_quantiles,
 )
 from scas_env.studies.reference_synthetic import (
     format_synthetic,
@@ -110,15 +109,6 @@ def test_the_posterior_is_calibrated_on_its_own_model_and_not_on_a_wrong_noise(m
     # stating a third of the run noise: over-confident, the PITs pile up at the ends
     wrong = _synthetic_pits(model, 1.0 / 3.0, 120)
     assert kstest(wrong, "uniform").pvalue < 1e-3
-
-
-def test_weighted_quantiles_are_numpys_inverted_cdf() -> None:
-    rng = np.random.default_rng(5)
-    v, w = rng.normal(size=500), rng.random(500)
-    levels = (0.05, 0.5, 0.95)
-    ours = weighted_quantiles(v, w / w.sum(), levels)
-    theirs = np.quantile(v, levels, weights=w, method="inverted_cdf")
-    np.testing.assert_allclose(ours, theirs, rtol=0, atol=0)
 
 
 def test_the_recorder_changes_nothing_and_records_what_the_monitor_learnt() -> None:

@@ -53,6 +53,7 @@ from tqdm.auto import tqdm
 
 from prognostics.degradation_models import TabulatedRateModel, inverse_damage_scalar
 from prognostics.random_effect import random_effect_update
+from prognostics.rul import weighted_quantile
 from scas_env.env import ScasMaintenanceEnv
 from scas_env.learning_kernel import bilinear_at, cell_of
 from scas_env.scenario import Scenario
@@ -154,12 +155,13 @@ class RecordingEnv(ScasMaintenanceEnv):
             return fly(*args)
 
         def flown_recorded(features: dict[str, float]) -> None:
-            if all(math.isfinite(features[f]) for f in monitor.learning):
+            before = monitor.flight_count
+            flown(features)
+            if monitor.flight_count != before:  # the monitor took the flight into its batch
                 self._batch.append((age(), self._wear_before))
                 self._values.append(float(features["I8"]))
-            flown(features)
-            if monitor.flight_count == 0:  # the monitor learnt the batch
-                flush()
+                if monitor.flight_count == 0:  # and learnt the batch
+                    flush()
 
         def tested_recorded(features: dict[str, float]) -> None:
             flush()  # the monitor learns the batch under way first
@@ -292,16 +294,6 @@ def event_update(
         log_w[p] += log_lik[p]
 
 
-def weighted_quantiles(values: np.ndarray, weights: np.ndarray, levels: Sequence[float]) -> list:
-    """Quantiles of the weighted sample (inverse of its step CDF: the smallest value whose
-    cumulative weight reaches each level)."""
-    order = np.argsort(values, kind="stable")
-    cum = np.cumsum(weights[order])
-    cum /= cum[-1]
-    idx = np.minimum(np.searchsorted(cum, np.asarray(levels), side="left"), values.size - 1)
-    return [float(values[order][i]) for i in idx]
-
-
 def check_points(log2_points: int, min_ess: float | None = None) -> None:
     """Refuse a point-set size ``2^log2_points`` outside [2^4, 2^22] and (if given) a
     ``min_ess`` that is not a positive number below it."""
@@ -393,7 +385,8 @@ class ReferencePosterior:
         """The RUL distribution after ``age`` flights survived."""
         w = self.weights(age)
         rul = np.maximum(self.life - age, 0.0)
-        q_lo, q_hi, low = weighted_quantiles(rul, w, (INTERVAL[0], INTERVAL[1], low_quantile))
+        levels = np.array([INTERVAL[0], INTERVAL[1], low_quantile])
+        q_lo, q_hi, low = (float(q) for q in weighted_quantile(rul, w, levels))
         risk = float(w[rul <= horizon].sum())
         return RulBelief(float(w @ rul), q_lo, q_hi, low, risk, float(1.0 / (w @ w)))
 
@@ -540,5 +533,4 @@ __all__ = [
     "event_update",
     "reference_lives",
     "run_reference_study",
-    "weighted_quantiles",
 ]
