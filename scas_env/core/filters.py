@@ -1,0 +1,387 @@
+"""Numba kernels of the health monitor: each row's two particle filters learn from features.
+
+Every row of a batch carries two filters (spring = 0, seal = 1) in the batch's particle
+arrays ``bank = (x, log_theta, w, log_w, aux)``: severity (m), log growth multiplier,
+weights, log-weights and, per feature, each particle's Gaussian belief about the
+installation effect of that feature (``aux[k]`` its mean, ``aux[k + 1]`` its variance;
+Rao-Blackwellised, :func:`prognostics.random_effect.random_effect_update`).
+
+* :func:`learn_row`: the batch of in-flight learning features (I8 into the spring filter,
+  I9 into the seal filter) is learnt from: both filters predicted to the middle of the
+  batch, conditioned on survival (both parts flew), each weighted by its feature's batch
+  mean, resampled where the weights degenerated; the batch is emptied.
+* :func:`test_row`: a pre-flight test's G1 (spring) and G3 (seal): the batch under way learnt
+  from first, both filters predicted over the flights pending, conditioned on survival and
+  weighted; returns both features corrected to a healthy new installation (what the
+  detectors read).
+* :func:`refresh_row`: both parts' RUL tables (:mod:`prognostics.rul_ageing`) of a row's
+  clouds.
+
+The surrogate's tables are read along the part's own severity at the other part's filter
+estimate (bilinear, as the world draws features); the other part's uncertainty enters each
+likelihood through the feature's slope against it. Status codes of a row (``status[e]``):
+0 ok; 1 a prediction left the representable range; 2 a non-finite log-likelihood; 3
+degenerate weights; 4 invalid RUL-table weights; 5 invalid RUL values
+(:data:`STATUS_MESSAGES`).
+"""
+
+from __future__ import annotations
+
+import math
+from typing import NamedTuple
+
+import numpy as np
+from numba import njit
+
+from prognostics.degradation_models import predict_particles
+from prognostics.particle_filter import (
+    MAX_ABS_LOG_THETA,
+    MAX_ABS_SEVERITY,
+    _add_log_likelihood,
+    _condition_below,
+    _first_out_of_range,
+    resample_if_degenerate,
+)
+from prognostics.random_effect import random_effect_update
+from prognostics.rul_ageing import _build_from_cloud
+
+#: Step (fraction of critical) of the central differences of the surrogate's mean curves.
+SLOPE_STEP = 0.02
+#: what a row's non-zero status means (the exception raised for it)
+STATUS_MESSAGES = {
+    1: (FloatingPointError, "a filter prediction put a particle outside the representable range"),
+    2: (ValueError, "a learning feature gave a non-finite log-likelihood"),
+    3: (FloatingPointError, "particle weights degenerated (non-finite likelihoods)"),
+    4: (ValueError, "weights must be finite, >= 0, with a positive sum"),
+    5: (ValueError, "RUL values must be finite and >= 0"),
+}
+
+
+class FilterModel(NamedTuple):
+    """What every row's filters share (built by :mod:`scas_env.core.setup`).
+
+    ``process``: per part, :func:`~prognostics.degradation_models.predict_particles`'
+    model arguments; ``rul_tables``: per part, the growth table of the RUL; ``d_threshold``:
+    per part, the damage of its critical value; ``critical``: (crack, wear) critical values
+    (m); ``active``: whether each fault grows; ``learn_part``, ``learn_aux``: per learning
+    feature, its filter and the index of its effect's mean in that filter's ``aux``;
+    ``learn_stack``, ``learn_own``, ``learn_other``: its surrogate (mean, unit std, run std)
+    tables with the own part's severity on axis 1 and their grids (fractions);
+    ``ground_*``: the same for G1 (spring) and G3 (seal); ``resample``: (threshold N_eff,
+    bandwidth h, kernel variance kappa, gaussian kernel, shrink).
+    """
+
+    process: tuple
+    rul_tables: tuple
+    d_threshold: np.ndarray
+    low_quantile: float
+    critical: np.ndarray
+    active: np.ndarray
+    learn_part: np.ndarray
+    learn_aux: np.ndarray
+    learn_stack: tuple
+    learn_own: tuple
+    learn_other: tuple
+    noise_scale: float
+    resample: tuple
+    ground_aux: np.ndarray
+    ground_stack: tuple
+    ground_own: tuple
+    ground_other: tuple
+
+
+@njit(cache=True)
+def cell_of(grid: np.ndarray, v: float) -> tuple[int, float]:
+    """Cell j of ``grid`` holding ``v`` (clamped to [grid[0], grid[-1]]) and its fraction in
+    it, as the surrogate's bilinear tables (``bisect_right - 1``, the last cell at the end)."""
+    v = min(max(v, grid[0]), grid[-1])
+    j = 0
+    while j < grid.size - 2 and grid[j + 1] <= v:
+        j += 1
+    return j, (v - grid[j]) / (grid[j + 1] - grid[j])
+
+
+@njit(cache=True)
+def bilinear_at(stack: np.ndarray, q: int, i: int, ti: float, j: int, tj: float) -> float:
+    """Table ``stack[q]`` at (i + ti, j + tj)."""
+    return (
+        stack[q, i, j] * ((1 - ti) * (1 - tj))
+        + stack[q, i + 1, j] * (ti * (1 - tj))
+        + stack[q, i, j + 1] * ((1 - ti) * tj)
+        + stack[q, i + 1, j + 1] * (ti * tj)
+    )
+
+
+@njit(cache=True)
+def effect_at(
+    stack: np.ndarray, own_grid: np.ndarray, other_grid: np.ndarray, own: float, other: float,
+    z: float,
+) -> float:  # fmt: skip
+    """``mu + tau z`` of the tables at (own, other) fractions."""
+    i, ti = cell_of(own_grid, own)
+    j, tj = cell_of(other_grid, other)
+    return bilinear_at(stack, 0, i, ti, j, tj) + bilinear_at(stack, 1, i, ti, j, tj) * z
+
+
+@njit(cache=True)
+def effect_likelihood(
+    y: float,
+    m: float,
+    x: np.ndarray,
+    w: np.ndarray,
+    critical: float,
+    stack: np.ndarray,
+    own_grid: np.ndarray,
+    other_grid: np.ndarray,
+    other: float,
+    noise_scale: float,
+    extra_var: float,
+    z_mean: np.ndarray,
+    z_var: np.ndarray,
+    log_lik: np.ndarray,
+    work: tuple,
+) -> float:
+    """Per particle: ``mu``, ``tau``, ``sigma`` of the tables at its own severity
+    (``x / critical`` clipped to [0, 1]) and the other part at ``other``; predictive density
+    of ``y`` (the mean of ``m`` runs, extra variance ``extra_var``) into ``log_lik`` and the
+    effect conditioned on it. Returns the weighted mean effect ``sum w_i tau_i m_i`` before
+    conditioning."""
+    n = x.size
+    j, tj = cell_of(other_grid, other)
+    mu, tau, var = work[10], work[11], work[12]
+    shift = 0.0
+    for p in range(n):
+        i, ti = cell_of(own_grid, min(max(x[p] / critical, 0.0), 1.0))
+        mu[p] = bilinear_at(stack, 0, i, ti, j, tj)
+        tau[p] = bilinear_at(stack, 1, i, ti, j, tj)
+        run = bilinear_at(stack, 2, i, ti, j, tj) * noise_scale
+        var[p] = run * run / m + extra_var
+        shift += w[p] * tau[p] * z_mean[p]
+    random_effect_update(y, mu, tau, var, z_mean, z_var, log_lik)
+    return shift
+
+
+@njit(cache=True)
+def fraction_moments(x: np.ndarray, w: np.ndarray, critical: float, sq: np.ndarray) -> tuple:
+    """Weighted mean (clipped to [0, 1]) and variance of a severity as a fraction of
+    ``critical`` (``sq``: scratch of N). ``np.dot`` as numpy's ``@`` (the same BLAS sum)."""
+    mean = np.dot(w, x)
+    for i in range(x.size):
+        d = x[i] - mean
+        sq[i] = d * d
+    var = max(np.dot(w, sq), 0.0) / critical**2
+    return min(max(mean / critical, 0.0), 1.0), var
+
+
+@njit(cache=True)
+def work_arrays(n: int, n_learn: int) -> tuple:
+    """Scratch of the filter kernels for N particles: cumsum, indices, two buffers, the
+    process scratch, log-likelihoods, squares, batch means, (unused), and the per-particle
+    mu, tau, variance of a likelihood."""
+    return (
+        np.empty(n), np.empty(n, dtype=np.intp), np.empty(n), np.empty(n), np.zeros((10, n)),
+        np.empty(n), np.empty(n), np.empty(max(n_learn, 1)), np.empty(0), np.empty(0),
+        np.empty(n), np.empty(n), np.empty(n),
+    )  # fmt: skip
+
+
+@njit(cache=True)
+def _resampled(n_eff: float, e: int, p: int, bank: tuple, work: tuple, model: FilterModel,
+               handle: tuple) -> bool:  # fmt: skip
+    """Resample filter p of row e if its weights degenerated (``ParticleFilter._after_update``);
+    False: degenerate weights."""
+    bx, blt, bw, blw, baux = bank
+    thr_n, h, kappa, gaussian, shrink = model.resample
+    k = resample_if_degenerate(
+        n_eff, thr_n, bx[e, p], blt[e, p], bw[e, p], blw[e, p], baux[e, p], work[0], work[1],
+        work[2], work[3], h, kappa, gaussian, shrink, handle,
+    )  # fmt: skip
+    return k >= 0
+
+
+@njit(cache=True)
+def _predict(e: int, p: int, d: float, bank: tuple, pending: np.ndarray, status: np.ndarray,
+             work: tuple, model: FilterModel, handle: tuple) -> None:  # fmt: skip
+    """Filter p of row e predicted over ``d`` flights, taken off ``pending``; status 1 if a
+    particle left the representable range."""
+    bx, blt = bank[0], bank[1]
+    if p == 0:
+        predict_particles(bx[e, 0], blt[e, 0], d, handle, work[4], *model.process[0])
+    else:
+        predict_particles(bx[e, 1], blt[e, 1], d, handle, work[4], *model.process[1])
+    if _first_out_of_range(bx[e, p], blt[e, p], MAX_ABS_SEVERITY, MAX_ABS_LOG_THETA) >= 0:
+        status[e] = 1
+    pending[e, p] -= d
+
+
+@njit(cache=True)
+def _survive(e: int, bank: tuple, status: np.ndarray, work: tuple, model: FilterModel,
+             handle: tuple) -> None:  # fmt: skip
+    """Both parts fly, so neither has reached its critical value: particles past it lose
+    their weight (status 3 if degenerate)."""
+    bx, bw, blw = bank[0], bank[2], bank[3]
+    for p in range(2):
+        if model.active[p] and status[e] == 0:
+            n_eff = _condition_below(bx[e, p], blw[e, p], bw[e, p], model.critical[p])
+            if n_eff >= 0.0 and not _resampled(n_eff, e, p, bank, work, model, handle):
+                status[e] = 3
+
+
+@njit(cache=True)
+def _effect_update(e: int, p: int, k: int, y: float, m: float, moments: tuple,
+                   st: np.ndarray, g_own: np.ndarray, g_other: np.ndarray, bank: tuple,
+                   status: np.ndarray, work: tuple, model: FilterModel,
+                   handle: tuple) -> float:  # fmt: skip
+    """The mean ``y`` of ``m`` runs of a feature whose installation effect is aux states
+    ``k``, ``k + 1`` of filter p, into that filter; returns ``y`` corrected to a healthy new
+    installation. Status 2 (non-finite likelihood) or 3."""
+    bx, bw, blw, baux = bank[0], bank[2], bank[3], bank[4]
+    c_hat, c_var, w_hat, w_var = moments
+    own, other, other_var = (c_hat, w_hat, w_var) if p == 0 else (w_hat, c_hat, c_var)
+    log_lik = work[5]
+    z_mean, z_var = baux[e, p, k], baux[e, p, k + 1]
+    z_bar = np.dot(bw[e, p], z_mean)
+    lo, hi = max(other - SLOPE_STEP, 0.0), min(other + SLOPE_STEP, 1.0)
+    slope = (
+        effect_at(st, g_own, g_other, own, hi, z_bar)
+        - effect_at(st, g_own, g_other, own, lo, z_bar)
+    ) / (hi - lo)
+    cross = effect_at(st, g_own, g_other, own, other, 0.0) - effect_at(
+        st, g_own, g_other, own, 0.0, 0.0
+    )
+    shift = effect_likelihood(
+        y, m, bx[e, p], bw[e, p], model.critical[p], st, g_own, g_other, other,
+        model.noise_scale, slope * slope * other_var, z_mean, z_var, log_lik, work,
+    )  # fmt: skip
+    for i in range(log_lik.size):
+        if not math.isfinite(log_lik[i]):
+            status[e] = 2
+            return y - shift - cross
+    n_eff = _add_log_likelihood(blw[e, p], bw[e, p], log_lik)
+    if not _resampled(n_eff, e, p, bank, work, model, handle):
+        status[e] = 3
+    return y - shift - cross
+
+
+@njit(cache=True)
+def _moments(e: int, bank: tuple, model: FilterModel, work: tuple) -> tuple:
+    """(c_hat, c_var, w_hat, w_var): both filters' severities as fractions of critical."""
+    bx, bw, sq = bank[0], bank[2], work[6]
+    c_hat, c_var = fraction_moments(bx[e, 0], bw[e, 0], model.critical[0], sq)
+    w_hat, w_var = fraction_moments(bx[e, 1], bw[e, 1], model.critical[1], sq)
+    return c_hat, c_var, w_hat, w_var
+
+
+@njit(cache=True)
+def learn_row(e: int, bank: tuple, pending: np.ndarray, flight_sum: np.ndarray,
+              flight_count: np.ndarray, status: np.ndarray, work: tuple, model: FilterModel,
+              handle: tuple) -> None:  # fmt: skip
+    """Row e's filters learn from the mean of its batch of in-flight learning features (the
+    module docstring); the batch is emptied. The batch's ``m`` flights were flown at states
+    from ``m`` flights ago to one flight ago: each filter is predicted to ``m // 2`` flights
+    into the batch (the mean state), updated there, and the rest stays pending."""
+    m = flight_count[e]
+    if m == 0:
+        return
+    means = work[7]
+    for j in range(model.learn_part.size):
+        means[j] = flight_sum[e, j] / m
+        flight_sum[e, j] = 0.0
+    flight_count[e] = 0
+    after = m - m // 2
+    for p in range(2):
+        d = pending[e, p] - after
+        if d > 0 and status[e] == 0:
+            _predict(e, p, d, bank, pending, status, work, model, handle)
+    _survive(e, bank, status, work, model, handle)
+    if status[e] != 0:
+        return
+    moments = _moments(e, bank, model, work)
+    for j in range(model.learn_part.size):
+        if status[e] != 0:
+            return
+        _effect_update(
+            e, model.learn_part[j], model.learn_aux[j], means[j], float(m), moments,
+            model.learn_stack[j], model.learn_own[j], model.learn_other[j], bank, status, work,
+            model, handle,
+        )  # fmt: skip
+
+
+@njit(cache=True)
+def test_row(e: int, g1: float, g3: float, bank: tuple, pending: np.ndarray,
+             flight_sum: np.ndarray, flight_count: np.ndarray, status: np.ndarray, work: tuple,
+             model: FilterModel, handle: tuple) -> tuple:  # fmt: skip
+    """Row e's filters learn from a pre-flight test's G1 (spring) and G3 (seal) (module
+    docstring); returns both corrected to a healthy new installation (NaN where not
+    reached because of a non-zero status)."""
+    corrected = (np.nan, np.nan)
+    if flight_count[e] > 0:
+        learn_row(e, bank, pending, flight_sum, flight_count, status, work, model, handle)
+    for p in range(2):
+        d = pending[e, p]
+        if d > 0 and status[e] == 0:
+            _predict(e, p, d, bank, pending, status, work, model, handle)
+    if status[e] == 0:
+        _survive(e, bank, status, work, model, handle)
+    if status[e] == 0:
+        moments = _moments(e, bank, model, work)
+        c0 = _effect_update(
+            e, 0, model.ground_aux[0], g1, 1.0, moments, model.ground_stack[0],
+            model.ground_own[0], model.ground_other[0], bank, status, work, model, handle,
+        )  # fmt: skip
+        c1 = np.nan
+        if status[e] == 0:
+            c1 = _effect_update(
+                e, 1, model.ground_aux[1], g3, 1.0, moments, model.ground_stack[1],
+                model.ground_own[1], model.ground_other[1], bank, status, work, model, handle,
+            )  # fmt: skip
+        corrected = (c0, c1)
+    return corrected
+
+
+@njit(cache=True)
+def refresh_row(e: int, bank: tuple, tables: tuple, status: np.ndarray, work: tuple,
+                model: FilterModel) -> None:  # fmt: skip
+    """Both parts' RUL tables of row e's clouds into row e of ``tables = (sorted, cum_w,
+    suffix_w, suffix_wr, low)``; status 4 or 5 if a cloud is invalid."""
+    bx, blt, bw = bank[0], bank[1], bank[2]
+    rul_sorted, rul_cum_w, rul_suffix_w, rul_suffix_wr, rul_low = tables
+    for p in range(2):
+        rul = model.rul_tables[p]
+        code, q = _build_from_cloud(
+            rul[0], rul[1], rul[2], rul[3], rul[4], model.d_threshold[p], bx[e, p], blt[e, p],
+            bw[e, p], model.low_quantile, work[6], rul_sorted[e, p], rul_cum_w[e, p],
+            rul_suffix_w[e, p], rul_suffix_wr[e, p],
+        )  # fmt: skip
+        rul_low[e, p] = q
+        if code != 0 and status[e] == 0:
+            status[e] = 3 + code
+
+
+@njit(cache=True)
+def refresh_rows(rows: np.ndarray, stale: np.ndarray, bank: tuple, tables: tuple,
+                 status: np.ndarray, model: FilterModel) -> None:  # fmt: skip
+    """:func:`refresh_row` for each row of ``rows`` whose ``stale`` flag is set (cleared)."""
+    work = work_arrays(bank[0].shape[2], model.learn_part.size)
+    for e in rows:
+        if stale[e]:
+            status[e] = 0
+            refresh_row(e, bank, tables, status, work, model)
+            stale[e] = False
+
+
+__all__ = [
+    "SLOPE_STEP",
+    "STATUS_MESSAGES",
+    "FilterModel",
+    "bilinear_at",
+    "cell_of",
+    "effect_at",
+    "effect_likelihood",
+    "fraction_moments",
+    "learn_row",
+    "refresh_row",
+    "refresh_rows",
+    "test_row",
+    "work_arrays",
+]

@@ -1,0 +1,197 @@
+"""The observation of an actuator: names, units, bounds, and its assembly from a batch.
+
+Float64 inside; the observation is cast to float32 here, at the boundary. Entries saturate
+at their documented bounds (the raw values travel in ``info["features"]``).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+from gymnasium import spaces
+from numba import njit
+
+from prognostics.rul_ageing import ageing_summary
+from scas_env.core.batch import ActuatorBatch
+from scas_env.core.costs import CostModel
+from scas_env.core.scenario import Scenario
+from scas_env.core.setup import FLIGHT_FEATURES, GROUND_FEATURES, PARTS, UPCOMING_PARTS
+
+#: feature -> (display unit, factor from SI, lower bound, upper bound) in display units
+FEATURE_UNITS = {
+    "I2": ("-", 1.0, -1.0, 1.0),
+    "I6": ("mm", 1e3, 0.0, 5.2),
+    "I7": ("uA/mm", 1e3, 0.0, 1e5),
+    "I8": ("uA", 1e6, -1e4, 1e4),
+    "I9": ("-", 1.0, 0.0, 100.0),
+    "G1": ("uA", 1e6, -1e4, 1e4),
+    "G3": ("uA/mm", 1e3, -4e4, 4e4),
+}
+#: the observed features, in the column order of ``ActuatorBatch.a["last"]``
+FEATURES = (*FLIGHT_FEATURES, *GROUND_FEATURES)
+#: groups of each flat observation mode, in order (``"dict"`` holds every group)
+GROUP_ORDER: dict[str, tuple[str, ...]] = {
+    "features+rul": ("features", "filter", "monitor"),
+    "features": ("features", "monitor"),
+    "state": ("state",),
+}
+
+
+@njit(cache=True)
+def ageing_estimates(
+    sorted_rul: np.ndarray,
+    cum_w: np.ndarray,
+    suffix_w: np.ndarray,
+    suffix_wr: np.ndarray,
+    low: np.ndarray,
+    pending: np.ndarray,
+    horizon: float,
+    cap: float,
+    out: np.ndarray,
+) -> None:
+    """``out[e, p] = (mean, low, risk)`` of part p of row e after ``pending[e, p]`` flights
+    since its filter's last prediction (:mod:`prognostics.rul_ageing`); mean and low capped
+    at ``cap``."""
+    for e in range(sorted_rul.shape[0]):
+        for p in range(sorted_rul.shape[1]):
+            mean, low_k, risk = ageing_summary(
+                sorted_rul[e, p], cum_w[e, p], suffix_w[e, p], suffix_wr[e, p], low[e, p],
+                float(pending[e, p]), horizon,
+            )  # fmt: skip
+            out[e, p, 0] = min(mean, cap)
+            out[e, p, 1] = min(low_k, cap)
+            out[e, p, 2] = risk
+
+
+class ObservationLayout:
+    """The observation's layout (names, units, bounds, space) of a scenario, and its
+    assembly from the rows of an :class:`~scas_env.core.batch.ActuatorBatch`."""
+
+    def __init__(self, scenario: Scenario, costs: CostModel) -> None:
+        self.scenario = scenario
+        self.features = FEATURES
+        self._factor = np.array([FEATURE_UNITS[f][1] for f in self.features])
+        slots = float(scenario.episode_slots)
+        cap = float(scenario.rul_cap_flights)
+        max_down = 1.0 + max(
+            costs.failure_downtime_slots, costs.seal_downtime_slots, costs.spring_downtime_slots
+        )
+        rows: list[tuple[str, str, float, float]] = [
+            (f, FEATURE_UNITS[f][0], FEATURE_UNITS[f][2], FEATURE_UNITS[f][3])
+            for f in self.features
+        ]
+        rows.append(("test_age", "slots", 0.0, slots))
+        rows.append(("no_go", "0/1", 0.0, 1.0))
+        filt = [
+            (f"{part}_{name}", unit, 0.0, hi)
+            for part in PARTS
+            for name, unit, hi in (
+                ("rul_mean", "flights", cap),
+                ("rul_low", "flights", cap),
+                ("risk", "-", 1.0),
+            )
+        ]
+        tail = [
+            ("spring_alarm", "0/1", 0.0, 1.0),
+            ("seal_alarm", "0/1", 0.0, 1.0),
+            ("spring_age", "flights", 0.0, slots),
+            ("seal_age", "flights", 0.0, slots),
+            ("downtime", "slots", 0.0, max_down),
+        ]
+        state = [
+            ("crack_fraction", "-", 0.0, 1.0),
+            ("wear_fraction", "-", 0.0, 1.0),
+            ("spring_rul_true", "flights", 0.0, cap),
+            ("seal_rul_true", "flights", 0.0, cap),
+            ("spring_age", "flights", 0.0, slots),
+            ("seal_age", "flights", 0.0, slots),
+            ("downtime", "slots", 0.0, max_down),
+            *(
+                (f"{part}_next_life_{k + 1}", "flights", 0.0, cap)
+                for part in PARTS
+                for k in range(UPCOMING_PARTS)
+            ),
+        ]
+        self.groups = {"features": rows, "filter": filt, "monitor": tail, "state": state}
+        mode = scenario.obs_mode
+        #: (low, high) float64 bounds per group, and of the flat layout ("flat")
+        self.bounds = {k: _bounds(v) for k, v in self.groups.items()}
+        if mode == "dict":
+            self.space = spaces.Dict({k: _box(v) for k, v in self.groups.items()})
+            self.names = tuple(f"{k}.{r[0]}" for k, v in self.groups.items() for r in v)
+            self.units = tuple(r[1] for v in self.groups.values() for r in v)
+        else:
+            layout = [r for g in GROUP_ORDER[mode] for r in self.groups[g]]
+            self.bounds["flat"] = _bounds(layout)
+            self.space = _box(layout)
+            self.names = tuple(r[0] for r in layout)
+            self.units = tuple(r[1] for r in layout)
+
+    def groups_of(self, batch: ActuatorBatch, rows: Any = slice(None)) -> dict[str, np.ndarray]:
+        """Float64 values of every observation group of this mode, one row per actuator of
+        ``rows`` (the filters' tables rebuilt first where they changed)."""
+        a, s = batch.a, self.scenario
+        mode = s.obs_mode
+        n = len(range(batch.n)[rows]) if isinstance(rows, slice) else len(rows)
+        out: dict[str, np.ndarray] = {}
+        if mode in ("features+rul", "features", "dict"):
+            out["features"] = np.column_stack(
+                [a["last"][rows] * self._factor, a["test_age"][rows], a["no_go"][rows]]
+            ).astype(np.float64)
+            out["monitor"] = np.column_stack(
+                [a["detected"][rows], a["part_age"][rows], a["downtime"][rows]]
+            ).astype(np.float64)
+        if mode in ("features+rul", "dict"):
+            batch.refresh(np.arange(batch.n)[rows])
+            est = np.empty((n, 2, 3))
+            ageing_estimates(
+                a["rul_sorted"][rows], a["rul_cum_w"][rows], a["rul_suffix_w"][rows],
+                a["rul_suffix_wr"][rows], a["rul_low"][rows], a["pending"][rows],
+                float(s.risk_horizon_flights), float(s.rul_cap_flights), est,
+            )  # fmt: skip
+            out["filter"] = est.reshape(n, 6)
+        if mode in ("state", "dict"):
+            sc = batch.setup.calibration.seal_critical_wear_m
+            out["state"] = np.column_stack(
+                [
+                    a["crack"][rows] / a["fail"][rows],
+                    a["wear"][rows] / sc,
+                    a["life"][rows],
+                    a["part_age"][rows],
+                    a["downtime"][rows],
+                    a["upcoming"][rows].reshape(n, -1),
+                ]
+            ).astype(np.float64)
+        return out
+
+    def observe(self, batch: ActuatorBatch, rows: Any = slice(None)) -> Any:
+        """The observations of ``rows`` (a batch: one row each), float32, saturated at the
+        documented bounds."""
+        values = self.groups_of(batch, rows)
+        if self.scenario.obs_mode == "dict":
+            return {k: clip_to_bounds(values[k], *self.bounds[k]) for k in self.groups}
+        order = GROUP_ORDER[self.scenario.obs_mode]
+        flat = np.concatenate([values[k] for k in order], axis=1)
+        return clip_to_bounds(flat, *self.bounds["flat"])
+
+
+def _box(rows: list[tuple[str, str, float, float]]) -> spaces.Box:
+    low = np.array([r[2] for r in rows], dtype=np.float32)
+    high = np.array([r[3] for r in rows], dtype=np.float32)
+    return spaces.Box(low, high, dtype=np.float32)
+
+
+def _bounds(rows: list[tuple[str, str, float, float]]) -> tuple[np.ndarray, np.ndarray]:
+    return np.array([r[2] for r in rows]), np.array([r[3] for r in rows])
+
+
+def clip_to_bounds(values: Any, low: np.ndarray, high: np.ndarray) -> np.ndarray:
+    """Saturate at the documented bounds (the observation's definition) and cast to float32;
+    ``values`` is one observation or a batch (rows)."""
+    return np.minimum(np.maximum(np.asarray(values, dtype=np.float64), low), high).astype(
+        np.float32
+    )
+
+
+__all__ = ["FEATURES", "FEATURE_UNITS", "GROUP_ORDER", "ObservationLayout", "clip_to_bounds"]

@@ -1,0 +1,421 @@
+"""The rare events of a row, in Python over the batch's arrays: a new unit, a part fitted.
+
+A reset fits a new unit with new parts; a replacement fits one new part. Each draws from
+the row's own streams (:mod:`scas_env.core.batch`): the unit from the ``parts`` stream, each
+spring pair and seal set from its kind's parts stream (``spring_parts``, ``seal_parts``), so
+that the k-th part of a kind fitted in an episode is the same part with the same life
+whatever the policy did. A fitted part brings its own growth stream, seeded from its parts
+stream; its whole life (standard flights to failure, the failing one included) is replayed
+from a copy of that stream when it is fitted. A new spring pair is a new installation: its
+installation effects are drawn, and the installation's reference reading of the ground
+features is recorded (the mean of ``reference_tests`` tests of the healthy installation).
+The monitor's filter of the part restarts from its prior.
+
+Everything here runs a few times per episode; the flight path is
+:mod:`scas_env.core.slot`.
+"""
+
+from __future__ import annotations
+
+import copy
+import math
+from dataclasses import replace
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from prognostics.normals import NormalStream
+from scas_env.actuator.health import CRACKED_SPRING, HealthState, actuator_config
+from scas_env.actuator.physics.spring import failure_depth_from_params
+from scas_env.actuator.sensing import draw_window, flight_window, ground_test
+from scas_env.actuator.uncertainty import (
+    UnitSample,
+    draw_run_conditions,
+    draw_unit,
+    truncated_normal,
+)
+from scas_env.core.flight import crack_flights_to_failure, wear_flights_to_failure
+from scas_env.core.setup import (
+    EFFECT_FEATURES,
+    FLIGHT_FEATURES,
+    GROUND_FEATURES,
+    MAX_LIFE_FLIGHTS,
+    PARTS,
+    UPCOMING_PARTS,
+    lognormal_sigma,
+)
+
+if TYPE_CHECKING:
+    from scas_env.core.batch import ActuatorBatch
+
+#: the streams of a row: its env's ``np_random`` hands out seeds in this order
+STREAMS = ("parts", "degradation", "measure", "filter")
+
+
+def seed_streams(np_random: np.random.Generator) -> dict[str, np.random.Generator]:
+    """A row's streams, seeded from its env's ``np_random``: a new unit (``parts``), the
+    measurement noise (``measure``), the filters (``filter``), then one parts stream per kind
+    of part. (``degradation`` keeps its place in the seed sequence but is not used: each
+    part grows from its own stream.)"""
+    seeds = np_random.integers(0, 2**63 - 1, size=len(STREAMS))
+    rngs = {name: np.random.default_rng(int(s)) for name, s in zip(STREAMS, seeds, strict=True)}
+    del rngs["degradation"]
+    part_seeds = np_random.integers(0, 2**63 - 1, size=len(PARTS))
+    for part, s in zip(PARTS, part_seeds, strict=True):
+        rngs[f"{part}_parts"] = np.random.default_rng(int(s))
+    return rngs
+
+
+def reset_row(batch: ActuatorBatch, e: int, np_random: np.random.Generator) -> None:
+    """Row ``e`` starts an episode: new streams from ``np_random``, a new unit with new parts
+    (or parts part-way through life, ``initial_health="random"``), the installation's
+    reference, filters at their priors, counters at zero."""
+    st, a = batch.setup, batch.a
+    rngs = seed_streams(np_random)
+    batch.rngs[e] = rngs
+    batch.set_handle(e, "measure")
+    batch.set_handle(e, "filter")
+    unit = draw_unit(st.params, rngs["parts"])
+    if st.physics:
+        batch.physics[e] = PhysicsRow(int(rngs["parts"].integers(0, 2**63 - 1)))
+    spring = draw_unit(st.params, rngs["spring_parts"])
+    unit = _fit_spring(batch, e, unit, spring, rngs["spring_parts"])
+    seal = draw_unit(st.params, rngs["seal_parts"])
+    unit = replace(unit, wear_rate_m3_n_m=seal.wear_rate_m3_n_m)
+    a["wmult"][e] = unit.wear_rate_m3_n_m / st.params.seal.wear_rate_m3_n_m
+    a["wear"][e] = 0.0
+    if st.scenario.initial_health == "random":
+        _random_health(batch, e, rngs["parts"].random(2))
+    if st.physics:
+        batch.physics[e].unit = unit
+    for part in PARTS:
+        _new_growth(batch, e, part, rngs[f"{part}_parts"], look_ahead=True)
+    record_reference(batch, e)
+    _clear_counters(batch, e)
+    _reset_monitor(batch, e)
+
+
+def _clear_counters(batch: ActuatorBatch, e: int) -> None:
+    a = batch.a
+    for name in (
+        "pending", "flight_sum", "flight_count", "det_n", "detected", "test_age", "no_go",
+        "part_age", "downtime", "slot", "flown", "tests", "no_go_count", "cost", "revenue",
+        "failures", "replacements", "wasted_sum", "wasted_count", "terms", "wasted_now",
+    ):  # fmt: skip
+        a[name][e] = 0
+    a["last"][e] = batch.healthy_features
+
+
+def _fit_spring(
+    batch: ActuatorBatch, e: int, unit: UnitSample, donor: UnitSample, rng: np.random.Generator
+) -> UnitSample:
+    """Row ``e`` takes ``donor``'s spring pair (geometry, Paris C, initial flaw) with new
+    installation effects drawn from ``rng``; returns the unit with it."""
+    st, a = batch.setup, batch.a
+    unit = replace(
+        unit,
+        wire_diameter_m=donor.wire_diameter_m,
+        mean_coil_diameter_m=donor.mean_coil_diameter_m,
+        paris_c=donor.paris_c,
+        initial_crack_m=donor.initial_crack_m,
+    )
+    a["crack"][e] = donor.initial_crack_m if st.scenario.crack_active else 0.0
+    a["theta"][e] = unit.paris_c / st.params.spring.paris_c
+    a["unit_z"][e] = st.surrogate.draw_unit_z(rng, st.unit_z_draws)
+    a["fail"][e] = (
+        failure_depth_from_params(
+            st.params,
+            wire_diameter_m=unit.wire_diameter_m[CRACKED_SPRING],
+            coil_diameter_m=unit.mean_coil_diameter_m[CRACKED_SPRING],
+        ).depth_m
+        if st.physics
+        else st.calibration.spring_failure_depth_m
+    )
+    return unit
+
+
+def _random_health(batch: ActuatorBatch, e: int, life_used: np.ndarray) -> None:
+    """Parts part-way through life: each at the fraction ``life_used`` of it (in damage
+    for the crack, in wear for the seals)."""
+    st, a = batch.setup, batch.a
+    cal, table = st.calibration, st.crack_table
+    if st.scenario.crack_active and a["crack"][e] >= cal.crack_dormant_below_m:
+        start = float(table.damage(np.array([a["crack"][e]]))[0])
+        end = float(table.damage(np.array([a["fail"][e]]))[0])
+        a["crack"][e] = float(
+            table.inverse_damage(np.array([start + life_used[0] * (end - start)]))[0]
+        )
+    if st.scenario.wear_active:
+        a["wear"][e] = life_used[1] * cal.seal_critical_wear_m
+
+
+def _new_growth(
+    batch: ActuatorBatch, e: int, part: str, rng: np.random.Generator, *, look_ahead: bool
+) -> None:
+    """The fitted ``part``'s own growth stream, seeded from ``rng`` (its parts stream), its
+    life, and (``look_ahead``, in the observation modes that show them) the lives of the
+    next parts."""
+    seed = int(rng.integers(0, 2**63 - 1))
+    batch.rngs[e][f"{part}_growth"] = np.random.default_rng(seed)
+    batch.set_handle(e, f"{part}_growth")
+    p = PARTS.index(part)
+    batch.a["life"][e, p] = flights_to_failure(batch, e, part)
+    if look_ahead and batch.look_ahead:
+        batch.a["upcoming"][e, p] = next_lives(batch, e, part, UPCOMING_PARTS)
+
+
+def flights_to_failure(batch: ActuatorBatch, e: int, part: str) -> float:
+    """Standard flights ``part`` of row ``e`` will still fly, the failing one included, at
+    its own future growth draws (a copy of its stream is replayed; inf if the fault is off
+    or the crack dormant)."""
+    st, a = batch.setup, batch.a
+    cal, wm = st.calibration, st.world
+    copied = copy.deepcopy(batch.rngs[e][f"{part}_growth"])  # alive while its handle is used
+    draws = NormalStream(copied).handle
+    if part == "spring":
+        if not st.scenario.crack_active or a["crack"][e] < cal.crack_dormant_below_m:
+            return math.inf
+        return crack_flights_to_failure(
+            float(a["crack"][e]), float(a["fail"][e]), float(a["theta"][e]), draws, *wm.damage,
+            wm.cv_log_depth, wm.cv_values, wm.dormant_m, MAX_LIFE_FLIGHTS,
+        )  # fmt: skip
+    if not st.scenario.wear_active:
+        return math.inf
+    rate = cal.wear_rate_m_per_flight * float(a["wmult"][e])
+    return wear_flights_to_failure(
+        float(a["wear"][e]), rate, wm.wear_cv, cal.seal_critical_wear_m, draws, MAX_LIFE_FLIGHTS
+    )
+
+
+def next_lives(batch: ActuatorBatch, e: int, part: str, count: int) -> list[float]:
+    """The whole lives (standard flights) of the next ``count`` parts of this kind that row
+    ``e``'s parts stream will supply (a copy of it: nothing of the row moves): what a
+    clairvoyant oracle knows."""
+    if isinstance(count, bool) or not isinstance(count, int) or count < 0:
+        raise ValueError(f"count = {count!r} must be an integer >= 0")
+    scratch = batch.scratch_row(e)
+    rng = copy.deepcopy(batch.rngs[e][f"{part}_parts"])
+    lives = []
+    for _ in range(count):
+        _fit_part(scratch, 0, part, rng, look_ahead=False)
+        lives.append(float(scratch.a["life"][0, PARTS.index(part)]))
+    return lives
+
+
+def _fit_part(
+    batch: ActuatorBatch, e: int, part: str, rng: np.random.Generator, *, look_ahead: bool
+) -> None:
+    """Row ``e`` gets a new ``part`` drawn from ``rng`` (its kind's parts stream), with its
+    growth stream and life."""
+    st, a = batch.setup, batch.a
+    donor = draw_unit(st.params, rng)
+    unit = batch.physics[e].unit if st.physics else donor
+    if part == "spring":
+        unit = _fit_spring(batch, e, unit, donor, rng)
+    else:
+        unit = replace(unit, wear_rate_m3_n_m=donor.wear_rate_m3_n_m)
+        a["wmult"][e] = donor.wear_rate_m3_n_m / st.params.seal.wear_rate_m3_n_m
+        a["wear"][e] = 0.0
+    if st.physics:
+        batch.physics[e].unit = unit
+    _new_growth(batch, e, part, rng, look_ahead=look_ahead)
+
+
+def replace_part(batch: ActuatorBatch, e: int, part: str, *, failed: bool) -> None:
+    """Row ``e`` fits a new ``part``: a preventive replacement (its cost, and the true life
+    thrown away, counted) or the replacement of a failed part (costed with the failure)."""
+    st, a = batch.setup, batch.a
+    p = PARTS.index(part)
+    if not failed:
+        cost = (
+            st.costs.spring_replacement_usd if part == "spring" else st.costs.seal_replacement_usd
+        )
+        a["terms"][e, 3] -= cost
+        wasted = min(float(a["life"][e, p]), st.scenario.rul_cap_flights)
+        a["wasted_sum"][e, p] += wasted
+        a["wasted_count"][e, p] += 1
+        a["wasted_now"][e, p] = wasted
+    a["replacements"][e, p] += 1
+    _fit_part(batch, e, part, batch.rngs[e][f"{part}_parts"], look_ahead=True)
+    if part == "spring":
+        record_reference(batch, e)
+    reset_filter(batch, e, part)
+    a["no_go"][e] = False
+    a["part_age"][e, p] = 0
+
+
+def record_reference(batch: ActuatorBatch, e: int) -> None:
+    """The installation's reference reading of G1 and G3, recorded at fitting: the mean of
+    ``reference_tests`` tests of the installation with healthy parts (the measure stream)."""
+    st = batch.setup
+    rng = batch.rngs[e]["measure"]
+    n = int(st.scenario.reference_tests)
+    if st.physics:
+        tests = [physics_test(batch, e, rng, healthy=True) for _ in range(n)]
+    else:
+        idx = st.world.ground_idx.tolist()
+        unit_z = batch.a["unit_z"][e]
+        tests = [st.surrogate.sample_list(0.0, 0.0, unit_z, rng, idx) for _ in range(n)]
+    batch.a["reference"][e] = [math.fsum(t[k] for t in tests) / n for k in range(2)]
+
+
+def _reset_monitor(batch: ActuatorBatch, e: int) -> None:
+    """Both filters at their priors: the spring's, then the seals' (which keep the
+    installation's effects, here the priors), then, for parts of unknown age, spread over
+    their lives."""
+    a = batch.a
+    n = batch.setup.n_particles
+    a["w"][e] = 1.0 / n
+    a["log_w"][e] = -math.log(n)
+    a["aux"][e, :, 0::2] = 0.0
+    a["aux"][e, :, 1::2] = 1.0
+    reset_filter(batch, e, "spring")
+    reset_filter(batch, e, "seal")
+    if batch.setup.scenario.initial_health == "random":
+        _spread_over_life(batch, e)
+
+
+def reset_filter(batch: ActuatorBatch, e: int, part: str) -> None:
+    """A new ``part`` is fitted to row ``e``: the batch of in-flight features flown with the
+    old one is learnt from first, then its filter restarts from the prior (a new spring pair
+    is a new installation: every installation effect back to N(0, 1); new seals keep the
+    installation's, collapsed to one Gaussian), its detector is cleared."""
+    st, a = batch.setup, batch.a
+    batch.learn_now(e)
+    rng = batch.rngs[e]["filter"]
+    n = st.n_particles
+    p = PARTS.index(part)
+    if part == "spring":
+        a0, s0 = st.params.spring.initial_crack_m, st.params.uncertainty.initial_crack_sigma_m
+        x0 = truncated_normal(rng, a0, s0, lower=0.0, upper=st.calibration.spring_failure_depth_m,
+                              size=n)  # fmt: skip
+        _reset_cloud(batch, e, p, x0, _lognormal(rng, lognormal_sigma(st.params, part), n))
+        a["aux"][e, :, 0::2] = 0.0
+        a["aux"][e, :, 1::2] = 1.0
+    else:
+        w = a["w"][e, 1]
+        kept = [
+            _mixture_moments(w, a["aux"][e, 1, k], a["aux"][e, 1, k + 1])
+            for k in range(0, 2 * len(EFFECT_FEATURES[1]), 2)
+        ]
+        _reset_cloud(batch, e, p, 0.0, _lognormal(rng, lognormal_sigma(st.params, part), n))
+        for j, (mean, var) in enumerate(kept):
+            a["aux"][e, 1, 2 * j] = mean
+            a["aux"][e, 1, 2 * j + 1] = var
+    a["det_n"][e, p] = 0
+    a["detected"][e, p] = False
+    a["pending"][e, p] = 0.0
+    a["stale"][e] = True
+
+
+def _reset_cloud(batch: ActuatorBatch, e: int, p: int, x0, theta0: np.ndarray) -> None:
+    """Filter p of row e: particles at ``x0``, growth multipliers ``theta0`` (> 0), uniform
+    weights (:meth:`prognostics.particle_filter.ParticleFilter.reset`)."""
+    a = batch.a
+    n = batch.setup.n_particles
+    a["x"][e, p] = x0
+    if not (np.all(np.isfinite(a["x"][e, p])) and np.all(np.isfinite(theta0))):
+        raise ValueError("a filter prior gave a non-finite particle")
+    if not np.all(theta0 > 0.0):
+        raise ValueError("theta0 must be > 0 for every particle")
+    a["log_theta"][e, p] = np.log(theta0)
+    a["w"][e, p] = 1.0 / n
+    a["log_w"][e, p] = -math.log(n)
+
+
+def _lognormal(rng: np.random.Generator, sigma: float, n: int) -> np.ndarray:
+    """exp(sigma z), z drawn as numba kernels draw normals from ``rng`` (the same values)."""
+    return np.exp(sigma * NormalStream(rng).standard_normal(n))
+
+
+def _mixture_moments(w: np.ndarray, mean: np.ndarray, var: np.ndarray) -> tuple[float, float]:
+    """Mean and variance of the weighted mixture of Gaussians N(mean_i, var_i)."""
+    mu = float(w @ mean)
+    return mu, float(w @ var + w @ (mean - mu) ** 2)
+
+
+def _spread_over_life(batch: ActuatorBatch, e: int) -> None:
+    """Priors of parts part-way through life: each particle at a uniform fraction of its own
+    life (in damage for the crack, in wear for the seals)."""
+    st, a = batch.setup, batch.a
+    rng = batch.rngs[e]["filter"]
+    model, n = st.spring_process, st.n_particles
+    x, theta = np.array(a["x"][e, 0]), np.exp(a["log_theta"][e, 0])
+    start = model.damage(np.maximum(x, model.grid[0]))
+    end = model.damage(np.array([st.calibration.spring_failure_depth_m]))[0]
+    used = rng.random(n) * np.maximum(end - start, 0.0)
+    _reset_cloud(batch, e, 0, model.inverse_damage(start + used), theta)
+    wear = rng.random(n) * st.calibration.seal_critical_wear_m
+    _reset_cloud(batch, e, 1, wear, np.exp(a["log_theta"][e, 1]))
+    a["stale"][e] = True
+
+
+class PhysicsRow:
+    """What the physics fidelity keeps of a row beyond the arrays: the fitted unit (every
+    tolerance the simulation reads) and the episode's library of flight windows (drawn
+    lazily from their own seeds, each with its healthy baseline simulated once)."""
+
+    def __init__(self, library_seed: int) -> None:
+        self.library_seed = library_seed
+        self.unit: UnitSample | None = None
+        self.windows: dict = {}
+
+
+def _physics_config(batch: ActuatorBatch, e: int, rng: np.random.Generator, healthy: bool):
+    st, a = batch.setup, batch.a
+    health = HealthState(
+        crack_depth_m=0.0 if healthy else float(a["crack"][e]),
+        seal_wear_m=0.0 if healthy else float(a["wear"][e]),
+    )
+    conditions = draw_run_conditions(st.params, rng)
+    return actuator_config(st.params, unit=batch.physics[e].unit, conditions=conditions,
+                           health=health)  # fmt: skip
+
+
+def physics_test(
+    batch: ActuatorBatch, e: int, rng: np.random.Generator, *, healthy: bool = False
+) -> list[float]:
+    """A simulated pre-flight test of row ``e`` (its parts healthy if ``healthy``): G1, G3."""
+    config = _physics_config(batch, e, rng, healthy)
+    feats = ground_test(batch.setup.params, config, rng).features
+    return [feats[f] for f in GROUND_FEATURES]
+
+
+def _library_window(batch: ActuatorBatch, e: int, rng: np.random.Generator):
+    """This flight's window from row ``e``'s library (None: draw a new one from ``rng``)."""
+    st = batch.setup
+    size = int(st.scenario.window_library)
+    if size == 0:
+        return None
+    row = batch.physics[e]
+    k = int(rng.integers(size))
+    if k not in row.windows:
+        seeded = np.random.default_rng((row.library_seed, k))
+        row.windows[k] = draw_window(st.params, seeded, st.params.mission.flight_window_s)
+    return row.windows[k]
+
+
+def physics_flight(batch: ActuatorBatch, e: int, rng: np.random.Generator) -> np.ndarray:
+    """A simulated flight window of row ``e`` at its parts' state: the in-flight features."""
+    st = batch.setup
+    config = _physics_config(batch, e, rng, healthy=False)
+    window = flight_window(
+        st.params, config, rng, st.params.mission.flight_window_s,
+        window=_library_window(batch, e, rng),
+    )  # fmt: skip
+    return np.array([window.features[f] for f in FLIGHT_FEATURES])
+
+
+__all__ = [
+    "STREAMS",
+    "PhysicsRow",
+    "flights_to_failure",
+    "next_lives",
+    "physics_flight",
+    "physics_test",
+    "record_reference",
+    "replace_part",
+    "reset_filter",
+    "reset_row",
+    "seed_streams",
+]

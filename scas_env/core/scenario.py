@@ -1,0 +1,165 @@
+"""Scenario of a maintenance episode: fidelity, observation, horizon, filters, active faults.
+
+Files: ``Scenario.load("case.toml")`` / ``scenario.save("s.yaml")`` (TOML, YAML or JSON; the
+fields at the top level or in a ``[scenario]`` table; docs/configs.md).
+
+>>> s = Scenario()
+>>> s.fidelity, s.obs_mode, s.episode_slots
+('surrogate', 'features+rul', 2000)
+>>> Scenario(fidelity="fast")
+Traceback (most recent call last):
+...
+ValueError: Scenario.fidelity = 'fast' must be one of ('surrogate', 'physics')
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from scas_env.actuator.config import Validated, param
+
+FIDELITIES = ("surrogate", "physics")
+OBS_MODES = ("features+rul", "features", "state", "dict")
+INITIAL_HEALTH = ("new", "random")
+PREFLIGHT = ("on_demand", "every_flight")
+
+
+@dataclass(frozen=True)
+class Scenario(Validated):
+    """Everything about an episode that is not the actuator design or the costs.
+
+    Attributes
+    ----------
+    fidelity : ``"surrogate"`` (features drawn from a model calibrated on physics
+        campaigns; microseconds per step) or ``"physics"`` (the actuator is simulated for
+        every pre-flight test and flight window). Both grow the parts with the same
+        calibrated whole-flight growth and each part's own growth draws.
+    obs_mode : ``"features+rul"``, ``"features"`` (no particle filter), ``"state"`` (true
+        severities and lives: the oracle's view) or ``"dict"`` (every quantity, for
+        inspection).
+    initial_health : ``"new"`` (new parts at reset) or ``"random"`` (each part starts at a
+        uniformly drawn fraction of its life, as on a fleet in service).
+    preflight : ``"on_demand"`` (the test runs when action 1 asks for it and costs
+        ``test_usd``) or ``"every_flight"`` (the paper's concept: the test runs at every
+        power-up, before every flight, at no cost; action 1 then equals action 0).
+    """
+
+    fidelity: str = "surrogate"
+    obs_mode: str = "features+rul"
+    initial_health: str = "new"
+    preflight: str = "on_demand"
+    episode_slots: float = param(
+        2000,
+        "slots",
+        lo=1,
+        hi=10_000_000,
+        integer=True,
+        source="about 1.7 spring and seal lives without maintenance (docs/physics.md, calibration)",
+    )
+    n_particles: float = param(
+        200, "-", lo=10, hi=100_000, integer=True, source="particles per filter (per part)"
+    )
+    risk_horizon_flights: float = param(
+        20,
+        "flights",
+        lo=1,
+        hi=10_000,
+        integer=True,
+        source="horizon of the probability-of-failure observation [B] (ref §9: 10 flights)",
+    )
+    rul_quantile: float = param(
+        0.05, "-", lo=0.0, hi=0.5, lo_open=True, source="low quantile of the RUL observation"
+    )
+    rul_cap_flights: float = param(
+        5000,
+        "flights",
+        lo=1,
+        hi=1e7,
+        source="RUL observations saturate here (documented bound of the observation)",
+    )
+    crack_active: float = param(1, "bool", lo=0, hi=1, integer=True, source="spring crack on")
+    wear_active: float = param(1, "bool", lo=0, hi=1, integer=True, source="seal wear on")
+    detection_window: float = param(
+        20,
+        "samples",
+        lo=2,
+        hi=1000,
+        integer=True,
+        source="running window of the section-5.1 detector ([DJS20] rule, ref §9)",
+    )
+    filter_noise_scale: float = param(
+        1.0,
+        "-",
+        lo=0.0,
+        lo_open=True,
+        hi=100.0,
+        source="multiplies the measurement noise the filters assume (filter-quality studies)",
+    )
+    filter_growth_bias: float = param(
+        1.0,
+        "-",
+        lo=0.0,
+        lo_open=True,
+        hi=100.0,
+        source="multiplies the growth rates the filters assume (a model that is off)",
+    )
+
+    reference_tests: float = param(
+        4,
+        "tests",
+        lo=1,
+        hi=100,
+        integer=True,
+        source="airworthiness go/no-go: tests averaged into the installation's reference at "
+        "fitting (a fitting check of a few power-ups)",
+    )
+    acceptance_catch: float = param(
+        0.9,
+        "-",
+        lo=0.5,
+        hi=0.999,
+        source="airworthiness go/no-go: probability that a part at its critical level fails "
+        "the test (the limit sits at that quantile of its reading)",
+    )
+    flight_update_flights: float = param(
+        10,
+        "flights",
+        lo=1,
+        hi=1000,
+        integer=True,
+        source="flights per update of the filters by the in-flight features I8, I9: the "
+        "ground station processes the flight-data downloads in batches",
+    )
+    window_library: float = param(
+        64,
+        "windows",
+        lo=0,
+        hi=100_000,
+        integer=True,
+        source="physics fidelity: each flight flies one of this many Table-1 windows drawn at "
+        "reset, each window's healthy baseline simulated once (0: a new window every flight)",
+    )
+    spring_theta_walk: float = param(
+        0.0,
+        "1/sqrt(flight)",
+        lo=0.0,
+        hi=0.05,
+        source="random walk of the spring filter's log theta (std per sqrt(flight); 0: none, "
+        "the growth multiplier is static; docs/beliefs.md)",
+    )
+
+    def _check(self) -> None:
+        for name, allowed in (
+            ("fidelity", FIDELITIES),
+            ("obs_mode", OBS_MODES),
+            ("initial_health", INITIAL_HEALTH),
+            ("preflight", PREFLIGHT),
+        ):
+            value = getattr(self, name)
+            if value not in allowed:
+                raise ValueError(f"Scenario.{name} = {value!r} must be one of {allowed}")
+        if not (self.crack_active or self.wear_active):
+            raise ValueError("Scenario: at least one of crack_active, wear_active must be 1")
+
+
+__all__ = ["FIDELITIES", "INITIAL_HEALTH", "OBS_MODES", "PREFLIGHT", "Scenario"]

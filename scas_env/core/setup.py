@@ -1,0 +1,300 @@
+"""What every actuator of a batch shares: the design, the scenario, the costs, and the
+constants the kernels read, computed once.
+
+:class:`Setup` is built from :class:`~scas_env.actuator.params.ScasParams`,
+:class:`~scas_env.core.scenario.Scenario`, :class:`~scas_env.core.costs.CostModel`, the
+calibration (growth tables, failure levels, whole-flight scatter) and the feature
+surrogate. It holds no episode state: the arrays of :class:`~scas_env.core.batch.ActuatorBatch`
+do.
+
+The monitor's filters (:mod:`scas_env.core.filters`): the spring filter's process is the
+calibrated Paris growth table with the whole-flight damage scatter at the new-part depth
+(``scheme="exact"``: one step of k flights lands where k flights would), the seal filter's
+linear Archard wear with its scatter; growth multipliers static (their prior, no random
+walk unless ``Scenario.spring_theta_walk``); ``filter_growth_bias`` and
+``filter_noise_scale`` make the filters assume other growth or noise than the world has.
+Every measured feature's installation effect is a per-particle Gaussian state: G1 and I8 in
+the spring filter, G3 and I9 in the seal filter.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import NamedTuple
+
+import numpy as np
+from scipy.stats import norm
+
+from prognostics.degradation_models import (
+    TabulatedRateModel,
+    linear_wear_model,
+    paris_crack_model,
+)
+from prognostics.particle_filter import regularisation_bandwidth
+from scas_env.actuator.calibration import Calibration
+from scas_env.actuator.params import ScasParams
+from scas_env.actuator.surrogate import SurrogateModel
+from scas_env.core.acceptance import AirworthinessLimits
+from scas_env.core.costs import CostModel
+from scas_env.core.filters import FilterModel
+from scas_env.core.scenario import Scenario
+
+#: the two replaceable parts, in column order of every (n, 2) array
+PARTS = ("spring", "seal")
+#: keys of ``info["reward_terms"]`` (USD this step), in the order they are summed
+REWARD_TERMS = ("flight", "test", "no_go", "replacement", "failure")
+#: in-flight features measured every flight, in observation order
+FLIGHT_FEATURES = ("I2", "I6", "I7", "I8", "I9")
+#: the pre-flight test's features
+GROUND_FEATURES = ("G1", "G3")
+#: in-flight features the filters learn from, and the part whose filter each one feeds
+LEARNING_FEATURES = {"I8": "spring", "I9": "seal"}
+#: each filter's features with installation effects as states, in ``aux`` order
+EFFECT_FEATURES = (("G1", "I8"), ("G3", "I9"))
+#: parts of each kind whose lives the clairvoyant view holds ahead of the fitted one
+UPCOMING_PARTS = 3
+#: flights after which a life counts as infinite (far beyond any episode)
+MAX_LIFE_FLIGHTS = 10_000_000
+#: kernel variance per dimension of the Epanechnikov jitter (2-D state)
+_KAPPA = 1.0 / (2 + 4)
+#: quantiles of the healthy distribution the detectors are fitted on (deterministic)
+_BASELINE_Z = norm.ppf(np.linspace(0.0005, 0.9995, 2000))
+#: the detectors: share of the window beyond the threshold, baseline percentile
+DETECTION_FRACTION = 0.95
+DETECTION_PERCENTILE = 95.0
+
+
+class WorldModel(NamedTuple):
+    """The world kernels' constants: the surrogate's grids (fractions) and (3, F, n_crack,
+    n_wear) stack of mean, unit std and run std; the growth table's damage arguments; the
+    whole-flight crack CV against log depth; the dormant depth (m), wear CV, mean wear per
+    flight (m), critical wear (m); which faults grow."""
+
+    crack_grid: np.ndarray
+    wear_grid: np.ndarray
+    stack: np.ndarray
+    flight_idx: np.ndarray
+    ground_idx: np.ndarray
+    damage: tuple
+    cv_log_depth: np.ndarray
+    cv_values: np.ndarray
+    dormant_m: float
+    wear_cv: float
+    wear_rate_m: float
+    seal_critical_m: float
+    crack_active: bool
+    wear_active: bool
+
+
+class DetectorModel(NamedTuple):
+    """The section-5.1 detectors on the corrected G1 (spring, both directions) and G3 (seal,
+    rising): per part the baseline's (lower, upper) percentiles, whether a rise and a fall
+    alarm, the window and the share of it that must lie beyond."""
+
+    thresholds: np.ndarray
+    rising: np.ndarray
+    falling: np.ndarray
+    window: int
+    fraction: float
+
+
+@dataclass(frozen=True, eq=False)
+class Setup:
+    """Design, scenario, costs, calibration and surrogate with the kernels' constants
+    (module docstring)."""
+
+    params: ScasParams
+    scenario: Scenario
+    costs: CostModel
+    calibration: Calibration
+    surrogate: SurrogateModel
+    world: WorldModel = field(init=False)
+    filters: FilterModel = field(init=False)
+    detector: DetectorModel = field(init=False)
+    limits: AirworthinessLimits = field(init=False)
+    #: limits on |G1 - ref|, |G3 - ref| (A, A/m)
+    go_limits: np.ndarray = field(init=False)
+    #: columns of I8, I9 among the flight features
+    learn_cols: np.ndarray = field(init=False)
+    #: installation effects drawn per fitted spring pair (the surrogate's first features)
+    unit_z_draws: int = field(init=False)
+    #: the world's crack-growth table (nominal Paris C) and the filters' process models
+    crack_table: TabulatedRateModel = field(init=False)
+    spring_process: TabulatedRateModel = field(init=False)
+    seal_process: TabulatedRateModel = field(init=False)
+
+    def __post_init__(self) -> None:
+        s, cal, sur = self.scenario, self.calibration, self.surrogate
+        flight_idx = np.array([sur.index(f) for f in FLIGHT_FEATURES], dtype=np.int64)
+        ground_idx = np.array([sur.index(f) for f in GROUND_FEATURES], dtype=np.int64)
+        crack_cv, wear_cv = cal.flight_scatter("whole_flight")
+        table = paris_crack_model(cal.crack_depth_m, cal.crack_rate_m_per_flight)
+        world = WorldModel(
+            crack_grid=sur.crack_grid,
+            wear_grid=sur.wear_grid,
+            stack=np.stack([sur.mean, sur.unit_std, sur.run_std]),
+            flight_idx=flight_idx,
+            ground_idx=ground_idx,
+            damage=table.table_args,
+            cv_log_depth=np.log(cal.crack_cv_depth_m),
+            cv_values=np.asarray(crack_cv, dtype=np.float64),
+            dormant_m=float(cal.crack_dormant_below_m),
+            wear_cv=float(wear_cv),
+            wear_rate_m=float(cal.wear_rate_m_per_flight),
+            seal_critical_m=float(cal.seal_critical_wear_m),
+            crack_active=bool(s.crack_active),
+            wear_active=bool(s.wear_active),
+        )
+        limits = AirworthinessLimits.from_surrogate(
+            sur, reference_tests=int(s.reference_tests), catch=s.acceptance_catch
+        )
+        put = object.__setattr__
+        put(self, "world", world)
+        spring_process, seal_process = _processes(self.params, s, cal)
+        put(self, "crack_table", table)
+        put(self, "spring_process", spring_process)
+        put(self, "seal_process", seal_process)
+        put(self, "filters", _filter_model(s, cal, sur, spring_process, seal_process))
+        put(self, "detector", _detector_model(s, sur))
+        put(self, "limits", limits)
+        put(self, "go_limits", np.array([limits.limits[f] for f in GROUND_FEATURES]))
+        put(
+            self,
+            "learn_cols",
+            np.array([FLIGHT_FEATURES.index(f) for f in LEARNING_FEATURES], dtype=np.int64),
+        )
+        put(self, "unit_z_draws", 1 + int(max(flight_idx.max(), ground_idx.max())))
+
+    @property
+    def n_particles(self) -> int:
+        return int(self.scenario.n_particles)
+
+    @property
+    def physics(self) -> bool:
+        return self.scenario.fidelity == "physics"
+
+
+def effect_tables(
+    surrogate: SurrogateModel, feature: str, part: str
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Feature's (mean, unit std, run std) tables with ``part``'s own severity on axis 1 and
+    the other part's on axis 2, and their grids (fractions of critical)."""
+    k = surrogate.index(feature)
+    stack = np.stack([surrogate.mean[k], surrogate.unit_std[k], surrogate.run_std[k]])
+    grids = (surrogate.crack_grid, surrogate.wear_grid)
+    if part == "seal":
+        stack, grids = stack.transpose(0, 2, 1), grids[::-1]
+    return (
+        np.ascontiguousarray(stack),
+        np.asarray(grids[0], dtype=np.float64),
+        np.asarray(grids[1], dtype=np.float64),
+    )
+
+
+def _processes(
+    params: ScasParams, s: Scenario, cal: Calibration
+) -> tuple[TabulatedRateModel, TabulatedRateModel]:
+    """The filters' process models of the spring and the seals (module docstring)."""
+    bias = s.filter_growth_bias
+    crack_cv_a0 = float(cal.crack_cv_at(params.spring.initial_crack_m, "whole_flight"))
+    wear_cv = cal.flight_scatter("whole_flight")[1]
+    spring = paris_crack_model(
+        cal.crack_depth_m,
+        bias * cal.crack_rate_m_per_flight,
+        damage_noise_cv=crack_cv_a0,
+        log_theta_noise_std=float(s.spring_theta_walk),
+        scheme="exact",
+    )
+    seal = linear_wear_model(bias * cal.wear_rate_m_per_flight, damage_noise_cv=wear_cv)
+    return spring, seal
+
+
+def _filter_model(
+    s: Scenario,
+    cal: Calibration,
+    sur: SurrogateModel,
+    spring: TabulatedRateModel,
+    seal: TabulatedRateModel,
+) -> FilterModel:
+    """The monitor's filters (module docstring)."""
+    a_fail, w_crit = cal.spring_failure_depth_m, cal.seal_critical_wear_m
+    tables = {
+        f: effect_tables(sur, f, part)
+        for part, feats in zip(PARTS, EFFECT_FEATURES, strict=True)
+        for f in feats
+    }
+    learn = tuple(LEARNING_FEATURES)
+    n = int(s.n_particles)
+
+    def aux_of(f: str) -> int:  # the effect's mean in its filter's aux (the variance next)
+        part = 0 if f in EFFECT_FEATURES[0] else 1
+        return 2 * EFFECT_FEATURES[part].index(f)
+
+    return FilterModel(
+        process=(spring.kernel_args, seal.kernel_args),
+        rul_tables=(spring.table_args, seal.table_args),
+        d_threshold=np.array(
+            [
+                float(spring.damage(np.array([a_fail]))[0]),
+                float(seal.damage(np.array([w_crit]))[0]),
+            ]
+        ),
+        low_quantile=float(s.rul_quantile),
+        critical=np.array([a_fail, w_crit]),
+        active=np.array([bool(s.crack_active), bool(s.wear_active)]),
+        learn_part=np.array([PARTS.index(LEARNING_FEATURES[f]) for f in learn], dtype=np.int64),
+        learn_aux=np.array([aux_of(f) for f in learn], dtype=np.int64),
+        learn_stack=tuple(tables[f][0] for f in learn),
+        learn_own=tuple(tables[f][1] for f in learn),
+        learn_other=tuple(tables[f][2] for f in learn),
+        noise_scale=float(s.filter_noise_scale),
+        resample=(0.5 * n, regularisation_bandwidth(n, "epanechnikov"), _KAPPA, False, True),
+        ground_aux=np.array([aux_of(f) for f in GROUND_FEATURES], dtype=np.int64),
+        ground_stack=tuple(tables[f][0] for f in GROUND_FEATURES),
+        ground_own=tuple(tables[f][1] for f in GROUND_FEATURES),
+        ground_other=tuple(tables[f][2] for f in GROUND_FEATURES),
+    )
+
+
+def _detector_model(s: Scenario, sur: SurrogateModel) -> DetectorModel:
+    """Thresholds of the detectors from the healthy run-to-run distribution of G1, G3
+    (``numpy.percentile``, linear, as :meth:`prognostics.detection.PercentileDetector.fit`)."""
+    thresholds = np.empty((2, 2))
+    for p, f in enumerate(GROUND_FEATURES):
+        k = sur.index(f)
+        base = sur.mean[k, 0, 0] + sur.run_std[k, 0, 0] * _BASELINE_Z
+        lower, upper = np.percentile(
+            base, [100.0 - DETECTION_PERCENTILE, DETECTION_PERCENTILE], method="linear"
+        )
+        thresholds[p] = float(lower), float(upper)
+    return DetectorModel(
+        thresholds=thresholds,
+        rising=np.array([True, True]),
+        falling=np.array([True, False]),
+        window=int(s.detection_window),
+        fraction=DETECTION_FRACTION,
+    )
+
+
+def lognormal_sigma(params: ScasParams, part: str) -> float:
+    """Log-sd of a part's growth multiplier prior (Paris C for the spring, the wear
+    coefficient for the seals)."""
+    unc = params.uncertainty
+    return float(unc.paris_c_log_sigma if part == "spring" else unc.wear_rate_log_sigma)
+
+
+__all__ = [
+    "EFFECT_FEATURES",
+    "FLIGHT_FEATURES",
+    "GROUND_FEATURES",
+    "LEARNING_FEATURES",
+    "MAX_LIFE_FLIGHTS",
+    "PARTS",
+    "REWARD_TERMS",
+    "UPCOMING_PARTS",
+    "DetectorModel",
+    "Setup",
+    "WorldModel",
+    "effect_tables",
+    "lognormal_sigma",
+]

@@ -1,0 +1,315 @@
+"""The numba kernel of one flight slot over the rows of a batch: test, fly, learn, book.
+
+:func:`slot_rows` runs, for each listed row and its action, what a slot does on the common
+path: on the ground, nothing; a pre-flight test (asked for, or before every flight): the
+ground features drawn, the filters and detectors updated, the go/no-go against the
+installation's reference; a flight: features drawn at the parts' state, the parts grown by
+their own draws, the learning batch filled and learnt from when full; then the slot's
+bookkeeping (:func:`close_row`). Two events leave the kernel for Python, which handles them
+with the row's part streams (:mod:`scas_env.core.parts`) and then closes the slot: a
+replacement asked for (``event = 2, 3``) and an in-flight failure (``event = FAILURE``, the
+failed parts in ``failed``). The physics fidelity measures in Python and calls
+:func:`test_measured` and :func:`fly_measured`, the same updates with given features.
+
+Arrays (one row per actuator; :class:`scas_env.core.batch.ActuatorBatch` names them):
+``world = (crack, wear, fail, theta, wmult, unit_z, life, reference)``,
+``monitor = (bank, pending, flight_sum, flight_count, stale, det_buf, det_n, detected)``,
+``memory = (last, test_age, no_go)``, ``books = (part_age, downtime, slot, flown, tests,
+no_go_count, cost, revenue)``, ``handles = (measure, filter, growth)``, ``out = (terms,
+reward, flew, failed, event, status)``; ``prices = (flight value, test, no-go inspection,
+failure)`` in USD.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from prognostics.normals import standard_normal
+from scas_env.core.filters import learn_row, test_row, work_arrays
+from scas_env.core.flight import crack_after_flight, features_at, wear_after_flight
+
+#: ``event`` of a row whose flight ended in a failure (2, 3: the replacement asked for)
+FAILURE = 4
+#: reward-term columns
+T_FLIGHT, T_TEST, T_NO_GO, T_REPLACEMENT, T_FAILURE = range(5)
+
+
+@njit(cache=True, inline="always")
+def _handle(h: np.ndarray, e: int) -> tuple:
+    return (h[e, 0], h[e, 1], h[e, 2])
+
+
+@njit(cache=True)
+def _quantile(ordered: np.ndarray, q: float) -> float:
+    """``np.quantile(values, q, method="linear")`` of sorted values, numpy's arithmetic
+    (:func:`prognostics.detection._linear_quantile`)."""
+    n = ordered.size
+    virtual = (n - 1) * q
+    lo = min(max(math.floor(virtual), 0), n - 1)
+    hi = min(lo + 1, n - 1)
+    gamma = virtual - lo
+    a, b = ordered[lo], ordered[hi]
+    diff = b - a
+    if gamma >= 0.5:
+        return b - diff * (1 - gamma)
+    return a + diff * gamma
+
+
+@njit(cache=True)
+def detect(e: int, p: int, value: float, det_buf: np.ndarray, det_n: np.ndarray,
+           detected: np.ndarray, det: tuple) -> None:  # fmt: skip
+    """Part p's section-5.1 detector of row e reads ``value``: the window of its last
+    ``W`` values against the healthy baseline's percentiles
+    (:class:`prognostics.detection.PercentileDetector`); the flag, once raised, stays."""
+    thresholds, rising, falling, window, fraction = det
+    det_buf[e, p, det_n[e, p] % window] = value
+    det_n[e, p] += 1
+    if det_n[e, p] < window:
+        return
+    ordered = np.sort(det_buf[e, p, :window])
+    low_q, high_q = _quantile(ordered, 1.0 - fraction), _quantile(ordered, fraction)
+    alarm = (rising[p] and low_q > thresholds[p, 1]) or (falling[p] and high_q < thresholds[p, 0])
+    detected[e, p] = alarm or detected[e, p]
+
+
+@njit(cache=True)
+def close_row(e: int, books: tuple, memory: tuple, out: tuple) -> None:
+    """The end of row e's slot: downtime, slot and ages advance; the reward and the
+    running cost and revenue take the slot's terms, summed in :data:`REWARD_TERMS` order."""
+    part_age, downtime, slot, flown, _, _, cost, revenue = books
+    terms, reward, flew = out[0], out[1], out[2]
+    downtime[e] = max(downtime[e] - 1, 0)
+    slot[e] += 1
+    memory[1][e] += 1
+    if flew[e]:
+        flown[e] += 1
+        part_age[e, 0] += 1
+        part_age[e, 1] += 1
+    t = terms[e]
+    reward[e] = ((((0.0 + t[0]) + t[1]) + t[2]) + t[3]) + t[4]
+    cost[e] -= (((0.0 + t[1]) + t[2]) + t[3]) + t[4]
+    revenue[e] += t[0]
+
+
+@njit(cache=True)
+def close_rows(rows: np.ndarray, books: tuple, memory: tuple, out: tuple) -> None:
+    """:func:`close_row` for each row of ``rows``."""
+    for e in rows:
+        close_row(e, books, memory, out)
+
+
+@njit(cache=True)
+def _tested(e: int, g1: float, g3: float, every_flight: bool, world: tuple, monitor: tuple,
+            memory: tuple, books: tuple, handles: tuple, out: tuple, go_limits: np.ndarray,
+            prices: tuple, filt: tuple, det: tuple, n_flight: int,
+            work: tuple) -> bool:  # fmt: skip
+    """A pre-flight test of row e read G1 = ``g1``, G3 = ``g3``: filters, detectors,
+    go/no-go, feature memory, counters and terms. Returns go (False also on a filter error,
+    whose status Python raises)."""
+    reference = world[7]
+    bank, pending, flight_sum, flight_count, stale, det_buf, det_n, detected = monitor
+    last, test_age, no_go = memory
+    terms, status = out[0], out[5]
+    c1, c3 = test_row(
+        e, g1, g3, bank, pending, flight_sum, flight_count, status, work, filt,
+        _handle(handles[1], e),
+    )  # fmt: skip
+    stale[e] = True
+    if status[e] != 0:
+        return False
+    detect(e, 0, c1, det_buf, det_n, detected, det)
+    detect(e, 1, c3, det_buf, det_n, detected, det)
+    passed = abs(g1 - reference[e, 0]) <= go_limits[0] and abs(g3 - reference[e, 1]) <= go_limits[1]
+    last[e, n_flight] = g1
+    last[e, n_flight + 1] = g3
+    test_age[e] = 0
+    no_go[e] = not passed
+    books[4][e] += 1
+    terms[e, T_TEST] = 0.0 if every_flight else -prices[1]
+    if not passed:
+        books[5][e] += 1
+        terms[e, T_NO_GO] = -prices[2]
+    return passed
+
+
+@njit(cache=True)
+def _grow(e: int, severity: np.ndarray, world: tuple, handles: tuple, wm: tuple,
+          out: tuple) -> bool:  # fmt: skip
+    """Row e's parts grow by one flight (each by the next draw of its own stream, times the
+    flight's severity); a flight off each part's life. Returns whether a part reached its
+    critical value (``failed`` says which)."""
+    crack, wear, fail, theta, wmult = world[0], world[1], world[2], world[3], world[4]
+    life = world[6]
+    failed = out[3]
+    hg = handles[2]
+    z_spring = standard_normal((hg[e, 0, 0], hg[e, 0, 1], hg[e, 0, 2]))
+    z_seal = standard_normal((hg[e, 1, 0], hg[e, 1, 1], hg[e, 1, 2]))
+    life[e, 0] -= 1.0
+    life[e, 1] -= 1.0
+    c = crack[e]
+    if wm.crack_active:
+        d = wm.damage
+        c = crack_after_flight(
+            c, theta[e], z_spring, severity[e, 0], d[0], d[1], d[2], d[3], d[4],
+            wm.cv_log_depth, wm.cv_values, wm.dormant_m,
+        )  # fmt: skip
+    w = wear[e]
+    if wm.wear_active:
+        w = wear_after_flight(w, wm.wear_rate_m * wmult[e], wm.wear_cv, z_seal, severity[e, 1])
+    crack[e], wear[e] = c, w
+    failed[e, 0] = c >= fail[e]
+    failed[e, 1] = w >= wm.seal_critical_m
+    return failed[e, 0] or failed[e, 1]
+
+
+@njit(cache=True)
+def _flown(e: int, feats: np.ndarray, broke: bool, severity: np.ndarray, interval: int,
+           monitor: tuple, memory: tuple, out: tuple, prices: tuple, filt: tuple,
+           learn_cols: np.ndarray, handles: tuple, work: tuple) -> None:  # fmt: skip
+    """After row e's flight: usage pending in both filters; a failure's terms and event,
+    or the features into the memory and the learning batch (learnt from when full) and
+    the flight's value."""
+    bank, pending, flight_sum, flight_count, stale = monitor[:5]
+    last = memory[0]
+    terms, flew, event, status = out[0], out[2], out[4], out[5]
+    pending[e, 0] += severity[e, 0]
+    pending[e, 1] += severity[e, 1]
+    if broke:
+        terms[e, T_FAILURE] = -prices[3]
+        event[e] = FAILURE
+        return
+    for m in range(feats.size):
+        last[e, m] = feats[m]
+    usable = True
+    for j in range(learn_cols.size):
+        if not math.isfinite(feats[learn_cols[j]]):
+            usable = False
+    if usable and learn_cols.size:
+        for j in range(learn_cols.size):
+            flight_sum[e, j] += feats[learn_cols[j]]
+        flight_count[e] += 1
+        if flight_count[e] >= interval:
+            learn_row(
+                e, bank, pending, flight_sum, flight_count, status, work, filt,
+                _handle(handles[1], e),
+            )  # fmt: skip
+            stale[e] = True
+    terms[e, T_FLIGHT] = prices[0]
+    flew[e] = True
+
+
+@njit(cache=True)
+def slot_rows(
+    rows: np.ndarray,
+    actions: np.ndarray,
+    every_flight: bool,
+    interval: int,
+    severity: np.ndarray,
+    world: tuple,
+    monitor: tuple,
+    memory: tuple,
+    books: tuple,
+    handles: tuple,
+    out: tuple,
+    go_limits: np.ndarray,
+    prices: tuple,
+    wm: tuple,
+    filt: tuple,
+    det: tuple,
+    learn_cols: np.ndarray,
+) -> None:
+    """One slot of each row ``e`` of ``rows`` under action ``actions[e]`` (module docstring).
+    Rows left with ``event[e] != 0`` (a replacement or a failure) or ``status[e] != 0`` (a
+    filter error) are not closed: Python takes them on."""
+    crack, wear, fail, unit_z = world[0], world[1], world[2], world[5]
+    downtime, no_go = books[1], memory[2]
+    terms, flew, failed, event, status = out[0], out[2], out[3], out[4], out[5]
+    n_flight = wm.flight_idx.size
+    work = work_arrays(monitor[0][0].shape[2], learn_cols.size)
+    ground_z = np.empty(2)
+    ground = np.empty(2)
+    flight_z = np.empty(n_flight)
+    feats = np.empty(n_flight)
+    for e in rows:
+        terms[e, :] = 0.0
+        flew[e] = False
+        failed[e, 0] = False
+        failed[e, 1] = False
+        event[e] = 0
+        status[e] = 0
+        a = actions[e]
+        if a >= 2:
+            event[e] = a
+            continue
+        if downtime[e] <= 0:
+            go = not no_go[e]
+            c = min(crack[e] / fail[e], 1.0)
+            w = min(wear[e] / wm.seal_critical_m, 1.0)
+            if every_flight or a == 1:
+                measure = _handle(handles[0], e)
+                ground_z[0] = standard_normal(measure)
+                ground_z[1] = standard_normal(measure)
+                features_at(c, w, unit_z[e], ground_z, wm.crack_grid, wm.wear_grid, wm.stack,
+                            wm.ground_idx, ground)  # fmt: skip
+                go = _tested(
+                    e, ground[0], ground[1], every_flight, world, monitor, memory, books,
+                    handles, out, go_limits, prices, filt, det, n_flight, work,
+                )  # fmt: skip
+                if status[e] != 0:
+                    continue
+            if go:
+                measure = _handle(handles[0], e)
+                for m in range(n_flight):
+                    flight_z[m] = standard_normal(measure)
+                features_at(c, w, unit_z[e], flight_z, wm.crack_grid, wm.wear_grid, wm.stack,
+                            wm.flight_idx, feats)  # fmt: skip
+                broke = _grow(e, severity, world, handles, wm, out)
+                _flown(e, feats, broke, severity, interval, monitor, memory, out, prices, filt,
+                       learn_cols, handles, work)  # fmt: skip
+                if event[e] != 0 or status[e] != 0:
+                    continue
+        close_row(e, books, memory, out)
+
+
+@njit(cache=True)
+def test_measured(
+    e: int, g1: float, g3: float, every_flight: bool, world: tuple, monitor: tuple,
+    memory: tuple, books: tuple, handles: tuple, out: tuple, go_limits: np.ndarray,
+    prices: tuple, filt: tuple, det: tuple, n_flight: int,
+) -> bool:  # fmt: skip
+    """A pre-flight test of row e whose features were measured outside (the physics
+    fidelity): the updates of :func:`slot_rows`. Returns go."""
+    work = work_arrays(monitor[0][0].shape[2], filt.learn_part.size)
+    return _tested(e, g1, g3, every_flight, world, monitor, memory, books, handles, out,
+                   go_limits, prices, filt, det, n_flight, work)  # fmt: skip
+
+
+@njit(cache=True)
+def fly_measured(
+    e: int, feats: np.ndarray, interval: int, severity: np.ndarray, world: tuple,
+    monitor: tuple, memory: tuple, handles: tuple, out: tuple, prices: tuple, wm: tuple,
+    filt: tuple, learn_cols: np.ndarray,
+) -> None:  # fmt: skip
+    """A flight of row e whose features were measured outside at the parts' state before
+    it (the physics fidelity): growth and updates of :func:`slot_rows` (NaN features if
+    it failed)."""
+    work = work_arrays(monitor[0][0].shape[2], learn_cols.size)
+    broke = _grow(e, severity, world, handles, wm, out)
+    if broke:
+        feats[:] = np.nan
+    _flown(e, feats, broke, severity, interval, monitor, memory, out, prices, filt, learn_cols,
+           handles, work)  # fmt: skip
+
+
+__all__ = [
+    "FAILURE",
+    "close_row",
+    "close_rows",
+    "detect",
+    "fly_measured",
+    "slot_rows",
+    "test_measured",
+]
