@@ -11,15 +11,15 @@ from policies.base import (
     policy_obs_mode,
     register_policy,
 )
-from policies.noisy_oracle import NoisyOraclePolicy
-from policies.oracle import OraclePolicy
-from policies.prognostic import FeatureRulePolicy, RulRiskPolicy
-from policies.rules import (
+from policies.rules.classic import (
     CorrectivePolicy,
     DetectionPolicy,
     PreventivePolicy,
     RandomPolicy,
 )
+from policies.rules.noisy_oracle import NoisyOraclePolicy
+from policies.rules.oracle import OraclePolicy
+from policies.rules.prognostic import FeatureRulePolicy, RulRiskPolicy
 
 __all__ = [
     "POLICIES",

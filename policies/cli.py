@@ -22,25 +22,25 @@ from typing import Any
 from scas_env.cli_args import (
     add_env_config_args,
     add_logging_args,
+    agent_scenario,
     announce_uncached_kernels,
     check_out_dir,
-    check_out_file,
     configure_logging,
     existing_file,
-    int_at_least,
     load_env_config,
     make_parser,
     name_list,
     nonneg_int,
+    positive_float,
     positive_int,
     scenario_changes,
 )
-from scas_env.costs import CostModel
-from scas_env.scenario import FIDELITIES, Scenario
+from scas_env.core.costs import CostModel
+from scas_env.core.scenario import FIDELITIES, Scenario
 
 log = logging.getLogger(__name__)
 
-__all__ = ["PARSERS", "benchmark_main", "preflight_main", "train_main", "tune_main", "value_main"]
+__all__ = ["PARSERS", "benchmark_main", "train_main", "tune_main", "value_main"]
 
 BENCHMARK_DOC = """\
 Policy benchmark: every policy on the same seeds -> table, CSV, JSON, Markdown and plots.
@@ -50,9 +50,7 @@ table gives means with 95% intervals and paired differences against the best rul
 --out: results.csv, events.csv, summary.json (statistics and the exact configuration: the
 Scenario and CostModel used), summary.md and plots. --ray-address runs the episodes as Ray
 tasks (auto, local or ray://host:10001; '' runs locally even when RAY_ADDRESS is set);
---workers is then unused. The shipped RL agent of the default list is the one trained on
-the scenario's observation: ppo on v0, ppo_v2 on v2 (an agent for another observation is
-left out). Example:
+--workers is then unused. The default list ends with the shipped RL agent (ppo). Example:
 
     scas-benchmark --episodes 40 --scenario examples/offshore_operator.toml --out results/off
 """
@@ -82,7 +80,7 @@ def _config_record(
 
 def benchmark_parser() -> Any:
     from policies.base import POLICIES
-    from policies.benchmark import DEFAULT_POLICIES, PLUGINS
+    from policies.benchmark.run import DEFAULT_POLICIES, PLUGINS
 
     parser = make_parser("scas-benchmark", BENCHMARK_DOC)
     parser.add_argument("--episodes", type=positive_int, default=40, help="episodes per policy")
@@ -154,45 +152,26 @@ def benchmark_main(argv: Sequence[str] | None = None) -> int:
         **_env_kwargs(scenario, costs, exclude=("obs_mode", "episode_slots")),
     }
 
-    from policies.benchmark import (
-        DEFAULT_POLICIES,
-        SCENARIO_AGENTS,
+    from policies.benchmark.report import format_table, write_outputs
+    from policies.benchmark.run import (
         PolicySpec,
-        check_specs,
         resolve_spec,
         run_benchmark,
     )
-    from policies.benchmark_report import format_table, write_outputs
 
     specs = [resolve_spec(name) for name in args.policies]
-    if list(args.policies) == list(DEFAULT_POLICIES):
-        # each shipped agent was trained on one observation layout: a default run keeps those
-        # that can act on its scenario (ppo on v0, ppo_v2 on v2); a default policy left out
-        # is a warning, an agent of another scenario that does not fit is only noted
-        extra = [resolve_spec(name) for name in SCENARIO_AGENTS]
-        kept = []
-        for spec in specs + extra:
-            try:
-                check_specs([spec], {**env_kwargs, "episode_slots": scenario.episode_slots})
-            except ValueError as exc:
-                (log.info if spec in extra else log.warning)(f"{spec.key} left out: {exc}")
-                continue
-            except ImportError:
-                if spec in extra:
-                    continue  # an optional extra: not needed to run the defaults
-                # a default policy: reported below with its install hint
-            kept.append(spec)
-        specs = kept
     for path in args.agent:
         label = Path(path).stem
         specs.append(
-            PolicySpec("sb3", {"path": str(path)}, label=label, module="policies.sb3_agents")
+            PolicySpec("sb3", {"path": str(path)}, label=label, module="policies.agents.sb3_agents")
         )
     for target in args.policy:
         if target.count(":") != 1 or not all(target.split(":")):
             parser.error(f"--policy {target!r}: expected MODULE:FACTORY")
         specs.append(
-            PolicySpec("factory", {"target": target}, label=target, module="policies.sb3_agents")
+            PolicySpec(
+                "factory", {"target": target}, label=target, module="policies.agents.sb3_agents"
+            )
         )
     labels = [s.key for s in specs]
     if len(set(labels)) != len(labels):
@@ -233,114 +212,84 @@ def benchmark_main(argv: Sequence[str] | None = None) -> int:
 
 
 TRAIN_DOC = """\
-Train an SB3 agent on ScasMaintenance-v0 and compare it with two rules.
+Train a MaskablePPO agent on decision epochs of ScasMaintenance-v2 (ScasMaintenanceEpochs-v2).
 
-Writes <out>/<name>.zip, <name>_vecnormalize.pkl and <name>.json, then prints mean reward,
-availability, cost per flight hour and in-flight failures per 1000 FH over
---compare-episodes episodes of the agent and the rules corrective and preventive
-(policies.rl.train, policies.rl.evaluate). Decision epochs: scripts/train_epochs.py. The
-shipped agent was trained with:
+One candidate of the hyper-parameter search file (policies/data/hyperparams/search.yml),
+one seed; checkpoints every --checkpoint-every decisions, SB3's progress.csv and run.json
+in --out (policies.agents.training.train_epochs). Warm start from a clone of a rule with
+--init (scripts/imitate_rule.py); the shipped agent's whole pipeline: `make train-agent-v2`
+(docs/rl.md). Example:
 
-    scas-train --algo ppo --timesteps 400000 --seed 0 --n-envs 4 --out policies/data \\
-        --name ppo_default --log-dir results/rl/ppo_default
+    scas-train --candidate gamma099 --seed 0 --native-envs 64 --timesteps 200000 \\
+        --out results/rl/gamma099_s0
 """
-
-#: The algorithms of :data:`policies.rl.ALGOS` (listed here so ``--help`` needs no torch).
-ALGO_NAMES = ("a2c", "dqn", "maskable_ppo", "ppo", "recurrent_ppo")
 
 
 def train_parser() -> Any:
+    from policies.agents.training import HYPERPARAMS_DIR
+
     parser = make_parser("scas-train", TRAIN_DOC)
-    parser.add_argument("--algo", default="ppo", choices=ALGO_NAMES, help="algorithm")
-    parser.add_argument("--timesteps", type=positive_int, default=400_000, help="env steps")
-    parser.add_argument("--seed", type=nonneg_int, default=0, help="seed of everything")
-    parser.add_argument("--n-envs", type=positive_int, default=4, help="parallel envs")
-    parser.add_argument("--out", default="results/rl", help="output folder of the agent")
-    parser.add_argument("--name", default=None, help="file stem of the agent (default: algo)")
-    parser.add_argument("--log-dir", default=None, help="logs (default: <out>/<name>_logs)")
+    parser.add_argument("--search", default=str(HYPERPARAMS_DIR / "search.yml"), help="search YAML")
+    parser.add_argument("--candidate", default="gamma099", help="candidate in the search YAML")
+    parser.add_argument("--seed", type=nonneg_int, default=0, help="training seed")
+    parser.add_argument("--algo", default="maskable_ppo", choices=("maskable_ppo", "ppo"))
     parser.add_argument(
-        "--eval-freq",
-        type=nonneg_int,
-        default=50_000,
-        help="env steps between evaluations, 0: none",
+        "--timesteps", type=positive_int, default=None, help="decisions (default: the YAML's)"
     )
     parser.add_argument(
-        "--eval-episodes", type=positive_int, default=5, help="episodes per evaluation"
+        "--max-wall-s", type=positive_float, default=None, help="stop after this wall time"
     )
-    parser.add_argument("--subprocess", action="store_true", help="SubprocVecEnv")
+    parser.add_argument("--checkpoint-every", type=positive_int, default=25_000, help="decisions")
     parser.add_argument(
-        "--native",
-        action="store_true",
-        help="train on the native vector env through policies.sb3_vec_env (fast)",
-    )
-    parser.add_argument(
-        "--episode-slots",
+        "--native-envs",
         type=positive_int,
         default=None,
-        help="scenario horizon (default: the scenario's episode_slots, 2000)",
+        help="train on this many actuators of the native decision-epoch vector env "
+        "(default: the YAML's n_envs single envs in a DummyVecEnv)",
     )
     parser.add_argument(
-        "--compare-episodes", type=positive_int, default=10, help="final comparison episodes"
+        "--init", default=None, help="start from this clone (scripts/imitate_rule.py's --out)"
     )
     parser.add_argument(
-        "--compare-seed", type=nonneg_int, default=1000, help="first env seed of the comparison"
+        "--running-normalization",
+        action="store_true",
+        help="with --init: let VecNormalize's statistics follow the rollouts (default: keep "
+        "the clone's; docs/rl.md)",
     )
-    parser.add_argument("--overwrite", action="store_true", help="replace an existing agent")
+    parser.add_argument("--out", required=True, help="new, empty output folder")
     add_env_config_args(parser)
     add_logging_args(parser)
     return parser
 
 
 def train_main(argv: Sequence[str] | None = None) -> int:
-    """``scas-train``: :func:`policies.rl.train`, then a comparison with two baselines."""
+    """``scas-train``: :func:`policies.agents.training.train_epochs`."""
     parser = train_parser()
     args = parser.parse_args(argv)
     configure_logging(args)
-    name = args.name or args.algo
-    check_out_file(parser, Path(args.out) / f"{name}.zip", args.overwrite)
-    scenario, costs = load_env_config(parser, args)
-    if costs != CostModel():
-        parser.error(
-            "--costs: the agent's metadata (policies.rl.save_agent) cannot record a cost model "
-            "yet; train with the default costs"
-        )
-    if args.episode_slots is not None:
-        scenario = scenario.replace(episode_slots=args.episode_slots)
-    env = scenario_changes(scenario)
+    if args.running_normalization and args.init is None:
+        parser.error("--running-normalization needs --init")
+    scenario = agent_scenario(parser, args)
+    from policies.agents.training import candidate_hyperparams, train_epochs
 
-    from policies.base import make_policy
-    from policies.rl import evaluate, load_agent, train
-
-    path = train(
-        args.algo,
-        args.timesteps,
-        args.seed,
-        args.n_envs,
+    try:
+        hyperparams = candidate_hyperparams(args.search, args.candidate)
+    except (OSError, ValueError, KeyError) as exc:
+        parser.error(f"--search {args.search!r} --candidate {args.candidate!r}: {exc}")
+    out = train_epochs(
+        hyperparams,
         args.out,
-        name=args.name,
-        eval_freq=args.eval_freq,
-        n_eval_episodes=args.eval_episodes,
-        log_dir=args.log_dir,
-        subprocess=args.subprocess,
-        native=args.native,
-        verbose=0,
-        progress_bar=not args.quiet,
-        **env,
+        seed=args.seed,
+        algo=args.algo,
+        checkpoint_every=args.checkpoint_every,
+        max_wall_s=args.max_wall_s,
+        total_timesteps=args.timesteps,
+        native_envs=args.native_envs,
+        init=args.init,
+        freeze_normalization=None if args.init is None else not args.running_normalization,
+        **scenario_changes(scenario),
     )
-    log.info(f"saved {path}")
-    agent = load_agent(path)
-    header = f"{'policy':12s} {'reward':>12s} {'availability':>12s} {'USD/FH':>8s}"
-    print(f"{header} {'failures/1000FH':>15s}")
-    for label, policy in (
-        (args.algo, agent),
-        ("corrective", make_policy("corrective", agent.obs_names)),
-        ("preventive", make_policy("preventive", agent.obs_names)),
-    ):
-        m = evaluate(policy, args.compare_episodes, args.compare_seed, **env).summary()
-        print(
-            f"{label:12s} {m['reward']:12.0f} {m['availability']:12.4f} "
-            f"{m['cost_per_fh']:8.1f} {m['failures_per_1000fh']:15.2f}"
-        )
+    log.info(f"trained: {out}")
     return 0
 
 
@@ -350,12 +299,12 @@ Tune the rule families with Optuna TPE on training seeds (the same budget for ev
 Every family gets --trials trials of --episodes training episodes (the same episodes in
 every trial: common random numbers); the nested families start from the tuned age rule.
 Writes tuning.json (chosen parameters, edge flags, every trial), tuning_history.csv and
-tuning_history.png to --out (policies.tuning). Held-out evaluation: scas-value.
+tuning_history.png to --out (policies.value.tuning). Held-out evaluation: scas-value.
 """
 
 
 def tune_parser() -> Any:
-    from policies.tuning import FAMILIES
+    from policies.value.tuning import FAMILIES
 
     parser = make_parser("scas-tune", TUNE_DOC)
     parser.add_argument(
@@ -371,7 +320,7 @@ def tune_parser() -> Any:
     parser.add_argument(
         "--quick",
         action="store_true",
-        help="tiny budget (policies.tuning.QUICK; then --trials, --episodes, --slots unused)",
+        help="tiny budget (policies.value.tuning.QUICK; then --trials, --episodes, --slots unused)",
     )
     parser.add_argument("--out", type=Path, default=Path("results/tuning"), help="output folder")
     parser.add_argument("--overwrite", action="store_true", help="replace an existing --out")
@@ -381,7 +330,7 @@ def tune_parser() -> Any:
 
 
 def tune_main(argv: Sequence[str] | None = None) -> int:
-    """``scas-tune``: :func:`policies.tuning.tune_families` and its writer."""
+    """``scas-tune``: :func:`policies.value.tuning.tune_families` and its writer."""
     parser = tune_parser()
     args = parser.parse_args(argv)
     configure_logging(args)
@@ -391,7 +340,7 @@ def tune_main(argv: Sequence[str] | None = None) -> int:
         parser.error(f"{args.scenario}: obs_mode is set per policy; leave it out of the file")
     env_kwargs = _env_kwargs(scenario, costs, exclude=("obs_mode", "episode_slots"))
 
-    from policies.tuning import QUICK, tune_families, write_tuning_outputs
+    from policies.value.tuning import QUICK, tune_families, write_tuning_outputs
 
     announce_uncached_kernels()
     size = (
@@ -427,7 +376,7 @@ Tunes every family on training seeds (Optuna TPE, the same budget), then runs ev
 
 
 def value_parser() -> Any:
-    from policies.tuning import FAMILIES
+    from policies.value.tuning import FAMILIES
 
     parser = make_parser("scas-value", VALUE_DOC)
     parser.add_argument("--episodes", type=positive_int, default=1000, help="held-out episodes")
@@ -448,7 +397,7 @@ def value_parser() -> Any:
         "--families",
         type=name_list(FAMILIES, "rule family"),
         default=None,
-        help="comma-separated rungs to tune and run (labels of policies.tuning.FAMILIES; the "
+        help="comma-separated rungs to tune and run (labels of policies.value.tuning.FAMILIES; the "
         "age rule, corrective and the oracle always run). Default: every rung",
     )
     add_env_config_args(parser)
@@ -467,7 +416,7 @@ def value_main(argv: Sequence[str] | None = None) -> int:
         parser.error(f"{args.scenario}: obs_mode is set per arm; leave it out of the file")
     env_kwargs = _env_kwargs(scenario, costs, exclude=("obs_mode", "episode_slots"))
 
-    from policies.value import QUICK, markdown_report, run_ladder, write_outputs
+    from policies.value.study import QUICK, markdown_report, run_ladder, write_outputs
 
     announce_uncached_kernels()
     size: dict[str, Any] = (
@@ -497,64 +446,10 @@ def value_main(argv: Sequence[str] | None = None) -> int:
     return 0
 
 
-PREFLIGHT_DOC = """\
-Availability with the pre-flight test on demand or before every flight.
-
-The age rule, plain and answering a no-go by replacing the implicated part, on the same
-seeded episodes of v1 and v2, both test modes (policies.preflight_study). Writes
-preflight.csv and preflight.json to --out.
-"""
-
-
-def preflight_parser() -> Any:
-    parser = make_parser("scas-preflight", PREFLIGHT_DOC)
-    parser.add_argument("--episodes", type=int_at_least(2), default=200, help="episodes per row")
-    parser.add_argument("--seed", type=nonneg_int, default=99, help="root seed of the episodes")
-    parser.add_argument("--out", type=Path, default=Path("results/preflight"), help="output folder")
-    parser.add_argument("--overwrite", action="store_true", help="replace an existing --out")
-    add_logging_args(parser)
-    return parser
-
-
-def preflight_main(argv: Sequence[str] | None = None) -> int:
-    """``scas-preflight``: :func:`policies.preflight_study.preflight_availability`."""
-    parser = preflight_parser()
-    args = parser.parse_args(argv)
-    configure_logging(args)
-    out = check_out_dir(parser, args.out, args.overwrite)
-    import csv
-    import json
-
-    from policies.preflight_study import preflight_availability
-    from scas_env import V2_KWARGS
-    from scas_env.results_folder import results_folder
-
-    announce_uncached_kernels()
-    scenarios = {"v1": {"go_no_go": "airworthiness"}, "v2": dict(V2_KWARGS)}
-    rows = preflight_availability(scenarios, episodes=args.episodes, seed=args.seed)
-    config = {"episodes": args.episodes, "seed": args.seed, "scenarios": scenarios}
-    with results_folder(out, config=config, seeds=args.seed, overwrite=args.overwrite) as tmp:
-        (tmp / "preflight.json").write_text(json.dumps(rows, indent=1))
-        with open(tmp / "preflight.csv", "w", newline="") as f:
-            writer = csv.DictWriter(f, fieldnames=list(rows[0]))
-            writer.writeheader()
-            writer.writerows(rows)
-    print("| scenario | preflight | rule | availability | no-go per episode | reward USD |")
-    print("|---|---|---|---|---|---|")
-    for r in rows:
-        print(
-            f"| {r['scenario']} | {r['preflight']} | {r['rule']} | "
-            f"{r['availability']:.5f} +- {r['availability_se']:.5f} | "
-            f"{r['no_go_per_episode']:.2f} | {r['reward_usd']:,.0f} |"
-        )
-    return 0
-
-
 #: command name -> function building its parser (for documentation and tests).
 PARSERS = {
     "scas-benchmark": benchmark_parser,
     "scas-train": train_parser,
     "scas-tune": tune_parser,
     "scas-value": value_parser,
-    "scas-preflight": preflight_parser,
 }

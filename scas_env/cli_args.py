@@ -27,8 +27,8 @@ from typing import Any
 
 from scas_env.actuator.config import FORMATS
 from scas_env.actuator.params import ScasParams
-from scas_env.costs import CostModel
-from scas_env.scenario import Scenario
+from scas_env.core.costs import CostModel
+from scas_env.core.scenario import Scenario
 
 log = logging.getLogger(__name__)
 #: Logged once per process when numba compiles (instead of sitting silent for ~30 s).

@@ -15,12 +15,10 @@ Three pieces, so that drawing never reaches into the env:
 matplotlib is imported inside :class:`HealthDashboard` only (the env layer does not need
 it otherwise). Frame cost: :func:`benchmark_frame_ms` (``scripts``: see docs/dashboard.md).
 
-The env is read through ``env.unwrapped`` attributes that exist today (``world``: crack,
-wear, their fractions, critical depth, true RUL; ``calibration``; ``monitor``: the
-filters' RUL distributions; ``builder.last``: latest features; ``stats``, ``slot``,
-``downtime``, ``scenario``), all in the small functions :func:`critical_levels`,
-:func:`unit_growth_multipliers`, :func:`rul_distribution`, :func:`episode_totals`,
-:func:`true_state` and :func:`latest_features`: the only places to change if they move.
+The env is read through row 0 of its batch (``env.unwrapped.batch``, the
+:class:`~scas_env.core.batch.ActuatorBatch` of the single env), all in the small functions
+:func:`critical_levels`, :func:`unit_growth_multipliers`, :func:`rul_distribution`,
+:func:`episode_totals`, :func:`true_state` and :func:`latest_features`.
 """
 
 from __future__ import annotations
@@ -32,10 +30,9 @@ from typing import Any
 
 import numpy as np
 
-from scas_env.observation import FEATURE_UNITS
+from scas_env.core.observation import FEATURE_UNITS, FEATURES
+from scas_env.core.setup import PARTS
 
-PARTS = ("spring", "seal")
-FEATURES = ("I2", "I6", "I7", "G1", "G3")
 #: central interval of the RUL distributions drawn (probability levels)
 INTERVAL = (0.05, 0.95)
 #: bins of the RUL histograms
@@ -163,58 +160,64 @@ def _frozen_array(name: str, value: Any) -> np.ndarray:
 def critical_levels(env: Any) -> tuple[float, float]:
     """(critical crack depth of the fitted spring, critical seal wear), m."""
     u = env.unwrapped
-    return float(u.world.spring_failure_m), float(u.calibration.seal_critical_wear_m)
+    return float(u.batch.a["fail"][0]), float(u.calibration.seal_critical_wear_m)
 
 
 def unit_growth_multipliers(env: Any) -> tuple[float, float]:
     """True growth multipliers of the fitted parts: (C_unit / C_nom, k_w,unit / k_w,nom)."""
-    w = env.unwrapped.world
-    return float(w.theta), float(w.wear_multiplier)
+    a = env.unwrapped.batch.a
+    return float(a["theta"][0]), float(a["wmult"][0])
 
 
 def rul_distribution(env: Any, part: str) -> tuple[np.ndarray, np.ndarray]:
     """``part``'s particle-filter RUL now (flights): (samples, weights summing to 1); the
-    distribution at the last test aged by the flights flown since (``scas_env.monitor``)."""
-    m = env.unwrapped.monitor
-    r, cum_w, _, _, _ = m.ageing(part).tables()
-    weights = np.diff(cum_w)
-    return np.maximum(r - float(m.pending[part]), 0.0), weights / weights.sum()
+    distribution at the filter's last update aged by the flights flown since."""
+    batch = env.unwrapped.batch
+    batch.refresh(np.zeros(1, dtype=np.int64))
+    p = PARTS.index(part)
+    a = batch.a
+    weights = np.diff(a["rul_cum_w"][0, p])
+    return (
+        np.maximum(a["rul_sorted"][0, p] - float(a["pending"][0, p]), 0.0),
+        weights / weights.sum(),
+    )
 
 
 def episode_totals(env: Any) -> dict[str, Any]:
     """Costs, revenue, counts and downtime of the episode so far."""
-    u = env.unwrapped
-    s = u.stats
+    a = env.unwrapped.batch.a
     return {
-        "slot": int(u.slot),
-        "cost_usd": float(s.cost),
-        "revenue_usd": float(s.revenue),
-        "flights": int(s.flown),
-        "tests": int(s.tests),
-        "failures": {p: int(s.failures[p]) for p in PARTS},
-        "replacements": {p: int(s.replacements[p]) for p in PARTS},
-        "downtime": int(u.downtime),
+        "slot": int(a["slot"][0]),
+        "cost_usd": float(a["cost"][0]),
+        "revenue_usd": float(a["revenue"][0]),
+        "flights": int(a["flown"][0]),
+        "tests": int(a["tests"][0]),
+        "failures": {p: int(a["failures"][0, k]) for k, p in enumerate(PARTS)},
+        "replacements": {p: int(a["replacements"][0, k]) for k, p in enumerate(PARTS)},
+        "downtime": int(a["downtime"][0]),
     }
 
 
 def true_state(env: Any) -> dict[str, float]:
-    """The truth now: crack depth and wear (m), their fractions of critical, true RUL of
-    each part (flights, ``inf`` if the fault never grows)."""
-    w = env.unwrapped.world
-    spring_rul, seal_rul = w.true_rul_flights()
+    """The truth now: crack depth and wear (m), their fractions of critical, each part's
+    remaining life (flights, the failing one included; ``inf`` if the fault never grows)."""
+    u = env.unwrapped
+    a = u.batch.a
+    crack, wear = float(a["crack"][0]), float(a["wear"][0])
     return {
-        "crack_depth_m": float(w.crack_m),
-        "seal_wear_m": float(w.wear_m),
-        "crack_fraction": float(w.crack_fraction),
-        "wear_fraction": float(w.wear_fraction),
-        "spring_rul_flights": float(spring_rul),
-        "seal_rul_flights": float(seal_rul),
+        "crack_depth_m": crack,
+        "seal_wear_m": wear,
+        "crack_fraction": crack / float(a["fail"][0]),
+        "wear_fraction": wear / float(u.calibration.seal_critical_wear_m),
+        "spring_rul_flights": float(a["life"][0, 0]),
+        "seal_rul_flights": float(a["life"][0, 1]),
     }
 
 
 def latest_features(env: Any) -> dict[str, float]:
     """Latest measured features (SI units; healthy means before the first measurement)."""
-    return {f: float(v) for f, v in env.unwrapped.builder.last.items()}
+    last = env.unwrapped.batch.a["last"][0]
+    return {f: float(v) for f, v in zip(FEATURES, last.tolist(), strict=True)}
 
 
 class HealthTrace:

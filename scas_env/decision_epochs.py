@@ -1,29 +1,30 @@
-"""Decision epochs over ``ScasMaintenance-v0``: "act now, then fly k flights" (a semi-MDP).
+"""Decision epochs over ``ScasMaintenance-v2``: "act now, then fly k flights" (a semi-MDP).
 
-Of the 2000 per-flight decisions of a v0 episode only a handful matter (a replacement, a
+Of the 2000 per-flight decisions of an episode only a handful matter (a replacement, a
 test); the rest are "fly". :class:`DecisionEpochs` lets an agent decide when to look again:
 one step applies a maintenance action at the current slot, then flies (action ``fly``; on
 the ground it waits) until ``k`` slots have passed, ``k`` chosen by the agent from a small
-set. The v0 env underneath is unchanged; a v0 episode and a decision-epoch episode on the
-same seed and the same per-slot actions are the same episode bit for bit (tested).
+set. The per-flight env underneath is unchanged; its episode and a decision-epoch episode on
+the same seed and the same per-slot actions are the same episode bit for bit (tested).
+Registered as ``scas_env/ScasMaintenanceEpochs-v2`` (the version of the env it wraps).
 
 ## Action space
 
 ``Discrete(4 * len(ks))``; action ``a`` means maintenance action ``a // len(ks)`` then
 ``k = ks[a % len(ks)]`` slots in all (the first one included):
 
-| a // len(ks) | v0 action | at the first slot |
+| a // len(ks) | per-flight action | at the first slot |
 |---|---|---|
 | 0 | fly | fly (wait while grounded) |
 | 1 | test_and_fly | pre-flight test, fly if it passes go/no-go |
 | 2 | replace_spring | new centering-spring pair (ground time) |
 | 3 | replace_seal | new seal set (ground time) |
 
-The remaining ``k - 1`` slots are ``fly``. A step ends early when the v0 episode truncates.
+The remaining ``k - 1`` slots are ``fly``. A step ends early when the episode truncates.
 
 ## Observation space
 
-``Box(n + 1,)`` float32: the v0 flat observation (``obs_mode`` ``"features+rul"``,
+``Box(n + 1,)`` float32: the per-flight env's flat observation (``obs_mode`` ``"features+rul"``,
 ``"features"`` or ``"state"``; names in ``obs_names``) followed by:
 
 | name | unit | bounds | meaning |
@@ -32,20 +33,21 @@ The remaining ``k - 1`` slots are ``fly``. A step ends early when the v0 episode
 
 ## Reward and discount
 
-``reward = sum_{j < n} gamma**j * r_j`` (USD), the v0 rewards ``r_j`` of the ``n`` slots
-flown in this step, discounted per flight with ``gamma`` (default 1: the plain sum, so an
-episode's total is v0's total). ``info`` is the v0 info of the last slot plus:
+``reward = sum_{j < n} gamma**j * r_j`` (USD), the per-flight rewards ``r_j`` of the ``n``
+slots flown in this step, discounted per flight with ``gamma`` (default 1: the plain sum, so
+an episode's total is the per-flight env's total). ``info`` is the per-flight info of the
+last slot plus:
 
 | key | unit | meaning |
 |---|---|---|
 | epoch_slots | slots | ``n``, the slots this step took (``k``, or fewer at truncation) |
 | epoch_discount | - | ``gamma ** n``: the discount to apply to the next step's value |
-| epoch_action | - | the maintenance choice at the first slot (a v0 action; 4: delegate) |
+| epoch_action | - | the maintenance choice at the first slot (0-3; 4: delegate) |
 | epoch_k | slots | the ``k`` chosen |
 
 Semi-MDP discounting with SB3: SB3's algorithms apply one fixed ``gamma`` per step, so they
 cannot use ``epoch_discount``. With ``gamma=1`` here (finite 2000-slot episodes, the slots
-left in the observation) the episode return is exactly v0's undiscounted return, which is
+left in the observation) the episode return is exactly the undiscounted return, which is
 what the benchmark scores; SB3's own ``gamma`` then only weighs decisions, not flights (use
 one close to 1, e.g. 0.99-0.999 per decision). A custom algorithm can bootstrap with
 ``epoch_discount`` instead.
@@ -61,23 +63,23 @@ ground it would do the same as ``fly``); ``replace_*`` only when the part has fl
 ## Delegation (optional)
 
 With ``delegate`` (an object with the project's policy protocol, ``predict(obs)`` on the
-flat v0 observation, e.g. a tuned rule from :func:`policies.base.make_policy`), a fifth
-maintenance choice ``delegate`` (4) hands the step's ``k`` slots to it: at each of them the
-v0 action is ``delegate.predict(obs)`` of that slot's observation. The action space is then
+flat per-flight observation, e.g. a tuned rule from :func:`policies.base.make_policy`), a
+fifth maintenance choice ``delegate`` (4) hands the step's ``k`` slots to it: at each of them
+the action is ``delegate.predict(obs)`` of that slot's observation. The action space is then
 ``Discrete(5 * len(ks))``, ``a // len(ks) == 4`` meaning "the delegate for ``k`` slots";
 it is always valid in the mask. An agent that always delegates plays the delegate's own
 per-flight episode, bit for bit (tested), so RL starts at the rule and learns when to
 overrule it (residual policy learning: Silver et al. 2018, "Residual Policy Learning";
 Johannink et al. 2019, "Residual Reinforcement Learning for Robot Control"). The delegate
 must be stateless (its action a function of the current observation), as the project's
-rules are; its actions must be v0 actions (0..3).
+rules are; its actions must be per-flight actions (0..3).
 
 >>> import gymnasium as gym
 >>> import scas_env
->>> env = DecisionEpochs(gym.make("scas_env/ScasMaintenance-v0", episode_slots=100))
+>>> env = gym.make("scas_env/ScasMaintenanceEpochs-v2", episode_slots=100)
 >>> obs, info = env.reset(seed=0)
 >>> obs.shape, env.action_space, float(obs[-1])
-((19,), Discrete(20), 100.0)
+((21,), Discrete(20), 100.0)
 >>> obs, reward, terminated, truncated, info = env.step(env.encode(0, 20))
 >>> info["epoch_slots"], float(obs[-1])
 (20, 80.0)
@@ -106,18 +108,19 @@ __all__ = [
     "DELEGATE",
     "EPOCHS_ENV_ID",
     "DecisionEpochs",
+    "check_gamma",
     "delegate_actions",
     "maintenance_mask",
     "make_decision_epoch_env",
     "with_delegation",
 ]
 
-#: registered id: ``gym.make(EPOCHS_ENV_ID, ks=..., gamma=..., **v0 keywords)``
-EPOCHS_ENV_ID = "scas_env/ScasMaintenanceEpochs-v0"
+#: registered id: ``gym.make(EPOCHS_ENV_ID, ks=..., gamma=..., **ScasMaintenance-v2 keywords)``
+EPOCHS_ENV_ID = "scas_env/ScasMaintenanceEpochs-v2"
 
 
 def maintenance_mask(downtime: Any, spring_age: Any, seal_age: Any) -> np.ndarray:
-    """Valid v0 actions (bool, shape ``(..., 4)``) from downtime (slots) and part ages
+    """Valid per-flight actions (bool, shape ``(..., 4)``) from downtime (slots) and part ages
     (flights): ``fly`` always; ``test_and_fly`` iff ``downtime == 0``; ``replace_spring`` iff
     ``spring_age > 0``; ``replace_seal`` iff ``seal_age > 0``.
 
@@ -159,7 +162,7 @@ def _check_delegate(delegate: Any) -> Any:
 
 
 def delegate_actions(delegate: Any, obs: np.ndarray) -> np.ndarray:
-    """The v0 actions (int64, ``(n,)``) of ``delegate`` on the flat v0 observations ``obs``
+    """The per-flight actions (int64, ``(n,)``) of ``delegate`` on the flat observations ``obs``
     (``(n, n_obs)``); raises ``ValueError`` if they are not ``n`` integers in 0..3."""
     act, _ = delegate.predict(obs, deterministic=True)
     out = np.asarray(act)
@@ -169,7 +172,7 @@ def delegate_actions(delegate: Any, obs: np.ndarray) -> np.ndarray:
         or np.any((out < 0) | (out > 3))
     ):
         raise ValueError(
-            f"the delegate's actions {act!r} must be {len(obs)} v0 actions (integers in 0..3)"
+            f"the delegate's actions {act!r} must be {len(obs)} actions (integers in 0..3)"
         )
     return out.astype(np.int64)
 
@@ -185,15 +188,17 @@ def _check_ks(ks: Sequence[int]) -> tuple[int, ...]:
     return tuple(int(k) for k in out)
 
 
-class DecisionEpochs(gym.Wrapper):
+class DecisionEpochs(gym.Env):
     """Act now, then fly ``k`` slots; see the module docstring for the spec.
 
     Parameters
     ----------
-    env : a ``ScasMaintenance-v0`` env with a flat (``Box``) observation.
+    env : a ``ScasMaintenance-v2`` env (possibly wrapped) with a flat (``Box``) observation;
+        this env owns it (``self.env``) and is itself the unwrapped env, so
+        ``env.unwrapped.action_masks()`` is MaskablePPO's mask.
     ks : choices of ``k`` (slots per decision), distinct integers >= 1.
     gamma : per-flight discount in ``[0, 1]`` applied inside a step (1: plain sum).
-    delegate : None, or a stateless policy on the flat v0 observation that the choice
+    delegate : None, or a stateless policy on the flat per-flight observation that the choice
         ``delegate`` hands ``k`` slots to (module docstring, "Delegation").
     """
 
@@ -204,13 +209,15 @@ class DecisionEpochs(gym.Wrapper):
         gamma: float = 1.0,
         delegate: Any = None,
     ) -> None:
-        super().__init__(env)
+        if not isinstance(env, gym.Env):
+            raise ValueError(f"env = {env!r} must be a gymnasium.Env (ScasMaintenance-v2)")
+        self.env = env
+        self.metadata = env.metadata
+        self.render_mode = env.render_mode
         self.ks = _check_ks(ks)
         self.delegate = _check_delegate(delegate)
         self.n_maintenance = N_MAINTENANCE + (delegate is not None)
-        if not isinstance(gamma, int | float) or not 0.0 <= float(gamma) <= 1.0:
-            raise ValueError(f"gamma = {gamma!r} must be a number in [0, 1] (per flight)")
-        self.gamma = float(gamma)
+        self.gamma = check_gamma(gamma)
         inner = env.observation_space
         if not isinstance(inner, spaces.Box) or len(inner.shape) != 1:
             raise ValueError(
@@ -225,12 +232,16 @@ class DecisionEpochs(gym.Wrapper):
             dtype=np.float32,
         )
         self.action_space = spaces.Discrete(self.n_maintenance * len(self.ks))
-        self._last: np.ndarray | None = None  # the v0 observation now (the delegate reads it)
+        self._last: np.ndarray | None = None  # the per-flight observation now (the delegate's)
         self.obs_names = (*u.obs_names, "flights_left")
         self.obs_units = (*u.obs_units, "slots")
 
+    scenario = property(lambda self: self.env.unwrapped.scenario)
+    costs = property(lambda self: self.env.unwrapped.costs)
+    params = property(lambda self: self.env.unwrapped.params)
+
     def encode(self, maintenance: int, k: int) -> int:
-        """The action for v0 action ``maintenance`` then ``k`` slots in all."""
+        """The action for per-flight action ``maintenance`` then ``k`` slots in all."""
         if k not in self.ks:
             raise ValueError(f"k = {k!r} must be one of {self.ks}")
         if maintenance not in range(self.n_maintenance):
@@ -240,18 +251,27 @@ class DecisionEpochs(gym.Wrapper):
         return int(maintenance) * len(self.ks) + self.ks.index(k)
 
     def decode(self, action: Any) -> tuple[int, int]:
-        """``(v0 action, k)`` of a decision-epoch action."""
+        """``(per-flight action, k)`` of a decision-epoch action."""
+        n = self.action_space.n
+        if not (
+            isinstance(action, int | np.integer | np.ndarray)
+            and not isinstance(action, bool | np.bool_)
+            and np.ndim(action) == 0
+            and np.issubdtype(np.asarray(action).dtype, np.integer)
+            and 0 <= action < n
+        ):
+            raise ValueError(f"action = {action!r} must be an integer in 0..{n - 1}")
         a = int(action)
-        if not 0 <= a < self.action_space.n:
-            raise ValueError(f"action = {action!r} must be in 0..{self.action_space.n - 1}")
         return a // len(self.ks), self.ks[a % len(self.ks)]
 
     def _obs(self, obs: np.ndarray) -> np.ndarray:
         left = self.episode_slots - int(self.env.unwrapped.slot)
         return np.append(obs, np.float32(left)).astype(np.float32)
 
-    def reset(self, **kwargs: Any) -> tuple[np.ndarray, dict[str, Any]]:
-        obs, info = self.env.reset(**kwargs)
+    def reset(
+        self, *, seed: int | None = None, options: dict[str, Any] | None = None
+    ) -> tuple[np.ndarray, dict[str, Any]]:
+        obs, info = self.env.reset(seed=seed, options=options)
         self._last = obs
         return self._obs(obs), info
 
@@ -280,19 +300,40 @@ class DecisionEpochs(gym.Wrapper):
         return self._obs(obs), total, terminated, truncated, info
 
     def action_masks(self) -> np.ndarray:
-        """Valid actions now (bool, ``(4 * len(ks),)``); see the module docstring."""
+        """Valid actions now (bool, ``(n_maintenance * len(ks),)``); see the module docstring."""
+        if self._last is None:
+            raise RuntimeError("call reset() before action_masks()")
         u = self.env.unwrapped
-        m = maintenance_mask(u.downtime, u.part_age["spring"], u.part_age["seal"])
+        age = u.part_age
+        m = maintenance_mask(u.downtime, age["spring"], age["seal"])
         if self.delegate is not None:
             m = with_delegation(m)
         return np.repeat(m, len(self.ks))
+
+    def render(self) -> Any:
+        return self.env.render()
+
+    def close(self) -> None:
+        self.env.close()
+        super().close()
+
+
+def check_gamma(gamma: Any) -> float:
+    """``gamma`` as a float in [0, 1] (ValueError otherwise; numpy floats accepted)."""
+    if (
+        isinstance(gamma, bool | np.bool_)
+        or not isinstance(gamma, int | float | np.integer | np.floating)
+        or not 0.0 <= float(gamma) <= 1.0
+    ):
+        raise ValueError(f"gamma = {gamma!r} must be a number in [0, 1] (per flight)")
+    return float(gamma)
 
 
 def make_decision_epoch_env(
     ks: Sequence[int] = DEFAULT_KS, gamma: float = 1.0, delegate: Any = None, **kwargs: Any
 ) -> DecisionEpochs:
-    """Entry point of :data:`EPOCHS_ENV_ID`: a v0 env (``kwargs``: its keywords) in
-    :class:`DecisionEpochs` (so RL-Zoo can train on it by id)."""
+    """Entry point of :data:`EPOCHS_ENV_ID`: a ``ScasMaintenance-v2`` env (``kwargs``: its
+    keywords) in :class:`DecisionEpochs` (so RL-Zoo can train on it by id)."""
     from scas_env.env import ScasMaintenanceEnv
 
     return DecisionEpochs(ScasMaintenanceEnv(**kwargs), ks=ks, gamma=gamma, delegate=delegate)

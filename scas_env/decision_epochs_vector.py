@@ -25,7 +25,7 @@ that chose a smaller one wait (docs/rl.md measures SB3's frames per second again
 >>> venv = DecisionEpochsVectorEnv(3, episode_slots=100)
 >>> obs, info = venv.reset(seed=0)
 >>> obs.shape, venv.single_action_space
-((3, 19), Discrete(20))
+((3, 21), Discrete(20))
 >>> obs, rewards, terminated, truncated, info = venv.step(np.array([4, 2, 0]))
 >>> info["epoch_slots"].tolist(), truncated.tolist(), obs[:, -1].tolist()
 ([100, 20, 1], [True, False, False], [100.0, 80.0, 99.0])
@@ -50,11 +50,12 @@ from scas_env.decision_epochs import (
     N_MAINTENANCE,
     _check_delegate,
     _check_ks,
+    check_gamma,
     delegate_actions,
     maintenance_mask,
     with_delegation,
 )
-from scas_env.vector_env import ScasMaintenanceVectorEnv, expose_surface
+from scas_env.vector_env import ScasMaintenanceVectorEnv
 
 __all__ = ["DecisionEpochsVectorEnv", "make_decision_epochs_vector_env"]
 
@@ -86,9 +87,7 @@ class DecisionEpochsVectorEnv(VectorEnv):
         self.ks = _check_ks(ks)
         self.delegate = _check_delegate(delegate)
         self.n_maintenance = N_MAINTENANCE + (delegate is not None)
-        if not isinstance(gamma, int | float) or not 0.0 <= float(gamma) <= 1.0:
-            raise ValueError(f"gamma = {gamma!r} must be a number in [0, 1] (per flight)")
-        self.gamma = float(gamma)
+        self.gamma = check_gamma(gamma)
         self.inner = ScasMaintenanceVectorEnv(num_envs, **kwargs)
         inner = self.inner.single_observation_space
         if not isinstance(inner, spaces.Box) or len(inner.shape) != 1:
@@ -106,11 +105,15 @@ class DecisionEpochsVectorEnv(VectorEnv):
         self.single_action_space = spaces.Discrete(self.n_maintenance * len(self.ks))
         self.observation_space = batch_space(self.single_observation_space, self.num_envs)
         self.action_space = batch_space(self.single_action_space, self.num_envs)
-        expose_surface(self, self.inner.envs[0])
+        self.setup = self.inner.setup
         self.obs_names = (*self.inner.obs_names, "flights_left")
         self.obs_units = (*self.inner.obs_units, "slots")
         self._ks = np.array(self.ks, dtype=np.int64)
-        self._last: np.ndarray | None = None  # the v0 observations now (the delegate reads them)
+        self._last: np.ndarray | None = None  # the per-flight observations (the delegate's)
+
+    scenario = property(lambda self: self.setup.scenario)
+    costs = property(lambda self: self.setup.costs)
+    params = property(lambda self: self.setup.params)
 
     def _obs(self, obs: np.ndarray) -> np.ndarray:
         left = (self.episode_slots - self.inner.a["slot"]).astype(np.float32)

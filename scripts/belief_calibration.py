@@ -1,6 +1,6 @@
 """Calibration and sharpness of the monitor's RUL and risk outputs (issue #12).
 
-Runs :func:`scas_env.studies.belief_calibration.run_study`, prints the per-stage table and the
+Runs :func:`experiments.belief_calibration.run_study`, prints the per-stage table and the
 reliability diagram, and writes CSV/JSON/PNG into ``--out`` (docs/beliefs.md).
 
     python scripts/belief_calibration.py --episodes 200 --seed 1000 --out results/beliefs
@@ -16,7 +16,7 @@ import argparse
 import json
 from collections.abc import Sequence
 
-from scas_env.studies.belief_calibration import (
+from experiments.belief_calibration import (
     POLICIES,
     PRESETS,
     format_reliability,
@@ -60,7 +60,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     if args.compare is not None:
         import numpy as np
 
-        from scas_env.studies.belief_comparison import (
+        from experiments.belief_comparison import (
             compare_runs,
             format_comparison,
             read_lives,
@@ -72,7 +72,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(format_comparison(rows))
         return 0
     if args.out is not None:
-        from scas_env.results_folder import check_destination
+        from scas_env.utils.results_folder import check_destination
 
         check_destination(args.out, args.overwrite)
     result = run_study(

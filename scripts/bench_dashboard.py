@@ -1,14 +1,14 @@
 """Dashboard speed: ms per ``rgb_array`` frame (record + draw) along an episode.
 
 Usage: ``python scripts/bench_dashboard.py [--slots 500] [--frames 200] [--seed 0]``.
-See scas_env.studies.dashboard_animation.dashboard_frame_ms.
+See experiments.dashboard_animation.dashboard_frame_ms.
 """
 
 from __future__ import annotations
 
 import argparse
 
-from scas_env.studies.dashboard_animation import dashboard_frame_ms
+from experiments.dashboard_animation import dashboard_frame_ms
 
 
 def main() -> None:

@@ -2,11 +2,11 @@
 
 Usage: ``python scripts/bench_sb3.py [--timesteps 65536] [--repeats 2]
 [--setups dummy-4,native-64,cartpole-4] [--config project] --out results/bench_sb3``
-(setups: :data:`policies.sb3_speed.SETUPS`). Sets ``OMP_WAIT_POLICY=PASSIVE`` unless set
+(setups: :data:`experiments.sb3_speed.SETUPS`). Sets ``OMP_WAIT_POLICY=PASSIVE`` unless set
 (idle OpenMP threads sleep; see :func:`scas_env.learning_kernel.start_threads`).
 Runs alternate between the setups; the median speed-up over ``dummy-4`` within a round is
 printed and saved with every run (JSON, CSV) and a bar chart (PNG) by
-:func:`policies.sb3_speed.run_sb3_bench`.
+:func:`experiments.sb3_speed.run_sb3_bench`.
 """
 
 from __future__ import annotations
@@ -18,7 +18,7 @@ import os
 # and must not spin between parallel calls (scas_env.learning_kernel.start_threads).
 os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
 
-from policies.sb3_speed import FPS_CONFIGS, SETUPS, run_sb3_bench
+from experiments.sb3_speed import FPS_CONFIGS, SETUPS, run_sb3_bench
 
 
 def main() -> None:

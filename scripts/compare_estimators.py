@@ -3,7 +3,7 @@
 Options: ``--help`` and docs/estimators.md.
 """
 
-from scas_env.studies.estimator_comparison import main
+from experiments.estimator_comparison import main
 
 if __name__ == "__main__":
     raise SystemExit(main())

@@ -1,6 +1,6 @@
 """Flight-to-flight damage scatter: scaled window vs whole flights vs closed form.
 
-Logic in scas_env.studies.damage_scatter. Example (the docs/physics.md table, ~8 min):
+Logic in experiments.damage_scatter. Example (the docs/physics.md table, ~8 min):
 
     python scripts/damage_scatter.py --flights 40 --windows 60 --out results/damage_scatter.json
 """
@@ -11,8 +11,8 @@ import argparse
 import json
 from pathlib import Path
 
-from scas_env.actuator.atomic_file import write_text_atomic
 from scas_env.cli_args import add_params_arg, check_out_file, load_params
+from scas_env.utils.atomic_file import write_text_atomic
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -29,7 +29,7 @@ def main(argv: list[str] | None = None) -> int:
     check_out_file(parser, args.out, args.overwrite)
     params = load_params(parser, args)
 
-    from scas_env.studies.damage_scatter import damage_scatter
+    from experiments.damage_scatter import damage_scatter
 
     result = damage_scatter(params, n_flights=args.flights, n_windows=args.windows)
     text = json.dumps(result, indent=1)

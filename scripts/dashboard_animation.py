@@ -3,7 +3,7 @@
 Usage: ``python scripts/dashboard_animation.py [--policy rul_risk] [--seed 3]
 [--slots 2000] [--every 34] [--fps 6] [--scale 1.0] [--out docs/img/dashboard_episode.gif]
 [--overwrite]``. Writes the GIF and a JSON of the numbers of each frame beside it.
-See scas_env.studies.dashboard_animation.
+See experiments.dashboard_animation.
 """
 
 from __future__ import annotations
@@ -12,9 +12,9 @@ import argparse
 
 import gymnasium as gym
 
+from experiments.dashboard_animation import episode_frames, save_gif
 from policies.base import make_policy, policy_obs_mode
 from scas_env import ENV_ID
-from scas_env.studies.dashboard_animation import episode_frames, save_gif
 
 
 def main() -> None:

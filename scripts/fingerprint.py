@@ -1,4 +1,4 @@
-"""Print the SHA-256 fingerprint of seeded behaviour (scas_env.studies.fingerprint).
+"""Print the SHA-256 fingerprint of seeded behaviour (experiments.fingerprint).
 
 Run it before and after a change that must not move any number and compare:
 ``python scripts/fingerprint.py > before.json`` ... ``python scripts/fingerprint.py | diff
@@ -10,8 +10,8 @@ from __future__ import annotations
 import argparse
 import json
 
-from policies.benchmark import run_benchmark
-from scas_env.studies.fingerprint import PARTS, fingerprint
+from experiments.fingerprint import PARTS, fingerprint
+from policies.benchmark.run import run_benchmark
 
 ALL_PARTS = [*PARTS, "benchmark"]
 

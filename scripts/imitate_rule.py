@@ -1,8 +1,8 @@
 """Clone a tuned rule into a decision-epoch agent: the warm start of the RL training.
 
 Records the rule's per-flight episodes on training seeds, cuts them into decision epochs
-(policies.epoch_demonstrations), behaviour-clones them into the network of a search
-candidate (policies.epoch_imitation), then runs DAgger rounds (policies.epoch_dagger: the
+(policies.agents.demonstrations), behaviour-clones them into the network of a search
+candidate (policies.agents.imitation), then runs DAgger rounds (policies.agents.dagger: the
 rule labels the states the clone visits on further training episodes);
 ``scripts/train_epochs.py --init OUT`` then trains PPO from the clone. Example (the v2
 filter rule of the value study)::
@@ -11,7 +11,7 @@ filter rule of the value study)::
         --rules-from docs/value_v2/ladder.json --arm filter --candidate imitation_g1 \\
         --out results/rl_v2/clone
 
-``--delegate-k K`` makes a residual agent instead (policies.epoch_delegation): the rule
+``--delegate-k K`` makes a residual agent instead (policies.agents.delegation): the rule
 becomes an action ("the rule for k slots") and the clone takes it with ``k = K`` everywhere,
 its critic fitted to the rule's returns; no DAgger (the rule's labels add nothing there).
 """
@@ -21,12 +21,12 @@ from __future__ import annotations
 import argparse
 
 from policies import tuning
-from policies.benchmark import episode_seeds
-from policies.epoch_dagger import DaggerPlan
-from policies.epoch_delegation import DelegateSpec, delegation_demonstrations
-from policies.epoch_demonstrations import demonstrations, record_rule
-from policies.epoch_selection import HELD_OUT_SEED, VALIDATION_SEED, tuned_rules
-from policies.epoch_training import HYPERPARAMS_DIR, candidate_hyperparams, clone_rule
+from policies.agents.dagger import DaggerPlan
+from policies.agents.delegation import DelegateSpec, delegation_demonstrations
+from policies.agents.demonstrations import demonstrations, record_rule
+from policies.agents.selection import HELD_OUT_SEED, VALIDATION_SEED, tuned_rules
+from policies.agents.training import HYPERPARAMS_DIR, candidate_hyperparams, clone_rule
+from policies.benchmark.run import episode_seeds
 from scas_env.cli_args import add_env_config_args, agent_scenario, scenario_changes
 from scas_env.decision_epochs import DEFAULT_KS
 

@@ -1,4 +1,4 @@
-"""Where the native v2 vector env's time goes (scas_env.studies.env_profile; docs/speed.md).
+"""Where the native v2 vector env's time goes (experiments.env_profile; docs/speed.md).
 
 Prints a cProfile of its steps (``--mix``, default the trained-policy 90/9/1 mix) and the
 filter kernels' phases in microseconds per actuator. Timings: run on a quiet machine.
@@ -8,13 +8,13 @@ from __future__ import annotations
 
 import argparse
 
-from scas_env.studies.env_profile import (
+from experiments.env_profile import (
     DEFAULT_MIX,
     format_breakdown,
     kernel_breakdown,
     profile_steps,
 )
-from scas_env.studies.env_speed import ACTION_MIXES
+from experiments.env_speed import ACTION_MIXES
 
 
 def main() -> None:

@@ -1,6 +1,6 @@
 """The spring's exact posterior beside the particle filter, on the same lives (issue #12).
 
-Runs :func:`scas_env.studies.reference_posterior.run_reference_study` on
+Runs :func:`experiments.reference_posterior.run_reference_study` on
 ScasMaintenance-v2's scenario (``--scenario`` fields override it), prints the per-stage
 table of both estimators with the paired differences, and writes CSV/JSON/PNG into ``--out``
 (docs/beliefs.md, "A reference posterior").
@@ -19,15 +19,15 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from scas_env import V2_KWARGS
-from scas_env.studies.belief_calibration import POLICIES, STAGES
-from scas_env.studies.reference_posterior import (
+from experiments.belief_calibration import POLICIES, STAGES
+from experiments.reference_posterior import (
     DEFAULT_LOG2_POINTS,
     DEFAULT_MIN_ESS,
     REFERENCE_STAGES,
     run_reference_study,
 )
-from scas_env.studies.reference_report import format_table, stage_table, write_report
+from experiments.reference_report import format_table, stage_table, write_report
+from scas_env import V2_KWARGS
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -60,7 +60,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         default=None,
         metavar="N",
         help="no episodes: N lives drawn from the reference's own model, the PIT of each "
-        "true RUL at the stages (scas_env.studies.reference_synthetic); prints the table",
+        "true RUL at the stages (experiments.reference_synthetic); prints the table",
     )
     parser.add_argument(
         "--no-tests", action="store_true", help="--synthetic lives without G1 tests"
@@ -74,7 +74,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             parser.error("--synthetic prints its table only: drop --out")
         return _synthetic(args)
     if args.out is not None:
-        from scas_env.results_folder import check_destination
+        from scas_env.utils.results_folder import check_destination
 
         check_destination(args.out, args.overwrite)
     scenario = {**V2_KWARGS, **args.scenario}
@@ -101,10 +101,10 @@ def main(argv: Sequence[str] | None = None) -> int:
 
 
 def _synthetic(args: argparse.Namespace) -> int:
+    from experiments.reference_posterior import SpringModel
+    from experiments.reference_synthetic import format_synthetic, synthetic_stage_pits
+    from scas_env.core.scenario import Scenario
     from scas_env.env import ScasMaintenanceEnv
-    from scas_env.scenario import Scenario
-    from scas_env.studies.reference_posterior import SpringModel
-    from scas_env.studies.reference_synthetic import format_synthetic, synthetic_stage_pits
 
     env = ScasMaintenanceEnv(scenario=Scenario.from_dict({**V2_KWARGS, **args.scenario}))
     env.reset(seed=args.seed)

@@ -1,9 +1,9 @@
 """Value of prognostics vs sensing quality (issue 13, item 3): the sweep's command line.
 
 Builds (or loads from --cache-dir) the sensing variants of the design
-(scas_env.studies.sensing_variants: sensor noise x --noise, per-unit tolerances
+(experiments.sensing_variants: sensor noise x --noise, per-unit tolerances
 --tolerances), then re-tunes the nested families at every level and runs them on the same
-held-out episodes as the tuned age rule (policies.sensing_sweep.run_sensing_sweep).
+held-out episodes as the tuned age rule (experiments.sensing_sweep.run_sensing_sweep).
 Outputs in --out: sweep.csv, sweep.json, sweep.md, value_vs_sensing.png. Example:
 
     PYTHONPATH=. python scripts/sensing_sweep.py --episodes 1000 --workers 2 \\
@@ -32,7 +32,7 @@ from scas_env.cli_args import (
     positive_int,
     scenario_changes,
 )
-from scas_env.costs import CostModel
+from scas_env.core.costs import CostModel
 
 log = logging.getLogger("sensing_sweep")
 
@@ -86,7 +86,7 @@ def parser() -> argparse.ArgumentParser:
     p.add_argument("--workers", type=positive_int, default=2, help="local worker processes")
     p.add_argument("--out", type=Path, default=Path("results/sensing_sweep"))
     p.add_argument("--overwrite", action="store_true", help="replace an existing --out")
-    p.add_argument("--quick", action="store_true", help="policies.sensing_sweep.QUICK sizes")
+    p.add_argument("--quick", action="store_true", help="experiments.sensing_sweep.QUICK sizes")
     add_env_config_args(p)
     add_logging_args(p)
     return p
@@ -111,8 +111,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     if costs != CostModel():
         env_kwargs["cost_model"] = costs
 
-    from policies.sensing_sweep import QUICK, SWEPT, run_sensing_sweep, write_sweep_outputs
-    from scas_env.studies.sensing_variants import sensing_levels, sensing_variants
+    from experiments.sensing_sweep import QUICK, SWEPT, run_sensing_sweep, write_sweep_outputs
+    from experiments.sensing_variants import sensing_levels, sensing_variants
 
     families = [f.strip() for f in args.families.split(",") if f.strip()] or list(SWEPT)
     announce_uncached_kernels()

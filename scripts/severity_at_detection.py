@@ -14,8 +14,8 @@ import json
 import sys
 from pathlib import Path
 
-from scas_env.actuator.atomic_file import write_text_atomic
 from scas_env.cli_args import add_params_arg, check_out_file, load_params
+from scas_env.utils.atomic_file import write_text_atomic
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -12,7 +12,7 @@ rules tuned on v2's training seeds read from the v2 value study, held-out on its
         --scenario examples/v2.toml --rules-from docs/value_v2/ladder.json \\
         --held-out-seed 2 --out results/rl_v2/selection
 
-Calls :func:`policies.epoch_selection.select_ship_evaluate`.
+Calls :func:`policies.agents.selection.select_ship_evaluate`.
 """
 
 from __future__ import annotations
@@ -20,8 +20,8 @@ from __future__ import annotations
 import argparse
 import json
 
-from policies.epoch_selection import HELD_OUT_SEED, select_ship_evaluate, tuned_rules
-from policies.sb3_agents import DATA_DIR
+from policies.agents.sb3_agents import DATA_DIR
+from policies.agents.selection import HELD_OUT_SEED, select_ship_evaluate, tuned_rules
 from scas_env.cli_args import add_env_config_args, agent_scenario, scenario_changes
 
 
@@ -49,9 +49,6 @@ def main() -> None:
     parser.add_argument(
         "--overwrite", action="store_true", help="replace an agent of the same name there"
     )
-    parser.add_argument(
-        "--skip-default", action="store_true", help="leave ppo_default out of the held-out run"
-    )
     add_env_config_args(parser)
     args = parser.parse_args()
     for opt in ("validation_episodes", "held_out_episodes", "workers"):
@@ -71,7 +68,6 @@ def main() -> None:
             validation_episodes=args.validation_episodes,
             held_out_episodes=args.held_out_episodes,
             n_workers=args.workers,
-            compare_default=False if args.skip_default else None,
             ship_to=DATA_DIR if args.ship_to is None else args.ship_to,
             overwrite=args.overwrite,
         )

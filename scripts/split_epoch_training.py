@@ -31,7 +31,7 @@ def main() -> None:
 
     from stable_baselines3.common.callbacks import BaseCallback
 
-    from policies.sb3_speed import _find_counter, make_setup, speed_model
+    from experiments.sb3_speed import _find_counter, make_setup, speed_model
 
     venv = make_setup(args.setup, args.seed)
     model = speed_model(venv, args.seed, init=args.init)

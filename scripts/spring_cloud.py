@@ -1,9 +1,9 @@
 """The spring filter's cloud against the truth per life stage (docs/beliefs.md, "Spring
 calibration: cause and fix").
 
-Runs :func:`scas_env.studies.spring_cloud.cloud_records` on ScasMaintenance-v2's scenario
+Runs :func:`experiments.spring_cloud.cloud_records` on ScasMaintenance-v2's scenario
 (``scas_env.V2_KWARGS``, with ``--scenario`` fields over it) and prints
-:func:`~scas_env.studies.spring_cloud.stage_summary`; ``--out`` writes it as JSON.
+:func:`~experiments.spring_cloud.stage_summary`; ``--out`` writes it as JSON.
 
     python scripts/spring_cloud.py --episodes 40 --seed 0
     python scripts/spring_cloud.py --episodes 40 --seed 0 --monitor '{"spring_theta_walk": 0.003}'
@@ -17,9 +17,9 @@ import argparse
 import json
 from collections.abc import Sequence
 
+from experiments.belief_calibration import POLICIES
+from experiments.spring_cloud import cloud_records, format_summary, stage_summary
 from scas_env import V2_KWARGS
-from scas_env.studies.belief_calibration import POLICIES
-from scas_env.studies.spring_cloud import cloud_records, format_summary, stage_summary
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -33,7 +33,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser.add_argument("--no-progress", action="store_true")
     args = parser.parse_args(argv)
     if args.out is not None:
-        from scas_env.results_folder import check_destination
+        from scas_env.utils.results_folder import check_destination
 
         check_destination(args.out, False)
     records = cloud_records(
@@ -49,7 +49,7 @@ def main(argv: Sequence[str] | None = None) -> int:
           "above its 95 %")  # fmt: skip
     print(format_summary(rows))
     if args.out is not None:
-        from scas_env.actuator.atomic_file import write_text_atomic
+        from scas_env.utils.atomic_file import write_text_atomic
 
         write_text_atomic(args.out, json.dumps({"args": vars(args), "stages": rows}, indent=1))
     return 0

@@ -1,4 +1,4 @@
-"""Train one MaskablePPO (or PPO) agent on decision epochs (policies.epoch_training).
+"""Train one MaskablePPO (or PPO) agent on decision epochs (policies.agents.training).
 
 Example (one candidate of policies/data/hyperparams/search.yml, one seed)::
 
@@ -20,9 +20,8 @@ From a clone of the tuned filter rule (``scripts/imitate_rule.py``), on the nati
 from __future__ import annotations
 
 import argparse
-import os
 
-from policies.epoch_training import HYPERPARAMS_DIR, candidate_hyperparams, train_epochs
+from policies.agents.training import HYPERPARAMS_DIR, candidate_hyperparams, train_epochs
 from scas_env.cli_args import add_env_config_args, agent_scenario, scenario_changes
 
 
@@ -55,23 +54,12 @@ def main() -> None:
         help="with --init: let VecNormalize's statistics follow the rollouts (default: keep "
         "the clone's; moving them changes the clone's actions, see docs/rl.md)",
     )
-    parser.add_argument(
-        "--kernel-threads",
-        type=int,
-        default=1,
-        help="with --native-envs: threads of the vector env's filter kernels (same numbers; "
-        "pays only with an idle core, docs/speed.md)",
-    )
     parser.add_argument("--out", required=True, help="new, empty output folder")
     add_env_config_args(parser)
     args = parser.parse_args()
     scenario = agent_scenario(parser, args)
     if args.native_envs is not None and args.native_envs < 1:
         parser.error(f"--native-envs {args.native_envs} must be >= 1")
-    if args.kernel_threads != 1 and args.native_envs is None:
-        parser.error("--kernel-threads needs --native-envs")
-    if args.kernel_threads > 1:  # before torch loads GNU OpenMP (learning_kernel.start_threads)
-        os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
     if args.running_normalization and args.init is None:
         parser.error("--running-normalization needs --init")
     if args.max_wall_s is not None and args.max_wall_s <= 0:
@@ -87,7 +75,6 @@ def main() -> None:
         native_envs=args.native_envs,
         init=args.init,
         freeze_normalization=None if args.init is None else not args.running_normalization,
-        kernel_threads=args.kernel_threads,
         **scenario_changes(scenario),
     )
 

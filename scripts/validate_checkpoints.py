@@ -13,7 +13,7 @@ statistics that run had after 1 M decisions)::
         --scenario examples/v2.toml --rules-from docs/value_v2/ladder.json \\
         --episodes 200 --out results/kl/swap.csv
 
-Calls :func:`policies.epoch_selection.validate_checkpoints`.
+Calls :func:`policies.agents.selection.validate_checkpoints`.
 """
 
 from __future__ import annotations
@@ -21,7 +21,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from policies.epoch_selection import tuned_rules, validate_checkpoints
+from policies.agents.selection import tuned_rules, validate_checkpoints
 from scas_env.cli_args import add_env_config_args, agent_scenario, scenario_changes
 
 

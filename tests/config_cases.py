@@ -18,8 +18,8 @@ from hypothesis import strategies as st
 
 from scas_env.actuator import params as params_module
 from scas_env.actuator.config import Validated
-from scas_env.costs import CostModel
-from scas_env.scenario import Scenario
+from scas_env.core.costs import CostModel
+from scas_env.core.scenario import Scenario
 
 GROUPS: tuple[type[Validated], ...] = tuple(
     f.type if isinstance(f.type, type) else getattr(params_module, f.type)

@@ -1,4 +1,4 @@
-"""The airworthiness go/no-go (scas_env.acceptance) and the pre-flight test modes."""
+"""The airworthiness go/no-go (scas_env.core.acceptance) and the pre-flight test modes."""
 
 from __future__ import annotations
 
@@ -8,12 +8,12 @@ import pytest
 from scipy.stats import binomtest
 
 import scas_env
-from scas_env.acceptance import AirworthinessLimits
+from scas_env.core.acceptance import AirworthinessLimits
 from scas_env.actuator.calibration import default_calibration
 from scas_env.actuator.params import ScasParams
 from scas_env.actuator.surrogate import default_surrogate
 from scas_env.env import ScasMaintenanceEnv
-from scas_env.scenario import Scenario
+from scas_env.core.scenario import Scenario
 from scas_env.world import ActuatorWorld
 
 
@@ -120,7 +120,7 @@ def test_v1_is_registered_with_the_airworthiness_go_no_go() -> None:
 
 
 def test_go_no_go_study_agrees_with_the_model_and_rejects_bad_input() -> None:
-    from scas_env.studies.go_no_go import format_rates, no_go_rates
+    from experiments.go_no_go import format_rates, no_go_rates
 
     rows = no_go_rates(400, severities=(0.0, 1.0))
     assert len(rows) == 2 * 2 * 2

@@ -14,8 +14,8 @@ from __future__ import annotations
 import pytest
 from scipy.stats import binomtest
 
-from scas_env.fleet_state import PARTS
-from scas_env.studies.belief_calibration import INTERVAL, run_study
+from scas_env.core.setup import PARTS
+from experiments.belief_calibration import INTERVAL, run_study
 
 FIRST_SEED, EPISODES = 5000, 6
 

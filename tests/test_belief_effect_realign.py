@@ -25,7 +25,7 @@ from scas_env import V2_KWARGS
 from scas_env.env import ScasMaintenanceEnv
 from scas_env.learning_kernel import realign_effect
 from scas_env.monitor import THETA_WALK
-from scas_env.scenario import Scenario
+from scas_env.core.scenario import Scenario
 from scas_env.vector_env import ScasMaintenanceVectorEnv
 
 OPTIONS = {"spring_theta_walk": 0.003, "spring_effect_realign": True}
@@ -209,7 +209,7 @@ def test_the_fields_round_trip_through_a_file(tmp_path) -> None:
 def test_the_belief_study_takes_the_options_as_scenario_fields() -> None:
     """``scripts/belief_calibration.py --scenario`` builds the env with the fields (its own
     monitor): the records repeat with the seed and differ from today's filter's."""
-    from scas_env.studies.belief_calibration import run_episode, run_study
+    from experiments.belief_calibration import run_episode, run_study
 
     fields = {**V2_KWARGS, **OPTIONS, "episode_slots": 600}
     result = run_study(episodes=1, seed=3, policies=["test10"], scenario_fields=fields,

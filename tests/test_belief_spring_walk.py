@@ -19,7 +19,7 @@ from scipy.stats import chi2
 from scas_env import V2_KWARGS
 from scas_env.env import ScasMaintenanceEnv
 from scas_env.monitor import STATES_THETA_WALK, THETA_WALK, HealthMonitor
-from scas_env.studies.belief_calibration import MonitorOptionsEnv, run_study
+from experiments.belief_calibration import MonitorOptionsEnv, run_study
 
 WALK = 0.003
 
@@ -125,7 +125,7 @@ def test_cloud_records_follow_the_world_and_refuse_a_shared_draw_scenario() -> N
     """The spring-cloud study: the true RUL it compares with is the world's exact remaining
     life (so a record's stage is age / (age + life left) of that spring), its PITs are
     shares in [0, 1]; a scenario without per-part draws (no exact life) is refused."""
-    from scas_env.studies.spring_cloud import cloud_records, stage_summary
+    from experiments.spring_cloud import cloud_records, stage_summary
 
     recs = cloud_records(
         episodes=1, seed=7, scenario_fields={**V2_KWARGS, "episode_slots": 400}, progress=False

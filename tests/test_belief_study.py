@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 from scipy.stats import binomtest
 
-from scas_env.studies.belief_calibration import (
+from experiments.belief_calibration import (
     PartTrace,
     life_rows,
     reliability_rows,
@@ -110,7 +110,7 @@ def test_paired_difference_against_a_direct_cluster_bootstrap() -> None:
     """The difference is the paired mean; its interval matches a hand-written percentile
     bootstrap over episodes (numpy) within Monte Carlo error; with no spread it collapses
     to the difference; the MDD is 2.8 standard errors."""
-    from scas_env.studies.belief_comparison import MDD_FACTOR, paired_difference
+    from experiments.belief_comparison import MDD_FACTOR, paired_difference
 
     rng = np.random.default_rng(0)
     episode = np.repeat(np.arange(150), 2)
@@ -132,7 +132,7 @@ def test_paired_difference_against_a_direct_cluster_bootstrap() -> None:
 
 
 def test_compare_runs_pairs_lives_and_pools_stages(tmp_path) -> None:
-    from scas_env.studies.belief_comparison import compare_runs, read_lives
+    from experiments.belief_comparison import compare_runs, read_lives
 
     header = "preset,policy,part,stage,episode,life,covered,undercut,log_ratio\n"
     rows_a = [f"default,never,spring,{s},{e},0,1,0,0.1\n" for s in (0.2, 0.8) for e in range(4)]

@@ -10,12 +10,12 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from policies.benchmark import PolicySpec, episode_seeds, run_benchmark
-from policies.benchmark_report import format_table, write_outputs
-from policies.benchmark_stats import paired_difference, summarize, t_interval
+from policies.benchmark.run import PolicySpec, episode_seeds, run_benchmark
+from policies.benchmark.report import format_table, write_outputs
+from policies.benchmark.stats import paired_difference, summarize, t_interval
 from scas_env.actuator.calibration import default_calibration, sample_lives
 from scas_env.actuator.params import ScasParams
-from scas_env.costs import CostModel
+from scas_env.core.costs import CostModel
 
 SMALL = {"episodes": 2, "slots": 150, "seed": 5}
 

@@ -6,7 +6,7 @@ import csv
 
 import pytest
 
-from policies.benchmark import PolicySpec, check_specs, run_benchmark
+from policies.benchmark.run import PolicySpec, check_specs, run_benchmark
 from policies.cli import benchmark_main
 from scas_env import V2_KWARGS
 
@@ -52,12 +52,12 @@ def test_decision_epoch_agents_see_the_run_s_horizon() -> None:
     trained on (an explicit ``episode_slots`` in the spec is kept)."""
     import gymnasium as gym
 
-    from policies.benchmark import PolicySpec, run_benchmark
-    from policies.sb3_agents import V2_AGENT, load_sb3_policy
+    from policies.benchmark.run import PolicySpec, run_benchmark
+    from policies.agents.sb3_agents import V2_AGENT, load_sb3_policy
     from scas_env import ENV_ID_V2, V2_KWARGS
 
     own = PolicySpec("sb3", {"path": str(V2_AGENT), "episode_slots": 2000}, label="own",
-                     module="policies.sb3_agents")  # fmt: skip
+                     module="policies.agents.sb3_agents")  # fmt: skip
     result = run_benchmark(
         ["ppo_v2", own, "oracle", "preventive"], episodes=2, slots=300,
         env_kwargs=V2_KWARGS, n_workers=1, progress=False,

@@ -25,8 +25,8 @@ from hypothesis import strategies as st
 from policies import cli as policies_cli
 from scas_env import cli_args
 from scas_env.actuator.config import tomllib
-from scas_env.costs import CostModel
-from scas_env.scenario import Scenario
+from scas_env.core.costs import CostModel
+from scas_env.core.scenario import Scenario
 from scas_env.studies import cli as studies_cli
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -237,7 +237,7 @@ def test_scripts_are_wrappers(script: str) -> None:
 def test_policy_whose_module_is_missing_is_a_usage_error(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    from policies.benchmark import PLUGINS, PolicySpec
+    from policies.benchmark.run import PLUGINS, PolicySpec
 
     monkeypatch.setitem(PLUGINS, "ghost", PolicySpec("sb3", label="ghost", module="no_such_mod"))
     with pytest.raises(SystemExit) as exit_:
@@ -308,7 +308,7 @@ def test_scenario_file_with_costs_table_sets_both(tmp_path: Path) -> None:
 def test_benchmark_runs_the_scenario_file_and_records_it(tmp_path: Path) -> None:
     """Same rows as run_benchmark called with the file's values by hand; the summary keeps
     the exact Scenario and CostModel, and a second run into the same folder is refused."""
-    from policies.benchmark import run_benchmark
+    from policies.benchmark.run import run_benchmark
 
     example = ROOT / "examples" / "training_fleet.yaml"
     out = tmp_path / "bench"
@@ -388,12 +388,12 @@ def test_benchmark_takes_agents_and_factories_beside_named_policies(tmp_path: Pa
     out = tmp_path / "bench"
     code = policies_cli.benchmark_main(
         ["--episodes", "1", "--slots", "20", "--workers", "1", "--policies", "preventive",
-         "--policy", "policies.rules:PreventivePolicy", "--out", str(out), "-q"]
+         "--policy", "policies.rules.classic:PreventivePolicy", "--out", str(out), "-q"]
     )  # fmt: skip
     assert code == 0
     rows = (out / "results.csv").read_text().splitlines()
     labels = [r.split(",")[0] for r in rows[1:]]
-    assert labels == ["preventive", "policies.rules:PreventivePolicy"]
+    assert labels == ["preventive", "policies.rules.classic:PreventivePolicy"]
     for bad, message in (
         (["--policy", "nocolon"], "expected MODULE:FACTORY"),
         (["--agent", str(tmp_path / "missing.zip")], "missing.zip"),

@@ -23,8 +23,8 @@ from scas_env.actuator.config import (
     tomllib,  # the standard library's, or the tomli backport on Python 3.10
 )
 from scas_env.actuator.params import ScasParams
-from scas_env.costs import CostModel
-from scas_env.scenario import FIDELITIES, INITIAL_HEALTH, OBS_MODES, Scenario
+from scas_env.core.costs import CostModel
+from scas_env.core.scenario import FIDELITIES, INITIAL_HEALTH, OBS_MODES, Scenario
 
 ROOT = Path(__file__).resolve().parents[1]
 EXAMPLES = sorted((ROOT / "examples").glob("*.*"))

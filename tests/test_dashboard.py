@@ -183,7 +183,7 @@ class _Fly:
 def test_episode_animation_files(tmp_path) -> None:
     from PIL import Image
 
-    from scas_env.studies.dashboard_animation import episode_frames, save_gif
+    from experiments.dashboard_animation import episode_frames, save_gif
 
     env = gym.make(scas_env.ENV_ID, episode_slots=25)
     episode = episode_frames(env, _Fly(), seed=0, every=10)

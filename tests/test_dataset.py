@@ -13,7 +13,7 @@ import pytest
 import scas_env
 from scas_env.actuator.params import ScasParams
 from scas_env.actuator.physics.fluid import dynamic_viscosity
-from scas_env.scenario import Scenario
+from scas_env.core.scenario import Scenario
 from scas_env.studies.run_to_failure import (
     export_run_to_failure,
     leakage_fraction,

@@ -61,7 +61,7 @@ def test_vector_epochs_equal_single_wrappers_across_episodes() -> None:
 def test_make_vec_and_sb3_adapter_match_dummy_vec_env() -> None:
     from stable_baselines3.common.vec_env import DummyVecEnv
 
-    from policies.sb3_vec_env import NativeVecEnv
+    from policies.agents.sb3_vec_env import NativeVecEnv
 
     n = 3
     venv = gym.make_vec(
@@ -112,7 +112,7 @@ def test_train_epochs_on_the_native_vector_env(tmp_path) -> None:
     finished episodes, and says which vector env it used."""
     import json
 
-    from policies.epoch_training import HYPERPARAMS_DIR, candidate_hyperparams, train_epochs
+    from policies.agents.training import HYPERPARAMS_DIR, candidate_hyperparams, train_epochs
 
     pytest.importorskip("sb3_contrib")
     hp = {**candidate_hyperparams(HYPERPARAMS_DIR / "search.yml", "gamma099"), "n_steps": 16}

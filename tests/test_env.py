@@ -12,9 +12,9 @@ from gymnasium.utils.env_checker import check_env as gym_check_env
 from stable_baselines3.common.env_checker import check_env as sb3_check_env
 
 import scas_env
-from scas_env.costs import CostModel
+from scas_env.core.costs import CostModel
 from scas_env.env import ScasMaintenanceEnv
-from scas_env.scenario import OBS_MODES, Scenario
+from scas_env.core.scenario import OBS_MODES, Scenario
 
 ENV_ID = scas_env.ENV_ID
 

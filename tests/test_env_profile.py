@@ -1,12 +1,12 @@
 """The speed profile's phase-switched copy of the batched test kernel
-(scas_env.studies.env_profile._test_phases) must stay the kernel it times."""
+(experiments.env_profile._test_phases) must stay the kernel it times."""
 
 from __future__ import annotations
 
 import numpy as np
 
 from scas_env import learning_kernel
-from scas_env.studies.env_profile import (
+from experiments.env_profile import (
     DEFAULT_MIX,
     _actions,
     _test_phases,

@@ -10,8 +10,8 @@ import pytest
 
 import scas_env
 from policies.base import make_policy
-from policies.benchmark import episode_seeds, run_benchmark
-from policies.episode_runner import run_episode, run_episodes
+from policies.benchmark.run import episode_seeds, run_benchmark
+from policies.benchmark.runner import run_episode, run_episodes
 
 
 @pytest.mark.parametrize("name", ["corrective", "detection", "rul_risk", "random", "oracle"])

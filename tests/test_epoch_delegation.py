@@ -159,7 +159,7 @@ def test_bad_delegates_are_refused() -> None:
 # ---------------------------------------------------------------- the residual agent's chain
 @pytest.fixture(scope="module")
 def recorded():
-    from policies.epoch_demonstrations import record_rule
+    from policies.agents.demonstrations import record_rule
 
     scenario = {**V2_KWARGS, "episode_slots": SLOTS}
     return record_rule("rul_risk", BUSY, episodes=4, seed=1, scenario=scenario, batch=2)
@@ -167,7 +167,7 @@ def recorded():
 
 @pytest.mark.parametrize("gamma", [1.0, 0.9])
 def test_delegation_demonstrations_label_the_rule_and_its_returns(recorded, gamma) -> None:
-    from policies.epoch_delegation import delegation_demonstrations
+    from policies.agents.delegation import delegation_demonstrations
 
     demos = delegation_demonstrations(recorded, KS, 5, gamma)
     n = recorded.actions.size
@@ -185,7 +185,7 @@ def test_delegation_demonstrations_label_the_rule_and_its_returns(recorded, gamm
 
 
 def test_delegate_specs_are_checked_and_round_trip() -> None:
-    from policies.epoch_delegation import DelegateSpec
+    from policies.agents.delegation import DelegateSpec
 
     spec = DelegateSpec("rul_risk", {**BUSY, "override": True})
     assert DelegateSpec.from_json(spec.to_json()) == spec
@@ -210,10 +210,10 @@ def test_a_clone_that_delegates_plays_the_rule_after_training_and_loading(
     import torch
     from sb3_contrib import MaskablePPO
 
-    from policies.benchmark import PolicySpec, run_benchmark
-    from policies.epoch_delegation import DelegateSpec, delegation_demonstrations
-    from policies.epoch_selection import _spec
-    from policies.epoch_training import clone_rule, train_epochs
+    from policies.benchmark.run import PolicySpec, run_benchmark
+    from policies.agents.delegation import DelegateSpec, delegation_demonstrations
+    from policies.agents.selection import _spec
+    from policies.agents.training import clone_rule, train_epochs
 
     scenario = {**V2_KWARGS, "episode_slots": SLOTS}
     hp = {"n_steps": 32, "batch_size": 32, "n_epochs": 1, "policy_kwargs": {"net_arch": [16]}}
@@ -260,8 +260,8 @@ def test_label_smoothing_leaves_the_closed_form_share_on_the_other_valid_actions
     pytest.importorskip("sb3_contrib")
     import torch
 
-    from policies.epoch_demonstrations import Demonstrations
-    from policies.epoch_imitation import clone
+    from policies.agents.demonstrations import Demonstrations
+    from policies.agents.imitation import clone
     from tests.clone_cases import box3_model
 
     n, alpha = 2000, 0.1
@@ -291,7 +291,7 @@ def test_training_passes_kernel_threads_to_the_native_env(tmp_path) -> None:
     pytest.importorskip("sb3_contrib")
     import json
 
-    from policies.epoch_training import _prepared, train_epochs
+    from policies.agents.training import _prepared, train_epochs
 
     hp = {"n_steps": 16, "batch_size": 16, "n_epochs": 1, "policy_kwargs": {"net_arch": [8]}}
     scenario = {**V2_KWARGS, "episode_slots": 60}

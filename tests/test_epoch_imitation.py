@@ -8,8 +8,8 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from policies.benchmark import episode_seeds
-from policies.epoch_demonstrations import (
+from policies.benchmark.run import episode_seeds
+from policies.agents.demonstrations import (
     RuleEpisodes,
     demonstrations,
     epoch_labels,
@@ -139,7 +139,7 @@ def test_return_statistics_are_those_vecnormalize_accumulates(recorded: RuleEpis
     epochs are played on the decision-epoch env (independent: SB3's own accumulation)."""
     from stable_baselines3.common.vec_env import DummyVecEnv, VecNormalize
 
-    from policies.epoch_imitation import set_statistics
+    from policies.agents.imitation import set_statistics
 
     gamma = 0.99
     demos = demonstrations(recorded, DEFAULT_KS, gamma=gamma)
@@ -170,7 +170,7 @@ def test_return_statistics_are_those_vecnormalize_accumulates(recorded: RuleEpis
 
 def _synthetic_demos(n_episodes: int = 20, slots: int = 50):
     """Demonstrations whose action is a threshold of one observation entry (learnable)."""
-    from policies.epoch_demonstrations import Demonstrations
+    from policies.agents.demonstrations import Demonstrations
 
     rng = np.random.default_rng(0)
     n = n_episodes * slots
@@ -195,7 +195,7 @@ def _synthetic_demos(n_episodes: int = 20, slots: int = 50):
 
 def test_clone_learns_a_learnable_expert_and_rejects_bad_settings() -> None:
     pytest.importorskip("sb3_contrib")
-    from policies.epoch_imitation import clone
+    from policies.agents.imitation import clone
     from tests.clone_cases import box3_model
 
     demos = _synthetic_demos()
@@ -226,7 +226,7 @@ def test_training_starts_from_the_clone(tmp_path, recorded: RuleEpisodes) -> Non
     import torch
     from sb3_contrib import MaskablePPO
 
-    from policies.epoch_training import clone_rule, train_epochs
+    from policies.agents.training import clone_rule, train_epochs
 
     hp = {"n_steps": 32, "batch_size": 32, "n_epochs": 1, "policy_kwargs": {"net_arch": [16]}}
     demos = demonstrations(recorded, DEFAULT_KS)
@@ -250,7 +250,7 @@ def test_training_starts_from_the_clone(tmp_path, recorded: RuleEpisodes) -> Non
     np.testing.assert_array_equal(stats_bc.obs_rms.mean, stats_0.obs_rms.mean)
     assert stats_bc.ret_rms.var == stats_0.ret_rms.var
     # regularised towards the clone: the same start, a reference-free policy in every zip
-    from policies.epoch_reference import ReferenceKLPolicy
+    from policies.agents.reference import ReferenceKLPolicy
 
     kl = train_epochs(
         {**hp, "ent_coef": 0.1, "reference_mix": 0.05},
@@ -313,7 +313,7 @@ def test_dagger_labels_of_the_rules_own_states_are_its_demonstrations(
     """Run on the rule's own path, DAgger's look-ahead labels (a copied env played forward,
     cached along the path) equal the labels cut from the recorded episode (independent:
     epoch_labels on the whole recorded episode)."""
-    from policies.epoch_dagger import dagger_samples
+    from policies.agents.dagger import dagger_samples
 
     seeds = episode_seeds(1, 3)[:2]
     got = dagger_samples(
@@ -337,7 +337,7 @@ def test_lookahead_counts_the_slots_left_at_the_end_of_an_episode() -> None:
     """With a rule that never acts, the look-ahead is the slots left (1 at the last slot),
     never a step past truncation; and it stops at its limit."""
     from policies.base import make_policy
-    from policies.epoch_dagger import _lookahead
+    from policies.agents.dagger import _lookahead
 
     env = gym.make(ENV_ID, disable_env_checker=True, **SCENARIO).unwrapped
     never = make_policy("corrective", env.obs_names)
@@ -356,8 +356,8 @@ def test_clone_rule_runs_dagger_rounds_and_records_them(tmp_path, recorded: Rule
     pytest.importorskip("sb3_contrib")
     import json
 
-    from policies.epoch_dagger import DaggerPlan, merged
-    from policies.epoch_training import clone_rule
+    from policies.agents.dagger import DaggerPlan, merged
+    from policies.agents.training import clone_rule
 
     demos = demonstrations(recorded, DEFAULT_KS, safety=3.0)
     both = merged(demos, demos)

@@ -1,4 +1,4 @@
-"""PPO regularised towards a reference policy (policies.epoch_reference)."""
+"""PPO regularised towards a reference policy (policies.agents.reference)."""
 
 from __future__ import annotations
 
@@ -10,7 +10,7 @@ pytest.importorskip("sb3_contrib")
 import gymnasium as gym
 import torch as th
 
-from policies.epoch_reference import ReferenceKLPolicy, reference_kl
+from policies.agents.reference import ReferenceKLPolicy, reference_kl
 
 N_ACTIONS = 6
 OBS = gym.spaces.Box(-np.inf, np.inf, (3,), np.float32)
@@ -127,7 +127,7 @@ def test_bad_references_are_refused() -> None:
 
 
 def test_training_needs_the_reference_it_is_regularised_to(tmp_path) -> None:
-    from policies.epoch_training import train_epochs
+    from policies.agents.training import train_epochs
 
     hp = {"n_steps": 32, "batch_size": 32, "reference_mix": 0.05}
     with pytest.raises(ValueError, match=r"reference_mix = 0\.05 needs init"):

@@ -1,4 +1,4 @@
-"""Scenario-aware selection of decision-epoch checkpoints (policies.epoch_selection).
+"""Scenario-aware selection of decision-epoch checkpoints (policies.agents.selection).
 
 Fake training runs whose checkpoints act by construction (one action logit far above the
 others): "fly for 20 slots" beats "test before every flight" and "replace the seal whenever
@@ -14,8 +14,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from policies.benchmark import PolicySpec, run_benchmark
-from policies.epoch_selection import (
+from policies.benchmark.run import PolicySpec, run_benchmark
+from policies.agents.selection import (
     VALIDATION_SEED,
     resolve_scenario,
     ship_best,
@@ -108,14 +108,14 @@ def test_validation_on_the_runs_scenario_picks_the_best_checkpoint(v2_runs, tmp_
     with (tmp_path / "agent_v2_curves.csv").open() as fh:
         assert {r["run"] for r in csv.DictReader(fh)} == {"a", "b"}
     # the shipped copy acts on v2 and refuses v0's observation
-    ship = PolicySpec("sb3", {"path": str(zip_path)}, label="x", module="policies.sb3_agents")
+    ship = PolicySpec("sb3", {"path": str(zip_path)}, label="x", module="policies.agents.sb3_agents")
     res = run_benchmark([ship], episodes=1, slots=SLOTS, env_kwargs=dict(V2_KWARGS))
     expected = run_benchmark(
         [PolicySpec("sb3", {
             "path": str(v2_runs / "a" / "ckpt_200_steps.zip"),
             "vecnormalize": str(v2_runs / "a" / "ckpt_vecnormalize_200_steps.pkl"),
             "ks": KS, "episode_slots": SLOTS,
-        }, label="x", module="policies.sb3_agents")],
+        }, label="x", module="policies.agents.sb3_agents")],
         episodes=1, slots=SLOTS, env_kwargs=dict(V2_KWARGS),
     )  # fmt: skip
     assert res.rows[0]["reward"] == expected.rows[0]["reward"]
@@ -230,7 +230,7 @@ def test_tuned_rules_read_the_ladder_at_full_precision(tmp_path) -> None:
 def test_paired_vs_rules_matches_scipy_paired_t() -> None:
     import scipy.stats
 
-    from policies.epoch_selection import paired_vs_rules
+    from policies.agents.selection import paired_vs_rules
 
     rng = np.random.default_rng(3)
     n = 50
@@ -259,14 +259,14 @@ def test_paired_vs_rules_matches_scipy_paired_t() -> None:
 
 @pytest.mark.parametrize("seed", [VALIDATION_SEED, 1])
 def test_held_out_refuses_validation_and_tuning_seeds(seed, tmp_path) -> None:
-    from policies.epoch_selection import held_out_comparison
+    from policies.agents.selection import held_out_comparison
 
     with pytest.raises(ValueError, match="not a held-out one"):
         held_out_comparison({}, tmp_path, seed=seed, episodes=1)
 
 
 def test_shipping_refuses_to_overwrite_an_agent(tmp_path) -> None:
-    from policies.epoch_selection import _refuse_existing
+    from policies.agents.selection import _refuse_existing
 
     _refuse_existing(tmp_path, "agent", overwrite=False)  # nothing there yet
     (tmp_path / "agent.zip").write_bytes(b"x")

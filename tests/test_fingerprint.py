@@ -7,8 +7,8 @@ import hashlib
 import numpy as np
 import pytest
 
-from policies.benchmark import run_benchmark
-from scas_env.studies.fingerprint import benchmark_digest, episodes_digest, feed, fingerprint
+from policies.benchmark.run import run_benchmark
+from experiments.fingerprint import benchmark_digest, episodes_digest, feed, fingerprint
 
 
 def _digest(obj: object) -> str:

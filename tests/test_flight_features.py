@@ -10,7 +10,7 @@ from scas_env.actuator.params import ScasParams
 from scas_env.actuator.surrogate import default_surrogate
 from scas_env.env import ScasMaintenanceEnv
 from scas_env.monitor import learning_features
-from scas_env.scenario import FLIGHT_FEATURE_SETS, Scenario
+from scas_env.core.scenario import FLIGHT_FEATURE_SETS, Scenario
 from scas_env.world import ActuatorWorld
 
 EXTENDED = "I2,I6,I7,I8,I9"

@@ -20,7 +20,7 @@ import pytest
 
 from scas_env.actuator import shipped_files
 from scas_env.actuator.calibration import Calibration, default_calibration
-from scas_env.actuator.shipped_files import (
+from scas_env.utils.shipped_files import (
     MANIFEST_NAME,
     SHIPPED_DIRS,
     ShippedFileError,

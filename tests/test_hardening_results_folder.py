@@ -11,7 +11,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from scas_env.results_folder import (
+from scas_env.utils.results_folder import (
     MANIFEST,
     ResultsFolderError,
     check_destination,

@@ -32,7 +32,7 @@ from scas_env import V2_KWARGS, learning_kernel
 from scas_env import vector_env as vector_env_module
 from scas_env.decision_epochs_vector import DecisionEpochsVectorEnv
 from scas_env.learning_kernel import chunk_bounds, chunk_count
-from scas_env.parallel import single_threaded
+from scas_env.utils.parallel import single_threaded
 from scas_env.vector_env import ScasMaintenanceVectorEnv, make_vector_env
 
 _KW = {**V2_KWARGS, "initial_health": "random", "episode_slots": 120}
@@ -316,7 +316,7 @@ def test_forked_child_of_gnu_openmp_runs_the_serial_kernels() -> None:
 
 def test_sb3_speed_setup_with_two_kernel_threads() -> None:
     """``epochs-native-64-t2`` is ``epochs-native-64`` with the filter kernels on 2 threads."""
-    from policies.sb3_speed import make_setup
+    from experiments.sb3_speed import make_setup
 
     def inner(venv: Any) -> Any:
         while hasattr(venv, "venv"):

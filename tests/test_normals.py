@@ -28,7 +28,7 @@ from prognostics.normals import (
     standard_normal,
 )
 from prognostics.particle_filter import ParticleFilter
-from scas_env.studies.prognostics_speed import synthetic_case
+from experiments.prognostics_speed import synthetic_case
 
 BIT_GENERATORS = (
     np.random.PCG64,

@@ -8,7 +8,7 @@ import pytest
 
 import scas_env
 from policies.base import make_policy
-from policies.benchmark import PolicySpec, episode_seeds, run_benchmark, run_episode
+from policies.benchmark.run import PolicySpec, episode_seeds, run_benchmark, run_episode
 
 
 @pytest.mark.parametrize(

@@ -7,9 +7,9 @@ import itertools
 import numpy as np
 import pytest
 
-from policies.benchmark import PolicySpec, run_benchmark
-from policies.benchmark_stats import paired_difference
-from policies.oracle import plan_cost, plan_cost_known
+from policies.benchmark.run import PolicySpec, run_benchmark
+from policies.benchmark.stats import paired_difference
+from policies.rules.oracle import plan_cost, plan_cost_known
 from scas_env import V2_KWARGS
 
 COSTS = (2500.0, 1500.0, 6000.0, 0, 1)  # flight value, spring, seal, downtimes (CostModel)

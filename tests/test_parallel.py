@@ -1,11 +1,11 @@
-"""Worker processes of scas_env.parallel: results independent of workers, one thread each."""
+"""Worker processes of scas_env.utils.parallel: results independent of workers, one thread each."""
 
 from __future__ import annotations
 
 import numba
 import pytest
 
-from scas_env.parallel import in_worker, map_chunks, single_thread
+from scas_env.utils.parallel import in_worker, map_chunks, single_thread
 
 
 def _threads(chunk: list[int]) -> list[tuple[int, int, int]]:
@@ -56,7 +56,7 @@ def test_single_threaded_pins_blas_numba_and_torch_and_restores_them() -> None:
     import threadpoolctl
     import torch
 
-    from scas_env.parallel import single_threaded
+    from scas_env.utils.parallel import single_threaded
 
     original_torch = torch.get_num_threads()
     with threadpoolctl.threadpool_limits(limits=2):  # a known starting point above one
@@ -76,7 +76,7 @@ def test_single_threaded_pins_blas_numba_and_torch_and_restores_them() -> None:
 def test_single_threaded_restores_after_an_exception() -> None:
     import threadpoolctl
 
-    from scas_env.parallel import single_threaded
+    from scas_env.utils.parallel import single_threaded
 
     with threadpoolctl.threadpool_limits(limits=2):
         before = _blas_threads()

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from scas_env.env import ScasMaintenanceEnv
-from scas_env.scenario import Scenario
+from scas_env.core.scenario import Scenario
 from scas_env.vector_env import ScasMaintenanceVectorEnv
 
 KW = {"degradation_draws": "per_part", "obs_mode": "state", "episode_slots": 2500}

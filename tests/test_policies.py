@@ -12,12 +12,12 @@ from stable_baselines3.common.monitor import Monitor
 
 import scas_env
 from policies import make_policy, policy_obs_mode
-from policies.benchmark import run_episode
-from policies.nested import ground_test_reference
-from policies.noisy_oracle import NoisyOraclePolicy
-from policies.oracle import OraclePolicy
-from policies.prognostic import FeatureRulePolicy, RulRiskPolicy
-from policies.rules import DetectionPolicy, PreventivePolicy, RandomPolicy
+from policies.benchmark.run import run_episode
+from policies.rules.nested import ground_test_reference
+from policies.rules.noisy_oracle import NoisyOraclePolicy
+from policies.rules.oracle import OraclePolicy
+from policies.rules.prognostic import FeatureRulePolicy, RulRiskPolicy
+from policies.rules.classic import DetectionPolicy, PreventivePolicy, RandomPolicy
 
 FULL = (
     "I2", "I6", "I7", "G1", "G3", "test_age", "no_go", "spring_rul_mean", "spring_rul_low",
@@ -240,8 +240,8 @@ def test_oracle_never_fails_in_flight():
 
 
 def test_detection_rule_answers_a_failed_test_with_the_implicated_part() -> None:
-    from policies.nested import ground_test_reference
-    from policies.rules import DetectionPolicy
+    from policies.rules.nested import ground_test_reference
+    from policies.rules.classic import DetectionPolicy
     from scas_env.env import ScasMaintenanceEnv
 
     names = ScasMaintenanceEnv(obs_mode="features").obs_names

@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from policies.nested import ground_test_reference
-from policies.preflight_study import RULES, age_rule_answering_no_go, preflight_availability
-from policies.rules import PREVENTIVE_DEFAULTS, PreventivePolicy
+from policies.rules.nested import ground_test_reference
+from experiments.preflight_study import RULES, age_rule_answering_no_go, preflight_availability
+from policies.rules.classic import PREVENTIVE_DEFAULTS, PreventivePolicy
 from scas_env.env import ScasMaintenanceEnv
 
 

@@ -33,12 +33,12 @@ def test_from_dict_gives_a_clear_error_or_the_given_values(cls: type) -> None:
 
 
 def test_an_integer_beyond_float_range_is_a_clear_error() -> None:
-    from scas_env.costs import CostModel
+    from scas_env.core.costs import CostModel
 
     check_from_dict(CostModel, {"flight_value_usd": 10**400})
 
 
 def test_an_exponent_string_for_an_integer_field_is_handled() -> None:
-    from scas_env.scenario import Scenario
+    from scas_env.core.scenario import Scenario
 
     check_from_dict(Scenario, {"episode_slots": "2e3"})

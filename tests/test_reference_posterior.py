@@ -12,9 +12,9 @@ from scipy.stats import kstest, multivariate_normal
 
 from scas_env import V2_KWARGS
 from scas_env.env import ScasMaintenanceEnv
-from scas_env.scenario import Scenario
-from scas_env.studies.belief_calibration import policy_action
-from scas_env.studies.reference_posterior import (
+from scas_env.core.scenario import Scenario
+from experiments.belief_calibration import policy_action
+from experiments.reference_posterior import (
     BATCH,
     TEST,
     RecordingEnv,
@@ -22,7 +22,7 @@ from scas_env.studies.reference_posterior import (
     SpringModel,
     run_reference_study,
 )
-from scas_env.studies.reference_synthetic import (
+from experiments.reference_synthetic import (
     format_synthetic,
     measurement_moments,
     synthetic_stage_pits,

@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from scas_env.studies.reference_report import format_table, stage_table
+from experiments.reference_report import format_table, stage_table
 
 
 def _row(seed: int, stage: float, truth: float, shift: float, risk: float) -> dict:

@@ -7,9 +7,9 @@ import math
 import numpy as np
 import pytest
 
-from policies.benchmark import PolicySpec
-from policies.renewal import age_rule_rate, long_run_rates, sample_lives
-from scas_env.costs import CostModel
+from policies.benchmark.run import PolicySpec
+from experiments.renewal import age_rule_rate, long_run_rates, sample_lives
+from scas_env.core.costs import CostModel
 
 FH = 1.5  # flight hours per flight (mission default, 5400 s)
 
@@ -51,7 +51,7 @@ def test_renewal_reward_matches_long_simulation_for_corrective_and_age_rules():
 def test_long_run_window_is_the_difference_of_two_runs_on_the_same_seeds():
     spec = PolicySpec("preventive")
     out = long_run_rates([spec], episodes=2, warmup=300, window=300, seed=5)
-    from policies.benchmark import run_benchmark
+    from policies.benchmark.run import run_benchmark
 
     a = run_benchmark([spec], episodes=2, slots=300, seed=5).rows
     b = run_benchmark([spec], episodes=2, slots=600, seed=5).rows

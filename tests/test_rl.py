@@ -18,7 +18,7 @@ from stable_baselines3.common.monitor import Monitor
 from stable_baselines3.common.vec_env import DummyVecEnv
 
 from policies.base import make_policy
-from policies.benchmark import episode_seeds
+from policies.benchmark.run import episode_seeds
 from policies.rl import (
     DEFAULT_AGENT,
     MaintenanceEvalCallback,

@@ -1,4 +1,4 @@
-"""Loading agents (policies.sb3_agents): any SB3 zip, RL-Zoo layout, module:factory, refusals."""
+"""Loading agents (policies.agents.sb3_agents): any SB3 zip, RL-Zoo layout, module:factory, refusals."""
 
 from __future__ import annotations
 
@@ -16,10 +16,10 @@ import yaml
 from stable_baselines3 import PPO
 from stable_baselines3.common.vec_env import DummyVecEnv, VecNormalize
 
-import policies.sb3_agents as agents
+import policies.agents.sb3_agents as agents
 from policies.base import make_policy
-from policies.rules import PreventivePolicy
-from policies.sb3_agents import (
+from policies.rules.classic import PreventivePolicy
+from policies.agents.sb3_agents import (
     DEFAULT_AGENT,
     SB3Agent,
     check_manifest,
@@ -118,7 +118,7 @@ def test_truncated_and_corrupted_zips_are_refused_with_the_file_name(
 
 
 def test_shipped_files_are_checked_against_the_manifest(tmp_path: Path, monkeypatch) -> None:
-    import scas_env.actuator.shipped_files as shipped
+    import scas_env.utils.shipped_files as shipped
 
     check_manifest(DEFAULT_AGENT)  # the shipped copy passes
     # a rezipped policy.pth with one weight changed has valid CRCs: only the manifest sees it
@@ -150,15 +150,15 @@ def test_shipped_files_are_checked_against_the_manifest(tmp_path: Path, monkeypa
 
 def test_module_factory_policies_and_registry() -> None:
     names = _names()
-    policy = load_factory(names, "policies.rules:PreventivePolicy", spring_age=500.0)
+    policy = load_factory(names, "policies.rules.classic:PreventivePolicy", spring_age=500.0)
     assert isinstance(policy, PreventivePolicy) and policy.params()["spring_age"] == 500.0
-    built = make_policy("factory", names, target="policies.rules:PreventivePolicy")
+    built = make_policy("factory", names, target="policies.rules.classic:PreventivePolicy")
     obs = _obs()
     np.testing.assert_array_equal(built.predict(obs)[0], PreventivePolicy(names).predict(obs)[0])
     for target, match in (
-        ("policies.rules", "module:factory"),
+        ("policies.rules.classic", "module:factory"),
         ("no_such_module_xyz:make", "cannot import"),
-        ("policies.rules:nothing", "no callable"),
+        ("policies.rules.classic:nothing", "no callable"),
         ("builtins:tuple", "without predict"),
     ):
         with pytest.raises(ValueError, match=match):

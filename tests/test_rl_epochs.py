@@ -1,4 +1,4 @@
-"""Decision epochs (scas_env.decision_epochs) and their replay on v0 (policies.sb3_agents)."""
+"""Decision epochs (scas_env.decision_epochs) and their replay on v0 (policies.agents.sb3_agents)."""
 
 from __future__ import annotations
 
@@ -6,7 +6,7 @@ import gymnasium as gym
 import numpy as np
 import pytest
 
-from policies.sb3_agents import EpochAgent
+from policies.agents.sb3_agents import EpochAgent
 from scas_env import ENV_ID
 from scas_env.decision_epochs import (
     DEFAULT_KS,
@@ -160,7 +160,7 @@ def test_plain_ppo_copy_of_a_maskable_agent_decides_the_same(tmp_path) -> None:
     from sb3_contrib import MaskablePPO
     from stable_baselines3 import PPO
 
-    from policies.epoch_selection import as_plain_ppo
+    from policies.agents.selection import as_plain_ppo
 
     env, plain = _pair()
     model = MaskablePPO("MlpPolicy", env, seed=1, device="cpu", n_steps=64, batch_size=64)

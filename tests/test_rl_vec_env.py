@@ -1,4 +1,4 @@
-"""The SB3 VecEnv adapter over the native vector env (policies.sb3_vec_env)."""
+"""The SB3 VecEnv adapter over the native vector env (policies.agents.sb3_vec_env)."""
 
 from __future__ import annotations
 
@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 from stable_baselines3.common.vec_env import DummyVecEnv
 
-from policies.sb3_vec_env import NativeVecEnv
+from policies.agents.sb3_vec_env import NativeVecEnv
 from scas_env import ENV_ID
 from scas_env.decision_epochs import maintenance_mask
 

@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 
 from policies.base import make_policy
-from policies.benchmark import PLUGINS, run_benchmark
-from policies.sb3_agents import V2_AGENT, load_sb3_policy
+from policies.benchmark.run import PLUGINS, run_benchmark
+from policies.agents.sb3_agents import V2_AGENT, load_sb3_policy
 from scas_env import ENV_ID, ENV_ID_V2, V2_KWARGS
 
 

@@ -1,4 +1,4 @@
-"""The SB3 speed benchmark's bookkeeping (policies.sb3_speed) and training_fps."""
+"""The SB3 speed benchmark's bookkeeping (experiments.sb3_speed) and training_fps."""
 
 from __future__ import annotations
 
@@ -8,9 +8,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-import policies.sb3_speed as speed
+import experiments.sb3_speed as speed
 from policies.rl import ALGOS
-from policies.sb3_speed import fps_ppo_kwargs, fps_rounds, make_setup, summarise, training_fps
+from experiments.sb3_speed import fps_ppo_kwargs, fps_rounds, make_setup, summarise, training_fps
 
 
 def test_rounds_alternate_and_speedups_are_taken_within_a_round(monkeypatch) -> None:
@@ -87,7 +87,7 @@ def test_bench_writes_json_csv_png(tmp_path: Path, monkeypatch) -> None:
 def test_epoch_setups_count_the_flights_flown() -> None:
     """The decision-epoch setups: 4 single wrappers and the 64-actuator vector env, the same
     spaces; their frames are flights, the sum of the steps' ``epoch_slots``."""
-    from policies.sb3_speed import _find_counter
+    from experiments.sb3_speed import _find_counter
 
     dummy, native = make_setup("epochs-dummy-4"), make_setup("epochs-native-64")
     assert (dummy.num_envs, native.num_envs) == (4, 64)
@@ -107,7 +107,7 @@ def test_epoch_setups_count_the_flights_flown() -> None:
 
 def test_a_clone_start_is_for_the_epoch_setups_only() -> None:
     pytest.importorskip("sb3_contrib")
-    from policies.sb3_speed import make_setup, training_fps
+    from experiments.sb3_speed import make_setup, training_fps
 
     with pytest.raises(ValueError, match="decision-epoch setups only"):
         training_fps(lambda: make_setup("cartpole-4"), 64, init="results/none")

@@ -1,5 +1,5 @@
-"""Sensing variants (scas_env.studies.sensing_variants) and the sensing sweep
-(policies.sensing_sweep): parameters change only where asked, the surrogate cache, and the
+"""Sensing variants (experiments.sensing_variants) and the sensing sweep
+(experiments.sensing_sweep): parameters change only where asked, the surrogate cache, and the
 sweep's paired statistics against an independent computation from its CSV."""
 
 from __future__ import annotations
@@ -12,16 +12,16 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from policies.benchmark import PolicySpec, run_benchmark
-from policies.nested import shipped_reference, surrogate_reference
-from policies.sensing_sweep import QUICK, REFERENCE, replicate_seeds, run_sensing_sweep
-from policies.sensing_sweep import write_sweep_outputs as write_sweep
-from policies.tuning import HELD_OUT_SEED
+from policies.benchmark.run import PolicySpec, run_benchmark
+from policies.rules.nested import shipped_reference, surrogate_reference
+from experiments.sensing_sweep import QUICK, REFERENCE, replicate_seeds, run_sensing_sweep
+from experiments.sensing_sweep import write_sweep_outputs as write_sweep
+from policies.value.tuning import HELD_OUT_SEED
 from scas_env import V2_KWARGS
 from scas_env.actuator.calibration import default_calibration, params_digest
 from scas_env.actuator.params import ScasParams
 from scas_env.actuator.surrogate import default_surrogate
-from scas_env.studies.sensing_variants import (
+from experiments.sensing_variants import (
     NOISE_FIELDS,
     TOLERANCE_FIELDS,
     SensingLevel,

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 from scipy import optimize, stats
 
-from policies.benchmark_stats import (
+from policies.benchmark.stats import (
     bootstrap_mean,
     garwood_interval,
     garwood_rate,

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 from scipy.stats import norm
 
-from scas_env.studies.estimator_comparison import (
+from experiments.estimator_comparison import (
     ESTIMATORS,
     STAGES,
     ComparisonConfig,
@@ -121,7 +121,7 @@ def test_cli_writes_table_csv_json_and_plot(tmp_path, capsys) -> None:
 
 def test_flight_source_reads_batch_means_after_the_baseline_batches() -> None:
     from scas_env.monitor import BASELINE_TESTS
-    from scas_env.studies.estimator_comparison import _Context, simulate_life
+    from experiments.estimator_comparison import _Context, simulate_life
 
     cfg = ComparisonConfig(units=2, seed=2, source="flight", every=7, parts=("seal",))
     ctx = _Context("seal", cfg)

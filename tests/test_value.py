@@ -10,8 +10,8 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from policies.tuning import FAMILIES, HELD_OUT_SEED, edge_report, relevant_box, tune_family
-from policies.value import (
+from policies.value.tuning import FAMILIES, HELD_OUT_SEED, edge_report, relevant_box, tune_family
+from policies.value.study import (
     LADDER,
     QUICK,
     REFERENCE,

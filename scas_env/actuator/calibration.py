@@ -31,7 +31,6 @@ import numpy.typing as npt
 from tqdm.auto import tqdm
 
 from prognostics.degradation_models import paris_crack_model
-from scas_env.actuator.atomic_file import write_text_atomic
 from scas_env.actuator.bandwidth import seal_criterion
 from scas_env.actuator.flight_damage import (
     FlightDamage,
@@ -47,14 +46,15 @@ from scas_env.actuator.health import actuator_config
 from scas_env.actuator.missions import flight_profile, link_force_n
 from scas_env.actuator.params import ScasParams
 from scas_env.actuator.physics.actuator import simulate
-from scas_env.actuator.shipped_files import shipped_path, verify_shipped_file
-from scas_env.actuator.table_checks import (
+from scas_env.actuator.uncertainty import draw_units, nominal_unit
+from scas_env.utils.atomic_file import write_text_atomic
+from scas_env.utils.shipped_files import shipped_path, verify_shipped_file
+from scas_env.utils.table_checks import (
     finite_array,
     finite_scalar,
     load_json_table,
     whole_number,
 )
-from scas_env.actuator.uncertainty import draw_units, nominal_unit
 
 FloatArray = npt.NDArray[np.float64]
 CALIBRATION_VERSION = 1
@@ -242,7 +242,7 @@ class Calibration:
     @classmethod
     def load(cls, path: str | Path) -> Calibration:
         """Read a calibration file; every error names the file, and a shipped file is
-        checked against the SHA-256 manifest (:mod:`scas_env.actuator.shipped_files`)."""
+        checked against the SHA-256 manifest (:mod:`scas_env.utils.shipped_files`)."""
         verify_shipped_file(path)
         return load_json_table(path, lambda data: cls(**data), "calibration")
 

@@ -59,8 +59,8 @@ else:  # pragma: no cover - Python 3.10: the tomli backport (a declared dependen
 T = TypeVar("T", bound="Validated")
 
 #: Tables a configuration file may hold instead of one group's fields, and the class read
-#: from each: the episode (``scas_env.scenario.Scenario``), the cost model
-#: (``scas_env.costs.CostModel``) and the actuator design (``scas_env.actuator.params``).
+#: from each: the episode (``scas_env.core.scenario.Scenario``), the cost model
+#: (``scas_env.core.costs.CostModel``) and the actuator design (``scas_env.actuator.params``).
 FILE_SECTIONS = {"scenario": "Scenario", "costs": "CostModel", "params": "ScasParams"}
 
 

@@ -39,9 +39,9 @@ from pathlib import Path
 import numpy as np
 import numpy.typing as npt
 
-from scas_env.actuator.atomic_file import write_text_atomic
-from scas_env.actuator.shipped_files import shipped_path, verify_shipped_file
-from scas_env.actuator.table_checks import finite_array, load_json_table, whole_number
+from scas_env.utils.atomic_file import write_text_atomic
+from scas_env.utils.shipped_files import shipped_path, verify_shipped_file
+from scas_env.utils.table_checks import finite_array, load_json_table, whole_number
 
 FloatArray = npt.NDArray[np.float64]
 SURROGATE_VERSION = 1
@@ -315,7 +315,7 @@ class SurrogateModel:
     @classmethod
     def load(cls, path: str | Path) -> SurrogateModel:
         """Read a surrogate file; every error names the file, and a shipped file is checked
-        against the SHA-256 manifest (:mod:`scas_env.actuator.shipped_files`)."""
+        against the SHA-256 manifest (:mod:`scas_env.utils.shipped_files`)."""
         verify_shipped_file(path)
         return load_json_table(path, lambda data: cls(**data), "surrogate")
 

@@ -20,7 +20,6 @@ from __future__ import annotations
 import copy
 import math
 from dataclasses import replace
-from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -34,6 +33,7 @@ from scas_env.actuator.uncertainty import (
     draw_unit,
     truncated_normal,
 )
+from scas_env.core.filters import STATUS_MESSAGES, learn_row, work_arrays
 from scas_env.core.flight import crack_flights_to_failure, wear_flights_to_failure
 from scas_env.core.setup import (
     EFFECT_FEATURES,
@@ -44,9 +44,7 @@ from scas_env.core.setup import (
     UPCOMING_PARTS,
     lognormal_sigma,
 )
-
-if TYPE_CHECKING:
-    from scas_env.core.batch import ActuatorBatch
+from scas_env.core.state import ActuatorState, PhysicsRow
 
 #: the streams of a row: its env's ``np_random`` hands out seeds in this order
 STREAMS = ("parts", "degradation", "measure", "filter")
@@ -66,7 +64,7 @@ def seed_streams(np_random: np.random.Generator) -> dict[str, np.random.Generato
     return rngs
 
 
-def reset_row(batch: ActuatorBatch, e: int, np_random: np.random.Generator) -> None:
+def reset_row(batch: ActuatorState, e: int, np_random: np.random.Generator) -> None:
     """Row ``e`` starts an episode: new streams from ``np_random``, a new unit with new parts
     (or parts part-way through life, ``initial_health="random"``), the installation's
     reference, filters at their priors, counters at zero."""
@@ -95,7 +93,7 @@ def reset_row(batch: ActuatorBatch, e: int, np_random: np.random.Generator) -> N
     _reset_monitor(batch, e)
 
 
-def _clear_counters(batch: ActuatorBatch, e: int) -> None:
+def _clear_counters(batch: ActuatorState, e: int) -> None:
     a = batch.a
     for name in (
         "pending", "flight_sum", "flight_count", "det_n", "detected", "test_age", "no_go",
@@ -107,7 +105,7 @@ def _clear_counters(batch: ActuatorBatch, e: int) -> None:
 
 
 def _fit_spring(
-    batch: ActuatorBatch, e: int, unit: UnitSample, donor: UnitSample, rng: np.random.Generator
+    batch: ActuatorState, e: int, unit: UnitSample, donor: UnitSample, rng: np.random.Generator
 ) -> UnitSample:
     """Row ``e`` takes ``donor``'s spring pair (geometry, Paris C, initial flaw) with new
     installation effects drawn from ``rng``; returns the unit with it."""
@@ -134,7 +132,7 @@ def _fit_spring(
     return unit
 
 
-def _random_health(batch: ActuatorBatch, e: int, life_used: np.ndarray) -> None:
+def _random_health(batch: ActuatorState, e: int, life_used: np.ndarray) -> None:
     """Parts part-way through life: each at the fraction ``life_used`` of it (in damage
     for the crack, in wear for the seals)."""
     st, a = batch.setup, batch.a
@@ -150,7 +148,7 @@ def _random_health(batch: ActuatorBatch, e: int, life_used: np.ndarray) -> None:
 
 
 def _new_growth(
-    batch: ActuatorBatch, e: int, part: str, rng: np.random.Generator, *, look_ahead: bool
+    batch: ActuatorState, e: int, part: str, rng: np.random.Generator, *, look_ahead: bool
 ) -> None:
     """The fitted ``part``'s own growth stream, seeded from ``rng`` (its parts stream), its
     life, and (``look_ahead``, in the observation modes that show them) the lives of the
@@ -164,7 +162,7 @@ def _new_growth(
         batch.a["upcoming"][e, p] = next_lives(batch, e, part, UPCOMING_PARTS)
 
 
-def flights_to_failure(batch: ActuatorBatch, e: int, part: str) -> float:
+def flights_to_failure(batch: ActuatorState, e: int, part: str) -> float:
     """Standard flights ``part`` of row ``e`` will still fly, the failing one included, at
     its own future growth draws (a copy of its stream is replayed; inf if the fault is off
     or the crack dormant)."""
@@ -187,7 +185,7 @@ def flights_to_failure(batch: ActuatorBatch, e: int, part: str) -> float:
     )
 
 
-def next_lives(batch: ActuatorBatch, e: int, part: str, count: int) -> list[float]:
+def next_lives(batch: ActuatorState, e: int, part: str, count: int) -> list[float]:
     """The whole lives (standard flights) of the next ``count`` parts of this kind that row
     ``e``'s parts stream will supply (a copy of it: nothing of the row moves): what a
     clairvoyant oracle knows."""
@@ -203,7 +201,7 @@ def next_lives(batch: ActuatorBatch, e: int, part: str, count: int) -> list[floa
 
 
 def _fit_part(
-    batch: ActuatorBatch, e: int, part: str, rng: np.random.Generator, *, look_ahead: bool
+    batch: ActuatorState, e: int, part: str, rng: np.random.Generator, *, look_ahead: bool
 ) -> None:
     """Row ``e`` gets a new ``part`` drawn from ``rng`` (its kind's parts stream), with its
     growth stream and life."""
@@ -221,7 +219,7 @@ def _fit_part(
     _new_growth(batch, e, part, rng, look_ahead=look_ahead)
 
 
-def replace_part(batch: ActuatorBatch, e: int, part: str, *, failed: bool) -> None:
+def replace_part(batch: ActuatorState, e: int, part: str, *, failed: bool) -> None:
     """Row ``e`` fits a new ``part``: a preventive replacement (its cost, and the true life
     thrown away, counted) or the replacement of a failed part (costed with the failure)."""
     st, a = batch.setup, batch.a
@@ -244,7 +242,7 @@ def replace_part(batch: ActuatorBatch, e: int, part: str, *, failed: bool) -> No
     a["part_age"][e, p] = 0
 
 
-def record_reference(batch: ActuatorBatch, e: int) -> None:
+def record_reference(batch: ActuatorState, e: int) -> None:
     """The installation's reference reading of G1 and G3, recorded at fitting: the mean of
     ``reference_tests`` tests of the installation with healthy parts (the measure stream)."""
     st = batch.setup
@@ -259,7 +257,7 @@ def record_reference(batch: ActuatorBatch, e: int) -> None:
     batch.a["reference"][e] = [math.fsum(t[k] for t in tests) / n for k in range(2)]
 
 
-def _reset_monitor(batch: ActuatorBatch, e: int) -> None:
+def _reset_monitor(batch: ActuatorState, e: int) -> None:
     """Both filters at their priors: the spring's, then the seals' (which keep the
     installation's effects, here the priors), then, for parts of unknown age, spread over
     their lives."""
@@ -275,13 +273,13 @@ def _reset_monitor(batch: ActuatorBatch, e: int) -> None:
         _spread_over_life(batch, e)
 
 
-def reset_filter(batch: ActuatorBatch, e: int, part: str) -> None:
+def reset_filter(batch: ActuatorState, e: int, part: str) -> None:
     """A new ``part`` is fitted to row ``e``: the batch of in-flight features flown with the
     old one is learnt from first, then its filter restarts from the prior (a new spring pair
     is a new installation: every installation effect back to N(0, 1); new seals keep the
     installation's, collapsed to one Gaussian), its detector is cleared."""
     st, a = batch.setup, batch.a
-    batch.learn_now(e)
+    learn_now(batch, e)
     rng = batch.rngs[e]["filter"]
     n = st.n_particles
     p = PARTS.index(part)
@@ -308,7 +306,7 @@ def reset_filter(batch: ActuatorBatch, e: int, part: str) -> None:
     a["stale"][e] = True
 
 
-def _reset_cloud(batch: ActuatorBatch, e: int, p: int, x0, theta0: np.ndarray) -> None:
+def _reset_cloud(batch: ActuatorState, e: int, p: int, x0, theta0: np.ndarray) -> None:
     """Filter p of row e: particles at ``x0``, growth multipliers ``theta0`` (> 0), uniform
     weights (:meth:`prognostics.particle_filter.ParticleFilter.reset`)."""
     a = batch.a
@@ -334,7 +332,7 @@ def _mixture_moments(w: np.ndarray, mean: np.ndarray, var: np.ndarray) -> tuple[
     return mu, float(w @ var + w @ (mean - mu) ** 2)
 
 
-def _spread_over_life(batch: ActuatorBatch, e: int) -> None:
+def _spread_over_life(batch: ActuatorState, e: int) -> None:
     """Priors of parts part-way through life: each particle at a uniform fraction of its own
     life (in damage for the crack, in wear for the seals)."""
     st, a = batch.setup, batch.a
@@ -350,18 +348,30 @@ def _spread_over_life(batch: ActuatorBatch, e: int) -> None:
     a["stale"][e] = True
 
 
-class PhysicsRow:
-    """What the physics fidelity keeps of a row beyond the arrays: the fitted unit (every
-    tolerance the simulation reads) and the episode's library of flight windows (drawn
-    lazily from their own seeds, each with its healthy baseline simulated once)."""
+def learn_now(batch: ActuatorState, e: int) -> None:
+    """Row ``e``'s filters learn from the batch of in-flight features under way (before a
+    new part is fitted: those flights were flown with the old one)."""
+    a = batch.a
+    if a["flight_count"][e] == 0:
+        return
+    status = a["status"]
+    status[e] = 0
+    work = work_arrays(batch.setup.n_particles, len(batch.a["flight_sum"][e]))
+    handle = tuple(int(v) for v in a["h_filter"][e])
+    learn_row(e, batch.bank, a["pending"], a["flight_sum"], a["flight_count"], status, work,
+              batch.setup.filters, handle)  # fmt: skip
+    a["stale"][e] = True
+    raise_status(int(status[e]))
 
-    def __init__(self, library_seed: int) -> None:
-        self.library_seed = library_seed
-        self.unit: UnitSample | None = None
-        self.windows: dict = {}
+
+def raise_status(code: int) -> None:
+    """Raise what a filter kernel's non-zero row status means; nothing for 0."""
+    if code:
+        error, message = STATUS_MESSAGES[code]
+        raise error(f"a particle-filter update failed: {message}")
 
 
-def _physics_config(batch: ActuatorBatch, e: int, rng: np.random.Generator, healthy: bool):
+def _physics_config(batch: ActuatorState, e: int, rng: np.random.Generator, healthy: bool):
     st, a = batch.setup, batch.a
     health = HealthState(
         crack_depth_m=0.0 if healthy else float(a["crack"][e]),
@@ -373,7 +383,7 @@ def _physics_config(batch: ActuatorBatch, e: int, rng: np.random.Generator, heal
 
 
 def physics_test(
-    batch: ActuatorBatch, e: int, rng: np.random.Generator, *, healthy: bool = False
+    batch: ActuatorState, e: int, rng: np.random.Generator, *, healthy: bool = False
 ) -> list[float]:
     """A simulated pre-flight test of row ``e`` (its parts healthy if ``healthy``): G1, G3."""
     config = _physics_config(batch, e, rng, healthy)
@@ -381,7 +391,7 @@ def physics_test(
     return [feats[f] for f in GROUND_FEATURES]
 
 
-def _library_window(batch: ActuatorBatch, e: int, rng: np.random.Generator):
+def _library_window(batch: ActuatorState, e: int, rng: np.random.Generator):
     """This flight's window from row ``e``'s library (None: draw a new one from ``rng``)."""
     st = batch.setup
     size = int(st.scenario.window_library)
@@ -395,7 +405,7 @@ def _library_window(batch: ActuatorBatch, e: int, rng: np.random.Generator):
     return row.windows[k]
 
 
-def physics_flight(batch: ActuatorBatch, e: int, rng: np.random.Generator) -> np.ndarray:
+def physics_flight(batch: ActuatorState, e: int, rng: np.random.Generator) -> np.ndarray:
     """A simulated flight window of row ``e`` at its parts' state: the in-flight features."""
     st = batch.setup
     config = _physics_config(batch, e, rng, healthy=False)
@@ -408,11 +418,12 @@ def physics_flight(batch: ActuatorBatch, e: int, rng: np.random.Generator) -> np
 
 __all__ = [
     "STREAMS",
-    "PhysicsRow",
     "flights_to_failure",
+    "learn_now",
     "next_lives",
     "physics_flight",
     "physics_test",
+    "raise_status",
     "record_reference",
     "replace_part",
     "reset_filter",

@@ -55,7 +55,6 @@ from scas_env.actuator.params import ScasParams
 from scas_env.actuator.physics.spring import failure_depth_from_params
 from scas_env.actuator.sensing import flight_window, ground_test
 from scas_env.actuator.uncertainty import draw_run_conditions, draw_unit
-from scas_env.parallel import map_chunks
 from scas_env.studies.campaign_table import (
     CONDITIONS,
     FAULT_MODES,
@@ -65,6 +64,7 @@ from scas_env.studies.campaign_table import (
     CampaignResult,
     campaign_columns,
 )
+from scas_env.utils.parallel import map_chunks
 
 __all__ = ["CampaignConfig", "run_campaign", "run_generator", "simulate_run"]
 
@@ -240,7 +240,7 @@ def run_campaign(
         ``chunk_size``.
     n_workers : worker processes; default ``os.cpu_count()``; 1 runs in this process.
     chunk_size : runs per task; default ``ceil(runs / (4 n_workers))``, at most
-        :data:`scas_env.parallel.MAX_CHUNK`.
+        :data:`scas_env.utils.parallel.MAX_CHUNK`.
     progress : show a tqdm progress bar (runs done).
 
     Returns

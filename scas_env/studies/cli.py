@@ -21,7 +21,6 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 
 from scas_env.cli_args import (
-    HelpFormatter,
     add_logging_args,
     add_params_arg,
     announce_uncached_kernels,
@@ -41,16 +40,11 @@ log = logging.getLogger(__name__)
 
 __all__ = [
     "PARSERS",
-    "bench_env_main",
-    "bench_integrator_main",
-    "bench_main",
-    "bench_prognostics_main",
     "build_calibration_main",
     "build_surrogate_main",
     "campaign_main",
     "export_dataset_main",
     "figures_main",
-    "go_no_go_main",
     "reproduce_main",
     "simulate_main",
 ]
@@ -468,155 +462,6 @@ build_calibration_main = _command(
 
 # --- scas-bench: speed of the integrator, the prognostics and the env ------------------
 
-BENCH_INTEGRATOR_DOC = """\
-Integrator speed and accuracy: real-time factor, batch throughput, error vs fine step.
-
-Without options the ScasParams defaults are used (scas_env.studies.integrator_speed).
-"""
-
-
-def _bench_integrator_args(parser: Parser) -> None:
-    parser.add_argument(
-        "--dt", type=positive_float, default=None, help="sim_dt_s override in s (default: params)"
-    )
-    parser.add_argument(
-        "--friction-velocity",
-        type=positive_float,
-        default=None,
-        help="friction_velocity_m_s override in m/s (default: params)",
-    )
-    parser.add_argument("--duration", type=positive_float, default=60.0, help="seconds per command")
-    parser.add_argument(
-        "--batch-runs", type=positive_int, default=8, help="runs in the batch timing"
-    )
-    parser.add_argument(
-        "--substeps", type=positive_int, default=10, help="RK4 substeps of the reference"
-    )
-    add_params_arg(parser)
-
-
-def _bench_integrator_run(parser: Parser, args: Args) -> int:
-    import numba
-
-    from scas_env.studies.integrator_speed import benchmark_integrator, format_results
-
-    params = load_params(parser, args)
-    try:
-        if args.dt is not None:
-            params = params.replace(sensors=params.sensors.replace(sim_dt_s=args.dt))
-        if args.friction_velocity is not None:
-            params = params.replace(
-                actuator=params.actuator.replace(friction_velocity_m_s=args.friction_velocity)
-            )
-    except ValueError as exc:
-        parser.error(str(exc))
-    log.info(
-        f"sim_dt_s = {params.sensors.sim_dt_s} s, friction_velocity_m_s = "
-        f"{params.actuator.friction_velocity_m_s} m/s, {numba.get_num_threads()} threads, "
-        f"{args.duration} s per command; reference = {args.substeps} RK4 substeps per step"
-    )
-    results = benchmark_integrator(
-        params,
-        duration_s=args.duration,
-        reference_substeps=args.substeps,
-        batch_runs=args.batch_runs,
-    )
-    print(format_results(results))
-    print("RTF = simulated s / wall s (one actuator, one core); batch x/s = all cores")
-    return 0
-
-
-BENCH_PROGNOSTICS_DOC = """\
-Particle-filter and RUL timing for N particles (scas_env.studies.prognostics_speed).
-"""
-
-
-def _bench_prognostics_args(parser: Parser) -> None:
-    parser.add_argument("--particles", type=positive_int, default=1000, help="particles N")
-    parser.add_argument("--calls", type=positive_int, default=2000, help="timed calls")
-    parser.add_argument("--seed", type=nonneg_int, default=0, help="seed")
-
-
-def _bench_prognostics_run(parser: Parser, args: Args) -> int:
-    from scas_env.studies.prognostics_speed import format_table, run_benchmark
-
-    times = run_benchmark(n_particles=args.particles, n_calls=args.calls, seed=args.seed)
-    print(format_table(times, args.particles))
-    return 0
-
-
-BENCH_ENV_DOC = """\
-Environment speed: surrogate and physics steps and the vector env, beside CartPole.
-
-Default scenario (scas_env.studies.env_speed).
-"""
-
-
-def _bench_env_args(parser: Parser) -> None:
-    parser.add_argument(
-        "--steps", type=positive_int, default=5000, help="timed surrogate steps per variant"
-    )
-    parser.add_argument(
-        "--num-envs", type=positive_int, default=64, help="environments of the vector env"
-    )
-
-
-def _bench_env_run(parser: Parser, args: Args) -> int:
-    from scas_env.studies.env_speed import env_timings, format_timings, vector_throughput
-
-    print(format_timings(env_timings(args.steps)))
-    for mix, rate in vector_throughput(args.num_envs).items():
-        print(f"vector env, {args.num_envs} envs, {mix:24s} {rate:12,.0f} env-steps/s")
-    return 0
-
-
-BENCHES = {
-    "integrator": (BENCH_INTEGRATOR_DOC, _bench_integrator_args, _bench_integrator_run),
-    "prognostics": (BENCH_PROGNOSTICS_DOC, _bench_prognostics_args, _bench_prognostics_run),
-    "env": (BENCH_ENV_DOC, _bench_env_args, _bench_env_run),
-}
-bench_integrator_main = _command("scas-bench integrator", *BENCHES["integrator"])
-bench_prognostics_main = _command("scas-bench prognostics", *BENCHES["prognostics"])
-bench_env_main = _command("scas-bench env", *BENCHES["env"])
-
-BENCH_DOC = """\
-Speed benchmarks, each beside a reference measured in the same run.
-
-    scas-bench integrator    # real-time factor of the actuator model
-    scas-bench prognostics   # particle filter and RUL per call
-    scas-bench env           # env steps beside CartPole, vector env throughput
-"""
-
-
-def bench_parser() -> tuple[Parser, dict[str, tuple[Parser, Callable[[Parser, Args], int]]]]:
-    """The ``scas-bench`` parser and, per benchmark, its sub-parser and runner."""
-    parser = make_parser("scas-bench", BENCH_DOC)
-    sub = parser.add_subparsers(dest="bench", required=True, metavar="{" + ",".join(BENCHES) + "}")
-    runners = {}
-    for name, (doc, add, run) in BENCHES.items():
-        p = sub.add_parser(
-            name, help=doc.splitlines()[0], description=doc.strip(), formatter_class=HelpFormatter
-        )
-        add(p)
-        add_logging_args(p)
-        runners[name] = (p, run)
-    return parser, runners
-
-
-def bench_main(argv: Sequence[str] | None = None) -> int:
-    """``scas-bench {integrator,prognostics,env} [options]``."""
-    parser, runners = bench_parser()
-    args = parser.parse_args(argv)
-    configure_logging(args)
-    p, run = runners[args.bench]
-    return run(p, args)
-
-
-PARSERS["scas-bench"] = lambda: bench_parser()[0]
-
-
-# --- scas-export-dataset ----------------------------------------------------------------
-
 EXPORT_DATASET_DOC = """\
 Export a run-to-failure dataset: N simulated units flown to failure, Parquet + CSV + card.
 
@@ -683,40 +528,3 @@ export_dataset_main = _command(
 
 
 # --- scas-go-no-go ----------------------------------------------------------------------
-
-GO_NO_GO_DOC = """\
-Pre-flight test at known severities: no-go shares of both go/no-go meanings vs targets.
-
-See scas_env.studies.go_no_go and scas_env.acceptance. Example:
-
-    scas-go-no-go --units 2000 --out results/go_no_go
-"""
-
-
-def _go_no_go_args(parser: Parser) -> None:
-    parser.add_argument("--units", type=positive_int, default=2000, help="tests per cell")
-    parser.add_argument("--seed", type=nonneg_int, default=0, help="root seed")
-    parser.add_argument(
-        "--out", type=Path, default=None, help="folder for go_no_go.json (default: print only)"
-    )
-    parser.add_argument("--overwrite", action="store_true", help="replace an existing --out")
-
-
-def _go_no_go_run(parser: Parser, args: Args) -> int:
-    from scas_env.studies.go_no_go import format_rates, no_go_rates
-
-    if args.out is not None:
-        check_out_dir(parser, args.out, args.overwrite)
-    rows = no_go_rates(args.units, seed=args.seed)
-    print(format_rates(rows))
-    if args.out is not None:
-        from scas_env.results_folder import results_folder
-
-        config = {"units": args.units, "seed": args.seed}
-        seeds = {"root": args.seed}
-        with results_folder(args.out, config=config, seeds=seeds, overwrite=args.overwrite) as tmp:
-            (tmp / "go_no_go.json").write_text(json.dumps(rows, indent=1))
-    return 0
-
-
-go_no_go_main = _command("scas-go-no-go", GO_NO_GO_DOC, _go_no_go_args, _go_no_go_run)

@@ -40,9 +40,8 @@ from scas_env.actuator.calibration import params_digest
 from scas_env.actuator.params import ScasParams
 from scas_env.actuator.physics.fluid import dynamic_viscosity
 from scas_env.actuator.physics.seal import leakage_coefficients, leakage_flow_m3_s
+from scas_env.core.scenario import Scenario
 from scas_env.dashboard import critical_levels, unit_growth_multipliers
-from scas_env.parallel import map_chunks
-from scas_env.scenario import Scenario
 from scas_env.studies.run_to_failure_data import (
     FLIGHT_COLUMNS,
     FORMAT_VERSION,
@@ -53,6 +52,7 @@ from scas_env.studies.run_to_failure_data import (
     to_table,
     write_dataset,
 )
+from scas_env.utils.parallel import map_chunks
 
 FLY, TEST_AND_FLY = 0, 1
 PARTS = ("spring", "seal")
@@ -234,7 +234,7 @@ def simulate_units(
     seed : root seed (>= 0); unit ``u`` gets child ``u`` of ``SeedSequence(seed)``.
     test_every : pre-flight test before every ``test_every``-th slot (0: never).
     max_slots : slots after which a unit without failure is censored.
-    n_workers : worker processes (:func:`scas_env.parallel.map_chunks`); results do not
+    n_workers : worker processes (:func:`scas_env.utils.parallel.map_chunks`); results do not
         depend on it.
     progress : show a tqdm bar.
     """

@@ -29,7 +29,7 @@ from scas_env.actuator.physics.spring import failure_depth_from_params
 from scas_env.actuator.sensing import flight_window, ground_test
 from scas_env.actuator.surrogate import FEATURE_CONDITION, SurrogateModel
 from scas_env.actuator.uncertainty import draw_run_conditions, draw_unit
-from scas_env.parallel import map_chunks
+from scas_env.utils.parallel import map_chunks
 
 
 def unit_runs(

@@ -1,0 +1,633 @@
+"""Calibration and sharpness of the monitor's beliefs: RUL intervals and risk against the truth.
+
+Seeded episodes of the surrogate env run under simple policies that never replace a part
+before it fails (so every part life ends in a failure, or at the end of the episode):
+
+* ``"test10"``: the pre-flight test every 10th slot, otherwise fly;
+* ``"never"``: never test (the filters learn only from what they are fed in flight).
+
+After every step the monitor's RUL distribution of each part (``HealthMonitor.ageing`` aged
+by its pending flights, uncapped) is recorded beside two truths:
+
+* ``info``: the env's ``info["true_state"]`` RUL, the expected flights to failure at the
+  unit's own growth rates (no future flight-to-flight scatter);
+* ``realised``: flights until the part actually failed (known for lives that ended in a
+  failure inside the episode).
+
+Per part and per life stage (fractions of the part's true life ``L``: the flight on which it
+failed, or for a life cut by the end of the episode its age then plus the info RUL), the
+record at the first age >= stage x L gives, over lives:
+
+* ``coverage``: share of truths inside the nominal 90 % interval (the 5 % and 95 % quantiles
+  of the monitor's RUL distribution), target 0.85-0.95;
+* ``undercut``: share of truths below the low quantile ``scenario.rul_quantile`` (nominal
+  rate: that level, target +- 0.025);
+* ``sd_log``: standard deviation of ``log(predicted mean / true RUL)`` (target <= 0.2 at
+  0.8 of life);
+* with the Wilson 95 % interval of each share (scipy.stats.binomtest).
+
+Reliability of the risk output ``P(fail within risk_horizon_flights)``: records (one per life
+and age) are binned by their predicted risk; per bin the mean prediction against the observed
+frequency of a failure within the horizon, with its Wilson interval (target: within +- 0.05),
+for each truth:
+
+* ``realised``: a failure within the horizon that happened, over the records whose outcome is
+  known (the life failed, or flew the horizon before the episode ended). The censoring is
+  informative where a no-go test grounds the aircraft near a part's end (the paper preset):
+  the records just before the grounding drop out, those of lives that flew on stay;
+* ``info``: the info RUL within the horizon, over every record. Under per-part degradation
+  draws (v2) the info RUL is the exact number of flights to failure, so this is the same
+  event without the censoring; otherwise it is an expectation, not an event.
+
+:func:`run_study` returns the tables; :func:`write_study` writes CSV/JSON and two PNGs into a
+results folder (:func:`scas_env.utils.results_folder.results_folder`). ``scripts/belief_calibration.py``
+is the command line.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from scas_env.monitor import HealthMonitor
+from scipy.stats import binomtest
+from tqdm.auto import tqdm
+
+from scas_env.core.scenario import Scenario
+from scas_env.core.setup import PARTS
+from scas_env.env import FLY, TEST_AND_FLY, ScasMaintenanceEnv
+from scas_env.utils.results_folder import results_folder
+
+STAGES: tuple[float, ...] = (0.2, 0.4, 0.6, 0.8, 0.9)
+POLICIES: tuple[str, ...] = ("test10", "never")
+TRUTHS: tuple[str, ...] = ("info", "realised")
+#: nominal central interval of the RUL distribution
+INTERVAL: tuple[float, float] = (0.05, 0.95)
+#: bin edges of the reliability diagram (predicted risk)
+RISK_BINS: tuple[float, ...] = (0.0, 0.01, 0.03, 0.1, 0.2, 0.35, 0.5, 0.7, 0.9, 1.0)
+#: issue #12's targets
+TARGETS = {
+    "coverage": (0.85, 0.95),
+    "undercut_tolerance": 0.025,
+    "reliability_tolerance": 0.05,
+    "sd_log_at_0.8": 0.2,
+}
+#: columns of ``lives.csv`` (:func:`life_rows` with the key of its table)
+LIFE_COLUMNS = ("preset", "policy", "part", "stage", "episode", "life", "covered", "undercut",
+                "log_ratio")  # fmt: skip
+#: presets of the study: scenario fields over the defaults
+PRESETS: dict[str, dict[str, Any]] = {
+    "default": {},
+    "paper": {"preflight": "every_flight"},
+}
+
+
+class MonitorOptionsEnv(ScasMaintenanceEnv):
+    """:class:`ScasMaintenanceEnv` whose health monitor takes extra keywords
+    (``monitor_options``, e.g. ``installation``): monitor variants that no :class:`Scenario`
+    field selects, for this study only. The spring calibration options are scenario fields
+    (``spring_theta_walk``, ``spring_effect_realign``): pass them with ``scenario_fields``,
+    so the env builds its monitor with them (the draws of a registered env with the fields).
+
+    After the env's own reset the monitor is rebuilt with the options and reset on the same
+    filter stream (``rngs["filter"]``, continuing where the env's monitor left it): episodes
+    are seeded and reproducible, the world's draws are the env's own, but the filters' draws
+    differ from those of an env that would build the option in itself. The observation
+    returned by :meth:`reset` is the env's monitor's (a prior, like the rebuilt one's).
+    """
+
+    def __init__(self, monitor_options: Mapping[str, Any], **kwargs: Any) -> None:
+        _check_monitor_options(monitor_options)
+        self.monitor_options = dict(monitor_options)
+        super().__init__(**kwargs)
+
+    def reset(self, *, seed: int | None = None, options: dict | None = None) -> tuple:
+        obs, info = super().reset(seed=seed, options=options)
+        self.monitor = HealthMonitor(
+            self.params,
+            self.scenario,
+            self.calibration,
+            self.surrogate,
+            self.rngs["filter"],
+            **self.monitor_options,
+        )
+        self.monitor.reset()
+        return obs, info
+
+
+def _check_monitor_options(options: Mapping[str, Any]) -> None:
+    allowed = ("installation", "spring_theta_walk", "spring_effect_realign")
+    bad = sorted(k for k in options if k not in allowed)
+    if bad:
+        raise ValueError(f"monitor_options {bad} are not among the allowed keywords {allowed}")
+
+
+def policy_action(policy: str, slot: int) -> int:
+    """The action of ``policy`` at ``slot`` (module docstring)."""
+    if policy == "test10":
+        return TEST_AND_FLY if slot % 10 == 0 else FLY
+    if policy == "never":
+        return FLY
+    raise ValueError(f"policy = {policy!r} must be one of {POLICIES}")
+
+
+@dataclass
+class PartTrace:
+    """One part's records over an episode: one row per (life, age) first seen."""
+
+    life: list[int] = field(default_factory=list)
+    age: list[int] = field(default_factory=list)
+    mean: list[float] = field(default_factory=list)
+    low: list[float] = field(default_factory=list)
+    q_lo: list[float] = field(default_factory=list)
+    q_hi: list[float] = field(default_factory=list)
+    risk: list[float] = field(default_factory=list)
+    true_info: list[float] = field(default_factory=list)
+    #: per life: flight on which it failed (age + 1 before that flight), or -1 if cut
+    fail_flight: list[int] = field(default_factory=list)
+    #: per life: its age and info RUL at the end of the episode (cut lives)
+    end_age: list[int] = field(default_factory=list)
+    end_info: list[float] = field(default_factory=list)
+
+
+def run_episode(env: ScasMaintenanceEnv, policy: str, seed: int) -> dict[str, PartTrace]:
+    """One episode of ``policy`` from ``env.reset(seed=seed)``; each part's trace."""
+    _, info = env.reset(seed=seed)
+    traces = {p: PartTrace() for p in PARTS}
+    life = dict.fromkeys(PARTS, 0)
+    last_age = dict.fromkeys(PARTS, -1)
+    failures = dict.fromkeys(PARTS, 0)
+    replacements = dict.fromkeys(PARTS, 0)
+    for p in PARTS:
+        _record(env, traces[p], p, 0, info)
+        last_age[p] = 0
+    truncated = False
+    while not truncated:
+        age_before = dict(env.part_age)
+        _, _, _, truncated, info = env.step(policy_action(policy, env.slot))
+        for p in PARTS:
+            tr = traces[p]
+            if info["replacements"][p] != replacements[p]:
+                failed = info["failures"][p] != failures[p]
+                tr.fail_flight.append(age_before[p] + 1 if failed else -1)
+                tr.end_age.append(age_before[p])
+                tr.end_info.append(math.nan)
+                failures[p], replacements[p] = info["failures"][p], info["replacements"][p]
+                life[p] += 1
+                last_age[p] = -1
+            age = env.part_age[p]
+            if age != last_age[p]:
+                _record(env, tr, p, life[p], info)
+                last_age[p] = age
+    for p in PARTS:  # the lives cut by the end of the episode
+        tr = traces[p]
+        tr.fail_flight.append(-1)
+        tr.end_age.append(env.part_age[p])
+        tr.end_info.append(float(info["true_state"][f"{p}_rul_flights"]))
+    return traces
+
+
+def _record(env: ScasMaintenanceEnv, tr: PartTrace, part: str, life: int, info: Any) -> None:
+    monitor = env.monitor
+    ageing = monitor.ageing(part)
+    k = float(monitor.pending[part])
+    mean, low, risk = ageing.summary(k, float(env.scenario.risk_horizon_flights))
+    tr.life.append(life)
+    tr.age.append(env.part_age[part])
+    tr.mean.append(mean)
+    tr.low.append(low)
+    tr.q_lo.append(ageing.quantile(k, INTERVAL[0]))
+    tr.q_hi.append(ageing.quantile(k, INTERVAL[1]))
+    tr.risk.append(risk)
+    tr.true_info.append(float(info["true_state"][f"{part}_rul_flights"]))
+
+
+def trace_table(traces: Sequence[PartTrace]) -> dict[str, np.ndarray]:
+    """The records of several episodes' traces of one part as arrays, with each record's
+    life length ``L``, stage ``age / L``, realised RUL (NaN if unknown), episode (index of
+    its trace) and life within that episode."""
+    cols: dict[str, list] = {
+        k: [] for k in ("life", "age", "mean", "low", "q_lo", "q_hi", "risk", "true_info")
+    }
+    life_len: list[float] = []
+    fail_flight: list[float] = []
+    end_age: list[float] = []
+    episode_of: list[int] = []
+    offset = 0
+    for e, tr in enumerate(traces):
+        for k in cols:
+            values = getattr(tr, k)
+            cols[k].extend(np.asarray(values) + offset if k == "life" else values)
+        episode_of += [e] * len(tr.fail_flight)
+        for f, a, r in zip(tr.fail_flight, tr.end_age, tr.end_info, strict=True):
+            life_len.append(float(f) if f > 0 else a + r)
+            fail_flight.append(float(f) if f > 0 else math.nan)
+            end_age.append(float(a))
+        offset += len(tr.fail_flight)
+    out = {k: np.asarray(v, dtype=np.float64) for k, v in cols.items()}
+    life = out["life"].astype(np.int64)
+    out["life"] = life
+    lengths = np.asarray(life_len)
+    out["life_length"] = lengths[life]
+    out["realised"] = np.asarray(fail_flight)[life] - out["age"]
+    out["end_age"] = np.asarray(end_age)[life]
+    first_life = np.cumsum([0] + [len(tr.fail_flight) for tr in traces])
+    out["episode"] = np.asarray(episode_of, dtype=np.int64)[life]
+    out["life_in_episode"] = life - first_life[out["episode"]]
+    with np.errstate(invalid="ignore", divide="ignore"):
+        out["stage"] = out["age"] / out["life_length"]
+    return out
+
+
+def _share(hits: np.ndarray) -> tuple[float, float, float, int]:
+    n = int(hits.size)
+    if n == 0:
+        return math.nan, math.nan, math.nan, 0
+    k = int(hits.sum())
+    ci = binomtest(k, n).proportion_ci(0.95, method="wilson")
+    return k / n, float(ci.low), float(ci.high), n
+
+
+def stage_rows(
+    table: dict[str, np.ndarray], stages: Sequence[float], low_level: float
+) -> list[dict[str, float | str]]:
+    """Coverage, undercut and sd of the log ratio per stage and truth (module docstring)."""
+    rows: list[dict[str, float | str]] = []
+    for s in stages:
+        first = _first_at(table, s)
+        for truth in TRUTHS:
+            t = table["true_info" if truth == "info" else "realised"][first]
+            keep = np.isfinite(t) & (t > 0.0)
+            idx, t = first[keep], t[keep]
+            cover = _share((table["q_lo"][idx] <= t) & (t <= table["q_hi"][idx]))
+            under = _share(t < table["low"][idx])
+            with np.errstate(divide="ignore"):  # a zero predicted mean: dropped below
+                ratio = np.log(table["mean"][idx] / t) if t.size else np.empty(0)
+            ratio = ratio[np.isfinite(ratio)]
+            rows.append(
+                {
+                    "stage": s,
+                    "truth": truth,
+                    "lives": cover[3],
+                    "coverage": cover[0],
+                    "coverage_ci_low": cover[1],
+                    "coverage_ci_high": cover[2],
+                    "undercut": under[0],
+                    "undercut_ci_low": under[1],
+                    "undercut_ci_high": under[2],
+                    "undercut_nominal": low_level,
+                    "sd_log": float(np.std(ratio, ddof=1)) if ratio.size > 1 else math.nan,
+                    "mean_log": float(np.mean(ratio)) if ratio.size else math.nan,
+                    "median_true_rul": float(np.median(t)) if t.size else math.nan,
+                }
+            )
+    return rows
+
+
+def _first_at(table: dict[str, np.ndarray], stage: float) -> np.ndarray:
+    """Index of the first record of each life at or past ``stage`` of its life."""
+    at = np.flatnonzero(table["stage"] >= stage)
+    return at[np.unique(table["life"][at], return_index=True)[1]] if at.size else at
+
+
+def life_rows(table: dict[str, np.ndarray], stages: Sequence[float]) -> list[dict[str, float]]:
+    """Per stage and life, the record :func:`stage_rows` counts against the ``info`` truth:
+    episode, life within it, covered (0/1), undercut (0/1), ``log(mean / truth)``. Two runs
+    on the same seeds fly the same lives (``degradation_draws = "per_part"``, policies that
+    do not read the filters), so these rows pair them (:mod:`.belief_comparison`)."""
+    rows: list[dict[str, float]] = []
+    for s in stages:
+        first = _first_at(table, s)
+        t = table["true_info"][first]
+        keep = np.isfinite(t) & (t > 0.0)
+        for i, truth in zip(first[keep], t[keep], strict=True):
+            with np.errstate(divide="ignore"):
+                ratio = math.log(table["mean"][i] / truth) if table["mean"][i] > 0 else -math.inf
+            rows.append(
+                {
+                    "stage": s,
+                    "episode": int(table["episode"][i]),
+                    "life": int(table["life_in_episode"][i]),
+                    "covered": int(table["q_lo"][i] <= truth <= table["q_hi"][i]),
+                    "undercut": int(truth < table["low"][i]),
+                    "log_ratio": ratio,
+                }
+            )
+    return rows
+
+
+def reliability_rows(
+    table: dict[str, np.ndarray],
+    horizon: float,
+    bins: Sequence[float] = RISK_BINS,
+    truth: str = "realised",
+) -> list[dict[str, float | str]]:
+    """Predicted risk binned against the observed frequency of a failure within ``horizon``
+    flights: a realised failure over the records whose outcome is known (``"realised"``), or
+    an info RUL <= ``horizon`` over every record (``"info"``; module docstring)."""
+    if truth == "realised":
+        realised = table["realised"]
+        failed_in = np.isfinite(realised) & (realised <= horizon)
+        # outcome known: the life failed in the episode, or survived the horizon before it ended
+        known = np.isfinite(realised) | (table["end_age"] - table["age"] >= horizon)
+    elif truth == "info":
+        failed_in = table["true_info"] <= horizon
+        known = np.ones(failed_in.shape, dtype=bool)
+    else:
+        raise ValueError(f"truth = {truth!r} must be one of {TRUTHS}")
+    risk = table["risk"][known]
+    hit = failed_in[known]
+    edges = np.asarray(bins)
+    which = np.clip(np.searchsorted(edges, risk, side="right") - 1, 0, edges.size - 2)
+    rows = []
+    for b in range(edges.size - 1):
+        sel = which == b
+        share, lo, hi, n = _share(hit[sel])
+        rows.append(
+            {
+                "truth": truth,
+                "bin_low": float(edges[b]),
+                "bin_high": float(edges[b + 1]),
+                "records": n,
+                "predicted": float(risk[sel].mean()) if n else math.nan,
+                "observed": share,
+                "observed_ci_low": lo,
+                "observed_ci_high": hi,
+            }
+        )
+    return rows
+
+
+@dataclass(frozen=True)
+class StudyResult:
+    """Tables of one study: ``stages``, ``reliability`` and per-life ``lives`` rows
+    (:func:`life_rows`) keyed by (preset, policy, part); ``config`` as run."""
+
+    config: dict[str, Any]
+    stages: dict[tuple[str, str, str], list[dict[str, float | str]]]
+    reliability: dict[tuple[str, str, str], list[dict[str, float]]]
+    lives: dict[tuple[str, str, str], list[dict[str, float]]] = field(default_factory=dict)
+
+
+def check_episodes(episodes: int, seed: int, policies: Sequence[str]) -> None:
+    """Refuse a study's ``episodes`` (an integer >= 1), first ``seed`` (>= 0) and
+    ``policies`` (a non-empty subset of :data:`POLICIES`) before any work."""
+    if isinstance(episodes, bool) or not isinstance(episodes, int) or episodes < 1:
+        raise ValueError(f"episodes = {episodes!r} must be an integer >= 1")
+    if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
+        raise ValueError(f"seed = {seed!r} must be an integer >= 0")
+    bad = [p for p in policies if p not in POLICIES]
+    if bad or not policies:
+        raise ValueError(f"policies = {list(policies)!r} must be a non-empty subset of {POLICIES}")
+
+
+def run_study(
+    *,
+    episodes: int = 100,
+    seed: int = 1000,
+    policies: Sequence[str] = POLICIES,
+    presets: Sequence[str] = ("default",),
+    scenario_fields: Mapping[str, Any] | None = None,
+    stages: Sequence[float] = STAGES,
+    progress: bool = True,
+    env_factory: Callable[[Scenario], ScasMaintenanceEnv] | None = None,
+    monitor_options: Mapping[str, Any] | None = None,
+) -> StudyResult:
+    """Run ``episodes`` seeded episodes (seeds ``seed .. seed + episodes - 1``) per policy and
+    preset; the per-stage and reliability tables (module docstring).
+
+    ``scenario_fields`` override the preset's scenario (e.g. ``flight_features``);
+    ``env_factory`` builds the env from the scenario (default :class:`ScasMaintenanceEnv`);
+    ``monitor_options`` (keywords of :class:`scas_env.monitor.HealthMonitor`, e.g.
+    ``{"installation": "baseline"}``) run the episodes with :class:`MonitorOptionsEnv`
+    (not together with ``env_factory``); the spring calibration options are scenario fields
+    (``{"spring_theta_walk": 0.007, "spring_effect_realign": True}`` in ``scenario_fields``).
+    """
+    if monitor_options and env_factory is not None:
+        raise ValueError("monitor_options and env_factory cannot be combined: pass one of them")
+    check_episodes(episodes, seed, policies)
+    bad = [p for p in presets if p not in PRESETS]
+    if bad or not presets:
+        raise ValueError(
+            f"presets = {list(presets)!r} must be a non-empty subset of {tuple(PRESETS)}"
+        )
+    bad_s = [s for s in stages if not 0.0 < s < 1.0]
+    if bad_s or not stages:
+        raise ValueError(f"stages = {list(stages)!r} must be fractions of life in (0, 1)")
+    extra = dict(scenario_fields or {})
+    scenarios = {p: Scenario.from_dict({**PRESETS[p], **extra}) for p in presets}
+    options = dict(monitor_options or {})
+    if options:
+        _check_monitor_options(options)
+        make = lambda sc: MonitorOptionsEnv(options, scenario=sc)  # noqa: E731
+    else:
+        make = env_factory or (lambda sc: ScasMaintenanceEnv(scenario=sc))
+    stage_tables: dict[tuple[str, str, str], list] = {}
+    rel_tables: dict[tuple[str, str, str], list] = {}
+    life_tables: dict[tuple[str, str, str], list] = {}
+    jobs = [(pr, po) for pr in presets for po in policies]
+    bar = tqdm(total=len(jobs) * episodes, desc="belief episodes", disable=not progress)
+    for preset, policy in jobs:
+        env = make(scenarios[preset])
+        traces: dict[str, list[PartTrace]] = {p: [] for p in PARTS}
+        for e in range(episodes):
+            for p, tr in run_episode(env, policy, seed + e).items():
+                traces[p].append(tr)
+            bar.update()
+        sc = env.scenario
+        for p in PARTS:
+            table = trace_table(traces[p])
+            key = (preset, policy, p)
+            stage_tables[key] = stage_rows(table, stages, float(sc.rul_quantile))
+            horizon = float(sc.risk_horizon_flights)
+            rel_tables[key] = [
+                row for truth in TRUTHS for row in reliability_rows(table, horizon, truth=truth)
+            ]
+            life_tables[key] = life_rows(table, stages)
+    bar.close()
+    config = {
+        "episodes": episodes,
+        "seed": seed,
+        "policies": list(policies),
+        "presets": list(presets),
+        "scenario_fields": extra,
+        "monitor_options": options,
+        "stages": list(stages),
+        "interval": list(INTERVAL),
+        "risk_bins": list(RISK_BINS),
+        "targets": TARGETS,
+    }
+    return StudyResult(config, stage_tables, rel_tables, life_tables)
+
+
+def format_stages(result: StudyResult, truth: str = "info") -> str:
+    """A text table: coverage, undercut and sd log ratio per preset, policy, part and stage."""
+    lines = [
+        f"{'preset':8s} {'policy':7s} {'part':6s} {'stage':>5s} {'lives':>5s} "
+        f"{'coverage [95% CI]':>22s} {'undercut [95% CI]':>22s} {'sd_log':>7s} {'bias':>6s}"
+    ]
+    for (preset, policy, part), rows in result.stages.items():
+        for r in rows:
+            if r["truth"] != truth:
+                continue
+            lines.append(
+                f"{preset:8s} {policy:7s} {part:6s} {float(r['stage']):5.2f} {int(r['lives']):5d} "
+                f"{float(r['coverage']):6.3f} [{float(r['coverage_ci_low']):.3f}, "
+                f"{float(r['coverage_ci_high']):.3f}] "
+                f"{float(r['undercut']):6.3f} [{float(r['undercut_ci_low']):.3f}, "
+                f"{float(r['undercut_ci_high']):.3f}] "
+                f"{float(r['sd_log']):7.3f} {float(r['mean_log']):6.2f}"
+            )
+    return "\n".join(lines)
+
+
+def format_reliability(result: StudyResult, truth: str = "realised") -> str:
+    """A text table of the reliability diagrams against ``truth`` (bins with records only)."""
+    lines = [
+        f"{'preset':8s} {'policy':7s} {'part':6s} {'bin':>11s} {'records':>7s} "
+        f"{'predicted':>9s} {'observed [95% CI]':>22s}"
+    ]
+    for (preset, policy, part), rows in result.reliability.items():
+        for r in rows:
+            if not r["records"] or r["truth"] != truth:
+                continue
+            lines.append(
+                f"{preset:8s} {policy:7s} {part:6s} "
+                f"{r['bin_low']:5.2f}-{r['bin_high']:4.2f} {int(r['records']):7d} "
+                f"{r['predicted']:9.4f} {r['observed']:6.4f} "
+                f"[{r['observed_ci_low']:.4f}, {r['observed_ci_high']:.4f}]"
+            )
+    return "\n".join(lines)
+
+
+def _flat(tables: Mapping[tuple[str, str, str], list[dict]]) -> list[dict]:
+    return [
+        {"preset": k[0], "policy": k[1], "part": k[2], **row}
+        for k, rows in tables.items()
+        for row in rows
+    ]
+
+
+def _write_csv(path: Path, rows: list[dict]) -> None:
+    keys = list(rows[0])
+    lines = [",".join(keys)]
+    for r in rows:
+        lines.append(",".join(str(r[k]) for k in keys))
+    path.write_text("\n".join(lines) + "\n")
+
+
+def write_study(result: StudyResult, out: str | Path, *, overwrite: bool = False) -> list[Path]:
+    """``stages.csv``, ``reliability.csv``, ``lives.csv`` (per-life rows, for paired
+    comparisons), ``study.json``, ``coverage.png`` and ``reliability.png`` in the results
+    folder ``out`` (written atomically)."""
+    names = [
+        "stages.csv", "reliability.csv", "lives.csv", "study.json", "coverage.png",
+        "reliability.png",
+    ]  # fmt: skip
+    seeds = {"first": result.config["seed"], "episodes": result.config["episodes"]}
+    with results_folder(out, config=result.config, seeds=seeds, overwrite=overwrite) as tmp:
+        stages, rel = _flat(result.stages), _flat(result.reliability)
+        _write_csv(tmp / "stages.csv", stages)
+        _write_csv(tmp / "reliability.csv", rel)
+        lives = _flat(result.lives)
+        if lives:
+            _write_csv(tmp / "lives.csv", lives)
+        else:  # no life reached a stage: the header only
+            (tmp / "lives.csv").write_text(",".join(LIFE_COLUMNS) + "\n")
+        (tmp / "study.json").write_text(
+            json.dumps({"config": result.config, "stages": stages, "reliability": rel}, indent=1)
+            + "\n"
+        )
+        _plot_coverage(result, tmp / "coverage.png")
+        _plot_reliability(result, tmp / "reliability.png")
+    return [Path(out) / n for n in names]
+
+
+def _plot_coverage(result: StudyResult, path: Path) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(1, 2, figsize=(10, 4), sharey=True)
+    for ax, part in zip(axes, PARTS, strict=True):
+        for (preset, policy, p), rows in result.stages.items():
+            if p != part:
+                continue
+            r = [x for x in rows if x["truth"] == "info"]
+            s = [float(x["stage"]) for x in r]
+            c = np.array([float(x["coverage"]) for x in r])
+            lo = c - np.array([float(x["coverage_ci_low"]) for x in r])
+            hi = np.array([float(x["coverage_ci_high"]) for x in r]) - c
+            ax.errorbar(s, c, yerr=[lo, hi], marker="o", capsize=3, label=f"{preset}/{policy}")
+        ax.axhspan(*TARGETS["coverage"], color="0.9", label="target 85-95 %")
+        ax.axhline(INTERVAL[1] - INTERVAL[0], color="k", lw=0.8, ls="--")
+        ax.set_title(f"{part}: coverage of the 90 % RUL interval")
+        ax.set_xlabel("fraction of true life")
+        ax.set_ylim(0, 1.02)
+    axes[0].set_ylabel("coverage (info truth)")
+    axes[1].legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+
+
+def _plot_reliability(result: StudyResult, path: Path) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(1, 2, figsize=(10, 4.5), sharey=True)
+    for ax, part in zip(axes, PARTS, strict=True):
+        for (preset, policy, p), rows in result.reliability.items():
+            if p != part:
+                continue
+            for truth, marker in (("realised", "o"), ("info", "s")):
+                r = [x for x in rows if x["records"] and x["truth"] == truth]
+                x = np.array([x["predicted"] for x in r])
+                y = np.array([x["observed"] for x in r])
+                lo = y - np.array([x["observed_ci_low"] for x in r])
+                hi = np.array([x["observed_ci_high"] for x in r]) - y
+                ax.errorbar(
+                    x, y, yerr=[lo, hi], marker=marker, capsize=3,
+                    label=f"{preset}/{policy} ({truth})",
+                )  # fmt: skip
+        t = TARGETS["reliability_tolerance"]
+        grid = np.linspace(0, 1, 2)
+        ax.plot(grid, grid, "k--", lw=0.8)
+        ax.fill_between(grid, grid - t, grid + t, color="0.9", label="+-5 points")
+        ax.set_title(f"{part}: P(fail within horizon)")
+        ax.set_xlabel("predicted risk")
+        ax.set_xlim(0, 1)
+        ax.set_ylim(0, 1)
+    axes[0].set_ylabel("observed frequency")
+    axes[1].legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+
+
+__all__ = [
+    "POLICIES",
+    "PRESETS",
+    "STAGES",
+    "TARGETS",
+    "StudyResult",
+    "check_episodes",
+    "format_reliability",
+    "format_stages",
+    "life_rows",
+    "policy_action",
+    "reliability_rows",
+    "run_episode",
+    "run_study",
+    "stage_rows",
+    "trace_table",
+    "write_study",
+]

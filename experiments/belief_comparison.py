@@ -1,0 +1,131 @@
+"""Paired comparison of two belief-calibration runs on the same seeds (issue #12).
+
+Two runs of :func:`experiments.belief_calibration.run_study` with the same seeds fly the
+same part lives (per-part degradation draws; the study's policies do not read the filters),
+so each life's record at a stage is paired: coverage of the 90 % interval and undercut of
+the low quantile, 0/1 in each run. Per (policy, part, stage), and pooled over the stages:
+
+* shares in run A and run B, and their difference B - A;
+* its 95 % interval by a cluster bootstrap over episodes (the unit drawn independently;
+  ``scipy.stats.bootstrap``, ``paired=True``, percentile method) of
+  ``sum(d_e) / sum(n_e)``, with ``d_e`` the episode's summed per-life differences and ``n_e``
+  its paired lives;
+* the minimum detectable difference at 5 % two-sided and 80 % power,
+  ``(z_0.975 + z_0.8) x`` the bootstrap standard error.
+
+``scripts/belief_calibration.py --compare A B`` reads the runs' ``lives.csv``.
+"""
+
+from __future__ import annotations
+
+import csv
+from collections import defaultdict
+from collections.abc import Sequence
+from pathlib import Path
+
+import numpy as np
+from scipy.stats import bootstrap, norm
+
+#: metrics compared (columns of ``lives.csv``, 0/1 per life)
+METRICS: tuple[str, ...] = ("covered", "undercut")
+#: minimum detectable difference factor: z_{0.975} + z_{0.80}
+MDD_FACTOR = float(norm.ppf(0.975) + norm.ppf(0.80))
+
+Key = tuple[str, str, str, float, int, int]
+
+
+def read_lives(folder: str | Path) -> dict[Key, dict[str, float]]:
+    """``lives.csv`` of a results folder keyed by (policy, part, preset, stage, episode,
+    life); raises ``FileNotFoundError`` naming the file if the run did not write it."""
+    path = Path(folder) / "lives.csv"
+    if not path.is_file():
+        raise FileNotFoundError(f"{path}: no per-life rows (re-run the study to write them)")
+    out: dict[Key, dict[str, float]] = {}
+    with path.open(newline="") as fh:
+        for r in csv.DictReader(fh):
+            key = (r["policy"], r["part"], r["preset"], float(r["stage"]), int(r["episode"]),
+                   int(r["life"]))  # fmt: skip
+            out[key] = {m: float(r[m]) for m in METRICS}
+    return out
+
+
+def paired_difference(
+    a: np.ndarray, b: np.ndarray, episode: np.ndarray, rng: np.random.Generator,
+    n_resamples: int = 4000,
+) -> dict[str, float]:  # fmt: skip
+    """Shares of the 0/1 arrays ``a`` and ``b`` (one entry per paired life), ``b - a``, its
+    95 % cluster-bootstrap interval over ``episode`` and the minimum detectable difference
+    (module docstring)."""
+    if not (a.shape == b.shape == episode.shape and a.ndim == 1 and a.size > 0):
+        raise ValueError(f"a, b, episode must be equal non-empty 1-D arrays, got {a.shape}")
+    eps, inv = np.unique(episode, return_inverse=True)
+    d = np.bincount(inv, weights=b - a, minlength=eps.size)
+    n = np.bincount(inv, minlength=eps.size).astype(np.float64)
+    diff = float(d.sum() / n.sum())
+    if eps.size < 2 or np.all(d * n[0] == d[0] * n):  # the same ratio in every episode
+        low = high = diff
+        se = 0.0
+    else:
+        res = bootstrap(
+            (d, n), lambda dd, nn, axis=-1: dd.sum(axis=axis) / nn.sum(axis=axis),
+            paired=True, vectorized=True, n_resamples=n_resamples, method="percentile", rng=rng,
+        )  # fmt: skip
+        low, high = float(res.confidence_interval.low), float(res.confidence_interval.high)
+        se = float(res.standard_error)
+    return {
+        "lives": int(a.size),
+        "episodes": int(eps.size),
+        "share_a": float(a.mean()),
+        "share_b": float(b.mean()),
+        "diff": diff,
+        "ci_low": low,
+        "ci_high": high,
+        "mdd": MDD_FACTOR * se,
+    }
+
+
+def compare_runs(
+    a: dict[Key, dict[str, float]],
+    b: dict[Key, dict[str, float]],
+    rng: np.random.Generator,
+    stages: Sequence[float] | None = None,
+) -> list[dict[str, float | str]]:
+    """Per (policy, part, stage) and pooled over ``stages`` (all of A's if None): the paired
+    comparison of each metric over the lives present in both runs."""
+    common = sorted(set(a) & set(b))
+    if not common:
+        raise ValueError("the two runs share no (policy, part, stage, episode, life) record")
+    groups: dict[tuple[str, str, str], list[Key]] = defaultdict(list)
+    for k in common:
+        if stages is None or k[3] in stages:
+            groups[(k[0], k[1], f"{k[3]:g}")].append(k)
+            groups[(k[0], k[1], "all")].append(k)
+    rows: list[dict[str, float | str]] = []
+    for (policy, part, stage), keys in groups.items():
+        episode = np.array([k[4] for k in keys])
+        for m in METRICS:
+            va = np.array([a[k][m] for k in keys])
+            vb = np.array([b[k][m] for k in keys])
+            row = paired_difference(va, vb, episode, rng)
+            rows.append({"policy": policy, "part": part, "stage": stage, "metric": m, **row})
+    rows.sort(key=lambda r: (r["policy"], r["part"], r["metric"], str(r["stage"])))
+    return rows
+
+
+def format_comparison(rows: Sequence[dict[str, float | str]]) -> str:
+    """A text table of :func:`compare_runs`."""
+    lines = [
+        f"{'policy':7s} {'part':6s} {'metric':8s} {'stage':>5s} {'lives':>5s} {'A':>6s} "
+        f"{'B':>6s} {'B - A [95% CI]':>26s} {'MDD':>6s}"
+    ]
+    for r in rows:
+        lines.append(
+            f"{r['policy']:7s} {r['part']:6s} {r['metric']:8s} {r['stage']:>5s} "
+            f"{int(r['lives']):5d} {float(r['share_a']):6.3f} {float(r['share_b']):6.3f} "
+            f"{float(r['diff']):+7.3f} [{float(r['ci_low']):+.3f}, {float(r['ci_high']):+.3f}] "
+            f"{float(r['mdd']):6.3f}"
+        )
+    return "\n".join(lines)
+
+
+__all__ = ["METRICS", "compare_runs", "format_comparison", "paired_difference", "read_lives"]

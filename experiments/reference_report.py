@@ -1,0 +1,150 @@
+"""Tables and figures of the reference-posterior study (``reference_posterior``).
+
+Per policy and life stage, for the particle filter (``pf``) and the reference (``ref``) on the
+same lives: coverage of the 90 % interval, undercut of the low quantile (each with its Wilson
+95 % interval), the sd and mean of ``log(mean / truth)``, and the Brier score of the risk
+output against the truth's failure within the horizon; then the paired difference
+``ref - pf`` of coverage and undercut with its cluster-bootstrap interval over episodes and
+the minimum detectable difference (:func:`experiments.belief_comparison.paired_difference`).
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from experiments.belief_calibration import TARGETS, _share, _write_csv
+from experiments.belief_comparison import paired_difference
+from scas_env.utils.results_folder import results_folder
+
+#: the two estimators compared
+ESTIMATORS: tuple[str, ...] = ("pf", "ref")
+
+
+def _hits(rows: Sequence[dict[str, Any]], est: str) -> dict[str, np.ndarray]:
+    truth = np.array([r["truth"] for r in rows])
+    lo, hi = np.array([r[f"{est}_q_lo"] for r in rows]), np.array([r[f"{est}_q_hi"] for r in rows])
+    low = np.array([r[f"{est}_low"] for r in rows])
+    mean = np.array([r[f"{est}_mean"] for r in rows])
+    risk = np.array([r[f"{est}_risk"] for r in rows])
+    with np.errstate(divide="ignore"):
+        log_ratio = np.log(mean / truth)
+    return {
+        "covered": ((lo <= truth) & (truth <= hi)).astype(np.float64),
+        "undercut": (truth < low).astype(np.float64),
+        "log_ratio": log_ratio,
+        "brier": (risk - (truth <= rows[0]["horizon"])) ** 2,
+    }
+
+
+def stage_table(
+    rows: Sequence[dict[str, Any]], rng: np.random.Generator
+) -> list[dict[str, float | str]]:
+    """One row per (policy, stage) and per policy over all stages (``"all"``): both
+    estimators' calibration and the paired differences (module docstring)."""
+    groups: dict[tuple[str, str], list[dict[str, Any]]] = {}
+    for r in rows:
+        groups.setdefault((r["policy"], f"{r['stage']:g}"), []).append(r)
+        groups.setdefault((r["policy"], "all"), []).append(r)
+    out: list[dict[str, float | str]] = []
+    for (policy, stage), group in groups.items():
+        row: dict[str, float | str] = {"policy": policy, "stage": stage, "lives": len(group)}
+        hits = {est: _hits(group, est) for est in ESTIMATORS}
+        for est, h in hits.items():
+            for metric in ("covered", "undercut"):
+                share, lo, hi, _ = _share(h[metric])
+                name = "coverage" if metric == "covered" else "undercut"
+                row[f"{est}_{name}"], row[f"{est}_{name}_ci_low"] = share, lo
+                row[f"{est}_{name}_ci_high"] = hi
+            finite = h["log_ratio"][np.isfinite(h["log_ratio"])]
+            row[f"{est}_sd_log"] = float(np.std(finite, ddof=1)) if finite.size > 1 else np.nan
+            row[f"{est}_mean_log"] = float(np.mean(finite)) if finite.size else np.nan
+            row[f"{est}_brier"] = float(np.mean(h["brier"]))
+        episode = np.array([r["seed"] for r in group])
+        for metric in ("covered", "undercut"):
+            d = paired_difference(hits["pf"][metric], hits["ref"][metric], episode, rng)
+            for k in ("diff", "ci_low", "ci_high", "mdd"):
+                row[f"{metric}_ref_minus_pf_{k}"] = d[k]
+        row["ref_min_ess"] = float(min(r["ref_ess"] for r in group))
+        out.append(row)
+    out.sort(key=lambda r: (str(r["policy"]), str(r["stage"])))
+    return out
+
+
+def format_table(table: Sequence[dict[str, float | str]]) -> str:
+    """The stage table as text."""
+    lines = [
+        f"{'policy':7s} {'stage':>5s} {'lives':>5s}  {'coverage pf / ref':>17s}  "
+        f"{'undercut pf / ref':>17s}  {'sd log pf / ref':>15s}  {'Brier pf / ref':>15s}  "
+        f"{'coverage ref-pf [95% CI]':>26s}  {'min ESS':>7s}"
+    ]
+    for r in table:
+        lines.append(
+            f"{r['policy']:7s} {r['stage']:>5s} {int(r['lives']):5d}  "
+            f"{r['pf_coverage']:7.3f} / {r['ref_coverage']:6.3f}  "
+            f"{r['pf_undercut']:7.3f} / {r['ref_undercut']:6.3f}  "
+            f"{r['pf_sd_log']:6.3f} / {r['ref_sd_log']:6.3f}  "
+            f"{r['pf_brier']:6.4f} / {r['ref_brier']:6.4f}  "
+            f"{r['covered_ref_minus_pf_diff']:+7.3f} [{r['covered_ref_minus_pf_ci_low']:+.3f}, "
+            f"{r['covered_ref_minus_pf_ci_high']:+.3f}]  {r['ref_min_ess']:7.0f}"
+        )
+    return "\n".join(lines)
+
+
+def write_report(
+    rows: Sequence[dict[str, Any]],
+    table: Sequence[dict[str, float | str]],
+    config: dict[str, Any],
+    out: str | Path,
+    *,
+    overwrite: bool = False,
+) -> list[Path]:
+    """``lives.csv`` (per life and stage), ``stages.csv``, ``study.json`` and
+    ``coverage.png`` in the results folder ``out`` (written atomically)."""
+    names = ["lives.csv", "stages.csv", "study.json", "coverage.png"]
+    seeds = {"first": config["seed"], "episodes": config["episodes"]}
+    with results_folder(out, config=config, seeds=seeds, overwrite=overwrite) as tmp:
+        _write_csv(tmp / "lives.csv", rows)
+        _write_csv(tmp / "stages.csv", table)
+        (tmp / "study.json").write_text(
+            json.dumps({"config": config, "stages": list(table)}, indent=1) + "\n"
+        )
+        _plot(table, tmp / "coverage.png")
+    return [Path(out) / n for n in names]
+
+
+def _plot(table: Sequence[dict[str, float | str]], path: Path) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    policies = sorted({str(r["policy"]) for r in table})
+    fig, axes = plt.subplots(1, 2, figsize=(10, 4))
+    for policy in policies:
+        rs = [r for r in table if r["policy"] == policy and r["stage"] != "all"]
+        s = np.array([float(r["stage"]) for r in rs])
+        for est, style in (("pf", "o-"), ("ref", "s--")):
+            for ax, name in zip(axes, ("coverage", "undercut"), strict=True):
+                v = np.array([float(r[f"{est}_{name}"]) for r in rs])
+                lo = v - np.array([float(r[f"{est}_{name}_ci_low"]) for r in rs])
+                hi = np.array([float(r[f"{est}_{name}_ci_high"]) for r in rs]) - v
+                ax.errorbar(s, v, yerr=[lo, hi], fmt=style, capsize=3, label=f"{policy} {est}")
+    axes[0].axhspan(*TARGETS["coverage"], color="0.9")
+    axes[0].set_title("spring: coverage of the 90 % RUL interval")
+    tol = TARGETS["undercut_tolerance"]
+    axes[1].axhspan(0.05 - tol, 0.05 + tol, color="0.9")
+    axes[1].set_title("spring: undercut of the 5 % quantile")
+    for ax in axes:
+        ax.set_xlabel("fraction of true life")
+    axes[1].legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+
+
+__all__ = ["ESTIMATORS", "format_table", "stage_table", "write_report"]

@@ -1,0 +1,175 @@
+"""The spring filter's particle cloud against the truth over life (docs/beliefs.md, "Spring
+calibration: cause and fix").
+
+Seeded episodes (``Scenario.degradation_draws = "per_part"``, so the world knows each spring's
+exact remaining life) under a belief-study policy (:func:`policy_action`). Every ``every``
+flights of a spring's age the record holds, beside the stage (age / life):
+
+* ``pit_theta``, ``pit_x``: the weighted share of particles below the true growth multiplier
+  (``world.theta``) and below the true crack depth (``world.crack_m``), the cloud aged
+  noise-free by the flights pending (each particle along its own damage path);
+* ``pit_rul``: the share of particle RULs (``usage_to_threshold`` of the aged cloud) below the
+  exact remaining life (``world.life_left``); ``pit_rul_det`` the same against the
+  noise-free life of the true (x, theta), so their difference is what the RUL predictor's
+  noise-free extrapolation costs;
+* ``log_det_error``: log(noise-free life of the true (x, theta) / exact life);
+* ``z_theta``, ``z_x``: the truth's distance from the cloud's weighted mean in cloud sds;
+  ``sd_log_theta``, ``sd_x_rel``: the cloud's spread.
+
+A calibrated cloud has every PIT uniform: 5 % of records below 0.05 and 5 % above 0.95,
+and z-scores of sd ~1. :func:`stage_summary` gives these per stage window.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+import numpy as np
+from tqdm.auto import tqdm
+
+from experiments.belief_calibration import MonitorOptionsEnv, policy_action
+from scas_env.core.scenario import Scenario
+from scas_env.env import ScasMaintenanceEnv
+
+#: stage windows (fractions of the spring's life) of :func:`stage_summary`
+WINDOWS: tuple[tuple[float, float], ...] = (
+    (0.15, 0.25),
+    (0.35, 0.45),
+    (0.55, 0.65),
+    (0.75, 0.85),
+    (0.85, 0.95),
+)
+
+
+def _spring_record(env: ScasMaintenanceEnv, seed: int, life: int, age: int) -> dict[str, float]:
+    mon = env.monitor
+    pf, model = mon.spring_filter, mon.spring_filter.process
+    w, theta = np.asarray(pf.weights), np.asarray(pf.theta)
+    k = float(mon.pending["spring"])
+    x = model.inverse_damage(model.damage(np.maximum(np.asarray(pf.x), model.grid[0])) + theta * k)
+    rul = model.usage_to_threshold(x, theta, mon.a_fail)
+    x_true, th_true = float(env.world.crack_m), float(env.world.theta)
+    life_left = float(env.world.life_left["spring"])
+    det = float(model.usage_to_threshold(np.array([x_true]), np.array([th_true]), mon.a_fail)[0])
+    lt = np.log(theta)
+    m_lt = float(w @ lt)
+    s_lt = math.sqrt(max(float(w @ (lt - m_lt) ** 2), 0.0))
+    m_x = float(w @ x)
+    s_x = math.sqrt(max(float(w @ (x - m_x) ** 2), 0.0))
+    return {
+        "seed": seed,
+        "life": life,
+        "age": age,
+        "stage": age / (age + life_left),
+        "pit_theta": float(w[lt < math.log(th_true)].sum()),
+        "pit_x": float(w[x < x_true].sum()),
+        "pit_rul": float(w[rul < life_left].sum()),
+        "pit_rul_det": float(w[rul < det].sum()),
+        "log_det_error": math.log(det / life_left) if det > 0 and life_left > 0 else math.nan,
+        "z_theta": (math.log(th_true) - m_lt) / s_lt if s_lt > 0 else math.nan,
+        "z_x": (x_true - m_x) / s_x if s_x > 0 else math.nan,
+        "sd_log_theta": s_lt,
+        "sd_x_rel": s_x / x_true,
+    }
+
+
+def cloud_records(
+    *,
+    episodes: int,
+    seed: int,
+    policy: str = "test10",
+    scenario_fields: Mapping[str, Any] | None = None,
+    monitor_options: Mapping[str, Any] | None = None,
+    every: int = 5,
+    progress: bool = True,
+) -> list[dict[str, float]]:
+    """Records of the spring cloud against the truth (module docstring), every ``every``
+    flights of each spring's age, over seeds ``seed .. seed + episodes - 1``."""
+    for name, value, lo in (("episodes", episodes, 1), ("seed", seed, 0), ("every", every, 1)):
+        if isinstance(value, bool) or not isinstance(value, int) or value < lo:
+            raise ValueError(f"{name} = {value!r} must be an integer >= {lo}")
+    scenario = Scenario.from_dict(dict(scenario_fields or {}))
+    if scenario.degradation_draws != "per_part":
+        raise ValueError(
+            "scenario_fields must set degradation_draws = 'per_part' (the exact remaining "
+            f"life is the truth), got {scenario.degradation_draws!r}"
+        )
+    policy_action(policy, 0)  # checks the policy
+    options = dict(monitor_options or {})
+    env = (
+        MonitorOptionsEnv(options, scenario=scenario)
+        if options
+        else ScasMaintenanceEnv(scenario=scenario)
+    )
+    out: list[dict[str, float]] = []
+    for s in tqdm(range(seed, seed + episodes), desc="spring cloud", disable=not progress):
+        env.reset(seed=s)
+        life, last, done = 0, -1, False
+        while not done:
+            before = env.part_age["spring"]
+            _, _, _, done, _ = env.step(policy_action(policy, env.slot))
+            age = env.part_age["spring"]
+            if age < before:  # a new spring pair
+                life, last = life + 1, -1
+                continue
+            if age == 0 or age == last or age % every:
+                continue
+            last = age
+            out.append(_spring_record(env, s, life, age))
+    return out
+
+
+def stage_summary(
+    records: Sequence[Mapping[str, float]],
+    windows: Sequence[tuple[float, float]] = WINDOWS,
+) -> list[dict[str, float]]:
+    """Per stage window: records, the shares of each PIT below 0.05 and above 0.95, the sd
+    of the z-scores, the median cloud spreads and the sd of ``log_det_error``."""
+    stage = np.array([r["stage"] for r in records])
+
+    def col(name: str, sel: np.ndarray) -> np.ndarray:
+        return np.array([r[name] for r in records])[sel]
+
+    rows = []
+    for lo, hi in windows:
+        sel = (stage >= lo) & (stage < hi)
+        row: dict[str, float] = {"stage_low": lo, "stage_high": hi, "records": int(sel.sum())}
+        if sel.any():
+            for name in ("pit_rul", "pit_rul_det", "pit_theta", "pit_x"):
+                v = col(name, sel)
+                row[f"{name}_below_0.05"] = float(np.mean(v < 0.05))
+                row[f"{name}_above_0.95"] = float(np.mean(v > 0.95))
+            for name in ("z_theta", "z_x"):
+                row[f"{name}_sd"] = float(np.nanstd(col(name, sel)))
+            row["sd_log_theta_median"] = float(np.median(col("sd_log_theta", sel)))
+            row["sd_x_rel_median"] = float(np.median(col("sd_x_rel", sel)))
+            row["log_det_error_sd"] = float(np.nanstd(col("log_det_error", sel)))
+        rows.append(row)
+    return rows
+
+
+def format_summary(rows: Sequence[Mapping[str, float]]) -> str:
+    """The summary as a fixed-width table (shares below 0.05 / above 0.95 of each PIT)."""
+    head = (
+        f"{'stage':>9} {'n':>5} | {'RUL lo/hi':>11} | {'theta lo/hi':>11} | {'x lo/hi':>11} | "
+        f"{'sd z_th':>7} {'sd z_x':>7} | {'sd lt':>6} {'sd x/x':>6} | {'det err':>7}"
+    )
+    lines = [head]
+    for r in rows:
+        if not r["records"]:
+            continue
+        lines.append(
+            f"{r['stage_low']:.2f}-{r['stage_high']:.2f} {r['records']:5d} | "
+            f"{r['pit_rul_below_0.05']:.3f}/{r['pit_rul_above_0.95']:.3f} | "
+            f"{r['pit_theta_below_0.05']:.3f}/{r['pit_theta_above_0.95']:.3f} | "
+            f"{r['pit_x_below_0.05']:.3f}/{r['pit_x_above_0.95']:.3f} | "
+            f"{r['z_theta_sd']:7.2f} {r['z_x_sd']:7.2f} | "
+            f"{r['sd_log_theta_median']:6.3f} {r['sd_x_rel_median']:6.3f} | "
+            f"{r['log_det_error_sd']:7.4f}"
+        )
+    return "\n".join(lines)
+
+
+__all__ = ["WINDOWS", "cloud_records", "format_summary", "stage_summary"]

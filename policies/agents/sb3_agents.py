@@ -1,0 +1,552 @@
+"""Trained agents as policies of this project: load any SB3 zip, or any ``module:factory``.
+
+Every object returned here follows the policy protocol of :mod:`policies.base`:
+``predict(observation, state=None, episode_start=None, deterministic=True)`` on **raw**
+``ScasMaintenance-v0`` observations (one ``(n,)`` or a batch ``(n_envs, n)``).
+
+- :func:`load_sb3_policy` turns an SB3 zip (saved by this project, by RL-Zoo or by plain
+  ``model.save``) into an :class:`SB3Agent` (per-flight agent) or an :class:`EpochAgent`
+  (an agent trained on :class:`scas_env.decision_epochs.DecisionEpochs`, replayed flight by
+  flight on v0: it decides, commits to ``k`` slots, then decides again). VecNormalize
+  statistics are found beside the zip (see :func:`find_vecnormalize`) and are **required**
+  when the agent was trained with them (its ``<name>.json`` or RL-Zoo ``config.yml`` says so).
+- :func:`load_factory` builds any object with SB3's ``predict`` from ``"module:factory"``.
+
+Both are registered (``"sb3"`` and ``"factory"``) so the benchmark can rebuild them by name in
+its workers: ``PolicySpec("sb3", params={"path": PATH}, module="policies.agents.sb3_agents")`` and
+``PolicySpec("factory", params={"target": "pkg.mod:make"}, module="policies.agents.sb3_agents")``.
+
+Security: an SB3 zip holds pickled Python objects (SB3 unpickles parts of it, e.g. learning
+rate schedules) and a ``*_vecnormalize.pkl`` is a pickle; ``module:factory`` imports and runs
+code. **Loading any of them runs code chosen by whoever made the file: load only files you
+trust.** The shipped agents in ``policies/data`` are checked against the SHA-256 manifest
+of shipped files (``scas_env/actuator/data/shipped_files.json``) before loading (a
+corrupted or altered copy is refused).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import importlib
+import json
+import pickle
+import zipfile
+from collections.abc import Sequence
+from pathlib import Path
+from types import ModuleType
+from typing import Any
+
+import numpy as np
+
+from policies.base import register_policy
+from scas_env.decision_epochs import (
+    DELEGATE,
+    FLY,
+    MASK_READS,
+    N_MAINTENANCE,
+    delegate_actions,
+    maintenance_mask,
+    with_delegation,
+)
+from scas_env.utils.shipped_files import verify_shipped_file
+
+DATA_DIR = Path(__file__).resolve().parents[1] / "data"
+#: The shipped agent (model zip; its statistics and metadata sit beside it): MaskablePPO on
+#: decision epochs of ``ScasMaintenance-v2``, warm-started from the tuned filter rule (the
+#: benchmark's ``ppo``; ``policies/data/README.md``).
+DEFAULT_AGENT = DATA_DIR / "maskable_ppo_epochs_v2.zip"
+
+__all__ = [
+    "DEFAULT_AGENT",
+    "EpochAgent",
+    "SB3Agent",
+    "algo_class",
+    "check_manifest",
+    "find_vecnormalize",
+    "load_factory",
+    "load_sb3_policy",
+    "require_contrib",
+]
+
+
+def require_contrib(purpose: str) -> ModuleType:
+    """``sb3_contrib``, or an ``ImportError`` naming the ``rl`` extra and ``purpose``."""
+    try:
+        return importlib.import_module("sb3_contrib")
+    except ImportError as exc:
+        raise ImportError(
+            f"to {purpose} you need sb3-contrib, which is not installed: "
+            "pip install 'scas-maintenance-gym[rl]' (or 'sb3-contrib>=2.3')"
+        ) from exc
+
+
+# ---------------------------------------------------------------------------- file checks
+def sha256(path: Path) -> str:
+    """Hex SHA-256 of a file's bytes."""
+    digest = hashlib.sha256()
+    with path.open("rb") as fh:
+        for block in iter(lambda: fh.read(1 << 20), b""):
+            digest.update(block)
+    return digest.hexdigest()
+
+
+def check_manifest(path: Path) -> None:
+    """Refuse a shipped file (``policies/data``) whose SHA-256 differs from the package's
+    manifest of shipped files (:func:`scas_env.utils.shipped_files.verify_shipped_file`);
+    files elsewhere are not checked: they are the user's."""
+    verify_shipped_file(path)
+
+
+def _zip_data(path: Path) -> dict[str, Any]:
+    """The JSON ``data`` member of an SB3 zip, checking every member's CRC first."""
+    try:
+        with zipfile.ZipFile(path) as zf:
+            bad = zf.testzip()
+            if bad is not None:
+                raise ValueError(f"{path}: member {bad!r} is corrupted (CRC mismatch)")
+            names = zf.namelist()
+            for needed in ("data", "policy.pth"):
+                if needed not in names:
+                    raise ValueError(
+                        f"{path}: not a complete SB3 model zip (truncated or corrupted?): no "
+                        f"{needed!r} member; found {names[:4]}{'...' if len(names) > 4 else ''}"
+                    )
+            return json.loads(zf.read("data"))
+    except zipfile.BadZipFile as exc:
+        raise ValueError(
+            f"{path}: not a readable zip file (truncated or corrupted): {exc}"
+        ) from exc
+
+
+# ---------------------------------------------------------------------------- algorithms
+#: policy-class module prefix -> algorithm (``package:Class``)
+_POLICY_MODULES = (
+    ("sb3_contrib.common.maskable", "sb3_contrib:MaskablePPO"),
+    ("sb3_contrib.common.recurrent", "sb3_contrib:RecurrentPPO"),
+    ("sb3_contrib.qrdqn", "sb3_contrib:QRDQN"),
+    ("stable_baselines3.dqn", "stable_baselines3:DQN"),
+    ("stable_baselines3.common.policies", "stable_baselines3:PPO"),
+)
+ALGO_NAMES = {
+    "ppo": "stable_baselines3:PPO",
+    "a2c": "stable_baselines3:A2C",
+    "dqn": "stable_baselines3:DQN",
+    "maskable_ppo": "sb3_contrib:MaskablePPO",
+    "recurrent_ppo": "sb3_contrib:RecurrentPPO",
+    "qrdqn": "sb3_contrib:QRDQN",
+}
+
+
+def _import(target: str) -> Any:
+    module, _, name = target.partition(":")
+    if module == "sb3_contrib":
+        return getattr(require_contrib(f"load a {name} agent"), name)
+    return getattr(importlib.import_module(module), name)
+
+
+def algo_class(algo: str | None, data: dict[str, Any]) -> Any:
+    """The SB3 class to load a zip with: ``algo`` (:data:`ALGO_NAMES`) if given, else guessed
+    from the module of the zip's policy class (A2C zips load as PPO: same policy)."""
+    if algo is not None:
+        if algo not in ALGO_NAMES:
+            raise ValueError(f"algo = {algo!r} must be one of {sorted(ALGO_NAMES)}")
+        return _import(ALGO_NAMES[algo])
+    module = str(data.get("policy_class", {}).get("__module__", ""))
+    for prefix, target in _POLICY_MODULES:
+        if module.startswith(prefix):
+            return _import(target)
+    raise ValueError(
+        f"cannot tell the algorithm of a zip whose policy class is in {module!r}; "
+        f"pass algo= one of {sorted(ALGO_NAMES)}"
+    )
+
+
+def _masked(model: Any) -> bool:
+    return type(model).__name__ == "MaskablePPO"
+
+
+# ---------------------------------------------------------------------------- agents
+class SB3Agent:
+    """A per-flight SB3 model acting on raw v0 observations (policy protocol):
+    ``predict`` normalises with the ``VecNormalize`` statistics (if any; not updated) and,
+    for MaskablePPO, passes the action mask of the raw observation.
+
+    Parameters
+    ----------
+    model : the SB3 model.
+    normalizer : ``VecNormalize`` whose ``obs_rms`` is used, or ``None``.
+    obs_names : names of the observation entries (the env's ``obs_names``).
+    masked : pass action masks to ``model.predict``.
+    """
+
+    def __init__(
+        self, model: Any, normalizer: Any, obs_names: Sequence[str], *, masked: bool = False
+    ) -> None:
+        self.model = model
+        self.normalizer = normalizer
+        self.obs_names = tuple(obs_names)
+        self.masked = masked
+        if masked:
+            missing = [n for n in MASK_READS if n not in self.obs_names]
+            if missing:
+                raise ValueError(f"obs_names lack {missing} that the action mask reads")
+            self._mask_cols = [self.obs_names.index(n) for n in MASK_READS]
+
+    def _check(self, observation: Any) -> np.ndarray:
+        obs = np.asarray(observation, dtype=np.float32)
+        n = len(self.obs_names)
+        if obs.ndim not in (1, 2) or obs.shape[-1] != n:
+            raise ValueError(f"observation has shape {obs.shape}; expected ({n},) or (n_envs, {n})")
+        return obs
+
+    def predict(
+        self,
+        observation: Any,
+        state: Any = None,
+        episode_start: Any = None,
+        deterministic: bool = True,
+    ) -> tuple[int | np.ndarray, Any]:
+        """Action for one raw observation (``int``) or a batch (``int64`` array)."""
+        obs = self._check(observation)
+        norm = self.normalizer.normalize_obs(obs) if self.normalizer is not None else obs
+        kwargs: dict[str, Any] = {}
+        if self.masked:
+            kwargs["action_masks"] = maintenance_mask(*(obs[..., c] for c in self._mask_cols))
+        actions, state = self.model.predict(
+            norm, state=state, episode_start=episode_start, deterministic=deterministic, **kwargs
+        )
+        actions = np.asarray(actions, dtype=np.int64)
+        return (int(actions) if obs.ndim == 1 else actions.reshape(-1)), state
+
+    def reset(self, seed: int | Sequence[int] | None = None) -> None:
+        """New episode. ``seed`` re-seeds SB3's global generators (``set_random_seed``) for
+        reproducible ``deterministic=False`` actions; for a batch the first seed is used."""
+        if seed is not None:
+            first = seed[0] if isinstance(seed, Sequence) else seed
+            self.model.set_random_seed(int(first) % 2**32)
+
+
+class EpochAgent(SB3Agent):
+    """A decision-epoch agent replayed on v0, flight by flight (policy protocol).
+
+    At a decision slot it builds the decision-epoch observation (the v0 observation plus
+    ``flights_left = episode_slots - slots since episode_start``), asks the model for
+    ``(maintenance action, k)`` (masked as :class:`~scas_env.decision_epochs.DecisionEpochs`
+    does), plays the maintenance action now and ``fly`` for the next ``k - 1`` slots, then
+    decides again. The per-env counters travel in the returned ``state`` (pass it back, as
+    the benchmark does; ``episode_start`` resets them), so the same object serves batches.
+    A v0 episode played this way equals the decision-epoch episode on the same seed (tested).
+    With ``delegate`` (a stateless policy on the v0 observation: a residual agent, see
+    :mod:`policies.agents.delegation`) the model has a fifth maintenance choice, "the
+    delegate for ``k`` slots": the delegate then acts at each of those slots.
+    """
+
+    def __init__(
+        self,
+        model: Any,
+        normalizer: Any,
+        obs_names: Sequence[str],
+        *,
+        ks: Sequence[int],
+        episode_slots: int,
+        masked: bool = True,
+        delegate: Any = None,
+    ) -> None:
+        super().__init__(model, normalizer, obs_names, masked=False)
+        self.ks = tuple(int(k) for k in ks)
+        self.episode_slots = int(episode_slots)
+        self.masked_epochs = masked
+        self.delegate = delegate
+        choices = N_MAINTENANCE + (delegate is not None)
+        n_actions = getattr(model.action_space, "n", None)
+        if n_actions != choices * len(self.ks):
+            raise ValueError(
+                f"the model has {n_actions} actions; ks = {self.ks} "
+                f"{'with' if delegate is not None else 'without'} a delegate needs "
+                f"{choices * len(self.ks)}"
+            )
+        missing = [n for n in MASK_READS if n not in self.obs_names]
+        if missing:
+            raise ValueError(f"obs_names lack {missing} that the action mask reads")
+        self._cols = [self.obs_names.index(n) for n in MASK_READS]
+
+    def predict(
+        self,
+        observation: Any,
+        state: Any = None,
+        episode_start: Any = None,
+        deterministic: bool = True,
+    ) -> tuple[int | np.ndarray, Any]:
+        """v0 action(s); ``state`` = ``(slot, remaining, delegating)`` arrays per env."""
+        obs = self._check(observation)
+        batch = np.atleast_2d(obs)
+        n = len(batch)
+        if state is None:
+            slot, remaining = np.zeros(n, np.int64), np.zeros(n, np.int64)
+            delegating = np.zeros(n, dtype=bool)
+        else:
+            slot, remaining = (np.array(s, dtype=np.int64) for s in state[:2])
+            delegating = np.array(state[2], dtype=bool) if len(state) > 2 else np.zeros(n, bool)
+        if episode_start is not None:
+            start = np.broadcast_to(np.asarray(episode_start, dtype=bool), (n,))
+            slot[start], remaining[start], delegating[start] = 0, 0, False
+        actions = np.zeros(n, np.int64)  # fly while committed
+        due = np.flatnonzero(remaining <= 0)
+        if due.size:
+            left = (self.episode_slots - slot[due]).astype(np.float32)
+            epoch_obs = np.column_stack([batch[due], left])
+            norm = self.normalizer.normalize_obs(epoch_obs) if self.normalizer else epoch_obs
+            if self.masked_epochs:
+                m = maintenance_mask(*(batch[due][:, c] for c in self._cols))
+                if self.delegate is not None:
+                    m = with_delegation(m)
+                chosen = self._masked_choice(
+                    norm, np.repeat(m, len(self.ks), axis=-1), deterministic
+                )
+            else:
+                chosen, _ = self.model.predict(norm, deterministic=deterministic)
+            chosen = np.asarray(chosen, dtype=np.int64).reshape(-1)
+            maintenance = chosen // len(self.ks)
+            delegating[due] = maintenance == DELEGATE
+            actions[due] = np.where(delegating[due], FLY, maintenance)
+            remaining[due] = np.asarray(self.ks)[chosen % len(self.ks)]
+        if delegating.any():
+            actions[delegating] = delegate_actions(self.delegate, batch[delegating])
+        remaining -= 1
+        slot += 1
+        out = int(actions[0]) if obs.ndim == 1 else actions
+        return out, (slot, remaining, delegating)
+
+    def _masked_choice(self, norm: np.ndarray, masks: np.ndarray, deterministic: bool) -> Any:
+        """MaskablePPO's own ``predict`` with masks; for a plain PPO model carrying the same
+        weights (the shipped copy, loadable without sb3-contrib) the same rule by hand: the
+        masked actions' logits set to -inf, then argmax (or a sample)."""
+        if _masked(self.model):
+            return self.model.predict(norm, deterministic=deterministic, action_masks=masks)[0]
+        import torch
+
+        with torch.no_grad():
+            obs_t, _ = self.model.policy.obs_to_tensor(norm)
+            logits = self.model.policy.get_distribution(obs_t).distribution.logits
+            logits = logits.masked_fill(~torch.as_tensor(masks), -torch.inf)
+            if deterministic:
+                return logits.argmax(dim=1).numpy()
+            return torch.distributions.Categorical(logits=logits).sample().numpy()
+
+
+# ---------------------------------------------------------------------------- loading
+def find_vecnormalize(path: Path) -> Path | None:
+    """The VecNormalize statistics of the zip ``path``, first found of: ``<stem>_vecnormalize
+    .pkl`` (this project, SB3's CheckpointCallback naming aside), ``vecnormalize.pkl`` beside
+    it, ``<stem>/vecnormalize.pkl`` (RL-Zoo: ``<log>/<env>.zip`` with ``<log>/<env>/``)."""
+    stem = path.name.removesuffix(".zip")
+    for cand in (
+        path.with_name(f"{stem}_vecnormalize.pkl"),
+        path.with_name("vecnormalize.pkl"),
+        path.parent / stem / "vecnormalize.pkl",
+    ):
+        if cand.is_file():
+            return cand
+    return None
+
+
+def _trained_with_normalize(path: Path, meta: dict[str, Any]) -> bool | None:
+    """True/False if the agent's metadata (``<stem>.json``) or RL-Zoo ``config.yml`` tells
+    whether VecNormalize was used in training; None if nothing tells."""
+    if "normalize" in meta:
+        return bool(meta["normalize"])
+    if meta:  # this project's metadata before the key existed: always normalised
+        return True
+    config = path.parent / path.name.removesuffix(".zip") / "config.yml"
+    if config.is_file():
+        raw = _read_zoo_config(config)
+        pairs = raw if isinstance(raw, list) else list((raw or {}).items())
+        for item in pairs:
+            if isinstance(item, list | tuple) and len(item) == 2 and item[0] == "normalize":
+                value = item[1]
+                return bool(value) and str(value).lower() not in ("false", "none", "0")
+    return None
+
+
+def _read_zoo_config(path: Path) -> Any:
+    """RL-Zoo's ``config.yml`` (``yaml.dump`` of an OrderedDict, tagged
+    ``!!python/object/apply:collections.OrderedDict``) read safely: the tag becomes its list of
+    ``[key, value]`` pairs, and no other Python tag is constructed."""
+    import yaml  # PyYAML: the rl extra
+
+    class ZooLoader(yaml.SafeLoader):
+        pass
+
+    def ordered(loader: yaml.SafeLoader, node: yaml.Node) -> Any:
+        items = loader.construct_sequence(node, deep=True)
+        return items[0] if len(items) == 1 and isinstance(items[0], list) else items
+
+    ZooLoader.add_constructor(
+        "tag:yaml.org,2002:python/object/apply:collections.OrderedDict", ordered
+    )
+    try:
+        return yaml.load(path.read_text(), Loader=ZooLoader)
+    except yaml.YAMLError as exc:
+        raise ValueError(f"{path}: not a readable RL-Zoo config.yml: {exc}") from exc
+
+
+def _load_normalizer(path: Path, obs_dim: int) -> Any:
+    from stable_baselines3.common.vec_env import VecNormalize
+
+    check_manifest(path)
+    try:
+        with path.open("rb") as fh:
+            normalizer = pickle.load(fh)  # SB3's own format (VecNormalize.load does the same)
+    except Exception as exc:
+        raise ValueError(f"{path}: cannot read VecNormalize statistics: {exc!r}") from exc
+    if not isinstance(normalizer, VecNormalize):
+        raise ValueError(f"{path}: holds a {type(normalizer).__name__}, not VecNormalize")
+    mean = np.asarray(normalizer.obs_rms.mean)
+    var = np.asarray(normalizer.obs_rms.var)
+    if mean.shape != (obs_dim,) or not (np.isfinite(mean).all() and np.isfinite(var).all()):
+        raise ValueError(
+            f"{path}: observation statistics of shape {mean.shape} (finite: "
+            f"{bool(np.isfinite(mean).all() and np.isfinite(var).all())}) do not fit the "
+            f"model's observation of size {obs_dim}"
+        )
+    normalizer.training = False
+    normalizer.norm_reward = False
+    return normalizer
+
+
+def load_sb3_policy(
+    path: str | Path = DEFAULT_AGENT,
+    obs_names: Sequence[str] | None = None,
+    *,
+    vecnormalize: str | Path | None = None,
+    algo: str | None = None,
+    ks: Sequence[int] | None = None,
+    episode_slots: int | None = None,
+    require_vecnormalize: bool | None = None,
+    delegate: Any = None,
+) -> SB3Agent:
+    """An SB3 zip as a policy on raw v0 observations; **runs code from the files: load only
+    files you trust** (module docstring).
+
+    Parameters
+    ----------
+    path : the model zip (this project's, RL-Zoo's, or any ``model.save``).
+    obs_names : the env's observation names; checked against the agent's metadata when known.
+    vecnormalize : its VecNormalize ``.pkl``; default :func:`find_vecnormalize`.
+    algo : SB3 algorithm name (:data:`ALGO_NAMES`); default from metadata or the zip.
+    ks, episode_slots : make it an :class:`EpochAgent` (decision epochs: slots per decision,
+        episode length); default from the metadata ``<stem>.json`` (``"formulation":
+        "decision_epochs"``).
+    require_vecnormalize : True: a missing ``.pkl`` is an error; False: act without one;
+        None (default): required if the metadata or RL-Zoo's ``config.yml`` says the agent was
+        trained with VecNormalize.
+    delegate : a residual decision-epoch agent's rule (a
+        :class:`policies.agents.delegation.DelegateSpec` or its JSON mapping); default from
+        the metadata (``"delegate"``).
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise ValueError(f"path = {str(path)!r} does not exist (expected an SB3 model .zip)")
+    check_manifest(path)
+    data = _zip_data(path)
+    meta_path = path.with_name(f"{path.name.removesuffix('.zip')}.json")
+    meta: dict[str, Any] = json.loads(meta_path.read_text()) if meta_path.is_file() else {}
+    if meta:
+        check_manifest(meta_path)
+    algo = algo if algo is not None else meta.get("algo")
+    cls = algo_class(algo, data)
+    if (
+        obs_names is not None
+        and "obs_names" in meta
+        and tuple(obs_names) != tuple(meta["obs_names"])
+    ):
+        trained_on = meta.get("scenario") or "v0's default scenario"
+        raise ValueError(
+            f"obs_names = {tuple(obs_names)} differ from the agent's {tuple(meta['obs_names'])}"
+            f" (it was trained on {trained_on})"
+        )
+    names = tuple(obs_names if obs_names is not None else meta.get("obs_names", ()))
+    try:
+        model = cls.load(path, device="cpu")
+    except Exception as exc:
+        raise ValueError(f"{path}: SB3 cannot load this {cls.__name__} zip: {exc!r}") from exc
+    for p in model.policy.parameters():
+        if not bool(p.isfinite().all()):
+            raise ValueError(f"{path}: the policy has non-finite parameters (corrupted)")
+    obs_dim = int(np.prod(model.observation_space.shape))
+    norm_path = Path(vecnormalize) if vecnormalize is not None else find_vecnormalize(path)
+    needed = require_vecnormalize
+    if needed is None:
+        needed = _trained_with_normalize(path, meta)
+    normalizer = None
+    if norm_path is not None and norm_path.is_file():
+        normalizer = _load_normalizer(norm_path, obs_dim)
+    elif vecnormalize is not None or needed:
+        where = str(vecnormalize) if vecnormalize is not None else f"beside {path}"
+        raise ValueError(
+            f"{path} was trained with VecNormalize but its statistics are missing ({where}: "
+            f"expected {path.name.removesuffix('.zip')}_vecnormalize.pkl); without them it would "
+            "act on unscaled observations. Pass vecnormalize=PATH, or require_vecnormalize=False "
+            "if the agent was trained without it"
+        )
+    ks = ks if ks is not None else meta.get("ks")
+    if ks is not None:
+        slots = episode_slots if episode_slots is not None else meta.get("episode_slots")
+        if slots is None:
+            raise ValueError(f"{path}: a decision-epoch agent needs episode_slots")
+        if not names:
+            raise ValueError(f"{path}: pass obs_names (the v0 env's) for a decision-epoch agent")
+        if obs_dim != len(names) + 1:
+            raise ValueError(
+                f"{path}: the model observes {obs_dim} entries, the env {len(names)} "
+                "(+ flights_left): it was trained on another observation (scenario)"
+            )
+        from policies.agents.delegation import DelegateSpec
+
+        spec = delegate if delegate is not None else meta.get("delegate")
+        if spec is not None and not isinstance(spec, DelegateSpec):
+            spec = DelegateSpec.from_json(spec)
+        return EpochAgent(
+            model,
+            normalizer,
+            names,
+            ks=ks,
+            episode_slots=slots,
+            masked=_masked(model) or bool(meta.get("action_masks", False)),
+            delegate=None if spec is None else spec.build(names),
+        )
+    if not names:
+        raise ValueError(f"{path}: pass obs_names (the env's observation names)")
+    if obs_dim != len(names):
+        raise ValueError(f"{path}: the model observes {obs_dim} entries, the env {len(names)}")
+    return SB3Agent(model, normalizer, names, masked=_masked(model))
+
+
+def load_factory(obs_names: Sequence[str], target: str, **params: Any) -> Any:
+    """``factory(obs_names, **params)`` of ``target = "module:factory"`` (a policy object with
+    SB3's ``predict``). Imports and runs that module's code: trusted code only."""
+    if not isinstance(target, str) or target.count(":") != 1:
+        raise ValueError(f"target = {target!r} must be 'module:factory'")
+    module_name, attr = target.split(":")
+    try:
+        module = importlib.import_module(module_name)
+    except ImportError as exc:
+        raise ValueError(f"target = {target!r}: cannot import {module_name!r}: {exc}") from exc
+    factory = getattr(module, attr, None)
+    if not callable(factory):
+        raise ValueError(f"target = {target!r}: {module_name} has no callable {attr!r}")
+    policy = factory(obs_names, **params)
+    if not callable(getattr(policy, "predict", None)):
+        raise ValueError(f"target = {target!r} returned {type(policy).__name__} without predict")
+    return policy
+
+
+def _sb3_factory(
+    obs_names: Sequence[str], path: str | Path = DEFAULT_AGENT, **kwargs: Any
+) -> SB3Agent:
+    """Registry factory ``"sb3"``: :func:`load_sb3_policy` ``(path, obs_names, **kwargs)``."""
+    return load_sb3_policy(path, obs_names, **kwargs)
+
+
+register_policy("sb3", _sb3_factory, obs_mode="features+rul", family="external")
+register_policy("factory", load_factory, obs_mode="features+rul", family="external")

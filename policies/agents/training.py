@@ -1,0 +1,521 @@
+"""Training of SB3 agents on decision epochs (:class:`scas_env.decision_epochs.DecisionEpochs`).
+
+One run (:func:`train_epochs`): ``n_envs`` decision-epoch envs (``DummyVecEnv``, each in a
+``Monitor``, seeded ``seed * 1000 + rank`` at the first reset) under ``VecNormalize``
+(observations standardised, rewards scaled by the running std of the discounted return with
+the algorithm's ``gamma``), trained for ``total_timesteps`` *decisions* or until ``max_wall_s``
+seconds of wall time, whichever comes first. A checkpoint (model zip + VecNormalize
+statistics) is written every ``checkpoint_every`` decisions; the best one is chosen later on
+validation seeds (:mod:`policies.agents.selection`), never on the held-out ones.
+
+Hyper-parameters come from an RL-Zoo-format YAML (:func:`load_zoo_hyperparams`): a mapping
+``env id -> {n_envs, n_timesteps, policy, normalize, <algorithm keywords>}``.
+
+sb3-contrib (MaskablePPO) is an optional dependency: the ``rl`` extra.
+"""
+
+from __future__ import annotations
+
+import json
+import time
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+import gymnasium as gym
+
+from policies.agents.delegation import DelegateSpec, v0_obs_names
+from policies.agents.sb3_agents import require_contrib
+from scas_env import ENV_ID
+from scas_env.decision_epochs import DEFAULT_KS, DecisionEpochs
+from scas_env.utils.atomic_file import write_text_atomic
+
+#: id of the decision-epoch formulation in the hyper-parameter YAML files
+EPOCH_ENV_ID = "scas_env/ScasMaintenanceEpochs-v0"
+HYPERPARAMS_DIR = Path(__file__).resolve().parents[1] / "data" / "hyperparams"
+#: keys of an RL-Zoo entry that are not algorithm keywords
+ZOO_KEYS = ("n_envs", "n_timesteps", "policy", "normalize")
+#: this project's key for fine-tuning near the ``init`` policy: the uniform share of the
+#: reference (:mod:`policies.agents.reference`; ``ent_coef`` is then the KL weight)
+REFERENCE_KEY = "reference_mix"
+
+__all__ = [
+    "EPOCH_ENV_ID",
+    "HYPERPARAMS_DIR",
+    "candidate_hyperparams",
+    "clone_rule",
+    "init_delegate",
+    "load_zoo_hyperparams",
+    "make_epoch_env",
+    "train_epochs",
+    "warm_start",
+    "with_schedules",
+]
+
+
+def load_zoo_hyperparams(path: str | Path, env_id: str = EPOCH_ENV_ID) -> dict[str, Any]:
+    """The entry ``env_id`` of an RL-Zoo-format YAML file (a copy, unknown keys kept for the
+    algorithm). Raises ``ValueError`` naming the file if it or the entry is missing."""
+    path = Path(path)
+    if not path.is_file():
+        raise ValueError(f"hyper-parameter file {str(path)!r} does not exist")
+    import yaml  # PyYAML: the rl extra
+
+    data = yaml.safe_load(path.read_text())
+    if not isinstance(data, dict) or env_id not in data:
+        keys = sorted(data) if isinstance(data, dict) else type(data).__name__
+        raise ValueError(f"{path}: no entry {env_id!r} (found {keys})")
+    return dict(data[env_id])
+
+
+def candidate_hyperparams(search: str | Path, candidate: str) -> dict[str, Any]:
+    """Hyper-parameters of ``candidate`` in a search YAML (``base``: an RL-Zoo file beside it,
+    ``candidates``: name -> overrides)."""
+    import yaml  # PyYAML: the rl extra
+
+    search = Path(search)
+    if not search.is_file():
+        raise ValueError(f"search file {str(search)!r} does not exist")
+    spec = yaml.safe_load(search.read_text())
+    candidates = spec.get("candidates", {}) if isinstance(spec, dict) else {}
+    if candidate not in candidates:
+        raise ValueError(f"candidate = {candidate!r} must be one of {sorted(candidates)}")
+    base = load_zoo_hyperparams(search.parent / spec["base"])
+    return {**base, **candidates[candidate]}
+
+
+def _schedule(name: str, value: Any) -> Any:
+    """RL-Zoo's ``lin_<x>`` strings (``learning_rate``, ``clip_range``): a linear decay from
+    ``x`` to 0 over training (SB3 calls it with the progress remaining, 1 -> 0)."""
+    if not isinstance(value, str):
+        return value
+    if not value.startswith("lin_"):
+        raise ValueError(f"{name} = {value!r}: a number or 'lin_<number>' (RL-Zoo schedule)")
+    try:
+        start = float(value[4:])
+    except ValueError:
+        raise ValueError(f"{name} = {value!r}: 'lin_<number>', e.g. 'lin_3e-4'") from None
+    if not start > 0:
+        raise ValueError(f"{name} = {value!r} must start above 0")
+    from stable_baselines3.common.utils import LinearSchedule
+
+    return LinearSchedule(start, 0.0, 1.0)
+
+
+def make_epoch_env(
+    ks: Sequence[int] = DEFAULT_KS, delegate: DelegateSpec | None = None, **scenario: Any
+) -> gym.Env:
+    """One ``ScasMaintenance-v0`` (``scenario`` keywords) in :class:`DecisionEpochs`, with
+    ``delegate`` (:mod:`policies.agents.delegation`) built for its observation if given."""
+    env = gym.make(ENV_ID, disable_env_checker=True, **scenario)
+    rule = None if delegate is None else delegate.build(env.unwrapped.obs_names)
+    return DecisionEpochs(env, ks=ks, delegate=rule)
+
+
+class _WallClock:
+    """SB3 callback factory: stop learning after ``limit_s`` seconds (None: never)."""
+
+    @staticmethod
+    def make(limit_s: float | None) -> Any:
+        from stable_baselines3.common.callbacks import BaseCallback
+
+        class WallClockStop(BaseCallback):
+            def __init__(self) -> None:
+                super().__init__()
+                self.start = time.perf_counter()
+
+            def _on_step(self) -> bool:
+                return limit_s is None or time.perf_counter() - self.start < limit_s
+
+        return WallClockStop()
+
+
+def _native_epochs(
+    num_envs: int,
+    seed: int,
+    monitor_dir: Path,
+    ks: Sequence[int],
+    scenario: dict[str, Any],
+    delegate: DelegateSpec | None = None,
+) -> Any:
+    """``num_envs`` decision-epoch actuators on the native vector env, monitored (one CSV,
+    ``monitor_dir/0.monitor.csv``), seeded ``seed + e``."""
+    from stable_baselines3.common.vec_env import VecMonitor
+
+    from policies.agents.sb3_vec_env import NativeVecEnv
+    from scas_env.decision_epochs_vector import DecisionEpochsVectorEnv
+
+    monitor_dir.mkdir(parents=True, exist_ok=True)
+    rule = None if delegate is None else delegate.build(v0_obs_names(**scenario))
+    native = NativeVecEnv(
+        DecisionEpochsVectorEnv(num_envs, ks=tuple(ks), delegate=rule, **scenario),
+        info_keys=(),
+    )
+    native.seed(seed)
+    return VecMonitor(native, filename=str(monitor_dir / "0"))
+
+
+ALGOS = ("maskable_ppo", "ppo")
+
+
+def _check_delegate(delegate: Any, scenario: Mapping[str, Any]) -> None:
+    """Refuse a ``delegate`` that is not a :class:`DelegateSpec` (or None) or whose policy
+    cannot be built for the scenario's observation (before any folder is made)."""
+    if delegate is None:
+        return
+    if not isinstance(delegate, DelegateSpec):
+        raise ValueError(f"delegate = {delegate!r} must be a DelegateSpec or None")
+    delegate.build(v0_obs_names(**scenario))
+
+
+def _new_out_dir(out_dir: str | Path) -> Path:
+    """``out_dir`` created, refused if it exists and is not empty (nothing overwritten)."""
+    out = Path(out_dir)
+    if out.exists() and any(out.iterdir()):
+        raise ValueError(f"out_dir = {str(out)!r} exists and is not empty; choose a new one")
+    out.mkdir(parents=True, exist_ok=True)
+    return out
+
+
+def with_schedules(hp: Mapping[str, Any]) -> dict[str, Any]:
+    """A copy of algorithm keywords with RL-Zoo's ``lin_<x>`` strings (``learning_rate``,
+    ``clip_range``) made schedules (:func:`_schedule`)."""
+    out = dict(hp)
+    for key in ("learning_rate", "clip_range"):
+        if key in out:
+            out[key] = _schedule(key, out[key])
+    return out
+
+
+def _check_run(algo: str, native_envs: int | None) -> None:
+    """Refuse an unknown ``algo`` or a bad ``native_envs`` (before any folder is made)."""
+    if native_envs is not None and (
+        isinstance(native_envs, bool) or not isinstance(native_envs, int) or native_envs < 1
+    ):
+        raise ValueError(f"native_envs = {native_envs!r} must be None or an integer >= 1")
+    if algo not in ALGOS:
+        raise ValueError(f"algo = {algo!r} must be one of {sorted(ALGOS)}")
+
+
+def _prepared(
+    hyperparams: Mapping[str, Any],
+    out: Path,
+    *,
+    seed: int,
+    algo: str,
+    ks: Sequence[int],
+    native_envs: int | None,
+    scenario: dict[str, Any],
+    delegate: DelegateSpec | None = None,
+) -> tuple[Any, Any, int, bool, dict[str, Any]]:
+    """The model, its (normalised) vector env, ``n_envs``, ``normalize`` and the algorithm
+    keywords of one run (:func:`train_epochs`), seeded as documented there."""
+    contrib = require_contrib("train on decision epochs")
+    import torch
+    from stable_baselines3 import PPO
+    from stable_baselines3.common.env_util import make_vec_env
+    from stable_baselines3.common.utils import set_random_seed
+    from stable_baselines3.common.vec_env import VecNormalize
+
+    _check_run(algo, native_envs)
+    classes = {"maskable_ppo": contrib.MaskablePPO, "ppo": PPO}
+    hp = dict(hyperparams)
+    n_envs = int(hp.pop("n_envs", 4))
+    hp.pop("n_timesteps", None)
+    policy = hp.pop("policy", "MlpPolicy")
+    normalize = bool(hp.pop("normalize", True))
+    if hp.pop(REFERENCE_KEY, None) is not None:
+        if policy != "MlpPolicy" or algo != "maskable_ppo":
+            raise ValueError(
+                f"{REFERENCE_KEY} needs policy 'MlpPolicy' and algo 'maskable_ppo', got "
+                f"{policy!r} and {algo!r}"
+            )
+        from policies.agents.reference import ReferenceKLPolicy
+
+        policy = ReferenceKLPolicy
+    hp = with_schedules(hp)
+    torch.set_num_threads(1)
+    set_random_seed(seed)
+    if native_envs is None:
+        venv = make_vec_env(
+            make_epoch_env,
+            n_envs=n_envs,
+            seed=seed * 1000,
+            env_kwargs={"ks": tuple(ks), "delegate": delegate, **scenario},
+            monitor_dir=str(out / "monitor"),
+        )
+    else:
+        venv = _native_epochs(
+            native_envs,
+            seed * 1000,
+            out / "monitor",
+            ks,
+            scenario,
+            delegate=delegate,
+        )
+        n_envs = venv.num_envs
+    gamma = float(hp.get("gamma", 0.99))
+    if normalize:
+        venv = VecNormalize(venv, norm_obs=True, norm_reward=True, gamma=gamma)
+    model = classes[algo](policy, venv, seed=seed, device="cpu", verbose=0, **hp)
+    return model, venv, n_envs, normalize, hp
+
+
+def warm_start(model: Any, venv: Any, init: Path) -> None:
+    """Copy a saved run's policy weights (``init/model.zip``) and ``VecNormalize``
+    statistics (``init/vecnormalize.pkl``) into ``model`` and ``venv``; the architectures
+    must match (same ``policy_kwargs``)."""
+    import pickle
+
+    zip_path, pkl = init / "model.zip", init / "vecnormalize.pkl"
+    for f in (zip_path, pkl):
+        if not f.is_file():
+            raise ValueError(f"init = {str(init)!r} lacks {f.name} (a clone_rule output)")
+    saved = type(model).load(zip_path, device="cpu")
+    try:
+        model.policy.load_state_dict(saved.policy.state_dict())
+    except RuntimeError as err:
+        raise ValueError(f"init = {str(init)!r}: its network does not match ({err})") from None
+    with pkl.open("rb") as fh:
+        stats = pickle.load(fh)
+    venv.obs_rms, venv.ret_rms = stats.obs_rms, stats.ret_rms
+
+
+def train_epochs(
+    hyperparams: Mapping[str, Any],
+    out_dir: str | Path,
+    *,
+    seed: int = 0,
+    algo: str = "maskable_ppo",
+    ks: Sequence[int] = DEFAULT_KS,
+    checkpoint_every: int = 20_000,
+    max_wall_s: float | None = None,
+    total_timesteps: int | None = None,
+    progress_bar: bool = False,
+    native_envs: int | None = None,
+    init: str | Path | None = None,
+    freeze_normalization: bool | None = None,
+    delegate: DelegateSpec | None = None,
+    **scenario: Any,
+) -> Path:
+    """Train one agent on decision epochs; returns ``out_dir``.
+
+    ``hyperparams``: an RL-Zoo entry (:func:`load_zoo_hyperparams`; ``learning_rate`` and
+    ``clip_range`` may be RL-Zoo's ``lin_<x>`` linear decays); ``total_timesteps``
+    overrides its ``n_timesteps`` (decisions, summed over envs). ``native_envs``: train on
+    that many actuators of the decision-epoch vector env
+    (:class:`scas_env.decision_epochs_vector.DecisionEpochsVectorEnv` through
+    :class:`policies.agents.sb3_vec_env.NativeVecEnv`) instead of the YAML's ``n_envs`` single envs
+    in a ``DummyVecEnv``. ``init``: a folder written by :func:`clone_rule` (or any folder
+    with ``model.zip`` and ``vecnormalize.pkl`` of the same network) to start from; its
+    policy is also saved as checkpoint 0, so selection can keep it. With the hyper-parameter
+    ``reference_mix`` (needs ``init``) PPO is regularised towards the ``init`` policy
+    (:mod:`policies.agents.reference`: ``ent_coef`` weighs ``KL(pi || rho)``, ``rho`` the
+    init policy mixed with ``reference_mix`` of the uniform one). ``freeze_normalization``
+    (default: True with ``init``, else False; True needs ``init``): keep ``init``'s
+    ``VecNormalize`` statistics fixed. ``delegate``: the rule the agent may hand ``k`` slots
+    to (:mod:`policies.agents.delegation`; default: the one ``init``'s ``clone.json`` records,
+    if any: the warm start's network has its actions). The normalisation statistics are
+    part of the policy: the network acts on
+    observations standardised by them, and letting them follow the training rollouts
+    changes its actions without a gradient step (measured: the clone with the statistics a
+    fine-tuning run had accumulated after 1 M decisions lost 1,864 USD/episode on
+    validation, all of the decline of that run). Writes
+    ``out_dir/ckpt_<n>`` checkpoints (``model.zip``, ``vecnormalize.pkl``), ``progress.csv``
+    (SB3's logger: training episode rewards of the Monitor) and ``run.json`` (config, written
+    before training so that checkpoints can be validated while it runs, ``"finished":
+    false``; at the end the decisions and wall time reached, ``"finished": true``).
+    """
+    from stable_baselines3.common.callbacks import CallbackList, CheckpointCallback
+    from stable_baselines3.common.logger import configure
+
+    n_timesteps = int(float(dict(hyperparams).get("n_timesteps", 1_000_000)))
+    total = n_timesteps if total_timesteps is None else total_timesteps
+    if isinstance(total, bool) or not isinstance(total, int) or total < 1:
+        raise ValueError(f"total_timesteps = {total!r} must be an integer >= 1")
+    if isinstance(checkpoint_every, bool) or not isinstance(checkpoint_every, int):
+        raise ValueError(f"checkpoint_every = {checkpoint_every!r} must be an integer >= 1")
+    if checkpoint_every < 1:
+        raise ValueError(f"checkpoint_every = {checkpoint_every!r} must be an integer >= 1")
+    if init is not None and not Path(init).is_dir():
+        raise ValueError(f"init = {str(init)!r} is not a folder")
+    mix = dict(hyperparams).get(REFERENCE_KEY)
+    if mix is not None and init is None:
+        raise ValueError(f"{REFERENCE_KEY} = {mix!r} needs init (the reference policy)")
+    if freeze_normalization is None:
+        freeze_normalization = init is not None
+    elif not isinstance(freeze_normalization, bool):
+        raise ValueError(f"freeze_normalization = {freeze_normalization!r} must be a bool or None")
+    elif freeze_normalization and init is None:
+        raise ValueError("freeze_normalization = True needs init (the statistics to keep)")
+    _check_run(algo, native_envs)
+    if delegate is None and init is not None:
+        delegate = init_delegate(Path(init))
+    _check_delegate(delegate, scenario)
+    out = _new_out_dir(out_dir)
+    model, venv, n_envs, normalize, _ = _prepared(
+        hyperparams,
+        out,
+        seed=seed,
+        algo=algo,
+        ks=ks,
+        native_envs=native_envs,
+        scenario=scenario,
+        delegate=delegate,
+    )
+    if init is not None:
+        warm_start(model, venv, Path(init))
+        if mix is not None:
+            model.policy.set_reference(model.policy, mix)
+        if normalize and freeze_normalization:
+            venv.training = False  # VecNormalize: no more updates of obs_rms nor ret_rms
+        model.save(out / "ckpt_0_steps.zip")
+        if normalize:
+            venv.save(str(out / "ckpt_vecnormalize_0_steps.pkl"))
+    # the run's settings now (checkpoints can be validated while it trains), its end later
+    run = {
+        "algo": algo,
+        "seed": seed,
+        "ks": list(ks),
+        "scenario": scenario,
+        "hyperparams": {k: repr(v) for k, v in dict(hyperparams).items()},
+        "decisions": 0,
+        "decisions_requested": total,
+        "wall_s": None,
+        "stopped_by_wall_clock": False,
+        "finished": False,
+        "vec_env": "NativeVecEnv(DecisionEpochsVectorEnv)" if native_envs else "DummyVecEnv",
+        "n_envs": n_envs,
+        "init": None if init is None else str(init),
+        "freeze_normalization": freeze_normalization,
+        "delegate": None if delegate is None else delegate.to_json(),
+    }
+    write_text_atomic(out / "run.json", json.dumps(run, indent=1))
+    model.set_logger(configure(str(out), ["csv"]))
+    checkpoints = CheckpointCallback(
+        max(checkpoint_every // n_envs, 1),
+        str(out),
+        name_prefix="ckpt",
+        save_vecnormalize=normalize,
+    )
+    start = time.perf_counter()
+    model.learn(
+        total,
+        callback=CallbackList([checkpoints, _WallClock.make(max_wall_s)]),
+        progress_bar=progress_bar,
+    )
+    wall = time.perf_counter() - start
+    model.save(out / f"ckpt_{model.num_timesteps}_steps.zip")
+    if normalize:
+        venv.save(str(out / f"ckpt_vecnormalize_{model.num_timesteps}_steps.pkl"))
+    run.update(
+        decisions=int(model.num_timesteps),
+        wall_s=round(wall, 1),
+        stopped_by_wall_clock=model.num_timesteps < total,
+        finished=True,
+    )
+    write_text_atomic(out / "run.json", json.dumps(run, indent=1))
+    venv.close()
+    return out
+
+
+def init_delegate(init: Path) -> DelegateSpec | None:
+    """The delegate a :func:`clone_rule` folder was cloned with (``clone.json``), or None."""
+    summary = init / "clone.json"
+    if not summary.is_file():
+        return None
+    return DelegateSpec.from_json(json.loads(summary.read_text()).get("delegate"))
+
+
+def clone_rule(
+    hyperparams: Mapping[str, Any],
+    demos: Any,
+    out_dir: str | Path,
+    *,
+    seed: int = 0,
+    algo: str = "maskable_ppo",
+    epochs: int = 30,
+    batch_size: int = 4096,
+    learning_rate: float = 1e-3,
+    maintenance_weight: float = 100.0,
+    label_smoothing: float = 0.0,
+    dagger: Any = None,
+    progress: bool = False,
+    delegate: DelegateSpec | None = None,
+    **scenario: Any,
+) -> Any:
+    """Behaviour-clone ``demos`` (:class:`policies.agents.demonstrations.Demonstrations`)
+    into a fresh model of ``hyperparams`` (the network a later :func:`train_epochs` with
+    ``init=out_dir`` trains) with :func:`policies.agents.imitation.clone`; writes
+    ``out_dir/model.zip``, ``vecnormalize.pkl`` and ``clone.json`` (history, settings).
+    ``dagger``: a :class:`policies.agents.dagger.DaggerPlan` (rounds of the rule labelling
+    the clone's own states, each followed by ``dagger.epochs`` more passes over all samples).
+    ``delegate``: the network gets the delegation actions (demonstrations of
+    :func:`policies.agents.delegation.delegation_demonstrations`); recorded in ``clone.json``
+    so that :func:`train_epochs` from this folder uses it too.
+    Returns the last :class:`policies.agents.imitation.CloneResult`."""
+    import dataclasses
+
+    import numpy as np
+
+    from policies.agents.dagger import merged
+    from policies.agents.imitation import clone
+
+    _check_run(algo, None)
+    if delegate is not None and dagger is not None:
+        raise ValueError("dagger needs the rule's own labels; a delegate clone has none to add")
+    _check_delegate(delegate, scenario)
+    out = _new_out_dir(out_dir)
+    model, venv, _, normalize, _ = _prepared(
+        hyperparams,
+        out,
+        seed=seed,
+        algo=algo,
+        ks=demos.ks,
+        native_envs=2,
+        scenario=scenario,
+        delegate=delegate,
+    )
+    if not normalize:
+        raise ValueError(
+            "clone_rule needs normalize: true (the clone sets VecNormalize's statistics)"
+        )
+    rng = np.random.default_rng(seed)
+    settings = {
+        "batch_size": batch_size,
+        "learning_rate": learning_rate,
+        "maintenance_weight": maintenance_weight,
+        "label_smoothing": label_smoothing,
+        "rng": rng,
+        "progress": progress,
+    }
+    result = clone(model, venv, demos, epochs=epochs, **settings)
+    rounds = [dataclasses.asdict(result)]
+    for seeds in () if dagger is None else dagger.rounds:
+        agent = dagger.agent(model, venv, scenario)
+        more = dagger.samples(agent, seeds, scenario, progress=progress)
+        demos = merged(demos, more)
+        result = clone(model, venv, demos, epochs=dagger.epochs, **settings)
+        rounds.append({**dataclasses.asdict(result), "new_samples": len(more.actions)})
+    model.save(out / "model.zip")
+    venv.save(str(out / "vecnormalize.pkl"))
+    summary = {
+        "algo": algo,
+        "seed": seed,
+        "ks": list(demos.ks),
+        "scenario": scenario,
+        "hyperparams": {k: repr(v) for k, v in dict(hyperparams).items()},
+        "epochs": epochs,
+        "batch_size": batch_size,
+        "learning_rate": learning_rate,
+        "maintenance_weight": maintenance_weight,
+        "label_smoothing": label_smoothing,
+        "samples": len(demos.actions),
+        "episodes": len(np.unique(demos.episode)),
+        "dagger": None if dagger is None else dagger.describe(),
+        "delegate": None if delegate is None else delegate.to_json(),
+        "history": rounds,
+    }
+    (out / "clone.json").write_text(json.dumps(summary, indent=1))
+    venv.close()
+    return result

@@ -1,0 +1,355 @@
+"""The policy benchmark: every policy on the same episodes, in parallel, with statistics.
+
+Seeds (common random numbers): ``SeedSequence(seed).spawn(episodes)`` gives one child per
+episode; ``child.generate_state(2, uint64)`` gives the env seed (``reset(seed=...)``) and
+the policy seed (``policy.reset(seed=...)``, used by random policies). Episode ``e`` of every
+policy starts from the same actuator unit; the episodes then share the env's random stream
+only as long as the policies act alike (a test draws measurement noise), so the paired
+differences are of policies on the same units, not on the same sample paths.
+
+Tasks are batches of up to :data:`BATCH_EPISODES` consecutive episodes of one policy, run
+side by side in a vector env by the one episode runner (:mod:`policies.benchmark.runner`;
+the physics fidelity's vector env steps single envs one after the other). Each episode
+gives exactly what :func:`run_episode` gives on its seeds (tested), the batches are fixed
+by episode index, and tasks carry their seeds, so the results do not depend on the number
+of workers or on running locally (:func:`map_chunks`) or on a Ray cluster
+(``ray_address``; ``ray`` is imported only then).
+
+Per episode (one row of results.csv): flight hours ``FH = flights * flight_duration_s /
+3600``; ``cost_per_fh = cost_usd / FH`` (costs only, the value of flights excluded);
+in-flight failures, preventive replacements (failures excluded) and pre-flight tests per
+1000 FH; ``wasted_life`` = mean true RUL (flights) of the parts replaced preventively (NaN
+without one); ``reward`` = sum of rewards; ``term_*`` = reward terms summed. Every removal
+of a part (failure or preventive replacement) and every part still fitted at the end
+(censored) is an event with the part's age in flights (events.csv, survival plot).
+"""
+
+from __future__ import annotations
+
+import importlib
+import time
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field, replace
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+from tqdm.auto import tqdm
+
+import policies  # noqa: F401  (registers the built-in policies)
+from policies.base import make_policy, policy_family, policy_obs_mode
+from policies.benchmark.runner import TERMS, run_episode, run_episodes
+from policies.benchmark.stats import summarize
+from scas_env import ENV_ID
+from scas_env.utils.parallel import in_worker, init_worker, map_chunks, single_thread
+
+#: Named plug-ins: a benchmark name that needs a module imported first (trained agents).
+PLUGINS: dict[str, PolicySpec] = {}
+DEFAULT_POLICIES = (
+    "corrective",
+    "preventive",
+    "detection",
+    "rul_risk",
+    "oracle",
+    "random",
+    "ppo",
+)
+#: Episodes of one policy stepped together in one vectorised env (one task).
+BATCH_EPISODES = 32
+
+__all__ = [
+    "DEFAULT_POLICIES",
+    "PLUGINS",
+    "TERMS",
+    "BenchmarkResult",
+    "PolicySpec",
+    "episode_seeds",
+    "resolve_spec",
+    "run_benchmark",
+    "run_episode",
+]
+
+
+@dataclass(frozen=True)
+class PolicySpec:
+    """A policy to benchmark, rebuilt by name in each worker.
+
+    Attributes
+    ----------
+    name : registry name (:func:`policies.base.make_policy`).
+    params : keyword parameters of the policy.
+    label : name in the tables (default ``name``); labels must be unique.
+    module : module imported in the worker before building the policy (a plug-in that
+        registers itself, e.g. a loader of trained agents).
+    obs_mode : observation mode of the env (default: the registered one).
+    """
+
+    name: str
+    params: Mapping[str, Any] = field(default_factory=dict)
+    label: str | None = None
+    module: str | None = None
+    obs_mode: str | None = None
+
+    @property
+    def key(self) -> str:
+        return self.label or self.name
+
+    def build_mode(self) -> str:
+        if self.module:
+            importlib.import_module(self.module)
+        return self.obs_mode or policy_obs_mode(self.name)
+
+
+#: the shipped agent: MaskablePPO on decision epochs, warm-started from the tuned filter rule
+#: (policies/data/README.md, docs/rl.md)
+PLUGINS["ppo"] = PolicySpec("sb3", label="ppo", module="policies.agents.sb3_agents")
+
+
+def resolve_spec(name: str) -> PolicySpec:
+    """The spec of a benchmark name: a plug-in (``"ppo"``: the shipped PPO agent) or a
+    registered policy with its default parameters."""
+    return PLUGINS.get(name, PolicySpec(name))
+
+
+def episode_seeds(seed: int, episodes: int) -> list[tuple[int, int]]:
+    """``(env_seed, policy_seed)`` of each episode from ``SeedSequence(seed).spawn``.
+
+    >>> episode_seeds(0, 2) == episode_seeds(0, 3)[:2]
+    True
+    """
+    if isinstance(episodes, bool) or not isinstance(episodes, int) or episodes < 1:
+        raise ValueError(f"episodes = {episodes!r} must be an integer >= 1")
+    children = np.random.SeedSequence(seed).spawn(episodes)
+    return [tuple(int(v) for v in c.generate_state(2, np.uint64)) for c in children]
+
+
+Batch = tuple[int, tuple[tuple[int, int, int], ...]]
+
+
+def check_specs(specs: Sequence[PolicySpec], env_kwargs: Mapping[str, Any]) -> None:
+    """Build every policy once against its env's observation, before any episode runs: a
+    policy that cannot act on this scenario (e.g. an agent trained on another observation
+    layout) raises its ``ValueError`` here, naming the policy."""
+    names: dict[str, tuple[str, ...]] = {}
+    for spec in specs:
+        mode = spec.build_mode()
+        if mode not in names:
+            env = gym.make(ENV_ID, disable_env_checker=True, obs_mode=mode, **env_kwargs)
+            names[mode] = tuple(env.unwrapped.obs_names)
+            env.close()
+        try:
+            make_policy(spec.name, names[mode], **dict(spec.params))
+        except ValueError as exc:
+            raise ValueError(f"policy {spec.key!r} cannot run on this scenario: {exc}") from exc
+
+
+def _run_chunk(
+    specs: tuple[PolicySpec, ...], env_kwargs: Mapping[str, Any], chunk: Sequence[Batch]
+) -> list[dict[str, Any]]:
+    """Batches ``(policy index, ((episode, env seed, policy seed), ...))``."""
+    envs: dict[tuple[str, int], Any] = {}
+    built: dict[int, Any] = {}
+    out = []
+    for p, batch in chunk:
+        spec = specs[p]
+        mode = spec.build_mode()
+        n = len(batch)
+        if (mode, n) not in envs:
+            envs[mode, n] = gym.make_vec(
+                ENV_ID,
+                num_envs=n,
+                vectorization_mode="vector_entry_point",
+                obs_mode=mode,
+                **env_kwargs,
+            )
+        env = envs[mode, n]
+        if p not in built:
+            built[p] = make_policy(spec.name, env.obs_names, **dict(spec.params))
+            if in_worker():
+                single_thread()  # the policy may have loaded torch
+        results = run_episodes(env, built[p], [(es, ps) for _, es, ps in batch])
+        for (e, env_seed, _), result in zip(batch, results, strict=True):
+            result["row"] = {
+                "policy": spec.key,
+                "episode": e,
+                "env_seed": env_seed,
+                **result["row"],
+            }
+            result["events"] = [{"policy": spec.key, "episode": e, **ev} for ev in result["events"]]
+            out.append(result)
+    for env in envs.values():
+        env.close()
+    return out
+
+
+def _run_chunk_ray(
+    specs: tuple[PolicySpec, ...],
+    env_kwargs: Mapping[str, Any],
+    chunk: Sequence[tuple[int, int, int, int]],
+) -> list[dict[str, Any]]:
+    """:func:`_run_chunk` in a Ray worker, one thread per library like the local workers."""
+    init_worker()
+    return _run_chunk(specs, env_kwargs, chunk)
+
+
+def _map_ray(
+    shared: tuple[Any, ...],
+    items: Sequence[Any],
+    address: str,
+    chunk_size: int,
+    *,
+    progress: bool = False,
+) -> list[dict[str, Any]]:
+    """The same chunks as :func:`map_chunks`, as Ray tasks (one CPU each), in chunk order.
+
+    If this process is already connected to Ray (``ray.init`` called by the caller), that
+    connection is used as it is and left open. Otherwise ``ray.init(address=address)``
+    connects (``"auto"``: the cluster started on this machine by ``ray start``;
+    ``"ray://host:10001"``: Ray Client) or, for ``"local"``, starts a new instance on this
+    machine (loopback only, no dashboard); it is shut down at the end. The shared objects
+    go to the object store once, not once per task. The workers need this package
+    installed.
+    """
+    try:
+        import ray
+    except ImportError as exc:
+        raise ImportError(
+            f"ray_address = {address!r} needs ray, which is not installed: "
+            "pip install 'scas-maintenance-gym[ray]' (or 'ray>=2.9'), "
+            "or leave ray_address unset to run on local worker processes"
+        ) from exc
+    owner = not ray.is_initialized()
+    if owner:
+        options: dict[str, Any] = {}
+        if address == "local":
+            options = {"include_dashboard": False, "_node_ip_address": "127.0.0.1"}
+        ray.init(address=address, **options)
+    try:
+        task = ray.remote(num_cpus=1)(_run_chunk_ray)
+        shared_refs = [ray.put(obj) for obj in shared]
+        chunks = [list(items[k : k + chunk_size]) for k in range(0, len(items), chunk_size)]
+        refs = [task.remote(*shared_refs, chunk) for chunk in chunks]
+        index = {ref: k for k, ref in enumerate(refs)}
+        done: list[list[dict[str, Any]]] = [[] for _ in chunks]
+        pending = list(refs)
+        with tqdm(total=len(items), disable=not progress, desc="episodes", unit="run") as bar:
+            while pending:
+                ready, pending = ray.wait(pending, num_returns=1)
+                for ref in ready:
+                    k = index[ref]
+                    done[k] = ray.get(ref)
+                    bar.update(len(chunks[k]))
+    finally:
+        if owner:
+            ray.shutdown()
+    return [r for chunk in done for r in chunk]
+
+
+@dataclass(frozen=True)
+class BenchmarkResult:
+    """Rows (one per policy and episode), removal events, statistics and run metadata."""
+
+    rows: list[dict[str, Any]]
+    events: list[dict[str, Any]]
+    summary: dict[str, Any]
+    config: dict[str, Any]
+    wall_s: float
+
+
+def _needs_horizon(spec: PolicySpec) -> bool:
+    """The oracle, and SB3 agents loaded by ``policies.agents.sb3_agents`` (a decision-epoch agent's
+    ``flights_left`` counts down from the episode's length; other agents ignore it)."""
+    return spec.name == "oracle" or (
+        spec.name == "sb3" and spec.module == "policies.agents.sb3_agents"
+    )
+
+
+def run_benchmark(
+    specs: Sequence[PolicySpec | str] = DEFAULT_POLICIES,
+    *,
+    episodes: int = 40,
+    slots: int = 2000,
+    seed: int = 0,
+    n_workers: int = 1,
+    env_kwargs: Mapping[str, Any] | None = None,
+    progress: bool = False,
+    ray_address: str | None = None,
+    confidence: float = 0.95,
+) -> BenchmarkResult:
+    """Run every policy on episodes ``0..episodes-1`` (seeds :func:`episode_seeds`).
+
+    ``env_kwargs`` go to ``gym.make`` besides ``obs_mode`` (Scenario fields such as
+    ``fidelity`` or ``crack_active``, and ``cost_model``); ``slots`` sets
+    ``episode_slots``. ``ray_address`` (e.g. ``"auto"``, ``"local"``, ``"ray://host:10001"``)
+    runs the episodes as Ray tasks instead of on ``n_workers`` local processes, with the
+    same results (:func:`_map_ray`). Paired differences are taken against the rule-based
+    policy (family ``"rule"``) with the highest mean reward.
+    """
+    if ray_address is not None and not isinstance(ray_address, str):
+        raise ValueError(f"ray_address = {ray_address!r} must be a string or None")
+    specs = tuple(resolve_spec(s) if isinstance(s, str) else s for s in specs)
+    # the planning oracle plans over the episode's horizon, and a decision-epoch agent
+    # observes the slots left in it: give them this run's
+    specs = tuple(
+        replace(s, params={**s.params, "episode_slots": slots})
+        if _needs_horizon(s) and "episode_slots" not in s.params
+        else s
+        for s in specs
+    )
+    keys = [s.key for s in specs]
+    if not specs or len(set(keys)) != len(keys):
+        raise ValueError(f"policies = {keys} must be a non-empty list of unique labels")
+    kwargs = dict(env_kwargs or {})
+    for reserved in ("obs_mode", "episode_slots"):
+        if reserved in kwargs:
+            raise ValueError(f"env_kwargs must not set {reserved!r} (set per policy / slots)")
+    kwargs["episode_slots"] = slots
+    check_specs(specs, kwargs)
+    seeds = episode_seeds(seed, episodes)
+    tasks: list[Batch] = [
+        (p, tuple((e, *seeds[e]) for e in range(b, min(b + BATCH_EPISODES, episodes))))
+        for b in range(0, episodes, BATCH_EPISODES)
+        for p in range(len(specs))
+    ]
+    shared = (specs, kwargs)
+    t0 = time.perf_counter()
+    if ray_address:
+        results = _map_ray(shared, tasks, ray_address, 1, progress=progress)
+    else:
+        results = map_chunks(
+            _run_chunk,
+            shared,
+            tasks,
+            n_workers=n_workers,
+            chunk_size=1,
+            progress=progress,
+            desc="episode batches",
+        )
+    wall = time.perf_counter() - t0
+    rows = sorted(
+        (r["row"] for r in results), key=lambda r: (keys.index(r["policy"]), r["episode"])
+    )
+    events = [ev for r in results for ev in r["events"]]
+    events.sort(key=lambda ev: (keys.index(ev["policy"]), ev["episode"]))
+    rules = [s.key for s in specs if _family(s) == "rule"]
+    config = {
+        "episodes": episodes,
+        "slots": slots,
+        "seed": seed,
+        "n_workers": n_workers,
+        "ray_address": ray_address,
+        "env_kwargs": {
+            k: repr(v) if not isinstance(v, int | float | str) else v for k, v in kwargs.items()
+        },
+        "policies": [
+            {"label": s.key, "name": s.name, "params": dict(s.params), "family": _family(s)}
+            for s in specs
+        ],
+    }
+    summary = summarize(rows, keys, rules, confidence)
+    return BenchmarkResult(rows, events, summary, config, wall)
+
+
+def _family(spec: PolicySpec) -> str:
+    spec.build_mode()
+    return policy_family(spec.name)

@@ -1,0 +1,1 @@
+"""Rule-based policies and bounds: condition-based rules, the clairvoyant oracle and random."""

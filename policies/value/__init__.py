@@ -1,0 +1,1 @@
+"""What information is worth: rule families tuned with the same budget, the value study."""

@@ -1,0 +1,391 @@
+"""Value of prognostics: the same nested rule family re-tuned at each information level.
+
+The study's spine is a **value-of-information ladder** (docs/value.md). Each rung is one
+family of :mod:`policies.value.tuning` (:data:`LADDER`), i.e. the age rule plus an override fed
+by the information of that rung, tuned with the same budget on training seeds and then run
+on held-out episodes (:data:`policies.value.tuning.HELD_OUT_SEED`) that no trial saw:
+
+* ``age``: age only (the preventive rule), the reference of every paired difference;
+* ``features``: the in-flight features only (no filter, no tests);
+* ``filter``: features plus the particle filters, tests every ``test_every`` slots (tuned);
+* ``filter+tests every flight``: the same with a test before every flight, emulated by the
+  test action every slot at zero test cost (the env has no free every-flight test mode);
+* ``noisy oracle sigma=s``: each part's life known up to ``exp(s z)``, s in {0, 0.1, 0.2,
+  0.3, 0.5} (controls: the value must fall as s grows);
+* ``oracle``: the planning oracle (:mod:`policies.rules.oracle`), not tuned;
+* ``corrective`` (run to failure) and ``detection`` as context.
+
+Every arm of a held-out run uses the same episode seeds (common random numbers). Per arm:
+the intervals of :func:`policies.benchmark.stats.metric_interval` and the paired difference
+of the reward against ``age`` with its t-interval and minimum detectable difference; the
+**break-even sigma** is where the noisy oracle's paired value against the age rule crosses
+zero (linear interpolation between the two sigmas that bracket it).
+
+The sensing-quality sweep (sensor noise x0.1 ... x3, per-unit tolerances on/off) re-tunes
+the same nested families at each sensing variant of the design, each with its own feature
+surrogate: :mod:`experiments.sensing_sweep` (variants: :mod:`experiments.sensing_variants`;
+command ``scripts/sensing_sweep.py``).
+"""
+
+from __future__ import annotations
+
+import csv
+import itertools
+import json
+import math
+import time
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from policies.benchmark.run import PolicySpec, run_benchmark
+from policies.benchmark.stats import METRICS, metric_interval, paired_comparison
+from policies.value.tuning import FAMILIES, HELD_OUT_SEED, TuningResult, tune_families
+
+#: Rungs in order of information (labels of policies.value.tuning.FAMILIES, plus "oracle").
+LADDER = (
+    "age",
+    "features",
+    "filter",
+    "filter+tests every flight",
+    "noisy oracle sigma=0.5",
+    "noisy oracle sigma=0.3",
+    "noisy oracle sigma=0.2",
+    "noisy oracle sigma=0.1",
+    "noisy oracle sigma=0",
+    "oracle",
+)
+#: Context arms (not rungs): run to failure and the detection rule.
+CONTEXT = ("corrective", "detection")
+REFERENCE = "age"
+#: Quick mode (tests, smoke runs).
+QUICK: dict[str, int] = {"episodes": 4, "slots": 150, "trials": 2, "train_episodes": 3}
+
+__all__ = [
+    "CONTEXT",
+    "LADDER",
+    "QUICK",
+    "REFERENCE",
+    "LadderResult",
+    "break_even_sigma",
+    "markdown_report",
+    "run_ladder",
+    "summarize_ladder",
+    "write_outputs",
+]
+
+
+@dataclass(frozen=True)
+class LadderResult:
+    """Held-out rows (one per arm and episode), statistics, tuning results, config."""
+
+    rows: list[dict[str, Any]]
+    summary: dict[str, Any]
+    tuning: dict[str, TuningResult]
+    config: dict[str, Any]
+    wall_s: float
+
+
+def _sigma(label: str) -> float | None:
+    prefix = "noisy oracle sigma="
+    return float(label[len(prefix) :]) if label.startswith(prefix) else None
+
+
+def break_even_sigma(sigmas: Sequence[float], values: Sequence[float]) -> float:
+    """Smallest sigma at which the value (paired reward vs the age rule) crosses from
+    positive to <= 0, linearly interpolated; NaN if it never does (or starts <= 0: then
+    the first sigma if the first value is <= 0).
+
+    >>> round(break_even_sigma([0.0, 0.1, 0.2, 0.3], [30.0, 10.0, -10.0, -20.0]), 6)
+    0.15
+    """
+    order = np.argsort(sigmas)
+    s = np.asarray(sigmas, dtype=np.float64)[order]
+    v = np.asarray(values, dtype=np.float64)[order]
+    if v.size == 0:
+        return math.nan
+    if v[0] <= 0:
+        return float(s[0])
+    for k in range(1, v.size):
+        if v[k] <= 0:
+            return float(s[k - 1] + (s[k] - s[k - 1]) * v[k - 1] / (v[k - 1] - v[k]))
+    return math.nan
+
+
+def _specs(
+    tuning: Mapping[str, TuningResult], slots: int
+) -> list[tuple[str, PolicySpec, dict[str, Any]]]:
+    """(arm label, policy spec, env keywords) of every held-out arm."""
+    out = [("corrective", PolicySpec("corrective", label="corrective"), {})]
+    for label in (*LADDER, "detection"):
+        if label == "oracle":
+            spec = PolicySpec("oracle", {"episode_slots": slots}, label="oracle")
+            out.append((label, spec, {}))
+            continue
+        if label not in tuning:
+            continue
+        fam = FAMILIES[label]
+        spec = PolicySpec(fam.policy, tuning[label].best_params, label=label)
+        out.append((label, spec, dict(fam.env_kwargs)))
+    return out
+
+
+def run_ladder(
+    *,
+    episodes: int = 1000,
+    slots: int = 2000,
+    trials: int = 40,
+    train_episodes: int = 40,
+    n_workers: int = 1,
+    progress: bool = False,
+    confidence: float = 0.95,
+    families: Sequence[str] | None = None,
+    env_kwargs: Mapping[str, Any] | None = None,
+) -> LadderResult:
+    """Tune every family (:func:`policies.value.tuning.tune_families`, ``trials x
+    train_episodes`` training episodes each), then run every arm on ``episodes`` held-out
+    episodes and summarise (:func:`summarize_ladder`). ``env_kwargs``: the user's scenario
+    and costs, under each arm's own keywords."""
+    t0 = time.perf_counter()
+    base = dict(env_kwargs or {})
+    labels = [k for k in FAMILIES if families is None or k in families or k == REFERENCE]
+    tuning = tune_families(
+        labels,
+        trials=trials,
+        episodes=train_episodes,
+        slots=slots,
+        n_workers=n_workers,
+        progress=progress,
+        env_kwargs=base,
+    )
+    arms = _specs(tuning, slots)
+    groups: dict[str, list[tuple[str, PolicySpec, dict[str, Any]]]] = {}
+    for arm in arms:
+        groups.setdefault(repr(sorted(arm[2].items())), []).append(arm)
+    rows: list[dict[str, Any]] = []
+    events: list[dict[str, Any]] = []
+    for group in groups.values():
+        res = run_benchmark(
+            [spec for _, spec, _ in group],
+            episodes=episodes,
+            slots=slots,
+            seed=HELD_OUT_SEED,
+            n_workers=n_workers,
+            env_kwargs={**base, **group[0][2]},
+            progress=progress,
+            confidence=confidence,
+        )
+        rows += [{"arm": r["policy"], **r} for r in res.rows]
+        events += res.events
+    order = [a for a, _, _ in arms]
+    rows.sort(key=lambda r: (order.index(r["arm"]), r["episode"]))
+    summary = summarize_ladder(rows, order, confidence)
+    summary["events"] = _event_counts(events)
+    config = {
+        "episodes": episodes,
+        "slots": slots,
+        "held_out_seed": HELD_OUT_SEED,
+        "trials": trials,
+        "train_episodes": train_episodes,
+        "n_workers": n_workers,
+        "arms": [
+            {
+                "arm": a,
+                "policy": s.name,
+                "params": {k: _jsonable(v) for k, v in dict(s.params).items()},
+                "env_kwargs": {k: repr(v) for k, v in e.items()},
+            }
+            for a, s, e in arms
+        ],
+    }
+    return LadderResult(rows, summary, tuning, config, time.perf_counter() - t0)
+
+
+def _jsonable(v: Any) -> Any:
+    if isinstance(v, bool | int | str) or v is None:
+        return v
+    if isinstance(v, float):
+        return v if math.isfinite(v) else repr(v)
+    return repr(v)
+
+
+def _event_counts(events: Sequence[Mapping[str, Any]]) -> dict[str, dict[str, int]]:
+    out: dict[str, dict[str, int]] = {}
+    for ev in events:
+        d = out.setdefault(ev["policy"], {})
+        key = f"{ev['part']}_{ev['kind']}"
+        d[key] = d.get(key, 0) + 1
+    return out
+
+
+def summarize_ladder(
+    rows: Sequence[Mapping[str, Any]], arms: Sequence[str], confidence: float = 0.95
+) -> dict[str, Any]:
+    """Per arm: intervals of every metric, the paired reward difference vs ``age`` (with
+    sd, p-value and minimum detectable difference); the break-even sigma and the paired
+    differences between consecutive noisy-oracle sigmas (the monotonicity control)."""
+    if REFERENCE not in arms:
+        raise ValueError(f"arms {list(arms)} must include the reference {REFERENCE!r}")
+    by_arm = {
+        a: sorted((r for r in rows if r["arm"] == a), key=lambda r: int(r["episode"])) for a in arms
+    }
+    episodes = {a: [int(r["episode"]) for r in by_arm[a]] for a in arms}
+    for a in arms:
+        if episodes[a] != episodes[REFERENCE]:
+            raise ValueError(f"arms {a!r} and {REFERENCE!r} were not run on the same episodes")
+
+    def reward(a: str) -> np.ndarray:
+        return np.array([float(r["reward"]) for r in by_arm[a]])
+
+    out: dict[str, Any] = {"confidence": confidence, "reference": REFERENCE, "arms": {}}
+    for a in arms:
+        out["arms"][a] = {
+            "metrics": {m: metric_interval(by_arm[a], m, confidence).to_dict() for m in METRICS},
+            "value_vs_age": paired_comparison(reward(a), reward(REFERENCE), confidence),
+        }
+    noisy = sorted((s, a) for a in arms if (s := _sigma(a)) is not None)
+    if noisy:
+        values = [out["arms"][a]["value_vs_age"]["mean"] for _, a in noisy]
+        out["break_even_sigma"] = break_even_sigma([s for s, _ in noisy], values)
+        out["monotone_steps"] = [
+            {
+                "from": a,
+                "to": b,
+                **paired_comparison(reward(b), reward(a), confidence),
+            }
+            for (_, a), (_, b) in itertools.pairwise(noisy)
+        ]
+    return out
+
+
+def _money(x: float) -> str:
+    return "-" if not math.isfinite(x) else f"{x:+,.0f}"
+
+
+def markdown_report(result: LadderResult) -> str:
+    """ladder.md: the ladder table, the controls and the tuning summary."""
+    s, c = result.summary, result.config
+    pct = f"{100 * s['confidence']:.0f}%"
+    lines = [
+        "# Value of prognostics: the information ladder",
+        "",
+        f"Held-out: {c['episodes']} episodes x {c['slots']} slots per arm, seed "
+        f"{c['held_out_seed']} (the same episodes for every arm; no trial saw them). Tuning: "
+        f"{c['trials']} Optuna TPE trials x {c['train_episodes']} training episodes per family. "
+        f"Value = paired reward difference vs the tuned age rule (USD per episode), {pct} "
+        "t-interval, MDD = minimum detectable difference (80 % power, two-sided 5 %). "
+        "Cost per FH and rates are finite-horizon figures (episodes from new parts, "
+        f"{c['slots']} slots): not long-run rates (docs/value.md).",
+        "",
+        "| arm | value USD/episode | 95% CI | MDD | p | reward USD/episode | cost USD/FH "
+        "(finite horizon) | availability | failures/1000 FH (Garwood) |",
+        "|---|---|---|---|---|---|---|---|---|",
+    ]
+    for arm, d in s["arms"].items():
+        v, m = d["value_vs_age"], d["metrics"]
+        av, cf, fl, rw = m["availability"], m["cost_per_fh"], m["failures_per_1000fh"], m["reward"]
+        lines.append(
+            f"| {arm} | {_money(v['mean'])} | [{_money(v['low'])}, {_money(v['high'])}] | "
+            f"{v['mdd']:,.0f} | {v['p_value']:.3g} | {rw['mean']:,.0f} | "
+            f"{cf['mean']:.2f} [{cf['low']:.2f}, {cf['high']:.2f}] | "
+            f"{av['mean']:.4f} [{av['low']:.4f}, {av['high']:.4f}] | "
+            f"{fl['mean']:.3f} [{fl['low']:.3f}, {fl['high']:.3f}] |"
+        )
+    if "break_even_sigma" in s:
+        lines += ["", f"Break-even sigma (noisy oracle = age rule): {s['break_even_sigma']:.3f}"]
+        lines += ["", "Monotonicity control (paired, next sigma minus previous, USD/episode):", ""]
+        for st in s["monotone_steps"]:
+            lines.append(
+                f"- {st['to']} - {st['from']}: {_money(st['mean'])} "
+                f"[{_money(st['low'])}, {_money(st['high'])}], MDD {st['mdd']:,.0f}"
+            )
+    lines += ["", "## Tuned parameters (training seeds)", ""]
+    for label, t in result.tuning.items():
+        edges = {k: v for k, v in t.edges.items() if v != "inside"}
+        params = {k: (round(v, 4) if isinstance(v, float) else v) for k, v in t.best_params.items()}
+        lines.append(
+            f"- `{label}` ({t.policy}): {params}; training reward {t.best_reward:,.0f}; "
+            f"{t.episodes_simulated} episodes; at box edge: {edges or 'none'}"
+        )
+    return "\n".join(lines) + "\n"
+
+
+def _plot(summary: Mapping[str, Any], path: Path) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    arms = [a for a in LADDER if a in summary["arms"]]
+    v = [summary["arms"][a]["value_vs_age"] for a in arms]
+    mean = np.array([d["mean"] for d in v])
+    err = np.nan_to_num(np.array([[d["mean"] - d["low"], d["high"] - d["mean"]] for d in v]).T)
+    mdd = np.array([d["mdd"] for d in v])
+    fig, ax = plt.subplots(figsize=(9, 4.8))
+    x = np.arange(len(arms))
+    ax.errorbar(x, mean, yerr=err, fmt="o", capsize=4, label="value, 95% CI")
+    ax.fill_between(x, -mdd, mdd, color="grey", alpha=0.15, label="± MDD (80% power)")
+    ax.axhline(0.0, color="black", lw=0.8)
+    ax.set_xticks(x, arms, rotation=30, ha="right")
+    ax.set_ylabel("value per episode vs tuned age rule (USD)")
+    ax.set_title("Value per episode vs information (held-out, paired)")
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+
+
+def _atomic_write(path: Path, text: str) -> None:
+    tmp = path.with_suffix(path.suffix + ".tmp")
+    tmp.write_text(text)
+    tmp.replace(path)
+
+
+def write_outputs(
+    result: LadderResult, out_dir: str | Path, *, plots: bool = True, overwrite: bool = False
+) -> dict[str, Path]:
+    """Write ladder.csv (held-out rows), ladder.json (statistics, tuning, config, wall
+    time), ladder.md, tuning_history.csv and value_vs_information.png (+ its numbers in
+    ladder.json). Refuses to overwrite existing files unless ``overwrite``."""
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    paths = {
+        "csv": out / "ladder.csv",
+        "json": out / "ladder.json",
+        "md": out / "ladder.md",
+        "history": out / "tuning_history.csv",
+    }
+    if plots:
+        paths["png"] = out / "value_vs_information.png"
+    existing = [str(p) for p in paths.values() if p.exists()]
+    if existing and not overwrite:
+        raise FileExistsError(f"{existing} exist; pass overwrite=True (--overwrite) to replace")
+    with paths["csv"].with_suffix(".tmp").open("w", newline="") as f:
+        writer = csv.DictWriter(f, fieldnames=list(result.rows[0]))
+        writer.writeheader()
+        writer.writerows(result.rows)
+    paths["csv"].with_suffix(".tmp").replace(paths["csv"])
+    hist = [{"family": k, **h} for k, t in result.tuning.items() for h in t.history]
+    fields: list[str] = []
+    for h in hist:
+        fields += [k for k in h if k not in fields]
+    with paths["history"].with_suffix(".tmp").open("w", newline="") as f:
+        writer = csv.DictWriter(f, fieldnames=fields)
+        writer.writeheader()
+        writer.writerows(hist)
+    paths["history"].with_suffix(".tmp").replace(paths["history"])
+    payload = {
+        **result.summary,
+        "tuning": {k: t.to_dict() for k, t in result.tuning.items()},
+        "config": result.config,
+        "wall_s": result.wall_s,
+    }
+    _atomic_write(paths["json"], json.dumps(payload, indent=2, default=_jsonable) + "\n")
+    _atomic_write(paths["md"], markdown_report(result))
+    if plots:
+        _plot(result.summary, paths["png"])
+    return paths
