@@ -129,6 +129,13 @@ def test_bad_spares_inputs_are_refused() -> None:
         pool.take(3)
     with pytest.raises(ValueError, match="quantity = -2"):
         pool.order(SPRING_KIT, -2)
+    with pytest.raises(ValueError, match="fleet = -1 must be an index 0-0"):
+        pool.take(SPRING_KIT, fleet=-1)
+    crew = CrewQueue(1, n_aircraft=2, n_actuators=3)
+    with pytest.raises(ValueError, match="actuator = 3 must be an index 0-2"):
+        crew.request(0, 3, SPRING_KIT, day=0)
+    with pytest.raises(ValueError, match="same batch"):
+        crew.dispatch(SparesPool(_spec(), batch=2))
 
 
 def test_crew_serves_first_come_first_served_up_to_its_capacity() -> None:

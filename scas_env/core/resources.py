@@ -104,6 +104,13 @@ class SparesSpec:
         )
 
 
+def _index(name: str, value: int, size: int) -> int:
+    """``value`` as an index into ``size`` items, else ``ValueError`` (no negative wrap)."""
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or not 0 <= value < size:
+        raise ValueError(f"{name} = {value!r} must be an index 0-{size - 1}")
+    return int(value)
+
+
 def _kind(kind: int) -> int:
     if isinstance(kind, bool) or not isinstance(kind, (int, np.integer)) or not 0 <= kind < K:
         raise ValueError(f"kind = {kind!r} must be an index 0-{K - 1} of {SPARE_KINDS}")
@@ -152,12 +159,12 @@ class SparesPool:
 
     def available(self, kind: int, fleet: int = 0) -> bool:
         """True when a unit of ``kind`` can be taken now (on hand or unlimited)."""
-        k = _kind(kind)
+        k, fleet = _kind(kind), _index("fleet", fleet, self.batch)
         return bool(self._unlimited[k] or self.on_hand[fleet, k] > 0)
 
     def take(self, kind: int, fleet: int = 0) -> bool:
         """Consume one unit of ``kind``; ``False`` (and a stock-out counted) if none is on hand."""
-        k = _kind(kind)
+        k, fleet = _kind(kind), _index("fleet", fleet, self.batch)
         if self._unlimited[k]:
             self.taken[fleet, k] += 1
             return True
@@ -183,7 +190,7 @@ class SparesPool:
         self, kind: int, quantity: int, fleet: int = 0, rng: np.random.Generator | None = None
     ) -> None:
         """Place an order of ``quantity`` units of ``kind`` today (one lead time per order)."""
-        k = _kind(kind)
+        k, fleet = _kind(kind), _index("fleet", fleet, self.batch)
         if isinstance(quantity, bool) or not isinstance(quantity, (int, np.integer)):
             raise ValueError(f"quantity = {quantity!r} must be an integer >= 0")
         if quantity < 0:
@@ -246,9 +253,17 @@ class CrewQueue:
         self.waiting_job_days = np.zeros(self.batch, dtype=np.int64)
         self.days = 0
 
+    def _job(self, fleet: int, aircraft: int, actuator: int, kind: int) -> tuple[int, ...]:
+        return (
+            _index("fleet", fleet, self.batch),
+            _index("aircraft", aircraft, self.shape[1]),
+            _index("actuator", actuator, self.shape[2]),
+            _kind(kind),
+        )
+
     def request(self, aircraft: int, actuator: int, kind: int, day: int, fleet: int = 0) -> bool:
         """Queue a job; ``False`` if that job is already pending (nothing changes)."""
-        k = _kind(kind)
+        fleet, aircraft, actuator, k = self._job(fleet, aircraft, actuator, kind)
         if self.sequence[fleet, aircraft, actuator, k] >= 0:
             return False
         self.sequence[fleet, aircraft, actuator, k] = self._next[fleet]
@@ -258,7 +273,7 @@ class CrewQueue:
 
     def cancel(self, aircraft: int, actuator: int, kind: int, fleet: int = 0) -> bool:
         """Drop a pending job; ``False`` if none was pending."""
-        k = _kind(kind)
+        fleet, aircraft, actuator, k = self._job(fleet, aircraft, actuator, kind)
         if self.sequence[fleet, aircraft, actuator, k] < 0:
             return False
         self.sequence[fleet, aircraft, actuator, k] = -1
@@ -267,7 +282,7 @@ class CrewQueue:
 
     def pending(self, fleet: int = 0) -> IntArray:
         """Pending jobs of a fleet as rows ``(aircraft, actuator, kind)`` in FIFO order."""
-        seq = self.sequence[fleet]
+        seq = self.sequence[_index("fleet", fleet, self.batch)]
         idx = np.argwhere(seq >= 0)
         return idx[np.argsort(seq[seq >= 0], kind="stable")]
 
@@ -278,6 +293,7 @@ class CrewQueue:
 
     def free_today(self, fleet: int = 0) -> int | None:
         """Jobs the crew can still start today (``None``: unlimited)."""
+        fleet = _index("fleet", fleet, self.batch)
         return None if self.capacity is None else self.capacity - int(self.used_today[fleet])
 
     def dispatch(
@@ -286,6 +302,9 @@ class CrewQueue:
         """Do pending jobs while the crew has capacity: in FIFO order (or ascending
         ``priority``, shape ``(aircraft, actuator, kind)``, ties FIFO); a job whose spare is
         out of stock is skipped and keeps waiting. Returns the rows done today."""
+        fleet = _index("fleet", fleet, self.batch)
+        if not isinstance(spares, SparesPool) or spares.batch != self.batch:
+            raise ValueError("spares must be a SparesPool of the same batch as the crew")
         rows = self.pending(fleet)
         if priority is not None:
             prio = np.asarray(priority, dtype=np.float64)
