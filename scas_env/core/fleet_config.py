@@ -31,9 +31,9 @@ from typing import Any
 
 from scas_env.actuator.config import FILE_SECTIONS, Validated, _build, param, read_mapping
 from scas_env.actuator.mission_types import MISSION_TYPES
+from scas_env.core.costs import CostModel
 from scas_env.core.demand import DemandModel
 from scas_env.core.resources import NO_BASE_STOCK, SparesSpec
-from scas_env.core.costs import CostModel
 
 #: the table of a configuration file that holds a FleetConfig
 SECTION = "fleet"

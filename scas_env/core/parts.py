@@ -96,7 +96,8 @@ def reset_row(batch: ActuatorState, e: int, np_random: np.random.Generator) -> N
 def _clear_counters(batch: ActuatorState, e: int) -> None:
     a = batch.a
     for name in (
-        "pending", "flight_sum", "flight_count", "det_n", "detected", "test_age", "no_go",
+        "pending", "flight_sum", "flight_count", "batch_usage", "det_n", "detected", "broken",
+        "test_age", "no_go",
         "part_age", "downtime", "slot", "flown", "tests", "no_go_count", "cost", "revenue",
         "failures", "replacements", "wasted_sum", "wasted_count", "terms", "wasted_now",
     ):  # fmt: skip
@@ -358,8 +359,8 @@ def learn_now(batch: ActuatorState, e: int) -> None:
     status[e] = 0
     work = work_arrays(batch.setup.n_particles, len(batch.a["flight_sum"][e]))
     handle = tuple(int(v) for v in a["h_filter"][e])
-    learn_row(e, batch.bank, a["pending"], a["flight_sum"], a["flight_count"], status, work,
-              batch.setup.filters, handle)  # fmt: skip
+    learn_row(e, batch.bank, a["pending"], a["flight_sum"], a["flight_count"], a["batch_usage"],
+              status, work, batch.setup.filters, handle)  # fmt: skip
     a["stale"][e] = True
     raise_status(int(status[e]))
 
