@@ -205,15 +205,21 @@ class SparesPool:
         self.ordered[fleet, k] += quantity
 
     def advance_day(self, rng: np.random.Generator | None = None) -> None:
-        """End of day: base-stock orders (fleets in order, kinds in order), then arrivals."""
-        shortfall = np.maximum(self._base[None, :] - self.inventory_position, 0)
-        shortfall[:, self._base < 0] = 0
-        shortfall[:, self._unlimited] = 0
-        for b, k in zip(*np.nonzero(shortfall), strict=True):
-            self.order(int(k), int(shortfall[b, k]), int(b), rng)
-        self.on_hand += self.pipeline[:, :, 0]
-        self.pipeline[:, :, :-1] = self.pipeline[:, :, 1:]
-        self.pipeline[:, :, -1] = 0
+        """End of day of every fleet, in order (:meth:`advance_day_for`)."""
+        for b in range(self.batch):
+            self.advance_day_for(b, rng)
+
+    def advance_day_for(self, fleet: int, rng: np.random.Generator | None = None) -> None:
+        """End of day of one fleet: base-stock orders (kinds in order), then arrivals."""
+        b = _index("fleet", fleet, self.batch)
+        shortfall = np.maximum(self._base - self.inventory_position[b], 0)
+        shortfall[self._base < 0] = 0
+        shortfall[self._unlimited] = 0
+        for k in np.flatnonzero(shortfall).tolist():
+            self.order(k, int(shortfall[k]), b, rng)
+        self.on_hand[b] += self.pipeline[b, :, 0]
+        self.pipeline[b, :, :-1] = self.pipeline[b, :, 1:]
+        self.pipeline[b, :, -1] = 0
 
 
 class CrewQueue:
@@ -324,6 +330,30 @@ class CrewQueue:
             self.jobs_done[fleet] += 1
             done.append((a, u, k))
         return np.array(done, dtype=np.int64).reshape(-1, 3)
+
+    def do_now(
+        self, jobs: Sequence[tuple[int, int, int]], spares: SparesPool, fleet: int = 0
+    ) -> bool:
+        """Do the jobs ``(aircraft, actuator, kind)`` at once, all or none (an unscheduled
+        removal after landing): True, with a crew slot and a spare used per job, when the
+        crew has the capacity left today and every spare is at hand; False otherwise, with
+        nothing used (no stock-out counted: the jobs are then queued by the caller)."""
+        fleet = _index("fleet", fleet, self.batch)
+        free = self.free_today(fleet)
+        if free is not None and free < len(jobs):
+            return False
+        need = np.zeros(K, dtype=np.int64)
+        for job in jobs:
+            self._job(fleet, *job)
+            need[job[2]] += 1
+        for k in range(K):
+            if need[k] and not (spares._unlimited[k] or spares.on_hand[fleet, k] >= need[k]):
+                return False
+        for _, _, k in jobs:
+            spares.take(int(k), fleet)
+        self.used_today[fleet] += len(jobs)
+        self.jobs_done[fleet] += len(jobs)
+        return True
 
     def end_day(self) -> None:
         """Count the day: job-days waited by the jobs still pending; free the crew."""
