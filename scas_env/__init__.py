@@ -54,4 +54,8 @@ for _id in (ENV_ID_EPOCHS, _ENV_ID_EPOCHS_OLD):
             vector_entry_point="scas_env.decision_epochs_vector:make_decision_epochs_vector_env",
         )
 if ENV_ID_FLEET not in registry:
-    register(id=ENV_ID_FLEET, entry_point="scas_env.fleet_env:ScasFleetEnv")
+    register(
+        id=ENV_ID_FLEET,
+        entry_point="scas_env.fleet_env:ScasFleetEnv",
+        vector_entry_point="scas_env.fleet_vector_env:make_fleet_vector_env",
+    )

@@ -17,6 +17,7 @@ from scas_env.core.fleet_config import FleetConfig
 from scas_env.core.fleet_view import FleetView
 from scas_env.core.scenario import Scenario
 from scas_env.core.setup import Setup
+from scas_env.fleet_dashboard import draw_fleet, render_text
 
 #: the actuators' scenario of a fleet unless given: parts part-way through life, as in service
 FLEET_SCENARIO = {"initial_health": "random"}
@@ -244,16 +245,11 @@ class ScasFleetEnv(gym.Env):
         return self._masks.ravel()
 
     def render(self) -> str | np.ndarray | None:
+        if not self._started:
+            return None
         if self.render_mode == "ansi":
-            info = self.view.info(0)
-            return (
-                f"day {info['day']}: missions {info['missions_flown']}/"
-                f"{info['missions_demanded']}, failures {sum(info['failures'].values())}, "
-                f"jobs waiting {info['jobs_waiting']}, cost {info['cost_usd']:,.0f} USD"
-            )
+            return render_text(self.view.info(0))
         if self.render_mode == "rgb_array":
-            from scas_env.fleet_dashboard import draw_fleet
-
             return draw_fleet(self.fleet, self.view, 0)
         return None
 
