@@ -51,6 +51,8 @@ from numba.np.random._constants import (
     ziggurat_nor_r,
 )
 
+from prognostics import validation as check
+
 #: ``(state_address, next_uint64 address, next_double address)`` of a bit generator
 Handle = tuple[int, int, int]
 
@@ -187,8 +189,7 @@ class NormalStream:
     __slots__ = ("handle", "lock", "rng")
 
     def __init__(self, rng: np.random.Generator) -> None:
-        if not isinstance(rng, np.random.Generator):
-            raise ValueError(f"rng must be a numpy.random.Generator, got {type(rng).__name__}")
+        check.generator("rng", rng)
         bit_generator = rng.bit_generator
         iface = bit_generator.ctypes
         self.rng = rng
@@ -208,13 +209,20 @@ class NormalStream:
 
     def fill(self, out: np.ndarray) -> None:
         """Fill a float64 array with N(0, 1) draws (same values as ``rng.standard_normal``)."""
-        if not (isinstance(out, np.ndarray) and out.dtype == np.float64 and out.ndim == 1):
-            raise ValueError("out must be a 1-D float64 numpy array")
+        if not (
+            isinstance(out, np.ndarray)
+            and out.dtype == np.float64
+            and out.ndim == 1
+            and out.flags.writeable
+        ):
+            raise check.ArgumentTypeError(
+                f"out = {check.show(out)} must be a writeable 1-D float64 numpy array"
+            )
         with self.lock:
             fill_standard_normal(self.handle, out)
 
     def standard_normal(self, size: int) -> np.ndarray:
         """``size`` N(0, 1) draws in a new array."""
-        out = np.empty(int(size))
+        out = np.empty(check.integer("size", size, ge=0))
         self.fill(out)
         return out

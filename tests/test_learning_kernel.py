@@ -228,7 +228,7 @@ def test_ageing_tables_round_trip() -> None:
         assert back.summary(k, 20.0) == ref.summary(k, 20.0)
         assert back.quantile(k, 0.9) == ref.quantile(k, 0.9)
     r, cum_w, suffix_w, suffix_wr, low = ref.tables()
-    with pytest.raises(ValueError, match="N \\+ 1"):
+    with pytest.raises(ValueError, match=r"cum_w must be an array of shape \(51,\)"):
         AgeingRul.from_tables(r, cum_w[:-1], suffix_w, suffix_wr, low, low_quantile=0.05)
     with pytest.raises(ValueError, match="low_quantile"):
         AgeingRul.from_tables(r, cum_w, suffix_w, suffix_wr, low, low_quantile=1.5)

@@ -306,16 +306,20 @@ def test_step_equals_predict_then_update(name: str, threshold: float) -> None:
     assert fused.n_resamples == split.n_resamples > 0
 
 
-def test_step_with_infinite_measurement_predicts_then_raises_like_update() -> None:
+def test_step_with_infinite_measurement_raises_before_predicting() -> None:
+    """A bad measurement is refused before any work: the cloud is not half-stepped (until
+    issue 27, step predicted first and then raised, as predict then update would)."""
     process, meas = _models()["euler-pchip"]
     x0, th0 = _wide_cloud(50, 7)
-    fused, split = (ParticleFilter(process, meas, 50, np.random.default_rng(1)) for _ in range(2))
+    fused, untouched = (
+        ParticleFilter(process, meas, 50, np.random.default_rng(1)) for _ in range(2)
+    )
     fused.reset(x0, th0)
-    split.reset(x0, th0)
-    split.predict(1.0)
-    with pytest.raises(ValueError, match="finite"):
+    untouched.reset(x0, th0)
+    with pytest.raises(ValueError, match="y = inf must be a finite number"):
         fused.step(1.0, math.inf)
-    np.testing.assert_array_equal(fused.x, split.x)
+    np.testing.assert_array_equal(fused.x, untouched.x)
+    assert fused.rng.random() == untouched.rng.random()  # no draw either
     with pytest.raises(ValueError, match="usage"):
         fused.step(-1.0, 0.5)
 
