@@ -19,8 +19,8 @@ from scas_env.core.scenario import Scenario
 from scas_env.core.setup import Setup
 from scas_env.fleet_dashboard import draw_fleet, render_text
 
-#: the actuators' scenario of a fleet unless given: parts part-way through life, as in service
-FLEET_SCENARIO = {"initial_health": "random"}
+#: the actuators' scenario of a fleet unless given: parts part-way through life, ages known
+FLEET_SCENARIO = {"initial_health": "in_service"}
 
 
 def make_fleet_setup(
@@ -31,9 +31,11 @@ def make_fleet_setup(
     calibration: Calibration | None,
     surrogate: SurrogateModel | None,
     fleet_fields: dict[str, Any],
+    obs_mode: str = "features+rul",
 ) -> tuple[FleetConfig, Setup]:
     """The fleet's configuration and its actuators' :class:`~scas_env.core.setup.Setup` from
-    an env's keywords, each checked (``fleet_fields``: fields of :class:`FleetConfig`)."""
+    an env's keywords, each checked (``fleet_fields``: fields of :class:`FleetConfig`;
+    ``obs_mode`` sets the actuators' scenario's: ``"state"`` shows each actuator's truth)."""
     if fleet is not None and fleet_fields:
         raise ValueError(
             f"pass either fleet=FleetConfig(...) or its fields, not both: {sorted(fleet_fields)}"
@@ -52,7 +54,10 @@ def make_fleet_setup(
     base = scenario if scenario is not None else Scenario(**FLEET_SCENARIO)
     # the observation's bounds of ages and test age: the episode's flights
     slots = int(config.episode_days) * int(config.flights_per_mission)
-    base = base.replace(episode_slots=max(int(base.episode_slots), slots))
+    base = base.replace(
+        episode_slots=max(int(base.episode_slots), slots),
+        obs_mode="state" if obs_mode == "state" else "features+rul",
+    )
     params = params if params is not None else ScasParams()
     types = ("standard", *(t for t in config.mission_types if t != "standard"))
     setup = Setup(
@@ -139,9 +144,10 @@ class ScasFleetEnv(gym.Env):
 
     ## Starting State
 
-    Every actuator a new unit with parts part-way through life (``Scenario.initial_health
-    = "random"`` unless a scenario is given), spares at their initial stock, no job queued,
-    the whole episode's demand drawn.
+    Every actuator a new unit whose parts have flown a uniformly drawn fraction of their
+    lives, their ages known and the monitor's filters predicted over them
+    (``Scenario.initial_health = "in_service"`` unless a scenario is given), spares at their
+    initial stock, no job queued, the whole episode's demand drawn.
 
     ## Episode End
 
@@ -192,7 +198,7 @@ class ScasFleetEnv(gym.Env):
             )
         self.render_mode = render_mode
         self.config, self.setup = make_fleet_setup(
-            fleet, scenario, cost_model, params, calibration, surrogate, fleet_fields
+            fleet, scenario, cost_model, params, calibration, surrogate, fleet_fields, obs_mode
         )
         self.fleet = FleetBatch(self.setup, self.config, 1)
         self.view = FleetView(self.fleet, obs_mode)

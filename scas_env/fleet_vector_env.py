@@ -5,7 +5,8 @@ returns a :class:`ScasFleetVectorEnv`: the fleets' actuators are the rows of one
 :class:`~scas_env.core.batch.ActuatorBatch` (:class:`~scas_env.core.fleet.FleetBatch` with
 ``B`` fleets), so fleet ``b`` gives exactly the episode of a single fleet env seeded
 ``seed + b`` (tested bit for bit). Autoreset is Gymnasium's next-step mode; ``info`` is a
-dict of per-fleet arrays (the KPIs of :class:`~scas_env.fleet_env.ScasFleetEnv`), and
+dict of per-fleet arrays (the KPIs of :class:`~scas_env.fleet_env.ScasFleetEnv`, nested
+dicts kept; per-aircraft entries left out), and
 :meth:`action_masks` gives each fleet's masks (MaskablePPO's format).
 """
 
@@ -23,20 +24,9 @@ from scas_env.core.fleet_view import FleetView
 from scas_env.fleet_env import check_fleet_action, fleet_action_space, make_fleet_setup
 from scas_env.vector_env import check_num_envs
 
-#: per-fleet info entries of the vector env (scalars of the single env's info)
-INFO_KEYS = (
-    "day",
-    "mission_availability",
-    "aircraft_availability",
-    "flights",
-    "flight_hours",
-    "cost_usd",
-    "cost_per_fh",
-    "background_removals",
-    "unscheduled_removals",
-    "jobs_waiting",
-    "crew_utilisation",
-)
+#: entries of the single fleet env's info that are per aircraft or per actuator (left out
+#: of the vector env's info, which holds one value per fleet)
+PER_AIRCRAFT = ("aircraft_reward", "missions_missed_today", "assigned_today", "true_life")
 
 
 def make_fleet_vector_env(num_envs: int, **kwargs: Any) -> ScasFleetVectorEnv:
@@ -64,7 +54,7 @@ class ScasFleetVectorEnv(VectorEnv):
     ) -> None:
         n = check_num_envs(num_envs)
         self.config, self.setup = make_fleet_setup(
-            fleet, scenario, cost_model, params, calibration, surrogate, fleet_fields
+            fleet, scenario, cost_model, params, calibration, surrogate, fleet_fields, obs_mode
         )
         self.fleet = FleetBatch(self.setup, self.config, n)
         self.view = FleetView(self.fleet, obs_mode)
@@ -135,7 +125,14 @@ class ScasFleetVectorEnv(VectorEnv):
             masks.append(self.view.masks(b, values).ravel())
             infos.append(self.view.info(b, values))
         self._masks = np.stack(masks)
-        info = {k: np.array([i[k] for i in infos]) for k in INFO_KEYS}
+        info: dict[str, Any] = {}
+        for key, value in infos[0].items():
+            if key in PER_AIRCRAFT or key == "action_mask":
+                continue
+            if isinstance(value, dict):
+                info[key] = {k: np.array([i[key][k] for i in infos]) for k in value}
+            else:
+                info[key] = np.array([i[key] for i in infos])
         info["action_mask"] = self._masks
         return np.stack(obs), info
 
@@ -146,4 +143,4 @@ class ScasFleetVectorEnv(VectorEnv):
         return self._masks
 
 
-__all__ = ["INFO_KEYS", "ScasFleetVectorEnv", "make_fleet_vector_env"]
+__all__ = ["PER_AIRCRAFT", "ScasFleetVectorEnv", "make_fleet_vector_env"]

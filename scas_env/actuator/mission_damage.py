@@ -37,10 +37,10 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
-from scas_env.utils.atomic_file import write_text_atomic
 from scas_env.actuator.calibration import Calibration, params_digest
 from scas_env.actuator.mission_types import MISSION_TYPES, N_REGIMES
 from scas_env.actuator.params import ScasParams
+from scas_env.utils.atomic_file import write_text_atomic
 from scas_env.utils.shipped_files import shipped_path, verify_shipped_file
 from scas_env.utils.table_checks import (
     finite_array,

@@ -375,6 +375,10 @@ def refresh_rows(rows: np.ndarray, stale: np.ndarray, bank: tuple, tables: tuple
             stale[e] = False
 
 
+#: public names of the filters' prediction and survival steps
+predict_filter = _predict
+survive_filters = _survive
+
 __all__ = [
     "SLOPE_STEP",
     "STATUS_MESSAGES",
@@ -385,8 +389,10 @@ __all__ = [
     "effect_likelihood",
     "fraction_moments",
     "learn_row",
+    "predict_filter",
     "refresh_row",
     "refresh_rows",
+    "survive_filters",
     "test_row",
     "work_arrays",
 ]

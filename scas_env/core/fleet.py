@@ -9,7 +9,11 @@ over ``B`` (:mod:`scas_env.core.demand`, :mod:`scas_env.core.resources`). A day 
 ``b`` under its aircraft's actions:
 
 1. **Requests.** Each aircraft's maintenance choice per actuator (none, spring kit, seal kit,
-   both) queues crew jobs; an aircraft with a job requested today is in the hangar today.
+   both) queues crew jobs; an aircraft with a new job requested today (not one already
+   queued) is in the hangar today. A
+   preventive job that waits for the crew or a spare does not ground the aircraft (it is
+   airworthy); it is done on the first morning the crew and a spare allow, which puts the
+   aircraft in the hangar that day.
 2. **Morning.** The crew does queued jobs first come first served, up to its jobs a day,
    each with a spare of its kind (a job without one waits, a stock-out counted): a part that
    failed is repaired, a background removal gets a whole actuator from the rotable pool, a
@@ -17,7 +21,7 @@ over ``B`` (:mod:`scas_env.core.demand`, :mod:`scas_env.core.resources`). A day 
 3. **Missions.** Today's missions (drawn at reset for the whole episode plus the look-ahead
    days: the schedule is known, and does not depend on the policy) go to the aircraft that
    ask for one of their type, in aircraft order, while any is left; an aircraft flies only
-   when it is free (no job queued or done today, no broken part, no downtime left); with
+   when it is free (no job requested or done today, no broken part, no downtime left); with
    the test option its actuators run the pre-flight test first. One slot of the actuator
    batch flies every mission: ``F`` flights, the aircraft's actuators together; a failed
    test holds the aircraft on the ground, a failure in flight ends the mission.
@@ -217,6 +221,7 @@ class FleetBatch:
         for counter in (spares.taken, spares.stock_outs, spares.ordered):
             counter[b] = 0
         crew.sequence[b] = -1
+        crew.short[b] = False
         crew.requested_day[b] = -1
         for counter in (crew.used_today, crew.jobs_done, crew.skipped_for_spares,
                         crew.waiting_job_days):  # fmt: skip
@@ -247,8 +252,8 @@ class FleetBatch:
         requested = np.zeros(sh.aircraft, dtype=np.bool_)
         for i, j in zip(*np.nonzero(act[:, 1:]), strict=True):
             for kind in _JOBS[int(act[i, 1 + j])]:
-                crew.request(int(i), int(j), kind, day, b)
-            requested[i] = True
+                if crew.request(int(i), int(j), kind, day, b):
+                    requested[i] = True
         worked = np.zeros(sh.aircraft, dtype=np.bool_)
         for i, j, kind in crew.dispatch(self.spares, b).tolist():
             e = self.row(b, i, j)
@@ -267,10 +272,9 @@ class FleetBatch:
                 self._actions[e] = fit if now == STAND_BY else REPLACE_BOTH
         rows = self.rows_of(b)
         per = (sh.aircraft, sh.actuators)
-        pending = (crew.sequence[b] >= 0).any(axis=(1, 2))
         broken = a["broken"][rows].reshape(*per, 2).any(axis=(1, 2)) | self.removed[b].any(axis=1)
         down = a["downtime"][rows].reshape(per).max(axis=1) > 0
-        hangar = pending | requested | worked
+        hangar = requested | worked
         free = ~(hangar | broken | down)
         self.today["hangar"][b] = hangar
         left = self.demand[b, day].copy()

@@ -51,10 +51,10 @@ class SparesConfig(Validated):
     """
 
     spring_kit_initial: float = param(
-        1, "kits", lo=0, hi=10_000, integer=True, source="one kit per kind on the shelf [B]"
+        2, "kits", lo=0, hi=10_000, integer=True, source="two kits per kind on the shelf [B]"
     )
     spring_kit_base_stock: float = param(
-        1,
+        2,
         "kits",
         lo=NO_BASE_STOCK,
         hi=10_000,
@@ -71,10 +71,10 @@ class SparesConfig(Validated):
         "dominates' unscheduled downtime",
     )
     seal_kit_initial: float = param(
-        1, "kits", lo=0, hi=10_000, integer=True, source="one kit per kind on the shelf [B]"
+        2, "kits", lo=0, hi=10_000, integer=True, source="two kits per kind on the shelf [B]"
     )
     seal_kit_base_stock: float = param(
-        1,
+        2,
         "kits",
         lo=NO_BASE_STOCK,
         hi=10_000,
@@ -85,12 +85,13 @@ class SparesConfig(Validated):
         10, "days", lo=0, hi=365, integer=True, source="a seal kit from the distributor [B]"
     )
     actuator_pool: float = param(
-        0,
+        2,
         "actuators",
         lo=0,
         hi=10_000,
         integer=True,
-        source="serviceable actuators in the rotable pool [B]; 0: kits only",
+        source="serviceable actuators in the rotable pool for 24 installed [B]; a background "
+        "removal needs one (0: such an aircraft waits for none ever comes)",
     )
     actuator_turnaround_days: float = param(
         30,
@@ -213,10 +214,15 @@ class FleetConfig(Validated):
         source="reported beside the measured mission availability; 0: none (the env's "
         "dynamics do not use it)",
     )
-    mission_types: tuple[str, ...] = ("standard",)
-    mission_value_usd: tuple[float, ...] = (5000.0,)
-    mission_not_flown_usd: tuple[float, ...] = (0.0,)
-    demand: DemandModel = field(default_factory=DemandModel)
+    #: a civil multi-role operator [B]: Table 1's mix, utility work (short sectors, loads),
+    #: crew changes in gusty wind (the damaging types of docs/fleet_model.md)
+    mission_types: tuple[str, ...] = ("standard", "utility", "offshore_gusts")
+    #: 2 flights at the single actuator's $2,500 a flight (CostModel.flight_value_usd)
+    mission_value_usd: tuple[float, ...] = (5000.0, 5000.0, 5000.0)
+    #: a mission not flown: a substitute aircraft, ref §8.2's "value of lost availability"
+    #: $5,000 per grounded day (2,000-20,000), on top of the value not earned
+    mission_not_flown_usd: tuple[float, ...] = (5000.0, 5000.0, 5000.0)
+    demand: DemandModel = field(default_factory=lambda: DemandModel(mission_mix=(0.5, 0.3, 0.2)))
     spares: SparesConfig = field(default_factory=SparesConfig)
 
     def _check(self) -> None:
@@ -318,7 +324,9 @@ class FleetConfig(Validated):
             lookahead_days=0,
             unlimited_crew=1,
             background_removals=0,
+            mission_types=("standard",),
             mission_value_usd=(CostModel().flight_value_usd,),
+            mission_not_flown_usd=(0.0,),
             demand=demand,
             spares=SparesConfig(unlimited=1),
         )

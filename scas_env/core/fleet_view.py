@@ -6,7 +6,8 @@ Observation groups (float64 inside, float32 at the boundary, saturated at their 
 * ``actuators`` (N, A, m): each actuator's entries of the single env's observation mode
   (``"features+rul"``: the 20 entries of ``ScasMaintenance-v2``; ``"state"``: the truth);
 * ``aircraft`` (N, 5): jobs queued (jobs), a part broken or removed (0/1), days of downtime
-  left, a failed pre-flight test holding it (0/1), free to fly tomorrow (0/1);
+  left, a failed pre-flight test holding it (0/1), free to fly tomorrow (0/1: nothing broken,
+  no downtime left; a queued job done tomorrow morning would still keep it in the hangar);
 * ``resources`` (8,): spares on hand and on order (spring kits, seal kits, actuators;
   units), crew jobs waiting, crew jobs a day (0: unlimited);
 * ``demand`` (L + 1, K): missions of each type asked tomorrow and on the next L days;
@@ -92,9 +93,7 @@ class FleetView:
         high = np.concatenate([np.ravel(self.bounds[g][1]) for g in GROUPS])
         self.flat_bounds = (low, high)
         if obs_mode == "dict":
-            self.space: spaces.Space = spaces.Dict(
-                {g: _box(*self.bounds[g]) for g in GROUPS}
-            )
+            self.space: spaces.Space = spaces.Dict({g: _box(*self.bounds[g]) for g in GROUPS})
         else:
             self.space = _box(low, high)
         self.agent_space = self._agent_space()
@@ -110,9 +109,7 @@ class FleetView:
         ]
         out += [f"aircraft_{i}.{n}" for i in range(sh.aircraft) for n, _ in AIRCRAFT_FIELDS]
         out += [n for n, _ in RESOURCE_FIELDS]
-        out += [
-            f"demand_day{d}.{t}" for d in range(sh.lookahead + 1) for t in self.types
-        ]
+        out += [f"demand_day{d}.{t}" for d in range(sh.lookahead + 1) for t in self.types]
         out += [n for n, _ in CALENDAR_FIELDS]
         return tuple(out)
 
@@ -153,7 +150,7 @@ class FleetView:
         broken = a["broken"][rows].reshape(*per, 2).any(axis=(1, 2)) | fleet.removed[b].any(1)
         down = a["downtime"][rows].reshape(per).max(axis=1)
         no_go = a["no_go"][rows].reshape(per).any(axis=1)
-        free = (jobs == 0) & ~broken & (down == 0)
+        free = ~broken & (down == 0)
         aircraft = np.column_stack([jobs, broken, down, no_go, free]).astype(np.float64)
         capacity = fleet.config.crew_capacity
         resources = np.concatenate(
@@ -267,9 +264,7 @@ class FleetView:
             "failures": {p: int(failures[k]) for k, p in enumerate(PARTS)},
             "background_removals": int(books["background_removals"][b]),
             "unscheduled_removals": int(failures.sum() + books["background_removals"][b]),
-            "replacements": {
-                p: int(a["replacements"][rows, k].sum()) for k, p in enumerate(PARTS)
-            },
+            "replacements": {p: int(a["replacements"][rows, k].sum()) for k, p in enumerate(PARTS)},
             "tests": int(a["tests"][rows].sum()),
             "stock_outs": {
                 k: int(fleet.spares.stock_outs[b, n]) for n, k in enumerate(SPARE_KINDS)

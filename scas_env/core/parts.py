@@ -33,8 +33,19 @@ from scas_env.actuator.uncertainty import (
     draw_unit,
     truncated_normal,
 )
-from scas_env.core.filters import STATUS_MESSAGES, learn_row, work_arrays
-from scas_env.core.flight import crack_flights_to_failure, wear_flights_to_failure
+from scas_env.core.filters import (
+    STATUS_MESSAGES,
+    learn_row,
+    predict_filter,
+    survive_filters,
+    work_arrays,
+)
+from scas_env.core.flight import (
+    crack_after_flights,
+    crack_flights_to_failure,
+    wear_after_flights,
+    wear_flights_to_failure,
+)
 from scas_env.core.setup import (
     EFFECT_FEATURES,
     FLIGHT_FEATURES,
@@ -91,6 +102,8 @@ def reset_row(batch: ActuatorState, e: int, np_random: np.random.Generator) -> N
     record_reference(batch, e)
     _clear_counters(batch, e)
     _reset_monitor(batch, e)
+    if st.scenario.initial_health == "in_service":
+        _in_service(batch, e, rngs["parts"].random(2))
 
 
 def _clear_counters(batch: ActuatorState, e: int) -> None:
@@ -131,6 +144,53 @@ def _fit_spring(
         else st.calibration.spring_failure_depth_m
     )
     return unit
+
+
+def _in_service(batch: ActuatorState, e: int, used: np.ndarray) -> None:
+    """Each part of row ``e`` has flown ``floor(used * life)`` standard flights (its own
+    growth draws used up, its age known); its filter is the new-part prior predicted over
+    them (the filter stream) and conditioned on the part having survived."""
+    st, a = batch.setup, batch.a
+    wm, cal = st.world, st.calibration
+    for p, part in enumerate(PARTS):
+        life = float(a["life"][e, p])
+        flights = int(used[p] * life) if math.isfinite(life) else 0
+        if flights == 0:
+            continue
+        handle = tuple(int(v) for v in a["h_growth"][e, p])
+        if part == "spring" and st.scenario.crack_active:
+            a["crack"][e] = crack_after_flights(
+                float(a["crack"][e]), float(a["theta"][e]), handle, flights, *wm.damage,
+                wm.cv_log_depth, wm.cv_values, wm.dormant_m,
+            )  # fmt: skip
+        elif part == "seal" and st.scenario.wear_active:
+            rate = cal.wear_rate_m_per_flight * float(a["wmult"][e])
+            a["wear"][e] = wear_after_flights(
+                float(a["wear"][e]), rate, wm.wear_cv, handle, flights
+            )
+        a["life"][e, p] -= flights
+        a["part_age"][e, p] = flights
+        a["pending"][e, p] = float(flights)
+    predict_and_survive(batch, e)
+
+
+def predict_and_survive(batch: ActuatorState, e: int) -> None:
+    """Row ``e``'s filters predicted over the flights pending and conditioned on both parts
+    having survived them (the filter stream; :mod:`scas_env.core.filters`)."""
+    a = batch.a
+    status = a["status"]
+    status[e] = 0
+    work = work_arrays(batch.setup.n_particles, len(batch.a["flight_sum"][e]))
+    handle = tuple(int(v) for v in a["h_filter"][e])
+    filt = batch.setup.filters
+    for p in range(2):
+        d = float(a["pending"][e, p])
+        if d > 0 and status[e] == 0:
+            predict_filter(e, p, d, batch.bank, a["pending"], status, work, filt, handle)
+    if status[e] == 0:
+        survive_filters(e, batch.bank, status, work, filt, handle)
+    a["stale"][e] = True
+    raise_status(int(status[e]))
 
 
 def _random_health(batch: ActuatorState, e: int, life_used: np.ndarray) -> None:

@@ -25,7 +25,8 @@ stock-out (the degenerate fleet).
 **Crew** (:class:`CrewQueue`): at most one pending job per (aircraft, actuator, kind); jobs
 are served first come, first served (or by a priority the caller gives), up to ``C`` a day.
 A job needs a crew slot and a spare of its kind: a job whose spare is out of stock is skipped
-and waits (the mechanic takes the next job rather than idling). Counters: jobs done, jobs
+and waits (the mechanic takes the next job rather than idling); its stock-out is counted
+once, when it first finds the shelf empty. Counters: jobs done, jobs
 waiting, job-days waited, utilisation (jobs done / (C x days)).
 
 >>> pool = SparesPool(SparesSpec(initial=(2, 0, 0), base_stock=(2, -1, -1), lead_days=(3, 1, 1)))
@@ -251,6 +252,8 @@ class CrewQueue:
     def reset(self) -> None:
         """No jobs pending, counters zero."""
         self.sequence = np.full(self.shape, -1, dtype=np.int64)  # -1: no job pending
+        #: jobs that found no spare at least once (their stock-out is counted once)
+        self.short = np.zeros(self.shape, dtype=np.bool_)
         self.requested_day = np.full(self.shape, -1, dtype=np.int64)
         self._next = np.zeros(self.batch, dtype=np.int64)
         self.used_today = np.zeros(self.batch, dtype=np.int64)
@@ -321,9 +324,14 @@ class CrewQueue:
         for a, u, k in rows:
             if self.capacity is not None and self.used_today[fleet] >= self.capacity:
                 break
-            if not spares.take(int(k), fleet):
+            if not spares.available(int(k), fleet):
                 self.skipped_for_spares[fleet] += 1
+                if not self.short[fleet, a, u, k]:  # a stock-out: one per job, not per day
+                    self.short[fleet, a, u, k] = True
+                    spares.stock_outs[fleet, k] += 1
                 continue
+            spares.take(int(k), fleet)
+            self.short[fleet, a, u, k] = False
             self.sequence[fleet, a, u, k] = -1
             self.requested_day[fleet, a, u, k] = -1
             self.used_today[fleet] += 1

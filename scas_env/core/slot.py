@@ -152,16 +152,21 @@ def _tested(e: int, g1: float, g3: float, every_flight: bool, world: tuple, moni
 @njit(cache=True)
 def _grow(e: int, k: int, world: tuple, handles: tuple, wm: tuple, out: tuple) -> bool:
     """Row e's parts grow by one flight of mission type ``k`` (each by the next draw of its
-    own stream); a standard flight off each part's life. Returns whether a part reached its
-    critical value (``failed`` says which)."""
+    own stream); its standard-flight equivalent off each part's life (exact for the standard
+    mission, 1; a damaging type's multiplier at the crack's depth, first order). Returns
+    whether a part reached its critical value (``failed`` says which)."""
     crack, wear, fail, theta, wmult = world[0], world[1], world[2], world[3], world[4]
     life = world[6]
     failed = out[3]
     hg = handles[2]
     z_spring = standard_normal((hg[e, 0, 0], hg[e, 0, 1], hg[e, 0, 2]))
     z_seal = standard_normal((hg[e, 1, 0], hg[e, 1, 1], hg[e, 1, 2]))
-    life[e, 0] -= 1.0
-    life[e, 1] -= 1.0
+    if k == 0:
+        life[e, 0] -= 1.0
+        life[e, 1] -= 1.0
+    else:
+        life[e, 0] -= interp_scalar(crack[e], wm.damage[0], wm.type_crack_mult[k])
+        life[e, 1] -= wm.type_wear_mult[k]
     c = crack[e]
     if wm.crack_active:
         d = wm.damage

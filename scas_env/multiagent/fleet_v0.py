@@ -57,11 +57,11 @@ class FleetParallelEnv(ParallelEnv):
         self._action_space = spaces.MultiDiscrete(per)
         self._obs_space = self.fleet_env.view.agent_space
 
-    @functools.lru_cache(maxsize=None)  # noqa: B019 - one space per agent, PettingZoo's habit
+    @functools.cache  # noqa: B019 - one space per agent, PettingZoo's habit
     def observation_space(self, agent: str) -> spaces.Box:
         return self._obs_space
 
-    @functools.lru_cache(maxsize=None)  # noqa: B019
+    @functools.cache  # noqa: B019
     def action_space(self, agent: str) -> spaces.MultiDiscrete:
         return self._action_space
 
@@ -93,7 +93,9 @@ class FleetParallelEnv(ParallelEnv):
         missing = sorted(set(self.agents) - set(actions))
         extra = sorted(set(actions) - set(self.agents))
         if missing or extra:
-            raise ValueError(f"actions must name every live agent: missing {missing}, extra {extra}")
+            raise ValueError(
+                f"actions must name every live agent: missing {missing}, extra {extra}"
+            )
         joint = np.concatenate(
             [np.asarray(actions[a], dtype=np.int64).ravel() for a in self.possible_agents]
         )
