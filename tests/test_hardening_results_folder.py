@@ -71,7 +71,10 @@ def test_an_existing_folder_is_refused_before_the_block_runs(tmp_path: Path) -> 
     (dest / "old.png").write_bytes(b"old")
     ran = []
     with (
-        pytest.raises(ResultsFolderError, match=rf"{dest} already exists; pass overwrite=True"),
+        pytest.raises(
+            ResultsFolderError,
+            match=rf"{dest} already exists and is not empty; pass overwrite=True",
+        ),
         results_folder(dest, config={}, seeds=[]),
     ):
         ran.append(True)
@@ -111,7 +114,7 @@ def test_check_destination_validates_before_any_work(tmp_path: Path) -> None:
     assert not (tmp_path / "a").exists()  # a check only
     blocker = tmp_path / "file.txt"
     blocker.write_text("x")
-    with pytest.raises(ResultsFolderError, match=rf"{blocker} exists and is not a folder"):
+    with pytest.raises(ResultsFolderError, match=rf"{blocker} is a file, not a folder"):
         check_destination(blocker / "sub")
     with pytest.raises(ResultsFolderError, match="exists and is not a folder"):
         check_destination(blocker, overwrite=True)
@@ -172,3 +175,112 @@ def test_timestamped_names_a_fresh_sibling() -> None:
 def test_an_unwritable_parent_is_refused_even_for_root() -> None:
     with pytest.raises(ResultsFolderError, match=r"cannot create results folder /proc/bench"):
         check_destination("/proc/bench")
+
+
+# --- one rule for every --out folder (issue 27) ------------------------------------------
+
+#: every console command that writes a results folder to --out
+RESULTS_COMMANDS = (
+    "scas-benchmark",
+    "scas-tune",
+    "scas-value",
+    "scas-preflight",
+    "scas-reproduce",
+    "scas-simulate",
+    "scas-figures",
+    "scas-export-dataset",
+    "scas-go-no-go",
+)
+
+
+@pytest.mark.parametrize("name", ["run.json", "r.CSV", "table.md", "data.parquet", "a.b.yaml"])
+def test_a_folder_named_like_a_file_is_refused(tmp_path: Path, name: str) -> None:
+    dest = tmp_path / "results" / name
+    with pytest.raises(ResultsFolderError) as err:
+        check_destination(dest)
+    assert str(err.value) == (
+        f"the results destination names a folder (the results files go inside it), not a "
+        f"{dest.suffix} file: {dest}; choose a name without a file suffix, "
+        f"e.g. {dest.with_suffix('')}"
+    )
+    dest.mkdir(parents=True)  # an existing folder of that name too: the name is the mistake
+    with pytest.raises(ResultsFolderError, match="names a folder"):
+        check_destination(dest, overwrite=True)
+    for fine in ("run-2026.01", "benchmark_v0.2", "out"):  # dots that are not file suffixes
+        assert check_destination(tmp_path / fine) == tmp_path / fine
+
+
+def test_an_empty_folder_is_accepted_and_filled(tmp_path: Path) -> None:
+    dest = tmp_path / "bench"
+    dest.mkdir()
+    assert check_destination(dest) == dest
+    with results_folder(dest, config={}, seeds=0) as tmp:
+        (tmp / "a.csv").write_text("x\n")
+    assert sorted(p.name for p in dest.iterdir()) == ["a.csv", MANIFEST]
+    assert _siblings(dest) == ["bench"]
+
+
+def test_a_non_empty_folder_is_a_file_exists_error_too(tmp_path: Path) -> None:
+    from scas_env.results_folder import ResultsFolderExistsError
+
+    (tmp_path / "d").mkdir()
+    (tmp_path / "d" / "x").write_text("")
+    with pytest.raises(ResultsFolderExistsError) as err:
+        check_destination(tmp_path / "d", option="--out")
+    assert isinstance(err.value, FileExistsError) and isinstance(err.value, ValueError)
+    assert str(err.value).startswith(
+        f"--out {tmp_path / 'd'} already exists and is not empty; pass --overwrite"
+    )
+
+
+@pytest.mark.parametrize("command", RESULTS_COMMANDS)
+def test_every_results_command_refuses_a_file_name_for_out(
+    command: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``scas-tune --out results/tuning_quick.json`` made a folder named ``.json``."""
+    from tests.test_cli import MAINS
+
+    out = tmp_path / "results" / "tuning_quick.json"
+    with pytest.raises(SystemExit) as exit_:
+        MAINS[command](["--out", str(out)])
+    err = " ".join(capsys.readouterr().err.split())
+    assert exit_.value.code == 2, err
+    assert (
+        f"error: --out names a folder (the results files go inside it), not a .json file: "
+        f"{out}; choose a name without a file suffix, e.g. --out {out.with_suffix('')}"
+    ) in err
+    assert "Traceback" not in err and not (tmp_path / "results").exists()
+
+
+@pytest.mark.parametrize("command", RESULTS_COMMANDS)
+def test_every_results_command_accepts_an_empty_out_folder(
+    command: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """The check every command runs first passes on an empty folder (``scas-export-dataset``
+    refused one); a non-empty one needs --overwrite. The parser is the command's own."""
+    from scas_env.cli_args import check_out_dir
+    from tests.test_cli import PARSERS
+
+    parser = PARSERS[command]()
+    (tmp_path / "empty").mkdir()
+    assert check_out_dir(parser, tmp_path / "empty", False) == tmp_path / "empty"
+    (tmp_path / "empty" / "x.csv").write_text("")
+    with pytest.raises(SystemExit):
+        check_out_dir(parser, tmp_path / "empty", False)
+    assert "already exists and is not empty; pass --overwrite" in capsys.readouterr().err
+    assert check_out_dir(parser, tmp_path / "empty", True) == tmp_path / "empty"
+
+
+def test_export_dataset_writes_into_an_empty_folder(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    from scas_env.studies.cli import export_dataset_main
+
+    out = tmp_path / "rtf"
+    out.mkdir()
+    argv = ["--units", "2", "--max-slots", "10", "--workers", "1", "--formats", "csv"]
+    assert export_dataset_main([*argv, "--out", str(out), "-q"]) == 0
+    assert sorted(p.name for p in out.iterdir()) == [
+        "datacard.json", "datacard.md", "flights.csv", "units.csv"
+    ]  # fmt: skip
+    assert _siblings(out) == ["rtf"]
