@@ -263,10 +263,10 @@ def scenario_changes(scenario: Scenario, *, exclude: Sequence[str] = ()) -> dict
 
 def check_out_dir(parser: argparse.ArgumentParser, path: str | Path, overwrite: bool) -> Path:
     """Validate an output folder before any work, by the one rule of every results folder
-    (:func:`scas_env.results_folder.check_destination`): a name ending in a file suffix
+    (:func:`scas_env.utils.results_folder.check_destination`): a name ending in a file suffix
     (``--out r.json``) is refused, an existing empty folder is accepted, a non-empty one needs
     ``--overwrite``; a file in its place or an unwritable parent is a usage error."""
-    from scas_env.results_folder import ResultsFolderError, check_destination
+    from scas_env.utils.results_folder import ResultsFolderError, check_destination
 
     try:
         check_destination(path, overwrite, option="--out")

@@ -4,8 +4,8 @@ Keys are drawn from each class's fields plus unknown names; values from numbers 
 of range, NaN, inf, huge integers, strings, None, booleans, lists and dicts. The contract
 ("clear error or valid result"): a ``ValueError``/``TypeError`` whose message names the
 class and a field or key, or an object whose every given field holds a finite number inside
-the declared range (equal to the given value; a boolean is never taken as a number); never
-another exception.
+the declared range (equal to the given value; a boolean only for a switch, unit "bool");
+never another exception.
 """
 
 from __future__ import annotations
@@ -98,7 +98,8 @@ def check_from_dict(cls: type[Validated], data: dict[str, Any]) -> Any:
         if key not in numeric:
             continue
         md = numeric[key]
-        assert not isinstance(given, bool | np.bool_), f"{key}: boolean {given!r} taken as a number"
+        if md["unit"] != "bool":  # only a switch (0/1) takes true/false
+            assert not isinstance(given, bool | np.bool_), f"{key}: boolean {given!r} as number"
         stored = getattr(obj, key)
         assert isinstance(stored, int | float) and math.isfinite(stored), (key, given, stored)
         assert stored == float(given), f"{key}: given {given!r}, stored {stored!r}"

@@ -2,7 +2,7 @@
 
 ``python -m tests.interrupt_run OUT MARKS [export]``: inside a results folder for ``OUT``
 (replacing it: ``overwrite=True``), write a partial file, then run 8 chunks of 60 s each on 2
-workers (:func:`scas_env.parallel.map_chunks`). Each worker writes its pid into the folder
+workers (:func:`scas_env.utils.parallel.map_chunks`). Each worker writes its pid into the folder
 ``MARKS`` when it starts a chunk, so the test knows the run is under way. With ``export``, the
 same through the run-to-failure dataset's writer instead (its own temporary folder).
 """
@@ -25,8 +25,8 @@ def slow_chunk(marks: str, seconds: float, chunk: list[int]) -> list[int]:
 def main(argv: list[str]) -> int:
     import signal
 
-    from scas_env.parallel import map_chunks
-    from scas_env.results_folder import partial_folder, results_folder
+    from scas_env.utils.parallel import map_chunks
+    from scas_env.utils.results_folder import partial_folder, results_folder
 
     # as in a terminal: a shell's background job (a CI step) may start us with SIGINT ignored
     signal.signal(signal.SIGINT, signal.default_int_handler)

@@ -25,10 +25,10 @@ import yaml
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from scas_env.actuator.config import read_mapping
+from scas_env.actuator.config import param, read_mapping
 from scas_env.actuator.params import ScasParams
-from scas_env.costs import CostModel
-from scas_env.scenario import Scenario
+from scas_env.core.costs import CostModel
+from scas_env.core.scenario import Scenario
 from tests.config_cases import CLASSES, numeric_fields
 
 SETTINGS = settings(
@@ -38,7 +38,18 @@ SETTINGS = settings(
     database=None,
     suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow],
 )
-NUMERIC = [(cls, name) for cls in CLASSES for name in numeric_fields(cls)]
+NUMERIC = [
+    (cls, name)
+    for cls in CLASSES
+    for name, md in numeric_fields(cls).items()
+    if md["unit"] != "bool"  # a switch (0/1) takes true/false
+]
+SWITCHES = [
+    (cls, name)
+    for cls in CLASSES
+    for name, md in numeric_fields(cls).items()
+    if md["unit"] == "bool"
+]
 
 
 # --- booleans for numbers --------------------------------------------------------------
@@ -86,10 +97,40 @@ def test_every_numeric_field_refuses_every_boolean(pick: tuple[type, str], flag:
         cls.from_dict({name: flag})
 
 
-def test_switches_still_take_booleans(tmp_path: Path) -> None:
-    path = tmp_path / "s.yaml"
-    path.write_text("spring_effect_realign: true\nflight_features: I2,I6,I7,I8,I9\n")
-    assert Scenario.load(path).spring_effect_realign is True
+@pytest.mark.parametrize(
+    ("name", "text", "expected"),
+    [
+        ("s.toml", "crack_active = false\n", 0),
+        ("s.yaml", "crack_active: no\n", 0),
+        ("s.yml", "crack_active: yes\n", 1),
+        ("s.json", '{"crack_active": false}', 0),
+        ("s.toml", "crack_active = 0\n", 0),
+    ],
+)
+def test_switches_take_booleans_as_0_and_1(
+    tmp_path: Path, name: str, text: str, expected: int
+) -> None:
+    """A switch is declared with unit "bool" (0/1): there true/false is the natural input."""
+    path = tmp_path / name
+    path.write_text(text)
+    value = Scenario.load(path).crack_active
+    assert value == expected and type(value) is int
+
+
+@SETTINGS
+@given(pick=st.sampled_from(SWITCHES), flag=st.sampled_from([True, False, np.True_, np.False_]))
+def test_every_switch_takes_every_boolean(pick: tuple[type, str], flag: Any) -> None:
+    cls, name = pick
+    data = {name: flag}
+    if cls is Scenario and not flag:  # a cross-field rule: one fault stays on
+        data["wear_active" if name == "crack_active" else "crack_active"] = 1
+    assert getattr(cls.from_dict(data), name) == int(flag)
+
+
+def test_every_class_declares_its_switches_with_the_bool_unit() -> None:
+    assert (Scenario, "crack_active") in SWITCHES and (Scenario, "wear_active") in SWITCHES
+    with pytest.raises(ValueError, match=r"a switch \(unit 'bool'\) is an integer in \[0, 1\]"):
+        param(1, "bool", lo=0, hi=2, integer=True)
 
 
 # --- keys given twice ------------------------------------------------------------------

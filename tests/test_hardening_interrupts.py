@@ -1,6 +1,6 @@
 """Interrupted runs leave nothing that looks like a result, and no process behind (issue 27).
 
-A real 2-worker run (``tests/interrupt_run.py``: :func:`scas_env.parallel.map_chunks` with
+A real 2-worker run (``tests/interrupt_run.py``: :func:`scas_env.utils.parallel.map_chunks` with
 60-s tasks inside a results folder that would replace an existing one) is sent SIGTERM, SIGINT,
 a terminal's Ctrl-C (SIGINT to the whole process group) or SIGKILL once both workers are busy.
 Targets: the process exits within 5 s, every process of its tree (workers, multiprocessing's
@@ -24,9 +24,9 @@ from pathlib import Path
 
 import pytest
 
-from scas_env.actuator.atomic_file import Terminated, sigterm_raises
-from scas_env.parallel import map_chunks
-from scas_env.results_folder import partial_folder, results_folder
+from scas_env.utils.atomic_file import Terminated, sigterm_raises
+from scas_env.utils.parallel import map_chunks
+from scas_env.utils.results_folder import partial_folder, results_folder
 
 ROOT = Path(__file__).resolve().parents[1]
 LINUX = Path("/proc/self/stat").is_file()

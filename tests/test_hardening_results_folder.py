@@ -7,6 +7,7 @@ import hashlib
 import json
 import os
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -179,18 +180,28 @@ def test_an_unwritable_parent_is_refused_even_for_root() -> None:
 
 # --- one rule for every --out folder (issue 27) ------------------------------------------
 
-#: every console command that writes a results folder to --out
+#: the console commands (pyproject.toml) whose --out is a results folder
 RESULTS_COMMANDS = (
     "scas-benchmark",
     "scas-tune",
     "scas-value",
-    "scas-preflight",
     "scas-reproduce",
     "scas-simulate",
     "scas-figures",
     "scas-export-dataset",
-    "scas-go-no-go",
 )
+
+
+def _main(command: str) -> Any:
+    """The function behind a console command, from pyproject.toml's [project.scripts]."""
+    import importlib
+
+    from scas_env.actuator.config import tomllib
+
+    root = Path(__file__).resolve().parents[1]
+    scripts = tomllib.loads((root / "pyproject.toml").read_text())["project"]["scripts"]
+    module, name = scripts[command].split(":")
+    return getattr(importlib.import_module(module), name)
 
 
 @pytest.mark.parametrize("name", ["run.json", "r.CSV", "table.md", "data.parquet", "a.b.yaml"])
@@ -221,7 +232,7 @@ def test_an_empty_folder_is_accepted_and_filled(tmp_path: Path) -> None:
 
 
 def test_a_non_empty_folder_is_a_file_exists_error_too(tmp_path: Path) -> None:
-    from scas_env.results_folder import ResultsFolderExistsError
+    from scas_env.utils.results_folder import ResultsFolderExistsError
 
     (tmp_path / "d").mkdir()
     (tmp_path / "d" / "x").write_text("")
@@ -238,11 +249,9 @@ def test_every_results_command_refuses_a_file_name_for_out(
     command: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     """``scas-tune --out results/tuning_quick.json`` made a folder named ``.json``."""
-    from tests.test_cli import MAINS
-
     out = tmp_path / "results" / "tuning_quick.json"
     with pytest.raises(SystemExit) as exit_:
-        MAINS[command](["--out", str(out)])
+        _main(command)(["--out", str(out)])
     err = " ".join(capsys.readouterr().err.split())
     assert exit_.value.code == 2, err
     assert (
@@ -252,16 +261,17 @@ def test_every_results_command_refuses_a_file_name_for_out(
     assert "Traceback" not in err and not (tmp_path / "results").exists()
 
 
-@pytest.mark.parametrize("command", RESULTS_COMMANDS)
-def test_every_results_command_accepts_an_empty_out_folder(
-    command: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+def test_the_commands_check_accepts_an_empty_folder(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    """The check every command runs first passes on an empty folder (``scas-export-dataset``
-    refused one); a non-empty one needs --overwrite. The parser is the command's own."""
-    from scas_env.cli_args import check_out_dir
-    from tests.test_cli import PARSERS
+    """The check every results command runs first (``check_out_dir``, through which each
+    of them refuses ``--out x.json`` above) passes on an empty folder (``scas-export-dataset``
+    refused one); a non-empty one needs --overwrite."""
+    import argparse
 
-    parser = PARSERS[command]()
+    from scas_env.cli_args import check_out_dir
+
+    parser = argparse.ArgumentParser(prog="scas-any")
     (tmp_path / "empty").mkdir()
     assert check_out_dir(parser, tmp_path / "empty", False) == tmp_path / "empty"
     (tmp_path / "empty" / "x.csv").write_text("")
@@ -274,8 +284,7 @@ def test_every_results_command_accepts_an_empty_out_folder(
 def test_export_dataset_writes_into_an_empty_folder(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    from scas_env.studies.cli import export_dataset_main
-
+    export_dataset_main = _main("scas-export-dataset")
     out = tmp_path / "rtf"
     out.mkdir()
     argv = ["--units", "2", "--max-slots", "10", "--workers", "1", "--formats", "csv"]

@@ -12,7 +12,8 @@ holds either the fields of one group at its top level, or tables named after
 so one file can describe a whole case. Files are UTF-8 (a byte-order mark is allowed); a key
 may appear once per mapping. Readers: :mod:`tomllib`, PyYAML's ``SafeLoader`` (no object
 construction, so a file cannot run code) and :mod:`json`, the last two refusing a repeated
-key (:func:`read_mapping`); a boolean is never taken for a number. Writers: a small TOML
+key (:func:`read_mapping`); a boolean is taken only by a switch (unit ``"bool"``), never
+for a number. Writers: a small TOML
 writer for such mappings (:func:`toml_text`), PyYAML's ``safe_dump`` and :mod:`json`. Files
 are written atomically (a temporary file renamed into place); an existing file is refused
 unless ``overwrite=True``.
@@ -85,7 +86,12 @@ def param(
         lo, hi: allowed range; ``lo_open``/``hi_open`` exclude the bound itself.
         integer: the value must be a whole number.
         source: where the value comes from (reference sheet section, paper, rationale).
+
+    A switch is declared with unit ``"bool"`` (integer, 0 or 1): it alone also takes
+    ``True``/``False`` (a file's ``true``/``yes``); any other numeric field refuses a boolean.
     """
+    if unit == "bool" and not (integer and lo == 0 and hi == 1 and not (lo_open or hi_open)):
+        raise ValueError(f"a switch (unit 'bool') is an integer in [0, 1], got {lo}..{hi}")
     return field(
         default=default,
         metadata={
@@ -116,13 +122,16 @@ def _range_text(md: dict[str, Any]) -> str:
 def check_value(owner: str, name: str, value: Any, md: dict[str, Any]) -> None:
     """Raise ``ValueError`` unless ``value`` is a finite real number inside the field's range.
 
-    Numbers and numeric strings (YAML 1.1 reads ``1e5`` as a string) are accepted; a boolean
-    is refused (``float(True)`` is 1.0, so TOML ``true`` or YAML ``yes`` would mean 1).
+    Numbers and numeric strings (YAML 1.1 reads ``1e5`` as a string) are accepted. A boolean
+    is accepted only by a switch (a field declared with unit ``"bool"``, 0 or 1) and refused
+    for a number: ``float(True)`` is 1.0, so TOML ``true`` or YAML ``yes`` for
+    ``episode_slots`` would silently mean 1.
     """
     unit = md.get("unit", "")
-    if isinstance(value, bool) or type(value).__name__ in ("bool", "bool_"):  # numpy's too
-        # float(True) is 1.0: a switch given for a number (TOML `true`, YAML `yes`) would
-        # silently mean 1
+    is_bool = isinstance(value, bool) or type(value).__name__ in ("bool", "bool_")  # numpy's
+    if is_bool and unit == "bool":
+        value = int(value)
+    elif is_bool:
         raise ValueError(
             f"{owner}.{name} = {value!r} is a boolean; expected a number in "
             f"{_range_text(md)} {unit}"

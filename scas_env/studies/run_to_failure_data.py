@@ -26,7 +26,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from scas_env.results_folder import check_destination, partial_folder
+from scas_env.utils.results_folder import check_destination, partial_folder
 
 if TYPE_CHECKING:
     import pyarrow as pa
@@ -240,7 +240,7 @@ def check_formats(formats: tuple[str, ...]) -> None:
 
 def check_output(out: str | os.PathLike[str], overwrite: bool) -> Path:
     """The output folder, checked by the rule of every results folder
-    (:func:`scas_env.results_folder.check_destination`: an empty folder is accepted, a
+    (:func:`scas_env.utils.results_folder.check_destination`: an empty folder is accepted, a
     non-empty one needs ``overwrite`` (``FileExistsError``), a file's name is refused)."""
     check_destination(out, overwrite)
     return Path(out)

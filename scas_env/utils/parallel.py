@@ -8,7 +8,7 @@ thread. With one worker the chunks run in the calling process with the same sing
 settings (:func:`single_threaded`), restored when :func:`map_chunks` returns.
 
 Interrupts: an exception in the calling process while workers run (a task's error, Ctrl-C,
-or SIGTERM, which :func:`~scas_env.actuator.atomic_file.sigterm_raises` turns into one)
+or SIGTERM, which :func:`~scas_env.utils.atomic_file.sigterm_raises` turns into one)
 cancels the queued chunks and terminates the workers at once; workers ignore SIGINT (the
 parent stops them) and end with their parent however it ends (``PR_SET_PDEATHSIG`` on Linux,
 a watchdog thread elsewhere), so no worker outlives the command.
@@ -34,7 +34,7 @@ import numba
 import threadpoolctl
 from tqdm.auto import tqdm
 
-from scas_env.actuator.atomic_file import sigterm_raises
+from scas_env.utils.atomic_file import sigterm_raises
 
 T = TypeVar("T")
 R = TypeVar("R")

@@ -46,7 +46,7 @@ from pathlib import Path
 from typing import Any
 
 from scas_env._version import __version__
-from scas_env.actuator.atomic_file import sigterm_raises
+from scas_env.utils.atomic_file import sigterm_raises
 
 MANIFEST = "manifest.json"
 #: Distributions whose versions go into every manifest (absent ones are recorded as such).
@@ -244,7 +244,7 @@ def results_folder(
 def partial_folder(dest: str | Path) -> Iterator[Path]:
     """A new hidden folder ``.<name>.partial-XXXX`` beside ``dest`` for a result being
     written; removed when the block ends, whatever ends it (an exception, Ctrl-C, SIGTERM:
-    :func:`~scas_env.actuator.atomic_file.sigterm_raises` holds for the block), unless the
+    :func:`~scas_env.utils.atomic_file.sigterm_raises` holds for the block), unless the
     block renamed it into place. The parent folder must exist."""
     dest = Path(dest)
     with sigterm_raises():
