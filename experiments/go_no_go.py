@@ -12,7 +12,7 @@ interval (scipy), beside the normal-theory probability of the limit
 healthy unit fails <= 1e-3 of tests, a part at its critical level >= 0.9) are printed beside
 each figure.
 
-    python -m experiments.go_no_go --units 2000 --out results/go_no_go
+    python -m experiments.go_no_go --units 2000 --out results/go_no_go  # JSON and PNG
 """
 
 from __future__ import annotations
@@ -119,9 +119,34 @@ def format_rates(rows: Sequence[dict[str, float | str]]) -> str:
     return "\n".join(lines)
 
 
+def plot_rates(rows: Sequence[dict[str, float | str]], path: Path) -> None:
+    """No-go share against the part's fraction of critical, per part: the Wilson interval
+    and the model's probability."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(6, 4))
+    for part, color in zip(PARTS, ("tab:blue", "tab:red"), strict=True):
+        mine = [r for r in rows if r["part"] == part]
+        x = np.array([float(r["severity"]) for r in mine])
+        y = np.array([float(r["share"]) for r in mine])
+        err = [y - [float(r["ci_low"]) for r in mine], [float(r["ci_high"]) for r in mine] - y]
+        ax.errorbar(x, y, yerr=err, fmt="o", color=color, capsize=3, label=f"{part}, measured")
+        ax.plot(x, [float(r["model"]) for r in mine], "--", color=color, label=f"{part}, model")
+    ax.axhline(TARGETS["critical_min"], color="0.6", lw=0.8)
+    ax.set(xlabel="part at fraction of its critical level (the other new)", ylabel="P(no-go)",
+           ylim=(-0.02, 1.02), title="Pre-flight test: airworthiness go/no-go")  # fmt: skip
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """The command line (module docstring): the table printed, ``--out`` a results folder
-    with ``go_no_go.json``."""
+    with ``go_no_go.json`` and ``go_no_go.png``."""
     from scas_env.cli_args import check_out_dir, make_parser, nonneg_int, positive_int
     from scas_env.utils.results_folder import results_folder
 
@@ -142,10 +167,11 @@ def main(argv: Sequence[str] | None = None) -> int:
         seeds = {"root": args.seed}
         with results_folder(args.out, config=config, seeds=seeds, overwrite=args.overwrite) as tmp:
             (tmp / "go_no_go.json").write_text(json.dumps(rows, indent=1) + "\n")
+            plot_rates(rows, tmp / "go_no_go.png")
     return 0
 
 
-__all__ = ["SEVERITIES", "TARGETS", "format_rates", "main", "no_go_rates", "one_test"]
+__all__ = ["SEVERITIES", "TARGETS", "format_rates", "main", "no_go_rates", "one_test", "plot_rates"]
 
 
 if __name__ == "__main__":

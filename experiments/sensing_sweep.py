@@ -174,7 +174,7 @@ def run_sensing_sweep(
     ``levels``: level label -> the level's env keywords (``params``, ``calibration``,
     ``surrogate``: :meth:`experiments.sensing_variants.SensingVariant.env_kwargs`),
     in the order of the table; ``env_kwargs``: the scenario and costs shared by every
-    level (e.g. ``go_no_go="airworthiness"``); ``base_level``: the level the others are
+    level (e.g. ``preflight="every_flight"``); ``base_level``: the level the others are
     compared with family by family (default: the first)."""
     if not levels:
         raise ValueError("levels is empty: give at least one sensing level")

@@ -101,7 +101,9 @@ def test_small_runs_of_the_commands(tmp_path, capsys) -> None:
     from experiments import go_no_go, prognostics_speed, reference_posterior, renewal, spring_cloud
 
     assert go_no_go.main(["--units", "3", "--out", str(tmp_path / "g")]) == 0
-    assert (tmp_path / "g" / "go_no_go.json").is_file()
+    assert (tmp_path / "g" / "go_no_go.json").is_file() and (
+        tmp_path / "g" / "go_no_go.png"
+    ).is_file()
     assert spring_cloud.main(["--episodes", "1", "--scenario", '{"episode_slots": 300}',
                               "--no-progress", "--out", str(tmp_path / "c.json")]) == 0  # fmt: skip
     assert (tmp_path / "c.json").is_file()
