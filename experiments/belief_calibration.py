@@ -39,7 +39,8 @@ for each truth:
 * ``info``: the info RUL within the horizon, over every record: the info RUL is the exact
   number of flights to failure, so this is the same event without the censoring.
 
-:func:`run_study` returns the tables; :func:`write_study` writes CSV/JSON and two PNGs into a
+:func:`run_study` returns the tables; :func:`experiments.belief_output.write_study` writes
+CSV/JSON and two PNGs into a
 results folder (:func:`scas_env.utils.results_folder.results_folder`). Command line
 (docs/beliefs.md)::
 
