@@ -40,9 +40,8 @@ for each truth:
   number of flights to failure, so this is the same event without the censoring.
 
 :func:`run_study` returns the tables; :func:`experiments.belief_output.write_study` writes
-CSV/JSON and two PNGs into a
-results folder (:func:`scas_env.utils.results_folder.results_folder`). Command line
-(docs/beliefs.md)::
+CSV/JSON and two PNGs into a results folder
+(:func:`scas_env.utils.results_folder.results_folder`). Command line (docs/beliefs.md)::
 
     python -m experiments.belief_calibration --episodes 200 --seed 1000 --out results/cal
     python -m experiments.belief_calibration --scenario '{"spring_theta_walk": 0.007}'
