@@ -73,8 +73,8 @@ check-install:
 
 ## Speed, each beside a reference measured in the same run.
 bench: install
-	$(PY) scripts/bench_integrator.py
-	$(PY) scripts/bench_prognostics.py
+	$(PY) -m experiments.integrator_speed
+	$(PY) -m experiments.prognostics_speed
 	$(PY) scripts/bench_env.py
 
 figures: install

@@ -117,19 +117,3 @@ def test_v1_is_registered_with_the_airworthiness_go_no_go() -> None:
     assert env.unwrapped.scenario.go_no_go == "airworthiness"
     envs = gym.make_vec(scas_env.ENV_ID_V1, num_envs=2, vectorization_mode="vector_entry_point")
     assert envs.scenario.go_no_go == "airworthiness"
-
-
-def test_go_no_go_study_agrees_with_the_model_and_rejects_bad_input() -> None:
-    from experiments.go_no_go import format_rates, no_go_rates
-
-    rows = no_go_rates(400, severities=(0.0, 1.0))
-    assert len(rows) == 2 * 2 * 2
-    for r in rows:
-        assert 0 <= r["no_go"] <= r["tests"] and r["ci_low"] <= r["share"] <= r["ci_high"]
-        if r["go_no_go"] == "airworthiness":  # model inside a wide Wilson interval of 400
-            assert r["ci_low"] - 0.02 <= r["model"] <= r["ci_high"] + 0.02
-    assert "target" in format_rates(rows)
-    with pytest.raises(ValueError, match="n_units"):
-        no_go_rates(0)
-    with pytest.raises(ValueError, match="severities"):
-        no_go_rates(10, severities=(1.5,))

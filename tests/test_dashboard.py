@@ -173,31 +173,6 @@ def test_bad_part_rul_raises() -> None:
         PartRul(np.ones(2), np.full(2, 0.5), true_flights=float("nan"))
 
 
-class _Fly:
-    """A policy that flies every slot (SB3-style predict)."""
-
-    def predict(self, obs, state=None, deterministic=True):
-        return 0, state
-
-
-def test_episode_animation_files(tmp_path) -> None:
-    from PIL import Image
-
-    from experiments.dashboard_animation import episode_frames, save_gif
-
-    env = gym.make(scas_env.ENV_ID, episode_slots=25)
-    episode = episode_frames(env, _Fly(), seed=0, every=10)
-    assert [n["slot"] for n in episode.numbers] == [0, 10, 20, 25]
-    assert all(f.shape == SHAPE for f in episode.frames)
-    gif, numbers = save_gif(episode, tmp_path / "a.gif", fps=5, scale=0.5)
-    with Image.open(gif) as im:
-        assert im.n_frames == 4 and im.size == (SHAPE[1] // 2, SHAPE[0] // 2)
-    assert numbers.read_text().count('"slot"') == 4
-    with pytest.raises(FileExistsError, match="overwrite"):
-        save_gif(episode, gif, fps=5)
-    assert sorted(p.name for p in tmp_path.iterdir()) == ["a.gif", "a.json"]
-
-
 def test_benchmark_function_runs() -> None:
     """The frame benchmark (timings are reported by scripts/bench_dashboard.py, not tested)."""
     from scas_env.dashboard import benchmark_frame_ms

@@ -12,6 +12,7 @@ import pytest
 from numba import njit
 from numba.np.random._constants import ki_double, ziggurat_nor_r
 
+from experiments.prognostics_speed import synthetic_case
 from prognostics.degradation_models import TabulatedRateModel, rate_at_scalar
 from prognostics.measurement import (
     MeasurementModel,
@@ -28,7 +29,6 @@ from prognostics.normals import (
     standard_normal,
 )
 from prognostics.particle_filter import ParticleFilter
-from experiments.prognostics_speed import synthetic_case
 
 BIT_GENERATORS = (
     np.random.PCG64,
