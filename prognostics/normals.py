@@ -174,8 +174,27 @@ def fill_truncated_normal(
                 redraw = True
 
 
-def _address(fn: ctypes._CFuncPtr) -> int:
-    return int(ctypes.cast(fn, ctypes.c_void_p).value)
+_capsule_pointer = ctypes.pythonapi.PyCapsule_GetPointer
+_capsule_pointer.restype = ctypes.c_void_p
+_capsule_pointer.argtypes = (ctypes.py_object, ctypes.c_char_p)
+
+
+class _BitGen(ctypes.Structure):
+    """numpy's ``bitgen_t`` (numpy/random/bitgen.h, the C API numpy publishes for Cython and
+    numba users): the state and the bit generator's functions."""
+
+    _fields_ = [
+        (name, ctypes.c_void_p)
+        for name in ("state", "next_uint64", "next_uint32", "next_double", "next_raw")
+    ]
+
+
+def handle_of(rng: np.random.Generator) -> Handle:
+    """The :data:`Handle` of ``rng``'s bit generator, read from its ``capsule`` (a
+    ``bitgen_t``): the addresses ``bit_generator.ctypes`` gives, ~10x faster (tested equal).
+    Valid while ``rng`` lives, in this process."""
+    bitgen = _BitGen.from_address(_capsule_pointer(rng.bit_generator.capsule, b"BitGenerator"))
+    return (int(bitgen.state), int(bitgen.next_uint64), int(bitgen.next_double))
 
 
 class NormalStream:
@@ -190,15 +209,9 @@ class NormalStream:
 
     def __init__(self, rng: np.random.Generator) -> None:
         check.generator("rng", rng)
-        bit_generator = rng.bit_generator
-        iface = bit_generator.ctypes
         self.rng = rng
-        self.lock: threading.Lock = bit_generator.lock
-        self.handle: Handle = (
-            int(iface.state_address),
-            _address(iface.next_uint64),
-            _address(iface.next_double),
-        )
+        self.lock: threading.Lock = rng.bit_generator.lock
+        self.handle: Handle = handle_of(rng)
 
     def __reduce__(self) -> tuple[type[NormalStream], tuple[np.random.Generator]]:
         # addresses are per process: rebuild them from the (pickled) Generator

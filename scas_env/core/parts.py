@@ -17,13 +17,14 @@ Everything here runs a few times per episode; the flight path is
 
 from __future__ import annotations
 
-import copy
 import math
+from collections.abc import Iterator
+from contextlib import contextmanager
 from dataclasses import replace
 
 import numpy as np
 
-from prognostics.normals import NormalStream
+from prognostics.normals import Handle, NormalStream, handle_of
 from scas_env.actuator.health import CRACKED_SPRING, HealthState, actuator_config
 from scas_env.actuator.physics.spring import failure_depth_from_params
 from scas_env.actuator.sensing import draw_window, flight_window, ground_test
@@ -229,21 +230,36 @@ def flights_to_failure(batch: ActuatorState, e: int, part: str) -> float:
     or the crack dormant)."""
     st, a = batch.setup, batch.a
     cal, wm = st.calibration, st.world
-    copied = copy.deepcopy(batch.rngs[e][f"{part}_growth"])  # alive while its handle is used
-    draws = NormalStream(copied).handle
     if part == "spring":
         if not st.scenario.crack_active or a["crack"][e] < cal.crack_dormant_below_m:
             return math.inf
-        return crack_flights_to_failure(
-            float(a["crack"][e]), float(a["fail"][e]), float(a["theta"][e]), draws, *wm.damage,
-            wm.cv_log_depth, wm.cv_values, wm.dormant_m, MAX_LIFE_FLIGHTS,
-        )  # fmt: skip
-    if not st.scenario.wear_active:
+    elif not st.scenario.wear_active:
         return math.inf
-    rate = cal.wear_rate_m_per_flight * float(a["wmult"][e])
-    return wear_flights_to_failure(
-        float(a["wear"][e]), rate, wm.wear_cv, cal.seal_critical_wear_m, draws, MAX_LIFE_FLIGHTS
-    )
+    with replayed(batch.rngs[e][f"{part}_growth"]) as draws:
+        if part == "spring":
+            return crack_flights_to_failure(
+                float(a["crack"][e]), float(a["fail"][e]), float(a["theta"][e]), draws,
+                *wm.damage, wm.cv_log_depth, wm.cv_values, wm.dormant_m, MAX_LIFE_FLIGHTS,
+            )  # fmt: skip
+        rate = cal.wear_rate_m_per_flight * float(a["wmult"][e])
+        return wear_flights_to_failure(
+            float(a["wear"][e]), rate, wm.wear_cv, cal.seal_critical_wear_m, draws,
+            MAX_LIFE_FLIGHTS,
+        )  # fmt: skip
+
+
+@contextmanager
+def replayed(rng: np.random.Generator) -> Iterator[Handle]:
+    """Draw ahead from ``rng`` (its kernel handle), then put it back where it was: what drawing
+    from a ``copy.deepcopy`` of it gives, ~15x faster (the bit generator's state saved and
+    restored; tested equal)."""
+    bit_generator = rng.bit_generator
+    saved = bit_generator.state
+    try:
+        with bit_generator.lock:
+            yield handle_of(rng)
+    finally:
+        bit_generator.state = saved
 
 
 def next_lives(batch: ActuatorState, e: int, part: str, count: int) -> list[float]:
@@ -253,11 +269,15 @@ def next_lives(batch: ActuatorState, e: int, part: str, count: int) -> list[floa
     if isinstance(count, bool) or not isinstance(count, int) or count < 0:
         raise ValueError(f"count = {count!r} must be an integer >= 0")
     scratch = batch.scratch_row(e)
-    rng = copy.deepcopy(batch.rngs[e][f"{part}_parts"])
+    rng = batch.rngs[e][f"{part}_parts"]
+    saved = rng.bit_generator.state
     lives = []
-    for _ in range(count):
-        _fit_part(scratch, 0, part, rng, look_ahead=False)
-        lives.append(float(scratch.a["life"][0, PARTS.index(part)]))
+    try:
+        for _ in range(count):
+            _fit_part(scratch, 0, part, rng, look_ahead=False)
+            lives.append(float(scratch.a["life"][0, PARTS.index(part)]))
+    finally:
+        rng.bit_generator.state = saved
     return lives
 
 

@@ -23,7 +23,7 @@ from typing import Any
 
 import numpy as np
 
-from prognostics.normals import NormalStream
+from prognostics.normals import handle_of
 from scas_env.core.setup import (
     EFFECT_FEATURES,
     FLIGHT_FEATURES,
@@ -213,7 +213,7 @@ class ActuatorState:
     def set_handle(self, e: int, name: str) -> None:
         """Row ``e``'s kernels draw from its stream ``name`` (after it is made or copied)."""
         column, p = _HANDLES[name]
-        handle = NormalStream(self.rngs[e][name]).handle
+        handle = handle_of(self.rngs[e][name])
         if p is None:
             self.a[column][e] = handle
         else:
