@@ -180,3 +180,22 @@ def test_benchmark_function_runs() -> None:
     env = gym.make(scas_env.ENV_ID)
     env.reset(seed=0)
     assert set(benchmark_frame_ms(env, frames=3)) == {"median", "mean", "max", "cpu_median"}
+
+
+def test_env_renders_the_dashboard_frame_by_frame() -> None:
+    """``render_mode="rgb_array"``: the env's frame is the dashboard of its own record, the
+    same pixels for the same seed and actions, another frame after more flights."""
+    frames = []
+    for _ in range(2):
+        env = gym.make(scas_env.ENV_ID, render_mode="rgb_array", episode_slots=30)
+        env.reset(seed=3)
+        for k in range(12):
+            env.step(1 if k % 4 == 0 else 0)
+        frames.append(env.render())
+        env.close()
+    assert frames[0].shape == SHAPE and frames[0].dtype == np.uint8
+    np.testing.assert_array_equal(frames[0], frames[1])
+    env = gym.make(scas_env.ENV_ID, render_mode="rgb_array", episode_slots=30)
+    env.reset(seed=3)
+    env.step(0)
+    assert not np.array_equal(env.render(), frames[0])

@@ -182,6 +182,16 @@ class Setup:
             np.array([FLIGHT_FEATURES.index(f) for f in LEARNING_FEATURES], dtype=np.int64),
         )
         put(self, "unit_z_draws", 1 + int(max(flight_idx.max(), ground_idx.max())))
+        for name in KERNEL_TABLES:
+            put(self, name, read_only(getattr(self, name)))
+
+    def __setstate__(self, state: dict) -> None:
+        """After ``pickle`` or ``copy.deepcopy``, which give every array back writeable: the
+        kernels' tables read-only again, so that the kernels see the types they were compiled
+        for (otherwise each kernel compiles a second time, for writeable arrays)."""
+        self.__dict__.update(state)
+        for name in KERNEL_TABLES:
+            object.__setattr__(self, name, read_only(state[name]))
 
     @property
     def n_particles(self) -> int:
@@ -190,6 +200,22 @@ class Setup:
     @property
     def physics(self) -> bool:
         return self.scenario.fidelity == "physics"
+
+
+#: the :class:`Setup` fields the kernels read, every array in them read-only
+KERNEL_TABLES = ("world", "filters", "detector", "go_limits", "learn_cols")
+
+
+def read_only(value: object) -> object:
+    """``value`` with every array in it (through tuples and named tuples) a read-only view."""
+    if isinstance(value, np.ndarray):
+        view = value.view()
+        view.flags.writeable = False
+        return view
+    if isinstance(value, tuple):
+        items = [read_only(v) for v in value]
+        return type(value)(*items) if hasattr(value, "_fields") else tuple(items)
+    return value
 
 
 def _mission_tables(
@@ -345,6 +371,7 @@ __all__ = [
     "EFFECT_FEATURES",
     "FLIGHT_FEATURES",
     "GROUND_FEATURES",
+    "KERNEL_TABLES",
     "LEARNING_FEATURES",
     "MAX_LIFE_FLIGHTS",
     "PARTS",
@@ -355,4 +382,5 @@ __all__ = [
     "WorldModel",
     "effect_tables",
     "lognormal_sigma",
+    "read_only",
 ]
