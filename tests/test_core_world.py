@@ -219,6 +219,26 @@ def test_true_rul_is_the_replayed_life_counted_down_by_every_flight() -> None:
     assert failures >= 3 and fitted - failures >= 2, (failures, fitted)
 
 
+@pytest.mark.parametrize("bit_generator", [np.random.PCG64, np.random.MT19937])
+def test_replayed_draws_ahead_as_a_deepcopy_and_leaves_the_stream_in_place(
+    bit_generator: type,
+) -> None:
+    """``replayed`` (state saved, drawn, restored) gives the draws of a ``deepcopy`` of the
+    stream, and the stream continues as if nothing had been drawn."""
+    from prognostics.normals import fill_standard_normal
+    from scas_env.core.parts import replayed
+
+    rng = np.random.Generator(bit_generator(17))
+    rng.standard_normal(3)
+    expected_ahead = copy.deepcopy(rng).standard_normal(1000)
+    untouched = copy.deepcopy(rng)
+    got = np.empty(1000)
+    with replayed(rng) as handle:
+        fill_standard_normal(handle, got)
+    np.testing.assert_array_equal(got, expected_ahead)
+    np.testing.assert_array_equal(rng.standard_normal(50), untouched.standard_normal(50))
+
+
 def test_the_kth_part_is_the_same_whatever_the_policy_did() -> None:
     """The lives the clairvoyant view announces at reset are those the parts then live,
     whether the policy replaced early, ran them to failure or tested in between (tests draw

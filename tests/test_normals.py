@@ -25,6 +25,7 @@ from prognostics.normals import (
     NormalStream,
     fill_random,
     fill_standard_normal,
+    handle_of,
     random,
     standard_normal,
 )
@@ -68,6 +69,22 @@ def test_every_bit_generator_gives_its_own_sequence(bit_generator: type) -> None
     np.testing.assert_array_equal(
         stream.rng.integers(0, 2**62, 10), reference.integers(0, 2**62, 10)
     )
+
+
+@pytest.mark.parametrize("bit_generator", BIT_GENERATORS)
+def test_the_capsule_handle_is_the_ctypes_interface(bit_generator: type) -> None:
+    """handle_of reads numpy's bitgen_t from the capsule; numpy's own ctypes interface is
+    the independent source of the same three addresses."""
+    import ctypes
+
+    rng = np.random.Generator(bit_generator(5))
+    iface = rng.bit_generator.ctypes
+    expected = (
+        int(iface.state_address),
+        int(ctypes.cast(iface.next_uint64, ctypes.c_void_p).value),
+        int(ctypes.cast(iface.next_double, ctypes.c_void_p).value),
+    )
+    assert handle_of(rng) == expected
 
 
 def test_kernel_and_numpy_draws_interleave_as_numpy_alone() -> None:
