@@ -103,7 +103,7 @@ class ScasFleetEnv(gym.Env):
 
     | entry | choices | meaning |
     |---|---|---|
-    | mission | ``1 + 2K`` | 0 stand by; ``1..K`` fly a mission of type ``k - 1``; ``K+1..2K`` run the pre-flight test on every actuator, then fly that type |
+    | mission | ``1 + 2K`` | 0 stand by; ``1..K`` fly type ``k - 1``; ``K+1..2K`` test, then fly |
     | actuator ``j`` | 4 | 0 nothing; 1 replace the spring; 2 replace the seals; 3 both |
 
     A maintenance choice queues crew jobs and puts the aircraft in the hangar until they are
@@ -171,7 +171,8 @@ class ScasFleetEnv(gym.Env):
     >>> obs, info = env.reset(seed=0)
     >>> env.action_space.shape, obs.dtype
     ((32,), dtype('float32'))
-    >>> obs, reward, terminated, truncated, info = env.step(env.action_space.sample(env.unwrapped.action_masks()))
+    >>> action = env.action_space.sample(env.unwrapped.action_masks())
+    >>> obs, reward, terminated, truncated, info = env.step(action)
     >>> info["day"]
     1
     """

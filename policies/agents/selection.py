@@ -435,9 +435,9 @@ def as_plain_ppo(
 ) -> None:
     """Save a MaskablePPO model's weights as a plain SB3 PPO zip (same network: the masked
     policy only sets the logits of invalid actions to -inf, which
-    :class:`policies.agents.sb3_agents.EpochAgent` does itself), so that using the shipped agent needs
-    no sb3-contrib. ``scenario``: the env keywords it was trained on (its observation size);
-    ``delegate``: a residual agent's rule (its action count)."""
+    :class:`policies.agents.sb3_agents.EpochAgent` does itself), so that using the shipped
+    agent needs no sb3-contrib. ``scenario``: the env keywords it was trained on (its
+    observation size); ``delegate``: a residual agent's rule (its action count)."""
     from sb3_contrib import MaskablePPO
     from stable_baselines3 import PPO
 
