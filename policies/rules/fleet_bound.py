@@ -35,6 +35,7 @@ from typing import Any
 
 import numpy as np
 
+from policies.base import register_policy
 from scas_env.core.fleet_config import FleetConfig
 from scas_env.core.parts import next_lives
 from scas_env.core.setup import PARTS
@@ -65,12 +66,14 @@ def fleet_upper_bound(seed: int, fleet: FleetConfig | None = None, **env_kwargs:
     per_day = np.minimum(demand.sum(axis=1), sh.aircraft)
     # the missions worth flying, best first: on a day with more asked than aircraft, the
     # best of that day (value + penalty) are the ones a plan can fly
-    gains: list[float] = []
+    gains: list[tuple[float, float]] = []  # (value + penalty, value) of a mission flown
     for d in range(sh.days):
-        day = np.repeat(value + penalty, demand[d])
-        gains.extend(sorted(day, reverse=True)[: per_day[d]])
-    gains_sorted = np.sort(np.array(gains))[::-1]
-    top = np.concatenate([[0.0], np.cumsum(gains_sorted)])
+        both = zip(np.repeat(value + penalty, demand[d]), np.repeat(value, demand[d]), strict=True)
+        day = sorted(both, reverse=True)
+        gains.extend(day[: per_day[d]])
+    gains.sort(reverse=True)
+    top = np.concatenate([[0.0], np.cumsum([g for g, _ in gains])])
+    top_value = np.concatenate([[0.0], np.cumsum([v for _, v in gains])])
     slowest = _slowest_crack(env)
     batch = fb.actuators
     cost = np.zeros((sh.aircraft, sh.days + 1))
@@ -89,13 +92,38 @@ def fleet_upper_bound(seed: int, fleet: FleetConfig | None = None, **env_kwargs:
     total = top[m] - best[m]
     k = int(np.argmax(total))
     penalties = float((demand * penalty).sum())
+    bound = float(total[k] - penalties)
     return {
-        "bound": float(total[k] - penalties),
+        "bound": bound,
         "missions": k,
+        "missions_demanded": int(demand.sum()),
+        "flights": k * sh.flights,
+        "flight_hours": k * sh.flights * cfg.demand.flight_hours_per_flight,
+        "value_flown": float(top_value[k]),
         "gains": float(top[k]),
         "penalties": penalties,
         "replacement_cost": float(best[k]),
+        "cost_usd": float(top_value[k]) - bound,
     }
+
+
+class FleetBound:
+    """The bound as a benchmark arm (``fleet_bound``): its rows are computed per episode seed
+    by :func:`fleet_upper_bound` (:func:`policies.benchmark.fleet_runner.fleet_bound_rows`),
+    not run; it has no actions."""
+
+    def __init__(self, obs_names: Any = (), **params: Any) -> None:
+        if params:
+            raise ValueError(f"fleet_bound takes no parameters, got {sorted(params)}")
+
+    def predict(self, *args: Any, **kwargs: Any) -> Any:
+        raise TypeError(
+            "fleet_bound is an upper bound computed per episode (fleet_upper_bound), "
+            "not a policy that acts"
+        )
+
+
+register_policy("fleet_bound", FleetBound, obs_mode="features+rul", family="bound")
 
 
 def _check_costs(cfg: FleetConfig, costs: Any, price: dict[str, float]) -> None:

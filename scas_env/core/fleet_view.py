@@ -245,6 +245,7 @@ class FleetView:
         wasted_sum = a["wasted_sum"][rows].sum(axis=0)
         wasted_count = a["wasted_count"][rows].sum(axis=0)
         terms = fleet.today["terms"][b]
+        on_order = fleet.spares.on_order
         row_terms = a["terms"][rows].sum(axis=0)
         return {
             "day": days,
@@ -269,6 +270,8 @@ class FleetView:
             "stock_outs": {
                 k: int(fleet.spares.stock_outs[b, n]) for n, k in enumerate(SPARE_KINDS)
             },
+            "stock": {k: int(fleet.spares.on_hand[b, n]) for n, k in enumerate(SPARE_KINDS)},
+            "on_order": {k: int(on_order[b, n]) for n, k in enumerate(SPARE_KINDS)},
             "jobs_waiting": int((fleet.crew.sequence[b] >= 0).sum()),
             "jobs_done": jobs_done,
             "waiting_job_days": int(fleet.crew.waiting_job_days[b]),
