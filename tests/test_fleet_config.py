@@ -23,10 +23,14 @@ def test_defaults_are_the_issue_s_fleet() -> None:
     cfg = FleetConfig()
     assert (cfg.aircraft, cfg.actuators_per_aircraft, cfg.flights_per_mission) == (8, 3, 2)
     assert cfg.n_actuators == 24 and cfg.crew_capacity == 1
-    assert cfg.mission_types == ("standard",) and cfg.demand.mission_mix == (1.0,)
+    assert cfg.mission_types == ("standard", "utility", "offshore_gusts")
+    assert cfg.demand.mission_mix == (0.5, 0.3, 0.2)
     assert cfg.base_missions_per_day == pytest.approx(600 * 8 / 3 / 365)
-    # a mission of 2 flights is worth two of the single env's flights
-    assert cfg.mission_value_usd == (2 * CostModel().flight_value_usd,)
+    # a mission of 2 flights is worth two of the single env's flights; a missed one costs a
+    # substitute aircraft on top
+    assert cfg.mission_value_usd == (2 * CostModel().flight_value_usd,) * 3
+    assert cfg.mission_not_flown_usd == (5000.0,) * 3
+    assert cfg.spares.spec().initial == (2, 2, 2)
     for group in (FleetConfig, SparesConfig, DemandModel):
         for name, _, unit, _, source in group.describe():
             assert unit and source, f"{group.__name__}.{name} needs a unit and a source"
@@ -48,7 +52,7 @@ def test_spares_map_to_the_resource_spec() -> None:
         lead_spread_days=2,
     )
     assert spares.spec() == SparesSpec(
-        initial=(3, 1, 4),
+        initial=(3, 2, 4),
         base_stock=(2, -1, 4),
         lead_days=(10, 10, 20),
         lead_spread_days=(2, 2, 2),
@@ -73,8 +77,8 @@ def test_the_degenerate_fleet() -> None:
         ({"mission_types": ("standard", "windy")}, r"mission_types\[1\] = 'windy'"),
         ({"mission_types": ("standard", "standard")}, r"names a type twice"),
         ({"mission_types": ()}, r"non-empty list"),
-        ({"mission_value_usd": (-1.0,)}, r"mission_value_usd\[0\] = -1.0 USD"),
-        ({"mission_not_flown_usd": (1.0, 2.0)}, r"needs 1 amounts"),
+        ({"mission_value_usd": (5.0, -1.0, 5.0)}, r"mission_value_usd\[1\] = -1.0 USD"),
+        ({"mission_not_flown_usd": (1.0, 2.0)}, r"needs 3 amounts"),
         (
             {"mission_types": ("standard", "training"), "mission_value_usd": (1.0, 1.0)},
             r"needs 2 amounts",
@@ -85,17 +89,23 @@ def test_the_degenerate_fleet() -> None:
                 "mission_value_usd": (1.0, 1.0),
                 "mission_not_flown_usd": (0.0, 0.0),
             },
-            r"mission_mix has 1 probabilities but FleetConfig.mission_types has 2",
+            r"mission_mix has 3 probabilities but FleetConfig.mission_types has 2",
         ),
         (
-            {"demand": DemandModel(flight_hours_per_aircraft_year=1500.0)},
+            {
+                "demand": DemandModel(
+                    flight_hours_per_aircraft_year=1500.0, mission_mix=(0.5, 0.3, 0.2)
+                )
+            },
             r"mean demand of 11 missions a day exceeds the 8 aircraft",
         ),
         (
             {
                 "flights_per_mission": 16,
                 "demand": DemandModel(
-                    flight_hours_per_aircraft_year=10.0, flight_hours_per_flight=2.0
+                    flight_hours_per_aircraft_year=10.0,
+                    flight_hours_per_flight=2.0,
+                    mission_mix=(0.5, 0.3, 0.2),
                 ),
             },
             r"16 flights of 2.0 h lasts 32.0 h, more than a day",
@@ -179,6 +189,17 @@ def test_fleet_examples_load_and_every_value_is_explained(path: Path) -> None:
         for key, value in values.items():
             if not isinstance(value, dict):
                 assert _comment_above(lines, key, first), f"{path.name} [{table}] {key}"
+
+
+@pytest.mark.parametrize("path", FLEET_EXAMPLES, ids=lambda p: p.name)
+def test_fleet_examples_load_all_three_sections(path: Path) -> None:
+    """``[fleet]`` is a registered file section (``FILE_SECTIONS``): each class reads its own
+    table of a fleet file, and the fleet env runs the whole case."""
+    data = read_mapping(path)
+    assert Scenario.load(path) == Scenario.from_dict(data["scenario"])
+    assert CostModel.load(path) == CostModel.from_dict(data["costs"])
+    assert FleetConfig.load(path) == FleetConfig.from_dict(data["fleet"])
+    assert Scenario.load(path).initial_health == "in_service"
 
 
 def test_the_two_examples_are_the_operators_they_claim() -> None:
