@@ -9,10 +9,10 @@ from pathlib import Path
 import pytest
 
 from scas_env.actuator.config import read_mapping
+from scas_env.core.costs import CostModel
 from scas_env.core.demand import DemandModel
 from scas_env.core.fleet_config import FleetConfig, SparesConfig
 from scas_env.core.resources import SparesSpec
-from scas_env.core.costs import CostModel
 from scas_env.core.scenario import Scenario
 
 ROOT = Path(__file__).resolve().parents[1]

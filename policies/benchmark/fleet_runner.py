@@ -135,7 +135,7 @@ def fleet_row(info: dict[str, Any], e: int, reward: float) -> dict[str, Any]:
         "flights": int(info["flights"][e]),
         "flight_hours": fh,
         "cost_usd": float(info["cost_usd"][e]),
-        "cost_per_fh": float(info["cost_per_fh"][e]),
+        "cost_per_fh": float(info["cost_usd"][e]) / fh if fh > 0 else math.nan,
         "reward": reward,
         "failures_spring": failures["spring"],
         "failures_seal": failures["seal"],

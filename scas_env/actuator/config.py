@@ -9,9 +9,9 @@ Files: :meth:`Validated.load` and :meth:`Validated.save` read and write TOML, YA
 (by suffix) with the same validation; errors name the file, the table and the field. A file
 holds either the fields of one group at its top level, or tables named after
 :data:`FILE_SECTIONS` (``[scenario]``, ``[costs]``, ``[params]``, ``[fleet]``), each read by
-its class, so one file can describe a whole case. Files are UTF-8 (a byte-order mark is allowed); a key
-may appear once per mapping. Readers: :mod:`tomllib`, PyYAML's ``SafeLoader`` (no object
-construction, so a file cannot run code) and :mod:`json`, the last two refusing a repeated
+its class, so one file can describe a whole case. Files are UTF-8 (a byte-order mark is
+allowed); a key may appear once per mapping. Readers: :mod:`tomllib`, PyYAML's
+``SafeLoader`` (no object construction, so a file cannot run code) and :mod:`json`, the last two refusing a repeated
 key (:func:`read_mapping`); a boolean is taken only by a switch (unit ``"bool"``), never
 for a number. Writers: a small TOML
 writer for such mappings (:func:`toml_text`), PyYAML's ``safe_dump`` and :mod:`json`. Files

@@ -25,7 +25,7 @@ from typing import Any
 import numpy as np
 from gymnasium import spaces
 
-from scas_env.fleet_env import ScasFleetEnv
+from scas_env.fleet_env import ScasFleetEnv, check_fleet_action
 
 try:
     from pettingzoo import ParallelEnv
@@ -96,8 +96,13 @@ class FleetParallelEnv(ParallelEnv):
             raise ValueError(
                 f"actions must name every live agent: missing {missing}, extra {extra}"
             )
+        config = self.fleet_env.config
         joint = np.concatenate(
-            [np.asarray(actions[a], dtype=np.int64).ravel() for a in self.possible_agents]
+            [
+                check_fleet_action(actions[a], self._action_space, config, f"actions[{a!r}]")
+                for a in self.possible_agents
+            ],
+            axis=None,
         )
         _, reward, terminated, truncated, info = self.fleet_env.step(joint)
         observations, infos = self._split(info)
