@@ -11,12 +11,11 @@ holds either the fields of one group at its top level, or tables named after
 :data:`FILE_SECTIONS` (``[scenario]``, ``[costs]``, ``[params]``, ``[fleet]``), each read by
 its class, so one file can describe a whole case. Files are UTF-8 (a byte-order mark is
 allowed); a key may appear once per mapping. Readers: :mod:`tomllib`, PyYAML's
-``SafeLoader`` (no object construction, so a file cannot run code) and :mod:`json`, the last two refusing a repeated
-key (:func:`read_mapping`); a boolean is taken only by a switch (unit ``"bool"``), never
-for a number. Writers: a small TOML
-writer for such mappings (:func:`toml_text`), PyYAML's ``safe_dump`` and :mod:`json`. Files
-are written atomically (a temporary file renamed into place); an existing file is refused
-unless ``overwrite=True``.
+``SafeLoader`` (no object construction, so a file cannot run code) and :mod:`json`, the last
+two refusing a repeated key (:func:`read_mapping`); a boolean is taken only by a switch
+(unit ``"bool"``), never for a number. Writers: a small TOML writer for such mappings
+(:func:`toml_text`), PyYAML's ``safe_dump`` and :mod:`json`. Files are written atomically (a
+temporary file renamed into place); an existing file is refused unless ``overwrite=True``.
 
 Example:
     >>> from dataclasses import dataclass
