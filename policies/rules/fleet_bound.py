@@ -5,8 +5,10 @@ For one episode (a seed of ``ScasFleet-v0``) everything is known in advance: the
 every day and every part's remaining life and the lives of the parts that will replace it
 (each kind's parts stream hands them out in order whatever the policy does). The relaxation
 drops every constraint that costs a policy something: the crew, the spares and their lead
-times, downtime, tests, background removals; any aircraft may fly any mission (at most one
-a day); every flight counts as the least damaging mission type's. Then the best plan flies
+times, downtime, tests, background removals; any aircraft may fly any mission, and the
+missions flown are not matched to aircraft day by day (at most ``N`` missions a day, each
+aircraft at most as many missions as there are days); every flight counts as the least
+damaging mission type's (per part, the smallest growth multiplier). Then the best plan flies
 the ``M`` missions of largest value-plus-penalty and spreads them over the aircraft so that
 the parts used up (each replaced, at its preventive cost, just before it would fail) cost
 least:
@@ -22,10 +24,11 @@ Why no policy beats it: every policy pays at least the relaxed plan's cost for t
 it completes (a part flown to failure costs an in-flight failure, more than its preventive
 replacement; a background swap fits new parts for more than their preventive cost; a
 damaging mission uses up lives at least as fast), earns at most ``v_k`` per mission
-(an aborted mission earns part of ``v_k``, pays ``p_k`` and the failure that aborted it,
-more than ``v_k``), and pays every penalty the plan pays. The constructor checks the cost
-conditions this needs; ``tests/test_fleet_bound.py`` checks the bound against every rule on
-fixed seeds.
+(an aborted mission earns at most ``(F - 1) / F`` of ``v_k`` and pays ``p_k`` and the failure
+that aborted it, which costs at least the part it replaces plus that value), and pays
+every penalty the plan pays. ``fleet_upper_bound`` checks the cost conditions this needs;
+``tests/test_fleet_bound.py`` checks the bound against every rule on fixed seeds and its
+plan against an enumeration.
 """
 
 from __future__ import annotations
@@ -74,7 +77,7 @@ def fleet_upper_bound(seed: int, fleet: FleetConfig | None = None, **env_kwargs:
     gains.sort(reverse=True)
     top = np.concatenate([[0.0], np.cumsum([g for g, _ in gains])])
     top_value = np.concatenate([[0.0], np.cumsum([v for _, v in gains])])
-    slowest = _slowest_crack(env)
+    slowest = _slowest(env)
     batch = fb.actuators
     cost = np.zeros((sh.aircraft, sh.days + 1))
     flights = sh.flights * np.arange(sh.days + 1)
@@ -84,9 +87,8 @@ def fleet_upper_bound(seed: int, fleet: FleetConfig | None = None, **env_kwargs:
             for p, part in enumerate(PARTS):
                 lives = [float(batch.a["life"][e, p])]
                 lives += next_lives(batch, e, part, LOOKAHEAD_PARTS)
-                if part == "spring":
-                    lives = [life / slowest for life in lives]
-                cost[i] += price[part] * _replacements(lives, flights, batch, e, part, slowest)
+                lives = [life / slowest[p] for life in lives]
+                cost[i] += price[part] * _replacements(lives, flights, batch, e, part, slowest[p])
     best = _min_plus_over_aircraft(cost)
     m = np.arange(min(best.size, top.size))
     total = top[m] - best[m]
@@ -127,12 +129,19 @@ register_policy("fleet_bound", FleetBound, obs_mode="features+rul", family="boun
 
 
 def _check_costs(cfg: FleetConfig, costs: Any, price: dict[str, float]) -> None:
-    """The cost conditions that make the relaxation a bound (module docstring)."""
-    flight_value = max(cfg.mission_value_usd) / int(cfg.flights_per_mission)
-    if costs.failure_total_usd < max(price.values()) or costs.failure_total_usd < flight_value:
+    """The cost conditions that make the relaxation a bound (module docstring): a failure
+    pays for the part it replaces (at least its preventive price) and for the value of the
+    flights its mission flew before it (at most ``F - 1`` of ``F``), which the relaxation
+    does not earn."""
+    flights = int(cfg.flights_per_mission)
+    before = max(cfg.mission_value_usd) * (flights - 1) / flights
+    need = max(price.values()) + before
+    if costs.failure_total_usd < need:
         raise ValueError(
-            "the bound needs an in-flight failure to cost at least a preventive replacement and "
-            f"a flight's value; failure_total_usd = {costs.failure_total_usd}"
+            "the bound needs an in-flight failure to cost at least a preventive replacement "
+            f"({max(price.values())} USD) plus the value of the {flights - 1} flights of a "
+            f"mission before it ({before} USD): failure_total_usd = "
+            f"{costs.failure_total_usd} must be >= {need}"
         )
     if cfg.background_removals and cfg.background_removal_usd < sum(price.values()):
         raise ValueError(
@@ -141,23 +150,24 @@ def _check_costs(cfg: FleetConfig, costs: Any, price: dict[str, float]) -> None:
         )
 
 
-def _slowest_crack(env: Any) -> float:
-    """The smallest crack-growth multiplier of the fleet's mission types (<= 1: the standard
-    mission is 1), which stretches a spring's life in standard flights at most by 1 / it."""
+def _slowest(env: Any) -> tuple[float, float]:
+    """Per part, the smallest growth multiplier of the fleet's mission types (<= 1: the
+    standard mission is 1; the spring's crack multiplier over the growth grid, the seals'
+    wear multiplier), which stretches a part's life in standard flights at most by 1 / it."""
     wm = env.setup.world
-    return float(min(1.0, wm.type_crack_mult.min()))
+    return float(min(1.0, wm.type_crack_mult.min())), float(min(1.0, wm.type_wear_mult.min()))
 
 
 def _replacements(
     lives: list[float], flights: np.ndarray, batch: Any, e: int, part: str, slowest: float
 ) -> np.ndarray:
     """Replacements one part position needs to fly each number of ``flights``: the fitted
-    part flies ``L_0 - 1`` flights safely, each next part ``L_q - 1``."""
+    part flies ``L_0 - 1`` flights safely, each next part ``L_q - 1`` (lives stretched by
+    ``1 / slowest``)."""
     safe = np.cumsum([max(life - 1.0, 0.0) for life in lives])
     while math.isfinite(safe[-1]) and safe[-1] < flights[-1]:
         more = next_lives(batch, e, part, len(lives) + LOOKAHEAD_PARTS)[len(lives) - 1 :]
-        if part == "spring":
-            more = [life / slowest for life in more]
+        more = [life / slowest for life in more]
         lives = lives + more
         safe = np.cumsum([max(life - 1.0, 0.0) for life in lives])
     return np.searchsorted(safe, flights, side="left").astype(np.float64)
