@@ -147,6 +147,25 @@ def test_same_seed_and_actions_same_episode() -> None:
     assert not all(np.array_equal(a, b) for a, b in zip(o1, o3, strict=True))
 
 
+def _same(x: Any, y: Any) -> bool:
+    if isinstance(x, dict):
+        return x.keys() == y.keys() and all(_same(x[k], y[k]) for k in x)
+    return bool(np.array_equal(x, y, equal_nan=isinstance(x, float | np.ndarray)))
+
+
+def test_a_reset_forgets_the_last_episode() -> None:
+    """Reset with a seed after an episode: the observation and the whole info of a new env
+    reset with that seed (today's terms, missions and assignments included)."""
+    used = ScasFleetEnv(fleet=SMALL)
+    _episode(used, 5, 20)
+    fresh = ScasFleetEnv(fleet=SMALL)
+    o1, i1 = used.reset(seed=9)
+    o2, i2 = fresh.reset(seed=9)
+    assert np.array_equal(o1, o2)
+    for key in i2:
+        assert _same(i1[key], i2[key]), key
+
+
 def test_pickle_and_deepcopy_continue_bit_for_bit() -> None:
     env = ScasFleetEnv(fleet=SMALL)
     _episode(env, 7, 10)
@@ -415,6 +434,7 @@ def test_bad_vector_and_agent_actions_are_refused() -> None:
     [
         ({"aircrafts": 4}, r"FleetConfig: unknown key\(s\) \['aircrafts'\]"),
         ({"mtbur_fh": math.nan}, r"FleetConfig\.mtbur_fh = nan FH is not finite"),
+        ({"mission_value_usd": (math.nan, 1.0, 1.0)}, r"mission_value_usd\[0\] = nan USD"),
         ({"crew_jobs_per_day": 1.5}, r"crew_jobs_per_day = 1\.5 .*whole number"),
         ({"episode_days": True}, r"episode_days = True"),
         ({"holding_usd_per_unit_day": -1.0}, r"holding_usd_per_unit_day = -1\.0"),
