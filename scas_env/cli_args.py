@@ -232,6 +232,12 @@ def load_env_config(
     scenario, costs = Scenario(), CostModel()
     try:
         if args.scenario is not None:
+            if "fleet" in read_mapping(args.scenario):
+                raise ValueError(
+                    f"{args.scenario} holds a [fleet] table: this command runs one actuator "
+                    "(ScasMaintenance-v2), not a fleet; give it a file without [fleet], or run "
+                    "fleets with gym.make('scas_env/ScasFleet-v0', fleet=FleetConfig.load(...))"
+                )
             scenario = Scenario.load(args.scenario)
             if args.costs is None and "costs" in read_mapping(args.scenario):
                 costs = CostModel.load(args.scenario)

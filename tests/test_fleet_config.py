@@ -212,3 +212,19 @@ def test_the_two_examples_are_the_operators_they_claim() -> None:
     assert military.demand.flight_hours_per_aircraft_year == 200.0  # CBO FY2023
     assert military.mission_availability_target == 0.68
     assert military.mission_types[0] == "training"
+
+
+@pytest.mark.parametrize("path", FLEET_EXAMPLES, ids=lambda p: p.name)
+def test_single_actuator_commands_refuse_a_fleet_file(
+    path: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A fleet file's [scenario] and [costs] tables are readable, but a command that runs one
+    actuator does not silently drop its [fleet] table: a usage error before any work."""
+    from policies import cli as policies_cli
+
+    out = tmp_path / "bench"
+    with pytest.raises(SystemExit) as exit_:
+        policies_cli.benchmark_main(["--scenario", str(path), "--out", str(out)])
+    assert exit_.value.code == 2
+    assert "holds a [fleet] table: this command runs one actuator" in capsys.readouterr().err
+    assert not out.exists()
