@@ -216,7 +216,7 @@ class FleetConfig(Validated):
         "dynamics do not use it)",
     )
     #: a civil multi-role operator [B]: Table 1's mix, utility work (short sectors, loads),
-    #: crew changes in gusty wind (the damaging types of docs/fleet_model.md)
+    #: crew changes in gusty wind (the damaging types of docs/fleet.md)
     mission_types: tuple[str, ...] = ("standard", "utility", "offshore_gusts")
     #: 2 flights at the single actuator's $2,500 a flight (CostModel.flight_value_usd)
     mission_value_usd: tuple[float, ...] = (5000.0, 5000.0, 5000.0)
