@@ -150,7 +150,7 @@ def benchmark_main(argv: Sequence[str] | None = None) -> int:
     args = parser.parse_args(argv)
     configure_logging(args)
     out = check_out_dir(parser, args.out, args.overwrite)
-    scenario, costs = load_env_config(parser, args)
+    scenario, costs = load_env_config(parser, args, fleet=True)
     if scenario.obs_mode != Scenario().obs_mode:
         parser.error(
             f"{args.scenario}: obs_mode = {scenario.obs_mode!r}: the benchmark gives each "

@@ -177,8 +177,7 @@ class ScasFleetEnv(gym.Env):
     >>> obs, info = env.reset(seed=0)
     >>> env.action_space.shape, obs.dtype
     ((32,), dtype('float32'))
-    >>> action = env.action_space.sample(env.unwrapped.action_masks())
-    >>> obs, reward, terminated, truncated, info = env.step(action)
+    >>> obs, reward, terminated, truncated, info = env.step(env.action_space.sample())
     >>> info["day"]
     1
     """

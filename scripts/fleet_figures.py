@@ -4,7 +4,7 @@ derived numbers, and the bound against the fleet rules.
     python scripts/fleet_figures.py multipliers   # the shipped table at some depths (~1 s)
     python scripts/fleet_figures.py lives         # flights to failure per type (~2 s)
     python scripts/fleet_figures.py configs       # demand and resources of the fleets (~1 s)
-    python scripts/fleet_figures.py bound --seeds 0 1 2 3 --days 365   # ~2 min
+    python scripts/fleet_figures.py bound --seeds 0 1 2 3 --days 365   # ~30 s
 """
 
 from __future__ import annotations

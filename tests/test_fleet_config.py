@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import math
 import re
 from pathlib import Path
@@ -219,12 +220,29 @@ def test_single_actuator_commands_refuse_a_fleet_file(
     path: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     """A fleet file's [scenario] and [costs] tables are readable, but a command that runs one
-    actuator does not silently drop its [fleet] table: a usage error before any work."""
+    actuator (here the tuner) does not silently drop its [fleet] table: a usage error before
+    any work."""
     from policies import cli as policies_cli
 
-    out = tmp_path / "bench"
+    out = tmp_path / "tune"
     with pytest.raises(SystemExit) as exit_:
-        policies_cli.benchmark_main(["--scenario", str(path), "--out", str(out)])
+        policies_cli.tune_main(["--scenario", str(path), "--out", str(out)])
     assert exit_.value.code == 2
     assert "holds a [fleet] table: this command runs one actuator" in capsys.readouterr().err
     assert not out.exists()
+
+
+@pytest.mark.filterwarnings("ignore:No artists with labels:UserWarning")
+def test_the_benchmark_runs_a_fleet_file_with_its_three_tables(tmp_path: Path) -> None:
+    """``scas-benchmark --scenario <fleet file>`` reads the file's [scenario], [costs] and
+    [fleet] tables (FILE_SECTIONS) and records them."""
+    from policies import cli as policies_cli
+
+    path = ROOT / "examples" / "fleet_military_training.toml"
+    out = tmp_path / "bench"
+    argv = ["--scenario", str(path), "--episodes", "1", "--policies", "fleet_naive"]
+    assert policies_cli.benchmark_main([*argv, "--workers", "1", "--out", str(out), "-q"]) == 0
+    config = json.loads((out / "summary.json").read_text())["config"]
+    assert FleetConfig.from_dict(config["fleet"]) == FleetConfig.load(path)
+    assert CostModel.from_dict(config["costs"]) == CostModel.load(path)
+    assert Scenario.from_dict(config["scenario"]).initial_health == "in_service"

@@ -26,8 +26,8 @@ from scas_env.actuator.mission_types import (
 )
 from scas_env.actuator.missions import REGIMES, flight_profile
 from scas_env.actuator.params import ScasParams
-from scas_env.utils.shipped_files import shipped_path
 from scas_env.studies.mission_types_build import regime_mix_multipliers
+from scas_env.utils.shipped_files import shipped_path
 
 P = ScasParams()
 FS = P.sensors.sample_rate_hz

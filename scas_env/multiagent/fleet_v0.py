@@ -4,7 +4,7 @@
 >>> env = fleet_v0.parallel_env(episode_days=5)
 >>> observations, infos = env.reset(seed=0)
 >>> env.agents[:2], env.action_space("aircraft_0")
-(['aircraft_0', 'aircraft_1'], MultiDiscrete([3 4 4 4]))
+(['aircraft_0', 'aircraft_1'], MultiDiscrete([7 4 4 4]))
 
 Each aircraft ``aircraft_i`` observes its own actuators (the single env's 20 entries each)
 and status, and the fleet's shared groups (spares, crew, demand, calendar)
