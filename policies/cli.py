@@ -245,7 +245,7 @@ def _fleet_config(parser: Any, args: Any) -> Any:
     """The FleetConfig of ``--scenario``'s ``[fleet]`` table, the default fleet for
     ``--fleet``, else None (the single actuator)."""
     from scas_env.actuator.config import read_mapping
-    from scas_env.core.fleet_config import FleetConfig
+    from scas_env.core.fleet.config import FleetConfig
 
     has_table = args.scenario is not None and "fleet" in read_mapping(args.scenario)
     if not (has_table or args.fleet):

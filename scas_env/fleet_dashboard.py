@@ -14,9 +14,9 @@ from typing import Any
 
 import numpy as np
 
-from scas_env.core.fleet import FleetBatch
-from scas_env.core.fleet_view import FleetView
-from scas_env.core.resources import SPARE_KINDS
+from scas_env.core.fleet.batch import FleetBatch
+from scas_env.core.fleet.resources import SPARE_KINDS
+from scas_env.core.fleet.view import FleetView
 from scas_env.core.setup import PARTS
 
 #: frame size (pixels) = FIGSIZE_IN * DPI

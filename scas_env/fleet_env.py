@@ -12,9 +12,9 @@ from scas_env.actuator.calibration import Calibration, calibration_for
 from scas_env.actuator.params import ScasParams
 from scas_env.actuator.surrogate import SurrogateModel, default_surrogate
 from scas_env.core.costs import CostModel
-from scas_env.core.fleet import MAINTENANCE_CHOICES, FleetBatch
-from scas_env.core.fleet_config import FleetConfig
-from scas_env.core.fleet_view import FleetView
+from scas_env.core.fleet.batch import MAINTENANCE_CHOICES, FleetBatch
+from scas_env.core.fleet.config import FleetConfig
+from scas_env.core.fleet.view import FleetView
 from scas_env.core.scenario import Scenario
 from scas_env.core.setup import Setup
 from scas_env.fleet_dashboard import draw_fleet, render_text
@@ -95,7 +95,7 @@ class ScasFleetEnv(gym.Env):
     that fails in flight ends the mission and needs an unscheduled removal; a background
     removal (MTBUR 5,000 FH) that no feature sees takes an actuator to the shop. The task:
     fly the missions at the least cost. The dynamics of a day:
-    :mod:`scas_env.core.fleet`.
+    :mod:`scas_env.core.fleet.batch`.
 
     ## Action Space
 
@@ -121,7 +121,7 @@ class ScasFleetEnv(gym.Env):
     ## Observation Space
 
     ``Box`` (float32, documented bounds; ``env.unwrapped.obs_names`` names every entry), the
-    groups of :mod:`scas_env.core.fleet_view`: per actuator the single env's 20 entries
+    groups of :mod:`scas_env.core.fleet.view`: per actuator the single env's 20 entries
     (latest features I2, I6, I7, I8, I9, G1, G3; test age; no-go; RUL mean, low quantile and
     risk of spring and seals; detector flags; part ages; downtime), per aircraft its status
     (jobs queued, broken, downtime, no-go, free), the fleet's spares on hand and on order, jobs

@@ -2,7 +2,7 @@
 
 ``gym.make_vec("scas_env/ScasFleet-v0", num_envs=B, vectorization_mode="vector_entry_point")``
 returns a :class:`ScasFleetVectorEnv`: the fleets' actuators are the rows of one
-:class:`~scas_env.core.batch.ActuatorBatch` (:class:`~scas_env.core.fleet.FleetBatch` with
+:class:`~scas_env.core.batch.ActuatorBatch` (:class:`~scas_env.core.fleet.batch.FleetBatch` with
 ``B`` fleets), so fleet ``b`` gives exactly the episode of a single fleet env seeded
 ``seed + b`` (tested bit for bit). Autoreset is Gymnasium's next-step mode; ``info`` is a
 dict of per-fleet arrays (the KPIs of :class:`~scas_env.fleet_env.ScasFleetEnv`, nested
@@ -19,8 +19,8 @@ from gymnasium.utils import seeding
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
-from scas_env.core.fleet import FleetBatch
-from scas_env.core.fleet_view import FleetView
+from scas_env.core.fleet.batch import FleetBatch
+from scas_env.core.fleet.view import FleetView
 from scas_env.fleet_env import check_fleet_action, fleet_action_space, make_fleet_setup
 from scas_env.vector_env import check_num_envs
 

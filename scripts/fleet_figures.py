@@ -93,7 +93,7 @@ def lives(units: int = 20_000, seed: int = 0) -> None:
 def configs() -> None:
     """Mean missions a day, background removal probability per flight and the spares of
     the default fleet and the two examples."""
-    from scas_env.core.fleet_config import FleetConfig
+    from scas_env.core.fleet.config import FleetConfig
 
     cases = {"default": FleetConfig()}
     cases.update({name: FleetConfig.load(ROOT / "examples" / name) for name in EXAMPLES})
@@ -119,7 +119,7 @@ def bound(seeds: list[int], days: int) -> None:
     from policies.benchmark.fleet_runner import run_fleet_episodes
     from policies.rules.fleet import FLEET_FAMILIES
     from policies.rules.fleet_bound import fleet_upper_bound
-    from scas_env.core.fleet_config import FleetConfig
+    from scas_env.core.fleet.config import FleetConfig
 
     cfg = FleetConfig(episode_days=days)
     bounds = np.array([fleet_upper_bound(s, cfg)["bound"] for s in seeds])

@@ -8,7 +8,7 @@ from typing import Any
 
 import numpy as np
 
-from scas_env.core.fleet_config import FleetConfig, SparesConfig
+from scas_env.core.fleet.config import FleetConfig, SparesConfig
 from scas_env.fleet_env import ScasFleetEnv
 
 #: a small fleet with every resource scarce: 4 aircraft x 2 actuators, 3 mission types, one

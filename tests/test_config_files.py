@@ -24,7 +24,7 @@ from scas_env.actuator.config import (
 )
 from scas_env.actuator.params import ScasParams
 from scas_env.core.costs import CostModel
-from scas_env.core.fleet_config import FleetConfig
+from scas_env.core.fleet.config import FleetConfig
 from scas_env.core.scenario import FIDELITIES, INITIAL_HEALTH, OBS_MODES, Scenario
 
 ROOT = Path(__file__).resolve().parents[1]

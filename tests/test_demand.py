@@ -1,4 +1,4 @@
-"""The fleet's demand model (scas_env.core.demand): closed forms, seeding, validation."""
+"""The fleet's demand model (scas_env.core.fleet.demand): closed forms, seeding, validation."""
 
 from __future__ import annotations
 
@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from scas_env.core.demand import DAYS_PER_YEAR, DemandModel, draw_schedule
+from scas_env.core.fleet.demand import DAYS_PER_YEAR, DemandModel, draw_schedule
 
 FLEET = {"aircraft": 8, "flights_per_mission": 2}
 

@@ -108,7 +108,9 @@ def test_validation_on_the_runs_scenario_picks_the_best_checkpoint(v2_runs, tmp_
     with (tmp_path / "agent_v2_curves.csv").open() as fh:
         assert {r["run"] for r in csv.DictReader(fh)} == {"a", "b"}
     # the shipped copy acts on v2 and refuses v0's observation
-    ship = PolicySpec("sb3", {"path": str(zip_path)}, label="x", module="policies.agents.sb3_agents")
+    ship = PolicySpec(
+        "sb3", {"path": str(zip_path)}, label="x", module="policies.agents.sb3_agents"
+    )
     res = run_benchmark([ship], episodes=1, slots=SLOTS, env_kwargs=dict(V2_KWARGS))
     expected = run_benchmark(
         [PolicySpec("sb3", {

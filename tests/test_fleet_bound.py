@@ -17,8 +17,8 @@ from policies.benchmark.fleet_runner import run_fleet_episodes
 from policies.rules.fleet import FLEET_FAMILIES
 from policies.rules.fleet_bound import _min_plus_over_aircraft, fleet_upper_bound
 from scas_env.core.costs import CostModel
-from scas_env.core.demand import DemandModel
-from scas_env.core.fleet_config import FleetConfig
+from scas_env.core.fleet.config import FleetConfig
+from scas_env.core.fleet.demand import DemandModel
 from scas_env.core.parts import next_lives
 from scas_env.core.scenario import Scenario
 from scas_env.fleet_env import ScasFleetEnv

@@ -1,4 +1,4 @@
-"""Fleet configuration (scas_env.core.fleet_config): validation, files, the two examples."""
+"""Fleet configuration (scas_env.core.fleet.config): validation, files, the two examples."""
 
 from __future__ import annotations
 
@@ -11,9 +11,9 @@ import pytest
 
 from scas_env.actuator.config import read_mapping
 from scas_env.core.costs import CostModel
-from scas_env.core.demand import DemandModel
-from scas_env.core.fleet_config import FleetConfig, SparesConfig
-from scas_env.core.resources import SparesSpec
+from scas_env.core.fleet.config import FleetConfig, SparesConfig
+from scas_env.core.fleet.demand import DemandModel
+from scas_env.core.fleet.resources import SparesSpec
 from scas_env.core.scenario import Scenario
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -11,8 +11,8 @@ from dataclasses import dataclass, field
 import numpy as np
 import pytest
 
-from scas_env.core.demand import DemandModel
-from scas_env.core.fleet_config import FleetConfig, SparesConfig
+from scas_env.core.fleet.config import FleetConfig, SparesConfig
+from scas_env.core.fleet.demand import DemandModel
 from scas_env.core.scenario import Scenario
 from scas_env.fleet_env import ScasFleetEnv
 from tests.fleet_cases import SMALL, Names, masked_random, rows_of_aircraft

@@ -15,9 +15,9 @@ import numpy as np
 import pytest
 
 import scas_env
-from scas_env.core.demand import DemandModel
-from scas_env.core.fleet_config import FleetConfig
-from scas_env.core.fleet_view import AIRCRAFT_FIELDS, GROUPS
+from scas_env.core.fleet.config import FleetConfig
+from scas_env.core.fleet.demand import DemandModel
+from scas_env.core.fleet.view import AIRCRAFT_FIELDS, GROUPS
 from scas_env.core.scenario import Scenario
 from scas_env.fleet_env import ScasFleetEnv
 from scas_env.fleet_vector_env import PER_AIRCRAFT, ScasFleetVectorEnv

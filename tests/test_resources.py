@@ -1,4 +1,4 @@
-"""Spares and crew of a fleet (scas_env.core.resources): hand computations, counters, seeding."""
+"""Spares and crew of a fleet (scas_env.core.fleet.resources): hand computations, counters, seeding."""
 
 from __future__ import annotations
 
@@ -8,7 +8,7 @@ import pickle
 import numpy as np
 import pytest
 
-from scas_env.core.resources import (
+from scas_env.core.fleet.resources import (
     ACTUATOR,
     NO_BASE_STOCK,
     SEAL_KIT,

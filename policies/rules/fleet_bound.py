@@ -39,7 +39,7 @@ from typing import Any
 import numpy as np
 
 from policies.base import register_policy
-from scas_env.core.fleet_config import FleetConfig
+from scas_env.core.fleet.config import FleetConfig
 from scas_env.core.parts import next_lives
 from scas_env.core.setup import PARTS
 

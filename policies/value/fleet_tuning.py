@@ -44,7 +44,7 @@ from policies.value.tuning import (
     edge_report,
 )
 from scas_env import ENV_ID_FLEET
-from scas_env.core.fleet_config import FleetConfig
+from scas_env.core.fleet.config import FleetConfig
 from scas_env.utils.parallel import map_chunks
 
 AGE: Box = {

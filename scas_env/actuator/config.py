@@ -63,7 +63,7 @@ T = TypeVar("T", bound="Validated")
 #: Tables a configuration file may hold instead of one group's fields, and the class read
 #: from each: the episode (``scas_env.core.scenario.Scenario``), the cost model
 #: (``scas_env.core.costs.CostModel``), the actuator design (``scas_env.actuator.params``) and
-#: the fleet (``scas_env.core.fleet_config.FleetConfig``, with its ``[fleet.demand]`` and
+#: the fleet (``scas_env.core.fleet.config.FleetConfig``, with its ``[fleet.demand]`` and
 #: ``[fleet.spares]`` sub-tables).
 FILE_SECTIONS = {
     "scenario": "Scenario",

@@ -8,7 +8,7 @@
 
 Each aircraft ``aircraft_i`` observes its own actuators (the single env's 20 entries each)
 and status, and the fleet's shared groups (spares, crew, demand, calendar)
-(:meth:`~scas_env.core.fleet_view.FleetView.observe_agents`); it chooses its mission and each
+(:meth:`~scas_env.core.fleet.view.FleetView.observe_agents`); it chooses its mission and each
 of its actuators' maintenance, as one row of the fleet env's action. The reward is the
 team's (the fleet's day, the same for every agent); ``infos[agent]`` holds the aircraft's
 own share of the actuators' reward (``aircraft_reward``), its action mask and the fleet's

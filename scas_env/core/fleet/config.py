@@ -33,8 +33,8 @@ from typing import Any
 from scas_env.actuator.config import Validated, param
 from scas_env.actuator.mission_types import MISSION_TYPES
 from scas_env.core.costs import CostModel
-from scas_env.core.demand import DemandModel
-from scas_env.core.resources import NO_BASE_STOCK, SparesSpec
+from scas_env.core.fleet.demand import DemandModel
+from scas_env.core.fleet.resources import NO_BASE_STOCK, SparesSpec
 
 #: the table of a configuration file that holds a FleetConfig
 SECTION = "fleet"
@@ -127,7 +127,7 @@ class SparesConfig(Validated):
                 )
 
     def spec(self) -> SparesSpec:
-        """The resource model's :class:`~scas_env.core.resources.SparesSpec`."""
+        """The resource model's :class:`~scas_env.core.fleet.resources.SparesSpec`."""
         pool = int(self.actuator_pool)
         return SparesSpec(
             initial=(int(self.spring_kit_initial), int(self.seal_kit_initial), pool),
@@ -298,7 +298,7 @@ class FleetConfig(Validated):
 
     @property
     def crew_capacity(self) -> int | None:
-        """Crew jobs a day for :class:`~scas_env.core.resources.CrewQueue` (None: unlimited)."""
+        """Crew jobs a day for :class:`~scas_env.core.fleet.resources.CrewQueue` (None: unlimited)."""
         return None if self.unlimited_crew else int(self.crew_jobs_per_day)
 
     @property

@@ -5,7 +5,7 @@ actuators.
 The actuators of every fleet are the rows of one :class:`~scas_env.core.batch.ActuatorBatch`
 (row ``(b N + i) A + j``: fleet ``b``, aircraft ``i``, actuator ``j``; the rows of an aircraft
 are one group: they test and fly together); the fleets' demand, crew and spares are arrays
-over ``B`` (:mod:`scas_env.core.demand`, :mod:`scas_env.core.resources`). A day of fleet
+over ``B`` (:mod:`scas_env.core.fleet.demand`, :mod:`scas_env.core.fleet.resources`). A day of fleet
 ``b`` under its aircraft's actions:
 
 1. **Requests.** Each aircraft's maintenance choice per actuator (none, spring kit, seal kit,
@@ -51,9 +51,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from scas_env.core.batch import ActuatorBatch
-from scas_env.core.demand import draw_schedule
-from scas_env.core.fleet_config import FleetConfig
-from scas_env.core.resources import ACTUATOR, SEAL_KIT, SPRING_KIT, CrewQueue, SparesPool
+from scas_env.core.fleet.config import FleetConfig
+from scas_env.core.fleet.demand import draw_schedule
+from scas_env.core.fleet.resources import ACTUATOR, SEAL_KIT, SPRING_KIT, CrewQueue, SparesPool
 from scas_env.core.setup import PARTS, Setup
 from scas_env.core.slot import (
     FLY,
@@ -105,7 +105,7 @@ class FleetShape:
 
 
 class FleetBatch:
-    """``B`` fleets of one :class:`~scas_env.core.fleet_config.FleetConfig` (module
+    """``B`` fleets of one :class:`~scas_env.core.fleet.config.FleetConfig` (module
     docstring).
 
     Attributes

@@ -1,5 +1,5 @@
 """What a fleet's operator reads: the observation, the action masks and the info of a
-:class:`~scas_env.core.fleet.FleetBatch`, for the whole fleet and for one aircraft.
+:class:`~scas_env.core.fleet.batch.FleetBatch`, for the whole fleet and for one aircraft.
 
 Observation groups (float64 inside, float32 at the boundary, saturated at their bounds):
 
@@ -25,10 +25,10 @@ from typing import Any
 import numpy as np
 from gymnasium import spaces
 
-from scas_env.core.demand import DAYS_PER_YEAR
-from scas_env.core.fleet import BOOKS, FleetBatch
+from scas_env.core.fleet.batch import BOOKS, FleetBatch
+from scas_env.core.fleet.demand import DAYS_PER_YEAR
+from scas_env.core.fleet.resources import SPARE_KINDS
 from scas_env.core.observation import GROUP_ORDER, ObservationLayout, clip_to_bounds
-from scas_env.core.resources import SPARE_KINDS
 from scas_env.core.setup import PARTS, REWARD_TERMS
 
 AIRCRAFT_FIELDS = (

@@ -65,7 +65,7 @@ class DemandModel(Validated):
     """Daily mission demand: base rate, seasonality, surges, mission-type mix (module doc).
 
     ``mission_mix`` holds the probability of each mission type, in the order of the
-    fleet's ``mission_types`` (``scas_env.core.fleet_config.FleetConfig``); >= 0, sum 1.
+    fleet's ``mission_types`` (``scas_env.core.fleet.config.FleetConfig``); >= 0, sum 1.
     """
 
     flight_hours_per_aircraft_year: float = param(
