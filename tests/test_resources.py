@@ -1,4 +1,4 @@
-"""Spares and crew of a fleet (scas_env.core.fleet.resources): hand computations, counters, seeding."""
+"""Spares and crew of a fleet (scas_env.core.fleet.resources): hand computations, seeding."""
 
 from __future__ import annotations
 

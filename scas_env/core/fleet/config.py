@@ -298,7 +298,8 @@ class FleetConfig(Validated):
 
     @property
     def crew_capacity(self) -> int | None:
-        """Crew jobs a day for :class:`~scas_env.core.fleet.resources.CrewQueue` (None: unlimited)."""
+        """Crew jobs a day for :class:`~scas_env.core.fleet.resources.CrewQueue` (None:
+        unlimited)."""
         return None if self.unlimited_crew else int(self.crew_jobs_per_day)
 
     @property
