@@ -69,7 +69,7 @@ from experiments.belief_calibration import (
     trace_table,
 )
 from prognostics.degradation_models import TabulatedRateModel, inverse_damage_scalar
-from prognostics.random_effect import random_effect_update
+from prognostics.measurement import random_effect_update
 from prognostics.rul import weighted_quantile
 from scas_env.core.filters import bilinear_at, cell_of
 from scas_env.core.scenario import Scenario

@@ -20,6 +20,30 @@ Likelihood (ref §5.2): ``log p(y | x) = -1/2 ((y - h(x)) / sigma)^2 - log sigma
     [1.0, 2.0, 4.0]
     >>> round(float(mm.sigma(np.array([0.5]))[0]), 4)
     0.1414
+
+**A Gaussian random effect**, marginalised per particle (:func:`random_effect_update`).
+Measurement model (a feature with an unknown installation effect ``z``, the same in every
+measurement of one installation; e.g. a random-effects surrogate ``mu + tau z + sigma eps``):
+
+    y = h(x) + a(x) z + v,      v ~ N(0, s(x)^2),      z ~ N(m, P)
+
+Given a particle's path, ``z`` stays Gaussian, so each particle i carries its own posterior
+``N(m_i, P_i)`` of ``z`` (Rao-Blackwellisation: Doucet, de Freitas, Murphy & Russell 2000,
+"Rao-Blackwellised particle filtering for dynamic Bayesian networks", UAI; Chen & Liu 2000,
+mixture Kalman filters). One measurement ``y``:
+
+* weight by the predictive density ``N(y; h_i + a_i m_i, s_i^2 + a_i^2 P_i)``;
+* condition ``z`` on it (scalar Kalman update): ``S_i = s_i^2 + a_i^2 P_i``,
+  ``K_i = P_i a_i / S_i``, ``m_i <- m_i + K_i (y - h_i - a_i m_i)``,
+  ``P_i <- P_i - K_i a_i P_i``.
+
+The particle filter carries ``m`` and ``P`` through resampling
+(:meth:`prognostics.particle_filter.ParticleFilter.add_auxiliary`).
+
+    >>> m, p, ll = np.zeros(1), np.ones(1), np.empty(1)
+    >>> random_effect_update(1.0, np.zeros(1), np.ones(1), np.ones(1), m, p, ll)
+    >>> float(m[0]), float(p[0])
+    (0.5, 0.5)
 """
 
 from __future__ import annotations
@@ -531,3 +555,28 @@ def measurement_from_curve(
     return MeasurementModel(
         kind="pchip", sigma_knots=sev, sigma_values=sig, knots=sev, values=mu, slopes=slopes
     )
+
+
+@njit(cache=True)
+def random_effect_update(
+    y: float,
+    mean: np.ndarray,
+    loading: np.ndarray,
+    noise_var: np.ndarray,
+    z_mean: np.ndarray,
+    z_var: np.ndarray,
+    log_likelihood: np.ndarray,
+) -> None:
+    """One measurement ``y`` for every particle i (module docstring): the predictive
+    log-density into ``log_likelihood[i]``, then ``z_mean[i]`` and ``z_var[i]`` conditioned
+    on ``y`` in place. ``mean`` = h(x_i), ``loading`` = a(x_i), ``noise_var`` = s(x_i)^2 > 0
+    (feature units and their squares)."""
+    for i in range(mean.size):
+        a = loading[i]
+        p = z_var[i]
+        v = noise_var[i] + a * a * p
+        r = y - mean[i] - a * z_mean[i]
+        log_likelihood[i] = -0.5 * r * r / v - 0.5 * math.log(v) - _HALF_LOG_2PI
+        gain = p * a / v
+        z_mean[i] += gain * r
+        z_var[i] = p - gain * a * p

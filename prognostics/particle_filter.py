@@ -652,46 +652,6 @@ class ParticleFilter:
         self._check_cloud("step", usage, y)
         return self._after_update()
 
-    def attach(
-        self,
-        x: np.ndarray,
-        log_theta: np.ndarray,
-        w: np.ndarray,
-        log_w: np.ndarray,
-        aux: dict[str, np.ndarray] | None = None,
-    ) -> None:
-        """Keep the particles in the given arrays from now on (e.g. views of a row of a
-        :class:`~prognostics.particle_bank.ParticleBank`): the current values are copied
-        into them, then the filter reads and writes them. ``aux`` maps every name of
-        :attr:`aux` to its new array. Each array: float64, C-contiguous, shape (N,)."""
-        n = self.n_particles
-        new = {"_x": x, "_log_theta": log_theta, "_w": w, "_log_w": log_w}
-        aux = {} if aux is None else check.mapping("aux", aux)
-        if sorted(aux) != sorted(self.aux):
-            raise ValueError(
-                f"aux must map exactly the names {sorted(self.aux)}, got {sorted(aux)}"
-            )
-        for name, arr in (*new.items(), *aux.items()):
-            name = name.lstrip("_") if name in new else f"aux[{name!r}]"
-            if not (
-                isinstance(arr, np.ndarray)
-                and arr.shape == (n,)
-                and arr.dtype == np.float64
-                and arr.flags.c_contiguous
-                and arr.flags.writeable
-            ):
-                raise check.ArgumentTypeError(
-                    f"{name} = {check.show(arr)} must be a writeable C-contiguous float64 array "
-                    f"of shape ({n},)"
-                )
-        for attr, arr in new.items():
-            arr[:] = getattr(self, attr)
-            setattr(self, attr, arr)
-        for name, arr in aux.items():
-            arr[:] = self.aux[name]
-            self.aux[name] = arr
-        self._make_views()
-
     def add_auxiliary(self, name: str, value: float = 0.0) -> np.ndarray:
         """Register a per-particle array ``aux[name]`` (filled with ``value``) that
         resampling permutes with the particles; returns it (write into it in place)."""

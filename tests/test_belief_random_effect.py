@@ -8,9 +8,8 @@ import pytest
 from scipy.stats import multivariate_normal, norm
 
 from prognostics.degradation_models import linear_wear_model
-from prognostics.measurement import measurement_from_curve
+from prognostics.measurement import measurement_from_curve, random_effect_update
 from prognostics.particle_filter import ParticleFilter
-from prognostics.random_effect import random_effect_update
 
 
 def test_random_effect_update_is_the_gaussian_predictive_and_posterior() -> None:

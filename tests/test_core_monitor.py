@@ -316,28 +316,3 @@ def test_ageing_tables_round_trip() -> None:
         AgeingRul.from_tables(r, cum_w[:-1], suffix_w, suffix_wr, low, low_quantile=0.05)
     with pytest.raises(ValueError, match="low_quantile"):
         AgeingRul.from_tables(r, cum_w, suffix_w, suffix_wr, low, low_quantile=1.5)
-
-
-def test_filter_attach_and_bank_reject_what_does_not_fit() -> None:
-    """``ParticleFilter.attach`` (a filter reading and writing arrays it is given) and
-    ``ParticleBank``: arrays of the wrong kind and sizes are refused with clear errors."""
-    from prognostics.particle_bank import ParticleBank
-
-    meas = measurement_from_curve(np.array([0.0, 1e-3]), np.array([0.0, 1.0]), np.array([0.1, 0.1]))
-    pf = ParticleFilter(linear_wear_model(1e-6), meas, 8, np.random.default_rng(0))
-    pf.reset(0.0, 1.0)
-    pf.add_auxiliary("a")
-    n = pf.n_particles
-    with pytest.raises(ValueError, match="C-contiguous"):
-        pf.attach(np.zeros(2 * n)[::2], np.zeros(n), np.zeros(n), np.zeros(n), {"a": np.zeros(n)})
-    with pytest.raises(ValueError, match="aux"):
-        pf.attach(np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(n), {})
-    bank = ParticleBank(2, 1, n, 1)
-    pf.attach(bank.x[1, 0], bank.log_theta[1, 0], bank.w[1, 0], bank.log_w[1, 0],
-              {"a": bank.aux[1, 0, 0]})  # fmt: skip
-    pf.predict(3.0)
-    np.testing.assert_array_equal(bank.x[1, 0], pf.x)
-    assert np.all(bank.x[0] == 0.0)
-    for bad in ({"n_rows": 0}, {"n_particles": 1}, {"n_filters": 1.5}):
-        with pytest.raises(ValueError, match=next(iter(bad))):
-            ParticleBank(**{"n_rows": 1, "n_filters": 1, "n_particles": 4, **bad})

@@ -40,7 +40,6 @@ import prognostics
 from prognostics import (
     detection,
     features,
-    gaussian_rul,
     measurement,
     metrics,
     particle_filter,
@@ -57,15 +56,13 @@ from prognostics.degradation_models import (
     paris_crack_model,
 )
 from prognostics.detection import DetectorConfig, PercentileDetector
-from prognostics.gaussian_rul import GaussianRul
 from prognostics.measurement import MeasurementModel
-from prognostics.normals import NormalStream
-from prognostics.particle_bank import ParticleBank
+from prognostics.normals import NormalStream, handle_of
 from prognostics.particle_filter import ParticleFilter
 from prognostics.prognosis_run import HealthySet
 from prognostics.rul import HazardZone, RulPredictor
 from prognostics.rul_ageing import AgeingRul
-from prognostics.ukf import UnscentedFilter
+from prognostics.ukf import GaussianRul, UnscentedFilter
 from tests.hardening_checks import numbers_in
 
 NAN = math.nan
@@ -502,13 +499,13 @@ def _specs() -> list[Spec]:
             lambda: {"horizon_steps": 6.0, "low_quantile": 0.05, "high_quantile": 0.95},
         ),
         Spec(
-            "gaussian_rul.check_gaussian_state",
-            _f(gaussian_rul.check_gaussian_state),
+            "ukf.check_gaussian_state",
+            _f(ukf.check_gaussian_state),
             lambda: {k: v for k, v in _gaussian().items() if k in ("mean", "cov")},
         ),
         Spec(
-            "gaussian_rul.gaussian_rul_summary",
-            _f(gaussian_rul.gaussian_rul_summary),
+            "ukf.gaussian_rul_summary",
+            _f(ukf.gaussian_rul_summary),
             lambda: {
                 **_gaussian(),
                 "horizon_steps": 6.0,
@@ -648,6 +645,7 @@ def _specs() -> list[Spec]:
         ),
         # ------------------------------------------------------------------ random numbers
         Spec("NormalStream", _f(NormalStream), lambda: {"rng": _rng()}),
+        Spec("handle_of", _f(handle_of), lambda: {"rng": _rng()}),
         Spec(
             "NormalStream.fill",
             lambda: NormalStream(_rng()).fill,
@@ -658,11 +656,6 @@ def _specs() -> list[Spec]:
             "NormalStream.standard_normal",
             lambda: NormalStream(_rng()).standard_normal,
             lambda: {"size": 5},
-        ),
-        Spec(
-            "ParticleBank",
-            _f(ParticleBank),
-            lambda: {"n_rows": 2, "n_filters": 2, "n_particles": 10, "n_aux": 1},
         ),
         Spec(
             "resampling.effective_sample_size",
@@ -732,18 +725,6 @@ def _specs() -> list[Spec]:
             lambda: _pf().step,
             lambda: {"usage": 1.0, "y": 0.3},
             nan_ok=frozenset({"y"}),
-        ),
-        Spec(
-            "ParticleFilter.attach",
-            lambda: _pf().attach,
-            lambda: {
-                "x": np.zeros(20),
-                "log_theta": np.zeros(20),
-                "w": np.zeros(20),
-                "log_w": np.zeros(20),
-                "aux": None,
-            },
-            nan_ok=frozenset({"x", "log_theta", "w", "log_w"}),  # outputs: overwritten
         ),
         Spec(
             "ParticleFilter.add_auxiliary",

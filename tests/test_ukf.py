@@ -9,9 +9,8 @@ import pytest
 from scipy.stats import lognorm, norm
 
 from prognostics.degradation_models import linear_wear_model, paris_crack_model
-from prognostics.gaussian_rul import GaussianRul, gaussian_rul_summary
 from prognostics.measurement import MeasurementModel
-from prognostics.ukf import UnscentedFilter, psd_sqrt_2x2
+from prognostics.ukf import GaussianRul, UnscentedFilter, gaussian_rul_summary, psd_sqrt_2x2
 
 DEPTH = np.concatenate([np.linspace(1e-4, 5e-4, 30), np.linspace(5.2e-4, 1.2e-3, 25)])
 RATE = 1e-7 * (DEPTH / 1e-4) ** 1.125  # Paris-like, non-uniform grid

@@ -34,6 +34,7 @@ import numpy as np
 from numba import njit
 
 from prognostics.degradation_models import predict_particles
+from prognostics.measurement import random_effect_update
 from prognostics.particle_filter import (
     MAX_ABS_LOG_THETA,
     MAX_ABS_SEVERITY,
@@ -42,7 +43,6 @@ from prognostics.particle_filter import (
     _first_out_of_range,
     resample_if_degenerate,
 )
-from prognostics.random_effect import random_effect_update
 from prognostics.rul_ageing import _build_from_cloud
 
 #: Step (fraction of critical) of the central differences of the surrogate's mean curves.
