@@ -23,7 +23,7 @@ import sys
 import tempfile
 from collections.abc import Iterable, Sequence
 from pathlib import Path
-from typing import Any
+from typing import Any, NoReturn
 
 from scas_env.actuator.config import FORMATS
 from scas_env.actuator.params import ScasParams
@@ -39,6 +39,7 @@ COMPILE_NOTICE = (
 __all__ = [
     "COMPILE_NOTICE",
     "HelpFormatter",
+    "Parser",
     "add_env_config_args",
     "add_logging_args",
     "add_params_arg",
@@ -74,11 +75,19 @@ class HelpFormatter(argparse.ArgumentDefaultsHelpFormatter, argparse.RawDescript
         return super()._get_help_string(action)
 
 
+class Parser(argparse.ArgumentParser):
+    """An argument parser whose usage errors are one line on stderr, exit status 2:
+    ``prog: error: message (--help: usage)``, the message's own line breaks joined (no
+    usage block, which for these commands runs over many lines)."""
+
+    def error(self, message: str) -> NoReturn:
+        text = " ".join(str(message).split())
+        self.exit(2, f"{self.prog}: error: {text} (--help: usage)\n")
+
+
 def make_parser(prog: str, doc: str | None) -> argparse.ArgumentParser:
     """Parser of one command: ``doc`` (a module docstring) is its description."""
-    return argparse.ArgumentParser(
-        prog=prog, description=(doc or "").strip(), formatter_class=HelpFormatter
-    )
+    return Parser(prog=prog, description=(doc or "").strip(), formatter_class=HelpFormatter)
 
 
 # --- argument types: each raises ArgumentTypeError with the value and what is allowed ---
@@ -215,6 +224,8 @@ def load_params(parser: argparse.ArgumentParser, args: argparse.Namespace) -> Sc
         return ScasParams()
     try:
         return ScasParams.load(args.params)
+    except UnicodeDecodeError as exc:  # a file that is not text: name it
+        parser.error(f"{args.params}: not a UTF-8 text file ({exc.reason} at byte {exc.start})")
     except (ValueError, FileNotFoundError) as exc:
         parser.error(str(exc))
 
@@ -230,13 +241,17 @@ def load_env_config(
     from scas_env.actuator.config import read_mapping
 
     scenario, costs = Scenario(), CostModel()
+    reading = args.scenario
     try:
         if args.scenario is not None:
             scenario = Scenario.load(args.scenario)
             if args.costs is None and "costs" in read_mapping(args.scenario):
                 costs = CostModel.load(args.scenario)
+        reading = args.costs
         if args.costs is not None:
             costs = CostModel.load(args.costs)
+    except UnicodeDecodeError as exc:  # a file that is not text: name it
+        parser.error(f"{reading}: not a UTF-8 text file ({exc.reason} at byte {exc.start})")
     except (ValueError, FileNotFoundError) as exc:
         parser.error(str(exc))
     return scenario, costs

@@ -12,12 +12,12 @@ import gymnasium as gym
 import numpy as np
 import pytest
 
-from scas_env import ENV_ID_EPOCHS_V2, V2_KWARGS
+from scas_env import ENV_ID_EPOCHS
 from scas_env.decision_epochs import DecisionEpochs
 from scas_env.decision_epochs_vector import DecisionEpochsVectorEnv
 from scas_env.env import ScasMaintenanceEnv
 
-KW = {**V2_KWARGS, "episode_slots": 300, "initial_health": "random"}
+KW = {"episode_slots": 300, "initial_health": "random"}
 
 
 def _masked_actions(rng: np.random.Generator, masks: np.ndarray) -> np.ndarray:
@@ -65,14 +65,12 @@ def test_make_vec_and_sb3_adapter_match_dummy_vec_env() -> None:
 
     n = 3
     venv = gym.make_vec(
-        ENV_ID_EPOCHS_V2, num_envs=n, vectorization_mode="vector_entry_point",
+        ENV_ID_EPOCHS, num_envs=n, vectorization_mode="vector_entry_point",
         episode_slots=200,
     )  # fmt: skip
     assert isinstance(venv, DecisionEpochsVectorEnv)
     native = NativeVecEnv(venv)
-    dummy = DummyVecEnv(
-        [lambda: DecisionEpochs(ScasMaintenanceEnv(**V2_KWARGS, episode_slots=200))] * n
-    )
+    dummy = DummyVecEnv([lambda: DecisionEpochs(ScasMaintenanceEnv(episode_slots=200))] * n)
     native.seed(3)
     dummy.seed(3)
     np.testing.assert_array_equal(native.reset(), dummy.reset())
@@ -118,7 +116,7 @@ def test_train_epochs_on_the_native_vector_env(tmp_path) -> None:
     hp = {**candidate_hyperparams(HYPERPARAMS_DIR / "search.yml", "gamma099"), "n_steps": 16}
     out = train_epochs(
         hp, tmp_path / "run", seed=1, total_timesteps=256, checkpoint_every=128,
-        native_envs=8, **{**V2_KWARGS, "episode_slots": 100},
+        native_envs=8, episode_slots=100,
     )  # fmt: skip
     run = json.loads((out / "run.json").read_text())
     assert run["vec_env"].startswith("NativeVecEnv") and run["n_envs"] == 8

@@ -7,8 +7,8 @@ import hashlib
 import numpy as np
 import pytest
 
-from policies.benchmark.run import run_benchmark
 from experiments.fingerprint import benchmark_digest, episodes_digest, feed, fingerprint
+from policies.benchmark.run import run_benchmark
 
 
 def _digest(obj: object) -> str:
@@ -37,14 +37,13 @@ def test_episode_digest_is_reproducible_and_seed_sensitive() -> None:
     )
 
 
-def test_benchmark_part_needs_the_benchmark_function() -> None:
+def test_benchmark_part_digests_the_rows_and_events_and_moves_with_the_seed() -> None:
     with pytest.raises(ValueError, match="unknown parts"):
-        fingerprint(["benchmark"])
-    a = benchmark_digest(run_benchmark, episodes=1, slots=30)
-    assert (
-        a
-        == fingerprint(
-            ["benchmark"],
-            run_benchmark=lambda **kw: run_benchmark(**{**kw, "episodes": 1, "slots": 30}),
-        )["benchmark"]
-    )
+        fingerprint(["benchmark", "nope"])
+    a = benchmark_digest(episodes=1, slots=30)
+    result = run_benchmark(episodes=1, slots=30, seed=11, n_workers=1)
+    h = hashlib.sha256()
+    feed(h, result.rows)
+    feed(h, result.events)
+    assert a == h.hexdigest() == benchmark_digest(episodes=1, slots=30)
+    assert a != benchmark_digest(episodes=1, slots=30, seed=12)

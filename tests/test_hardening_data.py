@@ -18,8 +18,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from scas_env.actuator import shipped_files
 from scas_env.actuator.calibration import Calibration, default_calibration
+from scas_env.actuator.surrogate import SurrogateModel, default_surrogate
+from scas_env.utils import shipped_files
 from scas_env.utils.shipped_files import (
     MANIFEST_NAME,
     SHIPPED_DIRS,
@@ -29,7 +30,6 @@ from scas_env.utils.shipped_files import (
     verify_shipped_file,
     write_manifest,
 )
-from scas_env.actuator.surrogate import SurrogateModel, default_surrogate
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -163,7 +163,7 @@ def test_the_manifest_lists_every_shipped_data_file_with_its_hash() -> None:
     checked = verify_all()
     assert set(checked) == set(build_manifest())
     assert "scas_env/actuator/data/calibration.json" in checked
-    assert "policies/data/ppo_default.zip" in checked
+    assert "policies/data/maskable_ppo_epochs_v2.zip" in checked
 
 
 def test_pyproject_ships_the_manifest() -> None:
@@ -204,9 +204,9 @@ def test_a_corrupted_shipped_file_is_refused_naming_it(shipped_copy: Path) -> No
 
 
 def test_a_corrupted_agent_file_is_refused(shipped_copy: Path) -> None:
-    path = shipped_copy / "policies" / "data" / "ppo_default.zip"
+    path = shipped_copy / "policies" / "data" / "maskable_ppo_epochs_v2.zip"
     path.write_bytes(path.read_bytes()[:-10])  # truncated
-    with pytest.raises(ShippedFileError, match=r"ppo_default\.zip is corrupted"):
+    with pytest.raises(ShippedFileError, match=r"maskable_ppo_epochs_v2\.zip is corrupted"):
         verify_shipped_file(path)
 
 

@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from policies.rules.nested import ground_test_reference
 from experiments.preflight_study import RULES, age_rule_answering_no_go, preflight_availability
 from policies.rules.classic import PREVENTIVE_DEFAULTS, PreventivePolicy
+from policies.rules.nested import ground_test_reference
 from scas_env.env import ScasMaintenanceEnv
 
 
@@ -36,9 +36,7 @@ def test_answering_rule_is_the_age_rule_until_a_no_go() -> None:
 
 
 def test_rows_cover_every_mode_and_rule_on_the_same_episodes() -> None:
-    rows = preflight_availability(
-        {"v1": {"go_no_go": "airworthiness"}}, episodes=2, seed=5, episode_slots=60
-    )
+    rows = preflight_availability({"default": {}}, episodes=2, seed=5, episode_slots=60)
     assert [(r["preflight"], r["rule"]) for r in rows] == [
         (p, rule) for p in ("on_demand", "every_flight") for rule in RULES
     ]

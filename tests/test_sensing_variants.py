@@ -12,15 +12,8 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from policies.benchmark.run import PolicySpec, run_benchmark
-from policies.rules.nested import shipped_reference, surrogate_reference
 from experiments.sensing_sweep import QUICK, REFERENCE, replicate_seeds, run_sensing_sweep
 from experiments.sensing_sweep import write_sweep_outputs as write_sweep
-from policies.value.tuning import HELD_OUT_SEED
-from scas_env import V2_KWARGS
-from scas_env.actuator.calibration import default_calibration, params_digest
-from scas_env.actuator.params import ScasParams
-from scas_env.actuator.surrogate import default_surrogate
 from experiments.sensing_variants import (
     NOISE_FIELDS,
     TOLERANCE_FIELDS,
@@ -31,6 +24,12 @@ from experiments.sensing_variants import (
     surrogate_cache_key,
     surrogate_digest,
 )
+from policies.benchmark.run import PolicySpec, run_benchmark
+from policies.rules.nested import shipped_reference, surrogate_reference
+from policies.value.tuning import HELD_OUT_SEED
+from scas_env.actuator.calibration import default_calibration, params_digest
+from scas_env.actuator.params import ScasParams
+from scas_env.actuator.surrogate import default_surrogate
 
 #: A small surrogate design (2 x 2 grid, 2 units x 2 runs): seconds, not minutes.
 TINY = {"grid": 2, "units_per_point": 2, "paired_units": 2, "runs_per_unit": 2}
@@ -126,7 +125,7 @@ def test_more_sensor_noise_widens_the_run_scatter(tiny_variant):
 def sweep(tiny_variant, tmp_path_factory):
     built, _ = tiny_variant
     levels = {"default": {}, built.label: built.env_kwargs()}
-    result = run_sensing_sweep(levels, replicates=2, env_kwargs=V2_KWARGS, **QUICK)
+    result = run_sensing_sweep(levels, replicates=2, **QUICK)
     out = tmp_path_factory.mktemp("sweep") / "out"
     paths = write_sweep(result, out, levels_info={built.label: built.describe()})
     return result, paths
@@ -176,7 +175,7 @@ def test_sweep_levels_share_the_age_rule_and_replicates_their_seeds(sweep, tiny_
             episodes=QUICK["episodes"],
             slots=QUICK["slots"],
             seed=HELD_OUT_SEED,
-            env_kwargs={**V2_KWARGS, **built.env_kwargs()},
+            env_kwargs=built.env_kwargs(),
         )
         shared = [
             x["reward"]

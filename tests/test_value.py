@@ -10,23 +10,24 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from policies.value.tuning import FAMILIES, HELD_OUT_SEED, edge_report, relevant_box, tune_family
 from policies.value.study import (
     LADDER,
-    QUICK,
     REFERENCE,
     break_even_sigma,
     run_ladder,
     summarize_ladder,
     write_outputs,
 )
+from policies.value.tuning import FAMILIES, HELD_OUT_SEED, edge_report, relevant_box, tune_family
 
+#: a small ladder (the statistics and outputs are checked, not what the rules are worth)
+SMALL = {"episodes": 4, "slots": 400, "trials": 2, "train_episodes": 3}
 FAMS = ("age", "filter", "noisy oracle sigma=0", "noisy oracle sigma=0.5")
 
 
 @pytest.fixture(scope="module")
 def quick():
-    return run_ladder(families=FAMS, **{**QUICK, "slots": 400}, n_workers=1)
+    return run_ladder(families=FAMS, **SMALL, n_workers=1)
 
 
 def test_nested_family_starts_from_the_age_rule_and_never_trains_worse():

@@ -2,10 +2,11 @@
 
 :func:`run_episodes` steps ``len(seeds)`` episodes together through a vector env of
 ``ScasMaintenance-v2`` (the native :class:`scas_env.vector_env.ScasMaintenanceVectorEnv`)
-and asks the policy for a batch of actions per slot (one forward pass for a network). Each actuator's episode is exactly that of a single env with the same
-seed (tested), and policies act row by row (rules on their row, the random policy with one
-generator per episode, a network deterministically), so an episode's row and events do not
-depend on its batch (tested). The benchmark, RL evaluation and the value study all run
+and asks the policy for a batch of actions per slot (one forward pass for a network). Each
+actuator's episode is exactly that of a single env with the same seed (tested), and
+policies act row by row (rules on their row, the random policy with one generator per
+episode, a network deterministically), so an episode's row and events do not depend on its
+batch (tested). The benchmark, RL evaluation and the value study all run
 their episodes here; :func:`run_episode` runs one given env through it.
 """
 
