@@ -368,9 +368,13 @@ def train_main(argv: Sequence[str] | None = None) -> int:
     except (ValueError, ImportError) as exc:
         parser.error(str(exc))
     announce_uncached_kernels()
+    rollout = int(hyperparams.get("n_steps", 2048)) * (
+        args.native_envs or int(hyperparams.get("n_envs", 4))
+    )
     log.info(
-        f"training {args.algo} for {total:,} decisions into {args.out} (SB3's progress.csv "
-        f"there; a checkpoint every {args.checkpoint_every:,} decisions)"
+        f"training {args.algo} for {total:,} decisions, in whole rollouts of {rollout:,}, into "
+        f"{args.out} (SB3's progress.csv there; a checkpoint every "
+        f"{args.checkpoint_every:,} decisions)"
     )
     out = train_epochs(
         hyperparams,

@@ -21,8 +21,8 @@ from policies.rules.prognostic import FeatureRulePolicy, RulRiskPolicy
 
 FULL = (
     "I2", "I6", "I7", "I8", "I9", "G1", "G3", "test_age", "no_go", "spring_rul_mean",
-    "spring_rul_low", "spring_risk", "seal_rul_mean", "seal_rul_low", "seal_risk", "spring_alarm", "seal_alarm",
-    "spring_age", "seal_age", "downtime",
+    "spring_rul_low", "spring_risk", "seal_rul_mean", "seal_rul_low", "seal_risk",
+    "spring_alarm", "seal_alarm", "spring_age", "seal_age", "downtime",
 )  # fmt: skip
 STATE = (
     "crack_fraction", "wear_fraction", "spring_rul_true", "seal_rul_true", "spring_age",

@@ -528,9 +528,7 @@ def _export_dataset_args(parser: Parser) -> None:
     )
     parser.add_argument("--workers", type=positive_int, default=2, help="worker processes")
     parser.add_argument(
-        "--formats",
-        default="csv",
-        help="comma-separated file formats: csv, parquet (parquet needs pyarrow: the `data` extra)",
+        "--formats", default="parquet,csv", help="comma-separated file formats: parquet, csv"
     )
 
 
