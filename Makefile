@@ -4,14 +4,23 @@ VENV ?= .venv
 PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed-stamp
 RESULTS ?= results
+## Where pip gets torch. Empty (the default): the default index, as `pip install torch` does;
+## on Linux that is the CUDA build (GBs of GPU libraries). For the CPU build the README
+## promises, set it to PyTorch's CPU wheel index, e.g.
+##   make test TORCH_INDEX_URL=https://download.pytorch.org/whl/cpu
+## Used by the install of every target and by `check-install`. It applies when $(VENV) is
+## created or pyproject.toml changes: a venv already installed keeps its torch (remove it first).
+TORCH_INDEX_URL ?=
+TORCH_PIP_ARGS := torch==2.13.0 $(if $(strip $(TORCH_INDEX_URL)),--index-url $(strip $(TORCH_INDEX_URL)))
 
 .PHONY: install benchmark demo test test-slow test-all lint format bench figures reproduce clean \
 	check-install train-agent-v2
 
 $(STAMP): pyproject.toml
 	test -x $(PY) || $(PYTHON) -m venv $(VENV)
-	# CPU torch first: an unpinned torch (pulled by stable-baselines3) would fetch GB of CUDA wheels.
-	$(PY) -m pip install --disable-pip-version-check -q torch==2.13.0
+	# torch first (from TORCH_INDEX_URL when set): installed later, as a dependency of
+	# stable-baselines3, it would come from the default index whatever the setting.
+	$(PY) -m pip install --disable-pip-version-check -q $(TORCH_PIP_ARGS)
 	$(PY) -m pip install --disable-pip-version-check -q -e ".[dev,ray]"
 	touch $(STAMP)
 	@echo "installed; the first run compiles the numba kernels once (~30 s, announced)"
@@ -48,16 +57,17 @@ format: install
 	$(PY) -m ruff check --fix .
 
 ## What a user gets from `pip install .` (no extras): build the wheel, install it into a
-## fresh venv (CPU torch first), then, outside the source tree so that only the installed
-## package can be imported, run every console command at a tiny size with its default
-## options (the benchmark first: it compiles the numba kernels the others load) and the
-## README's Python snippets. About 3 minutes on a quiet 2-core machine (docs/cli.md).
+## fresh venv (torch first, from TORCH_INDEX_URL when set), then, outside the source tree
+## so that only the installed package can be imported, run every console command at a tiny
+## size with its default options (the benchmark first: it compiles the numba kernels the
+## others load) and the README's Python snippets. About 3 minutes on a quiet 2-core machine
+## (docs/cli.md).
 CHECK_DIR ?= $(abspath $(RESULTS))/check-install
 CHECK_RUN = cd $(CHECK_DIR) && venv/bin
 check-install:
 	rm -rf $(CHECK_DIR)
 	$(PYTHON) -m venv $(CHECK_DIR)/venv
-	$(CHECK_DIR)/venv/bin/pip install --disable-pip-version-check -q torch==2.13.0
+	$(CHECK_DIR)/venv/bin/pip install --disable-pip-version-check -q $(TORCH_PIP_ARGS)
 	$(CHECK_DIR)/venv/bin/pip wheel --disable-pip-version-check -q --no-deps -w $(CHECK_DIR)/dist .
 	$(CHECK_DIR)/venv/bin/pip install --disable-pip-version-check -q $(CHECK_DIR)/dist/*.whl
 	$(CHECK_RUN)/scas-benchmark --episodes 2 --slots 100 --out runs/benchmark
@@ -76,8 +86,8 @@ check-install:
 
 ## Speed, each beside a reference measured in the same run.
 bench: install
-	$(PY) scripts/bench_integrator.py
-	$(PY) scripts/bench_prognostics.py
+	$(PY) -m experiments.integrator_speed
+	$(PY) -m experiments.prognostics_speed
 	$(PY) scripts/bench_env.py
 
 figures: install

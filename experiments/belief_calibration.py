@@ -6,11 +6,12 @@ before it fails (so every part life ends in a failure, or at the end of the epis
 * ``"test10"``: the pre-flight test every 10th slot, otherwise fly;
 * ``"never"``: never test (the filters learn only from what they are fed in flight).
 
-After every step the monitor's RUL distribution of each part (``HealthMonitor.ageing`` aged
-by its pending flights, uncapped) is recorded beside two truths:
+After every step the monitor's RUL distribution of each part (:func:`filter_belief`: the RUL
+tables of the filter's cloud in the env's batch, ``env.batch``, aged by its pending flights,
+uncapped) is recorded beside two truths:
 
-* ``info``: the env's ``info["true_state"]`` RUL, the expected flights to failure at the
-  unit's own growth rates (no future flight-to-flight scatter);
+* ``info``: the env's ``info["true_state"]`` RUL, each part's exact remaining life (its
+  growth draws are fixed at fitting; the failing flight included);
 * ``realised``: flights until the part actually failed (known for lives that ended in a
   failure inside the episode).
 
@@ -35,13 +36,16 @@ for each truth:
   known (the life failed, or flew the horizon before the episode ended). The censoring is
   informative where a no-go test grounds the aircraft near a part's end (the paper preset):
   the records just before the grounding drop out, those of lives that flew on stay;
-* ``info``: the info RUL within the horizon, over every record. Under per-part degradation
-  draws (v2) the info RUL is the exact number of flights to failure, so this is the same
-  event without the censoring; otherwise it is an expectation, not an event.
+* ``info``: the info RUL within the horizon, over every record: the info RUL is the exact
+  number of flights to failure, so this is the same event without the censoring.
 
-:func:`run_study` returns the tables; :func:`write_study` writes CSV/JSON and two PNGs into a
-results folder (:func:`scas_env.utils.results_folder.results_folder`). ``scripts/belief_calibration.py``
-is the command line.
+:func:`run_study` returns the tables; :func:`experiments.belief_output.write_study` writes
+CSV/JSON and two PNGs into a results folder
+(:func:`scas_env.utils.results_folder.results_folder`). Command line (docs/beliefs.md)::
+
+    python -m experiments.belief_calibration --episodes 200 --seed 1000 --out results/cal
+    python -m experiments.belief_calibration --scenario '{"spring_theta_walk": 0.007}'
+    python -m experiments.belief_calibration --compare results/a results/b  # paired
 """
 
 from __future__ import annotations
@@ -54,14 +58,14 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-from scas_env.monitor import HealthMonitor
 from scipy.stats import binomtest
 from tqdm.auto import tqdm
 
+from prognostics.rul_ageing import AgeingRul
+from scas_env.core.batch import ActuatorBatch
 from scas_env.core.scenario import Scenario
 from scas_env.core.setup import PARTS
 from scas_env.env import FLY, TEST_AND_FLY, ScasMaintenanceEnv
-from scas_env.utils.results_folder import results_folder
 
 STAGES: tuple[float, ...] = (0.2, 0.4, 0.6, 0.8, 0.9)
 POLICIES: tuple[str, ...] = ("test10", "never")
@@ -70,7 +74,7 @@ TRUTHS: tuple[str, ...] = ("info", "realised")
 INTERVAL: tuple[float, float] = (0.05, 0.95)
 #: bin edges of the reliability diagram (predicted risk)
 RISK_BINS: tuple[float, ...] = (0.0, 0.01, 0.03, 0.1, 0.2, 0.35, 0.5, 0.7, 0.9, 1.0)
-#: issue #12's targets
+#: the calibration targets (docs/beliefs.md)
 TARGETS = {
     "coverage": (0.85, 0.95),
     "undercut_tolerance": 0.025,
@@ -85,46 +89,6 @@ PRESETS: dict[str, dict[str, Any]] = {
     "default": {},
     "paper": {"preflight": "every_flight"},
 }
-
-
-class MonitorOptionsEnv(ScasMaintenanceEnv):
-    """:class:`ScasMaintenanceEnv` whose health monitor takes extra keywords
-    (``monitor_options``, e.g. ``installation``): monitor variants that no :class:`Scenario`
-    field selects, for this study only. The spring calibration options are scenario fields
-    (``spring_theta_walk``, ``spring_effect_realign``): pass them with ``scenario_fields``,
-    so the env builds its monitor with them (the draws of a registered env with the fields).
-
-    After the env's own reset the monitor is rebuilt with the options and reset on the same
-    filter stream (``rngs["filter"]``, continuing where the env's monitor left it): episodes
-    are seeded and reproducible, the world's draws are the env's own, but the filters' draws
-    differ from those of an env that would build the option in itself. The observation
-    returned by :meth:`reset` is the env's monitor's (a prior, like the rebuilt one's).
-    """
-
-    def __init__(self, monitor_options: Mapping[str, Any], **kwargs: Any) -> None:
-        _check_monitor_options(monitor_options)
-        self.monitor_options = dict(monitor_options)
-        super().__init__(**kwargs)
-
-    def reset(self, *, seed: int | None = None, options: dict | None = None) -> tuple:
-        obs, info = super().reset(seed=seed, options=options)
-        self.monitor = HealthMonitor(
-            self.params,
-            self.scenario,
-            self.calibration,
-            self.surrogate,
-            self.rngs["filter"],
-            **self.monitor_options,
-        )
-        self.monitor.reset()
-        return obs, info
-
-
-def _check_monitor_options(options: Mapping[str, Any]) -> None:
-    allowed = ("installation", "spring_theta_walk", "spring_effect_realign")
-    bad = sorted(k for k in options if k not in allowed)
-    if bad:
-        raise ValueError(f"monitor_options {bad} are not among the allowed keywords {allowed}")
 
 
 def policy_action(policy: str, slot: int) -> int:
@@ -192,10 +156,21 @@ def run_episode(env: ScasMaintenanceEnv, policy: str, seed: int) -> dict[str, Pa
     return traces
 
 
+def filter_belief(batch: ActuatorBatch, row: int, part: str) -> tuple[AgeingRul, float]:
+    """The RUL distribution of ``part``'s filter in ``row`` of ``batch`` as the observation
+    reads it: the tables of its cloud (rebuilt first if the cloud changed since) and the
+    flights pending since the filter's last prediction (the age ``k`` to query them at)."""
+    batch.refresh(np.array([row], dtype=np.int64))
+    a, p = batch.a, PARTS.index(part)
+    tables = (a[k][row, p] for k in ("rul_sorted", "rul_cum_w", "rul_suffix_w", "rul_suffix_wr"))
+    ageing = AgeingRul.from_tables(
+        *tables, float(a["rul_low"][row, p]), low_quantile=float(batch.setup.scenario.rul_quantile)
+    )
+    return ageing, float(a["pending"][row, p])
+
+
 def _record(env: ScasMaintenanceEnv, tr: PartTrace, part: str, life: int, info: Any) -> None:
-    monitor = env.monitor
-    ageing = monitor.ageing(part)
-    k = float(monitor.pending[part])
+    ageing, k = filter_belief(env.batch, 0, part)
     mean, low, risk = ageing.summary(k, float(env.scenario.risk_horizon_flights))
     tr.life.append(life)
     tr.age.append(env.part_age[part])
@@ -298,8 +273,8 @@ def _first_at(table: dict[str, np.ndarray], stage: float) -> np.ndarray:
 def life_rows(table: dict[str, np.ndarray], stages: Sequence[float]) -> list[dict[str, float]]:
     """Per stage and life, the record :func:`stage_rows` counts against the ``info`` truth:
     episode, life within it, covered (0/1), undercut (0/1), ``log(mean / truth)``. Two runs
-    on the same seeds fly the same lives (``degradation_draws = "per_part"``, policies that
-    do not read the filters), so these rows pair them (:mod:`.belief_comparison`)."""
+    on the same seeds fly the same lives (each part's growth draws are its own, and the
+    policies do not read the filters), so these rows pair them (:mod:`.belief_comparison`)."""
     rows: list[dict[str, float]] = []
     for s in stages:
         first = _first_at(table, s)
@@ -396,20 +371,14 @@ def run_study(
     stages: Sequence[float] = STAGES,
     progress: bool = True,
     env_factory: Callable[[Scenario], ScasMaintenanceEnv] | None = None,
-    monitor_options: Mapping[str, Any] | None = None,
 ) -> StudyResult:
     """Run ``episodes`` seeded episodes (seeds ``seed .. seed + episodes - 1``) per policy and
     preset; the per-stage and reliability tables (module docstring).
 
-    ``scenario_fields`` override the preset's scenario (e.g. ``flight_features``);
-    ``env_factory`` builds the env from the scenario (default :class:`ScasMaintenanceEnv`);
-    ``monitor_options`` (keywords of :class:`scas_env.monitor.HealthMonitor`, e.g.
-    ``{"installation": "baseline"}``) run the episodes with :class:`MonitorOptionsEnv`
-    (not together with ``env_factory``); the spring calibration options are scenario fields
-    (``{"spring_theta_walk": 0.007, "spring_effect_realign": True}`` in ``scenario_fields``).
+    ``scenario_fields`` override the preset's scenario (e.g. ``{"spring_theta_walk":
+    0.007}``); ``env_factory`` builds the env from the scenario (default
+    :class:`ScasMaintenanceEnv`; a subclass, e.g. one that records what it learns).
     """
-    if monitor_options and env_factory is not None:
-        raise ValueError("monitor_options and env_factory cannot be combined: pass one of them")
     check_episodes(episodes, seed, policies)
     bad = [p for p in presets if p not in PRESETS]
     if bad or not presets:
@@ -421,12 +390,7 @@ def run_study(
         raise ValueError(f"stages = {list(stages)!r} must be fractions of life in (0, 1)")
     extra = dict(scenario_fields or {})
     scenarios = {p: Scenario.from_dict({**PRESETS[p], **extra}) for p in presets}
-    options = dict(monitor_options or {})
-    if options:
-        _check_monitor_options(options)
-        make = lambda sc: MonitorOptionsEnv(options, scenario=sc)  # noqa: E731
-    else:
-        make = env_factory or (lambda sc: ScasMaintenanceEnv(scenario=sc))
+    make = env_factory or (lambda sc: ScasMaintenanceEnv(scenario=sc))
     stage_tables: dict[tuple[str, str, str], list] = {}
     rel_tables: dict[tuple[str, str, str], list] = {}
     life_tables: dict[tuple[str, str, str], list] = {}
@@ -456,7 +420,6 @@ def run_study(
         "policies": list(policies),
         "presets": list(presets),
         "scenario_fields": extra,
-        "monitor_options": options,
         "stages": list(stages),
         "interval": list(INTERVAL),
         "risk_bins": list(RISK_BINS),
@@ -465,169 +428,94 @@ def run_study(
     return StudyResult(config, stage_tables, rel_tables, life_tables)
 
 
-def format_stages(result: StudyResult, truth: str = "info") -> str:
-    """A text table: coverage, undercut and sd log ratio per preset, policy, part and stage."""
-    lines = [
-        f"{'preset':8s} {'policy':7s} {'part':6s} {'stage':>5s} {'lives':>5s} "
-        f"{'coverage [95% CI]':>22s} {'undercut [95% CI]':>22s} {'sd_log':>7s} {'bias':>6s}"
-    ]
-    for (preset, policy, part), rows in result.stages.items():
-        for r in rows:
-            if r["truth"] != truth:
-                continue
-            lines.append(
-                f"{preset:8s} {policy:7s} {part:6s} {float(r['stage']):5.2f} {int(r['lives']):5d} "
-                f"{float(r['coverage']):6.3f} [{float(r['coverage_ci_low']):.3f}, "
-                f"{float(r['coverage_ci_high']):.3f}] "
-                f"{float(r['undercut']):6.3f} [{float(r['undercut_ci_low']):.3f}, "
-                f"{float(r['undercut_ci_high']):.3f}] "
-                f"{float(r['sd_log']):7.3f} {float(r['mean_log']):6.2f}"
-            )
-    return "\n".join(lines)
+def main(argv: Sequence[str] | None = None) -> int:
+    """The command line (module docstring): run the study, print its tables, write
+    ``--out``; or, with ``--compare A B``, pair two runs' ``lives.csv`` life by life."""
+    from scas_env.cli_args import check_out_dir, make_parser, nonneg_int, positive_int
 
+    parser = make_parser("python -m experiments.belief_calibration", __doc__)
+    parser.add_argument("--episodes", type=positive_int, default=100, help="episodes per policy")
+    parser.add_argument("--seed", type=nonneg_int, default=1000, help="first episode seed")
+    parser.add_argument("--policies", nargs="+", default=list(POLICIES), choices=POLICIES)
+    parser.add_argument("--presets", nargs="+", default=["default"], choices=list(PRESETS))
+    parser.add_argument(
+        "--scenario",
+        type=json.loads,
+        default={},
+        help="Scenario fields as JSON over the defaults, e.g. '{\"spring_theta_walk\": 0.007}'",
+    )
+    parser.add_argument(
+        "--compare",
+        nargs=2,
+        metavar=("A", "B"),
+        default=None,
+        help="no run: compare two results folders of the same seeds, life by life (paired "
+        "differences B - A with cluster-bootstrap 95%% intervals over episodes)",
+    )
+    parser.add_argument("--out", type=Path, default=None, help="results folder (none: print)")
+    parser.add_argument("--overwrite", action="store_true", help="replace an existing --out")
+    parser.add_argument("--no-progress", action="store_true", help="no progress bar")
+    args = parser.parse_args(argv)
+    if args.compare is not None:
+        from experiments.belief_comparison import compare_runs, format_comparison, read_lives
 
-def format_reliability(result: StudyResult, truth: str = "realised") -> str:
-    """A text table of the reliability diagrams against ``truth`` (bins with records only)."""
-    lines = [
-        f"{'preset':8s} {'policy':7s} {'part':6s} {'bin':>11s} {'records':>7s} "
-        f"{'predicted':>9s} {'observed [95% CI]':>22s}"
-    ]
-    for (preset, policy, part), rows in result.reliability.items():
-        for r in rows:
-            if not r["records"] or r["truth"] != truth:
-                continue
-            lines.append(
-                f"{preset:8s} {policy:7s} {part:6s} "
-                f"{r['bin_low']:5.2f}-{r['bin_high']:4.2f} {int(r['records']):7d} "
-                f"{r['predicted']:9.4f} {r['observed']:6.4f} "
-                f"[{r['observed_ci_low']:.4f}, {r['observed_ci_high']:.4f}]"
-            )
-    return "\n".join(lines)
-
-
-def _flat(tables: Mapping[tuple[str, str, str], list[dict]]) -> list[dict]:
-    return [
-        {"preset": k[0], "policy": k[1], "part": k[2], **row}
-        for k, rows in tables.items()
-        for row in rows
-    ]
-
-
-def _write_csv(path: Path, rows: list[dict]) -> None:
-    keys = list(rows[0])
-    lines = [",".join(keys)]
-    for r in rows:
-        lines.append(",".join(str(r[k]) for k in keys))
-    path.write_text("\n".join(lines) + "\n")
-
-
-def write_study(result: StudyResult, out: str | Path, *, overwrite: bool = False) -> list[Path]:
-    """``stages.csv``, ``reliability.csv``, ``lives.csv`` (per-life rows, for paired
-    comparisons), ``study.json``, ``coverage.png`` and ``reliability.png`` in the results
-    folder ``out`` (written atomically)."""
-    names = [
-        "stages.csv", "reliability.csv", "lives.csv", "study.json", "coverage.png",
-        "reliability.png",
-    ]  # fmt: skip
-    seeds = {"first": result.config["seed"], "episodes": result.config["episodes"]}
-    with results_folder(out, config=result.config, seeds=seeds, overwrite=overwrite) as tmp:
-        stages, rel = _flat(result.stages), _flat(result.reliability)
-        _write_csv(tmp / "stages.csv", stages)
-        _write_csv(tmp / "reliability.csv", rel)
-        lives = _flat(result.lives)
-        if lives:
-            _write_csv(tmp / "lives.csv", lives)
-        else:  # no life reached a stage: the header only
-            (tmp / "lives.csv").write_text(",".join(LIFE_COLUMNS) + "\n")
-        (tmp / "study.json").write_text(
-            json.dumps({"config": result.config, "stages": stages, "reliability": rel}, indent=1)
-            + "\n"
+        try:
+            a, b = (read_lives(folder) for folder in args.compare)
+        except FileNotFoundError as exc:
+            parser.error(str(exc))
+        rows = compare_runs(a, b, np.random.default_rng(args.seed))
+        print(f"paired: A = {args.compare[0]}, B = {args.compare[1]} (info truth)")
+        print(format_comparison(rows))
+        return 0
+    if args.out is not None:
+        check_out_dir(parser, args.out, args.overwrite)
+    try:
+        result = run_study(
+            episodes=args.episodes,
+            seed=args.seed,
+            policies=args.policies,
+            presets=args.presets,
+            scenario_fields=args.scenario,
+            progress=not args.no_progress,
         )
-        _plot_coverage(result, tmp / "coverage.png")
-        _plot_reliability(result, tmp / "reliability.png")
-    return [Path(out) / n for n in names]
+    except (TypeError, ValueError) as exc:  # a bad --scenario field or value
+        parser.error(str(exc))
+    from experiments.belief_output import format_reliability, format_stages, write_study
 
-
-def _plot_coverage(result: StudyResult, path: Path) -> None:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    fig, axes = plt.subplots(1, 2, figsize=(10, 4), sharey=True)
-    for ax, part in zip(axes, PARTS, strict=True):
-        for (preset, policy, p), rows in result.stages.items():
-            if p != part:
-                continue
-            r = [x for x in rows if x["truth"] == "info"]
-            s = [float(x["stage"]) for x in r]
-            c = np.array([float(x["coverage"]) for x in r])
-            lo = c - np.array([float(x["coverage_ci_low"]) for x in r])
-            hi = np.array([float(x["coverage_ci_high"]) for x in r]) - c
-            ax.errorbar(s, c, yerr=[lo, hi], marker="o", capsize=3, label=f"{preset}/{policy}")
-        ax.axhspan(*TARGETS["coverage"], color="0.9", label="target 85-95 %")
-        ax.axhline(INTERVAL[1] - INTERVAL[0], color="k", lw=0.8, ls="--")
-        ax.set_title(f"{part}: coverage of the 90 % RUL interval")
-        ax.set_xlabel("fraction of true life")
-        ax.set_ylim(0, 1.02)
-    axes[0].set_ylabel("coverage (info truth)")
-    axes[1].legend(fontsize=8)
-    fig.tight_layout()
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
-
-
-def _plot_reliability(result: StudyResult, path: Path) -> None:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    fig, axes = plt.subplots(1, 2, figsize=(10, 4.5), sharey=True)
-    for ax, part in zip(axes, PARTS, strict=True):
-        for (preset, policy, p), rows in result.reliability.items():
-            if p != part:
-                continue
-            for truth, marker in (("realised", "o"), ("info", "s")):
-                r = [x for x in rows if x["records"] and x["truth"] == truth]
-                x = np.array([x["predicted"] for x in r])
-                y = np.array([x["observed"] for x in r])
-                lo = y - np.array([x["observed_ci_low"] for x in r])
-                hi = np.array([x["observed_ci_high"] for x in r]) - y
-                ax.errorbar(
-                    x, y, yerr=[lo, hi], marker=marker, capsize=3,
-                    label=f"{preset}/{policy} ({truth})",
-                )  # fmt: skip
-        t = TARGETS["reliability_tolerance"]
-        grid = np.linspace(0, 1, 2)
-        ax.plot(grid, grid, "k--", lw=0.8)
-        ax.fill_between(grid, grid - t, grid + t, color="0.9", label="+-5 points")
-        ax.set_title(f"{part}: P(fail within horizon)")
-        ax.set_xlabel("predicted risk")
-        ax.set_xlim(0, 1)
-        ax.set_ylim(0, 1)
-    axes[0].set_ylabel("observed frequency")
-    axes[1].legend(fontsize=8)
-    fig.tight_layout()
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
+    print("RUL calibration per life stage (truth: info's exact RUL)")
+    print(format_stages(result, "info"))
+    print("\nthe same against the realised RUL (lives that failed in the episode)")
+    print(format_stages(result, "realised"))
+    print("\nreliability of P(fail within the risk horizon): realised failures (censored)")
+    print(format_reliability(result, "realised"))
+    print("\nthe same against the info RUL (every record)")
+    print(format_reliability(result, "info"))
+    if args.out is not None:
+        for path in write_study(result, args.out, overwrite=args.overwrite):
+            print(path)
+    return 0
 
 
 __all__ = [
+    "INTERVAL",
+    "LIFE_COLUMNS",
     "POLICIES",
     "PRESETS",
     "STAGES",
     "TARGETS",
     "StudyResult",
     "check_episodes",
-    "format_reliability",
-    "format_stages",
+    "filter_belief",
     "life_rows",
+    "main",
     "policy_action",
     "reliability_rows",
     "run_episode",
     "run_study",
     "stage_rows",
     "trace_table",
-    "write_study",
 ]
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,4 +1,4 @@
-"""Paired comparison of two belief-calibration runs on the same seeds (issue #12).
+"""Paired comparison of two belief-calibration runs on the same seeds.
 
 Two runs of :func:`experiments.belief_calibration.run_study` with the same seeds fly the
 same part lives (per-part degradation draws; the study's policies do not read the filters),
@@ -13,7 +13,7 @@ the low quantile, 0/1 in each run. Per (policy, part, stage), and pooled over th
 * the minimum detectable difference at 5 % two-sided and 80 % power,
   ``(z_0.975 + z_0.8) x`` the bootstrap standard error.
 
-``scripts/belief_calibration.py --compare A B`` reads the runs' ``lives.csv``.
+``python -m experiments.belief_calibration --compare A B`` reads the runs' ``lives.csv``.
 """
 
 from __future__ import annotations

@@ -5,11 +5,17 @@ is not a flight's"): the calibration's scaled-window CV, the CV over whole simul
 flights (:func:`scas_env.actuator.calibration.whole_flight_scatter`, the calibration's
 seeds) and the closed form of a flight as a sum of independent regime windows
 (:func:`scas_env.actuator.flight_damage.summed_cv`, each Table-1 regime simulated alone in
-``n_windows`` windows of ``window_s``).
+``n_windows`` windows of ``window_s``). The command line (docs/findings.md, "Environment";
+about 8 min)::
+
+    python -m experiments.damage_scatter --flights 40 --windows 60 --out results/damage_scatter.json
 """
 
 from __future__ import annotations
 
+import json
+from collections.abc import Sequence
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -20,7 +26,7 @@ from scas_env.actuator.flight_damage import simulated_flight_damage, summed_cv
 from scas_env.actuator.missions import REGIMES
 from scas_env.actuator.params import ScasParams
 
-__all__ = ["damage_scatter"]
+__all__ = ["damage_scatter", "main"]
 
 
 def damage_scatter(
@@ -67,3 +73,38 @@ def damage_scatter(
             "wear": float(whole.wear_m.mean() / cal.wear_rate_m_per_flight),
         },
     }
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """The command line (module docstring): the estimates as JSON, printed and written."""
+    from scas_env.cli_args import (
+        add_params_arg,
+        check_out_file,
+        int_at_least,
+        load_params,
+        make_parser,
+        nonneg_int,
+    )
+    from scas_env.utils.atomic_file import write_text_atomic
+
+    parser = make_parser("python -m experiments.damage_scatter", __doc__)
+    parser.add_argument("--flights", type=int_at_least(2), default=40, help="whole flights")
+    parser.add_argument("--windows", type=int_at_least(2), default=60, help="windows per regime")
+    parser.add_argument(
+        "--seed", type=nonneg_int, default=None, help="root seed (default: the calibration's)"
+    )
+    parser.add_argument("--out", type=Path, required=True, help="output JSON")
+    parser.add_argument("--overwrite", action="store_true", help="replace an existing --out")
+    add_params_arg(parser)
+    args = parser.parse_args(argv)
+    check_out_file(parser, args.out, args.overwrite)
+    params = load_params(parser, args)
+    result = damage_scatter(params, n_flights=args.flights, n_windows=args.windows, seed=args.seed)
+    text = json.dumps(result, indent=1)
+    write_text_atomic(args.out, text + "\n")
+    print(text)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,16 +1,23 @@
-"""An animation of one episode's health dashboard (for the docs), and the frame benchmark.
+"""An animation of one episode's health dashboard (docs/dashboard.md, the GIF
+``docs/img/dashboard_episode.gif`` and its numbers beside it).
 
 :func:`episode_frames` runs one episode with a policy (anything with an SB3-style
 ``predict(obs) -> (action, state)``), feeds every step to a
 :class:`~scas_env.dashboard.DashboardRenderer` and keeps one frame every ``every`` slots,
 with the numbers each frame shows. :func:`save_gif` writes them as a looping GIF (Pillow,
-which matplotlib already needs) next to a JSON of those numbers, atomically.
+which matplotlib already needs) next to a JSON of those numbers, atomically. Command line::
+
+    python -m experiments.dashboard_animation --policy rul_risk --seed 3 --every 34 \
+        --out docs/img/dashboard_episode.gif --overwrite
+
+The frame time along an episode: :mod:`experiments.dashboard_speed`.
 """
 
 from __future__ import annotations
 
 import json
 import os
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -19,12 +26,7 @@ import gymnasium as gym
 import numpy as np
 
 from scas_env import ENV_ID
-from scas_env.dashboard import (
-    DashboardRenderer,
-    HealthTrace,
-    benchmark_frame_ms,
-    frame_record_from_env,
-)
+from scas_env.dashboard import DashboardRenderer, frame_record_from_env
 
 
 @dataclass(frozen=True, eq=False)
@@ -117,18 +119,37 @@ def save_gif(
     return gif, numbers
 
 
-def dashboard_frame_ms(*, slots: int = 500, frames: int = 200, seed: int = 0) -> dict:
-    """Frame times (ms: median, mean, max) of ``frames`` consecutive slots after ``slots``
-    slots of flying with a test every 10, the history of all of them drawn
-    (:func:`scas_env.dashboard.benchmark_frame_ms` with the history kept)."""
-    env = gym.make(ENV_ID, episode_slots=slots + frames + 1)
-    env.reset(seed=seed)
-    trace = HealthTrace()
-    trace.record(env)
-    for k in range(slots):
-        env.step(1 if k % 10 == 0 else 0)
-        trace.record(env)
-    return benchmark_frame_ms(env, trace, frames=frames)
+def main(argv: Sequence[str] | None = None) -> int:
+    """The command line (module docstring): the GIF and its JSON written, their sizes shown."""
+    from policies.base import make_policy, policy_obs_mode
+    from scas_env.cli_args import make_parser, nonneg_int, positive_float, positive_int
+
+    parser = make_parser("python -m experiments.dashboard_animation", __doc__)
+    parser.add_argument("--policy", default="rul_risk", help="registered policy name")
+    parser.add_argument("--seed", type=nonneg_int, default=3, help="env seed")
+    parser.add_argument("--slots", type=positive_int, default=2000, help="episode slots")
+    parser.add_argument("--every", type=positive_int, default=34, help="one frame every N slots")
+    parser.add_argument("--fps", type=positive_float, default=6.0, help="frames per second")
+    parser.add_argument("--scale", type=positive_float, default=1.0, help="resize factor")
+    parser.add_argument("--out", type=Path, default=Path("docs/img/dashboard_episode.gif"))
+    parser.add_argument("--overwrite", action="store_true", help="replace existing files")
+    args = parser.parse_args(argv)
+    try:
+        mode = policy_obs_mode(args.policy)
+        env = gym.make(ENV_ID, episode_slots=args.slots, obs_mode=mode)
+        policy = make_policy(args.policy, env.unwrapped.obs_names)
+        title = f"{args.policy} policy, seed {args.seed}"
+        frames = episode_frames(env, policy, seed=args.seed, every=args.every, title=title)
+        paths = save_gif(frames, args.out, fps=args.fps, scale=args.scale, overwrite=args.overwrite)
+    except (ValueError, FileExistsError) as err:
+        parser.error(str(err))
+    for path in paths:
+        print(f"{path} ({path.stat().st_size / 1e3:.0f} kB)")
+    return 0
 
 
-__all__ = ["EpisodeFrames", "dashboard_frame_ms", "episode_frames", "save_gif"]
+__all__ = ["EpisodeFrames", "episode_frames", "main", "save_gif"]
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

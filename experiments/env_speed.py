@@ -1,256 +1,275 @@
-"""Speed measurements of the environment, each beside a reference measured in the same run.
+"""Speed of the envs, each figure beside a reference measured in the same run (``make bench``).
 
-Used by ``scripts/bench_env.py`` (``make bench``); never by unit tests.
+    python -m experiments.env_speed                 # every figure, ~2 min
+    python -m experiments.env_speed --json out.json
+
+* **single env** (``ScasMaintenance-v2``, ``gym.make``): microseconds per step, flying only and
+  with a pre-flight test every 10 slots, beside Gymnasium's ``CartPole-v1`` step;
+* **native vector env** at 64 actuators: env-steps (actuator-slots) per second under the
+  trained policy's mix (90 % fly, 9 % test, 1 % replace: the shipped agent's actions on
+  v2) and flying only, beside CartPole's own native vector env at 64;
+* **the filter arithmetic's ceiling** under that mix: the env-steps per second the vector env
+  would reach if only the particle-filter updates cost time. The updates of the mix are
+  counted (tests; learning updates, one per ``flight_update_flights`` flights) and each
+  kind is timed alone on the same batch (a jitted loop of the kernels, the cloud's RUL
+  tables rebuilt as the env does); ceiling = env-steps / (tests x t_test + learns x t_learn);
+* **the fleet** (``ScasFleet-v0``, 8 aircraft x 3 actuators, the naive rule at its defaults):
+  actuator-flights per second and seconds per 365-day episode, beside the vector env's
+  actuator-steps per second (the issue's target: the fleet flies at least half as many
+  actuator-flights per second as the vector env steps actuators).
+
+Times are CPU seconds of this process (``time.process_time``), the best of a few repeats:
+less sensitive than wall time to other jobs on a shared machine, not immune to them.
 """
 
 from __future__ import annotations
 
+import argparse
+import json
 import time
-from collections.abc import Callable
-from dataclasses import dataclass
+from collections.abc import Callable, Sequence
+from pathlib import Path
+from typing import Any
 
 import gymnasium as gym
 import numpy as np
+from numba import njit
 
 import scas_env
-from prognostics.features import flight_features
-from scas_env.env import ScasMaintenanceEnv
+from scas_env.core.filters import learn_row, refresh_row, test_row, work_arrays
+
+#: the trained policy's mix of actions (fly, test, replace spring, replace seal)
+MIX = (0.90, 0.09, 0.005, 0.005)
 
 
-@dataclass(frozen=True)
-class Timing:
-    name: str
-    seconds_per_call: float
-    reference: str
-    reference_seconds_per_call: float
-
-    @property
-    def ratio(self) -> float:
-        """How many times slower than the reference (>1 = slower)."""
-        return self.seconds_per_call / self.reference_seconds_per_call
+def _best(fn: Callable[[], float], repeats: int = 3) -> float:
+    return min(fn() for _ in range(repeats))
 
 
-def _per_call(fn: Callable[[], object], n: int, repeats: int = 3) -> float:
-    best = float("inf")
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        for _ in range(n):
-            fn()
-        best = min(best, (time.perf_counter() - t0) / n)
-    return best
+def _cpu(fn: Callable[[], Any]) -> float:
+    t0 = time.process_time()
+    fn()
+    return time.process_time() - t0
 
 
-def _stepper(env: gym.Env, seed: int, test_every: int = 10) -> Callable[[], object]:
-    env.reset(seed=seed)
-    state = {"k": 0}
+def single_env_us(steps: int = 6000) -> dict[str, float]:
+    """Microseconds per step of the single env (flying; a test every 10 slots) and of
+    CartPole-v1, through ``gym.make`` (its wrappers included)."""
+    env = gym.make(scas_env.ENV_ID)
+    cart = gym.make("CartPole-v1")
 
-    def step() -> object:
-        state["k"] += 1
-        out = env.step(1 if state["k"] % test_every == 0 else 0)
-        if out[3]:
-            env.reset()
-        return out
+    def run(actions: Sequence[int]) -> float:
+        env.reset(seed=0)
 
-    return step
+        def go() -> None:
+            for a in actions:
+                if env.step(a)[3]:
+                    env.reset()
 
+        return _cpu(go) / len(actions) * 1e6
 
-def _random_stepper(env: gym.Env, seed: int) -> Callable[[], object]:
-    """Uniform random actions (an untrained agent: half the steps replace a part)."""
-    env.reset(seed=seed)
-    actions = iter(np.random.default_rng(seed).integers(0, 4, 10**7).tolist())
+    def cartpole() -> float:
+        cart.reset(seed=0)
 
-    def step() -> object:
-        out = env.step(next(actions))
-        if out[3]:
-            env.reset()
-        return out
+        def go() -> None:
+            for _ in range(steps):
+                if any(cart.step(0)[2:4]):
+                    cart.reset()
 
-    return step
+        return _cpu(go) / steps * 1e6
 
-
-def cartpole_step_s(n: int = 20_000) -> float:
-    env = gym.make("CartPole-v1").unwrapped
-    env.reset(seed=0)
-
-    def step() -> object:
-        out = env.step(env.action_space.sample())
-        if out[2]:
-            env.reset()
-        return out
-
-    return _per_call(step, n)
+    fly = [0] * steps
+    tested = [1 if k % 10 == 0 else 0 for k in range(steps)]
+    run(tested[:500])  # compile and warm
+    return {
+        "cartpole_us": _best(cartpole),
+        "fly_us": _best(lambda: run(fly)),
+        "test_every_10_us": _best(lambda: run(tested)),
+    }
 
 
-def env_timings(
-    n_steps: int = 5000, physics_steps: int = 40, physics_warmup: int = 200
-) -> list[Timing]:
-    """Surrogate and physics step times beside CartPole's, in one process.
-
-    The physics step is timed after ``physics_warmup`` steps, when the episode's window
-    library (``Scenario.window_library`` = 64) is nearly full, as over most of an episode;
-    the warm-up steps themselves (new windows, their baselines simulated) are timed too."""
-    cart = cartpole_step_s()
-    surrogate = _per_call(_stepper(ScasMaintenanceEnv(), 0), n_steps)
-    features_only = _per_call(_stepper(ScasMaintenanceEnv(obs_mode="features"), 0), n_steps)
-    random_actions = _per_call(_random_stepper(ScasMaintenanceEnv(), 0), n_steps)
-    v2 = _per_call(_stepper(ScasMaintenanceEnv(**scas_env.V2_KWARGS), 0), n_steps)
-    physics_env = ScasMaintenanceEnv(fidelity="physics")
-    physics_step = _stepper(physics_env, 0, test_every=1)
-    t0 = time.perf_counter()
-    for _ in range(physics_warmup):  # fill most of the episode's window library
-        physics_step()
-    warm = (time.perf_counter() - t0) / physics_warmup
-    physics = _per_call(physics_step, physics_steps, repeats=1)
-    t = np.arange(20_000) / 1000.0
-    x = 1e-3 * np.sin(2 * np.pi * 2 * t)
-    features = _per_call(lambda: flight_features(t, 3.2 * x, x, 3.2 * x, x), 50)
-    return [
-        Timing("surrogate step, features+rul (PF)", surrogate, "CartPole-v1 step", cart),
-        Timing("surrogate step, features only", features_only, "CartPole-v1 step", cart),
-        Timing("surrogate step, uniform random actions", random_actions, "CartPole-v1 step", cart),
-        Timing("v2 step, filters learning from I8/I9", v2, "CartPole-v1 step", cart),
-        Timing("physics step, test + 20 s window + PF", physics, "CartPole-v1 step", cart),
-        Timing("physics step, first 200 of an episode", warm, "CartPole-v1 step", cart),
-        Timing("in-flight features of a 20 s window", features, "CartPole-v1 step", cart),
-    ]
-
-
-#: Action mixes of the vector-env measurement: (fly, test_and_fly, replace_spring, replace_seal).
-ACTION_MIXES: dict[str, tuple[float, float, float, float]] = {
-    "fly only": (1.0, 0.0, 0.0, 0.0),
-    "test every ~10 slots": (0.9, 0.1, 0.0, 0.0),
-    "trained-policy mix (90/9/1)": (0.9, 0.09, 0.005, 0.005),
-    "uniform random": (0.25, 0.25, 0.25, 0.25),
-}
-
-
-def _vector_rate(envs: gym.vector.VectorEnv, actions: np.ndarray) -> float:
-    envs.reset(seed=0)
-    for a in actions[:10]:  # warm-up (numba caches, buffers)
-        envs.step(a)
-    t0 = time.perf_counter()
-    for a in actions[10:]:
-        envs.step(a)
-    return actions[10:].size / (time.perf_counter() - t0)
-
-
-def _epoch_rate(envs: gym.vector.VectorEnv, actions: np.ndarray) -> float:
-    """Env-steps (slots flown by the actuators inside their epochs) per second of a
-    decision-epoch vector env over ``actions`` (the first 3 decision steps untimed)."""
-    envs.reset(seed=0)
-    for a in actions[:3]:
-        envs.step(a)
-    slots = 0
-    t0 = time.perf_counter()
-    for a in actions[3:]:
-        slots += int(envs.step(a)[4]["epoch_slots"].sum())
-    return slots / (time.perf_counter() - t0)
-
-
-def vector_throughput(
-    num_envs: int = 64, n_steps: int = 200, n_decisions: int = 30, kernel_threads: int = 2,
-    rounds: int = 3,
-) -> dict[str, float]:  # fmt: skip
-    """Env-steps per second of ``make_vec`` with ``num_envs`` environments per action mix,
-    beside Gymnasium's natively vectorised CartPole (random actions) in the same run; and
-    of the v2 decision-epoch vector env (``ScasMaintenanceEpochs-v1``) over ``n_decisions``
-    decision steps, maintenance as the trained-policy mix, each epoch's length drawn
-    uniformly from its ``ks`` (env-steps = slots flown). Then both v2 envs on the 90/9/1 mix
-    with the filter kernels serial and on ``kernel_threads`` threads
-    (:class:`~scas_env.vector_env.ScasMaintenanceVectorEnv`), the same actions, measured
-    alternately over ``rounds`` rounds, best of each (:func:`kernel_threads_rates`)."""
+def vector_rates(num_envs: int = 64, steps: int = 600) -> dict[str, float]:
+    """Env-steps per second of the native vector env under :data:`MIX` and flying only,
+    CartPole's native vector env, and the filter updates of the mix (counts and the
+    ceiling, module docstring)."""
     rng = np.random.default_rng(0)
-    out = {}
+    mix = rng.choice(4, size=(steps * 4, num_envs), p=MIX)
+    venv = gym.make_vec(scas_env.ENV_ID, num_envs=num_envs, vectorization_mode="vector_entry_point")
+    venv.reset(seed=0)
+    for t in range(100):
+        venv.step(mix[t])
+    start = {"k": 100}
+
+    def run(actions: np.ndarray) -> float:
+        def go() -> None:
+            for a in actions:
+                venv.step(a)
+
+        return num_envs * len(actions) / _cpu(go)
+
+    def run_mix() -> float:
+        k = start["k"]
+        start["k"] += steps
+        return run(mix[k : k + steps])
+
+    a = venv.unwrapped.a if hasattr(venv, "unwrapped") else venv.a
+    tests0, flown0 = int(a["tests"].sum()), int(a["flown"].sum())
+    slots0 = int(a["slot"].sum())
+    mix_rate = max(run_mix() for _ in range(3))
+    tests = int(a["tests"].sum()) - tests0
+    flights = int(a["flown"].sum()) - flown0
+    slots = int(a["slot"].sum()) - slots0
+    fly_rate = max(run(np.zeros((steps, num_envs), dtype=np.int64)) for _ in range(3))
     cart = gym.make_vec("CartPole-v1", num_envs=num_envs, vectorization_mode="vector_entry_point")
-    out["CartPole-v1 (reference)"] = _vector_rate(
-        cart, rng.integers(0, 2, (n_steps + 10, num_envs))
-    )
-    for version, env_id in (("v0", scas_env.ENV_ID), ("v2", scas_env.ENV_ID_V2)):
-        envs = gym.make_vec(env_id, num_envs=num_envs, vectorization_mode="vector_entry_point")
-        for name, p in ACTION_MIXES.items():
-            actions = rng.choice(4, size=(n_steps + 10, num_envs), p=p)
-            out[f"{version}: {name}"] = _vector_rate(envs, actions)
-    epochs = gym.make_vec(
-        scas_env.ENV_ID_EPOCHS_V2, num_envs=num_envs, vectorization_mode="vector_entry_point"
-    )
-    n_ks = len(epochs.ks)
-    maintenance = rng.choice(
-        4, size=(n_decisions + 3, num_envs), p=ACTION_MIXES["trained-policy mix (90/9/1)"]
-    )
-    ks = rng.integers(0, n_ks, size=maintenance.shape)
-    out["v2 decision epochs: 90/9/1, k uniform"] = _epoch_rate(epochs, maintenance * n_ks + ks)
-    out.update(kernel_threads_rates(num_envs, n_steps, n_decisions, kernel_threads, rounds))
+    cart.reset(seed=0)
+    zeros = np.zeros(num_envs, dtype=np.int64)
+
+    def cart_rate() -> float:
+        return num_envs * steps / _cpu(lambda: [cart.step(zeros) for _ in range(steps)])
+
+    interval = int(venv.unwrapped.setup.scenario.flight_update_flights)
+    learns = flights / interval
+    t_test, t_learn = update_costs(venv.unwrapped)
+    ceiling = slots / (tests * t_test + learns * t_learn)
+    return {
+        "mix_steps_per_s": mix_rate,
+        "fly_steps_per_s": fly_rate,
+        "cartpole_vector_steps_per_s": max(cart_rate() for _ in range(3)),
+        "tests_per_step": tests / slots,
+        "learns_per_step": learns / slots,
+        "test_update_us": t_test * 1e6,
+        "learn_update_us": t_learn * 1e6,
+        "filter_ceiling_steps_per_s": ceiling,
+        "share_of_ceiling": mix_rate / ceiling,
+    }
+
+
+@njit(cache=True)
+def _time_learn(rows, bank, pending, flight_sum, flight_count, usage, status, tables,
+                filt, handles, interval, means):  # fmt: skip
+    work = work_arrays(bank[0].shape[2], flight_sum.shape[1])
+    for e in rows:
+        flight_count[e] = interval
+        usage[e, 0] = float(interval)
+        usage[e, 1] = float(interval)
+        pending[e, 0] = float(interval)
+        pending[e, 1] = float(interval)
+        for j in range(flight_sum.shape[1]):
+            flight_sum[e, j] = means[e, j] * interval
+        h = (handles[e, 0], handles[e, 1], handles[e, 2])
+        learn_row(e, bank, pending, flight_sum, flight_count, usage, status, work, filt, h)
+        refresh_row(e, bank, tables, status, work, filt)
+
+
+@njit(cache=True)
+def _time_test(rows, bank, pending, flight_sum, flight_count, usage, status, tables, filt,
+               handles, ground):  # fmt: skip
+    work = work_arrays(bank[0].shape[2], flight_sum.shape[1])
+    for e in rows:
+        flight_count[e] = 0
+        pending[e, 0] = 10.0
+        pending[e, 1] = 10.0
+        h = (handles[e, 0], handles[e, 1], handles[e, 2])
+        test_row(e, ground[e, 0], ground[e, 1], bank, pending, flight_sum, flight_count, usage,
+                 status, work, filt, h)  # fmt: skip
+        refresh_row(e, bank, tables, status, work, filt)
+
+
+def update_costs(venv: Any, repeats: int = 20) -> tuple[float, float]:
+    """CPU seconds of one test update and one learning update (each with the RUL tables'
+    rebuild) on a copy of the vector env's batch, averaged over its rows."""
+    import copy
+
+    batch = copy.deepcopy(venv.batch)
+    a, st = batch.a, batch.setup
+    rows = np.arange(batch.n, dtype=np.int64)
+    last = a["last"]
+    means = last[:, st.learn_cols].copy()
+    ground = last[:, len(st.world.flight_idx) :].copy()
+    args = (rows, batch.bank, a["pending"], a["flight_sum"], a["flight_count"],
+            a["batch_usage"], a["status"], batch.tables, st.filters, a["h_filter"])  # fmt: skip
+    interval = int(st.scenario.flight_update_flights)
+    _time_learn(*args, interval, means)
+    _time_test(*args, ground)
+    t_learn = _best(lambda: _cpu(lambda: [_time_learn(*args, interval, means)
+                                          for _ in range(repeats)]))  # fmt: skip
+    t_test = _best(lambda: _cpu(lambda: [_time_test(*args, ground) for _ in range(repeats)]))
+    n = rows.size * repeats
+    return t_test / n, t_learn / n
+
+
+def fleet_rates(episodes: int = 2) -> dict[str, float]:
+    """The default fleet under the naive rule: actuator-flights per second, seconds per
+    episode (CPU)."""
+    import policies  # noqa: F401  (registers the rules)
+    from policies.base import make_policy
+
+    env = gym.make(scas_env.ENV_ID_FLEET)
+    u = env.unwrapped
+    policy = make_policy("fleet_naive", u.obs_names)
+    actuators = u.fleet.shape.actuators
+    out = []
+    for seed in range(episodes + 1):
+        obs, _ = env.reset(seed=seed)
+
+        def go() -> int:
+            nonlocal obs
+            done = False
+            while not done:
+                obs, _, te, tr, info = env.step(policy.predict(obs)[0])
+                done = te or tr
+            return int(info["flights"])
+
+        t0 = time.process_time()
+        flights = go()
+        out.append((time.process_time() - t0, flights * actuators))
+    secs = [s for s, _ in out[1:]]  # the first compiles
+    flights = [f for _, f in out[1:]]
+    return {
+        "fleet_episode_s": float(np.mean(secs)),
+        "fleet_actuator_flights_per_s": float(np.sum(flights) / np.sum(secs)),
+    }
+
+
+def measure() -> dict[str, float]:
+    """Every figure of the module docstring, in one run."""
+    out = {**single_env_us(), **vector_rates(), **fleet_rates()}
+    out["fleet_share_of_vector"] = out["fleet_actuator_flights_per_s"] / out["mix_steps_per_s"]
     return out
 
 
-def kernel_threads_rates(
-    num_envs: int = 64, n_steps: int = 200, n_decisions: int = 30, kernel_threads: int = 2,
-    rounds: int = 3,
-) -> dict[str, float]:  # fmt: skip
-    """Env-steps per second of the v2 vector env (90/9/1 mix, ``n_steps`` steps) and of the
-    v2 decision-epoch vector env (as :func:`vector_throughput`'s) with ``kernel_threads=1``
-    and ``kernel_threads``, the same actions, alternating over ``rounds`` rounds (a shared
-    machine's load drifts), best of each; the threads' run is bit for bit the serial one
-    (tests/test_kernel_threads.py)."""
-    rng = np.random.default_rng(1)
-    mix = ACTION_MIXES["trained-policy mix (90/9/1)"]
-    actions = rng.choice(4, size=(n_steps + 10, num_envs), p=mix)
-    out: dict[str, float] = {}
-    for t in (1, kernel_threads):
-        out[f"v2: 90/9/1, kernel_threads={t}"] = 0.0
-        out[f"v2 decision epochs: 90/9/1, kernel_threads={t}"] = 0.0
-    envs, epochs = {}, {}
-    for t in (1, kernel_threads):
-        make = {"vectorization_mode": "vector_entry_point", "kernel_threads": t}
-        envs[t] = gym.make_vec(scas_env.ENV_ID_V2, num_envs=num_envs, **make)
-        epochs[t] = gym.make_vec(scas_env.ENV_ID_EPOCHS_V2, num_envs=num_envs, **make)
-    n_ks = len(epochs[1].ks)
-    maintenance = rng.choice(4, size=(n_decisions + 3, num_envs), p=mix)
-    decisions = maintenance * n_ks + rng.integers(0, n_ks, size=maintenance.shape)
-    for t in (1, kernel_threads):  # warm-up: numba's caches, its threads
-        _vector_rate(envs[t], actions[:20])
-    for _ in range(rounds):
-        for t in (1, kernel_threads):
-            key = f"v2: 90/9/1, kernel_threads={t}"
-            out[key] = max(out[key], _vector_rate(envs[t], actions))
-            key = f"v2 decision epochs: 90/9/1, kernel_threads={t}"
-            out[key] = max(out[key], _epoch_rate(epochs[t], decisions))
-    return out
+def format_rates(r: dict[str, float]) -> str:
+    return "\n".join(
+        [
+            f"single env, flying:           {r['fly_us']:8.1f} us/step "
+            f"(CartPole-v1 {r['cartpole_us']:.1f} us: x{r['fly_us'] / r['cartpole_us']:.1f})",
+            f"single env, test every 10:    {r['test_every_10_us']:8.1f} us/step "
+            f"(x{r['test_every_10_us'] / r['cartpole_us']:.1f} CartPole)",
+            f"vector env 64, mix 90/9/1:    {r['mix_steps_per_s']:10,.0f} env-steps/s "
+            f"(CartPole vector {r['cartpole_vector_steps_per_s']:,.0f})",
+            f"vector env 64, flying:        {r['fly_steps_per_s']:10,.0f} env-steps/s",
+            f"filter updates of the mix:    {r['tests_per_step']:.3f} tests and "
+            f"{r['learns_per_step']:.3f} learning updates per step; "
+            f"{r['test_update_us']:.1f} and {r['learn_update_us']:.1f} us each",
+            f"filter arithmetic ceiling:    {r['filter_ceiling_steps_per_s']:10,.0f} env-steps/s "
+            f"(the mix reaches {100 * r['share_of_ceiling']:.0f} %)",
+            f"fleet (8 x 3, naive rule):    {r['fleet_actuator_flights_per_s']:10,.0f} "
+            f"actuator-flights/s ({100 * r['fleet_share_of_vector']:.0f} % of the vector env's "
+            f"actuator-steps/s), {r['fleet_episode_s']:.2f} s per 365-day episode",
+        ]
+    )
 
 
-def kernel_call_overhead(num_envs: int = 64, n_rows: int = 6, n_calls: int = 2000) -> dict:
-    """Microseconds per call of the learning kernel with nothing to do (no actuator's batch
-    is full: each row is skipped), serial (:func:`~scas_env.learning_kernel.learn_batch`) and
-    on two chunks (``learn_batch_threads``): the fixed cost of a call, best of 5 x
-    ``n_calls``, on the bank of a v2 vector env of ``num_envs`` after 5 flights."""
-    from scas_env.learning_kernel import learn_batch, learn_batch_threads, start_threads
-
-    from scas_env.vector_env import ScasMaintenanceVectorEnv
-
-    start_threads()
-    env = ScasMaintenanceVectorEnv(num_envs, **scas_env.V2_KWARGS)
-    env.reset(seed=0)
-    for _ in range(5):
-        env.step(np.zeros(num_envs, dtype=np.int64))
-    env.a["flight_count"][:] = 0
-    idx = np.arange(n_rows, dtype=np.int64)
-    args = (idx, idx, *env._kernel_io(idx), np.zeros(0, dtype=np.bool_))
-    out = {}
-    for name, call in (
-        ("serial", lambda: learn_batch(*args)),
-        ("2 chunks", lambda: learn_batch_threads(*args, 2)),
-    ):
-        out[name] = _per_call(call, n_calls, repeats=5) * 1e6
-    return out
+def main(argv: Sequence[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--json", type=Path, default=None, help="also write the figures here")
+    args = parser.parse_args(argv)
+    rates = measure()
+    print(format_rates(rates))
+    if args.json is not None:
+        args.json.write_text(json.dumps(rates, indent=1) + "\n")
+    return 0
 
 
-def format_timings(timings: list[Timing]) -> str:
-    lines = [
-        f"{'what':42s} {'per call':>12s} {'reference':>22s} {'ref per call':>12s} {'ratio':>7s}"
-    ]
-    for t in timings:
-        lines.append(
-            f"{t.name:42s} {t.seconds_per_call * 1e6:10.1f}us {t.reference:>22s} "
-            f"{t.reference_seconds_per_call * 1e6:10.1f}us {t.ratio:7.1f}"
-        )
-    return "\n".join(lines)
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,4 +1,5 @@
-"""Speed and accuracy benchmark of the actuator integrator (``scripts/bench_integrator.py``).
+"""Speed and accuracy benchmark of the actuator integrator (docs/speed.md; part of ``make
+bench``: ``python -m experiments.integrator_speed``).
 
 For each benchmark command (pre-flight-test-like steps and a flight-like sine sum) it
 measures, after JIT warm-up and as the best of ``repeats`` timings:
@@ -17,8 +18,9 @@ measures, after JIT warm-up and as the best of ``repeats`` timings:
 from __future__ import annotations
 
 import dataclasses
+import logging
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -146,3 +148,81 @@ def format_results(results: list[BenchResult]) -> str:
             f"{r.friction_work_rel_error:9.1e}"
         )
     return "\n".join(lines)
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """The command line: the table of :func:`benchmark_integrator` for the design (``--params``,
+    ``--dt``, ``--friction-velocity`` override it)."""
+    import numba
+
+    from scas_env.cli_args import (
+        add_logging_args,
+        add_params_arg,
+        configure_logging,
+        load_params,
+        make_parser,
+        positive_float,
+        positive_int,
+    )
+
+    parser = make_parser("python -m experiments.integrator_speed", __doc__)
+    parser.add_argument(
+        "--dt", type=positive_float, default=None, help="sim_dt_s override in s (default: params)"
+    )
+    parser.add_argument(
+        "--friction-velocity",
+        type=positive_float,
+        default=None,
+        help="friction_velocity_m_s override in m/s (default: params)",
+    )
+    parser.add_argument("--duration", type=positive_float, default=60.0, help="seconds per command")
+    parser.add_argument(
+        "--batch-runs", type=positive_int, default=8, help="runs in the batch timing"
+    )
+    parser.add_argument(
+        "--substeps", type=int, default=10, help="RK4 substeps of the reference (>= 2)"
+    )
+    add_params_arg(parser)
+    add_logging_args(parser)
+    args = parser.parse_args(argv)
+    configure_logging(args)
+    params = load_params(parser, args)
+    try:
+        if args.dt is not None:
+            params = params.replace(sensors=params.sensors.replace(sim_dt_s=args.dt))
+        if args.friction_velocity is not None:
+            params = params.replace(
+                actuator=params.actuator.replace(friction_velocity_m_s=args.friction_velocity)
+            )
+        if args.substeps < 2:
+            raise ValueError(f"--substeps {args.substeps} must be >= 2")
+    except ValueError as exc:
+        parser.error(str(exc))
+    logging.getLogger(__name__).info(
+        f"sim_dt_s = {params.sensors.sim_dt_s} s, friction_velocity_m_s = "
+        f"{params.actuator.friction_velocity_m_s} m/s, {numba.get_num_threads()} threads, "
+        f"{args.duration} s per command; reference = {args.substeps} RK4 substeps per step"
+    )
+    results = benchmark_integrator(
+        params,
+        duration_s=args.duration,
+        reference_substeps=args.substeps,
+        batch_runs=args.batch_runs,
+    )
+    print(format_results(results))
+    print("RTF = simulated s / wall s (one actuator, one core); batch x/s = all cores")
+    return 0
+
+
+__all__ = [
+    "BenchResult",
+    "benchmark_integrator",
+    "format_results",
+    "main",
+    "sine_command",
+    "step_command",
+]
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

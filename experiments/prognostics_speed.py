@@ -1,4 +1,5 @@
-"""Timing of the particle-filter hot path and the RUL summary beside the step-by-step reference.
+"""Timing of the particle-filter hot path and the RUL summary beside the step-by-step reference
+(``python -m experiments.prognostics_speed``, part of ``make bench``; docs/speed.md).
 
 Synthetic Paris-like case (no simulator needed): ``g(a) = g_0 (a / a_0)^{m/2}`` tabulated on
 200 depths, a PCHIP measurement model on 8 levels, N particles. Each timing is the median
@@ -15,7 +16,7 @@ from __future__ import annotations
 
 import dataclasses
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 
 import numpy as np
 
@@ -120,3 +121,24 @@ def format_table(times_us: dict[str, float], n_particles: int) -> str:
     lines = [f"| operation (N = {n_particles}) | median us/call |", "|---|---:|"]
     lines += [f"| {k} | {v:.1f} |" for k, v in times_us.items()]
     return "\n".join(lines)
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """The command line: the Markdown table of :func:`run_benchmark`."""
+    from scas_env.cli_args import make_parser, nonneg_int, positive_int
+
+    parser = make_parser("python -m experiments.prognostics_speed", __doc__)
+    parser.add_argument("--particles", type=positive_int, default=1000, help="particles N")
+    parser.add_argument("--calls", type=positive_int, default=2000, help="timed calls")
+    parser.add_argument("--seed", type=nonneg_int, default=0, help="seed")
+    args = parser.parse_args(argv)
+    times = run_benchmark(n_particles=args.particles, n_calls=args.calls, seed=args.seed)
+    print(format_table(times, args.particles))
+    return 0
+
+
+__all__ = ["format_table", "main", "run_benchmark", "synthetic_case"]
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,6 +1,6 @@
 """A reference posterior for the spring: exact Bayes on the data the health monitor received.
 
-The monitor's spring filter (``scas_env/monitor.py``) is a particle filter over a static
+The monitor's spring filter (:mod:`scas_env.core.filters`) is a particle filter over a static
 parameter vector (initial crack depth ``a0``, growth multiplier ``theta``) with the
 installation effects ``z`` of its features (I8 in flight, G1 on tests) as per-particle
 Gaussian states. How much of its miscalibration (docs/beliefs.md) is the particle
@@ -11,7 +11,7 @@ This module computes that posterior directly. Given ``(a0, theta)`` the crack pa
 ``t`` flights; the world's flight-to-flight scatter, CV 0.6-1.8 %, moves a life by about
 0.1 %, and is left out), so every measurement's mean ``mu``, installation loading ``tau`` and
 run noise ``sigma`` follow from the surrogate's tables as the world draws them
-(:func:`scas_env.fleet_kernels.surrogate_flights`), and each feature's ``z ~ N(0, 1)`` is
+(:func:`scas_env.core.flight.features_at`), and each feature's ``z ~ N(0, 1)`` is
 integrated out exactly by the scalar Kalman recursion of
 :func:`prognostics.random_effect.random_effect_update` (the predictive densities multiply to
 the joint Gaussian density with covariance ``diag(sigma^2) + tau tau^T``; tested). The
@@ -23,7 +23,10 @@ log theta normal: the laws the world draws), weighted by their likelihood and by
 The data are those the monitor used, in the same form: the means of the in-flight batches
 (each flight's ``mu``, ``tau``, ``sigma`` at its own crack depth, so the batch mean's
 likelihood is exact, where the filter evaluates the mid-batch state) and every test's G1,
-known at a record once the monitor had learnt them (a batch under way is not). The other part
+known at a record once the monitor had learnt them (a batch under way is not).
+:class:`RecordingEnv` reads them from the env's batch arrays around each step (the learning
+batch's count and sum, the latest features), and checks after every step that its own copy
+of the batch under way is the batch's, bit for bit. The other part
 enters at its **true** wear fraction (the filter uses its own seal estimate and adds the
 cross-fault variance): the reference is exact on the spring's side and knows the seal, which
 measured cross-fault effects show to be a small difference (docs/beliefs.md).
@@ -35,20 +38,25 @@ RUL distribution at each spring life's stage records, and returns per-life rows;
 sd of the log ratio and Brier score per stage for both, paired. Late in life the posterior
 holds a small part of the prior's mass: :meth:`ReferencePosterior.refine` then redraws the
 points from a proposal fitted to it (importance sampling, every event replayed).
-``scripts/reference_posterior.py`` is the command line.
+
+Command line (docs/beliefs.md, "A reference posterior")::
+
+    python -m experiments.reference_posterior --episodes 100 --seed 1000 --policies test10 \
+        --out results/reference_test10
+    python -m experiments.reference_posterior --synthetic 1000 --seed 21 --log2-points 12
 """
 
 from __future__ import annotations
 
-import functools
+import json
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any
 
 import numpy as np
 from numba import njit
-from scas_env.learning_kernel import bilinear_at, cell_of
 from scipy.stats import chi2, multivariate_t, norm, qmc, truncnorm
 from tqdm.auto import tqdm
 
@@ -63,7 +71,9 @@ from experiments.belief_calibration import (
 from prognostics.degradation_models import TabulatedRateModel, inverse_damage_scalar
 from prognostics.random_effect import random_effect_update
 from prognostics.rul import weighted_quantile
+from scas_env.core.filters import bilinear_at, cell_of
 from scas_env.core.scenario import Scenario
+from scas_env.core.setup import FLIGHT_FEATURES, GROUND_FEATURES, LEARNING_FEATURES, Setup
 from scas_env.env import ScasMaintenanceEnv
 
 #: kinds of a data event
@@ -113,72 +123,81 @@ class SpringEvents:
 
 class RecordingEnv(ScasMaintenanceEnv):
     """:class:`ScasMaintenanceEnv` that records, beside its normal episode, the spring
-    filter's data (:class:`SpringEvents`, ``self.events`` after each reset). Nothing in the
-    episode changes: the monitor's methods are wrapped, not replaced."""
+    filter's data (:class:`SpringEvents`, ``self.events`` after each reset), read from its
+    batch's arrays around each step (row 0 of ``self.batch.a``). Nothing in the episode
+    changes: the arrays are only read.
+
+    Within a slot the monitor learns in this order: a test (asked for, or before every
+    flight) learns the in-flight batch under way, then its G1; a flight's I8 joins the batch
+    (``flight_sum``, ``flight_count``), which is learnt when full; a replacement (or the
+    part replaced after an in-flight failure) learns the batch under way before the new
+    part's filter restarts. The recorder keeps its own copy of the batch under way (each
+    flight's pre-flight spring age and true wear fraction, the running sum of I8 in the
+    kernel's order) and raises ``RuntimeError`` if, after a step, it is not the batch's
+    count and sum bit for bit: each recorded batch mean is then what the filter learnt
+    (``flight_sum / flight_count``)."""
 
     def __init__(self, **kwargs: Any) -> None:
         super().__init__(**kwargs)
-        if "I8" not in self.scenario.flight_features.split(","):
-            raise ValueError(
-                f"flight_features = {self.scenario.flight_features!r} must include I8 (the "
-                "spring filter's in-flight feature) for the reference posterior"
-            )
         if self.scenario.fidelity != "surrogate":
             raise ValueError(
                 f"fidelity = {self.scenario.fidelity!r}: the reference posterior needs the "
                 "surrogate world ('surrogate')"
             )
+        #: column of I8 in the learning batch's sums, and in ``a["last"]``; G1's there
+        self._i8_sum = list(LEARNING_FEATURES).index("I8")
+        self._i8 = FLIGHT_FEATURES.index("I8")
+        self._g1 = len(FLIGHT_FEATURES) + GROUND_FEATURES.index("G1")
+        self._interval = int(self.scenario.flight_update_flights)
+        self._critical = float(self.calibration.seal_critical_wear_m)
 
     def reset(self, *, seed: int | None = None, options: dict | None = None) -> tuple:
         out = super().reset(seed=seed, options=options)
         self.events = SpringEvents()
         self._life = 0
         self._batch: list[tuple[float, float]] = []  # (pre-flight age, true wear fraction)
-        self._values: list[float] = []  # the batch's I8 values
-        monitor, world = self.monitor, self.world  # the monitor is new at each reset
-        flown, tested, replaced = monitor.flown, monitor.tested, monitor.replaced
-        world.__dict__.pop("fly", None)  # the world is not: unwrap the last episode's
-        fly = world.fly
-
-        def age() -> int:
-            return int(self.part_age["spring"])
-
-        def flush() -> None:
-            if self._batch:
-                y = float(np.mean(self._values))
-                self.events.add(BATCH, y, self._life, age(), self._batch)
-                self._batch, self._values = [], []
-
-        @functools.wraps(fly)
-        def fly_recorded(*args: Any) -> Any:
-            self._wear_before = min(world.wear_fraction, 1.0)
-            return fly(*args)
-
-        def flown_recorded(features: dict[str, float]) -> None:
-            before = monitor.flight_count
-            flown(features)
-            if monitor.flight_count != before:  # the monitor took the flight into its batch
-                self._batch.append((age(), self._wear_before))
-                self._values.append(float(features["I8"]))
-                if monitor.flight_count == 0:  # and learnt the batch
-                    flush()
-
-        def tested_recorded(features: dict[str, float]) -> None:
-            flush()  # the monitor learns the batch under way first
-            wear = min(world.wear_fraction, 1.0)
-            self.events.add(TEST, float(features["G1"]), self._life, age(), [(age(), wear)])
-            tested(features)
-
-        def replaced_recorded(part: str) -> None:
-            flush()  # the monitor learns the batch flown with the old part first
-            if part == "spring":
-                self._life += 1
-            replaced(part)
-
-        world.fly = fly_recorded
-        monitor.flown, monitor.tested = flown_recorded, tested_recorded
-        monitor.replaced = replaced_recorded
+        self._sum = 0.0  # the batch's I8 summed as the kernel sums it
+        self._check()
         return out
+
+    def step(self, action: Any) -> tuple:
+        a = self.batch.a
+        age = int(a["part_age"][0, 0])
+        wear = min(float(a["wear"][0]) / self._critical, 1.0)
+        tests = int(a["tests"][0])
+        replaced = a["replacements"][0].copy()
+        out = super().step(action)
+        if a["tests"][0] != tests:
+            self._flush(age)  # the test learnt the batch under way first
+            g1 = float(a["last"][0, self._g1])
+            self.events.add(TEST, g1, self._life, age, [(age, wear)])
+        if a["flew"][0]:  # a flight whose features joined the batch
+            self._batch.append((age, wear))
+            self._sum += float(a["last"][0, self._i8])
+            if len(self._batch) >= self._interval:
+                self._flush(age)
+        if (a["replacements"][0] != replaced).any():
+            self._flush(age)  # learnt before the new part's filter restarts
+            if a["replacements"][0, 0] != replaced[0]:
+                self._life += 1
+        self._check()
+        return out
+
+    def _flush(self, age: int) -> None:
+        """The batch under way was learnt at spring age ``age``: recorded, emptied."""
+        if self._batch:
+            y = self._sum / len(self._batch)
+            self.events.add(BATCH, y, self._life, age, self._batch)
+            self._batch, self._sum = [], 0.0
+
+    def _check(self) -> None:
+        a = self.batch.a
+        count, total = int(a["flight_count"][0]), float(a["flight_sum"][0, self._i8_sum])
+        if len(self._batch) != count or self._sum != total:
+            raise RuntimeError(
+                f"the recorder's batch ({len(self._batch)} flights, I8 sum {self._sum!r}) is "
+                f"not the monitor's ({count}, {total!r})"
+            )
 
 
 @dataclass(frozen=True)
@@ -198,10 +217,11 @@ class SpringModel:
     wear_grid: np.ndarray
 
     @classmethod
-    def of(cls, env: ScasMaintenanceEnv) -> SpringModel:
-        """The model of ``env`` after a reset (its monitor's growth tables and priors)."""
-        monitor, sur = env.monitor, env.surrogate
-        unc = env.params.uncertainty
+    def of(cls, setup: Setup) -> SpringModel:
+        """The model of an env's :class:`~scas_env.core.setup.Setup` (``env.setup``): its
+        spring filter's growth tables and priors, its surrogate."""
+        sur, cal = setup.surrogate, setup.calibration
+        unc = setup.params.uncertainty
         i8, g1 = (
             np.ascontiguousarray(
                 np.stack([sur.mean[k], sur.unit_std[k], sur.run_std[k]]), dtype=np.float64
@@ -209,10 +229,10 @@ class SpringModel:
             for k in (sur.index("I8"), sur.index("G1"))
         )
         return cls(
-            growth=monitor.spring_filter.process,
-            a_fail_m=float(monitor.a_fail),
-            dormant_m=float(env.calibration.crack_dormant_below_m),
-            a0_mean_m=float(env.params.spring.initial_crack_m),
+            growth=setup.spring_process,
+            a_fail_m=float(cal.spring_failure_depth_m),
+            dormant_m=float(cal.crack_dormant_below_m),
+            a0_mean_m=float(setup.params.spring.initial_crack_m),
             a0_sd_m=float(unc.initial_crack_sigma_m),
             log_theta_sd=float(unc.paris_c_log_sigma),
             stacks=(i8, g1),
@@ -441,7 +461,7 @@ def reference_lives(
     reference's (the same with ``ref_``, and ``ref_ess``)."""
     trace = run_episode(env, policy, seed)["spring"]
     table = trace_table([trace])
-    model = SpringModel.of(env)
+    model = SpringModel.of(env.setup)
     events = env.events
     sc = env.scenario
     low_q, horizon = float(sc.rul_quantile), float(sc.risk_horizon_flights)
@@ -518,6 +538,94 @@ def run_reference_study(
     return rows
 
 
+def main(argv: Sequence[str] | None = None) -> int:
+    """The command line (module docstring): the per-stage table of both estimators with the
+    paired differences, and ``--out`` (CSV/JSON/PNG); ``--synthetic N``: lives drawn from
+    the reference's own model (:mod:`experiments.reference_synthetic`), the table printed."""
+    from scas_env.cli_args import check_out_dir, make_parser, nonneg_int, positive_int
+
+    parser = make_parser("python -m experiments.reference_posterior", __doc__)
+    parser.add_argument("--episodes", type=positive_int, default=100, help="episodes per policy")
+    parser.add_argument("--seed", type=nonneg_int, default=1000, help="first episode seed")
+    parser.add_argument("--policies", nargs="+", default=list(POLICIES), choices=POLICIES)
+    parser.add_argument(
+        "--scenario",
+        type=json.loads,
+        default={},
+        help="Scenario fields as JSON over the defaults, e.g. "
+        '\'{"spring_theta_walk": 0.007}\' or \'{"preflight": "every_flight"}\'',
+    )
+    parser.add_argument(
+        "--log2-points", type=int, default=DEFAULT_LOG2_POINTS, help="2^k Sobol points per set"
+    )
+    parser.add_argument(
+        "--min-ess",
+        type=float,
+        default=DEFAULT_MIN_ESS,
+        help="refine a belief whose effective sample size is below this",
+    )
+    parser.add_argument(
+        "--synthetic",
+        type=positive_int,
+        default=None,
+        metavar="N",
+        help="no episodes: N lives drawn from the reference's own model, the PIT of each "
+        "true RUL at the stages (experiments.reference_synthetic); prints the table",
+    )
+    parser.add_argument("--no-tests", action="store_true", help="--synthetic lives without tests")
+    parser.add_argument("--out", type=Path, default=None, help="results folder (none: print)")
+    parser.add_argument("--overwrite", action="store_true", help="replace an existing --out")
+    parser.add_argument("--no-progress", action="store_true", help="no progress bar")
+    args = parser.parse_args(argv)
+    try:
+        check_points(args.log2_points, args.min_ess)
+        scenario = Scenario.from_dict(dict(args.scenario))
+    except (TypeError, ValueError) as exc:
+        parser.error(str(exc))
+    if args.synthetic is not None:
+        if args.out is not None:
+            parser.error("--synthetic prints its table only: drop --out")
+        from experiments.reference_synthetic import format_synthetic, synthetic_stage_pits
+
+        env = ScasMaintenanceEnv(scenario=scenario)
+        pits = synthetic_stage_pits(
+            SpringModel.of(env.setup),
+            args.synthetic,
+            np.random.default_rng(args.seed),
+            stages=STAGES,
+            tests=not args.no_tests,
+            log2_points=args.log2_points,
+            min_ess=args.min_ess,
+            progress=not args.no_progress,
+        )
+        print(format_synthetic(pits, float(scenario.rul_quantile)))
+        return 0
+    if args.out is not None:
+        check_out_dir(parser, args.out, args.overwrite)
+    from experiments.reference_report import format_table, stage_table, write_report
+
+    rows = run_reference_study(
+        episodes=args.episodes,
+        seed=args.seed,
+        policies=args.policies,
+        scenario_fields=args.scenario,
+        log2_points=args.log2_points,
+        min_ess=args.min_ess,
+        progress=not args.no_progress,
+    )
+    table = stage_table(rows, np.random.default_rng(args.seed))
+    print(format_table(table))
+    if args.out is not None:
+        config = {
+            "episodes": args.episodes, "seed": args.seed, "policies": args.policies,
+            "scenario_fields": args.scenario, "log2_points": args.log2_points,
+            "min_ess": args.min_ess, "stages": list(REFERENCE_STAGES),
+        }  # fmt: skip
+        for path in write_report(rows, table, config, args.out, overwrite=args.overwrite):
+            print(path)
+    return 0
+
+
 __all__ = [
     "BATCH",
     "DEFAULT_LOG2_POINTS",
@@ -531,6 +639,11 @@ __all__ = [
     "SpringModel",
     "check_points",
     "event_update",
+    "main",
     "reference_lives",
     "run_reference_study",
 ]
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

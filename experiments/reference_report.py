@@ -17,8 +17,9 @@ from typing import Any
 
 import numpy as np
 
-from experiments.belief_calibration import TARGETS, _share, _write_csv
+from experiments.belief_calibration import TARGETS, _share
 from experiments.belief_comparison import paired_difference
+from experiments.belief_output import write_csv
 from scas_env.utils.results_folder import results_folder
 
 #: the two estimators compared
@@ -108,8 +109,8 @@ def write_report(
     names = ["lives.csv", "stages.csv", "study.json", "coverage.png"]
     seeds = {"first": config["seed"], "episodes": config["episodes"]}
     with results_folder(out, config=config, seeds=seeds, overwrite=overwrite) as tmp:
-        _write_csv(tmp / "lives.csv", rows)
-        _write_csv(tmp / "stages.csv", table)
+        write_csv(tmp / "lives.csv", rows)
+        write_csv(tmp / "stages.csv", table)
         (tmp / "study.json").write_text(
             json.dumps({"config": config, "stages": list(table)}, indent=1) + "\n"
         )

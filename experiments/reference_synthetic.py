@@ -11,7 +11,8 @@ noise and the seal at a linear wear ``age / seal_life_flights``; then the
 :class:`~experiments.reference_posterior.ReferencePosterior` on those data, and the PIT
 of the true RUL at each stage.
 
-``scripts/reference_posterior.py --synthetic N`` is the command line (docs/beliefs.md).
+``python -m experiments.reference_posterior --synthetic N`` is the command line
+(docs/beliefs.md).
 """
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""Long-run (renewal-reward) rates beside the benchmark's finite-horizon ones.
+r"""Long-run (renewal-reward) rates beside the benchmark's finite-horizon ones.
 
 The benchmark's cost per FH and failures per 1000 FH are **finite-horizon** figures: each
 episode starts from new parts and lasts ``episode_slots`` slots (about 1.7 mean lives), so
@@ -21,12 +21,21 @@ figures stand beside them:
 The closed form ignores the rare coincidences of the two parts (both failing in one
 flight; a part due while the aircraft is grounded for the other): the check in
 tests/test_renewal.py bounds their effect.
+
+Command line (docs/findings.md, "Value of prognostics")::
+
+    python -m experiments.renewal --lives 1000 --episodes 32       # simulated vs closed form
+    python -m experiments.renewal --ladder docs/value_v2/ladder.json --episodes 16 \
+        --out results/value_long_run.json                           # the ladder's arms
 """
 
 from __future__ import annotations
 
+import json
+import math
 import re
 from collections.abc import Mapping, Sequence
+from pathlib import Path
 from typing import Any
 
 import gymnasium as gym
@@ -38,7 +47,17 @@ from scas_env import ENV_ID
 from scas_env.core.costs import CostModel
 from scas_env.core.setup import PARTS
 
-__all__ = ["age_rule_rate", "long_run_for_arms", "long_run_rates", "sample_lives"]
+#: the age rule of the check (flights per part)
+AGE_RULE = {"spring": 850.0, "seal": 760.0}
+
+__all__ = [
+    "AGE_RULE",
+    "age_rule_rate",
+    "long_run_for_arms",
+    "long_run_rates",
+    "main",
+    "sample_lives",
+]
 
 
 def sample_lives(n: int, seed: int, *, max_slots: int = 20_000) -> dict[str, np.ndarray]:
@@ -204,3 +223,99 @@ def _parse_cost_model(key: str, text: str) -> CostModel:
         raise ValueError(f"env keyword {key} = {text!r}: only a CostModel repr is understood")
     fields = dict(re.findall(r"(\w+)=([-+0-9.e]+)", text))
     return CostModel(**{k: float(v) for k, v in fields.items()})
+
+
+def _check_rows(
+    lives: Mapping[str, np.ndarray], sim: Mapping[str, Mapping[str, Any]]
+) -> list[dict[str, Any]]:
+    """Per policy of the check: simulated long-run cost per FH and failures per 1000 FH
+    (with their intervals) beside the closed form on ``lives``."""
+    rows = []
+    for key, ages in (("corrective", dict.fromkeys(PARTS, math.inf)), ("preventive", AGE_RULE)):
+        theory = age_rule_rate(lives, ages)
+        got = sim[key]
+        rows.append(
+            {
+                "policy": key,
+                "ages": {p: float(v) for p, v in ages.items()},
+                "cost_per_fh": got["cost_per_fh"],
+                "cost_per_fh_closed_form": theory["cost_per_fh"],
+                "failures_per_1000fh": got["failures_per_1000fh"],
+                "failures_per_1000fh_closed_form": theory["failures_per_1000fh"],
+            }
+        )
+    return rows
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """The command line (module docstring): the check of the closed form against simulation,
+    or (``--ladder``) the long-run rates of a ladder's arms; printed, ``--out`` as JSON."""
+    from scas_env.cli_args import (
+        check_out_file,
+        existing_file,
+        make_parser,
+        nonneg_int,
+        positive_int,
+    )
+    from scas_env.utils.atomic_file import write_text_atomic
+
+    parser = make_parser("python -m experiments.renewal", __doc__)
+    parser.add_argument("--lives", type=positive_int, default=1000, help="lives per part")
+    parser.add_argument("--episodes", type=positive_int, default=32, help="simulated episodes")
+    parser.add_argument("--warmup", type=positive_int, default=2000, help="slots before the window")
+    parser.add_argument("--window", type=positive_int, default=18_000, help="slots of the window")
+    parser.add_argument("--seed", type=nonneg_int, default=3, help="seed of the episodes")
+    parser.add_argument("--lives-seed", type=nonneg_int, default=21, help="seed of the lives")
+    parser.add_argument("--workers", type=positive_int, default=1, help="worker processes")
+    parser.add_argument(
+        "--ladder", type=existing_file, default=None, help="a ladder.json: its arms' rates"
+    )
+    parser.add_argument("--out", type=Path, default=None, help="JSON file (default: print only)")
+    parser.add_argument("--overwrite", action="store_true", help="replace an existing --out")
+    args = parser.parse_args(argv)
+    if args.out is not None:
+        check_out_file(parser, args.out, args.overwrite)
+    window = {"warmup": args.warmup, "window": args.window, "n_workers": args.workers}
+    if args.ladder is not None:
+        try:
+            arms = json.loads(args.ladder.read_text())["config"]["arms"]
+        except (KeyError, TypeError, ValueError) as exc:
+            parser.error(f"--ladder {args.ladder}: no config.arms ({exc})")
+        out: Any = long_run_for_arms(arms, episodes=args.episodes, **window)
+        for arm, r in out.items():
+            c, f = r["cost_per_fh"], r["failures_per_1000fh"]
+            print(
+                f"{arm:28s} {c['mean']:8.2f} [{c['low']:.2f}, {c['high']:.2f}] USD/FH  "
+                f"{f['mean']:6.3f} [{f['low']:.3f}, {f['high']:.3f}] failures/1000 FH"
+            )
+    else:
+        lives = sample_lives(args.lives, args.lives_seed)
+        specs = [
+            PolicySpec("corrective"),
+            PolicySpec(
+                "preventive",
+                {
+                    "spring_age": AGE_RULE["spring"],
+                    "seal_age": AGE_RULE["seal"],
+                    "opportunity": 0.0,
+                },
+            ),
+        ]
+        sim = long_run_rates(specs, episodes=args.episodes, seed=args.seed, **window)
+        out = _check_rows(lives, sim)
+        for r in out:
+            c, f = r["cost_per_fh"], r["failures_per_1000fh"]
+            print(
+                f"{r['policy']:10s} cost {c['mean']:.2f} [{c['low']:.2f}, {c['high']:.2f}] USD/FH "
+                f"(closed form {r['cost_per_fh_closed_form']:.2f}); failures {f['mean']:.3f} "
+                f"[{f['low']:.3f}, {f['high']:.3f}] per 1000 FH (closed form "
+                f"{r['failures_per_1000fh_closed_form']:.3f})"
+            )
+    if args.out is not None:
+        doc = {"args": {k: str(v) for k, v in vars(args).items()}, "rates": out}
+        write_text_atomic(args.out, json.dumps(doc, indent=1) + "\n")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,24 +1,26 @@
 """SB3 PPO training speed: the native vector env (:class:`policies.agents.sb3_vec_env.NativeVecEnv`)
-against the ``DummyVecEnv`` setup, side by side in one run.
+against the ``DummyVecEnv`` setup, side by side in one run (docs/findings.md, "Speed").
 
 Setups (:data:`SETUPS`), each ``VecNormalize`` over a monitored vector env, PPO on the CPU
 with one torch thread and the same hyper-parameters (:data:`FPS_CONFIGS`):
 
-- ``dummy-4``: 4 single ``ScasMaintenance-v0`` in SB3's ``DummyVecEnv`` (each in
-  ``Monitor``): the setup of ``policies.rl.train``;
+- ``dummy-4``: 4 single ``ScasMaintenance-v2`` in SB3's ``DummyVecEnv`` (each in
+  ``Monitor``);
 - ``native-64``: ``NativeVecEnv(gym.make_vec(..., num_envs=64,
   vectorization_mode="vector_entry_point"), info_keys=())`` in ``VecMonitor``;
 - ``cartpole-4``: 4 ``CartPole-v1`` in ``DummyVecEnv``: PPO's own cost with a near-free env;
 - ``epochs-dummy-4``: MaskablePPO on 4 decision-epoch v2 envs in ``DummyVecEnv`` (the setup of
-  ``policies.agents.training``); ``epochs-native-64``: MaskablePPO on
-  ``NativeVecEnv(DecisionEpochsVectorEnv(64, **V2_KWARGS))``. Their frames are flights (a
-  decision flies k of them), counted from ``info["epoch_slots"]``; ``epochs-native-64-t2``:
-  the same with the vector env's filter kernels on two threads (``kernel_threads=2``: the
-  same numbers; torch keeps its one thread, so only the env's kernels differ).
+  ``policies.agents.training``); ``epochs-native-64``: MaskablePPO on the native
+  decision-epoch vector env of 64 actuators (``ScasMaintenanceEpochs-v2``). Their frames are
+  flights (a decision flies k of them), counted from ``info["epoch_slots"]``.
 
 Frames per second = env steps summed over envs / wall time of ``model.learn``. Runs alternate
 between the setups (A, B, A, B, ...) so a drift of the machine's speed (it is shared) hits
 each; each speed-up is taken within one round and the median over the rounds is reported.
+Command line::
+
+    python -m experiments.sb3_speed --timesteps 131072 --repeats 3 \
+        --setups epochs-dummy-4,epochs-native-64 --init results/agent_v2/clone
 """
 
 from __future__ import annotations
@@ -38,24 +40,30 @@ from tqdm.auto import tqdm
 from scas_env import ENV_ID
 
 #: PPO settings: SB3's own defaults (``PPO("MlpPolicy", env)``: n_steps 2048, batch 64, 10
-#: epochs, a 64-64 MLP) or this project's (``policies.rl.ALGOS["ppo"]``: n_steps 512, batch 256)
+#: epochs, a 64-64 MLP) or this project's per-flight settings (:data:`PROJECT_PPO`)
 FPS_CONFIGS = ("sb3-default", "project")
+#: the project's per-flight PPO settings (those of the retired per-flight agents)
+PROJECT_PPO: dict[str, Any] = {
+    "n_steps": 512,
+    "batch_size": 256,
+    "n_epochs": 10,
+    "gamma": 0.99,
+    "gae_lambda": 0.95,
+    "learning_rate": 3e-4,
+    "ent_coef": 0.01,
+    "policy_kwargs": {"net_arch": [64, 64]},
+}
 #: setups, the first is the baseline of the speed-ups; ``epochs-*``: MaskablePPO on decision
-#: epochs over v2 (``ScasMaintenanceEpochs-v1``), frames = flights flown
-SETUPS = (
-    "dummy-4",
-    "native-64",
-    "cartpole-4",
-    "epochs-dummy-4",
-    "epochs-native-64",
-    "epochs-native-64-t2",
-)
+#: epochs (``ScasMaintenanceEpochs-v2``), frames = flights flown
+SETUPS = ("dummy-4", "native-64", "cartpole-4", "epochs-dummy-4", "epochs-native-64")
 
 __all__ = [
     "FPS_CONFIGS",
+    "PROJECT_PPO",
     "SETUPS",
     "fps_ppo_kwargs",
     "fps_rounds",
+    "main",
     "make_setup",
     "run_sb3_bench",
     "speed_model",
@@ -70,9 +78,7 @@ def fps_ppo_kwargs(config: str) -> dict[str, Any]:
         raise ValueError(f"config = {config!r} must be one of {FPS_CONFIGS}")
     if config == "sb3-default":
         return {}
-    from policies.rl import ALGOS
-
-    return dict(ALGOS["ppo"].kwargs)
+    return {**PROJECT_PPO, "policy_kwargs": dict(PROJECT_PPO["policy_kwargs"])}
 
 
 def make_setup(label: str, seed: int = 0) -> Any:
@@ -92,21 +98,13 @@ def make_setup(label: str, seed: int = 0) -> Any:
         venv = make_vec_env("CartPole-v1", n_envs=4, seed=seed)
     elif label == "epochs-dummy-4":
         from policies.agents.training import make_epoch_env
-        from scas_env import V2_KWARGS
 
-        venv = _flight_counter(
-            make_vec_env(make_epoch_env, n_envs=4, seed=seed, env_kwargs=V2_KWARGS)
-        )
-    elif label in ("epochs-native-64", "epochs-native-64-t2"):
+        venv = _flight_counter(make_vec_env(make_epoch_env, n_envs=4, seed=seed))
+    elif label == "epochs-native-64":
         from policies.agents.sb3_vec_env import NativeVecEnv
-        from scas_env import ENV_ID_EPOCHS_V2
+        from scas_env import ENV_ID_EPOCHS
 
-        native = gym.make_vec(
-            ENV_ID_EPOCHS_V2,
-            num_envs=64,
-            vectorization_mode="vector_entry_point",
-            kernel_threads=2 if label.endswith("-t2") else 1,
-        )
+        native = gym.make_vec(ENV_ID_EPOCHS, num_envs=64, vectorization_mode="vector_entry_point")
         venv = _flight_counter(VecMonitor(NativeVecEnv(native, info_keys=("epoch_slots",))))
         venv.seed(seed)
     else:
@@ -318,3 +316,48 @@ def run_sb3_bench(
     ax.set_title(f"SB3 PPO ({config}), {timesteps} steps per run, {repeats} rounds")
     fig.savefig(out / "bench_sb3.png", dpi=120)
     return summary
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """The command line (module docstring): the median speed-up over the first setup within
+    a round, printed and saved with every run (JSON, CSV) and a bar chart (PNG)."""
+    from scas_env.cli_args import make_parser, nonneg_int, positive_int
+
+    parser = make_parser("python -m experiments.sb3_speed", __doc__)
+    parser.add_argument("--timesteps", type=positive_int, default=65_536, help="PPO steps per run")
+    parser.add_argument("--seed", type=nonneg_int, default=0, help="seed of every run")
+    parser.add_argument("--repeats", type=positive_int, default=2, help="rounds over the setups")
+    parser.add_argument(
+        "--setups",
+        default="dummy-4,native-64,cartpole-4",
+        help=f"comma-separated, baseline first, from {','.join(SETUPS)}",
+    )
+    parser.add_argument("--config", default="project", choices=FPS_CONFIGS, help="PPO settings")
+    parser.add_argument(
+        "--init", default=None, help="epoch setups: start from this clone (imitate_rule.py)"
+    )
+    parser.add_argument("--out", type=Path, default=Path("results/bench_sb3"), help="new folder")
+    args = parser.parse_args(argv)
+    try:
+        summary = run_sb3_bench(
+            args.out,
+            args.timesteps,
+            setups=args.setups.split(","),
+            seed=args.seed,
+            repeats=args.repeats,
+            config=args.config,
+            init=args.init,
+        )
+    except ValueError as exc:
+        parser.error(str(exc))
+    for setup, row in summary.items():
+        print(
+            f"{setup:17s} {row['fps']:8.0f} frames/s  x{row['speedup']:.2f} "
+            f"(range {row['speedup_min']:.2f}-{row['speedup_max']:.2f}, {row['rounds']} rounds)"
+        )
+    print(f"saved {args.out}/bench_sb3.{{json,csv,png}}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

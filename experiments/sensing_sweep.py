@@ -1,4 +1,5 @@
-"""Sensing-quality sweep: where do prognostics start to pay (issue 13, item 3).
+r"""Sensing-quality sweep: where do prognostics start to pay (docs/findings.md, "Value of
+prognostics").
 
 At every sensing level (a sensing variant of the design: its sensor noise, its per-unit
 tolerances and its own feature surrogate, built by
@@ -26,19 +27,23 @@ population of the level's own surrogate (``reference``,
   paired difference of the two replicates' values says how much of a value is tuning luck,
   beside the value's MDD.
 
-Outputs (:func:`write_sweep_outputs`): ``sweep.csv`` (one row per replicate, level, arm and
-held-out episode), ``sweep.json`` (statistics, variants, tuning, timings, config),
-``sweep.md`` (the table) and ``value_vs_sensing.png`` (value per episode vs sensing quality,
-95 % CI and MDD; its numbers are in ``sweep.json``).
+Outputs (:mod:`experiments.sensing_sweep_output`): ``sweep.csv``, ``sweep.json``, ``sweep.md``
+and ``value_vs_sensing.png``. Command line (docs/findings.md)::
+
+    python -m experiments.sensing_sweep --noise 1 --tolerances on --replicates 2 \
+        --families filter --trials 24 --train-episodes 30 --episodes 1000 --workers 2 \
+        --out results/v2_replicates
 """
 
 from __future__ import annotations
 
-import csv
+import argparse
 import hashlib
 import json
-import math
+import logging
 import os
+import shlex
+import sys
 import time
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, replace
@@ -71,12 +76,12 @@ __all__ = [
     "REFERENCE",
     "SWEPT",
     "SweepResult",
-    "markdown_sweep",
+    "main",
     "replicate_seeds",
     "run_sensing_sweep",
     "summarize_sweep",
-    "write_sweep_outputs",
 ]
+log = logging.getLogger("experiments.sensing_sweep")
 
 
 @dataclass(frozen=True)
@@ -169,7 +174,7 @@ def run_sensing_sweep(
     ``levels``: level label -> the level's env keywords (``params``, ``calibration``,
     ``surrogate``: :meth:`experiments.sensing_variants.SensingVariant.env_kwargs`),
     in the order of the table; ``env_kwargs``: the scenario and costs shared by every
-    level (e.g. ``go_no_go="airworthiness"``); ``base_level``: the level the others are
+    level (e.g. ``preflight="every_flight"``); ``base_level``: the level the others are
     compared with family by family (default: the first)."""
     if not levels:
         raise ValueError("levels is empty: give at least one sensing level")
@@ -369,182 +374,142 @@ def summarize_sweep(
     }
 
 
-def _money(x: float) -> str:
-    return "-" if not math.isfinite(x) else f"{x:+,.0f}"
-
-
-def markdown_sweep(result: SweepResult, levels_info: Mapping[str, Any] | None = None) -> str:
-    """sweep.md: the value table (and the tuning spread when there are replicates)."""
-    c, s = result.config, result.summary
-    lines = [
-        "# Value of prognostics vs sensing quality",
-        "",
-        f"Held-out: {c['episodes']} episodes x {c['slots']} slots per arm and level, seed "
-        f"{c['held_out_seed']}. Tuning per level: {c['trials']} TPE trials x "
-        f"{c['train_episodes']} training episodes per family (seeds "
-        f"{c['replicate_seeds']}). Value = paired reward difference vs the tuned age rule "
-        "(USD per episode), 95 % t-interval, MDD = minimum detectable difference (80 % "
-        "power, two-sided 5 %).",
-        "",
-        "| replicate | level | arm | value | 95% CI | MDD | p |",
-        "|---|---|---|---|---|---|---|",
-    ]
-    for v in s["values"]:
-        lines.append(
-            f"| {v['replicate']} | {v['level']} | {v['arm']} | {_money(v['mean'])} | "
-            f"[{_money(v['low'])}, {_money(v['high'])}] | {v['mdd']:,.0f} | {v['p_value']:.3g} |"
+def _floats(text: str) -> list[float]:
+    try:
+        values = [float(v) for v in text.split(",") if v.strip()]
+    except ValueError:
+        values = []
+    if not values or any(not (v > 0 and v < float("inf")) for v in values):
+        raise argparse.ArgumentTypeError(
+            f"{text!r}: give comma-separated noise factors > 0, e.g. 0.1,0.3,1,3"
         )
-    if s["tuning_spread"]:
-        lines += [
-            "",
-            "## Tuning noise: value of replicate r minus replicate 0 (same held-out episodes)",
-            "",
-            "| level | arm | r | difference | 95% CI | value MDD |",
-            "|---|---|---|---|---|---|",
-        ]
-        for v in s["tuning_spread"]:
-            lines.append(
-                f"| {v['level']} | {v['arm']} | {v['replicate']} | {_money(v['mean'])} | "
-                f"[{_money(v['low'])}, {_money(v['high'])}] | {v['value_mdd']:,.0f} |"
-            )
-    if s.get("vs_base"):
-        lines += [
-            "",
-            f"## Same family, level minus {s['base_level']} (same held-out episodes)",
-            "",
-            "| replicate | level | arm | difference | 95% CI | MDD |",
-            "|---|---|---|---|---|---|",
-        ]
-        for v in s["vs_base"]:
-            lines.append(
-                f"| {v['replicate']} | {v['level']} | {v['arm']} | {_money(v['mean'])} | "
-                f"[{_money(v['low'])}, {_money(v['high'])}] | {v['mdd']:,.0f} |"
-            )
-    lines += ["", "## Tuned parameters (training seeds)", ""]
-    for key, res in result.tuning.items():
-        for label, t in res.items():
-            p = {
-                k: (round(v, 4) if isinstance(v, float) else v)
-                for k, v in t.best_params.items()
-                if k != "reference"
-            }
-            lines.append(f"- {key} `{label}`: {p}; training reward {t.best_reward:,.0f}")
-    if levels_info:
-        lines += ["", "## Levels", "", "```", json.dumps(levels_info, indent=1), "```"]
-    lines += ["", f"Wall time {result.wall_s:.0f} s ({result.timings})."]
-    return "\n".join(lines) + "\n"
+    return values
 
 
-def _plot(result: SweepResult, levels_info: Mapping[str, Any] | None, path: Path) -> None:
-    import matplotlib
+def _switches(text: str) -> list[bool]:
+    words = [w.strip() for w in text.split(",") if w.strip()]
+    if not words or any(w not in ("on", "off") for w in words):
+        raise argparse.ArgumentTypeError(f"{text!r}: give on, off or on,off")
+    return [w == "on" for w in words]
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
 
-    all_values = result.summary["values"]
-    replicates = sorted({v["replicate"] for v in all_values})
-    info = dict(levels_info or {})
-    levels = list(result.config["levels"])
-    groups: dict[str, list[str]] = {}
-    for level in levels:
-        tol = info.get(level, {}).get("tolerances")
-        name = "" if tol is None else f"tolerances {'on' if tol else 'off'}"
-        groups.setdefault(name, []).append(level)
-    fig, axes = plt.subplots(
-        1, len(groups), figsize=(5.5 * len(groups), 4.6), sharey=True, squeeze=False
+def parser() -> argparse.ArgumentParser:
+    """The command line's parser (:func:`main`)."""
+    from scas_env.cli_args import add_env_config_args, add_logging_args, make_parser, positive_int
+
+    p = make_parser("python -m experiments.sensing_sweep", __doc__)
+    p.add_argument("--episodes", type=positive_int, default=1000, help="held-out episodes")
+    p.add_argument("--slots", type=positive_int, default=2000, help="flight slots per episode")
+    p.add_argument("--trials", type=positive_int, default=40, help="TPE trials per family")
+    p.add_argument("--train-episodes", type=positive_int, default=40, help="episodes per trial")
+    p.add_argument(
+        "--replicates", type=positive_int, default=1, help="tuning replicates (2: tuning noise)"
     )
-    for ax, (name, group) in zip(axes[0], groups.items(), strict=True):
-        scale = [info.get(lv, {}).get("noise_scale") for lv in group]
-        numeric = all(isinstance(g, float | int) for g in scale)
-        x = np.array(scale, dtype=float) if numeric else np.arange(len(group), dtype=float)
-        mdd = np.zeros(len(group))
-        series = [(r, arm) for r in replicates for arm in result.config["families"]]
-        for k, (r, arm) in enumerate(series):
-            v = [
-                next(
-                    d
-                    for d in all_values
-                    if d["level"] == lv and d["arm"] == arm and d["replicate"] == r
-                )
-                for lv in group
-            ]
-            mean = np.array([d["mean"] for d in v])
-            half = [[d["mean"] - d["low"], d["high"] - d["mean"]] for d in v]
-            err = np.nan_to_num(np.array(half).T)
-            mdd = np.maximum(mdd, [d["mdd"] for d in v])
-            shift = (1.0 + 0.03 * (k - (len(series) - 1) / 2)) if numeric else 1.0
-            style = {"fmt": "o-"} if r == 0 else {"fmt": "s--", "mfc": "none", "alpha": 0.7}
-            what = arm if len(replicates) == 1 else f"{arm}, tuning replicate {r}"
-            ax.errorbar(x * shift, mean, yerr=err, capsize=4, label=f"{what}, 95% CI", **style)
-        ax.fill_between(x, -mdd, mdd, color="grey", alpha=0.15, label="± MDD (80% power)")
-        ax.axhline(0.0, color="black", lw=0.8)
-        if numeric:
-            ax.set_xscale("log")
-            ax.set_xticks(x, [f"x{g:g}" for g in x])
-            ax.set_xlabel("sensor noise (x the design's)")
-        else:
-            ax.set_xticks(x, group, rotation=30, ha="right")
-        ax.set_title(name or "sensing levels")
-        ax.grid(alpha=0.3)
-    axes[0][0].set_ylabel("value per episode vs tuned age rule (USD)")
-    axes[0][0].legend(fontsize=8)
-    fig.suptitle("Value per episode vs sensing quality (held-out, paired)")
-    fig.tight_layout()
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
+    p.add_argument("--noise", type=_floats, default=[0.1, 0.3, 1.0, 3.0], help="noise factors")
+    p.add_argument("--tolerances", type=_switches, default=[True, False], help="on,off")
+    p.add_argument(
+        "--families",
+        default="filter",
+        help="nested families re-tuned per level, comma-separated (e.g. features,filter)",
+    )
+    p.add_argument(
+        "--own-degradation",
+        action="store_true",
+        help="calibrate each variant's degradation from its own physics (default: held fixed)",
+    )
+    p.add_argument("--cache-dir", type=Path, default=Path("results/sensing_cache"))
+    p.add_argument("--workers", type=positive_int, default=2, help="local worker processes")
+    p.add_argument("--out", type=Path, default=Path("results/sensing_sweep"))
+    p.add_argument("--overwrite", action="store_true", help="replace an existing --out")
+    p.add_argument("--quick", action="store_true", help="QUICK sizes (smoke runs)")
+    add_env_config_args(p)
+    add_logging_args(p)
+    return p
 
 
-def _jsonable(v: Any) -> Any:
-    if isinstance(v, bool | int | str) or v is None:
-        return v
-    if isinstance(v, float):
-        return v if math.isfinite(v) else repr(v)
-    if isinstance(v, tuple | list):
-        return [_jsonable(x) for x in v]
-    if isinstance(v, dict):
-        return {str(k): _jsonable(x) for k, x in v.items()}
-    return repr(v)
+def main(argv: Sequence[str] | None = None) -> int:
+    """Build (or load from ``--cache-dir``) the sensing variants
+    (:mod:`experiments.sensing_variants`: sensor noise x ``--noise``, per-unit tolerances
+    ``--tolerances``), re-tune the nested families at every level and run them on the same
+    held-out episodes as the tuned age rule (:func:`run_sensing_sweep`); write ``--out``."""
+    from scas_env.cli_args import (
+        announce_uncached_kernels,
+        check_out_dir,
+        configure_logging,
+        load_env_config,
+        scenario_changes,
+    )
+    from scas_env.core.costs import CostModel
 
+    parse = parser()
+    args = parse.parse_args(argv)
+    configure_logging(args)
+    out = check_out_dir(parse, args.out, args.overwrite)
+    scenario, costs = load_env_config(parse, args)
+    env_kwargs: dict[str, Any] = scenario_changes(scenario, exclude=("obs_mode",))
+    if costs != CostModel():
+        env_kwargs["cost_model"] = costs
 
-def write_sweep_outputs(
-    result: SweepResult,
-    out: str | Path,
-    *,
-    levels_info: Mapping[str, Any] | None = None,
-    extra_config: Mapping[str, Any] | None = None,
-    overwrite: bool = False,
-) -> dict[str, Path]:
-    """Write sweep.csv, sweep.json, sweep.md and value_vs_sensing.png into the folder
-    ``out`` atomically with a manifest (:func:`scas_env.utils.results_folder.results_folder`; an
-    existing folder is refused unless ``overwrite``). ``levels_info``: per level, a
-    JSON-able description (noise scale, tolerances, digests: the variants' ``describe``)."""
-    from scas_env.utils.results_folder import results_folder
+    from experiments.sensing_sweep_output import write_sweep_outputs
+    from experiments.sensing_variants import sensing_levels, sensing_variants
 
-    names = {
-        "csv": "sweep.csv",
-        "json": "sweep.json",
-        "md": "sweep.md",
-        "png": "value_vs_sensing.png",
-    }
-    config = _jsonable({**result.config, **dict(extra_config or {})})
-    seeds = {"held_out_seed": HELD_OUT_SEED, "replicates": result.config["replicate_seeds"]}
-    with results_folder(out, config=config, seeds=seeds, overwrite=overwrite) as tmp:
-        with (tmp / names["csv"]).open("w", newline="") as f:
-            writer = csv.DictWriter(f, fieldnames=list(result.rows[0]))
-            writer.writeheader()
-            writer.writerows(result.rows)
-        payload = {
-            **result.summary,
-            "levels": _jsonable(dict(levels_info or {})),
-            "tuning": {
-                k: {a: _jsonable(t.to_dict()) for a, t in res.items()}
-                for k, res in result.tuning.items()
-            },
-            "config": config,
-            "timings": result.timings,
-            "wall_s": result.wall_s,
+    families = [f.strip() for f in args.families.split(",") if f.strip()] or list(SWEPT)
+    announce_uncached_kernels()
+    t0 = time.perf_counter()
+    variants = sensing_variants(
+        sensing_levels(args.noise, args.tolerances),
+        hold_degradation=not args.own_degradation,
+        cache_dir=args.cache_dir,
+        n_workers=args.workers,
+        progress=not args.quiet,
+    )
+    variants_s = time.perf_counter() - t0
+    size = (
+        dict(QUICK)
+        if args.quick
+        else {
+            "episodes": args.episodes,
+            "slots": args.slots,
+            "trials": args.trials,
+            "train_episodes": args.train_episodes,
         }
-        (tmp / names["json"]).write_text(json.dumps(_jsonable(payload), indent=1) + "\n")
-        (tmp / names["md"]).write_text(markdown_sweep(result, levels_info))
-        _plot(result, levels_info, tmp / names["png"])
-    return {k: Path(out) / v for k, v in names.items()}
+    )
+    try:
+        result = run_sensing_sweep(
+            {v.label: v.env_kwargs() for v in variants},
+            families=families,
+            replicates=args.replicates,
+            n_workers=args.workers,
+            progress=not args.quiet,
+            env_kwargs=env_kwargs,
+            base_level=next((v.label for v in variants if v.surrogate_path is None), None),
+            **size,
+        )
+    except ValueError as exc:
+        parse.error(str(exc))
+    cpu = os.times()
+    words = ["python -m experiments.sensing_sweep", *(sys.argv[1:] if argv is None else argv)]
+    extra = {
+        "command": " ".join(shlex.quote(str(a)) for a in words),
+        "scenario": scenario.to_dict(),
+        "costs": costs.to_dict(),
+        "variants_s": variants_s,
+        # CPU seconds of this process and its (finished) worker processes
+        "cpu_s": cpu.user + cpu.system + cpu.children_user + cpu.children_system,
+        "load_average_1min_at_end": os.getloadavg()[0],
+    }
+    info = {v.label: v.describe() for v in variants}
+    paths = write_sweep_outputs(
+        result, out, levels_info=info, extra_config=extra, overwrite=args.overwrite
+    )
+    log.info(
+        f"variants {variants_s:.1f} s, sweep {result.wall_s:.1f} s {result.timings}, "
+        f"CPU {extra['cpu_s']:.0f} s"
+    )
+    for name, path in paths.items():
+        log.info(f"{name}: {path}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

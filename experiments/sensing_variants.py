@@ -1,7 +1,7 @@
 """Sensing variants of the actuator design for the value study's sensing-quality sweep.
 
 A sensing level is a sensor-noise factor ``g`` and a switch for the per-unit tolerances
-(issue 13, item 3):
+(docs/findings.md, "Value of prognostics"):
 
 * **noise x g**: the current sensor's electrical noise ``SensorParams.current_noise_a`` and
   the LVDT noise ``SensorParams.lvdt_noise_v`` both multiplied by ``g`` (:data:`NOISE_SCALES`:
@@ -48,7 +48,7 @@ from scas_env.actuator.calibration import Calibration, calibration_for, params_d
 from scas_env.actuator.params import ScasParams
 from scas_env.actuator.surrogate import FEATURE_CONDITION, SurrogateModel, default_surrogate
 
-#: Sensor-noise factors of the sweep (issue 13).
+#: Sensor-noise factors of the sweep.
 NOISE_SCALES: tuple[float, ...] = (0.1, 0.3, 1.0, 3.0)
 #: Per-unit tolerances on (the design's) and off.
 TOLERANCES: tuple[bool, ...] = (True, False)

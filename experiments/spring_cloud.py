@@ -1,35 +1,43 @@
-"""The spring filter's particle cloud against the truth over life (docs/beliefs.md, "Spring
-calibration: cause and fix").
+r"""The spring filter's particle cloud against the truth over life (docs/beliefs.md, "The cloud
+against the truth"; docs/findings.md, "Beliefs").
 
-Seeded episodes (``Scenario.degradation_draws = "per_part"``, so the world knows each spring's
-exact remaining life) under a belief-study policy (:func:`policy_action`). Every ``every``
-flights of a spring's age the record holds, beside the stage (age / life):
+Seeded episodes under a belief-study policy (:func:`policy_action`); the world fixes each
+spring's growth draws at fitting, so it knows its exact remaining life. Every ``every``
+flights of a spring's age the record holds, beside the stage (age / life), read from the
+env's batch (``env.batch.a``, row 0: the spring filter's cloud ``x``, ``log_theta``, ``w``
+and ``pending``; the truth ``crack``, ``theta``, ``life``):
 
 * ``pit_theta``, ``pit_x``: the weighted share of particles below the true growth multiplier
-  (``world.theta``) and below the true crack depth (``world.crack_m``), the cloud aged
-  noise-free by the flights pending (each particle along its own damage path);
+  and below the true crack depth, the cloud aged noise-free by the flights pending (each
+  particle along its own damage path);
 * ``pit_rul``: the share of particle RULs (``usage_to_threshold`` of the aged cloud) below the
-  exact remaining life (``world.life_left``); ``pit_rul_det`` the same against the
-  noise-free life of the true (x, theta), so their difference is what the RUL predictor's
-  noise-free extrapolation costs;
+  exact remaining life; ``pit_rul_det`` the same against the noise-free life of the true
+  (x, theta), so their difference is what the RUL predictor's noise-free extrapolation
+  costs;
 * ``log_det_error``: log(noise-free life of the true (x, theta) / exact life);
 * ``z_theta``, ``z_x``: the truth's distance from the cloud's weighted mean in cloud sds;
   ``sd_log_theta``, ``sd_x_rel``: the cloud's spread.
 
 A calibrated cloud has every PIT uniform: 5 % of records below 0.05 and 5 % above 0.95,
-and z-scores of sd ~1. :func:`stage_summary` gives these per stage window.
+and z-scores of sd ~1. :func:`stage_summary` gives these per stage window. Command line::
+
+    python -m experiments.spring_cloud --episodes 40 --seed 0
+    python -m experiments.spring_cloud --episodes 40 --seed 0 \
+        --scenario '{"spring_theta_walk": 0.003}'
 """
 
 from __future__ import annotations
 
+import json
 import math
 from collections.abc import Mapping, Sequence
+from pathlib import Path
 from typing import Any
 
 import numpy as np
 from tqdm.auto import tqdm
 
-from experiments.belief_calibration import MonitorOptionsEnv, policy_action
+from experiments.belief_calibration import POLICIES, policy_action
 from scas_env.core.scenario import Scenario
 from scas_env.env import ScasMaintenanceEnv
 
@@ -44,15 +52,15 @@ WINDOWS: tuple[tuple[float, float], ...] = (
 
 
 def _spring_record(env: ScasMaintenanceEnv, seed: int, life: int, age: int) -> dict[str, float]:
-    mon = env.monitor
-    pf, model = mon.spring_filter, mon.spring_filter.process
-    w, theta = np.asarray(pf.weights), np.asarray(pf.theta)
-    k = float(mon.pending["spring"])
-    x = model.inverse_damage(model.damage(np.maximum(np.asarray(pf.x), model.grid[0])) + theta * k)
-    rul = model.usage_to_threshold(x, theta, mon.a_fail)
-    x_true, th_true = float(env.world.crack_m), float(env.world.theta)
-    life_left = float(env.world.life_left["spring"])
-    det = float(model.usage_to_threshold(np.array([x_true]), np.array([th_true]), mon.a_fail)[0])
+    a, setup = env.batch.a, env.setup
+    model, a_fail = setup.spring_process, float(setup.calibration.spring_failure_depth_m)
+    w, theta = a["w"][0, 0].copy(), np.exp(a["log_theta"][0, 0])
+    k = float(a["pending"][0, 0])
+    x = model.inverse_damage(model.damage(np.maximum(a["x"][0, 0], model.grid[0])) + theta * k)
+    rul = model.usage_to_threshold(x, theta, a_fail)
+    x_true, th_true = float(a["crack"][0]), float(a["theta"][0])
+    life_left = float(a["life"][0, 0])
+    det = float(model.usage_to_threshold(np.array([x_true]), np.array([th_true]), a_fail)[0])
     lt = np.log(theta)
     m_lt = float(w @ lt)
     s_lt = math.sqrt(max(float(w @ (lt - m_lt) ** 2), 0.0))
@@ -81,7 +89,6 @@ def cloud_records(
     seed: int,
     policy: str = "test10",
     scenario_fields: Mapping[str, Any] | None = None,
-    monitor_options: Mapping[str, Any] | None = None,
     every: int = 5,
     progress: bool = True,
 ) -> list[dict[str, float]]:
@@ -91,18 +98,8 @@ def cloud_records(
         if isinstance(value, bool) or not isinstance(value, int) or value < lo:
             raise ValueError(f"{name} = {value!r} must be an integer >= {lo}")
     scenario = Scenario.from_dict(dict(scenario_fields or {}))
-    if scenario.degradation_draws != "per_part":
-        raise ValueError(
-            "scenario_fields must set degradation_draws = 'per_part' (the exact remaining "
-            f"life is the truth), got {scenario.degradation_draws!r}"
-        )
     policy_action(policy, 0)  # checks the policy
-    options = dict(monitor_options or {})
-    env = (
-        MonitorOptionsEnv(options, scenario=scenario)
-        if options
-        else ScasMaintenanceEnv(scenario=scenario)
-    )
+    env = ScasMaintenanceEnv(scenario=scenario)
     out: list[dict[str, float]] = []
     for s in tqdm(range(seed, seed + episodes), desc="spring cloud", disable=not progress):
         env.reset(seed=s)
@@ -172,4 +169,48 @@ def format_summary(rows: Sequence[Mapping[str, float]]) -> str:
     return "\n".join(lines)
 
 
-__all__ = ["WINDOWS", "cloud_records", "format_summary", "stage_summary"]
+def main(argv: Sequence[str] | None = None) -> int:
+    """The command line (module docstring): records, the summary printed, ``--out`` JSON."""
+    from scas_env.cli_args import check_out_file, make_parser, nonneg_int, positive_int
+    from scas_env.utils.atomic_file import write_text_atomic
+
+    parser = make_parser("python -m experiments.spring_cloud", __doc__)
+    parser.add_argument("--episodes", type=positive_int, default=40, help="episodes")
+    parser.add_argument("--seed", type=nonneg_int, default=0, help="first episode seed")
+    parser.add_argument("--policy", default="test10", choices=POLICIES)
+    parser.add_argument(
+        "--scenario", type=json.loads, default={}, help="Scenario fields as JSON over the defaults"
+    )
+    parser.add_argument("--every", type=positive_int, default=5, help="flights between records")
+    parser.add_argument("--out", type=Path, default=None, help="JSON of the summary (none: print)")
+    parser.add_argument("--overwrite", action="store_true", help="replace an existing --out")
+    parser.add_argument("--no-progress", action="store_true", help="no progress bar")
+    args = parser.parse_args(argv)
+    if args.out is not None:
+        check_out_file(parser, args.out, args.overwrite)
+    try:
+        records = cloud_records(
+            episodes=args.episodes,
+            seed=args.seed,
+            policy=args.policy,
+            scenario_fields=args.scenario,
+            every=args.every,
+            progress=not args.no_progress,
+        )
+    except (TypeError, ValueError) as exc:
+        parser.error(str(exc))
+    rows = stage_summary(records)
+    print("spring cloud vs truth: shares of records with the truth below the cloud's 5 % / "
+          "above its 95 %")  # fmt: skip
+    print(format_summary(rows))
+    if args.out is not None:
+        config = {k: (str(v) if isinstance(v, Path) else v) for k, v in vars(args).items()}
+        write_text_atomic(args.out, json.dumps({"args": config, "stages": rows}, indent=1) + "\n")
+    return 0
+
+
+__all__ = ["WINDOWS", "cloud_records", "format_summary", "main", "stage_summary"]
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

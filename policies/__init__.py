@@ -11,6 +11,7 @@ from policies.base import (
     policy_obs_mode,
     register_policy,
 )
+from policies.rules import fleet as _fleet  # noqa: F401  (registers the fleet rules)
 from policies.rules.classic import (
     CorrectivePolicy,
     DetectionPolicy,

@@ -45,6 +45,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numba import njit
 
+from prognostics import validation as check
 from prognostics.normals import Handle, standard_normal
 
 _CELLS_PER_SEGMENT = 4
@@ -348,31 +349,37 @@ SCHEMES: tuple[str, ...] = ("euler", "exact")
 
 
 def _frozen_1d(name: str, values: np.ndarray) -> np.ndarray:
-    arr = np.array(values, dtype=np.float64)
-    if arr.ndim != 1:
-        raise ValueError(f"{name} must be 1-D, got shape {arr.shape}")
-    if not np.all(np.isfinite(arr)):
-        raise ValueError(f"{name} must be finite")
+    arr = np.array(check.array(name, values, ndim=1), dtype=np.float64)  # a copy
     arr.setflags(write=False)
     return arr
 
 
 def _finite(name: str, values: np.ndarray) -> np.ndarray:
-    """``values`` as float64, or ValueError naming the first non-finite entry."""
-    arr = np.asarray(values, dtype=np.float64)
-    if not np.all(np.isfinite(arr)):
-        bad = arr.ravel()[~np.isfinite(arr.ravel())][0]
-        raise ValueError(f"{name} contains {bad}: every value must be finite")
-    return arr
+    """``values`` (any shape) as float64, finite, or a ValueError naming the first bad entry."""
+    return check.array(name, values)
 
 
 def _check_theta(theta: np.ndarray, n: int) -> np.ndarray:
-    th = np.asarray(theta, dtype=np.float64)
-    if th.shape != (n,):
-        raise ValueError(f"theta must have shape ({n},) like x, got {th.shape}")
-    if not np.all(th > 0.0) or not np.all(np.isfinite(th)):
-        raise ValueError("theta (growth multiplier) must be finite and > 0")
-    return th
+    return check.array("theta (growth multiplier)", theta, shape=(n,), like="x", gt=0.0)
+
+
+def _particles(
+    name: str, values: np.ndarray, n: int | None = None, check_values: bool = True
+) -> np.ndarray:
+    """A particle array updated in place: a writeable 1-D float64 numpy array (of ``n``
+    entries, like ``x``), finite unless ``check_values=False``."""
+    if not (
+        isinstance(values, np.ndarray)
+        and values.dtype == np.float64
+        and values.ndim == 1
+        and values.flags.writeable
+    ):
+        raise check.ArgumentTypeError(
+            f"{name} = {check.show(values)} must be a writeable 1-D float64 numpy array "
+            "(it is updated in place)"
+        )
+    finite = True if check_values else None
+    return check.array(name, values, shape=None if n is None else (n,), like="x", finite=finite)
 
 
 @dataclass(frozen=True, eq=False)
@@ -419,12 +426,9 @@ class TabulatedRateModel:
             raise ValueError("grid must be strictly increasing")
         if np.any(rate <= 0.0):
             raise ValueError(f"rate must be > 0 everywhere, min is {rate.min()}")
-        if self.scheme not in SCHEMES:
-            raise ValueError(f"scheme = {self.scheme!r} is not one of {SCHEMES}")
+        check.choice("scheme", self.scheme, SCHEMES)
         for name in ("process_noise_std", "log_theta_noise_std", "damage_noise_cv"):
-            value = getattr(self, name)
-            if not (math.isfinite(value) and value >= 0.0):
-                raise ValueError(f"{name} = {value} must be finite and >= 0")
+            check.real(name, getattr(self, name), ge=0.0)
         if self.process_noise_std > 0.0 and self.damage_noise_cv > 0.0:
             raise ValueError(
                 f"process_noise_std = {self.process_noise_std} and damage_noise_cv = "
@@ -503,10 +507,9 @@ class TabulatedRateModel:
 
     def usage_to_threshold(self, x: np.ndarray, theta: np.ndarray, threshold: float) -> np.ndarray:
         """Usage to reach ``threshold`` noise-free: ``max(I(H) - I(x), 0) / theta``."""
-        xa = np.asarray(x, dtype=np.float64)
+        xa = _finite("x", x)
         th = _check_theta(theta, xa.size)
-        if not math.isfinite(threshold):
-            raise ValueError(f"threshold = {threshold} must be finite")
+        check.real("threshold", threshold)
         remaining = self.damage(np.array([threshold]))[0] - self.damage(xa)
         return np.maximum(remaining, 0.0) / th
 
@@ -525,8 +528,12 @@ class TabulatedRateModel:
         allocation per call. Draws: ``rng.standard_normal`` for the x noise (if any), then
         for the log-theta walk (if any).
         """
-        if not (math.isfinite(usage) and usage >= 0.0):
-            raise ValueError(f"usage = {usage} must be finite and >= 0")
+        _particles("x", x)
+        _particles("log_theta", log_theta, x.size)
+        check.real("usage", usage, ge=0.0)
+        check.generator("rng", rng)
+        if work is not None:  # scratch: its values do not matter
+            _particles("work", work, check_values=False)
         x_noise = self.process_noise_std > 0.0 or self.damage_noise_cv > 0.0
         n_draws = x.size * (x_noise + (self.log_theta_noise_std > 0.0))
         if work is None or work.size < n_draws:
@@ -575,10 +582,11 @@ class TabulatedRateModel:
         of steps per particle (0 if already at or past the threshold). Raises ``ValueError``
         if some particle has not failed after ``max_steps``.
         """
-        xs = np.array(x, dtype=np.float64)
+        xs = np.array(check.array("x", x, ndim=1), dtype=np.float64)  # a copy, advanced
         th = _check_theta(theta, xs.size)
-        if not (math.isfinite(usage_per_step) and usage_per_step > 0.0):
-            raise ValueError(f"usage_per_step = {usage_per_step} must be finite and > 0")
+        check.real("threshold", threshold)
+        check.real("usage_per_step", usage_per_step, gt=0.0)
+        check.integer("max_steps", max_steps, ge=0)
         steps = np.zeros(xs.size, dtype=np.int64)
         alive = xs < threshold
         for _ in range(max_steps):
@@ -608,6 +616,22 @@ def paris_crack_model(
     ref §9 ``paris_c_log_sigma``); ``u_k`` is the number of flights in the step.
     ``damage_noise_cv``: flight-to-flight growth scatter (:class:`TabulatedRateModel`).
     """
+    grid = check.array("depth_grid_m", depth_grid_m, ndim=1, min_size=2)
+    if np.any(np.diff(grid) <= 0.0):
+        raise ValueError(f"depth_grid_m must be strictly increasing, got {check.show(grid)}")
+    check.array(
+        "growth_rate_m_per_flight",
+        growth_rate_m_per_flight,
+        shape=grid.shape,
+        like="depth_grid_m",
+        gt=0.0,
+    )
+    check.real("process_noise_std_m", process_noise_std_m, ge=0.0)
+    if process_noise_std_m > 0.0 and check.real("damage_noise_cv", damage_noise_cv) > 0.0:
+        raise ValueError(
+            f"process_noise_std_m = {process_noise_std_m} and damage_noise_cv = "
+            f"{damage_noise_cv}: use one of the two growth noises"
+        )
     return TabulatedRateModel(
         grid=depth_grid_m,
         rate=growth_rate_m_per_flight,
@@ -630,8 +654,7 @@ def linear_wear_model(
     ``r`` is the wear rate at unit multiplier (m per usage unit); the table is constant, so
     its grid ([0, 1]) is immaterial: the rate is held constant outside it.
     """
-    if not (math.isfinite(wear_rate_per_usage) and wear_rate_per_usage > 0.0):
-        raise ValueError(f"wear_rate_per_usage = {wear_rate_per_usage} must be finite and > 0")
+    check.real("wear_rate_per_usage", wear_rate_per_usage, gt=0.0)
     return TabulatedRateModel(
         grid=np.array([0.0, 1.0]),
         rate=np.array([wear_rate_per_usage, wear_rate_per_usage]),

@@ -37,6 +37,8 @@ from typing import Literal
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from prognostics import validation as check
+
 __all__ = [
     "DetectorConfig",
     "PercentileDetector",
@@ -87,20 +89,11 @@ class DetectorConfig:
     method: str = "linear"
 
     def __post_init__(self) -> None:
-        if not 50.0 < self.baseline_percentile < 100.0:
-            raise ValueError(
-                f"baseline_percentile must be in (50, 100), got {self.baseline_percentile}"
-            )
-        if isinstance(self.window, bool) or not isinstance(self.window, int | np.integer):
-            raise ValueError(f"window must be an integer >= 1, got {self.window!r}")
-        if self.window < 1:
-            raise ValueError(f"window must be an integer >= 1, got {self.window}")
-        if not 0.0 < self.fraction <= 1.0:
-            raise ValueError(f"fraction must be in (0, 1], got {self.fraction}")
-        if self.direction not in _DIRECTIONS:
-            raise ValueError(f"direction must be one of {_DIRECTIONS}, got {self.direction!r}")
-        if self.method not in _METHODS:
-            raise ValueError(f"method must be one of {_METHODS}, got {self.method!r}")
+        check.real("baseline_percentile", self.baseline_percentile, gt=50.0, lt=100.0)
+        check.integer("window", self.window, ge=1)
+        check.real("fraction", self.fraction, gt=0.0, le=1.0)
+        check.choice("direction", self.direction, _DIRECTIONS)
+        check.choice("method", self.method, _METHODS)
 
 
 @dataclass(frozen=True)
@@ -112,12 +105,7 @@ class Thresholds:
 
 
 def _finite_1d(name: str, values: ArrayLike, min_size: int = 1) -> NDArray[np.float64]:
-    arr = np.asarray(values, dtype=np.float64)
-    if arr.ndim != 1 or arr.size < min_size:
-        raise ValueError(f"{name} must be 1-D with at least {min_size} values, got {arr.shape}")
-    if not np.all(np.isfinite(arr)):
-        raise ValueError(f"{name} must be finite (contains NaN or inf)")
-    return arr
+    return check.array(name, values, ndim=1, min_size=min_size)
 
 
 class PercentileDetector:
@@ -130,7 +118,9 @@ class PercentileDetector:
     """
 
     def __init__(self, config: DetectorConfig | None = None) -> None:
-        self.config = DetectorConfig() if config is None else config
+        self.config = (
+            DetectorConfig() if config is None else check.instance("config", config, DetectorConfig)
+        )
         self._thresholds: Thresholds | None = None
         self._buffer: deque[float] = deque(maxlen=self.config.window)
 
@@ -188,10 +178,9 @@ class PercentileDetector:
 
     def update(self, value: float) -> bool:
         """Push one feature value; alarm for the window ending with it (False until full)."""
-        if not np.isfinite(value):
-            raise ValueError(f"value must be finite, got {value}")
+        v = check.real("value", value)
         th = self.thresholds  # raises if not fitted
-        self._buffer.append(float(value))
+        self._buffer.append(v)
         if len(self._buffer) < self.config.window:
             return False
         if self.config.method == "linear":  # hot path: numpy's arithmetic on a sorted list
@@ -246,11 +235,15 @@ def severity_at_detection(severity_path: ArrayLike, alarms: ArrayLike) -> float:
     0.2
     """
     sev = _finite_1d("severity_path", severity_path)
-    alarm_arr = np.asarray(alarms)
+    try:
+        alarm_arr = np.asarray(alarms)
+    except (ValueError, TypeError) as err:  # e.g. ragged nested lists
+        raise ValueError(f"alarms must be a boolean array: {err}") from None
     if alarm_arr.shape != sev.shape or alarm_arr.dtype != np.bool_:
-        raise ValueError(
-            f"alarms must be a boolean array of shape {sev.shape}, got {alarm_arr.dtype} "
-            f"{alarm_arr.shape}"
+        error = ValueError if alarm_arr.dtype == np.bool_ else check.ArgumentTypeError
+        raise error(
+            f"alarms must be a boolean array of shape {sev.shape} (like severity_path), got "
+            f"{alarm_arr.dtype} {alarm_arr.shape}"
         )
     hits = np.flatnonzero(alarm_arr)
     return float(sev[hits[0]]) if hits.size else float("nan")
@@ -259,16 +252,21 @@ def severity_at_detection(severity_path: ArrayLike, alarms: ArrayLike) -> float:
 def false_alarm_rate(detector: PercentileDetector, healthy_series: ArrayLike) -> float:
     """Share of full windows that alarm on healthy histories (per test or flight).
 
-    ``healthy_series`` is one history (T,) or several (S, T); each history starts from an
-    empty window, and only its T - W + 1 full windows are counted.
+    ``healthy_series`` is one history (T,) or several (S, T), S >= 1, of finite values;
+    each history starts from an empty window, and only its T - W + 1 full windows are
+    counted, so T >= W (the detector's window).
     """
-    arr = np.asarray(healthy_series, dtype=np.float64)
+    check.instance("detector", detector, PercentileDetector)
+    if detector._thresholds is None:
+        raise ValueError("detector is not fitted: call detector.fit(baseline) first")
+    arr = check.array("healthy_series", healthy_series, ndim=(1, 2))
     if arr.ndim == 1:
         arr = arr[None, :]
     w = detector.config.window
-    if arr.ndim != 2 or arr.shape[1] < w:
+    if arr.shape[0] < 1 or arr.shape[1] < w:
         raise ValueError(
-            f"healthy_series must be (T,) or (S, T) with T >= window = {w}, got {arr.shape}"
+            f"healthy_series must be (T,) or (S, T) with S >= 1 and T >= window = {w}, got "
+            f"{arr.shape}"
         )
     counts = [int(np.count_nonzero(detector.alarms(row))) for row in arr]
     return sum(counts) / (arr.shape[0] * (arr.shape[1] - w + 1))

@@ -38,6 +38,8 @@ import numpy as np
 import scipy.fft
 from numpy.typing import ArrayLike, NDArray
 
+from prognostics import validation as check
+
 __all__ = [
     "CANDIDATE_INFO",
     "DEFAULT_MAX_LAG_S",
@@ -133,7 +135,7 @@ MAX_ABS_SIGNAL = 1e100
 
 def _signal(name: str, values: ArrayLike) -> FloatArray:
     """Float64 signal with time on the last axis, at least 2 samples, all finite."""
-    arr = np.asarray(values, dtype=np.float64)
+    arr = check.array(name, values, finite=None)  # real numbers; their values checked below
     if arr.ndim < 1 or arr.shape[-1] < 2:
         raise ValueError(f"{name} must have at least 2 samples on its last axis, got {arr.shape}")
     if not np.all(np.abs(arr) <= MAX_ABS_SIGNAL):  # also false for NaN
@@ -151,12 +153,13 @@ def _same_shape(name: str, arr: FloatArray, ref_name: str, ref: FloatArray) -> N
         raise ValueError(f"{name} has shape {arr.shape}, must equal {ref_name} shape {ref.shape}")
 
 
-def _sample_period(t: ArrayLike, n_samples: int) -> float:
-    """Sampling period dt (s) of a uniform, strictly increasing 1-D time vector."""
-    t_arr = np.asarray(t, dtype=np.float64)
+def _sample_period(t: ArrayLike, n_samples: int, signal: str = "the signals") -> float:
+    """Sampling period dt (s) of a uniform, strictly increasing 1-D time vector with one
+    sample per sample of ``signal`` (named in the message)."""
+    t_arr = check.array("t", t, finite=None)  # real numbers; their values checked below
     if t_arr.ndim != 1 or t_arr.size != n_samples:
         raise ValueError(
-            f"t must be 1-D with {n_samples} samples (the signals' last axis), got {t_arr.shape}"
+            f"t must be 1-D with {n_samples} samples (the last axis of {signal}), got {t_arr.shape}"
         )
     if not np.all(np.isfinite(t_arr)):
         raise ValueError("t must be finite")
@@ -190,11 +193,11 @@ def step_windows(t: ArrayLike, step_times_s: ArrayLike) -> NDArray[np.intp]:
     >>> step_windows(np.arange(10) * 0.1, [0.0, 0.35, 0.7]).tolist()
     [[0, 4], [4, 7], [7, 10]]
     """
-    t_arr = np.asarray(t, dtype=np.float64)
+    t_arr = check.array("t", t, finite=None)
+    if t_arr.ndim != 1 or t_arr.size < 2:
+        raise ValueError(f"t must be 1-D with at least 2 samples, got shape {t_arr.shape}")
     _sample_period(t_arr, t_arr.size)
-    times = np.asarray(step_times_s, dtype=np.float64)
-    if times.ndim != 1 or times.size == 0 or not np.all(np.isfinite(times)):
-        raise ValueError(f"step_times_s must be a non-empty finite 1-D array, got {times!r}")
+    times = check.array("step_times_s", step_times_s, ndim=1, min_size=1)
     if np.any(np.diff(times) <= 0.0) or times[0] < t_arr[0] or times[-1] >= t_arr[-1]:
         raise ValueError(
             f"step_times_s must be strictly increasing within [t[0], t[-1]) = "
@@ -203,29 +206,33 @@ def step_windows(t: ArrayLike, step_times_s: ArrayLike) -> NDArray[np.intp]:
     starts = np.searchsorted(t_arr, times, side="left")
     stops = np.append(starts[1:], t_arr.size)
     windows = np.stack([starts, stops], axis=1).astype(np.intp)
-    _check_windows(windows, t_arr.size)
+    _check_windows(windows, t_arr.size, "t")
     return windows
 
 
-def _check_windows(windows: ArrayLike, n_samples: int) -> NDArray[np.intp]:
-    w = np.asarray(windows)
+def _check_windows(windows: ArrayLike, n_samples: int, signal: str) -> NDArray[np.intp]:
+    """(K, 2) integer windows ``[start, stop)`` of >= 2 samples within the ``n_samples``
+    samples of ``signal`` (named in the message)."""
+    try:
+        w = np.asarray(windows)
+    except (ValueError, TypeError) as err:  # e.g. ragged nested lists
+        raise ValueError(
+            f"windows must be a (K, 2) integer array of [start, stop): {err}"
+        ) from None
     if w.ndim != 2 or w.shape[1] != 2 or w.shape[0] == 0 or not np.issubdtype(w.dtype, np.integer):
-        raise ValueError(f"windows must be a (K, 2) integer array of [start, stop), got {w!r}")
+        error = ValueError if np.issubdtype(w.dtype, np.integer) else check.ArgumentTypeError
+        raise error(f"windows must be a (K, 2) integer array of [start, stop), got {check.show(w)}")
     if np.any(w[:, 0] < 0) or np.any(w[:, 1] > n_samples) or np.any(w[:, 1] - w[:, 0] < 2):
         raise ValueError(
-            f"windows must satisfy 0 <= start, start + 2 <= stop <= {n_samples}, got {w.tolist()}"
+            f"windows must satisfy 0 <= start, start + 2 <= stop <= {n_samples} (the samples "
+            f"of {signal}), got {w.tolist()}"
         )
     return w.astype(np.intp)
 
 
 def _setpoints(setpoints_m: ArrayLike, n_windows: int) -> FloatArray:
-    sp = np.asarray(setpoints_m, dtype=np.float64)
-    if sp.shape != (n_windows,) or not np.all(np.isfinite(sp)):
-        raise ValueError(
-            f"setpoints_m must be a finite 1-D array with one value per window ({n_windows}), "
-            f"got shape {sp.shape}"
-        )
-    return sp
+    """One finite set-point per window."""
+    return check.array("setpoints_m", setpoints_m, shape=(n_windows,), like="windows")
 
 
 def g1_mean_current(i: ArrayLike) -> FloatArray:
@@ -270,8 +277,9 @@ def g2_overshoot(
     20.0
     """
     x_arr = _signal("x", x)
-    w = _check_windows(windows, x_arr.shape[-1])
+    w = _check_windows(windows, x_arr.shape[-1], "x")
     b = _setpoints(setpoints_m, w.shape[0])
+    check.real("initial_setpoint_m", initial_setpoint_m)
     a = np.concatenate([[float(initial_setpoint_m)], b[:-1]])
     step = b - a
     if not np.isfinite(initial_setpoint_m) or np.any(step == 0.0):
@@ -331,10 +339,9 @@ def g3_current_per_displacement(
     i_arr = _signal("i", i)
     x_arr = _signal("x", x)
     _same_shape("i", i_arr, "x", x_arr)
-    w = _check_windows(windows, x_arr.shape[-1])
+    w = _check_windows(windows, x_arr.shape[-1], "x")
     sp = _setpoints(setpoints_m, w.shape[0])
-    if not 0.0 <= settle_fraction < 1.0:
-        raise ValueError(f"settle_fraction must be in [0, 1), got {settle_fraction}")
+    check.real("settle_fraction", settle_fraction, ge=0.0, lt=1.0)
     used = w[sp != 0.0]
     if used.shape[0] == 0:
         raise ValueError(f"setpoints_m must contain a non-zero set-point, got {sp.tolist()}")
@@ -366,7 +373,7 @@ def ground_features(
     i_arr = _signal("i", i)
     x_arr = _signal("x", x)
     _same_shape("i", i_arr, "x", x_arr)
-    _sample_period(t, x_arr.shape[-1])
+    _sample_period(t, x_arr.shape[-1], "i and x")
     windows = step_windows(t, step_times_s)
     return {
         "G1": g1_mean_current(i_arr),
@@ -397,8 +404,7 @@ def _energy(a: FloatArray) -> FloatArray:
 
 
 def _lag_samples(max_lag_s: float, dt: float, n_samples: int) -> int:
-    if not np.isfinite(max_lag_s) or max_lag_s < 0.0:
-        raise ValueError(f"max_lag_s must be finite and >= 0, got {max_lag_s}")
+    check.real("max_lag_s", max_lag_s, ge=0.0)
     lag = round(max_lag_s / dt)
     if lag >= n_samples:
         raise ValueError(
@@ -440,7 +446,8 @@ def _mean_norm_xcorr(
 
 
 def _i1(x: FloatArray, dt: float, freq_hz: float) -> FloatArray:
-    if not 0.0 < freq_hz < 0.5 / dt:
+    check.real("freq_hz", freq_hz, gt=0.0)
+    if not freq_hz < 0.5 / dt:
         raise ValueError(f"freq_hz must be in (0, Nyquist = {0.5 / dt} Hz), got {freq_hz}")
     n_samples = x.shape[-1]
     kernel, sums = _hann_dtft_kernel(n_samples, dt, float(freq_hz))
@@ -462,7 +469,7 @@ def i1_fft_amplitude(t: ArrayLike, x: ArrayLike, *, freq_hz: float = 2.0) -> Flo
     keeps the 1.5 Hz and 0.8 Hz Table-1 components out of the 2 Hz value.
     """
     x_arr = _signal("x", x)
-    return _i1(x_arr, _sample_period(t, x_arr.shape[-1]), freq_hz)
+    return _i1(x_arr, _sample_period(t, x_arr.shape[-1], "x"), freq_hz)
 
 
 def i2_current_xcorr(
@@ -482,7 +489,7 @@ def i2_current_xcorr(
     """
     i_arr = _signal("i", i)
     ih_arr = _baseline("i_h", i_h, "i", i_arr)
-    lag = _lag_samples(max_lag_s, _sample_period(t, i_arr.shape[-1]), i_arr.shape[-1])
+    lag = _lag_samples(max_lag_s, _sample_period(t, i_arr.shape[-1], "i"), i_arr.shape[-1])
     moving = _moving_sum(i_arr, lag)
     return _mean_norm_xcorr(moving, ih_arr, lag, _energy(i_arr), _energy(ih_arr))
 
@@ -493,7 +500,7 @@ def i3_position_xcorr(
     """I3: as :func:`i2_current_xcorr` for the position x against the healthy x_h (-)."""
     x_arr = _signal("x", x)
     xh_arr = _baseline("x_h", x_h, "x", x_arr)
-    lag = _lag_samples(max_lag_s, _sample_period(t, x_arr.shape[-1]), x_arr.shape[-1])
+    lag = _lag_samples(max_lag_s, _sample_period(t, x_arr.shape[-1], "x"), x_arr.shape[-1])
     moving = _moving_sum(x_arr, lag)
     return _mean_norm_xcorr(moving, xh_arr, lag, _energy(x_arr), _energy(xh_arr))
 
@@ -508,7 +515,7 @@ def i4_position_autocorr(
     the autocorrelation), e.g. with a lower servo bandwidth.
     """
     x_arr = _signal("x", x)
-    lag = _lag_samples(max_lag_s, _sample_period(t, x_arr.shape[-1]), x_arr.shape[-1])
+    lag = _lag_samples(max_lag_s, _sample_period(t, x_arr.shape[-1], "x"), x_arr.shape[-1])
     energy = _energy(x_arr)
     return _mean_norm_xcorr(_moving_sum(x_arr, lag), x_arr, lag, energy, energy)
 
@@ -638,7 +645,7 @@ def flight_features(
     ih_arr = _baseline("i_h", i_h, "i", i_arr)
     xh_arr = _baseline("x_h", x_h, "x", x_arr)
     n_samples = x_arr.shape[-1]
-    dt = _sample_period(t, n_samples)
+    dt = _sample_period(t, n_samples, "i and x")
     lag = _lag_samples(max_lag_s, dt, n_samples)
     e_i, e_ih, e_x, e_xh = (_energy(a) for a in (i_arr, ih_arr, x_arr, xh_arr))
     moving_x = _moving_sum(x_arr, lag)  # shared by I3 and I4

@@ -45,6 +45,7 @@ from numpy.polynomial.hermite_e import hermegauss
 from scipy.optimize import brentq
 from scipy.special import ndtr
 
+from prognostics import validation as check
 from prognostics.degradation_models import TabulatedRateModel
 from prognostics.rul import RulSummary
 
@@ -60,12 +61,8 @@ _XTOL_REL = 1e-10
 
 def check_gaussian_state(mean: npt.ArrayLike, cov: npt.ArrayLike) -> tuple[np.ndarray, np.ndarray]:
     """``mean`` (2,) and ``cov`` (2, 2) as float64, finite, ``cov`` symmetric PSD, or ValueError."""
-    m = np.asarray(mean, dtype=np.float64)
-    p = np.asarray(cov, dtype=np.float64)
-    if m.shape != (2,) or p.shape != (2, 2):
-        raise ValueError(f"mean must have shape (2,) and cov (2, 2), got {m.shape} and {p.shape}")
-    if not (np.all(np.isfinite(m)) and np.all(np.isfinite(p))):
-        raise ValueError(f"mean {m.tolist()} and cov {p.tolist()} must be finite")
+    m = check.array("mean", mean, shape=(2,))
+    p = check.array("cov", cov, shape=(2, 2))
     tol = 1e-12 * max(abs(p[0, 0]), abs(p[1, 1]), 1e-300)
     if abs(p[0, 1] - p[1, 0]) > tol or p[0, 0] < 0.0 or p[1, 1] < 0.0:
         raise ValueError(f"cov {p.tolist()} must be symmetric with variances >= 0")
@@ -92,10 +89,8 @@ class GaussianRul:
         mean: npt.ArrayLike,
         cov: npt.ArrayLike,
     ) -> None:
-        if not isinstance(model, TabulatedRateModel):
-            raise ValueError(f"model must be a TabulatedRateModel, got {type(model).__name__}")
-        if not math.isfinite(threshold):
-            raise ValueError(f"threshold = {threshold} must be finite")
+        check.instance("model", model, TabulatedRateModel)
+        check.real("threshold", threshold)
         m, p = check_gaussian_state(mean, cov)
         self.model = model
         self.d_threshold = float(model.damage(np.array([float(threshold)]))[0])
@@ -141,9 +136,7 @@ class GaussianRul:
 
     def cdf(self, t: float) -> float:
         """``P(RUL <= t)`` for ``t >= 0`` usage units."""
-        t = float(t)
-        if not (math.isfinite(t) and t >= 0.0):
-            raise ValueError(f"t = {t} must be finite and >= 0")
+        t = check.real("t", t, ge=0.0)
         if t == 0.0 or self.s_x == 0.0:  # already failed; or exact: one node of x
             return self._cdf_over_x(t)
         if self.s_l == 0.0:  # exact: one node of l
@@ -156,16 +149,14 @@ class GaussianRul:
 
     def moment(self, k: int) -> float:
         """``E[RUL^k]`` (usage units^k), k = 1 or 2."""
-        if k not in (1, 2):
-            raise ValueError(f"k = {k} must be 1 or 2")
+        k = check.integer("k", k, ge=1, le=2)
         rem = np.maximum(self._remaining, 0.0)
         growth = np.exp(-k * self._m_l_x + 0.5 * k * k * self._s_l_x**2)
         return float(self._x_w @ (rem**k * growth))
 
     def quantile(self, q: float) -> float:
         """Smallest ``t >= 0`` with ``P(RUL <= t) >= q``, for ``q`` in (0, 1)."""
-        if not 0.0 < q < 1.0:
-            raise ValueError(f"q = {q} must be in (0, 1)")
+        check.real("q", q, gt=0.0, lt=1.0)
         if self.cdf(0.0) >= q:
             return 0.0
         hi = max(self.moment(1), 1e-300)
@@ -183,13 +174,9 @@ class GaussianRul:
         self, horizon_steps: float, low_quantile: float = 0.05, high_quantile: float = 0.95
     ) -> RulSummary:
         """Mean, std, median, ``low``/``high`` quantiles and ``P(RUL <= horizon_steps)``."""
-        if not 0.0 < low_quantile <= 0.5 <= high_quantile < 1.0:
-            raise ValueError(
-                f"need 0 < low_quantile ({low_quantile}) <= 0.5 <= high_quantile "
-                f"({high_quantile}) < 1"
-            )
-        if not (math.isfinite(horizon_steps) and horizon_steps >= 0.0):
-            raise ValueError(f"horizon_steps = {horizon_steps} must be finite and >= 0")
+        check.real("horizon_steps", horizon_steps, ge=0.0)
+        check.real("low_quantile", low_quantile, gt=0.0, le=0.5)
+        check.real("high_quantile", high_quantile, ge=0.5, lt=1.0)
         mean = self.moment(1)
         var = max(self.moment(2) - mean * mean, 0.0)
         return RulSummary(

@@ -35,6 +35,8 @@ from numba import njit
 from numpy.polynomial import Polynomial
 from scipy.interpolate import PchipInterpolator
 
+from prognostics import validation as check
+
 MEAN_KINDS: tuple[str, ...] = ("poly", "pchip")
 SIGMA_KINDS: tuple[str, ...] = ("per_level", "constant")
 _HALF_LOG_2PI = 0.5 * math.log(2.0 * math.pi)
@@ -288,18 +290,13 @@ MAX_ABS_FIT_VALUE = 1e100
 
 
 def _finite(name: str, values: Any) -> np.ndarray:
-    """``values`` as float64, or ValueError naming the first non-finite entry."""
-    arr = np.asarray(values, dtype=np.float64)
-    if not np.all(np.isfinite(arr)):
-        bad = arr.ravel()[~np.isfinite(arr.ravel())][0]
-        raise ValueError(f"{name} contains {bad}: every value must be finite")
-    return arr
+    """``values`` (any shape) as float64, finite, or a ValueError naming the first bad entry."""
+    return check.array(name, values)
 
 
 def _float_array(name: str, values: Any, min_size: int = 0) -> np.ndarray:
-    arr = np.array(values, dtype=np.float64).ravel()
-    if arr.size < min_size or not np.all(np.isfinite(arr)):
-        raise ValueError(f"{name} must hold >= {min_size} finite values, got {arr.size} ({arr!r})")
+    """A read-only 1-D copy of >= ``min_size`` finite values (any shape, flattened)."""
+    arr = np.array(check.array(name, values, min_size=min_size), dtype=np.float64).ravel()
     arr.setflags(write=False)
     return arr
 
@@ -326,8 +323,7 @@ class MeasurementModel:
     slopes: np.ndarray = field(default_factory=_empty)
 
     def __post_init__(self) -> None:
-        if self.kind not in MEAN_KINDS:
-            raise ValueError(f"kind = {self.kind!r} is not one of {MEAN_KINDS}")
+        check.choice("kind", self.kind, MEAN_KINDS)
         is_poly = self.kind == "poly"
         for name in ("coef", "knots", "values", "slopes"):
             needed = (name == "coef") == is_poly
@@ -342,14 +338,13 @@ class MeasurementModel:
                 "pchip needs >= 2 strictly increasing knots and one value and slope per knot, "
                 f"got {self.knots.size} knots, {self.values.size} values, {self.slopes.size} slopes"
             )
-        if not (math.isfinite(self.offset) and math.isfinite(self.scale)):
-            raise ValueError(f"offset = {self.offset}, scale = {self.scale} must be finite")
+        check.real("offset", self.offset)
+        check.real("scale", self.scale)
         sk = _float_array("sigma_knots", self.sigma_knots, 1)
+        if np.any(np.diff(sk) <= 0.0):
+            raise ValueError(f"sigma_knots must be strictly increasing, got {check.show(sk)}")
         sv = _float_array("sigma_values", self.sigma_values, 1)
-        if sv.shape != sk.shape or np.any(np.diff(sk) <= 0.0) or np.any(sv <= 0.0):
-            raise ValueError(
-                "sigma_knots must be strictly increasing with one sigma_value > 0 per knot"
-            )
+        check.array("sigma_values", sv, shape=sk.shape, like="sigma_knots", gt=0.0)
         object.__setattr__(self, "sigma_knots", sk)
         object.__setattr__(self, "sigma_values", sv)
 
@@ -399,7 +394,13 @@ class MeasurementModel:
 
     def log_likelihood(self, y: np.ndarray, x: np.ndarray) -> np.ndarray:
         """``log N(y; h(x), sigma_v(x)^2)``, broadcasting ``y`` against ``x``."""
-        ya, xa = np.broadcast_arrays(_finite("y", y), _finite("x", x))
+        y_arr, x_arr = _finite("y", y), _finite("x", x)
+        try:
+            ya, xa = np.broadcast_arrays(y_arr, x_arr)
+        except ValueError:
+            raise ValueError(
+                f"y of shape {y_arr.shape} must broadcast against x of shape {x_arr.shape}"
+            ) from None
         with np.errstate(over="ignore", invalid="ignore"):
             z = (ya - self.mean(xa)) / self.sigma(xa)
             out = -0.5 * z * z - np.log(self.sigma(xa)) - _HALF_LOG_2PI
@@ -413,6 +414,7 @@ class MeasurementModel:
     def sample(self, x: np.ndarray, rng: np.random.Generator) -> np.ndarray:
         """Synthetic measurements ``h(x) + sigma_v(x) eps``, ``eps ~ N(0, 1)`` from ``rng``."""
         xa = _finite("x", x)
+        check.generator("rng", rng)
         return self.mean(xa) + self.sigma(xa) * rng.standard_normal(xa.shape)
 
     def to_dict(self) -> dict[str, Any]:
@@ -426,12 +428,16 @@ class MeasurementModel:
     @classmethod
     def from_dict(cls, data: dict[str, Any]) -> MeasurementModel:
         """Rebuild from :meth:`to_dict` output; unknown keys raise ``ValueError``."""
+        check.mapping("data", data)
         allowed = {f.name for f in fields(cls)}
-        unknown = sorted(set(data) - allowed)
+        unknown = sorted((k for k in data if k not in allowed), key=repr)
         if unknown:
             raise ValueError(
-                f"MeasurementModel: unknown key(s) {unknown}; allowed {sorted(allowed)}"
+                f"MeasurementModel: unknown key(s) {unknown} in data; allowed {sorted(allowed)}"
             )
+        missing = sorted({"kind", "sigma_knots", "sigma_values"} - set(data))
+        if missing:
+            raise ValueError(f"MeasurementModel: data lacks the key(s) {missing}")
         return cls(**data)
 
 
@@ -457,26 +463,18 @@ def fit_measurement_model(
     min_sigma : explicit floor on sigma (feature units, >= 0); the fit raises if a sigma is
         still <= 0, e.g. a noise-free feature level.
     """
-    sev = np.asarray(severity, dtype=np.float64)
-    feat = np.asarray(feature, dtype=np.float64)
-    if sev.ndim != 1 or sev.shape != feat.shape or sev.size < 2:
-        raise ValueError(
-            f"severity and feature must be 1-D of equal length >= 2: {sev.shape}, {feat.shape}"
-        )
-    if not (np.all(np.isfinite(sev)) and np.all(np.isfinite(feat))):
-        raise ValueError("severity and feature must be finite")
+    sev = check.array("severity", severity, ndim=1, min_size=2)
+    feat = check.array("feature", feature, shape=sev.shape, like="severity")
     for name, arr in (("severity", sev), ("feature", feat)):
         if np.any(np.abs(arr) > MAX_ABS_FIT_VALUE):
             raise ValueError(
                 f"{name} holds |values| up to {float(np.abs(arr).max())}: at most "
                 f"{MAX_ABS_FIT_VALUE:g} is allowed (sums of squares would overflow)"
             )
-    if mean_kind not in MEAN_KINDS:
-        raise ValueError(f"mean_kind = {mean_kind!r} is not one of {MEAN_KINDS}")
-    if sigma_kind not in SIGMA_KINDS:
-        raise ValueError(f"sigma_kind = {sigma_kind!r} is not one of {SIGMA_KINDS}")
-    if not (math.isfinite(min_sigma) and min_sigma >= 0.0):
-        raise ValueError(f"min_sigma = {min_sigma} must be finite and >= 0")
+    check.choice("mean_kind", mean_kind, MEAN_KINDS)
+    check.choice("sigma_kind", sigma_kind, SIGMA_KINDS)
+    check.integer("degree", degree, ge=0)
+    check.real("min_sigma", min_sigma, ge=0.0)
     levels, inverse, counts = np.unique(sev, return_inverse=True, return_counts=True)
     level_means = np.bincount(inverse, weights=feat) / counts
     if mean_kind == "pchip":
@@ -524,18 +522,11 @@ def measurement_from_curve(
     ``sigma_kind="per_level"``, for curves that are already summarised (e.g. the tables of a
     feature surrogate): PCHIP through ``(severity, mean)``, ``sigma`` linear in between.
     """
-    sev = np.asarray(severity, dtype=np.float64)
-    mu = np.asarray(mean, dtype=np.float64)
-    sig = np.asarray(sigma, dtype=np.float64)
-    if sev.ndim != 1 or sev.size < 2 or mu.shape != sev.shape or sig.shape != sev.shape:
-        raise ValueError(
-            "severity, mean and sigma must be 1-D arrays of the same length >= 2, got shapes "
-            f"{sev.shape}, {mu.shape}, {sig.shape}"
-        )
+    sev = check.array("severity", severity, ndim=1, min_size=2)
     if np.any(np.diff(sev) <= 0.0):
-        raise ValueError("severity must be strictly increasing")
-    if not (np.all(np.isfinite(mu)) and np.all(np.isfinite(sig)) and np.all(sig > 0.0)):
-        raise ValueError("mean must be finite and sigma finite and > 0")
+        raise ValueError(f"severity must be strictly increasing, got {check.show(sev)}")
+    mu = check.array("mean", mean, shape=sev.shape, like="severity")
+    sig = check.array("sigma", sigma, shape=sev.shape, like="severity", gt=0.0)
     slopes = PchipInterpolator(sev, mu).derivative()(sev)
     return MeasurementModel(
         kind="pchip", sigma_knots=sev, sigma_values=sig, knots=sev, values=mu, slopes=slopes

@@ -3,7 +3,15 @@
 Notation (ref §6.2): predictions at times ``t_i`` (``t_P`` the first), true end of life
 ``t_EoL``, true RUL ``r*(i) = t_EoL - t_i``, predicted RUL distribution ``r(i)`` given as
 samples with weights. Times and RULs share one unit (e.g. flights). [DJS20] §5.2 reports
-RA (min over the degradation) and the final CRA.
+RA (min over the degradation) and the final CRA. Every function cites the definition it
+implements: "Saxena 2010" with the metric's name, as the reference sheet §6.2 recalls it
+(the paper's formula images could not be read there; §6.1 lists the implementations the
+definitions were checked against: NASA prog_algs and the NASA PCoE MATLAB library).
+
+Arguments are checked before any work (:mod:`prognostics.validation`): a true RUL is a
+finite number > 0 (``r* = t_EoL - t_i`` with ``t_i < t_EoL``), predicted RULs and bounds
+are real numbers (never NaN), weights are finite, >= 0, with a positive sum; anything else
+raises a ``ValueError`` or ``TypeError`` naming the argument.
 
     >>> relative_accuracy(100.0, np.array([90.0]))
     0.9
@@ -19,26 +27,43 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from prognostics import validation as check
+
 BANDS: tuple[str, ...] = ("band", "cone")
 ESTIMATORS: tuple[str, ...] = ("mean", "median")
 
 
-def _samples(rul_samples: np.ndarray, weights: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:
-    r = np.atleast_1d(np.asarray(rul_samples, dtype=np.float64))
-    if r.ndim != 1 or r.size == 0 or not np.all(np.isfinite(r)):
-        raise ValueError(f"rul_samples must be a non-empty finite 1-D array, got shape {r.shape}")
+def _raw_samples(
+    rul_samples: np.ndarray, weights: np.ndarray | None, name: str = "rul_samples"
+) -> tuple[np.ndarray, np.ndarray | None]:
+    """Checked samples (a scalar is one sample) and checked raw weights (None: uniform)."""
+    r = check.array(name, rul_samples, ndim=1, min_size=1, atleast_1d=True)
     if weights is None:
+        return r, None
+    return r, check.weights("weights", weights, r.shape, like=name)
+
+
+def _samples(
+    rul_samples: np.ndarray, weights: np.ndarray | None, name: str = "rul_samples"
+) -> tuple[np.ndarray, np.ndarray]:
+    """Checked samples and normalised weights (uniform for None)."""
+    r, w = _raw_samples(rul_samples, weights, name)
+    if w is None:
         return r, np.full(r.size, 1.0 / r.size)
-    w = np.asarray(weights, dtype=np.float64)
-    if w.shape != r.shape or not np.all(np.isfinite(w)) or np.any(w < 0.0) or not w.sum() > 0:
-        raise ValueError("weights must match rul_samples, be finite, >= 0, with a positive sum")
     return r, w / w.sum()
 
 
-def _positive(name: str, value: float) -> float:
-    if not (math.isfinite(value) and value > 0.0):
-        raise ValueError(f"{name} = {value} must be finite and > 0")
-    return float(value)
+def _true_rul(value: float, name: str = "true_rul") -> float:
+    """A true RUL ``r* = t_EoL - t_i``: finite and > 0 (a prediction precedes the EoL)."""
+    return check.real(name, value, gt=0.0)
+
+
+def _alpha(value: float, name: str = "alpha") -> float:
+    return check.real(name, value, gt=0.0)
+
+
+def _beta(value: float) -> float:
+    return check.real("beta", value, gt=0.0, le=1.0)
 
 
 def point_prediction(
@@ -46,6 +71,8 @@ def point_prediction(
 ) -> float:
     """``<r>``: weighted mean, or weighted median (smallest r with CDF >= 1/2).
 
+    The central tendency of the predicted RUL distribution that RA and the point alpha-lambda
+    test use (Saxena 2010, "relative accuracy": ``<.>`` is the mean or the median; ref §6.2).
     The median compares the weight at or below each sample with the weight above it in
     exact arithmetic (:func:`math.fsum` of the differences gives the exact sign), so a CDF
     of exactly 1/2 counts: the lower middle of an even, unweighted sample.
@@ -53,14 +80,14 @@ def point_prediction(
     >>> point_prediction(np.array([4.0, 1.0, 3.0, 2.0]), estimator="median")
     2.0
     """
-    r, w = _samples(rul_samples, weights)
+    estimator = check.choice("estimator", estimator, ESTIMATORS)
+    r, raw = _raw_samples(rul_samples, weights)
     if estimator == "mean":
+        w = np.full(r.size, 1.0 / r.size) if raw is None else raw / raw.sum()
         return float(w @ r)
-    if estimator == "median":
-        raw = np.ones(r.size) if weights is None else np.asarray(weights, dtype=np.float64)
-        order = np.argsort(r, kind="stable")
-        return float(r[order[_first_half_index(raw[order])]])
-    raise ValueError(f"estimator = {estimator!r} is not one of {ESTIMATORS}")
+    raw = np.ones(r.size) if raw is None else raw
+    order = np.argsort(r, kind="stable")
+    return float(r[order[_first_half_index(raw[order])]])
 
 
 def _first_half_index(w: np.ndarray) -> int:
@@ -93,8 +120,9 @@ def relative_accuracy(
     weights: np.ndarray | None = None,
     estimator: str = "mean",
 ) -> float:
-    """``RA = 1 - |r* - <r>| / r*`` (Saxena 2010; ref §6.2), ``<r>`` mean or median."""
-    rt = _positive("true_rul", true_rul)
+    """``RA = 1 - |r* - <r>| / r*`` (Saxena 2010, "relative accuracy"; ref §6.2), ``<r>``
+    the mean or the median of the predicted RUL (:func:`point_prediction`)."""
+    rt = _true_rul(true_rul)
     return float(
         _ra(np.array([rt]), np.array([point_prediction(rul_samples, weights, estimator)]))[0]
     )
@@ -115,40 +143,52 @@ def _ra(true_rul: np.ndarray, points: np.ndarray) -> np.ndarray:
 
 
 def cumulative_relative_accuracy(ra_values: np.ndarray, weights: np.ndarray | None = None) -> float:
-    """``CRA = sum_i w_i RA_i / sum_i w_i`` over the prediction set (ref §6.2).
+    """``CRA = sum_i w_i RA_i / sum_i w_i`` over the prediction set (Saxena 2010,
+    "cumulative relative accuracy"; ref §6.2).
 
-    Uniform weights give ``(1/|p|) sum RA_i`` (prog_algs CRA); weights may increase toward
-    EoL.
+    ``ra_values`` are relative accuracies (finite, <= 1 by definition). Uniform weights
+    give ``(1/|p|) sum RA_i`` (prog_algs CRA); weights may increase toward EoL.
     """
-    ra, w = _samples(ra_values, weights)
+    ra = check.array("ra_values", ra_values, ndim=1, min_size=1, atleast_1d=True, le=1.0)
+    _, w = _samples(ra, weights, "ra_values")
     return float(w @ ra)
 
 
 def alpha_bounds(
     true_rul: float, alpha: float, band: str = "cone", eol: float | None = None
 ) -> tuple[float, float]:
-    """Accuracy bounds on the RUL at one time.
+    """Accuracy bounds on the RUL at one time (Saxena 2010, "alpha-lambda accuracy" and
+    "prognostic horizon"; ref §6.2).
 
     ``"cone"`` (alpha-lambda): ``[(1 - alpha) r*, (1 + alpha) r*]``;
-    ``"band"`` (prognostic horizon): ``[r* - alpha t_EoL, r* + alpha t_EoL]`` (needs ``eol``).
+    ``"band"`` (prognostic horizon): ``[r* - alpha t_EoL, r* + alpha t_EoL]`` (needs ``eol``,
+    the true end of life, > 0: the band's half-width is ``alpha t_EoL``).
     """
-    if not (math.isfinite(alpha) and alpha > 0.0):
-        raise ValueError(f"alpha = {alpha} must be finite and > 0")
+    rt = _true_rul(true_rul)
+    a = _alpha(alpha)
+    band = check.choice("band", band, BANDS)
+    if band == "band" and eol is None:
+        raise ValueError("band='band' needs eol (the true end of life)")
+    t_eol = None if eol is None else check.real("eol", eol, gt=0.0 if band == "band" else None)
     if band == "cone":
-        return (1.0 - alpha) * true_rul, (1.0 + alpha) * true_rul
-    if band == "band":
-        if eol is None:
-            raise ValueError("band='band' needs eol (the true end of life)")
-        return true_rul - alpha * eol, true_rul + alpha * eol
-    raise ValueError(f"band = {band!r} is not one of {BANDS}")
+        return (1.0 - a) * rt, (1.0 + a) * rt
+    return rt - a * t_eol, rt + a * t_eol
 
 
 def probability_mass_within(
     rul_samples: np.ndarray, weights: np.ndarray | None, lower: float, upper: float
 ) -> float:
-    """``pi[r]_{lower}^{upper} = sum_i w_i 1[lower <= r_i <= upper]``."""
+    """``pi[r]_{lower}^{upper} = sum_i w_i 1[lower <= r_i <= upper]``: the probability mass
+    of the predicted RUL within the bounds (Saxena 2010, "beta criterion"; ref §6.2).
+
+    ``lower <= upper`` are real numbers (an infinite bound makes a half-line), never NaN.
+    """
+    lo = check.real("lower", lower, finite=False)
+    hi = check.real("upper", upper, finite=False)
+    if not lo <= hi:
+        raise ValueError(f"lower = {lo} must be <= upper = {hi}")
     r, w = _samples(rul_samples, weights)
-    return float(w @ ((r >= lower) & (r <= upper)))
+    return float(w @ ((r >= lo) & (r <= hi)))
 
 
 def beta_criterion(
@@ -158,16 +198,17 @@ def beta_criterion(
     upper: float,
     beta: float = 0.5,
 ) -> bool:
-    """``pi[r]_{lower}^{upper} >= beta`` (Saxena 2010 beta criterion; ref §6.2)."""
-    if not 0.0 < beta <= 1.0:
-        raise ValueError(f"beta = {beta} must be in (0, 1]")
-    return probability_mass_within(rul_samples, weights, lower, upper) >= beta
+    """``pi[r]_{lower}^{upper} >= beta`` (Saxena 2010, "beta criterion"; ref §6.2),
+    ``beta`` in (0, 1]."""
+    b = _beta(beta)
+    return probability_mass_within(rul_samples, weights, lower, upper) >= b
 
 
 def alpha_lambda_point(true_rul: float, predicted_rul: float, alpha: float) -> bool:
-    """``(1 - alpha) r*(t_lambda) <= r(t_lambda) <= (1 + alpha) r*(t_lambda)``."""
-    lo, hi = alpha_bounds(_positive("true_rul", true_rul), alpha, "cone")
-    return lo <= predicted_rul <= hi
+    """``(1 - alpha) r*(t_lambda) <= r(t_lambda) <= (1 + alpha) r*(t_lambda)`` for a point
+    prediction (Saxena 2010, "alpha-lambda accuracy"; ref §6.2)."""
+    lo, hi = alpha_bounds(true_rul, alpha, "cone")
+    return lo <= check.real("predicted_rul", predicted_rul) <= hi
 
 
 def alpha_lambda_distribution(
@@ -177,18 +218,38 @@ def alpha_lambda_distribution(
     alpha: float = 0.2,
     beta: float = 0.5,
 ) -> bool:
-    """``pi[r(t_lambda)]_{-alpha}^{+alpha} >= beta`` with the cone bounds."""
-    lo, hi = alpha_bounds(_positive("true_rul", true_rul), alpha, "cone")
+    """``pi[r(t_lambda)]_{-alpha}^{+alpha} >= beta`` with the cone bounds, for a predicted
+    distribution (Saxena 2010, "alpha-lambda accuracy" with the beta criterion; ref §6.2)."""
+    lo, hi = alpha_bounds(true_rul, alpha, "cone")
     return beta_criterion(rul_samples, weights, lo, hi, beta)
 
 
 def _check_times(times: np.ndarray, eol: float) -> np.ndarray:
-    t = np.asarray(times, dtype=np.float64)
-    if t.ndim != 1 or t.size == 0 or np.any(np.diff(t) <= 0.0) or not np.all(np.isfinite(t)):
-        raise ValueError("times must be a non-empty, finite, strictly increasing 1-D array")
-    if not (math.isfinite(eol) and t[-1] < eol):
+    t = check.array("times", times, ndim=1, min_size=1)
+    if np.any(np.diff(t) <= 0.0):
+        raise ValueError(f"times must be strictly increasing, got {check.show(t)}")
+    if not t[-1] < check.real("eol", eol):
         raise ValueError(f"eol = {eol} must be finite and after the last prediction {t[-1]}")
     return t
+
+
+def _predictions(
+    t: np.ndarray,
+    rul_samples: Sequence[np.ndarray],
+    weights: Sequence[np.ndarray | None] | None,
+) -> tuple[list[np.ndarray], list[np.ndarray | None]]:
+    """One checked sample array (and weights, or None) per prediction time."""
+    samples = check.sequence("rul_samples", rul_samples, t.size, like="times")
+    ws = (
+        [None] * t.size
+        if weights is None
+        else check.sequence("weights", weights, t.size, like="times")
+    )
+    checked = [
+        _raw_samples(r, w, f"rul_samples[{j}]")
+        for j, (r, w) in enumerate(zip(samples, ws, strict=True))
+    ]
+    return [r for r, _ in checked], [w for _, w in checked]
 
 
 def prognostic_horizon(
@@ -200,16 +261,17 @@ def prognostic_horizon(
     beta: float = 0.5,
     band: str = "band",
 ) -> float:
-    """``PH = t_EoL - t_{i_ab}``, ``i_ab = min{j : pi[r(j)]_{-alpha}^{+alpha} >= beta}``.
+    """``PH = t_EoL - t_{i_ab}``, ``i_ab = min{j : pi[r(j)]_{-alpha}^{+alpha} >= beta}``
+    (Saxena 2010, "prognostic horizon"; ref §6.2).
 
     Bounds ``r*(j) +- alpha t_EoL`` (``band="band"``, Saxena 2010) or the cone
     ``(1 +- alpha) r*(j)`` (``band="cone"``, NASA MATLAB library). NaN if never met.
     """
     t = _check_times(times, eol)
-    ws = [None] * t.size if weights is None else list(weights)
-    if len(rul_samples) != t.size or len(ws) != t.size:
-        raise ValueError("rul_samples and weights need one entry per prediction time")
-    for ti, r, w in zip(t, rul_samples, ws, strict=True):
+    alpha_bounds(eol - t[0], alpha, band, eol)  # alpha, band and eol, before any work
+    _beta(beta)
+    samples, ws = _predictions(t, rul_samples, weights)
+    for ti, r, w in zip(t, samples, ws, strict=True):
         lo, hi = alpha_bounds(eol - ti, alpha, band, eol)
         if beta_criterion(r, w, lo, hi, beta):
             return float(eol - ti)
@@ -217,23 +279,18 @@ def prognostic_horizon(
 
 
 def convergence(times: np.ndarray, metric: np.ndarray) -> float:
-    """Convergence ``C_M`` of a metric ``M(i) >= 0`` from ``t_P = times[0]`` (ref §6.2).
+    """Convergence ``C_M`` of a metric ``M(i) >= 0`` from ``t_P = times[0]`` (Saxena 2010,
+    "convergence"; ref §6.2).
 
     ``x_c = 1/2 sum (t_{i+1}^2 - t_i^2) M_i / sum (t_{i+1} - t_i) M_i``,
     ``y_c = 1/2 sum (t_{i+1} - t_i) M_i^2 / sum (t_{i+1} - t_i) M_i``,
     ``C_M = sqrt((x_c - t_P)^2 + y_c^2)``; sums over i = P .. EoUP-1 (the last time only
     closes the last interval). Smaller is better.
     """
-    t = np.asarray(times, dtype=np.float64)
-    m = np.asarray(metric, dtype=np.float64)
-    if t.ndim != 1 or t.size < 2 or m.shape != t.shape:
-        raise ValueError(
-            f"times and metric need one 1-D shape with >= 2 points, got {t.shape}, {m.shape}"
-        )
-    if not np.all(np.isfinite(t)) or np.any(np.diff(t) <= 0.0):
+    t = check.array("times", times, ndim=1, min_size=2)
+    if np.any(np.diff(t) <= 0.0):
         raise ValueError(f"times must be finite and strictly increasing, got {t.tolist()}")
-    if not np.all(np.isfinite(m)) or np.any(m < 0.0):
-        raise ValueError("metric values must be finite and >= 0")
+    m = check.array("metric", metric, shape=t.shape, like="times", ge=0.0)
     with np.errstate(over="ignore", invalid="ignore"):
         dt = np.diff(t)
         mi = m[:-1]
@@ -277,35 +334,38 @@ def evaluate_predictions(
     estimator: str = "mean",
 ) -> PrognosticMetrics:
     """RA at every time, min RA, CRA (lambda = 1, uniform weights), alpha-lambda (beta
-    version) at each lambda, PH and the convergence of the absolute error ``|r* - <r>|``.
+    version) at each lambda, PH and the convergence of the absolute error ``|r* - <r>|``
+    (Saxena 2010: each metric as in the function that computes it; ref §6.2).
 
     ``t_lambda = t_P + lambda (t_EoL - t_P)``; alpha-lambda uses the first prediction at or
     after ``t_lambda`` (prog_algs convention); ref §6 defaults alpha = 0.2, beta = 0.5,
-    PH band alpha = 0.1.
+    PH band alpha = 0.1. Every argument is checked before any metric is computed.
+    ``convergence`` is NaN for a single prediction, ``prognostic_horizon`` NaN if never met.
     """
     t = _check_times(times, eol)
-    ws = [None] * t.size if weights is None else list(weights)
-    if len(rul_samples) != t.size or len(ws) != t.size:
-        raise ValueError("rul_samples and weights need one entry per prediction time")
+    _alpha(alpha)
+    _alpha(ph_alpha, "ph_alpha")
+    alpha_bounds(eol - t[0], ph_alpha, band, eol)  # band and eol
+    _beta(beta)
+    estimator = check.choice("estimator", estimator, ESTIMATORS)
+    lams = [
+        check.real(f"lambdas[{k}]", lam, ge=0.0, le=1.0)
+        for k, lam in enumerate(check.sequence("lambdas", lambdas))
+    ]
+    samples, ws = _predictions(t, rul_samples, weights)
     true_rul = eol - t
-    points = np.array(
-        [point_prediction(r, w, estimator) for r, w in zip(rul_samples, ws, strict=True)]
-    )
+    points = np.array([point_prediction(r, w, estimator) for r, w in zip(samples, ws, strict=True)])
     ra = _ra(true_rul, points)
     al: dict[float, bool] = {}
-    for lam in lambdas:
-        if not 0.0 <= lam <= 1.0:
-            raise ValueError(f"lambda = {lam} must be in [0, 1]")
+    for lam in lams:
         i = int(np.searchsorted(t, t[0] + lam * (eol - t[0]), side="left"))
         if i < t.size:
-            al[float(lam)] = alpha_lambda_distribution(
-                true_rul[i], rul_samples[i], ws[i], alpha, beta
-            )
+            al[float(lam)] = alpha_lambda_distribution(true_rul[i], samples[i], ws[i], alpha, beta)
     return PrognosticMetrics(
         relative_accuracy=ra,
         min_relative_accuracy=float(ra.min()),
         cumulative_relative_accuracy=float(ra.mean()),
         alpha_lambda=al,
-        prognostic_horizon=prognostic_horizon(t, rul_samples, ws, eol, ph_alpha, beta, band),
+        prognostic_horizon=prognostic_horizon(t, samples, ws, eol, ph_alpha, beta, band),
         convergence=convergence(t, np.abs(true_rul - points)) if t.size >= 2 else math.nan,
     )

@@ -51,6 +51,8 @@ from numba.np.random._constants import (
     ziggurat_nor_r,
 )
 
+from prognostics import validation as check
+
 #: ``(state_address, next_uint64 address, next_double address)`` of a bit generator
 Handle = tuple[int, int, int]
 
@@ -172,8 +174,27 @@ def fill_truncated_normal(
                 redraw = True
 
 
-def _address(fn: ctypes._CFuncPtr) -> int:
-    return int(ctypes.cast(fn, ctypes.c_void_p).value)
+_capsule_pointer = ctypes.pythonapi.PyCapsule_GetPointer
+_capsule_pointer.restype = ctypes.c_void_p
+_capsule_pointer.argtypes = (ctypes.py_object, ctypes.c_char_p)
+
+
+class _BitGen(ctypes.Structure):
+    """numpy's ``bitgen_t`` (numpy/random/bitgen.h, the C API numpy publishes for Cython and
+    numba users): the state and the bit generator's functions."""
+
+    _fields_ = [
+        (name, ctypes.c_void_p)
+        for name in ("state", "next_uint64", "next_uint32", "next_double", "next_raw")
+    ]
+
+
+def handle_of(rng: np.random.Generator) -> Handle:
+    """The :data:`Handle` of ``rng``'s bit generator, read from its ``capsule`` (a
+    ``bitgen_t``): the addresses ``bit_generator.ctypes`` gives, ~10x faster (tested equal).
+    Valid while ``rng`` lives, in this process."""
+    bitgen = _BitGen.from_address(_capsule_pointer(rng.bit_generator.capsule, b"BitGenerator"))
+    return (int(bitgen.state), int(bitgen.next_uint64), int(bitgen.next_double))
 
 
 class NormalStream:
@@ -187,17 +208,10 @@ class NormalStream:
     __slots__ = ("handle", "lock", "rng")
 
     def __init__(self, rng: np.random.Generator) -> None:
-        if not isinstance(rng, np.random.Generator):
-            raise ValueError(f"rng must be a numpy.random.Generator, got {type(rng).__name__}")
-        bit_generator = rng.bit_generator
-        iface = bit_generator.ctypes
+        check.generator("rng", rng)
         self.rng = rng
-        self.lock: threading.Lock = bit_generator.lock
-        self.handle: Handle = (
-            int(iface.state_address),
-            _address(iface.next_uint64),
-            _address(iface.next_double),
-        )
+        self.lock: threading.Lock = rng.bit_generator.lock
+        self.handle: Handle = handle_of(rng)
 
     def __reduce__(self) -> tuple[type[NormalStream], tuple[np.random.Generator]]:
         # addresses are per process: rebuild them from the (pickled) Generator
@@ -208,13 +222,20 @@ class NormalStream:
 
     def fill(self, out: np.ndarray) -> None:
         """Fill a float64 array with N(0, 1) draws (same values as ``rng.standard_normal``)."""
-        if not (isinstance(out, np.ndarray) and out.dtype == np.float64 and out.ndim == 1):
-            raise ValueError("out must be a 1-D float64 numpy array")
+        if not (
+            isinstance(out, np.ndarray)
+            and out.dtype == np.float64
+            and out.ndim == 1
+            and out.flags.writeable
+        ):
+            raise check.ArgumentTypeError(
+                f"out = {check.show(out)} must be a writeable 1-D float64 numpy array"
+            )
         with self.lock:
             fill_standard_normal(self.handle, out)
 
     def standard_normal(self, size: int) -> np.ndarray:
         """``size`` N(0, 1) draws in a new array."""
-        out = np.empty(int(size))
+        out = np.empty(check.integer("size", size, ge=0))
         self.fill(out)
         return out

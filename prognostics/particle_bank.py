@@ -21,6 +21,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from prognostics import validation as check
+
 
 class ParticleBank:
     """Particle arrays of ``n_rows x n_filters`` filters of ``n_particles`` (module docstring).
@@ -36,8 +38,7 @@ class ParticleBank:
             ("n_particles", n_particles, 2),
             ("n_aux", n_aux, 0),
         ):
-            if isinstance(value, bool) or not isinstance(value, int | np.integer) or value < lo:
-                raise ValueError(f"{name} = {value!r} must be an integer >= {lo}")
+            check.integer(name, value, ge=lo)
         shape = (int(n_rows), int(n_filters), int(n_particles))
         self.x = np.zeros(shape)
         self.log_theta = np.zeros(shape)

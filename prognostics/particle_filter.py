@@ -48,6 +48,7 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
+from prognostics import validation as check
 from prognostics.degradation_models import (
     HOT_KERNEL,
     PROCESS_SCRATCH_ROWS,
@@ -85,14 +86,14 @@ def regularisation_bandwidth(n_particles: int, kernel: str = "epanechnikov") -> 
     >>> round(regularisation_bandwidth(1000, "gaussian"), 4)
     0.3162
     """
+    check.integer("n_particles", n_particles, ge=1)
+    check.choice("kernel", kernel, KERNELS)
     n = _STATE_DIM
     if kernel == "epanechnikov":
         c_n = math.pi ** (n / 2) / math.gamma(n / 2 + 1)
         a = (8.0 / c_n * (n + 4) * (2.0 * math.sqrt(math.pi)) ** n) ** (1.0 / (n + 4))
         return a * n_particles ** (-1.0 / (n + 4))
-    if kernel == "gaussian":
-        return (4.0 / (n_particles * (n + 2))) ** (1.0 / (n + 4))
-    raise ValueError(f"kernel = {kernel!r} is not one of {KERNELS}")
+    return (4.0 / (n_particles * (n + 2))) ** (1.0 / (n + 4))
 
 
 @njit(cache=True, inline="always")
@@ -380,16 +381,20 @@ class StateEstimate:
     ess: float
 
 
-def _initial(name: str, values: InitialValues, rng: np.random.Generator, out: np.ndarray) -> None:
-    """``out[:] = values`` (a scalar, an (N,) array, or a sampler's (N,) draw), all finite."""
-    n = out.size
-    arr = values(rng, n) if callable(values) else values
+def _initial(name: str, values: InitialValues, rng: np.random.Generator, n: int) -> np.ndarray:
+    """``values`` (a scalar, an (N,) array, or a sampler's (N,) draw) checked: finite real
+    numbers that broadcast to (N,) (a scalar, or N values)."""
+    if callable(values):
+        name = f"{name}(rng, {n}) (the sampler's draw)"
+        values = values(rng, n)
+    arr = check.array(name, values)
     try:
-        out[:] = arr
-    except (ValueError, TypeError) as err:
-        raise ValueError(f"{name} must give a scalar or {n} values: {err}") from None
-    if not np.isfinite(out).all():
-        raise ValueError(f"{name} must give {n} finite values")
+        fits = np.broadcast_shapes(arr.shape, (n,)) == (n,)
+    except ValueError:
+        fits = False
+    if not fits:
+        raise ValueError(f"{name} must be a number or {n} numbers, got shape {arr.shape}")
+    return arr
 
 
 class ParticleFilter:
@@ -430,23 +435,15 @@ class ParticleFilter:
         shrink: bool = True,
         resampler: str = "systematic",
     ) -> None:
-        if not isinstance(process, TabulatedRateModel):
-            raise ValueError(f"process must be a TabulatedRateModel, got {type(process).__name__}")
-        if not isinstance(measurement, MeasurementModel):
-            raise ValueError(
-                f"measurement must be a MeasurementModel, got {type(measurement).__name__}"
-            )
-        if not (isinstance(n_particles, int | np.integer) and n_particles >= 2):
-            raise ValueError(f"n_particles = {n_particles!r} must be an integer >= 2")
-        if not isinstance(rng, np.random.Generator):
-            raise ValueError(f"rng must be a numpy.random.Generator, got {type(rng).__name__}")
-        if not 0.0 < resample_threshold <= 1.0:
-            raise ValueError(f"resample_threshold = {resample_threshold} must be in (0, 1]")
-        if kernel not in KERNELS:
-            raise ValueError(f"kernel = {kernel!r} is not one of {KERNELS}")
-        if resampler not in SCHEMES:
-            raise ValueError(f"resampler = {resampler!r} is not one of {SCHEMES}")
-        n = int(n_particles)
+        check.instance("process", process, TabulatedRateModel)
+        check.instance("measurement", measurement, MeasurementModel)
+        n = check.integer("n_particles", n_particles, ge=2)
+        check.generator("rng", rng)
+        check.real("resample_threshold", resample_threshold, gt=0.0, le=1.0)
+        check.flag("regularise", regularise)
+        check.choice("kernel", kernel, KERNELS)
+        check.flag("shrink", shrink)
+        check.choice("resampler", resampler, SCHEMES)
         self.process = process
         self.measurement = measurement
         self._stream = NormalStream(rng)
@@ -540,11 +537,15 @@ class ParticleFilter:
         ``f(rng, N) -> (N,) array`` called with the filter's Generator; theta0 must be > 0.
         """
         n = self.n_particles
-        self._ready = False  # until both clouds are drawn and valid
-        _initial("x0", x0, self.rng, self._x)
-        _initial("theta0", theta0, self.rng, self._log_theta)
-        if not np.all(self._log_theta > 0.0):
-            raise ValueError("theta0 must be > 0 for every particle")
+        x = _initial("x0", x0, self.rng, n)
+        theta = _initial("theta0", theta0, self.rng, n)
+        if not np.all(theta > 0.0):
+            raise ValueError(
+                f"theta0 must be > 0 for every particle, got {check.show(float(theta.min()))}"
+            )
+        self._ready = False  # until both clouds are written and representable
+        self._x[:] = x
+        self._log_theta[:] = theta
         np.log(self._log_theta, out=self._log_theta)
         self._check_cloud("reset", "x0, theta0")
         self._w.fill(1.0 / n)
@@ -606,39 +607,35 @@ class ParticleFilter:
         building a new model. Returns True if the filter resampled.
         """
         self._check_ready()
-        y = float(y)
-        if math.isnan(y):
-            return False
-        if not math.isfinite(y):
-            raise ValueError(f"y = {y} must be finite or NaN (no measurement)")
+        y = check.real("y", y, nan_means="no measurement")
         if measurement is None:
             args = self._likelihood_args
-        elif isinstance(measurement, MeasurementModel):
-            args = measurement.likelihood_args
         else:
-            raise ValueError(
-                f"measurement must be a MeasurementModel, got {type(measurement).__name__}"
-            )
+            args = check.instance("measurement", measurement, MeasurementModel).likelihood_args
         if sigma_values is not None:
-            sig = np.ascontiguousarray(sigma_values, dtype=np.float64)
-            if sig.shape != args[-1].shape or not bool(np.all(sig > 0.0) & np.all(sig < np.inf)):
-                raise ValueError(
-                    f"sigma_values = {sigma_values!r} must hold {args[-1].size} finite values "
-                    "> 0 (one per sigma knot of the measurement model)"
-                )
-            args = (*args[:-1], sig)
+            # one value > 0 per sigma knot of the measurement model used
+            sig = check.array(
+                "sigma_values",
+                sigma_values,
+                shape=args[-1].shape,
+                like="measurement.sigma_knots",
+                gt=0.0,
+            )
+            args = (*args[:-1], np.ascontiguousarray(sig))
+        if math.isnan(y):
+            return False
         self._ess = _update_kernel(y, self._x, self._log_w, self._w, self._scratch, *args)
         return self._after_update()
 
     def step(self, usage: float, y: float) -> bool:
         """``predict(usage)`` then ``update(y)`` (one fused kernel, the same result bit for
         bit); returns whether the filter resampled."""
-        y = float(y)
-        if not math.isfinite(y):  # NaN: predict only; inf: predict, then update raises
-            self.predict(usage)
-            return self.update(y)
         self._check_ready()
         usage = _checked_usage(usage)
+        y = check.real("y", y, nan_means="no measurement")
+        if math.isnan(y):  # predict only
+            self.predict(usage)
+            return False
         with self._stream.lock:
             self._ess = _step_kernel(
                 self._x,
@@ -669,12 +666,13 @@ class ParticleFilter:
         :attr:`aux` to its new array. Each array: float64, C-contiguous, shape (N,)."""
         n = self.n_particles
         new = {"_x": x, "_log_theta": log_theta, "_w": w, "_log_w": log_w}
-        aux = {} if aux is None else aux
+        aux = {} if aux is None else check.mapping("aux", aux)
         if sorted(aux) != sorted(self.aux):
             raise ValueError(
                 f"aux must map exactly the names {sorted(self.aux)}, got {sorted(aux)}"
             )
         for name, arr in (*new.items(), *aux.items()):
+            name = name.lstrip("_") if name in new else f"aux[{name!r}]"
             if not (
                 isinstance(arr, np.ndarray)
                 and arr.shape == (n,)
@@ -682,7 +680,10 @@ class ParticleFilter:
                 and arr.flags.c_contiguous
                 and arr.flags.writeable
             ):
-                raise ValueError(f"{name} must be a writeable C-contiguous float64 array of {n}")
+                raise check.ArgumentTypeError(
+                    f"{name} = {check.show(arr)} must be a writeable C-contiguous float64 array "
+                    f"of shape ({n},)"
+                )
         for attr, arr in new.items():
             arr[:] = getattr(self, attr)
             setattr(self, attr, arr)
@@ -695,10 +696,9 @@ class ParticleFilter:
         """Register a per-particle array ``aux[name]`` (filled with ``value``) that
         resampling permutes with the particles; returns it (write into it in place)."""
         if not isinstance(name, str) or name in self.aux:
-            raise ValueError(f"name = {name!r} must be a new string (have {sorted(self.aux)})")
-        if not math.isfinite(value):
-            raise ValueError(f"value = {value} must be finite")
-        self.aux[name] = np.full(self.n_particles, float(value))
+            error = ValueError if isinstance(name, str) else check.ArgumentTypeError
+            raise error(f"name = {name!r} must be a new string (have {sorted(self.aux)})")
+        self.aux[name] = np.full(self.n_particles, check.real("value", value))
         return self.aux[name]
 
     def update_log_likelihood(self, log_likelihood: np.ndarray) -> bool:
@@ -707,11 +707,8 @@ class ParticleFilter:
         ``log w_i <- log w_i + l_i``, normalised; resamples as :meth:`update`. All values
         must be finite. Returns True if the filter resampled."""
         self._check_ready()
-        ll = np.ascontiguousarray(log_likelihood, dtype=np.float64)
-        if ll.shape != self._w.shape or not bool(np.all(np.isfinite(ll))):
-            raise ValueError(
-                f"log_likelihood must hold {self.n_particles} finite values, got shape {ll.shape}"
-            )
+        ll = check.array("log_likelihood", log_likelihood, shape=self._w.shape)
+        ll = np.ascontiguousarray(ll)
         self._ess = _add_log_likelihood(self._log_w, self._w, ll)
         return self._after_update()
 
@@ -721,9 +718,7 @@ class ParticleFilter:
         :meth:`update`. If no particle lies below, nothing changes (returns False; the
         caller decides). Returns True if the filter resampled."""
         self._check_ready()
-        if not math.isfinite(threshold):
-            raise ValueError(f"threshold = {threshold} must be finite")
-        ess = _condition_below(self._x, self._log_w, self._w, float(threshold))
+        ess = _condition_below(self._x, self._log_w, self._w, check.real("threshold", threshold))
         if ess < 0.0:
             return False
         self._ess = ess
@@ -781,10 +776,7 @@ class ParticleFilter:
 
 
 def _checked_usage(usage: float) -> float:
-    value = float(usage)
-    if not (math.isfinite(value) and value >= 0.0):
-        raise ValueError(f"usage = {usage} must be finite and >= 0")
-    return value
+    return check.real("usage", usage, ge=0.0)
 
 
 def _read_only(arr: np.ndarray) -> np.ndarray:

@@ -39,6 +39,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from prognostics import validation as check
 from prognostics.degradation_models import TabulatedRateModel
 from prognostics.detection import DetectorConfig, PercentileDetector
 from prognostics.measurement import MeasurementModel
@@ -99,13 +100,16 @@ class PrognosisTrace:
         useful predictions t_EoUP (usage units); later predictions are dropped. Keyword
         arguments go to ``evaluate_predictions`` (alpha, beta, ...).
         """
-        stop = eol if end is None else end
-        if not (math.isfinite(stop) and stop <= eol):
-            raise ValueError(f"end = {end} must be finite and <= eol = {eol}")
+        check.real("eol", eol)
+        stop = eol if end is None else check.real("end", end)
+        if stop > eol:
+            raise ValueError(f"end = {end} must be <= eol = {eol}")
         times = self.times[self.start_index :]
         n = int(np.count_nonzero(times < stop))
         if n == 0:
-            raise ValueError(f"end = {stop} leaves no prediction (first at t = {times[0]})")
+            raise ValueError(
+                f"eol = {eol}, end = {end} leave no prediction (the first is at t = {times[0]})"
+            )
         return evaluate_predictions(
             times[:n],
             list(self.rul_samples[:n]),
@@ -144,16 +148,12 @@ def run_prognosis(
     start_index : first test (0 <= start_index < T) with a RUL prediction, e.g. the test
         at which the fault was detected.
     """
-    u = np.asarray(usage, dtype=np.float64)
-    y = np.asarray(measurements, dtype=np.float64)
-    if u.ndim != 1 or u.size == 0 or y.shape != u.shape:
-        raise ValueError(
-            f"usage and measurements must be 1-D of one length, got {u.shape}, {y.shape}"
-        )
-    if not (np.all(np.isfinite(u)) and np.all(u > 0.0)):
-        raise ValueError("usage must be finite and > 0 at every test")
-    if isinstance(start_index, bool) or not 0 <= start_index < u.size:
-        raise ValueError(f"start_index = {start_index!r} must be an integer in [0, {u.size})")
+    u = check.array("usage", usage, ndim=1, min_size=1, gt=0.0)
+    y = check.array(
+        "measurements", measurements, shape=u.shape, like="usage", nan_means="test missing"
+    )
+    check.instance("hazard", hazard, HazardZone)
+    check.integer("start_index", start_index, ge=0, le=u.size - 1)
     pf = ParticleFilter(process, measurement, n_particles, rng)
     pf.reset(x0, theta0)
     n = u.size
@@ -207,14 +207,21 @@ def grow_path(
     ``I`` is ``model.damage`` (flights at unit multiplier), eps_n log-normal with mean 1 and
     coefficient of variation ``cv_at(x_n)``: ``ln eps ~ N(-s^2/2, s^2)``, ``s^2 = ln(1+cv^2)``.
     """
-    if not (math.isfinite(theta) and theta > 0.0):
-        raise ValueError(f"theta = {theta} must be finite and > 0")
-    if not (math.isfinite(x0) and x0 < threshold):
-        raise ValueError(f"x0 = {x0} must be finite and below threshold = {threshold}")
+    check.instance("model", model, TabulatedRateModel)
+    check.real("theta", theta, gt=0.0)
+    check.function("cv_at", cv_at)
+    check.real("x0", x0)
+    if not x0 < check.real("threshold", threshold):
+        raise ValueError(f"x0 = {x0} must be below threshold = {threshold}")
+    check.generator("rng", rng)
+    check.integer("max_flights", max_flights, ge=1)
     xs = [float(x0)]
     damage = float(model.damage(np.array([x0]))[0])
     for _ in range(max_flights):
-        s2 = math.log1p(cv_at(xs[-1]) ** 2)
+        cv = cv_at(xs[-1])
+        if not (type(cv) is float and 0.0 <= cv < math.inf):  # the message only on failure
+            check.real(f"cv_at({xs[-1]!r})", cv, ge=0.0)
+        s2 = math.log1p(cv**2)
         damage += theta * math.exp(math.sqrt(s2) * rng.standard_normal() - 0.5 * s2)
         xs.append(float(model.inverse_damage(np.array([damage]))[0]))
         if xs[-1] >= threshold:
@@ -225,6 +232,9 @@ def grow_path(
 # ----------------------------------------------------------------------------- unit referencing
 def prior_severity(model: TabulatedRateModel, x0: float, flights: FloatArray) -> FloatArray:
     """Noise-free severity at unit multiplier: ``x(t) = I^{-1}(I(x0) + t)``."""
+    check.instance("model", model, TabulatedRateModel)
+    check.real("x0", x0)
+    flights = check.array("flights", flights)
     return model.inverse_damage(model.damage(np.array([x0])) + flights)
 
 
@@ -247,13 +257,25 @@ def unit_reference(
 
     Returns ``(c, unit measurement model)``.
     """
-    n = min(int(n_tests), y.size)
+    y = check.array("y", y, ndim=1)
+    flights = check.array("flights", flights, ndim=1)
+    check.instance("measurement", measurement, MeasurementModel)
+    n = min(check.integer("n_tests", n_tests), y.size, flights.size)
     if n < 3:
-        raise ValueError(f"n_tests = {n_tests} must leave >= 3 reference tests (have {y.size})")
+        raise ValueError(
+            f"n_tests = {n_tests} must leave >= 3 reference tests (have {y.size} y and "
+            f"{flights.size} flights)"
+        )
     x_prior = prior_severity(model, x0, flights[:n])
     h = measurement.mean(x_prior)
-    gain = float(np.mean(h) / np.mean(y[:n]))
-    scale = float(np.std(gain * y[:n] - h, ddof=1) / np.mean(measurement.sigma(x_prior)))
+    with np.errstate(divide="ignore", over="ignore", invalid="ignore"):
+        gain = float(np.mean(h) / np.mean(y[:n]))
+        scale = float(np.std(gain * y[:n] - h, ddof=1) / np.mean(measurement.sigma(x_prior)))
+    if not (math.isfinite(gain) and math.isfinite(scale) and scale > 0.0):
+        raise ValueError(
+            f"y's first {n} values (mean {float(np.mean(y[:n]))!r}) give the gain {gain!r} and "
+            f"noise scale {scale!r}: need a non-zero mean and some scatter"
+        )
     data = measurement.to_dict()
     data["sigma_values"] = [scale * v for v in data["sigma_values"]]
     return gain, MeasurementModel.from_dict(data)
@@ -273,11 +295,15 @@ def installation_reference(
     The corrected series is ``c y - o``; it holds ``L`` on average over the reference tests.
     Returns ``(c, o, L)``.
     """
-    if y.ndim != 1 or y.size < 1 or x_prior.shape != y.shape:
-        raise ValueError(f"y {y.shape} and x_prior {x_prior.shape} must be 1-D of one length")
+    y = check.array("y", y, ndim=1, min_size=1)
+    x_prior = check.array("x_prior", x_prior, shape=y.shape, like="y")
+    check.instance("measurement", measurement, MeasurementModel)
+    check.flag("relative", relative)
     h = measurement.mean(x_prior)
     level = float(np.mean(h))
     if relative:
+        if not float(np.mean(y)) != 0.0:
+            raise ValueError("y averages to 0: a relative reference needs a non-zero mean")
         return level / float(np.mean(y)), 0.0, level
     return 1.0, float(np.mean(y - h)), level
 
@@ -297,10 +323,9 @@ def installation_measurement_model(
     (``K`` = ``n_reference`` reference tests; the ``s^2 / K`` term treats the offset's
     error as independent per test, a conservative approximation of a fixed bias).
     """
-    if not (math.isfinite(run_std) and run_std > 0.0):
-        raise ValueError(f"run_std = {run_std} must be finite and > 0")
-    if n_reference < 1:
-        raise ValueError(f"n_reference = {n_reference} must be >= 1")
+    check.instance("population", population, MeasurementModel)
+    check.real("run_std", run_std, gt=0.0)
+    check.integer("n_reference", n_reference, ge=1)
     data = population.to_dict()
     sig_p = np.asarray(data["sigma_values"])
     s2 = run_std**2
@@ -315,8 +340,9 @@ def healthy_residuals(series: FloatArray) -> FloatArray:
     ``r_ij = (y_ij - mean_j y_ij) sqrt(m / (m - 1))``: each unit's own level removed, scaled
     so that ``E r^2`` is the run-to-run variance (m tests per unit).
     """
-    if series.ndim != 2 or series.shape[1] < 2:
-        raise ValueError(f"series must be (units, tests >= 2), got shape {series.shape}")
+    series = check.array("series", series, ndim=2)
+    if series.shape[0] < 1 or series.shape[1] < 2:
+        raise ValueError(f"series must be (units >= 1, tests >= 2), got shape {series.shape}")
     m = series.shape[1]
     return ((series - series.mean(axis=1, keepdims=True)) * math.sqrt(m / (m - 1))).ravel()
 
@@ -329,6 +355,9 @@ def installation_detector(
     Baseline: ``level + sqrt(1 + 1/K) r`` with ``r`` the healthy run-to-run residuals
     (:func:`healthy_residuals`); the factor adds the offset's own error (K reference tests).
     """
+    check.real("level", level)
+    residuals = check.array("residuals", residuals, ndim=1, min_size=2)
+    check.integer("n_reference", n_reference, ge=1)
     det = PercentileDetector(DetectorConfig(window=window, direction=direction))  # type: ignore[arg-type]
     return det.fit(level + math.sqrt(1.0 + 1.0 / n_reference) * residuals)
 
@@ -345,4 +374,8 @@ class HealthySet:
 
     def run_std(self, feature: str) -> float:
         """Pooled run-to-run standard deviation of ``feature`` (feature units)."""
+        if not (isinstance(feature, str) and feature in self.series):
+            raise ValueError(
+                f"feature = {check.show(feature)} must be one of {sorted(self.series)}"
+            )
         return float(np.sqrt(np.mean(healthy_residuals(self.series[feature]) ** 2)))

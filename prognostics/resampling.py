@@ -32,18 +32,15 @@ from collections.abc import Callable
 import numpy as np
 from numba import njit
 
+from prognostics import validation as check
+
 SCHEMES: tuple[str, ...] = ("systematic", "stratified", "multinomial", "residual")
 
 
 def _check_weights(weights: np.ndarray) -> np.ndarray:
-    w = np.asarray(weights, dtype=np.float64)
-    if w.ndim != 1 or w.size == 0:
-        raise ValueError(f"weights must be a non-empty 1-D array, got shape {w.shape}")
-    if not np.all(np.isfinite(w)) or np.any(w < 0.0):
-        raise ValueError("weights must be finite and >= 0")
-    if not w.sum() > 0.0:
-        raise ValueError(f"weights must have a positive sum, got {w.sum()}")
-    return w
+    """1-D, non-empty, finite, >= 0, positive sum (divided by the largest weight when the
+    sum overflows: the same normalised weights; :func:`prognostics.validation.weights`)."""
+    return check.weights("weights", weights)
 
 
 def _normalised_cumsum(w: np.ndarray) -> np.ndarray:
@@ -99,18 +96,16 @@ def _uniforms(
     rng: np.random.Generator | None, u: np.ndarray | float | None, size: int | None
 ) -> np.ndarray | float:
     if (rng is None) == (u is None):
-        raise ValueError("pass exactly one of rng (a numpy Generator) or u (explicit uniforms)")
+        raise ValueError(
+            f"rng = {check.show(rng)}, u = {check.show(u)}: pass exactly one of rng (a numpy "
+            "Generator) or u (explicit uniforms)"
+        )
     if u is None:
-        if not isinstance(rng, np.random.Generator):
-            raise ValueError(f"rng must be a numpy.random.Generator, got {type(rng).__name__}")
+        check.generator("rng", rng)
         return rng.random() if size is None else rng.random(size)
-    arr = np.asarray(u, dtype=np.float64)
-    expected = () if size is None else (size,)
-    if arr.shape != expected:
-        raise ValueError(f"u must have shape {expected}, got {arr.shape}")
-    if np.any(arr < 0.0) or np.any(arr >= 1.0):
-        raise ValueError("u must lie in [0, 1)")
-    return float(arr) if size is None else arr
+    if size is None:
+        return check.real("u", u, ge=0.0, lt=1.0)
+    return check.array("u", u, shape=(size,), like="weights", ge=0.0, lt=1.0)
 
 
 def systematic_resample(
@@ -170,8 +165,7 @@ def residual_resample(weights: np.ndarray, rng: np.random.Generator) -> np.ndarr
     from ``r_i = (N w_i - n_i) / R``; so ``E[count_i] = n_i + R r_i = N w_i``.
     """
     w = _check_weights(weights)
-    if not isinstance(rng, np.random.Generator):
-        raise ValueError(f"rng must be a numpy.random.Generator, got {type(rng).__name__}")
+    check.generator("rng", rng)
     n = w.size
     scaled = n * w / w.sum()
     copies = np.floor(scaled).astype(np.intp)
@@ -196,6 +190,4 @@ def resample(
     weights: np.ndarray, rng: np.random.Generator, scheme: str = "systematic"
 ) -> np.ndarray:
     """Parent indices from the named scheme (one of :data:`SCHEMES`), drawing from ``rng``."""
-    if scheme not in _DISPATCH:
-        raise ValueError(f"scheme = {scheme!r} is not one of {SCHEMES}")
-    return _DISPATCH[scheme](weights, rng)
+    return _DISPATCH[check.choice("scheme", scheme, SCHEMES)](weights, rng)

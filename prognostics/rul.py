@@ -34,6 +34,7 @@ import numpy as np
 from numba import njit
 from scipy.special import ndtr
 
+from prognostics import validation as check
 from prognostics.degradation_models import TabulatedRateModel, damage_array
 
 
@@ -45,10 +46,8 @@ class HazardZone:
     std: float = 0.0
 
     def __post_init__(self) -> None:
-        if not math.isfinite(self.mean):
-            raise ValueError(f"HazardZone.mean = {self.mean} must be finite")
-        if not (math.isfinite(self.std) and self.std >= 0.0):
-            raise ValueError(f"HazardZone.std = {self.std} must be finite and >= 0")
+        check.real("HazardZone.mean", self.mean)
+        check.real("HazardZone.std", self.std, ge=0.0)
 
 
 @dataclass(frozen=True)
@@ -69,22 +68,22 @@ class RulSummary:
 def _check_particles(
     x: np.ndarray, theta: np.ndarray, weights: np.ndarray | None
 ) -> tuple[np.ndarray, np.ndarray]:
-    xa = np.asarray(x, dtype=np.float64)
-    th = np.asarray(theta, dtype=np.float64)
-    if xa.ndim != 1 or xa.size == 0 or th.shape != xa.shape:
-        raise ValueError(f"x and theta must be 1-D of one length, got {xa.shape}, {th.shape}")
-    if weights is not None and np.shape(weights) != xa.shape:
-        raise ValueError(f"weights must have shape {xa.shape}, got {np.shape(weights)}")
-    if not np.all(np.isfinite(xa)):
-        raise ValueError(f"x (particle severities) must be finite, got {xa[~np.isfinite(xa)][0]}")
-    if not (np.all(np.isfinite(th)) and np.all(th > 0.0)):
-        raise ValueError("theta (growth multipliers) must be finite and > 0")
+    """Checked particles: severities ``x`` (N,), multipliers ``theta`` (N,) > 0 and, when
+    given, ``weights`` (N,) (finite, >= 0, positive sum; checked, not returned)."""
+    xa = check.array("x (particle severities)", x, ndim=1, min_size=1)
+    th = check.array("theta (growth multipliers)", theta, shape=xa.shape, like="x", gt=0.0)
+    if weights is not None:
+        check.weights("weights", weights, xa.shape, like="x")
     return xa, th
 
 
 def _check_usage(usage_per_step: float) -> None:
-    if not (math.isfinite(usage_per_step) and usage_per_step > 0.0):
-        raise ValueError(f"usage_per_step = {usage_per_step} must be finite and > 0")
+    check.real("usage_per_step", usage_per_step, gt=0.0)
+
+
+def _check_model(model: TabulatedRateModel, hazard: HazardZone) -> None:
+    check.instance("model", model, TabulatedRateModel)
+    check.instance("hazard", hazard, HazardZone)
 
 
 def predict_rul(
@@ -100,11 +99,17 @@ def predict_rul(
     ``rng`` is required for a Gaussian hazard zone (one threshold draw per particle).
     """
     xa, th = _check_particles(x, theta, None)
+    _check_model(model, hazard)
     _check_usage(usage_per_step)
     if hazard.std == 0.0:
+        if rng is not None:
+            check.generator("rng", rng)
         return model.usage_to_threshold(xa, th, hazard.mean) / usage_per_step
     if not isinstance(rng, np.random.Generator):
-        raise ValueError("a Gaussian hazard zone needs rng (a numpy Generator) to draw thresholds")
+        raise check.ArgumentTypeError(
+            f"rng = {check.show(rng)}: a Gaussian hazard zone needs rng (a "
+            "numpy.random.Generator) to draw thresholds"
+        )
     h = hazard.mean + hazard.std * rng.standard_normal(xa.size)
     remaining = model.damage(h) - model.damage(xa)
     return np.maximum(remaining, 0.0) / (th * usage_per_step)
@@ -120,10 +125,10 @@ def probability_of_failure(
     usage_per_step: float = 1.0,
 ) -> float:
     """Risk ``P(RUL <= horizon_steps)`` (module docstring), exact for both zone types."""
-    xa, th = _check_particles(x, theta, weights)
+    xa, th = _check_particles(x, theta, check.array("weights", weights))
+    _check_model(model, hazard)
     _check_usage(usage_per_step)
-    if not (math.isfinite(horizon_steps) and horizon_steps >= 0.0):
-        raise ValueError(f"horizon_steps = {horizon_steps} must be finite and >= 0")
+    check.real("horizon_steps", horizon_steps, ge=0.0)
     w = _normalised(weights)
     if hazard.std == 0.0:
         rul = model.usage_to_threshold(xa, th, hazard.mean) / usage_per_step
@@ -133,9 +138,7 @@ def probability_of_failure(
 
 
 def _normalised(weights: np.ndarray) -> np.ndarray:
-    w = np.asarray(weights, dtype=np.float64)
-    if w.ndim != 1 or not np.all(np.isfinite(w)) or np.any(w < 0.0) or not w.sum() > 0.0:
-        raise ValueError("weights must be a 1-D array of finite values >= 0 with a positive sum")
+    w = check.weights("weights", weights, np.shape(weights))
     return w / w.sum()
 
 
@@ -180,14 +183,11 @@ def _weighted_summary(
 
 
 def _summary_or_raise(
-    r: np.ndarray, w: np.ndarray, levels: np.ndarray, horizon: float
+    r: np.ndarray, w: np.ndarray, levels: np.ndarray, horizon: float, name: str = "values"
 ) -> tuple[np.ndarray, float, float, float]:
-    ra = np.ascontiguousarray(r, dtype=np.float64)
+    ra = np.ascontiguousarray(check.array(name, r, ndim=1, min_size=1))
+    check.weights("weights", w, ra.shape, like=name)  # checked; the kernel reads them as given
     wa = np.ascontiguousarray(w, dtype=np.float64)
-    if ra.ndim != 1 or ra.size == 0 or wa.shape != ra.shape:
-        raise ValueError(
-            f"values and weights must be 1-D of one length, got {ra.shape}, {wa.shape}"
-        )
     out = np.empty(levels.size)
     status, mean, std, risk = _weighted_summary(ra, wa, levels, horizon, out)
     if status == 1:
@@ -207,6 +207,12 @@ def _check_moments(mean: float, std: float, r: np.ndarray) -> None:
         )
 
 
+def _check_summary_levels(horizon_steps: float, low_quantile: float, high_quantile: float) -> None:
+    check.real("horizon_steps", horizon_steps, ge=0.0)
+    check.real("low_quantile", low_quantile, ge=0.0, le=0.5)
+    check.real("high_quantile", high_quantile, ge=0.5, le=1.0)
+
+
 def weighted_quantile(values: np.ndarray, weights: np.ndarray, q: np.ndarray) -> np.ndarray:
     """Inverse of the weighted empirical CDF: smallest v with ``sum_{v_i <= v} w_i >= q``.
 
@@ -215,9 +221,7 @@ def weighted_quantile(values: np.ndarray, weights: np.ndarray, q: np.ndarray) ->
     >>> float(weighted_quantile(np.array([3.0, 1.0, 2.0]), np.array([0.2, 0.5, 0.3]), 0.6))
     2.0
     """
-    qa = np.asarray(q, dtype=np.float64)
-    if not (np.all(qa >= 0.0) and np.all(qa <= 1.0)):
-        raise ValueError(f"quantile levels q = {q} must lie in [0, 1]")
+    qa = check.array("q (quantile levels)", q, ge=0.0, le=1.0)
     order = np.argsort(qa.ravel())
     sorted_q, _, _, _ = _summary_or_raise(values, weights, qa.ravel()[order], math.inf)
     out = np.empty(qa.size)
@@ -237,17 +241,16 @@ def summarize_rul(
     """Weighted mean, std, median and ``low``/``high`` quantiles of RUL samples (steps).
 
     ``prob_failure`` defaults to ``sum_i w_i 1[RUL_i <= horizon_steps]``; pass the exact
-    Gaussian-zone value from :func:`probability_of_failure` to override it.
+    Gaussian-zone value from :func:`probability_of_failure` to override it (a probability
+    in [0, 1]).
     """
-    if not 0.0 <= low_quantile <= 0.5 <= high_quantile <= 1.0:
-        raise ValueError(
-            f"need 0 <= low_quantile ({low_quantile}) <= 0.5 "
-            f"<= high_quantile ({high_quantile}) <= 1"
-        )
-    if not (math.isfinite(horizon_steps) and horizon_steps >= 0.0):
-        raise ValueError(f"horizon_steps = {horizon_steps} must be finite and >= 0")
+    _check_summary_levels(horizon_steps, low_quantile, high_quantile)
+    if prob_failure is not None:
+        check.real("prob_failure", prob_failure, ge=0.0, le=1.0)
     levels = np.array([low_quantile, 0.5, high_quantile])
-    (low, median, high), mean, std, risk = _summary_or_raise(rul, weights, levels, horizon_steps)
+    (low, median, high), mean, std, risk = _summary_or_raise(
+        rul, weights, levels, horizon_steps, "rul"
+    )
     return RulSummary(
         mean=mean,
         std=std,
@@ -275,6 +278,8 @@ def rul_summary(
     rng: np.random.Generator | None = None,
 ) -> RulSummary:
     """:func:`predict_rul` then :func:`summarize_rul`, with the exact risk of failure."""
+    _check_particles(x, theta, check.array("weights", weights))
+    _check_summary_levels(horizon_steps, low_quantile, high_quantile)
     rul = predict_rul(x, theta, model, hazard, usage_per_step, rng)
     risk = None
     if hazard.std > 0.0:
@@ -304,9 +309,10 @@ class RulPredictor:
     """Fast repeated RUL summaries of one filter's particles against a fixed threshold.
 
     The same numbers as :func:`rul_summary` with a deterministic threshold, for a hot loop
-    (an environment step): the threshold's damage ``I(H)`` is computed once, buffers are
-    reused, and the particle arrays (the filter's own, already validated) are not checked
-    again. RUL of particle i = ``max(I(H) - I(x_i), 0) / theta_i`` steps of one usage unit.
+    (an environment step): the threshold's damage ``I(H)`` is computed once and buffers are
+    reused. The particle arrays must be float64, C-contiguous, of the ``n_particles`` the
+    predictor was built for, and finite (checked: a NaN severity would otherwise read as
+    RUL 0). RUL of particle i = ``max(I(H) - I(x_i), 0) / theta_i`` steps of one usage unit.
     """
 
     def __init__(
@@ -319,19 +325,10 @@ class RulPredictor:
         low_quantile: float = 0.05,
         high_quantile: float = 0.95,
     ) -> None:
-        if not math.isfinite(threshold):
-            raise ValueError(f"threshold = {threshold} must be finite")
-        if not (math.isfinite(horizon_steps) and horizon_steps >= 0.0):
-            raise ValueError(f"horizon_steps = {horizon_steps} must be finite and >= 0")
-        if not 0.0 <= low_quantile <= 0.5 <= high_quantile <= 1.0:
-            raise ValueError(
-                f"need 0 <= low_quantile ({low_quantile}) <= 0.5 "
-                f"<= high_quantile ({high_quantile}) <= 1"
-            )
-        if isinstance(n_particles, bool) or not (
-            isinstance(n_particles, int | np.integer) and n_particles >= 1
-        ):
-            raise ValueError(f"n_particles = {n_particles!r} must be an integer >= 1")
+        check.instance("model", model, TabulatedRateModel)
+        check.real("threshold", threshold)
+        _check_summary_levels(horizon_steps, low_quantile, high_quantile)
+        check.integer("n_particles", n_particles, ge=1)
         self.model = model
         self.d_threshold = float(model.damage(np.array([threshold]))[0])
         self.horizon = float(horizon_steps)
@@ -340,27 +337,37 @@ class RulPredictor:
         self._rul = np.empty(n_particles)
         self._q = np.empty(3)
 
-    def _check_sizes(self, *arrays: np.ndarray) -> None:
-        """Every array must have one entry per particle the buffers were built for: the
-        kernels run unchecked, a shorter array would leave buffer entries unset."""
+    def _arrays(self, **arrays: object) -> list[np.ndarray]:
+        """The particle arrays, checked: one finite float64 entry per particle the buffers
+        were built for (the kernels run unchecked: a shorter array would leave buffer
+        entries unset), C-contiguous (the kernels' layout)."""
         shape = self._rul.shape
-        try:  # the hot path: the filter's own arrays
-            if all(a.shape == shape for a in arrays):
-                return
-        except AttributeError:
-            pass
-        for name, arr in zip(("x", "log_theta", "weights"), arrays, strict=False):
-            if np.shape(arr) != shape:
-                raise ValueError(
-                    f"RulPredictor built for {shape[0]} particles got {name} of shape "
-                    f"{np.shape(arr)}; need shape {shape}"
-                )
-        raise ValueError("x, log_theta and weights must be numpy arrays")
+        out = []
+        for name, arr in arrays.items():
+            if not (
+                type(arr) is np.ndarray
+                and arr.dtype == np.float64
+                and arr.shape == shape
+                and arr.flags.c_contiguous
+            ):  # not the filter's own array: any real array of the right shape
+                try:
+                    got = np.shape(arr) if isinstance(arr, np.ndarray | list | tuple) else None
+                except ValueError:  # ragged nested lists: check.array names the problem
+                    got = None
+                if got is not None and got != shape:
+                    raise ValueError(
+                        f"RulPredictor built for {shape[0]} particles got {name} of shape "
+                        f"{got}; need shape {shape}"
+                    )
+                arr = np.ascontiguousarray(check.array(name, arr, shape=shape))
+            elif not np.isfinite(arr).all():
+                check.array(name, arr)  # raises, naming the first non-finite entry
+            out.append(arr)
+        return out
 
     def values(self, x: np.ndarray, log_theta: np.ndarray) -> np.ndarray:
         """RUL of every particle (steps; a read-only view of a buffer reused by the next call)."""
-        self._check_sizes(x, log_theta)
-        return self._fill(x, log_theta)
+        return self._fill(*self._arrays(x=x, log_theta=log_theta))
 
     def _fill(self, x: np.ndarray, log_theta: np.ndarray) -> np.ndarray:
         damage_array(*self.model.table_args, x, self._d)
@@ -371,13 +378,18 @@ class RulPredictor:
 
     def summary(self, x: np.ndarray, log_theta: np.ndarray, weights: np.ndarray) -> RulSummary:
         """Weighted RUL summary of particles ``x`` with log multipliers ``log_theta``."""
-        self._check_sizes(x, log_theta, weights)
+        x, log_theta, weights = self._arrays(x=x, log_theta=log_theta, weights=weights)
         self._fill(x, log_theta)
         status, mean, std, risk = _weighted_summary(
             self._rul, weights, self.levels, self.horizon, self._q
         )
+        if status == 1:
+            check.weights("weights", weights, weights.shape)  # raises, naming the problem
         if status:
-            raise ValueError("particle weights or RUL values are not finite")
+            raise ValueError(
+                "the particles' RUL values are not finite: a log_theta so small that theta "
+                "underflows, or a severity x whose damage overflows"
+            )
         if not (math.isfinite(mean) and math.isfinite(std)):
             _check_moments(mean, std, self._rul)
         low, median, high = self._q

@@ -26,6 +26,7 @@ import math
 import numpy as np
 from numba import njit
 
+from prognostics import validation as check
 from prognostics.degradation_models import damage_scalar
 from prognostics.rul import RulPredictor
 
@@ -130,12 +131,11 @@ class AgeingRul:
     """
 
     def __init__(self, rul: np.ndarray, weights: np.ndarray, *, low_quantile: float) -> None:
-        r = np.ascontiguousarray(rul, dtype=np.float64)
+        r = np.ascontiguousarray(check.array("rul", rul, ndim=1, min_size=1, ge=0.0))
+        # checked here; the kernel reads them as given
+        check.weights("weights", weights, r.shape, like="rul")
         w = np.ascontiguousarray(weights, dtype=np.float64)
-        if r.ndim != 1 or r.size == 0 or w.shape != r.shape:
-            raise ValueError(f"rul and weights must be 1-D of one length, got {r.shape}, {w.shape}")
-        if not 0.0 <= low_quantile <= 1.0:
-            raise ValueError(f"low_quantile = {low_quantile} must lie in [0, 1]")
+        _check_level(low_quantile)
         n = r.size
         self._r = np.empty(n)
         self._cum_w = np.empty(n + 1)
@@ -160,15 +160,14 @@ class AgeingRul:
     ) -> AgeingRul:
         """``AgeingRul(predictor.values(x, log_theta), weights, low_quantile=...)`` in one
         kernel: the summary of a particle filter's cloud (its own float64 arrays of one
-        length, e.g. ``pf.x``, ``pf.log_theta``, ``pf.weights``), the same numbers."""
+        length, e.g. ``pf.x``, ``pf.log_theta``, ``pf.weights``), the same numbers. Other
+        real arrays are converted; all must be finite (a NaN severity would read as RUL 0)."""
+        check.instance("predictor", predictor, RulPredictor)
+        x = np.ascontiguousarray(check.array("x", x, ndim=1, min_size=1))
         n = x.size
-        if log_theta.shape != (n,) or weights.shape != (n,) or x.shape != (n,) or n == 0:
-            raise ValueError(
-                f"x, log_theta and weights must be 1-D of one length, got {x.shape}, "
-                f"{log_theta.shape}, {weights.shape}"
-            )
-        if not 0.0 <= low_quantile <= 1.0:
-            raise ValueError(f"low_quantile = {low_quantile} must lie in [0, 1]")
+        log_theta = np.ascontiguousarray(check.array("log_theta", log_theta, shape=(n,), like="x"))
+        weights = np.ascontiguousarray(check.array("weights", weights, shape=(n,), like="x"))
+        _check_level(low_quantile)
         self = cls.__new__(cls)
         self._r, self._cum_w = np.empty(n), np.empty(n + 1)
         self._suffix_w, self._suffix_wr = np.empty(n + 1), np.empty(n + 1)
@@ -194,16 +193,16 @@ class AgeingRul:
     ) -> AgeingRul:
         """An AgeingRul holding copies of tables :meth:`tables` returned (e.g. built by a
         batched kernel with ``_build_from_cloud``): the inverse of :meth:`tables`."""
-        r = np.asarray(sorted_rul, dtype=np.float64)
-        sums = [np.asarray(a, dtype=np.float64) for a in (cum_w, suffix_w, suffix_wr)]
-        n = r.shape[0] if r.ndim == 1 else 0
-        if n < 1 or any(a.shape != (n + 1,) for a in sums):
-            raise ValueError(
-                f"sorted_rul must be 1-D of N >= 1 values and the sums of N + 1, got "
-                f"{r.shape}, {[a.shape for a in sums]}"
-            )
-        if not 0.0 <= low_quantile <= 1.0:
-            raise ValueError(f"low_quantile = {low_quantile} must lie in [0, 1]")
+        r = check.array("sorted_rul", sorted_rul, ndim=1, min_size=1, ge=0.0)
+        if np.any(np.diff(r) < 0.0):
+            raise ValueError(f"sorted_rul must be sorted (non-decreasing), got {check.show(r)}")
+        n = r.size
+        sums = [
+            check.array(name, a, shape=(n + 1,), like="sorted_rul plus 1", ge=0.0)
+            for name, a in (("cum_w", cum_w), ("suffix_w", suffix_w), ("suffix_wr", suffix_wr))
+        ]
+        check.real("low", low, ge=0.0)
+        _check_level(low_quantile)
         return cls._copied(r, *sums, low, low_quantile)
 
     @classmethod
@@ -251,8 +250,7 @@ class AgeingRul:
     def summary(self, k: float, horizon: float) -> tuple[float, float, float]:
         """``(mean(k), low(k), prob_failure(k, horizon))`` in one call (the same numbers)."""
         _check_steps(k)
-        if not (math.isfinite(horizon) and horizon >= 0.0):
-            raise ValueError(f"horizon = {horizon} must be finite and >= 0")
+        check.real("horizon", horizon, ge=0.0)
         return ageing_summary(
             self._r, self._cum_w, self._suffix_w, self._suffix_wr, self._low, float(k), horizon
         )
@@ -266,8 +264,7 @@ class AgeingRul:
         26.0
         """
         _check_steps(k)
-        if not 0.0 <= level <= 1.0:
-            raise ValueError(f"level = {level} must lie in [0, 1]")
+        check.real("level", level, ge=0.0, le=1.0)
         n = self._r.size
         j = int(np.searchsorted(self._cum_w[1:], level, side="left"))
         return max(float(self._r[min(j, n - 1)]) - k, 0.0)
@@ -275,15 +272,17 @@ class AgeingRul:
     def prob_failure(self, k: float, horizon: float) -> float:
         """``P(max(R - k, 0) <= horizon) = P(R <= horizon + k)``, ``horizon >= 0``."""
         _check_steps(k)
-        if not (math.isfinite(horizon) and horizon >= 0.0):
-            raise ValueError(f"horizon = {horizon} must be finite and >= 0")
+        check.real("horizon", horizon, ge=0.0)
         j = int(np.searchsorted(self._r, horizon + k, side="right"))
         return min(float(self._cum_w[j]), 1.0)
 
 
 def _check_steps(k: float) -> None:
-    if not (math.isfinite(k) and k >= 0.0):
-        raise ValueError(f"k = {k} steps since the build must be finite and >= 0")
+    check.real("k (steps since the build)", k, ge=0.0)
+
+
+def _check_level(low_quantile: float) -> None:
+    check.real("low_quantile", low_quantile, ge=0.0, le=1.0)
 
 
 __all__ = ["AgeingRul", "ageing_summary"]

@@ -30,6 +30,7 @@ import numpy as np
 import scipy.stats
 from numpy.typing import ArrayLike, NDArray
 
+from prognostics import validation as check
 from prognostics.detection import DetectorConfig, PercentileDetector
 
 if TYPE_CHECKING:  # matplotlib is imported lazily, inside the plotting function
@@ -55,12 +56,16 @@ Method = Literal["gaussian", "histogram"]
 DEFAULT_REDUNDANCY_NATS = 0.1
 """Jeffreys divergence below which two candidates are redundant (reference sheet §7.2)."""
 
+#: Most histogram bins :func:`histogram_jeffreys` accepts (a count; far above any useful one)
+MAX_BINS = 1_000_000
+#: ``numpy.histogram_bin_edges`` rules :func:`histogram_jeffreys` accepts by name
+BIN_RULES: tuple[str, ...] = ("auto", "fd", "doane", "scott", "stone", "rice", "sturges", "sqrt")
+METHODS: tuple[str, ...] = ("gaussian", "histogram")
+
 
 # ----------------------------------------------------------------------------- validation
 def _severity(severity: ArrayLike) -> FloatArray:
-    sev = np.asarray(severity, dtype=np.float64)
-    if sev.ndim != 1 or not np.all(np.isfinite(sev)) or np.any(sev < 0.0):
-        raise ValueError(f"severity must be a finite 1-D array >= 0, got shape {sev.shape}")
+    sev = check.array("severity", severity, ndim=1, ge=0.0)
     if np.count_nonzero(sev == 0.0) < 2 or not np.any(sev > 0.0):
         raise ValueError(
             "severity must hold at least 2 healthy runs (severity 0) and one faulty run, got "
@@ -69,25 +74,29 @@ def _severity(severity: ArrayLike) -> FloatArray:
     return sev
 
 
-def _values(name: str, values: ArrayLike, sev: FloatArray) -> FloatArray:
-    arr = np.asarray(values, dtype=np.float64)
-    if arr.shape != sev.shape or not np.all(np.isfinite(arr)):
-        raise ValueError(
-            f"feature {name!r} must be finite with the severity shape {sev.shape}, got {arr.shape}"
-        )
+def _values(label: str, values: ArrayLike, sev: FloatArray) -> FloatArray:
+    """One candidate's values (``label`` names the argument): finite, one per run, not
+    constant over the healthy runs."""
+    arr = check.array(label, values, shape=sev.shape, like="severity")
     if np.std(arr[sev == 0.0]) == 0.0:
-        raise ValueError(f"feature {name!r} is constant over the healthy runs: no noise scale")
+        raise ValueError(f"{label} is constant over the healthy runs: no noise scale")
     return arr
 
 
 def _table(
     features: Mapping[str, ArrayLike], severity: ArrayLike
 ) -> tuple[list[str], FloatArray, FloatArray]:
+    check.mapping("features", features)
     sev = _severity(severity)
     if len(features) < 1:
         raise ValueError("features must contain at least one candidate")
     names = list(features)
-    return names, np.stack([_values(n, features[n], sev) for n in names]), sev
+    for name in names:
+        if not isinstance(name, str):
+            raise check.ArgumentTypeError(
+                f"features has the key {check.show(name)}: feature names must be strings"
+            )
+    return names, np.stack([_values(f"features[{n!r}]", features[n], sev) for n in names]), sev
 
 
 def _shift_sign(values: FloatArray, sev: FloatArray) -> float:
@@ -150,8 +159,11 @@ def histogram_jeffreys(
     """
     p = _sample("p_samples", p_samples)
     q = _sample("q_samples", q_samples)
-    if not pseudo_count > 0.0:
-        raise ValueError(f"pseudo_count must be > 0, got {pseudo_count}")
+    if isinstance(bins, str):
+        check.choice("bins", bins, BIN_RULES)
+    else:
+        check.integer("bins", bins, ge=1, le=MAX_BINS)
+    check.real("pseudo_count", pseudo_count, gt=0.0)
     edges = np.histogram_bin_edges(np.concatenate([p, q]), bins=bins)
     pk = np.histogram(p, bins=edges)[0] + pseudo_count
     qk = np.histogram(q, bins=edges)[0] + pseudo_count
@@ -159,18 +171,13 @@ def histogram_jeffreys(
 
 
 def _sample(name: str, values: ArrayLike) -> FloatArray:
-    arr = np.asarray(values, dtype=np.float64)
-    if arr.ndim != 1 or arr.size < 2 or not np.all(np.isfinite(arr)):
-        raise ValueError(f"{name} must be a finite 1-D array of >= 2 values, got {arr.shape}")
-    return arr
+    return check.array(name, values, ndim=1, min_size=2)
 
 
 def _jeffreys(method: Method) -> Callable[[ArrayLike, ArrayLike], float]:
-    if method == "gaussian":
+    if check.choice("method", method, METHODS) == "gaussian":
         return gaussian_jeffreys
-    if method == "histogram":
-        return histogram_jeffreys
-    raise ValueError(f"method must be 'gaussian' or 'histogram', got {method!r}")
+    return histogram_jeffreys
 
 
 def redundancy_matrix(
@@ -186,8 +193,8 @@ def redundancy_matrix(
 
     Returns the names and the symmetric (F, F) matrix (nats, zero diagonal).
     """
-    names, table, sev = _table(features, severity)
     jeffreys = _jeffreys(method)
+    names, table, sev = _table(features, severity)
     z = [normalised_response(row, sev) for row in table]
     matrix = np.zeros((len(names), len(names)))
     for a in range(len(names)):
@@ -220,12 +227,16 @@ def redundant_pairs(
     ``FEATURE_INFO[id].complexity``), as [DJS20] dropped I5 against I6; on equal complexity
     the one with the lower |Spearman| correlation with severity, then the later name.
     """
-    if not np.isfinite(threshold_nats) or threshold_nats <= 0.0:
-        raise ValueError(f"threshold_nats must be finite and > 0, got {threshold_nats}")
-    names, matrix = redundancy_matrix(features, severity, method=method)
+    check.real("threshold_nats", threshold_nats, gt=0.0)
+    check.mapping("complexity", complexity)
+    _jeffreys(method)
+    names, _, _ = _table(features, severity)
     missing = [n for n in names if n not in complexity]
     if missing:
         raise ValueError(f"complexity has no rank for features {missing}")
+    for n in names:
+        check.real(f"complexity[{n!r}]", complexity[n])
+    names, matrix = redundancy_matrix(features, severity, method=method)
     sev = _severity(severity)
     pairs = []
     for a in range(len(names)):
@@ -289,8 +300,12 @@ def score_feature(
     - score = accuracy * |spearman| * (1 - severity_at_detection / s_max), 0 if not
       detected: high for accurate, monotone features that alarm early.
     """
+    if not isinstance(name, str):
+        raise check.ArgumentTypeError(f"name = {check.show(name)} must be a string")
+    if config is not None:
+        check.instance("config", config, DetectorConfig)
     sev = _severity(severity)
-    arr = _values(name, values, sev)
+    arr = _values("values", values, sev)
     healthy = arr[sev == 0.0]
     s_max = float(sev.max())
     shift = float(np.mean(arr[sev == s_max]) - healthy.mean())
@@ -331,6 +346,8 @@ def rank_features(
     config: DetectorConfig | None = None,
 ) -> list[FeatureScore]:
     """:func:`score_feature` for every candidate, best first (score, then SNR_dB)."""
+    if config is not None:
+        check.instance("config", config, DetectorConfig)
     names, table, sev = _table(features, severity)
     scores = [
         score_feature(n, row, sev, config=config) for n, row in zip(names, table, strict=True)
@@ -351,8 +368,15 @@ def plot_accuracy_sensitivity(
     highest -> 900 pt^2), labelled with the feature name. Undetected candidates are drawn
     hollow at x = s_max with "(n.d.)". Uses the Agg canvas directly (no pyplot state).
     """
+    check.sequence("scores", scores)
     if len(scores) == 0:
         raise ValueError("scores must contain at least one FeatureScore")
+    for k, s in enumerate(scores):
+        check.instance(f"scores[{k}]", s, FeatureScore)
+    if not isinstance(path, str | os.PathLike):
+        raise check.ArgumentTypeError(f"path = {check.show(path)} must be a str or a path")
+    if title is not None and not isinstance(title, str):
+        raise check.ArgumentTypeError(f"title = {check.show(title)} must be a string or None")
     out = Path(path)
     if not out.parent.is_dir():
         raise ValueError(f"path's directory {out.parent} does not exist")

@@ -49,6 +49,7 @@ import math
 
 import numpy as np
 
+from prognostics import validation as check
 from prognostics.degradation_models import TabulatedRateModel, advance_scalar
 from prognostics.gaussian_rul import GaussianRul, check_gaussian_state
 from prognostics.measurement import MeasurementModel, mean_scalar, sigma_scalar
@@ -61,16 +62,18 @@ def psd_sqrt_2x2(p: np.ndarray) -> np.ndarray:
     """Upper-triangular ``U`` with ``U^T U = p`` for a 2 x 2 PSD ``p`` (zero variances allowed).
 
     filterpy takes the sigma-point offsets from the rows of ``U`` (as from
-    ``scipy.linalg.cholesky``, upper by default). A negative variance raises.
+    ``scipy.linalg.cholesky``, upper by default). A negative or NaN variance raises a
+    ``ValueError`` (inside the filter, a ``FloatingPointError``: the state went bad).
 
     >>> psd_sqrt_2x2(np.array([[4.0, 2.0], [2.0, 2.0]])).tolist()
     [[2.0, 1.0], [0.0, 1.0]]
     >>> psd_sqrt_2x2(np.array([[1.0, 0.0], [0.0, 0.0]])).tolist()
     [[1.0, 0.0], [0.0, 0.0]]
     """
+    p = check.array("p", p, shape=(2, 2), finite=None)  # its values are checked here
     a, b, d = float(p[0, 0]), float(p[0, 1]), float(p[1, 1])
     if not (a >= 0.0 and d >= 0.0):
-        raise FloatingPointError(f"covariance {p.tolist()} has a negative or NaN variance")
+        raise ValueError(f"p = covariance {p.tolist()} has a negative or NaN variance")
     l11 = math.sqrt(a)
     l21 = b / l11 if l11 > 0.0 else 0.0
     l22 = math.sqrt(max(d - l21 * l21, 0.0))
@@ -97,19 +100,11 @@ class UnscentedFilter:
         beta: float = 0.0,
         kappa: float = 3.0 - _DIM,
     ) -> None:
-        if not isinstance(process, TabulatedRateModel):
-            raise ValueError(f"process must be a TabulatedRateModel, got {type(process).__name__}")
-        if not isinstance(measurement, MeasurementModel):
-            raise ValueError(
-                f"measurement must be a MeasurementModel, got {type(measurement).__name__}"
-            )
-        for name, value, ok in (
-            ("alpha", alpha, alpha > 0.0),
-            ("beta", beta, beta >= 0.0),
-            ("kappa", kappa, kappa > -_DIM),
-        ):
-            if not (math.isfinite(value) and ok):
-                raise ValueError(f"{name} = {value} is outside the allowed range (see docstring)")
+        check.instance("process", process, TabulatedRateModel)
+        check.instance("measurement", measurement, MeasurementModel)
+        check.real("alpha", alpha, gt=0.0)
+        check.real("beta", beta, ge=0.0)
+        check.real("kappa", kappa, gt=-_DIM)
         try:  # an optional dependency: only this estimator needs it
             from filterpy.kalman import MerweScaledSigmaPoints, UnscentedKalmanFilter
         except ImportError as err:
@@ -166,16 +161,11 @@ class UnscentedFilter:
         correlation: float = 0.0,
     ) -> None:
         """Gaussian prior: ``x ~ N(x_mean, x_std^2)``, ``log theta ~ N(.., log_theta_std^2)``."""
-        values = (x_mean, x_std, log_theta_mean, log_theta_std, correlation)
-        if not all(math.isfinite(v) for v in values):
-            raise ValueError(
-                f"prior (x_mean, x_std, log_theta_mean, ...) = {values} must be finite"
-            )
-        if x_std < 0.0 or log_theta_std < 0.0 or abs(correlation) > 1.0:
-            raise ValueError(
-                f"x_std = {x_std}, log_theta_std = {log_theta_std} must be >= 0 and "
-                f"correlation = {correlation} in [-1, 1]"
-            )
+        check.real("x_mean", x_mean)
+        check.real("x_std", x_std, ge=0.0)
+        check.real("log_theta_mean", log_theta_mean)
+        check.real("log_theta_std", log_theta_std, ge=0.0)
+        check.real("correlation", correlation, ge=-1.0, le=1.0)
         c = correlation * x_std * log_theta_std
         self._ukf.x = np.array([x_mean, log_theta_mean], dtype=np.float64)
         self._ukf.P = np.array([[x_std**2, c], [c, log_theta_std**2]])
@@ -200,14 +190,16 @@ class UnscentedFilter:
     def predict(self, usage: float) -> None:
         """Propagate over ``usage`` (>= 0) usage units (process model and its noise)."""
         self._check_ready()
-        u = float(usage)
-        if not (math.isfinite(u) and u >= 0.0):
-            raise ValueError(f"usage = {usage} must be finite and >= 0")
+        u = check.real("usage", usage, ge=0.0)
         ukf = self._ukf
         ukf.Q = np.diag(
             [self.process.process_noise_std**2 * u, self.process.log_theta_noise_std**2 * u]
         )
-        ukf.predict(dt=u)
+        try:
+            ukf.predict(dt=u)
+        except ValueError as err:  # psd_sqrt_2x2 refused the state
+            self._ready = False
+            raise FloatingPointError(f"predict({usage!r}): {err}; call reset(...)") from None
         self._check_state("predict", usage)
 
     def update(self, y: float, measurement: MeasurementModel | None = None) -> bool:
@@ -216,14 +208,11 @@ class UnscentedFilter:
         ``measurement`` overrides the filter's model for this update (several features).
         """
         self._check_ready()
-        y = float(y)
+        y = check.real("y", y, nan_means="no measurement")
+        model = self.measurement if measurement is None else measurement
+        check.instance("measurement", model, MeasurementModel)
         if math.isnan(y):
             return False
-        if not math.isfinite(y):
-            raise ValueError(f"y = {y} must be finite or NaN (no measurement)")
-        model = self.measurement if measurement is None else measurement
-        if not isinstance(model, MeasurementModel):
-            raise ValueError(f"measurement must be a MeasurementModel, got {type(model).__name__}")
         ukf = self._ukf
         # sigma points of the current state (filterpy keeps the prior's from predict(): an
         # update after an update would otherwise reuse stale points)
@@ -237,7 +226,8 @@ class UnscentedFilter:
         return True
 
     def step(self, usage: float, y: float) -> bool:
-        """``predict(usage)`` then ``update(y)``."""
+        """``predict(usage)`` then ``update(y)`` (``y`` checked before the prediction)."""
+        check.real("y", y, nan_means="no measurement")
         self.predict(usage)
         return self.update(y)
 

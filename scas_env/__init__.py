@@ -25,12 +25,15 @@ from gymnasium.envs.registration import register, registry  # noqa: E402
 from scas_env._version import __version__  # noqa: E402
 from scas_env.actuator.params import ScasParams  # noqa: E402
 
-__all__ = ["ENV_ID", "ENV_ID_EPOCHS", "ScasParams", "__version__"]
+__all__ = ["ENV_ID", "ENV_ID_EPOCHS", "ENV_ID_FLEET", "ScasParams", "__version__"]
 
 #: the single-actuator maintenance task (``scas_env.env.ScasMaintenanceEnv``)
 ENV_ID = "scas_env/ScasMaintenance-v2"
 #: decision epochs over it, "act now, then fly k slots" (``scas_env.decision_epochs``)
 ENV_ID_EPOCHS = "scas_env/ScasMaintenanceEpochs-v2"
+#: a fleet of helicopters with SCAS actuators, one crew, spares, day by day
+#: (``scas_env.fleet_env.ScasFleetEnv``)
+ENV_ID_FLEET = "scas_env/ScasFleet-v0"
 #: the decision-epoch env's previous name, kept for one release (Gymnasium then warns that
 #: it is out of date and names ``ENV_ID_EPOCHS``)
 _ENV_ID_EPOCHS_OLD = "scas_env/ScasMaintenanceEpochs-v1"
@@ -50,3 +53,9 @@ for _id in (ENV_ID_EPOCHS, _ENV_ID_EPOCHS_OLD):
             entry_point="scas_env.decision_epochs:make_decision_epoch_env",
             vector_entry_point="scas_env.decision_epochs_vector:make_decision_epochs_vector_env",
         )
+if ENV_ID_FLEET not in registry:
+    register(
+        id=ENV_ID_FLEET,
+        entry_point="scas_env.fleet_env:ScasFleetEnv",
+        vector_entry_point="scas_env.fleet_vector_env:make_fleet_vector_env",
+    )

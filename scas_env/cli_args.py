@@ -277,18 +277,17 @@ def scenario_changes(scenario: Scenario, *, exclude: Sequence[str] = ()) -> dict
 
 
 def check_out_dir(parser: argparse.ArgumentParser, path: str | Path, overwrite: bool) -> Path:
-    """Validate an output folder before any work: an existing non-empty folder needs
+    """Validate an output folder before any work, by the one rule of every results folder
+    (:func:`scas_env.utils.results_folder.check_destination`): a name ending in a file suffix
+    (``--out r.json``) is refused, an existing empty folder is accepted, a non-empty one needs
     ``--overwrite``; a file in its place or an unwritable parent is a usage error."""
-    path = Path(path)
-    if path.exists():
-        if not path.is_dir():
-            parser.error(f"--out {path} is a file; expected a folder")
-        if any(path.iterdir()) and not overwrite:
-            parser.error(f"--out {path} exists and is not empty; pass --overwrite to replace it")
-        _check_writable(parser, path)
-    else:
-        _check_writable(parser, _existing_ancestor(parser, path))
-    return path
+    from scas_env.utils.results_folder import ResultsFolderError, check_destination
+
+    try:
+        check_destination(path, overwrite, option="--out")
+    except ResultsFolderError as exc:
+        parser.error(str(exc))
+    return Path(path)
 
 
 def check_out_file(

@@ -168,7 +168,7 @@ def delegate_actions(delegate: Any, obs: np.ndarray) -> np.ndarray:
     out = np.asarray(act)
     if (
         out.shape != (len(obs),)
-        or not np.issubdtype(out.dtype, np.integer)
+        or out.dtype.kind not in "iu"  # integers (a timedelta64 is a numpy integer too)
         or np.any((out < 0) | (out > 3))
     ):
         raise ValueError(
@@ -257,7 +257,7 @@ class DecisionEpochs(gym.Env):
             isinstance(action, int | np.integer | np.ndarray)
             and not isinstance(action, bool | np.bool_)
             and np.ndim(action) == 0
-            and np.issubdtype(np.asarray(action).dtype, np.integer)
+            and np.asarray(action).dtype.kind in "iu"  # not timedelta64
             and 0 <= action < n
         ):
             raise ValueError(f"action = {action!r} must be an integer in 0..{n - 1}")
@@ -273,6 +273,10 @@ class DecisionEpochs(gym.Env):
     ) -> tuple[np.ndarray, dict[str, Any]]:
         super().reset(seed=seed)  # Gymnasium's contract (its checker); the draws are the env's
         obs, info = self.env.reset(seed=seed, options=options)
+        # this env's randomness is the per-flight env's: one generator (Gymnasium's checker
+        # reads ``unwrapped._np_random`` after a seeded reset)
+        inner = self.env.unwrapped
+        self._np_random, self._np_random_seed = inner._np_random, inner._np_random_seed
         self._last = obs
         return self._obs(obs), info
 

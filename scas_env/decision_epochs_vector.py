@@ -131,7 +131,7 @@ class DecisionEpochsVectorEnv(VectorEnv):
         n_act = self.single_action_space.n
         if (
             a.shape != (self.num_envs,)
-            or not np.issubdtype(a.dtype, np.integer)
+            or a.dtype.kind not in "iu"  # integers, not timedelta64
             or np.any((a < 0) | (a >= n_act))
         ):
             raise ValueError(

@@ -303,7 +303,7 @@ class ScasMaintenanceEnv(gym.Env):
         if not (type(action) in _PLAIN_INTS and 0 <= action < 4) and not (
             isinstance(action, np.integer | np.ndarray)
             and np.ndim(action) == 0
-            and np.issubdtype(np.asarray(action).dtype, np.integer)
+            and np.asarray(action).dtype.kind in "iu"  # not timedelta64 (a numpy integer)
             and 0 <= action < 4
         ):
             raise ValueError(f"action = {action!r} is not in Discrete(4): {ACTION_NAMES}")

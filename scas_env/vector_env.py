@@ -130,7 +130,7 @@ class ScasMaintenanceVectorEnv(VectorEnv):
         act = np.asarray(actions)
         if (
             act.shape != (n,)
-            or not np.issubdtype(act.dtype, np.integer)
+            or act.dtype.kind not in "iu"  # integers, not timedelta64
             or np.any((act < 0) | (act > 3))
         ):
             raise ValueError(f"actions = {actions!r} must be {n} integers in 0..3 {ACTION_NAMES}")

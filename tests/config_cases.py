@@ -4,7 +4,8 @@ Keys are drawn from each class's fields plus unknown names; values from numbers 
 of range, NaN, inf, huge integers, strings, None, booleans, lists and dicts. The contract
 ("clear error or valid result"): a ``ValueError``/``TypeError`` whose message names the
 class and a field or key, or an object whose every given field holds a finite number inside
-the declared range (equal to the given value); never another exception.
+the declared range (equal to the given value; a boolean only for a switch, unit "bool");
+never another exception.
 """
 
 from __future__ import annotations
@@ -97,6 +98,8 @@ def check_from_dict(cls: type[Validated], data: dict[str, Any]) -> Any:
         if key not in numeric:
             continue
         md = numeric[key]
+        if md["unit"] != "bool":  # only a switch (0/1) takes true/false
+            assert not isinstance(given, bool | np.bool_), f"{key}: boolean {given!r} as number"
         stored = getattr(obj, key)
         assert isinstance(stored, int | float) and math.isfinite(stored), (key, given, stored)
         assert stored == float(given), f"{key}: given {given!r}, stored {stored!r}"

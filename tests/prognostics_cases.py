@@ -148,6 +148,199 @@ def run_evaluate(case: tuple) -> Any:
     return got
 
 
+#: wrong kinds where a number is expected: each must raise (a TypeError naming the argument)
+WRONG_KIND = ["abc", None, True, 1 + 2j, np.timedelta64(2, "s")]
+#: a number argument: moderate, special, or of a wrong kind
+number_or_junk = st.one_of(number, st.sampled_from(WRONG_KIND))
+positive_or_junk = st.one_of(positive, st.sampled_from(WRONG_KIND))
+
+
+def _is_number(v: Any) -> bool:
+    return isinstance(v, int | float) and not isinstance(v, bool)
+
+
+def _positive_number(v: Any) -> bool:
+    return _is_number(v) and math.isfinite(v) and v > 0
+
+
+def _raised_naming(got: Any, *names: str) -> bool:
+    return isinstance(got, Raised) and any(n in str(got.err) for n in names)
+
+
+@st.composite
+def alpha_bounds_case(draw):
+    band = draw(st.sampled_from(["cone", "band", "tube", None]))
+    eol = draw(st.one_of(st.none(), positive_or_junk))
+    return draw(positive_or_junk), draw(positive_or_junk), band, eol
+
+
+def run_alpha_bounds(case: tuple) -> Any:
+    """Saxena 2010 cone ``(1 +- alpha) r*`` and band ``r* +- alpha t_EoL``."""
+    true_rul, alpha, band, eol = case
+    got = outcome(metrics.alpha_bounds, true_rul, alpha, band, eol)
+    valid = (
+        _positive_number(true_rul)
+        and _positive_number(alpha)
+        and band in metrics.BANDS
+        and (eol is None if band == "cone" and not _is_number(eol) else _positive_number(eol))
+    )
+    if not valid:
+        bad = [n for n, v in (("true_rul", true_rul), ("alpha", alpha)) if not _positive_number(v)]
+        assert _raised_naming(got, *bad, "band", "eol"), f"alpha_bounds: {case} -> {got}"
+        return got
+    assert not isinstance(got, Raised), f"alpha_bounds refused {case}: {got}"
+    half = alpha * true_rul if band == "cone" else alpha * eol
+    assert got == (true_rul - half, true_rul + half) or np.allclose(
+        got, (true_rul - half, true_rul + half), rtol=1e-12
+    )
+    return got
+
+
+@st.composite
+def mass_case(draw):
+    n = draw(st.integers(0, 8))
+    r = draw(array(n=st.just(n)))
+    w = draw(st.one_of(st.none(), array(st.floats(0, 10), st.just(n))))
+    return r, w, draw(number_or_junk), draw(number_or_junk), draw(st.floats(-0.5, 1.5))
+
+
+def run_mass(case: tuple) -> Any:
+    """``pi[r]_lower^upper`` (Saxena 2010 beta criterion), against a direct count."""
+    r, w, lower, upper, beta = case
+    got = outcome(metrics.probability_mass_within, r, w, lower, upper)
+    crit = outcome(metrics.beta_criterion, r, w, lower, upper, beta)
+    bounds_ok = (
+        _is_number(lower) and _is_number(upper) and not math.isnan(lower + 0.0)
+        and not math.isnan(upper + 0.0) and lower <= upper
+    )  # fmt: skip
+    valid = bounds_ok and r.size > 0 and all_finite(r) and (w is None or _valid_weights(w, r.size))
+    if not valid:
+        assert isinstance(got, Raised), f"probability_mass_within accepted {case}: {got}"
+        assert isinstance(crit, Raised), f"beta_criterion accepted {case}: {crit}"
+        return got
+    assert not isinstance(got, Raised), f"probability_mass_within refused {case}: {got}"
+    ww = np.ones(r.size) if w is None else w
+    inside = (r >= lower) & (r <= upper)
+    assert math.isclose(got, float(ww[inside].sum() / ww.sum()), rel_tol=1e-9, abs_tol=1e-12)
+    if 0 < beta <= 1:
+        assert crit == (got >= beta)
+    else:
+        assert _raised_naming(crit, "beta"), f"beta_criterion accepted beta = {beta}"
+    return got
+
+
+@st.composite
+def alpha_lambda_case(draw):
+    return draw(positive_or_junk), draw(number_or_junk), draw(positive_or_junk)
+
+
+def run_alpha_lambda(case: tuple) -> Any:
+    """Saxena 2010 alpha-lambda accuracy for a point prediction."""
+    true_rul, predicted, alpha = case
+    got = outcome(metrics.alpha_lambda_point, true_rul, predicted, alpha)
+    bad = [
+        name
+        for name, ok in (
+            ("true_rul", _positive_number(true_rul)),
+            ("predicted_rul", _is_number(predicted) and math.isfinite(predicted)),
+            ("alpha", _positive_number(alpha)),
+        )
+        if not ok
+    ]
+    if bad:
+        assert _raised_naming(got, *bad), f"alpha_lambda_point: {case} -> {got}"
+        return got
+    assert got == ((1 - alpha) * true_rul <= predicted <= (1 + alpha) * true_rul)
+    return got
+
+
+@st.composite
+def cra_case(draw):
+    n = draw(st.integers(0, 8))
+    ra = draw(array(st.one_of(st.floats(-5, 1), st.sampled_from([*SPECIAL, 1.5])), st.just(n)))
+    w = draw(st.one_of(st.none(), array(st.floats(0, 10), st.just(n))))
+    return ra, w
+
+
+def run_cra(case: tuple) -> Any:
+    """Saxena 2010 CRA: a weighted mean of relative accuracies (each <= 1)."""
+    ra, w = case
+    got = outcome(metrics.cumulative_relative_accuracy, ra, w)
+    valid = (
+        ra.size > 0
+        and all_finite(ra)
+        and bool(np.all(ra <= 1))
+        and (w is None or _valid_weights(w, ra.size))
+    )
+    if not valid:
+        assert isinstance(got, Raised), f"cumulative_relative_accuracy accepted {case}: {got}"
+        return got
+    ww = np.ones(ra.size) if w is None else w
+    assert math.isclose(got, float(ww @ ra / ww.sum()), rel_tol=1e-9, abs_tol=1e-12)
+    return got
+
+
+@st.composite
+def horizon_case(draw):
+    n = draw(st.integers(1, 5))
+    times = np.sort(draw(array(st.floats(0, 100), st.just(n))))
+    eol = draw(st.one_of(st.floats(0, 300), st.sampled_from(SPECIAL)))
+    samples = [draw(array(n=st.integers(0, 4))) for _ in range(draw(st.sampled_from([n, n + 1])))]
+    alpha = draw(positive_or_junk)
+    return times, samples, eol, alpha, draw(st.sampled_from(["band", "cone"]))
+
+
+def run_horizon(case: tuple) -> Any:
+    """Saxena 2010 PH: ``t_EoL - t_j`` at the first time the beta criterion holds, or NaN."""
+    times, samples, eol, alpha, band = case
+    got = outcome(metrics.prognostic_horizon, times, samples, None, eol, alpha, 0.5, band,
+                  allow_nan=True)  # fmt: skip
+    valid = (
+        bool(np.all(np.diff(times) > 0))
+        and math.isfinite(eol)
+        and times[-1] < eol
+        and (band == "cone" or eol > 0)
+        and _positive_number(alpha)
+        and len(samples) == times.size
+        and all(s.size > 0 and all_finite(s) for s in samples)
+    )
+    if not valid:
+        assert isinstance(got, Raised), f"prognostic_horizon accepted {case}: {got}"
+        return got
+    assert math.isnan(got) or any(got == eol - t for t in times), got
+    return got
+
+
+@st.composite
+def false_alarm_case(draw):
+    window = draw(st.integers(1, 5))
+    shape = draw(st.sampled_from([(0,), (6,), (2, 6), (0, 6), (2, 2), (2, 3, 4)]))
+    series = draw(hnp.arrays(np.float64, shape, elements=number))
+    return window, series
+
+
+def run_false_alarm(case: tuple) -> Any:
+    """Share of full windows alarming on healthy series, against the online detector."""
+    window, series = case
+    det = detection.PercentileDetector(detection.DetectorConfig(window=window, fraction=0.5))
+    det.fit(np.arange(101.0))
+    got = outcome(detection.false_alarm_rate, det, series)
+    rows = series[None, :] if series.ndim == 1 else series
+    valid = series.ndim in (1, 2) and rows.shape[0] >= 1 and rows.shape[1] >= window
+    valid = valid and all_finite(series)
+    if not valid:
+        assert _raised_naming(got, "healthy_series"), f"false_alarm_rate accepted {case}: {got}"
+        return got
+    alarms, windows = 0, 0
+    for row in rows:
+        det.reset()
+        flags = [det.update(v) for v in row]
+        alarms += sum(flags[window - 1 :])
+        windows += len(flags) - window + 1
+    assert got == alarms / windows
+    return got
+
+
 # ----------------------------------------------------------------------------- resampling
 @st.composite
 def resample_case(draw):
@@ -505,6 +698,12 @@ CASES: dict[str, tuple[st.SearchStrategy, Callable[[Any], Any]]] = {
     "relative_accuracy": (accuracy_case(), run_relative_accuracy),
     "convergence": (convergence_case(), run_convergence),
     "evaluate_predictions": (evaluate_case(), run_evaluate),
+    "alpha_bounds": (alpha_bounds_case(), run_alpha_bounds),
+    "probability_mass_within": (mass_case(), run_mass),
+    "alpha_lambda_point": (alpha_lambda_case(), run_alpha_lambda),
+    "cumulative_relative_accuracy": (cra_case(), run_cra),
+    "prognostic_horizon": (horizon_case(), run_horizon),
+    "false_alarm_rate": (false_alarm_case(), run_false_alarm),
     "resample": (resample_case(), run_resample),
     "weighted_quantile": (quantile_case(), run_quantile),
     "rul_summary": (rul_case(), run_rul),

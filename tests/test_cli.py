@@ -132,7 +132,7 @@ def _cases(tmp: Path) -> list[tuple[str, list[str], str]]:
         ("scas-benchmark", ["--policies", "ppo,ppo"], "policy(s) ['ppo'] given more than once"),
         ("scas-benchmark", ["--fidelity", "fast"], "--fidelity: invalid choice: 'fast'"),
         ("scas-benchmark", ["--out", busy], "exists and is not empty; pass --overwrite"),
-        ("scas-benchmark", ["--out", str(tmp / "c.csv")], "is a file; expected a folder"),
+        ("scas-benchmark", ["--out", str(tmp / "c.csv")], "c.csv exists and is not a folder"),
         ("scas-benchmark", ["--out", str(tmp / "c.csv" / "x")], "c.csv is a file, not a folder"),
         ("scas-benchmark", ["--scenario", str(tmp / "no.toml")], "no.toml' does not exist"),
         ("scas-benchmark", ["--scenario", str(costs.with_suffix(".txt"))], "does not exist"),

@@ -27,7 +27,9 @@ from scas_env.core.costs import CostModel
 from scas_env.core.scenario import FIDELITIES, INITIAL_HEALTH, OBS_MODES, Scenario
 
 ROOT = Path(__file__).resolve().parents[1]
-EXAMPLES = sorted((ROOT / "examples").glob("*.*"))
+#: the single-actuator examples; the fleet's (fleet_*) hold a [fleet] table that only
+#: FleetConfig reads (tests/test_fleet_config.py)
+EXAMPLES = sorted(p for p in (ROOT / "examples").glob("*.*") if not p.name.startswith("fleet_"))
 SUFFIXES = (".toml", ".yaml", ".yml", ".json")
 CHOICES = {"fidelity": FIDELITIES, "obs_mode": OBS_MODES, "initial_health": INITIAL_HEALTH}
 SETTINGS = settings(

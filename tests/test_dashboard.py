@@ -173,31 +173,6 @@ def test_bad_part_rul_raises() -> None:
         PartRul(np.ones(2), np.full(2, 0.5), true_flights=float("nan"))
 
 
-class _Fly:
-    """A policy that flies every slot (SB3-style predict)."""
-
-    def predict(self, obs, state=None, deterministic=True):
-        return 0, state
-
-
-def test_episode_animation_files(tmp_path) -> None:
-    from PIL import Image
-
-    from experiments.dashboard_animation import episode_frames, save_gif
-
-    env = gym.make(scas_env.ENV_ID, episode_slots=25)
-    episode = episode_frames(env, _Fly(), seed=0, every=10)
-    assert [n["slot"] for n in episode.numbers] == [0, 10, 20, 25]
-    assert all(f.shape == SHAPE for f in episode.frames)
-    gif, numbers = save_gif(episode, tmp_path / "a.gif", fps=5, scale=0.5)
-    with Image.open(gif) as im:
-        assert im.n_frames == 4 and im.size == (SHAPE[1] // 2, SHAPE[0] // 2)
-    assert numbers.read_text().count('"slot"') == 4
-    with pytest.raises(FileExistsError, match="overwrite"):
-        save_gif(episode, gif, fps=5)
-    assert sorted(p.name for p in tmp_path.iterdir()) == ["a.gif", "a.json"]
-
-
 def test_benchmark_function_runs() -> None:
     """The frame benchmark (timings are reported by scripts/bench_dashboard.py, not tested)."""
     from scas_env.dashboard import benchmark_frame_ms
@@ -205,3 +180,22 @@ def test_benchmark_function_runs() -> None:
     env = gym.make(scas_env.ENV_ID)
     env.reset(seed=0)
     assert set(benchmark_frame_ms(env, frames=3)) == {"median", "mean", "max", "cpu_median"}
+
+
+def test_env_renders_the_dashboard_frame_by_frame() -> None:
+    """``render_mode="rgb_array"``: the env's frame is the dashboard of its own record, the
+    same pixels for the same seed and actions, another frame after more flights."""
+    frames = []
+    for _ in range(2):
+        env = gym.make(scas_env.ENV_ID, render_mode="rgb_array", episode_slots=30)
+        env.reset(seed=3)
+        for k in range(12):
+            env.step(1 if k % 4 == 0 else 0)
+        frames.append(env.render())
+        env.close()
+    assert frames[0].shape == SHAPE and frames[0].dtype == np.uint8
+    np.testing.assert_array_equal(frames[0], frames[1])
+    env = gym.make(scas_env.ENV_ID, render_mode="rgb_array", episode_slots=30)
+    env.reset(seed=3)
+    env.step(0)
+    assert not np.array_equal(env.render(), frames[0])

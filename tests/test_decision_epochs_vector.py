@@ -1,19 +1,25 @@
-"""The decision-epoch vector env gives the single envs' decision-epoch episodes, bit for bit.
+"""Decision epochs (``ScasMaintenanceEpochs-v2``), single and batched.
 
+``DecisionEpochs`` is the per-flight env's episode cut into decisions ("act now, then fly
+k slots"): the same episode bit for bit under the same per-slot actions. The vector twin
 ``DecisionEpochsVectorEnv`` (N actuators over the native vector env, each flying its own k
-slots) against ``DecisionEpochs`` over N single envs seeded ``seed + e``; and through SB3:
-``NativeVecEnv`` over it against ``DummyVecEnv`` of the single wrappers (same-step autoreset,
-terminal observations, masks).
+slots) gives ``DecisionEpochs`` over N single envs seeded ``seed + e``; and through SB3:
+``NativeVecEnv`` over it against ``DummyVecEnv`` of the single envs (same-step autoreset,
+terminal observations, masks). Checkers, copies and bad inputs.
 """
 
 from __future__ import annotations
+
+import copy
+import pickle
+import warnings
 
 import gymnasium as gym
 import numpy as np
 import pytest
 
 from scas_env import ENV_ID_EPOCHS
-from scas_env.decision_epochs import DecisionEpochs
+from scas_env.decision_epochs import DEFAULT_KS, DecisionEpochs
 from scas_env.decision_epochs_vector import DecisionEpochsVectorEnv
 from scas_env.env import ScasMaintenanceEnv
 
@@ -30,10 +36,134 @@ def _masked_actions(rng: np.random.Generator, masks: np.ndarray) -> np.ndarray:
     return out
 
 
-def test_vector_epochs_equal_single_wrappers_across_episodes() -> None:
+def _epochs(**kw) -> DecisionEpochs:
+    return DecisionEpochs(ScasMaintenanceEnv(**kw))
+
+
+# ----------------------------------------------------------------------------- single
+def test_checkers_pass_without_warnings() -> None:
+    from gymnasium.utils.env_checker import check_env as gym_check_env
+    from stable_baselines3.common.env_checker import check_env as sb3_check_env
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        gym_check_env(gym.make(ENV_ID_EPOCHS, episode_slots=60).unwrapped,
+                      skip_render_check=True)  # fmt: skip
+        sb3_check_env(_epochs(episode_slots=60), warn=True)
+
+
+def test_an_epoch_episode_is_the_per_flight_episode_bit_for_bit() -> None:
+    """The same seed and the per-slot actions the decisions stand for: the decision-epoch
+    episode's rewards are the sums of the per-flight rewards of its slots, its observations
+    those of its last slot (and the slots left), its info that slot's info."""
+    env = _epochs(**KW)
+    flat = ScasMaintenanceEnv(**KW)
+    obs, _ = env.reset(seed=5)
+    o, _ = flat.reset(seed=5)
+    np.testing.assert_array_equal(obs[:-1], o)
+    assert obs[-1] == KW["episode_slots"]
+    rng = np.random.default_rng(1)
+    truncated = False
+    while not truncated:
+        action = int(_masked_actions(rng, env.action_masks()[None])[0])
+        maintenance, k = env.decode(action)
+        obs, reward, _, truncated, info = env.step(action)
+        total, n = 0.0, 0
+        for j in range(k):
+            o, r, _, tr, inf = flat.step(maintenance if j == 0 else 0)
+            total += r
+            n += 1
+            if tr:
+                break
+        assert reward == total and info["epoch_slots"] == n and truncated == tr
+        assert (info["epoch_action"], info["epoch_k"], info["epoch_discount"]) == (
+            maintenance,
+            k,
+            1.0,
+        )
+        np.testing.assert_array_equal(obs[:-1], o)
+        assert obs[-1] == KW["episode_slots"] - flat.slot
+        assert {k: v for k, v in info.items() if not k.startswith("epoch")} == inf
+
+
+def test_discount_weighs_the_flights_of_a_step() -> None:
+    gamma = 0.9
+    env = DecisionEpochs(ScasMaintenanceEnv(episode_slots=50), gamma=gamma)
+    flat = ScasMaintenanceEnv(episode_slots=50)
+    env.reset(seed=2)
+    flat.reset(seed=2)
+    _, reward, *_, info = env.step(env.encode(1, 5))
+    rewards = [flat.step(1 if j == 0 else 0)[1] for j in range(5)]
+    assert reward == pytest.approx(sum(gamma**j * r for j, r in enumerate(rewards)), rel=1e-12)
+    assert info["epoch_discount"] == pytest.approx(gamma**5, rel=1e-15)
+
+
+def test_masks_follow_downtime_and_part_ages() -> None:
+    env = _epochs(episode_slots=100)
+    env.reset(seed=0)
+    n_ks = len(DEFAULT_KS)
+    mask = env.action_masks().reshape(4, n_ks)
+    assert mask[:2].all() and not mask[2:].any()  # new parts: nothing to replace
+    env.step(env.encode(0, 5))
+    assert env.action_masks().all()
+    env.step(env.encode(3, 1))  # new seals: their downtime
+    mask = env.action_masks().reshape(4, n_ks)
+    assert mask[0].all() and not mask[1].any() and mask[2].all() and not mask[3].any()
+
+
+@pytest.mark.parametrize("how", ["pickle", "deepcopy"])
+def test_copies_continue_identically(how: str) -> None:
+    env = _epochs(**KW)
+    env.reset(seed=3)
+    rng = np.random.default_rng(4)
+    for _ in range(10):
+        env.step(int(_masked_actions(rng, env.action_masks()[None])[0]))
+    twin = pickle.loads(pickle.dumps(env)) if how == "pickle" else copy.deepcopy(env)
+    for _ in range(40):
+        action = int(_masked_actions(rng, env.action_masks()[None])[0])
+        a, b = env.step(action), twin.step(action)
+        np.testing.assert_array_equal(a[0], b[0])
+        assert a[1:] == b[1:]
+        np.testing.assert_array_equal(env.action_masks(), twin.action_masks())
+        if a[3]:
+            break
+
+
+@pytest.mark.parametrize(
+    "action",
+    [20, -1, 2.5, "3", True, np.bool_(True), np.timedelta64(2), np.array([1]), None],
+    ids=repr,
+)
+def test_bad_actions_raise(action) -> None:
+    env = gym.make(ENV_ID_EPOCHS, episode_slots=30)
+    env.reset(seed=0)
+    with pytest.raises(ValueError, match="action"):
+        env.step(action)
+    assert env.unwrapped.env.unwrapped.slot == 0
+
+
+def test_bad_arguments_raise() -> None:
+    with pytest.raises(ValueError, match="ks"):
+        _epochs().__class__(ScasMaintenanceEnv(), ks=(5, 5))
+    for gamma in (1.5, -0.1, "0.9", True):
+        with pytest.raises(ValueError, match="gamma"):
+            DecisionEpochs(ScasMaintenanceEnv(), gamma=gamma)
+    with pytest.raises(ValueError, match="delegate"):
+        DecisionEpochs(ScasMaintenanceEnv(), delegate=object())
+    with pytest.raises(ValueError, match="flat Box"):
+        DecisionEpochs(ScasMaintenanceEnv(obs_mode="dict"))
+    env = _epochs()
+    with pytest.raises(RuntimeError, match="reset"):
+        env.action_masks()
+    with pytest.raises(ValueError, match="k = 7"):
+        env.encode(0, 7)
+
+
+# ----------------------------------------------------------------------------- vector
+def test_vector_epochs_equal_single_decision_epoch_envs_across_episodes() -> None:
     n = 4
     venv = DecisionEpochsVectorEnv(n, **KW)
-    singles = [DecisionEpochs(ScasMaintenanceEnv(**KW)) for _ in range(n)]
+    singles = [_epochs(**KW) for _ in range(n)]
     obs, _ = venv.reset(seed=7)
     for e, env in enumerate(singles):
         np.testing.assert_array_equal(env.reset(seed=7 + e)[0], obs[e])
@@ -48,14 +178,34 @@ def test_vector_epochs_equal_single_wrappers_across_episodes() -> None:
         for e, env in enumerate(singles):
             o, r, te, tr, inf = env.step(int(actions[e]))
             assert r == rewards[e] and te == term[e] and tr == trunc[e], (t, e)
-            assert inf["epoch_slots"] == info["epoch_slots"][e]
-            assert inf["epoch_discount"] == info["epoch_discount"][e]
+            for key in ("epoch_slots", "epoch_discount", "epoch_action", "epoch_k"):
+                assert inf[key] == info[key][e], key
             if tr:
+                assert info["_final_obs"][e]
                 np.testing.assert_array_equal(o, info["final_obs"][e])
                 o, _ = env.reset()
                 ends += 1
             np.testing.assert_array_equal(o, obs[e], err_msg=f"step {t}, env {e}")
     assert ends >= 4
+
+
+@pytest.mark.parametrize("how", ["pickle", "deepcopy"])
+def test_copies_of_the_vector_epochs_env_continue_identically(how: str) -> None:
+    venv = DecisionEpochsVectorEnv(3, **KW)
+    venv.reset(seed=2)
+    rng = np.random.default_rng(6)
+    for _ in range(10):
+        venv.step(_masked_actions(rng, venv.action_masks()))
+    twin = pickle.loads(pickle.dumps(venv)) if how == "pickle" else copy.deepcopy(venv)
+    for _ in range(60):
+        actions = _masked_actions(rng, venv.action_masks())
+        a, b = venv.step(actions), twin.step(actions)
+        for x, y in zip(a[:4], b[:4], strict=True):
+            np.testing.assert_array_equal(x, y)
+        assert a[4].keys() == b[4].keys()
+        for k in a[4]:
+            if k != "final_obs":
+                np.testing.assert_array_equal(a[4][k], b[4][k])
 
 
 def test_make_vec_and_sb3_adapter_match_dummy_vec_env() -> None:
@@ -65,12 +215,11 @@ def test_make_vec_and_sb3_adapter_match_dummy_vec_env() -> None:
 
     n = 3
     venv = gym.make_vec(
-        ENV_ID_EPOCHS, num_envs=n, vectorization_mode="vector_entry_point",
-        episode_slots=200,
-    )  # fmt: skip
+        ENV_ID_EPOCHS, num_envs=n, vectorization_mode="vector_entry_point", episode_slots=200
+    )
     assert isinstance(venv, DecisionEpochsVectorEnv)
     native = NativeVecEnv(venv)
-    dummy = DummyVecEnv([lambda: DecisionEpochs(ScasMaintenanceEnv(episode_slots=200))] * n)
+    dummy = DummyVecEnv([lambda: _epochs(episode_slots=200)] * n)
     native.seed(3)
     dummy.seed(3)
     np.testing.assert_array_equal(native.reset(), dummy.reset())
@@ -93,16 +242,18 @@ def test_make_vec_and_sb3_adapter_match_dummy_vec_env() -> None:
     assert dones_seen >= 3
 
 
-def test_bad_actions_raise() -> None:
+def test_vector_bad_actions_raise() -> None:
     venv = DecisionEpochsVectorEnv(2, episode_slots=10)
     venv.reset(seed=0)
-    for bad in ([0, 20], [0], [0.5, 1.0], [-1, 0]):
+    for bad in ([0, 20], [0], [0.5, 1.0], [-1, 0], [True, False],
+                np.array([1, 2], dtype="m8")):  # fmt: skip
         with pytest.raises(ValueError, match="actions"):
-            venv.step(np.array(bad))
+            venv.step(np.asarray(bad))
+    assert (venv.inner.a["slot"] == 0).all()
     with pytest.raises(ValueError, match="ks"):
         DecisionEpochsVectorEnv(2, ks=(5, 5))
-    with pytest.raises(ValueError, match="active"):
-        venv.inner.step_active(np.zeros(2, dtype=np.int64), np.ones(3, dtype=bool))
+    with pytest.raises(ValueError, match="flat Box"):
+        DecisionEpochsVectorEnv(2, obs_mode="dict")
 
 
 def test_train_epochs_on_the_native_vector_env(tmp_path) -> None:

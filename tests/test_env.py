@@ -1,31 +1,35 @@
-"""ScasMaintenance-v0: API conformance, determinism, pickling, bad inputs, physics sanity."""
+"""ScasMaintenance-v2, the single env (a batch of one): API conformance, registration,
+determinism and copies, bad inputs, the reward's accounting and the episode's mechanics."""
 
 from __future__ import annotations
 
+import copy
 import pickle
 import warnings
 
 import gymnasium as gym
 import numpy as np
 import pytest
+from gymnasium.error import DeprecatedEnv
 from gymnasium.utils.env_checker import check_env as gym_check_env
 from stable_baselines3.common.env_checker import check_env as sb3_check_env
 
 import scas_env
 from scas_env.core.costs import CostModel
-from scas_env.env import ScasMaintenanceEnv
 from scas_env.core.scenario import OBS_MODES, Scenario
+from scas_env.env import ScasMaintenanceEnv
 
 ENV_ID = scas_env.ENV_ID
-
-
-def _rollout(env: gym.Env, actions: list[int], seed: int) -> list[tuple]:
-    obs, info = env.reset(seed=seed)
-    out = [(_flat(obs), 0.0, info["true_state"]["crack_depth_m"])]
-    for a in actions:
-        obs, r, term, trunc, info = env.step(a)
-        out.append((_flat(obs), r, info["true_state"]["crack_depth_m"], term, trunc))
-    return out
+#: the observation of the default mode, in order (the env's docstring table)
+OBS_NAMES = (
+    "I2", "I6", "I7", "I8", "I9", "G1", "G3", "test_age", "no_go",
+    "spring_rul_mean", "spring_rul_low", "spring_risk", "seal_rul_mean", "seal_rul_low",
+    "seal_risk", "spring_alarm", "seal_alarm", "spring_age", "seal_age", "downtime",
+)  # fmt: skip
+OBS_UNITS = (
+    "-", "mm", "uA/mm", "uA", "-", "uA", "uA/mm", "slots", "0/1", "flights", "flights", "-",
+    "flights", "flights", "-", "0/1", "0/1", "flights", "flights", "slots",
+)  # fmt: skip
 
 
 def _flat(obs) -> np.ndarray:
@@ -39,73 +43,197 @@ def _actions(n: int, seed: int = 0) -> list[int]:
     return rng.choice(4, size=n, p=[0.8, 0.15, 0.025, 0.025]).tolist()
 
 
+def _rollout(env: gym.Env, actions: list[int], seed: int | None) -> list[tuple]:
+    """Everything the env returns, step by step (``seed=None``: continue the episode)."""
+    out = []
+    if seed is not None:
+        obs, info = env.reset(seed=seed)
+        out.append((_flat(obs).tobytes(), copy.deepcopy(info)))
+    for a in actions:
+        obs, r, term, trunc, info = env.step(a)
+        out.append((_flat(obs).tobytes(), r, term, trunc, copy.deepcopy(info)))
+    return out
+
+
+# ----------------------------------------------------------------------------- conformance
 @pytest.mark.parametrize("obs_mode", OBS_MODES)
 def test_gymnasium_and_sb3_checkers_pass_without_warnings(obs_mode: str) -> None:
-    env = ScasMaintenanceEnv(obs_mode=obs_mode, episode_slots=50)
     with warnings.catch_warnings():
         warnings.simplefilter("error")
-        gym_check_env(env, skip_render_check=True)
+        gym_check_env(ScasMaintenanceEnv(obs_mode=obs_mode, episode_slots=50),
+                      skip_render_check=True)  # fmt: skip
         sb3_check_env(ScasMaintenanceEnv(obs_mode=obs_mode, episode_slots=50), warn=True)
 
 
-def test_registered_id_and_vector_entry_point() -> None:
-    assert ENV_ID in gym.registry
+def test_one_registered_version_and_the_retired_ids() -> None:
+    """v2 is the only version: ``ENV_ID`` with its vector entry point; v0, v1 and Epochs-v0
+    are retired (Gymnasium's ``DeprecatedEnv`` naming the current id); the decision-epoch
+    env's old name Epochs-v1 still makes it, with Gymnasium's warning naming v2; the old
+    module-level names are gone."""
+    assert ENV_ID == "scas_env/ScasMaintenance-v2"
+    assert scas_env.ENV_ID_EPOCHS == "scas_env/ScasMaintenanceEpochs-v2"
     spec = gym.spec(ENV_ID)
     assert spec.entry_point == "scas_env.env:ScasMaintenanceEnv"
+    assert spec.vector_entry_point == "scas_env.vector_env:make_vector_env"
+    assert spec.kwargs == {} and spec.max_episode_steps is None
     env = gym.make(ENV_ID, episode_slots=5)
-    assert env.unwrapped.scenario.episode_slots == 5
+    assert env.unwrapped.scenario == Scenario(episode_slots=5)
+    for old, new in (
+        ("scas_env/ScasMaintenance-v0", ENV_ID),
+        ("scas_env/ScasMaintenance-v1", ENV_ID),
+        ("scas_env/ScasMaintenanceEpochs-v0", scas_env.ENV_ID_EPOCHS),
+    ):
+        assert old not in gym.registry
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", DeprecationWarning)
+            with pytest.raises(DeprecatedEnv, match=f"Please use `{new}`"):
+                gym.make(old)
+    with pytest.warns(DeprecationWarning, match="upgrading to version `v2`"):
+        old_name = gym.make("scas_env/ScasMaintenanceEpochs-v1", episode_slots=30)
+    obs, _ = old_name.reset(seed=0)
+    new_obs, _ = gym.make(scas_env.ENV_ID_EPOCHS, episode_slots=30).reset(seed=0)
+    np.testing.assert_array_equal(obs, new_obs)
+    assert new_obs.shape == (21,)  # the per-flight env's 20 entries and flights_left
+    for gone in ("V2_KWARGS", "ENV_ID_V2", "ENV_ID_V1", "ENV_ID_EPOCHS_V2"):
+        assert not hasattr(scas_env, gone), gone
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # nothing a user runs warns about the version asked for
+        gym.make(ENV_ID).reset(seed=0)
+        gym.make(scas_env.ENV_ID_EPOCHS).reset(seed=0)
+
+
+def test_default_scenario_is_the_current_version() -> None:
+    s = Scenario()
+    assert (s.fidelity, s.obs_mode, s.initial_health, s.preflight) == (
+        "surrogate", "features+rul", "new", "on_demand")  # fmt: skip
+    assert (s.episode_slots, s.flight_update_flights, s.reference_tests) == (2000, 10, 4)
+    for removed in ("go_no_go", "flight_features", "degradation_draws", "damage_scatter",
+                    "go_no_go_false_alarm", "spring_effect_realign", "kernel_threads"):  # fmt: skip
+        assert not hasattr(s, removed)
+        with pytest.raises(ValueError, match=removed):
+            ScasMaintenanceEnv(**{removed: 1})
 
 
 def test_observation_names_units_and_bounds() -> None:
     env = ScasMaintenanceEnv()
-    assert len(env.obs_names) == env.observation_space.shape[0] == len(env.obs_units) == 18
-    assert env.obs_names[:7] == ("I2", "I6", "I7", "G1", "G3", "test_age", "no_go")
+    assert env.obs_names == OBS_NAMES and env.obs_units == OBS_UNITS
+    assert env.observation_space.shape == (20,) and env.observation_space.dtype == np.float32
+    assert np.all(np.isfinite(env.observation_space.low))
+    assert np.all(np.isfinite(env.observation_space.high))
     obs, _ = env.reset(seed=3)
+    assert env.observation_space.contains(obs)
     for a in _actions(300, 3):
-        obs, *_ = env.step(a)
-        assert env.observation_space.contains(obs)
-        assert obs.dtype == np.float32
+        obs, *_, info = env.step(a)
+        assert env.observation_space.contains(obs) and obs.dtype == np.float32
+        b = env.batch.a
+        assert obs[OBS_NAMES.index("test_age")] == b["test_age"][0]
+        assert obs[OBS_NAMES.index("downtime")] == info["downtime"] == env.downtime
+        assert obs[OBS_NAMES.index("spring_age")] == env.part_age["spring"]
+        assert obs[OBS_NAMES.index("seal_age")] == b["part_age"][0, 1]
+        assert obs[OBS_NAMES.index("no_go")] == b["no_go"][0]
+        for f, factor in (("I2", 1.0), ("I6", 1e3), ("I7", 1e3), ("I8", 1e6), ("I9", 1.0),
+                          ("G1", 1e6), ("G3", 1e3)):  # fmt: skip
+            lo, hi = (env.observation_space.low[OBS_NAMES.index(f)],
+                      env.observation_space.high[OBS_NAMES.index(f)])  # fmt: skip
+            assert obs[OBS_NAMES.index(f)] == np.float32(
+                np.clip(info["features"][f] * factor, lo, hi)
+            )
 
 
-@pytest.mark.parametrize("fidelity,n", [("surrogate", 300), ("physics", 6)])
+def test_other_observation_modes() -> None:
+    env = ScasMaintenanceEnv(obs_mode="features")
+    assert env.obs_names == OBS_NAMES[:9] + OBS_NAMES[15:]
+    env = ScasMaintenanceEnv(obs_mode="state")
+    assert env.obs_names[:7] == (
+        "crack_fraction", "wear_fraction", "spring_rul_true", "seal_rul_true", "spring_age",
+        "seal_age", "downtime")  # fmt: skip
+    obs, info = env.reset(seed=0)
+    assert obs[0] == np.float32(info["true_state"]["crack_fraction"])
+    assert obs[2] == np.float32(info["true_state"]["spring_rul_flights"])
+    env = ScasMaintenanceEnv(obs_mode="dict")
+    obs, _ = env.reset(seed=0)
+    assert set(obs) == {"features", "filter", "monitor", "state"}
+    assert env.observation_space.contains(obs)
+
+
+# ----------------------------------------------------------------------------- determinism
+@pytest.mark.parametrize(("fidelity", "n"), [("surrogate", 300), ("physics", 6)])
 def test_same_seed_same_actions_same_episode_bit_for_bit(fidelity: str, n: int) -> None:
-    actions = _actions(n, 1)
-    if fidelity == "physics":
-        actions = [1, 0, 2, 1, 3, 1]
-    a = _rollout(ScasMaintenanceEnv(fidelity=fidelity), actions, seed=7)
-    b = _rollout(ScasMaintenanceEnv(fidelity=fidelity), actions, seed=7)
-    c = _rollout(ScasMaintenanceEnv(fidelity=fidelity), actions, seed=8)
-    for x, y in zip(a, b, strict=True):
-        np.testing.assert_array_equal(x[0], y[0])
-        assert x[1:] == y[1:]
-    assert any(not np.array_equal(x[0], y[0]) for x, y in zip(a, c, strict=True))
+    actions = _actions(n, 1) if fidelity == "surrogate" else [1, 0, 2, 1, 3, 1]
+    kw = {"fidelity": fidelity, "window_library": 2}
+    a = _rollout(ScasMaintenanceEnv(**kw), actions, seed=7)
+    b = _rollout(ScasMaintenanceEnv(**kw), actions, seed=7)
+    c = _rollout(ScasMaintenanceEnv(**kw), actions, seed=8)
+    assert a == b
+    assert any(x[0] != y[0] for x, y in zip(a, c, strict=True))
 
 
-def test_pickle_round_trip_continues_identically() -> None:
-    env = ScasMaintenanceEnv()
+def test_reset_without_seed_continues_the_generator_and_a_reseed_repeats() -> None:
+    env = ScasMaintenanceEnv(episode_slots=40)
+    first = _rollout(env, [0] * 40, seed=5)
+    env.reset()  # a new episode from the same np_random: a new unit
+    second = _rollout(env, [0] * 40, seed=None)
+    again = _rollout(ScasMaintenanceEnv(episode_slots=40), [0] * 40, seed=5)
+    assert first == again and first[1:] != second
+
+
+@pytest.mark.parametrize("how", ["pickle", "deepcopy"])
+@pytest.mark.parametrize("fidelity", ["surrogate", "physics"])
+def test_copies_continue_identically(how: str, fidelity: str) -> None:
+    """A copy mid-episode (after tests, replacements and a learning update) continues the
+    episode bit for bit, its streams its own: stepping the copy leaves the original alone."""
+    n_before, n_after = (60, 300) if fidelity == "surrogate" else (3, 4)
+    env = ScasMaintenanceEnv(fidelity=fidelity, window_library=2)
     env.reset(seed=11)
-    for a in _actions(50, 2):
+    for a in ([2, 1, 0, *_actions(n_before, 2)])[:n_before]:
         env.step(a)
-    clone = pickle.loads(pickle.dumps(env))
-    for a in _actions(100, 4):
-        o1, r1, *_ = env.step(a)
-        o2, r2, *_ = clone.step(a)
-        np.testing.assert_array_equal(o1, o2)
-        assert r1 == r2
+    clone = pickle.loads(pickle.dumps(env)) if how == "pickle" else copy.deepcopy(env)
+    actions = _actions(n_after, 4)
+    assert _rollout(clone, actions, None) == _rollout(env, actions, None)
+    assert clone.batch.a is not env.batch.a
+    assert clone.batch.rngs[0]["measure"] is not env.batch.rngs[0]["measure"]
 
 
+@pytest.mark.parametrize("how", ["pickle", "deepcopy"])
+def test_copies_hand_the_kernels_the_types_they_were_compiled_for(how: str) -> None:
+    """Every argument group of the kernels has the same numba type in a copy (pickle gives
+    arrays back writeable: a read-only table would then be another type, and every kernel
+    would compile a second time, about a minute, on the copy's first step)."""
+    import numba
+
+    env = ScasMaintenanceEnv()
+    env.reset(seed=1)
+    clone = pickle.loads(pickle.dumps(env)) if how == "pickle" else copy.deepcopy(env)
+    setup_fields = ("world", "filters", "detector", "go_limits", "learn_cols")
+    for name in setup_fields:
+        assert numba.typeof(getattr(clone.setup, name)) == numba.typeof(getattr(env.setup, name)), (
+            name
+        )
+    batch_groups = ("_world", "_monitor", "_memory", "_books", "_handles", "_out", "tables",
+                    "bank", "_prices")  # fmt: skip
+    for name in batch_groups:
+        assert numba.typeof(getattr(clone.batch, name)) == numba.typeof(getattr(env.batch, name)), (
+            name
+        )
+
+
+# ----------------------------------------------------------------------------- bad input
 @pytest.mark.parametrize(
-    "action", [4, -1, 1.5, "fly", None, np.int64(4), np.int64(-1), np.array([1]), np.float64(1)]
-)
+    "action",
+    [4, -1, 2.5, 1.0, "3", "fly", None, True, False, np.bool_(True), np.timedelta64(2),
+     np.int64(4), np.int64(-1), np.array([1]), np.array(True), np.float64(1), [1]],
+    ids=repr,
+)  # fmt: skip
 def test_bad_actions_raise(action) -> None:
     env = ScasMaintenanceEnv()
     env.reset(seed=0)
     with pytest.raises(ValueError, match="action"):
         env.step(action)
+    assert env.slot == 0  # nothing happened
 
 
 @pytest.mark.parametrize(
-    "action", [1, np.int64(1), np.int32(1), np.uint8(1), np.uint64(1), np.array(1)]
+    "action", [1, np.int64(1), np.int32(1), np.uint8(1), np.uint64(1), np.array(1)], ids=repr
 )
 def test_integer_actions_of_any_kind_are_accepted(action) -> None:
     env = ScasMaintenanceEnv()
@@ -118,7 +246,9 @@ def test_step_before_reset_and_bad_seeds_raise() -> None:
     env = ScasMaintenanceEnv()
     with pytest.raises(RuntimeError, match="reset"):
         env.step(0)
-    for seed in (-1, 1.5, "0"):
+    with pytest.raises(RuntimeError, match="reset"):
+        env.part_lives()
+    for seed in (-1, 1.5, "0", True):
         with pytest.raises(ValueError, match="seed"):
             env.reset(seed=seed)
 
@@ -152,7 +282,7 @@ def test_bad_configs_raise_clear_errors() -> None:
 
     with pytest.raises(ValueError, match=r"seal_friction_n = 0.0 N is outside .* \(0, "):
         ActuatorParams(seal_friction_n=0.0)  # no friction, no Archard wear: refused up front
-    for name in ("calibration", "surrogate"):
+    for name in ("calibration", "surrogate", "params", "cost_model", "scenario"):
         with pytest.raises(ValueError, match=name):
             ScasMaintenanceEnv(**{name: "x"})
     with pytest.raises(ValueError, match="unknown key"):
@@ -163,20 +293,70 @@ def test_bad_configs_raise_clear_errors() -> None:
         ScasMaintenanceEnv(episode_slots=0)
     with pytest.raises(ValueError, match="not both"):
         ScasMaintenanceEnv(scenario=Scenario(), episode_slots=3)
-    with pytest.raises(ValueError, match="cost_model"):
-        ScasMaintenanceEnv(cost_model={"test_usd": 1.0})
+    with pytest.raises(ValueError, match="window_library"):
+        ScasMaintenanceEnv(fidelity="physics", window_library=-1)
+    with pytest.raises(ValueError, match="at least one of crack_active, wear_active"):
+        ScasMaintenanceEnv(crack_active=0, wear_active=0)
+    for mode in (1, "rgb", ["ansi"]):
+        with pytest.raises(ValueError, match=r"render_mode = .* must be None or one of"):
+            ScasMaintenanceEnv(render_mode=mode)
 
 
+def test_ansi_render_shows_the_state() -> None:
+    env = ScasMaintenanceEnv(render_mode="ansi")
+    env.reset(seed=0)
+    env.step(0)
+    text = env.render()
+    assert text.startswith("slot 1: crack ") and "availability 1.000" in text
+    assert ScasMaintenanceEnv().render() is None
+
+
+# ----------------------------------------------------------------------------- mechanics
 def test_reward_accounting_matches_cost_model() -> None:
-    costs = CostModel(test_usd=123.0, flight_value_usd=1000.0)
+    costs = CostModel(test_usd=123.0, flight_value_usd=1000.0, spring_downtime_slots=2)
     env = ScasMaintenanceEnv(cost_model=costs)
     env.reset(seed=0)
     _, r, *_, info = env.step(1)
-    assert info["reward_terms"]["test"] == -123.0
-    assert r == pytest.approx(sum(info["reward_terms"].values()))
+    assert info["reward_terms"] == {"flight": 1000.0, "test": -123.0, "no_go": 0.0,
+                                    "replacement": 0.0, "failure": 0.0}  # fmt: skip
+    assert r == 1000.0 - 123.0
     _, r, *_, info = env.step(2)  # spring change: the slot on the ground, parts cost
-    assert r == -costs.spring_replacement_usd
-    assert info["replacements"]["spring"] == 1
+    assert r == -costs.spring_replacement_usd and info["replacements"]["spring"] == 1
+    assert info["downtime"] == 2 and info["flights"] == 1
+    for expected in (1, 0):  # the extra downtime: nothing flies, nothing is paid
+        _, r, *_, info = env.step(1)
+        assert r == 0.0 and info["downtime"] == expected and info["tests"] == 1
+    _, r, *_, info = env.step(0)
+    assert r == 1000.0 and info["flights"] == 2
+    assert info["cost_usd"] == 123.0 + costs.spring_replacement_usd
+    assert info["revenue_usd"] == 2000.0 and info["availability"] == 2 / 5
+
+
+def test_running_totals_are_the_sums_of_the_steps() -> None:
+    env = ScasMaintenanceEnv(initial_health="random", episode_slots=600)
+    env.reset(seed=4)
+    total = {"reward": 0.0, "cost": 0.0, "revenue": 0.0}
+    for a in _actions(600, 8):
+        _, r, _, trunc, info = env.step(a)
+        terms = info["reward_terms"]
+        assert r == sum(terms.values())
+        total["reward"] += r
+        total["revenue"] += terms["flight"]
+        total["cost"] -= r - terms["flight"]
+    assert trunc and info["slot"] == 600
+    assert info["revenue_usd"] == pytest.approx(total["revenue"], rel=1e-12)
+    assert info["cost_usd"] == pytest.approx(total["cost"], rel=1e-12)
+    assert info["revenue_usd"] - info["cost_usd"] == pytest.approx(total["reward"], rel=1e-12)
+    assert info["availability"] == info["flights"] / 600
+
+
+def _nested_keys(d: dict, prefix: str = "") -> set[str]:
+    out = set()
+    for k, v in d.items():
+        out.add(prefix + k)
+        if isinstance(v, dict):
+            out |= _nested_keys(v, prefix + k + ".")
+    return out
 
 
 def test_wasted_life_is_the_true_rul_thrown_away_and_info_keeps_its_size() -> None:
@@ -204,15 +384,6 @@ def test_wasted_life_is_the_true_rul_thrown_away_and_info_keeps_its_size() -> No
         assert info["wasted_life_sum_flights"][part] == pytest.approx(sum(values), rel=1e-12)
 
 
-def _nested_keys(d: dict, prefix: str = "") -> set[str]:
-    out = set()
-    for k, v in d.items():
-        out.add(prefix + k)
-        if isinstance(v, dict):
-            out |= _nested_keys(v, prefix + k + ".")
-    return out
-
-
 def test_never_maintained_unit_fails_and_failed_part_is_renewed() -> None:
     env = ScasMaintenanceEnv(episode_slots=3000)
     env.reset(seed=5)
@@ -225,47 +396,71 @@ def test_never_maintained_unit_fails_and_failed_part_is_renewed() -> None:
             # the failed part was replaced: at least one part is new again
             assert state["crack_fraction"] < 0.2 or state["wear_fraction"] < 0.01
             assert r == -env.costs.failure_total_usd
+            assert info["downtime"] == env.costs.failure_downtime_slots
     assert failures >= 2
     assert sum(info["failures"].values()) == failures
+    assert info["replacements"] == info["failures"]  # failed parts only: none preventive
     assert info["availability"] < 1.0
 
 
-def test_replacement_resets_hidden_state_and_filter() -> None:
+def test_replacement_renews_the_part_and_its_filter() -> None:
     env = ScasMaintenanceEnv()
     env.reset(seed=9)
+    a, cal = env.batch.a, env.calibration
     for _ in range(600):
         env.step(1)
-    worn = env.world.wear_m
-    assert worn > 0.3 * env.calibration.seal_critical_wear_m
+    assert a["wear"][0] > 0.3 * cal.seal_critical_wear_m
+    assert a["x"][0, 1] @ a["w"][0, 1] > 0.2 * cal.seal_critical_wear_m
     env.step(3)
-    assert env.world.wear_m == 0.0
-    assert env.monitor.seal_filter.estimate().x_mean == 0.0
-    assert env.part_age["seal"] == 0
-    crack_before = env.world.crack_m
+    assert a["wear"][0] == 0.0 and env.part_age["seal"] == 0
+    assert np.all(a["x"][0, 1] == 0.0)
+    crack_before = a["crack"][0]
     env.step(2)
-    assert env.world.crack_m < crack_before
-    est = env.monitor.spring_filter.estimate()
-    assert est.x_mean == pytest.approx(env.params.spring.initial_crack_m, rel=0.2)
+    assert a["crack"][0] < crack_before and env.part_age["spring"] == 0
+    mean = a["x"][0, 0] @ a["w"][0, 0]
+    assert mean == pytest.approx(env.params.spring.initial_crack_m, rel=0.2)
 
 
 def test_filter_tracks_seal_wear_under_regular_tests() -> None:
-    # testing every 5 flights, after the first 300 flights of a seal set: the filter's mean
-    # follows the true wear (units 0-3; per-unit median error measured 3-9% of critical)
+    """Testing every 5 flights, after the first 300 flights of a seal set: the seal
+    filter's mean follows the true wear (units 0-3; median error a few % of critical)."""
     medians = []
     for seed in range(4):
         env = ScasMaintenanceEnv()
         env.reset(seed=seed)
+        a, crit = env.batch.a, env.calibration.seal_critical_wear_m
         truth, est = [], []
         for k in range(900):
             env.step(1 if k % 5 == 0 else 0)
-            if env.part_age["seal"] > 300 and env.world.wear_fraction < 0.95:
-                truth.append(env.world.wear_m)
-                est.append(env.monitor.seal_filter.estimate().x_mean)
+            if env.part_age["seal"] > 300 and a["wear"][0] < 0.95 * crit:
+                truth.append(float(a["wear"][0]))
+                est.append(float(a["x"][0, 1] @ a["w"][0, 1]))
         truth, est = np.array(truth), np.array(est)
         assert truth.size > 100
         assert np.corrcoef(truth, est)[0, 1] > 0.95
-        medians.append(np.median(np.abs(est - truth)) / env.calibration.seal_critical_wear_m)
+        medians.append(np.median(np.abs(est - truth)) / crit)
     assert np.mean(medians) < 0.1
+
+
+def test_failed_go_no_go_grounds_the_slot_and_shows_in_the_observation() -> None:
+    k = OBS_NAMES.index("no_go")
+    for seed in range(20):  # a part at 97 % of critical fails the test with p ~ 0.85
+        env = ScasMaintenanceEnv()
+        env.reset(seed=seed)
+        env.batch.a["wear"][0] = 0.97 * env.calibration.seal_critical_wear_m
+        obs, r, _, _, info = env.step(1)
+        if info["no_go"] == 1:
+            break
+    assert obs[k] == 1.0 and info["flights"] == 0
+    assert r == -(env.costs.test_usd + env.costs.no_go_inspection_usd)
+    obs, r, *_, info = env.step(0)  # held: no untested flight after a no-go
+    assert obs[k] == 1.0 and r == 0.0 and info["flights"] == 0
+    obs, *_ = env.step(3)  # new seals: the failed test has been answered
+    assert obs[k] == 0.0
+    env.step(0)  # the reseal's extra downtime slot
+    obs, r, *_ = env.step(1)
+    assert obs[k] == 0.0
+    assert r == env.costs.flight_value_usd - env.costs.test_usd
 
 
 @pytest.mark.slow
@@ -287,39 +482,32 @@ def test_long_surrogate_run_stays_finite_with_bounded_memory() -> None:
     assert grown < 20e6
 
 
-def test_failed_go_no_go_grounds_the_slot_and_shows_in_the_observation() -> None:
-    env = ScasMaintenanceEnv()
-    env.reset(seed=2)
-    k = env.obs_names.index("no_go")
-    env.world.wear_m = 0.97 * env.calibration.seal_critical_wear_m  # G3 far above its band
-    obs, r, _, _, info = env.step(1)
-    assert obs[k] == 1.0 and info["no_go"] == 1 and info["flights"] == 0
-    assert r == -(env.costs.test_usd + env.costs.no_go_inspection_usd)
-    obs, *_ = env.step(3)  # new seals: the failed test has been answered
-    assert obs[k] == 0.0
-    env.step(0)  # the reseal's extra downtime slot
-    obs, r, *_ = env.step(1)
-    assert obs[k] == 0.0
-    assert r == env.costs.flight_value_usd - env.costs.test_usd
-
-
 def test_physics_window_library_reuses_windows_and_their_baselines() -> None:
+    from scas_env.actuator.sensing import draw_window
+
     env = ScasMaintenanceEnv(fidelity="physics", window_library=2)
     env.reset(seed=4)
     for _ in range(5):
         env.step(0)
-    windows = env.world._windows
-    assert 1 <= len(windows) <= 2  # five flights, at most two distinct windows
-    # a library window is what draw_window gives from its own seed
-    from scas_env.actuator.sensing import draw_window
-
-    k, window = next(iter(windows.items()))
+    row = env.batch.physics[0]
+    assert 1 <= len(row.windows) <= 2  # five flights, at most two distinct windows
+    k, window = next(iter(row.windows.items()))
     again = draw_window(
         env.params,
-        np.random.default_rng((env.world._library_seed, k)),
+        np.random.default_rng((row.library_seed, k)),
         env.params.mission.flight_window_s,
     )
     np.testing.assert_array_equal(window.profile.scas_command_m, again.profile.scas_command_m)
     np.testing.assert_array_equal(window.baseline.current_a, again.baseline.current_a)
-    with pytest.raises(ValueError, match="window_library"):
-        ScasMaintenanceEnv(fidelity="physics", window_library=-1)
+
+
+def test_physics_episode_flies_tests_and_renews_parts() -> None:
+    """The physics fidelity runs the current version: measured features feed the same
+    filters and books (tests, a no-go-free flight, replacements)."""
+    env = ScasMaintenanceEnv(fidelity="physics", window_library=2)
+    obs, _ = env.reset(seed=1)
+    for action in (1, 0, 3, 0, 0, 2):
+        obs, r, _, _, info = env.step(action)
+        assert env.observation_space.contains(obs) and np.isfinite(r)
+    assert info["tests"] == 1 and info["replacements"] == {"spring": 1, "seal": 1}
+    assert info["flights"] >= 3 and np.all(np.isfinite(list(info["features"].values())))

@@ -1,14 +1,30 @@
-"""The behaviour fingerprint: reproducible, and moved by any change of a seeded number."""
+"""The behaviour fingerprint (``experiments/fingerprint.py``): reproducible, moved by any
+change of a seeded number, and equal to the committed digests of the current version
+(``experiments/fingerprint.json``): one cheap part in the default suite, all in the slow one."""
 
 from __future__ import annotations
 
 import hashlib
+import json
+import subprocess
+import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
 
-from experiments.fingerprint import benchmark_digest, episodes_digest, feed, fingerprint
-from policies.benchmark.run import run_benchmark
+from experiments.fingerprint import (
+    COMMITTED,
+    PARTS,
+    benchmark_digest,
+    episodes_digest,
+    feed,
+    fingerprint,
+)
+
+ROOT = Path(__file__).resolve().parents[1]
+#: cheap parts (a few seconds) checked against the committed digests in the default suite
+CHEAP = ("lives", "every_flight")
 
 
 def _digest(obj: object) -> str:
@@ -25,25 +41,42 @@ def test_feed_sees_the_last_bit_and_ignores_key_order() -> None:
     assert _digest(x) != _digest(x.astype(np.float32))
     assert _digest({"a": 1, "b": 2.0}) == _digest({"b": 2.0, "a": 1})
     assert _digest(1.0) == _digest(np.float64(1.0)) != _digest(np.nextafter(1.0, 2.0))
+    assert _digest(np.array([1, None], dtype=object)) != _digest(np.array([1, 2], dtype=object))
 
 
 def test_episode_digest_is_reproducible_and_seed_sensitive() -> None:
     kw = {"slots": 40}
-    assert episodes_digest("features+rul", seeds=(0,), **kw) == episodes_digest(
-        "features+rul", seeds=(0,), **kw
-    )
-    assert episodes_digest("features+rul", seeds=(0,), **kw) != episodes_digest(
-        "features+rul", seeds=(1,), **kw
-    )
+    first = episodes_digest("features+rul", seeds=(0,), **kw)
+    assert first == episodes_digest("features+rul", seeds=(0,), **kw)
+    assert first != episodes_digest("features+rul", seeds=(1,), **kw)
+    assert first != episodes_digest("features+rul", seeds=(0,), filter_noise_scale=1.01, **kw)
 
 
-def test_benchmark_part_digests_the_rows_and_events_and_moves_with_the_seed() -> None:
+def test_benchmark_part_is_reproducible_and_unknown_parts_raise() -> None:
     with pytest.raises(ValueError, match="unknown parts"):
-        fingerprint(["benchmark", "nope"])
-    a = benchmark_digest(episodes=1, slots=30)
-    result = run_benchmark(episodes=1, slots=30, seed=11, n_workers=1)
-    h = hashlib.sha256()
-    feed(h, result.rows)
-    feed(h, result.events)
-    assert a == h.hexdigest() == benchmark_digest(episodes=1, slots=30)
-    assert a != benchmark_digest(episodes=1, slots=30, seed=12)
+        fingerprint(["no such part"])
+    assert benchmark_digest(episodes=1, slots=30) == benchmark_digest(episodes=1, slots=30)
+
+
+def _committed() -> dict[str, str]:
+    assert COMMITTED == ROOT / "experiments" / "fingerprint.json"
+    digests = json.loads(COMMITTED.read_text())
+    assert set(digests) == set(PARTS), "the committed digests cover every part"
+    return digests
+
+
+@pytest.mark.parametrize("part", CHEAP)
+def test_cheap_parts_equal_the_committed_digests(part: str) -> None:
+    assert fingerprint([part]) == {part: _committed()[part]}
+
+
+@pytest.mark.slow
+def test_every_part_equals_the_committed_digests() -> None:
+    """``python -m experiments.fingerprint --check experiments/fingerprint.json``: single,
+    vector and decision-epoch episodes, physics, campaign and benchmark rows unchanged."""
+    _committed()
+    run = subprocess.run(
+        [sys.executable, "-m", "experiments.fingerprint", "--check", str(COMMITTED)],
+        cwd=ROOT, capture_output=True, text=True, timeout=3600,
+    )  # fmt: skip
+    assert run.returncode == 0, run.stdout + run.stderr

@@ -166,6 +166,18 @@ def test_the_manifest_lists_every_shipped_data_file_with_its_hash() -> None:
     assert "policies/data/maskable_ppo_epochs_v2.zip" in checked
 
 
+def test_file_handling_lives_in_utils_not_in_the_model() -> None:
+    """``atomic_file``, ``shipped_files`` and ``table_checks`` moved out of the actuator model
+    package into ``scas_env.utils``; the model's loaders use them from there."""
+    import importlib
+
+    for name in ("atomic_file", "shipped_files", "table_checks"):
+        assert importlib.import_module(f"scas_env.utils.{name}")
+        assert not (ROOT / "scas_env" / "actuator" / f"{name}.py").exists(), name
+    assert shipped_files.package_root() == ROOT
+    assert shipped_files.manifest_path() == ROOT / "scas_env" / "actuator" / "data" / MANIFEST_NAME
+
+
 def test_pyproject_ships_the_manifest() -> None:
     """setuptools' package-data must include the manifest next to the tables it checks."""
     tomllib = pytest.importorskip("tomllib")  # Python >= 3.11

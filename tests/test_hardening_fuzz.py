@@ -1,6 +1,8 @@
 """Fuzz: >= 1,000 generated cases across the prognostics entry points, the configuration
-classes and the shipped data tables; each must end in a clear error or a valid result,
-never a crash, a NaN or a silently accepted bad input.
+classes, the shipped data tables and the environments (the single env and the decision-epoch
+env built from generated keywords, reset with generated seeds, stepped with generated
+actions); each must end in a clear error or a valid result, never a crash, a NaN or a
+silently accepted bad input.
 
 Cases come from the same generators as the property tests (``tests/prognostics_cases.py``,
 ``tests/config_cases.py``) plus random corruptions of the calibration and surrogate tables;
@@ -16,13 +18,17 @@ from functools import partial
 from typing import Any
 
 import numpy as np
+import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from scas_env.actuator.calibration import Calibration, default_calibration
 from scas_env.actuator.surrogate import SurrogateModel, default_surrogate
+from scas_env.core.scenario import Scenario
+from scas_env.decision_epochs import DecisionEpochs
+from scas_env.env import ScasMaintenanceEnv
 from tests.config_cases import CLASSES, check_from_dict, config_dict, odd_values
-from tests.hardening_checks import all_finite
+from tests.hardening_checks import CLEAR_ERRORS, Raised, all_finite, outcome
 from tests.prognostics_cases import CASES
 
 N_CASES = 1200
@@ -85,6 +91,75 @@ def run_surrogate(case: tuple[str, tuple[int, ...], float]) -> None:
     for grid in (model.crack_grid, model.wear_grid):
         assert grid[0] == 0 and grid[-1] == 1 and np.all(np.diff(grid) > 0)
     assert all_finite(model.tables_at(0.3, 0.7))
+
+
+@st.composite
+def env_case(draw) -> tuple[dict[str, Any], Any, list[Any]]:
+    """Env keywords (Scenario fields in and out of range, unknown keys, render modes), a
+    seed and a few actions, each valid or odd."""
+    fields = draw(config_dict(Scenario)) if draw(st.booleans()) else {}
+    fields.pop("fidelity", None)  # the physics fidelity is slow: its steps are tested elsewhere
+    if draw(st.integers(0, 3)) == 0:
+        fields["render_mode"] = draw(st.one_of(st.sampled_from([None, "ansi"]), odd_values))
+    seed = draw(st.one_of(st.integers(0, 2**32), st.none(), odd_values))
+    actions: list[Any] = draw(st.lists(st.integers(0, 3), min_size=1, max_size=6))
+    if draw(st.booleans()):  # one odd action somewhere among valid ones
+        actions.insert(draw(st.integers(0, len(actions))), draw(odd_values))
+    return fields, seed, actions
+
+
+def _clear(err: BaseException, *words: str) -> None:
+    assert any(w in str(err) for w in words), f"unclear error {err!r} (expected one of {words})"
+
+
+def run_env(case: tuple[dict[str, Any], Any, list[Any]], epochs: bool, counts: Counter) -> None:
+    """Build, reset and step an env: each call a clear error naming what was wrong, or an
+    observation in the observation space and a finite reward."""
+    fields, seed, actions = case
+    made = outcome(ScasMaintenanceEnv, **fields)
+    if isinstance(made, Raised):
+        _clear(made.err, "Scenario", "render_mode", *map(str, fields))
+        counts["refused config"] += 1
+        return
+    env = DecisionEpochs(made, ks=(1, 3)) if epochs else made
+    reset = outcome(env.reset, seed=seed, allow_nan=True)
+    if isinstance(reset, Raised):
+        _clear(reset.err, "seed")
+        counts["refused seed"] += 1
+        return
+    assert reset[0] in env.observation_space
+    for action in actions:
+        if epochs and isinstance(action, int) and not isinstance(action, bool):
+            action = action * 2  # maintenance action, k = 1
+        try:
+            obs, reward, terminated, truncated, _ = env.step(action)
+        except CLEAR_ERRORS as err:
+            _clear(err, "action", "particle-filter update failed")
+            counts["refused action"] += 1
+            continue
+        assert obs in env.observation_space and math.isfinite(reward), (obs, reward)
+        assert terminated is False and isinstance(truncated, bool)
+        counts["step"] += 1
+        if truncated:
+            break
+
+
+@pytest.mark.parametrize("epochs", [False, True], ids=["ScasMaintenanceEnv", "DecisionEpochs"])
+def test_fuzz_envs_clear_error_or_valid_result(epochs: bool) -> None:
+    """Generated keywords, seeds and actions for the single env and the decision-epoch env
+    (derandomised): configurations, seeds and actions refused with a clear error naming
+    them, or valid observations and finite rewards."""
+    counts: Counter[str] = Counter()
+
+    @settings(max_examples=60, deadline=None, derandomize=True, database=None,
+              suppress_health_check=list(HealthCheck))  # fmt: skip
+    @given(env_case())
+    def check(case: tuple[dict[str, Any], Any, list[Any]]) -> None:
+        run_env(case, epochs, counts)
+
+    check()
+    assert counts["step"] >= 50 and counts["refused action"] >= 5, counts
+    assert counts["refused config"] >= 5 and counts["refused seed"] >= 3, counts
 
 
 ENTRY_POINTS: list[tuple[str, st.SearchStrategy, Any]] = [

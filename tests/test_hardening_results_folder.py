@@ -7,6 +7,7 @@ import hashlib
 import json
 import os
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -71,7 +72,10 @@ def test_an_existing_folder_is_refused_before_the_block_runs(tmp_path: Path) -> 
     (dest / "old.png").write_bytes(b"old")
     ran = []
     with (
-        pytest.raises(ResultsFolderError, match=rf"{dest} already exists; pass overwrite=True"),
+        pytest.raises(
+            ResultsFolderError,
+            match=rf"{dest} already exists and is not empty; pass overwrite=True",
+        ),
         results_folder(dest, config={}, seeds=[]),
     ):
         ran.append(True)
@@ -111,7 +115,7 @@ def test_check_destination_validates_before_any_work(tmp_path: Path) -> None:
     assert not (tmp_path / "a").exists()  # a check only
     blocker = tmp_path / "file.txt"
     blocker.write_text("x")
-    with pytest.raises(ResultsFolderError, match=rf"{blocker} exists and is not a folder"):
+    with pytest.raises(ResultsFolderError, match=rf"{blocker} is a file, not a folder"):
         check_destination(blocker / "sub")
     with pytest.raises(ResultsFolderError, match="exists and is not a folder"):
         check_destination(blocker, overwrite=True)
@@ -172,3 +176,120 @@ def test_timestamped_names_a_fresh_sibling() -> None:
 def test_an_unwritable_parent_is_refused_even_for_root() -> None:
     with pytest.raises(ResultsFolderError, match=r"cannot create results folder /proc/bench"):
         check_destination("/proc/bench")
+
+
+# --- one rule for every --out folder (issue 27) ------------------------------------------
+
+#: the console commands (pyproject.toml) whose --out is a results folder
+RESULTS_COMMANDS = (
+    "scas-benchmark",
+    "scas-tune",
+    "scas-value",
+    "scas-reproduce",
+    "scas-simulate",
+    "scas-figures",
+    "scas-export-dataset",
+)
+
+
+def _main(command: str) -> Any:
+    """The function behind a console command, from pyproject.toml's [project.scripts]."""
+    import importlib
+
+    from scas_env.actuator.config import tomllib
+
+    root = Path(__file__).resolve().parents[1]
+    scripts = tomllib.loads((root / "pyproject.toml").read_text())["project"]["scripts"]
+    module, name = scripts[command].split(":")
+    return getattr(importlib.import_module(module), name)
+
+
+@pytest.mark.parametrize("name", ["run.json", "r.CSV", "table.md", "data.parquet", "a.b.yaml"])
+def test_a_folder_named_like_a_file_is_refused(tmp_path: Path, name: str) -> None:
+    dest = tmp_path / "results" / name
+    with pytest.raises(ResultsFolderError) as err:
+        check_destination(dest)
+    assert str(err.value) == (
+        f"the results destination names a folder (the results files go inside it), not a "
+        f"{dest.suffix} file: {dest}; choose a name without a file suffix, "
+        f"e.g. {dest.with_suffix('')}"
+    )
+    dest.mkdir(parents=True)  # an existing folder of that name too: the name is the mistake
+    with pytest.raises(ResultsFolderError, match="names a folder"):
+        check_destination(dest, overwrite=True)
+    for fine in ("run-2026.01", "benchmark_v0.2", "out"):  # dots that are not file suffixes
+        assert check_destination(tmp_path / fine) == tmp_path / fine
+
+
+def test_an_empty_folder_is_accepted_and_filled(tmp_path: Path) -> None:
+    dest = tmp_path / "bench"
+    dest.mkdir()
+    assert check_destination(dest) == dest
+    with results_folder(dest, config={}, seeds=0) as tmp:
+        (tmp / "a.csv").write_text("x\n")
+    assert sorted(p.name for p in dest.iterdir()) == ["a.csv", MANIFEST]
+    assert _siblings(dest) == ["bench"]
+
+
+def test_a_non_empty_folder_is_a_file_exists_error_too(tmp_path: Path) -> None:
+    from scas_env.utils.results_folder import ResultsFolderExistsError
+
+    (tmp_path / "d").mkdir()
+    (tmp_path / "d" / "x").write_text("")
+    with pytest.raises(ResultsFolderExistsError) as err:
+        check_destination(tmp_path / "d", option="--out")
+    assert isinstance(err.value, FileExistsError) and isinstance(err.value, ValueError)
+    assert str(err.value).startswith(
+        f"--out {tmp_path / 'd'} already exists and is not empty; pass --overwrite"
+    )
+
+
+@pytest.mark.parametrize("command", RESULTS_COMMANDS)
+def test_every_results_command_refuses_a_file_name_for_out(
+    command: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``scas-tune --out results/tuning_quick.json`` made a folder named ``.json``."""
+    out = tmp_path / "results" / "tuning_quick.json"
+    with pytest.raises(SystemExit) as exit_:
+        _main(command)(["--out", str(out)])
+    err = " ".join(capsys.readouterr().err.split())
+    assert exit_.value.code == 2, err
+    assert (
+        f"error: --out names a folder (the results files go inside it), not a .json file: "
+        f"{out}; choose a name without a file suffix, e.g. --out {out.with_suffix('')}"
+    ) in err
+    assert "Traceback" not in err and not (tmp_path / "results").exists()
+
+
+def test_the_commands_check_accepts_an_empty_folder(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """The check every results command runs first (``check_out_dir``, through which each
+    of them refuses ``--out x.json`` above) passes on an empty folder (``scas-export-dataset``
+    refused one); a non-empty one needs --overwrite."""
+    import argparse
+
+    from scas_env.cli_args import check_out_dir
+
+    parser = argparse.ArgumentParser(prog="scas-any")
+    (tmp_path / "empty").mkdir()
+    assert check_out_dir(parser, tmp_path / "empty", False) == tmp_path / "empty"
+    (tmp_path / "empty" / "x.csv").write_text("")
+    with pytest.raises(SystemExit):
+        check_out_dir(parser, tmp_path / "empty", False)
+    assert "already exists and is not empty; pass --overwrite" in capsys.readouterr().err
+    assert check_out_dir(parser, tmp_path / "empty", True) == tmp_path / "empty"
+
+
+def test_export_dataset_writes_into_an_empty_folder(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    export_dataset_main = _main("scas-export-dataset")
+    out = tmp_path / "rtf"
+    out.mkdir()
+    argv = ["--units", "2", "--max-slots", "10", "--workers", "1", "--formats", "csv"]
+    assert export_dataset_main([*argv, "--out", str(out), "-q"]) == 0
+    assert sorted(p.name for p in out.iterdir()) == [
+        "datacard.json", "datacard.md", "flights.csv", "units.csv"
+    ]  # fmt: skip
+    assert _siblings(out) == ["rtf"]

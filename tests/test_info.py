@@ -1,4 +1,5 @@
-"""The step info's fast deep copy (scas_env.info)."""
+"""The step info (``scas_env.core.info``): one implementation for one actuator and for a
+batch, a fast exact deep copy."""
 
 from __future__ import annotations
 
@@ -7,8 +8,9 @@ import pickle
 
 import numpy as np
 
+from scas_env.core.info import StepInfo, build_info
 from scas_env.env import ScasMaintenanceEnv
-from scas_env.info import StepInfo
+from scas_env.vector_env import ScasMaintenanceVectorEnv
 
 
 def _containers(obj: object) -> list[int]:
@@ -44,3 +46,31 @@ def test_env_info_deepcopies_like_a_plain_dict_and_pickles() -> None:
 
 def _as_plain(d: dict) -> dict:
     return {k: _as_plain(v) if isinstance(v, dict) else v for k, v in d.items()}
+
+
+def _leaves(d: dict, prefix: str = "") -> dict:
+    out = {}
+    for k, v in d.items():
+        out.update(_leaves(v, f"{prefix}{k}.") if isinstance(v, dict) else {prefix + k: v})
+    return out
+
+
+def test_one_row_and_all_rows_are_the_same_info() -> None:
+    """``build_info(batch, e)`` (Python scalars, the single env's) equals entry ``e`` of
+    ``build_info(batch)`` (arrays, the vector env's), key for key, after tests, failures,
+    replacements and downtime; the scalars are plain Python numbers."""
+    venv = ScasMaintenanceVectorEnv(3, initial_health="random")
+    venv.reset(seed=1)
+    rng = np.random.default_rng(0)
+    for _ in range(500):
+        venv.step(rng.choice(4, size=3, p=[0.93, 0.06, 0.005, 0.005]))
+        every = _leaves(build_info(venv.batch))
+        for e in range(3):
+            one = _leaves(build_info(venv.batch, e))
+            assert one.keys() == every.keys()
+            for key, value in one.items():
+                assert type(value) in (int, float, bool), key
+                assert value == every[key][e] or (np.isnan(value) and np.isnan(every[key][e]))
+    a = venv.a
+    assert a["failures"].sum() >= 1 and a["replacements"].sum() > a["failures"].sum()
+    assert a["no_go_count"].sum() >= 1

@@ -118,7 +118,7 @@ def test_bad_options_raise(kwargs: dict) -> None:
 
 
 def test_bad_data_raise() -> None:
-    with pytest.raises(ValueError, match="equal length"):
+    with pytest.raises(ValueError, match=r"feature must be an array of shape \(4,\)"):
         fit_measurement_model(np.arange(4.0), np.arange(3.0))
     with pytest.raises(ValueError, match="finite"):
         fit_measurement_model(np.array([0.0, 1.0]), np.array([0.0, np.nan]))

@@ -157,5 +157,5 @@ def test_overflowing_metrics_raise_instead_of_returning_inf() -> None:
         relative_accuracy(5e-324, np.array([1.0]))
     with pytest.raises(ValueError, match="convergence overflows"):
         convergence(np.array([0.0, 1e200]), np.array([1.0, 1.0]))
-    with pytest.raises(ValueError, match="times must be finite"):
+    with pytest.raises(ValueError, match=r"times must be .*finite"):
         convergence(np.array([0.0, math.nan]), np.array([1.0, 1.0]))

@@ -133,11 +133,11 @@ def test_bad_inputs_raise() -> None:
         pf.reset(0.0, -1.0)
     with pytest.raises(RuntimeError, match="reset"):
         pf.predict(1.0)  # a failed reset leaves the filter unusable, not half-reset
-    with pytest.raises(ValueError, match="x0 must give 10 finite"):
+    with pytest.raises(ValueError, match="x0 must be an array of finite numbers, got nan"):
         pf.reset(np.full(10, np.nan), 1.0)
-    with pytest.raises(ValueError, match="x0 must give a scalar or 10 values"):
+    with pytest.raises(ValueError, match="x0 must be a number or 10 numbers"):
         pf.reset(np.zeros(3), 1.0)
-    with pytest.raises(ValueError, match="theta0 must give a scalar or 10 values"):
+    with pytest.raises(ValueError, match=r"theta0\(rng, 10\).* must be a number or 10 numbers"):
         pf.reset(0.0, lambda g, n: np.ones(n + 1))
     pf.reset(0.0, 1.0)
     with pytest.raises(ValueError, match="usage"):

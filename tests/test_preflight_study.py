@@ -36,7 +36,7 @@ def test_answering_rule_is_the_age_rule_until_a_no_go() -> None:
 
 
 def test_rows_cover_every_mode_and_rule_on_the_same_episodes() -> None:
-    rows = preflight_availability({"default": {}}, episodes=2, seed=5, episode_slots=60)
+    rows = preflight_availability({"v2": {}}, episodes=2, seed=5, episode_slots=60)
     assert [(r["preflight"], r["rule"]) for r in rows] == [
         (p, rule) for p in ("on_demand", "every_flight") for rule in RULES
     ]

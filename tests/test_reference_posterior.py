@@ -1,6 +1,7 @@
 """The spring's reference posterior: its likelihood against the joint Gaussian density,
 its calibration on data drawn from its own model (and its failure on a mis-stated noise),
-its quantiles against numpy's, and the recorder against the monitor's own episode."""
+and the recorder against the monitor's own episode (what it records is what the filters
+were fed, read independently from ``info``)."""
 
 from __future__ import annotations
 
@@ -10,9 +11,6 @@ import numpy as np
 import pytest
 from scipy.stats import kstest, multivariate_normal
 
-from scas_env import V2_KWARGS
-from scas_env.env import ScasMaintenanceEnv
-from scas_env.core.scenario import Scenario
 from experiments.belief_calibration import policy_action
 from experiments.reference_posterior import (
     BATCH,
@@ -27,13 +25,12 @@ from experiments.reference_synthetic import (
     measurement_moments,
     synthetic_stage_pits,
 )
+from scas_env.env import ScasMaintenanceEnv
 
 
 @pytest.fixture(scope="module")
 def model() -> SpringModel:
-    env = ScasMaintenanceEnv(scenario=Scenario.from_dict(V2_KWARGS))
-    env.reset(seed=0)
-    return SpringModel.of(env)
+    return SpringModel.of(ScasMaintenanceEnv().setup)
 
 
 def _events(rng: np.random.Generator) -> list[tuple[int, np.ndarray, np.ndarray]]:
@@ -101,6 +98,7 @@ def _synthetic_pits(model: SpringModel, noise_factor: float, lives: int) -> np.n
     return np.array(pits)
 
 
+@pytest.mark.slow
 def test_the_posterior_is_calibrated_on_its_own_model_and_not_on_a_wrong_noise(model) -> None:
     pits = _synthetic_pits(model, 1.0, 120)
     assert kstest(pits, "uniform").pvalue > 1e-3
@@ -111,59 +109,81 @@ def test_the_posterior_is_calibrated_on_its_own_model_and_not_on_a_wrong_noise(m
     assert kstest(wrong, "uniform").pvalue < 1e-3
 
 
-def test_the_recorder_changes_nothing_and_records_what_the_monitor_learnt() -> None:
-    sc = Scenario.from_dict(V2_KWARGS)
-    plain, rec = ScasMaintenanceEnv(scenario=sc), RecordingEnv(scenario=sc)
-    learnt = []
+@pytest.mark.parametrize("preflight", ["on_demand", "every_flight"])
+def test_the_recorder_changes_nothing_and_records_what_the_monitor_learnt(preflight) -> None:
+    """Along an episode with tests and replacements (failures), the recording env gives the
+    plain env's observations and rewards; its events are what the filters were fed, checked
+    against ``info`` step by step: every flown flight's I8 is in exactly one batch (or in
+    the batch under way), in order, each batch's mean is their mean, every test's G1 is an
+    event at the age it was measured, and the batch counts are the interval's unless a test
+    or a replacement cut them."""
+    kw = {"preflight": preflight, "episode_slots": 1500}
+    plain, rec = ScasMaintenanceEnv(**kw), RecordingEnv(**kw)
     obs_a, _ = plain.reset(seed=4)
     obs_b, _ = rec.reset(seed=4)
-    monitor = rec.monitor
-    inner_learn, inner_test = monitor.learn_from_flights, monitor.tested
-
-    def batch_mean() -> None:  # what the monitor is about to learn from
-        if monitor.flight_count:
-            i8 = monitor.learning.index("I8")
-            learnt.append(monitor.flight_sum[i8] / monitor.flight_count)
-
-    def learn() -> None:
-        batch_mean()
-        inner_learn()
-
-    def test(features: dict[str, float]) -> None:
-        batch_mean()  # the test kernel learns the batch under way first
-        inner_test(features)
-
-    monitor.learn_from_flights, monitor.tested = learn, test
     np.testing.assert_array_equal(obs_a, obs_b)
-    for _ in range(400):
+    flights: list[tuple[int, float]] = []  # (pre-flight spring age, I8) of every flown flight
+    tests: list[tuple[int, float]] = []  # (spring age, G1) of every test
+    lives = [0]
+    for _ in range(1500):
         a = policy_action("test10", plain.slot)
-        oa, ra, *_ = plain.step(a)
+        age = plain.part_age["spring"]
+        before = (plain.batch.a["flown"][0], plain.batch.a["tests"][0])
+        oa, ra, *_, ia = plain.step(a)
         ob, rb, *_ = rec.step(a)
         np.testing.assert_array_equal(oa, ob)
         assert ra == rb
+        if ia["tests"] != before[1]:
+            tests.append((lives[-1], age, ia["features"]["G1"]))
+        if ia["flights"] != before[0]:
+            flights.append((lives[-1], age, ia["features"]["I8"]))
+        if ia["replacements"]["spring"] != len(lives) - 1:
+            lives.append(lives[-1] + 1)
+    assert len(lives) > 1  # a spring was replaced (failed) in the episode
     ev = rec.events
     batches = [e for e in range(len(ev.kind)) if ev.kind[e] == BATCH]
-    tests = [e for e in range(len(ev.kind)) if ev.kind[e] == TEST]
-    assert len(tests) == rec.stats.tests > 30
-    assert [ev.y[e] for e in batches] == pytest.approx(learnt, rel=1e-12)
-    for e in batches:  # consecutive pre-flight ages, learnt at the last or the test after it
+    got_tests = [(ev.life[e], ev.known_after[e], ev.y[e]) for e in range(len(ev.kind))
+                 if ev.kind[e] == TEST]  # fmt: skip
+    assert got_tests == tests and len(tests) > 30
+    k = 0
+    interval = int(plain.scenario.flight_update_flights)
+    for e in batches:
         ages = np.asarray(ev.ages[ev.start[e] : ev.stop[e]])
-        np.testing.assert_array_equal(np.diff(ages), 1.0)
+        mine = flights[k : k + ages.size]
+        k += ages.size
+        assert [(f[0], f[1]) for f in mine] == [(ev.life[e], int(x)) for x in ages]
+        assert ev.y[e] == pytest.approx(np.mean([f[2] for f in mine]), rel=1e-13)
+        np.testing.assert_array_equal(np.diff(ages), 1.0)  # consecutive pre-flight ages
         assert ages[-1] <= ev.known_after[e] <= ages[-1] + 1
+        assert ages.size <= interval
+    # the flights left over are the batch under way
+    assert len(flights) - k == rec.batch.a["flight_count"][0] < interval
+    full = sum(ev.stop[e] - ev.start[e] == interval for e in batches)
+    if preflight == "on_demand":  # else a test before every flight learns each flight alone
+        assert full > len(batches) // 2
+
+
+def test_the_recorder_refuses_to_lose_track_of_the_batch() -> None:
+    rec = RecordingEnv(episode_slots=30)
+    rec.reset(seed=0)
+    rec.step(0)
+    rec._sum += 1e-9  # a copy that is no longer the monitor's batch
+    with pytest.raises(RuntimeError, match="not the monitor's"):
+        rec.step(0)
 
 
 def test_bad_arguments_are_refused(model) -> None:
     with pytest.raises(ValueError, match="log2_points = 3"):
         ReferencePosterior(model, np.random.default_rng(0), 3)
-    with pytest.raises(ValueError, match="must include I8"):
-        RecordingEnv(scenario=Scenario())
+    with pytest.raises(ValueError, match="surrogate"):
+        RecordingEnv(fidelity="physics")
     for bad, match in (
         ({"log2_points": 30}, "log2_points = 30"),
         ({"min_ess": 5000.0, "log2_points": 12}, "min_ess = 5000.0"),
         ({"stages": (0.5, 1.0)}, "stages"),
         ({"episodes": 0}, "episodes = 0"),
     ):
-        kwargs = {"episodes": 1, "seed": 0, "scenario_fields": V2_KWARGS, **bad}
+        kwargs = {"episodes": 1, "seed": 0, **bad}
         with pytest.raises(ValueError, match=match):
             run_reference_study(**kwargs)
 
@@ -182,23 +202,16 @@ def test_synthetic_stage_pits_judge_each_life_once_per_stage(model) -> None:
         synthetic_stage_pits(model, 2, np.random.default_rng(0), stages=(1.2,))
 
 
-def test_the_recorder_wraps_the_world_once_however_many_resets() -> None:
-    rec = RecordingEnv(scenario=Scenario.from_dict(V2_KWARGS))
-    for seed in range(3):
-        rec.reset(seed=seed)
-    assert rec.world.fly.__wrapped__.__func__ is type(rec.world).fly  # one layer, not three
-
-
 def test_the_noise_free_life_of_the_true_spring_is_the_worlds_exact_life(model) -> None:
     """The path the reference assumes (the filter's damage integral, no flight scatter) ends
     where the world's spring fails: its life within 0.3 % of the world's exact one."""
-    env = ScasMaintenanceEnv(scenario=Scenario.from_dict(V2_KWARGS))
+    env = ScasMaintenanceEnv()
     ratios = []
     for seed in range(1000, 1012):
         env.reset(seed=seed)
-        w = env.world
-        life = model.lives(np.array([w.crack_m]), np.array([np.log(w.theta)]))[1][0]
-        ratios.append(w.life_left["spring"] / life - 1.0)
+        a = env.batch.a
+        life = model.lives(np.array([a["crack"][0]]), np.array([np.log(a["theta"][0])]))[1][0]
+        ratios.append(a["life"][0, 0] / life - 1.0)
     assert np.all(np.abs(ratios) < 3e-3), ratios
     # the world counts the failing flight, the model a continuous life: never shorter
     assert np.all(np.array(ratios) > -1.0 / 500.0)

@@ -7,8 +7,8 @@ import math
 import numpy as np
 import pytest
 
-from policies.benchmark.run import PolicySpec
 from experiments.renewal import age_rule_rate, long_run_rates, sample_lives
+from policies.benchmark.run import PolicySpec
 from scas_env.core.costs import CostModel
 
 FH = 1.5  # flight hours per flight (mission default, 5400 s)

@@ -193,7 +193,7 @@ def test_rul_predictor_refuses_arrays_of_another_size() -> None:
 
 def test_non_finite_particles_and_overflowing_summaries_raise() -> None:
     model = linear_wear_model(0.01)
-    with pytest.raises(ValueError, match=r"x \(particle severities\) must be finite"):
+    with pytest.raises(ValueError, match=r"x \(particle severities\) must be .*finite"):
         rul_summary(
             np.array([0.0, np.nan]), np.ones(2), np.ones(2), model, HazardZone(1.0),
             horizon_steps=1.0,
@@ -203,5 +203,5 @@ def test_non_finite_particles_and_overflowing_summaries_raise() -> None:
                     rng=np.random.default_rng(0))  # fmt: skip
     with pytest.raises(ValueError, match="overflow the weighted mean or variance"):
         summarize_rul(np.array([1e300, 0.0]), np.ones(2), horizon_steps=0.0)
-    with pytest.raises(ValueError, match="every value must be finite"):
+    with pytest.raises(ValueError, match="x must be an array of finite numbers, got nan"):
         model.damage(np.array([np.nan]))

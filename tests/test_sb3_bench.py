@@ -9,8 +9,14 @@ import numpy as np
 import pytest
 
 import experiments.sb3_speed as speed
-from policies.rl import ALGOS
-from experiments.sb3_speed import fps_ppo_kwargs, fps_rounds, make_setup, summarise, training_fps
+from experiments.sb3_speed import (
+    PROJECT_PPO,
+    fps_ppo_kwargs,
+    fps_rounds,
+    make_setup,
+    summarise,
+    training_fps,
+)
 
 
 def test_rounds_alternate_and_speedups_are_taken_within_a_round(monkeypatch) -> None:
@@ -52,9 +58,10 @@ def test_bad_arguments_raise(tmp_path: Path) -> None:
 def test_configs_are_sb3_defaults_and_the_project_settings() -> None:
     assert fps_ppo_kwargs("sb3-default") == {}
     project = fps_ppo_kwargs("project")
-    assert project == dict(ALGOS["ppo"].kwargs) and project["batch_size"] == 256
-    project["batch_size"] = 1  # a copy: the shipped settings stay as they are
-    assert ALGOS["ppo"].kwargs["batch_size"] == 256
+    assert project == PROJECT_PPO and project["batch_size"] == 256
+    project["batch_size"] = 1  # a copy: the settings stay as they are
+    project["policy_kwargs"]["net_arch"] = [8]
+    assert PROJECT_PPO["batch_size"] == 256 and PROJECT_PPO["policy_kwargs"]["net_arch"] == [64, 64]
 
 
 def test_setups_are_what_they_say() -> None:

@@ -13,7 +13,7 @@ import pytest
 from scipy import stats
 
 from experiments.sensing_sweep import QUICK, REFERENCE, replicate_seeds, run_sensing_sweep
-from experiments.sensing_sweep import write_sweep_outputs as write_sweep
+from experiments.sensing_sweep_output import write_sweep_outputs as write_sweep
 from experiments.sensing_variants import (
     NOISE_FIELDS,
     TOLERANCE_FIELDS,

@@ -120,23 +120,89 @@ def test_cli_writes_table_csv_json_and_plot(tmp_path, capsys) -> None:
 
 
 def test_flight_source_reads_batch_means_after_the_baseline_batches() -> None:
-    from scas_env.monitor import BASELINE_TESTS
-    from experiments.estimator_comparison import _Context, simulate_life
+    from experiments.estimator_comparison import REFERENCE_TESTS, _Context, simulate_life
 
     cfg = ComparisonConfig(units=2, seed=2, source="flight", every=7, parts=("seal",))
     ctx = _Context("seal", cfg)
-    assert ctx.feature == "I9" and "I9" in ctx.scenario.flight_feature_names
+    assert ctx.feature == "I9"
+    assert (ctx.scenario.crack_active, ctx.scenario.wear_active) == (0, 1)
     k = ctx.sur.index("I9")
     w = ctx.sur.wear_grid * ctx.threshold
     np.testing.assert_allclose(ctx.measurement.mean(w), ctx.sur.mean[k, 0, :], rtol=1e-12)
-    sigma = ctx.sur.run_std[k, 0, :] * math.sqrt((1 + 1 / BASELINE_TESTS) / 7)
+    sigma = ctx.sur.run_std[k, 0, :] * math.sqrt((1 + 1 / REFERENCE_TESTS) / 7)
     np.testing.assert_allclose(ctx.measurement.sigma(w), sigma, rtol=1e-12)
     rate = ctx.cal.wear_rate_m_per_flight * ctx.scenario.filter_growth_bias
     np.testing.assert_allclose(ctx.nominal_path(123.0), 123.0 * rate, rtol=1e-12)
     life = simulate_life(ctx, 0, np.random.SeedSequence(9), cfg)
-    first = 7 * (BASELINE_TESTS + 1)
+    first = 7 * (REFERENCE_TESTS + 1)
     expected = np.arange(first, life.flights_to_failure, 7)
     np.testing.assert_array_equal(life.update_flights, expected[: life.update_flights.size])
     assert life.update_flights[-1] + 7 >= life.flights_to_failure
+    # the truth is the exact remaining life: the failing flight counted
+    np.testing.assert_array_equal(life.true_rul, life.flights_to_failure - life.update_flights)
     rows = compare_estimators(cfg, progress=False)
     assert {r["part"] for r in rows} == {"seal"} and len(rows) > 0
+
+
+def test_test_readings_are_the_envs_draw_minus_the_installation_offset() -> None:
+    """A test reading is the surrogate's draw at the parts' state with the unit's
+    installation effects (the world kernel's), minus the recorded reference's offset; the
+    new-part filter is the env's process model at the monitor's priors."""
+    from experiments.estimator_comparison import REFERENCE_TESTS, _Context, simulate_life
+
+    cfg = ComparisonConfig(units=2, seed=3, parts=("spring",))
+    ctx = _Context("spring", cfg)
+    assert ctx.feature == "G1" and ctx.scenario.reference_tests == REFERENCE_TESTS
+    life = simulate_life(ctx, 0, np.random.SeedSequence(4), cfg)
+    np.testing.assert_array_equal(life.update_flights, np.arange(10, life.flights_to_failure, 10))
+    np.testing.assert_array_equal(life.true_rul, life.flights_to_failure - life.update_flights)
+    # a reading by hand: the batch reset as the life's, its crack at half of critical
+    batch, a, sur = ctx.env.batch, ctx.env.batch.a, ctx.sur
+    batch.reset(np.zeros(1, dtype=np.int64), [np.random.default_rng(0)])
+    a["crack"][0] = 0.5 * a["fail"][0]
+    y = ctx.test_reading(np.random.default_rng(1))
+    k = sur.index("G1")
+    z = np.random.default_rng(1).standard_normal(2)[0]
+    mean, unit, run = (float(sur.tables_at(0.5, 0.0)[q][k]) for q in range(3))
+    drawn = mean + unit * a["unit_z"][0, k] + run * z
+    offset = a["reference"][0, 0] - sur.mean[k, 0, 0]
+    assert y == pytest.approx(drawn - offset, rel=1e-12)
+    pf = ctx.particle_filter(np.random.default_rng(0))
+    assert pf.process is ctx.setup.spring_process and pf.n_particles == cfg.particles
+    assert np.all((pf.x >= 0.0) & (pf.x <= ctx.threshold))
+
+
+def test_ukf_summary_falls_back_where_the_gaussian_quantile_fails() -> None:
+    """A seal life where most of the UKF's state lies past the threshold late in life:
+    ``GaussianRul.quantile`` raises there; the fall-back quantile is the smallest ``t``
+    with ``CDF(t) >= q`` within its tolerance, and the other summaries are the Gaussian
+    RUL's own."""
+    from experiments.estimator_comparison import (
+        FALLBACK_XTOL,
+        HIGH_Q,
+        _Context,
+        _ukf_for,
+        simulate_life,
+        ukf_summary,
+    )
+
+    cfg = ComparisonConfig(units=1000, seed=0, parts=("seal",))
+    ctx = _Context("seal", cfg)
+    life_seq, _ = np.random.SeedSequence((0, 0)).spawn(1000)[85].spawn(2)
+    life = simulate_life(ctx, 85, life_seq, cfg)
+    ukf, last, used = _ukf_for(ctx), 0, 0
+    for t, y in zip(life.update_flights.tolist(), life.readings.tolist(), strict=True):
+        ukf.predict(float(t - last))
+        ukf.update(y)
+        last = t
+        summary, fallback = ukf_summary(ukf, ctx.threshold, 20.0)
+        if not fallback:
+            continue
+        used += 1
+        rul = ukf.rul(ctx.threshold)
+        with pytest.raises(RuntimeError):
+            rul.summary(20.0)
+        assert rul.cdf(summary.high) >= HIGH_Q
+        assert summary.high < FALLBACK_XTOL or rul.cdf(summary.high - FALLBACK_XTOL) < HIGH_Q
+        assert summary.mean == rul.moment(1) and summary.prob_failure == rul.cdf(20.0)
+    assert used >= 1

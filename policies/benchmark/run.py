@@ -38,9 +38,10 @@ from tqdm.auto import tqdm
 
 import policies  # noqa: F401  (registers the built-in policies)
 from policies.base import make_policy, policy_family, policy_obs_mode
+from policies.benchmark.fleet_runner import run_fleet_episodes
 from policies.benchmark.runner import TERMS, run_episode, run_episodes
-from policies.benchmark.stats import summarize
-from scas_env import ENV_ID
+from policies.benchmark.stats import FLEET_METRICS, METRICS, summarize
+from scas_env import ENV_ID, ENV_ID_FLEET
 from scas_env.utils.parallel import in_worker, init_worker, map_chunks, single_thread
 
 #: Named plug-ins: a benchmark name that needs a module imported first (trained agents).
@@ -135,13 +136,24 @@ def check_specs(specs: Sequence[PolicySpec], env_kwargs: Mapping[str, Any]) -> N
     for spec in specs:
         mode = spec.build_mode()
         if mode not in names:
-            env = gym.make(ENV_ID, disable_env_checker=True, obs_mode=mode, **env_kwargs)
+            env = gym.make(env_id_of(env_kwargs), disable_env_checker=True, obs_mode=mode,
+                           **env_kwargs)  # fmt: skip
             names[mode] = tuple(env.unwrapped.obs_names)
             env.close()
         try:
             make_policy(spec.name, names[mode], **dict(spec.params))
         except (ValueError, TypeError) as exc:  # TypeError: parameters the policy lacks
             raise ValueError(f"policy {spec.key!r} cannot run on this scenario: {exc}") from exc
+
+
+def is_fleet(env_kwargs: Mapping[str, Any]) -> bool:
+    """Whether a benchmark's env keywords describe fleets (a ``fleet`` configuration)."""
+    return "fleet" in env_kwargs
+
+
+def env_id_of(env_kwargs: Mapping[str, Any]) -> str:
+    """``ScasFleet-v0`` for fleets, else ``ScasMaintenance-v2``."""
+    return ENV_ID_FLEET if is_fleet(env_kwargs) else ENV_ID
 
 
 def _run_chunk(
@@ -157,7 +169,7 @@ def _run_chunk(
         n = len(batch)
         if (mode, n) not in envs:
             envs[mode, n] = gym.make_vec(
-                ENV_ID,
+                env_id_of(env_kwargs),
                 num_envs=n,
                 vectorization_mode="vector_entry_point",
                 obs_mode=mode,
@@ -168,7 +180,8 @@ def _run_chunk(
             built[p] = make_policy(spec.name, env.obs_names, **dict(spec.params))
             if in_worker():
                 single_thread()  # the policy may have loaded torch
-        results = run_episodes(env, built[p], [(es, ps) for _, es, ps in batch])
+        runner = run_fleet_episodes if is_fleet(env_kwargs) else run_episodes
+        results = runner(env, built[p], [(es, ps) for _, es, ps in batch])
         for (e, env_seed, _), result in zip(batch, results, strict=True):
             result["row"] = {
                 "policy": spec.key,
@@ -300,9 +313,10 @@ def prepare_benchmark(
     specs = tuple(resolve_spec(s) if isinstance(s, str) else s for s in specs)
     # the planning oracle plans over the episode's horizon, and a decision-epoch agent
     # observes the slots left in it: give them this run's
+    fleet = is_fleet(env_kwargs or {})
     specs = tuple(
         replace(s, params={**s.params, "episode_slots": slots})
-        if _needs_horizon(s) and "episode_slots" not in s.params
+        if not fleet and _needs_horizon(s) and "episode_slots" not in s.params
         else s
         for s in specs
     )
@@ -313,7 +327,8 @@ def prepare_benchmark(
     for reserved in ("obs_mode", "episode_slots"):
         if reserved in kwargs:
             raise ValueError(f"env_kwargs must not set {reserved!r} (set per policy / slots)")
-    kwargs["episode_slots"] = slots
+    if not fleet:  # a fleet's episode is its FleetConfig's episode_days
+        kwargs["episode_slots"] = slots
     check_specs(specs, kwargs)
     return specs, kwargs
 
@@ -342,6 +357,7 @@ def run_benchmark(
     specs, kwargs = prepare_benchmark(
         specs, episodes=episodes, slots=slots, env_kwargs=env_kwargs, ray_address=ray_address
     )
+    fleet = is_fleet(kwargs)
     keys = [s.key for s in specs]
     seeds = episode_seeds(seed, episodes)
     tasks: list[Batch] = [
@@ -384,7 +400,8 @@ def run_benchmark(
             for s in specs
         ],
     }
-    summary = summarize(rows, keys, rules, confidence)
+    metrics = FLEET_METRICS if fleet else METRICS
+    summary = summarize(rows, keys, rules, confidence, metrics=metrics)
     return BenchmarkResult(rows, events, summary, config, wall)
 
 

@@ -46,20 +46,44 @@ METRICS = (
     "wasted_life",
     "reward",
 )
+#: Per-episode metrics of fleets (``ScasFleet-v0``; :mod:`policies.benchmark.fleet_runner`).
+FLEET_METRICS = (
+    "mission_availability",
+    "aircraft_availability",
+    "cost_per_fh",
+    "failures_per_1000fh",
+    "unscheduled_per_1000fh",
+    "stock_outs",
+    "waiting_job_days",
+    "crew_utilisation",
+    "wasted_life",
+    "reward",
+)
 #: Rate metric -> the results.csv count column(s) it pools (exact Poisson intervals).
 POOLED_COUNTS: dict[str, tuple[str, ...]] = {
     "failures_per_1000fh": ("failures_spring", "failures_seal"),
+    "unscheduled_per_1000fh": ("unscheduled_removals",),
     "replacements_per_1000fh": ("replacements_spring", "replacements_seal"),
     "tests_per_1000fh": ("tests",),
 }
 #: Metrics bounded below (or in [0, 1]) with a percentile-bootstrap interval of the mean.
-BOOTSTRAPPED = ("availability", "cost_per_fh", "wasted_life")
+BOOTSTRAPPED = (
+    "availability",
+    "mission_availability",
+    "aircraft_availability",
+    "crew_utilisation",
+    "cost_per_fh",
+    "wasted_life",
+    "stock_outs",
+    "waiting_job_days",
+)
 #: Resamples of the bootstrap intervals, and their fixed seed (reproducible tables).
 BOOTSTRAP_RESAMPLES = 4999
 BOOTSTRAP_SEED = 20260
 
 __all__ = [
     "BOOTSTRAPPED",
+    "FLEET_METRICS",
     "METRICS",
     "POOLED_COUNTS",
     "Interval",
@@ -289,20 +313,22 @@ def summarize(
     policies: Sequence[str],
     reference_candidates: Sequence[str],
     confidence: float = 0.95,
+    *,
+    metrics: Sequence[str] = METRICS,
 ) -> dict[str, Any]:
-    """Per-policy intervals of :data:`METRICS` (:func:`metric_interval`) and paired
-    differences (t-interval and minimum detectable difference) against the best of
-    ``reference_candidates`` (highest mean reward); rows are results.csv rows."""
+    """Per-policy intervals of ``metrics`` (:data:`METRICS`, or :data:`FLEET_METRICS` for
+    fleets; :func:`metric_interval`) and paired differences (t-interval and minimum
+    detectable difference) against the best of ``reference_candidates`` (highest mean
+    reward); rows are results.csv rows."""
+    names = tuple(metrics)
     mine: dict[str, list[Mapping[str, Any]]] = {}
     by_policy: dict[str, dict[str, np.ndarray]] = {}
     for p in policies:
         mine[p] = sorted((r for r in rows if r["policy"] == p), key=lambda r: r["episode"])
         by_policy[p] = {
-            m: np.array([r[m] for r in mine[p]], dtype=np.float64) for m in (*METRICS, "episode")
+            m: np.array([r[m] for r in mine[p]], dtype=np.float64) for m in (*names, "episode")
         }
-    per_policy = {
-        p: {m: metric_interval(mine[p], m, confidence) for m in METRICS} for p in policies
-    }
+    per_policy = {p: {m: metric_interval(mine[p], m, confidence) for m in names} for p in policies}
     candidates = [p for p in reference_candidates if p in per_policy]
     ref = best_policy(per_policy, candidates) if candidates else None
     paired: dict[str, dict[str, Interval]] = {}
@@ -311,8 +337,7 @@ def summarize(
             if not np.array_equal(by_policy[p]["episode"], by_policy[ref]["episode"]):
                 raise ValueError(f"policy {p!r} and {ref!r} were not run on the same episodes")
             paired[p] = {
-                m: paired_difference(by_policy[p][m], by_policy[ref][m], confidence)
-                for m in METRICS
+                m: paired_difference(by_policy[p][m], by_policy[ref][m], confidence) for m in names
             }
     return {
         "confidence": confidence,

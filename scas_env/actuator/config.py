@@ -9,8 +9,11 @@ Files: :meth:`Validated.load` and :meth:`Validated.save` read and write TOML, YA
 (by suffix) with the same validation; errors name the file, the table and the field. A file
 holds either the fields of one group at its top level, or tables named after
 :data:`FILE_SECTIONS` (``[scenario]``, ``[costs]``, ``[params]``), each read by its class,
-so one file can describe a whole case. Readers: :mod:`tomllib`, PyYAML's ``safe_load`` (no
-object construction, so a file cannot run code) and :mod:`json`; writers: a small TOML
+so one file can describe a whole case. Files are UTF-8 (a byte-order mark is allowed); a key
+may appear once per mapping. Readers: :mod:`tomllib`, PyYAML's ``SafeLoader`` (no object
+construction, so a file cannot run code) and :mod:`json`, the last two refusing a repeated
+key (:func:`read_mapping`); a boolean is taken only by a switch (unit ``"bool"``), never
+for a number. Writers: a small TOML
 writer for such mappings (:func:`toml_text`), PyYAML's ``safe_dump`` and :mod:`json`. Files
 are written atomically (a temporary file renamed into place); an existing file is refused
 unless ``overwrite=True``.
@@ -83,7 +86,12 @@ def param(
         lo, hi: allowed range; ``lo_open``/``hi_open`` exclude the bound itself.
         integer: the value must be a whole number.
         source: where the value comes from (reference sheet section, paper, rationale).
+
+    A switch is declared with unit ``"bool"`` (integer, 0 or 1): it alone also takes
+    ``True``/``False`` (a file's ``true``/``yes``); any other numeric field refuses a boolean.
     """
+    if unit == "bool" and not (integer and lo == 0 and hi == 1 and not (lo_open or hi_open)):
+        raise ValueError(f"a switch (unit 'bool') is an integer in [0, 1], got {lo}..{hi}")
     return field(
         default=default,
         metadata={
@@ -112,9 +120,23 @@ def _range_text(md: dict[str, Any]) -> str:
 
 
 def check_value(owner: str, name: str, value: Any, md: dict[str, Any]) -> None:
-    """Raise ``ValueError`` unless ``value`` is a finite real number inside the field's range."""
+    """Raise ``ValueError`` unless ``value`` is a finite real number inside the field's range.
+
+    Numbers and numeric strings (YAML 1.1 reads ``1e5`` as a string) are accepted. A boolean
+    is accepted only by a switch (a field declared with unit ``"bool"``, 0 or 1) and refused
+    for a number: ``float(True)`` is 1.0, so TOML ``true`` or YAML ``yes`` for
+    ``episode_slots`` would silently mean 1.
+    """
     unit = md.get("unit", "")
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
+    is_bool = isinstance(value, bool) or type(value).__name__ in ("bool", "bool_")  # numpy's
+    if is_bool and unit == "bool":
+        value = int(value)
+    elif is_bool:
+        raise ValueError(
+            f"{owner}.{name} = {value!r} is a boolean; expected a number in "
+            f"{_range_text(md)} {unit}"
+        )
+    if not isinstance(value, (int, float)):
         try:
             value = float(value)
         except (TypeError, ValueError):
@@ -167,7 +189,7 @@ class Validated:
         if not isinstance(data, dict):
             raise ValueError(f"{cls.__name__}: expected a dict, got {type(data).__name__}")
         names = {f.name: f for f in fields(cls)}
-        unknown = sorted(set(data) - set(names))
+        unknown = sorted(set(data) - set(names), key=repr)  # keys may be of mixed types
         if unknown:
             raise ValueError(f"{cls.__name__}: unknown key(s) {unknown}; allowed: {sorted(names)}")
         kwargs: dict[str, Any] = {}
@@ -308,31 +330,114 @@ def file_format(path: str | Path) -> str:
 def read_mapping(path: str | Path) -> dict[str, Any]:
     """Parse ``path`` (TOML, YAML or JSON by suffix) into a dict.
 
-    Raises ``FileNotFoundError`` for a missing file and ``ValueError`` naming the file for a
-    syntax error or a document that is not a mapping (an empty YAML file is ``{}``).
+    The file must be UTF-8 text (a leading UTF-8 byte-order mark is allowed and ignored).
+    Raises ``FileNotFoundError`` for a missing file and ``ValueError`` naming the file for
+    text that is not UTF-8, a syntax error, a key given twice in one mapping (TOML refuses
+    it itself; JSON and YAML parsers would keep the last value), a key that is not text, or a
+    document that is not a mapping (an empty YAML file is ``{}``).
     """
     path = Path(path)
     kind = file_format(path)
     if not path.is_file():
         raise FileNotFoundError(f"{path}: configuration file not found")
-    text = path.read_text(encoding="utf-8")
+    text = _read_text(path)
     try:
         if kind == "toml":
             data: Any = tomllib.loads(text)
         elif kind == "yaml":
-            import yaml
-
-            data = yaml.safe_load(text)
+            data = _yaml_load(text)
             data = {} if data is None else data
         else:
-            data = json.loads(text)
+            data = json.loads(text, object_pairs_hook=_json_object)
+    except _DuplicateKeyError as exc:
+        raise ValueError(f"{path}: {exc}") from None
     except Exception as exc:  # each parser has its own error class; all mean "bad syntax"
         raise ValueError(f"{path}: not valid {kind.upper()}: {exc}") from None
     if not isinstance(data, dict):
         raise ValueError(
             f"{path}: expected a mapping of field names to values, got {type(data).__name__}"
         )
+    _check_keys(data, path, ())
     return data
+
+
+def _read_text(path: Path) -> str:
+    """The file's text, decoded as UTF-8 (a leading byte-order mark dropped)."""
+    raw = path.read_bytes()
+    try:
+        return raw.decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        line = raw.count(b"\n", 0, exc.start) + 1
+        raise ValueError(
+            f"{path}: not UTF-8 text (byte 0x{raw[exc.start]:02x} at offset {exc.start}, "
+            f"line {line}); configuration files must be encoded as UTF-8 "
+            "(re-save it as UTF-8, e.g. `iconv -f latin1 -t utf-8`)"
+        ) from None
+
+
+class _DuplicateKeyError(ValueError):
+    """A key given twice in one mapping of a JSON or YAML document."""
+
+
+def _json_object(pairs: list[tuple[str, Any]]) -> dict[str, Any]:
+    """``object_pairs_hook`` of :func:`json.loads`: a dict, refusing a repeated key."""
+    out: dict[str, Any] = {}
+    for key, value in pairs:
+        if key in out:
+            raise _DuplicateKeyError(
+                f"key {key!r} appears twice in one object; each key may be given once"
+            )
+        out[key] = value
+    return out
+
+
+def _yaml_load(text: str) -> Any:
+    """``yaml.safe_load`` that refuses a key given twice in one mapping (PyYAML keeps the
+    last one). Merge keys (``<<: *base``) still override what they merge, as YAML defines."""
+    import yaml
+
+    global _StrictYamlLoader
+    if _StrictYamlLoader is None:
+
+        class StrictLoader(yaml.SafeLoader):
+            def construct_mapping(self, node: Any, deep: bool = False) -> Any:
+                if isinstance(node, yaml.MappingNode):
+                    seen: dict[Any, int] = {}
+                    for key_node, _ in node.value:
+                        if key_node.tag == "tag:yaml.org,2002:merge":
+                            continue
+                        key = self.construct_object(key_node, deep=True)
+                        line = key_node.start_mark.line + 1
+                        try:
+                            first = seen.get(key)
+                        except TypeError:  # unhashable: PyYAML's own error follows
+                            continue
+                        if first is not None:
+                            raise _DuplicateKeyError(
+                                f"key {key!r} appears twice in one mapping (lines {first} "
+                                f"and {line}); each key may be given once"
+                            )
+                        seen[key] = line
+                return super().construct_mapping(node, deep=deep)
+
+        _StrictYamlLoader = StrictLoader
+    return yaml.load(text, Loader=_StrictYamlLoader)  # a SafeLoader subclass: no objects
+
+
+_StrictYamlLoader: Any = None
+
+
+def _check_keys(data: Mapping[Any, Any], path: Path, where: tuple[str, ...]) -> None:
+    """Every key of every nested mapping is text (YAML allows ``1:`` or ``yes:`` as keys)."""
+    for key, value in data.items():
+        if not isinstance(key, str):
+            table = f" [{'.'.join(where)}]" if where else ""
+            raise ValueError(
+                f"{path}{table}: key {key!r} ({type(key).__name__}) is not a name; "
+                "keys are field or table names (text)"
+            )
+        if isinstance(value, Mapping):
+            _check_keys(value, path, (*where, key))
 
 
 def write_mapping(path: str | Path, data: Mapping[str, Any], *, overwrite: bool = False) -> Path:

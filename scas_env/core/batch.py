@@ -3,12 +3,16 @@ advances.
 
 :class:`ActuatorBatch` is what every face of the package runs on: the single env is a batch
 of one, the native vector env a batch of N, the fleet env a batch of aircraft x actuators.
-A slot of any set of rows is one call of :func:`scas_env.core.slot.slot_rows`; the rare
-events (a reset, a part fitted) are Python over the same arrays
+A slot of any set of rows is one call of :func:`scas_env.core.slot.slot_rows` under each
+row's plan (``a["flights"]``, ``a["group"]``, ``a["mtype"]``, ``a["flight_value"]``: one
+flight of the standard mission per slot, each row its own aircraft, unless a face says
+otherwise); the rare events (a reset, a part fitted) are Python over the same arrays
 (:mod:`scas_env.core.parts`). Nothing is copied in or out.
 """
 
 from __future__ import annotations
+
+from collections.abc import Callable
 
 import numpy as np
 
@@ -16,8 +20,20 @@ from scas_env.core import parts
 from scas_env.core.filters import refresh_rows
 from scas_env.core.flight import expected_rul
 from scas_env.core.setup import FLIGHT_FEATURES, PARTS
-from scas_env.core.slot import FAILURE, close_rows, fly_measured, slot_rows, test_measured
+from scas_env.core.slot import (
+    FAILURE,
+    REPLACE_BOTH,
+    STAND_BY,
+    TEST_AND_FLY,
+    close_rows,
+    fly_measured,
+    slot_rows,
+    test_measured,
+)
 from scas_env.core.state import ActuatorState
+
+#: the parts a replacement action fits
+REPLACED = {2: ("spring",), 3: ("seal",), REPLACE_BOTH: ("spring", "seal")}
 
 
 class ActuatorBatch(ActuatorState):
@@ -31,24 +47,38 @@ class ActuatorBatch(ActuatorState):
             parts.reset_row(self, e, rng)
 
     # ------------------------------------------------------------------ slots
-    def slot(self, rows: np.ndarray, actions: np.ndarray) -> None:
-        """One flight slot of each row of ``rows`` (int64, increasing) under ``actions``
-        (int64 of length n, read at those rows: 0 fly, 1 test then fly if it passes, 2
-        replace the spring, 3 replace the seals; checked by the caller). The slot's reward
-        and terms are in ``a["reward"]``, ``a["terms"]``."""
+    def slot(
+        self,
+        rows: np.ndarray,
+        actions: np.ndarray,
+        on_failure: Callable[[int, tuple[str, ...]], bool] | None = None,
+    ) -> None:
+        """One slot of each row of ``rows`` (int64, increasing) under ``actions`` (int64 of
+        length n, read at those rows: :data:`~scas_env.core.slot.FLY`, ``TEST_AND_FLY``,
+        ``REPLACE_SPRING``, ``REPLACE_SEAL``, ``STAND_BY``, ``REPLACE_BOTH``; checked by the
+        caller) and the rows' plans. The slot's reward and terms are in ``a["reward"]``,
+        ``a["terms"]``.
+
+        A part that fails in flight is replaced in the same slot (its failure costed, the
+        row on the ground ``1 + failure_downtime_slots`` slots), unless ``on_failure(row,
+        failed parts)`` returns False: the parts then stay broken (``a["broken"]``) until
+        :meth:`repair` (a fleet's crew and spares decide when)."""
         a, st = self.a, self.setup
         a["wasted_now"][rows] = 0.0
+        plan = (actions, a["flights"], a["group"], a["mtype"], a["flight_value"])
         if st.physics:
-            self._physics_slot(rows, actions)
+            self._physics_slot(rows, plan)
         else:
             slot_rows(
-                rows, actions, self._every_flight, self._interval, self.severity, self._world,
-                self._monitor, self._memory, self._books, self._handles, self._out,
-                st.go_limits, self._prices, st.world, st.filters, st.detector, st.learn_cols,
+                rows, plan, self._every_flight, self._interval, self._world, self._monitor,
+                self._memory, self._books, self._handles, self._out, st.go_limits,
+                self._prices, st.world, st.filters, st.detector, st.learn_cols,
             )  # fmt: skip
-        self._events(rows)
+        self._events(rows, on_failure)
 
-    def _events(self, rows: np.ndarray) -> None:
+    def _events(
+        self, rows: np.ndarray, on_failure: Callable[[int, tuple[str, ...]], bool] | None
+    ) -> None:
         """Rows the kernel left to Python: filter errors raised, replacements and failures
         handled, their slots closed."""
         a = self.a
@@ -58,60 +88,96 @@ class ActuatorBatch(ActuatorState):
         todo = rows[a["event"][rows] != 0]
         if not todo.size:
             return
-        costs = self.setup.costs
         for e in todo.tolist():
             event = int(a["event"][e])
             if event == FAILURE:
-                for p, part in enumerate(PARTS):
-                    if a["failed"][e, p]:
-                        a["failures"][e, p] += 1
-                        parts.replace_part(self, e, part, failed=True)
-                a["downtime"][e] = max(a["downtime"][e], 1 + int(costs.failure_downtime_slots))
+                failed = tuple(p for k, p in enumerate(PARTS) if a["failed"][e, k])
+                a["failures"][e] += a["failed"][e]
+                if on_failure is None or on_failure(e, failed):
+                    self.repair(e, failed)
+                else:
+                    for part in failed:
+                        a["broken"][e, PARTS.index(part)] = True
             else:
-                part = PARTS[event - 2]
-                parts.replace_part(self, e, part, failed=False)
-                extra = (
-                    costs.spring_downtime_slots if part == "spring" else costs.seal_downtime_slots
-                )
-                a["downtime"][e] = max(a["downtime"][e], 1 + int(extra))
+                self.replace(e, REPLACED[event])
         close_rows(todo, self._books, self._memory, self._out)
 
-    def _physics_slot(self, rows: np.ndarray, actions: np.ndarray) -> None:
-        """:func:`~scas_env.core.slot.slot_rows` with simulated measurements, row by row."""
+    def replace(self, e: int, fitted: tuple[str, ...]) -> None:
+        """Row ``e`` fits new ``fitted`` parts (a preventive replacement: the parts' cost and
+        the true life thrown away counted) and stays on the ground ``1 +`` the longest of
+        their downtimes (``CostModel.*_downtime_slots``)."""
+        costs, a = self.setup.costs, self.a
+        down = 0
+        for part in fitted:
+            parts.replace_part(self, e, part, failed=False)
+            extra = costs.spring_downtime_slots if part == "spring" else costs.seal_downtime_slots
+            down = max(down, 1 + int(extra))
+        a["downtime"][e] = max(a["downtime"][e], down)
+
+    def repair(self, e: int, failed: tuple[str, ...]) -> None:
+        """Row ``e`` replaces its ``failed`` parts (an unscheduled removal: costed with the
+        failure) and stays on the ground ``1 + failure_downtime_slots``."""
+        a = self.a
+        for part in failed:
+            parts.replace_part(self, e, part, failed=True)
+            a["broken"][e, PARTS.index(part)] = False
+        down = 1 + int(self.setup.costs.failure_downtime_slots)
+        a["downtime"][e] = max(a["downtime"][e], down)
+
+    def _physics_slot(self, rows: np.ndarray, plan: tuple) -> None:
+        """:func:`~scas_env.core.slot.slot_rows` with simulated measurements, row by row, in
+        the same phases."""
         a, st = self.a, self.setup
+        actions, flights, group, mtype, value = plan
         out = self._out
+        wants, go, broken_at = {}, {}, {}
         for e in rows.tolist():
             a["terms"][e] = 0.0
-            a["flew"][e] = False
+            a["flew"][e] = 0
             a["failed"][e] = False
             a["event"][e] = 0
             a["status"][e] = 0
             act = int(actions[e])
-            if act >= 2:
+            if act in REPLACED:
                 a["event"][e] = act
                 continue
-            if a["downtime"][e] <= 0:
-                go = not a["no_go"][e]
-                rng = self.rngs[e]["measure"]
-                if self._every_flight or act == 1:
-                    g1, g3 = parts.physics_test(self, e, rng)
-                    go = test_measured(
-                        e, g1, g3, self._every_flight, self._world, self._monitor, self._memory,
-                        self._books, self._handles, out, st.go_limits, self._prices,
-                        st.filters, st.detector, len(FLIGHT_FEATURES),
-                    )  # fmt: skip
-                    if a["status"][e]:
-                        continue
-                if go:
-                    feats = parts.physics_flight(self, e, rng)
-                    fly_measured(
-                        e, feats, self._interval, self.severity, self._world, self._monitor,
-                        self._memory, self._handles, out, self._prices, st.world,
-                        st.filters, st.learn_cols,
-                    )  # fmt: skip
-                    if a["event"][e] or a["status"][e]:
-                        continue
-            close_rows(np.array([e], dtype=np.int64), self._books, self._memory, out)
+            if act == STAND_BY or a["downtime"][e] > 0:
+                continue
+            ok = not a["no_go"][e]
+            if self._every_flight or act == TEST_AND_FLY:
+                g1, g3 = parts.physics_test(self, e, self.rngs[e]["measure"])
+                ok = test_measured(
+                    e, g1, g3, self._every_flight, self._world, self._monitor, self._memory,
+                    self._books, self._handles, out, st.go_limits, self._prices,
+                    st.filters, st.detector, len(FLIGHT_FEATURES),
+                )  # fmt: skip
+                if a["status"][e]:
+                    continue
+            wants[e] = True
+            g = int(group[e])
+            go[g] = go.get(g, True) and bool(ok)
+        most = max((int(flights[e]) for e in wants), default=0)
+        for f in range(most):
+            for e in wants:
+                g = int(group[e])
+                if not (go[g] and broken_at.get(g, -1) < 0 and f < flights[e]):
+                    continue
+                feats = parts.physics_flight(self, e, self.rngs[e]["measure"])
+                broke = fly_measured(
+                    e, feats, int(mtype[e]), self._interval, self._world, self._monitor,
+                    self._memory, self._handles, out, self._prices, st.world, st.filters,
+                    st.learn_cols,
+                )  # fmt: skip
+                if broke:
+                    broken_at[g] = f
+            for e in wants:
+                g = int(group[e])
+                at = broken_at.get(g, -1)
+                if go[g] and f < flights[e] and (at < 0 or at > f):
+                    a["flew"][e] += 1
+                    a["terms"][e, 0] += value[e]
+        done = [e for e in rows.tolist() if a["event"][e] == 0 and a["status"][e] == 0]
+        close_rows(np.array(done, dtype=np.int64), self._books, self._memory, out)
 
     # ------------------------------------------------------------------ reading
     def refresh(self, rows: np.ndarray | None = None) -> None:
@@ -125,14 +191,6 @@ class ActuatorBatch(ActuatorState):
         if bad.size:
             parts.raise_status(int(a["status"][bad[0]]))
 
-    def true_rul(self, out: np.ndarray | None = None) -> np.ndarray:
-        """(n, 2) true remaining life of spring and seals: each part's own (standard
-        flights, the failing one included)."""
-        if out is None:
-            return self.a["life"].copy()
-        out[:] = self.a["life"]
-        return out
-
     def expected_rul(self) -> np.ndarray:
         """(n, 2) expected standard flights to failure at the fitted parts' mean rates."""
         a, wm = self.a, self.setup.world
@@ -144,4 +202,4 @@ class ActuatorBatch(ActuatorState):
         return out
 
 
-__all__ = ["ActuatorBatch"]
+__all__ = ["REPLACED", "ActuatorBatch"]

@@ -274,12 +274,13 @@ def _moments(e: int, bank: tuple, model: FilterModel, work: tuple) -> tuple:
 
 @njit(cache=True)
 def learn_row(e: int, bank: tuple, pending: np.ndarray, flight_sum: np.ndarray,
-              flight_count: np.ndarray, status: np.ndarray, work: tuple, model: FilterModel,
-              handle: tuple) -> None:  # fmt: skip
+              flight_count: np.ndarray, batch_usage: np.ndarray, status: np.ndarray,
+              work: tuple, model: FilterModel, handle: tuple) -> None:  # fmt: skip
     """Row e's filters learn from the mean of its batch of in-flight learning features (the
     module docstring); the batch is emptied. The batch's ``m`` flights were flown at states
     from ``m`` flights ago to one flight ago: each filter is predicted to ``m // 2`` flights
-    into the batch (the mean state), updated there, and the rest stays pending."""
+    into the batch (the mean state: the usage of the batch's last ``m - m // 2`` flights,
+    ``batch_usage * (m - m // 2) / m``, stays pending), updated there."""
     m = flight_count[e]
     if m == 0:
         return
@@ -288,8 +289,10 @@ def learn_row(e: int, bank: tuple, pending: np.ndarray, flight_sum: np.ndarray,
         means[j] = flight_sum[e, j] / m
         flight_sum[e, j] = 0.0
     flight_count[e] = 0
-    after = m - m // 2
+    half = m - m // 2
     for p in range(2):
+        after = (batch_usage[e, p] * half) / m
+        batch_usage[e, p] = 0.0
         d = pending[e, p] - after
         if d > 0 and status[e] == 0:
             _predict(e, p, d, bank, pending, status, work, model, handle)
@@ -309,14 +312,16 @@ def learn_row(e: int, bank: tuple, pending: np.ndarray, flight_sum: np.ndarray,
 
 @njit(cache=True)
 def test_row(e: int, g1: float, g3: float, bank: tuple, pending: np.ndarray,
-             flight_sum: np.ndarray, flight_count: np.ndarray, status: np.ndarray, work: tuple,
-             model: FilterModel, handle: tuple) -> tuple:  # fmt: skip
+             flight_sum: np.ndarray, flight_count: np.ndarray, batch_usage: np.ndarray,
+             status: np.ndarray, work: tuple, model: FilterModel,
+             handle: tuple) -> tuple:  # fmt: skip
     """Row e's filters learn from a pre-flight test's G1 (spring) and G3 (seal) (module
     docstring); returns both corrected to a healthy new installation (NaN where not
     reached because of a non-zero status)."""
     corrected = (np.nan, np.nan)
     if flight_count[e] > 0:
-        learn_row(e, bank, pending, flight_sum, flight_count, status, work, model, handle)
+        learn_row(e, bank, pending, flight_sum, flight_count, batch_usage, status, work, model,
+                  handle)  # fmt: skip
     for p in range(2):
         d = pending[e, p]
         if d > 0 and status[e] == 0:
@@ -370,6 +375,10 @@ def refresh_rows(rows: np.ndarray, stale: np.ndarray, bank: tuple, tables: tuple
             stale[e] = False
 
 
+#: public names of the filters' prediction and survival steps
+predict_filter = _predict
+survive_filters = _survive
+
 __all__ = [
     "SLOPE_STEP",
     "STATUS_MESSAGES",
@@ -380,8 +389,10 @@ __all__ = [
     "effect_likelihood",
     "fraction_moments",
     "learn_row",
+    "predict_filter",
     "refresh_row",
     "refresh_rows",
+    "survive_filters",
     "test_row",
     "work_arrays",
 ]

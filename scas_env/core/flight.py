@@ -192,6 +192,43 @@ def wear_flights_to_failure(
 
 
 @njit(cache=True)
+def crack_after_flights(
+    crack_m: float,
+    theta: float,
+    handle: tuple,
+    flights: int,
+    dmg_grid: np.ndarray,
+    dmg_rate: np.ndarray,
+    dmg_cum: np.ndarray,
+    dmg_cells: np.ndarray,
+    dmg_inv_cell: float,
+    cv_log_depth: np.ndarray,
+    cv_values: np.ndarray,
+    dormant_m: float,
+) -> float:
+    """The crack (m) after ``flights`` standard flights, each growing it with the next normal
+    of ``handle`` (the spring's own growth stream: the draws are used up)."""
+    crack = crack_m
+    for _ in range(flights):
+        crack = crack_after_flight(
+            crack, theta, standard_normal(handle), 1.0, dmg_grid, dmg_rate, dmg_cum,
+            dmg_cells, dmg_inv_cell, cv_log_depth, cv_values, dormant_m,
+        )  # fmt: skip
+    return crack
+
+
+@njit(cache=True)
+def wear_after_flights(
+    wear_m: float, rate_m: float, wear_cv: float, handle: tuple, flights: int
+) -> float:
+    """The wear (m) after ``flights`` standard flights (:func:`crack_after_flights`)."""
+    wear = wear_m
+    for _ in range(flights):
+        wear = wear_after_flight(wear, rate_m, wear_cv, standard_normal(handle), 1.0)
+    return wear
+
+
+@njit(cache=True)
 def expected_rul(
     crack_m: np.ndarray,
     wear_m: np.ndarray,
@@ -229,11 +266,13 @@ def expected_rul(
 
 __all__ = [
     "crack_after_flight",
+    "crack_after_flights",
     "crack_flights_to_failure",
     "expected_rul",
     "features_at",
     "interp_scalar",
     "lognormal_factor",
     "wear_after_flight",
+    "wear_after_flights",
     "wear_flights_to_failure",
 ]

@@ -17,13 +17,14 @@ Everything here runs a few times per episode; the flight path is
 
 from __future__ import annotations
 
-import copy
 import math
+from collections.abc import Iterator
+from contextlib import contextmanager
 from dataclasses import replace
 
 import numpy as np
 
-from prognostics.normals import NormalStream
+from prognostics.normals import Handle, NormalStream, handle_of
 from scas_env.actuator.health import CRACKED_SPRING, HealthState, actuator_config
 from scas_env.actuator.physics.spring import failure_depth_from_params
 from scas_env.actuator.sensing import draw_window, flight_window, ground_test
@@ -33,8 +34,19 @@ from scas_env.actuator.uncertainty import (
     draw_unit,
     truncated_normal,
 )
-from scas_env.core.filters import STATUS_MESSAGES, learn_row, work_arrays
-from scas_env.core.flight import crack_flights_to_failure, wear_flights_to_failure
+from scas_env.core.filters import (
+    STATUS_MESSAGES,
+    learn_row,
+    predict_filter,
+    survive_filters,
+    work_arrays,
+)
+from scas_env.core.flight import (
+    crack_after_flights,
+    crack_flights_to_failure,
+    wear_after_flights,
+    wear_flights_to_failure,
+)
 from scas_env.core.setup import (
     EFFECT_FEATURES,
     FLIGHT_FEATURES,
@@ -91,12 +103,15 @@ def reset_row(batch: ActuatorState, e: int, np_random: np.random.Generator) -> N
     record_reference(batch, e)
     _clear_counters(batch, e)
     _reset_monitor(batch, e)
+    if st.scenario.initial_health == "in_service":
+        _in_service(batch, e, rngs["parts"].random(2))
 
 
 def _clear_counters(batch: ActuatorState, e: int) -> None:
     a = batch.a
     for name in (
-        "pending", "flight_sum", "flight_count", "det_n", "detected", "test_age", "no_go",
+        "pending", "flight_sum", "flight_count", "batch_usage", "det_n", "detected", "broken",
+        "test_age", "no_go",
         "part_age", "downtime", "slot", "flown", "tests", "no_go_count", "cost", "revenue",
         "failures", "replacements", "wasted_sum", "wasted_count", "terms", "wasted_now",
     ):  # fmt: skip
@@ -130,6 +145,53 @@ def _fit_spring(
         else st.calibration.spring_failure_depth_m
     )
     return unit
+
+
+def _in_service(batch: ActuatorState, e: int, used: np.ndarray) -> None:
+    """Each part of row ``e`` has flown ``floor(used * life)`` standard flights (its own
+    growth draws used up, its age known); its filter is the new-part prior predicted over
+    them (the filter stream) and conditioned on the part having survived."""
+    st, a = batch.setup, batch.a
+    wm, cal = st.world, st.calibration
+    for p, part in enumerate(PARTS):
+        life = float(a["life"][e, p])
+        flights = int(used[p] * life) if math.isfinite(life) else 0
+        if flights == 0:
+            continue
+        handle = tuple(int(v) for v in a["h_growth"][e, p])
+        if part == "spring" and st.scenario.crack_active:
+            a["crack"][e] = crack_after_flights(
+                float(a["crack"][e]), float(a["theta"][e]), handle, flights, *wm.damage,
+                wm.cv_log_depth, wm.cv_values, wm.dormant_m,
+            )  # fmt: skip
+        elif part == "seal" and st.scenario.wear_active:
+            rate = cal.wear_rate_m_per_flight * float(a["wmult"][e])
+            a["wear"][e] = wear_after_flights(
+                float(a["wear"][e]), rate, wm.wear_cv, handle, flights
+            )
+        a["life"][e, p] -= flights
+        a["part_age"][e, p] = flights
+        a["pending"][e, p] = float(flights)
+    predict_and_survive(batch, e)
+
+
+def predict_and_survive(batch: ActuatorState, e: int) -> None:
+    """Row ``e``'s filters predicted over the flights pending and conditioned on both parts
+    having survived them (the filter stream; :mod:`scas_env.core.filters`)."""
+    a = batch.a
+    status = a["status"]
+    status[e] = 0
+    work = work_arrays(batch.setup.n_particles, len(batch.a["flight_sum"][e]))
+    handle = tuple(int(v) for v in a["h_filter"][e])
+    filt = batch.setup.filters
+    for p in range(2):
+        d = float(a["pending"][e, p])
+        if d > 0 and status[e] == 0:
+            predict_filter(e, p, d, batch.bank, a["pending"], status, work, filt, handle)
+    if status[e] == 0:
+        survive_filters(e, batch.bank, status, work, filt, handle)
+    a["stale"][e] = True
+    raise_status(int(status[e]))
 
 
 def _random_health(batch: ActuatorState, e: int, life_used: np.ndarray) -> None:
@@ -168,21 +230,36 @@ def flights_to_failure(batch: ActuatorState, e: int, part: str) -> float:
     or the crack dormant)."""
     st, a = batch.setup, batch.a
     cal, wm = st.calibration, st.world
-    copied = copy.deepcopy(batch.rngs[e][f"{part}_growth"])  # alive while its handle is used
-    draws = NormalStream(copied).handle
     if part == "spring":
         if not st.scenario.crack_active or a["crack"][e] < cal.crack_dormant_below_m:
             return math.inf
-        return crack_flights_to_failure(
-            float(a["crack"][e]), float(a["fail"][e]), float(a["theta"][e]), draws, *wm.damage,
-            wm.cv_log_depth, wm.cv_values, wm.dormant_m, MAX_LIFE_FLIGHTS,
-        )  # fmt: skip
-    if not st.scenario.wear_active:
+    elif not st.scenario.wear_active:
         return math.inf
-    rate = cal.wear_rate_m_per_flight * float(a["wmult"][e])
-    return wear_flights_to_failure(
-        float(a["wear"][e]), rate, wm.wear_cv, cal.seal_critical_wear_m, draws, MAX_LIFE_FLIGHTS
-    )
+    with replayed(batch.rngs[e][f"{part}_growth"]) as draws:
+        if part == "spring":
+            return crack_flights_to_failure(
+                float(a["crack"][e]), float(a["fail"][e]), float(a["theta"][e]), draws,
+                *wm.damage, wm.cv_log_depth, wm.cv_values, wm.dormant_m, MAX_LIFE_FLIGHTS,
+            )  # fmt: skip
+        rate = cal.wear_rate_m_per_flight * float(a["wmult"][e])
+        return wear_flights_to_failure(
+            float(a["wear"][e]), rate, wm.wear_cv, cal.seal_critical_wear_m, draws,
+            MAX_LIFE_FLIGHTS,
+        )  # fmt: skip
+
+
+@contextmanager
+def replayed(rng: np.random.Generator) -> Iterator[Handle]:
+    """Draw ahead from ``rng`` (its kernel handle), then put it back where it was: what drawing
+    from a ``copy.deepcopy`` of it gives, ~15x faster (the bit generator's state saved and
+    restored; tested equal)."""
+    bit_generator = rng.bit_generator
+    saved = bit_generator.state
+    try:
+        with bit_generator.lock:
+            yield handle_of(rng)
+    finally:
+        bit_generator.state = saved
 
 
 def next_lives(batch: ActuatorState, e: int, part: str, count: int) -> list[float]:
@@ -192,11 +269,15 @@ def next_lives(batch: ActuatorState, e: int, part: str, count: int) -> list[floa
     if isinstance(count, bool) or not isinstance(count, int) or count < 0:
         raise ValueError(f"count = {count!r} must be an integer >= 0")
     scratch = batch.scratch_row(e)
-    rng = copy.deepcopy(batch.rngs[e][f"{part}_parts"])
+    rng = batch.rngs[e][f"{part}_parts"]
+    saved = rng.bit_generator.state
     lives = []
-    for _ in range(count):
-        _fit_part(scratch, 0, part, rng, look_ahead=False)
-        lives.append(float(scratch.a["life"][0, PARTS.index(part)]))
+    try:
+        for _ in range(count):
+            _fit_part(scratch, 0, part, rng, look_ahead=False)
+            lives.append(float(scratch.a["life"][0, PARTS.index(part)]))
+    finally:
+        rng.bit_generator.state = saved
     return lives
 
 
@@ -358,8 +439,8 @@ def learn_now(batch: ActuatorState, e: int) -> None:
     status[e] = 0
     work = work_arrays(batch.setup.n_particles, len(batch.a["flight_sum"][e]))
     handle = tuple(int(v) for v in a["h_filter"][e])
-    learn_row(e, batch.bank, a["pending"], a["flight_sum"], a["flight_count"], status, work,
-              batch.setup.filters, handle)  # fmt: skip
+    learn_row(e, batch.bank, a["pending"], a["flight_sum"], a["flight_count"], a["batch_usage"],
+              status, work, batch.setup.filters, handle)  # fmt: skip
     a["stale"][e] = True
     raise_status(int(status[e]))
 

@@ -20,7 +20,7 @@ from scas_env.actuator.config import Validated, param
 
 FIDELITIES = ("surrogate", "physics")
 OBS_MODES = ("features+rul", "features", "state", "dict")
-INITIAL_HEALTH = ("new", "random")
+INITIAL_HEALTH = ("new", "random", "in_service")
 PREFLIGHT = ("on_demand", "every_flight")
 
 
@@ -37,8 +37,12 @@ class Scenario(Validated):
     obs_mode : ``"features+rul"``, ``"features"`` (no particle filter), ``"state"`` (true
         severities and lives: the oracle's view) or ``"dict"`` (every quantity, for
         inspection).
-    initial_health : ``"new"`` (new parts at reset) or ``"random"`` (each part starts at a
-        uniformly drawn fraction of its life, as on a fleet in service).
+    initial_health : ``"new"`` (new parts at reset), ``"random"`` (each part starts at a
+        uniformly drawn fraction of its life, its age unknown to the monitor) or
+        ``"in_service"`` (each part has flown a uniformly drawn fraction of its own life,
+        grown by its own draws; the operator knows its age, and the monitor's filters start
+        from the new-part prior predicted over those flights and conditioned on the part
+        having survived them: a fleet in service with its maintenance records).
     preflight : ``"on_demand"`` (the test runs when action 1 asks for it and costs
         ``test_usd``) or ``"every_flight"`` (the paper's concept: the test runs at every
         power-up, before every flight, at no cost; action 1 then equals action 0).

@@ -68,7 +68,13 @@ class WorldModel(NamedTuple):
     """The world kernels' constants: the surrogate's grids (fractions) and (3, F, n_crack,
     n_wear) stack of mean, unit std and run std; the growth table's damage arguments; the
     whole-flight crack CV against log depth; the dormant depth (m), wear CV, mean wear per
-    flight (m), critical wear (m); which faults grow."""
+    flight (m), critical wear (m); which faults grow. Per mission type ``k`` (0: the
+    standard mission, whose values are the calibration's own): the crack growth table's rates
+    and damage integral on the calibration's grid (``type_rate[k]``, ``type_cum[k]``), the
+    whole-flight crack CV against log depth (``type_cv_log_depth[k]``, ``type_cv[k]``), the
+    seals' wear multiplier and CV, and the usage a flight adds to the filters' pending
+    flights: the crack multiplier on the grid (read at the spring filter's mean depth) and the
+    wear multiplier."""
 
     crack_grid: np.ndarray
     wear_grid: np.ndarray
@@ -84,6 +90,13 @@ class WorldModel(NamedTuple):
     seal_critical_m: float
     crack_active: bool
     wear_active: bool
+    type_rate: np.ndarray
+    type_cum: np.ndarray
+    type_cv_log_depth: tuple
+    type_cv: tuple
+    type_wear_mult: np.ndarray
+    type_wear_cv: np.ndarray
+    type_crack_mult: np.ndarray
 
 
 class DetectorModel(NamedTuple):
@@ -108,6 +121,9 @@ class Setup:
     costs: CostModel
     calibration: Calibration
     surrogate: SurrogateModel
+    #: mission types the batch flies (``scas_env.actuator.mission_types``), the standard
+    #: one first; a row's ``mtype`` indexes them
+    mission_types: tuple[str, ...] = ("standard",)
     world: WorldModel = field(init=False)
     filters: FilterModel = field(init=False)
     detector: DetectorModel = field(init=False)
@@ -129,6 +145,7 @@ class Setup:
         ground_idx = np.array([sur.index(f) for f in GROUND_FEATURES], dtype=np.int64)
         crack_cv, wear_cv = cal.flight_scatter("whole_flight")
         table = paris_crack_model(cal.crack_depth_m, cal.crack_rate_m_per_flight)
+        types = _mission_tables(self.mission_types, cal, table)
         world = WorldModel(
             crack_grid=sur.crack_grid,
             wear_grid=sur.wear_grid,
@@ -144,6 +161,7 @@ class Setup:
             seal_critical_m=float(cal.seal_critical_wear_m),
             crack_active=bool(s.crack_active),
             wear_active=bool(s.wear_active),
+            **types,
         )
         limits = AirworthinessLimits.from_surrogate(
             sur, reference_tests=int(s.reference_tests), catch=s.acceptance_catch
@@ -164,6 +182,16 @@ class Setup:
             np.array([FLIGHT_FEATURES.index(f) for f in LEARNING_FEATURES], dtype=np.int64),
         )
         put(self, "unit_z_draws", 1 + int(max(flight_idx.max(), ground_idx.max())))
+        for name in KERNEL_TABLES:
+            put(self, name, read_only(getattr(self, name)))
+
+    def __setstate__(self, state: dict) -> None:
+        """After ``pickle`` or ``copy.deepcopy``, which give every array back writeable: the
+        kernels' tables read-only again, so that the kernels see the types they were compiled
+        for (otherwise each kernel compiles a second time, for writeable arrays)."""
+        self.__dict__.update(state)
+        for name in KERNEL_TABLES:
+            object.__setattr__(self, name, read_only(state[name]))
 
     @property
     def n_particles(self) -> int:
@@ -172,6 +200,62 @@ class Setup:
     @property
     def physics(self) -> bool:
         return self.scenario.fidelity == "physics"
+
+
+#: the :class:`Setup` fields the kernels read, every array in them read-only
+KERNEL_TABLES = ("world", "filters", "detector", "go_limits", "learn_cols")
+
+
+def read_only(value: object) -> object:
+    """``value`` with every array in it (through tuples and named tuples) a read-only view."""
+    if isinstance(value, np.ndarray):
+        view = value.view()
+        view.flags.writeable = False
+        return view
+    if isinstance(value, tuple):
+        items = [read_only(v) for v in value]
+        return type(value)(*items) if hasattr(value, "_fields") else tuple(items)
+    return value
+
+
+def _mission_tables(
+    names: tuple[str, ...], cal: Calibration, table: TabulatedRateModel
+) -> dict[str, object]:
+    """The per-mission-type fields of :class:`WorldModel` (its docstring); the standard
+    mission (first) takes the calibration's own table and whole-flight scatter."""
+    if not names or names[0] != "standard" or len(set(names)) != len(names):
+        raise ValueError(
+            f"mission_types = {names!r} must be distinct mission types, 'standard' first"
+        )
+    grid = cal.crack_depth_m
+    crack_cv, wear_cv = cal.flight_scatter("whole_flight")
+    rates, cums = [table.table_args[1]], [table.table_args[2]]
+    cv_depth, cv = [np.log(cal.crack_cv_depth_m)], [np.asarray(crack_cv, dtype=np.float64)]
+    wear_mult, wear_cvs, crack_mult = [1.0], [float(wear_cv)], [np.ones(grid.size)]
+    if len(names) > 1:
+        from scas_env.actuator.mission_damage import default_mission_damage
+
+        damage = default_mission_damage()
+        for name in names[1:]:
+            row = damage.types[name]
+            mult = damage.crack_multiplier_at(name, grid)
+            args = paris_crack_model(grid, cal.crack_rate_m_per_flight * mult).table_args
+            rates.append(args[1])
+            cums.append(args[2])
+            cv_depth.append(np.log(damage.depth_m))
+            cv.append(np.asarray(row.crack_cv, dtype=np.float64))
+            wear_mult.append(float(row.wear_multiplier))
+            wear_cvs.append(float(row.wear_cv))
+            crack_mult.append(np.asarray(mult, dtype=np.float64))
+    return {
+        "type_rate": np.stack(rates),
+        "type_cum": np.stack(cums),
+        "type_cv_log_depth": tuple(cv_depth),
+        "type_cv": tuple(cv),
+        "type_wear_mult": np.array(wear_mult),
+        "type_wear_cv": np.array(wear_cvs),
+        "type_crack_mult": np.stack(crack_mult),
+    }
 
 
 def effect_tables(
@@ -287,6 +371,7 @@ __all__ = [
     "EFFECT_FEATURES",
     "FLIGHT_FEATURES",
     "GROUND_FEATURES",
+    "KERNEL_TABLES",
     "LEARNING_FEATURES",
     "MAX_LIFE_FLIGHTS",
     "PARTS",
@@ -297,4 +382,5 @@ __all__ = [
     "WorldModel",
     "effect_tables",
     "lognormal_sigma",
+    "read_only",
 ]

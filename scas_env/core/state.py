@@ -23,7 +23,7 @@ from typing import Any
 
 import numpy as np
 
-from prognostics.normals import NormalStream
+from prognostics.normals import handle_of
 from scas_env.core.setup import (
     EFFECT_FEATURES,
     FLIGHT_FEATURES,
@@ -113,6 +113,7 @@ class ActuatorState:
             "pending": np.zeros((n, 2)),
             "flight_sum": np.zeros((n, len(LEARNING_FEATURES))),
             "flight_count": np.zeros(n, dtype=i8),
+            "batch_usage": np.zeros((n, 2)),
             "rul_sorted": np.zeros((n, 2, p)),
             "rul_cum_w": np.zeros((n, 2, p + 1)),
             "rul_suffix_w": np.zeros((n, 2, p + 1)),
@@ -140,12 +141,20 @@ class ActuatorState:
             "replacements": np.zeros((n, 2), dtype=i8),
             "wasted_sum": np.zeros((n, 2)),
             "wasted_count": np.zeros((n, 2), dtype=i8),
-            # this slot: reward terms (USD, REWARD_TERMS order), reward, flown, failed
+            # parts that failed and wait for their repair (a fleet's deferred repairs)
+            "broken": np.zeros((n, 2), dtype=b),
+            # the plan of a slot: each row's flights if it flies, its aircraft (rows of one
+            # aircraft fly together), its mission type, the value of each flight it flies (USD)
+            "flights": np.ones(n, dtype=i8),
+            "group": np.arange(n, dtype=i8),
+            "mtype": np.zeros(n, dtype=i8),
+            "flight_value": np.full(n, float(setup.costs.flight_value_usd)),
+            # this slot: reward terms (USD, REWARD_TERMS order), reward, flights flown, failed
             # parts, the event left to Python, a filter error, true life thrown away by a
             # preventive replacement (flights)
             "terms": np.zeros((n, 5)),
             "reward": np.zeros(n),
-            "flew": np.zeros(n, dtype=b),
+            "flew": np.zeros(n, dtype=i8),
             "failed": np.zeros((n, 2), dtype=b),
             "event": np.zeros(n, dtype=i8),
             "status": np.zeros(n, dtype=i8),
@@ -163,7 +172,8 @@ class ActuatorState:
                                            "life", "reference"))  # fmt: skip
         self.bank = (a["x"], a["log_theta"], a["w"], a["log_w"], a["aux"])
         self._monitor = (self.bank, a["pending"], a["flight_sum"], a["flight_count"],
-                         a["stale"], a["det_buf"], a["det_n"], a["detected"])  # fmt: skip
+                         a["stale"], a["det_buf"], a["det_n"], a["detected"],
+                         a["batch_usage"])  # fmt: skip
         self._memory = (a["last"], a["test_age"], a["no_go"])
         self._books = tuple(a[k] for k in ("part_age", "downtime", "slot", "flown", "tests",
                                            "no_go_count", "cost", "revenue"))  # fmt: skip
@@ -173,7 +183,6 @@ class ActuatorState:
                        a["rul_low"])  # fmt: skip
         c = st.costs
         self._prices = (
-            float(c.flight_value_usd),
             float(c.test_usd),
             float(c.no_go_inspection_usd),
             float(c.failure_total_usd),
@@ -204,7 +213,7 @@ class ActuatorState:
     def set_handle(self, e: int, name: str) -> None:
         """Row ``e``'s kernels draw from its stream ``name`` (after it is made or copied)."""
         column, p = _HANDLES[name]
-        handle = NormalStream(self.rngs[e][name]).handle
+        handle = handle_of(self.rngs[e][name])
         if p is None:
             self.a[column][e] = handle
         else:

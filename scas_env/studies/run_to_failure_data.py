@@ -26,6 +26,8 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from scas_env.utils.results_folder import check_destination, partial_folder
+
 if TYPE_CHECKING:
     import pyarrow as pa
 
@@ -238,15 +240,11 @@ def check_formats(formats: tuple[str, ...]) -> None:
 
 
 def check_output(out: str | os.PathLike[str], overwrite: bool) -> Path:
-    """The output folder; FileExistsError if it exists and ``overwrite`` is false."""
-    path = Path(out)
-    if path.exists() and not overwrite:
-        raise FileExistsError(
-            f"out = {str(path)!r} exists; pass overwrite=True (--overwrite) to replace it"
-        )
-    if path.exists() and not path.is_dir():
-        raise ValueError(f"out = {str(path)!r} exists and is not a folder")
-    return path
+    """The output folder, checked by the rule of every results folder
+    (:func:`scas_env.utils.results_folder.check_destination`: an empty folder is accepted, a
+    non-empty one needs ``overwrite`` (``FileExistsError``), a file's name is refused)."""
+    check_destination(out, overwrite)
+    return Path(out)
 
 
 def write_dataset(
@@ -269,9 +267,8 @@ def write_dataset(
     check_formats(formats)
     path = check_output(out, overwrite)
     path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = Path(tempfile.mkdtemp(prefix=f".{path.name}.", dir=path.parent))
     names: dict[str, str] = {}
-    try:
+    with partial_folder(path) as tmp:  # removed on any exit, SIGTERM included
         for name, table in tables.items():
             if table.schema != arrow_schema(name):
                 raise ValueError(f"table {name!r} does not have the dataset schema")
@@ -285,9 +282,6 @@ def write_dataset(
         (tmp / "datacard.md").write_text(data_card_markdown(card))
         names["datacard.json"] = names["datacard.md"] = ""
         _replace_folder(tmp, path, overwrite)
-    except BaseException:
-        shutil.rmtree(tmp, ignore_errors=True)
-        raise
     return {key: path / key for key in names}
 
 

@@ -6,13 +6,25 @@ running in the parent is never forked), so calling scripts need the usual
 ``if __name__ == "__main__":`` guard, and each worker runs one numba, one BLAS and one torch
 thread. With one worker the chunks run in the calling process with the same single-thread
 settings (:func:`single_threaded`), restored when :func:`map_chunks` returns.
+
+Interrupts: an exception in the calling process while workers run (a task's error, Ctrl-C,
+or SIGTERM, which :func:`~scas_env.utils.atomic_file.sigterm_raises` turns into one)
+cancels the queued chunks and terminates the workers at once; workers ignore SIGINT (the
+parent stops them) and end with their parent however it ends (``PR_SET_PDEATHSIG`` on Linux,
+a watchdog thread elsewhere), so no worker outlives the command.
 """
 
 from __future__ import annotations
 
+import contextlib
+import ctypes
 import math
 import multiprocessing
+import os
+import signal
 import sys
+import threading
+import time
 from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from contextlib import contextmanager
@@ -21,6 +33,8 @@ from typing import Any, TypeVar
 import numba
 import threadpoolctl
 from tqdm.auto import tqdm
+
+from scas_env.utils.atomic_file import sigterm_raises
 
 T = TypeVar("T")
 R = TypeVar("R")
@@ -43,11 +57,45 @@ class _Scope:
 _SCOPES: list[_Scope] = []
 
 
-def init_worker() -> None:
-    """Initializer of every worker process (and of Ray tasks): see :func:`single_thread`."""
+def init_worker(parent_pid: int | None = None) -> None:
+    """Initializer of every worker process (and of Ray tasks): see :func:`single_thread`.
+
+    With ``parent_pid`` (the pool of :func:`map_chunks`), the worker also ends with its
+    parent (:func:`_end_with_parent`) and ignores SIGINT: a Ctrl-C in a terminal reaches
+    every process of the group, and the parent, which gets it too, stops the workers itself
+    (a worker interrupted on its own would print a traceback and take its next task).
+    """
     global _IN_WORKER
     _IN_WORKER = True
+    if parent_pid is not None:
+        signal.signal(signal.SIGINT, signal.SIG_IGN)
+        _end_with_parent(parent_pid)
     single_thread()
+
+
+def _end_with_parent(parent_pid: int) -> None:
+    """End this process when ``parent_pid`` (its parent) ends, however it ends (SIGKILL
+    included): on Linux the kernel sends SIGKILL (``prctl(PR_SET_PDEATHSIG)``); elsewhere a
+    daemon thread checks the parent id every 0.2 s. A parent already gone: exit now."""
+    if sys.platform.startswith("linux"):
+        try:
+            libc = ctypes.CDLL(None, use_errno=True)
+            if libc.prctl(_PR_SET_PDEATHSIG, signal.SIGKILL, 0, 0, 0) == 0:
+                if os.getppid() != parent_pid:  # died before prctl took effect
+                    os._exit(1)
+                return
+        except (OSError, AttributeError):  # no prctl: use the thread
+            pass
+
+    def watch() -> None:
+        while os.getppid() == parent_pid:
+            time.sleep(0.2)
+        os._exit(1)
+
+    threading.Thread(target=watch, name="end-with-parent", daemon=True).start()
+
+
+_PR_SET_PDEATHSIG = 1  # <linux/prctl.h>
 
 
 def in_worker() -> bool:
@@ -132,13 +180,53 @@ def map_chunks(
                     done[k] = fn(*shared, chunk)
                     bar.update(len(chunk))
         else:
-            context = multiprocessing.get_context("spawn")
-            with ProcessPoolExecutor(
-                n_workers, mp_context=context, initializer=init_worker
-            ) as pool:
-                futures = {pool.submit(fn, *shared, chunk): k for k, chunk in enumerate(chunks)}
-                for future in as_completed(futures):
-                    k = futures[future]
-                    done[k] = future.result()
-                    bar.update(len(chunks[k]))
+            with sigterm_raises():  # SIGTERM stops the workers like Ctrl-C does
+                _run_pool(fn, shared, chunks, done, n_workers, bar)
     return [r for chunk in done for r in chunk]
+
+
+def _run_pool(
+    fn: Callable[..., list[R]],
+    shared: tuple[Any, ...],
+    chunks: list[list[T]],
+    done: list[list[R]],
+    n_workers: int,
+    bar: Any,
+) -> None:
+    """The chunks on ``n_workers`` spawned processes, results into ``done[k]``.
+
+    On any exception here (a task's error, Ctrl-C, SIGTERM through :func:`sigterm_raises`)
+    the pool is stopped at once: queued chunks cancelled, workers terminated
+    (:func:`_stop_pool`), instead of waiting for every queued chunk to finish.
+    """
+    context = multiprocessing.get_context("spawn")
+    pool = ProcessPoolExecutor(
+        n_workers, mp_context=context, initializer=init_worker, initargs=(os.getpid(),)
+    )
+    try:
+        futures = {pool.submit(fn, *shared, chunk): k for k, chunk in enumerate(chunks)}
+        for future in as_completed(futures):
+            k = futures[future]
+            done[k] = future.result()
+            bar.update(len(chunks[k]))
+    except BaseException:
+        _stop_pool(pool)
+        raise
+    pool.shutdown(wait=True)
+
+
+def _stop_pool(pool: ProcessPoolExecutor, grace_s: float = 1.0) -> None:
+    """Cancel the queued tasks and end the workers: SIGTERM, then SIGKILL after
+    ``grace_s`` for any still alive; waits for them to exit (no zombie, no orphan)."""
+    processes = list((getattr(pool, "_processes", None) or {}).values())
+    pool.shutdown(wait=False, cancel_futures=True)
+    for process in processes:
+        with contextlib.suppress(Exception):
+            process.terminate()
+    deadline = time.monotonic() + grace_s
+    for process in processes:
+        with contextlib.suppress(Exception):
+            process.join(max(0.0, deadline - time.monotonic()))
+            if process.is_alive():
+                process.kill()
+                process.join(grace_s)

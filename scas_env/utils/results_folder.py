@@ -4,16 +4,17 @@
 (``.<name>.partial-XXXX``); when the block ends without an exception it writes
 ``manifest.json`` (the caller's config and seeds, package and library versions, the SHA-256
 and size of every file written) and renames the folder into place in one step. On any
-exception, ``KeyboardInterrupt`` included, the temporary folder is deleted and the
-destination is untouched: a reader sees the old complete folder or the new complete one,
-never a mix.
+exception, ``KeyboardInterrupt`` included, and on SIGTERM (turned into an exception for the
+block: :func:`partial_folder`), the temporary folder is deleted and the destination is
+untouched: a reader sees the old complete folder or the new complete one, never a mix.
 
-An existing destination is refused unless ``overwrite=True``; then the old folder is moved
-aside, the new one renamed in, and the old one deleted (replaced whole: no old PNG next to a
-new CSV). :func:`check_destination` runs the same checks without doing anything (call it
-before hours of simulation, so a bad ``--out`` fails first); :func:`timestamped` gives a
-fresh sibling name instead of overwriting; :func:`verify_results_folder` re-checks the
-hashes.
+The destination is a folder: a name ending in a file suffix (``run.json``) is refused. An
+existing empty folder is filled; a non-empty one is refused unless ``overwrite=True``; then
+the old folder is moved aside, the new one renamed in, and the old one deleted (replaced
+whole: no old PNG next to a new CSV). :func:`check_destination` runs the same checks
+without doing anything (call it before hours of simulation, so a bad ``--out`` fails first;
+every command's ``--out`` goes through it); :func:`timestamped` gives a fresh sibling name
+instead of overwriting; :func:`verify_results_folder` re-checks the hashes.
 
     >>> import tempfile, json
     >>> out = Path(tempfile.mkdtemp()) / "run"
@@ -45,6 +46,7 @@ from pathlib import Path
 from typing import Any
 
 from scas_env._version import __version__
+from scas_env.utils.atomic_file import sigterm_raises
 
 MANIFEST = "manifest.json"
 #: Distributions whose versions go into every manifest (absent ones are recorded as such).
@@ -60,7 +62,21 @@ LIBRARIES: tuple[str, ...] = (
 
 
 class ResultsFolderError(ValueError):
-    """The destination cannot be written (exists, not a folder, parent not writable)."""
+    """The destination cannot be written (exists, not a folder, parent not writable, a file's
+    name)."""
+
+
+class ResultsFolderExistsError(ResultsFolderError, FileExistsError):
+    """The destination exists and is not empty, and overwriting was not asked for."""
+
+
+#: Suffixes of files, not folders: ``--out results/tuning.json`` would make a folder named
+#: ``tuning.json`` holding ``results.csv``..., so an output folder ending in one is refused.
+FILE_SUFFIXES = frozenset(
+    (".arrow", ".csv", ".feather", ".gz", ".h5", ".hdf5", ".html", ".json", ".log", ".md",
+     ".npy", ".npz", ".parquet", ".pdf", ".pkl", ".png", ".pt", ".pth", ".svg", ".tar",
+     ".toml", ".tsv", ".txt", ".xlsx", ".yaml", ".yml", ".zip")
+)  # fmt: skip
 
 
 def _json_default(value: Any) -> Any:
@@ -83,37 +99,53 @@ def _nearest_existing(path: Path) -> Path:
     return probe
 
 
-def check_destination(path: str | Path, overwrite: bool = False) -> Path:
+def check_destination(
+    path: str | Path, overwrite: bool = False, *, option: str | None = None
+) -> Path:
     """Check that ``path`` can receive a results folder; returns it absolute. Does nothing.
 
-    Raises :class:`ResultsFolderError` naming the path when it exists, is not empty and
-    ``overwrite`` is False, when it exists and is not a folder, or when its nearest
-    existing ancestor is not a writable folder (tried by creating and removing a temporary
-    folder there).
+    The one rule of every command that writes a results folder (``--out``):
+
+    - a name ending in a file suffix (:data:`FILE_SUFFIXES`, e.g. ``.json``) is refused: the
+      path names a folder, the files go inside it;
+    - an existing folder is accepted if empty, and if not empty only with ``overwrite``
+      (:class:`ResultsFolderExistsError`, also a ``FileExistsError``);
+    - an existing file, or a file where a parent folder should be, is refused;
+    - the nearest existing ancestor must be a writable folder (tried by creating and removing
+      a temporary folder there: permission bits alone miss read-only file systems and root).
+
+    Errors are :class:`ResultsFolderError` naming the path; ``option`` (e.g. ``"--out"``)
+    words them for a command line (``--out r.json names a folder ...``).
     """
     if not isinstance(overwrite, bool):
         raise TypeError(f"overwrite = {overwrite!r} must be True or False")
     dest = Path(path).expanduser().absolute()
-    if dest.exists() or dest.is_symlink():
-        if not dest.is_dir() or dest.is_symlink():
-            raise ResultsFolderError(
-                f"results destination {dest} exists and is not a folder; choose another path"
-            )
-        if not overwrite and any(dest.iterdir()):  # an empty folder holds nothing to lose
-            raise ResultsFolderError(
-                f"results destination {dest} already exists; pass overwrite=True "
-                "(--overwrite) to replace it whole, or choose a new folder (e.g. timestamped)"
-            )
+    label = f"{option} {path}" if option else f"results folder {dest}"
+    replace = "--overwrite" if option else "overwrite=True (--overwrite)"
+    exists = dest.exists() or dest.is_symlink()
+    if exists and (not dest.is_dir() or dest.is_symlink()):
+        raise ResultsFolderError(
+            f"{label} exists and is not a folder; expected a folder, choose another path"
+        )
+    if dest.suffix.lower() in FILE_SUFFIXES:
+        raise ResultsFolderError(
+            f"{option or 'the results destination'} names a folder (the results files go "
+            f"inside it), not a {dest.suffix} file: {path}; choose a name without a file "
+            f"suffix, e.g. {f'{option} ' if option else ''}{Path(path).with_suffix('')}"
+        )
+    if exists and not overwrite and any(dest.iterdir()):  # an empty one holds nothing to lose
+        raise ResultsFolderExistsError(
+            f"{label} already exists and is not empty; pass {replace} to replace it "
+            "whole, or choose a new folder (e.g. timestamped)"
+        )
     anchor = _nearest_existing(dest.parent)
     if not anchor.is_dir():
-        raise ResultsFolderError(
-            f"cannot create results folder {dest}: {anchor} exists and is not a folder"
-        )
+        raise ResultsFolderError(f"cannot create {label}: {anchor} is a file, not a folder")
     try:
         probe = tempfile.mkdtemp(prefix=".write-check-", dir=anchor)
     except OSError as err:
         raise ResultsFolderError(
-            f"cannot create results folder {dest}: {anchor} is not writable ({err.strerror})"
+            f"cannot create {label}: {anchor} is not writable ({err.strerror})"
         ) from None
     with contextlib.suppress(OSError):
         os.rmdir(probe)
@@ -202,14 +234,25 @@ def results_folder(
     seeds_text = _serialise("seeds", seeds)
     dest = check_destination(path, overwrite)
     dest.parent.mkdir(parents=True, exist_ok=True)
-    tmp = Path(tempfile.mkdtemp(prefix=f".{dest.name}.partial-", dir=dest.parent))
-    try:
+    with partial_folder(dest) as tmp:
         yield tmp
         _write_manifest(tmp, config_text, seeds_text)
         _move_into_place(tmp, dest, overwrite)
-    except BaseException:
-        shutil.rmtree(tmp, ignore_errors=True)
-        raise
+
+
+@contextmanager
+def partial_folder(dest: str | Path) -> Iterator[Path]:
+    """A new hidden folder ``.<name>.partial-XXXX`` beside ``dest`` for a result being
+    written; removed when the block ends, whatever ends it (an exception, Ctrl-C, SIGTERM:
+    :func:`~scas_env.utils.atomic_file.sigterm_raises` holds for the block), unless the
+    block renamed it into place. The parent folder must exist."""
+    dest = Path(dest)
+    with sigterm_raises():
+        tmp = Path(tempfile.mkdtemp(prefix=f".{dest.name}.partial-", dir=dest.parent))
+        try:
+            yield tmp
+        finally:
+            shutil.rmtree(tmp, ignore_errors=True)  # nothing left there after the rename
 
 
 def _move_into_place(tmp: Path, dest: Path, overwrite: bool) -> None:
@@ -236,7 +279,10 @@ def _move_into_place(tmp: Path, dest: Path, overwrite: bool) -> None:
         os.rename(old / dest.name, dest)
         old.rmdir()
         raise
-    shutil.rmtree(old, ignore_errors=True)
+    try:
+        shutil.rmtree(old, ignore_errors=True)
+    finally:  # interrupted (Ctrl-C, SIGTERM) while deleting the old folder: finish it
+        shutil.rmtree(old, ignore_errors=True)
 
 
 def verify_results_folder(path: str | Path) -> list[str]:

@@ -1,0 +1,150 @@
+"""An upper bound on a fleet episode's reward that no policy beats: the clairvoyant
+relaxation.
+
+For one episode (a seed of ``ScasFleet-v0``) everything is known in advance: the missions of
+every day and every part's remaining life and the lives of the parts that will replace it
+(each kind's parts stream hands them out in order whatever the policy does). The relaxation
+drops every constraint that costs a policy something: the crew, the spares and their lead
+times, downtime, tests, background removals; any aircraft may fly any mission (at most one
+a day); every flight counts as the least damaging mission type's. Then the best plan flies
+the ``M`` missions of largest value-plus-penalty and spreads them over the aircraft so that
+the parts used up (each replaced, at its preventive cost, just before it would fail) cost
+least:
+
+    bound = max over M [ sum of the M largest (v_k + p_k) - sum of all penalties p_k
+                          - min over sum_i m_i = M of sum_i cost_i(m_i) ],
+
+``cost_i(m)``: the replacements aircraft ``i``'s parts need to fly ``F m`` flights, each part
+kind's lives ``L_0 - 1, L_1 - 1, ...`` (safe flights) in the order its stream supplies them.
+The inner minimum is a min-plus convolution over the aircraft (exact dynamic programme).
+
+Why no policy beats it: every policy pays at least the relaxed plan's cost for the missions
+it completes (a part flown to failure costs an in-flight failure, more than its preventive
+replacement; a background swap fits new parts for more than their preventive cost; a
+damaging mission uses up lives at least as fast), earns at most ``v_k`` per mission
+(an aborted mission earns part of ``v_k``, pays ``p_k`` and the failure that aborted it,
+more than ``v_k``), and pays every penalty the plan pays. The constructor checks the cost
+conditions this needs; ``tests/test_fleet_bound.py`` checks the bound against every rule on
+fixed seeds.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+
+from scas_env.core.fleet_config import FleetConfig
+from scas_env.core.parts import next_lives
+from scas_env.core.setup import PARTS
+
+#: parts of each kind looked ahead (more are fetched when a plan needs them)
+LOOKAHEAD_PARTS = 6
+
+
+def fleet_upper_bound(seed: int, fleet: FleetConfig | None = None, **env_kwargs: Any) -> dict:
+    """The clairvoyant relaxation's bound of the episode of ``ScasFleet-v0`` seeded ``seed``
+    (module docstring): ``{"bound", "missions", "gains", "penalties", "replacement_cost"}``
+    (USD; missions flown in the best plan, their values plus penalties, every penalty)."""
+    from scas_env.fleet_env import ScasFleetEnv
+
+    env = ScasFleetEnv(fleet=fleet, **env_kwargs)
+    env.reset(seed=int(seed))
+    cfg, fb = env.config, env.fleet
+    sh = fb.shape
+    costs = env.setup.costs
+    price = {
+        "spring": float(costs.spring_replacement_usd),
+        "seal": float(costs.seal_replacement_usd),
+    }
+    _check_costs(cfg, costs, price)
+    value = np.array(cfg.mission_value_usd)
+    penalty = np.array(cfg.mission_not_flown_usd)
+    demand = fb.demand[0, : sh.days]
+    per_day = np.minimum(demand.sum(axis=1), sh.aircraft)
+    # the missions worth flying, best first: on a day with more asked than aircraft, the
+    # best of that day (value + penalty) are the ones a plan can fly
+    gains: list[float] = []
+    for d in range(sh.days):
+        day = np.repeat(value + penalty, demand[d])
+        gains.extend(sorted(day, reverse=True)[: per_day[d]])
+    gains_sorted = np.sort(np.array(gains))[::-1]
+    top = np.concatenate([[0.0], np.cumsum(gains_sorted)])
+    slowest = _slowest_crack(env)
+    batch = fb.actuators
+    cost = np.zeros((sh.aircraft, sh.days + 1))
+    flights = sh.flights * np.arange(sh.days + 1)
+    for i in range(sh.aircraft):
+        for j in range(sh.actuators):
+            e = fb.row(0, i, j)
+            for p, part in enumerate(PARTS):
+                lives = [float(batch.a["life"][e, p])]
+                lives += next_lives(batch, e, part, LOOKAHEAD_PARTS)
+                if part == "spring":
+                    lives = [life / slowest for life in lives]
+                cost[i] += price[part] * _replacements(lives, flights, batch, e, part, slowest)
+    best = _min_plus_over_aircraft(cost)
+    m = np.arange(min(best.size, top.size))
+    total = top[m] - best[m]
+    k = int(np.argmax(total))
+    penalties = float((demand * penalty).sum())
+    return {
+        "bound": float(total[k] - penalties),
+        "missions": k,
+        "gains": float(top[k]),
+        "penalties": penalties,
+        "replacement_cost": float(best[k]),
+    }
+
+
+def _check_costs(cfg: FleetConfig, costs: Any, price: dict[str, float]) -> None:
+    """The cost conditions that make the relaxation a bound (module docstring)."""
+    flight_value = max(cfg.mission_value_usd) / int(cfg.flights_per_mission)
+    if costs.failure_total_usd < max(price.values()) or costs.failure_total_usd < flight_value:
+        raise ValueError(
+            "the bound needs an in-flight failure to cost at least a preventive replacement and "
+            f"a flight's value; failure_total_usd = {costs.failure_total_usd}"
+        )
+    if cfg.background_removals and cfg.background_removal_usd < sum(price.values()):
+        raise ValueError(
+            "the bound needs a background removal to cost at least both parts' preventive "
+            f"replacements; background_removal_usd = {cfg.background_removal_usd}"
+        )
+
+
+def _slowest_crack(env: Any) -> float:
+    """The smallest crack-growth multiplier of the fleet's mission types (<= 1: the standard
+    mission is 1), which stretches a spring's life in standard flights at most by 1 / it."""
+    wm = env.setup.world
+    return float(min(1.0, wm.type_crack_mult.min()))
+
+
+def _replacements(
+    lives: list[float], flights: np.ndarray, batch: Any, e: int, part: str, slowest: float
+) -> np.ndarray:
+    """Replacements one part position needs to fly each number of ``flights``: the fitted
+    part flies ``L_0 - 1`` flights safely, each next part ``L_q - 1``."""
+    safe = np.cumsum([max(life - 1.0, 0.0) for life in lives])
+    while math.isfinite(safe[-1]) and safe[-1] < flights[-1]:
+        more = next_lives(batch, e, part, len(lives) + LOOKAHEAD_PARTS)[len(lives) - 1 :]
+        if part == "spring":
+            more = [life / slowest for life in more]
+        lives = lives + more
+        safe = np.cumsum([max(life - 1.0, 0.0) for life in lives])
+    return np.searchsorted(safe, flights, side="left").astype(np.float64)
+
+
+def _min_plus_over_aircraft(cost: np.ndarray) -> np.ndarray:
+    """``best[M] = min over sum_i m_i = M of sum_i cost[i, m_i]`` (min-plus convolution)."""
+    best = cost[0].copy()
+    for row in cost[1:]:
+        size = best.size + row.size - 1
+        out = np.full(size, np.inf)
+        for x, c in enumerate(row):
+            np.minimum(out[x : x + best.size], best + c, out=out[x : x + best.size])
+        best = out
+    return best
+
+
+__all__ = ["LOOKAHEAD_PARTS", "fleet_upper_bound"]

@@ -1,0 +1,287 @@
+"""``ScasFleet-v0``: a fleet of helicopters with three SCAS actuators each, day by day."""
+
+from __future__ import annotations
+
+from typing import Any, ClassVar
+
+import gymnasium as gym
+import numpy as np
+from gymnasium import spaces
+
+from scas_env.actuator.calibration import Calibration, calibration_for
+from scas_env.actuator.params import ScasParams
+from scas_env.actuator.surrogate import SurrogateModel, default_surrogate
+from scas_env.core.costs import CostModel
+from scas_env.core.fleet import MAINTENANCE_CHOICES, FleetBatch
+from scas_env.core.fleet_config import FleetConfig
+from scas_env.core.fleet_view import FleetView
+from scas_env.core.scenario import Scenario
+from scas_env.core.setup import Setup
+from scas_env.fleet_dashboard import draw_fleet, render_text
+
+#: the actuators' scenario of a fleet unless given: parts part-way through life, ages known
+FLEET_SCENARIO = {"initial_health": "in_service"}
+
+
+def make_fleet_setup(
+    fleet: FleetConfig | None,
+    scenario: Scenario | None,
+    cost_model: CostModel | None,
+    params: ScasParams | None,
+    calibration: Calibration | None,
+    surrogate: SurrogateModel | None,
+    fleet_fields: dict[str, Any],
+    obs_mode: str = "features+rul",
+) -> tuple[FleetConfig, Setup]:
+    """The fleet's configuration and its actuators' :class:`~scas_env.core.setup.Setup` from
+    an env's keywords, each checked (``fleet_fields``: fields of :class:`FleetConfig`;
+    ``obs_mode`` sets the actuators' scenario's: ``"state"`` shows each actuator's truth)."""
+    if fleet is not None and fleet_fields:
+        raise ValueError(
+            f"pass either fleet=FleetConfig(...) or its fields, not both: {sorted(fleet_fields)}"
+        )
+    for name, value, cls in (
+        ("fleet", fleet, FleetConfig),
+        ("scenario", scenario, Scenario),
+        ("cost_model", cost_model, CostModel),
+        ("params", params, ScasParams),
+        ("calibration", calibration, Calibration),
+        ("surrogate", surrogate, SurrogateModel),
+    ):
+        if value is not None and not isinstance(value, cls):
+            raise ValueError(f"{name} = {value!r} must be None (the default) or a {cls.__name__}")
+    config = fleet if fleet is not None else FleetConfig.from_dict(fleet_fields)
+    base = scenario if scenario is not None else Scenario(**FLEET_SCENARIO)
+    # the observation's bounds of ages and test age: the episode's flights
+    slots = int(config.episode_days) * int(config.flights_per_mission)
+    base = base.replace(
+        episode_slots=max(int(base.episode_slots), slots),
+        obs_mode="state" if obs_mode == "state" else "features+rul",
+    )
+    params = params if params is not None else ScasParams()
+    types = ("standard", *(t for t in config.mission_types if t != "standard"))
+    setup = Setup(
+        params=params,
+        scenario=base,
+        costs=cost_model if cost_model is not None else CostModel(),
+        calibration=calibration if calibration is not None else calibration_for(params),
+        surrogate=surrogate if surrogate is not None else default_surrogate(),
+        mission_types=types,
+    )
+    return config, setup
+
+
+def fleet_action_space(config: FleetConfig) -> spaces.MultiDiscrete:
+    """Per aircraft: its mission choice (``1 + 2K``), then each actuator's maintenance
+    choice (4), flattened aircraft by aircraft."""
+    per = [1 + 2 * len(config.mission_types)] + [4] * int(config.actuators_per_aircraft)
+    return spaces.MultiDiscrete(np.tile(per, int(config.aircraft)))
+
+
+class ScasFleetEnv(gym.Env):
+    """A fleet of helicopters with SCAS actuators, one crew, a pool of spares, day by day.
+
+    ## Description
+
+    ``N`` helicopters (default 8), each with ``A`` SCAS actuators (default 3: a three-axis
+    SCAS), each actuator the single env's world with its two faults (a fatigue crack in a
+    centering spring, piston-seal wear) and its monitor (features, two particle filters, RUL,
+    risk). A step is a day. Each day brings missions (a demand model drawn at reset: base
+    rate from the utilisation, seasonality, surges; types that differ in severity: their
+    Table-1 regime mix changes each part's damage per flight, measured from whole simulated
+    flights); a mission needs one free aircraft for ``F`` flights (default 2). One crew does
+    ``C`` jobs a day (default 1), each with a spare from the pools (spring kits, seal kits,
+    whole actuators from a rotable pool; base-stock replenishment with lead times). A part
+    that fails in flight ends the mission and needs an unscheduled removal; a background
+    removal (MTBUR 5,000 FH) that no feature sees takes an actuator to the shop. The task:
+    fly the missions at the least cost. The dynamics of a day:
+    :mod:`scas_env.core.fleet`.
+
+    ## Action Space
+
+    ``MultiDiscrete`` of ``N (1 + A)`` entries, aircraft by aircraft:
+
+    | entry | choices | meaning |
+    |---|---|---|
+    | mission | ``1 + 2K`` | 0 stand by; ``1..K`` fly a mission of type ``k - 1``; ``K+1..2K`` run the pre-flight test on every actuator, then fly that type |
+    | actuator ``j`` | 4 | 0 nothing; 1 replace the spring; 2 replace the seals; 3 both |
+
+    A maintenance choice queues crew jobs and puts the aircraft in the hangar until they are
+    done (each needs a crew job and a spare); further jobs on an aircraft in the hangar cost
+    no further downtime. Missions go to the free aircraft asking for their type, in aircraft
+    order, while any is left. :meth:`action_masks` (and ``info["action_mask"]``) gives the
+    valid choices (MaskablePPO's format: the choices of every entry, concatenated).
+
+    ## Observation Space
+
+    ``Box`` (float32, documented bounds; ``env.unwrapped.obs_names`` names every entry), the
+    groups of :mod:`scas_env.core.fleet_view`: per actuator the single env's 20 entries
+    (latest features I2, I6, I7, I8, I9, G1, G3; test age; no-go; RUL mean, low quantile and
+    risk of spring and seals; detector flags; part ages; downtime), per aircraft its status
+    (jobs queued, broken, downtime, no-go, free), the fleet's spares on hand and on order, jobs
+    waiting, the crew's jobs a day, the missions asked tomorrow and on the next
+    ``lookahead_days`` days per type, the season and the days left. ``obs_mode="state"``
+    shows each actuator's truth instead of its monitor (an oracle's view); ``"dict"`` the
+    groups as a ``Dict``.
+
+    ## Rewards
+
+    Per day, in USD: each flight flown earns its mission type's value divided by ``F``; minus
+    every actuator's tests, no-go inspections, replacements and in-flight failures
+    (``CostModel``); minus the penalty of each mission not flown, the cost of each background
+    removal and the spares' holding cost (``FleetConfig``). ``info["reward_terms"]`` splits
+    it.
+
+    ## Info
+
+    Mission availability (missions flown / asked), aircraft availability (aircraft-days free
+    / aircraft-days), flights, flight hours, cost and cost per FH, in-flight failures per
+    part, background and unscheduled removals, replacements, tests, stock-outs per spare
+    kind, jobs waiting and done, job-days waited, crew utilisation, wasted life, today's
+    terms and each aircraft's share (``aircraft_reward``), the missions missed and assigned
+    today, every actuator's true remaining life (flights of the standard mission), the
+    action mask.
+
+    ## Starting State
+
+    Every actuator a new unit whose parts have flown a uniformly drawn fraction of their
+    lives, their ages known and the monitor's filters predicted over them
+    (``Scenario.initial_health = "in_service"`` unless a scenario is given), spares at their
+    initial stock, no job queued, the whole episode's demand drawn.
+
+    ## Episode End
+
+    Truncation after ``episode_days`` days (default 365). No termination.
+
+    ## Arguments
+
+    ``gym.make("scas_env/ScasFleet-v0", fleet=FleetConfig(...) or its fields,
+    scenario=Scenario(...), cost_model=CostModel(...), obs_mode=...)``. Files:
+    ``FleetConfig.load("examples/fleet_offshore.toml")``.
+
+    ## Version History
+
+    * v0: initial release.
+
+    ## Example
+
+    >>> import gymnasium as gym
+    >>> import scas_env
+    >>> env = gym.make("scas_env/ScasFleet-v0", episode_days=30)
+    >>> obs, info = env.reset(seed=0)
+    >>> env.action_space.shape, obs.dtype
+    ((32,), dtype('float32'))
+    >>> obs, reward, terminated, truncated, info = env.step(env.action_space.sample(env.unwrapped.action_masks()))
+    >>> info["day"]
+    1
+    """
+
+    metadata: ClassVar[dict[str, Any]] = {"render_modes": ["ansi", "rgb_array"], "render_fps": 4}
+
+    def __init__(
+        self,
+        *,
+        fleet: FleetConfig | None = None,
+        scenario: Scenario | None = None,
+        cost_model: CostModel | None = None,
+        params: ScasParams | None = None,
+        calibration: Calibration | None = None,
+        surrogate: SurrogateModel | None = None,
+        obs_mode: str = "features+rul",
+        render_mode: str | None = None,
+        **fleet_fields: Any,
+    ) -> None:
+        if render_mode is not None and render_mode not in self.metadata["render_modes"]:
+            raise ValueError(
+                f"render_mode = {render_mode!r} must be None or one of "
+                f"{self.metadata['render_modes']}"
+            )
+        self.render_mode = render_mode
+        self.config, self.setup = make_fleet_setup(
+            fleet, scenario, cost_model, params, calibration, surrogate, fleet_fields, obs_mode
+        )
+        self.fleet = FleetBatch(self.setup, self.config, 1)
+        self.view = FleetView(self.fleet, obs_mode)
+        self.observation_space = self.view.space
+        self.action_space = fleet_action_space(self.config)
+        self.obs_names = self.view.names
+        self._fleets = np.zeros(1, dtype=np.int64)
+        self._actions = np.zeros(
+            (1, int(self.config.aircraft), 1 + int(self.config.actuators_per_aircraft)),
+            dtype=np.int64,
+        )
+        self._started = False
+
+    # ------------------------------------------------------------------ gym API
+    def reset(
+        self, *, seed: int | None = None, options: dict[str, Any] | None = None
+    ) -> tuple[Any, dict[str, Any]]:
+        if seed is not None and (
+            isinstance(seed, bool) or not isinstance(seed, int | np.integer) or seed < 0
+        ):
+            raise ValueError(f"seed = {seed!r} must be None or an integer >= 0")
+        if options is not None and (not isinstance(options, dict) or options):
+            raise ValueError(f"options = {options!r}: this env takes no options (None or {{}})")
+        super().reset(seed=None if seed is None else int(seed))
+        self.fleet.reset(self._fleets, [self.np_random])
+        self._started = True
+        return self._outputs()
+
+    def step(self, action: Any) -> tuple[Any, float, bool, bool, dict[str, Any]]:
+        if not self._started:
+            raise RuntimeError("call reset() before step()")
+        if self.fleet.day[0] >= self.fleet.shape.days:
+            raise RuntimeError("the episode was truncated: call reset() before step()")
+        self._actions[0] = check_fleet_action(action, self.action_space, self.config)
+        reward = float(self.fleet.step(self._fleets, self._actions)[0])
+        truncated = bool(self.fleet.day[0] >= self.fleet.shape.days)
+        obs, info = self._outputs()
+        return obs, reward, False, truncated, info
+
+    def _outputs(self) -> tuple[Any, dict[str, Any]]:
+        values = self.view.groups(0)
+        self._masks = self.view.masks(0, values)
+        info = self.view.info(0, values)
+        return self.view.observe(0, values), info
+
+    def action_masks(self) -> np.ndarray:
+        """Valid choices of every entry, concatenated (MaskablePPO's MultiDiscrete format)."""
+        if not self._started:
+            raise RuntimeError("call reset() before action_masks()")
+        return self._masks.ravel()
+
+    def render(self) -> str | np.ndarray | None:
+        if not self._started:
+            return None
+        if self.render_mode == "ansi":
+            return render_text(self.view.info(0))
+        if self.render_mode == "rgb_array":
+            return draw_fleet(self.fleet, self.view, 0)
+        return None
+
+
+def check_fleet_action(action: Any, space: spaces.MultiDiscrete, config: FleetConfig) -> np.ndarray:
+    """``action`` as the (N, 1 + A) int64 choices of a fleet, or ``ValueError`` naming what
+    is allowed (integers, ``space.shape``, each entry within its choices)."""
+    arr = np.asarray(action)
+    if (
+        arr.shape != space.shape
+        or not np.issubdtype(arr.dtype, np.integer)
+        or np.any(arr < 0)
+        or np.any(arr >= space.nvec)
+    ):
+        raise ValueError(
+            f"action = {action!r} must be {space.shape[0]} integers: per aircraft a mission "
+            f"choice in 0..{int(space.nvec[0]) - 1} then {int(config.actuators_per_aircraft)} "
+            f"maintenance choices in 0..3 {MAINTENANCE_CHOICES}"
+        )
+    return arr.astype(np.int64).reshape(int(config.aircraft), -1)
+
+
+__all__ = [
+    "FLEET_SCENARIO",
+    "ScasFleetEnv",
+    "check_fleet_action",
+    "fleet_action_space",
+    "make_fleet_setup",
+]

@@ -1,0 +1,146 @@
+"""``ScasFleet-v0`` for B fleets at once: one batch of actuators, one kernel call a day.
+
+``gym.make_vec("scas_env/ScasFleet-v0", num_envs=B, vectorization_mode="vector_entry_point")``
+returns a :class:`ScasFleetVectorEnv`: the fleets' actuators are the rows of one
+:class:`~scas_env.core.batch.ActuatorBatch` (:class:`~scas_env.core.fleet.FleetBatch` with
+``B`` fleets), so fleet ``b`` gives exactly the episode of a single fleet env seeded
+``seed + b`` (tested bit for bit). Autoreset is Gymnasium's next-step mode; ``info`` is a
+dict of per-fleet arrays (the KPIs of :class:`~scas_env.fleet_env.ScasFleetEnv`, nested
+dicts kept; per-aircraft entries left out), and
+:meth:`action_masks` gives each fleet's masks (MaskablePPO's format).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+from gymnasium.utils import seeding
+from gymnasium.vector import AutoresetMode, VectorEnv
+from gymnasium.vector.utils import batch_space
+
+from scas_env.core.fleet import FleetBatch
+from scas_env.core.fleet_view import FleetView
+from scas_env.fleet_env import check_fleet_action, fleet_action_space, make_fleet_setup
+from scas_env.vector_env import check_num_envs
+
+#: entries of the single fleet env's info that are per aircraft or per actuator (left out
+#: of the vector env's info, which holds one value per fleet)
+PER_AIRCRAFT = ("aircraft_reward", "missions_missed_today", "assigned_today", "true_life")
+
+
+def make_fleet_vector_env(num_envs: int, **kwargs: Any) -> ScasFleetVectorEnv:
+    """``vector_entry_point`` of ``ScasFleet-v0``."""
+    return ScasFleetVectorEnv(num_envs, **kwargs)
+
+
+class ScasFleetVectorEnv(VectorEnv):
+    """B fleets stepped together (module docstring); keywords as the single fleet env."""
+
+    metadata = {"autoreset_mode": AutoresetMode.NEXT_STEP}  # noqa: RUF012
+
+    def __init__(
+        self,
+        num_envs: int,
+        *,
+        fleet: Any = None,
+        scenario: Any = None,
+        cost_model: Any = None,
+        params: Any = None,
+        calibration: Any = None,
+        surrogate: Any = None,
+        obs_mode: str = "features+rul",
+        **fleet_fields: Any,
+    ) -> None:
+        n = check_num_envs(num_envs)
+        self.config, self.setup = make_fleet_setup(
+            fleet, scenario, cost_model, params, calibration, surrogate, fleet_fields, obs_mode
+        )
+        self.fleet = FleetBatch(self.setup, self.config, n)
+        self.view = FleetView(self.fleet, obs_mode)
+        if obs_mode == "dict":
+            raise ValueError("the fleet vector env takes a flat obs_mode ('features+rul', 'state')")
+        self.num_envs = n
+        self.single_observation_space = self.view.space
+        self.single_action_space = fleet_action_space(self.config)
+        self.observation_space = batch_space(self.single_observation_space, n)
+        self.action_space = batch_space(self.single_action_space, n)
+        self.obs_names = self.view.names
+        self._np_randoms: list[np.random.Generator | None] = [None] * n
+        self._autoreset = np.zeros(n, dtype=np.bool_)
+        shape = (n, int(self.config.aircraft), 1 + int(self.config.actuators_per_aircraft))
+        self._actions = np.zeros(shape, dtype=np.int64)
+        self._started = False
+
+    def reset(
+        self, *, seed: int | list[int | None] | None = None, options: dict[str, Any] | None = None
+    ) -> tuple[np.ndarray, dict[str, Any]]:
+        n = self.num_envs
+        if seed is None or (isinstance(seed, int | np.integer) and not isinstance(seed, bool)):
+            if seed is not None and seed < 0:
+                raise ValueError(f"seed = {seed!r} must be None or an integer >= 0")
+            seeds: list[int | None] = [None if seed is None else int(seed) + b for b in range(n)]
+        elif isinstance(seed, list | tuple) and len(seed) == n:
+            seeds = list(seed)
+        else:
+            raise ValueError(f"seed = {seed!r} must be None, an integer >= 0, or a list of {n}")
+        if options is not None and (not isinstance(options, dict) or options):
+            raise ValueError(f"options = {options!r}: this env takes no options (None or {{}})")
+        for b, s in enumerate(seeds):
+            if s is not None or self._np_randoms[b] is None:
+                self._np_randoms[b] = seeding.np_random(None if s is None else int(s))[0]
+        self.fleet.reset(np.arange(n, dtype=np.int64), self._np_randoms)
+        self._autoreset[:] = False
+        self._started = True
+        return self._outputs()
+
+    def step(self, actions: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, dict]:
+        if not self._started:
+            raise RuntimeError("call reset() before step()")
+        n = self.num_envs
+        arr = np.asarray(actions)
+        if arr.shape[:1] != (n,):
+            raise ValueError(f"actions must have {n} rows (one per fleet), got {arr.shape}")
+        for b in range(n):
+            self._actions[b] = check_fleet_action(arr[b], self.single_action_space, self.config)
+        resetting = self._autoreset.copy()
+        active = np.flatnonzero(~resetting)
+        rewards = np.zeros(n)
+        if active.size:
+            rewards = self.fleet.step(active, self._actions)
+            rewards[resetting] = 0.0
+        if resetting.any():
+            idx = np.flatnonzero(resetting)
+            self.fleet.reset(idx, [self._np_randoms[b] for b in idx.tolist()])
+        truncated = (self.fleet.day >= self.fleet.shape.days) & ~resetting
+        self._autoreset = truncated.copy()
+        obs, info = self._outputs()
+        return obs, rewards, np.zeros(n, dtype=np.bool_), truncated, info
+
+    def _outputs(self) -> tuple[np.ndarray, dict[str, Any]]:
+        obs, masks, infos = [], [], []
+        for b in range(self.num_envs):
+            values = self.view.groups(b)
+            obs.append(self.view.observe(b, values))
+            masks.append(self.view.masks(b, values).ravel())
+            infos.append(self.view.info(b, values))
+        self._masks = np.stack(masks)
+        info: dict[str, Any] = {}
+        for key, value in infos[0].items():
+            if key in PER_AIRCRAFT or key == "action_mask":
+                continue
+            if isinstance(value, dict):
+                info[key] = {k: np.array([i[key][k] for i in infos]) for k in value}
+            else:
+                info[key] = np.array([i[key] for i in infos])
+        info["action_mask"] = self._masks
+        return np.stack(obs), info
+
+    def action_masks(self) -> np.ndarray:
+        """Valid choices of every fleet, (B, sum of the choices) bool."""
+        if not self._started:
+            raise RuntimeError("call reset() before action_masks()")
+        return self._masks
+
+
+__all__ = ["PER_AIRCRAFT", "ScasFleetVectorEnv", "make_fleet_vector_env"]

@@ -1,0 +1,118 @@
+"""``ScasFleet-v0`` as a PettingZoo ``ParallelEnv``: one agent per aircraft.
+
+>>> from scas_env.multiagent import fleet_v0
+>>> env = fleet_v0.parallel_env(episode_days=5)
+>>> observations, infos = env.reset(seed=0)
+>>> env.agents[:2], env.action_space("aircraft_0")
+(['aircraft_0', 'aircraft_1'], MultiDiscrete([3 4 4 4]))
+
+Each aircraft ``aircraft_i`` observes its own actuators (the single env's 20 entries each)
+and status, and the fleet's shared groups (spares, crew, demand, calendar)
+(:meth:`~scas_env.core.fleet_view.FleetView.observe_agents`); it chooses its mission and each
+of its actuators' maintenance, as one row of the fleet env's action. The reward is the
+team's (the fleet's day, the same for every agent); ``infos[agent]`` holds the aircraft's
+own share of the actuators' reward (``aircraft_reward``), its action mask and the fleet's
+KPIs. All agents are truncated together after ``episode_days`` days, then leave. ``reset``
+takes no options and does not read any given (PettingZoo passes options through as-is).
+Requires ``pettingzoo`` (``pip install 'scas-maintenance-gym[marl]'``).
+"""
+
+from __future__ import annotations
+
+import functools
+from typing import Any
+
+import numpy as np
+from gymnasium import spaces
+
+from scas_env.fleet_env import ScasFleetEnv
+
+try:
+    from pettingzoo import ParallelEnv
+except ImportError as exc:  # pragma: no cover - the extra is missing
+    raise ImportError(
+        "scas_env.multiagent.fleet_v0 needs pettingzoo: pip install 'scas-maintenance-gym[marl]'"
+    ) from exc
+
+
+def parallel_env(**kwargs: Any) -> FleetParallelEnv:
+    """The fleet as a ``ParallelEnv`` (keywords: :class:`~scas_env.fleet_env.ScasFleetEnv`'s)."""
+    return FleetParallelEnv(**kwargs)
+
+
+class FleetParallelEnv(ParallelEnv):
+    """One agent per aircraft of a :class:`~scas_env.fleet_env.ScasFleetEnv` (module doc)."""
+
+    metadata = {"name": "scas_fleet_v0", "render_modes": ["ansi"], "is_parallelizable": True}  # noqa: RUF012
+
+    def __init__(self, **kwargs: Any) -> None:
+        if kwargs.get("obs_mode", "features+rul") == "dict":
+            raise ValueError("the per-aircraft view takes obs_mode 'features+rul' or 'state'")
+        self.fleet_env = ScasFleetEnv(**kwargs)
+        n = int(self.fleet_env.config.aircraft)
+        self.possible_agents = [f"aircraft_{i}" for i in range(n)]
+        self.agents: list[str] = []
+        self.render_mode = kwargs.get("render_mode")
+        per = self.fleet_env.action_space.nvec[: self.fleet_env.action_space.shape[0] // n]
+        self._action_space = spaces.MultiDiscrete(per)
+        self._obs_space = self.fleet_env.view.agent_space
+
+    @functools.cache  # noqa: B019 - one space per agent, PettingZoo's habit
+    def observation_space(self, agent: str) -> spaces.Box:
+        return self._obs_space
+
+    @functools.cache  # noqa: B019
+    def action_space(self, agent: str) -> spaces.MultiDiscrete:
+        return self._action_space
+
+    def _split(self, info: dict[str, Any]) -> tuple[dict[str, np.ndarray], dict[str, dict]]:
+        view = self.fleet_env.view
+        obs = view.observe_agents(0)
+        masks = info["action_mask"]
+        shares = info["aircraft_reward"]
+        shared = {k: v for k, v in info.items() if k not in ("action_mask", "aircraft_reward")}
+        observations = {a: obs[i] for i, a in enumerate(self.possible_agents)}
+        infos = {
+            a: {"action_mask": masks[i], "aircraft_reward": float(shares[i]), "fleet": shared}
+            for i, a in enumerate(self.possible_agents)
+        }
+        return observations, infos
+
+    def reset(
+        self, seed: int | None = None, options: dict[str, Any] | None = None
+    ) -> tuple[dict[str, np.ndarray], dict[str, dict]]:
+        # PettingZoo's API passes env-specific options through (its parallel_api_test sends
+        # {"options": 1}); this env has none, so any given are not read
+        _, info = self.fleet_env.reset(seed=seed)
+        self.agents = list(self.possible_agents)
+        return self._split(info)
+
+    def step(self, actions: dict[str, Any]) -> tuple[dict, dict, dict, dict, dict]:
+        if not self.agents:
+            raise RuntimeError("the episode has ended (no agents left): call reset()")
+        missing = sorted(set(self.agents) - set(actions))
+        extra = sorted(set(actions) - set(self.agents))
+        if missing or extra:
+            raise ValueError(
+                f"actions must name every live agent: missing {missing}, extra {extra}"
+            )
+        joint = np.concatenate(
+            [np.asarray(actions[a], dtype=np.int64).ravel() for a in self.possible_agents]
+        )
+        _, reward, terminated, truncated, info = self.fleet_env.step(joint)
+        observations, infos = self._split(info)
+        rewards = {a: reward for a in self.agents}
+        terminations = {a: terminated for a in self.agents}
+        truncations = {a: truncated for a in self.agents}
+        if terminated or truncated:
+            self.agents = []
+        return observations, rewards, terminations, truncations, infos
+
+    def render(self) -> str | None:
+        return self.fleet_env.render()
+
+    def close(self) -> None:
+        self.fleet_env.close()
+
+
+__all__ = ["FleetParallelEnv", "parallel_env"]

@@ -1,0 +1,116 @@
+"""Every experiment (the uninstalled ``experiments/`` folder) is runnable:
+``python -m experiments.<name> --help`` prints its usage, a bad option is a usage error,
+and its doctests pass (``experiments`` is outside the default test paths)."""
+
+from __future__ import annotations
+
+import doctest
+import importlib
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+#: the experiments with a command line (module names under experiments/)
+COMMANDS = (
+    "belief_calibration",
+    "damage_scatter",
+    "dashboard_animation",
+    "dashboard_speed",
+    "estimator_comparison",
+    "go_no_go",
+    "integrator_speed",
+    "preflight_study",
+    "prognostics_speed",
+    "reference_posterior",
+    "renewal",
+    "sb3_speed",
+    "sensing_sweep",
+    "spring_cloud",
+)
+#: library modules of the experiments (no command line of their own)
+LIBRARIES = (
+    "belief_comparison",
+    "belief_output",
+    "reference_report",
+    "reference_synthetic",
+    "sensing_sweep_output",
+    "sensing_variants",
+)
+
+
+@pytest.mark.parametrize("name", COMMANDS)
+def test_help_and_usage_errors(name: str, capsys) -> None:
+    main = importlib.import_module(f"experiments.{name}").main
+    with pytest.raises(SystemExit) as done:
+        main(["--help"])
+    assert done.value.code == 0
+    usage = capsys.readouterr().out
+    assert usage.startswith(f"usage: python -m experiments.{name}"), usage[:80]
+    with pytest.raises(SystemExit) as done:
+        main(["--no-such-option"])
+    assert done.value.code == 2
+
+
+def test_python_dash_m_runs_a_command() -> None:
+    """``python -m`` from the repository root (the folder is not installed)."""
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    out = subprocess.run(
+        [sys.executable, "-m", "experiments.go_no_go", "--help"],
+        cwd=ROOT, env=env, capture_output=True, text=True, check=True, timeout=120,
+    )  # fmt: skip
+    assert "airworthiness limit" in out.stdout
+
+
+@pytest.mark.parametrize("name", COMMANDS + LIBRARIES)
+def test_doctests(name: str) -> None:
+    module = importlib.import_module(f"experiments.{name}")
+    result = doctest.testmod(module, optionflags=doctest.ELLIPSIS)
+    assert result.failed == 0
+
+
+def test_the_removed_scripts_are_gone() -> None:
+    """Their commands are the experiments' ``main`` now (no second entry point)."""
+    gone = [
+        "belief_calibration", "reference_posterior", "spring_cloud", "compare_estimators",
+        "sensing_sweep", "damage_scatter", "dashboard_animation", "preflight_availability",
+        "bench_prognostics", "bench_integrator", "bench_dashboard", "go_no_go", "bench_sb3",
+    ]  # fmt: skip
+    assert not [n for n in gone if (ROOT / "scripts" / f"{n}.py").exists()]
+
+
+def test_belief_study_command_writes_and_compares(tmp_path, capsys) -> None:
+    from experiments.belief_calibration import main
+
+    out = tmp_path / "a"
+    args = ["--episodes", "1", "--seed", "5000", "--policies", "never", "--no-progress"]
+    assert main([*args, "--scenario", '{"episode_slots": 600}', "--out", str(out)]) == 0
+    names = {p.name for p in out.iterdir()}
+    assert {"stages.csv", "reliability.csv", "lives.csv", "study.json", "coverage.png"} <= names
+    assert main(["--compare", str(out), str(out)]) == 0
+    assert "+0.000" in capsys.readouterr().out  # a run paired with itself
+    with pytest.raises(SystemExit):  # a bad Scenario field is a usage error
+        main([*args, "--scenario", '{"theta_walk": 1}'])
+
+
+def test_small_runs_of_the_commands(tmp_path, capsys) -> None:
+    """Each command end to end at a tiny size (their tables printed, files written)."""
+    from experiments import go_no_go, prognostics_speed, reference_posterior, renewal, spring_cloud
+
+    assert go_no_go.main(["--units", "3", "--out", str(tmp_path / "g")]) == 0
+    assert (tmp_path / "g" / "go_no_go.json").is_file() and (
+        tmp_path / "g" / "go_no_go.png"
+    ).is_file()
+    assert spring_cloud.main(["--episodes", "1", "--scenario", '{"episode_slots": 300}',
+                              "--no-progress", "--out", str(tmp_path / "c.json")]) == 0  # fmt: skip
+    assert (tmp_path / "c.json").is_file()
+    assert reference_posterior.main(["--synthetic", "2", "--log2-points", "6", "--min-ess",
+                                     "10", "--no-progress"]) == 0  # fmt: skip
+    assert prognostics_speed.main(["--particles", "50", "--calls", "3"]) == 0
+    assert renewal.main(["--lives", "3", "--episodes", "2", "--warmup", "40", "--window", "40",
+                         "--out", str(tmp_path / "r.json")]) == 0  # fmt: skip
+    printed = capsys.readouterr().out
+    assert "closed form" in printed and "| predict |" in printed

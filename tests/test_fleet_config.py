@@ -1,0 +1,193 @@
+"""Fleet configuration (scas_env.core.fleet_config): validation, files, the two examples."""
+
+from __future__ import annotations
+
+import math
+import re
+from pathlib import Path
+
+import pytest
+
+from scas_env.actuator.config import read_mapping
+from scas_env.core.demand import DemandModel
+from scas_env.core.fleet_config import FleetConfig, SparesConfig
+from scas_env.core.resources import SparesSpec
+from scas_env.core.costs import CostModel
+from scas_env.core.scenario import Scenario
+
+ROOT = Path(__file__).resolve().parents[1]
+FLEET_EXAMPLES = sorted((ROOT / "examples").glob("fleet_*.*"))
+
+
+def test_defaults_are_the_issue_s_fleet() -> None:
+    cfg = FleetConfig()
+    assert (cfg.aircraft, cfg.actuators_per_aircraft, cfg.flights_per_mission) == (8, 3, 2)
+    assert cfg.n_actuators == 24 and cfg.crew_capacity == 1
+    assert cfg.mission_types == ("standard",) and cfg.demand.mission_mix == (1.0,)
+    assert cfg.base_missions_per_day == pytest.approx(600 * 8 / 3 / 365)
+    # a mission of 2 flights is worth two of the single env's flights
+    assert cfg.mission_value_usd == (2 * CostModel().flight_value_usd,)
+    for group in (FleetConfig, SparesConfig, DemandModel):
+        for name, _, unit, _, source in group.describe():
+            assert unit and source, f"{group.__name__}.{name} needs a unit and a source"
+
+
+def test_background_removal_probability_is_exponential_in_flight_hours() -> None:
+    cfg = FleetConfig(mtbur_fh=5000.0)
+    assert cfg.background_removal_probability == pytest.approx(1 - math.exp(-1.5 / 5000))
+    assert FleetConfig(background_removals=0).background_removal_probability == 0.0
+
+
+def test_spares_map_to_the_resource_spec() -> None:
+    spares = SparesConfig(
+        spring_kit_initial=3,
+        spring_kit_base_stock=2,
+        seal_kit_base_stock=-1,
+        actuator_pool=4,
+        actuator_turnaround_days=20,
+        lead_spread_days=2,
+    )
+    assert spares.spec() == SparesSpec(
+        initial=(3, 1, 4),
+        base_stock=(2, -1, 4),
+        lead_days=(10, 10, 20),
+        lead_spread_days=(2, 2, 2),
+        unlimited=(False, False, False),
+    )
+
+
+def test_the_degenerate_fleet() -> None:
+    cfg = FleetConfig.degenerate()
+    assert (cfg.aircraft, cfg.actuators_per_aircraft, cfg.flights_per_mission) == (1, 1, 1)
+    assert cfg.base_missions_per_day == 1.0 and cfg.demand.arrivals == "scheduled"
+    assert cfg.crew_capacity is None and all(cfg.spares.spec().unlimited)
+    assert cfg.background_removal_probability == 0.0
+    assert cfg.mission_value_usd == (CostModel().flight_value_usd,)
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "match"),
+    [
+        ({"aircraft": 0}, r"aircraft = 0 aircraft is outside"),
+        ({"actuators_per_aircraft": 2.5}, r"must be a whole number"),
+        ({"mission_types": ("standard", "windy")}, r"mission_types\[1\] = 'windy'"),
+        ({"mission_types": ("standard", "standard")}, r"names a type twice"),
+        ({"mission_types": ()}, r"non-empty list"),
+        ({"mission_value_usd": (-1.0,)}, r"mission_value_usd\[0\] = -1.0 USD"),
+        ({"mission_not_flown_usd": (1.0, 2.0)}, r"needs 1 amounts"),
+        (
+            {"mission_types": ("standard", "training"), "mission_value_usd": (1.0, 1.0)},
+            r"needs 2 amounts",
+        ),
+        (
+            {
+                "mission_types": ("standard", "training"),
+                "mission_value_usd": (1.0, 1.0),
+                "mission_not_flown_usd": (0.0, 0.0),
+            },
+            r"mission_mix has 1 probabilities but FleetConfig.mission_types has 2",
+        ),
+        (
+            {"demand": DemandModel(flight_hours_per_aircraft_year=1500.0)},
+            r"mean demand of 11 missions a day exceeds the 8 aircraft",
+        ),
+        (
+            {
+                "flights_per_mission": 16,
+                "demand": DemandModel(
+                    flight_hours_per_aircraft_year=10.0, flight_hours_per_flight=2.0
+                ),
+            },
+            r"16 flights of 2.0 h lasts 32.0 h, more than a day",
+        ),
+        ({"demand": {"surge_days": 3}}, r"demand must be a DemandModel"),
+    ],
+)
+def test_bad_configurations_are_refused_with_a_message(kwargs: dict, match: str) -> None:
+    with pytest.raises(ValueError, match=match):
+        FleetConfig(**kwargs)
+
+
+def test_bad_spares_are_refused_with_a_message() -> None:
+    with pytest.raises(ValueError, match=r"lead_spread_days = 11 days must be <= every"):
+        SparesConfig(lead_spread_days=11)
+    with pytest.raises(ValueError, match=r"spring_kit_base_stock = -2 kits is outside"):
+        SparesConfig(spring_kit_base_stock=-2)
+
+
+def test_unknown_keys_are_refused_at_every_level(tmp_path: Path) -> None:
+    with pytest.raises(ValueError, match=r"FleetConfig: unknown key\(s\) \['aircrafts'\]"):
+        FleetConfig.from_dict({"aircrafts": 4})
+    path = tmp_path / "bad.toml"
+    path.write_text("[fleet.spares]\nspring_kit_stock = 1\n")
+    with pytest.raises(ValueError, match=r"bad.toml \[fleet.spares\]: SparesConfig: unknown"):
+        FleetConfig.load(path)
+    path.write_text("[fleet]\naircraft = 4\n[fleets]\nx = 1\n")
+    with pytest.raises(ValueError, match=r"top-level key\(s\) \['fleets'\]"):
+        FleetConfig.load(path)
+    path.write_text("[scenario]\ninitial_health = 'random'\n")
+    with pytest.raises(ValueError, match=r"no \[fleet\] table"):
+        FleetConfig.load(path)
+
+
+@pytest.mark.parametrize("suffix", [".toml", ".yaml", ".json"])
+def test_files_round_trip(tmp_path: Path, suffix: str) -> None:
+    cfg = FleetConfig(
+        aircraft=6,
+        mission_types=("training", "utility"),
+        mission_value_usd=(1000.0, 3000.0),
+        mission_not_flown_usd=(0.0, 500.0),
+        demand=DemandModel(mission_mix=(0.75, 0.25), surge_rate_per_year=3.0, surge_height=0.5),
+        spares=SparesConfig(actuator_pool=2, lead_spread_days=1),
+    )
+    path = cfg.save(tmp_path / f"fleet{suffix}")
+    assert FleetConfig.load(path) == cfg
+    top = cfg.save(tmp_path / f"top{suffix}", section=None)
+    assert FleetConfig.load(top) == cfg
+    with pytest.raises(FileExistsError):
+        cfg.save(path)
+
+
+def _comment_above(lines: list[str], key: str, start: int) -> bool:
+    at = next(i for i in range(start, len(lines)) if re.match(rf"\s*{key}\s*=", lines[i]))
+    return lines[at - 1].strip().startswith("#")
+
+
+@pytest.mark.parametrize("path", FLEET_EXAMPLES, ids=lambda p: p.name)
+def test_fleet_examples_load_and_every_value_is_explained(path: Path) -> None:
+    cfg = FleetConfig.load(path)
+    data = read_mapping(path)
+    assert set(data) == {"scenario", "costs", "fleet"}
+    Scenario.from_dict(data["scenario"])  # the single actuator's tables are valid too
+    costs = CostModel.from_dict(data["costs"])
+    # the single env's flight value is the mission's value per flight
+    assert costs.flight_value_usd * cfg.flights_per_mission == pytest.approx(
+        cfg.mission_value_usd[0]
+    )
+    lines = path.read_text().splitlines()
+    for table, start in (
+        ("scenario", "[scenario]"),
+        ("costs", "[costs]"),
+        ("fleet", "[fleet]"),
+        ("fleet.demand", "[fleet.demand]"),
+        ("fleet.spares", "[fleet.spares]"),
+    ):
+        first = lines.index(start)
+        values = data
+        for part in table.split("."):
+            values = values[part]
+        for key, value in values.items():
+            if not isinstance(value, dict):
+                assert _comment_above(lines, key, first), f"{path.name} [{table}] {key}"
+
+
+def test_the_two_examples_are_the_operators_they_claim() -> None:
+    offshore = FleetConfig.load(ROOT / "examples" / "fleet_offshore.toml")
+    military = FleetConfig.load(ROOT / "examples" / "fleet_military_training.toml")
+    assert offshore.demand.flight_hours_per_aircraft_year == 1500.0  # Bristow S-92
+    assert offshore.mission_availability_target == 0.94
+    assert "offshore_gusts" in offshore.mission_types
+    assert 0.85 < offshore.base_missions_per_day / offshore.aircraft < 1.0
+    assert military.demand.flight_hours_per_aircraft_year == 200.0  # CBO FY2023
+    assert military.mission_availability_target == 0.68
+    assert military.mission_types[0] == "training"
