@@ -58,31 +58,38 @@ format: install
 
 ## What a user gets from `pip install .` (no extras): build the wheel, install it into a
 ## fresh venv (torch first, from TORCH_INDEX_URL when set), then, outside the source tree
-## so that only the installed package can be imported, run every console command at a tiny
-## size with its default options (the benchmark first: it compiles the numba kernels the
-## others load) and the README's Python snippets. About 3 minutes on a quiet 2-core machine
-## (docs/cli.md).
+## so that only the installed package can be imported, run the README's Python snippets
+## (they compile the env's numba kernels, once) and every console command at a tiny size
+## with its default options, in two lanes at once: the physics commands (the first compiles
+## the physics kernels) and the policy commands. Each lane stops at its first failure; the
+## target fails if either does.
 CHECK_DIR ?= $(abspath $(RESULTS))/check-install
-CHECK_RUN = cd $(CHECK_DIR) && venv/bin
 check-install:
 	rm -rf $(CHECK_DIR)
 	$(PYTHON) -m venv $(CHECK_DIR)/venv
 	$(CHECK_DIR)/venv/bin/pip install --disable-pip-version-check -q $(TORCH_PIP_ARGS)
 	$(CHECK_DIR)/venv/bin/pip wheel --disable-pip-version-check -q --no-deps -w $(CHECK_DIR)/dist .
 	$(CHECK_DIR)/venv/bin/pip install --disable-pip-version-check -q $(CHECK_DIR)/dist/*.whl
-	$(CHECK_RUN)/scas-benchmark --episodes 2 --slots 100 --out runs/benchmark
-	$(CHECK_RUN)/scas-train --timesteps 64 --out runs/train
-	$(CHECK_RUN)/scas-tune --trials 1 --episodes 2 --slots 100 --out runs/tune
-	$(CHECK_RUN)/scas-value --episodes 2 --slots 100 --trials 1 --train-episodes 2 --out runs/value
-	$(CHECK_RUN)/scas-campaign --runs 2 --levels 2 --out runs/campaign/c
-	$(CHECK_RUN)/scas-reproduce --quick --runs 2 --levels 3 --paths 1 --out runs/reproduce
-	$(CHECK_RUN)/scas-simulate --window 1 --out runs/simulate
-	$(CHECK_RUN)/scas-figures --out runs/figures
-	$(CHECK_RUN)/scas-build-surrogate --grid 2 --units 2 --runs 2 --paired-units 2 --out runs/surrogate.json
-	$(CHECK_RUN)/scas-build-calibration --windows 2 --whole-flights 2 --lives 100 --out runs/calibration.json
-	$(CHECK_RUN)/scas-export-dataset --units 2 --max-slots 200 --out runs/dataset
 	$(PYTHON) .ci/readme_python.py README.md > $(CHECK_DIR)/readme_snippets.py
 	cd $(CHECK_DIR) && venv/bin/python readme_snippets.py
+	cd $(CHECK_DIR) && ( \
+	  venv/bin/scas-simulate --window 1 --out runs/simulate && \
+	  venv/bin/scas-figures --out runs/figures && \
+	  venv/bin/scas-campaign --runs 2 --levels 2 --out runs/campaign/c && \
+	  venv/bin/scas-reproduce --quick --runs 2 --levels 3 --paths 1 --out runs/reproduce && \
+	  venv/bin/scas-build-surrogate --grid 2 --units 2 --runs 2 --paired-units 2 \
+	    --out runs/surrogate.json && \
+	  venv/bin/scas-build-calibration --windows 2 --whole-flights 2 --lives 100 \
+	    --out runs/calibration.json \
+	) & physics=$$!; \
+	cd $(CHECK_DIR) && \
+	  venv/bin/scas-benchmark --episodes 2 --slots 100 --out runs/benchmark && \
+	  venv/bin/scas-train --timesteps 64 --out runs/train && \
+	  venv/bin/scas-tune --trials 1 --episodes 2 --slots 100 --out runs/tune && \
+	  venv/bin/scas-value --episodes 2 --slots 100 --trials 1 --train-episodes 2 \
+	    --out runs/value && \
+	  venv/bin/scas-export-dataset --units 2 --max-slots 200 --out runs/dataset; \
+	policy=$$?; wait $$physics && test $$policy -eq 0
 
 ## Speed, each beside a reference measured in the same run.
 bench: install

@@ -224,8 +224,6 @@ def load_params(parser: argparse.ArgumentParser, args: argparse.Namespace) -> Sc
         return ScasParams()
     try:
         return ScasParams.load(args.params)
-    except UnicodeDecodeError as exc:  # a file that is not text: name it
-        parser.error(f"{args.params}: not a UTF-8 text file ({exc.reason} at byte {exc.start})")
     except (ValueError, FileNotFoundError) as exc:
         parser.error(str(exc))
 
@@ -241,17 +239,13 @@ def load_env_config(
     from scas_env.actuator.config import read_mapping
 
     scenario, costs = Scenario(), CostModel()
-    reading = args.scenario
     try:
         if args.scenario is not None:
             scenario = Scenario.load(args.scenario)
             if args.costs is None and "costs" in read_mapping(args.scenario):
                 costs = CostModel.load(args.scenario)
-        reading = args.costs
         if args.costs is not None:
             costs = CostModel.load(args.costs)
-    except UnicodeDecodeError as exc:  # a file that is not text: name it
-        parser.error(f"{reading}: not a UTF-8 text file ({exc.reason} at byte {exc.start})")
     except (ValueError, FileNotFoundError) as exc:
         parser.error(str(exc))
     return scenario, costs

@@ -438,6 +438,11 @@ def train_epochs(
     from stable_baselines3.common.callbacks import CallbackList, CheckpointCallback
     from stable_baselines3.common.logger import configure
 
+    if progress_bar:  # SB3's progress bar needs rich, which is no dependency here
+        import importlib.util
+
+        if importlib.util.find_spec("rich") is None:
+            raise ImportError("progress_bar = True needs rich (pip install rich); or leave it off")
     total, freeze_normalization, delegate = check_training(
         hyperparams,
         out_dir,
