@@ -105,8 +105,8 @@ def test_tuning_never_trains_on_the_held_out_episodes():
 
 
 def test_a_family_s_own_costs_are_changes_made_on_the_user_s() -> None:
-    """"Tests every flight" makes tests free on the user's cost model, not on the default
-    one (it used to replace the user's costs with CostModel(test_usd=0))."""
+    """The family "tests every flight" makes tests free on the user's cost model, not on the
+    default one (it used to replace the user's costs with CostModel(test_usd=0))."""
     from policies.value.tuning import family_env_kwargs
     from scas_env.core.costs import CostModel
 
