@@ -12,6 +12,7 @@ from policies.base import (
     register_policy,
 )
 from policies.rules import fleet as _fleet  # noqa: F401  (registers the fleet rules)
+from policies.rules import fleet_bound as _fleet_bound  # noqa: F401  (and the fleet's bound)
 from policies.rules.classic import (
     CorrectivePolicy,
     DetectionPolicy,

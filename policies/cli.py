@@ -50,9 +50,15 @@ table gives means with 95% intervals and paired differences against the best rul
 --out: results.csv, events.csv, summary.json (statistics and the exact configuration: the
 Scenario and CostModel used), summary.md and plots. --ray-address runs the episodes as Ray
 tasks (auto, local or ray://host:10001; '' runs locally even when RAY_ADDRESS is set);
---workers is then unused. The default list ends with the shipped RL agent (ppo). Example:
+--workers is then unused. The default list ends with the shipped RL agent (ppo).
+
+Fleets (ScasFleet-v0): --fleet runs the default fleet, a --scenario file with a [fleet] table
+runs that one; the default list is then the fleet rules, the agents and the clairvoyant bound
+(fleet_bound), with each policy's share of the gap between the naive rule and the bound.
+Examples:
 
     scas-benchmark --episodes 40 --scenario examples/offshore_operator.toml --out results/off
+    scas-benchmark --episodes 40 --scenario examples/fleet_offshore.toml --out results/fleet
 """
 
 
@@ -120,7 +126,7 @@ def _sizes(args: Any, sizes: dict[str, tuple[int, int]]) -> dict[str, int]:
 
 def benchmark_parser() -> Any:
     from policies.base import POLICIES
-    from policies.benchmark.run import DEFAULT_POLICIES, PLUGINS
+    from policies.benchmark.run import DEFAULT_FLEET_POLICIES, DEFAULT_POLICIES, PLUGINS
 
     parser = make_parser("scas-benchmark", BENCHMARK_DOC)
     parser.add_argument("--episodes", type=positive_int, default=40, help="episodes per policy")
@@ -135,8 +141,15 @@ def benchmark_parser() -> Any:
     parser.add_argument(
         "--policies",
         type=name_list(set(POLICIES) | set(PLUGINS), "policy"),
-        default=",".join(DEFAULT_POLICIES),
-        help="comma-separated policy names",
+        default=None,
+        help="comma-separated policy names (default: "
+        f"{','.join(DEFAULT_POLICIES)}; for fleets {','.join(DEFAULT_FLEET_POLICIES)})",
+    )
+    parser.add_argument(
+        "--fleet",
+        action="store_true",
+        help="benchmark ScasFleet-v0's default fleet (a --scenario file with a [fleet] table "
+        "runs that fleet)",
     )
     parser.add_argument(
         "--agent",
@@ -185,7 +198,7 @@ def benchmark_main(argv: Sequence[str] | None = None) -> int:
     args = parser.parse_args(argv)
     configure_logging(args)
     out = check_out_dir(parser, args.out, args.overwrite)
-    scenario, costs = load_env_config(parser, args)
+    scenario, costs = load_env_config(parser, args, fleet=True)
     if scenario.obs_mode != Scenario().obs_mode:
         parser.error(
             f"{args.scenario}: obs_mode = {scenario.obs_mode!r}: the benchmark gives each "
@@ -202,6 +215,15 @@ def benchmark_main(argv: Sequence[str] | None = None) -> int:
         "fidelity": scenario.fidelity,
         **_env_kwargs(scenario, costs, exclude=("obs_mode", "episode_slots")),
     }
+    fleet = _fleet_config(parser, args)
+    if fleet is not None:
+        if args.slots is not None:
+            parser.error("--slots: a fleet's episode is its [fleet] table's episode_days")
+        env_kwargs = {
+            "fleet": fleet,
+            "scenario": _fleet_scenario(parser, args),
+            "cost_model": costs,
+        }
 
     ray_address = (
         args.ray_address if args.ray_address is not None else os.environ.get("RAY_ADDRESS")
@@ -213,9 +235,18 @@ def benchmark_main(argv: Sequence[str] | None = None) -> int:
             parser.error(f"--policy {target!r}: expected MODULE:FACTORY")
 
     from policies.benchmark.report import format_table, write_outputs
-    from policies.benchmark.run import PolicySpec, prepare_benchmark, resolve_spec, run_benchmark
+    from policies.benchmark.run import (
+        DEFAULT_FLEET_POLICIES,
+        DEFAULT_POLICIES,
+        PolicySpec,
+        prepare_benchmark,
+        resolve_spec,
+        run_benchmark,
+    )
 
-    specs = [resolve_spec(name) for name in args.policies]
+    default = DEFAULT_FLEET_POLICIES if fleet is not None else DEFAULT_POLICIES
+    names = args.policies if args.policies is not None else list(default)
+    specs = [resolve_spec(name) for name in names]
     module = "policies.agents.sb3_agents"
     trust = {"trust_pickle": True} if args.trust_pickle else {}
     for path in args.agent:
@@ -260,7 +291,11 @@ def benchmark_main(argv: Sequence[str] | None = None) -> int:
         )
     except ConnectionError as exc:  # --ray-address: no cluster there (nothing written)
         parser.error(f"--ray-address: {exc}")
+    if fleet is not None:
+        scenario = env_kwargs["scenario"]
     result.config.update(_config_record(parser.prog, argv, args, scenario, costs))
+    if fleet is not None:
+        result.config["fleet"] = fleet.to_dict()
     print(format_table(result.summary))
     paths = write_outputs(result, out, overwrite=args.overwrite)
     n = len(result.rows)
@@ -273,6 +308,37 @@ def benchmark_main(argv: Sequence[str] | None = None) -> int:
     for name, path in paths.items():
         log.info(f"{name}: {path}")
     return 0
+
+
+def _fleet_config(parser: Any, args: Any) -> Any:
+    """The FleetConfig of ``--scenario``'s ``[fleet]`` table, the default fleet for
+    ``--fleet``, else None (the single actuator)."""
+    from scas_env.actuator.config import read_mapping
+    from scas_env.core.fleet_config import FleetConfig
+
+    has_table = args.scenario is not None and "fleet" in read_mapping(args.scenario)
+    if not (has_table or args.fleet):
+        return None
+    try:
+        return FleetConfig.load(args.scenario) if has_table else FleetConfig()
+    except (ValueError, FileNotFoundError) as exc:
+        parser.error(str(exc))
+
+
+def _fleet_scenario(parser: Any, args: Any) -> Scenario:
+    """The actuators' Scenario of a fleet: ScasFleet-v0's defaults (parts in service), then
+    the ``[scenario]`` table of ``--scenario``, then ``--fidelity``."""
+    from scas_env.actuator.config import read_mapping
+    from scas_env.fleet_env import FLEET_SCENARIO
+
+    table = read_mapping(args.scenario).get("scenario", {}) if args.scenario else {}
+    try:
+        scenario = Scenario.from_dict({**FLEET_SCENARIO, **table})
+    except ValueError as exc:
+        parser.error(f"{args.scenario}: [scenario]: {exc}")
+    if scenario.obs_mode != Scenario().obs_mode:
+        parser.error(f"{args.scenario}: obs_mode is set per policy; leave it out of the file")
+    return scenario.replace(fidelity=args.fidelity) if args.fidelity else scenario
 
 
 TRAIN_DOC = """\

@@ -229,18 +229,26 @@ def load_params(parser: argparse.ArgumentParser, args: argparse.Namespace) -> Sc
 
 
 def load_env_config(
-    parser: argparse.ArgumentParser, args: argparse.Namespace
+    parser: argparse.ArgumentParser, args: argparse.Namespace, *, fleet: bool = False
 ) -> tuple[Scenario, CostModel]:
     """The Scenario and CostModel of ``--scenario`` / ``--costs`` (defaults without them).
 
     A ``[costs]`` table in the ``--scenario`` file sets the costs unless ``--costs`` is given.
-    A bad file is a usage error naming the file, the table and the field.
+    A ``[fleet]`` table is a usage error unless ``fleet`` (the command runs fleets and reads
+    it): a command of one actuator does not drop it silently. A bad file is a usage error
+    naming the file, the table and the field.
     """
     from scas_env.actuator.config import read_mapping
 
     scenario, costs = Scenario(), CostModel()
     try:
         if args.scenario is not None:
+            if not fleet and "fleet" in read_mapping(args.scenario):
+                raise ValueError(
+                    f"{args.scenario} holds a [fleet] table: this command runs one actuator "
+                    "(ScasMaintenance-v2), not a fleet; give it a file without [fleet] "
+                    "(scas-benchmark runs fleets)"
+                )
             scenario = Scenario.load(args.scenario)
             if args.costs is None and "costs" in read_mapping(args.scenario):
                 costs = CostModel.load(args.scenario)

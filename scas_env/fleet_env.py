@@ -103,14 +103,20 @@ class ScasFleetEnv(gym.Env):
 
     | entry | choices | meaning |
     |---|---|---|
-    | mission | ``1 + 2K`` | 0 stand by; ``1..K`` fly a mission of type ``k - 1``; ``K+1..2K`` run the pre-flight test on every actuator, then fly that type |
+    | mission | ``1 + 2K`` | 0 stand by; ``k = 1..K`` fly a mission of type ``k - 1``; |
+    | | | ``K + k``: test every actuator before flight, then fly type ``k - 1`` |
     | actuator ``j`` | 4 | 0 nothing; 1 replace the spring; 2 replace the seals; 3 both |
 
-    A maintenance choice queues crew jobs and puts the aircraft in the hangar until they are
-    done (each needs a crew job and a spare); further jobs on an aircraft in the hangar cost
-    no further downtime. Missions go to the free aircraft asking for their type, in aircraft
-    order, while any is left. :meth:`action_masks` (and ``info["action_mask"]``) gives the
-    valid choices (MaskablePPO's format: the choices of every entry, concatenated).
+    A maintenance choice queues crew jobs (each needs a crew job and a spare) and puts the
+    aircraft in the hangar that day; the day the crew does a job the aircraft is in the
+    hangar too, and further jobs on it that day cost no further downtime. While a
+    preventive job waits for the crew or a spare an airworthy aircraft may fly. Missions go
+    to the free aircraft asking for their type, in aircraft order, while any is left.
+    :meth:`action_masks` (and ``info["action_mask"]``) gives the valid choices
+    (MaskablePPO's format: the choices of every entry, concatenated): a mission type only
+    for a free aircraft and a type asked tomorrow, plain flying not while a failed
+    pre-flight test holds the aircraft (unless the scenario tests before every flight), a
+    replacement only for a part that has flown.
 
     ## Observation Space
 
@@ -171,7 +177,7 @@ class ScasFleetEnv(gym.Env):
     >>> obs, info = env.reset(seed=0)
     >>> env.action_space.shape, obs.dtype
     ((32,), dtype('float32'))
-    >>> obs, reward, terminated, truncated, info = env.step(env.action_space.sample(env.unwrapped.action_masks()))
+    >>> obs, reward, terminated, truncated, info = env.step(env.action_space.sample())
     >>> info["day"]
     1
     """
@@ -260,22 +266,40 @@ class ScasFleetEnv(gym.Env):
         return None
 
 
-def check_fleet_action(action: Any, space: spaces.MultiDiscrete, config: FleetConfig) -> np.ndarray:
-    """``action`` as the (N, 1 + A) int64 choices of a fleet, or ``ValueError`` naming what
-    is allowed (integers, ``space.shape``, each entry within its choices)."""
-    arr = np.asarray(action)
-    if (
-        arr.shape != space.shape
-        or not np.issubdtype(arr.dtype, np.integer)
-        or np.any(arr < 0)
-        or np.any(arr >= space.nvec)
-    ):
+def check_fleet_action(
+    action: Any, space: spaces.MultiDiscrete, config: FleetConfig, name: str = "action"
+) -> np.ndarray:
+    """``action`` as the (aircraft, 1 + A) int64 choices of ``space`` (a fleet's, or one
+    aircraft's), or ``ValueError`` naming ``name``, the value and what is allowed: integers
+    (no booleans, no floats), ``space.shape``, each entry within its choices."""
+    n_act = int(config.actuators_per_aircraft)
+    per = 1 + n_act
+    n = int(space.shape[0])
+    allowed = (
+        f"{n} integers, aircraft by aircraft: a mission choice in 0..{int(space.nvec[0]) - 1} "
+        f"then {n_act} maintenance choices in 0..3 {MAINTENANCE_CHOICES}"
+    )
+    if isinstance(action, list | tuple) and any(isinstance(v, bool | np.bool_) for v in action):
+        raise ValueError(f"{name} = {action!r} holds a boolean; it must be {allowed}")
+    try:
+        arr = np.asarray(action)
+    except (ValueError, TypeError):
+        raise ValueError(f"{name} = {action!r} is not an array; it must be {allowed}") from None
+    if arr.shape != space.shape:
+        raise ValueError(f"{name} has shape {arr.shape} ({action!r}); it must be {allowed}")
+    if not np.issubdtype(arr.dtype, np.integer):
+        raise ValueError(f"{name} has dtype {arr.dtype} ({action!r}); it must be {allowed}")
+    bad = np.flatnonzero((arr < 0) | (arr >= space.nvec))
+    if bad.size:
+        k = int(bad[0])
+        i, entry = divmod(k, per)
+        what = "mission choice" if entry == 0 else f"actuator {entry - 1} maintenance choice"
+        whose = f"aircraft {i}'s {what}" if n > per else what
         raise ValueError(
-            f"action = {action!r} must be {space.shape[0]} integers: per aircraft a mission "
-            f"choice in 0..{int(space.nvec[0]) - 1} then {int(config.actuators_per_aircraft)} "
-            f"maintenance choices in 0..3 {MAINTENANCE_CHOICES}"
+            f"{name}[{k}] = {int(arr[k])} ({whose}) must be in 0..{int(space.nvec[k]) - 1}; "
+            f"{name} must be {allowed}"
         )
-    return arr.astype(np.int64).reshape(int(config.aircraft), -1)
+    return arr.astype(np.int64).reshape(-1, per)
 
 
 __all__ = [

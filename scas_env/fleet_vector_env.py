@@ -102,7 +102,9 @@ class ScasFleetVectorEnv(VectorEnv):
         if arr.shape[:1] != (n,):
             raise ValueError(f"actions must have {n} rows (one per fleet), got {arr.shape}")
         for b in range(n):
-            self._actions[b] = check_fleet_action(arr[b], self.single_action_space, self.config)
+            self._actions[b] = check_fleet_action(
+                arr[b], self.single_action_space, self.config, name=f"actions[{b}]"
+            )
         resetting = self._autoreset.copy()
         active = np.flatnonzero(~resetting)
         rewards = np.zeros(n)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import math
 import re
 from pathlib import Path
@@ -9,10 +10,10 @@ from pathlib import Path
 import pytest
 
 from scas_env.actuator.config import read_mapping
+from scas_env.core.costs import CostModel
 from scas_env.core.demand import DemandModel
 from scas_env.core.fleet_config import FleetConfig, SparesConfig
 from scas_env.core.resources import SparesSpec
-from scas_env.core.costs import CostModel
 from scas_env.core.scenario import Scenario
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -23,10 +24,14 @@ def test_defaults_are_the_issue_s_fleet() -> None:
     cfg = FleetConfig()
     assert (cfg.aircraft, cfg.actuators_per_aircraft, cfg.flights_per_mission) == (8, 3, 2)
     assert cfg.n_actuators == 24 and cfg.crew_capacity == 1
-    assert cfg.mission_types == ("standard",) and cfg.demand.mission_mix == (1.0,)
+    assert cfg.mission_types == ("standard", "utility", "offshore_gusts")
+    assert cfg.demand.mission_mix == (0.5, 0.3, 0.2)
     assert cfg.base_missions_per_day == pytest.approx(600 * 8 / 3 / 365)
-    # a mission of 2 flights is worth two of the single env's flights
-    assert cfg.mission_value_usd == (2 * CostModel().flight_value_usd,)
+    # a mission of 2 flights is worth two of the single env's flights; a missed one costs a
+    # substitute aircraft on top
+    assert cfg.mission_value_usd == (2 * CostModel().flight_value_usd,) * 3
+    assert cfg.mission_not_flown_usd == (5000.0,) * 3
+    assert cfg.spares.spec().initial == (2, 2, 2)
     for group in (FleetConfig, SparesConfig, DemandModel):
         for name, _, unit, _, source in group.describe():
             assert unit and source, f"{group.__name__}.{name} needs a unit and a source"
@@ -48,7 +53,7 @@ def test_spares_map_to_the_resource_spec() -> None:
         lead_spread_days=2,
     )
     assert spares.spec() == SparesSpec(
-        initial=(3, 1, 4),
+        initial=(3, 2, 4),
         base_stock=(2, -1, 4),
         lead_days=(10, 10, 20),
         lead_spread_days=(2, 2, 2),
@@ -73,8 +78,8 @@ def test_the_degenerate_fleet() -> None:
         ({"mission_types": ("standard", "windy")}, r"mission_types\[1\] = 'windy'"),
         ({"mission_types": ("standard", "standard")}, r"names a type twice"),
         ({"mission_types": ()}, r"non-empty list"),
-        ({"mission_value_usd": (-1.0,)}, r"mission_value_usd\[0\] = -1.0 USD"),
-        ({"mission_not_flown_usd": (1.0, 2.0)}, r"needs 1 amounts"),
+        ({"mission_value_usd": (5.0, -1.0, 5.0)}, r"mission_value_usd\[1\] = -1.0 USD"),
+        ({"mission_not_flown_usd": (1.0, 2.0)}, r"needs 3 amounts"),
         (
             {"mission_types": ("standard", "training"), "mission_value_usd": (1.0, 1.0)},
             r"needs 2 amounts",
@@ -85,17 +90,23 @@ def test_the_degenerate_fleet() -> None:
                 "mission_value_usd": (1.0, 1.0),
                 "mission_not_flown_usd": (0.0, 0.0),
             },
-            r"mission_mix has 1 probabilities but FleetConfig.mission_types has 2",
+            r"mission_mix has 3 probabilities but FleetConfig.mission_types has 2",
         ),
         (
-            {"demand": DemandModel(flight_hours_per_aircraft_year=1500.0)},
+            {
+                "demand": DemandModel(
+                    flight_hours_per_aircraft_year=1500.0, mission_mix=(0.5, 0.3, 0.2)
+                )
+            },
             r"mean demand of 11 missions a day exceeds the 8 aircraft",
         ),
         (
             {
                 "flights_per_mission": 16,
                 "demand": DemandModel(
-                    flight_hours_per_aircraft_year=10.0, flight_hours_per_flight=2.0
+                    flight_hours_per_aircraft_year=10.0,
+                    flight_hours_per_flight=2.0,
+                    mission_mix=(0.5, 0.3, 0.2),
                 ),
             },
             r"16 flights of 2.0 h lasts 32.0 h, more than a day",
@@ -181,6 +192,17 @@ def test_fleet_examples_load_and_every_value_is_explained(path: Path) -> None:
                 assert _comment_above(lines, key, first), f"{path.name} [{table}] {key}"
 
 
+@pytest.mark.parametrize("path", FLEET_EXAMPLES, ids=lambda p: p.name)
+def test_fleet_examples_load_all_three_sections(path: Path) -> None:
+    """``[fleet]`` is a registered file section (``FILE_SECTIONS``): each class reads its own
+    table of a fleet file, and the fleet env runs the whole case."""
+    data = read_mapping(path)
+    assert Scenario.load(path) == Scenario.from_dict(data["scenario"])
+    assert CostModel.load(path) == CostModel.from_dict(data["costs"])
+    assert FleetConfig.load(path) == FleetConfig.from_dict(data["fleet"])
+    assert Scenario.load(path).initial_health == "in_service"
+
+
 def test_the_two_examples_are_the_operators_they_claim() -> None:
     offshore = FleetConfig.load(ROOT / "examples" / "fleet_offshore.toml")
     military = FleetConfig.load(ROOT / "examples" / "fleet_military_training.toml")
@@ -191,3 +213,36 @@ def test_the_two_examples_are_the_operators_they_claim() -> None:
     assert military.demand.flight_hours_per_aircraft_year == 200.0  # CBO FY2023
     assert military.mission_availability_target == 0.68
     assert military.mission_types[0] == "training"
+
+
+@pytest.mark.parametrize("path", FLEET_EXAMPLES, ids=lambda p: p.name)
+def test_single_actuator_commands_refuse_a_fleet_file(
+    path: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A fleet file's [scenario] and [costs] tables are readable, but a command that runs one
+    actuator (here the tuner) does not silently drop its [fleet] table: a usage error before
+    any work."""
+    from policies import cli as policies_cli
+
+    out = tmp_path / "tune"
+    with pytest.raises(SystemExit) as exit_:
+        policies_cli.tune_main(["--scenario", str(path), "--out", str(out)])
+    assert exit_.value.code == 2
+    assert "holds a [fleet] table: this command runs one actuator" in capsys.readouterr().err
+    assert not out.exists()
+
+
+@pytest.mark.filterwarnings("ignore:No artists with labels:UserWarning")
+def test_the_benchmark_runs_a_fleet_file_with_its_three_tables(tmp_path: Path) -> None:
+    """``scas-benchmark --scenario <fleet file>`` reads the file's [scenario], [costs] and
+    [fleet] tables (FILE_SECTIONS) and records them."""
+    from policies import cli as policies_cli
+
+    path = ROOT / "examples" / "fleet_military_training.toml"
+    out = tmp_path / "bench"
+    argv = ["--scenario", str(path), "--episodes", "1", "--policies", "fleet_naive"]
+    assert policies_cli.benchmark_main([*argv, "--workers", "1", "--out", str(out), "-q"]) == 0
+    config = json.loads((out / "summary.json").read_text())["config"]
+    assert FleetConfig.from_dict(config["fleet"]) == FleetConfig.load(path)
+    assert CostModel.from_dict(config["costs"]) == CostModel.load(path)
+    assert Scenario.from_dict(config["scenario"]).initial_health == "in_service"

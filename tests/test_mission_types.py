@@ -26,8 +26,8 @@ from scas_env.actuator.mission_types import (
 )
 from scas_env.actuator.missions import REGIMES, flight_profile
 from scas_env.actuator.params import ScasParams
-from scas_env.utils.shipped_files import shipped_path
 from scas_env.studies.mission_types_build import regime_mix_multipliers
+from scas_env.utils.shipped_files import shipped_path
 
 P = ScasParams()
 FS = P.sensors.sample_rate_hz
@@ -150,7 +150,7 @@ def test_multipliers_agree_with_an_independent_per_regime_computation() -> None:
     # Each regime flown alone in short windows, weighted by the type's shares (the
     # load-spectrum route of the calibration): it leaves out cycles spanning two segments
     # (up to ~2 % of the damage) and its 4 windows a regime carry ~1-2 % of sampling error.
-    # Depths away from the threshold transitions (see docs/fleet_model.md).
+    # Depths away from the threshold transitions (see docs/fleet.md).
     depths = np.array([90e-6, 190e-6, 500e-6, 900e-6])
     for name in ("training", "offshore_gusts"):
         crack, wear = regime_mix_multipliers(

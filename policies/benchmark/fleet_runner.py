@@ -58,14 +58,18 @@ FLEET_ROW = (
 
 
 def run_fleet_episodes(
-    venv: Any, policy: Any, seeds: Sequence[tuple[int, int]]
+    venv: Any,
+    policy: Any,
+    seeds: Sequence[tuple[int, int]],
+    record: Sequence[bool] | None = None,
 ) -> list[dict[str, Any]]:
     """Run one fleet episode per ``(env_seed, policy_seed)`` to truncation, all at once.
 
     ``venv`` is a fleet vector env with ``len(seeds)`` fleets; the policy follows the
     project's protocol (``predict`` on a batch, ``reset(seed=[...])`` if it has one).
     Returns, per episode, ``{"row": results row, "events": []}`` (fleets record no removal
-    events; the rows carry the counts)."""
+    events, the rows carry the counts) and, for the episodes ``record`` marks, ``"trace"``:
+    its :func:`day_record` of every day."""
     n = len(seeds)
     if venv.num_envs != n:
         raise ValueError(f"the vector env has {venv.num_envs} fleets for {n} seeds")
@@ -76,17 +80,41 @@ def run_fleet_episodes(
     reward = np.zeros(n)
     start = np.ones(n, dtype=np.bool_)
     state = None
+    traces: list[list[dict[str, Any]]] = [[] for _ in range(n)]
+    recorded = [e for e in range(n) if record is not None and record[e]]
     while True:
         actions, state = policy.predict(obs, state=state, episode_start=start, deterministic=True)
         obs, r, terminated, truncated, info = venv.step(np.asarray(actions, dtype=np.int64))
         start[:] = False
         reward += r
+        for e in recorded:
+            traces[e].append(day_record(info, e))
         done = terminated | truncated
         if done.all():
             break
         if done.any():
             raise RuntimeError("episodes of one batch must end together (same episode_days)")
-    return [{"row": fleet_row(info, e, float(reward[e])), "events": []} for e in range(n)]
+    out: list[dict[str, Any]] = [
+        {"row": fleet_row(info, e, float(reward[e])), "events": []} for e in range(n)
+    ]
+    for e in recorded:
+        out[e]["trace"] = traces[e]
+    return out
+
+
+def day_record(info: dict[str, Any], e: int) -> dict[str, Any]:
+    """Fleet ``e``'s resources at the end of a day, from a vector info: spares on hand and on
+    order per kind, crew jobs waiting, crew jobs done so far, missions flown and asked so
+    far (a row of ``fleet_day.csv``)."""
+    return {
+        "day": int(info["day"][e]),
+        **{f"stock_{k}": int(v[e]) for k, v in info["stock"].items()},
+        **{f"on_order_{k}": int(v[e]) for k, v in info["on_order"].items()},
+        "jobs_waiting": int(info["jobs_waiting"][e]),
+        "jobs_done": int(info["jobs_done"][e]),
+        "missions_flown": int(info["missions_flown"][e]),
+        "missions_demanded": int(info["missions_demanded"][e]),
+    }
 
 
 def fleet_row(info: dict[str, Any], e: int, reward: float) -> dict[str, Any]:
@@ -107,7 +135,7 @@ def fleet_row(info: dict[str, Any], e: int, reward: float) -> dict[str, Any]:
         "flights": int(info["flights"][e]),
         "flight_hours": fh,
         "cost_usd": float(info["cost_usd"][e]),
-        "cost_per_fh": float(info["cost_per_fh"][e]),
+        "cost_per_fh": float(info["cost_usd"][e]) / fh if fh > 0 else math.nan,
         "reward": reward,
         "failures_spring": failures["spring"],
         "failures_seal": failures["seal"],
@@ -128,4 +156,49 @@ def fleet_row(info: dict[str, Any], e: int, reward: float) -> dict[str, Any]:
     }
 
 
-__all__ = ["FLEET_ROW", "fleet_row", "run_fleet_episodes"]
+#: counts the bound's relaxed plan has none of
+RELAXED_AWAY = (
+    "failures_spring",
+    "failures_seal",
+    "failures_per_1000fh",
+    "background_removals",
+    "unscheduled_removals",
+    "unscheduled_per_1000fh",
+    "tests",
+    "stock_outs",
+    "waiting_job_days",
+    "jobs_waiting",
+)
+
+
+def fleet_bound_rows(
+    env_kwargs: dict[str, Any], seeds: Sequence[tuple[int, int]]
+) -> list[dict[str, Any]]:
+    """The ``fleet_bound`` arm: per ``(env_seed, _)`` the clairvoyant relaxation's plan as a
+    results row (:func:`policies.rules.fleet_bound.fleet_upper_bound`; the episode's
+    missions and lives are those every policy meets on that seed). The relaxed plan has no
+    failure, removal, test, stock-out or wait (0); what it relaxes away (aircraft and crew
+    use, wasted life, replacements counted per part) is NaN."""
+    from policies.rules.fleet_bound import fleet_upper_bound
+
+    out = []
+    for env_seed, _ in seeds:
+        b = fleet_upper_bound(int(env_seed), **env_kwargs)
+        fh = float(b["flight_hours"])
+        row: dict[str, Any] = dict.fromkeys(FLEET_ROW, math.nan)
+        row.update(
+            missions_demanded=b["missions_demanded"],
+            missions_flown=b["missions"],
+            mission_availability=b["missions"] / max(b["missions_demanded"], 1),
+            flights=b["flights"],
+            flight_hours=fh,
+            cost_usd=b["cost_usd"],
+            cost_per_fh=b["cost_usd"] / fh if fh > 0 else math.nan,
+            reward=b["bound"],
+            **dict.fromkeys(RELAXED_AWAY, 0),
+        )
+        out.append({"row": row, "events": []})
+    return out
+
+
+__all__ = ["FLEET_ROW", "day_record", "fleet_bound_rows", "fleet_row", "run_fleet_episodes"]

@@ -9,7 +9,11 @@ Files written by :func:`write_outputs` into the output folder:
   (:mod:`policies.benchmark.stats`), paired differences against the best rule-based policy
   with their minimum detectable differences, and the run's configuration and wall time;
 * ``summary.md``: the same as Markdown tables;
-* ``cost_vs_availability.png``, ``survival.png``, ``cost_breakdown.png``.
+* ``cost_vs_availability.png``, ``survival.png``, ``cost_breakdown.png``;
+* fleets: ``cost_vs_availability.png`` (mission availability), and the first episode of each
+  policy day by day (spares, crew, missions missed) in ``fleet_day.csv`` and
+  ``fleet_day.png``; ``summary.json`` adds each policy's share of the gap between the
+  naive rule and the clairvoyant bound (``share_of_gap``).
 """
 
 from __future__ import annotations
@@ -54,7 +58,22 @@ COLUMNS = {
     "tests_per_1000fh": ("tests/1000FH", "{:.2f}"),
     "wasted_life": ("wasted life (fl)", "{:.1f}"),
     "reward": ("reward USD/episode", "{:.0f}"),
+    # fleets
+    "mission_availability": ("mission availability", "{:.4f}"),
+    "aircraft_availability": ("aircraft availability", "{:.4f}"),
+    "unscheduled_per_1000fh": ("unsched. removals/1000FH", "{:.3f}"),
+    "stock_outs": ("stock-outs", "{:.2f}"),
+    "waiting_job_days": ("job-days waited", "{:.1f}"),
+    "crew_utilisation": ("crew utilisation", "{:.3f}"),
 }
+
+
+def _metrics(summary: Mapping[str, Any]) -> Sequence[str]:
+    return summary.get("metrics", METRICS)
+
+
+def _is_fleet(summary: Mapping[str, Any]) -> bool:
+    return "mission_availability" in _metrics(summary)
 
 
 def _cell(iv: Mapping[str, float], fmt: str) -> str:
@@ -73,23 +92,42 @@ def _cell(iv: Mapping[str, float], fmt: str) -> str:
 
 def _rows(summary: Mapping[str, Any], key: str) -> list[list[str]]:
     return [
-        [policy] + [_cell(d[m], COLUMNS[m][1]) for m in METRICS]
+        [policy] + [_cell(d[m], COLUMNS[m][1]) for m in _metrics(summary)]
         for policy, d in summary[key].items()
     ]
 
 
-def format_table(summary: Mapping[str, Any]) -> str:
-    """Fixed-width terminal table: mean ± half-width of the t-interval per policy, then the
-    paired differences against the reference policy."""
-    header = ["policy"] + [COLUMNS[m][0] for m in METRICS]
-    blocks = [("policies", f"{100 * summary['confidence']:.0f}% intervals ({INTERVALS})")]
+def _gap_rows(summary: Mapping[str, Any]) -> list[list[str]]:
+    return [[p, _cell(iv, "{:.3f}")] for p, iv in summary.get("share_of_gap", {}).items()]
+
+
+def _gap_title(summary: Mapping[str, Any]) -> str:
+    g = summary["gap"]
+    return (
+        f"share of the gap closed, (policy - {g['base']}) / ({g['bound']} - {g['base']}) in "
+        f"reward, paired bootstrap {100 * summary['confidence']:.0f}% interval"
+    )
+
+
+def _blocks(summary: Mapping[str, Any]) -> list[tuple[str, list[str], list[list[str]]]]:
+    """(title, header, rows) of each table of a summary."""
+    header = ["policy"] + [COLUMNS[m][0] for m in _metrics(summary)]
+    conf = f"{100 * summary['confidence']:.0f}%"
+    out = [(f"{conf} intervals ({INTERVALS})", header, _rows(summary, "policies"))]
     if summary["reference"] is not None:
-        blocks.append(
-            ("paired_vs_reference", f"paired difference vs {summary['reference']} (same seeds)")
-        )
+        title = f"paired difference vs {summary['reference']} (same seeds)"
+        out.append((title, header, _rows(summary, "paired_vs_reference")))
+    if "share_of_gap" in summary:
+        out.append((_gap_title(summary), ["policy", "share of gap"], _gap_rows(summary)))
+    return out
+
+
+def format_table(summary: Mapping[str, Any]) -> str:
+    """Fixed-width terminal tables: per policy its intervals, the paired differences against
+    the reference policy, and (fleets) the share of the gap to the bound each closes."""
     lines = []
-    for key, title in blocks:
-        table = [header, *_rows(summary, key)]
+    for title, header, rows in _blocks(summary):
+        table = [header, *rows]
         widths = [max(len(r[k]) for r in table) for k in range(len(header))]
         lines.append(title)
         for r in table:
@@ -101,26 +139,23 @@ def format_table(summary: Mapping[str, Any]) -> str:
 def markdown_summary(result: BenchmarkResult) -> str:
     """The summary as Markdown tables with the run's configuration."""
     s, c = result.summary, result.config
+    length = "fleet episodes" if _is_fleet(s) else f"episodes x {c['slots']} slots"
     out = [
         "# Policy benchmark",
         "",
-        f"{c['episodes']} episodes x {c['slots']} slots per policy, seed {c['seed']}, "
+        f"{c['episodes']} {length} per policy, seed {c['seed']}, "
         f"{c['n_workers']} worker(s), wall {result.wall_s:.1f} s. Cells: mean "
         f"[{100 * s['confidence']:.0f}% interval] ({INTERVALS}); paired differences: mean ± "
         "t half-width (MDD: minimum detectable difference, 80 % power, two-sided "
         f"{100 - 100 * s['confidence']:.0f} %).",
         "",
-        FINITE_HORIZON,
+        "" if _is_fleet(s) else FINITE_HORIZON,
         "",
     ]
-    header = ["policy"] + [COLUMNS[m][0] for m in METRICS]
-    blocks = [("policies", "Per policy")]
-    if s["reference"] is not None:
-        blocks.append(("paired_vs_reference", f"Paired difference vs `{s['reference']}`"))
-    for key, title in blocks:
-        out += [f"## {title}", "", "| " + " | ".join(header) + " |"]
+    for title, header, rows in _blocks(s):
+        out += [f"## {title[0].upper()}{title[1:]}", "", "| " + " | ".join(header) + " |"]
         out.append("|" + "---|" * len(header))
-        out += ["| " + " | ".join(r) + " |" for r in _rows(s, key)]
+        out += ["| " + " | ".join(r) + " |" for r in rows]
         out.append("")
     out += ["## Parameters", ""]
     out += [f"- `{p['label']}` ({p['family']}): `{p['params']}`" for p in c["policies"]]
@@ -136,12 +171,14 @@ def _write_csv(path: Path, rows: Sequence[Mapping[str, Any]]) -> None:
 
 def _plot_cost_availability(summary: Mapping[str, Any], path: Path) -> None:
     fig, ax = plt.subplots(figsize=(6.5, 4.5))
+    fleet = _is_fleet(summary)
     for policy, d in summary["policies"].items():
-        a, c = d["availability"], d["cost_per_fh"]
+        a, c = d["mission_availability" if fleet else "availability"], d["cost_per_fh"]
         xerr = 0.0 if math.isnan(a["low"]) else 0.5 * (a["high"] - a["low"])
         yerr = 0.0 if math.isnan(c["low"]) else 0.5 * (c["high"] - c["low"])
         ax.errorbar(a["mean"], c["mean"], xerr=xerr, yerr=yerr, fmt="o", capsize=3, label=policy)
-    ax.set_xlabel("availability (flights / slots)")
+    x_fleet, x_single = "mission availability (flown / asked)", "availability (flights / slots)"
+    ax.set_xlabel(x_fleet if fleet else x_single)
     ax.set_ylabel("maintenance cost per flight hour (USD/FH)")
     ax.set_title(f"Cost vs availability ({100 * summary['confidence']:.0f}% intervals)")
     ax.grid(alpha=0.3)
@@ -252,6 +289,31 @@ def _plot_cost_breakdown(
     plt.close(fig)
 
 
+def _plot_fleet_day(traces: Mapping[str, Sequence[Mapping[str, Any]]], path: Path) -> None:
+    """Per policy, its first episode day by day: spares on hand per kind, crew jobs waiting,
+    missions missed so far."""
+    fig, axes = plt.subplots(3, 1, figsize=(8, 8), sharex=True)
+    kinds = [k[len("stock_") :] for k in next(iter(traces.values()))[0] if k.startswith("stock_")]
+    for policy, days in traces.items():
+        d = np.array([r["day"] for r in days])
+        (line,) = axes[0].step(d, [sum(r[f"stock_{k}"] for k in kinds) for r in days],
+                               where="post", label=policy)  # fmt: skip
+        axes[1].step(d, [r["jobs_waiting"] for r in days], where="post", color=line.get_color())
+        missed = [r["missions_demanded"] - r["missions_flown"] for r in days]
+        axes[2].plot(d, missed, color=line.get_color())
+    axes[0].set_ylabel(f"spares on hand\n({' + '.join(kinds)})")
+    axes[1].set_ylabel("crew jobs waiting")
+    axes[2].set_ylabel("missions missed so far")
+    axes[2].set_xlabel("day of the first episode")
+    axes[0].set_title("Stock and crew over an episode (episode 0 of each policy)")
+    for ax in axes:
+        ax.grid(alpha=0.3)
+    axes[0].legend(fontsize=7, ncol=2)
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+
+
 def write_outputs(
     result: BenchmarkResult, out_dir: str | Path, *, plots: bool = True, overwrite: bool = False
 ) -> dict[str, Path]:
@@ -269,22 +331,34 @@ def write_outputs(
         "summary_json": "summary.json",
         "summary_md": "summary.md",
     }
+    fleet = _is_fleet(result.summary)
+    if fleet and result.traces:
+        names["fleet_day"] = "fleet_day.csv"
     if plots:
-        names |= {
-            "cost_vs_availability": "cost_vs_availability.png",
-            "survival": "survival.png",
-            "cost_breakdown": "cost_breakdown.png",
-        }
+        names["cost_vs_availability"] = "cost_vs_availability.png"
+        if fleet and result.traces:
+            names["fleet_day_plot"] = "fleet_day.png"
+        elif not fleet:
+            names |= {"survival": "survival.png", "cost_breakdown": "cost_breakdown.png"}
     seeds = {"root": result.config.get("seed"), "episodes": result.config.get("episodes")}
     with results_folder(out, config=result.config, seeds=seeds, overwrite=overwrite) as tmp:
         at = {k: tmp / v for k, v in names.items()}
         _write_csv(at["results"], result.rows)
-        _write_csv(at["events"], result.events)
+        if result.events:
+            _write_csv(at["events"], result.events)
+        else:
+            at["events"].write_text("policy,episode\n")
+        if "fleet_day" in at:
+            _write_csv(at["fleet_day"], [{"policy": p, **r} for p, days in result.traces.items()
+                                         for r in days])  # fmt: skip
         payload = {**result.summary, "config": result.config, "wall_s": result.wall_s}
         at["summary_json"].write_text(json.dumps(payload, indent=2, default=repr) + "\n")
         at["summary_md"].write_text(markdown_summary(result))
         if plots:
             _plot_cost_availability(result.summary, at["cost_vs_availability"])
-            _plot_survival(result.events, policies, at["survival"])
-            _plot_cost_breakdown(result.rows, policies, at["cost_breakdown"])
+            if "fleet_day_plot" in at:
+                _plot_fleet_day(result.traces, at["fleet_day_plot"])
+            if "survival" in at:
+                _plot_survival(result.events, policies, at["survival"])
+                _plot_cost_breakdown(result.rows, policies, at["cost_breakdown"])
     return {k: out / v for k, v in names.items()}

@@ -38,7 +38,7 @@ from tqdm.auto import tqdm
 
 import policies  # noqa: F401  (registers the built-in policies)
 from policies.base import make_policy, policy_family, policy_obs_mode
-from policies.benchmark.fleet_runner import run_fleet_episodes
+from policies.benchmark.fleet_runner import fleet_bound_rows, run_fleet_episodes
 from policies.benchmark.runner import TERMS, run_episode, run_episodes
 from policies.benchmark.stats import FLEET_METRICS, METRICS, summarize
 from scas_env import ENV_ID, ENV_ID_FLEET
@@ -55,10 +55,24 @@ DEFAULT_POLICIES = (
     "random",
     "ppo",
 )
+#: Fleets: the default policies (the families of policies.rules.fleet, the bound) and the
+#: share of the gap between the naive rule and the bound each closes.
+DEFAULT_FLEET_POLICIES = (
+    "fleet_corrective",
+    "fleet_age",
+    "fleet_naive",
+    "fleet_opportunistic",
+    "fleet_aware",
+    "fleet_oracle",
+    "fleet_random",
+    "fleet_bound",
+)
+FLEET_GAP_BASE, FLEET_GAP_BOUND = "fleet_naive", "fleet_bound"
 #: Episodes of one policy stepped together in one vectorised env (one task).
 BATCH_EPISODES = 32
 
 __all__ = [
+    "DEFAULT_FLEET_POLICIES",
     "DEFAULT_POLICIES",
     "PLUGINS",
     "TERMS",
@@ -167,6 +181,10 @@ def _run_chunk(
         spec = specs[p]
         mode = spec.build_mode()
         n = len(batch)
+        if spec.name == "fleet_bound":
+            results = fleet_bound_rows(dict(env_kwargs), [(es, ps) for _, es, ps in batch])
+            out.extend(_labelled(spec, batch, results))
+            continue
         if (mode, n) not in envs:
             envs[mode, n] = gym.make_vec(
                 env_id_of(env_kwargs),
@@ -180,20 +198,25 @@ def _run_chunk(
             built[p] = make_policy(spec.name, env.obs_names, **dict(spec.params))
             if in_worker():
                 single_thread()  # the policy may have loaded torch
-        runner = run_fleet_episodes if is_fleet(env_kwargs) else run_episodes
-        results = runner(env, built[p], [(es, ps) for _, es, ps in batch])
-        for (e, env_seed, _), result in zip(batch, results, strict=True):
-            result["row"] = {
-                "policy": spec.key,
-                "episode": e,
-                "env_seed": env_seed,
-                **result["row"],
-            }
-            result["events"] = [{"policy": spec.key, "episode": e, **ev} for ev in result["events"]]
-            out.append(result)
+        pairs = [(es, ps) for _, es, ps in batch]
+        if is_fleet(env_kwargs):  # the first episode recorded day by day (stock, crew)
+            results = run_fleet_episodes(env, built[p], pairs, [e == 0 for e, _, _ in batch])
+        else:
+            results = run_episodes(env, built[p], pairs)
+        out.extend(_labelled(spec, batch, results))
     for env in envs.values():
         env.close()
     return out
+
+
+def _labelled(
+    spec: PolicySpec, batch: Sequence[tuple[int, int, int]], results: list[dict[str, Any]]
+) -> list[dict[str, Any]]:
+    """Results of a batch with the policy's label, the episode and its env seed."""
+    for (e, env_seed, _), result in zip(batch, results, strict=True):
+        result["row"] = {"policy": spec.key, "episode": e, "env_seed": env_seed, **result["row"]}
+        result["events"] = [{"policy": spec.key, "episode": e, **ev} for ev in result["events"]]
+    return results
 
 
 def _run_chunk_ray(
@@ -272,6 +295,8 @@ class BenchmarkResult:
     summary: dict[str, Any]
     config: dict[str, Any]
     wall_s: float
+    #: fleets: per policy, its first episode day by day (stock, crew; fleet_runner.day_record)
+    traces: dict[str, list[dict[str, Any]]] = field(default_factory=dict)
 
 
 def _needs_horizon(spec: PolicySpec) -> bool:
@@ -384,6 +409,8 @@ def run_benchmark(
         (r["row"] for r in results), key=lambda r: (keys.index(r["policy"]), r["episode"])
     )
     events = [ev for r in results for ev in r["events"]]
+    traces = {r["row"]["policy"]: r["trace"] for r in results if "trace" in r}
+    traces = {k: traces[k] for k in keys if k in traces}
     events.sort(key=lambda ev: (keys.index(ev["policy"]), ev["episode"]))
     rules = [s.key for s in specs if _family(s) == "rule"]
     config = {
@@ -401,8 +428,9 @@ def run_benchmark(
         ],
     }
     metrics = FLEET_METRICS if fleet else METRICS
-    summary = summarize(rows, keys, rules, confidence, metrics=metrics)
-    return BenchmarkResult(rows, events, summary, config, wall)
+    gap = (FLEET_GAP_BASE, FLEET_GAP_BOUND) if fleet else None
+    summary = summarize(rows, keys, rules, confidence, metrics=metrics, gap=gap)
+    return BenchmarkResult(rows, events, summary, config, wall, traces)
 
 
 def _family(spec: PolicySpec) -> str:

@@ -94,6 +94,7 @@ __all__ = [
     "minimum_detectable_difference",
     "paired_comparison",
     "paired_difference",
+    "share_of_gap",
     "summarize",
     "t_interval",
     "wilson_interval",
@@ -284,6 +285,51 @@ def bootstrap_mean(
     return Interval(mean, float(ci.low), float(ci.high), n)
 
 
+def share_of_gap(
+    policy: Sequence[float] | np.ndarray,
+    base: Sequence[float] | np.ndarray,
+    bound: Sequence[float] | np.ndarray,
+    confidence: float = 0.95,
+    *,
+    resamples: int = BOOTSTRAP_RESAMPLES,
+    seed: int = BOOTSTRAP_SEED,
+) -> Interval:
+    """The share of the gap between a base policy and an upper bound that ``policy`` closes,
+    ``mean(policy - base) / mean(bound - base)`` over paired episodes (the same seeds), with
+    a paired percentile-bootstrap interval (``scipy.stats.bootstrap``, ``paired=True``,
+    fixed seed): 0 is the base, 1 the bound. Episodes with a non-finite value are dropped
+    from all three."""
+    _confidence(confidence)
+    x, b, u = (np.asarray(v, dtype=np.float64) for v in (policy, base, bound))
+    if not x.shape == b.shape == u.shape or x.ndim != 1:
+        raise ValueError(f"policy, base and bound must be paired 1-D arrays, got {x.shape}, "
+                         f"{b.shape}, {u.shape}")  # fmt: skip
+    keep = np.isfinite(x) & np.isfinite(b) & np.isfinite(u)
+    x, b, u = x[keep], b[keep], u[keep]
+    n = int(x.size)
+    if n == 0 or np.mean(u - b) <= 0.0:
+        return Interval(math.nan, math.nan, math.nan, n)
+
+    def ratio(x: np.ndarray, b: np.ndarray, u: np.ndarray, axis: int = -1) -> np.ndarray:
+        return np.mean(x - b, axis=axis) / np.mean(u - b, axis=axis)
+
+    share = float(ratio(x, b, u))
+    if n < 2:
+        return Interval(share, math.nan, math.nan, n)
+    res = stats.bootstrap(
+        (x, b, u),
+        ratio,
+        paired=True,
+        vectorized=True,
+        confidence_level=confidence,
+        n_resamples=resamples,
+        method="percentile",
+        rng=np.random.default_rng(seed),
+    )
+    ci = res.confidence_interval
+    return Interval(share, float(ci.low), float(ci.high), n)
+
+
 def best_policy(per_policy: Mapping[str, Mapping[str, Interval]], candidates: Sequence[str]) -> str:
     """The candidate with the highest mean reward per episode."""
     if not candidates:
@@ -315,11 +361,14 @@ def summarize(
     confidence: float = 0.95,
     *,
     metrics: Sequence[str] = METRICS,
+    gap: tuple[str, str] | None = None,
 ) -> dict[str, Any]:
     """Per-policy intervals of ``metrics`` (:data:`METRICS`, or :data:`FLEET_METRICS` for
     fleets; :func:`metric_interval`) and paired differences (t-interval and minimum
     detectable difference) against the best of ``reference_candidates`` (highest mean
-    reward); rows are results.csv rows."""
+    reward); rows are results.csv rows. ``gap = (base, bound)``: also each policy's
+    :func:`share_of_gap` of the reward between those two (fleets: the naive rule and the
+    clairvoyant bound), when both ran."""
     names = tuple(metrics)
     mine: dict[str, list[Mapping[str, Any]]] = {}
     by_policy: dict[str, dict[str, np.ndarray]] = {}
@@ -339,11 +388,20 @@ def summarize(
             paired[p] = {
                 m: paired_difference(by_policy[p][m], by_policy[ref][m], confidence) for m in names
             }
-    return {
+    out = {
         "confidence": confidence,
+        "metrics": list(names),
         "reference": ref,
         "policies": {p: {m: iv.to_dict() for m, iv in d.items()} for p, d in per_policy.items()},
         "paired_vs_reference": {
             p: {m: iv.to_dict() for m, iv in d.items()} for p, d in paired.items()
         },
     }
+    if gap is not None and gap[0] in by_policy and gap[1] in by_policy:
+        base, bound = (by_policy[g]["reward"] for g in gap)
+        out["gap"] = {"base": gap[0], "bound": gap[1]}
+        out["share_of_gap"] = {
+            p: share_of_gap(by_policy[p]["reward"], base, bound, confidence).to_dict()
+            for p in policies
+        }
+    return out

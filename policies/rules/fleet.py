@@ -66,6 +66,43 @@ FILTER_DEFAULTS: dict[str, float] = {
 }
 AGE_DEFAULTS: dict[str, float] = {"spring_age": 691.6326, "seal_age": 526.2141}
 PARTS = ("spring", "seal")
+#: the families' defaults, tuned on training fleets (seeds disjoint from the benchmark's):
+#: ``python -m policies.value.fleet_tuning --trials 30 --episodes 16 --workers 2 --out
+#: results/fleet_tuning`` (one Optuna budget per family, nested: naive -> opportunistic ->
+#: aware; 480 training episodes each; 4 significant digits). ``opportunity`` tunes to ~0
+#: (grouping does not pay at this fleet's crew and spares) and the seal backstop of the
+#: aware rule to its upper edge (off in effect): measured, not imposed.
+FLEET_TUNED: dict[str, dict[str, float]] = {
+    "fleet_age": {"spring_age": 999.5, "seal_age": 2283.0, "opportunity": 0.7234},
+    "fleet_naive": {
+        "spring_age": 2582.0,
+        "seal_age": 5761.0,
+        "test_every": 1167.0,
+        "risk_threshold": 0.09076,
+        "spring_lead": 2.102,
+        "seal_lead": 0.9441,
+    },
+    "fleet_opportunistic": {
+        "spring_age": 2582.0,
+        "seal_age": 5761.0,
+        "test_every": 1167.0,
+        "risk_threshold": 0.09076,
+        "spring_lead": 2.102,
+        "seal_lead": 0.9441,
+        "opportunity": 0.0,
+    },
+    "fleet_aware": {
+        "spring_age": 3623.0,
+        "seal_age": 9318.0,
+        "test_every": 881.4,
+        "risk_threshold": 0.09493,
+        "spring_lead": 4.005,
+        "seal_lead": 1.811,
+        "opportunity": 0.008306,
+        "urgency": 1.837,
+    },
+    "fleet_oracle": {"lead_flights": 10.05, "opportunity": 0.06485},
+}
 
 
 class FleetLayout:
@@ -120,16 +157,12 @@ class FleetRule:
     #: per family: (policy family, obs_mode, defaults, uses the filters, groups, aware)
     FAMILIES: ClassVar[dict[str, tuple[str, str, dict[str, float], bool, bool, bool]]] = {
         "fleet_corrective": ("rule", "features+rul", {}, False, False, False),
-        "fleet_age": ("rule", "features+rul", {**AGE_DEFAULTS, "opportunity": 0.6087}, False,
-                      True, False),
-        "fleet_naive": ("rule", "features+rul", FILTER_DEFAULTS, True, False, False),
-        "fleet_opportunistic": ("rule", "features+rul",
-                                {**FILTER_DEFAULTS, "opportunity": 0.5}, True, True, False),
-        "fleet_aware": ("rule", "features+rul",
-                        {**FILTER_DEFAULTS, "opportunity": 0.5, "urgency": 3.0}, True, True,
-                        True),
-        "fleet_oracle": ("bound", "state", {"lead_flights": 8.0, "opportunity": 0.5}, False, True,
-                         False),
+        "fleet_age": ("rule", "features+rul", FLEET_TUNED["fleet_age"], False, True, False),
+        "fleet_naive": ("rule", "features+rul", FLEET_TUNED["fleet_naive"], True, False, False),
+        "fleet_opportunistic": ("rule", "features+rul", FLEET_TUNED["fleet_opportunistic"],
+                                True, True, False),
+        "fleet_aware": ("rule", "features+rul", FLEET_TUNED["fleet_aware"], True, True, True),
+        "fleet_oracle": ("bound", "state", FLEET_TUNED["fleet_oracle"], False, True, False),
     }  # fmt: skip
 
     def __init__(self, family: str, obs_names: Sequence[str], **params: float) -> None:

@@ -5,8 +5,10 @@ For one episode (a seed of ``ScasFleet-v0``) everything is known in advance: the
 every day and every part's remaining life and the lives of the parts that will replace it
 (each kind's parts stream hands them out in order whatever the policy does). The relaxation
 drops every constraint that costs a policy something: the crew, the spares and their lead
-times, downtime, tests, background removals; any aircraft may fly any mission (at most one
-a day); every flight counts as the least damaging mission type's. Then the best plan flies
+times, downtime, tests, background removals; any aircraft may fly any mission, and the
+missions flown are not matched to aircraft day by day (at most ``N`` missions a day, each
+aircraft at most as many missions as there are days); every flight counts as the least
+damaging mission type's (per part, the smallest growth multiplier). Then the best plan flies
 the ``M`` missions of largest value-plus-penalty and spreads them over the aircraft so that
 the parts used up (each replaced, at its preventive cost, just before it would fail) cost
 least:
@@ -22,10 +24,11 @@ Why no policy beats it: every policy pays at least the relaxed plan's cost for t
 it completes (a part flown to failure costs an in-flight failure, more than its preventive
 replacement; a background swap fits new parts for more than their preventive cost; a
 damaging mission uses up lives at least as fast), earns at most ``v_k`` per mission
-(an aborted mission earns part of ``v_k``, pays ``p_k`` and the failure that aborted it,
-more than ``v_k``), and pays every penalty the plan pays. The constructor checks the cost
-conditions this needs; ``tests/test_fleet_bound.py`` checks the bound against every rule on
-fixed seeds.
+(an aborted mission earns at most ``(F - 1) / F`` of ``v_k`` and pays ``p_k`` and the failure
+that aborted it, which costs at least the part it replaces plus that value), and pays
+every penalty the plan pays. ``fleet_upper_bound`` checks the cost conditions this needs;
+``tests/test_fleet_bound.py`` checks the bound against every rule on fixed seeds and its
+plan against an enumeration.
 """
 
 from __future__ import annotations
@@ -35,6 +38,7 @@ from typing import Any
 
 import numpy as np
 
+from policies.base import register_policy
 from scas_env.core.fleet_config import FleetConfig
 from scas_env.core.parts import next_lives
 from scas_env.core.setup import PARTS
@@ -65,13 +69,15 @@ def fleet_upper_bound(seed: int, fleet: FleetConfig | None = None, **env_kwargs:
     per_day = np.minimum(demand.sum(axis=1), sh.aircraft)
     # the missions worth flying, best first: on a day with more asked than aircraft, the
     # best of that day (value + penalty) are the ones a plan can fly
-    gains: list[float] = []
+    gains: list[tuple[float, float]] = []  # (value + penalty, value) of a mission flown
     for d in range(sh.days):
-        day = np.repeat(value + penalty, demand[d])
-        gains.extend(sorted(day, reverse=True)[: per_day[d]])
-    gains_sorted = np.sort(np.array(gains))[::-1]
-    top = np.concatenate([[0.0], np.cumsum(gains_sorted)])
-    slowest = _slowest_crack(env)
+        both = zip(np.repeat(value + penalty, demand[d]), np.repeat(value, demand[d]), strict=True)
+        day = sorted(both, reverse=True)
+        gains.extend(day[: per_day[d]])
+    gains.sort(reverse=True)
+    top = np.concatenate([[0.0], np.cumsum([g for g, _ in gains])])
+    top_value = np.concatenate([[0.0], np.cumsum([v for _, v in gains])])
+    slowest = _slowest(env)
     batch = fb.actuators
     cost = np.zeros((sh.aircraft, sh.days + 1))
     flights = sh.flights * np.arange(sh.days + 1)
@@ -81,30 +87,61 @@ def fleet_upper_bound(seed: int, fleet: FleetConfig | None = None, **env_kwargs:
             for p, part in enumerate(PARTS):
                 lives = [float(batch.a["life"][e, p])]
                 lives += next_lives(batch, e, part, LOOKAHEAD_PARTS)
-                if part == "spring":
-                    lives = [life / slowest for life in lives]
-                cost[i] += price[part] * _replacements(lives, flights, batch, e, part, slowest)
+                lives = [life / slowest[p] for life in lives]
+                cost[i] += price[part] * _replacements(lives, flights, batch, e, part, slowest[p])
     best = _min_plus_over_aircraft(cost)
     m = np.arange(min(best.size, top.size))
     total = top[m] - best[m]
     k = int(np.argmax(total))
     penalties = float((demand * penalty).sum())
+    bound = float(total[k] - penalties)
     return {
-        "bound": float(total[k] - penalties),
+        "bound": bound,
         "missions": k,
+        "missions_demanded": int(demand.sum()),
+        "flights": k * sh.flights,
+        "flight_hours": k * sh.flights * cfg.demand.flight_hours_per_flight,
+        "value_flown": float(top_value[k]),
         "gains": float(top[k]),
         "penalties": penalties,
         "replacement_cost": float(best[k]),
+        "cost_usd": float(top_value[k]) - bound,
     }
 
 
+class FleetBound:
+    """The bound as a benchmark arm (``fleet_bound``): its rows are computed per episode seed
+    by :func:`fleet_upper_bound` (:func:`policies.benchmark.fleet_runner.fleet_bound_rows`),
+    not run; it has no actions."""
+
+    def __init__(self, obs_names: Any = (), **params: Any) -> None:
+        if params:
+            raise ValueError(f"fleet_bound takes no parameters, got {sorted(params)}")
+
+    def predict(self, *args: Any, **kwargs: Any) -> Any:
+        raise TypeError(
+            "fleet_bound is an upper bound computed per episode (fleet_upper_bound), "
+            "not a policy that acts"
+        )
+
+
+register_policy("fleet_bound", FleetBound, obs_mode="features+rul", family="bound")
+
+
 def _check_costs(cfg: FleetConfig, costs: Any, price: dict[str, float]) -> None:
-    """The cost conditions that make the relaxation a bound (module docstring)."""
-    flight_value = max(cfg.mission_value_usd) / int(cfg.flights_per_mission)
-    if costs.failure_total_usd < max(price.values()) or costs.failure_total_usd < flight_value:
+    """The cost conditions that make the relaxation a bound (module docstring): a failure
+    pays for the part it replaces (at least its preventive price) and for the value of the
+    flights its mission flew before it (at most ``F - 1`` of ``F``), which the relaxation
+    does not earn."""
+    flights = int(cfg.flights_per_mission)
+    before = max(cfg.mission_value_usd) * (flights - 1) / flights
+    need = max(price.values()) + before
+    if costs.failure_total_usd < need:
         raise ValueError(
-            "the bound needs an in-flight failure to cost at least a preventive replacement and "
-            f"a flight's value; failure_total_usd = {costs.failure_total_usd}"
+            "the bound needs an in-flight failure to cost at least a preventive replacement "
+            f"({max(price.values())} USD) plus the value of the {flights - 1} flights of a "
+            f"mission before it ({before} USD): failure_total_usd = "
+            f"{costs.failure_total_usd} must be >= {need}"
         )
     if cfg.background_removals and cfg.background_removal_usd < sum(price.values()):
         raise ValueError(
@@ -113,23 +150,24 @@ def _check_costs(cfg: FleetConfig, costs: Any, price: dict[str, float]) -> None:
         )
 
 
-def _slowest_crack(env: Any) -> float:
-    """The smallest crack-growth multiplier of the fleet's mission types (<= 1: the standard
-    mission is 1), which stretches a spring's life in standard flights at most by 1 / it."""
+def _slowest(env: Any) -> tuple[float, float]:
+    """Per part, the smallest growth multiplier of the fleet's mission types (<= 1: the
+    standard mission is 1; the spring's crack multiplier over the growth grid, the seals'
+    wear multiplier), which stretches a part's life in standard flights at most by 1 / it."""
     wm = env.setup.world
-    return float(min(1.0, wm.type_crack_mult.min()))
+    return float(min(1.0, wm.type_crack_mult.min())), float(min(1.0, wm.type_wear_mult.min()))
 
 
 def _replacements(
     lives: list[float], flights: np.ndarray, batch: Any, e: int, part: str, slowest: float
 ) -> np.ndarray:
     """Replacements one part position needs to fly each number of ``flights``: the fitted
-    part flies ``L_0 - 1`` flights safely, each next part ``L_q - 1``."""
+    part flies ``L_0 - 1`` flights safely, each next part ``L_q - 1`` (lives stretched by
+    ``1 / slowest``)."""
     safe = np.cumsum([max(life - 1.0, 0.0) for life in lives])
     while math.isfinite(safe[-1]) and safe[-1] < flights[-1]:
         more = next_lives(batch, e, part, len(lives) + LOOKAHEAD_PARTS)[len(lives) - 1 :]
-        if part == "spring":
-            more = [life / slowest for life in more]
+        more = [life / slowest for life in more]
         lives = lives + more
         safe = np.cumsum([max(life - 1.0, 0.0) for life in lives])
     return np.searchsorted(safe, flights, side="left").astype(np.float64)

@@ -52,7 +52,7 @@ stabilisation, gust response, manoeuvre):
 
 In-flight monitoring is not mission-dependent: HUMS extract features in recognised regimes
 (regime recognition), so the feature model stays the standard one whatever the mission;
-only the damage per flight changes (docs/fleet_model.md).
+only the damage per flight changes (docs/fleet.md).
 
 >>> MISSION_TYPES["standard"].occurrence == tuple(r.occurrence for r in REGIMES)
 True

@@ -195,6 +195,8 @@ class FleetBatch:
         for b, rng in zip(fleets.tolist(), np_randoms, strict=True):
             rows = self.rows_of(b)
             self.actuators.reset(rows, [rng] * rows.size)
+            for name in ("reward", "flew"):  # the last slot's, read by the info
+                self.actuators.a[name][rows] = 0
             seeds = rng.integers(0, 2**63 - 1, size=3)
             streams = ("demand", "background", "lead")
             self.rngs[b] = {
@@ -212,6 +214,8 @@ class FleetBatch:
             self.removed[b] = False
             for book in self.books.values():
                 book[b] = 0.0
+            for name, today in self.today.items():
+                today[b] = -1 if name == "assigned" else 0
             self._reset_resources(b)
 
     def _reset_resources(self, b: int) -> None:

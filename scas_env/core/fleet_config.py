@@ -4,7 +4,8 @@ A frozen validated dataclass like ``Scenario`` and ``CostModel``
 (:class:`~scas_env.actuator.config.Validated`: every number declared with its unit, range
 and source; unknown keys and bad values refused with a message naming the field, the value
 and what is allowed). Files: ``FleetConfig.load("case.toml")`` reads the ``[fleet]`` table
-(beside ``[scenario]`` and ``[costs]``) or the fields at the top level; ``save`` writes them.
+(one of :data:`~scas_env.actuator.config.FILE_SECTIONS`, beside ``[scenario]`` and
+``[costs]``) or the fields at the top level; ``save`` writes them under ``[fleet]``.
 The demand and the spares are sub-tables (``[fleet.demand]``, ``[fleet.spares]``).
 
 Mission types are listed by name (:data:`~scas_env.actuator.mission_types.MISSION_TYPES`)
@@ -29,7 +30,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from scas_env.actuator.config import FILE_SECTIONS, Validated, _build, param, read_mapping
+from scas_env.actuator.config import Validated, param
 from scas_env.actuator.mission_types import MISSION_TYPES
 from scas_env.core.costs import CostModel
 from scas_env.core.demand import DemandModel
@@ -215,7 +216,7 @@ class FleetConfig(Validated):
         "dynamics do not use it)",
     )
     #: a civil multi-role operator [B]: Table 1's mix, utility work (short sectors, loads),
-    #: crew changes in gusty wind (the damaging types of docs/fleet_model.md)
+    #: crew changes in gusty wind (the damaging types of docs/fleet.md)
     mission_types: tuple[str, ...] = ("standard", "utility", "offshore_gusts")
     #: 2 flights at the single actuator's $2,500 a flight (CostModel.flight_value_usd)
     mission_value_usd: tuple[float, ...] = (5000.0, 5000.0, 5000.0)
@@ -332,27 +333,6 @@ class FleetConfig(Validated):
         )
 
     # ------------------------------------------------------------------------ files
-    @classmethod
-    def load(cls, path: str | Path, *, section: str | None = None) -> FleetConfig:
-        """Read the ``[fleet]`` table (or ``section``) of a TOML/YAML/JSON file, or the
-        fields at its top level when it has no tables; errors name the file and table."""
-        data = read_mapping(path)
-        table = section or SECTION
-        tables = set(FILE_SECTIONS) | {SECTION}
-        if table in data or set(data) & tables:
-            others = sorted(set(data) - tables)
-            if others:
-                raise ValueError(
-                    f"{path}: top-level key(s) {others} beside the tables "
-                    f"{sorted(set(data) & tables)}; allowed tables: {sorted(tables)}"
-                )
-            if table not in data:
-                raise ValueError(
-                    f"{path}: no [{table}] table for FleetConfig; it has {sorted(data)}"
-                )
-            return _build(cls, data[table], path, table)
-        return _build(cls, data, path, "")
-
     def save(  # type: ignore[override]
         self, path: str | Path, *, section: str | None = SECTION, overwrite: bool = False
     ) -> Path:

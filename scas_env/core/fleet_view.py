@@ -202,19 +202,22 @@ class FleetView:
     # ------------------------------------------------------------------ masks
     def masks(self, b: int, values: dict[str, np.ndarray] | None = None) -> np.ndarray:
         """Valid choices of fleet ``b``'s next day, (N, 1 + 2K + 4A) bool: per aircraft its
-        mission choice (stand by always; fly or test-and-fly a type when it is free and
-        the type is asked tomorrow), then per actuator its maintenance choice (none always;
-        a part once it has flown; both when both have)."""
+        mission choice (stand by always; test-and-fly a type when the aircraft is free and
+        the type is asked tomorrow; plain flying too, unless a failed pre-flight test holds
+        the aircraft: only a new test can clear it, so plain flying is valid then only when
+        the scenario tests before every flight), then per actuator its maintenance choice
+        (none always; a part once it has flown; both when both have)."""
         fleet = self.fleet
         sh, a = fleet.shape, fleet.actuators.a
         values = self.groups(b) if values is None else values
         free = values["aircraft"][:, 4] > 0
+        held = (values["aircraft"][:, 3] > 0) & (fleet.setup.scenario.preflight != "every_flight")
         asked = values["demand"][0] > 0
         k = sh.types
         out = np.zeros((sh.aircraft, 1 + 2 * k + 4 * sh.actuators), dtype=np.bool_)
         out[:, 0] = True
         fly = free[:, None] & asked[None, :]
-        out[:, 1 : 1 + k] = fly
+        out[:, 1 : 1 + k] = fly & ~held[:, None]
         out[:, 1 + k : 1 + 2 * k] = fly
         age = a["part_age"][fleet.rows_of(b)].reshape(sh.aircraft, sh.actuators, 2) > 0
         m = out[:, 1 + 2 * k :].reshape(sh.aircraft, sh.actuators, 4)
@@ -245,6 +248,7 @@ class FleetView:
         wasted_sum = a["wasted_sum"][rows].sum(axis=0)
         wasted_count = a["wasted_count"][rows].sum(axis=0)
         terms = fleet.today["terms"][b]
+        on_order = fleet.spares.on_order
         row_terms = a["terms"][rows].sum(axis=0)
         return {
             "day": days,
@@ -259,7 +263,9 @@ class FleetView:
             "flights": int(flights),
             "flight_hours": fh,
             "cost_usd": cost,
-            "cost_per_fh": cost / fh if fh > 0 else math.nan,
+            # no NaN in the info (Gymnasium's checker compares infos with ==): before any
+            # flight hour, inf once a cost was paid, else 0
+            "cost_per_fh": cost / fh if fh > 0 else (math.inf if cost > 0 else 0.0),
             "revenue_usd": float(a["revenue"][rows].sum()),
             "failures": {p: int(failures[k]) for k, p in enumerate(PARTS)},
             "background_removals": int(books["background_removals"][b]),
@@ -269,6 +275,8 @@ class FleetView:
             "stock_outs": {
                 k: int(fleet.spares.stock_outs[b, n]) for n, k in enumerate(SPARE_KINDS)
             },
+            "stock": {k: int(fleet.spares.on_hand[b, n]) for n, k in enumerate(SPARE_KINDS)},
+            "on_order": {k: int(on_order[b, n]) for n, k in enumerate(SPARE_KINDS)},
             "jobs_waiting": int((fleet.crew.sequence[b] >= 0).sum()),
             "jobs_done": jobs_done,
             "waiting_job_days": int(fleet.crew.waiting_job_days[b]),

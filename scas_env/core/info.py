@@ -59,6 +59,9 @@ def build_info(batch: ActuatorBatch, row: int | None = None) -> dict[str, Any]:
         def one(arr: Any, col: int | None = None) -> Any:
             return (arr if col is None else arr[:, col]).copy()
 
+        def per_row(arr: Any, names: tuple[str, ...]) -> dict[str, Any]:
+            return {name: arr[:, k].copy() for k, name in enumerate(names)}
+
         slot = a["slot"]
         availability: Any = np.where(slot > 0, a["flown"] / np.maximum(slot, 1), 1.0)
     else:
@@ -67,11 +70,14 @@ def build_info(batch: ActuatorBatch, row: int | None = None) -> dict[str, Any]:
         def one(arr: Any, col: int | None = None) -> Any:
             return arr.item(row) if col is None else arr.item(row, col)
 
+        def per_row(arr: Any, names: tuple[str, ...]) -> dict[str, Any]:
+            return StepInfo(zip(names, arr[row].tolist(), strict=True))
+
         slot_n = a["slot"].item(row)
         availability = a["flown"].item(row) / slot_n if slot_n else 1.0
 
     def per_part(arr: Any) -> dict[str, Any]:
-        return kind((p, one(arr, k)) for k, p in enumerate(PARTS))
+        return per_row(arr, PARTS)
 
     crack, wear = one(a["crack"]), one(a["wear"])
     terms = a["terms"]
@@ -88,8 +94,8 @@ def build_info(batch: ActuatorBatch, row: int | None = None) -> dict[str, Any]:
         wasted_life_flights=per_part(a["wasted_now"]),
         wasted_life_sum_flights=per_part(a["wasted_sum"]),
         wasted_life_count=per_part(a["wasted_count"]),
-        reward_terms=kind((t, one(terms, k)) for k, t in enumerate(REWARD_TERMS)),
-        features=kind((f, one(a["last"], k)) for k, f in enumerate(FEATURES)),
+        reward_terms=per_row(terms, REWARD_TERMS),
+        features=per_row(a["last"], FEATURES),
         true_state=kind(
             crack_depth_m=crack,
             seal_wear_m=wear,

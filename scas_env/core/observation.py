@@ -121,7 +121,15 @@ class ObservationLayout:
             self.space = spaces.Dict({k: _box(v) for k, v in self.groups.items()})
             self.names = tuple(f"{k}.{r[0]}" for k, v in self.groups.items() for r in v)
             self.units = tuple(r[1] for v in self.groups.values() for r in v)
+            self._order: tuple[str, ...] = tuple(self.groups)
         else:
+            self._order = GROUP_ORDER[mode]
+            self._columns: list[tuple[str, slice]] = []
+            start = 0
+            for g in self._order:
+                self._columns.append((g, slice(start, start + len(self.groups[g]))))
+                start += len(self.groups[g])
+            self._width = start
             layout = [r for g in GROUP_ORDER[mode] for r in self.groups[g]]
             self.bounds["flat"] = _bounds(layout)
             self.space = _box(layout)
@@ -131,18 +139,29 @@ class ObservationLayout:
     def groups_of(self, batch: ActuatorBatch, rows: Any = slice(None)) -> dict[str, np.ndarray]:
         """Float64 values of every observation group of this mode, one row per actuator of
         ``rows`` (the filters' tables rebuilt first where they changed)."""
-        a, s = batch.a, self.scenario
-        mode = s.obs_mode
         n = len(range(batch.n)[rows]) if isinstance(rows, slice) else len(rows)
         out: dict[str, np.ndarray] = {}
-        if mode in ("features+rul", "features", "dict"):
-            out["features"] = np.column_stack(
-                [a["last"][rows] * self._factor, a["test_age"][rows], a["no_go"][rows]]
-            ).astype(np.float64)
-            out["monitor"] = np.column_stack(
-                [a["detected"][rows], a["part_age"][rows], a["downtime"][rows]]
-            ).astype(np.float64)
-        if mode in ("features+rul", "dict"):
+        for group in self.groups:
+            if group in self._order:
+                width = len(self.groups[group])
+                out[group] = self._fill(group, np.empty((n, width)), batch, rows)
+        return out
+
+    def _fill(self, group: str, out: np.ndarray, batch: ActuatorBatch, rows: Any) -> Any:
+        """Write ``group``'s float64 values of ``rows`` (a slice or indices) into ``out``
+        (n, width)."""
+        a, s = batch.a, self.scenario
+        if group == "features":
+            k = self._factor.size
+            np.multiply(a["last"][rows], self._factor, out=out[:, :k])
+            out[:, k] = a["test_age"][rows]
+            out[:, k + 1] = a["no_go"][rows]
+        elif group == "monitor":
+            out[:, 0:2] = a["detected"][rows]
+            out[:, 2:4] = a["part_age"][rows]
+            out[:, 4] = a["downtime"][rows]
+        elif group == "filter":
+            n = out.shape[0]
             batch.refresh(np.arange(batch.n)[rows])
             est = np.empty((n, 2, 3))
             ageing_estimates(
@@ -150,30 +169,31 @@ class ObservationLayout:
                 a["rul_suffix_wr"][rows], a["rul_low"][rows], a["pending"][rows],
                 float(s.risk_horizon_flights), float(s.rul_cap_flights), est,
             )  # fmt: skip
-            out["filter"] = est.reshape(n, 6)
-        if mode in ("state", "dict"):
-            sc = batch.setup.calibration.seal_critical_wear_m
-            out["state"] = np.column_stack(
-                [
-                    a["crack"][rows] / a["fail"][rows],
-                    a["wear"][rows] / sc,
-                    a["life"][rows],
-                    a["part_age"][rows],
-                    a["downtime"][rows],
-                    a["upcoming"][rows].reshape(n, -1),
-                ]
-            ).astype(np.float64)
+            out[:] = est.reshape(n, 6)
+        else:  # state
+            n = out.shape[0]
+            out[:, 0] = a["crack"][rows] / a["fail"][rows]
+            out[:, 1] = a["wear"][rows] / batch.setup.calibration.seal_critical_wear_m
+            out[:, 2:4] = a["life"][rows]
+            out[:, 4:6] = a["part_age"][rows]
+            out[:, 6] = a["downtime"][rows]
+            out[:, 7:] = a["upcoming"][rows].reshape(n, -1)
         return out
 
     def observe(self, batch: ActuatorBatch, rows: Any = slice(None)) -> Any:
         """The observations of ``rows`` (a batch: one row each), float32, saturated at the
         documented bounds."""
-        values = self.groups_of(batch, rows)
         if self.scenario.obs_mode == "dict":
+            values = self.groups_of(batch, rows)
             return {k: clip_to_bounds(values[k], *self.bounds[k]) for k in self.groups}
-        order = GROUP_ORDER[self.scenario.obs_mode]
-        flat = np.concatenate([values[k] for k in order], axis=1)
-        return clip_to_bounds(flat, *self.bounds["flat"])
+        n = len(range(batch.n)[rows]) if isinstance(rows, slice) else len(rows)
+        flat = np.empty((n, self._width))
+        for group, cols in self._columns:
+            self._fill(group, flat[:, cols], batch, rows)
+        low, high = self.bounds["flat"]
+        np.maximum(flat, low, out=flat)
+        np.minimum(flat, high, out=flat)
+        return flat.astype(np.float32)
 
 
 def _box(rows: list[tuple[str, str, float, float]]) -> spaces.Box:

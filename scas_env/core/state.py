@@ -187,6 +187,7 @@ class ActuatorState:
             float(c.no_go_inspection_usd),
             float(c.failure_total_usd),
         )
+        self._slot_entry = None  # the slot kernel's entry point for these arrays (batch.py)
         self._every_flight = st.scenario.preflight == "every_flight"
         self._interval = int(st.scenario.flight_update_flights)
 
@@ -194,7 +195,7 @@ class ActuatorState:
     def __getstate__(self) -> dict[str, Any]:
         state = self.__dict__.copy()
         for key in ("_world", "bank", "_monitor", "_memory", "_books", "_handles", "_out",
-                    "tables", "_scratch"):  # fmt: skip
+                    "tables", "_scratch", "_slot_entry"):  # fmt: skip
             state.pop(key, None)
         return state
 

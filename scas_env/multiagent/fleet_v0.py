@@ -4,7 +4,7 @@
 >>> env = fleet_v0.parallel_env(episode_days=5)
 >>> observations, infos = env.reset(seed=0)
 >>> env.agents[:2], env.action_space("aircraft_0")
-(['aircraft_0', 'aircraft_1'], MultiDiscrete([3 4 4 4]))
+(['aircraft_0', 'aircraft_1'], MultiDiscrete([7 4 4 4]))
 
 Each aircraft ``aircraft_i`` observes its own actuators (the single env's 20 entries each)
 and status, and the fleet's shared groups (spares, crew, demand, calendar)
@@ -25,7 +25,7 @@ from typing import Any
 import numpy as np
 from gymnasium import spaces
 
-from scas_env.fleet_env import ScasFleetEnv
+from scas_env.fleet_env import ScasFleetEnv, check_fleet_action
 
 try:
     from pettingzoo import ParallelEnv
@@ -96,8 +96,13 @@ class FleetParallelEnv(ParallelEnv):
             raise ValueError(
                 f"actions must name every live agent: missing {missing}, extra {extra}"
             )
+        config = self.fleet_env.config
         joint = np.concatenate(
-            [np.asarray(actions[a], dtype=np.int64).ravel() for a in self.possible_agents]
+            [
+                check_fleet_action(actions[a], self._action_space, config, f"actions[{a!r}]")
+                for a in self.possible_agents
+            ],
+            axis=None,
         )
         _, reward, terminated, truncated, info = self.fleet_env.step(joint)
         observations, infos = self._split(info)
