@@ -28,10 +28,9 @@ $(STAMP): pyproject.toml
 install: $(STAMP)
 
 ## Main job: every maintenance policy on the same 40 episodes of 2000 flight slots of
-## ScasMaintenance-v2 (examples/v2.toml, 2 workers); prints the table, writes
-## CSV/JSON/Markdown and plots. v0: `$(PY) scripts/benchmark.py --out $(RESULTS)/benchmark_v0`.
+## ScasMaintenance-v2 (2 workers); prints the table, writes CSV/JSON/Markdown and plots.
 benchmark: install
-	$(PY) scripts/benchmark.py --scenario examples/v2.toml --out $(RESULTS)/benchmark
+	$(PY) scripts/benchmark.py --out $(RESULTS)/benchmark
 
 ## Physics demonstration: a pre-flight test and a flight window at three health states
 ## (signals as CSV, plots) and the paper's physics figures.
@@ -58,8 +57,12 @@ format: install
 	$(PY) -m ruff check --fix .
 
 ## What a user gets from `pip install .` (no extras): build the wheel, install it into a
-## fresh venv (torch first, from TORCH_INDEX_URL when set), run a small benchmark and the README's Python snippets
-## there, outside the source tree so that only the installed package can be imported.
+## fresh venv (torch first, from TORCH_INDEX_URL when set), then, outside the source tree
+## so that only the installed package can be imported, run the README's Python snippets
+## (they compile the env's numba kernels, once) and every console command at a tiny size
+## with its default options, in two lanes at once: the physics commands (the first compiles
+## the physics kernels) and the policy commands. Each lane stops at its first failure; the
+## target fails if either does.
 CHECK_DIR ?= $(abspath $(RESULTS))/check-install
 check-install:
 	rm -rf $(CHECK_DIR)
@@ -67,9 +70,26 @@ check-install:
 	$(CHECK_DIR)/venv/bin/pip install --disable-pip-version-check -q $(TORCH_PIP_ARGS)
 	$(CHECK_DIR)/venv/bin/pip wheel --disable-pip-version-check -q --no-deps -w $(CHECK_DIR)/dist .
 	$(CHECK_DIR)/venv/bin/pip install --disable-pip-version-check -q $(CHECK_DIR)/dist/*.whl
-	cd $(CHECK_DIR) && venv/bin/scas-benchmark --episodes 4 --slots 200 --out $(CHECK_DIR)/bench
 	$(PYTHON) .ci/readme_python.py README.md > $(CHECK_DIR)/readme_snippets.py
 	cd $(CHECK_DIR) && venv/bin/python readme_snippets.py
+	cd $(CHECK_DIR) && ( \
+	  venv/bin/scas-simulate --window 1 --out runs/simulate && \
+	  venv/bin/scas-figures --out runs/figures && \
+	  venv/bin/scas-campaign --runs 2 --levels 2 --out runs/campaign/c && \
+	  venv/bin/scas-reproduce --quick --runs 2 --levels 3 --paths 1 --out runs/reproduce && \
+	  venv/bin/scas-build-surrogate --grid 2 --units 2 --runs 2 --paired-units 2 \
+	    --out runs/surrogate.json && \
+	  venv/bin/scas-build-calibration --windows 2 --whole-flights 2 --lives 100 \
+	    --out runs/calibration.json \
+	) & physics=$$!; \
+	cd $(CHECK_DIR) && \
+	  venv/bin/scas-benchmark --episodes 2 --slots 100 --out runs/benchmark && \
+	  venv/bin/scas-train --timesteps 64 --out runs/train && \
+	  venv/bin/scas-tune --trials 1 --episodes 2 --slots 100 --out runs/tune && \
+	  venv/bin/scas-value --episodes 2 --slots 100 --trials 1 --train-episodes 2 \
+	    --out runs/value && \
+	  venv/bin/scas-export-dataset --units 2 --max-slots 200 --out runs/dataset; \
+	policy=$$?; wait $$physics && test $$policy -eq 0
 
 ## Speed, each beside a reference measured in the same run.
 bench: install
@@ -89,18 +109,18 @@ reproduce: install
 ## native decision-epoch env (the three at once), choose on validation seeds, write the agent
 ## to $(AGENT_DIR)/agent (the shipped one stays), compare on 1000 held-out episodes.
 AGENT_DIR ?= $(RESULTS)/agent_v2
-TRAIN_ARGS = --candidate imitation_g1 --scenario examples/v2.toml --init $(AGENT_DIR)/clone \
+TRAIN_ARGS = --candidate imitation_g1 --init $(AGENT_DIR)/clone \
 	--native-envs 64 --timesteps 5000000 --checkpoint-every 500000
 train-agent-v2: install
-	$(PY) scripts/imitate_rule.py --scenario examples/v2.toml --candidate imitation_g1 \
+	$(PY) scripts/imitate_rule.py --candidate imitation_g1 \
 		--rules-from docs/value_v2/ladder.json --out $(AGENT_DIR)/clone
-	$(PY) scripts/train_epochs.py $(TRAIN_ARGS) --seed 0 --out $(AGENT_DIR)/runs/s0 & a=$$!; \
-	$(PY) scripts/train_epochs.py $(TRAIN_ARGS) --seed 1 --out $(AGENT_DIR)/runs/s1 & b=$$!; \
-	$(PY) scripts/train_epochs.py $(TRAIN_ARGS) --seed 2 --out $(AGENT_DIR)/runs/s2; c=$$?; \
+	$(PY) scripts/train.py $(TRAIN_ARGS) --seed 0 --out $(AGENT_DIR)/runs/s0 & a=$$!; \
+	$(PY) scripts/train.py $(TRAIN_ARGS) --seed 1 --out $(AGENT_DIR)/runs/s1 & b=$$!; \
+	$(PY) scripts/train.py $(TRAIN_ARGS) --seed 2 --out $(AGENT_DIR)/runs/s2; c=$$?; \
 	wait $$a && wait $$b && test $$c -eq 0
 	mkdir -p $(AGENT_DIR)/agent
 	$(PY) scripts/ship_epochs.py --runs $(AGENT_DIR)/runs --name maskable_ppo_epochs_v2 \
-		--scenario examples/v2.toml --rules-from docs/value_v2/ladder.json \
+		--rules-from docs/value_v2/ladder.json \
 		--held-out-seed 2 --validation-episodes 200 --held-out-episodes 1000 \
 		--ship-to $(AGENT_DIR)/agent --out $(AGENT_DIR)/selection
 

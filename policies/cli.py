@@ -84,6 +84,46 @@ def _config_record(
     }
 
 
+#: the size options of scas-tune and scas-value: option -> (full default, --quick value);
+#: the quick values are policies.value.tuning.QUICK and policies.value.study.QUICK (tested)
+TUNE_SIZES = {"trials": (40, 4), "episodes": (40, 4), "slots": (2000, 2000)}
+TUNE_HELP = {
+    "trials": "TPE trials per family",
+    "episodes": "training episodes per trial",
+    "slots": "flight slots per episode",
+}
+VALUE_SIZES = {
+    "episodes": (1000, 16),
+    "slots": (2000, 2000),
+    "trials": (40, 4),
+    "train_episodes": (40, 4),
+}
+VALUE_HELP = {
+    "episodes": "held-out episodes per arm",
+    "slots": "flight slots per episode",
+    "trials": "TPE trials per family",
+    "train_episodes": "training episodes per trial",
+}
+
+
+def _size_args(parser: Any, sizes: dict[str, tuple[int, int]], helps: dict[str, str]) -> None:
+    for name, (full, quick) in sizes.items():
+        parser.add_argument(
+            f"--{name.replace('_', '-')}",
+            type=positive_int,
+            default=None,
+            help=f"{helps[name]} (default: {full}; with --quick: {quick})",
+        )
+
+
+def _sizes(args: Any, sizes: dict[str, tuple[int, int]]) -> dict[str, int]:
+    """Each size: the option's value if given, else its --quick or full default."""
+    return {
+        name: getattr(args, name) if getattr(args, name) is not None else sizes[name][args.quick]
+        for name in sizes
+    }
+
+
 def benchmark_parser() -> Any:
     from policies.base import POLICIES
     from policies.benchmark.run import DEFAULT_FLEET_POLICIES, DEFAULT_POLICIES, PLUGINS
@@ -116,15 +156,23 @@ def benchmark_parser() -> Any:
         type=existing_file,
         action="append",
         default=[],
-        help="an SB3 zip to benchmark besides --policies (its VecNormalize statistics and "
-        "metadata beside it, RL-Zoo layouts too); repeatable; loading runs the file's code",
+        help="an SB3 zip to benchmark besides --policies (its normalisation statistics and "
+        "metadata beside it, RL-Zoo layouts too); repeatable. Read without unpickling; a "
+        "file that needs unpickling is refused unless --trust-pickle",
+    )
+    parser.add_argument(
+        "--trust-pickle",
+        action="store_true",
+        help="let --agent read files only SB3's unpickling loader reads (a VecNormalize .pkl, "
+        "pickled network keywords): that runs code from the file; only for files you trust",
     )
     parser.add_argument(
         "--policy",
         action="append",
         default=[],
         metavar="MODULE:FACTORY",
-        help="a factory(obs_names) returning an object with SB3's predict; repeatable",
+        help="a factory(obs_names) returning an object with SB3's predict (imports and runs "
+        "that module: trusted code only); repeatable",
     )
     parser.add_argument("--out", type=Path, default=Path("results/benchmark"), help="folder")
     parser.add_argument("--overwrite", action="store_true", help="replace an existing --out")
@@ -136,7 +184,7 @@ def benchmark_parser() -> Any:
     )
     parser.add_argument(
         "--ray-address",
-        default=os.environ.get("RAY_ADDRESS") or None,
+        default=None,
         help="run on Ray: auto, local or ray://host:port (default: $RAY_ADDRESS, else local)",
     )
     add_env_config_args(parser)
@@ -156,10 +204,13 @@ def benchmark_main(argv: Sequence[str] | None = None) -> int:
             f"{args.scenario}: obs_mode = {scenario.obs_mode!r}: the benchmark gives each "
             "policy the observation it needs; leave obs_mode out of the scenario file"
         )
-    scenario = scenario.replace(
-        episode_slots=args.slots or scenario.episode_slots,
-        fidelity=args.fidelity or scenario.fidelity,
-    )
+    try:
+        scenario = scenario.replace(
+            episode_slots=args.slots or scenario.episode_slots,
+            fidelity=args.fidelity or scenario.fidelity,
+        )
+    except ValueError as exc:
+        parser.error(f"--slots {args.slots}: {exc}")
     env_kwargs = {
         "fidelity": scenario.fidelity,
         **_env_kwargs(scenario, costs, exclude=("obs_mode", "episode_slots")),
@@ -174,11 +225,21 @@ def benchmark_main(argv: Sequence[str] | None = None) -> int:
             "cost_model": costs,
         }
 
+    ray_address = (
+        args.ray_address if args.ray_address is not None else os.environ.get("RAY_ADDRESS")
+    ) or None  # '' on the command line: local workers even when RAY_ADDRESS is set
+    if args.trust_pickle and not args.agent:
+        parser.error("--trust-pickle applies to --agent files; none given")
+    for target in args.policy:
+        if target.count(":") != 1 or not all(target.split(":")):
+            parser.error(f"--policy {target!r}: expected MODULE:FACTORY")
+
     from policies.benchmark.report import format_table, write_outputs
     from policies.benchmark.run import (
         DEFAULT_FLEET_POLICIES,
         DEFAULT_POLICIES,
         PolicySpec,
+        prepare_benchmark,
         resolve_spec,
         run_benchmark,
     )
@@ -186,19 +247,14 @@ def benchmark_main(argv: Sequence[str] | None = None) -> int:
     default = DEFAULT_FLEET_POLICIES if fleet is not None else DEFAULT_POLICIES
     names = args.policies if args.policies is not None else list(default)
     specs = [resolve_spec(name) for name in names]
+    module = "policies.agents.sb3_agents"
+    trust = {"trust_pickle": True} if args.trust_pickle else {}
     for path in args.agent:
-        label = Path(path).stem
         specs.append(
-            PolicySpec("sb3", {"path": str(path)}, label=label, module="policies.agents.sb3_agents")
+            PolicySpec("sb3", {"path": str(path), **trust}, label=Path(path).stem, module=module)
         )
     for target in args.policy:
-        if target.count(":") != 1 or not all(target.split(":")):
-            parser.error(f"--policy {target!r}: expected MODULE:FACTORY")
-        specs.append(
-            PolicySpec(
-                "factory", {"target": target}, label=target, module="policies.agents.sb3_agents"
-            )
-        )
+        specs.append(PolicySpec("factory", {"target": target}, label=target, module=module))
     labels = [s.key for s in specs]
     if len(set(labels)) != len(labels):
         parser.error(f"policy labels {labels} must be unique")
@@ -209,19 +265,32 @@ def benchmark_main(argv: Sequence[str] | None = None) -> int:
             parser.error(
                 f"{spec.key!r} cannot be loaded ({exc}); install what it needs or leave it out"
             )
+    try:  # every policy built once on this scenario, before any episode
+        prepare_benchmark(
+            specs,
+            episodes=args.episodes,
+            slots=scenario.episode_slots,
+            env_kwargs=env_kwargs,
+            ray_address=ray_address,
+        )
+    except (ValueError, ImportError) as exc:
+        parser.error(str(exc))
 
     announce_uncached_kernels()  # the workers compile them
 
-    result = run_benchmark(
-        specs,
-        episodes=args.episodes,
-        slots=scenario.episode_slots,
-        seed=args.seed,
-        n_workers=args.workers,
-        env_kwargs=env_kwargs,
-        progress=not args.quiet,
-        ray_address=args.ray_address or None,
-    )
+    try:
+        result = run_benchmark(
+            specs,
+            episodes=args.episodes,
+            slots=scenario.episode_slots,
+            seed=args.seed,
+            n_workers=args.workers,
+            env_kwargs=env_kwargs,
+            progress=not args.quiet,
+            ray_address=ray_address,
+        )
+    except ConnectionError as exc:  # --ray-address: no cluster there (nothing written)
+        parser.error(f"--ray-address: {exc}")
     if fleet is not None:
         scenario = env_kwargs["scenario"]
     result.config.update(_config_record(parser.prog, argv, args, scenario, costs))
@@ -231,8 +300,8 @@ def benchmark_main(argv: Sequence[str] | None = None) -> int:
     paths = write_outputs(result, out, overwrite=args.overwrite)
     n = len(result.rows)
     where = (
-        f"on Ray at {args.ray_address!r}"
-        if args.ray_address
+        f"on Ray at {ray_address!r}"
+        if ray_address
         else f"{n / result.wall_s / args.workers:.2f} per worker"
     )
     log.info(f"{n} episodes in {result.wall_s:.1f} s ({n / result.wall_s:.2f} episodes/s, {where})")
@@ -276,10 +345,11 @@ TRAIN_DOC = """\
 Train a MaskablePPO agent on decision epochs of ScasMaintenance-v2 (ScasMaintenanceEpochs-v2).
 
 One candidate of the hyper-parameter search file (policies/data/hyperparams/search.yml),
-one seed; checkpoints every --checkpoint-every decisions, SB3's progress.csv and run.json
-in --out (policies.agents.training.train_epochs). Warm start from a clone of a rule with
---init (scripts/imitate_rule.py); the shipped agent's whole pipeline: `make train-agent-v2`
-(docs/rl.md). Example:
+one seed; checkpoints (model zip and normalization JSON) every --checkpoint-every decisions,
+SB3's progress.csv and run.json in --out (policies.agents.training.train_epochs). A rollout
+is the YAML's n_steps per env: a run trains at least one. Warm start from a clone of a rule
+with --init (scripts/imitate_rule.py); the shipped agent's whole pipeline: `make
+train-agent-v2` (docs/rl.md). Example:
 
     scas-train --candidate gamma099 --seed 0 --native-envs 64 --timesteps 200000 \\
         --out results/rl/gamma099_s0
@@ -293,14 +363,24 @@ def train_parser() -> Any:
     parser.add_argument("--search", default=str(HYPERPARAMS_DIR / "search.yml"), help="search YAML")
     parser.add_argument("--candidate", default="gamma099", help="candidate in the search YAML")
     parser.add_argument("--seed", type=nonneg_int, default=0, help="training seed")
-    parser.add_argument("--algo", default="maskable_ppo", choices=("maskable_ppo", "ppo"))
+    parser.add_argument(
+        "--algo",
+        default="maskable_ppo",
+        choices=("maskable_ppo", "ppo"),
+        help="SB3 algorithm (MaskablePPO: invalid maintenance actions masked)",
+    )
     parser.add_argument(
         "--timesteps", type=positive_int, default=None, help="decisions (default: the YAML's)"
     )
     parser.add_argument(
-        "--max-wall-s", type=positive_float, default=None, help="stop after this wall time"
+        "--max-wall-s",
+        type=positive_float,
+        default=None,
+        help="stop after this wall time in s (default: no limit, --timesteps decides)",
     )
-    parser.add_argument("--checkpoint-every", type=positive_int, default=25_000, help="decisions")
+    parser.add_argument(
+        "--checkpoint-every", type=positive_int, default=25_000, help="decisions per checkpoint"
+    )
     parser.add_argument(
         "--native-envs",
         type=positive_int,
@@ -309,7 +389,10 @@ def train_parser() -> Any:
         "(default: the YAML's n_envs single envs in a DummyVecEnv)",
     )
     parser.add_argument(
-        "--init", default=None, help="start from this clone (scripts/imitate_rule.py's --out)"
+        "--init",
+        default=None,
+        help="start from this clone: a folder with model.zip and normalization.json "
+        "(scripts/imitate_rule.py's --out; default: a new network)",
     )
     parser.add_argument(
         "--running-normalization",
@@ -331,24 +414,41 @@ def train_main(argv: Sequence[str] | None = None) -> int:
     if args.running_normalization and args.init is None:
         parser.error("--running-normalization needs --init")
     scenario = agent_scenario(parser, args)
-    from policies.agents.training import candidate_hyperparams, train_epochs
+    from policies.agents.training import candidate_hyperparams, check_training, train_epochs
 
     try:
         hyperparams = candidate_hyperparams(args.search, args.candidate)
     except (OSError, ValueError, KeyError) as exc:
         parser.error(f"--search {args.search!r} --candidate {args.candidate!r}: {exc}")
+    settings: dict[str, Any] = {
+        "algo": args.algo,
+        "checkpoint_every": args.checkpoint_every,
+        "total_timesteps": args.timesteps,
+        "native_envs": args.native_envs,
+        "init": args.init,
+        "freeze_normalization": None if args.init is None else not args.running_normalization,
+    }
+    changes = scenario_changes(scenario)
+    try:  # every check before any work: sizes, --out, --init's files, the scenario
+        total, *_ = check_training(hyperparams, args.out, scenario=changes, **settings)
+    except (ValueError, ImportError) as exc:
+        parser.error(str(exc))
+    announce_uncached_kernels()
+    rollout = int(hyperparams.get("n_steps", 2048)) * (
+        args.native_envs or int(hyperparams.get("n_envs", 4))
+    )
+    log.info(
+        f"training {args.algo} for {total:,} decisions, in whole rollouts of {rollout:,}, into "
+        f"{args.out} (SB3's progress.csv there; a checkpoint every "
+        f"{args.checkpoint_every:,} decisions)"
+    )
     out = train_epochs(
         hyperparams,
         args.out,
         seed=args.seed,
-        algo=args.algo,
-        checkpoint_every=args.checkpoint_every,
         max_wall_s=args.max_wall_s,
-        total_timesteps=args.timesteps,
-        native_envs=args.native_envs,
-        init=args.init,
-        freeze_normalization=None if args.init is None else not args.running_normalization,
-        **scenario_changes(scenario),
+        **settings,
+        **changes,
     )
     log.info(f"trained: {out}")
     return 0
@@ -361,6 +461,7 @@ Every family gets --trials trials of --episodes training episodes (the same epis
 every trial: common random numbers); the nested families start from the tuned age rule.
 Writes tuning.json (chosen parameters, edge flags, every trial), tuning_history.csv and
 tuning_history.png to --out (policies.value.tuning). Held-out evaluation: scas-value.
+--quick: fewer trials and episodes, full-length episodes (docs/cli.md).
 """
 
 
@@ -374,14 +475,13 @@ def tune_parser() -> Any:
         default=",".join(FAMILIES),
         help="comma-separated family labels (the age rule is always tuned first)",
     )
-    parser.add_argument("--trials", type=positive_int, default=40, help="TPE trials per family")
-    parser.add_argument("--episodes", type=positive_int, default=40, help="episodes per trial")
-    parser.add_argument("--slots", type=positive_int, default=2000, help="slots per episode")
+    _size_args(parser, TUNE_SIZES, TUNE_HELP)
     parser.add_argument("--workers", type=positive_int, default=2, help="local worker processes")
     parser.add_argument(
         "--quick",
         action="store_true",
-        help="tiny budget (policies.value.tuning.QUICK; then --trials, --episodes, --slots unused)",
+        help="the quick budget: fewer trials and episodes, full-length episodes "
+        "(policies.value.tuning.QUICK); a size option given as well wins",
     )
     parser.add_argument("--out", type=Path, default=Path("results/tuning"), help="output folder")
     parser.add_argument("--overwrite", action="store_true", help="replace an existing --out")
@@ -401,14 +501,10 @@ def tune_main(argv: Sequence[str] | None = None) -> int:
         parser.error(f"{args.scenario}: obs_mode is set per policy; leave it out of the file")
     env_kwargs = _env_kwargs(scenario, costs, exclude=("obs_mode", "episode_slots"))
 
-    from policies.value.tuning import QUICK, tune_families, write_tuning_outputs
+    from policies.value.tuning import tune_families, write_tuning_outputs
 
     announce_uncached_kernels()
-    size = (
-        dict(QUICK)
-        if args.quick
-        else {"trials": args.trials, "episodes": args.episodes, "slots": args.slots}
-    )
+    size = _sizes(args, TUNE_SIZES)
     results = tune_families(
         args.families,
         n_workers=args.workers,
@@ -432,7 +528,8 @@ Value of prognostics: the nested rule family re-tuned at each information level.
 Tunes every family on training seeds (Optuna TPE, the same budget), then runs every arm on
 --episodes held-out episodes (the same episodes for every arm) and writes the ladder
 (CSV/JSON/Markdown), the tuning history and value_vs_information.png to --out
-(policies.value.run_ladder). --quick: policies.value.QUICK sizes.
+(policies.value.study.run_ladder). --quick: fewer trials and episodes, full-length episodes
+(a few minutes on 2 cores; docs/cli.md).
 """
 
 
@@ -440,19 +537,15 @@ def value_parser() -> Any:
     from policies.value.tuning import FAMILIES
 
     parser = make_parser("scas-value", VALUE_DOC)
-    parser.add_argument("--episodes", type=positive_int, default=1000, help="held-out episodes")
-    parser.add_argument("--slots", type=positive_int, default=2000, help="flight slots per episode")
-    parser.add_argument("--trials", type=positive_int, default=40, help="TPE trials per family")
-    parser.add_argument(
-        "--train-episodes", type=positive_int, default=40, help="training episodes per trial"
-    )
+    _size_args(parser, VALUE_SIZES, VALUE_HELP)
     parser.add_argument("--workers", type=positive_int, default=2, help="local worker processes")
     parser.add_argument("--out", type=Path, default=Path("results/value"), help="output folder")
     parser.add_argument("--overwrite", action="store_true", help="replace an existing --out")
     parser.add_argument(
         "--quick",
         action="store_true",
-        help="quick mode (policies.value.QUICK; then the size options are not used)",
+        help="the quick budget: fewer held-out episodes, trials and training episodes, "
+        "full-length episodes (policies.value.study.QUICK); a size option given as well wins",
     )
     parser.add_argument(
         "--families",
@@ -477,19 +570,10 @@ def value_main(argv: Sequence[str] | None = None) -> int:
         parser.error(f"{args.scenario}: obs_mode is set per arm; leave it out of the file")
     env_kwargs = _env_kwargs(scenario, costs, exclude=("obs_mode", "episode_slots"))
 
-    from policies.value.study import QUICK, markdown_report, run_ladder, write_outputs
+    from policies.value.study import markdown_report, run_ladder, write_outputs
 
     announce_uncached_kernels()
-    size: dict[str, Any] = (
-        dict(QUICK)
-        if args.quick
-        else {
-            "episodes": args.episodes,
-            "slots": args.slots,
-            "trials": args.trials,
-            "train_episodes": args.train_episodes,
-        }
-    )
+    size = _sizes(args, VALUE_SIZES)
     result = run_ladder(
         n_workers=args.workers,
         progress=not args.quiet,

@@ -23,7 +23,7 @@ import sys
 import tempfile
 from collections.abc import Iterable, Sequence
 from pathlib import Path
-from typing import Any
+from typing import Any, NoReturn
 
 from scas_env.actuator.config import FORMATS
 from scas_env.actuator.params import ScasParams
@@ -39,6 +39,7 @@ COMPILE_NOTICE = (
 __all__ = [
     "COMPILE_NOTICE",
     "HelpFormatter",
+    "Parser",
     "add_env_config_args",
     "add_logging_args",
     "add_params_arg",
@@ -74,11 +75,19 @@ class HelpFormatter(argparse.ArgumentDefaultsHelpFormatter, argparse.RawDescript
         return super()._get_help_string(action)
 
 
+class Parser(argparse.ArgumentParser):
+    """An argument parser whose usage errors are one line on stderr, exit status 2:
+    ``prog: error: message (--help: usage)``, the message's own line breaks joined (no
+    usage block, which for these commands runs over many lines)."""
+
+    def error(self, message: str) -> NoReturn:
+        text = " ".join(str(message).split())
+        self.exit(2, f"{self.prog}: error: {text} (--help: usage)\n")
+
+
 def make_parser(prog: str, doc: str | None) -> argparse.ArgumentParser:
     """Parser of one command: ``doc`` (a module docstring) is its description."""
-    return argparse.ArgumentParser(
-        prog=prog, description=(doc or "").strip(), formatter_class=HelpFormatter
-    )
+    return Parser(prog=prog, description=(doc or "").strip(), formatter_class=HelpFormatter)
 
 
 # --- argument types: each raises ArgumentTypeError with the value and what is allowed ---

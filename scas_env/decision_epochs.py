@@ -271,6 +271,7 @@ class DecisionEpochs(gym.Env):
     def reset(
         self, *, seed: int | None = None, options: dict[str, Any] | None = None
     ) -> tuple[np.ndarray, dict[str, Any]]:
+        super().reset(seed=seed)  # Gymnasium's contract (its checker); the draws are the env's
         obs, info = self.env.reset(seed=seed, options=options)
         # this env's randomness is the per-flight env's: one generator (Gymnasium's checker
         # reads ``unwrapped._np_random`` after a seeded reset)

@@ -4,12 +4,11 @@ Records the rule's per-flight episodes on training seeds, cuts them into decisio
 (policies.agents.demonstrations), behaviour-clones them into the network of a search
 candidate (policies.agents.imitation), then runs DAgger rounds (policies.agents.dagger: the
 rule labels the states the clone visits on further training episodes);
-``scripts/train_epochs.py --init OUT`` then trains PPO from the clone. Example (the v2
-filter rule of the value study)::
+``scas-train --init OUT`` then trains PPO from the clone. Example (the filter rule of the
+value study)::
 
-    python scripts/imitate_rule.py --scenario examples/v2.toml \\
-        --rules-from docs/value_v2/ladder.json --arm filter --candidate imitation_g1 \\
-        --out results/rl_v2/clone
+    python scripts/imitate_rule.py --rules-from docs/value_v2/ladder.json --arm filter \\
+        --candidate imitation_g1 --out results/rl_v2/clone
 
 ``--delegate-k K`` makes a residual agent instead (policies.agents.delegation): the rule
 becomes an action ("the rule for k slots") and the clone takes it with ``k = K`` everywhere,
@@ -20,13 +19,13 @@ from __future__ import annotations
 
 import argparse
 
-from policies import tuning
 from policies.agents.dagger import DaggerPlan
 from policies.agents.delegation import DelegateSpec, delegation_demonstrations
 from policies.agents.demonstrations import demonstrations, record_rule
 from policies.agents.selection import HELD_OUT_SEED, VALIDATION_SEED, tuned_rules
 from policies.agents.training import HYPERPARAMS_DIR, candidate_hyperparams, clone_rule
 from policies.benchmark.run import episode_seeds
+from policies.value import tuning
 from scas_env.cli_args import add_env_config_args, agent_scenario, scenario_changes
 from scas_env.decision_epochs import DEFAULT_KS
 

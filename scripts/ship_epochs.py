@@ -1,16 +1,10 @@
 """Choose the best decision-epoch checkpoint on validation seeds, ship it, compare on held-out.
 
-Example (after the six runs of ``scripts/train_epochs.py`` under ``results/rl/epochs``)::
-
-    python scripts/ship_epochs.py --runs results/rl/epochs --name maskable_ppo_epochs \\
-        --out results/rl/epochs_selection --held-out-episodes 1000
-
-On ScasMaintenance-v2 (runs of ``scripts/train_epochs.py --scenario examples/v2.toml``; the
-rules tuned on v2's training seeds read from the v2 value study, held-out on its seeds)::
+Example (after runs of ``scas-train`` under ``results/rl_v2/epochs``; the rules tuned on
+the training seeds read from the value study, held-out on its seeds)::
 
     python scripts/ship_epochs.py --runs results/rl_v2/epochs --name maskable_ppo_epochs_v2 \\
-        --scenario examples/v2.toml --rules-from docs/value_v2/ladder.json \\
-        --held-out-seed 2 --out results/rl_v2/selection
+        --rules-from docs/value_v2/ladder.json --held-out-seed 2 --out results/rl_v2/selection
 
 Calls :func:`policies.agents.selection.select_ship_evaluate`.
 """
@@ -49,6 +43,12 @@ def main() -> None:
     parser.add_argument(
         "--overwrite", action="store_true", help="replace an agent of the same name there"
     )
+    parser.add_argument(
+        "--trust-pickle",
+        action="store_true",
+        help="read runs of an older version whose statistics are VecNormalize pickles only "
+        "(unpickling runs code: your own runs only)",
+    )
     add_env_config_args(parser)
     args = parser.parse_args()
     for opt in ("validation_episodes", "held_out_episodes", "workers"):
@@ -70,6 +70,7 @@ def main() -> None:
             n_workers=args.workers,
             ship_to=DATA_DIR if args.ship_to is None else args.ship_to,
             overwrite=args.overwrite,
+            trust_pickle=args.trust_pickle,
         )
     except ValueError as exc:
         parser.error(str(exc))

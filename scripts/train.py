@@ -1,8 +1,5 @@
-"""Train an SB3 agent on ``ScasMaintenance-v0`` (per flight) and compare it with two rules.
-
-The ``scas-train`` command; options: ``--help``, docs/cli.md and docs/rl.md. Decision
-epochs: ``scripts/train_epochs.py``.
-"""
+"""Train a MaskablePPO agent on decision epochs: ``scas-train`` (options: ``--help``,
+docs/cli.md and docs/rl.md)."""
 
 from policies.cli import train_main
 

@@ -1,16 +1,16 @@
 """Validation reward of decision-epoch checkpoints, paired against a tuned rule.
 
-Every checkpoint of the given run folders (``scripts/train_epochs.py --out``), or only those
+Every checkpoint of the given run folders (``scas-train --out``), or only those
 at ``--decisions``, on per-flight episodes of the validation seeds, paired against a rule
 tuned in a value-study ladder on the same episodes; rows are added to ``--out`` (a CSV; the
 checkpoints already in it are not run again). ``--statistics`` runs every checkpoint with
-another ``VecNormalize`` pickle than its own: the diagnostic of docs/rl.md ("the observation
-statistics, not the gradient"). Example (the clone, checkpoint 0 of a run, under the
-statistics that run had after 1 M decisions)::
+other observation statistics than its own (a normalisation JSON): the diagnostic of
+docs/rl.md ("the observation statistics, not the gradient"). Example (the clone, checkpoint
+0 of a run, under the statistics that run had after 1 M decisions)::
 
     python scripts/validate_checkpoints.py --runs results/kl/runs/s0 --decisions 0 \\
-        --statistics results/kl/runs/s0/ckpt_vecnormalize_999936_steps.pkl \\
-        --scenario examples/v2.toml --rules-from docs/value_v2/ladder.json \\
+        --statistics results/kl/runs/s0/ckpt_normalization_999936_steps.json \\
+        --rules-from docs/value_v2/ladder.json \\
         --episodes 200 --out results/kl/swap.csv
 
 Calls :func:`policies.agents.selection.validate_checkpoints`.
@@ -35,7 +35,15 @@ def main() -> None:
     parser.add_argument(
         "--decisions", type=int, nargs="+", default=None, help="only these checkpoints"
     )
-    parser.add_argument("--statistics", default=None, help="VecNormalize pickle for all")
+    parser.add_argument(
+        "--statistics", default=None, help="observation statistics (normalisation JSON) for all"
+    )
+    parser.add_argument(
+        "--trust-pickle",
+        action="store_true",
+        help="read checkpoints (or --statistics) whose statistics are VecNormalize pickles "
+        "(unpickling runs code: your own runs only)",
+    )
     parser.add_argument(
         "--rules-from",
         required=True,
@@ -63,6 +71,7 @@ def main() -> None:
             n_workers=args.workers,
             decisions=args.decisions,
             statistics=args.statistics,
+            trust_pickle=args.trust_pickle,
         )
     except ValueError as exc:
         parser.error(str(exc))

@@ -9,8 +9,8 @@ import sys
 
 import pytest
 
-from policies.benchmark.run import BenchmarkResult, PolicySpec, run_benchmark
 from policies.benchmark.report import write_outputs
+from policies.benchmark.run import BenchmarkResult, PolicySpec, run_benchmark
 
 ray = pytest.importorskip("ray")
 

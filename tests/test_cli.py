@@ -1,6 +1,8 @@
-"""Command-line programs: every parser documents every option with its default, bad values are
-usage errors (exit 2, a message naming the option) before any work, the console commands of
-pyproject.toml exist, scripts are wrappers, and the benchmark records the config it ran."""
+"""Command-line programs: every parser documents every option with its default (and
+docs/cli.md shows each command's --help), bad values are usage errors (one line, exit 2, a
+message naming the option) before any work, the console commands of pyproject.toml exist and
+run from a fresh install (Makefile check-install), scripts are wrappers, and the benchmark
+records the config it ran."""
 
 from __future__ import annotations
 
@@ -39,29 +41,21 @@ MAINS: dict[str, Callable[..., int]] = {
     "scas-train": policies_cli.train_main,
     "scas-tune": policies_cli.tune_main,
     "scas-value": policies_cli.value_main,
-    "scas-preflight": policies_cli.preflight_main,
     "scas-campaign": studies_cli.campaign_main,
     "scas-reproduce": studies_cli.reproduce_main,
     "scas-simulate": studies_cli.simulate_main,
     "scas-figures": studies_cli.figures_main,
     "scas-build-surrogate": studies_cli.build_surrogate_main,
     "scas-build-calibration": studies_cli.build_calibration_main,
-    "scas-bench": studies_cli.bench_main,
     "scas-export-dataset": studies_cli.export_dataset_main,
-    "scas-go-no-go": studies_cli.go_no_go_main,
 }
-#: scripts that are thin wrappers of a CLI main
+#: scripts that are thin wrappers of a console command's main
 WRAPPERS = {
-    "bench_env.py": "bench_env_main",
-    "bench_integrator.py": "bench_integrator_main",
-    "bench_prognostics.py": "bench_prognostics_main",
     "benchmark.py": "benchmark_main",
     "build_calibration.py": "build_calibration_main",
     "build_surrogate.py": "build_surrogate_main",
     "export_dataset.py": "export_dataset_main",
-    "go_no_go.py": "go_no_go_main",
     "paper_figures.py": "figures_main",
-    "preflight_availability.py": "preflight_main",
     "reproduce_paper.py": "reproduce_main",
     "run_campaign.py": "campaign_main",
     "simulate.py": "simulate_main",
@@ -148,14 +142,27 @@ def _cases(tmp: Path) -> list[tuple[str, list[str], str]]:
             "bad.toml [scenario]: Scenario.episode_slots = -5 slots is outside",
         ),
         ("scas-benchmark", ["--costs", str(bad), "--out", str(tmp / "o")], "no [costs] table"),
+        ("scas-benchmark", ["--trust-pickle"], "--trust-pickle applies to --agent files"),
+        ("scas-benchmark", ["--policy", "nomod:f"], "cannot import 'nomod'"),
+        ("scas-benchmark", ["--policy", "os:getcwd"], "getcwd(obs_names) failed: TypeError"),
+        ("scas-benchmark", ["--slots", "20000000"], "--slots 20000000: Scenario.episode_slots"),
         ("scas-train", ["--timesteps", "0"], "--timesteps: '0' is not an integer >= 1"),
         ("scas-train", ["--algo", "sac"], "--algo: invalid choice: 'sac'"),
-        ("scas-train", ["--n-envs", "0"], "--n-envs: '0' is not an integer >= 1"),
+        ("scas-train", ["--native-envs", "0"], "--native-envs: '0' is not an integer >= 1"),
         (
             "scas-train",
             ["--costs", str(costs), "--out", str(tmp / "o")],
-            "--costs: the agent's metadata",
+            "--costs / a [costs] table: the agents are trained on the default costs",
         ),
+        ("scas-train", ["--out", busy], "exists and is not empty; choose a new one"),
+        (
+            "scas-train",
+            ["--init", str(tmp / "none"), "--out", str(tmp / "o")],
+            "none' is not a folder",
+        ),
+        ("scas-train", ["--init", busy, "--out", str(tmp / "o")], "lacks model.zip"),
+        ("scas-train", ["--candidate", "nope", "--out", str(tmp / "o")], "candidate = 'nope'"),
+        ("scas-train", ["--running-normalization", "--out", str(tmp / "o")], "needs --init"),
         ("scas-tune", ["--episodes", "0", "--quick"], "--episodes: '0' is not an integer >= 1"),
         ("scas-tune", ["--families", "random"], "unknown rule family(s) ['random']"),
         ("scas-tune", ["--out", busy], "exists and is not empty"),
@@ -177,16 +184,17 @@ def _cases(tmp: Path) -> list[tuple[str, list[str], str]]:
         ("scas-simulate", ["--out", str(tmp / "o"), "--window", "nan"], "'nan' is not a finite"),
         ("scas-figures", ["--out", str(tmp / "o"), "--seed", "-3"], "'-3' is not an integer >= 0"),
         ("scas-figures", ["--out", str(tmp / "o"), "--params", str(bad)], "no [params] table"),
-        ("scas-build-surrogate", ["--units", "0"], "--units: '0' is not an integer >= 1"),
+        ("scas-build-surrogate", ["--units", "1"], "--units: '1' is not an integer >= 2"),
         ("scas-build-surrogate", ["--grid", "1"], "--grid: '1' is not an integer >= 2"),
         ("scas-build-surrogate", ["--out", str(tmp / "c.csv")], "c.csv exists; pass --overwrite"),
         ("scas-build-calibration", ["--lives", "-1"], "--lives: '-1' is not an integer >= 1"),
-        ("scas-bench", [], "the following arguments are required"),
-        ("scas-bench", ["env", "--steps", "-1"], "--steps: '-1' is not an integer >= 1"),
-        ("scas-bench", ["env", "--steps", "0"], "--steps: '0' is not an integer >= 1"),
-        ("scas-bench", ["prognostics", "--particles", "0"], "'0' is not an integer >= 1"),
-        ("scas-bench", ["integrator", "--dt", "0"], "--dt: '0' is not a finite number > 0"),
-        ("scas-bench", ["integrator", "--dt", "1e-2"], "SensorParams.sim_dt_s = 0.01 s"),
+        ("scas-reproduce", ["--runs", "1"], "--runs: '1' is not an integer >= 2"),
+        (
+            "scas-reproduce",
+            ["--runs", "3", "--campaign", str(tmp / "c"), "--out", str(tmp / "o")],
+            "--runs / --levels size a new campaign",
+        ),
+        ("scas-export-dataset", ["--out", str(tmp / "o"), "--formats", "xls"], "allowed parquet"),
     ]
 
 
@@ -250,9 +258,11 @@ def test_policy_whose_module_is_missing_is_a_usage_error(
     assert not (tmp_path / "o").exists()
 
 
-def test_algo_names_match_the_rl_module() -> None:
-    rl = pytest.importorskip("policies.rl")
-    assert sorted(rl.ALGOS) == sorted(policies_cli.ALGO_NAMES)
+def test_train_algorithms_are_the_training_module_s() -> None:
+    from policies.agents.training import ALGOS
+
+    (action,) = [a for a in policies_cli.train_parser()._actions if a.dest == "algo"]
+    assert tuple(action.choices) == ALGOS
 
 
 # --- argument types: exactly the values allowed, a clear message otherwise -------------
@@ -304,7 +314,7 @@ def test_scenario_file_with_costs_table_sets_both(tmp_path: Path) -> None:
 # --- runs -----------------------------------------------------------------------------
 
 
-@pytest.mark.filterwarnings("ignore:No artists with labels:UserWarning")  # no removals to plot
+@pytest.mark.filterwarnings("error::UserWarning")  # no removal to plot is said on the plot
 def test_benchmark_runs_the_scenario_file_and_records_it(tmp_path: Path) -> None:
     """Same rows as run_benchmark called with the file's values by hand; the summary keeps
     the exact Scenario and CostModel, and a second run into the same folder is refused."""
@@ -415,3 +425,181 @@ def test_agent_scenario_refuses_other_costs(tmp_path) -> None:
     same = tmp_path / "s.toml"
     same.write_text("[scenario]\nepisode_slots = 300\n[costs]\n")
     assert agent_scenario(parser, parser.parse_args(["--scenario", str(same)])).episode_slots == 300
+
+
+# --- in a process, as a user meets them ------------------------------------------------
+
+
+@pytest.fixture(scope="module")
+def bad_files(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
+    """Files that are not what their option wants, and agents that must not load."""
+    import gymnasium as gym
+    import numpy as np
+    from stable_baselines3 import PPO
+    from stable_baselines3.common.vec_env import DummyVecEnv, VecNormalize
+
+    tmp = tmp_path_factory.mktemp("bad")
+    files = {
+        "latin1": tmp / "latin1.toml",
+        "list": tmp / "list.json",
+        "costs_only": tmp / "costs_only.toml",
+        "obs_mode": tmp / "obs.toml",
+        "not_zip": tmp / "notes.zip",
+        "empty_init": tmp / "init",
+    }
+    files["latin1"].write_bytes("[scenario]\n# \xe9t\xe9\nepisode_slots = 3\n".encode("latin-1"))
+    files["list"].write_text("[1, 2]")
+    files["costs_only"].write_text("[costs]\ntest_usd = 3\n")
+    files["obs_mode"].write_text('obs_mode = "state"\n')
+    files["not_zip"].write_text("not a zip")
+    files["empty_init"].mkdir()
+
+    class Other(gym.Env):  # another env's spaces
+        observation_space = gym.spaces.Box(-1.0, 1.0, (18,), np.float32)
+        action_space = gym.spaces.Discrete(2)
+
+        def reset(self, *, seed=None, options=None):
+            return np.zeros(18, np.float32), {}
+
+        def step(self, action):
+            return np.zeros(18, np.float32), 0.0, False, True, {}
+
+    files["other_env"] = tmp / "other.zip"
+    PPO("MlpPolicy", Other(), n_steps=16, batch_size=16, device="cpu").save(files["other_env"])
+    # an agent whose statistics are a VecNormalize pickle (RL-Zoo, plain SB3)
+    from scas_env import ENV_ID
+
+    venv = VecNormalize(DummyVecEnv([lambda: gym.make(ENV_ID, disable_env_checker=True)]))
+    PPO("MlpPolicy", venv, n_steps=16, batch_size=16, device="cpu").save(tmp / "pickled.zip")
+    venv.save(str(tmp / "pickled_vecnormalize.pkl"))
+    files["pickled"] = tmp / "pickled.zip"
+    return files
+
+
+def _process_cases(f: dict[str, Path], tmp: Path) -> list[tuple[str, list[str], str]]:
+    out = str(tmp / "o")
+    return [
+        ("scas-benchmark", ["--policy", "nomod:f"], "cannot import 'nomod'"),
+        ("scas-benchmark", ["--policy", "os:getcwd"], "getcwd(obs_names) failed: TypeError"),
+        ("scas-benchmark", ["--scenario", str(f["latin1"])], "latin1.toml: not UTF-8 text"),
+        ("scas-benchmark", ["--scenario", str(f["costs_only"])], "no [scenario] table"),
+        ("scas-benchmark", ["--scenario", str(f["obs_mode"])], "leave obs_mode out"),
+        ("scas-benchmark", ["--agent", str(f["other_env"])], "shape (18,) and Discrete(2)"),
+        ("scas-benchmark", ["--agent", str(f["pickled"])], "scas-benchmark --trust-pickle"),
+        ("scas-train", ["--timesteps", "0"], "--timesteps: '0' is not an integer >= 1"),
+        ("scas-train", ["--init", str(f["empty_init"]), "--out", out], "lacks model.zip"),
+        ("scas-train", ["--running-normalization", "--out", out], "needs --init"),
+        ("scas-tune", ["--families", "random"], "unknown rule family(s) ['random']"),
+        ("scas-tune", ["--costs", str(f["latin1"])], "latin1.toml: not UTF-8 text"),
+        ("scas-value", ["--workers", "0"], "--workers: '0' is not an integer >= 1"),
+        ("scas-value", ["--scenario", str(f["obs_mode"])], "obs_mode is set per arm"),
+        ("scas-campaign", ["--levels", "1"], "--levels: '1' is not an integer >= 2"),
+        ("scas-campaign", ["--params", str(f["costs_only"])], "no [params] table"),
+        ("scas-reproduce", ["--quick", "--full"], "not allowed with argument"),
+        ("scas-reproduce", ["--runs", "1"], "--runs: '1' is not an integer >= 2"),
+        ("scas-simulate", [], "the following arguments are required: --out"),
+        ("scas-simulate", ["--out", out, "--window", "nan"], "'nan' is not a finite"),
+        ("scas-figures", ["--out", out, "--seed", "-3"], "'-3' is not an integer >= 0"),
+        ("scas-figures", ["--out", out, "--params", str(f["list"])], "expected a mapping"),
+        ("scas-build-surrogate", ["--grid", "1"], "--grid: '1' is not an integer >= 2"),
+        ("scas-build-surrogate", ["--params", str(f["latin1"])], "latin1.toml: not UTF-8 text"),
+        ("scas-build-calibration", ["--lives", "-1"], "'-1' is not an integer >= 1"),
+        ("scas-build-calibration", ["--out", str(f["list"]) + "/x"], "list.json is a file"),
+        ("scas-export-dataset", ["--units", "0"], "--units: '0' is not an integer >= 1"),
+        ("scas-export-dataset", ["--out", out, "--formats", "xls"], "allowed parquet, csv"),
+    ]
+
+
+def test_bad_arguments_in_a_process_are_one_line_and_exit_2(
+    bad_files: dict[str, Path], tmp_path: Path
+) -> None:
+    """Each console command's bad-argument cases as a user runs them: exit status 2, one
+    line on stderr naming the problem, no traceback, nothing written (4 processes at once)."""
+    scripts = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]["scripts"]
+    cases = _process_cases(bad_files, tmp_path)
+    assert {c for c, _, _ in cases} == set(scripts)  # every console command
+    env = {**os.environ, "PYTHONPATH": str(ROOT), "COLUMNS": "100"}
+    failures = []
+    for start in range(0, len(cases), 4):
+        running = []
+        for command, argv, message in cases[start : start + 4]:
+            module, name = scripts[command].split(":")
+            code = f"import sys; from {module} import {name}; sys.exit({name}())"
+            proc = subprocess.Popen(
+                [sys.executable, "-c", code, *argv],
+                stdout=subprocess.PIPE,
+                stderr=subprocess.PIPE,
+                text=True,
+                env=env,
+                cwd=tmp_path,
+            )
+            running.append((command, argv, message, proc))
+        for command, argv, message, proc in running:
+            _, stderr = proc.communicate(timeout=300)
+            lines = stderr.strip().splitlines()
+            ok = (
+                proc.returncode == 2
+                and len(lines) == 1
+                and "Traceback" not in stderr
+                and lines[0].startswith(f"{command}: error: ")
+                and message in lines[0]
+            )
+            if not ok:
+                failures.append((command, argv, proc.returncode, stderr[-2000:]))
+    assert not failures, failures
+    assert not (tmp_path / "o").exists()
+
+
+def test_docs_show_every_command_s_help_verbatim() -> None:
+    """docs/cli.md holds each console command's --help as the parser prints it (rewrite:
+    ``python -m tests.cli_docs``)."""
+    from tests import cli_docs
+
+    shown = cli_docs.blocks(cli_docs.DOC.read_text())
+    assert set(shown) == set(MAINS)
+    stale = [c for c in MAINS if shown[c] != cli_docs.render(c)]
+    assert not stale, f"docs/cli.md: --help of {stale} changed; run python -m tests.cli_docs"
+
+
+def test_check_install_runs_every_console_command_at_a_tiny_size() -> None:
+    """The Makefile's check-install runs each console command from the fresh venv."""
+    text = (ROOT / "Makefile").read_text()
+    recipe = text.split("\ncheck-install:", 1)[1].split("\n\n", 1)[0]
+    scripts = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]["scripts"]
+    ran = set(re.findall(r"(?:venv/bin|\$\(CHECK_RUN\))/(scas-[\w-]+) ", recipe))
+    missing = [c for c in scripts if c not in ran]
+    assert not missing, f"check-install does not run {missing}"
+
+
+def test_quick_sizes_are_the_modules_and_keep_full_length_episodes() -> None:
+    import inspect
+
+    from policies.value import study, tuning
+
+    for sizes, quick, function in (
+        (policies_cli.TUNE_SIZES, tuning.QUICK, tuning.tune_families),
+        (policies_cli.VALUE_SIZES, study.QUICK, study.run_ladder),
+    ):
+        assert {k: q for k, (_, q) in sizes.items()} == quick
+        defaults = inspect.signature(function).parameters
+        assert {k: f for k, (f, _) in sizes.items()} == {k: defaults[k].default for k in sizes}
+        assert quick["slots"] == sizes["slots"][0] == 2000  # quick shortens nothing
+    parser = policies_cli.value_parser()
+    args = parser.parse_args(["--quick", "--trials", "7"])
+    assert policies_cli._sizes(args, policies_cli.VALUE_SIZES) == {**study.QUICK, "trials": 7}
+    args = parser.parse_args([])
+    assert policies_cli._sizes(args, policies_cli.VALUE_SIZES)["episodes"] == 1000
+
+
+def test_an_agent_file_with_a_pickle_runs_only_with_trust_pickle(
+    bad_files: dict[str, Path], tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    argv = ["--agent", str(bad_files["pickled"]), "--policies", "corrective", "--episodes", "1",
+            "--slots", "20", "--workers", "1", "-q"]  # fmt: skip
+    with pytest.raises(SystemExit) as exit_:
+        policies_cli.benchmark_main([*argv, "--out", str(tmp_path / "a")])
+    assert exit_.value.code == 2 and "pass trust_pickle=True" in capsys.readouterr().err
+    assert not (tmp_path / "a").exists()
+    assert policies_cli.benchmark_main([*argv, "--trust-pickle", "--out", str(tmp_path / "b")]) == 0
+    rows = (tmp_path / "b" / "results.csv").read_text().splitlines()
+    assert [r.split(",")[0] for r in rows[1:]] == ["corrective", "pickled"]

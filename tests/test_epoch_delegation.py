@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from policies.base import make_policy
-from scas_env import ENV_ID, V2_KWARGS
+from scas_env import ENV_ID
 from scas_env.decision_epochs import DELEGATE, FLY, DecisionEpochs, delegate_actions
 from scas_env.decision_epochs_vector import DecisionEpochsVectorEnv
 
@@ -20,7 +20,7 @@ BUSY = {"spring_age": 160.0, "seal_age": 90.0, "test_every": 15.0}
 
 
 def _names() -> tuple[str, ...]:
-    env = gym.make(ENV_ID, episode_slots=SLOTS, disable_env_checker=True, **V2_KWARGS)
+    env = gym.make(ENV_ID, episode_slots=SLOTS, disable_env_checker=True)
     return tuple(env.unwrapped.obs_names)
 
 
@@ -30,7 +30,7 @@ def _rule():
 
 def _rule_episode(seed: int) -> tuple[list[int], list[float], np.ndarray]:
     """The rule's own per-flight episode on v2: actions, rewards, last observation."""
-    env = gym.make(ENV_ID, episode_slots=SLOTS, disable_env_checker=True, **V2_KWARGS)
+    env = gym.make(ENV_ID, episode_slots=SLOTS, disable_env_checker=True)
     rule = _rule()
     obs, _ = env.reset(seed=seed)
     actions, rewards, done = [], [], False
@@ -44,7 +44,7 @@ def _rule_episode(seed: int) -> tuple[list[int], list[float], np.ndarray]:
 
 
 def _epochs(delegate=None) -> DecisionEpochs:
-    env = gym.make(ENV_ID, episode_slots=SLOTS, disable_env_checker=True, **V2_KWARGS)
+    env = gym.make(ENV_ID, episode_slots=SLOTS, disable_env_checker=True)
     return DecisionEpochs(env, ks=KS, delegate=delegate)
 
 
@@ -66,11 +66,11 @@ def test_always_delegating_plays_the_rules_own_episode(k: int) -> None:
 
 
 def test_a_mixed_plan_equals_the_same_per_flight_actions_by_hand() -> None:
-    """Delegate, then overrule (fly, replace), then delegate again: slot by slot the v0
+    """Delegate, then overrule (fly, replace), then delegate again: slot by slot the per-flight
     actions are the rule's inside delegated steps and the plan's elsewhere."""
     rule = _rule()
     env = _epochs(_rule())
-    plain = gym.make(ENV_ID, episode_slots=SLOTS, disable_env_checker=True, **V2_KWARGS)
+    plain = gym.make(ENV_ID, episode_slots=SLOTS, disable_env_checker=True)
     env.reset(seed=9)
     p_obs, _ = plain.reset(seed=9)
     plan = [(DELEGATE, 20), (FLY, 5), (3, 1), (DELEGATE, 5)] * 20
@@ -95,7 +95,7 @@ def test_a_mixed_plan_equals_the_same_per_flight_actions_by_hand() -> None:
 
 def test_vector_env_equals_single_envs_and_masks_allow_delegation() -> None:
     n = 3
-    venv = DecisionEpochsVectorEnv(n, ks=KS, delegate=_rule(), episode_slots=SLOTS, **V2_KWARGS)
+    venv = DecisionEpochsVectorEnv(n, ks=KS, delegate=_rule(), episode_slots=SLOTS)
     singles = [_epochs(_rule()) for _ in range(n)]
     obs, _ = venv.reset(seed=40)
     for e, s in enumerate(singles):
@@ -145,7 +145,7 @@ def test_bad_delegates_are_refused() -> None:
         def predict(self, obs, state=None, episode_start=None, deterministic=True):
             return np.full(len(obs), 7), state
 
-    with pytest.raises(ValueError, match="must be 1 v0 actions"):
+    with pytest.raises(ValueError, match=r"must be 1 actions \(integers in 0\.\.3\)"):
         delegate_actions(Wrong(), np.zeros((1, 4), dtype=np.float32))
     env = _epochs(Wrong())
     env.reset(seed=0)
@@ -161,7 +161,7 @@ def test_bad_delegates_are_refused() -> None:
 def recorded():
     from policies.agents.demonstrations import record_rule
 
-    scenario = {**V2_KWARGS, "episode_slots": SLOTS}
+    scenario = {"episode_slots": SLOTS}
     return record_rule("rul_risk", BUSY, episodes=4, seed=1, scenario=scenario, batch=2)
 
 
@@ -201,7 +201,8 @@ def test_delegate_specs_are_checked_and_round_trip() -> None:
 def test_a_clone_that_delegates_plays_the_rule_after_training_and_loading(
     tmp_path, recorded
 ) -> None:
-    """imitate (always delegate) -> train_epochs(init) -> checkpoint loaded as a v0 policy:
+    """imitate (always delegate) -> train_epochs(init) -> checkpoint loaded as a per-flight
+    policy:
     its per-flight episode is the rule's own, bit for bit (the delegate travels through
     clone.json, run.json and the loader)."""
     pytest.importorskip("sb3_contrib")
@@ -210,12 +211,12 @@ def test_a_clone_that_delegates_plays_the_rule_after_training_and_loading(
     import torch
     from sb3_contrib import MaskablePPO
 
-    from policies.benchmark.run import PolicySpec, run_benchmark
     from policies.agents.delegation import DelegateSpec, delegation_demonstrations
     from policies.agents.selection import _spec
     from policies.agents.training import clone_rule, train_epochs
+    from policies.benchmark.run import PolicySpec, run_benchmark
 
-    scenario = {**V2_KWARGS, "episode_slots": SLOTS}
+    scenario = {"episode_slots": SLOTS}
     hp = {"n_steps": 32, "batch_size": 32, "n_epochs": 1, "policy_kwargs": {"net_arch": [16]}}
     spec = DelegateSpec("rul_risk", BUSY)
     demos = delegation_demonstrations(recorded, KS, 5, 0.99)
@@ -239,12 +240,10 @@ def test_a_clone_that_delegates_plays_the_rule_after_training_and_loading(
     )
     meta = json.loads((run / "run.json").read_text())
     assert meta["delegate"] == spec.to_json()
-    agent_spec = _spec("ckpt0", run / "ckpt_0_steps.zip", run / "ckpt_vecnormalize_0_steps.pkl",
+    agent_spec = _spec("ckpt0", run / "ckpt_0_steps.zip", run / "ckpt_normalization_0_steps.json",
                        meta, SLOTS)  # fmt: skip
     rule_spec = PolicySpec("rul_risk", params=BUSY, label="rule")
-    result = run_benchmark(
-        [agent_spec, rule_spec], episodes=3, slots=SLOTS, seed=17, env_kwargs=V2_KWARGS
-    )
+    result = run_benchmark([agent_spec, rule_spec], episodes=3, slots=SLOTS, seed=17)
     rewards = {
         label: [r["reward"] for r in result.rows if r["policy"] == label]
         for label in ("ckpt0", "rule")
@@ -283,33 +282,3 @@ def test_label_smoothing_leaves_the_closed_form_share_on_the_other_valid_actions
     np.testing.assert_allclose(mean, expected, atol=2e-3)
     with pytest.raises(ValueError, match=r"label_smoothing = 1\.0 must be a number in"):
         clone(model, venv, demos, label_smoothing=1.0, rng=np.random.default_rng(1))
-
-
-def test_training_passes_kernel_threads_to_the_native_env(tmp_path) -> None:
-    """train_epochs(kernel_threads=2) builds its native env with them and records them; the
-    DummyVecEnv path refuses them."""
-    pytest.importorskip("sb3_contrib")
-    import json
-
-    from policies.agents.training import _prepared, train_epochs
-
-    hp = {"n_steps": 16, "batch_size": 16, "n_epochs": 1, "policy_kwargs": {"net_arch": [8]}}
-    scenario = {**V2_KWARGS, "episode_slots": 60}
-    _, venv, *_ = _prepared(
-        hp, tmp_path / "p", seed=0, algo="maskable_ppo", ks=KS, native_envs=2,
-        scenario=scenario, kernel_threads=2,
-    )  # fmt: skip
-    inner = venv
-    while not hasattr(inner, "inner"):  # VecNormalize > VecMonitor > NativeVecEnv > epochs
-        inner = inner.venv
-    assert inner.inner.kernel_threads == 2
-    run = train_epochs(
-        hp, tmp_path / "run", ks=KS, total_timesteps=32, native_envs=2, kernel_threads=2,
-        **scenario,
-    )  # fmt: skip
-    assert json.loads((run / "run.json").read_text())["kernel_threads"] == 2
-    with pytest.raises(ValueError, match="kernel_threads = 2 needs native_envs"):
-        train_epochs(hp, tmp_path / "x", kernel_threads=2, **scenario)
-    with pytest.raises(ValueError, match="kernel_threads = 0 must be an integer"):
-        train_epochs(hp, tmp_path / "y", native_envs=2, kernel_threads=0, **scenario)
-    assert not (tmp_path / "x").exists() and not (tmp_path / "y").exists()

@@ -8,7 +8,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from policies.benchmark.run import episode_seeds
+from policies.agents.agent_files import ObsNormalization
 from policies.agents.demonstrations import (
     RuleEpisodes,
     demonstrations,
@@ -17,11 +17,12 @@ from policies.agents.demonstrations import (
     epoch_returns,
     record_rule,
 )
-from scas_env import ENV_ID, V2_KWARGS
+from policies.benchmark.run import episode_seeds
+from scas_env import ENV_ID
 from scas_env.decision_epochs import DEFAULT_KS, DecisionEpochs
 
 SLOTS = 300
-SCENARIO = {**V2_KWARGS, "episode_slots": SLOTS}
+SCENARIO = {"episode_slots": SLOTS}
 #: a filter rule that tests and replaces within 300 slots (so the episodes have actions)
 RULE = (
     "rul_risk",
@@ -249,6 +250,23 @@ def test_training_starts_from_the_clone(tmp_path, recorded: RuleEpisodes) -> Non
         stats_0 = pickle.load(fh)
     np.testing.assert_array_equal(stats_bc.obs_rms.mean, stats_0.obs_rms.mean)
     assert stats_bc.ret_rms.var == stats_0.ret_rms.var
+    # the same statistics in the JSON files the warm start and the loader read (no pickle)
+    for folder, name in ((tmp_path / "bc", "normalization.json"),
+                         (run, "ckpt_normalization_0_steps.json")):  # fmt: skip
+        saved = ObsNormalization.load(folder / name)
+        np.testing.assert_array_equal(saved.mean, stats_bc.obs_rms.mean)
+        np.testing.assert_array_equal(saved.var, stats_bc.obs_rms.var)
+        assert saved.returns["var"] == stats_bc.ret_rms.var
+        assert saved.count == stats_bc.obs_rms.count
+    # a clone folder of an older version (statistics as a pickle only) is refused, with
+    # the one-off conversion named
+    old = tmp_path / "old_bc"
+    old.mkdir()
+    for name in ("model.zip", "vecnormalize.pkl", "clone.json"):
+        (old / name).write_bytes((tmp_path / "bc" / name).read_bytes())
+    with pytest.raises(ValueError, match=r"lacks normalization\.json; it has vecnormalize"):
+        train_epochs(hp, tmp_path / "from_old", init=old, total_timesteps=32, native_envs=2,
+                     **SCENARIO)  # fmt: skip
     # regularised towards the clone: the same start, a reference-free policy in every zip
     from policies.agents.reference import ReferenceKLPolicy
 
@@ -336,8 +354,8 @@ def test_dagger_labels_of_the_rules_own_states_are_its_demonstrations(
 def test_lookahead_counts_the_slots_left_at_the_end_of_an_episode() -> None:
     """With a rule that never acts, the look-ahead is the slots left (1 at the last slot),
     never a step past truncation; and it stops at its limit."""
-    from policies.base import make_policy
     from policies.agents.dagger import _lookahead
+    from policies.base import make_policy
 
     env = gym.make(ENV_ID, disable_env_checker=True, **SCENARIO).unwrapped
     never = make_policy("corrective", env.obs_names)

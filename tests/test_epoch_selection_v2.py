@@ -1,4 +1,5 @@
-"""Scenario-aware selection of decision-epoch checkpoints (policies.agents.selection).
+"""Selection of decision-epoch checkpoints (policies.agents.selection): per scenario, on
+validation seeds, shipped with statistics that load without unpickling.
 
 Fake training runs whose checkpoints act by construction (one action logit far above the
 others): "fly for 20 slots" beats "test before every flight" and "replace the seal whenever
@@ -9,12 +10,14 @@ from __future__ import annotations
 
 import csv
 import json
+import pickle
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
 import pytest
 
-from policies.benchmark.run import PolicySpec, run_benchmark
+from policies.agents.agent_files import ObsNormalization, weights_sha256
 from policies.agents.selection import (
     VALIDATION_SEED,
     resolve_scenario,
@@ -23,35 +26,47 @@ from policies.agents.selection import (
     tuned_rules,
     validate_checkpoints,
 )
-from scas_env import V2_KWARGS
+from policies.benchmark.run import PolicySpec, run_benchmark
 
 SLOTS = 40
 KS = (1, 20)
-V2 = {**V2_KWARGS, "episode_slots": SLOTS}
-V0 = {"episode_slots": SLOTS}
+V2 = {"episode_slots": SLOTS}
+#: another scenario (same observation layout)
+OTHER = {"episode_slots": SLOTS, "initial_health": "random"}
 FLY_20, TEST_EVERY_FLIGHT, REPLACE_SEAL_EACH = 0 * 2 + 1, 1 * 2 + 0, 3 * 2 + 0  # a = m*len(KS)+k
 EPISODES = 4
 
 
 def _fake_run(
-    root: Path, name: str, scenario: dict, ckpts: dict[int, int], *, finished: bool = True
+    root: Path,
+    name: str,
+    scenario: dict,
+    ckpts: dict[int, int],
+    *,
+    finished: bool = True,
+    json_statistics: bool = True,
+    obs_mode: str | None = None,
 ) -> Path:
     """A run folder as train_epochs writes it, whose checkpoint ``steps`` always prefers
-    action ``ckpts[steps]`` (masked actions aside)."""
+    action ``ckpts[steps]`` (masked actions aside); ``json_statistics=False``: as an older
+    version wrote it (the statistics as VecNormalize pickles only); ``obs_mode``: the
+    model observes that layout instead of the scenario's."""
     import torch
     from sb3_contrib import MaskablePPO
     from stable_baselines3.common.vec_env import DummyVecEnv, VecNormalize
 
+    from policies.agents.training import save_statistics
     from scas_env.decision_epochs import make_decision_epoch_env
 
     run = root / name
     (run / "monitor").mkdir(parents=True)
-    env = make_decision_epoch_env(ks=KS, **scenario)
+    layout = {} if obs_mode is None else {"obs_mode": obs_mode}
+    env = make_decision_epoch_env(ks=KS, **scenario, **layout)
     model = MaskablePPO(
         "MlpPolicy", env, n_steps=32, batch_size=32, seed=0, device="cpu",
         policy_kwargs={"net_arch": [8, 8]},
     )  # fmt: skip
-    norm = VecNormalize(DummyVecEnv([lambda: make_decision_epoch_env(ks=KS, **scenario)]))
+    norm = VecNormalize(DummyVecEnv([lambda: make_decision_epoch_env(ks=KS, **scenario, **layout)]))
     for steps, action in ckpts.items():
         with torch.no_grad():
             model.policy.action_net.weight.zero_()
@@ -59,6 +74,8 @@ def _fake_run(
             model.policy.action_net.bias[action] = 10.0
         model.save(run / f"ckpt_{steps}_steps.zip")
         norm.save(str(run / f"ckpt_vecnormalize_{steps}_steps.pkl"))
+        if json_statistics:
+            save_statistics(norm, run / f"ckpt_normalization_{steps}_steps.json")
     (run / "progress.csv").write_text(
         "rollout/ep_rew_mean,time/total_timesteps\n4.9e6,100\n4.95e6,200\n"
     )
@@ -88,9 +105,9 @@ def test_validation_on_the_runs_scenario_picks_the_best_checkpoint(v2_runs, tmp_
     reward = {(r["run"], int(r["decisions"])): float(r["reward"]) for r in rows}
     assert reward[("a", 200)] > max(reward[("a", 100)], reward[("b", 100)])
     # paired against the rule on the same v2 episodes: the rule alone on those seeds
-    rule = run_benchmark(
-        [age], episodes=EPISODES, slots=SLOTS, seed=VALIDATION_SEED, env_kwargs=dict(V2_KWARGS)
-    ).summary["policies"][age.key]["reward"]["mean"]
+    rule = run_benchmark([age], episodes=EPISODES, slots=SLOTS, seed=VALIDATION_SEED).summary[
+        "policies"
+    ][age.key]["reward"]["mean"]
     for r in rows:
         assert float(r["diff_vs_rule"]) == pytest.approx(float(r["reward"]) - rule, abs=1e-6)
         assert json.loads(r["scenario"]) == V2 and r["rule"] == "preventive_tuned"
@@ -107,45 +124,76 @@ def test_validation_on_the_runs_scenario_picks_the_best_checkpoint(v2_runs, tmp_
     assert meta["training_scale"]["decisions"] == 300
     with (tmp_path / "agent_v2_curves.csv").open() as fh:
         assert {r["run"] for r in csv.DictReader(fh)} == {"a", "b"}
-    # the shipped copy acts on v2 and refuses v0's observation
+    # the shipped copy: statistics as JSON, its weights' digest recorded; it acts as the
+    # checkpoint does under SB3's own loader and the checkpoint's pickled statistics
+    assert sorted(p.name for p in tmp_path.glob("agent_v2*")) == [
+        "agent_v2.json", "agent_v2.zip", "agent_v2_curves.csv", "agent_v2_curves.png",
+        "agent_v2_normalization.json",
+    ]  # fmt: skip
+    assert meta["weights_sha256"] == weights_sha256(zip_path)
     ship = PolicySpec(
         "sb3", {"path": str(zip_path)}, label="x", module="policies.agents.sb3_agents"
     )
-    res = run_benchmark([ship], episodes=1, slots=SLOTS, env_kwargs=dict(V2_KWARGS))
+    res = run_benchmark([ship], episodes=2, slots=SLOTS)
     expected = run_benchmark(
         [PolicySpec("sb3", {
             "path": str(v2_runs / "a" / "ckpt_200_steps.zip"),
             "vecnormalize": str(v2_runs / "a" / "ckpt_vecnormalize_200_steps.pkl"),
-            "ks": KS, "episode_slots": SLOTS,
+            "ks": KS, "episode_slots": SLOTS, "trust_pickle": True,
         }, label="x", module="policies.agents.sb3_agents")],
-        episodes=1, slots=SLOTS, env_kwargs=dict(V2_KWARGS),
+        episodes=2, slots=SLOTS,
     )  # fmt: skip
-    assert res.rows[0]["reward"] == expected.rows[0]["reward"]
+    assert [r["reward"] for r in res.rows] == [r["reward"] for r in expected.rows]
+    # an env of another observation layout: refused before any episode
     with pytest.raises(ValueError, match=r"cannot run on this scenario.*differ from the agent"):
-        run_benchmark([ship], episodes=1, slots=SLOTS)
+        run_benchmark([replace(ship, obs_mode="features")], episodes=1, slots=SLOTS)
 
 
 def test_mixed_or_contradicted_scenarios_are_refused(v2_runs, tmp_path) -> None:
-    v0 = _fake_run(tmp_path, "v0", V0, {100: FLY_20})
+    other = _fake_run(tmp_path, "other", OTHER, {100: FLY_20})
     with pytest.raises(ValueError, match="mix scenarios"):
-        validate_checkpoints([v2_runs / "a", v0], tmp_path / "x.csv", progress=False)
+        validate_checkpoints([v2_runs / "a", other], tmp_path / "x.csv", progress=False)
     with pytest.raises(ValueError, match="differs from the one the runs"):
-        validate_checkpoints([v2_runs / "a"], tmp_path / "x.csv", scenario=V0, progress=False)
+        validate_checkpoints([v2_runs / "a"], tmp_path / "x.csv", scenario=OTHER, progress=False)
     # a run still training (no run.json) is taken to be on the caller's scenario
     training = _fake_run(tmp_path, "training", V2, {100: FLY_20}, finished=False)
     assert resolve_scenario([training], V2) == V2
     assert resolve_scenario([training, v2_runs / "b"]) == V2
-    assert resolve_scenario([training]) == {}  # nothing says otherwise: v0
+    assert resolve_scenario([training]) == {}  # nothing says otherwise: the defaults
     with pytest.raises(ValueError, match="differs"):
-        resolve_scenario([training, v0], V2)
-    # a v2 checkpoint asked to act on v0's observation (no metadata): its size differs
-    with pytest.raises(ValueError, match=r"observes .* trained on another observation"):
-        validate_checkpoints([training], tmp_path / "y.csv", scenario=V0, progress=False)
+        resolve_scenario([training, other], V2)
+    # a checkpoint of another observation layout (no metadata): its spaces differ
+    features = _fake_run(tmp_path, "features", V2, {100: FLY_20}, finished=False,
+                         obs_mode="features")  # fmt: skip
+    with pytest.raises(ValueError, match=r"ckpt_100_steps\.zip: the agent was made for obs"):
+        validate_checkpoints([features], tmp_path / "y.csv", scenario=V2, progress=False)
     # a validation CSV of another scenario is not extended
-    rows = validate_checkpoints([v0], tmp_path / "v0.csv", episodes=1, n_workers=1, progress=False)
-    assert json.loads(rows[0]["scenario"]) == V0
+    rows = validate_checkpoints(
+        [other], tmp_path / "other.csv", episodes=1, n_workers=1, progress=False
+    )
+    assert json.loads(rows[0]["scenario"]) == OTHER
     with pytest.raises(ValueError, match="holds validation rows of scenario"):
-        validate_checkpoints([v2_runs / "b"], tmp_path / "v0.csv", progress=False)
+        validate_checkpoints([v2_runs / "b"], tmp_path / "other.csv", progress=False)
+
+
+def test_runs_of_an_older_version_need_trust_to_read_their_pickles(v2_runs, tmp_path) -> None:
+    """Statistics as VecNormalize pickles only: refused unless trust_pickle, then the same
+    validation as the JSON statistics give, and a shipped copy converts them to JSON."""
+    old = _fake_run(tmp_path, "old", V2, {100: FLY_20}, json_statistics=False)
+    settings = {"episodes": EPISODES, "n_workers": 1, "progress": False}
+    with pytest.raises(ValueError, match=r"ckpt_vecnormalize_100_steps\.pkl is a VecNormal"):
+        validate_checkpoints([old], tmp_path / "old.csv", **settings)
+    rows = validate_checkpoints([old], tmp_path / "old.csv", trust_pickle=True, **settings)
+    new = validate_checkpoints([v2_runs / "a"], tmp_path / "new.csv", decisions=[200], **settings)
+    assert rows[0]["reward"] == new[0]["reward"]  # both fly 20 slots at a time
+    with pytest.raises(ValueError, match="pass trust_pickle=True to convert it"):
+        ship_best(tmp_path / "old.csv", tmp_path, "x", out_dir=tmp_path / "ship1")
+    assert not (tmp_path / "ship1").exists()  # refused before anything is written
+    ship_best(tmp_path / "old.csv", tmp_path, "x", out_dir=tmp_path / "ship2", trust_pickle=True)
+    shipped = ObsNormalization.load(tmp_path / "ship2" / "x_normalization.json")
+    with (old / "ckpt_vecnormalize_100_steps.pkl").open("rb") as fh:
+        venv = pickle.load(fh)  # the test's own file
+    np.testing.assert_array_equal(shipped.mean, venv.obs_rms.mean)
 
 
 def _statistics_run(root: Path) -> tuple[Path, Path, Path]:
@@ -172,13 +220,14 @@ def _statistics_run(root: Path) -> tuple[Path, Path, Path]:
     model.save(run / "ckpt_100_steps.zip")
     norm = VecNormalize(DummyVecEnv([lambda: make_decision_epoch_env(ks=KS, **V2)]))
     norm.obs_rms.mean[:], norm.obs_rms.var[:] = 0.0, 1.0
-    norm.save(str(run / "ckpt_vecnormalize_100_steps.pkl"))
+    own = run / "ckpt_normalization_100_steps.json"
+    ObsNormalization.from_vecnormalize(norm).save(own)
     norm.obs_rms.mean[-1] = 1000.0
-    other = root / "other.pkl"
-    norm.save(str(other))
+    other = root / "other.json"
+    ObsNormalization.from_vecnormalize(norm).save(other)
     meta = {"algo": "maskable_ppo", "ks": list(KS), "scenario": V2, "decisions": 100}
     (run / "run.json").write_text(json.dumps(meta))
-    return run, run / "ckpt_vecnormalize_100_steps.pkl", other
+    return run, own, other
 
 
 def test_checkpoints_can_be_validated_under_other_statistics(v2_runs, tmp_path) -> None:
@@ -194,18 +243,18 @@ def test_checkpoints_can_be_validated_under_other_statistics(v2_runs, tmp_path) 
     copy.mkdir(parents=True)
     shutil.copy(run / "ckpt_100_steps.zip", copy)
     shutil.copy(run / "run.json", copy)
-    shutil.copy(other, copy / "ckpt_vecnormalize_100_steps.pkl")
+    shutil.copy(other, copy / "ckpt_normalization_100_steps.json")
     by_copy = validate_checkpoints([copy], tmp_path / "copy.csv", **settings)
     assert float(swapped[0]["reward"]) == float(by_copy[0]["reward"])
     assert float(swapped[0]["reward"]) != float(own[0]["reward"])
     assert swapped[0]["statistics"] == str(other) and own[0]["statistics"] == ""
     with pytest.raises(ValueError, match="validated with other statistics"):
         ship_best(tmp_path / "swap.csv", tmp_path, "x", out_dir=tmp_path / "ship")
-    # only the checkpoints asked for; a missing pickle is refused before any work
+    # only the checkpoints asked for; a missing statistics file is refused before any work
     none = validate_checkpoints([v2_runs / "a"], tmp_path / "d.csv", decisions=[200], **settings)
     assert [int(r["decisions"]) for r in none] == [200]
     with pytest.raises(ValueError, match="is not a file"):
-        validate_checkpoints([run], tmp_path / "e.csv", statistics=tmp_path / "no.pkl")
+        validate_checkpoints([run], tmp_path / "e.csv", statistics=tmp_path / "no.json")
 
 
 def test_training_scale_counts_monitor_episodes(tmp_path) -> None:

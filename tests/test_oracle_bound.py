@@ -10,7 +10,6 @@ import pytest
 from policies.benchmark.run import PolicySpec, run_benchmark
 from policies.benchmark.stats import paired_difference
 from policies.rules.oracle import plan_cost, plan_cost_known
-from scas_env import V2_KWARGS
 
 COSTS = (2500.0, 1500.0, 6000.0, 0, 1)  # flight value, spring, seal, downtimes (CostModel)
 
@@ -72,9 +71,7 @@ def test_clairvoyant_oracle_is_never_beaten_in_any_episode():
         {"sigma": 0.0, "spring_age": 1e9, "seal_age": 1e9, "opportunity": 0.0},
         label="just-in-time oracle",
     )
-    res = run_benchmark(
-        [*names, jit, "oracle"], episodes=4, slots=1200, seed=3, env_kwargs=dict(V2_KWARGS)
-    )
+    res = run_benchmark([*names, jit, "oracle"], episodes=4, slots=1200, seed=3)
     reward = {
         p: np.array([r["reward"] for r in res.rows if r["policy"] == p])
         for p in [*names, jit.key, "oracle"]
@@ -114,36 +111,15 @@ def test_clairvoyant_oracle_bounds_every_policy_in_every_episode():
         {"sigma": 0.0, "spring_age": 1e9, "seal_age": 1e9, "opportunity": 0.0},
         label="just-in-time oracle",
     )
-    res = run_benchmark(
-        [*names, jit, "oracle"], episodes=64, seed=0, n_workers=2, env_kwargs=dict(V2_KWARGS)
-    )
-    reward = {
-        p: np.array([r["reward"] for r in res.rows if r["policy"] == p])
-        for p in [*names, jit.key, "oracle"]
-    }
-    for p in [*names, jit.key]:
-        assert np.all(reward[p] <= reward["oracle"]), p
-
-
-@pytest.mark.slow
-def test_no_policy_beats_the_oracle_beyond_one_grounded_slot():
-    names = ["corrective", "preventive", "detection", "rul_risk", "random"]
-    jit = PolicySpec(
-        "noisy_oracle",
-        {"sigma": 0.0, "spring_age": 1e9, "seal_age": 1e9, "opportunity": 0.0},
-        label="just-in-time oracle",
-    )
     res = run_benchmark([*names, jit, "oracle"], episodes=64, seed=0, n_workers=2)
     reward = {
         p: np.array([r["reward"] for r in res.rows if r["policy"] == p])
         for p in [*names, jit.key, "oracle"]
     }
-    oracle_rows = [r for r in res.rows if r["policy"] == "oracle"]
-    assert all(r["failures_spring"] + r["failures_seal"] == 0 for r in oracle_rows)
+    assert all(
+        r["failures_spring"] + r["failures_seal"] == 0 for r in res.rows if r["policy"] == "oracle"
+    )
     for p in [*names, jit.key]:
+        assert np.all(reward[p] <= reward["oracle"]), p
         d = paired_difference(reward["oracle"], reward[p])
         assert d.low > 0.0, p  # the oracle is better on average, significantly
-    for p in names:
-        # per episode: the policies' later parts are other draws of the parts stream, so a
-        # policy can be luckier by one grounded slot; never by a failure or a replacement
-        assert np.all(reward[p] - reward["oracle"] <= 2500.0), p

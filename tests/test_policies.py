@@ -13,21 +13,24 @@ from stable_baselines3.common.monitor import Monitor
 import scas_env
 from policies import make_policy, policy_obs_mode
 from policies.benchmark.run import run_episode
+from policies.rules.classic import DetectionPolicy, PreventivePolicy, RandomPolicy
 from policies.rules.nested import ground_test_reference
 from policies.rules.noisy_oracle import NoisyOraclePolicy
 from policies.rules.oracle import OraclePolicy
 from policies.rules.prognostic import FeatureRulePolicy, RulRiskPolicy
-from policies.rules.classic import DetectionPolicy, PreventivePolicy, RandomPolicy
 
 FULL = (
-    "I2", "I6", "I7", "G1", "G3", "test_age", "no_go", "spring_rul_mean", "spring_rul_low",
-    "spring_risk", "seal_rul_mean", "seal_rul_low", "seal_risk", "spring_alarm", "seal_alarm",
-    "spring_age", "seal_age", "downtime",
+    "I2", "I6", "I7", "I8", "I9", "G1", "G3", "test_age", "no_go", "spring_rul_mean",
+    "spring_rul_low", "spring_risk", "seal_rul_mean", "seal_rul_low", "seal_risk",
+    "spring_alarm", "seal_alarm", "spring_age", "seal_age", "downtime",
 )  # fmt: skip
 STATE = (
     "crack_fraction", "wear_fraction", "spring_rul_true", "seal_rul_true", "spring_age",
-    "seal_age", "downtime",
+    "seal_age", "downtime", "spring_next_life_1", "spring_next_life_2", "spring_next_life_3",
+    "seal_next_life_1", "seal_next_life_2", "seal_next_life_3",
 )  # fmt: skip
+#: the true state without the next parts' lives: the oracle then plans with life quantiles
+STATE_QUANTILES = STATE[:7]
 HEALTHY = {
     "test_age": 1.0, "spring_rul_mean": 900.0, "spring_rul_low": 600.0, "spring_risk": 0.0,
     "seal_rul_mean": 900.0, "seal_rul_low": 700.0, "seal_risk": 0.0, "spring_age": 100.0,
@@ -152,7 +155,7 @@ def test_noisy_oracle_draws_one_factor_per_part_fitted():
 
 
 def test_oracle_replaces_at_margin_and_groups_when_it_pays():
-    p = OraclePolicy(STATE, margin=2.0, episode_slots=2000)
+    p = OraclePolicy(STATE_QUANTILES, margin=2.0, episode_slots=2000)
     p.reset()
     assert act(p, spring_rul_true=2.5) == 0
     assert act(p, spring_rul_true=2.0) == 2  # seals 900 flights from failure: not grouped
@@ -162,7 +165,7 @@ def test_oracle_replaces_at_margin_and_groups_when_it_pays():
     p.reset()
     assert act(p, spring_rul_true=2.0, seal_rul_true=30.0) == 3  # seals 28 flights on: group
     # near the end nothing is replaced that outlives the episode
-    late = OraclePolicy(STATE, margin=2.0, episode_slots=1)
+    late = OraclePolicy(STATE_QUANTILES, margin=2.0, episode_slots=1)
     late.reset()
     assert act(late, spring_rul_true=2.0) == 0
 
@@ -240,8 +243,8 @@ def test_oracle_never_fails_in_flight():
 
 
 def test_detection_rule_answers_a_failed_test_with_the_implicated_part() -> None:
-    from policies.rules.nested import ground_test_reference
     from policies.rules.classic import DetectionPolicy
+    from policies.rules.nested import ground_test_reference
     from scas_env.env import ScasMaintenanceEnv
 
     names = ScasMaintenanceEnv(obs_mode="features").obs_names

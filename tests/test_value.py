@@ -10,23 +10,24 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from policies.value.tuning import FAMILIES, HELD_OUT_SEED, edge_report, relevant_box, tune_family
 from policies.value.study import (
     LADDER,
-    QUICK,
     REFERENCE,
     break_even_sigma,
     run_ladder,
     summarize_ladder,
     write_outputs,
 )
+from policies.value.tuning import FAMILIES, HELD_OUT_SEED, edge_report, relevant_box, tune_family
 
+#: a small ladder (the statistics and outputs are checked, not what the rules are worth)
+SMALL = {"episodes": 4, "slots": 400, "trials": 2, "train_episodes": 3}
 FAMS = ("age", "filter", "noisy oracle sigma=0", "noisy oracle sigma=0.5")
 
 
 @pytest.fixture(scope="module")
 def quick():
-    return run_ladder(families=FAMS, **{**QUICK, "slots": 400}, n_workers=1)
+    return run_ladder(families=FAMS, **SMALL, n_workers=1)
 
 
 def test_nested_family_starts_from_the_age_rule_and_never_trains_worse():
@@ -101,3 +102,24 @@ def test_only_parameters_that_act_are_checked_for_edges():
 def test_tuning_never_trains_on_the_held_out_episodes():
     with pytest.raises(ValueError, match="held-out"):
         tune_family(FAMILIES["age"], trials=1, episodes=1, slots=10, train_seed=HELD_OUT_SEED)
+
+
+def test_a_family_s_own_costs_are_changes_made_on_the_user_s() -> None:
+    """The family "tests every flight" makes tests free on the user's cost model, not on the
+    default one (it used to replace the user's costs with CostModel(test_usd=0))."""
+    from policies.value.tuning import family_env_kwargs
+    from scas_env.core.costs import CostModel
+
+    fam = FAMILIES["filter+tests every flight"]
+    mine = CostModel(flight_value_usd=3000.0, test_usd=100.0)
+    got = family_env_kwargs(fam, {"cost_model": mine, "initial_health": "random"})
+    assert got == {"cost_model": mine.replace(test_usd=0.0), "initial_health": "random"}
+    assert family_env_kwargs(FAMILIES["age"], {"cost_model": mine}) == {"cost_model": mine}
+    assert family_env_kwargs(fam, None) == {"cost_model": CostModel(test_usd=0.0)}
+    # end to end: the first trial is the age rule's point (override off: no replacement in
+    # 20 slots), a free test before every flight: 20 flights at the user's 3000 USD
+    never = {"spring_age": 4000.0, "seal_age": 4000.0, "opportunity": 0.0}
+    result = tune_family(fam, trials=1, episodes=1, slots=20, age_params=never,
+                         env_kwargs={"cost_model": mine})  # fmt: skip
+    assert result.history[0]["override"] is False
+    assert result.best_reward == 20 * 3000.0

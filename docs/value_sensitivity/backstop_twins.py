@@ -7,8 +7,8 @@ from pathlib import Path
 import numpy as np
 
 from policies.benchmark import PolicySpec, run_benchmark
-from policies.benchmark_stats import paired_comparison
-from policies.tuning import HELD_OUT_SEED
+from policies.benchmark.stats import paired_comparison
+from policies.value.tuning import HELD_OUT_SEED
 
 if __name__ == "__main__":
     main = json.loads(Path("docs/value_ladder.json").read_text())

@@ -6,8 +6,8 @@ from pathlib import Path
 import numpy as np
 
 from policies.benchmark import PolicySpec, run_benchmark
-from policies.benchmark_stats import paired_comparison
-from policies.tuning import FAMILIES, HELD_OUT_SEED, Family, tune_families
+from policies.benchmark.stats import paired_comparison
+from policies.value.tuning import FAMILIES, HELD_OUT_SEED, Family, tune_families
 
 if __name__ == "__main__":
     fams = {}

@@ -34,7 +34,7 @@ from policies.agents.demonstrations import (
 from policies.base import make_policy, policy_obs_mode
 from scas_env.decision_epochs import DELEGATE, _check_ks
 
-__all__ = ["DelegateSpec", "delegation_demonstrations", "v0_obs_names"]
+__all__ = ["DelegateSpec", "delegation_demonstrations", "flight_obs_names"]
 
 
 @dataclass(frozen=True)
@@ -79,8 +79,9 @@ class DelegateSpec:
         return cls(data["policy"], dict(data.get("params", {})))
 
 
-def v0_obs_names(**scenario: Any) -> tuple[str, ...]:
-    """The flat v0 observation names of an env with these keywords (what a delegate reads)."""
+def flight_obs_names(**scenario: Any) -> tuple[str, ...]:
+    """The flat per-flight observation names of an env with these keywords (what a delegate
+    reads)."""
     from scas_env.env import ScasMaintenanceEnv
 
     env = ScasMaintenanceEnv(**scenario)

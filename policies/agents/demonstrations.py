@@ -161,7 +161,7 @@ def epoch_returns(rewards: np.ndarray, k: np.ndarray, gamma: float) -> np.ndarra
 @dataclass(frozen=True)
 class RuleEpisodes:
     """Recorded per-flight episodes of one rule: ``obs`` (episodes, slots, n_obs) float32
-    (the v0 observation the rule saw), ``actions`` (episodes, slots) int8, ``rewards``
+    (the per-flight observation the rule saw), ``actions`` (episodes, slots) int8, ``rewards``
     (episodes, slots) float64 (USD), ``obs_names``."""
 
     obs: np.ndarray
@@ -181,9 +181,9 @@ def record_rule(
     progress: bool = False,
 ) -> RuleEpisodes:
     """Run ``rule`` (a registered policy name, e.g. ``"rul_risk"``, with ``params``) on
-    ``episodes`` per-flight episodes of ``scenario`` (v0 keywords, e.g. ``V2_KWARGS``) seeded
-    by :func:`policies.benchmark.episode_seeds` ``(seed, episodes)``, ``batch`` at a time on
-    the native vector env; record what it saw, did and earned."""
+    ``episodes`` per-flight episodes of ``scenario`` (env keywords besides the defaults)
+    seeded by :func:`policies.benchmark.episode_seeds` ``(seed, episodes)``, ``batch`` at a
+    time on the native vector env; record what it saw, did and earned."""
     from tqdm import tqdm
 
     from scas_env.vector_env import ScasMaintenanceVectorEnv
@@ -233,7 +233,8 @@ def record_rule(
 class Demonstrations:
     """Decision-epoch samples, one per recorded slot (flattened over episodes).
 
-    ``obs`` (n, n_obs + 1) float32: the epoch observation (v0 observation, ``flights_left``);
+    ``obs`` (n, n_obs + 1) float32: the epoch observation (the per-flight observation and
+    ``flights_left``);
     ``actions`` (n,) int64: the epoch action ``maintenance * len(ks) + index(k)``;
     ``masks`` (n, 4 len(ks)) bool: the epoch env's action mask; ``returns`` (n,) float64:
     :func:`epoch_returns` in USD; ``on_path`` (n,) bool; ``episode`` (n,) int64."""

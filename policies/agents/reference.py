@@ -18,7 +18,7 @@ frozen clone mixed with ``mix`` of the uniform policy over the valid actions
 action infinitely expensive. Without a reference the class is
 ``MaskableActorCriticPolicy`` unchanged, so its checkpoints load and act as usual.
 
-sb3-contrib is needed (the ``rl`` extra); import this module only when training.
+sb3-contrib (a dependency of this package) is needed; import this module only when training.
 """
 
 from __future__ import annotations

@@ -2,35 +2,38 @@
 
 Every object returned here follows the policy protocol of :mod:`policies.base`:
 ``predict(observation, state=None, episode_start=None, deterministic=True)`` on **raw**
-``ScasMaintenance-v0`` observations (one ``(n,)`` or a batch ``(n_envs, n)``).
+``ScasMaintenance-v2`` observations (one ``(n,)`` or a batch ``(n_envs, n)``).
 
 - :func:`load_sb3_policy` turns an SB3 zip (saved by this project, by RL-Zoo or by plain
   ``model.save``) into an :class:`SB3Agent` (per-flight agent) or an :class:`EpochAgent`
   (an agent trained on :class:`scas_env.decision_epochs.DecisionEpochs`, replayed flight by
-  flight on v0: it decides, commits to ``k`` slots, then decides again). VecNormalize
-  statistics are found beside the zip (see :func:`find_vecnormalize`) and are **required**
-  when the agent was trained with them (its ``<name>.json`` or RL-Zoo ``config.yml`` says so).
+  flight: it decides, commits to ``k`` slots, then decides again). Its observation
+  statistics are found beside the zip (:func:`find_statistics`) and are **required** when
+  the agent was trained with them (its ``<name>.json`` or RL-Zoo ``config.yml`` says so).
 - :func:`load_factory` builds any object with SB3's ``predict`` from ``"module:factory"``.
 
 Both are registered (``"sb3"`` and ``"factory"``) so the benchmark can rebuild them by name in
-its workers: ``PolicySpec("sb3", params={"path": PATH}, module="policies.agents.sb3_agents")`` and
-``PolicySpec("factory", params={"target": "pkg.mod:make"}, module="policies.agents.sb3_agents")``.
+its workers: ``PolicySpec("sb3", params={"path": PATH}, module="policies.agents.sb3_agents")``
+and ``PolicySpec("factory", params={"target": "pkg.mod:make"},
+module="policies.agents.sb3_agents")``.
 
-Security: an SB3 zip holds pickled Python objects (SB3 unpickles parts of it, e.g. learning
-rate schedules) and a ``*_vecnormalize.pkl`` is a pickle; ``module:factory`` imports and runs
-code. **Loading any of them runs code chosen by whoever made the file: load only files you
-trust.** The shipped agents in ``policies/data`` are checked against the SHA-256 manifest
-of shipped files (``scas_env/actuator/data/shipped_files.json``) before loading (a
-corrupted or altered copy is refused).
+Safety. Loading an agent unpickles nothing by default: the network is rebuilt from the JSON
+of the zip and its ``policy.pth`` tensors (``torch.load(weights_only=True)``), the
+observation statistics come from a JSON file (``<name>_normalization.json``,
+:mod:`policies.agents.agent_files`), and the model's observation and action spaces are
+checked against the env before it acts. A file that only SB3's own loader can read (a zip
+whose network keywords are pickled objects, a ``*_vecnormalize.pkl``) is refused unless
+``trust_pickle=True``: unpickling runs code chosen by whoever made the file. The shipped
+agent in ``policies/data`` is also checked against the SHA-256 manifest of shipped files
+(``scas_env/actuator/data/shipped_files.json``), and an agent whose metadata records
+``weights_sha256`` against it (a corrupted or altered copy is refused). ``module:factory``
+imports and runs that module's code: trusted code only.
 """
 
 from __future__ import annotations
 
-import hashlib
 import importlib
-import json
 import pickle
-import zipfile
 from collections.abc import Sequence
 from pathlib import Path
 from types import ModuleType
@@ -38,6 +41,14 @@ from typing import Any
 
 import numpy as np
 
+from policies.agents.agent_files import (
+    NeedsPickle,
+    ObsNormalization,
+    read_json_file,
+    read_sb3_policy,
+    weights_sha256,
+    zip_data,
+)
 from policies.base import register_policy
 from scas_env.decision_epochs import (
     DELEGATE,
@@ -62,7 +73,7 @@ __all__ = [
     "SB3Agent",
     "algo_class",
     "check_manifest",
-    "find_vecnormalize",
+    "find_statistics",
     "load_factory",
     "load_sb3_policy",
     "require_contrib",
@@ -70,52 +81,22 @@ __all__ = [
 
 
 def require_contrib(purpose: str) -> ModuleType:
-    """``sb3_contrib``, or an ``ImportError`` naming the ``rl`` extra and ``purpose``."""
+    """``sb3_contrib``, or an ``ImportError`` naming the package and ``purpose``."""
     try:
         return importlib.import_module("sb3_contrib")
     except ImportError as exc:
         raise ImportError(
-            f"to {purpose} you need sb3-contrib, which is not installed: "
-            "pip install 'scas-maintenance-gym[rl]' (or 'sb3-contrib>=2.3')"
+            f"to {purpose} you need sb3-contrib (a dependency of this package), which is "
+            "not installed: pip install 'sb3-contrib>=2.3'"
         ) from exc
 
 
 # ---------------------------------------------------------------------------- file checks
-def sha256(path: Path) -> str:
-    """Hex SHA-256 of a file's bytes."""
-    digest = hashlib.sha256()
-    with path.open("rb") as fh:
-        for block in iter(lambda: fh.read(1 << 20), b""):
-            digest.update(block)
-    return digest.hexdigest()
-
-
 def check_manifest(path: Path) -> None:
     """Refuse a shipped file (``policies/data``) whose SHA-256 differs from the package's
     manifest of shipped files (:func:`scas_env.utils.shipped_files.verify_shipped_file`);
     files elsewhere are not checked: they are the user's."""
     verify_shipped_file(path)
-
-
-def _zip_data(path: Path) -> dict[str, Any]:
-    """The JSON ``data`` member of an SB3 zip, checking every member's CRC first."""
-    try:
-        with zipfile.ZipFile(path) as zf:
-            bad = zf.testzip()
-            if bad is not None:
-                raise ValueError(f"{path}: member {bad!r} is corrupted (CRC mismatch)")
-            names = zf.namelist()
-            for needed in ("data", "policy.pth"):
-                if needed not in names:
-                    raise ValueError(
-                        f"{path}: not a complete SB3 model zip (truncated or corrupted?): no "
-                        f"{needed!r} member; found {names[:4]}{'...' if len(names) > 4 else ''}"
-                    )
-            return json.loads(zf.read("data"))
-    except zipfile.BadZipFile as exc:
-        raise ValueError(
-            f"{path}: not a readable zip file (truncated or corrupted): {exc}"
-        ) from exc
 
 
 # ---------------------------------------------------------------------------- algorithms
@@ -162,19 +143,22 @@ def algo_class(algo: str | None, data: dict[str, Any]) -> Any:
 
 
 def _masked(model: Any) -> bool:
-    return type(model).__name__ == "MaskablePPO"
+    """A MaskablePPO model (SB3's, or its network read by :func:`read_sb3_policy`)."""
+    return type(model).__name__ == "MaskablePPO" or bool(getattr(model, "masked", False))
 
 
 # ---------------------------------------------------------------------------- agents
 class SB3Agent:
-    """A per-flight SB3 model acting on raw v0 observations (policy protocol):
+    """A per-flight SB3 model acting on raw observations (policy protocol):
     ``predict`` normalises with the ``VecNormalize`` statistics (if any; not updated) and,
     for MaskablePPO, passes the action mask of the raw observation.
 
     Parameters
     ----------
     model : the SB3 model.
-    normalizer : ``VecNormalize`` whose ``obs_rms`` is used, or ``None``.
+    normalizer : observation statistics with ``normalize_obs`` (an
+        :class:`~policies.agents.agent_files.ObsNormalization` or a ``VecNormalize``), or
+        ``None``.
     obs_names : names of the observation entries (the env's ``obs_names``).
     masked : pass action masks to ``model.predict``.
     """
@@ -227,16 +211,17 @@ class SB3Agent:
 
 
 class EpochAgent(SB3Agent):
-    """A decision-epoch agent replayed on v0, flight by flight (policy protocol).
+    """A decision-epoch agent replayed flight by flight on the per-flight env (policy protocol).
 
-    At a decision slot it builds the decision-epoch observation (the v0 observation plus
+    At a decision slot it builds the decision-epoch observation (the per-flight observation plus
     ``flights_left = episode_slots - slots since episode_start``), asks the model for
     ``(maintenance action, k)`` (masked as :class:`~scas_env.decision_epochs.DecisionEpochs`
     does), plays the maintenance action now and ``fly`` for the next ``k - 1`` slots, then
     decides again. The per-env counters travel in the returned ``state`` (pass it back, as
     the benchmark does; ``episode_start`` resets them), so the same object serves batches.
-    A v0 episode played this way equals the decision-epoch episode on the same seed (tested).
-    With ``delegate`` (a stateless policy on the v0 observation: a residual agent, see
+    A per-flight episode played this way equals the decision-epoch episode on the same seed
+    (tested).
+    With ``delegate`` (a stateless policy on the per-flight observation: a residual agent, see
     :mod:`policies.agents.delegation`) the model has a fifth maintenance choice, "the
     delegate for ``k`` slots": the delegate then acts at each of those slots.
     """
@@ -277,7 +262,7 @@ class EpochAgent(SB3Agent):
         episode_start: Any = None,
         deterministic: bool = True,
     ) -> tuple[int | np.ndarray, Any]:
-        """v0 action(s); ``state`` = ``(slot, remaining, delegating)`` arrays per env."""
+        """Per-flight action(s); ``state`` = ``(slot, remaining, delegating)`` arrays per env."""
         obs = self._check(observation)
         batch = np.atleast_2d(obs)
         n = len(batch)
@@ -335,16 +320,29 @@ class EpochAgent(SB3Agent):
 
 
 # ---------------------------------------------------------------------------- loading
-def find_vecnormalize(path: Path) -> Path | None:
-    """The VecNormalize statistics of the zip ``path``, first found of: ``<stem>_vecnormalize
-    .pkl`` (this project, SB3's CheckpointCallback naming aside), ``vecnormalize.pkl`` beside
-    it, ``<stem>/vecnormalize.pkl`` (RL-Zoo: ``<log>/<env>.zip`` with ``<log>/<env>/``)."""
+#: where the observation statistics of ``<stem>.zip`` are looked for, in this order: this
+#: project's JSON (no unpickling), then VecNormalize pickles (need ``trust_pickle``)
+STATISTICS_NAMES = (
+    "{stem}_normalization.json",
+    "normalization.json",
+    "{stem}/normalization.json",
+    "{stem}_vecnormalize.pkl",
+    "vecnormalize.pkl",
+    "{stem}/vecnormalize.pkl",
+)
+_TRUST = (
+    "reading it would unpickle Python objects from the file, which runs code; pass "
+    "trust_pickle=True (scas-benchmark --trust-pickle) if you trust the file"
+)
+
+
+def find_statistics(path: Path) -> Path | None:
+    """The observation statistics of the zip ``path``: the first of :data:`STATISTICS_NAMES`
+    beside it (``<stem>_normalization.json`` is this project's; ``vecnormalize.pkl`` in
+    ``<stem>/`` is RL-Zoo's layout, ``<log>/<env>.zip`` with ``<log>/<env>/``)."""
     stem = path.name.removesuffix(".zip")
-    for cand in (
-        path.with_name(f"{stem}_vecnormalize.pkl"),
-        path.with_name("vecnormalize.pkl"),
-        path.parent / stem / "vecnormalize.pkl",
-    ):
+    for name in STATISTICS_NAMES:
+        cand = path.parent / name.format(stem=stem)
         if cand.is_file():
             return cand
     return None
@@ -372,7 +370,7 @@ def _read_zoo_config(path: Path) -> Any:
     """RL-Zoo's ``config.yml`` (``yaml.dump`` of an OrderedDict, tagged
     ``!!python/object/apply:collections.OrderedDict``) read safely: the tag becomes its list of
     ``[key, value]`` pairs, and no other Python tag is constructed."""
-    import yaml  # PyYAML: the rl extra
+    import yaml
 
     class ZooLoader(yaml.SafeLoader):
         pass
@@ -386,32 +384,66 @@ def _read_zoo_config(path: Path) -> Any:
     )
     try:
         return yaml.load(path.read_text(), Loader=ZooLoader)
-    except yaml.YAMLError as exc:
+    except (yaml.YAMLError, UnicodeDecodeError) as exc:
         raise ValueError(f"{path}: not a readable RL-Zoo config.yml: {exc}") from exc
 
 
-def _load_normalizer(path: Path, obs_dim: int) -> Any:
-    from stable_baselines3.common.vec_env import VecNormalize
-
+def _load_normalizer(path: Path, obs_dim: int, trust_pickle: bool) -> ObsNormalization:
+    """The observation statistics in ``path``: a normalisation JSON, or (``trust_pickle``)
+    a VecNormalize pickle; their size must be the model's observation size."""
     check_manifest(path)
-    try:
-        with path.open("rb") as fh:
-            normalizer = pickle.load(fh)  # SB3's own format (VecNormalize.load does the same)
-    except Exception as exc:
-        raise ValueError(f"{path}: cannot read VecNormalize statistics: {exc!r}") from exc
-    if not isinstance(normalizer, VecNormalize):
-        raise ValueError(f"{path}: holds a {type(normalizer).__name__}, not VecNormalize")
-    mean = np.asarray(normalizer.obs_rms.mean)
-    var = np.asarray(normalizer.obs_rms.var)
-    if mean.shape != (obs_dim,) or not (np.isfinite(mean).all() and np.isfinite(var).all()):
+    if path.suffix.lower() == ".json":
+        normalizer = ObsNormalization.load(path)
+    else:
+        if not trust_pickle:
+            raise ValueError(f"{path} is a VecNormalize pickle: {_TRUST}")
+        from stable_baselines3.common.vec_env import VecNormalize
+
+        try:
+            with path.open("rb") as fh:
+                venv = pickle.load(fh)  # trusted by the caller (trust_pickle=True)
+        except Exception as exc:
+            raise ValueError(f"{path}: cannot read VecNormalize statistics: {exc!r}") from exc
+        if not isinstance(venv, VecNormalize):
+            raise ValueError(f"{path}: holds a {type(venv).__name__}, not VecNormalize")
+        try:
+            normalizer = ObsNormalization.from_vecnormalize(venv)
+        except ValueError as exc:
+            raise ValueError(f"{path}: {exc}") from None
+    if normalizer.size != obs_dim:
         raise ValueError(
-            f"{path}: observation statistics of shape {mean.shape} (finite: "
-            f"{bool(np.isfinite(mean).all() and np.isfinite(var).all())}) do not fit the "
+            f"{path}: observation statistics of {normalizer.size} entries do not fit the "
             f"model's observation of size {obs_dim}"
         )
-    normalizer.training = False
-    normalizer.norm_reward = False
     return normalizer
+
+
+def _metadata(path: Path) -> dict[str, Any]:
+    """The agent's metadata ``<stem>.json`` beside the zip (``{}`` if there is none)."""
+    meta_path = path.with_name(f"{path.name.removesuffix('.zip')}.json")
+    if not meta_path.is_file():
+        return {}
+    check_manifest(meta_path)
+    meta = read_json_file(meta_path, "agent metadata file")
+    if not isinstance(meta, dict):
+        raise ValueError(f"{meta_path}: not an agent metadata file (expected a JSON object)")
+    return meta
+
+
+def _check_model(path: Path, model: Any, obs_size: int, n_actions: int, env: str) -> None:
+    """A model loaded by SB3 (trusted path): the same space and finiteness checks as
+    :func:`policies.agents.agent_files.read_sb3_policy`."""
+    shape = tuple(model.observation_space.shape or ())
+    n = getattr(model.action_space, "n", None)
+    if shape != (obs_size,) or n != n_actions:
+        raise ValueError(
+            f"{path}: the agent was made for observations of shape {shape} and "
+            f"{model.action_space}; {env} has observations ({obs_size},) and "
+            f"Discrete({n_actions})"
+        )
+    for p in model.policy.parameters():
+        if not bool(p.isfinite().all()):
+            raise ValueError(f"{path}: the policy has non-finite parameters (corrupted)")
 
 
 def load_sb3_policy(
@@ -424,88 +456,108 @@ def load_sb3_policy(
     episode_slots: int | None = None,
     require_vecnormalize: bool | None = None,
     delegate: Any = None,
+    trust_pickle: bool = False,
 ) -> SB3Agent:
-    """An SB3 zip as a policy on raw v0 observations; **runs code from the files: load only
-    files you trust** (module docstring).
+    """An SB3 zip as a policy on raw observations of ``ScasMaintenance-v2``.
+
+    By default nothing is unpickled (module docstring): the network is rebuilt from the
+    zip's JSON and its ``policy.pth`` tensors, the observation statistics read from a
+    normalisation JSON. The model's spaces are checked against the env's before use: a
+    zip made for another observation or action space is refused, naming the file.
 
     Parameters
     ----------
     path : the model zip (this project's, RL-Zoo's, or any ``model.save``).
     obs_names : the env's observation names; checked against the agent's metadata when known.
-    vecnormalize : its VecNormalize ``.pkl``; default :func:`find_vecnormalize`.
-    algo : SB3 algorithm name (:data:`ALGO_NAMES`); default from metadata or the zip.
+    vecnormalize : its observation statistics: a normalisation ``.json``
+        (:class:`policies.agents.agent_files.ObsNormalization`) or a VecNormalize ``.pkl``
+        (needs ``trust_pickle``); default :func:`find_statistics`.
+    algo : SB3 algorithm name (:data:`ALGO_NAMES`) for SB3's own loader (``trust_pickle``);
+        default from metadata or the zip.
     ks, episode_slots : make it an :class:`EpochAgent` (decision epochs: slots per decision,
         episode length); default from the metadata ``<stem>.json`` (``"formulation":
         "decision_epochs"``).
-    require_vecnormalize : True: a missing ``.pkl`` is an error; False: act without one;
+    require_vecnormalize : True: missing statistics are an error; False: act without them;
         None (default): required if the metadata or RL-Zoo's ``config.yml`` says the agent was
         trained with VecNormalize.
     delegate : a residual decision-epoch agent's rule (a
         :class:`policies.agents.delegation.DelegateSpec` or its JSON mapping); default from
         the metadata (``"delegate"``).
+    trust_pickle : allow reading a file that only SB3's unpickling loader reads (a zip whose
+        network keywords are pickled objects, a VecNormalize ``.pkl``): **that runs code
+        from the file**; only for files you trust.
     """
     path = Path(path)
     if not path.is_file():
         raise ValueError(f"path = {str(path)!r} does not exist (expected an SB3 model .zip)")
+    if not isinstance(trust_pickle, bool):
+        raise ValueError(f"trust_pickle = {trust_pickle!r} must be True or False")
+    if algo is not None and algo not in ALGO_NAMES:
+        raise ValueError(f"algo = {algo!r} must be one of {sorted(ALGO_NAMES)}")
     check_manifest(path)
-    data = _zip_data(path)
-    meta_path = path.with_name(f"{path.name.removesuffix('.zip')}.json")
-    meta: dict[str, Any] = json.loads(meta_path.read_text()) if meta_path.is_file() else {}
-    if meta:
-        check_manifest(meta_path)
-    algo = algo if algo is not None else meta.get("algo")
-    cls = algo_class(algo, data)
+    meta = _metadata(path)
     if (
         obs_names is not None
         and "obs_names" in meta
         and tuple(obs_names) != tuple(meta["obs_names"])
     ):
-        trained_on = meta.get("scenario") or "v0's default scenario"
         raise ValueError(
             f"obs_names = {tuple(obs_names)} differ from the agent's {tuple(meta['obs_names'])}"
-            f" (it was trained on {trained_on})"
+            f" ({path} was trained on another observation)"
         )
     names = tuple(obs_names if obs_names is not None else meta.get("obs_names", ()))
-    try:
-        model = cls.load(path, device="cpu")
-    except Exception as exc:
-        raise ValueError(f"{path}: SB3 cannot load this {cls.__name__} zip: {exc!r}") from exc
-    for p in model.policy.parameters():
-        if not bool(p.isfinite().all()):
-            raise ValueError(f"{path}: the policy has non-finite parameters (corrupted)")
-    obs_dim = int(np.prod(model.observation_space.shape))
-    norm_path = Path(vecnormalize) if vecnormalize is not None else find_vecnormalize(path)
-    needed = require_vecnormalize
-    if needed is None:
-        needed = _trained_with_normalize(path, meta)
-    normalizer = None
-    if norm_path is not None and norm_path.is_file():
-        normalizer = _load_normalizer(norm_path, obs_dim)
-    elif vecnormalize is not None or needed:
-        where = str(vecnormalize) if vecnormalize is not None else f"beside {path}"
-        raise ValueError(
-            f"{path} was trained with VecNormalize but its statistics are missing ({where}: "
-            f"expected {path.name.removesuffix('.zip')}_vecnormalize.pkl); without them it would "
-            "act on unscaled observations. Pass vecnormalize=PATH, or require_vecnormalize=False "
-            "if the agent was trained without it"
-        )
+    if not names:
+        raise ValueError(f"{path}: pass obs_names (the env's observation names)")
     ks = ks if ks is not None else meta.get("ks")
+    spec = None
     if ks is not None:
-        slots = episode_slots if episode_slots is not None else meta.get("episode_slots")
-        if slots is None:
-            raise ValueError(f"{path}: a decision-epoch agent needs episode_slots")
-        if not names:
-            raise ValueError(f"{path}: pass obs_names (the v0 env's) for a decision-epoch agent")
-        if obs_dim != len(names) + 1:
-            raise ValueError(
-                f"{path}: the model observes {obs_dim} entries, the env {len(names)} "
-                "(+ flights_left): it was trained on another observation (scenario)"
-            )
         from policies.agents.delegation import DelegateSpec
 
         spec = delegate if delegate is not None else meta.get("delegate")
         if spec is not None and not isinstance(spec, DelegateSpec):
             spec = DelegateSpec.from_json(spec)
+        ks = tuple(ks)
+        obs_size = len(names) + 1
+        n_actions = (N_MAINTENANCE + (spec is not None)) * len(ks)
+        env = f"decision epochs (ks {ks}{', with a delegate' if spec else ''}) over this env"
+    else:
+        obs_size, n_actions, env = len(names), N_MAINTENANCE, "this env"
+    recorded = meta.get("weights_sha256")
+    if recorded is not None and weights_sha256(path) != recorded:
+        raise ValueError(
+            f"{path}: its policy.pth differs from the one its metadata records "
+            "(weights_sha256): a corrupted or altered copy"
+        )
+    try:
+        model, _ = read_sb3_policy(path, obs_size, n_actions, env=env)
+    except NeedsPickle as why:
+        if not trust_pickle:
+            raise ValueError(f"{path}: {why}; {_TRUST}") from None
+        cls = algo_class(algo if algo is not None else meta.get("algo"), zip_data(path))
+        try:
+            model = cls.load(path, device="cpu")  # unpickles: trusted by the caller
+        except Exception as exc:
+            raise ValueError(f"{path}: SB3 cannot load this {cls.__name__} zip: {exc!r}") from exc
+        _check_model(path, model, obs_size, n_actions, env)
+    norm_path = Path(vecnormalize) if vecnormalize is not None else find_statistics(path)
+    needed = require_vecnormalize
+    if needed is None:
+        needed = _trained_with_normalize(path, meta)
+    normalizer = None
+    if norm_path is not None and norm_path.is_file():
+        normalizer = _load_normalizer(norm_path, obs_size, trust_pickle)
+    elif vecnormalize is not None or needed:
+        where = str(vecnormalize) if vecnormalize is not None else f"beside {path}"
+        raise ValueError(
+            f"{path} was trained with VecNormalize but its statistics are missing ({where}: "
+            f"expected {path.name.removesuffix('.zip')}_normalization.json); without them it "
+            "would act on unscaled observations. Pass vecnormalize=PATH, or "
+            "require_vecnormalize=False if the agent was trained without it"
+        )
+    if ks is not None:
+        slots = episode_slots if episode_slots is not None else meta.get("episode_slots")
+        if slots is None:
+            raise ValueError(f"{path}: a decision-epoch agent needs episode_slots")
         return EpochAgent(
             model,
             normalizer,
@@ -515,10 +567,6 @@ def load_sb3_policy(
             masked=_masked(model) or bool(meta.get("action_masks", False)),
             delegate=None if spec is None else spec.build(names),
         )
-    if not names:
-        raise ValueError(f"{path}: pass obs_names (the env's observation names)")
-    if obs_dim != len(names):
-        raise ValueError(f"{path}: the model observes {obs_dim} entries, the env {len(names)}")
     return SB3Agent(model, normalizer, names, masked=_masked(model))
 
 
@@ -530,12 +578,21 @@ def load_factory(obs_names: Sequence[str], target: str, **params: Any) -> Any:
     module_name, attr = target.split(":")
     try:
         module = importlib.import_module(module_name)
-    except ImportError as exc:
-        raise ValueError(f"target = {target!r}: cannot import {module_name!r}: {exc}") from exc
+    except Exception as exc:  # ImportError, or any error the module raises on import
+        raise ValueError(
+            f"target = {target!r}: cannot import {module_name!r}: {type(exc).__name__}: {exc}"
+        ) from exc
     factory = getattr(module, attr, None)
     if not callable(factory):
         raise ValueError(f"target = {target!r}: {module_name} has no callable {attr!r}")
-    policy = factory(obs_names, **params)
+    try:
+        policy = factory(obs_names, **params)
+    except Exception as exc:  # the user's code: any failure is that factory's
+        why = " ".join(str(exc).split()) or type(exc).__name__
+        raise ValueError(
+            f"target = {target!r}: {attr}(obs_names{', **params' if params else ''}) failed: "
+            f"{type(exc).__name__}: {why}"
+        ) from exc
     if not callable(getattr(policy, "predict", None)):
         raise ValueError(f"target = {target!r} returned {type(policy).__name__} without predict")
     return policy

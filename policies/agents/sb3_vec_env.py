@@ -1,6 +1,6 @@
 """SB3 on the native vector env: a ``stable_baselines3`` ``VecEnv`` over a Gymnasium ``VectorEnv``.
 
-``NativeVecEnv(gym.make_vec("scas_env/ScasMaintenance-v0", num_envs=N,
+``NativeVecEnv(gym.make_vec("scas_env/ScasMaintenance-v2", num_envs=N,
 vectorization_mode="vector_entry_point"))`` trains SB3 on the natively batched env
 (:class:`scas_env.vector_env.ScasMaintenanceVectorEnv`) instead of N single envs in a
 ``DummyVecEnv``. It gives the same observations, rewards and dones as ``DummyVecEnv`` on the
@@ -26,7 +26,7 @@ A vector env that autoresets in the same step (``AutoresetMode.SAME_STEP``, e.g.
 observations; the last ones come from its ``info["final_obs"]``, env by env.
 
 The per-flight native env autoresets on the step *after* a done (Gymnasium 1.x next-step);
-SB3 wants the new observation at once. ``ScasMaintenance-v0`` has no termination and every actuator
+SB3 wants the new observation at once. ``ScasMaintenance-v2`` has no termination and every actuator
 truncates at the same slot, so all envs end together and the adapter resets them all at once
 (``reset()`` without seeds: each actuator continues its own generator, as ``DummyVecEnv``'s
 resets do). Done envs that are not all of them raise ``RuntimeError`` (a future env with
@@ -132,7 +132,7 @@ class NativeVecEnv(VecEnv):
             if not dones.all():
                 raise RuntimeError(
                     f"envs {np.flatnonzero(dones).tolist()} ended alone; the adapter resets "
-                    "all envs together (ScasMaintenance-v0: all truncate at the same slot)"
+                    "all envs together (ScasMaintenance-v2: all truncate at the same slot)"
                 )
             for e in range(self.num_envs):
                 infos[e]["terminal_observation"] = obs[e]

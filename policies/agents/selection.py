@@ -1,21 +1,21 @@
 """Choose, ship and evaluate a decision-epoch agent (after :mod:`policies.agents.training`).
 
-0. :func:`resolve_scenario`: the scenario (env keywords, e.g. ``scas_env.V2_KWARGS`` for
-   v2) that every run was trained on: each run's ``run.json`` says it (written when the run
-   starts; a run of an older version had none until it finished, and the caller passes it,
-   ``scenario=``); runs whose ``run.json``
-   disagree with each other or with ``scenario`` are refused. Default: the runs' own, else
-   v0's default scenario ``{}``.
+0. :func:`resolve_scenario`: the scenario (env keywords besides the defaults, e.g.
+   ``{"initial_health": "random"}``) that every run was trained on: each run's ``run.json``
+   says it (written when the run starts; a run still training without one is taken to be on
+   the caller's ``scenario=``); runs whose ``run.json`` disagree with each other or with
+   ``scenario`` are refused. Default: the runs' own, else the default scenario ``{}``.
 1. :func:`validate_checkpoints`: every checkpoint of every run is replayed on per-flight
    episodes of that scenario (:class:`policies.agents.sb3_agents.EpochAgent` through the
    benchmark's one episode runner, :func:`policies.benchmark.run_benchmark`) on the
    **validation** seeds ``SeedSequence(VALIDATION_SEED)``, beside a reference rule on the
-   same episodes (default the age rule ``preventive`` with its shipped v0 parameters; for
-   another scenario pass the rule tuned on it, :func:`tuned_rules`). Results are appended to
+   same episodes (default the age rule ``preventive`` with its shipped parameters, or the
+   rule tuned on the scenario, :func:`tuned_rules`). Results are appended to
    a CSV with the scenario (rerun: only new checkpoints run; a CSV of another scenario is
    refused).
 2. :func:`ship_best`: the checkpoint with the highest mean validation reward is copied into
-   ``policies/data`` with its VecNormalize statistics, a metadata JSON (what
+   ``policies/data`` with its observation statistics (a normalisation JSON), a metadata JSON
+   (what
    :func:`policies.agents.sb3_agents.load_sb3_policy` reads), the training curves (CSV + PNG) and
    the manifest entry.
 3. :func:`held_out_comparison`: the shipped agent against the age rule (and any other
@@ -67,16 +67,23 @@ __all__ = [
 
 
 def checkpoints(run_dir: Path) -> list[tuple[int, Path, Path]]:
-    """``(decisions, model zip, VecNormalize pkl)`` of a run folder, by decisions."""
+    """``(decisions, model zip, statistics)`` of a run folder, by decisions: the statistics
+    are the checkpoint's normalisation JSON (``ckpt_normalization_<n>_steps.json``), else its
+    VecNormalize pickle (which loads only with ``trust_pickle``)."""
     out = []
     for zip_path in Path(run_dir).glob("ckpt_*_steps.zip"):
         m = _CKPT.search(zip_path.name)
         if m is None:
             continue
         steps = int(m.group(1))
-        pkl = zip_path.with_name(f"ckpt_vecnormalize_{steps}_steps.pkl")
-        if pkl.is_file():
-            out.append((steps, zip_path, pkl))
+        for name in (
+            f"ckpt_normalization_{steps}_steps.json",
+            f"ckpt_vecnormalize_{steps}_steps.pkl",
+        ):
+            stats = zip_path.with_name(name)
+            if stats.is_file():
+                out.append((steps, zip_path, stats))
+                break
     return sorted(out)
 
 
@@ -105,8 +112,8 @@ def resolve_scenario(
 
     A run's ``run.json`` holds it (``"scenario"``); a run without one (an older version's,
     still training) is taken to be on ``scenario`` (the caller's; default: the other
-    runs' own, else v0's ``{}``). Raises ``ValueError`` naming the runs if finished runs
-    disagree with each other (mixed scenarios) or with ``scenario``.
+    runs' own, else the default scenario's ``{}``). Raises ``ValueError`` naming the runs if
+    finished runs disagree with each other (mixed scenarios) or with ``scenario``.
     """
     declared: dict[str, str] = {}
     for run_dir in map(Path, run_dirs):
@@ -163,22 +170,31 @@ def tuned_rules(
 
 
 # ---------------------------------------------------------------------------- validation
-def _spec(label: str, zip_path: Path, pkl: Path, run: dict[str, Any], slots: int) -> PolicySpec:
-    params = {
+def _spec(
+    label: str,
+    zip_path: Path,
+    stats: Path,
+    run: dict[str, Any],
+    slots: int,
+    trust_pickle: bool = False,
+) -> PolicySpec:
+    params: dict[str, Any] = {
         "path": str(zip_path),
-        "vecnormalize": str(pkl),
+        "vecnormalize": str(stats),
         "algo": run["algo"],
         "ks": tuple(run["ks"]),
         "episode_slots": slots,
     }
     if run.get("delegate"):
         params["delegate"] = run["delegate"]
+    if trust_pickle:
+        params["trust_pickle"] = True
     return PolicySpec("sb3", params=params, label=label, module="policies.agents.sb3_agents")
 
 
 def _read_validation(out_csv: Path, scenario: Mapping[str, Any]) -> list[dict[str, Any]]:
     """Rows of an existing validation CSV; refused if they are of another scenario (rows
-    written before the ``scenario`` column existed are v0's, ``{}``)."""
+    without a ``scenario`` column are of the default scenario, ``{}``)."""
     if not out_csv.is_file():
         return []
     with out_csv.open() as fh:
@@ -207,6 +223,7 @@ def validate_checkpoints(
     progress: bool = True,
     decisions: Sequence[int] | None = None,
     statistics: str | Path | None = None,
+    trust_pickle: bool = False,
 ) -> list[dict[str, Any]]:
     """Validation reward of every checkpoint not yet in ``out_csv``; returns all rows
     (``run, decisions, reward, reward_low, reward_high, diff_vs_rule, ..., scenario,
@@ -217,10 +234,12 @@ def validate_checkpoints(
     ``SeedSequence(VALIDATION_SEED)``; ``diff_vs_rule`` is paired against ``reference``
     (default the age rule ``preventive`` with its shipped parameters) on the same episodes.
     ``decisions``: only the checkpoints at these decision counts (default all).
-    ``statistics``: a ``VecNormalize`` pickle every checkpoint is run with instead of its
-    own (a diagnostic: the same weights under other observation statistics); its path is
-    the rows' ``statistics`` column (empty: the checkpoint's own) and part of what is
-    already done.
+    ``statistics``: observation statistics (a normalisation JSON, or a ``VecNormalize``
+    pickle with ``trust_pickle``) every checkpoint is run with instead of its own (a
+    diagnostic: the same weights under other observation statistics); its path is the rows'
+    ``statistics`` column (empty: the checkpoint's own) and part of what is already done.
+    ``trust_pickle``: read checkpoints whose statistics exist only as pickles (runs of an
+    older version): that runs code from those files.
     """
     if statistics is not None and not Path(statistics).is_file():
         raise ValueError(f"statistics = {str(statistics)!r} is not a file")
@@ -238,7 +257,8 @@ def validate_checkpoints(
             wanted = decisions is None or steps in decisions
             if wanted and (run_dir.name, steps, tag) not in seen:
                 label = f"{run_dir.name}@{steps}"
-                specs.append(_spec(label, zip_path, Path(statistics or pkl), run, slots))
+                stats = Path(statistics or pkl)
+                specs.append(_spec(label, zip_path, stats, run, slots, trust_pickle))
     if len(specs) == 1:
         return done
     result = run_benchmark(
@@ -298,7 +318,7 @@ def update_manifest(names: Sequence[str]) -> None:
 def training_scale(run_dir: str | Path, slots: int) -> dict[str, Any]:
     """How far a run trained: ``decisions`` (``run.json``, else its last checkpoint),
     finished training ``episodes`` (rows of its Monitor CSVs, ``monitor/*.csv``) and
-    ``flights = episodes * slots`` (each episode flies ``slots`` v0 slots)."""
+    ``flights = episodes * slots`` (each episode flies ``slots`` per-flight slots)."""
     run_dir = Path(run_dir)
     run = _run_json(run_dir)
     ckpts = checkpoints(run_dir)
@@ -322,7 +342,7 @@ def training_scale(run_dir: str | Path, slots: int) -> dict[str, Any]:
 def _refuse_existing(out_dir: str | Path, name: str, overwrite: bool) -> None:
     """Raise ``ValueError`` naming the files of agent ``name`` already in ``out_dir``
     (unless ``overwrite``)."""
-    suffixes = (".zip", "_vecnormalize.pkl", ".json", "_curves.csv", "_curves.png")
+    suffixes = (".zip", "_normalization.json", ".json", "_curves.csv", "_curves.png")
     existing = [str(Path(out_dir) / f"{name}{x}") for x in suffixes]
     existing = [f for f in existing if Path(f).exists()]
     if existing and not overwrite:
@@ -338,6 +358,7 @@ def ship_best(
     out_dir: str | Path = DATA_DIR,
     reference: str = "preventive",
     overwrite: bool = False,
+    trust_pickle: bool = False,
 ) -> Path:
     """Copy the best checkpoint (highest mean validation reward) to ``out_dir/<name>.*`` with
     metadata and the training curves (``<name>_curves.csv/.png``); returns the zip path.
@@ -346,7 +367,9 @@ def ship_best(
     The validation rows must be of one scenario (the CSV of :func:`validate_checkpoints`);
     the metadata records it with the observation names of its env, which
     :func:`policies.agents.sb3_agents.load_sb3_policy` checks against the env it is asked to act
-    on, and the training scale of every validated run (:func:`training_scale`)."""
+    on, and the training scale of every validated run (:func:`training_scale`). The
+    checkpoint's statistics are shipped as a normalisation JSON (a run of an older version,
+    whose statistics are pickles only, needs ``trust_pickle`` to convert them)."""
     _refuse_existing(out_dir, name, overwrite)
     with Path(validation_csv).open() as fh:
         rows = list(csv.DictReader(fh))
@@ -370,7 +393,16 @@ def ship_best(
     run = _run_json(run_dir)
     settings = run or _TRAINING_DEFAULTS
     steps = int(best["decisions"])
+    stats = {d: p for d, _, p in checkpoints(run_dir)}.get(steps)
+    if stats is None:
+        raise ValueError(f"{run_dir}: checkpoint {steps} is missing or has no statistics")
+    if stats.suffix != ".json" and not trust_pickle:
+        raise ValueError(
+            f"{stats} is a VecNormalize pickle (a run of an older version): pass "
+            "trust_pickle=True to convert it (that unpickles it, which runs code)"
+        )
     out_dir = Path(out_dir)
+    out_dir.mkdir(parents=True, exist_ok=True)
     zip_dst = out_dir / f"{name}.zip"
     plain = settings["algo"] == "maskable_ppo"
     delegate = settings.get("delegate")
@@ -384,11 +416,16 @@ def ship_best(
         )
     else:
         shutil.copyfile(run_dir / f"ckpt_{steps}_steps.zip", zip_dst)
-    shutil.copyfile(
-        run_dir / f"ckpt_vecnormalize_{steps}_steps.pkl", out_dir / f"{name}_vecnormalize.pkl"
-    )
+    stats_dst = out_dir / f"{name}_normalization.json"
+    if stats.suffix == ".json":
+        shutil.copyfile(stats, stats_dst)
+    else:
+        from policies.agents.agent_files import convert_vecnormalize
+
+        convert_vecnormalize(stats, stats_dst)  # trusted: checked above
     import gymnasium as gym
 
+    from policies.agents.agent_files import weights_sha256
     from scas_env import ENV_ID
 
     env = gym.make(ENV_ID, disable_env_checker=True, episode_slots=slots, **env_kwargs)
@@ -402,27 +439,27 @@ def ship_best(
         "episode_slots": slots,
         "normalize": True,
         "obs_names": list(env.unwrapped.obs_names),
+        "weights_sha256": weights_sha256(zip_dst),
         **({"delegate": delegate} if delegate else {}),
         "selected": {"run": best["run"], "decisions": steps, "validation": best},
         "validation_seed": VALIDATION_SEED,
         "training_run": run,
         "versions": _versions(),
     }
-    if scenario:  # v0's metadata keeps its layout
-        meta["scenario"] = scenario
-        meta["validation_reference"] = reference
-        scale = {r: training_scale(runs_root / r, slots) for r in runs}
-        meta["training_scale"] = {
-            "runs": scale,
-            "decisions": sum(s["decisions"] for s in scale.values()),
-            "episodes": sum(s["episodes"] for s in scale.values()),
-            "flights": sum(s["flights"] for s in scale.values()),
-        }
+    meta["scenario"] = scenario
+    meta["validation_reference"] = reference
+    scale = {r: training_scale(runs_root / r, slots) for r in runs}
+    meta["training_scale"] = {
+        "runs": scale,
+        "decisions": sum(s["decisions"] for s in scale.values()),
+        "episodes": sum(s["episodes"] for s in scale.values()),
+        "flights": sum(s["flights"] for s in scale.values()),
+    }
     env.close()
     write_text_atomic(out_dir / f"{name}.json", json.dumps(meta, indent=1) + "\n")
     _curves(rows, runs_root, out_dir / f"{name}_curves", runs)
     if out_dir.resolve() == DATA_DIR:
-        update_manifest([f"{name}.zip", f"{name}_vecnormalize.pkl", f"{name}.json"])
+        update_manifest([f"{name}.zip", f"{name}_normalization.json", f"{name}.json"])
     return zip_dst
 
 
@@ -438,15 +475,17 @@ def as_plain_ppo(
     :class:`policies.agents.sb3_agents.EpochAgent` does itself), so that using the shipped
     agent needs no sb3-contrib. ``scenario``: the env keywords it was trained on (its
     observation size); ``delegate``: a residual agent's rule (its action count)."""
-    from sb3_contrib import MaskablePPO
     from stable_baselines3 import PPO
 
+    from policies.agents.agent_files import read_sb3_policy, zip_data
     from policies.agents.training import make_epoch_env
 
-    masked = MaskablePPO.load(maskable_zip, device="cpu")
     env = make_epoch_env(ks=tuple(ks), delegate=delegate, **scenario)
-    kwargs = dict(masked.policy_kwargs)
-    plain = PPO("MlpPolicy", env, policy_kwargs=kwargs, device="cpu", gamma=masked.gamma)
+    masked, _ = read_sb3_policy(
+        maskable_zip, env.observation_space.shape[0], int(env.action_space.n)
+    )
+    gamma = zip_data(maskable_zip).get("gamma", 0.99)
+    plain = PPO("MlpPolicy", env, policy_kwargs=masked.policy_kwargs, device="cpu", gamma=gamma)
     plain.policy.load_state_dict(masked.policy.state_dict())
     plain.save(out_zip)
 
@@ -578,7 +617,7 @@ def held_out_comparison(
     overwrite: bool = True,
 ) -> dict[str, Any]:
     """``agents`` (label -> zip) and ``rules`` (names or specs) on held-out seeds
-    ``SeedSequence(seed)`` of ``scenario`` (env keywords, default v0's); writes
+    ``SeedSequence(seed)`` of ``scenario`` (env keywords, default ``{}``); writes
     ``out/held_out.json`` (the benchmark summary, with paired intervals against the best
     rule, plus ``paired_vs_rules``: each agent minus each rule, :func:`paired_vs_rules`) and
     ``out/held_out_rows.csv`` (per episode). ``overwrite=False`` refuses an existing
@@ -638,6 +677,7 @@ def select_ship_evaluate(
     n_workers: int = 2,
     ship_to: str | Path = DATA_DIR,
     overwrite: bool = False,
+    trust_pickle: bool = False,
 ) -> dict[str, Any]:
     """The whole selection: validate every checkpoint under ``runs_root`` (runs of
     :func:`policies.agents.training.train_epochs`, all of one scenario: :func:`resolve_scenario`)
@@ -645,7 +685,8 @@ def select_ship_evaluate(
     best as ``policies/data/<name>`` and compare it on held-out seeds ``held_out_seed`` with
     every rule; writes ``out/validation.csv`` and ``out/held_out.json``;
     returns the held-out summary. ``ship_to``: where the agent goes (default the package's
-    ``policies/data``, refused if ``name`` is there unless ``overwrite``)."""
+    ``policies/data``, refused if ``name`` is there unless ``overwrite``). ``trust_pickle``:
+    runs of an older version whose statistics are pickles only (reading them runs code)."""
     runs_root, out = Path(runs_root), Path(out)
     runs = sorted(p for p in runs_root.iterdir() if (p / "progress.csv").is_file())
     if not runs:
@@ -661,6 +702,7 @@ def select_ship_evaluate(
         reference=rules[0],
         episodes=validation_episodes,
         n_workers=n_workers,
+        trust_pickle=trust_pickle,
     )
     shipped = ship_best(
         validation,
@@ -669,6 +711,7 @@ def select_ship_evaluate(
         reference=rules[0].key,
         out_dir=ship_to,
         overwrite=overwrite,
+        trust_pickle=trust_pickle,
     )
     agents: dict[str, str | Path] = {name: shipped}
     return held_out_comparison(

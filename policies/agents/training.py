@@ -11,7 +11,7 @@ validation seeds (:mod:`policies.agents.selection`), never on the held-out ones.
 Hyper-parameters come from an RL-Zoo-format YAML (:func:`load_zoo_hyperparams`): a mapping
 ``env id -> {n_envs, n_timesteps, policy, normalize, <algorithm keywords>}``.
 
-sb3-contrib (MaskablePPO) is an optional dependency: the ``rl`` extra.
+sb3-contrib (MaskablePPO) is a dependency of this package; TensorBoard logs need the ``rl`` extra.
 """
 
 from __future__ import annotations
@@ -24,14 +24,17 @@ from typing import Any
 
 import gymnasium as gym
 
-from policies.agents.delegation import DelegateSpec, v0_obs_names
+from policies.agents.delegation import DelegateSpec, flight_obs_names
 from policies.agents.sb3_agents import require_contrib
-from scas_env import ENV_ID
+from scas_env import ENV_ID, ENV_ID_EPOCHS
 from scas_env.decision_epochs import DEFAULT_KS, DecisionEpochs
 from scas_env.utils.atomic_file import write_text_atomic
 
+#: the observation and return statistics of a clone (:func:`clone_rule`), read without
+#: unpickling (:class:`policies.agents.agent_files.ObsNormalization`)
+NORMALIZATION_FILE = "normalization.json"
 #: id of the decision-epoch formulation in the hyper-parameter YAML files
-EPOCH_ENV_ID = "scas_env/ScasMaintenanceEpochs-v0"
+EPOCH_ENV_ID = ENV_ID_EPOCHS
 HYPERPARAMS_DIR = Path(__file__).resolve().parents[1] / "data" / "hyperparams"
 #: keys of an RL-Zoo entry that are not algorithm keywords
 ZOO_KEYS = ("n_envs", "n_timesteps", "policy", "normalize")
@@ -43,6 +46,7 @@ __all__ = [
     "EPOCH_ENV_ID",
     "HYPERPARAMS_DIR",
     "candidate_hyperparams",
+    "check_training",
     "clone_rule",
     "init_delegate",
     "load_zoo_hyperparams",
@@ -59,7 +63,7 @@ def load_zoo_hyperparams(path: str | Path, env_id: str = EPOCH_ENV_ID) -> dict[s
     path = Path(path)
     if not path.is_file():
         raise ValueError(f"hyper-parameter file {str(path)!r} does not exist")
-    import yaml  # PyYAML: the rl extra
+    import yaml
 
     data = yaml.safe_load(path.read_text())
     if not isinstance(data, dict) or env_id not in data:
@@ -71,7 +75,7 @@ def load_zoo_hyperparams(path: str | Path, env_id: str = EPOCH_ENV_ID) -> dict[s
 def candidate_hyperparams(search: str | Path, candidate: str) -> dict[str, Any]:
     """Hyper-parameters of ``candidate`` in a search YAML (``base``: an RL-Zoo file beside it,
     ``candidates``: name -> overrides)."""
-    import yaml  # PyYAML: the rl extra
+    import yaml
 
     search = Path(search)
     if not search.is_file():
@@ -105,7 +109,7 @@ def _schedule(name: str, value: Any) -> Any:
 def make_epoch_env(
     ks: Sequence[int] = DEFAULT_KS, delegate: DelegateSpec | None = None, **scenario: Any
 ) -> gym.Env:
-    """One ``ScasMaintenance-v0`` (``scenario`` keywords) in :class:`DecisionEpochs`, with
+    """One ``ScasMaintenance-v2`` (``scenario`` keywords) in :class:`DecisionEpochs`, with
     ``delegate`` (:mod:`policies.agents.delegation`) built for its observation if given."""
     env = gym.make(ENV_ID, disable_env_checker=True, **scenario)
     rule = None if delegate is None else delegate.build(env.unwrapped.obs_names)
@@ -146,7 +150,7 @@ def _native_epochs(
     from scas_env.decision_epochs_vector import DecisionEpochsVectorEnv
 
     monitor_dir.mkdir(parents=True, exist_ok=True)
-    rule = None if delegate is None else delegate.build(v0_obs_names(**scenario))
+    rule = None if delegate is None else delegate.build(flight_obs_names(**scenario))
     native = NativeVecEnv(
         DecisionEpochsVectorEnv(num_envs, ks=tuple(ks), delegate=rule, **scenario),
         info_keys=(),
@@ -165,7 +169,7 @@ def _check_delegate(delegate: Any, scenario: Mapping[str, Any]) -> None:
         return
     if not isinstance(delegate, DelegateSpec):
         raise ValueError(f"delegate = {delegate!r} must be a DelegateSpec or None")
-    delegate.build(v0_obs_names(**scenario))
+    delegate.build(flight_obs_names(**scenario))
 
 
 def _new_out_dir(out_dir: str | Path) -> Path:
@@ -262,23 +266,126 @@ def _prepared(
 
 
 def warm_start(model: Any, venv: Any, init: Path) -> None:
-    """Copy a saved run's policy weights (``init/model.zip``) and ``VecNormalize``
-    statistics (``init/vecnormalize.pkl``) into ``model`` and ``venv``; the architectures
-    must match (same ``policy_kwargs``)."""
-    import pickle
+    """Copy a saved run's policy weights (``init/model.zip``) and observation and return
+    statistics (``init/normalization.json``) into ``model`` and ``venv``; the architectures
+    must match (same ``policy_kwargs``). Nothing is unpickled: the weights are read with
+    ``torch.load(weights_only=True)`` (:func:`policies.agents.agent_files.read_weights`)."""
+    from policies.agents.agent_files import ObsNormalization, read_weights
 
-    zip_path, pkl = init / "model.zip", init / "vecnormalize.pkl"
-    for f in (zip_path, pkl):
-        if not f.is_file():
-            raise ValueError(f"init = {str(init)!r} lacks {f.name} (a clone_rule output)")
-    saved = type(model).load(zip_path, device="cpu")
+    _init_files(init)
+    zip_path, stats = init / "model.zip", init / NORMALIZATION_FILE
     try:
-        model.policy.load_state_dict(saved.policy.state_dict())
+        model.policy.load_state_dict(read_weights(zip_path))
     except RuntimeError as err:
-        raise ValueError(f"init = {str(init)!r}: its network does not match ({err})") from None
-    with pkl.open("rb") as fh:
-        stats = pickle.load(fh)
-    venv.obs_rms, venv.ret_rms = stats.obs_rms, stats.ret_rms
+        first = str(err).splitlines()[0]
+        raise ValueError(f"init = {str(init)!r}: its network does not match ({first})") from None
+    normalization = ObsNormalization.load(stats)
+    if normalization.returns is None:
+        raise ValueError(f"{stats}: no return statistics (the clone's file has them)")
+    try:
+        normalization.apply_to(venv)
+    except ValueError as exc:
+        raise ValueError(f"{stats}: {exc}") from None
+
+
+class _SaveStatistics:
+    """SB3 callback factory: beside each checkpoint of SB3's ``CheckpointCallback`` (same
+    frequency), the ``VecNormalize`` statistics as ``<prefix>_normalization_<n>_steps.json``
+    (:class:`policies.agents.agent_files.ObsNormalization`), which load without
+    unpickling."""
+
+    @staticmethod
+    def make(save_freq: int, folder: Path, prefix: str) -> Any:
+        from stable_baselines3.common.callbacks import BaseCallback
+
+        class SaveStatistics(BaseCallback):
+            def _on_step(self) -> bool:
+                if self.n_calls % save_freq == 0:
+                    save_statistics(
+                        self.model.get_vec_normalize_env(),
+                        folder / f"{prefix}_normalization_{self.num_timesteps}_steps.json",
+                    )
+                return True
+
+        return SaveStatistics()
+
+
+def save_statistics(venv: Any, path: Path) -> None:
+    """Write a ``VecNormalize``'s statistics as a normalisation JSON file."""
+    from policies.agents.agent_files import ObsNormalization
+
+    ObsNormalization.from_vecnormalize(venv).save(path)
+
+
+def _init_files(init: Path) -> None:
+    """Refuse a warm-start folder without the clone's ``model.zip`` and
+    ``normalization.json`` (an older clone's pickle named, with its one-off conversion)."""
+    if not (init / "model.zip").is_file():
+        raise ValueError(f"init = {str(init)!r} lacks model.zip (a clone_rule output)")
+    if not (init / NORMALIZATION_FILE).is_file():
+        old = init / "vecnormalize.pkl"
+        hint = (
+            f"; it has {old.name}: convert it once, if you trust it, with "
+            "policies.agents.agent_files.convert_vecnormalize"
+            if old.is_file()
+            else ""
+        )
+        raise ValueError(f"init = {str(init)!r} lacks {NORMALIZATION_FILE}{hint}")
+
+
+def check_training(
+    hyperparams: Mapping[str, Any],
+    out_dir: str | Path,
+    *,
+    algo: str = "maskable_ppo",
+    ks: Sequence[int] = DEFAULT_KS,
+    checkpoint_every: int = 20_000,
+    total_timesteps: int | None = None,
+    native_envs: int | None = None,
+    init: str | Path | None = None,
+    freeze_normalization: bool | None = None,
+    delegate: DelegateSpec | None = None,
+    scenario: Mapping[str, Any] | None = None,
+) -> tuple[int, bool, DelegateSpec | None]:
+    """Every check :func:`train_epochs` makes before any work (``ValueError`` naming the
+    argument): the sizes, ``algo``, the output folder (new or empty), the warm start's
+    folder and files, the scenario's keywords and ``ks`` (an env is built), the delegate.
+    Returns the decisions to train, ``freeze_normalization`` resolved and the delegate
+    (``init``'s when not given)."""
+    n_timesteps = int(float(dict(hyperparams).get("n_timesteps", 1_000_000)))
+    total = n_timesteps if total_timesteps is None else total_timesteps
+    if isinstance(total, bool) or not isinstance(total, int) or total < 1:
+        raise ValueError(f"total_timesteps = {total!r} must be an integer >= 1")
+    if isinstance(checkpoint_every, bool) or not isinstance(checkpoint_every, int):
+        raise ValueError(f"checkpoint_every = {checkpoint_every!r} must be an integer >= 1")
+    if checkpoint_every < 1:
+        raise ValueError(f"checkpoint_every = {checkpoint_every!r} must be an integer >= 1")
+    out = Path(out_dir)
+    if out.exists() and (not out.is_dir() or any(out.iterdir())):
+        raise ValueError(f"out_dir = {str(out)!r} exists and is not empty; choose a new one")
+    if init is not None and not Path(init).is_dir():
+        raise ValueError(f"init = {str(init)!r} is not a folder")
+    if init is not None:
+        _init_files(Path(init))
+    mix = dict(hyperparams).get(REFERENCE_KEY)
+    if mix is not None and init is None:
+        raise ValueError(f"{REFERENCE_KEY} = {mix!r} needs init (the reference policy)")
+    if freeze_normalization is None:
+        freeze_normalization = init is not None
+    elif not isinstance(freeze_normalization, bool):
+        raise ValueError(f"freeze_normalization = {freeze_normalization!r} must be a bool or None")
+    elif freeze_normalization and init is None:
+        raise ValueError("freeze_normalization = True needs init (the statistics to keep)")
+    _check_run(algo, native_envs)
+    scenario = dict(scenario or {})
+    try:
+        make_epoch_env(ks=tuple(ks), **scenario).close()
+    except TypeError as exc:
+        raise ValueError(f"scenario {scenario}: {exc}") from None
+    if delegate is None and init is not None:
+        delegate = init_delegate(Path(init))
+    _check_delegate(delegate, scenario)
+    return total, freeze_normalization, delegate
 
 
 def train_epochs(
@@ -307,7 +414,7 @@ def train_epochs(
     (:class:`scas_env.decision_epochs_vector.DecisionEpochsVectorEnv` through
     :class:`policies.agents.sb3_vec_env.NativeVecEnv`) instead of the YAML's ``n_envs`` single envs
     in a ``DummyVecEnv``. ``init``: a folder written by :func:`clone_rule` (or any folder
-    with ``model.zip`` and ``vecnormalize.pkl`` of the same network) to start from; its
+    with ``model.zip`` and ``normalization.json`` of the same network) to start from; its
     policy is also saved as checkpoint 0, so selection can keep it. With the hyper-parameter
     ``reference_mix`` (needs ``init``) PPO is regularised towards the ``init`` policy
     (:mod:`policies.agents.reference`: ``ent_coef`` weighs ``KL(pi || rho)``, ``rho`` the
@@ -321,7 +428,9 @@ def train_epochs(
     changes its actions without a gradient step (measured: the clone with the statistics a
     fine-tuning run had accumulated after 1 M decisions lost 1,864 USD/episode on
     validation, all of the decline of that run). Writes
-    ``out_dir/ckpt_<n>`` checkpoints (``model.zip``, ``vecnormalize.pkl``), ``progress.csv``
+    ``out_dir/ckpt_<n>_steps.zip`` checkpoints with their statistics
+    (``ckpt_normalization_<n>_steps.json``, and SB3's ``ckpt_vecnormalize_<n>_steps.pkl``),
+    ``progress.csv``
     (SB3's logger: training episode rewards of the Monitor) and ``run.json`` (config, written
     before training so that checkpoints can be validated while it runs, ``"finished":
     false``; at the end the decisions and wall time reached, ``"finished": true``).
@@ -329,29 +438,25 @@ def train_epochs(
     from stable_baselines3.common.callbacks import CallbackList, CheckpointCallback
     from stable_baselines3.common.logger import configure
 
-    n_timesteps = int(float(dict(hyperparams).get("n_timesteps", 1_000_000)))
-    total = n_timesteps if total_timesteps is None else total_timesteps
-    if isinstance(total, bool) or not isinstance(total, int) or total < 1:
-        raise ValueError(f"total_timesteps = {total!r} must be an integer >= 1")
-    if isinstance(checkpoint_every, bool) or not isinstance(checkpoint_every, int):
-        raise ValueError(f"checkpoint_every = {checkpoint_every!r} must be an integer >= 1")
-    if checkpoint_every < 1:
-        raise ValueError(f"checkpoint_every = {checkpoint_every!r} must be an integer >= 1")
-    if init is not None and not Path(init).is_dir():
-        raise ValueError(f"init = {str(init)!r} is not a folder")
+    if progress_bar:  # SB3's progress bar needs rich, which is no dependency here
+        import importlib.util
+
+        if importlib.util.find_spec("rich") is None:
+            raise ImportError("progress_bar = True needs rich (pip install rich); or leave it off")
+    total, freeze_normalization, delegate = check_training(
+        hyperparams,
+        out_dir,
+        algo=algo,
+        ks=ks,
+        checkpoint_every=checkpoint_every,
+        total_timesteps=total_timesteps,
+        native_envs=native_envs,
+        init=init,
+        freeze_normalization=freeze_normalization,
+        delegate=delegate,
+        scenario=scenario,
+    )
     mix = dict(hyperparams).get(REFERENCE_KEY)
-    if mix is not None and init is None:
-        raise ValueError(f"{REFERENCE_KEY} = {mix!r} needs init (the reference policy)")
-    if freeze_normalization is None:
-        freeze_normalization = init is not None
-    elif not isinstance(freeze_normalization, bool):
-        raise ValueError(f"freeze_normalization = {freeze_normalization!r} must be a bool or None")
-    elif freeze_normalization and init is None:
-        raise ValueError("freeze_normalization = True needs init (the statistics to keep)")
-    _check_run(algo, native_envs)
-    if delegate is None and init is not None:
-        delegate = init_delegate(Path(init))
-    _check_delegate(delegate, scenario)
     out = _new_out_dir(out_dir)
     model, venv, n_envs, normalize, _ = _prepared(
         hyperparams,
@@ -372,6 +477,7 @@ def train_epochs(
         model.save(out / "ckpt_0_steps.zip")
         if normalize:
             venv.save(str(out / "ckpt_vecnormalize_0_steps.pkl"))
+            save_statistics(venv, out / "ckpt_normalization_0_steps.json")
     # the run's settings now (checkpoints can be validated while it trains), its end later
     run = {
         "algo": algo,
@@ -392,22 +498,23 @@ def train_epochs(
     }
     write_text_atomic(out / "run.json", json.dumps(run, indent=1))
     model.set_logger(configure(str(out), ["csv"]))
-    checkpoints = CheckpointCallback(
-        max(checkpoint_every // n_envs, 1),
-        str(out),
-        name_prefix="ckpt",
-        save_vecnormalize=normalize,
-    )
+    save_freq = max(checkpoint_every // n_envs, 1)
+    callbacks = [
+        CheckpointCallback(save_freq, str(out), name_prefix="ckpt", save_vecnormalize=normalize)
+    ]
+    if normalize:
+        callbacks.append(_SaveStatistics.make(save_freq, out, "ckpt"))
     start = time.perf_counter()
     model.learn(
         total,
-        callback=CallbackList([checkpoints, _WallClock.make(max_wall_s)]),
+        callback=CallbackList([*callbacks, _WallClock.make(max_wall_s)]),
         progress_bar=progress_bar,
     )
     wall = time.perf_counter() - start
     model.save(out / f"ckpt_{model.num_timesteps}_steps.zip")
     if normalize:
         venv.save(str(out / f"ckpt_vecnormalize_{model.num_timesteps}_steps.pkl"))
+        save_statistics(venv, out / f"ckpt_normalization_{model.num_timesteps}_steps.json")
     run.update(
         decisions=int(model.num_timesteps),
         wall_s=round(wall, 1),
@@ -447,7 +554,8 @@ def clone_rule(
     """Behaviour-clone ``demos`` (:class:`policies.agents.demonstrations.Demonstrations`)
     into a fresh model of ``hyperparams`` (the network a later :func:`train_epochs` with
     ``init=out_dir`` trains) with :func:`policies.agents.imitation.clone`; writes
-    ``out_dir/model.zip``, ``vecnormalize.pkl`` and ``clone.json`` (history, settings).
+    ``out_dir/model.zip``, ``normalization.json`` (and SB3's ``vecnormalize.pkl``) and
+    ``clone.json`` (history, settings).
     ``dagger``: a :class:`policies.agents.dagger.DaggerPlan` (rounds of the rule labelling
     the clone's own states, each followed by ``dagger.epochs`` more passes over all samples).
     ``delegate``: the network gets the delegation actions (demonstrations of
@@ -499,6 +607,7 @@ def clone_rule(
         rounds.append({**dataclasses.asdict(result), "new_samples": len(more.actions)})
     model.save(out / "model.zip")
     venv.save(str(out / "vecnormalize.pkl"))
+    save_statistics(venv, out / NORMALIZATION_FILE)
     summary = {
         "algo": algo,
         "seed": seed,

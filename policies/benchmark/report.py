@@ -222,7 +222,10 @@ def _plot_survival(
         ax.set_title(f"{part}: age at removal (Kaplan-Meier, end censored)", fontsize=10)
         ax.set_xlabel("flights since fitted")
         ax.grid(alpha=0.3)
-        ax.legend(fontsize=7)
+        if ax.get_legend_handles_labels()[0]:
+            ax.legend(fontsize=7)
+        else:  # no part removed in any episode (short episodes): say so on the plot
+            ax.text(0.5, 0.5, "no removals", ha="center", va="center", transform=ax.transAxes)
     axes[0].set_ylabel("P(part still fitted at age t)")
     fig.tight_layout()
     fig.savefig(path, dpi=120)

@@ -79,6 +79,7 @@ __all__ = [
     "BenchmarkResult",
     "PolicySpec",
     "episode_seeds",
+    "prepare_benchmark",
     "resolve_spec",
     "run_benchmark",
     "run_episode",
@@ -155,7 +156,7 @@ def check_specs(specs: Sequence[PolicySpec], env_kwargs: Mapping[str, Any]) -> N
             env.close()
         try:
             make_policy(spec.name, names[mode], **dict(spec.params))
-        except ValueError as exc:
+        except (ValueError, TypeError) as exc:  # TypeError: parameters the policy lacks
             raise ValueError(f"policy {spec.key!r} cannot run on this scenario: {exc}") from exc
 
 
@@ -259,7 +260,11 @@ def _map_ray(
         options: dict[str, Any] = {}
         if address == "local":
             options = {"include_dashboard": False, "_node_ip_address": "127.0.0.1"}
-        ray.init(address=address, **options)
+        try:
+            ray.init(address=address, **options)
+        except (ConnectionError, ValueError, RuntimeError) as exc:
+            why = " ".join(str(exc).split())
+            raise ConnectionError(f"ray_address = {address!r}: cannot connect: {why}") from exc
     try:
         task = ray.remote(num_cpus=1)(_run_chunk_ray)
         shared_refs = [ray.put(obj) for obj in shared]
@@ -302,6 +307,57 @@ def _needs_horizon(spec: PolicySpec) -> bool:
     )
 
 
+def prepare_benchmark(
+    specs: Sequence[PolicySpec | str],
+    *,
+    episodes: int,
+    slots: int,
+    env_kwargs: Mapping[str, Any] | None = None,
+    ray_address: str | None = None,
+) -> tuple[tuple[PolicySpec, ...], dict[str, Any]]:
+    """Every check :func:`run_benchmark` makes before any episode: the policies resolved
+    (names, unique labels, the run's horizon given to those that plan over it) and each built
+    once against its env's observation (:func:`check_specs`), the env keywords, the sizes
+    and, with ``ray_address``, that Ray is installed. Returns the specs and env keywords
+    the run uses; raises ``ValueError`` (``ImportError`` for a missing package) otherwise.
+    Commands call it first to turn a bad input into a usage error."""
+    if ray_address is not None and not isinstance(ray_address, str):
+        raise ValueError(f"ray_address = {ray_address!r} must be a string or None")
+    if ray_address:
+        import importlib.util
+
+        if importlib.util.find_spec("ray") is None:
+            raise ImportError(
+                f"ray_address = {ray_address!r} needs ray, which is not installed: "
+                "pip install 'scas-maintenance-gym[ray]' (or 'ray>=2.9'), "
+                "or leave ray_address unset to run on local worker processes"
+            )
+    episode_seeds(0, episodes)  # the count's check
+    if isinstance(slots, bool) or not isinstance(slots, int) or slots < 1:
+        raise ValueError(f"slots = {slots!r} must be an integer >= 1")
+    specs = tuple(resolve_spec(s) if isinstance(s, str) else s for s in specs)
+    # the planning oracle plans over the episode's horizon, and a decision-epoch agent
+    # observes the slots left in it: give them this run's
+    fleet = is_fleet(env_kwargs or {})
+    specs = tuple(
+        replace(s, params={**s.params, "episode_slots": slots})
+        if not fleet and _needs_horizon(s) and "episode_slots" not in s.params
+        else s
+        for s in specs
+    )
+    keys = [s.key for s in specs]
+    if not specs or len(set(keys)) != len(keys):
+        raise ValueError(f"policies = {keys} must be a non-empty list of unique labels")
+    kwargs = dict(env_kwargs or {})
+    for reserved in ("obs_mode", "episode_slots"):
+        if reserved in kwargs:
+            raise ValueError(f"env_kwargs must not set {reserved!r} (set per policy / slots)")
+    if not fleet:  # a fleet's episode is its FleetConfig's episode_days
+        kwargs["episode_slots"] = slots
+    check_specs(specs, kwargs)
+    return specs, kwargs
+
+
 def run_benchmark(
     specs: Sequence[PolicySpec | str] = DEFAULT_POLICIES,
     *,
@@ -323,28 +379,11 @@ def run_benchmark(
     same results (:func:`_map_ray`). Paired differences are taken against the rule-based
     policy (family ``"rule"``) with the highest mean reward.
     """
-    if ray_address is not None and not isinstance(ray_address, str):
-        raise ValueError(f"ray_address = {ray_address!r} must be a string or None")
-    specs = tuple(resolve_spec(s) if isinstance(s, str) else s for s in specs)
-    # the planning oracle plans over the episode's horizon, and a decision-epoch agent
-    # observes the slots left in it: give them this run's
-    fleet = is_fleet(env_kwargs or {})
-    specs = tuple(
-        replace(s, params={**s.params, "episode_slots": slots})
-        if not fleet and _needs_horizon(s) and "episode_slots" not in s.params
-        else s
-        for s in specs
+    specs, kwargs = prepare_benchmark(
+        specs, episodes=episodes, slots=slots, env_kwargs=env_kwargs, ray_address=ray_address
     )
+    fleet = is_fleet(kwargs)
     keys = [s.key for s in specs]
-    if not specs or len(set(keys)) != len(keys):
-        raise ValueError(f"policies = {keys} must be a non-empty list of unique labels")
-    kwargs = dict(env_kwargs or {})
-    for reserved in ("obs_mode", "episode_slots"):
-        if reserved in kwargs:
-            raise ValueError(f"env_kwargs must not set {reserved!r} (set per policy / slots)")
-    if not fleet:  # a fleet's episode is its FleetConfig's episode_days
-        kwargs["episode_slots"] = slots
-    check_specs(specs, kwargs)
     seeds = episode_seeds(seed, episodes)
     tasks: list[Batch] = [
         (p, tuple((e, *seeds[e]) for e in range(b, min(b + BATCH_EPISODES, episodes))))

@@ -5,8 +5,8 @@
 and asks the policy for a batch of actions per slot (one forward pass for a network). Each
 actuator's episode is exactly that of a single env with the same seed (tested), and
 policies act row by row (rules on their row, the random policy with one generator per
-episode, a network deterministically), so an episode's row and events do not
-depend on its batch (tested). The benchmark, RL evaluation and the value study all run
+episode, a network deterministically), so an episode's row and events do not depend on its
+batch (tested). The benchmark, RL evaluation and the value study all run
 their episodes here; :func:`run_episode` runs one given env through it.
 """
 

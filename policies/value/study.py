@@ -43,7 +43,13 @@ import numpy as np
 
 from policies.benchmark.run import PolicySpec, run_benchmark
 from policies.benchmark.stats import METRICS, metric_interval, paired_comparison
-from policies.value.tuning import FAMILIES, HELD_OUT_SEED, TuningResult, tune_families
+from policies.value.tuning import (
+    FAMILIES,
+    HELD_OUT_SEED,
+    TuningResult,
+    family_env_kwargs,
+    tune_families,
+)
 
 #: Rungs in order of information (labels of policies.value.tuning.FAMILIES, plus "oracle").
 LADDER = (
@@ -61,8 +67,9 @@ LADDER = (
 #: Context arms (not rungs): run to failure and the detection rule.
 CONTEXT = ("corrective", "detection")
 REFERENCE = "age"
-#: Quick mode (tests, smoke runs).
-QUICK: dict[str, int] = {"episodes": 4, "slots": 150, "trials": 2, "train_episodes": 3}
+#: Quick mode (``scas-value --quick``): fewer episodes and trials, but episodes of full length,
+#: so that the arms still separate (figures and wall time: docs/cli.md).
+QUICK: dict[str, int] = {"episodes": 16, "slots": 2000, "trials": 4, "train_episodes": 4}
 
 __all__ = [
     "CONTEXT",
@@ -116,20 +123,21 @@ def break_even_sigma(sigmas: Sequence[float], values: Sequence[float]) -> float:
 
 
 def _specs(
-    tuning: Mapping[str, TuningResult], slots: int
+    tuning: Mapping[str, TuningResult], slots: int, base: Mapping[str, Any]
 ) -> list[tuple[str, PolicySpec, dict[str, Any]]]:
-    """(arm label, policy spec, env keywords) of every held-out arm."""
-    out = [("corrective", PolicySpec("corrective", label="corrective"), {})]
+    """(arm label, policy spec, env keywords) of every held-out arm in the user's world
+    ``base`` (:func:`policies.value.tuning.family_env_kwargs`)."""
+    out = [("corrective", PolicySpec("corrective", label="corrective"), dict(base))]
     for label in (*LADDER, "detection"):
         if label == "oracle":
             spec = PolicySpec("oracle", {"episode_slots": slots}, label="oracle")
-            out.append((label, spec, {}))
+            out.append((label, spec, dict(base)))
             continue
         if label not in tuning:
             continue
         fam = FAMILIES[label]
         spec = PolicySpec(fam.policy, tuning[label].best_params, label=label)
-        out.append((label, spec, dict(fam.env_kwargs)))
+        out.append((label, spec, family_env_kwargs(fam, base)))
     return out
 
 
@@ -161,7 +169,7 @@ def run_ladder(
         progress=progress,
         env_kwargs=base,
     )
-    arms = _specs(tuning, slots)
+    arms = _specs(tuning, slots, base)
     groups: dict[str, list[tuple[str, PolicySpec, dict[str, Any]]]] = {}
     for arm in arms:
         groups.setdefault(repr(sorted(arm[2].items())), []).append(arm)
@@ -174,7 +182,7 @@ def run_ladder(
             slots=slots,
             seed=HELD_OUT_SEED,
             n_workers=n_workers,
-            env_kwargs={**base, **group[0][2]},
+            env_kwargs=group[0][2],
             progress=progress,
             confidence=confidence,
         )
@@ -196,7 +204,8 @@ def run_ladder(
                 "arm": a,
                 "policy": s.name,
                 "params": {k: _jsonable(v) for k, v in dict(s.params).items()},
-                "env_kwargs": {k: repr(v) for k, v in e.items()},
+                # the arm's own keywords: where it differs from the user's world
+                "env_kwargs": {k: repr(v) for k, v in e.items() if k not in base or base[k] != v},
             }
             for a, s, e in arms
         ],
@@ -287,9 +296,14 @@ def markdown_report(result: LadderResult) -> str:
     for arm, d in s["arms"].items():
         v, m = d["value_vs_age"], d["metrics"]
         av, cf, fl, rw = m["availability"], m["cost_per_fh"], m["failures_per_1000fh"], m["reward"]
+        value = (  # the reference against itself: no difference to estimate
+            "reference | - | - | -"
+            if arm == REFERENCE
+            else f"{_money(v['mean'])} | [{_money(v['low'])}, {_money(v['high'])}] | "
+            f"{v['mdd']:,.0f} | {v['p_value']:.3g}"
+        )
         lines.append(
-            f"| {arm} | {_money(v['mean'])} | [{_money(v['low'])}, {_money(v['high'])}] | "
-            f"{v['mdd']:,.0f} | {v['p_value']:.3g} | {rw['mean']:,.0f} | "
+            f"| {arm} | {value} | {rw['mean']:,.0f} | "
             f"{cf['mean']:.2f} [{cf['low']:.2f}, {cf['high']:.2f}] | "
             f"{av['mean']:.4f} [{av['low']:.4f}, {av['high']:.4f}] | "
             f"{fl['mean']:.3f} [{fl['low']:.3f}, {fl['high']:.3f}] |"

@@ -71,7 +71,9 @@ class Family:
     fixed : parameters held fixed (e.g. the noisy oracle's ``sigma``).
     nested : the family has an ``override`` switch (searched as a category, the age
         rule's point enqueued first).
-    env_kwargs : env keywords (e.g. a cost model with free tests).
+    env_kwargs : env keywords of the family's own world, applied over the user's
+        (:func:`family_env_kwargs`); a ``cost_model`` here holds the *changes* from the
+        default ``CostModel()`` (e.g. free tests), made on the user's cost model.
     """
 
     label: str
@@ -118,10 +120,33 @@ def _families() -> dict[str, Family]:
     return {f.label: f for f in fams}
 
 
+def family_env_kwargs(family: Family, env_kwargs: Mapping[str, Any] | None) -> dict[str, Any]:
+    """The env keywords of ``family`` in the user's world ``env_kwargs``: the family's own
+    keywords over the user's, except its ``cost_model``, whose differences from
+    ``CostModel()`` are made on the user's cost model (free tests stay free on a user's
+    dearer flights and parts).
+
+    >>> fam = FAMILIES["filter+tests every flight"]
+    >>> mine = CostModel(flight_value_usd=3000.0)
+    >>> costs = family_env_kwargs(fam, {"cost_model": mine})["cost_model"]
+    >>> (costs.test_usd, costs.flight_value_usd)
+    (0.0, 3000.0)
+    """
+    out = {**dict(env_kwargs or {}), **dict(family.env_kwargs)}
+    own = family.env_kwargs.get("cost_model")
+    if own is not None:
+        default = CostModel().to_dict()
+        changes = {k: v for k, v in own.to_dict().items() if v != default[k]}
+        user = dict(env_kwargs or {}).get("cost_model") or CostModel()
+        out["cost_model"] = user.replace(**changes)
+    return out
+
+
 #: The families of the value-of-information ladder, by label.
 FAMILIES: dict[str, Family] = _families()
-#: Quick mode (tests, smoke runs).
-QUICK: dict[str, int] = {"trials": 3, "episodes": 3, "slots": 150}
+#: Quick mode (``scas-tune --quick``): fewer episodes and trials, but episodes of full length,
+#: so that the arms still separate (figures and wall time: docs/cli.md).
+QUICK: dict[str, int] = {"trials": 4, "episodes": 4, "slots": 2000}
 
 __all__ = [
     "AGE_BOX",
@@ -132,6 +157,7 @@ __all__ = [
     "Family",
     "TuningResult",
     "edge_report",
+    "family_env_kwargs",
     "relevant_box",
     "tune_families",
     "tune_family",
@@ -260,7 +286,7 @@ def tune_family(
         vectorization_mode="vector_entry_point",
         obs_mode=mode,
         episode_slots=slots,
-        **{**dict(env_kwargs or {}), **dict(family.env_kwargs)},
+        **family_env_kwargs(family, env_kwargs),
     )
     seeds = episode_seeds(train_seed, episodes)
     history: list[dict[str, Any]] = []

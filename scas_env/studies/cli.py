@@ -189,6 +189,19 @@ def _reproduce_args(parser: Parser) -> None:
         help="reuse a saved campaign (its stem: <stem>.csv + <stem>.json; default: run one)",
     )
     parser.add_argument(
+        "--runs",
+        type=int_at_least(2),
+        default=None,
+        help="campaign runs per severity level and fault (default: the size's, 12 with "
+        "--quick, 100 with --full)",
+    )
+    parser.add_argument(
+        "--levels",
+        type=int_at_least(3),
+        default=None,
+        help="campaign severity levels (default: the size's, 5 with --quick, 8 with --full)",
+    )
+    parser.add_argument(
         "--paths",
         type=positive_int,
         default=None,
@@ -212,6 +225,8 @@ def _reproduce_run(parser: Parser, args: Args) -> int:
     from scas_env.studies.reproduction import ReproductionConfig, run_reproduction
     from scas_env.studies.reproduction_report import write_report
 
+    if args.campaign is not None and (args.runs is not None or args.levels is not None):
+        parser.error("--runs / --levels size a new campaign; --campaign reuses a saved one")
     out = args.out or Path("results/reproduction_quick" if args.quick else "results/reproduction")
     check_out_dir(parser, out, args.overwrite)
     if args.campaign is not None:
@@ -221,11 +236,13 @@ def _reproduce_run(parser: Parser, args: Args) -> int:
                              "does not exist")  # fmt: skip
     params = load_params(parser, args)
     config = ReproductionConfig.quick() if args.quick else ReproductionConfig()
-    if args.paths is not None:
-        try:
-            config = config.replace(n_paths=args.paths)
-        except ValueError as exc:
-            parser.error(f"--paths: {exc}")
+    for option, field in (("runs", "n_runs"), ("levels", "n_levels"), ("paths", "n_paths")):
+        value = getattr(args, option)
+        if value is not None:
+            try:
+                config = config.replace(**{field: value})
+            except ValueError as exc:
+                parser.error(f"--{option}: {exc}")
     announce_uncached_kernels()
     start = time.perf_counter()
     rep = run_reproduction(
@@ -338,7 +355,9 @@ Rebuild the feature surrogate of an actuator design (shipped: scas_env/actuator/
 Runs the nested design (grid x grid fault levels, units, runs) on the physics model and fits
 the tables (scas_env.studies.surrogate_builder.build_shipped_surrogate: Table 2's features
 from independent units per point, I8 and I9 from --paired-units units shared by every
-point). The shipped file is replaced only with --overwrite.
+point). Writes results/surrogate.json by default; the shipped file of a source checkout
+is replaced with --out scas_env/actuator/data/surrogate.json --overwrite (then rebuild the
+manifest of shipped files: python -m scas_env.utils.shipped_files).
 """
 
 
@@ -353,8 +372,12 @@ def _build_surrogate_args(parser: Parser) -> None:
     parser.add_argument(
         "--grid", type=int_at_least(2), default=5, help="grid points per fault axis"
     )
-    parser.add_argument("--units", type=positive_int, default=8, help="units per grid point")
-    parser.add_argument("--runs", type=positive_int, default=5, help="runs per unit")
+    parser.add_argument(
+        "--units", type=int_at_least(2), default=8, help="units per grid point (>= 2: unit spread)"
+    )
+    parser.add_argument(
+        "--runs", type=int_at_least(2), default=5, help="runs per unit (>= 2: run spread)"
+    )
     parser.add_argument(
         "--paired-seed", type=nonneg_int, default=2021, help="root seed of the paired design"
     )
@@ -362,9 +385,15 @@ def _build_surrogate_args(parser: Parser) -> None:
         "--paired-units", type=int_at_least(2), default=16, help="units of the paired design"
     )
     parser.add_argument(
-        "--workers", type=positive_int, default=os.cpu_count() or 1, help="worker processes"
+        "--workers", type=positive_int, default=None, help="worker processes (default: all CPUs)"
     )
-    parser.add_argument("--out", type=Path, default=_shipped(DATA_FILE), help="output JSON")
+    parser.add_argument(
+        "--out",
+        type=Path,
+        default=Path("results") / DATA_FILE,
+        help=f"output JSON (the shipped one, in a source checkout: {_shipped(DATA_FILE)} with "
+        "--overwrite, then python -m scas_env.utils.shipped_files)",
+    )
     parser.add_argument("--overwrite", action="store_true", help="replace an existing --out")
     add_params_arg(parser)
 
@@ -383,9 +412,10 @@ def _build_surrogate_run(parser: Parser, args: Args) -> int:
         units_per_point=args.units,
         paired_units=args.paired_units,
         runs_per_unit=args.runs,
-        n_workers=args.workers,
+        n_workers=args.workers or os.cpu_count() or 1,
         progress=not args.quiet,
     )
+    args.out.parent.mkdir(parents=True, exist_ok=True)
     model.save(args.out)
     for k, f in enumerate(model.features):
         print(
@@ -406,7 +436,9 @@ Rebuild the calibration of an actuator design (shipped: scas_env/actuator/data).
 
 Critical seal wear, spring failure depth and the damage tables
 (scas_env.actuator.calibration.build_calibration), then a life summary of --lives random
-units. The shipped file is replaced only with --overwrite.
+units. Writes results/calibration.json by default; the shipped file of a source checkout
+is replaced with --out scas_env/actuator/data/calibration.json --overwrite (then rebuild the
+manifest of shipped files: python -m scas_env.utils.shipped_files).
 """
 
 
@@ -417,7 +449,13 @@ def _build_calibration_args(parser: Parser) -> None:
     parser.add_argument(
         "--windows", type=positive_int, default=60, help="flight windows for the scatter"
     )
-    parser.add_argument("--out", type=Path, default=_shipped(DATA_FILE), help="output JSON")
+    parser.add_argument(
+        "--out",
+        type=Path,
+        default=Path("results") / DATA_FILE,
+        help=f"output JSON (the shipped one, in a source checkout: {_shipped(DATA_FILE)} with "
+        "--overwrite, then python -m scas_env.utils.shipped_files)",
+    )
     parser.add_argument("--overwrite", action="store_true", help="replace an existing --out")
     parser.add_argument(
         "--lives", type=positive_int, default=100_000, help="units for the life summary"
@@ -441,6 +479,7 @@ def _build_calibration_run(parser: Parser, args: Args) -> int:
     cal = build_calibration(
         params, seed=args.seed, n_windows=args.windows, whole_flights=args.whole_flights
     )
+    args.out.parent.mkdir(parents=True, exist_ok=True)
     cal.save(args.out)
     lives = sample_lives(params, cal, np.random.default_rng(args.seed), args.lives)
     log.info(f"wrote {args.out}")
@@ -489,9 +528,7 @@ def _export_dataset_args(parser: Parser) -> None:
     )
     parser.add_argument("--workers", type=positive_int, default=2, help="worker processes")
     parser.add_argument(
-        "--formats",
-        default="parquet,csv",
-        help="comma-separated file formats: parquet (needs the `data` extra), csv",
+        "--formats", default="parquet,csv", help="comma-separated file formats: parquet, csv"
     )
 
 

@@ -379,7 +379,9 @@ def _earlier_row(
 ) -> dict[str, Any]:
     """Wear-before-crack row; with ``rep``, the installation variant's reason in run sigmas."""
     reason = "G3 rises > 5 healthy sigma with wear, falls 2-3 sigma with the crack"
-    if rep is not None:
+    # the healthy set holds the selected ground features only (a small campaign may select
+    # neither G1 nor G3): then the generic reason stays
+    if rep is not None and {"G1", "G3"} <= set(rep.healthy.series):
         shift = {
             f: scatter_facts(rep, f, g)["change"] / (rep.healthy.run_std(g) * _scale(g)[0])
             for f, g in (("wear", "G3"), ("crack", "G1"))

@@ -10,8 +10,8 @@ Parquet and CSV hold the same values (the loader reads either, typed by the sche
 Units are split into train and test sets by unit, never by row, as in NASA's C-MAPSS
 (Saxena et al. 2008): a model must predict units it has never seen.
 
-pyarrow is needed (the ``data`` extra: ``pip install "scas-maintenance-gym[data]"``); it is
-imported inside the functions, so the rest of the package works without it.
+pyarrow (a dependency of the package) is imported inside the functions, so importing the
+package does not load it.
 """
 
 from __future__ import annotations
@@ -148,7 +148,8 @@ def _pyarrow() -> Any:
         import pyarrow as pa
     except ModuleNotFoundError as err:  # pragma: no cover - depends on the install
         raise ModuleNotFoundError(
-            "the run-to-failure dataset needs pyarrow: pip install 'scas-maintenance-gym[data]'"
+            "the run-to-failure dataset needs pyarrow (a dependency of this package): "
+            "pip install 'pyarrow>=14'"
         ) from err
     return pa
 
