@@ -4,8 +4,6 @@
 from __future__ import annotations
 
 import numpy as np
-
-from scas_env import learning_kernel
 from experiments.env_profile import (
     DEFAULT_MIX,
     _actions,
@@ -13,6 +11,8 @@ from experiments.env_profile import (
     _vector_env,
     batch_under_way,
 )
+
+from scas_env import learning_kernel
 
 
 def _warmed(num_envs: int) -> tuple:
