@@ -5,3 +5,12 @@ names the page and the finding it backs; ``belief_output``, ``belief_comparison`
 ``reference_report``, ``reference_synthetic``, ``sensing_sweep_output`` and
 ``sensing_variants`` are their libraries. ``tests/test_experiments_cli.py`` runs every
 command's ``--help`` and doctests."""
+
+from pathlib import Path as _Path
+
+import scas_env as _scas_env
+from prognostics.numba_cache import register_package as _register_numba_package
+
+# kernels here inline the env's (e.g. env_speed times the core's filter kernels): their
+# cache is stamped with the env's numba sources too (prognostics.numba_cache)
+_register_numba_package(__name__, __path__[0], depends=(_Path(_scas_env.__file__).parent,))

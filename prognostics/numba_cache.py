@@ -10,8 +10,9 @@ after that helper is edited, until ``__pycache__`` is deleted: a silent wrong an
 numba's cache folders (``__pycache__``, or the user-wide one for a read-only install, or
 ``NUMBA_CACHE_DIR``) but stamps every cached kernel with::
 
-    (sha256 of the kernel's file, sha256 of every numba-using .py file of its package
-     and of prognostics, the bottom layer any package may import)
+    (sha256 of the kernel's file, sha256 of every numba-using .py file of its package,
+     of prognostics (the bottom layer any package may import) and of the packages it
+     declares it inlines from)
 
 Editing any jitted helper therefore changes the stamp of every kernel that might inline it;
 numba sees the mismatch at load time, recompiles and overwrites the entry. Hashing the few
@@ -39,6 +40,7 @@ from numba.core.registry import CPUDispatcher
 
 _PROGNOSTICS_DIR = Path(__file__).resolve().parent
 _REGISTERED: dict[Path, str] = {}  # package directory -> package name
+_DEPENDS: dict[Path, tuple[Path, ...]] = {}  # package directory -> directories it inlines from
 
 
 @cache
@@ -66,7 +68,8 @@ def _package_of(py_file: str) -> Path | None:
 def project_stamp(py_file: str) -> str:
     """The part of a kernel's cache stamp beyond its own file (module docstring)."""
     package_dir = _package_of(py_file)
-    dirs = sorted({package_dir, _PROGNOSTICS_DIR} - {None})
+    extra = _DEPENDS.get(package_dir, ()) if package_dir is not None else ()
+    dirs = sorted({package_dir, _PROGNOSTICS_DIR, *extra} - {None})
     return "+".join(package_sources_digest(d) for d in dirs)
 
 
@@ -107,12 +110,17 @@ def _install_locators() -> None:
             classes.insert(0, locator)
 
 
-def register_package(package: str, package_dir: str | Path) -> None:
+def register_package(
+    package: str, package_dir: str | Path, depends: tuple[str | Path, ...] = ()
+) -> None:
     """Stamp the cached kernels of ``package`` (its directory ``package_dir``) with the
-    project stamp; re-points kernels of the package that were decorated already."""
+    project stamp; re-points kernels of the package that were decorated already.
+    ``depends``: directories of further packages whose jitted helpers its kernels inline
+    (besides prognostics), whose sources then enter the stamp too."""
     _install_locators()
     directory = Path(package_dir).resolve()
     _REGISTERED[directory] = package
+    _DEPENDS[directory] = tuple(Path(d).resolve() for d in depends)
     for name, module in list(sys.modules.items()):
         if name == package or name.startswith(package + "."):
             for value in list(vars(module).values()):

@@ -84,6 +84,22 @@ def test_an_edited_helper_recompiles_the_cached_kernel_that_inlines_it(tmp_path:
     assert _run_kernel(tmp_path, "stamped_pkg") == 101.0  # project stamp: recompiled
 
 
+def test_a_helper_of_a_declared_dependency_recompiles_the_kernel(tmp_path: Path) -> None:
+    """A package whose kernels inline another package's helper declares it (``depends``):
+    editing that helper recompiles them (the experiments inline the env's kernels)."""
+    _make_package(tmp_path, "base_pkg", registered=True)
+    user = tmp_path / "user_pkg"
+    user.mkdir()
+    (user / "__init__.py").write_text(
+        "from prognostics.numba_cache import register_package\n"
+        f"register_package(__name__, __path__[0], depends=({str(tmp_path / 'base_pkg')!r},))\n"
+    )
+    (user / "kernel.py").write_text(KERNEL.format(package="base_pkg"))
+    assert _run_kernel(tmp_path, "user_pkg") == 2.0
+    _edit_helper(tmp_path, "base_pkg")
+    assert _run_kernel(tmp_path, "user_pkg") == 101.0
+
+
 def _kernels(package: str) -> list[tuple[str, CPUDispatcher]]:
     base = importlib.import_module(package)
     found = []
