@@ -84,7 +84,7 @@ check-install:
 	    --paired-units 2 --out runs/surrogate.json && \
 	  venv/bin/python -m experiments.build.calibration --windows 2 --whole-flights 2 \
 	    --lives 100 --out runs/calibration.json \
-	) & lab=$$!; unset PYTHONPATH; \
+	) & lab=$$!; \
 	cd $(CHECK_DIR) && \
 	  venv/bin/scas-benchmark --episodes 2 --slots 100 --out runs/benchmark && \
 	  venv/bin/scas-train --timesteps 64 --out runs/train && \
