@@ -30,13 +30,13 @@ install: $(STAMP)
 ## Main job: every maintenance policy on the same 40 episodes of 2000 flight slots of
 ## ScasMaintenance-v2 (2 workers); prints the table, writes CSV/JSON/Markdown and plots.
 benchmark: install
-	$(PY) scripts/benchmark.py --out $(RESULTS)/benchmark
+	$(VENV)/bin/scas-benchmark --out $(RESULTS)/benchmark
 
 ## Physics demonstration: a pre-flight test and a flight window at three health states
-## (signals as CSV, plots) and the paper's physics figures.
+## (signals as CSV, plots) and the paper's physics figures (experiments/, not installed).
 demo: install
-	$(PY) scripts/simulate.py --out $(RESULTS)/demo
-	$(PY) scripts/paper_figures.py --out $(RESULTS)/figures
+	$(PY) -m experiments.paper.demo --out $(RESULTS)/demo
+	$(PY) -m experiments.paper.figures --out $(RESULTS)/figures
 
 ## Default test suite (fast; slow checks are behind the `slow` marker).
 test: install
@@ -59,10 +59,11 @@ format: install
 ## What a user gets from `pip install .` (no extras): build the wheel, install it into a
 ## fresh venv (torch first, from TORCH_INDEX_URL when set), then, outside the source tree
 ## so that only the installed package can be imported, run the README's Python snippets
-## (they compile the env's numba kernels, once) and every console command at a tiny size
-## with its default options, in two lanes at once: the physics commands (the first compiles
-## the physics kernels) and the policy commands. Each lane stops at its first failure; the
-## target fails if either does.
+## (they compile the env's numba kernels, once) and every command at a tiny size with its
+## default options, in two lanes at once: the lab commands of experiments/ (not installed:
+## run by the venv's Python with only experiments/ added to its path, so they use the
+## installed wheel; the first compiles the physics kernels) and the console commands. Each
+## lane stops at its first failure; the target fails if either does.
 CHECK_DIR ?= $(abspath $(RESULTS))/check-install
 check-install:
 	rm -rf $(CHECK_DIR)
@@ -72,16 +73,18 @@ check-install:
 	$(CHECK_DIR)/venv/bin/pip install --disable-pip-version-check -q $(CHECK_DIR)/dist/*.whl
 	$(PYTHON) .ci/readme_python.py README.md > $(CHECK_DIR)/readme_snippets.py
 	cd $(CHECK_DIR) && venv/bin/python readme_snippets.py
-	cd $(CHECK_DIR) && ( \
-	  venv/bin/scas-simulate --window 1 --out runs/simulate && \
-	  venv/bin/scas-figures --out runs/figures && \
-	  venv/bin/scas-campaign --runs 2 --levels 2 --out runs/campaign/c && \
-	  venv/bin/scas-reproduce --quick --runs 2 --levels 3 --paths 1 --out runs/reproduce && \
-	  venv/bin/scas-build-surrogate --grid 2 --units 2 --runs 2 --paired-units 2 \
-	    --out runs/surrogate.json && \
-	  venv/bin/scas-build-calibration --windows 2 --whole-flights 2 --lives 100 \
-	    --out runs/calibration.json \
-	) & physics=$$!; \
+	mkdir -p $(CHECK_DIR)/lab && ln -s $(CURDIR)/experiments $(CHECK_DIR)/lab/experiments
+	cd $(CHECK_DIR) && export PYTHONPATH=lab && ( \
+	  venv/bin/python -m experiments.paper.demo --window 1 --out runs/demo && \
+	  venv/bin/python -m experiments.paper.figures --out runs/figures && \
+	  venv/bin/python -m experiments.paper.campaign --runs 2 --levels 2 --out runs/campaign/c && \
+	  venv/bin/python -m experiments.paper.reproduce --quick --runs 2 --levels 3 --paths 1 \
+	    --out runs/reproduce && \
+	  venv/bin/python -m experiments.build.surrogate --grid 2 --units 2 --runs 2 \
+	    --paired-units 2 --out runs/surrogate.json && \
+	  venv/bin/python -m experiments.build.calibration --windows 2 --whole-flights 2 \
+	    --lives 100 --out runs/calibration.json \
+	) & lab=$$!; \
 	cd $(CHECK_DIR) && \
 	  venv/bin/scas-benchmark --episodes 2 --slots 100 --out runs/benchmark && \
 	  venv/bin/scas-train --timesteps 64 --out runs/train && \
@@ -89,20 +92,21 @@ check-install:
 	  venv/bin/scas-value --episodes 2 --slots 100 --trials 1 --train-episodes 2 \
 	    --out runs/value && \
 	  venv/bin/scas-export-dataset --units 2 --max-slots 200 --out runs/dataset; \
-	policy=$$?; wait $$physics && test $$policy -eq 0
+	policy=$$?; wait $$lab && test $$policy -eq 0
 
 ## Speed, each beside a reference measured in the same run.
 bench: install
 	$(PY) -m experiments.integrator_speed
 	$(PY) -m experiments.prognostics_speed
-	$(PY) scripts/bench_env.py
+	$(PY) -m experiments.env_speed
 
+## The paper's physics figures (experiments/, not installed).
 figures: install
-	$(PY) scripts/paper_figures.py --out $(RESULTS)/figures
+	$(PY) -m experiments.paper.figures --out $(RESULTS)/figures
 
 ## The paper's sections 4-5 from our physics (quick mode; `--full` for the paper's sizes).
 reproduce: install
-	$(PY) scripts/reproduce_paper.py --quick
+	$(PY) -m experiments.paper.reproduce --quick
 
 ## The shipped v2 agent from scratch (docs/rl.md, "From the rule"): clone the tuned filter
 ## rule (demonstrations + DAgger), fine-tune 3 seeds x 5 M decisions with MaskablePPO on the
@@ -114,9 +118,9 @@ TRAIN_ARGS = --candidate imitation_g1 --init $(AGENT_DIR)/clone \
 train-agent-v2: install
 	$(PY) scripts/imitate_rule.py --candidate imitation_g1 \
 		--rules-from docs/value_v2/ladder.json --out $(AGENT_DIR)/clone
-	$(PY) scripts/train.py $(TRAIN_ARGS) --seed 0 --out $(AGENT_DIR)/runs/s0 & a=$$!; \
-	$(PY) scripts/train.py $(TRAIN_ARGS) --seed 1 --out $(AGENT_DIR)/runs/s1 & b=$$!; \
-	$(PY) scripts/train.py $(TRAIN_ARGS) --seed 2 --out $(AGENT_DIR)/runs/s2; c=$$?; \
+	$(VENV)/bin/scas-train $(TRAIN_ARGS) --seed 0 --out $(AGENT_DIR)/runs/s0 & a=$$!; \
+	$(VENV)/bin/scas-train $(TRAIN_ARGS) --seed 1 --out $(AGENT_DIR)/runs/s1 & b=$$!; \
+	$(VENV)/bin/scas-train $(TRAIN_ARGS) --seed 2 --out $(AGENT_DIR)/runs/s2; c=$$?; \
 	wait $$a && wait $$b && test $$c -eq 0
 	mkdir -p $(AGENT_DIR)/agent
 	$(PY) scripts/ship_epochs.py --runs $(AGENT_DIR)/runs --name maskable_ppo_epochs_v2 \

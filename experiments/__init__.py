@@ -1,10 +1,17 @@
-"""One-off measurements behind figures and tables in the docs (not installed).
+"""Lab work beside the installed packages (not installed): one-off measurements behind
+figures and tables in the docs, the paper's reproduction, the builders of the shipped data.
 
 Run from the repository root: ``python -m experiments.<name> --help``. Each command module
 names the page and the finding it backs; ``belief_output``, ``belief_comparison``,
 ``reference_report``, ``reference_synthetic``, ``sensing_sweep_output`` and
-``sensing_variants`` are their libraries. ``tests/test_experiments_cli.py`` runs every
-command's ``--help`` and doctests."""
+``sensing_variants`` are their libraries. Two subpackages:
+
+* ``experiments.paper``: [DJS20] reproduced (``python -m experiments.paper.reproduce``), its
+  campaigns, physics figures and demonstration runs (docs/reproduction.md);
+* ``experiments.build``: the builders of ``scas_env/actuator/data`` (calibration, feature
+  surrogate, mission-type table).
+
+``tests/test_experiments_cli.py`` runs every command's ``--help`` and doctests."""
 
 from pathlib import Path as _Path
 

@@ -170,7 +170,7 @@ def lives_digest() -> str:
 
 def campaign_digest(n_runs: int = 2, n_levels: int = 3, seed: int = 5) -> str:
     """A small physics campaign's feature table (one worker)."""
-    from scas_env.studies.campaign import CampaignConfig, run_campaign
+    from experiments.paper.campaign import CampaignConfig, run_campaign
 
     config = CampaignConfig(n_runs=n_runs, n_levels=n_levels)
     result = run_campaign(ScasParams(), config, seed=seed, n_workers=1, progress=False)

@@ -14,7 +14,7 @@ A sensing level is a sensor-noise factor ``g`` and a switch for the per-unit tol
   and is kept.
 
 Each variant gets the feature surrogate of its own parameters, built with the shipped
-surrogate's recipe (:func:`scas_env.studies.surrogate_builder.build_shipped_surrogate`:
+surrogate's recipe (:func:`experiments.build.surrogate.build_shipped_surrogate`:
 Table 2's features from seed 2020, 8 units x 5 runs per point of a 5 x 5 grid, I8 and I9
 from the paired design, seed 2021, 16 units), cached under ``cache_dir`` in a file
 named by :func:`surrogate_cache_key` (the parameters' digest, the modelled features and the
@@ -183,7 +183,7 @@ def load_or_build_surrogate(
     A cached file whose parameters' digest or features differ from the request (a file
     edited or copied by hand) raises ``ValueError`` naming it; a new one is written
     atomically."""
-    from scas_env.studies.surrogate_builder import build_shipped_surrogate
+    from experiments.build.surrogate import build_shipped_surrogate
 
     d = {**SURROGATE_DESIGN, **(design or {})}
     unknown = sorted(set(d) - set(SURROGATE_DESIGN))

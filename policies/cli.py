@@ -1,6 +1,5 @@
 """Command-line programs of the policy side: ``scas-benchmark``, ``scas-train``, ``scas-tune``,
-``scas-value`` (console entry points of pyproject.toml; ``scripts/*.py`` call the same
-functions).
+``scas-value`` (console entry points of pyproject.toml).
 
 Each ``*_main(argv)`` parses its arguments (``argv`` defaults to ``sys.argv[1:]``), checks
 every value and the output place before any work (usage errors, exit status 2), calls one

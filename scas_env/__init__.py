@@ -8,8 +8,11 @@ Layout (imports point down only; ``tests/test_layers.py`` enforces it):
   kernels that advance it, the monitor, the observation and info, scenario and costs.
 - ``scas_env.actuator``: one actuator - parameters, physics, faults, missions, sensing,
   calibration, feature surrogate, shipped data. Never imports gymnasium.
-- ``scas_env.studies``: offline work beside the env - campaigns, the paper's reproduction,
-  figures, builders of the shipped data. Nothing imports it but scripts and tests.
+- ``scas_env.dataset``: the run-to-failure dataset (``scas-export-dataset``): episodes of the
+  env flown to failure, written as tables. Nothing else installed imports it.
+
+The paper's reproduction, its figures and campaigns, and the builders of the shipped data
+are not installed: ``experiments/`` of a source checkout (``python -m experiments.<name>``).
 
 Environment ids are registered here, once, on import.
 """

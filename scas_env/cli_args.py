@@ -1,11 +1,12 @@
 """Shared pieces of the command-line programs: argument types, common options, logging.
 
-Every ``scas-*`` command (:mod:`policies.cli`, :mod:`scas_env.studies.cli`) builds its parser
-with :func:`make_parser` (``--help`` shows every option's default), validates values with the
-argument types below (a bad value is a usage error naming the option, its value and what is
-allowed, exit status 2, before any work starts), and checks its outputs with
-:func:`check_out_dir` / :func:`check_out_file` (an existing result is refused unless
-``--overwrite``; an unwritable place is refused at once, not after the run).
+Every ``scas-*`` command (:mod:`policies.cli`, :mod:`scas_env.dataset.cli`) and every lab
+command of ``experiments/`` builds its parser with :func:`make_parser` (``--help`` shows
+every option's default), validates values with the argument types below (a bad value is a
+usage error naming the option, its value and what is allowed, exit status 2, before any work
+starts), and checks its outputs with :func:`check_out_dir` / :func:`check_out_file` (an
+existing result is refused unless ``--overwrite``; an unwritable place is refused at once,
+not after the run).
 
 >>> positive_int("3")
 3

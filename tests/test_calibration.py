@@ -29,7 +29,7 @@ SHIPPED = default_calibration()
 def test_shipped_calibration_matches_default_parameters() -> None:
     assert SHIPPED.params_digest == params_digest(P), (
         "scas_env/actuator/data/calibration.json is stale: "
-        "run `python scripts/build_calibration.py`"
+        "run `python -m experiments.build.calibration`"
     )
 
 

@@ -1,4 +1,4 @@
-"""Tests of the simulation campaigns (scas_env.studies.campaign and campaign_table)."""
+"""Tests of the simulation campaigns (experiments.paper.campaign and campaign_table)."""
 
 from __future__ import annotations
 
@@ -9,10 +9,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from experiments.paper.campaign import CampaignConfig, run_campaign, run_generator, simulate_run
+from experiments.paper.campaign_table import FORMAT, CampaignResult, campaign_columns, load
 from scas_env.actuator.params import ScasParams
 from scas_env.actuator.physics.spring import failure_depth_from_params
-from scas_env.studies.campaign import CampaignConfig, run_campaign, run_generator, simulate_run
-from scas_env.studies.campaign_table import FORMAT, CampaignResult, campaign_columns, load
 
 PARAMS = ScasParams()
 SEAL_CRIT_M = 20e-6  # explicit, so the tests do not depend on the frequency criterion

@@ -1,8 +1,9 @@
 """Command-line programs: every parser documents every option with its default (and
 docs/cli.md shows each command's --help), bad values are usage errors (one line, exit 2, a
 message naming the option) before any work, the console commands of pyproject.toml exist and
-run from a fresh install (Makefile check-install), scripts are wrappers, and the benchmark
-records the config it ran."""
+run from a fresh install (Makefile check-install), so do the lab commands of experiments/
+(``python -m experiments.<name>``, against that install), no script duplicates a command,
+and the benchmark records the config it ran."""
 
 from __future__ import annotations
 
@@ -29,40 +30,27 @@ from scas_env import cli_args
 from scas_env.actuator.config import tomllib
 from scas_env.core.costs import CostModel
 from scas_env.core.scenario import Scenario
-from scas_env.studies import cli as studies_cli
+from scas_env.dataset import cli as dataset_cli
+from tests import cli_docs
 
 ROOT = Path(__file__).resolve().parents[1]
-PARSERS: dict[str, Callable[[], argparse.ArgumentParser]] = {
-    **policies_cli.PARSERS,
-    **studies_cli.PARSERS,
-}
-MAINS: dict[str, Callable[..., int]] = {
+PARSERS: dict[str, Callable[[], argparse.ArgumentParser]] = cli_docs.parsers()
+#: the console commands of pyproject.toml
+CONSOLE: dict[str, Callable[..., int]] = {
     "scas-benchmark": policies_cli.benchmark_main,
     "scas-train": policies_cli.train_main,
     "scas-tune": policies_cli.tune_main,
     "scas-value": policies_cli.value_main,
-    "scas-campaign": studies_cli.campaign_main,
-    "scas-reproduce": studies_cli.reproduce_main,
-    "scas-simulate": studies_cli.simulate_main,
-    "scas-figures": studies_cli.figures_main,
-    "scas-build-surrogate": studies_cli.build_surrogate_main,
-    "scas-build-calibration": studies_cli.build_calibration_main,
-    "scas-export-dataset": studies_cli.export_dataset_main,
+    "scas-export-dataset": dataset_cli.export_dataset_main,
 }
-#: scripts that are thin wrappers of a console command's main
-WRAPPERS = {
-    "benchmark.py": "benchmark_main",
-    "build_calibration.py": "build_calibration_main",
-    "build_surrogate.py": "build_surrogate_main",
-    "export_dataset.py": "export_dataset_main",
-    "paper_figures.py": "figures_main",
-    "reproduce_paper.py": "reproduce_main",
-    "run_campaign.py": "campaign_main",
-    "simulate.py": "simulate_main",
-    "train.py": "train_main",
-    "tune_policies.py": "tune_main",
-    "value_of_prognostics.py": "value_main",
+#: the lab commands that were console commands (scas-reproduce, scas-campaign,
+#: scas-simulate, scas-figures, scas-build-surrogate, scas-build-calibration, in that order)
+LAB: dict[str, Callable[..., int]] = {
+    f"python -m experiments.{name}": importlib.import_module(f"experiments.{name}").main
+    for name in cli_docs.EXPERIMENTS
 }
+MAINS: dict[str, Callable[..., int]] = {**CONSOLE, **LAB}
+REPRODUCE, CAMPAIGN, DEMO, FIGURES, SURROGATE, CALIBRATION = LAB
 
 
 def _all_parsers(parser: argparse.ArgumentParser) -> list[argparse.ArgumentParser]:
@@ -76,10 +64,10 @@ def _all_parsers(parser: argparse.ArgumentParser) -> list[argparse.ArgumentParse
 
 def test_console_commands_point_at_these_mains() -> None:
     scripts = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]["scripts"]
-    assert set(scripts) == set(MAINS)
+    assert set(scripts) == set(CONSOLE)
     for command, target in scripts.items():
         module, name = target.split(":")
-        assert getattr(importlib.import_module(module), name) is MAINS[command]
+        assert getattr(importlib.import_module(module), name) is CONSOLE[command]
     assert set(PARSERS) == set(MAINS)
 
 
@@ -168,29 +156,29 @@ def _cases(tmp: Path) -> list[tuple[str, list[str], str]]:
         ("scas-tune", ["--out", busy], "exists and is not empty"),
         ("scas-value", ["--workers", "0"], "--workers: '0' is not an integer >= 1"),
         ("scas-value", ["--out", busy], "exists and is not empty"),
-        ("scas-campaign", ["--levels", "1"], "--levels: '1' is not an integer >= 2"),
-        ("scas-campaign", ["--window", "-1"], "--window: '-1' is not a finite number > 0"),
-        ("scas-campaign", ["--modes", "rust"], "--modes: invalid choice: 'rust'"),
-        ("scas-campaign", ["--out", str(tmp / "c")], "c.csv exists; pass --overwrite"),
-        ("scas-reproduce", ["--paths", "0"], "--paths: '0' is not an integer >= 1"),
-        ("scas-reproduce", ["--quick", "--full"], "not allowed with argument"),
+        (CAMPAIGN, ["--levels", "1"], "--levels: '1' is not an integer >= 2"),
+        (CAMPAIGN, ["--window", "-1"], "--window: '-1' is not a finite number > 0"),
+        (CAMPAIGN, ["--modes", "rust"], "--modes: invalid choice: 'rust'"),
+        (CAMPAIGN, ["--out", str(tmp / "c")], "c.csv exists; pass --overwrite"),
+        (REPRODUCE, ["--paths", "0"], "--paths: '0' is not an integer >= 1"),
+        (REPRODUCE, ["--quick", "--full"], "not allowed with argument"),
         (
-            "scas-reproduce",
+            REPRODUCE,
             ["--campaign", str(tmp / "none"), "--out", str(tmp / "o")],
             "none.csv does not exist",
         ),
-        ("scas-simulate", [], "the following arguments are required: --out"),
-        ("scas-simulate", ["--out", busy], "exists and is not empty"),
-        ("scas-simulate", ["--out", str(tmp / "o"), "--window", "nan"], "'nan' is not a finite"),
-        ("scas-figures", ["--out", str(tmp / "o"), "--seed", "-3"], "'-3' is not an integer >= 0"),
-        ("scas-figures", ["--out", str(tmp / "o"), "--params", str(bad)], "no [params] table"),
-        ("scas-build-surrogate", ["--units", "1"], "--units: '1' is not an integer >= 2"),
-        ("scas-build-surrogate", ["--grid", "1"], "--grid: '1' is not an integer >= 2"),
-        ("scas-build-surrogate", ["--out", str(tmp / "c.csv")], "c.csv exists; pass --overwrite"),
-        ("scas-build-calibration", ["--lives", "-1"], "--lives: '-1' is not an integer >= 1"),
-        ("scas-reproduce", ["--runs", "1"], "--runs: '1' is not an integer >= 2"),
+        (DEMO, [], "the following arguments are required: --out"),
+        (DEMO, ["--out", busy], "exists and is not empty"),
+        (DEMO, ["--out", str(tmp / "o"), "--window", "nan"], "'nan' is not a finite"),
+        (FIGURES, ["--out", str(tmp / "o"), "--seed", "-3"], "'-3' is not an integer >= 0"),
+        (FIGURES, ["--out", str(tmp / "o"), "--params", str(bad)], "no [params] table"),
+        (SURROGATE, ["--units", "1"], "--units: '1' is not an integer >= 2"),
+        (SURROGATE, ["--grid", "1"], "--grid: '1' is not an integer >= 2"),
+        (SURROGATE, ["--out", str(tmp / "c.csv")], "c.csv exists; pass --overwrite"),
+        (CALIBRATION, ["--lives", "-1"], "--lives: '-1' is not an integer >= 1"),
+        (REPRODUCE, ["--runs", "1"], "--runs: '1' is not an integer >= 2"),
         (
-            "scas-reproduce",
+            REPRODUCE,
             ["--runs", "3", "--campaign", str(tmp / "c"), "--out", str(tmp / "o")],
             "--runs / --levels size a new campaign",
         ),
@@ -212,34 +200,24 @@ def test_bad_values_are_usage_errors(
         assert not (tmp_path / "o").exists()
 
 
-def test_script_reports_usage_error_without_traceback() -> None:
-    env = {**os.environ, "PYTHONPATH": str(ROOT)}
-    run = subprocess.run(
-        [sys.executable, str(ROOT / "scripts" / "benchmark.py"), "--episodes", "0"],
-        capture_output=True,
-        text=True,
-        env=env,
-        check=False,
-    )
-    assert run.returncode == 2
-    assert "Traceback" not in run.stderr
-    assert "--episodes: '0' is not an integer >= 1" in run.stderr
-
-
-@pytest.mark.parametrize("script", sorted(WRAPPERS))
-def test_scripts_are_wrappers(script: str) -> None:
-    """Each script imports one main from a CLI module and calls it: no logic of its own."""
-    tree = ast.parse((ROOT / "scripts" / script).read_text())
-    body = [n for n in tree.body if not isinstance(n, ast.Expr)]  # the docstring
-    assert len(body) == 2
-    imp, guard = body
-    assert isinstance(imp, ast.ImportFrom) and imp.module in (
-        "policies.cli",
-        "scas_env.studies.cli",
-    )
-    assert [a.name for a in imp.names] == [WRAPPERS[script]]
-    assert isinstance(guard, ast.If) and "__main__" in ast.unparse(guard.test)
-    assert ast.unparse(guard.body[0]) == f"raise SystemExit({WRAPPERS[script]}())"
+def test_no_script_duplicates_a_command() -> None:
+    """A command has one entry point: no script calls a console command's or an
+    experiment's ``main`` (the thin copies are gone)."""
+    gone = [
+        "benchmark", "train", "tune_policies", "value_of_prognostics", "export_dataset",
+        "run_campaign", "reproduce_paper", "simulate", "paper_figures", "build_surrogate",
+        "build_calibration", "build_mission_types", "preset_table", "severity_at_detection",
+        "fingerprint", "bench_env", "profile_vector_env", "fleet_figures",
+        "split_epoch_training",
+    ]  # fmt: skip
+    assert not [n for n in gone if (ROOT / "scripts" / f"{n}.py").exists()]
+    mains = {f.__name__ for f in CONSOLE.values()}
+    for script in sorted((ROOT / "scripts").glob("*.py")):
+        for node in ast.walk(ast.parse(script.read_text())):
+            if isinstance(node, ast.ImportFrom) and node.module:
+                names = {a.name for a in node.names}
+                assert not (node.module == "policies.cli" and names & mains), script.name
+                assert not (node.module.startswith("experiments") and "main" in names), script
 
 
 def test_policy_whose_module_is_missing_is_a_usage_error(
@@ -493,18 +471,18 @@ def _process_cases(f: dict[str, Path], tmp: Path) -> list[tuple[str, list[str], 
         ("scas-tune", ["--costs", str(f["latin1"])], "latin1.toml: not UTF-8 text"),
         ("scas-value", ["--workers", "0"], "--workers: '0' is not an integer >= 1"),
         ("scas-value", ["--scenario", str(f["obs_mode"])], "obs_mode is set per arm"),
-        ("scas-campaign", ["--levels", "1"], "--levels: '1' is not an integer >= 2"),
-        ("scas-campaign", ["--params", str(f["costs_only"])], "no [params] table"),
-        ("scas-reproduce", ["--quick", "--full"], "not allowed with argument"),
-        ("scas-reproduce", ["--runs", "1"], "--runs: '1' is not an integer >= 2"),
-        ("scas-simulate", [], "the following arguments are required: --out"),
-        ("scas-simulate", ["--out", out, "--window", "nan"], "'nan' is not a finite"),
-        ("scas-figures", ["--out", out, "--seed", "-3"], "'-3' is not an integer >= 0"),
-        ("scas-figures", ["--out", out, "--params", str(f["list"])], "expected a mapping"),
-        ("scas-build-surrogate", ["--grid", "1"], "--grid: '1' is not an integer >= 2"),
-        ("scas-build-surrogate", ["--params", str(f["latin1"])], "latin1.toml: not UTF-8 text"),
-        ("scas-build-calibration", ["--lives", "-1"], "'-1' is not an integer >= 1"),
-        ("scas-build-calibration", ["--out", str(f["list"]) + "/x"], "list.json is a file"),
+        (CAMPAIGN, ["--levels", "1"], "--levels: '1' is not an integer >= 2"),
+        (CAMPAIGN, ["--params", str(f["costs_only"])], "no [params] table"),
+        (REPRODUCE, ["--quick", "--full"], "not allowed with argument"),
+        (REPRODUCE, ["--runs", "1"], "--runs: '1' is not an integer >= 2"),
+        (DEMO, [], "the following arguments are required: --out"),
+        (DEMO, ["--out", out, "--window", "nan"], "'nan' is not a finite"),
+        (FIGURES, ["--out", out, "--seed", "-3"], "'-3' is not an integer >= 0"),
+        (FIGURES, ["--out", out, "--params", str(f["list"])], "expected a mapping"),
+        (SURROGATE, ["--grid", "1"], "--grid: '1' is not an integer >= 2"),
+        (SURROGATE, ["--params", str(f["latin1"])], "latin1.toml: not UTF-8 text"),
+        (CALIBRATION, ["--lives", "-1"], "'-1' is not an integer >= 1"),
+        (CALIBRATION, ["--out", str(f["list"]) + "/x"], "list.json is a file"),
         ("scas-export-dataset", ["--units", "0"], "--units: '0' is not an integer >= 1"),
         ("scas-export-dataset", ["--out", out, "--formats", "xls"], "allowed parquet, csv"),
     ]
@@ -513,20 +491,24 @@ def _process_cases(f: dict[str, Path], tmp: Path) -> list[tuple[str, list[str], 
 def test_bad_arguments_in_a_process_are_one_line_and_exit_2(
     bad_files: dict[str, Path], tmp_path: Path
 ) -> None:
-    """Each console command's bad-argument cases as a user runs them: exit status 2, one
-    line on stderr naming the problem, no traceback, nothing written (4 processes at once)."""
+    """Each command's bad-argument cases as a user runs them (a console command, ``python -m
+    experiments.<name>`` from the repository): exit status 2, one line on stderr naming the
+    problem, no traceback, nothing written (4 processes at once)."""
     scripts = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]["scripts"]
     cases = _process_cases(bad_files, tmp_path)
-    assert {c for c, _, _ in cases} == set(scripts)  # every console command
+    assert {c for c, _, _ in cases} == set(MAINS)  # every console and lab command
     env = {**os.environ, "PYTHONPATH": str(ROOT), "COLUMNS": "100"}
     failures = []
     for start in range(0, len(cases), 4):
         running = []
         for command, argv, message in cases[start : start + 4]:
-            module, name = scripts[command].split(":")
-            code = f"import sys; from {module} import {name}; sys.exit({name}())"
+            if command in scripts:
+                module, name = scripts[command].split(":")
+                code = ["-c", f"import sys; from {module} import {name}; sys.exit({name}())"]
+            else:  # python -m experiments.<name>
+                code = command.split()[1:]
             proc = subprocess.Popen(
-                [sys.executable, "-c", code, *argv],
+                [sys.executable, *code, *argv],
                 stdout=subprocess.PIPE,
                 stderr=subprocess.PIPE,
                 text=True,
@@ -551,24 +533,48 @@ def test_bad_arguments_in_a_process_are_one_line_and_exit_2(
 
 
 def test_docs_show_every_command_s_help_verbatim() -> None:
-    """docs/cli.md holds each console command's --help as the parser prints it (rewrite:
+    """docs/cli.md holds each command's --help as the parser prints it (rewrite:
     ``python -m tests.cli_docs``)."""
-    from tests import cli_docs
-
     shown = cli_docs.blocks(cli_docs.DOC.read_text())
     assert set(shown) == set(MAINS)
     stale = [c for c in MAINS if shown[c] != cli_docs.render(c)]
     assert not stale, f"docs/cli.md: --help of {stale} changed; run python -m tests.cli_docs"
 
 
-def test_check_install_runs_every_console_command_at_a_tiny_size() -> None:
-    """The Makefile's check-install runs each console command from the fresh venv."""
+def test_check_install_runs_every_command_at_a_tiny_size() -> None:
+    """The Makefile's check-install runs each console command from the fresh venv, and each
+    lab command of experiments/ with that venv's Python (against the installed wheel)."""
     text = (ROOT / "Makefile").read_text()
     recipe = text.split("\ncheck-install:", 1)[1].split("\n\n", 1)[0]
     scripts = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]["scripts"]
     ran = set(re.findall(r"(?:venv/bin|\$\(CHECK_RUN\))/(scas-[\w-]+) ", recipe))
     missing = [c for c in scripts if c not in ran]
     assert not missing, f"check-install does not run {missing}"
+    lab = set(re.findall(r"venv/bin/python (-m experiments\.[\w.]+) ", recipe))
+    missing = [c for c in LAB if c.removeprefix("python ") not in lab]
+    assert not missing, f"check-install does not run {missing}"
+
+
+@pytest.mark.slow
+def test_lab_commands_run_at_a_tiny_size(tmp_path: Path) -> None:
+    """Each lab command end to end at check-install's sizes (files written)."""
+    runs = {
+        DEMO: ["--window", "1", "--out", "demo"],
+        FIGURES: ["--out", "figures"],
+        CAMPAIGN: ["--runs", "2", "--levels", "2", "--workers", "1", "--out", "campaign/c"],
+        REPRODUCE: ["--quick", "--runs", "2", "--levels", "3", "--paths", "1", "--workers",
+                    "1", "--out", "r"],
+        SURROGATE: ["--grid", "2", "--units", "2", "--runs", "2", "--paired-units", "2",
+                    "--workers", "1", "--out", "s.json"],
+        CALIBRATION: ["--windows", "2", "--whole-flights", "2", "--lives", "100", "--out",
+                      "cal.json"],
+    }  # fmt: skip
+    assert set(runs) == set(LAB)
+    for command, argv in runs.items():
+        argv[-1] = str(tmp_path / argv[-1])
+        assert LAB[command]([*argv, "-q"]) == 0, command
+    written = {p.name for p in tmp_path.rglob("*") if p.is_file()}
+    assert {"c.csv", "c.json", "report.json", "s.json", "cal.json", "figures.json"} <= written
 
 
 def test_quick_sizes_are_the_modules_and_keep_full_length_episodes() -> None:

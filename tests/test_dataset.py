@@ -14,18 +14,18 @@ import scas_env
 from scas_env.actuator.params import ScasParams
 from scas_env.actuator.physics.fluid import dynamic_viscosity
 from scas_env.core.scenario import Scenario
-from scas_env.studies.run_to_failure import (
-    export_run_to_failure,
-    leakage_fraction,
-    simulate_units,
-    unit_seeds,
-)
-from scas_env.studies.run_to_failure_data import (
+from scas_env.dataset.files import (
     FLIGHT_COLUMNS,
     load_run_to_failure,
     split_by_unit,
     to_table,
     write_dataset,
+)
+from scas_env.dataset.run_to_failure import (
+    export_run_to_failure,
+    leakage_fraction,
+    simulate_units,
+    unit_seeds,
 )
 
 pytest.importorskip("pyarrow")
@@ -229,7 +229,7 @@ def test_workers_do_not_change_the_rows() -> None:
 
 
 def test_docs_list_every_column() -> None:
-    from scas_env.studies.run_to_failure_data import UNIT_COLUMNS
+    from scas_env.dataset.files import UNIT_COLUMNS
 
     text = (Path(__file__).resolve().parents[1] / "docs" / "dataset.md").read_text()
     for c in (*FLIGHT_COLUMNS, *UNIT_COLUMNS):

@@ -8,13 +8,8 @@ import json
 import numpy as np
 import pytest
 
-from scas_env.actuator.bandwidth import cutoff_frequency_hz, seal_criterion
-from scas_env.actuator.flight_damage import CrackRateTable, growth_model, load_spectrum_from_physics
-from scas_env.actuator.health import HealthState
-from scas_env.actuator.params import ScasParams
-from scas_env.actuator.physics.crack_growth import block_growth_rate_m, crack_history
-from scas_env.studies.demo import CSV_COLUMNS, run_demo
-from scas_env.studies.figure_data import (
+from experiments.paper.demo import CSV_COLUMNS, run_demo
+from experiments.paper.figure_data import (
     PaperFigures,
     crack_growth_curves,
     fig3_spring_rate,
@@ -23,7 +18,12 @@ from scas_env.studies.figure_data import (
     fig7a_null_bias,
     fig7b_seal_gain,
 )
-from scas_env.studies.figure_drawing import PAPER_PLOTS, plot_demo_condition, save_paper_figures
+from experiments.paper.figures import PAPER_PLOTS, plot_demo_condition, save_paper_figures
+from scas_env.actuator.bandwidth import cutoff_frequency_hz, seal_criterion
+from scas_env.actuator.flight_damage import CrackRateTable, growth_model, load_spectrum_from_physics
+from scas_env.actuator.health import HealthState
+from scas_env.actuator.params import ScasParams
+from scas_env.actuator.physics.crack_growth import block_growth_rate_m, crack_history
 
 P = ScasParams()
 

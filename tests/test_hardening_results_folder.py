@@ -180,24 +180,28 @@ def test_an_unwritable_parent_is_refused_even_for_root() -> None:
 
 # --- one rule for every --out folder (issue 27) ------------------------------------------
 
-#: the console commands (pyproject.toml) whose --out is a results folder
+#: the commands (pyproject.toml's console commands, experiments' lab commands) whose --out
+#: is a results folder
 RESULTS_COMMANDS = (
     "scas-benchmark",
     "scas-tune",
     "scas-value",
-    "scas-reproduce",
-    "scas-simulate",
-    "scas-figures",
+    "python -m experiments.paper.reproduce",
+    "python -m experiments.paper.demo",
+    "python -m experiments.paper.figures",
     "scas-export-dataset",
 )
 
 
 def _main(command: str) -> Any:
-    """The function behind a console command, from pyproject.toml's [project.scripts]."""
+    """The function behind a console command (pyproject.toml's [project.scripts]) or a lab
+    command (``python -m experiments.<name>``: that module's ``main``)."""
     import importlib
 
     from scas_env.actuator.config import tomllib
 
+    if command.startswith("python -m "):
+        return importlib.import_module(command.removeprefix("python -m ")).main
     root = Path(__file__).resolve().parents[1]
     scripts = tomllib.loads((root / "pyproject.toml").read_text())["project"]["scripts"]
     module, name = scripts[command].split(":")

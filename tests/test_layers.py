@@ -4,7 +4,7 @@ Imports point down only::
 
     scripts, tests, experiments (not installed: may import anything; nothing imports them)
     policies                     rules, agents, benchmark, value studies
-    scas_env.studies             offline work beside the env
+    scas_env.dataset             the run-to-failure dataset (episodes of the env, as tables)
     faces: scas_env/*.py         the Gymnasium faces (env, vector env, decision epochs, ...)
     scas_env.core                the simulation core
     scas_env.actuator            the model of one actuator
@@ -17,10 +17,11 @@ Imports point down only::
   that build observation spaces, ``scas_env/core/observation.py`` (an actuator's) and
   ``scas_env/core/fleet/view.py`` (a fleet's): a layout lives once, with its assembly;
   every other core module is Gymnasium-free;
-- the faces import the core, the model, utils (and prognostics), never the studies;
-- the studies may import the faces, the core and the model; nothing in ``scas_env`` or
-  ``policies`` imports the studies (but the studies themselves) or ``experiments``;
-  ``scas_env`` never imports ``policies``;
+- the faces import the core, the model, utils (and prognostics), never the dataset;
+- the dataset may import the faces, the core and the model; nothing in ``scas_env`` or
+  ``policies`` imports the dataset (but the dataset itself) or ``experiments`` (the paper's
+  reproduction, figures and campaigns, the builders of the shipped data: lab work, not
+  installed); ``scas_env`` never imports ``policies``;
 - no import circle anywhere (every import counts: module level, inside functions and under
   ``TYPE_CHECKING``);
 - no folder of the installed packages holds more than 15 modules (``.py`` files besides
@@ -53,7 +54,7 @@ KNOWN_CIRCLES = {
         ("experiments.sensing_sweep", "experiments.sensing_sweep_output"),
     )
 }
-KNOWN_LARGE_FOLDERS = {"scas_env.studies"}
+KNOWN_LARGE_FOLDERS: set[str] = set()
 
 
 def _module_name(path: Path) -> str:
@@ -71,7 +72,7 @@ def _layer(module: str) -> str:
         ("scas_env.utils", "utils"),
         ("scas_env.actuator", "model"),
         ("scas_env.core", "core"),
-        ("scas_env.studies", "studies"),
+        ("scas_env.dataset", "dataset"),
     ):
         if module == prefix or module.startswith(prefix + "."):
             return layer
@@ -88,11 +89,11 @@ ALLOWED: dict[str, set[str]] = {
     "model": {"utils", "prognostics", "version"},
     "core": {"model", "utils", "prognostics", "version"},
     "faces": {"core", "model", "utils", "prognostics", "version"},
-    "studies": {"faces", "core", "model", "utils", "prognostics", "version"},
+    "dataset": {"faces", "core", "model", "utils", "prognostics", "version"},
     "policies": {"faces", "core", "model", "utils", "prognostics", "version"},
     "experiments": {
         "policies",
-        "studies",
+        "dataset",
         "faces",
         "core",
         "model",
@@ -248,17 +249,17 @@ def _check_file(path: Path, module: str) -> None:
             )
 
 
-def test_studies_and_experiments_are_imported_by_nobody_below() -> None:
+def test_dataset_and_experiments_are_imported_by_nobody_below() -> None:
     """Said separately (the layer table says it too): the installed packages never import
-    ``experiments``; outside the studies, nothing installed imports ``scas_env.studies``;
+    ``experiments``; outside the dataset, nothing installed imports ``scas_env.dataset``;
     ``scas_env`` never imports ``policies``."""
     for module, targets in _graph().items():
         if module.split(".")[0] not in INSTALLED:
             continue
         for t in targets:
             assert not t.startswith("experiments"), f"{module} imports {t}"
-            if _layer(module) != "studies":
-                assert _layer(t) != "studies", f"{module} imports {t}"
+            if _layer(module) != "dataset":
+                assert _layer(t) != "dataset", f"{module} imports {t}"
             if module.startswith("scas_env"):
                 assert not t.startswith("policies"), f"{module} imports {t}"
 
@@ -303,12 +304,16 @@ def test_no_folder_holds_more_than_15_modules() -> None:
     assert large <= KNOWN_LARGE_FOLDERS, {f: _module_counts()[f] for f in large}
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="layout debt: scas_env.studies holds 16 modules",
-)
-def test_the_known_large_folders_are_split() -> None:
-    assert not {f for f, n in _module_counts().items() if n > MAX_MODULES}
+def test_the_lab_work_is_not_installed() -> None:
+    """The paper's reproduction, figures, campaigns and the builders of the shipped data live
+    in ``experiments/`` (outside pyproject's packages); no installed folder is "studies"."""
+    from scas_env.actuator.config import tomllib
+
+    found = tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["setuptools"]
+    assert found["packages"]["find"]["include"] == [f"{p}*" for p in INSTALLED]
+    assert not (ROOT / "scas_env" / "studies").exists()
+    for name in ("paper.reproduction", "paper.campaign", "paper.figures", "build.surrogate"):
+        assert _is_module(f"experiments.{name}"), name
 
 
 # ----------------------------------------------------------------------------- the checker
@@ -334,13 +339,14 @@ def test_the_checker_catches_what_it_should(tmp_path: Path) -> None:
     with pytest.raises(AssertionError, match="at module level"):
         _check_file(bad, "scas_env.dashboard_probe")
     assert "faces" not in ALLOWED["model"] and "faces" not in ALLOWED["core"]
-    assert "studies" not in ALLOWED["faces"] and "studies" not in ALLOWED["policies"]
+    assert "dataset" not in ALLOWED["faces"] and "dataset" not in ALLOWED["policies"]
     assert "policies" not in ALLOWED["faces"] and "experiments" not in ALLOWED["policies"]
     assert _layer("scas_env.actuator.physics.spring") == "model"
     assert _layer("scas_env.core.slot") == "core"
     assert _layer("scas_env.env") == _layer("scas_env") == "faces"
     assert _layer("scas_env.utils.atomic_file") == "utils"
-    assert _layer("scas_env.studies.campaign") == "studies"
+    assert _layer("scas_env.dataset.run_to_failure") == "dataset"
+    assert _layer("experiments.paper.campaign") == "experiments"
     assert _cycles({"a": {"b"}, "b": {"c"}, "c": {"a"}, "d": {"a"}}) == [frozenset("abc")]
     assert _cycles({"a": {"b"}, "b": set()}) == []
     assert _project_target("scas_env.core.setup.Setup") == "scas_env.core.setup"

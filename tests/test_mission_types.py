@@ -8,6 +8,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from experiments.build.mission_types import regime_mix_multipliers
 from scas_env.actuator.calibration import default_calibration
 from scas_env.actuator.flight_damage import simulated_flight_damage
 from scas_env.actuator.mission_damage import (
@@ -26,7 +27,6 @@ from scas_env.actuator.mission_types import (
 )
 from scas_env.actuator.missions import REGIMES, flight_profile
 from scas_env.actuator.params import ScasParams
-from scas_env.studies.mission_types_build import regime_mix_multipliers
 from scas_env.utils.shipped_files import shipped_path
 
 P = ScasParams()
@@ -226,7 +226,7 @@ def test_shipped_table_matches_a_quick_rebuild_within_monte_carlo_error() -> Non
     # flight's. Depths from 55 um: closer to the dormant depth a 15 min flight can hold no
     # cycle above the threshold, and cycles pairing extremes of far-apart segments (longer
     # flights hold more) make the ratio depend on the flight's length.
-    from scas_env.studies.mission_types_build import build_mission_types
+    from experiments.build.mission_types import build_mission_types
 
     n, duration = 4, 900.0
     quick = build_mission_types(P, seed=1, n_flights=n, duration_s=duration, progress=False)

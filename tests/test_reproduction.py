@@ -1,4 +1,4 @@
-"""Tests of the paper reproduction (scas_env.studies.reproduction*, prognostics.prognosis_run)."""
+"""Tests of the paper reproduction (experiments.paper.reproduction*, prognostics.prognosis_run)."""
 
 from __future__ import annotations
 
@@ -8,6 +8,19 @@ import math
 import numpy as np
 import pytest
 
+from experiments.paper.reproduction import FAULTS, ReproductionConfig, run_reproduction
+from experiments.paper.reproduction_conventions import G2_REASON, leakage_fraction
+from experiments.paper.reproduction_detection import installation_detection
+from experiments.paper.reproduction_prognosis import INSTALLATION_EFFECT, VARIANTS
+from experiments.paper.reproduction_report import (
+    PAPER,
+    detection_severity,
+    paper_mean,
+    path_detections,
+    prognosis_summary,
+    verdicts,
+    write_report,
+)
 from prognostics.degradation_models import linear_wear_model, paris_crack_model
 from prognostics.detection import DetectorConfig, PercentileDetector
 from prognostics.measurement import MeasurementModel, fit_measurement_model
@@ -23,19 +36,6 @@ from prognostics.prognosis_run import (
 from prognostics.rul import HazardZone
 from scas_env.actuator.params import ScasParams
 from scas_env.actuator.surrogate import default_surrogate
-from scas_env.studies.reproduction import FAULTS, ReproductionConfig, run_reproduction
-from scas_env.studies.reproduction_conventions import G2_REASON, leakage_fraction
-from scas_env.studies.reproduction_detection import installation_detection
-from scas_env.studies.reproduction_prognosis import INSTALLATION_EFFECT, VARIANTS
-from scas_env.studies.reproduction_report import (
-    PAPER,
-    detection_severity,
-    paper_mean,
-    path_detections,
-    prognosis_summary,
-    verdicts,
-    write_report,
-)
 
 
 # ----------------------------------------------------------------------------- helpers

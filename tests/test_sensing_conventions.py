@@ -5,15 +5,15 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from scas_env.actuator.calibration import default_calibration
-from scas_env.actuator.params import ScasParams
-from scas_env.actuator.physics.seal import laminar_leakage_coeff_m3_s_pa
-from scas_env.actuator.presets import PRESETS, preset_params
-from scas_env.studies.reproduction_conventions import (
+from experiments.paper.reproduction_conventions import (
     EXCLUDED_FEATURES,
     g2_noise_check,
     leakage_fraction,
 )
+from scas_env.actuator.calibration import default_calibration
+from scas_env.actuator.params import ScasParams
+from scas_env.actuator.physics.seal import laminar_leakage_coeff_m3_s_pa
+from scas_env.actuator.presets import PRESETS, preset_params
 
 P = ScasParams()
 CAL = default_calibration()
@@ -87,7 +87,7 @@ def _report(ours: str, verdict: str, claim: str = "seal wear: severity at detect
 def test_preset_table_has_a_column_per_preset(tmp_path) -> None:
     import json
 
-    from scas_env.studies.reproduction_presets import preset_table, read_reports
+    from experiments.paper.reproduction_presets import preset_table, read_reports
 
     paths = {}
     for name, ours, verdict in (("realistic", "0.27", "differs"), ("paper", "0.10", "holds")):

@@ -5,10 +5,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from experiments.build.surrogate import random_effects, unit_runs
 from scas_env.actuator.calibration import default_calibration, params_digest
 from scas_env.actuator.params import ScasParams
 from scas_env.actuator.surrogate import SurrogateModel, default_surrogate
-from scas_env.studies.surrogate_builder import random_effects, unit_runs
 
 P = ScasParams()
 MODEL = default_surrogate()
@@ -16,7 +16,8 @@ MODEL = default_surrogate()
 
 def test_shipped_surrogate_matches_default_parameters() -> None:
     assert MODEL.params_digest == params_digest(P), (
-        "scas_env/actuator/data/surrogate.json is stale: run `python scripts/build_surrogate.py`"
+        "scas_env/actuator/data/surrogate.json is stale: "
+        "run `python -m experiments.build.surrogate`"
     )
 
 

@@ -17,7 +17,7 @@ conventions:
 
 Default parameters are the constants ``*_DEFAULTS`` below: tuned with Optuna TPE on
 training seeds, one budget per family (:mod:`policies.value.tuning`,
-``python scripts/value_of_prognostics.py``; docs/value.md and docs/value_ladder.md give the
+``scas-value``; docs/value.md and docs/value_ladder.md give the
 held-out figures).
 """
 

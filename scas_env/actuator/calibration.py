@@ -2,8 +2,9 @@
 
 Everything the fast (surrogate) world and the particle filters need about degradation,
 computed once from the physics and shipped as ``scas_env/actuator/data/calibration.json``
-(rebuild: ``python scripts/build_calibration.py``; ``tests/test_calibration.py`` fails
-when the shipped file no longer matches the default parameters):
+(rebuild: ``python -m experiments.build.calibration`` in a source checkout;
+``tests/test_calibration.py`` fails when the shipped file no longer matches the default
+parameters):
 
 * the seal failure criterion (critical wear, cut-off frequencies) and the spring failure
   depth of the nominal unit;
@@ -116,7 +117,8 @@ class Calibration:
         if not isinstance(self.version, int) or self.version != CALIBRATION_VERSION:
             raise ValueError(
                 f"calibration version {self.version!r} is not the supported "
-                f"{CALIBRATION_VERSION}; rebuild it with scripts/build_calibration.py"
+                f"{CALIBRATION_VERSION}; rebuild it with build_calibration "
+                "(python -m experiments.build.calibration)"
             )
         if not isinstance(self.params_digest, str):
             raise ValueError(f"{own}.params_digest = {self.params_digest!r} must be a string")
@@ -260,7 +262,8 @@ def build_calibration(
 ) -> Calibration:
     """Compute the calibration of ``params`` from physics (a few seconds with defaults).
 
-    The shipped ``data/calibration.json`` is ``scas-build-calibration``'s output: seed 2020,
+    The shipped ``data/calibration.json`` is the output of ``python -m
+    experiments.build.calibration`` (a source checkout's builder): seed 2020,
     ``n_windows=60``, ``whole_flights=40`` (its defaults; this function's ``n_windows=30``
     keeps tests fast and gives other scatter estimates).
 

@@ -3,7 +3,7 @@
 Each mission type (:mod:`scas_env.actuator.mission_types`) changes how fast the two faults
 grow per flight. The table holds, per type, measured from whole simulated flights of the
 nominal unit (the procedure of the v2 calibration's whole-flight scatter, no window
-scaling; builder :func:`scas_env.studies.mission_types_build.build_mission_types`):
+scaling; builder :func:`experiments.build.mission_types.build_mission_types`):
 
 * ``crack_multiplier[a]``: mean Paris crack growth per flight of the type / that of the
   standard mix, at each depth ``a`` of the calibration's growth-table grid
@@ -20,9 +20,9 @@ type's multiplier: :meth:`MissionDamageTable.crack_rate_tables` and
 :meth:`MissionDamageTable.wear_rates` give the arrays.
 
 Shipped as ``scas_env/actuator/data/mission_types.json`` (rebuild:
-``python scripts/build_mission_types.py``); :func:`default_mission_damage` loads it, checks
-it against the SHA-256 manifest and refuses a table whose type definitions or actuator
-parameters differ from the code's.
+``python -m experiments.build.mission_types`` in a source checkout);
+:func:`default_mission_damage` loads it, checks it against the SHA-256 manifest and refuses
+a table whose type definitions or actuator parameters differ from the code's.
 """
 
 from __future__ import annotations
@@ -52,7 +52,7 @@ from scas_env.utils.table_checks import (
 FloatArray = npt.NDArray[np.float64]
 MISSION_DAMAGE_VERSION = 1
 DATA_FILE = "mission_types.json"
-_REBUILD = "python scripts/build_mission_types.py"
+_REBUILD = "python -m experiments.build.mission_types"
 
 
 @dataclass(frozen=True, eq=False)

@@ -11,7 +11,7 @@ wear fraction ``w = lambda / lambda_crit``::
   (fluid temperature, air, supply pressure, sensor noise, the flight's command draw).
 * All three are tabulated on a grid of (c, w) and interpolated bilinearly; outside
   [0, 1]^2 a ``ValueError`` is raised (a part at its critical value has failed).
-* The tables come from a nested physics design (``scas_env.studies.surrogate_builder``): at every
+* The tables come from a nested physics design (``experiments.build.surrogate``): at every
   grid point, several units with several runs each; ``tau`` and ``sigma`` from the one-way
   random-effects ANOVA (``tau^2 = (MS_between - MS_within)/R``, taken as 0 when the
   estimate is negative, the usual truncated estimator).
@@ -70,7 +70,7 @@ class SurrogateModel:
     params_digest : digest of the parameters the physics ran with.
     seed, units_per_point, runs_per_unit : the design it was built from.
     feature_designs : features whose tables come from another design, with that design
-        (``scas_env.studies.surrogate_builder``: I8 and I9 from a paired design).
+        (``experiments.build.surrogate``: I8 and I9 from a paired design).
     """
 
     features: tuple[str, ...]
@@ -91,7 +91,7 @@ class SurrogateModel:
         if not isinstance(self.version, int) or self.version != SURROGATE_VERSION:
             raise ValueError(
                 f"surrogate version {self.version!r} is not the supported {SURROGATE_VERSION}; "
-                "rebuild it with scripts/build_surrogate.py"
+                "rebuild it with python -m experiments.build.surrogate (a source checkout)"
             )
         if isinstance(self.features, str) or not all(isinstance(f, str) for f in self.features):
             raise ValueError(f"{own}.features = {self.features!r} must be a list of feature ids")

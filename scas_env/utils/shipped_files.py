@@ -9,8 +9,9 @@ bytes differ from the manifest (a corrupted or hand-edited copy) is refused with
 :class:`ShippedFileError` naming the file; a file outside the shipped folders (a user's own
 calibration or agent) is not checked.
 
-Rebuild the manifest after regenerating a shipped file (``scripts/build_calibration.py``,
-``scripts/build_surrogate.py``, the agent's shipping)::
+Rebuild the manifest after regenerating a shipped file (in a source checkout: ``python -m
+experiments.build.calibration``, ``experiments.build.surrogate``,
+``experiments.build.mission_types``; the agent's shipping)::
 
     python -m scas_env.utils.shipped_files
 

@@ -1,5 +1,8 @@
 """Builder of the mission-type damage table, and an independent per-regime check.
 
+    python -m experiments.build.mission_types --overwrite   # the shipped table, ~20 min
+    python -m scas_env.utils.shipped_files                 # then rebuild the manifest
+
 :func:`build_mission_types` simulates whole flights of every mission type
 (:func:`scas_env.actuator.mission_types.mission_flight_damage`: the nominal unit, noise on,
 the whole 1.5 h flight rainflow-counted, no window scaling, as the v2 calibration's
@@ -18,8 +21,11 @@ rainflow count and Paris' law, and it leaves out the cycles that span two regime
 
 from __future__ import annotations
 
+import argparse
+import json
 import math
 from collections.abc import Sequence
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -50,6 +56,8 @@ __all__ = [
     "DEFAULT_FLIGHTS",
     "DEFAULT_SEED",
     "build_mission_types",
+    "build_parser",
+    "main",
     "mission_type_flights",
     "regime_mix_multipliers",
     "summary_rows",
@@ -247,3 +255,54 @@ def summary_rows(
             }
         )
     return rows
+
+
+# --- command line -----------------------------------------------------------------------
+
+COMMAND_DOC = """\
+Rebuild the mission-type damage table from whole simulated flights.
+
+Logic in experiments.build.mission_types.build_mission_types. The shipped table (~20 min on
+one core): --overwrite writes scas_env/actuator/data/mission_types.json; then rebuild the
+SHA-256 manifest with python -m scas_env.utils.shipped_files.
+"""
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The command's parser."""
+    from scas_env.actuator.mission_damage import DATA_FILE
+    from scas_env.cli_args import add_params_arg, int_at_least, make_parser, nonneg_int
+
+    parser = make_parser("python -m experiments.build.mission_types", COMMAND_DOC)
+    parser.add_argument("--seed", type=nonneg_int, default=DEFAULT_SEED, help="root seed")
+    parser.add_argument(
+        "--flights", type=int_at_least(2), default=DEFAULT_FLIGHTS, help="whole flights per type"
+    )
+    parser.add_argument(
+        "--out",
+        type=Path,
+        default=Path("scas_env/actuator/data") / DATA_FILE,
+        help="output JSON (default: the shipped table of a source checkout)",
+    )
+    parser.add_argument("--overwrite", action="store_true", help="replace an existing --out")
+    add_params_arg(parser)
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Build the table, write it to ``--out`` and print its summary rows."""
+    from scas_env.cli_args import check_out_file, load_params
+
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    check_out_file(parser, args.out, args.overwrite)
+    params = load_params(parser, args)
+    table = build_mission_types(params, seed=args.seed, n_flights=args.flights)
+    table.save(args.out)
+    print(json.dumps(summary_rows(table), indent=1))
+    print(f"wrote {args.out}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -2,30 +2,38 @@
 
 Where the training time goes (docs/rl.md, "Decision epochs on the native vector env")::
 
-    python scripts/split_epoch_training.py --setup epochs-native-64 --init results/agent_v2g1/clone
-    python scripts/split_epoch_training.py --setup epochs-dummy-4 --init results/agent_v2g1/clone
+    python -m experiments.epoch_training_split --setup epochs-native-64 \
+        --init results/agent_v2g1/clone
+    python -m experiments.epoch_training_split --setup epochs-dummy-4 \
+        --init results/agent_v2g1/clone
 """
 
 from __future__ import annotations
 
-import argparse
 import time
+from collections.abc import Sequence
 from pathlib import Path
 
 
-def main() -> None:
-    parser = argparse.ArgumentParser(
-        description=__doc__.splitlines()[0], formatter_class=argparse.ArgumentDefaultsHelpFormatter
-    )
+def main(argv: Sequence[str] | None = None) -> int:
+    """The command line (module docstring): the split printed."""
+    from scas_env.cli_args import make_parser, nonneg_int, positive_int
+
+    parser = make_parser("python -m experiments.epoch_training_split", __doc__)
     parser.add_argument(
-        "--setup", default="epochs-native-64", choices=("epochs-dummy-4", "epochs-native-64")
+        "--setup",
+        default="epochs-native-64",
+        choices=("epochs-dummy-4", "epochs-native-64"),
+        help="the training setup (experiments.sb3_speed.make_setup)",
     )
-    parser.add_argument("--decisions", type=int, default=65_536, help="PPO steps")
-    parser.add_argument("--init", default=None, help="start from this clone (imitate_rule.py)")
-    parser.add_argument("--seed", type=int, default=0)
-    args = parser.parse_args()
-    if args.decisions < 1:
-        parser.error(f"--decisions {args.decisions} must be >= 1")
+    parser.add_argument("--decisions", type=positive_int, default=65_536, help="PPO steps")
+    parser.add_argument(
+        "--init",
+        default=None,
+        help="start from this clone (scripts/imitate_rule.py's --out; default: a new network)",
+    )
+    parser.add_argument("--seed", type=nonneg_int, default=0, help="seed")
+    args = parser.parse_args(argv)
     if args.init is not None and not Path(args.init).is_dir():
         parser.error(f"--init {args.init!r} is not a folder")
 
@@ -60,7 +68,8 @@ def main() -> None:
         f"{wall - clock.rollouts_s:.1f} s; {flights} flights: {flights / wall:,.0f} flights/s, "
         f"{flights / clock.rollouts_s:,.0f} while collecting"
     )
+    return 0
 
 
 if __name__ == "__main__":
-    main()
+    raise SystemExit(main())

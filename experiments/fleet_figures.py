@@ -1,16 +1,16 @@
 """Print the figures of docs/fleet.md: mission-type multipliers and lives, the fleets'
 derived numbers, and the bound against the fleet rules.
 
-    python scripts/fleet_figures.py multipliers   # the shipped table at some depths (~1 s)
-    python scripts/fleet_figures.py lives         # flights to failure per type (~2 s)
-    python scripts/fleet_figures.py configs       # demand and resources of the fleets (~1 s)
-    python scripts/fleet_figures.py bound --seeds 0 1 2 3 --days 365   # ~30 s
+    python -m experiments.fleet_figures multipliers  # the shipped table at some depths (~1 s)
+    python -m experiments.fleet_figures lives        # flights to failure per type (~2 s)
+    python -m experiments.fleet_figures configs      # demand and resources of the fleets (~1 s)
+    python -m experiments.fleet_figures bound --seeds 0 1 2 3 --days 365   # ~30 s
 """
 
 from __future__ import annotations
 
-import argparse
 import math
+from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
@@ -63,9 +63,10 @@ def lives(units: int = 20_000, seed: int = 0) -> None:
     """Flights to failure of random units flying one mission type all their lives: the
     calibration's ``sample_lives`` construction with the type's growth table and wear rate."""
     from prognostics.degradation_models import paris_crack_model
-    from scas_env.actuator.calibration import calibration_for, draw_units, sample_lives
+    from scas_env.actuator.calibration import calibration_for, sample_lives
     from scas_env.actuator.mission_damage import default_mission_damage
     from scas_env.actuator.params import ScasParams
+    from scas_env.actuator.uncertainty import draw_units
 
     params = ScasParams()
     cal = calibration_for(params)
@@ -146,15 +147,18 @@ def bound(seeds: list[int], days: int) -> None:
         print(f"| {family} | " + " | ".join(f"{row[k]:.3g}" for k in KPI_COLUMNS) + " |")
 
 
-def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+def main(argv: Sequence[str] | None = None) -> int:
+    """The command line (module docstring): one table printed per call."""
+    from scas_env.cli_args import make_parser, nonneg_int, positive_int
+
+    parser = make_parser("python -m experiments.fleet_figures", __doc__)
     sub = parser.add_subparsers(dest="figure", required=True)
     sub.add_parser("multipliers", help=multipliers.__doc__.splitlines()[0])
     sub.add_parser("lives", help=lives.__doc__.splitlines()[0])
     sub.add_parser("configs", help=configs.__doc__.splitlines()[0])
     b = sub.add_parser("bound", help=bound.__doc__.splitlines()[0])
-    b.add_argument("--seeds", type=int, nargs="+", default=[0, 1, 2, 3])
-    b.add_argument("--days", type=int, default=365)
+    b.add_argument("--seeds", type=nonneg_int, nargs="+", default=[0, 1, 2, 3], help="seeds")
+    b.add_argument("--days", type=positive_int, default=365, help="episode days")
     args = parser.parse_args(argv)
     if args.figure == "bound":
         bound(args.seeds, args.days)

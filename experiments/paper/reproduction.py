@@ -1,10 +1,10 @@
 """End-to-end reproduction of [DJS20] §4-5 from this package's physics.
 
 Pipeline (:func:`run_reproduction`; the report and plots are in
-:mod:`scas_env.studies.reproduction_report`):
+:mod:`experiments.paper.reproduction_report`):
 
 1. **Campaign** (§4): ``n_runs`` x ``n_levels`` runs of the ``crack`` and ``wear`` modes, both
-   conditions (:func:`scas_env.studies.campaign.run_campaign`), or a saved one.
+   conditions (:func:`experiments.paper.campaign.run_campaign`), or a saved one.
 2. **Selection** (§4, reference sheet §7.2), per fault mode and condition:
    :func:`prognostics.selection.rank_features` (correlation, SNR, accuracy, severity at
    detection). Redundancy: Jeffreys divergence of the normalised responses
@@ -19,7 +19,7 @@ Pipeline (:func:`run_reproduction`; the report and plots are in
    in-flight features and I8, I9), flagged non-responsive when
    |Spearman| < ``RESPONSIVE_MIN_SPEARMAN`` or SNR <= 0 dB; ``flight_table2`` is the top
    among Table 2's alone (the paper's pool, compared with the paper). G2 is left out of
-   every ranking (:data:`~scas_env.studies.reproduction_conventions.EXCLUDED_FEATURES`: it
+   every ranking (:data:`~experiments.paper.reproduction_conventions.EXCLUDED_FEATURES`: it
    measures no overshoot).
 3. **Detection** (§5.1): :class:`~prognostics.detection.PercentileDetector` (P95 of the
    population of healthy runs of both modes, 95% of a running window of W values beyond it)
@@ -27,7 +27,7 @@ Pipeline (:func:`run_reproduction`; the report and plots are in
    ``p W .. (p+1) W - 1`` (``n_runs // W`` paths). A fault is declared when any selected
    feature alarms. False-alarm rate: 2-fold cross-validation on the healthy runs.
 4. **Prognosis** (§5.2, Fig. 9), ``n_paths`` paths per fault, in two variants (paper
-   protocol and installation baseline): :mod:`scas_env.studies.reproduction_prognosis`. The
+   protocol and installation baseline): :mod:`experiments.paper.reproduction_prognosis`. The
    installation
    baseline's run-to-run spread comes from a nested set of ``healthy_units`` healthy units
    with ``installation_tests + detector_window`` tests each (the campaign has one run per
@@ -47,16 +47,10 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from prognostics.detection import DetectorConfig, PercentileDetector, severity_at_detection
-from prognostics.features import CANDIDATE_INFO, FEATURE_INFO
-from prognostics.selection import FeatureScore, rank_features, redundancy_matrix, redundant_pairs
-from scas_env.actuator.calibration import Calibration, calibration_for
-from scas_env.actuator.config import Validated, param
-from scas_env.actuator.params import ScasParams
-from scas_env.studies.campaign import CampaignConfig, run_campaign
-from scas_env.studies.campaign_table import CampaignResult, load
-from scas_env.studies.reproduction_conventions import EXCLUDED_FEATURES
-from scas_env.studies.reproduction_prognosis import (
+from experiments.paper.campaign import CampaignConfig, run_campaign
+from experiments.paper.campaign_table import CampaignResult, load
+from experiments.paper.reproduction_conventions import EXCLUDED_FEATURES
+from experiments.paper.reproduction_prognosis import (
     HealthySet,
     PathPrognosis,
     feature_score,
@@ -66,6 +60,12 @@ from scas_env.studies.reproduction_prognosis import (
     prognose_path,
     simulate_healthy_set,
 )
+from prognostics.detection import DetectorConfig, PercentileDetector, severity_at_detection
+from prognostics.features import CANDIDATE_INFO, FEATURE_INFO
+from prognostics.selection import FeatureScore, rank_features, redundancy_matrix, redundant_pairs
+from scas_env.actuator.calibration import Calibration, calibration_for
+from scas_env.actuator.config import Validated, param
+from scas_env.actuator.params import ScasParams
 
 __all__ = [
     "FAULTS",
@@ -178,7 +178,7 @@ def select_features(
     Every feature the campaign holds is a candidate (Table 2's ten and any further in-flight
     feature such as I8/I9) except ``excluded`` (name -> reason, reported as
     ``out["excluded"]``; default: G2, see
-    :mod:`scas_env.studies.reproduction_conventions`).
+    :mod:`experiments.paper.reproduction_conventions`).
     """
     complexity = {k: float(v.complexity) for k, v in CANDIDATE_INFO.items()}
     out: dict[str, Any] = {
@@ -347,7 +347,7 @@ def healthy_unit_alarms(
 # ----------------------------------------------------------------------------- top level
 @dataclass(frozen=True, eq=False)
 class Reproduction:
-    """Everything the report needs (see :mod:`scas_env.studies.reproduction_report`).
+    """Everything the report needs (see :mod:`experiments.paper.reproduction_report`).
 
     ``healthy_unit_alarm_share[variant][fault]``: per-unit false alarm
     (:func:`healthy_unit_alarms`); ``healthy``: the nested healthy set.

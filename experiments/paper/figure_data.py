@@ -2,7 +2,7 @@
 
 Each ``fig*`` function runs the library's physics for the nominal unit at nominal operating
 conditions and returns a frozen dataclass of float64 arrays (read-only) with a ``to_dict()``
-that gives JSON-serialisable lists. :mod:`scas_env.studies.figure_drawing` draws them.
+that gives JSON-serialisable lists. :mod:`experiments.paper.figures` draws them.
 
 * Fig. 3 (:func:`fig3_spring_rate`): spring rate (eq. 1) and cracked-coil rate (eq. 5) against
   crack depth, with the exact polar moment and the printed eq. 6 (ref §0.11).

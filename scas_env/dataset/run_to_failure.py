@@ -1,13 +1,13 @@
 """Run-to-failure trajectories of simulated SCAS actuators (a C-MAPSS-style dataset).
 
-Each unit is a fresh ``ScasMaintenance-v0`` episode flown under a maintenance-free policy:
-fly every slot, and (``test_every = k > 0``) run the pre-flight test before slots
-1, k + 1, 2k + 1, ... so that the on-ground features G1, G3 exist. The unit stops at its
-first in-flight failure (a part reaching its critical value), or is censored after
-``max_slots`` slots. Each slot before the failing flight is one row: what the avionics
-measured (in-flight features, test results, detector flags, the particle filter's RUL) next
-to the truth (crack depth, wear, leakage, critical levels, true RUL of each part and the
-realised RUL of the unit). Columns and units: :mod:`scas_env.studies.run_to_failure_data`.
+Each unit is a fresh ``ScasMaintenance-v2`` episode (``scas_env.ENV_ID``) flown under a
+maintenance-free policy: fly every slot, and (``test_every = k > 0``) run the pre-flight
+test before slots 1, k + 1, 2k + 1, ... so that the on-ground features G1, G3 exist. The
+unit stops at its first in-flight failure (a part reaching its critical value), or is
+censored after ``max_slots`` slots. Each slot before the failing flight is one row: what the
+avionics measured (in-flight features, test results, detector flags, the particle filter's
+RUL) next to the truth (crack depth, wear, leakage, critical levels, true RUL of each part
+and the realised RUL of the unit). Columns and units: :mod:`scas_env.dataset.files`.
 
 The failing flight itself has no row: its features are not reported (the flight is aborted)
 and the env replaces the failed part within the same step. Its index and part are in the
@@ -17,7 +17,7 @@ Seeding: unit ``u`` is reset with an integer drawn from child ``u`` of
 ``numpy.random.SeedSequence(seed).spawn(n_units)``, stored in the ``units`` table; the
 files depend only on the arguments, not on the number of workers (tested).
 
-    >>> from scas_env.studies.run_to_failure import simulate_units
+    >>> from scas_env.dataset.run_to_failure import simulate_units
     >>> flights, units = simulate_units(2, seed=0, max_slots=30)
     >>> [int(n) for n in units["slots"]], bool(units["censored"].all())
     ([30, 30], True)
@@ -42,7 +42,7 @@ from scas_env.actuator.physics.fluid import dynamic_viscosity
 from scas_env.actuator.physics.seal import leakage_coefficients, leakage_flow_m3_s
 from scas_env.core.scenario import Scenario
 from scas_env.dashboard import critical_levels, unit_growth_multipliers
-from scas_env.studies.run_to_failure_data import (
+from scas_env.dataset.files import (
     FLIGHT_COLUMNS,
     FORMAT_VERSION,
     UNIT_COLUMNS,
@@ -343,7 +343,7 @@ def data_card(
     test = f"pre-flight test before slots 1, {test_every + 1}, ..." if test_every else "no test"
     return {
         "format_version": FORMAT_VERSION,
-        "generator": "scas_env.studies.run_to_failure.export_run_to_failure",
+        "generator": "scas_env.dataset.run_to_failure.export_run_to_failure",
         "package_version": __version__,
         "env_id": ENV_ID,
         "n_units": len(units["unit"]),
@@ -354,7 +354,7 @@ def data_card(
         "test_every": test_every,
         "censoring": "a unit ends at its first in-flight failure (the failing flight has no "
         f"row) or is censored after {int(scenario.episode_slots)} slots",
-        "split": "by unit (C-MAPSS): scas_env.studies.run_to_failure_data.split_by_unit",
+        "split": "by unit (C-MAPSS): scas_env.dataset.files.split_by_unit",
         "scenario": scenario.to_dict(),
         "params_digest": params_digest(params),
         "params": params.to_dict(),

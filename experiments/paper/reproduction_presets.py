@@ -1,19 +1,23 @@
 """One table of reproduction verdicts with a column per sensing preset.
 
 Input: the ``report.json`` of one reproduction per preset
-(:func:`scas_env.studies.reproduction_report.write_report`, e.g. the default parameters and
+(:func:`experiments.paper.reproduction_report.write_report`, e.g. the default parameters and
 ``--params`` of :func:`scas_env.actuator.presets.preset_params` saved to a file). Output: a
 markdown table, one row per claim of [DJS20], per preset its "ours" value (the seal's
 worn-depth fraction in brackets where reported) and its verdict.
+
+    python -m experiments.paper.reproduction_presets \
+        realistic=results/repro_default/report.json paper=results/repro_paper/report.json
 """
 
 from __future__ import annotations
 
 import json
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-__all__ = ["preset_table", "read_reports"]
+__all__ = ["main", "preset_table", "read_reports"]
 
 
 def read_reports(paths: dict[str, str | Path]) -> dict[str, dict[str, Any]]:
@@ -39,3 +43,27 @@ def preset_table(reports: dict[str, dict[str, Any]]) -> str:
             cells += [f"{r['ours']}" + (f" [worn depth: {depth}]" if depth else ""), r["verdict"]]
         lines.append(f"| {row['claim']} | {row['paper']} | " + " | ".join(cells) + " |")
     return "\n".join(lines) + "\n"
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Print the table of the given ``NAME=path/to/report.json`` reports (markdown)."""
+    from scas_env.cli_args import make_parser
+
+    parser = make_parser("python -m experiments.paper.reproduction_presets", __doc__)
+    parser.add_argument("reports", nargs="+", help="NAME=path/to/report.json, one per preset")
+    args = parser.parse_args(argv)
+    paths = {}
+    for item in args.reports:
+        name, sep, path = item.partition("=")
+        if not sep or not name or not path:
+            parser.error(f"{item!r} must read NAME=path/to/report.json")
+        paths[name] = path
+    try:
+        print(preset_table(read_reports(paths)), end="")
+    except (OSError, ValueError, KeyError) as exc:
+        parser.error(str(exc))
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

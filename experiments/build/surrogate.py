@@ -1,4 +1,9 @@
-"""Build the feature surrogate from a nested physics design (``scripts/build_surrogate.py``).
+"""Build the feature surrogate from a nested physics design (the shipped
+``scas_env/actuator/data/surrogate.json``).
+
+    python -m experiments.build.surrogate --out results/surrogate.json
+    python -m experiments.build.surrogate --out scas_env/actuator/data/surrogate.json --overwrite
+    python -m scas_env.utils.shipped_files   # then rebuild the manifest of shipped files
 
 Design: at every grid point (crack fraction c, wear fraction w) of critical, ``n_units``
 units are drawn (``draw_unit``), and each runs ``runs_per_unit`` times (new run conditions
@@ -19,6 +24,12 @@ which feature came from which.
 """
 
 from __future__ import annotations
+
+import argparse
+import logging
+import os
+from collections.abc import Sequence
+from pathlib import Path
 
 import numpy as np
 
@@ -187,3 +198,108 @@ def build_shipped_surrogate(
     )
     design = f"paired: seed {paired_seed}, {paired_units} units x {runs_per_unit} runs"
     return main.with_features_from(paired, PAIRED_FEATURES, design)
+
+
+# --- command line -----------------------------------------------------------------------
+
+log = logging.getLogger(__name__)
+
+COMMAND_DOC = """\
+Rebuild the feature surrogate of an actuator design (shipped: scas_env/actuator/data).
+
+Runs the nested design (grid x grid fault levels, units, runs) on the physics model and fits
+the tables (experiments.build.surrogate.build_shipped_surrogate: Table 2's features from
+independent units per point, I8 and I9 from --paired-units units shared by every point).
+Writes results/surrogate.json by default; the shipped file of a source checkout is replaced
+with --out scas_env/actuator/data/surrogate.json --overwrite (then rebuild the manifest of
+shipped files: python -m scas_env.utils.shipped_files).
+"""
+#: the shipped data folder of a source checkout
+SHIPPED_DIR = Path("scas_env/actuator/data")
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The command's parser (``--help``: docs/cli.md)."""
+    from scas_env.actuator.surrogate import DATA_FILE
+    from scas_env.cli_args import (
+        add_logging_args,
+        add_params_arg,
+        int_at_least,
+        make_parser,
+        nonneg_int,
+        positive_int,
+    )
+
+    parser = make_parser("python -m experiments.build.surrogate", COMMAND_DOC)
+    parser.add_argument("--seed", type=nonneg_int, default=2020, help="root seed")
+    parser.add_argument(
+        "--grid", type=int_at_least(2), default=5, help="grid points per fault axis"
+    )
+    parser.add_argument(
+        "--units", type=int_at_least(2), default=8, help="units per grid point (>= 2: unit spread)"
+    )
+    parser.add_argument(
+        "--runs", type=int_at_least(2), default=5, help="runs per unit (>= 2: run spread)"
+    )
+    parser.add_argument(
+        "--paired-seed", type=nonneg_int, default=2021, help="root seed of the paired design"
+    )
+    parser.add_argument(
+        "--paired-units", type=int_at_least(2), default=16, help="units of the paired design"
+    )
+    parser.add_argument(
+        "--workers", type=positive_int, default=None, help="worker processes (default: all CPUs)"
+    )
+    parser.add_argument(
+        "--out",
+        type=Path,
+        default=Path("results") / DATA_FILE,
+        help=f"output JSON (the shipped one, in a source checkout: {SHIPPED_DIR / DATA_FILE} "
+        "with --overwrite, then python -m scas_env.utils.shipped_files)",
+    )
+    parser.add_argument("--overwrite", action="store_true", help="replace an existing --out")
+    add_params_arg(parser)
+    add_logging_args(parser)
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Build the surrogate, write it to ``--out`` and print each feature's extremes."""
+    from scas_env.cli_args import (
+        announce_uncached_kernels,
+        check_out_file,
+        configure_logging,
+        load_params,
+    )
+
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    configure_logging(args)
+    check_out_file(parser, args.out, args.overwrite)
+    params = load_params(parser, args)
+    announce_uncached_kernels()
+    model = build_shipped_surrogate(
+        params,
+        seed=args.seed,
+        paired_seed=args.paired_seed,
+        grid=args.grid,
+        units_per_point=args.units,
+        paired_units=args.paired_units,
+        runs_per_unit=args.runs,
+        n_workers=args.workers or os.cpu_count() or 1,
+        progress=not args.quiet,
+    )
+    args.out.parent.mkdir(parents=True, exist_ok=True)
+    model.save(args.out)
+    for k, f in enumerate(model.features):
+        print(
+            f"{f}: mean healthy {model.mean[k, 0, 0]:.4g}, crack {model.mean[k, -1, 0]:.4g}, "
+            f"wear {model.mean[k, 0, -1]:.4g}; unit std {model.unit_std[k, 0, 0]:.3g}, "
+            f"run std {model.run_std[k, 0, 0]:.3g}"
+        )
+    log.info(f"wrote {args.out}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,6 +1,6 @@
 """Feature table of a simulation campaign: schema, selection, CSV + JSON files.
 
-A campaign (:mod:`scas_env.studies.campaign`) gives one row per run. Columns, in order:
+A campaign (:mod:`experiments.paper.campaign`) gives one row per run. Columns, in order:
 
 * ``fault_mode`` (str, one of :data:`FAULT_MODES`), ``level`` (int, 0 = healthy),
   ``run_index`` (int, 0..n_runs-1 within its mode and level);

@@ -1,4 +1,4 @@
-"""Report of a :class:`~scas_env.studies.reproduction.Reproduction`: verdicts, tables and figures.
+"""Report of a :class:`~experiments.paper.reproduction.Reproduction`: verdicts, tables and figures.
 
 :func:`verdicts` compares every result [DJS20] states in §4-5 with ours and labels it
 "holds" or "differs" with a one-line reason. Rules: a feature choice or a direction holds
@@ -6,7 +6,7 @@ when it is the same; a detection severity holds within +-0.10 of the paper's val
 of critical); a minimum RA holds at or above the paper's bound; a final CRA holds when at
 least the paper's value minus 0.05. Prognosis numbers are means over the paths of a fault.
 Rows without suffix follow the paper's protocol; rows "(installation baseline)" the
-physics-informed variant of :mod:`scas_env.studies.reproduction_prognosis` (only on prognosis
+physics-informed variant of :mod:`experiments.paper.reproduction_prognosis` (only on prognosis
 paths: a
 campaign run is one unit, so no unit has its own baseline there). Reasons quote numbers of
 this run (campaign scatter, temperature share, life fraction of the min RA).
@@ -31,12 +31,12 @@ import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
+from experiments.paper.reproduction import FAULTS, RESPONSIVE_MIN_SPEARMAN, Reproduction
+from experiments.paper.reproduction_conventions import leakage_fraction
+from experiments.paper.reproduction_prognosis import INSTALLATION_EFFECT, VARIANTS, PathPrognosis
 from prognostics.features import CANDIDATE_INFO
 from prognostics.selection import plot_accuracy_sensitivity
 from scas_env.actuator.surrogate import default_surrogate
-from scas_env.studies.reproduction import FAULTS, RESPONSIVE_MIN_SPEARMAN, Reproduction
-from scas_env.studies.reproduction_conventions import leakage_fraction
-from scas_env.studies.reproduction_prognosis import INSTALLATION_EFFECT, VARIANTS, PathPrognosis
 
 __all__ = ["PAPER", "verdicts", "write_report"]
 
@@ -73,7 +73,7 @@ def _row(
 def paper_severity(rep: Reproduction, fault: str, value: float) -> float:
     """A severity in the paper's convention: the crack as a fraction of the critical depth,
     the seal as a fraction of the critical leakage growth (campaign levels are fractions of
-    the critical worn depth; :func:`~scas_env.studies.reproduction_conventions.leakage_fraction`).
+    the critical worn depth; :func:`~experiments.paper.reproduction_conventions.leakage_fraction`).
     """
     if fault != "wear":
         return value

@@ -1,6 +1,6 @@
-"""Run-to-failure dataset on disk: column schema, data card, atomic writer, loader, split.
+"""The run-to-failure dataset on disk: column schema, data card, atomic writer, loader, split.
 
-The dataset (built by :mod:`scas_env.studies.run_to_failure`) is a folder::
+The dataset (built by :mod:`scas_env.dataset.run_to_failure`) is a folder::
 
     flights.parquet  flights.csv   one row per flight slot of each unit (schema: FLIGHT_COLUMNS)
     units.parquet    units.csv     one row per unit (schema: UNIT_COLUMNS)

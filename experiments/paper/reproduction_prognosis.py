@@ -1,4 +1,4 @@
-"""Prognosis paths of the [DJS20] reproduction (:mod:`scas_env.studies.reproduction`, step 4).
+"""Prognosis paths of the [DJS20] reproduction (:mod:`experiments.paper.reproduction`, step 4).
 
 A unit (drawn, or nominal) degrades flight by flight (:func:`prognostics.prognosis_run.
 grow_path`: the calibration's damage integral, the unit's growth multiplier theta and the
@@ -32,6 +32,7 @@ import numpy as np
 from numpy.typing import NDArray
 from tqdm.auto import tqdm
 
+from experiments.paper.campaign_table import CampaignResult
 from prognostics.degradation_models import linear_wear_model, paris_crack_model
 from prognostics.detection import DetectorConfig, PercentileDetector
 from prognostics.measurement import MeasurementModel, fit_measurement_model
@@ -61,7 +62,6 @@ from scas_env.actuator.uncertainty import (
     nominal_unit,
     truncated_normal,
 )
-from scas_env.studies.campaign_table import CampaignResult
 
 __all__ = [
     "INSTALLATION_EFFECT",
@@ -360,8 +360,8 @@ def prognose_path(
 ) -> PathPrognosis:
     """Simulate, test, detect, filter and score one path of ``fault`` in both variants.
 
-    ``config`` is a :class:`scas_env.studies.reproduction.ReproductionConfig`. Randomness: the truth
-    (unit, growth, tests) and the filters of the variants from children 0, 1, 2 of
+    ``config`` is a :class:`experiments.paper.reproduction.ReproductionConfig`. Randomness:
+    the truth (unit, growth, tests) and the filters of the variants from children 0, 1, 2 of
     ``seed_seq``.
     """
     spec = _fault_model(params, cal, fault, config.log_theta_noise_std)

@@ -1,4 +1,4 @@
-"""The paper's conventions for the reproduction tables (issue #11, item 4).
+"""The paper's conventions for the reproduction tables.
 
 * **Seal severity as a fraction of critical leakage.** [DJS20] §2.2 sets the seal's critical
   level on the leakage coefficients ("critical values of these two coefficients were defined

@@ -1,14 +1,17 @@
-"""Severity at detection with an installation baseline, against the targets of issue #11.
+"""Severity at detection with an installation baseline, beside the paper and the targets.
+
+    python -m experiments.paper.reproduction_detection --campaign results/campaign/default_100x8 \
+        --paths 40 --out results/severity_at_detection.json
 
 For each fault, ``n_paths`` degradation paths exactly as the reproduction's prognosis paths
-(:func:`scas_env.studies.reproduction_prognosis.prognose_path`: the same unit, growth and
+(:func:`experiments.paper.reproduction_prognosis.prognose_path`: the same unit, growth and
 physics pre-flight tests for the same seeds, path i of fault f from
 ``SeedSequence(seed, spawn_key=(f, i))``), without the particle filter: the unit's own first
 K tests give its reference, the section-5.1 detector ([DJS20] §5.1: 95 % of a running
 window of W corrected tests beyond the P95 of the healthy run-to-run residuals) gives the
 first alarm, and the severity at that test is recorded in the paper's convention (crack:
 fraction of the critical depth; seal: fraction of the critical leakage growth,
-:func:`~scas_env.studies.reproduction_conventions.leakage_fraction`).
+:func:`~experiments.paper.reproduction_conventions.leakage_fraction`).
 
 The ground feature is each fault's top ground feature of the campaign's per-fault ranking
 (G1 for the crack, G3 for wear on the default design), as the installation variant of the
@@ -18,23 +21,22 @@ paper's value and the target.
 
 from __future__ import annotations
 
+import argparse
+import json
 import math
+import sys
+from collections.abc import Sequence
+from pathlib import Path
 from typing import Any
 
 import numpy as np
 from scipy import stats
 from tqdm.auto import tqdm
 
-from prognostics.prognosis_run import grow_path, healthy_residuals, installation_detector
-from scas_env.actuator.calibration import Calibration, calibration_for
-from scas_env.actuator.health import HealthState, actuator_config
-from scas_env.actuator.params import ScasParams
-from scas_env.actuator.sensing import flight_window
-from scas_env.actuator.uncertainty import UnitSample, draw_run_conditions, draw_unit
-from scas_env.studies.campaign_table import CampaignResult
-from scas_env.studies.reproduction import FAULTS, ReproductionConfig, select_features
-from scas_env.studies.reproduction_conventions import leakage_fraction
-from scas_env.studies.reproduction_prognosis import (
+from experiments.paper.campaign_table import CampaignResult
+from experiments.paper.reproduction import FAULTS, ReproductionConfig, select_features
+from experiments.paper.reproduction_conventions import leakage_fraction
+from experiments.paper.reproduction_prognosis import (
     _SEVERITY_COLUMN,
     _fault_model,
     _installation_setup,
@@ -44,13 +46,26 @@ from scas_env.studies.reproduction_prognosis import (
     ground_test_features,
     simulate_healthy_set,
 )
+from prognostics.prognosis_run import grow_path, healthy_residuals, installation_detector
+from scas_env.actuator.calibration import Calibration, calibration_for
+from scas_env.actuator.health import HealthState, actuator_config
+from scas_env.actuator.params import ScasParams
+from scas_env.actuator.sensing import flight_window
+from scas_env.actuator.uncertainty import UnitSample, draw_run_conditions, draw_unit
 
-__all__ = ["PAPER_DETECTION", "TARGETS", "format_targets", "installation_detection"]
+__all__ = [
+    "PAPER_DETECTION",
+    "TARGETS",
+    "build_parser",
+    "format_targets",
+    "installation_detection",
+    "main",
+]
 
 PAPER_DETECTION = {"crack": 0.25, "wear": 0.09}
 """[DJS20] §5.1: mean severity at detection (fraction of critical)."""
 TARGETS = {"crack": 0.35, "wear": 0.15}
-"""Issue #11 targets for the default sensing with an installation baseline (upper bounds)."""
+"""Targets for the default sensing with an installation baseline (upper bounds)."""
 
 
 def flight_window_features(
@@ -260,3 +275,79 @@ def format_targets(result: dict[str, dict[str, Any]]) -> str:
                 f"{unit[fault]}, detected on {r['flight_detected']:.0%} of paths"
             )
     return "\n".join(lines)
+
+
+# --- command line -----------------------------------------------------------------------
+
+COMMAND_DOC = """\
+Severity at detection with an installation baseline, beside the paper and the targets.
+
+Paths as the reproduction's prognosis paths, no particle filter
+(experiments.paper.reproduction_detection.installation_detection), on a saved campaign.
+"""
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The command's parser."""
+    from scas_env.cli_args import add_params_arg, int_at_least, make_parser, nonneg_int
+
+    parser = make_parser("python -m experiments.paper.reproduction_detection", COMMAND_DOC)
+    parser.add_argument("--campaign", type=Path, required=True, help="saved campaign stem")
+    parser.add_argument("--paths", type=int_at_least(2), default=40, help="paths per fault")
+    parser.add_argument("--seed", type=nonneg_int, default=0, help="root seed (the reproduction's)")
+    parser.add_argument(
+        "--tests-per-path",
+        type=int,
+        default=None,
+        help="pre-flight tests over a nominal life (default: the reproduction's 150; about "
+        "1100 is one test per flight, the paper's test at every power-up)",
+    )
+    parser.add_argument("--out", type=Path, required=True, help="output JSON")
+    parser.add_argument("--overwrite", action="store_true", help="replace an existing --out")
+    parser.add_argument(
+        "--flight",
+        action="store_true",
+        help="also detect with each fault's in-flight winner (I8/I9), one window per test",
+    )
+    parser.add_argument("--no-progress", action="store_true", help="no progress bar")
+    add_params_arg(parser)
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Write the detection result to ``--out`` (JSON) and print it beside the targets."""
+    from experiments.paper.campaign_table import load
+    from scas_env.cli_args import check_out_file, load_params
+    from scas_env.utils.atomic_file import write_text_atomic
+
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    for suffix in (".csv", ".json"):
+        if not args.campaign.with_suffix(suffix).is_file():
+            parser.error(f"--campaign {args.campaign}: {args.campaign.with_suffix(suffix)} missing")
+    check_out_file(parser, args.out, args.overwrite)
+    params = load_params(parser, args)
+    config = ReproductionConfig()
+    if args.tests_per_path is not None:
+        try:
+            config = config.replace(tests_per_path=args.tests_per_path)
+        except ValueError as exc:
+            parser.error(f"--tests-per-path: {exc}")
+    result = installation_detection(
+        params,
+        load(args.campaign),
+        config,
+        seed=args.seed,
+        n_paths=args.paths,
+        flight=args.flight,
+        progress=not args.no_progress,
+    )
+    given = sys.argv[1:] if argv is None else list(argv)
+    command = " ".join(["python -m experiments.paper.reproduction_detection", *given])
+    write_text_atomic(args.out, json.dumps({"command": command, **result}, indent=1) + "\n")
+    print(format_targets(result))
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,5 +1,7 @@
 """Demonstration run: the actuator at three health states, signals to CSV, overlays to PNG.
 
+    python -m experiments.paper.demo --out results/demo --seed 0 --window 20
+
 For each health state (default: healthy; a spring crack at 50% of the failure depth; seal
 wear at 80% of the critical wear) the nominal unit at nominal conditions runs
 
@@ -16,15 +18,19 @@ columns :data:`CSV_COLUMNS`, one PNG per condition overlaying the states.
 
 from __future__ import annotations
 
+import argparse
+import logging
 import math
 import os
-from collections.abc import Mapping
+import time
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 from tqdm import tqdm
 
+from experiments.paper.figures import plot_demo_condition
 from scas_env.actuator.bandwidth import critical_seal_wear_m
 from scas_env.actuator.health import HealthState, actuator_config
 from scas_env.actuator.missions import (
@@ -36,7 +42,6 @@ from scas_env.actuator.missions import (
 from scas_env.actuator.params import ScasParams
 from scas_env.actuator.physics.actuator import ActuatorRun, simulate
 from scas_env.actuator.physics.spring import failure_depth_from_params
-from scas_env.studies.figure_drawing import plot_demo_condition
 
 #: Signals written to each CSV, in order (SI units: s, m, A, Pa).
 CSV_COLUMNS = (
@@ -187,3 +192,61 @@ def run_demo(
         plot_demo_condition(runs[condition], png, title=title)
         pngs.append(png)
     return DemoSummary(tuple(rows), tuple(pngs))
+
+
+# --- command line -----------------------------------------------------------------------
+
+log = logging.getLogger(__name__)
+
+COMMAND_DOC = """\
+Demo: pre-flight test and a flight window at three health states -> CSV signals and PNGs.
+
+See experiments.paper.demo.run_demo. Example:
+
+    python -m experiments.paper.demo --out results/demo --seed 0 --window 20
+"""
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The command's parser (``--help``: docs/cli.md)."""
+    from scas_env.cli_args import (
+        add_logging_args,
+        add_params_arg,
+        make_parser,
+        nonneg_int,
+        positive_float,
+    )
+
+    parser = make_parser("python -m experiments.paper.demo", COMMAND_DOC)
+    parser.add_argument("--out", type=Path, required=True, help="output folder")
+    parser.add_argument("--overwrite", action="store_true", help="replace an existing --out")
+    parser.add_argument("--seed", type=nonneg_int, default=0, help="root seed")
+    parser.add_argument(
+        "--window", type=positive_float, default=DEFAULT_WINDOW_S, help="flight window (s)"
+    )
+    add_params_arg(parser)
+    add_logging_args(parser)
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Run the demo into ``--out`` and print its table."""
+    from scas_env.cli_args import check_out_dir, configure_logging, load_params
+
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    configure_logging(args)
+    check_out_dir(parser, args.out, args.overwrite)
+    params = load_params(parser, args)
+    start = time.perf_counter()
+    summary = run_demo(params, args.out, args.seed, window_s=args.window)
+    print(summary.format_table())
+    log.info(
+        f"wrote {len(summary.rows)} CSV and {len(summary.png_paths)} PNG files to {args.out} "
+        f"in {time.perf_counter() - start:.1f} s"
+    )
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

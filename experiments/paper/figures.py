@@ -1,16 +1,21 @@
-"""Matplotlib drawings of the paper's physics figures and of the demo signals (PNG files).
+"""The paper's physics figures (Figs. 3, 4, 5, 7a, 7b) and the demo's signals, drawn as PNG.
+
+    python -m experiments.paper.figures --out results/figures
 
 Object API only (``matplotlib.figure.Figure`` on an Agg canvas): no pyplot state, safe in
 headless runs and threads. Each ``plot_*`` function takes the data of
-:mod:`scas_env.studies.figure_data` (or simulated runs) and an output path, writes a PNG at
+:mod:`experiments.paper.figure_data` (or simulated runs) and an output path, writes a PNG at
 :data:`DPI` (creating the parent folder) and returns the Figure.
 """
 
 from __future__ import annotations
 
+import argparse
 import json
+import logging
 import os
-from collections.abc import Mapping
+import time
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 
 import numpy as np
@@ -18,15 +23,16 @@ from matplotlib import colormaps
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
-from scas_env.actuator.physics.actuator import ActuatorRun
-from scas_env.studies.figure_data import (
+from experiments.paper.figure_data import (
     CrackGrowthCurves,
     FrequencyResponseCurves,
     NullBiasCurves,
     PaperFigures,
     SealGainCurves,
     SpringRateCurves,
+    paper_figures,
 )
+from scas_env.actuator.physics.actuator import ActuatorRun
 
 DPI = 120
 MM = 1e3  # m -> mm
@@ -291,3 +297,54 @@ def save_paper_figures(figs: PaperFigures, out_dir: str | os.PathLike[str]) -> l
     json_path.write_text(json.dumps(figs.to_dict()))
     written.append(json_path)
     return written
+
+
+# --- command line -----------------------------------------------------------------------
+
+log = logging.getLogger(__name__)
+
+COMMAND_DOC = """\
+Paper physics figures (Figs. 3, 4, 5, 7a, 7b): one PNG each plus figures.json.
+
+See experiments.paper.figure_data.paper_figures and figures.save_paper_figures. Example:
+
+    python -m experiments.paper.figures --out results/figures
+"""
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The command's parser (``--help``: docs/cli.md)."""
+    from scas_env.cli_args import add_logging_args, add_params_arg, make_parser, nonneg_int
+
+    parser = make_parser("python -m experiments.paper.figures", COMMAND_DOC)
+    parser.add_argument("--out", type=Path, required=True, help="output folder")
+    parser.add_argument("--overwrite", action="store_true", help="replace an existing --out")
+    parser.add_argument(
+        "--seed", type=nonneg_int, default=0, help="seed of the Fig. 4 load spectrum"
+    )
+    add_params_arg(parser)
+    add_logging_args(parser)
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Compute the figures' data and write one PNG per figure and ``figures.json``."""
+    from scas_env.cli_args import check_out_dir, configure_logging, load_params
+
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    configure_logging(args)
+    check_out_dir(parser, args.out, args.overwrite)
+    params = load_params(parser, args)
+    start = time.perf_counter()
+    figs = paper_figures(params, np.random.default_rng(args.seed))
+    computed = time.perf_counter() - start
+    paths = save_paper_figures(figs, args.out)
+    for path in paths:
+        log.info(f"wrote {path}")
+    log.info(f"computed in {computed:.1f} s, total {time.perf_counter() - start:.1f} s")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
