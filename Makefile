@@ -4,23 +4,30 @@ VENV ?= .venv
 PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed-stamp
 RESULTS ?= results
-## Where pip gets torch. Empty (the default): the default index, as `pip install torch` does;
-## on Linux that is the CUDA build (GBs of GPU libraries). For the CPU build the README
-## promises, set it to PyTorch's CPU wheel index, e.g.
-##   make test TORCH_INDEX_URL=https://download.pytorch.org/whl/cpu
-## Used by the install of every target and by `check-install`. It applies when $(VENV) is
-## created or pyproject.toml changes: a venv already installed keeps its torch (remove it first).
+## Where pip gets torch 2.13.0: TORCH_INDEX_URL when set; otherwise a wheel pip already
+## finds without any index (a machine with a local wheel, e.g. pip's find-links), else
+## PyTorch's CPU wheel index, so that an ordinary Linux machine gets the CPU build, not the
+## default index's CUDA build (GBs of GPU libraries). It applies when $(VENV) is created or
+## pyproject.toml changes: a venv already installed keeps its torch (remove it first).
 TORCH_INDEX_URL ?=
-TORCH_PIP_ARGS := torch==2.13.0 $(if $(strip $(TORCH_INDEX_URL)),--index-url $(strip $(TORCH_INDEX_URL)))
+TORCH_CPU_INDEX := https://download.pytorch.org/whl/cpu
+# $(call install_torch,<pip>): install torch==2.13.0 with <pip> by the rule above
+install_torch = if [ -n "$(strip $(TORCH_INDEX_URL))" ]; then \
+	  $(1) install --disable-pip-version-check -q torch==2.13.0 --index-url $(strip $(TORCH_INDEX_URL)); \
+	elif $(1) install --disable-pip-version-check -q --dry-run --no-index --no-deps torch==2.13.0 >/dev/null 2>&1; then \
+	  $(1) install --disable-pip-version-check -q torch==2.13.0; \
+	else \
+	  $(1) install --disable-pip-version-check -q torch==2.13.0 --index-url $(TORCH_CPU_INDEX); \
+	fi
 
 .PHONY: install benchmark demo test test-slow test-all lint format bench figures reproduce clean \
 	check-install train-agent-v2
 
 $(STAMP): pyproject.toml
 	test -x $(PY) || $(PYTHON) -m venv $(VENV)
-	# torch first (from TORCH_INDEX_URL when set): installed later, as a dependency of
-	# stable-baselines3, it would come from the default index whatever the setting.
-	$(PY) -m pip install --disable-pip-version-check -q $(TORCH_PIP_ARGS)
+	# torch first (install_torch): installed later, as a dependency of stable-baselines3,
+	# it would come from the default index.
+	$(call install_torch,$(PY) -m pip)
 	$(PY) -m pip install --disable-pip-version-check -q -e ".[dev,ray]"
 	touch $(STAMP)
 	@echo "installed; the first run compiles the numba kernels once (~30 s, announced)"
@@ -57,7 +64,7 @@ format: install
 	$(PY) -m ruff check --fix .
 
 ## What a user gets from `pip install .` (no extras): build the wheel, install it into a
-## fresh venv (torch first, from TORCH_INDEX_URL when set), then, outside the source tree
+## fresh venv (torch first, by install_torch), then, outside the source tree
 ## so that only the installed package can be imported, run the README's Python snippets
 ## (they compile the env's numba kernels, once) and every command at a tiny size with its
 ## default options, in two lanes at once: the lab commands of experiments/ (not installed:
@@ -68,7 +75,7 @@ CHECK_DIR ?= $(abspath $(RESULTS))/check-install
 check-install:
 	rm -rf $(CHECK_DIR)
 	$(PYTHON) -m venv $(CHECK_DIR)/venv
-	$(CHECK_DIR)/venv/bin/pip install --disable-pip-version-check -q $(TORCH_PIP_ARGS)
+	$(call install_torch,$(CHECK_DIR)/venv/bin/pip)
 	$(CHECK_DIR)/venv/bin/pip wheel --disable-pip-version-check -q --no-deps -w $(CHECK_DIR)/dist .
 	$(CHECK_DIR)/venv/bin/pip install --disable-pip-version-check -q $(CHECK_DIR)/dist/*.whl
 	$(PYTHON) .ci/readme_python.py README.md > $(CHECK_DIR)/readme_snippets.py
