@@ -31,6 +31,7 @@ constant from a module that does not use numba (numba freezes globals at compile
 from __future__ import annotations
 
 import hashlib
+import logging
 import sys
 from functools import cache
 from pathlib import Path
@@ -137,3 +138,37 @@ def uses_project_stamp(dispatcher: CPUDispatcher) -> bool:
     """Whether a cached kernel is stamped by this module's locators (tests)."""
     cache = dispatcher._cache
     return isinstance(cache, caching.FunctionCache) and isinstance(cache._impl.locator, LOCATORS)
+
+
+#: what a process logs (once, at WARNING) when numba first compiles a kernel in it
+COMPILE_NOTICE = (
+    "compiling numba kernels (first run only, a minute or less; later runs load them from "
+    "numba's cache)"
+)
+_NOTICE = {"listener": False, "shown": False}
+
+
+def show_compile_notice(logger: logging.Logger) -> None:
+    """Log :data:`COMPILE_NOTICE` at WARNING, once per process."""
+    if not _NOTICE["shown"]:
+        _NOTICE["shown"] = True
+        logger.warning(COMPILE_NOTICE)
+
+
+def announce_compilation(logger: logging.Logger) -> None:
+    """Show :data:`COMPILE_NOTICE` through ``logger`` when numba first compiles a kernel in
+    this process (numba's event API; a cache hit compiles nothing, so the notice appears
+    only on a first run or after an edit). Installed once; no result depends on it."""
+    if _NOTICE["listener"]:
+        return
+    _NOTICE["listener"] = True
+    from numba.core import event
+
+    class _Notice(event.Listener):
+        def on_start(self, ev: object) -> None:
+            show_compile_notice(logger)
+
+        def on_end(self, ev: object) -> None:
+            pass
+
+    event.register("numba:compile", _Notice())

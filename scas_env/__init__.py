@@ -17,11 +17,16 @@ are not installed: ``experiments/`` of a source checkout (``python -m experiment
 Environment ids are registered here, once, on import.
 """
 
+import logging as _logging
+
+from prognostics.numba_cache import announce_compilation as _announce_compilation
 from prognostics.numba_cache import register_package as _register_numba_package
 
 # before any kernel of this package is compiled: a kernel's cache is stamped with the hash
 # of every numba-using module it may inline (prognostics.numba_cache)
 _register_numba_package(__name__, __path__[0])
+# the first use compiles the kernels (once; then numba's cache): say so, at WARNING
+_announce_compilation(_logging.getLogger(__name__))
 
 from gymnasium.envs.registration import register, registry  # noqa: E402
 

@@ -26,6 +26,11 @@ from collections.abc import Iterable, Sequence
 from pathlib import Path
 from typing import Any, NoReturn
 
+from prognostics.numba_cache import (
+    COMPILE_NOTICE,
+    announce_compilation,
+    show_compile_notice,
+)
 from scas_env.actuator.config import FORMATS
 from scas_env.actuator.params import ScasParams
 from scas_env.core.costs import CostModel
@@ -33,9 +38,6 @@ from scas_env.core.scenario import Scenario
 
 log = logging.getLogger(__name__)
 #: Logged once per process when numba compiles (instead of sitting silent for ~30 s).
-COMPILE_NOTICE = (
-    "compiling numba kernels (first run only, ~30 s; later runs load them from numba's cache)"
-)
 
 __all__ = [
     "COMPILE_NOTICE",
@@ -417,39 +419,12 @@ def announce_uncached_kernels() -> None:
     """Log the compile notice now if kernels are uncached: for runs whose kernels compile in
     worker processes, where the event listener of :func:`announce_numba_compilation` does
     not run. Call it after the work's modules are imported."""
-    global _notice_shown
-    if not _notice_shown and numba_cache_missing():
-        _notice_shown = True
-        log.warning(COMPILE_NOTICE)
-
-
-_listener_installed = False
-#: the notice was shown in this process (reset by tests)
-_notice_shown = False
+    if numba_cache_missing():
+        show_compile_notice(log)
 
 
 def announce_numba_compilation() -> None:
-    """Log once, when numba first compiles a kernel in this process, that it is doing so.
-
-    Kernels are compiled at their first call and cached on disk (``cache=True``); a cache hit
-    triggers no compile event, so the message appears only when the cache is missing or
-    stale (first run after installing or editing). Uses numba's event API
-    (``numba.core.event``); no result depends on it.
-    """
-    global _listener_installed
-    if _listener_installed:
-        return
-    _listener_installed = True
-    from numba.core import event
-
-    class _Notice(event.Listener):
-        def on_start(self, ev: Any) -> None:
-            global _notice_shown
-            if not _notice_shown:
-                _notice_shown = True
-                log.warning(COMPILE_NOTICE)
-
-        def on_end(self, ev: Any) -> None:
-            pass
-
-    event.register("numba:compile", _Notice())
+    """Log once, when numba first compiles a kernel in this process, that it is doing so
+    (:func:`prognostics.numba_cache.announce_compilation`; the library installs the same
+    listener on import, and the notice shows once either way)."""
+    announce_compilation(log)

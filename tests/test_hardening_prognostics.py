@@ -1089,8 +1089,11 @@ EXCUSED: dict[str, str] = {
             "ProjectUserProvidedLocator",
             "ProjectInTreeLocator",
             "ProjectUserWideLocator",
+            "announce_compilation",
+            "show_compile_notice",
         ),
-        "numba cache infrastructure, run at import (tests/test_hardening_numba_cache.py)",
+        "numba cache infrastructure, run at import (tests/test_hardening_numba_cache.py, "
+        "tests/test_cli.py)",
     ),
     **dict.fromkeys(
         (*validation.__all__, "show"),
