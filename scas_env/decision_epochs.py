@@ -80,7 +80,7 @@ rules are; its actions must be per-flight actions (0..3).
 >>> obs, info = env.reset(seed=0)
 >>> obs.shape, env.action_space, float(obs[-1])
 ((21,), Discrete(20), 100.0)
->>> obs, reward, terminated, truncated, info = env.step(env.encode(0, 20))
+>>> obs, reward, terminated, truncated, info = env.step(env.unwrapped.encode(0, 20))
 >>> info["epoch_slots"], float(obs[-1])
 (20, 80.0)
 """
@@ -271,8 +271,8 @@ class DecisionEpochs(gym.Env):
     def reset(
         self, *, seed: int | None = None, options: dict[str, Any] | None = None
     ) -> tuple[np.ndarray, dict[str, Any]]:
-        super().reset(seed=seed)  # Gymnasium's contract (its checker); the draws are the env's
-        obs, info = self.env.reset(seed=seed, options=options)
+        obs, info = self.env.reset(seed=seed, options=options)  # it checks seed and options
+        super().reset(seed=None if seed is None else int(seed))  # Gymnasium's contract
         # this env's randomness is the per-flight env's: one generator (Gymnasium's checker
         # reads ``unwrapped._np_random`` after a seeded reset)
         inner = self.env.unwrapped

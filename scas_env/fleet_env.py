@@ -8,7 +8,7 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
-from scas_env.actuator.calibration import Calibration, calibration_for
+from scas_env.actuator.calibration import Calibration, env_calibration
 from scas_env.actuator.params import ScasParams
 from scas_env.actuator.surrogate import SurrogateModel, default_surrogate
 from scas_env.core.costs import CostModel
@@ -64,7 +64,7 @@ def make_fleet_setup(
         params=params,
         scenario=base,
         costs=cost_model if cost_model is not None else CostModel(),
-        calibration=calibration if calibration is not None else calibration_for(params),
+        calibration=calibration if calibration is not None else env_calibration(params),
         surrogate=surrogate if surrogate is not None else default_surrogate(),
         mission_types=types,
     )

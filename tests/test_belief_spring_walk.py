@@ -34,8 +34,11 @@ def test_the_option_walks_the_spring_filter_only() -> None:
     assert walk.spring_process.log_theta_noise_std == WALK
     assert walk.seal_process.log_theta_noise_std == 0.0
     # the kernels run the processes' arguments
-    assert walk.filters.process[0] == walk.spring_process.kernel_args
-    assert walk.filters.process[1] == walk.seal_process.kernel_args
+    processes = (walk.spring_process, walk.seal_process)
+    for run, process in zip(walk.filters.process, processes, strict=True):
+        expected = process.kernel_args
+        assert len(run) == len(expected)
+        assert all(np.array_equal(a, b) for a, b in zip(run, expected, strict=True))
 
 
 def test_the_walk_spreads_log_theta_as_sigma_sqrt_flights() -> None:

@@ -3,7 +3,9 @@ eq. 9 by hand, seeding, atomic files, loader round trip, split by unit, bad inpu
 
 from __future__ import annotations
 
+import fnmatch
 import math
+import re
 from pathlib import Path
 
 import gymnasium as gym
@@ -71,26 +73,33 @@ def test_leakage_fraction_is_eq9_by_hand() -> None:
 
 def test_rows_match_a_replay_of_the_env(small) -> None:
     """Each unit replayed from its stored seed with the same actions fails at the stored flight
-    with the stored part, and its truth matches the rows."""
+    with the stored part (or, censored, runs to ``max_slots`` without failing), and its truth
+    matches the rows."""
     flights, units = small
     assert len(units["unit"]) == 4
-    env = gym.make(scas_env.ENV_ID, scenario=Scenario(episode_slots=20_000))
+    assert set(units["censored"]) == {False, True}  # the fixture has both kinds
+    max_slots = 20_000
+    env = gym.make(scas_env.ENV_ID, scenario=Scenario(episode_slots=max_slots))
     for u in range(4):
         rows = flights["unit"] == u
         assert rows.sum() == units["slots"][u]
         env.reset(seed=int(units["seed"][u]))
         crack = []
-        failed = ()
-        for slot in range(1, units["slots"][u] + 2):
-            _, _, _, _, info = env.step(1 if (slot - 1) % 7 == 0 else 0)
+        failed: tuple[str, ...] = ()
+        for slot in range(1, min(units["slots"][u] + 1, max_slots) + 1):
+            _, _, _, truncated, info = env.step(1 if (slot - 1) % 7 == 0 else 0)
             if info["failures"]["spring"] or info["failures"]["seal"]:
                 failed = tuple(p for p in ("spring", "seal") if info["failures"][p])
                 break
             crack.append(info["true_state"]["crack_depth_m"])
-        assert slot == units["slots"][u] + 1  # the failing slot is the one after the last row
+        if units["censored"][u]:
+            assert not failed and truncated and slot == max_slots
+            assert units["failure_mode"][u] == "none" and units["failure_flight"][u] == -1
+        else:
+            assert slot == units["slots"][u] + 1  # the failing slot is the one after the last row
+            mode = "both" if len(failed) == 2 else failed[0]
+            assert units["failure_mode"][u] == mode
         assert info["flights"] == units["flights"][u]
-        mode = "both" if len(failed) == 2 else failed[0]
-        assert units["failure_mode"][u] == mode
         np.testing.assert_array_equal(flights["crack_depth_m"][rows], crack)
 
 
@@ -105,10 +114,14 @@ def test_row_semantics(small) -> None:
         assert np.all(np.isnan(r["I2"]) == ~r["flown"])
         assert np.all(np.isnan(r["G1"]) == ~r["tested"])
         assert not np.any(r["flown"] & r["no_go"])
-        # realised RUL: flights still completed before the failing flight
-        np.testing.assert_array_equal(r["rul_flights"], units["flights"][u] - r["flight"])
-        assert r["rul_flights"][-1] == 0
-        assert units["failure_flight"][u] == units["flights"][u] + 1
+        assert np.all(r["no_go"] <= r["tested"])  # only a test can hold the aircraft
+        if units["censored"][u]:
+            assert np.all(np.isnan(r["rul_flights"])) and n == units["slots"][u]
+        else:
+            # realised RUL: flights still completed before the failing flight
+            np.testing.assert_array_equal(r["rul_flights"], units["flights"][u] - r["flight"])
+            assert r["rul_flights"][-1] == 0
+            assert units["failure_flight"][u] == units["flights"][u] + 1
         np.testing.assert_allclose(
             r["crack_fraction"], r["crack_depth_m"] / r["spring_critical_depth_m"], rtol=1e-12
         )
@@ -229,8 +242,17 @@ def test_workers_do_not_change_the_rows() -> None:
 
 
 def test_docs_list_every_column() -> None:
+    """Every column of the data card has a row in docs/dataset.md's table (several columns
+    may share a row) giving its type."""
     from scas_env.dataset.files import UNIT_COLUMNS
 
     text = (Path(__file__).resolve().parents[1] / "docs" / "dataset.md").read_text()
+    rows = [ln for ln in text.splitlines() if ln.startswith("| `")]
+    cells = [re.findall(r"`([^`]+)`", r.split(" | ")[0]) for r in rows]
     for c in (*FLIGHT_COLUMNS, *UNIT_COLUMNS):
-        assert f"| `{c.name}` | {c.dtype} | {c.unit} | {c.description} |" in text, c.name
+        hits = [
+            r for r, names in zip(rows, cells, strict=True)
+            if any(fnmatch.fnmatchcase(c.name, n) for n in names)
+        ]  # fmt: skip
+        assert hits, f"{c.name} has no row in docs/dataset.md"
+        assert any(f"| {c.dtype} |" in r for r in hits), (c.name, c.dtype, hits)

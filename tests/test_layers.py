@@ -48,7 +48,6 @@ MAX_MODULES = 15
 KNOWN_CIRCLES = {
     frozenset(pair)
     for pair in (
-        ("policies.rules.classic", "policies.rules.nested"),
         ("experiments.belief_calibration", "experiments.belief_output"),
         ("experiments.reference_posterior", "experiments.reference_synthetic"),
         ("experiments.sensing_sweep", "experiments.sensing_sweep_output"),
@@ -283,7 +282,7 @@ def test_no_import_circle() -> None:
 
 @pytest.mark.xfail(
     strict=True,
-    reason="layout debt: policies.rules.classic <-> nested; experiments' main() of "
+    reason="layout debt: experiments' main() of "
     "belief_calibration, reference_posterior, sensing_sweep <-> their output modules",
 )
 def test_the_known_import_circles_are_paid() -> None:

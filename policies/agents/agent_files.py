@@ -35,6 +35,7 @@ import zipfile
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
+from types import ModuleType
 from typing import Any
 
 import numpy as np
@@ -48,6 +49,7 @@ __all__ = [
     "read_json_file",
     "read_sb3_policy",
     "read_weights",
+    "require_contrib",
     "weights_sha256",
     "zip_data",
 ]
@@ -403,6 +405,17 @@ def check_spaces(
         )
 
 
+def require_contrib(purpose: str) -> ModuleType:
+    """``sb3_contrib``, or an ``ImportError`` naming the package and ``purpose``."""
+    try:
+        return importlib.import_module("sb3_contrib")
+    except ImportError as exc:
+        raise ImportError(
+            f"to {purpose} you need sb3-contrib (a dependency of this package), which is "
+            "not installed: pip install 'sb3-contrib>=2.3'"
+        ) from exc
+
+
 def _policy_class(path: Path, data: Mapping[str, Any]) -> type:
     """The policy class the zip names, looked up by module and name in
     :data:`POLICY_PACKAGES` (never unpickled); :class:`NeedsPickle` otherwise."""
@@ -420,8 +433,6 @@ def _policy_class(path: Path, data: Mapping[str, Any]) -> type:
         cls = getattr(importlib.import_module(module), match.group(1), None)
     except ImportError as exc:
         if module.startswith("sb3_contrib"):
-            from policies.agents.sb3_agents import require_contrib
-
             require_contrib(f"load {path}")
         raise ValueError(f"{path}: its policy class's module {module!r}: {exc}") from None
     if not (isinstance(cls, type) and issubclass(cls, BasePolicy)):

@@ -36,7 +36,6 @@ import importlib
 import pickle
 from collections.abc import Sequence
 from pathlib import Path
-from types import ModuleType
 from typing import Any
 
 import numpy as np
@@ -46,6 +45,7 @@ from policies.agents.agent_files import (
     ObsNormalization,
     read_json_file,
     read_sb3_policy,
+    require_contrib,
     weights_sha256,
     zip_data,
 )
@@ -78,17 +78,6 @@ __all__ = [
     "load_sb3_policy",
     "require_contrib",
 ]
-
-
-def require_contrib(purpose: str) -> ModuleType:
-    """``sb3_contrib``, or an ``ImportError`` naming the package and ``purpose``."""
-    try:
-        return importlib.import_module("sb3_contrib")
-    except ImportError as exc:
-        raise ImportError(
-            f"to {purpose} you need sb3-contrib (a dependency of this package), which is "
-            "not installed: pip install 'sb3-contrib>=2.3'"
-        ) from exc
 
 
 # ---------------------------------------------------------------------------- file checks

@@ -38,6 +38,7 @@ from policies.base import (
     Policy,
     register,
 )
+from policies.rules.healthy_band import implicated_spring
 
 #: Tuned defaults (policies.value.tuning; docs/value_ladder.md: family ``age`` and ``detection``).
 PREVENTIVE_DEFAULTS: dict[str, float] = {
@@ -146,7 +147,7 @@ class DetectionPolicy(Policy):
     """Detection-triggered: test when ``test_age >= test_every`` slots, replace the part
     whose section-5.1 alarm is on (the spring on ``spring_alarm``, the seals on
     ``seal_alarm``), and after a failed go/no-go test the part the test implicates
-    (:func:`policies.rules.nested.implicated_spring`), as the nested rules do: under the
+    (:func:`policies.rules.healthy_band.implicated_spring`), as the nested rules do: under the
     airworthiness go/no-go (v1, v2) a failed test holds the aircraft until a part is
     replaced. The alarm is binary, so there is no opportunistic variant."""
 
@@ -175,8 +176,6 @@ class DetectionPolicy(Policy):
 
     def _act(self, obs: np.ndarray) -> IntArray:
         flying = self.column(obs, "downtime") <= 0
-        from policies.rules.nested import implicated_spring
-
         failed = flying & (self.column(obs, "no_go") > 0.5)
         blame = implicated_spring(self.column(obs, "G1"), self.column(obs, "G3"))
         spring = (self.column(obs, "spring_alarm") > 0.5) | (failed & blame)

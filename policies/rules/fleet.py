@@ -8,7 +8,7 @@ when it has flown (age > 0) and
 * its age passes the backstop ``scale * T_p`` (flights), or
 * (the filter rules) its risk of failing within the horizon passes ``scale * r``, or its
   low RUL quantile ``* scale`` falls to its lead ``L_p`` (flights), or
-* a failed pre-flight test implicates it (:func:`policies.rules.nested.implicated_spring`),
+* a failed pre-flight test implicates it (:func:`policies.rules.healthy_band.implicated_spring`),
 
 with ``scale = 1``, or ``1 - opportunity`` for the opportunistic grouping on an aircraft that
 is in the hangar anyway. An aircraft with a due part does not fly: it asks for its due parts
@@ -43,7 +43,7 @@ from typing import Any, ClassVar
 import numpy as np
 
 from policies.base import register_policy
-from policies.rules.nested import implicated_spring
+from policies.rules.healthy_band import implicated_spring
 from policies.rules.prognostic import RUL_RISK_AGE_DEFAULTS, RUL_RISK_DEFAULTS
 
 #: the families of this module, in the benchmark's order

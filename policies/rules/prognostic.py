@@ -5,7 +5,7 @@
   failing within ``Scenario.risk_horizon_flights``) or ``p_rul_low * scale <= p_lead``
   (flights, the low RUL quantile). Tests every ``test_every`` slots feed the filters; a
   failed test replaces the part its evidence implicates
-  (:func:`policies.rules.nested.implicated_spring`), not simply the one with the higher risk.
+  (:func:`policies.rules.healthy_band.implicated_spring`), not simply the one with the higher risk.
 * ``feature_rule`` (``obs_mode="features"``): no filter. The override reads the last
   flight's in-flight features as z-scores against the healthy population (shipped
   surrogate: mean, unit and run scatter): the seals are due when ``z(I7) >= scale *

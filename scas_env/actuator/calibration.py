@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import logging
 import math
 from dataclasses import asdict, dataclass
 from functools import lru_cache
@@ -56,6 +57,8 @@ from scas_env.utils.table_checks import (
     load_json_table,
     whole_number,
 )
+
+_log = logging.getLogger(__name__)
 
 FloatArray = npt.NDArray[np.float64]
 CALIBRATION_VERSION = 1
@@ -367,12 +370,41 @@ def default_calibration() -> Calibration:
     return Calibration.load(shipped_path(DATA_FILE))
 
 
-def calibration_for(params: ScasParams) -> Calibration:
-    """The shipped calibration if it matches ``params``, else a fresh one from physics."""
+#: Build settings of the shipped calibration (``python -m experiments.build.calibration``),
+#: which the env needs in full (it draws each flight's damage with the whole-flight scatter).
+ENV_BUILD: dict[str, int] = {"seed": 2020, "n_windows": 60, "whole_flights": 40}
+
+
+def calibration_for(
+    params: ScasParams, *, n_windows: int = 30, whole_flights: int = 0
+) -> Calibration:
+    """The shipped calibration if it matches ``params``, else a fresh one from physics
+    (:func:`build_calibration` with ``n_windows`` and ``whole_flights``; with whole flights
+    it takes minutes, so it is announced and shows progress). The envs pass
+    :data:`ENV_BUILD`: the settings of the shipped file."""
     shipped = default_calibration()
     if shipped.params_digest == params_digest(params):
         return shipped
-    return build_calibration(params, progress=False)
+    if whole_flights:
+        _log.warning(
+            "these ScasParams differ from the shipped calibration's: building theirs from "
+            "physics (%d whole flights, about %d s); pass calibration= to reuse one",
+            whole_flights,
+            6 * whole_flights,
+        )
+        seed = ENV_BUILD["seed"]
+        return build_calibration(
+            params, seed=seed, n_windows=n_windows, whole_flights=whole_flights, progress=True
+        )
+    return build_calibration(params, n_windows=n_windows, progress=False)
+
+
+def env_calibration(params: ScasParams) -> Calibration:
+    """:func:`calibration_for` with the shipped file's build settings (:data:`ENV_BUILD`):
+    what an env built on ``params`` runs on when no calibration is passed."""
+    return calibration_for(
+        params, n_windows=ENV_BUILD["n_windows"], whole_flights=ENV_BUILD["whole_flights"]
+    )
 
 
 @dataclass(frozen=True, eq=False)
