@@ -24,6 +24,7 @@ from scas_env.actuator.config import (
 )
 from scas_env.actuator.params import ScasParams
 from scas_env.core.costs import CostModel
+from scas_env.core.mismatch import Mismatch
 from scas_env.core.scenario import FIDELITIES, INITIAL_HEALTH, OBS_MODES, Scenario
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -135,12 +136,14 @@ def test_sectioned_file_holds_a_whole_case(tmp_path: Path) -> None:
         "scenario": Scenario(episode_slots=300, initial_health="random"),
         "costs": CostModel(mission_abort_usd=90_000.0),
         "params": ScasParams().replace(spring=ScasParams().spring.replace(paris_m=2.5)),
+        "mismatch": Mismatch(crack_growth=1.2, sensing_noise=2.0),
     }
     for suffix in SUFFIXES:
         path = save_sections(tmp_path / f"case{suffix}", case)
         assert Scenario.load(path) == case["scenario"]
         assert CostModel.load(path) == case["costs"]
         assert ScasParams.load(path) == case["params"]
+        assert Mismatch.load(path) == case["mismatch"]
         assert set(_read(path)) == set(FILE_SECTIONS)
 
 
