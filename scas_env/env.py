@@ -35,6 +35,7 @@ def make_setup(
     surrogate: SurrogateModel | None,
     scenario_fields: dict[str, Any],
     mismatch: Mismatch | None = None,
+    world_surrogate: SurrogateModel | None = None,
 ) -> Setup:
     """The :class:`~scas_env.core.setup.Setup` of an env's keywords, each checked."""
     if scenario is not None and scenario_fields:
@@ -48,6 +49,7 @@ def make_setup(
         ("calibration", calibration, Calibration),
         ("surrogate", surrogate, SurrogateModel),
         ("mismatch", mismatch, Mismatch),
+        ("world_surrogate", world_surrogate, SurrogateModel),
     ):
         if value is not None and not isinstance(value, cls):
             raise ValueError(f"{name} = {value!r} must be None (the default) or a {cls.__name__}")
@@ -60,6 +62,7 @@ def make_setup(
         calibration=calibration if calibration is not None else calibration_for(params),
         surrogate=surrogate if surrogate is not None else default_surrogate(),
         mismatch=mismatch if mismatch is not None else Mismatch(),
+        world_surrogate=world_surrogate,
     )
 
 
@@ -182,7 +185,9 @@ class ScasMaintenanceEnv(gym.Env):
     actuator for every test and flight window (the parts grow as in the surrogate fidelity).
     ``params`` other than the default are calibrated from physics at construction.
     ``mismatch=Mismatch(...)`` (:mod:`scas_env.core.mismatch`) makes the world run other
-    growth, scatter or sensing constants than the monitor's filters assume (default: none).
+    growth, scatter or sensing constants than the monitor's filters assume (default: none);
+    ``world_surrogate=SurrogateModel(...)`` draws the world's features from another feature
+    surrogate than the monitor's ``surrogate`` (e.g. one built at another fluid temperature).
 
     ## Vectorised
 
@@ -231,6 +236,7 @@ class ScasMaintenanceEnv(gym.Env):
         calibration: Calibration | None = None,
         surrogate: SurrogateModel | None = None,
         mismatch: Mismatch | None = None,
+        world_surrogate: SurrogateModel | None = None,
         render_mode: str | None = None,
         **scenario_fields: Any,
     ) -> None:
@@ -242,7 +248,7 @@ class ScasMaintenanceEnv(gym.Env):
                 f"{self.metadata['render_modes']}"
             )
         self.setup = make_setup(scenario, cost_model, params, calibration, surrogate,
-                                scenario_fields, mismatch)  # fmt: skip
+                                scenario_fields, mismatch, world_surrogate)  # fmt: skip
         self.render_mode = render_mode
         #: the health dashboard (scas_env.dashboard) of the "rgb_array" and "human" modes
         self._renderer = (

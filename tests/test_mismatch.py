@@ -105,7 +105,7 @@ KNOBS = {name: 1.7 for name in (*GROWTH_FIELDS, *SENSING_FIELDS)}
 
 def test_no_mismatch_keeps_the_nominal_objects() -> None:
     st = _setup()
-    assert st.world_params is st.params and st.world_surrogate is st.surrogate
+    assert st.world_params is st.params and st.world_features is st.surrogate
 
 
 @pytest.mark.parametrize("name", list(KNOBS))
@@ -147,7 +147,7 @@ def test_each_knob_moves_only_its_own_world_constants(name: str) -> None:
     }
     if st.world_params != nominal.params:
         moved.add("params")
-    if st.world_surrogate is not nominal.surrogate:
+    if st.world_features is not nominal.surrogate:
         moved.add("surrogate")
     assert moved == MOVES[name]
 
@@ -305,3 +305,40 @@ def test_the_vector_env_runs_the_same_mismatched_episodes_as_single_envs() -> No
         for t in range(steps):
             obs, *_ = env.step(int(actions[t, e]))
             assert np.array_equal(obs, vec[t + 1][e]), (e, t)
+
+
+def test_a_world_surrogate_of_its_own_moves_the_world_features_only() -> None:
+    """A world surrogate whose means are shifted by a constant per feature (what a surrogate
+    built at another fluid temperature would be, to first order): the features and the
+    installation's reference move by that shift, the monitor keeps the nominal model."""
+    import dataclasses
+
+    sur = default_surrogate()
+    shift = np.linspace(0.1, 0.7, len(sur.features))[:, None, None] * sur.run_std[:, :1, :1]
+    hot = dataclasses.replace(sur, mean=sur.mean + shift)
+    nominal = _setup()
+    st = make_setup(None, None, None, None, None, {}, None, hot)
+    assert st.world_surrogate is hot and st.world_features is hot and st.surrogate is sur
+    for f in nominal.filters._fields:
+        assert _same(getattr(st.filters, f), getattr(nominal.filters, f)), f
+    assert _same(st.go_limits, nominal.go_limits)
+    outs = []
+    for world in (None, hot):
+        env = gym.make(ENV_ID, world_surrogate=world)
+        env.reset(seed=11)
+        *_, info = env.step(0)
+        a = env.unwrapped.batch.a
+        outs.append(
+            (np.array([info["features"][f] for f in FLIGHT_FEATURES]), a["reference"][0].copy())
+        )
+    idx = [sur.index(f) for f in FLIGHT_FEATURES]
+    np.testing.assert_allclose(outs[1][0] - outs[0][0], shift[idx, 0, 0], rtol=1e-9, atol=1e-15)
+    g = [sur.index("G1"), sur.index("G3")]
+    np.testing.assert_allclose(outs[1][1] - outs[0][1], shift[g, 0, 0], rtol=1e-6, atol=1e-15)
+    both = make_setup(None, None, None, None, None, {}, Mismatch(sensing_noise=2.0), hot)
+    np.testing.assert_array_equal(both.world_features.run_std, 2.0 * hot.run_std)
+    with pytest.raises(ValueError, match="world_surrogate must be None or a SurrogateModel"):
+        make_setup(None, None, None, None, None, {}, None, dataclasses.replace(
+            sur, features=sur.features[::-1]))  # fmt: skip
+    with pytest.raises(ValueError, match="physics fidelity simulates its features"):
+        make_setup(None, None, None, None, None, {"fidelity": "physics"}, None, hot)

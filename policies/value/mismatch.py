@@ -205,15 +205,24 @@ def _worlds(levels: Mapping[str, Sequence[float]]) -> dict[str, tuple[str, float
 
 
 def _tune_chunk(
-    settings: Mapping[str, Any], chunk: Sequence[tuple[str, str, Mismatch, Any]]
-) -> list[TuningResult]:
-    """Tune ``(world, family label, mismatch, age params)`` items (one per call)."""
+    settings: Mapping[str, Any],
+    cache: Path | None,
+    chunk: Sequence[tuple[str, str, Mismatch, Any]],
+) -> list[dict[str, Any]]:
+    """Tune ``(world, family label, mismatch, age params)`` items; each result (as a dict)
+    goes to ``cache`` as soon as it is done."""
     base = dict(settings)
     env = base.pop("env_kwargs")
-    return [
-        tune_family(FAMILIES[label], age_params=age, env_kwargs={**env, "mismatch": m}, **base)
-        for _, label, m, age in chunk
-    ]
+    out = []
+    for key, label, m, age in chunk:
+
+        def tune(label=label, m=m, age=age) -> dict[str, Any]:
+            fam = FAMILIES[label]
+            kw = {**env, "mismatch": m}
+            return tune_family(fam, age_params=age, env_kwargs=kw, **base).to_dict()
+
+        out.append(_cached(cache, f"tune_{_safe(key)}_{label}", tune))
+    return out
 
 
 def _cached(cache: Path | None, name: str, make: Callable[[], Any]) -> Any:
@@ -306,19 +315,9 @@ def run_mismatch_study(
         _check_cache(cache, {**recorded, "held_out": (episodes, HELD_OUT_SEED, confidence)})
 
     def tuned(stage: str, items: list[tuple[str, str, Mismatch, Any]]) -> dict[str, TuningResult]:
-        todo = [
-            it
-            for it in items
-            if cache is None or not (cache / f"tune_{_safe(it[0])}_{it[1]}.json").is_file()
-        ]
-        fresh = map_chunks(_tune_chunk, (settings,), todo, n_workers=n_workers, chunk_size=1,
-                           progress=progress, desc=f"tuning ({stage})")  # fmt: skip
-        done = {it[0]: r for it, r in zip(todo, fresh, strict=True)}
-        out = {}
-        for key, label, _, _ in items:
-            d = _cached(cache, f"tune_{_safe(key)}_{label}", lambda key=key: done[key].to_dict())
-            out[key] = TuningResult(**d)
-        return out
+        done = map_chunks(_tune_chunk, (settings, cache), items, n_workers=n_workers,
+                          chunk_size=1, progress=progress, desc=f"tuning ({stage})")  # fmt: skip
+        return {it[0]: TuningResult(**d) for it, d in zip(items, done, strict=True)}
 
     age_worlds = [k for k, (kind, _) in worlds.items() if k == NOMINAL or not KINDS[kind].sensing]
     ages = tuned("age", [(k, "age", world_mismatch(*worlds[k]), None) for k in age_worlds])

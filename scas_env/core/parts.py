@@ -306,7 +306,7 @@ def replace_part(batch: ActuatorState, e: int, part: str, *, failed: bool) -> No
 def record_reference(batch: ActuatorState, e: int) -> None:
     """The installation's reference reading of G1 and G3, recorded at fitting: the mean of
     ``reference_tests`` tests of the installation with healthy parts (the measure stream), as
-    the world measures them (``Setup.world_surrogate``)."""
+    the world measures them (``Setup.world_features``)."""
     st = batch.setup
     rng = batch.rngs[e]["measure"]
     n = int(st.scenario.reference_tests)
@@ -315,7 +315,7 @@ def record_reference(batch: ActuatorState, e: int) -> None:
     else:
         idx = st.world.ground_idx.tolist()
         unit_z = batch.a["unit_z"][e]
-        tests = [st.world_surrogate.sample_list(0.0, 0.0, unit_z, rng, idx) for _ in range(n)]
+        tests = [st.world_features.sample_list(0.0, 0.0, unit_z, rng, idx) for _ in range(n)]
     batch.a["reference"][e] = [math.fsum(t[k] for t in tests) / n for k in range(2)]
 
 

@@ -18,8 +18,10 @@ the spring filter, G3 and I9 in the seal filter.
 
 A :class:`~scas_env.core.mismatch.Mismatch` changes the world's constants only (growth
 tables, whole-flight CVs, the unit draws' scatter ``world_params``, the surrogate's unit and
-run std ``world_surrogate``); the filters, the detectors and the go/no-go limits keep the
-nominal model. The default (no mismatch) leaves every constant as it was, bit for bit.
+run std ``world_features``), and so does a world surrogate of its own (``world_surrogate``:
+features from another design point, e.g. another fluid temperature); the filters, the
+detectors and the go/no-go limits keep the nominal model. The default (no mismatch) leaves
+every constant as it was, bit for bit.
 """
 
 from __future__ import annotations
@@ -133,6 +135,9 @@ class Setup:
     mission_types: tuple[str, ...] = ("standard",)
     #: the world's constants against the monitor's model (default: none)
     mismatch: Mismatch = field(default_factory=Mismatch)
+    #: the world's own feature surrogate (e.g. built at another fluid temperature,
+    #: docs/value.md); None: the monitor's ``surrogate``
+    world_surrogate: SurrogateModel | None = None
     world: WorldModel = field(init=False)
     filters: FilterModel = field(init=False)
     detector: DetectorModel = field(init=False)
@@ -144,10 +149,11 @@ class Setup:
     #: installation effects drawn per fitted spring pair (the surrogate's first features)
     unit_z_draws: int = field(init=False)
     #: the design the world's parts are drawn from (``params`` unless a mismatch changes the
-    #: unit scatter of the growth constants) and the surrogate the world's features are drawn
-    #: from (``surrogate`` unless a mismatch changes its unit or run std)
+    #: unit scatter of the growth constants)
     world_params: ScasParams = field(init=False)
-    world_surrogate: SurrogateModel = field(init=False)
+    #: the surrogate the world's features are drawn from: ``world_surrogate`` (or
+    #: ``surrogate``) with the mismatch's unit and run std multipliers
+    world_features: SurrogateModel = field(init=False)
     #: the world's crack-growth table (the calibration's, times ``mismatch.crack_growth``)
     #: and the filters' process models
     crack_table: TabulatedRateModel = field(init=False)
@@ -164,7 +170,16 @@ class Setup:
                 f"Mismatch {sensing} scales the feature surrogate's tables: the surrogate "
                 "fidelity only (a physics world with other sensing is another ScasParams)"
             )
-        world_sur = _world_surrogate(sur, m)
+        own = self.world_surrogate
+        if own is not None:
+            if not isinstance(own, SurrogateModel) or own.features != sur.features:
+                raise ValueError(
+                    "world_surrogate must be None or a SurrogateModel of the monitor's features "
+                    f"{sur.features}"
+                )
+            if s.fidelity == "physics":
+                raise ValueError("world_surrogate: the physics fidelity simulates its features")
+        world_sur = _world_surrogate(sur if own is None else own, m)
         flight_idx = np.array([sur.index(f) for f in FLIGHT_FEATURES], dtype=np.int64)
         ground_idx = np.array([sur.index(f) for f in GROUND_FEATURES], dtype=np.int64)
         crack_cv, wear_cv = cal.flight_scatter("whole_flight")
@@ -195,7 +210,7 @@ class Setup:
         put = object.__setattr__
         put(self, "world", world)
         put(self, "world_params", _world_params(self.params, m))
-        put(self, "world_surrogate", world_sur)
+        put(self, "world_features", world_sur)
         spring_process, seal_process = _processes(self.params, s, cal)
         put(self, "crack_table", table)
         put(self, "spring_process", spring_process)
