@@ -155,9 +155,40 @@ def test_quick_study_runs_and_writes_its_files(tmp_path) -> None:
         cache_dir=tmp_path / "cache",
     )
     assert _same(again.rows, res.rows)
+    # more held-out episodes reuse the cached tunings; other tuning settings are refused
+    more = run_mismatch_study(
+        levels={"growth": (1.5,)},
+        episodes={"growth": 3},
+        slots=60,
+        trials=1,
+        train_episodes=2,
+        cache_dir=tmp_path / "cache",
+    )
+    assert (
+        more.tuning["growth=1.5"]["filter"].to_dict()
+        == res.tuning["growth=1.5"]["filter"].to_dict()
+    )
+    assert {r["episode"] for r in more.rows} == {0, 1, 2}
     with pytest.raises(ValueError, match="other settings"):
-        run_mismatch_study(levels={"growth": (1.5,)}, episodes=3, slots=60, trials=1,
+        run_mismatch_study(levels={"growth": (1.5,)}, episodes=2, slots=60, trials=2,
                            train_episodes=2, cache_dir=tmp_path / "cache")  # fmt: skip
+    with pytest.raises(ValueError, match="missing"):
+        run_mismatch_study(levels={"growth": (1.5,)}, episodes={"unit scatter": 2})
+
+
+def test_sensing_worlds_reuse_the_nominal_age_episodes() -> None:
+    res = run_mismatch_study(
+        levels={"sensing noise": (2.0,)},
+        episodes=2,
+        slots=60,
+        trials=1,
+        train_episodes=2,
+    )
+    age = {
+        w: [r["reward"] for r in res.rows if r["world"] == w and r["arm"] == AGE_NOMINAL]
+        for w in ("nominal", "sensing noise=2")
+    }
+    assert age["nominal"] == age["sensing noise=2"] and len(age["nominal"]) == 2
 
 
 def test_main_refuses_bad_arguments(tmp_path, capsys) -> None:

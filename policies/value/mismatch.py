@@ -79,12 +79,12 @@ class Kind:
 KINDS: dict[str, Kind] = {
     "growth": Kind(
         ("crack_growth", "wear_growth"),
-        (0.5, 0.7, 0.85, 1.0, 1.2, 1.5, 2.0),
+        (0.5, 0.7, 1.0, 1.5, 2.0),
         "mean crack-growth and wear rates",
     ),
     "unit scatter": Kind(
         ("crack_unit_scatter", "wear_unit_scatter"),
-        (1.0, 1.5, 2.0, 3.0),
+        (1.0, 2.0, 3.0),
         "log-sd of Paris C and of the Archard coefficient across parts",
     ),
     "flight scatter": Kind(
@@ -97,7 +97,7 @@ KINDS: dict[str, Kind] = {
     ),
     "installation spread": Kind(
         ("installation_spread",),
-        (1.0, 1.5, 2.0, 3.0, 5.0),
+        (1.0, 2.0, 3.0, 5.0),
         "between-installation std of the features",
     ),
 }
@@ -271,7 +271,7 @@ def _safe(name: str) -> str:
 def run_mismatch_study(
     *,
     levels: Mapping[str, Sequence[float]] | None = None,
-    episodes: int = 1000,
+    episodes: int | Mapping[str, int] = 1000,
     slots: int = 2000,
     trials: int = 24,
     train_episodes: int = 30,
@@ -282,12 +282,16 @@ def run_mismatch_study(
     env_kwargs: Mapping[str, Any] | None = None,
 ) -> MismatchResult:
     """Tune the age and filter families at every world (module docstring), run the arms on
-    ``episodes`` held-out episodes per world and summarise (:func:`summarize_study`).
+    held-out episodes and summarise (:func:`summarize_study`).
 
     ``levels``: kind -> levels (default: every kind of :data:`KINDS` at its levels; level
-    1, the nominal model, is added to each kind). ``cache_dir``: each world's tuning and
-    held-out rows are kept there as they finish, and a rerun with the same settings picks
-    them up. ``env_kwargs``: the user's scenario and costs besides the mismatch.
+    1, the nominal model, is added to each kind). ``episodes``: held-out episodes per arm, for
+    every kind or per kind (kind -> n; the nominal world runs the largest). Under the sensing
+    kinds the age rule is not run again: its episodes are the nominal world's (the first n;
+    they do not depend on the features, tested). ``cache_dir``: each tuning and each world's
+    held-out rows are kept there as they finish, and a rerun with the same tuning settings
+    picks them up (more levels or episodes add to it). ``env_kwargs``: the user's scenario and
+    costs besides the mismatch.
     """
     t0 = time.perf_counter()
     chosen = {k: KINDS[k].levels for k in KINDS} if levels is None else dict(levels)
@@ -297,6 +301,7 @@ def run_mismatch_study(
         for level in lv:
             world_mismatch(kind, level)  # validates the level before any work
         chosen[kind] = tuple(sorted({1.0, *(float(x) for x in lv)}))
+    sizes = _sizes(episodes, chosen)
     base = dict(env_kwargs or {})
     if "mismatch" in base:
         raise ValueError("env_kwargs must not set 'mismatch' (the study sets it per world)")
@@ -311,8 +316,7 @@ def run_mismatch_study(
     }
     cache = None if cache_dir is None else Path(cache_dir)
     if cache is not None:
-        recorded = {**settings, "env_kwargs": repr(sorted(base.items()))}
-        _check_cache(cache, {**recorded, "held_out": (episodes, HELD_OUT_SEED, confidence)})
+        _check_cache(cache, {**settings, "env_kwargs": repr(sorted(base.items()))})
 
     def tuned(stage: str, items: list[tuple[str, str, Mismatch, Any]]) -> dict[str, TuningResult]:
         done = map_chunks(_tune_chunk, (settings, cache), items, n_workers=n_workers,
@@ -329,13 +333,17 @@ def run_mismatch_study(
     tuning = {k: {"age": age_of[k], "filter": filters[k]} for k in worlds}
 
     rows: list[dict[str, Any]] = []
-    for key, (kind, level) in worlds.items():
-        specs = _arms(tuning, key, own_age=key in ages)
+    nominal_rows: list[dict[str, Any]] = []
+    for key, (kind, level) in worlds.items():  # the nominal world first
+        n = max(sizes.values()) if key == NOMINAL else sizes[kind]
+        reuse_age = key != NOMINAL and key not in ages
+        specs = [a for a in _arms(tuning, key, own_age=key in ages)
+                 if not (reuse_age and a[0] == AGE_NOMINAL)]  # fmt: skip
 
-        def held_out(specs=specs, kind=kind, level=level) -> list[dict[str, Any]]:
+        def held_out(specs=specs, kind=kind, level=level, n=n) -> list[dict[str, Any]]:
             res = run_benchmark(
                 [s for _, s in specs],
-                episodes=episodes,
+                episodes=n,
                 slots=slots,
                 seed=HELD_OUT_SEED,
                 n_workers=n_workers,
@@ -345,21 +353,22 @@ def run_mismatch_study(
             )
             return res.rows
 
-        got = _cached(cache, f"heldout_{_safe(key)}", held_out)
+        got = _cached(cache, f"heldout_{_safe(key)}_{n}", held_out)
         where = {"world": key, "kind": "all" if key == NOMINAL else kind, "level": level}
-        for r in got:
-            rows.append({**where, "arm": r["policy"], **r})
+        rows += [{**where, "arm": r["policy"], **r} for r in got]
         if key == NOMINAL:  # at level 1 the re-tuned rules are the nominal-tuned ones
+            nominal_rows = got
             for r in got:
                 arm = {AGE_NOMINAL: AGE_RETUNED, FILTER_NOMINAL: FILTER_RETUNED}[r["policy"]]
                 rows.append({**where, "arm": arm, **r})
-        elif key not in ages:  # sensing kinds: the age rule is the nominal one
-            rows += [{**where, "arm": AGE_RETUNED, **r} for r in got if r["policy"] == AGE_NOMINAL]
+        elif reuse_age:  # sensing kinds: the nominal world's age-rule episodes
+            same = [r for r in nominal_rows if r["policy"] == AGE_NOMINAL and r["episode"] < n]
+            rows += [{**where, "arm": arm, **r} for arm in (AGE_NOMINAL, AGE_RETUNED) for r in same]
     summary = summarize_study(rows, chosen, confidence)
     config = {
         "levels": {k: list(v) for k, v in chosen.items()},
         "kinds": {k: {"fields": list(KINDS[k].fields), "what": KINDS[k].what} for k in chosen},
-        "episodes": episodes,
+        "episodes": sizes,
         "slots": slots,
         "held_out_seed": HELD_OUT_SEED,
         "trials": trials,
@@ -370,6 +379,23 @@ def run_mismatch_study(
         "env_kwargs": {k: repr(v) for k, v in base.items()},
     }
     return MismatchResult(rows, summary, tuning, config, time.perf_counter() - t0)
+
+
+def _sizes(episodes: int | Mapping[str, int], levels: Mapping[str, Any]) -> dict[str, int]:
+    """Held-out episodes per kind of ``levels`` from an int (every kind) or a mapping."""
+
+    def count(name: str, v: Any) -> int:
+        if isinstance(v, bool) or not isinstance(v, int | np.integer) or v < 2:
+            raise ValueError(f"episodes {name}= {v!r} must be an integer >= 2 (paired intervals)")
+        return int(v)
+
+    if isinstance(episodes, Mapping):
+        missing = sorted(set(levels) - set(episodes))
+        extra = sorted(set(episodes) - set(levels))
+        if missing or extra:
+            raise ValueError(f"episodes per kind: missing {missing}, not studied {extra}")
+        return {k: count(f"[{k!r}] ", episodes[k]) for k in levels}
+    return {k: count("", episodes) for k in levels}
 
 
 def _arms(
@@ -477,6 +503,13 @@ def _gain(g: Mapping[str, float] | None, level: float) -> str:
     return f"{_money(g['mean'])} [{_money(g['low'])}, {_money(g['high'])}]"
 
 
+def _sizes_text(sizes: Mapping[str, int]) -> str:
+    counts = sorted(set(sizes.values()), reverse=True)
+    if len(counts) == 1:
+        return str(counts[0])
+    return ", ".join(f"{n} ({', '.join(k for k, v in sizes.items() if v == n)})" for n in counts)
+
+
 def _lvl(x: float) -> str:
     return "none in range" if not math.isfinite(x) else f"x{x:.3g}"
 
@@ -495,8 +528,9 @@ def markdown_report(result: MismatchResult) -> str:
     lines = [
         "# Value of prognostics under model mismatch",
         "",
-        f"Held-out: {c['episodes']} episodes x {c['slots']} slots per arm and level, seed "
-        f"{c['held_out_seed']} (the same episodes at every level and for every arm). Tuning: "
+        f"Held-out: {_sizes_text(c['episodes'])} episodes x {c['slots']} slots per arm and "
+        f"level, seed {c['held_out_seed']} (the same episodes at every level and for every "
+        "arm; level 1 runs the largest number). Tuning: "
         f"{c['trials']} Optuna TPE trials x {c['train_episodes']} training episodes per family "
         f"and world (seed {c['train_seed']}). Value = paired reward difference, filter rule "
         "minus age rule (USD per episode), 95 % t-interval, MDD = minimum detectable "
@@ -698,6 +732,16 @@ def write_outputs(
     return {k: Path(out) / v for k, v in names.items()}
 
 
+def _count_arg(text: str) -> tuple[str, int]:
+    kind, _, value = text.partition("=")
+    kind = kind.strip()
+    if kind not in KINDS or not value.strip().isdigit() or int(value) < 2:
+        raise argparse.ArgumentTypeError(
+            f"{text!r}: expected KIND=N with KIND one of {list(KINDS)} and N >= 2"
+        )
+    return kind, int(value)
+
+
 def _levels_arg(text: str) -> tuple[str, tuple[float, ...]]:
     kind, _, values = text.partition("=")
     kind = kind.strip()
@@ -739,7 +783,17 @@ def main(argv: Sequence[str] | None = None) -> int:
         metavar="KIND=L1,L2",
         help="levels of a kind (repeatable; level 1 is always run)",
     )
-    parser.add_argument("--episodes", type=positive_int, default=1000, help="held-out episodes")
+    parser.add_argument(
+        "--episodes", type=positive_int, default=1000, help="held-out episodes per arm and level"
+    )
+    parser.add_argument(
+        "--episodes-of",
+        type=_count_arg,
+        action="append",
+        default=[],
+        metavar="KIND=N",
+        help="held-out episodes of one kind (repeatable; the others take --episodes)",
+    )
     parser.add_argument("--slots", type=positive_int, default=2000)
     parser.add_argument("--trials", type=positive_int, default=24, help="TPE trials per tuning")
     parser.add_argument(
@@ -773,6 +827,13 @@ def main(argv: Sequence[str] | None = None) -> int:
         if kind not in kinds:
             parser.error(f"--levels {kind}=...: {kind!r} is not among --kinds")
         levels[kind] = lv
+    if not args.quick:
+        per_kind = dict.fromkeys(levels, args.episodes)
+        for kind, n in args.episodes_of:
+            if kind not in kinds:
+                parser.error(f"--episodes-of {kind}=...: {kind!r} is not among --kinds")
+            per_kind[kind] = n
+        sizes["episodes"] = per_kind
     result = run_mismatch_study(
         levels=levels,
         n_workers=args.workers,
