@@ -660,6 +660,7 @@ def plot(summary: Mapping[str, Any], path: Path) -> None:
         ax2.plot(lv, ra, "s-", ms=3, label="RA of the mean")
         ax2.axhline(0.95, color="grey", ls=":", lw=0.8)
         ax2.set_xscale("log")
+        ax2.set_xlim(ax.get_xlim())
         ax2.set_xticks(lv, [f"{x:g}" for x in lv])
         ax2.minorticks_off()
         ax2.set_xlabel("level (x the model's)")
