@@ -204,3 +204,37 @@ def test_main_refuses_bad_arguments(tmp_path, capsys) -> None:
         with pytest.raises(SystemExit):
             study.main(argv)
         assert message in capsys.readouterr().err
+
+
+def test_tuning_warm_start_enqueues_the_given_point() -> None:
+    from policies.value.tuning import FAMILIES, tune_family
+
+    point = {"spring_age": 300.0, "seal_age": 400.0, "opportunity": 0.5}
+    res = tune_family(FAMILIES["age"], trials=2, episodes=2, slots=60, start_points=[point])
+    first = {k: res.history[0][k] for k in point}
+    assert first == point and res.best_reward >= res.history[0]["reward"]
+    nested = tune_family(
+        FAMILIES["filter"],
+        trials=3,
+        episodes=2,
+        slots=60,
+        age_params=point,
+        start_points=[
+            {
+                **point,
+                "risk_threshold": 0.01,
+                "spring_lead": 20.0,
+                "seal_lead": 30.0,
+                "test_every": 100.0,
+                "override": True,
+            }
+        ],
+    )
+    assert nested.history[0]["override"] is False  # the age point first, then the warm start
+    assert nested.history[1]["override"] is True and nested.history[1]["test_every"] == 100.0
+    with pytest.raises(ValueError, match="outside"):
+        tune_family(FAMILIES["age"], trials=1, episodes=2, slots=60,
+                    start_points=[{**point, "spring_age": 10.0}])  # fmt: skip
+    with pytest.raises(ValueError, match="lacks"):
+        tune_family(FAMILIES["age"], trials=1, episodes=2, slots=60,
+                    start_points=[{"spring_age": 300.0}])  # fmt: skip

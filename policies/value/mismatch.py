@@ -36,6 +36,7 @@ from __future__ import annotations
 
 import argparse
 import csv
+import hashlib
 import json
 import math
 import sys
@@ -207,21 +208,24 @@ def _worlds(levels: Mapping[str, Sequence[float]]) -> dict[str, tuple[str, float
 def _tune_chunk(
     settings: Mapping[str, Any],
     cache: Path | None,
-    chunk: Sequence[tuple[str, str, Mismatch, Any]],
+    chunk: Sequence[tuple[str, str, Mismatch, Any, Any]],
 ) -> list[dict[str, Any]]:
-    """Tune ``(world, family label, mismatch, age params)`` items; each result (as a dict)
-    goes to ``cache`` as soon as it is done."""
+    """Tune ``(world, family label, mismatch, age params, warm start)`` items; each result
+    (as a dict) goes to ``cache`` as soon as it is done."""
     base = dict(settings)
     env = base.pop("env_kwargs")
     out = []
-    for key, label, m, age in chunk:
+    for key, label, m, age, warm in chunk:
 
-        def tune(label=label, m=m, age=age) -> dict[str, Any]:
+        def tune(label=label, m=m, age=age, warm=warm) -> dict[str, Any]:
             fam = FAMILIES[label]
             kw = {**env, "mismatch": m}
-            return tune_family(fam, age_params=age, env_kwargs=kw, **base).to_dict()
+            starts = () if warm is None else (warm,)
+            return tune_family(fam, age_params=age, env_kwargs=kw, start_points=starts,
+                               **base).to_dict()  # fmt: skip
 
-        out.append(_cached(cache, f"tune_{_safe(key)}_{label}", tune))
+        name = f"tune_{_safe(key)}_{label}" + ("" if warm is None else "_warm")
+        out.append(_cached(cache, name, tune))
     return out
 
 
@@ -318,31 +322,52 @@ def run_mismatch_study(
     if cache is not None:
         _check_cache(cache, {**settings, "env_kwargs": repr(sorted(base.items()))})
 
-    def tuned(stage: str, items: list[tuple[str, str, Mismatch, Any]]) -> dict[str, TuningResult]:
+    def tuned(
+        stage: str, items: list[tuple[str, str, Mismatch, Any, Any]]
+    ) -> dict[str, TuningResult]:
         done = map_chunks(_tune_chunk, (settings, cache), items, n_workers=n_workers,
                           chunk_size=1, progress=progress, desc=f"tuning ({stage})")  # fmt: skip
         return {it[0]: TuningResult(**d) for it, d in zip(items, done, strict=True)}
 
-    age_worlds = [k for k, (kind, _) in worlds.items() if k == NOMINAL or not KINDS[kind].sensing]
-    ages = tuned("age", [(k, "age", world_mismatch(*worlds[k]), None) for k in age_worlds])
+    # the nominal model first; every other world's tuning is warm-started from its point
+    nominal_m = world_mismatch(*worlds[NOMINAL])
+    ages = tuned("age", [(NOMINAL, "age", nominal_m, None, None)])
+    others = [k for k, (kind, _) in worlds.items() if k != NOMINAL and not KINDS[kind].sensing]
+    warm_age = ages[NOMINAL].best_params
+    ages |= tuned("age", [(k, "age", world_mismatch(*worlds[k]), None, warm_age) for k in others])
     age_of = {k: ages[k if k in ages else NOMINAL] for k in worlds}
-    filters = tuned(
+    filters = tuned("filter", [(NOMINAL, "filter", nominal_m, age_of[NOMINAL].best_params, None)])
+    warm_filter = filters[NOMINAL].best_params
+    filters |= tuned(
         "filter",
-        [(k, "filter", world_mismatch(*worlds[k]), age_of[k].best_params) for k in worlds],
+        [
+            (k, "filter", world_mismatch(*worlds[k]), age_of[k].best_params, warm_filter)
+            for k in worlds
+            if k != NOMINAL
+        ],
     )
     tuning = {k: {"age": age_of[k], "filter": filters[k]} for k in worlds}
 
     rows: list[dict[str, Any]] = []
-    nominal_rows: list[dict[str, Any]] = []
+    nominal_age: list[dict[str, Any]] = []
     for key, (kind, level) in worlds.items():  # the nominal world first
         n = max(sizes.values()) if key == NOMINAL else sizes[kind]
-        reuse_age = key != NOMINAL and key not in ages
-        specs = [a for a in _arms(tuning, key, own_age=key in ages)
-                 if not (reuse_age and a[0] == AGE_NOMINAL)]  # fmt: skip
-
-        def held_out(specs=specs, kind=kind, level=level, n=n) -> list[dict[str, Any]]:
+        specs = _arms(tuning, key, own_age=key in ages)
+        # an arm whose rule another arm of this world already runs (the same policy and
+        # parameters: a re-tuning that kept its warm start) is run once
+        ids = {label: _arm_id(spec) for label, spec in specs}
+        unique: dict[str, PolicySpec] = {}
+        for label, spec in specs:
+            unique.setdefault(ids[label], spec)
+        if key != NOMINAL and key not in ages:  # sensing kinds: the nominal age episodes
+            unique.pop(ids[AGE_NOMINAL])
+        name = {i: f"heldout_{_safe(key)}_{n}_{i}" for i in unique}
+        todo = [(i, spec) for i, spec in unique.items()
+                if cache is None or not (cache / f"{name[i]}.json").is_file()]  # fmt: skip
+        fresh: dict[str, list[dict[str, Any]]] = {}
+        if todo:
             res = run_benchmark(
-                [s for _, s in specs],
+                [spec for _, spec in todo],
                 episodes=n,
                 slots=slots,
                 seed=HELD_OUT_SEED,
@@ -351,19 +376,22 @@ def run_mismatch_study(
                 progress=progress,
                 confidence=confidence,
             )
-            return res.rows
-
-        got = _cached(cache, f"heldout_{_safe(key)}_{n}", held_out)
+            for i, spec in todo:
+                fresh[i] = [r for r in res.rows if r["policy"] == spec.key]
+        got = {i: _cached(cache, name[i], lambda i=i, fresh=fresh: fresh[i]) for i in unique}
+        if key == NOMINAL:
+            nominal_age = got[ids[AGE_NOMINAL]]
+        elif ids[AGE_NOMINAL] not in got:
+            got[ids[AGE_NOMINAL]] = [r for r in nominal_age if r["episode"] < n]
         where = {"world": key, "kind": "all" if key == NOMINAL else kind, "level": level}
-        rows += [{**where, "arm": r["policy"], **r} for r in got]
+        arms = [label for label, _ in specs]
         if key == NOMINAL:  # at level 1 the re-tuned rules are the nominal-tuned ones
-            nominal_rows = got
-            for r in got:
-                arm = {AGE_NOMINAL: AGE_RETUNED, FILTER_NOMINAL: FILTER_RETUNED}[r["policy"]]
-                rows.append({**where, "arm": arm, **r})
-        elif reuse_age:  # sensing kinds: the nominal world's age-rule episodes
-            same = [r for r in nominal_rows if r["policy"] == AGE_NOMINAL and r["episode"] < n]
-            rows += [{**where, "arm": arm, **r} for arm in (AGE_NOMINAL, AGE_RETUNED) for r in same]
+            ids |= {AGE_RETUNED: ids[AGE_NOMINAL], FILTER_RETUNED: ids[FILTER_NOMINAL]}
+            arms += [AGE_RETUNED, FILTER_RETUNED]
+        elif key not in ages:  # sensing kinds: the age rule is the nominal one
+            ids[AGE_RETUNED] = ids[AGE_NOMINAL]
+            arms.append(AGE_RETUNED)
+        rows += [{**where, **r, "arm": label} for label in arms for r in got[ids[label]]]
     summary = summarize_study(rows, chosen, confidence)
     config = {
         "levels": {k: list(v) for k, v in chosen.items()},
@@ -379,6 +407,12 @@ def run_mismatch_study(
         "env_kwargs": {k: repr(v) for k, v in base.items()},
     }
     return MismatchResult(rows, summary, tuning, config, time.perf_counter() - t0)
+
+
+def _arm_id(spec: PolicySpec) -> str:
+    """The id of an arm's rule: its policy and a digest of its parameters."""
+    text = json.dumps([spec.name, dict(spec.params)], sort_keys=True, default=repr)
+    return f"{spec.name}_{hashlib.sha256(text.encode()).hexdigest()[:12]}"
 
 
 def _sizes(episodes: int | Mapping[str, int], levels: Mapping[str, Any]) -> dict[str, int]:
