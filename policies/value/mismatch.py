@@ -13,7 +13,8 @@ arm: common random numbers):
   world; value = paired reward difference filter - age (USD per episode);
 * **re-tuned**: both families tuned again on the mismatched world (the same budget, training
   seeds :data:`~policies.value.tuning.TRAIN_SEED`, :func:`policies.value.tuning.tune_family`),
-  value = paired difference of the re-tuned rules. The age rule's episodes do not depend on
+  warm-started from the nominal-tuned point (``start_points``: at least as good as it on the
+  training seeds); value = paired difference of the re-tuned rules. The age rule's episodes do not depend on
   the features (it reads ages only and never tests), so under the sensing kinds it is not
   re-tuned: its tuning would replay the nominal one trial for trial;
 * the gain of re-tuning each rule (re-tuned - nominal-tuned, paired), and the filters'
