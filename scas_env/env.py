@@ -14,6 +14,7 @@ from scas_env.actuator.surrogate import SurrogateModel, default_surrogate
 from scas_env.core.batch import ActuatorBatch
 from scas_env.core.costs import CostModel
 from scas_env.core.info import StepInfo, build_info
+from scas_env.core.mismatch import Mismatch
 from scas_env.core.observation import ObservationLayout
 from scas_env.core.parts import next_lives
 from scas_env.core.scenario import Scenario
@@ -33,6 +34,8 @@ def make_setup(
     calibration: Calibration | None,
     surrogate: SurrogateModel | None,
     scenario_fields: dict[str, Any],
+    mismatch: Mismatch | None = None,
+    world_surrogate: SurrogateModel | None = None,
 ) -> Setup:
     """The :class:`~scas_env.core.setup.Setup` of an env's keywords, each checked."""
     if scenario is not None and scenario_fields:
@@ -45,6 +48,8 @@ def make_setup(
         ("params", params, ScasParams),
         ("calibration", calibration, Calibration),
         ("surrogate", surrogate, SurrogateModel),
+        ("mismatch", mismatch, Mismatch),
+        ("world_surrogate", world_surrogate, SurrogateModel),
     ):
         if value is not None and not isinstance(value, cls):
             raise ValueError(f"{name} = {value!r} must be None (the default) or a {cls.__name__}")
@@ -56,6 +61,8 @@ def make_setup(
         costs=cost_model if cost_model is not None else CostModel(),
         calibration=calibration if calibration is not None else env_calibration(params),
         surrogate=surrogate if surrogate is not None else default_surrogate(),
+        mismatch=mismatch if mismatch is not None else Mismatch(),
+        world_surrogate=world_surrogate,
     )
 
 
@@ -177,6 +184,10 @@ class ScasMaintenanceEnv(gym.Env):
     ``scenario``); unknown keywords raise ``ValueError``. ``fidelity="physics"`` simulates the
     actuator for every test and flight window (the parts grow as in the surrogate fidelity).
     ``params`` other than the default are calibrated from physics at construction.
+    ``mismatch=Mismatch(...)`` (:mod:`scas_env.core.mismatch`) makes the world run other
+    growth, scatter or sensing constants than the monitor's filters assume (default: none);
+    ``world_surrogate=SurrogateModel(...)`` draws the world's features from another feature
+    surrogate than the monitor's ``surrogate`` (e.g. one built at another fluid temperature).
 
     ## Vectorised
 
@@ -224,6 +235,8 @@ class ScasMaintenanceEnv(gym.Env):
         params: ScasParams | None = None,
         calibration: Calibration | None = None,
         surrogate: SurrogateModel | None = None,
+        mismatch: Mismatch | None = None,
+        world_surrogate: SurrogateModel | None = None,
         render_mode: str | None = None,
         **scenario_fields: Any,
     ) -> None:
@@ -235,7 +248,7 @@ class ScasMaintenanceEnv(gym.Env):
                 f"{self.metadata['render_modes']}"
             )
         self.setup = make_setup(scenario, cost_model, params, calibration, surrogate,
-                                scenario_fields)  # fmt: skip
+                                scenario_fields, mismatch, world_surrogate)  # fmt: skip
         self.render_mode = render_mode
         #: the health dashboard (scas_env.dashboard) of the "rgb_array" and "human" modes
         self._renderer = (

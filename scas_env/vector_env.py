@@ -60,11 +60,13 @@ class ScasMaintenanceVectorEnv(VectorEnv):
         params: Any = None,
         calibration: Any = None,
         surrogate: Any = None,
+        mismatch: Any = None,
+        world_surrogate: Any = None,
         **scenario_fields: Any,
     ) -> None:
         n = check_num_envs(num_envs)
         self.setup = make_setup(scenario, cost_model, params, calibration, surrogate,
-                                scenario_fields)  # fmt: skip
+                                scenario_fields, mismatch, world_surrogate)  # fmt: skip
         self.layout = ObservationLayout(self.setup.scenario, self.setup.costs)
         self.num_envs = n
         self.single_observation_space = self.layout.space

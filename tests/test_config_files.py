@@ -25,6 +25,7 @@ from scas_env.actuator.config import (
 from scas_env.actuator.params import ScasParams
 from scas_env.core.costs import CostModel
 from scas_env.core.fleet.config import FleetConfig
+from scas_env.core.mismatch import Mismatch
 from scas_env.core.scenario import FIDELITIES, INITIAL_HEALTH, OBS_MODES, Scenario
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -137,6 +138,7 @@ def test_sectioned_file_holds_a_whole_case(tmp_path: Path) -> None:
         "costs": CostModel(mission_abort_usd=90_000.0),
         "params": ScasParams().replace(spring=ScasParams().spring.replace(paris_m=2.5)),
         "fleet": FleetConfig(aircraft=4, crew_jobs_per_day=2),
+        "mismatch": Mismatch(crack_growth=1.2, sensing_noise=2.0),
     }
     for suffix in SUFFIXES:
         path = save_sections(tmp_path / f"case{suffix}", case)
@@ -144,6 +146,7 @@ def test_sectioned_file_holds_a_whole_case(tmp_path: Path) -> None:
         assert CostModel.load(path) == case["costs"]
         assert ScasParams.load(path) == case["params"]
         assert FleetConfig.load(path) == case["fleet"]
+        assert Mismatch.load(path) == case["mismatch"]
         assert set(_read(path)) == set(FILE_SECTIONS)
 
 

@@ -7,8 +7,11 @@ Files written by :func:`write_outputs` into the output folder:
   at the end of an episode (censored), with its age in flights;
 * ``summary.json``: per-policy means with intervals that stay in range
   (:mod:`policies.benchmark.stats`), paired differences against the best rule-based policy
-  with their minimum detectable differences, and the run's configuration and wall time;
-* ``summary.md``: the same as Markdown tables;
+  with their minimum detectable differences, the beliefs at decision time of the policies
+  that act on them (``prognostics``: :func:`policies.benchmark.stats.prognostics_block`),
+  and the run's configuration and wall time;
+* ``summary.md``: the same as Markdown tables (the beliefs as a column group of the
+  per-policy table);
 * ``cost_vs_availability.png``, ``survival.png``, ``cost_breakdown.png``;
 * fleets: ``cost_vs_availability.png`` (mission availability), and the first episode of each
   policy day by day (spares, crew, missions missed) in ``fleet_day.csv`` and
@@ -74,6 +77,35 @@ def _metrics(summary: Mapping[str, Any]) -> Sequence[str]:
 
 def _is_fleet(summary: Mapping[str, Any]) -> bool:
     return "mission_availability" in _metrics(summary)
+
+
+#: the column group of the beliefs at decision time (policies.benchmark.runner)
+BELIEF_COLUMNS = (
+    "beliefs scored",
+    "RA at decisions",
+    "alpha-lambda hits (alpha 0.2)",
+    "coverage of [rul_low, inf)",
+)
+BELIEFS_NOTE = (
+    "Beliefs at decision time (policies that act on the filters' RUL): every preventive "
+    "replacement (the beliefs decided on) and every pre-flight test (the beliefs after it), "
+    "each part's mean RUL and low quantile against its true remaining life. RA: Saxena's "
+    "relative accuracy of the mean, episodes as clusters; alpha-lambda hits: the mean within "
+    "+-20 % of the truth; coverage: truth >= rul_low (nominal 1 - rul_quantile, 0.95 by "
+    "default); Wilson intervals over the predictions."
+)
+
+
+def _belief_cells(block: Mapping[str, Any] | None) -> list[str]:
+    """The belief columns of one policy (``-`` for a policy without beliefs)."""
+    if not block:
+        return ["-"] * len(BELIEF_COLUMNS)
+    return [
+        str(block["n"]),
+        _cell(block["relative_accuracy"], "{:.3f}"),
+        _cell(block["alpha_lambda"], "{:.3f}"),
+        _cell(block["coverage"], "{:.3f}"),
+    ]
 
 
 def _cell(iv: Mapping[str, float], fmt: str) -> str:
@@ -152,10 +184,16 @@ def markdown_summary(result: BenchmarkResult) -> str:
         "" if _is_fleet(s) else FINITE_HORIZON,
         "",
     ]
-    for title, header, rows in _blocks(s):
+    beliefs = s.get("prognostics")
+    for index, (title, header, rows) in enumerate(_blocks(s)):
+        if index == 0 and beliefs:
+            header = header + list(BELIEF_COLUMNS)
+            rows = [r + _belief_cells(beliefs.get(r[0])) for r in rows]
         out += [f"## {title[0].upper()}{title[1:]}", "", "| " + " | ".join(header) + " |"]
         out.append("|" + "---|" * len(header))
         out += ["| " + " | ".join(r) + " |" for r in rows]
+        if index == 0 and beliefs:
+            out += ["", BELIEFS_NOTE]
         out.append("")
     out += ["## Parameters", ""]
     out += [f"- `{p['label']}` ({p['family']}): `{p['params']}`" for p in c["policies"]]

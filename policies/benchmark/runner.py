@@ -2,12 +2,35 @@
 
 :func:`run_episodes` steps ``len(seeds)`` episodes together through a vector env of
 ``ScasMaintenance-v2`` (the native :class:`scas_env.vector_env.ScasMaintenanceVectorEnv`)
-and asks the policy for a batch of actions per slot (one forward pass for a network). Each
-actuator's episode is exactly that of a single env with the same seed (tested), and
+and asks the policy for a batch of actions per slot (one forward pass for a network).
+Each actuator's episode is exactly that of a single env with the same seed (tested), and
 policies act row by row (rules on their row, the random policy with one generator per
 episode, a network deterministically), so an episode's row and events do not depend on its
-batch (tested). The benchmark, RL evaluation and the value study all run
-their episodes here; :func:`run_episode` runs one given env through it.
+batch (tested). The benchmark, RL evaluation and the value study all run their episodes
+here; :func:`run_episode` runs one given env through it.
+
+**Beliefs at decision time.** For a policy that acts on beliefs (a flat observation with
+``spring_rul_mean``, ``spring_rul_low``, ``seal_rul_mean``, ``seal_rul_low``) the runner
+scores the filters' RUL prediction of each part against the truth (``info["true_state"]``'s
+``*_rul_flights``: the exact remaining life, the failing flight included) at every
+decision that acted on them:
+
+* ``replacement``: a slot where a part was replaced preventively (not after a failure): the
+  observation the policy decided on against the truth at that moment (the info before the
+  step);
+* ``test``: a slot where a pre-flight test ran: the observation after the step (the beliefs
+  the test updated, which the next decisions read) against the truth after the step; a part
+  that failed in that slot's flight is left out (its filter restarted on a new part).
+
+Per prediction (:func:`decision_scores`): Saxena's relative accuracy of the mean RUL
+(:func:`prognostics.metrics.relative_accuracy`), the alpha-lambda hit of the mean at
+``alpha`` = :data:`DECISION_ALPHA` (:func:`prognostics.metrics.alpha_lambda_point`), and
+whether the truth lies in ``[rul_low, inf)``, the one-sided bound at the scenario's
+``rul_quantile`` (nominal coverage ``1 - rul_quantile``, 0.95 by default). The truth is
+capped at ``rul_cap_flights`` as the observation is; a part whose life is infinite (fault
+off, dormant crack) is left out. Each episode's row sums them per event and part
+(:func:`decision_columns`: count, RA sum, hits, covered); policies without beliefs have
+zeros.
 """
 
 from __future__ import annotations
@@ -19,8 +42,50 @@ from typing import Any
 import numpy as np
 from gymnasium.vector import AutoresetMode, SyncVectorEnv
 
+from prognostics.metrics import alpha_lambda_point, relative_accuracy
 from scas_env.core.setup import PARTS
 from scas_env.core.setup import REWARD_TERMS as TERMS
+
+#: alpha of the alpha-lambda accuracy of the decision-time predictions (Saxena et al. 2010)
+DECISION_ALPHA = 0.2
+#: decisions whose beliefs are scored (module docstring), and the sums each row keeps
+DECISION_EVENTS = ("replacement", "test")
+DECISION_STATS = ("n", "ra_sum", "alpha_hits", "covered")
+
+
+def decision_columns() -> tuple[str, ...]:
+    """The results-row columns of the decision-time scores: ``prog_<event>_<part>_<stat>``."""
+    return tuple(
+        f"prog_{k}_{p}_{s}" for k in DECISION_EVENTS for p in PARTS for s in DECISION_STATS
+    )
+
+
+def belief_columns(obs_names: Sequence[str] | None) -> dict[str, tuple[int, int]] | None:
+    """Per part, the observation columns of its filter's mean RUL and low quantile; None if
+    the observation has no beliefs (features only, the truth, a dict)."""
+    names = list(obs_names or ())
+    want = {p: (f"{p}_rul_mean", f"{p}_rul_low") for p in PARTS}
+    if not all(c in names for cols in want.values() for c in cols):
+        return None
+    return {p: (names.index(m), names.index(lo)) for p, (m, lo) in want.items()}
+
+
+def decision_scores(
+    true_rul: float, rul_mean: float, rul_low: float, cap: float = math.inf
+) -> tuple[float, bool, bool] | None:
+    """One prediction at decision time: (RA of the mean, alpha-lambda hit of the mean at
+    :data:`DECISION_ALPHA`, truth >= the low quantile), the truth capped at ``cap``; None if
+    the truth is not a finite RUL > 0.
+
+    >>> decision_scores(100.0, 90.0, 60.0)
+    (0.9, True, True)
+    """
+    if not (math.isfinite(true_rul) and true_rul > 0.0):
+        return None
+    truth = min(float(true_rul), float(cap))
+    ra = relative_accuracy(truth, np.array([float(rul_mean)]))
+    hit = alpha_lambda_point(truth, float(rul_mean), DECISION_ALPHA)
+    return ra, bool(hit), bool(truth >= rul_low)
 
 
 def episode_row(
@@ -29,10 +94,12 @@ def episode_row(
     reward: float,
     wasted: Mapping[str, tuple[float, int]],
     flight_duration_s: float,
+    decisions: Mapping[str, float] | None = None,
 ) -> dict[str, Any]:
     """One results row from an episode's final info (see :mod:`policies.benchmark.run`).
 
-    ``wasted[part] = (sum, count)`` of the true RUL (flights) at preventive replacements.
+    ``wasted[part] = (sum, count)`` of the true RUL (flights) at preventive replacements;
+    ``decisions``: the decision-time sums (:func:`decision_columns`; zeros if None).
     """
     fh = info["flights"] * flight_duration_s / 3600.0
     per_kfh = 1000.0 / fh if fh > 0 else math.nan
@@ -62,6 +129,9 @@ def episode_row(
         row[f"wasted_life_{p}"] = wasted[p][0] / wasted[p][1] if wasted[p][1] else math.nan
     for k in TERMS:
         row[f"term_{k}"] = float(terms[k])
+    for col in decision_columns():
+        value = 0 if decisions is None else decisions.get(col, 0)
+        row[col] = float(value) if col.endswith("_ra_sum") else int(value)
     return row
 
 
@@ -72,6 +142,8 @@ class _OneEnv(SyncVectorEnv):
     def __init__(self, env: Any) -> None:
         super().__init__([lambda: env], autoreset_mode=AutoresetMode.NEXT_STEP)
         self.params = env.unwrapped.params
+        self.obs_names = getattr(env.unwrapped, "obs_names", None)
+        self.setup = getattr(env.unwrapped, "setup", None)
 
 
 def run_episode(env: Any, policy: Any, env_seed: int, policy_seed: int) -> dict[str, Any]:
@@ -104,10 +176,18 @@ def run_episodes(venv: Any, policy: Any, seeds: Sequence[tuple[int, int]]) -> li
     events: list[list[dict[str, Any]]] = [[] for _ in range(n)]
     start = np.ones(n, dtype=np.bool_)
     state = None
+    beliefs = belief_columns(getattr(venv, "obs_names", None))
+    if not isinstance(obs, np.ndarray) or obs.ndim != 2:
+        beliefs = None
+    setup = getattr(venv, "setup", None)
+    cap = float(setup.scenario.rul_cap_flights) if setup is not None else math.inf
+    scores = [dict.fromkeys(decision_columns(), 0.0) for _ in range(n)]
     while True:
-        before = info
+        before, decided_on = info, obs
         actions, state = policy.predict(obs, state=state, episode_start=start, deterministic=True)
         obs, reward, terminated, truncated, info = venv.step(np.asarray(actions, dtype=np.int64))
+        if beliefs is not None:
+            _score_decisions(scores, beliefs, cap, before, decided_on, info, obs)
         start[:] = False
         reward_sum += reward
         for k in TERMS:
@@ -143,9 +223,46 @@ def run_episodes(venv: Any, policy: Any, seeds: Sequence[tuple[int, int]]) -> li
             for part in PARTS
         }
         term_e = {k: terms[k][e] for k in TERMS}
-        row = episode_row(row_info, term_e, reward_sum[e], wasted, flight_duration_s)
+        row = episode_row(row_info, term_e, reward_sum[e], wasted, flight_duration_s, scores[e])
         out.append({"row": row, "events": events[e]})
     return out
+
+
+def _score_decisions(
+    scores: list[dict[str, float]],
+    beliefs: Mapping[str, tuple[int, int]],
+    cap: float,
+    before: Mapping[str, Any],
+    decided_on: np.ndarray,
+    info: Mapping[str, Any],
+    obs: np.ndarray,
+) -> None:
+    """Add this slot's decision-time scores (module docstring) to each episode's sums."""
+    failed = {p: info["failures"][p] > before["failures"][p] for p in PARTS}
+    replaced = np.zeros(len(scores), dtype=np.bool_)
+    for p in PARTS:
+        replaced |= (info["replacements"][p] > before["replacements"][p]) & ~failed[p]
+    tested = info["tests"] > before["tests"]
+    for kind, rows, seen, when in (
+        ("replacement", replaced, decided_on, before),
+        ("test", tested, obs, info),
+    ):
+        for e in np.flatnonzero(rows):
+            for p in PARTS:
+                if kind == "test" and failed[p][e]:
+                    continue
+                m, lo = beliefs[p]
+                truth = float(when["true_state"][f"{p}_rul_flights"][e])
+                got = decision_scores(truth, float(seen[e, m]), float(seen[e, lo]), cap)
+                if got is None:
+                    continue
+                ra, hit, covered = got
+                key = f"prog_{kind}_{p}_"
+                sums = scores[e]
+                sums[key + "n"] += 1
+                sums[key + "ra_sum"] += ra
+                sums[key + "alpha_hits"] += hit
+                sums[key + "covered"] += covered
 
 
 def _info_row(info: Mapping[str, Any], e: int) -> dict[str, Any]:
@@ -157,4 +274,15 @@ def _info_row(info: Mapping[str, Any], e: int) -> dict[str, Any]:
     return row
 
 
-__all__ = ["TERMS", "episode_row", "run_episode", "run_episodes"]
+__all__ = [
+    "DECISION_ALPHA",
+    "DECISION_EVENTS",
+    "DECISION_STATS",
+    "TERMS",
+    "belief_columns",
+    "decision_columns",
+    "decision_scores",
+    "episode_row",
+    "run_episode",
+    "run_episodes",
+]

@@ -17,6 +17,13 @@ Per-policy intervals are chosen so that they never leave the metric's possible r
   ``scipy.stats.bootstrap``), which lies inside the range of the observed values;
 * the reward per episode (unbounded, near-normal over hundreds of episodes): t-interval.
 
+Beliefs at decision time (:func:`prognostics_block`, policies that act on beliefs;
+:mod:`policies.benchmark.runner`): the mean relative accuracy over every scored prediction
+is a ratio of per-episode sums, with a t-interval of its linearised variance taking the
+episodes as clusters (predictions of one episode are not independent); the alpha-lambda hit
+rate and the coverage of ``[rul_low, inf)`` get Wilson intervals over the predictions
+(treated as independent trials: read them as lower bounds of the uncertainty).
+
 >>> iv = t_interval([1.0, 2.0, 3.0])
 >>> round(iv.mean, 3), round(iv.half_width, 3)  # t_{0.975, 2} * 1 / sqrt(3)
 (2.0, 2.484)
@@ -35,6 +42,9 @@ from typing import Any
 import numpy as np
 from scipy import optimize, stats
 from scipy.stats import t as student_t
+
+from policies.benchmark.runner import DECISION_ALPHA, DECISION_EVENTS
+from scas_env.core.setup import PARTS
 
 #: Per-episode metrics summarised per policy (results.csv columns).
 METRICS = (
@@ -94,6 +104,8 @@ __all__ = [
     "minimum_detectable_difference",
     "paired_comparison",
     "paired_difference",
+    "prognostics_block",
+    "ratio_interval",
     "share_of_gap",
     "summarize",
     "t_interval",
@@ -330,6 +342,81 @@ def share_of_gap(
     return Interval(share, float(ci.low), float(ci.high), n)
 
 
+def ratio_interval(
+    sums: Sequence[float] | np.ndarray,
+    counts: Sequence[float] | np.ndarray,
+    confidence: float = 0.95,
+) -> Interval:
+    """``r = sum(sums) / sum(counts)`` over clusters (episodes) with ``counts > 0``, and the
+    t-interval (``m - 1`` degrees of freedom, ``m`` clusters) of its linearised variance
+    ``m / (m - 1) * sum((s_e - r c_e)^2) / (sum c)^2``; ``n`` is the number of items.
+
+    >>> iv = ratio_interval([2.0, 4.0], [2, 4])
+    >>> iv.mean, iv.low, iv.high, iv.n
+    (1.0, 1.0, 1.0, 6)
+    """
+    _confidence(confidence)
+    s, c = np.asarray(sums, dtype=np.float64), np.asarray(counts, dtype=np.float64)
+    if s.shape != c.shape:
+        raise ValueError(f"sums and counts need equal shapes, got {s.shape} and {c.shape}")
+    keep = c > 0
+    s, c = s[keep], c[keep]
+    total = float(c.sum())
+    if total == 0.0:
+        return Interval(math.nan, math.nan, math.nan, 0)
+    r = float(s.sum() / total)
+    m = int(c.size)
+    if m < 2:
+        return Interval(r, math.nan, math.nan, int(total))
+    var = m / (m - 1) * float(np.sum((s - r * c) ** 2)) / total**2
+    half = float(student_t.ppf(0.5 + 0.5 * confidence, m - 1) * math.sqrt(var))
+    return Interval(r, r - half, r + half, int(total))
+
+
+def prognostics_block(
+    rows: Sequence[Mapping[str, Any]], confidence: float = 0.95
+) -> dict[str, Any] | None:
+    """The decision-time scores of one policy's rows (``prog_<event>_<part>_<stat>``
+    columns of :func:`policies.benchmark.runner.decision_columns`): predictions ``n``, the
+    mean relative accuracy (:func:`ratio_interval` over episodes), the alpha-lambda hit
+    rate and the coverage of ``[rul_low, inf)`` (:func:`wilson_interval`); overall, per
+    event (``replacement``, ``test``) and per part. None if the rows have no such columns
+    or no scored prediction."""
+    groups = [(k, p) for k in DECISION_EVENTS for p in PARTS]
+    if not rows or not all(f"prog_{k}_{p}_n" in rows[0] for k, p in groups):
+        return None
+
+    def block(chosen: Sequence[tuple[str, str]]) -> dict[str, Any] | None:
+        def per_episode(stat: str) -> np.ndarray:
+            return np.array(
+                [sum(float(r[f"prog_{k}_{p}_{stat}"]) for k, p in chosen) for r in rows]
+            )
+
+        n_e = per_episode("n")
+        n = int(n_e.sum())
+        if n == 0:
+            return None
+        hits, covered = int(per_episode("alpha_hits").sum()), int(per_episode("covered").sum())
+        return {
+            "n": n,
+            "episodes": int(np.count_nonzero(n_e)),
+            "relative_accuracy": ratio_interval(per_episode("ra_sum"), n_e, confidence).to_dict(),
+            "alpha_lambda": wilson_interval(hits, n, confidence).to_dict(),
+            "coverage": wilson_interval(covered, n, confidence).to_dict(),
+        }
+
+    overall = block(groups)
+    if overall is None:
+        return None
+    return {
+        **overall,
+        "alpha": DECISION_ALPHA,
+        "interval": "[rul_low, inf): the one-sided bound at Scenario.rul_quantile",
+        "by_event": {k: block([(k, p) for p in PARTS]) for k in DECISION_EVENTS},
+        "by_part": {p: block([(k, p) for k in DECISION_EVENTS]) for p in PARTS},
+    }
+
+
 def best_policy(per_policy: Mapping[str, Mapping[str, Interval]], candidates: Sequence[str]) -> str:
     """The candidate with the highest mean reward per episode."""
     if not candidates:
@@ -368,7 +455,8 @@ def summarize(
     detectable difference) against the best of ``reference_candidates`` (highest mean
     reward); rows are results.csv rows. ``gap = (base, bound)``: also each policy's
     :func:`share_of_gap` of the reward between those two (fleets: the naive rule and the
-    clairvoyant bound), when both ran."""
+    clairvoyant bound), when both ran. ``"prognostics"``: per policy that acted on beliefs,
+    the decision-time scores (:func:`prognostics_block`)."""
     names = tuple(metrics)
     mine: dict[str, list[Mapping[str, Any]]] = {}
     by_policy: dict[str, dict[str, np.ndarray]] = {}
@@ -388,7 +476,7 @@ def summarize(
             paired[p] = {
                 m: paired_difference(by_policy[p][m], by_policy[ref][m], confidence) for m in names
             }
-    out = {
+    out: dict[str, Any] = {
         "confidence": confidence,
         "metrics": list(names),
         "reference": ref,
@@ -404,4 +492,7 @@ def summarize(
             p: share_of_gap(by_policy[p]["reward"], base, bound, confidence).to_dict()
             for p in policies
         }
+    beliefs = {p: prognostics_block(mine[p], confidence) for p in policies}
+    if any(b is not None for b in beliefs.values()):
+        out["prognostics"] = {p: b for p, b in beliefs.items() if b is not None}
     return out

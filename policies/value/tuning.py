@@ -250,6 +250,18 @@ def _age_point(family: Family, age_params: Mapping[str, Any] | None) -> dict[str
     return point
 
 
+def _start_point(family: Family, point: Mapping[str, Any]) -> dict[str, Any]:
+    """A point of ``family`` to enqueue: its searched parameters, each inside the box."""
+    keys = [*family.box, *(["override"] if family.nested else [])]
+    missing = [k for k in keys if k not in point]
+    if missing:
+        raise ValueError(f"start point {dict(point)} lacks {missing} of family {family.label!r}")
+    for name, (lo, hi, _) in family.box.items():
+        if not lo <= float(point[name]) <= hi:
+            raise ValueError(f"start point {name} = {point[name]!r} is outside [{lo}, {hi}]")
+    return {k: point[k] for k in keys}
+
+
 def tune_family(
     family: Family,
     *,
@@ -261,12 +273,15 @@ def tune_family(
     sampler_seed: int = SAMPLER_SEED,
     env_kwargs: Mapping[str, Any] | None = None,
     train_seed: int = TRAIN_SEED,
+    start_points: Sequence[Mapping[str, Any]] = (),
 ) -> TuningResult:
     """Tune one family with TPE (module docstring); ``age_params``: the tuned age rule,
     enqueued with the override off as the first trial of a nested family; ``env_kwargs``:
     the user's scenario and costs (``gym.make`` keywords), under the family's own;
     ``train_seed``: root seed of the training episodes (another tuning replicate: another
-    seed, never :data:`HELD_OUT_SEED`)."""
+    seed, never :data:`HELD_OUT_SEED`); ``start_points``: further points of the family
+    enqueued next (a warm start, e.g. the point tuned on another scenario: the search then
+    ends at least as good on the training seeds)."""
     import optuna
 
     for name, value in (("trials", trials), ("episodes", episodes), ("slots", slots)):
@@ -305,6 +320,8 @@ def tune_family(
     start = _age_point(family, age_params)
     if start is not None:
         study.enqueue_trial(start)
+    for point in start_points:
+        study.enqueue_trial(_start_point(family, point))
     study.optimize(objective, n_trials=trials, show_progress_bar=progress)
     env.close()
     best = history[study.best_trial.number]

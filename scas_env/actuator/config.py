@@ -8,8 +8,8 @@ range and its source. ``__post_init__`` checks each value (finite, in range) and
 Files: :meth:`Validated.load` and :meth:`Validated.save` read and write TOML, YAML or JSON
 (by suffix) with the same validation; errors name the file, the table and the field. A file
 holds either the fields of one group at its top level, or tables named after
-:data:`FILE_SECTIONS` (``[scenario]``, ``[costs]``, ``[params]``, ``[fleet]``), each read by
-its class, so one file can describe a whole case. Files are UTF-8 (a byte-order mark is
+:data:`FILE_SECTIONS` (``[scenario]``, ``[costs]``, ``[params]``, ``[fleet]``, ``[mismatch]``),
+each read by its class, so one file can describe a whole case. Files are UTF-8 (a byte-order mark is
 allowed); a key may appear once per mapping. Readers: :mod:`tomllib`, PyYAML's
 ``SafeLoader`` (no object construction, so a file cannot run code) and :mod:`json`, the last
 two refusing a repeated key (:func:`read_mapping`); a boolean is taken only by a switch
@@ -64,12 +64,14 @@ T = TypeVar("T", bound="Validated")
 #: from each: the episode (``scas_env.core.scenario.Scenario``), the cost model
 #: (``scas_env.core.costs.CostModel``), the actuator design (``scas_env.actuator.params``) and
 #: the fleet (``scas_env.core.fleet.config.FleetConfig``, with its ``[fleet.demand]`` and
-#: ``[fleet.spares]`` sub-tables).
+#: ``[fleet.spares]`` sub-tables) and the world's mismatch against the monitor's model
+#: (``scas_env.core.mismatch``).
 FILE_SECTIONS = {
     "scenario": "Scenario",
     "costs": "CostModel",
     "params": "ScasParams",
     "fleet": "FleetConfig",
+    "mismatch": "Mismatch",
 }
 
 

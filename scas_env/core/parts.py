@@ -85,12 +85,12 @@ def reset_row(batch: ActuatorState, e: int, np_random: np.random.Generator) -> N
     batch.rngs[e] = rngs
     batch.set_handle(e, "measure")
     batch.set_handle(e, "filter")
-    unit = draw_unit(st.params, rngs["parts"])
+    unit = draw_unit(st.world_params, rngs["parts"])
     if st.physics:
         batch.physics[e] = PhysicsRow(int(rngs["parts"].integers(0, 2**63 - 1)))
-    spring = draw_unit(st.params, rngs["spring_parts"])
+    spring = draw_unit(st.world_params, rngs["spring_parts"])
     unit = _fit_spring(batch, e, unit, spring, rngs["spring_parts"])
-    seal = draw_unit(st.params, rngs["seal_parts"])
+    seal = draw_unit(st.world_params, rngs["seal_parts"])
     unit = replace(unit, wear_rate_m3_n_m=seal.wear_rate_m3_n_m)
     a["wmult"][e] = unit.wear_rate_m3_n_m / st.params.seal.wear_rate_m3_n_m
     a["wear"][e] = 0.0
@@ -152,7 +152,7 @@ def _in_service(batch: ActuatorState, e: int, used: np.ndarray) -> None:
     growth draws used up, its age known); its filter is the new-part prior predicted over
     them (the filter stream) and conditioned on the part having survived."""
     st, a = batch.setup, batch.a
-    wm, cal = st.world, st.calibration
+    wm = st.world
     for p, part in enumerate(PARTS):
         life = float(a["life"][e, p])
         flights = int(used[p] * life) if math.isfinite(life) else 0
@@ -165,7 +165,7 @@ def _in_service(batch: ActuatorState, e: int, used: np.ndarray) -> None:
                 wm.cv_log_depth, wm.cv_values, wm.dormant_m,
             )  # fmt: skip
         elif part == "seal" and st.scenario.wear_active:
-            rate = cal.wear_rate_m_per_flight * float(a["wmult"][e])
+            rate = wm.wear_rate_m * float(a["wmult"][e])
             a["wear"][e] = wear_after_flights(
                 float(a["wear"][e]), rate, wm.wear_cv, handle, flights
             )
@@ -241,7 +241,7 @@ def flights_to_failure(batch: ActuatorState, e: int, part: str) -> float:
                 float(a["crack"][e]), float(a["fail"][e]), float(a["theta"][e]), draws,
                 *wm.damage, wm.cv_log_depth, wm.cv_values, wm.dormant_m, MAX_LIFE_FLIGHTS,
             )  # fmt: skip
-        rate = cal.wear_rate_m_per_flight * float(a["wmult"][e])
+        rate = wm.wear_rate_m * float(a["wmult"][e])
         return wear_flights_to_failure(
             float(a["wear"][e]), rate, wm.wear_cv, cal.seal_critical_wear_m, draws,
             MAX_LIFE_FLIGHTS,
@@ -287,7 +287,7 @@ def _fit_part(
     """Row ``e`` gets a new ``part`` drawn from ``rng`` (its kind's parts stream), with its
     growth stream and life."""
     st, a = batch.setup, batch.a
-    donor = draw_unit(st.params, rng)
+    donor = draw_unit(st.world_params, rng)
     unit = batch.physics[e].unit if st.physics else donor
     if part == "spring":
         unit = _fit_spring(batch, e, unit, donor, rng)
@@ -325,7 +325,8 @@ def replace_part(batch: ActuatorState, e: int, part: str, *, failed: bool) -> No
 
 def record_reference(batch: ActuatorState, e: int) -> None:
     """The installation's reference reading of G1 and G3, recorded at fitting: the mean of
-    ``reference_tests`` tests of the installation with healthy parts (the measure stream)."""
+    ``reference_tests`` tests of the installation with healthy parts (the measure stream), as
+    the world measures them (``Setup.world_features``)."""
     st = batch.setup
     rng = batch.rngs[e]["measure"]
     n = int(st.scenario.reference_tests)
@@ -334,7 +335,7 @@ def record_reference(batch: ActuatorState, e: int) -> None:
     else:
         idx = st.world.ground_idx.tolist()
         unit_z = batch.a["unit_z"][e]
-        tests = [st.surrogate.sample_list(0.0, 0.0, unit_z, rng, idx) for _ in range(n)]
+        tests = [st.world_features.sample_list(0.0, 0.0, unit_z, rng, idx) for _ in range(n)]
     batch.a["reference"][e] = [math.fsum(t[k] for t in tests) / n for k in range(2)]
 
 

@@ -15,10 +15,18 @@ walk unless ``Scenario.spring_theta_walk``); ``filter_growth_bias`` and
 ``filter_noise_scale`` make the filters assume other growth or noise than the world has.
 Every measured feature's installation effect is a per-particle Gaussian state: G1 and I8 in
 the spring filter, G3 and I9 in the seal filter.
+
+A :class:`~scas_env.core.mismatch.Mismatch` changes the world's constants only (growth
+tables, whole-flight CVs, the unit draws' scatter ``world_params``, the surrogate's unit and
+run std ``world_features``), and so does a world surrogate of its own (``world_surrogate``:
+features from another design point, e.g. another fluid temperature); the filters, the
+detectors and the go/no-go limits keep the nominal model. The default (no mismatch) leaves
+every constant as it was, bit for bit.
 """
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass, field
 from typing import NamedTuple
 
@@ -37,6 +45,7 @@ from scas_env.actuator.surrogate import SurrogateModel
 from scas_env.core.acceptance import AirworthinessLimits
 from scas_env.core.costs import CostModel
 from scas_env.core.filters import FilterModel
+from scas_env.core.mismatch import SENSING_FIELDS, Mismatch
 from scas_env.core.scenario import Scenario
 
 #: the two replaceable parts, in column order of every (n, 2) array
@@ -124,6 +133,11 @@ class Setup:
     #: mission types the batch flies (``scas_env.actuator.mission_types``), the standard
     #: one first; a row's ``mtype`` indexes them
     mission_types: tuple[str, ...] = ("standard",)
+    #: the world's constants against the monitor's model (default: none)
+    mismatch: Mismatch = field(default_factory=Mismatch)
+    #: the world's own feature surrogate (e.g. built at another fluid temperature,
+    #: docs/value.md); None: the monitor's ``surrogate``
+    world_surrogate: SurrogateModel | None = None
     world: WorldModel = field(init=False)
     filters: FilterModel = field(init=False)
     detector: DetectorModel = field(init=False)
@@ -134,30 +148,57 @@ class Setup:
     learn_cols: np.ndarray = field(init=False)
     #: installation effects drawn per fitted spring pair (the surrogate's first features)
     unit_z_draws: int = field(init=False)
-    #: the world's crack-growth table (nominal Paris C) and the filters' process models
+    #: the design the world's parts are drawn from (``params`` unless a mismatch changes the
+    #: unit scatter of the growth constants)
+    world_params: ScasParams = field(init=False)
+    #: the surrogate the world's features are drawn from: ``world_surrogate`` (or
+    #: ``surrogate``) with the mismatch's unit and run std multipliers
+    world_features: SurrogateModel = field(init=False)
+    #: the world's crack-growth table (the calibration's, times ``mismatch.crack_growth``)
+    #: and the filters' process models
     crack_table: TabulatedRateModel = field(init=False)
     spring_process: TabulatedRateModel = field(init=False)
     seal_process: TabulatedRateModel = field(init=False)
 
     def __post_init__(self) -> None:
-        s, cal, sur = self.scenario, self.calibration, self.surrogate
+        s, cal, sur, m = self.scenario, self.calibration, self.surrogate, self.mismatch
+        if not isinstance(m, Mismatch):
+            raise ValueError(f"mismatch = {m!r} must be a Mismatch")
+        sensing = {k: getattr(m, k) for k in SENSING_FIELDS if getattr(m, k) != 1.0}
+        if sensing and s.fidelity == "physics":
+            raise ValueError(
+                f"Mismatch {sensing} scales the feature surrogate's tables: the surrogate "
+                "fidelity only (a physics world with other sensing is another ScasParams)"
+            )
+        own = self.world_surrogate
+        if own is not None:
+            if not isinstance(own, SurrogateModel) or own.features != sur.features:
+                raise ValueError(
+                    "world_surrogate must be None or a SurrogateModel of the monitor's features "
+                    f"{sur.features}"
+                )
+            if s.fidelity == "physics":
+                raise ValueError("world_surrogate: the physics fidelity simulates its features")
+        world_sur = _world_surrogate(sur if own is None else own, m)
         flight_idx = np.array([sur.index(f) for f in FLIGHT_FEATURES], dtype=np.int64)
         ground_idx = np.array([sur.index(f) for f in GROUND_FEATURES], dtype=np.int64)
         crack_cv, wear_cv = cal.flight_scatter("whole_flight")
-        table = paris_crack_model(cal.crack_depth_m, cal.crack_rate_m_per_flight)
-        types = _mission_tables(self.mission_types, cal, table)
+        table = paris_crack_model(
+            cal.crack_depth_m, _scaled(cal.crack_rate_m_per_flight, m.crack_growth)
+        )
+        types = _mission_tables(self.mission_types, cal, table, m)
         world = WorldModel(
-            crack_grid=sur.crack_grid,
-            wear_grid=sur.wear_grid,
-            stack=np.stack([sur.mean, sur.unit_std, sur.run_std]),
+            crack_grid=world_sur.crack_grid,
+            wear_grid=world_sur.wear_grid,
+            stack=np.stack([world_sur.mean, world_sur.unit_std, world_sur.run_std]),
             flight_idx=flight_idx,
             ground_idx=ground_idx,
             damage=table.table_args,
             cv_log_depth=np.log(cal.crack_cv_depth_m),
-            cv_values=np.asarray(crack_cv, dtype=np.float64),
+            cv_values=_scaled(np.asarray(crack_cv, dtype=np.float64), m.crack_flight_scatter),
             dormant_m=float(cal.crack_dormant_below_m),
-            wear_cv=float(wear_cv),
-            wear_rate_m=float(cal.wear_rate_m_per_flight),
+            wear_cv=float(_scaled(wear_cv, m.wear_flight_scatter)),
+            wear_rate_m=float(_scaled(cal.wear_rate_m_per_flight, m.wear_growth)),
             seal_critical_m=float(cal.seal_critical_wear_m),
             crack_active=bool(s.crack_active),
             wear_active=bool(s.wear_active),
@@ -168,6 +209,8 @@ class Setup:
         )
         put = object.__setattr__
         put(self, "world", world)
+        put(self, "world_params", _world_params(self.params, m))
+        put(self, "world_features", world_sur)
         spring_process, seal_process = _processes(self.params, s, cal)
         put(self, "crack_table", table)
         put(self, "spring_process", spring_process)
@@ -218,11 +261,48 @@ def read_only(value: object) -> object:
     return value
 
 
+def _scaled(value, factor: float):
+    """``value * factor``, or ``value`` itself when ``factor`` is 1 (no mismatch: the
+    nominal constants untouched)."""
+    return value if factor == 1.0 else value * factor
+
+
+def _world_params(params: ScasParams, m: Mismatch) -> ScasParams:
+    """The design the world's parts are drawn from: ``params`` with the unit scatter of
+    Paris C and of the Archard coefficient times the mismatch's (``params`` itself if 1)."""
+    if m.crack_unit_scatter == 1.0 and m.wear_unit_scatter == 1.0:
+        return params
+    unc = params.uncertainty
+    return params.replace(
+        uncertainty=unc.replace(
+            paris_c_log_sigma=unc.paris_c_log_sigma * m.crack_unit_scatter,
+            wear_rate_log_sigma=unc.wear_rate_log_sigma * m.wear_unit_scatter,
+        )
+    )
+
+
+def _world_surrogate(sur: SurrogateModel, m: Mismatch) -> SurrogateModel:
+    """The surrogate the world's features are drawn from: ``sur`` with its unit std times
+    ``installation_spread`` and its run std times ``sensing_noise`` (``sur`` itself if 1)."""
+    if m.installation_spread == 1.0 and m.sensing_noise == 1.0:
+        return sur
+    return dataclasses.replace(
+        sur,
+        unit_std=sur.unit_std * m.installation_spread,
+        run_std=sur.run_std * m.sensing_noise,
+    )
+
+
 def _mission_tables(
-    names: tuple[str, ...], cal: Calibration, table: TabulatedRateModel
+    names: tuple[str, ...],
+    cal: Calibration,
+    table: TabulatedRateModel,
+    m: Mismatch | None = None,
 ) -> dict[str, object]:
     """The per-mission-type fields of :class:`WorldModel` (its docstring); the standard
-    mission (first) takes the calibration's own table and whole-flight scatter."""
+    mission (first) takes the world's own table (``table``) and the calibration's
+    whole-flight scatter; the mismatch ``m`` scales every type's growth rate and CVs."""
+    m = Mismatch() if m is None else m
     if not names or names[0] != "standard" or len(set(names)) != len(names):
         raise ValueError(
             f"mission_types = {names!r} must be distinct mission types, 'standard' first"
@@ -230,8 +310,10 @@ def _mission_tables(
     grid = cal.crack_depth_m
     crack_cv, wear_cv = cal.flight_scatter("whole_flight")
     rates, cums = [table.table_args[1]], [table.table_args[2]]
-    cv_depth, cv = [np.log(cal.crack_cv_depth_m)], [np.asarray(crack_cv, dtype=np.float64)]
-    wear_mult, wear_cvs, crack_mult = [1.0], [float(wear_cv)], [np.ones(grid.size)]
+    cv_depth = [np.log(cal.crack_cv_depth_m)]
+    cv = [_scaled(np.asarray(crack_cv, dtype=np.float64), m.crack_flight_scatter)]
+    wear_mult, crack_mult = [1.0], [np.ones(grid.size)]
+    wear_cvs = [float(_scaled(wear_cv, m.wear_flight_scatter))]
     if len(names) > 1:
         from scas_env.actuator.mission_damage import default_mission_damage
 
@@ -239,13 +321,14 @@ def _mission_tables(
         for name in names[1:]:
             row = damage.types[name]
             mult = damage.crack_multiplier_at(name, grid)
-            args = paris_crack_model(grid, cal.crack_rate_m_per_flight * mult).table_args
+            rate = _scaled(cal.crack_rate_m_per_flight, m.crack_growth) * mult
+            args = paris_crack_model(grid, rate).table_args
             rates.append(args[1])
             cums.append(args[2])
             cv_depth.append(np.log(damage.depth_m))
-            cv.append(np.asarray(row.crack_cv, dtype=np.float64))
+            cv.append(_scaled(np.asarray(row.crack_cv, dtype=np.float64), m.crack_flight_scatter))
             wear_mult.append(float(row.wear_multiplier))
-            wear_cvs.append(float(row.wear_cv))
+            wear_cvs.append(float(_scaled(row.wear_cv, m.wear_flight_scatter)))
             crack_mult.append(np.asarray(mult, dtype=np.float64))
     return {
         "type_rate": np.stack(rates),
