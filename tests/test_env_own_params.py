@@ -36,5 +36,5 @@ def test_an_env_on_other_params_builds_a_whole_flight_calibration(
     assert np.all(np.isfinite(crack_cv)) and math.isfinite(float(np.ravel(wear_cv)[0]))
     obs, _ = env.reset(seed=0)
     for _ in range(50):
-        obs, reward, terminated, truncated, _ = env.step(0)
+        obs, _, _, truncated, _ = env.step(0)
     assert truncated and np.all(np.isfinite(obs))
