@@ -15,8 +15,8 @@ arm: common random numbers):
   seeds :data:`~policies.value.tuning.TRAIN_SEED`, :func:`policies.value.tuning.tune_family`),
   warm-started from the nominal-tuned point (``start_points``: at least as good as it on the
   training seeds); value = paired difference of the re-tuned rules. The age rule's episodes
-  do not depend on the features (it reads ages only and never tests), so under the sensing kinds it is not
-  re-tuned: its tuning would replay the nominal one trial for trial;
+  do not depend on the features (it reads ages only and never tests), so under the sensing
+  kinds it is not re-tuned: its tuning would replay the nominal one trial for trial;
 * the gain of re-tuning each rule (re-tuned - nominal-tuned, paired), and the filters'
   beliefs at decision time (relative accuracy, alpha-lambda hits, coverage of the low
   quantile; :mod:`policies.benchmark.runner`).
