@@ -18,6 +18,13 @@
   actuator-steps per second (the issue's target: the fleet flies at least half as many
   actuator-flights per second as the vector env steps actuators).
 
+``--scenario JSON`` compares instead: the single env's and the native vector env's figures
+with those Scenario fields beside the defaults, measured alternately in the same run, and
+the slowdown of each (the option's time over the default's), e.g. the spring filter's
+rejuvenation::
+
+    python -m experiments.env_speed --scenario '{"rejuvenation": "resample_move"}'
+
 Times are CPU seconds of this process (``time.process_time``), the best of a few repeats:
 less sensitive than wall time to other jobs on a shared machine, not immune to them.
 """
@@ -52,10 +59,11 @@ def _cpu(fn: Callable[[], Any]) -> float:
     return time.process_time() - t0
 
 
-def single_env_us(steps: int = 6000) -> dict[str, float]:
+def single_env_us(steps: int = 6000, **fields: Any) -> dict[str, float]:
     """Microseconds per step of the single env (flying; a test every 10 slots) and of
-    CartPole-v1, through ``gym.make`` (its wrappers included)."""
-    env = gym.make(scas_env.ENV_ID)
+    CartPole-v1, through ``gym.make`` (its wrappers included); ``fields``: Scenario fields
+    over the defaults."""
+    env = gym.make(scas_env.ENV_ID, **fields)
     cart = gym.make("CartPole-v1")
 
     def run(actions: Sequence[int]) -> float:
@@ -88,13 +96,15 @@ def single_env_us(steps: int = 6000) -> dict[str, float]:
     }
 
 
-def vector_rates(num_envs: int = 64, steps: int = 600) -> dict[str, float]:
+def vector_rates(num_envs: int = 64, steps: int = 600, **fields: Any) -> dict[str, float]:
     """Env-steps per second of the native vector env under :data:`MIX` and flying only,
     CartPole's native vector env, and the filter updates of the mix (counts and the
-    ceiling, module docstring)."""
+    ceiling, module docstring); ``fields``: Scenario fields over the defaults."""
     rng = np.random.default_rng(0)
     mix = rng.choice(4, size=(steps * 4, num_envs), p=MIX)
-    venv = gym.make_vec(scas_env.ENV_ID, num_envs=num_envs, vectorization_mode="vector_entry_point")
+    venv = gym.make_vec(
+        scas_env.ENV_ID, num_envs=num_envs, vectorization_mode="vector_entry_point", **fields
+    )
     venv.reset(seed=0)
     for t in range(100):
         venv.step(mix[t])
@@ -238,6 +248,40 @@ def measure() -> dict[str, float]:
     return out
 
 
+#: the figures :func:`compare` times, and whether more is faster
+COMPARED = {"fly_us": False, "test_every_10_us": False, "mix_steps_per_s": True,
+            "fly_steps_per_s": True}  # fmt: skip
+
+
+def compare(fields: dict[str, Any], repeats: int = 2) -> dict[str, dict[str, float]]:
+    """The single and vector env figures (:data:`COMPARED`) with the default scenario and
+    with ``fields``, alternated ``repeats`` times in one run: per figure the best of each
+    and the slowdown (the option's time per step over the default's)."""
+    best: dict[str, dict[str, float]] = {"default": {}, "option": {}}
+    for _ in range(repeats):
+        for name, kw in (("default", {}), ("option", fields)):
+            figures = {**single_env_us(**kw), **vector_rates(**kw)}
+            for k, faster in COMPARED.items():
+                old = best[name].get(k)
+                new = figures[k]
+                best[name][k] = new if old is None else (max if faster else min)(old, new)
+    best["slowdown"] = {
+        k: (best["default"][k] / best["option"][k] if faster else best["option"][k]
+            / best["default"][k])
+        for k, faster in COMPARED.items()
+    }  # fmt: skip
+    return best
+
+
+def format_comparison(c: dict[str, dict[str, float]], fields: dict[str, Any]) -> str:
+    lines = [f"default scenario vs {json.dumps(fields)} (best of each, CPU time; slowdown = "
+             "time per step with the option / without)"]  # fmt: skip
+    for k in COMPARED:
+        d, o, s = c["default"][k], c["option"][k], c["slowdown"][k]
+        lines.append(f"{k:20s} {d:12,.1f} {o:12,.1f}   slowdown x{s:.3f}")
+    return "\n".join(lines)
+
+
 def format_rates(r: dict[str, float]) -> str:
     return "\n".join(
         [
@@ -263,7 +307,20 @@ def format_rates(r: dict[str, float]) -> str:
 def main(argv: Sequence[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--json", type=Path, default=None, help="also write the figures here")
+    parser.add_argument(
+        "--scenario",
+        type=json.loads,
+        default=None,
+        help="compare the single and vector env with these Scenario fields (JSON) against "
+        "the defaults, in one run (module docstring)",
+    )
     args = parser.parse_args(argv)
+    if args.scenario is not None:
+        result = compare(args.scenario)
+        print(format_comparison(result, args.scenario))
+        if args.json is not None:
+            args.json.write_text(json.dumps(result, indent=1) + "\n")
+        return 0
     rates = measure()
     print(format_rates(rates))
     if args.json is not None:

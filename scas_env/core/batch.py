@@ -87,6 +87,8 @@ class ActuatorBatch(ActuatorState):
         :meth:`repair` (a fleet's crew and spares decide when)."""
         a, st = self.a, self.setup
         a["wasted_now"][rows] = 0.0
+        if self.keeps_history:  # a test (2 data), one per flight, a replacement's batch
+            self.ensure_history(rows, 3 + int(a["flights"][rows].max(initial=0)))
         plan = (actions, a["flights"], a["group"], a["mtype"], a["flight_value"])
         if st.physics:
             self._physics_slot(rows, plan)

@@ -17,6 +17,10 @@ Rao-Blackwellised, :func:`prognostics.random_effect.random_effect_update`).
 * :func:`refresh_row`: both parts' RUL tables (:mod:`prognostics.rul_ageing`) of a row's
   clouds.
 
+With ``FilterModel.move`` on (``Scenario.rejuvenation = "resample_move"``) the spring
+filter keeps its data and resamples by resample-move (:mod:`scas_env.core.rejuvenation`):
+``bank[5]`` holds its history, clock and per-particle log-likelihoods.
+
 The surrogate's tables are read along the part's own severity at the other part's filter
 estimate (bilinear, as the world draws features); the other part's uncertainty enters each
 likelihood through the feature's slope against it. Status codes of a row (``status[e]``):
@@ -44,6 +48,8 @@ from prognostics.particle_filter import (
     resample_if_degenerate,
 )
 from prognostics.rul_ageing import _build_from_cloud
+from scas_env.core.rejuvenation import C_AGE, C_SURVIVED, record_datum, resample_move
+from scas_env.core.table_cells import bilinear_at, cell_of
 
 #: Step (fraction of critical) of the central differences of the surrogate's mean curves.
 SLOPE_STEP = 0.02
@@ -68,7 +74,10 @@ class FilterModel(NamedTuple):
     ``learn_stack``, ``learn_own``, ``learn_other``: its surrogate (mean, unit std, run std)
     tables with the own part's severity on axis 1 and their grids (fractions);
     ``ground_*``: the same for G1 (spring) and G3 (seal); ``resample``: (threshold N_eff,
-    bandwidth h, kernel variance kappa, gaussian kernel, shrink).
+    bandwidth h, kernel variance kappa, gaussian kernel, shrink); ``move``: the spring
+    filter's resample-move (:mod:`scas_env.core.rejuvenation`): (on, Metropolis-Hastings
+    steps per particle, the prior's initial crack depth mean, sd and upper bound (m), the
+    prior sd of log theta, the random-walk scale).
     """
 
     process: tuple
@@ -88,28 +97,7 @@ class FilterModel(NamedTuple):
     ground_stack: tuple
     ground_own: tuple
     ground_other: tuple
-
-
-@njit(cache=True)
-def cell_of(grid: np.ndarray, v: float) -> tuple[int, float]:
-    """Cell j of ``grid`` holding ``v`` (clamped to [grid[0], grid[-1]]) and its fraction in
-    it, as the surrogate's bilinear tables (``bisect_right - 1``, the last cell at the end)."""
-    v = min(max(v, grid[0]), grid[-1])
-    j = 0
-    while j < grid.size - 2 and grid[j + 1] <= v:
-        j += 1
-    return j, (v - grid[j]) / (grid[j + 1] - grid[j])
-
-
-@njit(cache=True)
-def bilinear_at(stack: np.ndarray, q: int, i: int, ti: float, j: int, tj: float) -> float:
-    """Table ``stack[q]`` at (i + ti, j + tj)."""
-    return (
-        stack[q, i, j] * ((1 - ti) * (1 - tj))
-        + stack[q, i + 1, j] * (ti * (1 - tj))
-        + stack[q, i, j + 1] * ((1 - ti) * tj)
-        + stack[q, i + 1, j + 1] * (ti * tj)
-    )
+    move: tuple
 
 
 @njit(cache=True)
@@ -189,9 +177,12 @@ def work_arrays(n: int, n_learn: int) -> tuple:
 def _resampled(n_eff: float, e: int, p: int, bank: tuple, work: tuple, model: FilterModel,
                handle: tuple) -> bool:  # fmt: skip
     """Resample filter p of row e if its weights degenerated (``ParticleFilter._after_update``);
-    False: degenerate weights."""
-    bx, blt, bw, blw, baux = bank
+    the spring's by resample-move if on and its history is whole. False: degenerate
+    weights."""
+    bx, blt, bw, blw, baux = bank[0], bank[1], bank[2], bank[3], bank[4]
     thr_n, h, kappa, gaussian, shrink = model.resample
+    if p == 0 and model.move[0] and bank[5][1][e] >= 0:
+        return resample_move(n_eff, thr_n, e, bank, work, model, handle) >= 0
     k = resample_if_degenerate(
         n_eff, thr_n, bx[e, p], blt[e, p], bw[e, p], blw[e, p], baux[e, p], work[0], work[1],
         work[2], work[3], h, kappa, gaussian, shrink, handle,
@@ -212,6 +203,8 @@ def _predict(e: int, p: int, d: float, bank: tuple, pending: np.ndarray, status:
     if _first_out_of_range(bx[e, p], blt[e, p], MAX_ABS_SEVERITY, MAX_ABS_LOG_THETA) >= 0:
         status[e] = 1
     pending[e, p] -= d
+    if p == 0 and model.move[0]:
+        bank[5][2][e, C_AGE] += d
 
 
 @njit(cache=True)
@@ -222,6 +215,8 @@ def _survive(e: int, bank: tuple, status: np.ndarray, work: tuple, model: Filter
     bx, bw, blw = bank[0], bank[2], bank[3]
     for p in range(2):
         if model.active[p] and status[e] == 0:
+            if p == 0 and model.move[0]:
+                bank[5][2][e, C_SURVIVED] = bank[5][2][e, C_AGE]
             n_eff = _condition_below(bx[e, p], blw[e, p], bw[e, p], model.critical[p])
             if n_eff >= 0.0 and not _resampled(n_eff, e, p, bank, work, model, handle):
                 status[e] = 3
@@ -230,11 +225,13 @@ def _survive(e: int, bank: tuple, status: np.ndarray, work: tuple, model: Filter
 @njit(cache=True)
 def _effect_update(e: int, p: int, k: int, y: float, m: float, moments: tuple,
                    st: np.ndarray, g_own: np.ndarray, g_other: np.ndarray, bank: tuple,
-                   status: np.ndarray, work: tuple, model: FilterModel,
-                   handle: tuple) -> float:  # fmt: skip
+                   status: np.ndarray, work: tuple, model: FilterModel, handle: tuple,
+                   table: int) -> float:  # fmt: skip
     """The mean ``y`` of ``m`` runs of a feature whose installation effect is aux states
     ``k``, ``k + 1`` of filter p, into that filter; returns ``y`` corrected to a healthy new
-    installation. Status 2 (non-finite likelihood) or 3."""
+    installation. Status 2 (non-finite likelihood) or 3. ``table``: the feature's index
+    among the learning features, or their number plus p for a test's (the spring's history
+    with ``model.move`` on)."""
     bx, bw, blw, baux = bank[0], bank[2], bank[3], bank[4]
     c_hat, c_var, w_hat, w_var = moments
     own, other, other_var = (c_hat, w_hat, w_var) if p == 0 else (w_hat, c_hat, c_var)
@@ -257,6 +254,9 @@ def _effect_update(e: int, p: int, k: int, y: float, m: float, moments: tuple,
         if not math.isfinite(log_lik[i]):
             status[e] = 2
             return y - shift - cross
+    if p == 0 and model.move[0]:
+        j, tj = cell_of(g_other, other)
+        record_datum(e, table, k, y, m, j, tj, slope * slope * other_var, log_lik, bank)
     n_eff = _add_log_likelihood(blw[e, p], bw[e, p], log_lik)
     if not _resampled(n_eff, e, p, bank, work, model, handle):
         status[e] = 3
@@ -306,7 +306,7 @@ def learn_row(e: int, bank: tuple, pending: np.ndarray, flight_sum: np.ndarray,
         _effect_update(
             e, model.learn_part[j], model.learn_aux[j], means[j], float(m), moments,
             model.learn_stack[j], model.learn_own[j], model.learn_other[j], bank, status, work,
-            model, handle,
+            model, handle, j,
         )  # fmt: skip
 
 
@@ -333,12 +333,14 @@ def test_row(e: int, g1: float, g3: float, bank: tuple, pending: np.ndarray,
         c0 = _effect_update(
             e, 0, model.ground_aux[0], g1, 1.0, moments, model.ground_stack[0],
             model.ground_own[0], model.ground_other[0], bank, status, work, model, handle,
+            model.learn_part.size,
         )  # fmt: skip
         c1 = np.nan
         if status[e] == 0:
             c1 = _effect_update(
                 e, 1, model.ground_aux[1], g3, 1.0, moments, model.ground_stack[1],
                 model.ground_own[1], model.ground_other[1], bank, status, work, model, handle,
+                model.learn_part.size + 1,
             )  # fmt: skip
         corrected = (c0, c1)
     return corrected

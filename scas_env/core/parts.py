@@ -47,6 +47,7 @@ from scas_env.core.flight import (
     wear_after_flights,
     wear_flights_to_failure,
 )
+from scas_env.core.rejuvenation import restart
 from scas_env.core.setup import (
     EFFECT_FEATURES,
     FLIGHT_FEATURES,
@@ -358,8 +359,9 @@ def _reset_monitor(batch: ActuatorState, e: int) -> None:
 def reset_filter(batch: ActuatorState, e: int, part: str) -> None:
     """A new ``part`` is fitted to row ``e``: the batch of in-flight features flown with the
     old one is learnt from first, then its filter restarts from the prior (a new spring pair
-    is a new installation: every installation effect back to N(0, 1); new seals keep the
-    installation's, collapsed to one Gaussian), its detector is cleared."""
+    is a new installation: every installation effect back to N(0, 1), and the spring
+    filter's history for resample-move emptied; new seals keep the installation's,
+    collapsed to one Gaussian), its detector is cleared."""
     st, a = batch.setup, batch.a
     learn_now(batch, e)
     rng = batch.rngs[e]["filter"]
@@ -372,6 +374,7 @@ def reset_filter(batch: ActuatorState, e: int, part: str) -> None:
         _reset_cloud(batch, e, p, x0, _lognormal(rng, lognormal_sigma(st.params, part), n))
         a["aux"][e, :, 0::2] = 0.0
         a["aux"][e, :, 1::2] = 1.0
+        restart(e, batch.bank)
     else:
         w = a["w"][e, 1]
         kept = [

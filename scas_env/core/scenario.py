@@ -22,6 +22,7 @@ FIDELITIES = ("surrogate", "physics")
 OBS_MODES = ("features+rul", "features", "state", "dict")
 INITIAL_HEALTH = ("new", "random", "in_service")
 PREFLIGHT = ("on_demand", "every_flight")
+REJUVENATION = ("none", "resample_move")
 
 
 @dataclass(frozen=True)
@@ -46,12 +47,26 @@ class Scenario(Validated):
     preflight : ``"on_demand"`` (the test runs when action 1 asks for it and costs
         ``test_usd``) or ``"every_flight"`` (the paper's concept: the test runs at every
         power-up, before every flight, at no cost; action 1 then equals action 0).
+    rejuvenation : how the spring filter keeps its hold on its static parameters (initial
+        crack depth, log growth multiplier) when it resamples. ``"none"`` (the default): the
+        regularised particle filter's kernel jitter (Liu & West 2001 shrinkage).
+        ``"resample_move"``: resample-move (Gilks & Berzuini 2001): the spring filter's
+        process is the noise-free damage integral of its growth table (the whole-flight
+        scatter, which moves a life by about 0.1 %, left out, as the reference posterior
+        leaves it out), every datum it learns is kept per row, and after each resampling
+        every particle takes ``rejuvenation_steps`` random-walk Metropolis-Hastings steps
+        whose target is the full-history posterior (prior x every likelihood term, the
+        installation effects integrated out, survival), so the cloud stays a sample of the
+        exact posterior of the filter's model (docs/beliefs.md). Needs a spring of known age
+        (``initial_health`` ``"new"`` or ``"in_service"``) and ``spring_theta_walk`` = 0.
+        The seal filter is unchanged.
     """
 
     fidelity: str = "surrogate"
     obs_mode: str = "features+rul"
     initial_health: str = "new"
     preflight: str = "on_demand"
+    rejuvenation: str = "none"
     episode_slots: float = param(
         2000,
         "slots",
@@ -151,6 +166,15 @@ class Scenario(Validated):
         source="random walk of the spring filter's log theta (std per sqrt(flight); 0: none, "
         "the growth multiplier is static; docs/beliefs.md)",
     )
+    rejuvenation_steps: float = param(
+        1,
+        "MH steps",
+        lo=1,
+        hi=100,
+        integer=True,
+        source="Metropolis-Hastings steps per particle after each resampling of the spring "
+        "filter, with rejuvenation = 'resample_move' (Gilks & Berzuini 2001; docs/beliefs.md)",
+    )
 
     def _check(self) -> None:
         for name, allowed in (
@@ -158,12 +182,25 @@ class Scenario(Validated):
             ("obs_mode", OBS_MODES),
             ("initial_health", INITIAL_HEALTH),
             ("preflight", PREFLIGHT),
+            ("rejuvenation", REJUVENATION),
         ):
             value = getattr(self, name)
             if value not in allowed:
                 raise ValueError(f"Scenario.{name} = {value!r} must be one of {allowed}")
         if not (self.crack_active or self.wear_active):
             raise ValueError("Scenario: at least one of crack_active, wear_active must be 1")
+        if self.rejuvenation == "resample_move":
+            if self.initial_health == "random":
+                raise ValueError(
+                    "Scenario.rejuvenation = 'resample_move' needs the spring's age known to "
+                    "the monitor (initial_health 'new' or 'in_service'), got initial_health = "
+                    "'random'"
+                )
+            if self.spring_theta_walk != 0.0:
+                raise ValueError(
+                    "Scenario.rejuvenation = 'resample_move' moves a static growth multiplier: "
+                    f"spring_theta_walk must be 0, got {self.spring_theta_walk}"
+                )
 
 
-__all__ = ["FIDELITIES", "INITIAL_HEALTH", "OBS_MODES", "PREFLIGHT", "Scenario"]
+__all__ = ["FIDELITIES", "INITIAL_HEALTH", "OBS_MODES", "PREFLIGHT", "REJUVENATION", "Scenario"]

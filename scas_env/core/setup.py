@@ -11,7 +11,10 @@ The monitor's filters (:mod:`scas_env.core.filters`): the spring filter's proces
 calibrated Paris growth table with the whole-flight damage scatter at the new-part depth
 (``scheme="exact"``: one step of k flights lands where k flights would), the seal filter's
 linear Archard wear with its scatter; growth multipliers static (their prior, no random
-walk unless ``Scenario.spring_theta_walk``); ``filter_growth_bias`` and
+walk unless ``Scenario.spring_theta_walk``; with ``Scenario.rejuvenation =
+"resample_move"`` the spring's process has no scatter and its static parameters are moved by
+Metropolis-Hastings after each resampling, :mod:`scas_env.core.rejuvenation`);
+``filter_growth_bias`` and
 ``filter_noise_scale`` make the filters assume other growth or noise than the world has.
 Every measured feature's installation effect is a per-particle Gaussian state: G1 and I8 in
 the spring filter, G3 and I9 in the seal filter.
@@ -215,7 +218,7 @@ class Setup:
         put(self, "crack_table", table)
         put(self, "spring_process", spring_process)
         put(self, "seal_process", seal_process)
-        put(self, "filters", _filter_model(s, cal, sur, spring_process, seal_process))
+        put(self, "filters", _filter_model(self.params, s, cal, sur, spring_process, seal_process))
         put(self, "detector", _detector_model(s, sur))
         put(self, "limits", limits)
         put(self, "go_limits", np.array([limits.limits[f] for f in GROUND_FEATURES]))
@@ -365,6 +368,8 @@ def _processes(
     bias = s.filter_growth_bias
     crack_cv_a0 = float(cal.crack_cv_at(params.spring.initial_crack_m, "whole_flight"))
     wear_cv = cal.flight_scatter("whole_flight")[1]
+    if s.rejuvenation == "resample_move":  # a static model: the path is the damage integral
+        crack_cv_a0 = 0.0
     spring = paris_crack_model(
         cal.crack_depth_m,
         bias * cal.crack_rate_m_per_flight,
@@ -377,6 +382,7 @@ def _processes(
 
 
 def _filter_model(
+    params: ScasParams,
     s: Scenario,
     cal: Calibration,
     sur: SurrogateModel,
@@ -420,6 +426,27 @@ def _filter_model(
         ground_stack=tuple(tables[f][0] for f in GROUND_FEATURES),
         ground_own=tuple(tables[f][1] for f in GROUND_FEATURES),
         ground_other=tuple(tables[f][2] for f in GROUND_FEATURES),
+        move=_move_model(params, s, cal),
+    )
+
+
+#: random-walk scale over the posterior's sd in d dimensions (Roberts, Gelman & Gilks 1997:
+#: 2.38 / sqrt(d) for a Gaussian target), d = 2
+_RW_SCALE = 2.38 / 2**0.5
+
+
+def _move_model(params: ScasParams, s: Scenario, cal: Calibration) -> tuple:
+    """:attr:`FilterModel.move`: (on, steps, prior mean, sd and upper bound of the initial
+    crack depth (m), prior sd of log theta, random-walk scale)."""
+    unc = params.uncertainty
+    return (
+        s.rejuvenation == "resample_move",
+        int(s.rejuvenation_steps),
+        float(params.spring.initial_crack_m),
+        float(unc.initial_crack_sigma_m),
+        float(cal.spring_failure_depth_m),
+        lognormal_sigma(params, "spring"),
+        _RW_SCALE,
     )
 
 

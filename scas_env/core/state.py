@@ -24,6 +24,7 @@ from typing import Any
 import numpy as np
 
 from prognostics.normals import handle_of
+from scas_env.core.rejuvenation import HISTORY_COLUMNS
 from scas_env.core.setup import (
     EFFECT_FEATURES,
     FLIGHT_FEATURES,
@@ -32,6 +33,10 @@ from scas_env.core.setup import (
     UPCOMING_PARTS,
     Setup,
 )
+
+#: data a row's spring history holds at first with ``Scenario.rejuvenation = "resample_move"``
+#: (it doubles when a slot could fill it: :meth:`ActuatorState.ensure_history`)
+HISTORY_START = 512
 
 #: handle slots of a row's streams drawn from inside kernels
 _HANDLES = {"measure": ("h_measure", None), "filter": ("h_filter", None),
@@ -74,6 +79,8 @@ class ActuatorState:
         #: the next parts' lives are computed at each fitting (observation modes that show
         #: them: "state" and "dict")
         self.look_ahead = setup.scenario.obs_mode in ("state", "dict")
+        #: whether the spring filter keeps its history (resample-move rejuvenation)
+        self.keeps_history = setup.scenario.rejuvenation == "resample_move"
         sur = setup.surrogate
         self.healthy_features = np.array(
             [float(sur.mean[sur.index(f), 0, 0]) for f in (*FLIGHT_FEATURES, *GROUND_FEATURES)]
@@ -87,6 +94,7 @@ class ActuatorState:
         p = setup.n_particles
         n_aux = 2 * max(len(f) for f in EFFECT_FEATURES)
         n_feat = len(FLIGHT_FEATURES) + len(GROUND_FEATURES)
+        cap = HISTORY_START if setup.scenario.rejuvenation == "resample_move" else 0
         return {
             # the world: m, m, m (the spring's failure depth), -, -, standard normals of the
             # installation effects, standard flights each part will still fly (the failing
@@ -123,6 +131,16 @@ class ActuatorState:
             "det_buf": np.zeros((n, 2, int(setup.scenario.detection_window))),
             "det_n": np.zeros((n, 2), dtype=i8),
             "detected": np.zeros((n, 2), dtype=b),
+            # the spring filter's resample-move (scas_env.core.rejuvenation; empty unless
+            # Scenario.rejuvenation says so): the data it learnt (age in flights, value, runs,
+            # table, effect slot, the other part's cell and fraction, extra variance), how
+            # many (-1: the history overflowed), its age and survival age (flights), each
+            # particle's log-likelihood, proposals and acceptances of its moves
+            "history": np.zeros((n, cap, HISTORY_COLUMNS)),
+            "history_n": np.zeros(n, dtype=i8),
+            "clock": np.zeros((n, 2)),
+            "loglik": np.zeros((n, p)),
+            "tally": np.zeros((n, 2), dtype=i8),
             # the memory of the latest features (SI; flight features, then G1, G3), slots
             # since the last test, whether it failed go/no-go
             "last": np.zeros((n, n_feat)),
@@ -170,7 +188,8 @@ class ActuatorState:
         a, st = self.a, self.setup
         self._world = tuple(a[k] for k in ("crack", "wear", "fail", "theta", "wmult", "unit_z",
                                            "life", "reference"))  # fmt: skip
-        self.bank = (a["x"], a["log_theta"], a["w"], a["log_w"], a["aux"])
+        move = (a["history"], a["history_n"], a["clock"], a["loglik"], a["tally"])
+        self.bank = (a["x"], a["log_theta"], a["w"], a["log_w"], a["aux"], move)
         self._monitor = (self.bank, a["pending"], a["flight_sum"], a["flight_count"],
                          a["stale"], a["det_buf"], a["det_n"], a["detected"],
                          a["batch_usage"])  # fmt: skip
@@ -190,6 +209,23 @@ class ActuatorState:
         self._slot_entry = None  # the slot kernel's entry point for these arrays (batch.py)
         self._every_flight = st.scenario.preflight == "every_flight"
         self._interval = int(st.scenario.flight_update_flights)
+
+    def ensure_history(self, rows: np.ndarray, data: int) -> None:
+        """Room for ``data`` more data in the spring histories of ``rows`` (a slot's most):
+        the history doubles (the kernels' views made again) if a row could fill it."""
+        if not self.keeps_history or not rows.size:
+            return
+        a = self.a
+        need = int(a["history_n"][rows].max()) + data
+        cap = a["history"].shape[1]
+        if need <= cap:
+            return
+        while cap < need:
+            cap *= 2
+        grown = np.zeros((self.n, cap, HISTORY_COLUMNS))
+        grown[:, : a["history"].shape[1]] = a["history"]
+        a["history"] = grown
+        self._bind()
 
     # ------------------------------------------------------------------ copies
     def __getstate__(self) -> dict[str, Any]:
