@@ -5,7 +5,7 @@ at ``--decisions``, on per-flight episodes of the validation seeds, paired again
 tuned in a value-study ladder on the same episodes; rows are added to ``--out`` (a CSV; the
 checkpoints already in it are not run again). ``--statistics`` runs every checkpoint with
 other observation statistics than its own (a normalisation JSON): the diagnostic of
-docs/rl.md ("the observation statistics, not the gradient"). Example (the clone, checkpoint
+docs/rl.md. Example (the clone, checkpoint
 0 of a run, under the statistics that run had after 1 M decisions)::
 
     python scripts/validate_checkpoints.py --runs results/kl/runs/s0 --decisions 0 \\
