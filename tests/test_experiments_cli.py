@@ -25,6 +25,8 @@ COMMANDS = (
     "dashboard_speed",
     "epoch_training_split",
     "estimator_comparison",
+    "fleet_agents.ship",
+    "fleet_agents.train",
     "fleet_figures",
     "go_no_go",
     "integrator_speed",

@@ -1,0 +1,4 @@
+"""The fleet agents' training and shipping (docs/fleet_agents.md): ``python -m
+experiments.fleet_agents.train`` (clone a fleet rule, then MaskablePPO, checkpoints) and
+``python -m experiments.fleet_agents.ship`` (checkpoints on validation fleets, the best one into
+``policies/data``)."""
