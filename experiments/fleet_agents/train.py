@@ -9,7 +9,7 @@ a random network. Checkpoints go to ``OUT/run``; choose one on validation seeds 
 ``python -m experiments.fleet_agents.ship`` (docs/fleet_agents.md). The shipped joint agent::
 
     python -m experiments.fleet_agents.train --kind joint --warm-start --rule fleet_naive \\
-        --clone-epochs 40 --dagger-epochs 15 --clone-batch 256 \\
+        --clone-epochs 40 --dagger-epochs 15 --clone-batch 256 --set n_steps=64 batch_size=256 \\
         --fleet-days 2000000 --checkpoint-every 50000 --max-wall-s 5400 \\
         --out results/fleet_agents/joint
 """
