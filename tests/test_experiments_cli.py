@@ -25,6 +25,7 @@ COMMANDS = (
     "dashboard_speed",
     "epoch_training_split",
     "estimator_comparison",
+    "fleet_agents.rllib",
     "fleet_agents.ship",
     "fleet_agents.train",
     "fleet_figures",

@@ -12,10 +12,10 @@ printed returns are per aircraft in those units (RLlib sums them over the 8 agen
 
 RLlib is the distributed engine users grow into (Ray is already the benchmark's fan-out
 engine): ``--env-runners`` and a cluster (``ray start``; ``--address auto``) scale the same
-script. Install: ``pip install "ray[rllib]"`` (it pins its own gymnasium: use a separate
-virtual environment, see docs/rl.md). A small run::
+script. Install: ``pip install "ray[rllib]" pettingzoo`` and this package (Ray pins its own
+gymnasium: use a separate virtual environment). From the repository root, a small run::
 
-    python examples/rllib_fleet.py --iterations 3 --episode-days 60
+    python -m experiments.fleet_agents.rllib --iterations 3 --episode-days 60
 """
 
 from __future__ import annotations
@@ -90,8 +90,10 @@ def _total(value: Any) -> float:
     return float(value) if value is not None else 0.0
 
 
-def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(
+        prog="python -m experiments.fleet_agents.rllib", description=__doc__.splitlines()[0]
+    )
     parser.add_argument("--iterations", type=int, default=3)
     parser.add_argument("--episode-days", type=int, default=60, help="days per fleet episode")
     parser.add_argument("--env-runners", type=int, default=1)
@@ -100,7 +102,7 @@ def main() -> None:
     parser.add_argument("--sample-timeout-s", type=float, default=1800.0)
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--out", type=Path, default=Path("results/rllib_fleet"))
-    args = parser.parse_args()
+    args = parser.parse_args(argv)
 
     import ray
     from ray.rllib.algorithms.ppo import PPOConfig
@@ -178,7 +180,8 @@ def main() -> None:
     (args.out / "summary.json").write_text(json.dumps(summary, indent=2, default=str) + "\n")
     algo.stop()
     ray.shutdown()
+    return 0
 
 
 if __name__ == "__main__":
-    main()
+    raise SystemExit(main())
