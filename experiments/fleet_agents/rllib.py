@@ -97,7 +97,9 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--iterations", type=int, default=3)
     parser.add_argument("--episode-days", type=int, default=60, help="days per fleet episode")
     parser.add_argument("--env-runners", type=int, default=1)
-    parser.add_argument("--batch", type=int, default=4000, help="agent steps per iteration")
+    parser.add_argument(
+        "--batch", type=int, default=4000, help="fleet-days (env steps) per iteration"
+    )
     parser.add_argument("--address", default=None, help="a Ray cluster ('auto'), else local")
     parser.add_argument("--sample-timeout-s", type=float, default=1800.0)
     parser.add_argument("--seed", type=int, default=0)
