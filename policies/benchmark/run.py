@@ -119,6 +119,11 @@ class PolicySpec:
 #: the shipped agent: MaskablePPO on decision epochs, warm-started from the tuned filter rule
 #: (policies/data/README.md, docs/rl.md)
 PLUGINS["ppo"] = PolicySpec("sb3", label="ppo", module="policies.agents.sb3_agents")
+#: the shipped fleet agent (ScasFleet-v0's default fleet): MaskablePPO over the fleet's joint
+#: action, warm-started from the fleet_naive rule (docs/fleet_agents.md); the parameter-shared
+#: one is not shipped (params={"path": ...})
+PLUGINS["fleet_ppo"] = PolicySpec("fleet_ppo", module="policies.agents.fleet.plugins")
+PLUGINS["fleet_shared_ppo"] = PolicySpec("fleet_shared_ppo", module="policies.agents.fleet.plugins")
 
 
 def resolve_spec(name: str) -> PolicySpec:

@@ -1,0 +1,293 @@
+"""Trained fleet agents as benchmark policies: the centralised and the parameter-shared PPO.
+
+:class:`FleetAgent` acts on **raw** flat ``ScasFleet-v0`` observations ``(B, D)`` (the
+project's policy protocol): it rebuilds the action masks from the observation
+(:meth:`policies.agents.fleet.masks.FleetObsLayout.masks`, equal to the env's), normalises with
+the agent's frozen ``VecNormalize`` statistics and asks the MaskablePPO network for
+
+* ``kind = "joint"`` (the centralised agent, :class:`~policies.agents.fleet.adapters.FleetVecEnv`):
+  the fleet's whole ``MultiDiscrete`` action from the fleet's observation;
+* ``kind = "shared"`` (one network for every aircraft,
+  :class:`~policies.agents.fleet.shared_adapter.FleetAgentsVecEnv`): each aircraft's row from its
+  own view, the rows joined into the fleet's action.
+
+:func:`load_fleet_agent` reads ``<stem>.zip`` (MaskablePPO), ``<stem>_normalization.json`` (the
+observation statistics, :class:`policies.agents.agent_files.ObsNormalization`) and ``<stem>.json``
+(kind, the observation names it was trained on, the per-aircraft view's options, whether the
+scenario tests before every flight) and checks the model's observation and action spaces
+against the env's before it acts, with an error that says what differs. Registered for the
+benchmark: ``"fleet_ppo"`` (default: the shipped :data:`FLEET_JOINT_AGENT`) and
+``"fleet_shared_ppo"`` (:data:`FLEET_SHARED_AGENT`, not shipped), both with
+``params={"path": ...}`` for another file.
+
+**Nothing is unpickled**, as for the single-actuator agent (:mod:`policies.agents.sb3_agents`):
+the network is rebuilt from the zip's JSON ``data`` and its ``policy.pth`` tensors
+(``torch.load(weights_only=True)``), the statistics come from JSON. A zip whose network needs
+pickled objects, or a ``*_vecnormalize.pkl`` without its JSON twin, is refused (convert a
+trusted pickle once with :func:`policies.agents.agent_files.convert_vecnormalize`). The shipped
+files are checked against the package's SHA-256 manifest first, and the zip's weights against
+the ``weights_sha256`` its metadata records.
+"""
+
+from __future__ import annotations
+
+import json
+import re
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from policies.agents.agent_files import (
+    LoadedModel,
+    NeedsPickle,
+    ObsNormalization,
+    read_json_file,
+    weights_sha256,
+)
+from policies.agents.fleet.masks import FleetObsLayout
+from policies.agents.sb3_agents import DATA_DIR, check_manifest
+from policies.base import register_policy
+
+__all__ = [
+    "FLEET_JOINT_AGENT",
+    "FLEET_SHARED_AGENT",
+    "KINDS",
+    "FleetAgent",
+    "load_fleet_agent",
+    "write_agent_meta",
+]
+
+FLEET_JOINT_AGENT = DATA_DIR / "fleet_maskable_ppo.zip"
+FLEET_SHARED_AGENT = DATA_DIR / "fleet_shared_ppo.zip"
+#: ``joint``: one network over the fleet; ``shared``: one network per aircraft row
+KINDS = ("joint", "shared")
+
+
+class FleetAgent:
+    """A MaskablePPO fleet agent on raw flat fleet observations (module docstring).
+
+    Parameters
+    ----------
+    model : the MaskablePPO model.
+    normalizer : ``VecNormalize`` whose ``obs_rms`` scales the network's input, or ``None``.
+    obs_names : the fleet env's observation names.
+    kind : ``"joint"`` or ``"shared"``.
+    agent_id, fleet_status : the shared agent's view (:class:`FleetAgentsVecEnv`'s options).
+    tests_every_flight : the scenario tests before every flight (the masks' rule).
+    """
+
+    def __init__(
+        self,
+        model: Any,
+        normalizer: Any,
+        obs_names: Sequence[str],
+        *,
+        kind: str = "joint",
+        agent_id: bool = True,
+        fleet_status: bool = True,
+        tests_every_flight: bool = False,
+    ) -> None:
+        if kind not in KINDS:
+            raise ValueError(f"kind = {kind!r} must be one of {KINDS}")
+        self.model, self.normalizer, self.kind = model, normalizer, kind
+        self.obs_names = tuple(obs_names)
+        self.layout = lay = FleetObsLayout(self.obs_names, tests_every_flight=tests_every_flight)
+        self.agent_id, self.fleet_status = bool(agent_id), bool(fleet_status)
+        if kind == "joint":
+            want_obs, want_nvec = len(self.obs_names), np.tile(lay.nvec, lay.n)
+        else:
+            want_obs = lay.agent_size(agent_id=self.agent_id, fleet_status=self.fleet_status)
+            want_nvec = lay.nvec
+        got_obs = tuple(model.observation_space.shape)
+        got_nvec = np.asarray(getattr(model.action_space, "nvec", []))
+        if got_obs != (want_obs,) or not np.array_equal(got_nvec, want_nvec):
+            raise ValueError(
+                f"the {kind} agent observes {got_obs} and chooses {got_nvec.tolist()}; this fleet "
+                f"({lay.n} aircraft x {lay.a} actuators, {lay.k} mission types) gives "
+                f"({want_obs},) and needs {want_nvec.tolist()}: it was trained on another fleet"
+            )
+
+    def network_input(self, obs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The network's (normalised) input rows and their masks for observations (B, D)."""
+        masks = self.layout.masks(obs)
+        if self.kind == "joint":
+            rows = np.asarray(obs, dtype=np.float32)
+        else:
+            views = self.layout.agent_obs(
+                obs, agent_id=self.agent_id, fleet_status=self.fleet_status
+            )
+            rows = views.reshape(-1, views.shape[-1])
+            masks = masks.reshape(rows.shape[0], -1)
+        if self.normalizer is not None:
+            rows = self.normalizer.normalize_obs(rows).astype(np.float32)
+        return rows, masks
+
+    def predict(
+        self,
+        observation: Any,
+        state: Any = None,
+        episode_start: Any = None,
+        deterministic: bool = True,
+    ) -> tuple[np.ndarray, Any]:
+        """The fleet's action (N (1 + A),) for one observation, (B, N (1 + A)) for a batch."""
+        obs = np.asarray(observation, dtype=np.float32)
+        single = obs.ndim == 1
+        batch = np.atleast_2d(obs)
+        rows, masks = self.network_input(batch)
+        actions, _ = self.model.predict(rows, deterministic=deterministic, action_masks=masks)
+        out = np.asarray(actions, dtype=np.int64).reshape(batch.shape[0], -1)
+        return (out[0] if single else out), state
+
+    def reset(self, seed: int | Sequence[int] | None = None) -> None:
+        """New episodes; ``seed`` seeds SB3's generators for ``deterministic=False``."""
+        if seed is not None:
+            first = seed[0] if isinstance(seed, Sequence) else seed
+            self.model.set_random_seed(int(first) % 2**32)
+
+
+def write_agent_meta(path: Path, meta: dict[str, Any]) -> None:
+    """``<stem>.json`` beside the zip ``path`` (what :func:`load_fleet_agent` reads)."""
+    stem = path.name.removesuffix(".zip")
+    path.with_name(f"{stem}.json").write_text(json.dumps(meta, indent=2, sort_keys=True) + "\n")
+
+
+def _ints(entry: Any) -> list[int]:
+    """The integers of a space's JSON entry (``"[7 4 4]"``, ``"[555]"`` or a list)."""
+    if isinstance(entry, list):
+        return [int(v) for v in entry]
+    return [int(v) for v in re.findall(r"-?\d+", entry)] if isinstance(entry, str) else []
+
+
+def read_fleet_policy(path: Path, obs_size: int, nvec: np.ndarray) -> LoadedModel:
+    """The MaskablePPO network of ``path`` for a ``Box(obs_size,)`` observation and a
+    ``MultiDiscrete(nvec)`` action, rebuilt without unpickling (module docstring)."""
+    import gymnasium as gym
+
+    from policies.agents.agent_files import _policy_class, _read_zip, _tensors
+
+    data, blob = _read_zip(path)
+    action = data.get("action_space")
+    got = _ints(action.get("nvec") if isinstance(action, dict) else None)
+    obs = data.get("observation_space")
+    shape = _ints(obs.get("_shape") if isinstance(obs, dict) else None)
+    if list(shape) != [obs_size] or list(got) != [int(v) for v in nvec]:
+        raise ValueError(
+            f"{path}: the agent observes {tuple(shape)} and chooses {list(got)}; this fleet "
+            f"gives ({obs_size},) and needs {[int(v) for v in nvec]}: it was made for another "
+            "fleet"
+        )
+    try:
+        cls = _policy_class(path, data)
+    except NeedsPickle as exc:
+        raise ValueError(f"{path}: cannot be read without unpickling: {exc}") from None
+    kwargs = data.get("policy_kwargs", {})
+    if not isinstance(kwargs, dict) or ":serialized:" in kwargs:
+        raise ValueError(f"{path}: its network's keywords are pickled Python objects")
+    state = _tensors(path, blob)
+    obs_space = gym.spaces.Box(-np.inf, np.inf, shape=(obs_size,), dtype=np.float32)
+    action_space = gym.spaces.MultiDiscrete(np.asarray(nvec, dtype=np.int64))
+    try:
+        policy = cls(obs_space, action_space, lambda _: 0.0, **kwargs)
+        policy.load_state_dict(state)
+    except (TypeError, RuntimeError) as exc:
+        first = str(exc).splitlines()[0]
+        raise ValueError(
+            f"{path}: its weights do not fit the network it describes: {first}"
+        ) from None
+    if not all(bool(t.isfinite().all()) for t in state.values() if t.is_floating_point()):
+        raise ValueError(f"{path}: the policy has non-finite parameters (corrupted)")
+    policy.set_training_mode(False)
+    return LoadedModel(policy, kwargs, path)
+
+
+def load_fleet_agent(
+    path: str | Path, obs_names: Sequence[str], *, kind: str | None = None
+) -> FleetAgent:
+    """The fleet agent of ``path`` (``.zip`` with ``_normalization.json`` and ``.json`` beside
+    it) for an env with ``obs_names``; nothing is unpickled (module docstring)."""
+    path = Path(path)
+    if not path.is_file():
+        raise ValueError(f"path = {str(path)!r} does not exist (expected a fleet agent's .zip)")
+    check_manifest(path)
+    stem = path.name.removesuffix(".zip")
+    meta_path = path.with_name(f"{stem}.json")
+    if not meta_path.is_file():
+        raise ValueError(f"{path}: its metadata {meta_path.name} is missing (kind, obs_names)")
+    check_manifest(meta_path)
+    meta = read_json_file(meta_path, "fleet agent metadata file")
+    if not isinstance(meta, dict):
+        raise ValueError(f"{meta_path}: not an agent metadata file (expected a JSON object)")
+    kind = kind if kind is not None else meta.get("kind", "joint")
+    if kind not in KINDS:
+        raise ValueError(f"kind = {kind!r} must be one of {KINDS}")
+    trained = tuple(meta.get("obs_names", ()))
+    if trained and tuple(obs_names) != trained:
+        diff = sorted(set(trained) ^ set(obs_names))[:4]
+        raise ValueError(
+            f"{path}: trained on a fleet observation of {len(trained)} entries, this env gives "
+            f"{len(tuple(obs_names))} (first differences: {diff}): another fleet configuration"
+        )
+    recorded = meta.get("weights_sha256")
+    if recorded is not None and recorded != weights_sha256(path):
+        raise ValueError(f"{path}: its weights differ from the weights_sha256 of {meta_path.name}")
+    agent_id = bool(meta.get("agent_id", True))
+    fleet_status = bool(meta.get("fleet_status", True))
+    lay = FleetObsLayout(obs_names)
+    if kind == "joint":
+        obs_size, nvec = len(tuple(obs_names)), np.tile(lay.nvec, lay.n)
+    else:
+        obs_size = lay.agent_size(agent_id=agent_id, fleet_status=fleet_status)
+        nvec = lay.nvec
+    model = read_fleet_policy(path, obs_size, nvec)
+    norm_path = path.with_name(f"{stem}_normalization.json")
+    normalizer = None
+    if norm_path.is_file():
+        check_manifest(norm_path)
+        normalizer = ObsNormalization.load(norm_path)
+        if normalizer.size != obs_size:
+            raise ValueError(
+                f"{norm_path}: statistics of {normalizer.size} entries, the network reads "
+                f"{obs_size}"
+            )
+    elif meta.get("normalize", True):
+        pkl = path.with_name(f"{stem}_vecnormalize.pkl")
+        hint = (
+            f" ({pkl.name} is a pickle: convert a trusted one with "
+            "policies.agents.agent_files.convert_vecnormalize)"
+            if pkl.is_file()
+            else ""
+        )
+        raise ValueError(f"{path}: trained with VecNormalize but {norm_path.name} is missing{hint}")
+    return FleetAgent(
+        model,
+        normalizer,
+        obs_names,
+        kind=kind,
+        agent_id=agent_id,
+        fleet_status=fleet_status,
+        tests_every_flight=bool(meta.get("tests_every_flight", False)),
+    )
+
+
+def _joint_factory(obs_names: Sequence[str], path: str | Path = FLEET_JOINT_AGENT) -> FleetAgent:
+    """Registry factory ``"fleet_ppo"``: the shipped centralised agent or ``path``."""
+    return load_fleet_agent(path, obs_names)
+
+
+def _shared_factory(obs_names: Sequence[str], path: str | Path | None = None) -> FleetAgent:
+    """Registry factory ``"fleet_shared_ppo"``: the parameter-shared agent of ``path`` (none is
+    shipped)."""
+    if path is None:
+        path = FLEET_SHARED_AGENT
+        if not path.is_file():
+            raise ValueError(
+                "fleet_shared_ppo: no parameter-shared fleet agent is shipped; pass "
+                'params={"path": ".../ckpt_<n>.zip"} (docs/fleet_agents.md)'
+            )
+    return load_fleet_agent(path, obs_names)
+
+
+register_policy("fleet_ppo", _joint_factory, obs_mode="features+rul", family="external")
+register_policy("fleet_shared_ppo", _shared_factory, obs_mode="features+rul", family="external")

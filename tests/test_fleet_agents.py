@@ -1,0 +1,220 @@
+"""Fleet agents: cloning a rule, a tiny training run, loading checkpoints and the shipped
+agent without unpickling, acting on the fleet env (policies.agents.fleet)."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import gymnasium as gym
+import numpy as np
+import pytest
+
+import scas_env  # noqa: F401
+from policies.agents.fleet.demos import collect, discounted_returns, project_to_masks
+from policies.agents.fleet.masks import FleetObsLayout
+from policies.agents.fleet.plugins import (
+    FLEET_JOINT_AGENT,
+    FleetAgent,
+    load_fleet_agent,
+)
+from policies.agents.fleet.selection import best_tuned_rule, checkpoints
+from policies.agents.fleet.training import FleetPPOConfig, clone_rule, train
+from policies.base import make_policy
+from policies.benchmark.run import PLUGINS
+
+pytest.importorskip("sb3_contrib")
+TINY = {"aircraft": 2, "episode_days": 8}
+
+
+def _valid(action: np.ndarray, mask: np.ndarray, nvec: np.ndarray) -> bool:
+    offsets = np.concatenate([[0], np.cumsum(nvec)[:-1]])
+    return bool(mask[offsets + action].all())
+
+
+def test_discounted_returns_and_demonstrations_are_the_rules() -> None:
+    r = np.array([[1.0, 2.0], [3.0, 4.0]])
+    np.testing.assert_allclose(discounted_returns(r, 0.5), [[2.5, 4.0], [3.0, 4.0]])
+    env = gym.make("scas_env/ScasFleet-v0", disable_env_checker=True, **TINY)
+    rule = make_policy("fleet_naive", env.unwrapped.obs_names)
+    demos = collect(rule, [5, 6], TINY, gamma=1.0, scale=1.0, center=0.0, batch=2)
+    days = TINY["episode_days"]
+    assert len(demos) == 2 * days and demos.on_path.all()
+    obs, _ = env.reset(seed=5)  # fleet 0 of the demonstrations: seed 5
+    total = 0.0
+    for t in range(days):
+        np.testing.assert_array_equal(demos.obs[2 * t], obs)
+        act = rule.predict(obs)[0]
+        np.testing.assert_array_equal(demos.actions[2 * t], act)
+        obs, reward, *_ = env.step(act)
+        total += reward
+    assert demos.returns[0] == pytest.approx(total)  # gamma 1, scale 1: the episode's USD
+    rows = demos.rows(FleetObsLayout(env.unwrapped.obs_names), agent_id=True, fleet_status=False)
+    assert len(rows) == 2 * len(demos) and rows.actions.shape[1] == 4
+
+
+def test_labels_are_projected_onto_the_masks() -> None:
+    nvec = np.array([3, 4, 4])
+    masks = np.array(
+        [
+            [1, 0, 1, 1, 0, 1, 0, 1, 0, 0, 0],  # spring not flown on entry 1; entry 2 new
+            [1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1],
+        ],
+        dtype=bool,
+    )
+    labels = np.array([[1, 3, 2], [1, 3, 2]])
+    out = project_to_masks(labels, masks, nvec)
+    np.testing.assert_array_equal(out, [[0, 2, 0], [1, 3, 2]])
+
+
+@pytest.mark.slow
+def test_tiny_clone_and_training_run_then_load_and_act(tmp_path: Path) -> None:
+    for kind in ("joint", "shared"):
+        cfg = FleetPPOConfig(kind=kind, fleets=2, n_steps=4, batch_size=8, net_arch=(16,))
+        out = tmp_path / kind
+        record = clone_rule(
+            cfg,
+            "fleet_naive",
+            {},
+            out / "clone",
+            env_kwargs=TINY,
+            demo_episodes=2,
+            dagger_rounds=(1,),
+            epochs=2,
+            dagger_epochs=1,
+        )
+        assert len(record["rounds"]) == 2 and record["rounds"][0]["samples"] > 0
+        run = train(
+            cfg,
+            out / "run",
+            fleet_days=16,
+            checkpoint_every=8,
+            init=out / "clone" / "clone.zip",
+            env_kwargs=TINY,
+        )
+        assert run["finished"] and run["fleet_days"] >= 16
+        found = checkpoints(out / "run")
+        assert [d for d, _ in found][:3] == [0, 8, 16]
+        meta = json.loads(found[-1][1].with_suffix(".json").read_text())
+        assert meta["kind"] == kind and meta["fleet_days"] == found[-1][0]
+        env = gym.make("scas_env/ScasFleet-v0", disable_env_checker=True, **TINY)
+        agent = load_fleet_agent(found[-1][1], env.unwrapped.obs_names)
+        obs, _ = env.reset(seed=0)
+        for _ in range(TINY["episode_days"]):
+            act, _ = agent.predict(obs)
+            assert env.action_space.contains(act)
+            assert _valid(act, env.unwrapped.action_masks(), env.action_space.nvec)
+            obs, *_ = env.step(act)
+        batch, _ = agent.predict(np.stack([obs, obs]))
+        assert batch.shape == (2, env.action_space.shape[0])
+        # the clone (checkpoint 0) keeps its statistics fixed through training
+        first = load_fleet_agent(found[0][1], env.unwrapped.obs_names).normalizer.mean
+        np.testing.assert_array_equal(first, agent.normalizer.mean)
+        with pytest.raises(ValueError, match="another fleet configuration"):
+            other = gym.make("scas_env/ScasFleet-v0", disable_env_checker=True, aircraft=3)
+            load_fleet_agent(found[-1][1], other.unwrapped.obs_names)
+
+
+@pytest.mark.parametrize("path", [FLEET_JOINT_AGENT])
+def test_shipped_agents_load_and_act_on_the_default_fleet(path: Path) -> None:
+    if not path.is_file():
+        pytest.skip(f"{path.name} not shipped")
+    env = gym.make("scas_env/ScasFleet-v0", disable_env_checker=True)
+    names = env.unwrapped.obs_names
+    agent = load_fleet_agent(path, names)
+    obs, _ = env.reset(seed=11)
+    for _ in range(5):
+        act, _ = agent.predict(obs)
+        assert _valid(act, env.unwrapped.action_masks(), env.action_space.nvec)
+        obs, *_ = env.step(act)
+    meta = json.loads(path.with_suffix(".json").read_text())
+    for key in ("commands", "validation", "fleet_days_trained", "wall_s_training", "kind"):
+        assert key in meta
+    small = gym.make("scas_env/ScasFleet-v0", disable_env_checker=True, aircraft=4)
+    with pytest.raises(ValueError, match="another fleet configuration"):
+        load_fleet_agent(path, small.unwrapped.obs_names)
+    name = "fleet_ppo"
+    assert PLUGINS[name].module == "policies.agents.fleet.plugins"
+    built = make_policy(name, names)
+    assert isinstance(built, FleetAgent)
+
+
+def test_agent_refuses_a_model_of_another_fleet() -> None:
+    class Fake:
+        observation_space = gym.spaces.Box(0, 1, (3,))
+        action_space = gym.spaces.MultiDiscrete([7, 4, 4, 4])
+
+    names = gym.make("scas_env/ScasFleet-v0", disable_env_checker=True).unwrapped.obs_names
+    with pytest.raises(ValueError, match="trained on another fleet"):
+        FleetAgent(Fake(), None, names, kind="shared")
+    with pytest.raises(ValueError, match="kind"):
+        FleetAgent(Fake(), None, names, kind="central")
+    with pytest.raises(ValueError, match="does not exist"):
+        load_fleet_agent("no/such/agent.zip", names)
+
+
+def test_best_tuned_rule_reads_the_tuning_file(tmp_path: Path) -> None:
+    assert best_tuned_rule(None) == ("fleet_naive", {})
+    data = {
+        "families": {
+            "fleet_naive": {"params": {"risk_threshold": 0.1}, "train_reward": 7.0e6},
+            "fleet_aware": {"params": {"urgency": 2.0}, "train_reward": 7.1e6},
+            "fleet_oracle": {"params": {"lead_flights": 3.0}, "train_reward": 9.0e6},
+        }
+    }
+    path = tmp_path / "tuning.json"
+    path.write_text(json.dumps(data))
+    assert best_tuned_rule(path) == ("fleet_aware", {"urgency": 2.0})  # the oracle is no rule
+    assert best_tuned_rule(path, "fleet_naive") == ("fleet_naive", {"risk_threshold": 0.1})
+    with pytest.raises(ValueError, match="not in"):
+        best_tuned_rule(path, "fleet_opportunistic")
+
+
+def test_choose_the_best_validation_checkpoint_and_its_paired_difference(tmp_path: Path) -> None:
+    from policies.agents.fleet.selection import KPIS, choose, curves, kpi_table
+
+    rng = np.random.default_rng(0)
+    base = rng.normal(7e6, 1e5, 8)
+    rows = []
+    for label, shift in (("rule:fleet_naive", 0.0), ("run:0", -3e5), ("run:50", -1e5)):
+        for e, b in enumerate(base):
+            row = {k: 1.0 for k in KPIS}
+            rows.append({**row, "label": label, "episode": e, "reward": b + shift + e})
+    chosen = choose(rows, "run", ["fleet_naive"])
+    assert chosen["label"] == "run:50" and chosen["fleet_days"] == 50
+    vs = chosen["paired_vs"]["fleet_naive"]
+    assert vs["difference"] == pytest.approx(-1e5) and vs["low"] <= -1e5 <= vs["high"]
+    assert "| run:50 |" in kpi_table(rows, ["run:50"])
+    (tmp_path / "progress.csv").write_text(
+        "time/total_timesteps,rollout/ep_rew_mean\n1000,7000000\n2000,7100000\n"
+    )
+    curves(tmp_path, rows, "run", ["fleet_naive"], tmp_path / "c")
+    assert (tmp_path / "c.png").is_file() and "validation" in (tmp_path / "c.csv").read_text()
+    with pytest.raises(ValueError, match="no validated checkpoint"):
+        choose(rows, "other", ["fleet_naive"])
+
+
+def test_a_copy_of_the_shipped_agent_needs_its_json_statistics_and_weights(tmp_path: Path) -> None:
+    if not FLEET_JOINT_AGENT.is_file():
+        pytest.skip("fleet_maskable_ppo.zip not shipped")
+    import shutil
+
+    names = gym.make("scas_env/ScasFleet-v0", disable_env_checker=True).unwrapped.obs_names
+    stem = FLEET_JOINT_AGENT.name.removesuffix(".zip")
+    for suffix in (".zip", ".json", "_normalization.json"):
+        shutil.copyfile(FLEET_JOINT_AGENT.with_name(stem + suffix), tmp_path / (stem + suffix))
+    copy = tmp_path / FLEET_JOINT_AGENT.name
+    obs = gym.make("scas_env/ScasFleet-v0", disable_env_checker=True).reset(seed=2)[0]
+    shipped = load_fleet_agent(FLEET_JOINT_AGENT, names).predict(obs)[0]
+    np.testing.assert_array_equal(load_fleet_agent(copy, names).predict(obs)[0], shipped)
+    (tmp_path / f"{stem}_normalization.json").unlink()
+    (tmp_path / f"{stem}_vecnormalize.pkl").write_bytes(b"not read")
+    with pytest.raises(ValueError, match=r"normalization\.json is missing.*convert_vecnormalize"):
+        load_fleet_agent(copy, names)
+    meta = json.loads((tmp_path / f"{stem}.json").read_text())
+    meta["weights_sha256"] = "0" * 64
+    (tmp_path / f"{stem}.json").write_text(json.dumps(meta))
+    with pytest.raises(ValueError, match="weights differ"):
+        load_fleet_agent(copy, names)
+    with pytest.raises(ValueError, match="no parameter-shared fleet agent is shipped"):
+        make_policy("fleet_shared_ppo", names)
