@@ -55,8 +55,8 @@ DEFAULT_POLICIES = (
     "random",
     "ppo",
 )
-#: Fleets: the default policies (the families of policies.rules.fleet, the bound) and the
-#: share of the gap between the naive rule and the bound each closes.
+#: Fleets: the default policies (the families of policies.rules.fleet, the shipped fleet
+#: agent, the bound) and the share of the gap between the naive rule and the bound each closes.
 DEFAULT_FLEET_POLICIES = (
     "fleet_corrective",
     "fleet_age",
@@ -65,6 +65,7 @@ DEFAULT_FLEET_POLICIES = (
     "fleet_aware",
     "fleet_oracle",
     "fleet_random",
+    "fleet_ppo",
     "fleet_bound",
 )
 FLEET_GAP_BASE, FLEET_GAP_BOUND = "fleet_naive", "fleet_bound"
