@@ -15,6 +15,7 @@ from policies.agents.fleet.demos import collect, discounted_returns, project_to_
 from policies.agents.fleet.masks import FleetObsLayout
 from policies.agents.fleet.plugins import (
     FLEET_JOINT_AGENT,
+    FLEET_SHARED_AGENT,
     FleetAgent,
     load_fleet_agent,
 )
@@ -115,7 +116,7 @@ def test_tiny_clone_and_training_run_then_load_and_act(tmp_path: Path) -> None:
             load_fleet_agent(found[-1][1], other.unwrapped.obs_names)
 
 
-@pytest.mark.parametrize("path", [FLEET_JOINT_AGENT])
+@pytest.mark.parametrize("path", [FLEET_JOINT_AGENT, FLEET_SHARED_AGENT])
 def test_shipped_agents_load_and_act_on_the_default_fleet(path: Path) -> None:
     if not path.is_file():
         pytest.skip(f"{path.name} not shipped")
@@ -216,5 +217,6 @@ def test_a_copy_of_the_shipped_agent_needs_its_json_statistics_and_weights(tmp_p
     (tmp_path / f"{stem}.json").write_text(json.dumps(meta))
     with pytest.raises(ValueError, match="weights differ"):
         load_fleet_agent(copy, names)
-    with pytest.raises(ValueError, match="no parameter-shared fleet agent is shipped"):
-        make_policy("fleet_shared_ppo", names)
+    # the registry's names load the shipped files
+    assert make_policy("fleet_shared_ppo", names).kind == "shared"
+    assert make_policy("fleet_ppo", names).kind == "joint"

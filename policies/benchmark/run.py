@@ -66,6 +66,7 @@ DEFAULT_FLEET_POLICIES = (
     "fleet_oracle",
     "fleet_random",
     "fleet_ppo",
+    "fleet_shared_ppo",
     "fleet_bound",
 )
 FLEET_GAP_BASE, FLEET_GAP_BOUND = "fleet_naive", "fleet_bound"
@@ -121,8 +122,8 @@ class PolicySpec:
 #: (policies/data/README.md, docs/rl.md)
 PLUGINS["ppo"] = PolicySpec("sb3", label="ppo", module="policies.agents.sb3_agents")
 #: the shipped fleet agent (ScasFleet-v0's default fleet): MaskablePPO over the fleet's joint
-#: action, warm-started from the fleet_naive rule (docs/fleet_agents.md); the parameter-shared
-#: one is not shipped (params={"path": ...})
+#: action, and the parameter-shared one (one network per aircraft), both warm-started from
+#: the fleet_naive rule (docs/fleet_agents.md)
 PLUGINS["fleet_ppo"] = PolicySpec("fleet_ppo", module="policies.agents.fleet.plugins")
 PLUGINS["fleet_shared_ppo"] = PolicySpec("fleet_shared_ppo", module="policies.agents.fleet.plugins")
 

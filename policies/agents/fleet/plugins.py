@@ -17,7 +17,7 @@ observation statistics, :class:`policies.agents.agent_files.ObsNormalization`) a
 scenario tests before every flight) and checks the model's observation and action spaces
 against the env's before it acts, with an error that says what differs. Registered for the
 benchmark: ``"fleet_ppo"`` (default: the shipped :data:`FLEET_JOINT_AGENT`) and
-``"fleet_shared_ppo"`` (:data:`FLEET_SHARED_AGENT`, not shipped), both with
+``"fleet_shared_ppo"`` (:data:`FLEET_SHARED_AGENT`), both with
 ``params={"path": ...}`` for another file.
 
 **Nothing is unpickled**, as for the single-actuator agent (:mod:`policies.agents.sb3_agents`):
@@ -277,8 +277,8 @@ def _joint_factory(obs_names: Sequence[str], path: str | Path = FLEET_JOINT_AGEN
 
 
 def _shared_factory(obs_names: Sequence[str], path: str | Path | None = None) -> FleetAgent:
-    """Registry factory ``"fleet_shared_ppo"``: the parameter-shared agent of ``path`` (none is
-    shipped)."""
+    """Registry factory ``"fleet_shared_ppo"``: the shipped parameter-shared agent or
+    ``path``."""
     if path is None:
         path = FLEET_SHARED_AGENT
         if not path.is_file():
