@@ -70,7 +70,49 @@ def _split(info: dict[str, Any], n: int, keys: Sequence[str] | None) -> list[dic
     return out
 
 
-class NativeVecEnv(VecEnv):
+class VectorEnvAccess:
+    """SB3 ``VecEnv`` attribute access for adapters over ONE Gymnasium vector env
+    (``self.venv``): every index reads or calls the vector env's attribute, ``set_attr`` only
+    for all indices, ``action_masks`` through the adapter's own ``action_masks()``; no
+    wrappers, no images. Shared by :class:`NativeVecEnv` and the fleet adapters."""
+
+    num_envs: int
+    venv: Any
+
+    def _indices(self, indices: Any) -> list[int]:
+        if indices is None:
+            return list(range(self.num_envs))
+        if isinstance(indices, int | np.integer):
+            return [int(indices)]
+        return [int(i) for i in indices]
+
+    def get_attr(self, attr_name: str, indices: Any = None) -> list[Any]:
+        value = getattr(self.venv, attr_name)
+        return [value for _ in self._indices(indices)]
+
+    def set_attr(self, attr_name: str, value: Any, indices: Any = None) -> None:
+        if len(self._indices(indices)) != self.num_envs:
+            raise ValueError(f"set_attr({attr_name!r}) sets the vector env's; indices must be all")
+        setattr(self.venv, attr_name, value)
+
+    def env_method(
+        self, method_name: str, *method_args: Any, indices: Any = None, **method_kwargs: Any
+    ) -> list[Any]:
+        idx = self._indices(indices)
+        if method_name == "action_masks":
+            masks = self.action_masks()
+            return [masks[i] for i in idx]
+        result = getattr(self.venv, method_name)(*method_args, **method_kwargs)
+        return [result for _ in idx]
+
+    def env_is_wrapped(self, wrapper_class: type, indices: Any = None) -> list[bool]:
+        return [False for _ in self._indices(indices)]
+
+    def get_images(self) -> Sequence[np.ndarray | None]:
+        return [None for _ in range(self.num_envs)]
+
+
+class NativeVecEnv(VectorEnvAccess, VecEnv):
     """SB3 ``VecEnv`` over a Gymnasium vector env with flat Box observations.
 
     Parameters
@@ -159,41 +201,9 @@ class NativeVecEnv(VecEnv):
         return maintenance_mask(*(self._obs[:, c] for c in self._mask_cols))
 
     # ------------------------------------------------------------------ attributes
-    def _indices(self, indices: Any) -> list[int]:
-        if indices is None:
-            return list(range(self.num_envs))
-        if isinstance(indices, int | np.integer):
-            return [int(indices)]
-        return [int(i) for i in indices]
-
     def has_attr(self, attr_name: str) -> bool:
         """``action_masks`` (when the observation has what the mask reads) or an attribute of
         the vector env (MaskablePPO asks for ``action_masks``)."""
         if attr_name == "action_masks":
             return self._mask_cols is not None or callable(getattr(self.venv, "action_masks", None))
         return hasattr(self.venv, attr_name)
-
-    def get_attr(self, attr_name: str, indices: Any = None) -> list[Any]:
-        value = getattr(self.venv, attr_name)
-        return [value for _ in self._indices(indices)]
-
-    def set_attr(self, attr_name: str, value: Any, indices: Any = None) -> None:
-        if len(self._indices(indices)) != self.num_envs:
-            raise ValueError(f"set_attr({attr_name!r}) sets the vector env's; indices must be all")
-        setattr(self.venv, attr_name, value)
-
-    def env_method(
-        self, method_name: str, *method_args: Any, indices: Any = None, **method_kwargs: Any
-    ) -> list[Any]:
-        idx = self._indices(indices)
-        if method_name == "action_masks":
-            masks = self.action_masks()
-            return [masks[i] for i in idx]
-        result = getattr(self.venv, method_name)(*method_args, **method_kwargs)
-        return [result for _ in idx]
-
-    def env_is_wrapped(self, wrapper_class: type, indices: Any = None) -> list[bool]:
-        return [False for _ in self._indices(indices)]
-
-    def get_images(self) -> Sequence[np.ndarray | None]:
-        return [None for _ in range(self.num_envs)]

@@ -41,7 +41,7 @@ import numpy as np
 from gymnasium import spaces
 from stable_baselines3.common.vec_env.base_vec_env import VecEnv, VecEnvWrapper
 
-from policies.agents.sb3_vec_env import _split
+from policies.agents.sb3_vec_env import VectorEnvAccess, _split
 
 __all__ = ["REWARD_CENTER", "REWARD_SCALE", "FleetVecEnv", "VecRewardScale", "make_fleet_venv"]
 
@@ -64,7 +64,7 @@ def make_fleet_venv(num_fleets: int, **env_kwargs: Any) -> Any:
     )
 
 
-class _FleetBase(VecEnv):
+class _FleetBase(VectorEnvAccess, VecEnv):
     """What both fleet adapters share: the native env, seeding, resets, attributes."""
 
     def __init__(
@@ -161,40 +161,8 @@ class _FleetBase(VecEnv):
     def close(self) -> None:
         self.venv.close()
 
-    def _indices(self, indices: Any) -> list[int]:
-        if indices is None:
-            return list(range(self.num_envs))
-        if isinstance(indices, int | np.integer):
-            return [int(indices)]
-        return [int(i) for i in indices]
-
     def has_attr(self, attr_name: str) -> bool:
         return attr_name == "action_masks" or hasattr(self.venv, attr_name)
-
-    def get_attr(self, attr_name: str, indices: Any = None) -> list[Any]:
-        value = getattr(self.venv, attr_name)
-        return [value for _ in self._indices(indices)]
-
-    def set_attr(self, attr_name: str, value: Any, indices: Any = None) -> None:
-        if len(self._indices(indices)) != self.num_envs:
-            raise ValueError(f"set_attr({attr_name!r}) sets the vector env's; indices must be all")
-        setattr(self.venv, attr_name, value)
-
-    def env_method(
-        self, method_name: str, *method_args: Any, indices: Any = None, **method_kwargs: Any
-    ) -> list[Any]:
-        idx = self._indices(indices)
-        if method_name == "action_masks":
-            masks = self.action_masks()
-            return [masks[i] for i in idx]
-        result = getattr(self.venv, method_name)(*method_args, **method_kwargs)
-        return [result for _ in idx]
-
-    def env_is_wrapped(self, wrapper_class: type, indices: Any = None) -> list[bool]:
-        return [False for _ in self._indices(indices)]
-
-    def get_images(self) -> Sequence[np.ndarray | None]:
-        return [None for _ in range(self.num_envs)]
 
 
 class FleetVecEnv(_FleetBase):
