@@ -123,14 +123,14 @@ AGENT_DIR ?= $(RESULTS)/agent_v2
 TRAIN_ARGS = --candidate imitation_g1 --init $(AGENT_DIR)/clone \
 	--native-envs 64 --timesteps 5000000 --checkpoint-every 500000
 train-agent-v2: install
-	$(PY) scripts/imitate_rule.py --candidate imitation_g1 \
+	$(PY) -m experiments.epoch_agents.imitate_rule --candidate imitation_g1 \
 		--rules-from docs/value_v2/ladder.json --out $(AGENT_DIR)/clone
 	$(VENV)/bin/scas-train $(TRAIN_ARGS) --seed 0 --out $(AGENT_DIR)/runs/s0 & a=$$!; \
 	$(VENV)/bin/scas-train $(TRAIN_ARGS) --seed 1 --out $(AGENT_DIR)/runs/s1 & b=$$!; \
 	$(VENV)/bin/scas-train $(TRAIN_ARGS) --seed 2 --out $(AGENT_DIR)/runs/s2; c=$$?; \
 	wait $$a && wait $$b && test $$c -eq 0
 	mkdir -p $(AGENT_DIR)/agent
-	$(PY) scripts/ship_epochs.py --runs $(AGENT_DIR)/runs --name maskable_ppo_epochs_v2 \
+	$(PY) -m experiments.epoch_agents.ship --runs $(AGENT_DIR)/runs --name maskable_ppo_epochs_v2 \
 		--rules-from docs/value_v2/ladder.json \
 		--held-out-seed 2 --validation-episodes 200 --held-out-episodes 1000 \
 		--ship-to $(AGENT_DIR)/agent --out $(AGENT_DIR)/selection

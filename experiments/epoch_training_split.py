@@ -30,7 +30,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser.add_argument(
         "--init",
         default=None,
-        help="start from this clone (scripts/imitate_rule.py's --out; default: a new network)",
+        help="start from this clone (experiments.epoch_agents.imitate_rule's --out; default: "
+        "a new network)",
     )
     parser.add_argument("--seed", type=nonneg_int, default=0, help="seed")
     args = parser.parse_args(argv)

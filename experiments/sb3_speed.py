@@ -151,7 +151,7 @@ def training_fps(
     thread, on the CPU (``config``: :data:`FPS_CONFIGS`). On a decision-epoch setup (a flight
     counter inside): MaskablePPO with the trainings' settings (:func:`epoch_ppo_kwargs`),
     and the frames are the flights flown; ``init``: start from this clone
-    (``scripts/imitate_rule.py``'s output) with the fine-tuning settings
+    (``experiments.epoch_agents.imitate_rule``'s output) with the fine-tuning settings
     (:func:`epoch_ppo_kwargs` of ``imitation_g1``), as the shipped agent's runs did."""
     if isinstance(total_timesteps, bool) or not isinstance(total_timesteps, int):
         raise ValueError(f"total_timesteps = {total_timesteps!r} must be an integer >= 1")

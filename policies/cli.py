@@ -347,7 +347,7 @@ One candidate of the hyper-parameter search file (policies/data/hyperparams/sear
 one seed; checkpoints (model zip and normalization JSON) every --checkpoint-every decisions,
 SB3's progress.csv and run.json in --out (policies.agents.training.train_epochs). A rollout
 is the YAML's n_steps per env: a run trains at least one. Warm start from a clone of a rule
-with --init (scripts/imitate_rule.py); the shipped agent's whole pipeline: `make
+with --init (experiments.epoch_agents.imitate_rule); the shipped agent's whole pipeline: `make
 train-agent-v2` (docs/rl.md). Example:
 
     scas-train --candidate gamma099 --seed 0 --native-envs 64 --timesteps 200000 \\
@@ -391,7 +391,7 @@ def train_parser() -> Any:
         "--init",
         default=None,
         help="start from this clone: a folder with model.zip and normalization.json "
-        "(scripts/imitate_rule.py's --out; default: a new network)",
+        "(experiments.epoch_agents.imitate_rule's --out; default: a new network)",
     )
     parser.add_argument(
         "--running-normalization",

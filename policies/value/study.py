@@ -24,7 +24,7 @@ zero (linear interpolation between the two sigmas that bracket it).
 The sensing-quality sweep (sensor noise x0.1 ... x3, per-unit tolerances on/off) re-tunes
 the same nested families at each sensing variant of the design, each with its own feature
 surrogate: :mod:`experiments.sensing_sweep` (variants: :mod:`experiments.sensing_variants`;
-command ``scripts/sensing_sweep.py``).
+command ``python -m experiments.sensing_sweep``).
 """
 
 from __future__ import annotations

@@ -7,7 +7,8 @@ rule labels the states the clone visits on further training episodes);
 ``scas-train --init OUT`` then trains PPO from the clone. Example (the filter rule of the
 value study)::
 
-    python scripts/imitate_rule.py --rules-from docs/value_v2/ladder.json --arm filter \\
+    python -m experiments.epoch_agents.imitate_rule --rules-from docs/value_v2/ladder.json \\
+        --arm filter \\
         --candidate imitation_g1 --out results/rl_v2/clone
 
 ``--delegate-k K`` makes a residual agent instead (policies.agents.delegation): the rule

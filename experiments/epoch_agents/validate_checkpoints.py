@@ -8,7 +8,8 @@ other observation statistics than its own (a normalisation JSON): the diagnostic
 docs/rl.md. Example (the clone, checkpoint
 0 of a run, under the statistics that run had after 1 M decisions)::
 
-    python scripts/validate_checkpoints.py --runs results/kl/runs/s0 --decisions 0 \\
+    python -m experiments.epoch_agents.validate_checkpoints --runs results/kl/runs/s0 \\
+        --decisions 0 \\
         --statistics results/kl/runs/s0/ckpt_normalization_999936_steps.json \\
         --rules-from docs/value_v2/ladder.json \\
         --episodes 200 --out results/kl/swap.csv

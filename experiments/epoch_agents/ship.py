@@ -3,7 +3,8 @@
 Example (after runs of ``scas-train`` under ``results/rl_v2/epochs``; the rules tuned on
 the training seeds read from the value study, held-out on its seeds)::
 
-    python scripts/ship_epochs.py --runs results/rl_v2/epochs --name maskable_ppo_epochs_v2 \\
+    python -m experiments.epoch_agents.ship --runs results/rl_v2/epochs \\
+        --name maskable_ppo_epochs_v2 \\
         --rules-from docs/value_v2/ladder.json --held-out-seed 2 --out results/rl_v2/selection
 
 Calls :func:`policies.agents.selection.select_ship_evaluate`.
