@@ -365,6 +365,26 @@ class Reproduction:
     timings_s: dict[str, float]
 
 
+def healthy_set_for(
+    params: ScasParams, selection: dict[str, Any], config: ReproductionConfig, seed: int
+) -> HealthySet:
+    """The nested healthy units of a reproduction: ``config.healthy_units`` units with
+    ``installation_tests + detector_window`` tests each of every selected ground feature,
+    drawn from ``SeedSequence(seed, spawn_key=(len(FAULTS),))``."""
+    chosen = [
+        selection["selected"][f][k] for f in FAULTS for k in ("ground", "ground_per_fault_top")
+    ]
+    k = config.installation_tests
+    return simulate_healthy_set(
+        params,
+        tuple(sorted(set(chosen))),
+        config.healthy_units,
+        k + config.detector_window,
+        k,
+        np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(len(FAULTS),))),
+    )
+
+
 def run_reproduction(
     params: ScasParams,
     config: ReproductionConfig,
@@ -394,18 +414,7 @@ def run_reproduction(
     selection = select_features(campaign)
     detection = campaign_detection(campaign, selection, config.detector_window)
     timings["selection_detection"] = time.perf_counter() - clock - timings["campaign"]
-    chosen = [
-        selection["selected"][f][k] for f in FAULTS for k in ("ground", "ground_per_fault_top")
-    ]
-    k = config.installation_tests
-    healthy = simulate_healthy_set(
-        params,
-        tuple(sorted(set(chosen))),
-        config.healthy_units,
-        k + config.detector_window,
-        k,
-        np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(len(FAULTS),))),
-    )
+    healthy = healthy_set_for(params, selection, config, seed)
     timings["healthy_units"] = time.perf_counter() - clock - sum(timings.values())
     cal = calibration_for(params)
     prognosis = {

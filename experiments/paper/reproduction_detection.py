@@ -34,7 +34,12 @@ from scipy import stats
 from tqdm.auto import tqdm
 
 from experiments.paper.campaign_table import CampaignResult
-from experiments.paper.reproduction import FAULTS, ReproductionConfig, select_features
+from experiments.paper.reproduction import (
+    FAULTS,
+    ReproductionConfig,
+    healthy_set_for,
+    select_features,
+)
 from experiments.paper.reproduction_conventions import leakage_fraction
 from experiments.paper.reproduction_prognosis import (
     _SEVERITY_COLUMN,
@@ -44,7 +49,6 @@ from experiments.paper.reproduction_prognosis import (
     _PathTests,
     feature_score,
     ground_test_features,
-    simulate_healthy_set,
 )
 from prognostics.prognosis_run import grow_path, healthy_residuals, installation_detector
 from scas_env.actuator.calibration import Calibration, calibration_for
@@ -174,18 +178,7 @@ def installation_detection(
     if isinstance(n_paths, bool) or not isinstance(n_paths, int) or n_paths < 1:
         raise ValueError(f"n_paths = {n_paths!r} must be an integer >= 1")
     selection = select_features(campaign)
-    chosen = [
-        selection["selected"][f][k] for f in FAULTS for k in ("ground", "ground_per_fault_top")
-    ]
-    k = config.installation_tests
-    healthy = simulate_healthy_set(
-        params,
-        tuple(sorted(set(chosen))),
-        config.healthy_units,
-        k + config.detector_window,
-        k,
-        np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(len(FAULTS),))),
-    )
+    healthy = healthy_set_for(params, selection, config, seed)
     cal = calibration_for(params)
     residuals = (
         _flight_residuals(params, selection, config, np.random.SeedSequence(seed, spawn_key=(3,)))
