@@ -28,8 +28,12 @@ known at a record once the monitor had learnt them (a batch under way is not).
 batch's count and sum, the latest features), and checks after every step that its own copy
 of the batch under way is the batch's, bit for bit. The other part
 enters at its **true** wear fraction (the filter uses its own seal estimate and adds the
-cross-fault variance): the reference is exact on the spring's side and knows the seal, which
-measured cross-fault effects show to be a small difference (docs/beliefs.md).
+cross-fault variance): the reference is exact on the spring's side and knows the seal.
+``seal_view="filter"`` (``--seal-view filter``) gives it the seal as the monitor sees it
+instead: each run at the seal filter's mean wear fraction before that flight, no extra
+variance. The two views split the filter's loss into the particle approximation (filter
+against the reference with the filter's seal view) and the factorised seal estimate (the
+two references against each other; docs/beliefs.md).
 
 :func:`run_reference_study` runs seeded episodes of the belief study's policies
 (:mod:`experiments.belief_calibration`), records both the filter's and the reference's
@@ -87,6 +91,8 @@ MAX_REFINEMENTS = 3
 #: life stages of the study: the belief study's and two in the last tenth of life, where the
 #: risk output decides
 REFERENCE_STAGES: tuple[float, ...] = (*STAGES, 0.95, 0.98)
+#: the seal wear the reference reads the spring's features at (:class:`RecordingEnv`)
+SEAL_VIEWS: tuple[str, ...] = ("true", "filter")
 
 
 @dataclass
@@ -137,8 +143,12 @@ class RecordingEnv(ScasMaintenanceEnv):
     count and sum bit for bit: each recorded batch mean is then what the filter learnt
     (``flight_sum / flight_count``)."""
 
-    def __init__(self, **kwargs: Any) -> None:
+    def __init__(self, *, seal_view: str = "true", **kwargs: Any) -> None:
+        if seal_view not in SEAL_VIEWS:
+            raise ValueError(f"seal_view = {seal_view!r} must be one of {SEAL_VIEWS}")
         super().__init__(**kwargs)
+        #: the seal wear the reference reads the spring's features at (module docstring)
+        self.seal_view = seal_view
         if self.scenario.fidelity != "surrogate":
             raise ValueError(
                 f"fidelity = {self.scenario.fidelity!r}: the reference posterior needs the "
@@ -163,7 +173,10 @@ class RecordingEnv(ScasMaintenanceEnv):
     def step(self, action: Any) -> tuple:
         a = self.batch.a
         age = int(a["part_age"][0, 0])
-        wear = min(float(a["wear"][0]) / self._critical, 1.0)
+        if self.seal_view == "true":
+            wear = min(float(a["wear"][0]) / self._critical, 1.0)
+        else:  # the seal filter's weighted mean, as a fraction of critical
+            wear = min(max(float(a["w"][0, 1] @ a["x"][0, 1]) / self._critical, 0.0), 1.0)
         tests = int(a["tests"][0])
         replaced = a["replacements"][0].copy()
         out = super().step(action)
@@ -509,15 +522,19 @@ def run_reference_study(
     log2_points: int = DEFAULT_LOG2_POINTS,
     stages: Sequence[float] = REFERENCE_STAGES,
     min_ess: float = DEFAULT_MIN_ESS,
+    seal_view: str = "true",
     progress: bool = True,
 ) -> list[dict[str, float]]:
     """Per-life rows of :func:`reference_lives` over seeds ``seed .. seed + episodes - 1``
-    per policy; the Sobol scrambling draws from ``SeedSequence(seed)``'s children."""
+    per policy; the Sobol scrambling draws from ``SeedSequence(seed)``'s children;
+    ``seal_view``: :class:`RecordingEnv`'s."""
     check_episodes(episodes, seed, policies)
     check_points(log2_points, min_ess)
     if not stages or any(not 0.0 < s < 1.0 for s in stages):
         raise ValueError(f"stages = {list(stages)!r} must be fractions of life in (0, 1)")
-    env = RecordingEnv(scenario=Scenario.from_dict(dict(scenario_fields or {})))
+    env = RecordingEnv(
+        seal_view=seal_view, scenario=Scenario.from_dict(dict(scenario_fields or {}))
+    )
     children = np.random.SeedSequence(seed).spawn(len(policies) * episodes)
     rows: list[dict[str, float]] = []
     bar = tqdm(total=len(policies) * episodes, desc="reference episodes", disable=not progress)
@@ -573,6 +590,13 @@ def main(argv: Sequence[str] | None = None) -> int:
         "true RUL at the stages (experiments.reference_synthetic); prints the table",
     )
     parser.add_argument("--no-tests", action="store_true", help="--synthetic lives without tests")
+    parser.add_argument(
+        "--seal-view",
+        choices=SEAL_VIEWS,
+        default="true",
+        help="the seal wear the reference reads the spring's features at: the world's "
+        "('true') or the seal filter's mean ('filter')",
+    )
     parser.add_argument("--out", type=Path, default=None, help="results folder (none: print)")
     parser.add_argument("--overwrite", action="store_true", help="replace an existing --out")
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
@@ -611,6 +635,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         scenario_fields=args.scenario,
         log2_points=args.log2_points,
         min_ess=args.min_ess,
+        seal_view=args.seal_view,
         progress=not args.no_progress,
     )
     table = stage_table(rows, np.random.default_rng(args.seed))
@@ -620,6 +645,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             "episodes": args.episodes, "seed": args.seed, "policies": args.policies,
             "scenario_fields": args.scenario, "log2_points": args.log2_points,
             "min_ess": args.min_ess, "stages": list(REFERENCE_STAGES),
+            "seal_view": args.seal_view,
         }  # fmt: skip
         for path in write_report(rows, table, config, args.out, overwrite=args.overwrite):
             print(path)
@@ -631,6 +657,7 @@ __all__ = [
     "DEFAULT_LOG2_POINTS",
     "DEFAULT_MIN_ESS",
     "REFERENCE_STAGES",
+    "SEAL_VIEWS",
     "TEST",
     "RecordingEnv",
     "ReferencePosterior",

@@ -195,8 +195,10 @@ class MonitorReference:
 
     # -------------------------------------------------------------- steps
     def _predict(self, p: int, flights: float) -> None:
+        """Filter p over ``flights``; a part whose fault is switched off does not degrade."""
         if flights > 0:
-            self.pf[p].predict(flights)
+            if self.active[p]:
+                self.pf[p].predict(flights)
             self.pending[p] -= flights
 
     def _survive(self) -> None:

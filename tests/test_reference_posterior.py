@@ -172,6 +172,41 @@ def test_the_recorder_refuses_to_lose_track_of_the_batch() -> None:
         rec.step(0)
 
 
+def test_the_seal_view_records_the_world_or_the_seal_filters_mean() -> None:
+    """The same episode recorded with both seal views: the same events, with the world's wear
+    fraction before each flight (``"true"``) or the seal filter's weighted mean wear over
+    critical before it (``"filter"``), computed here from the arrays independently."""
+    kw = {"episode_slots": 120}
+    views = {v: RecordingEnv(seal_view=v, **kw) for v in ("true", "filter")}
+    for env in views.values():
+        env.reset(seed=2)
+    true_wear, filter_wear = [], []
+    for _ in range(119):
+        a = policy_action("test10", views["true"].slot)
+        arr, crit = views["filter"].batch.a, views["filter"].calibration.seal_critical_wear_m
+        before_flown = arr["flown"][0]
+        w, x = arr["w"][0, 1].copy(), arr["x"][0, 1].copy()
+        wear = float(views["true"].batch.a["wear"][0])
+        for env in views.values():
+            env.step(a)
+        if arr["flown"][0] != before_flown:
+            true_wear.append(wear / crit)
+            filter_wear.append(float(np.sum(w * x)) / crit)
+    ev_t, ev_f = views["true"].events, views["filter"].events
+    assert ev_t.y == ev_f.y and ev_t.ages == ev_f.ages and len(ev_t.y) > 5
+    batches_t = [w for e in range(len(ev_t.kind)) if ev_t.kind[e] == BATCH
+                 for w in ev_t.wear[ev_t.start[e] : ev_t.stop[e]]]  # fmt: skip
+    batches_f = [w for e in range(len(ev_f.kind)) if ev_f.kind[e] == BATCH
+                 for w in ev_f.wear[ev_f.start[e] : ev_f.stop[e]]]  # fmt: skip
+    n = len(batches_t)
+    assert n > 50
+    np.testing.assert_allclose(batches_t, true_wear[:n], rtol=1e-15)
+    np.testing.assert_allclose(batches_f, filter_wear[:n], rtol=1e-12)
+    assert not np.allclose(batches_t, batches_f)
+    with pytest.raises(ValueError, match="seal_view = 'mean' must be one of"):
+        RecordingEnv(seal_view="mean")
+
+
 def test_bad_arguments_are_refused(model) -> None:
     with pytest.raises(ValueError, match="log2_points = 3"):
         ReferencePosterior(model, np.random.default_rng(0), 3)

@@ -47,12 +47,15 @@ from prognostics.particle_filter import (
     _first_out_of_range,
     resample_if_degenerate,
 )
-from prognostics.rul_ageing import _build_from_cloud
+from prognostics.rul_ageing import _build, _build_from_cloud
 from scas_env.core.rejuvenation import C_AGE, C_SURVIVED, record_datum, resample_move
 from scas_env.core.table_cells import bilinear_at, cell_of
 
 #: Step (fraction of critical) of the central differences of the surrogate's mean curves.
 SLOPE_STEP = 0.02
+#: RUL (flights) of every particle of a part whose fault is switched off: it never fails
+#: (the observation reads it as ``Scenario.rul_cap_flights``, its risk as 0)
+NEVER_FLIGHTS = 1e300
 #: what a row's non-zero status means (the exception raised for it)
 STATUS_MESSAGES = {
     1: (FloatingPointError, "a filter prediction put a particle outside the representable range"),
@@ -194,8 +197,12 @@ def _resampled(n_eff: float, e: int, p: int, bank: tuple, work: tuple, model: Fi
 def _predict(e: int, p: int, d: float, bank: tuple, pending: np.ndarray, status: np.ndarray,
              work: tuple, model: FilterModel, handle: tuple) -> None:  # fmt: skip
     """Filter p of row e predicted over ``d`` flights, taken off ``pending``; status 1 if a
-    particle left the representable range."""
+    particle left the representable range. A part whose fault is switched off
+    (``model.active``) does not degrade: its cloud stays where it is."""
     bx, blt = bank[0], bank[1]
+    if not model.active[p]:
+        pending[e, p] -= d
+        return
     if p == 0:
         predict_particles(bx[e, 0], blt[e, 0], d, handle, work[4], *model.process[0])
     else:
@@ -350,10 +357,22 @@ def test_row(e: int, g1: float, g3: float, bank: tuple, pending: np.ndarray,
 def refresh_row(e: int, bank: tuple, tables: tuple, status: np.ndarray, work: tuple,
                 model: FilterModel) -> None:  # fmt: skip
     """Both parts' RUL tables of row e's clouds into row e of ``tables = (sorted, cum_w,
-    suffix_w, suffix_wr, low)``; status 4 or 5 if a cloud is invalid."""
+    suffix_w, suffix_wr, low)``; status 4 or 5 if a cloud is invalid. A part whose fault is
+    switched off never fails: every particle's RUL is :data:`NEVER_FLIGHTS`."""
     bx, blt, bw = bank[0], bank[1], bank[2]
     rul_sorted, rul_cum_w, rul_suffix_w, rul_suffix_wr, rul_low = tables
     for p in range(2):
+        if not model.active[p]:
+            r = work[6]
+            r[:] = NEVER_FLIGHTS
+            code, q = _build(
+                r, bw[e, p], model.low_quantile, rul_sorted[e, p], rul_cum_w[e, p],
+                rul_suffix_w[e, p], rul_suffix_wr[e, p],
+            )  # fmt: skip
+            rul_low[e, p] = q
+            if code != 0 and status[e] == 0:
+                status[e] = 3 + code
+            continue
         rul = model.rul_tables[p]
         code, q = _build_from_cloud(
             rul[0], rul[1], rul[2], rul[3], rul[4], model.d_threshold[p], bx[e, p], blt[e, p],

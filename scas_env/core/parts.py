@@ -371,6 +371,8 @@ def reset_filter(batch: ActuatorState, e: int, part: str) -> None:
         a0, s0 = st.params.spring.initial_crack_m, st.params.uncertainty.initial_crack_sigma_m
         x0 = truncated_normal(rng, a0, s0, lower=0.0, upper=st.calibration.spring_failure_depth_m,
                               size=n)  # fmt: skip
+        if not st.scenario.crack_active:  # no crack grows: the world's spring stays at 0
+            x0 = np.zeros(n)
         _reset_cloud(batch, e, p, x0, _lognormal(rng, lognormal_sigma(st.params, part), n))
         a["aux"][e, :, 0::2] = 0.0
         a["aux"][e, :, 1::2] = 1.0
@@ -427,9 +429,11 @@ def _spread_over_life(batch: ActuatorState, e: int) -> None:
     start = model.damage(np.maximum(x, model.grid[0]))
     end = model.damage(np.array([st.calibration.spring_failure_depth_m]))[0]
     used = rng.random(n) * np.maximum(end - start, 0.0)
-    _reset_cloud(batch, e, 0, model.inverse_damage(start + used), theta)
+    if st.scenario.crack_active:  # a fault switched off keeps its part new (as the world)
+        _reset_cloud(batch, e, 0, model.inverse_damage(start + used), theta)
     wear = rng.random(n) * st.calibration.seal_critical_wear_m
-    _reset_cloud(batch, e, 1, wear, np.exp(a["log_theta"][e, 1]))
+    if st.scenario.wear_active:
+        _reset_cloud(batch, e, 1, wear, np.exp(a["log_theta"][e, 1]))
     a["stale"][e] = True
 
 

@@ -201,6 +201,11 @@ class Scenario(Validated):
                     "Scenario.rejuvenation = 'resample_move' moves a static growth multiplier: "
                     f"spring_theta_walk must be 0, got {self.spring_theta_walk}"
                 )
+            if not self.crack_active:
+                raise ValueError(
+                    "Scenario.rejuvenation = 'resample_move' moves the spring crack's "
+                    "parameters: crack_active must be 1, got crack_active = 0"
+                )
 
 
 __all__ = ["FIDELITIES", "INITIAL_HEALTH", "OBS_MODES", "PREFLIGHT", "REJUVENATION", "Scenario"]
