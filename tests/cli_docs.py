@@ -1,4 +1,4 @@
-"""Each command's ``--help`` in docs/cli.md, as a compact table (tests/test_cli.py checks it):
+"""Each command's ``--help`` in docs/cli.md, as a compact list (tests/test_cli.py checks it):
 the console commands and the lab commands of ``experiments/`` that were console commands.
 
 After changing an option or a command's description, rewrite the blocks with::
@@ -7,12 +7,12 @@ After changing an option or a command's description, rewrite the blocks with::
 
 Each command's block sits between ``<!-- help: scas-x -->`` (``<!-- help: python -m
 experiments.x -->``) and ``<!-- /help -->`` in docs/cli.md: the parser's description as it
-prints it (``format_help()`` at a width of 100 columns), then one row per option with the help
+prints it (``format_help()`` at a width of 100 columns), then one item per option with the help
 ``--help`` prints for it (its default included; ``(default: False)`` of a flag left out) and
 the options that exclude each other. An option whose help is one of :data:`SHARED` is only
-named in the block's last row (``a/b``: one or the other); the block between ``<!--
+named in the block's last item (``a/b``: one or the other); the block between ``<!--
 shared-help -->`` and ``<!-- /shared-help -->`` shows :data:`SHARED` (an option whose help
-changes gets its own row again, and the test fails until the page is rewritten).
+changes gets its own item again, and the test fails until the page is rewritten).
 """
 
 from __future__ import annotations
@@ -78,9 +78,14 @@ def _checkout_relative(parser: argparse.ArgumentParser) -> argparse.ArgumentPars
     return parser
 
 
+def _line(text: str) -> str:
+    """``text`` on one line, fit for Markdown (``<`` escaped)."""
+    return " ".join(text.split()).replace("<", "\\<")
+
+
 def _cell(text: str) -> str:
     """``text`` on one line, fit for a table cell."""
-    return " ".join(text.split()).replace("|", "\\|").replace("<", "\\<")
+    return _line(text).replace("|", "\\|")
 
 
 def _option_help(formatter: argparse.HelpFormatter, action: argparse.Action) -> str:
@@ -100,8 +105,8 @@ def _description(parser: argparse.ArgumentParser) -> str:
 
 
 def render(command: str) -> str:
-    """``command --help`` at :data:`WIDTH` columns: its description, then a table of its
-    options (those of :data:`SHARED` named in the last row)."""
+    """``command --help`` at :data:`WIDTH` columns: its description, then a list of its
+    options (those of :data:`SHARED` named in the last item)."""
     old = os.environ.get("COLUMNS")
     os.environ["COLUMNS"] = str(WIDTH)
     try:
@@ -114,7 +119,7 @@ def render(command: str) -> str:
             if SHARED.get(option) == text:
                 shared.append(option.split(",")[0].split()[0])
             else:
-                rows.append(f"| `{option}` | {_cell(text)} |")
+                rows.append(f"- `{option}`: {_line(text)}")
         description = _description(parser)
     finally:
         if old is None:
@@ -124,15 +129,15 @@ def render(command: str) -> str:
     exclusive = []
     for group in parser._mutually_exclusive_groups:
         names = [a.option_strings[0] for a in group._group_actions]
-        if set(names) <= set(shared):  # shown as a/b in the shared row
+        if set(names) <= set(shared):  # shown as a/b in the shared item
             shared = [s for s in shared if s not in names[1:]]
             shared[shared.index(names[0])] = "/".join(names)
         else:
             exclusive.append(" / ".join(f"`{n}`" for n in names))
     if shared:
         names = ", ".join(f"`{s}`" for s in shared)
-        rows.append(f"| {names} | [shared](#options-shared-by-the-commands) |")
-    out = f"```text\n{description}\n```\n\n| option | help |\n|---|---|\n" + "\n".join(rows) + "\n"
+        rows.append(f"- {names}: [shared](#shared-options)")
+    out = f"```text\n{description}\n```\n\n" + "\n".join(rows) + "\n"
     if exclusive:
         out += "\nExclusive: " + "; ".join(exclusive) + ".\n"
     return out
