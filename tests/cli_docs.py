@@ -1,13 +1,18 @@
-"""Each command's ``--help`` in docs/cli.md, verbatim (tests/test_cli.py checks it): the
-console commands and the lab commands of ``experiments/`` that were console commands.
+"""Each command's ``--help`` in docs/cli.md, as a compact list (tests/test_cli.py checks it):
+the console commands and the lab commands of ``experiments/`` that were console commands.
 
 After changing an option or a command's description, rewrite the blocks with::
 
     python -m tests.cli_docs
 
 Each command's block sits between ``<!-- help: scas-x -->`` (``<!-- help: python -m
-experiments.x -->``) and ``<!-- /help -->`` in docs/cli.md; the text is the parser's
-``format_help()`` at a width of 100 columns.
+experiments.x -->``) and ``<!-- /help -->`` in docs/cli.md: the parser's description as it
+prints it (``format_help()`` at a width of 100 columns), then one item per option with the help
+``--help`` prints for it (its default included; ``(default: False)`` of a flag left out) and
+the options that exclude each other. An option whose help is one of :data:`SHARED` is only
+named in the block's last item (``a/b``: one or the other); the block between ``<!--
+shared-help -->`` and ``<!-- /shared-help -->`` shows :data:`SHARED` (an option whose help
+changes gets its own item again, and the test fails until the page is rewritten).
 """
 
 from __future__ import annotations
@@ -22,6 +27,7 @@ ROOT = Path(__file__).resolve().parents[1]
 DOC = ROOT / "docs" / "cli.md"
 WIDTH = 100
 BLOCK = re.compile(r"(<!-- help: (?P<name>[\w .-]+?) -->\n)(?P<body>.*?)(<!-- /help -->)", re.S)
+SHARED_BLOCK = re.compile(r"(<!-- shared-help -->\n)(.*?)(<!-- /shared-help -->)", re.S)
 #: the lab commands (``python -m experiments.<name>``) whose help docs/cli.md shows: the
 #: paper's reproduction, campaigns, figures and demo, and the builders of the shipped data
 EXPERIMENTS = (
@@ -32,6 +38,19 @@ EXPERIMENTS = (
     "build.surrogate",
     "build.calibration",
 )
+#: options several commands share, with the help they print (shown once on the page)
+SHARED = {
+    "-h, --help": "show this help message and exit",
+    "-v, --verbose": "also show debug messages",
+    "-q, --quiet": "show only warnings and errors",
+    "--overwrite": "replace an existing --out",
+    "--params FILE": "actuator design (ScasParams groups such as [spring], or a [params] table). "
+    "Default: the built-in ScasParams()",
+    "--scenario FILE": "episode settings (Scenario fields, or a [scenario] table; a [costs] table "
+    "in the same file sets the cost model too). Default: the built-in Scenario()",
+    "--costs FILE": "cost model (CostModel fields, or a [costs] table); replaces a [costs] table "
+    "of --scenario. Default: the built-in CostModel()",
+}
 
 
 def parsers() -> dict:
@@ -59,18 +78,75 @@ def _checkout_relative(parser: argparse.ArgumentParser) -> argparse.ArgumentPars
     return parser
 
 
+def _line(text: str) -> str:
+    """``text`` on one line, fit for Markdown (``<`` escaped)."""
+    return " ".join(text.split()).replace("<", "\\<")
+
+
+def _cell(text: str) -> str:
+    """``text`` on one line, fit for a table cell."""
+    return _line(text).replace("|", "\\|")
+
+
+def _option_help(formatter: argparse.HelpFormatter, action: argparse.Action) -> str:
+    """The help ``--help`` prints for ``action`` on one line, without a flag's
+    ``(default: False)``."""
+    text = " ".join(formatter._expand_help(action).split()) if action.help else ""
+    if action.nargs == 0 and action.default is False:
+        text = text.removesuffix(" (default: False)")
+    return text
+
+
+def _description(parser: argparse.ArgumentParser) -> str:
+    """The description as ``--help`` prints it (line breaks kept)."""
+    formatter = parser._get_formatter()
+    formatter.add_text(parser.description)
+    return formatter.format_help().strip("\n")
+
+
 def render(command: str) -> str:
-    """``command --help`` at :data:`WIDTH` columns, as a fenced block."""
+    """``command --help`` at :data:`WIDTH` columns: its description, then a list of its
+    options (those of :data:`SHARED` named in the last item)."""
     old = os.environ.get("COLUMNS")
     os.environ["COLUMNS"] = str(WIDTH)
     try:
-        text = _checkout_relative(parsers()[command]()).format_help()
+        parser = _checkout_relative(parsers()[command]())
+        formatter = parser._get_formatter()
+        rows, shared = [], []
+        for action in parser._actions:
+            option = formatter._format_action_invocation(action)
+            text = _option_help(formatter, action)
+            if SHARED.get(option) == text:
+                shared.append(option.split(",")[0].split()[0])
+            else:
+                rows.append(f"- `{option}`: {_line(text)}")
+        description = _description(parser)
     finally:
         if old is None:
             del os.environ["COLUMNS"]
         else:
             os.environ["COLUMNS"] = old
-    return f"```text\n{text.rstrip()}\n```\n"
+    exclusive = []
+    for group in parser._mutually_exclusive_groups:
+        names = [a.option_strings[0] for a in group._group_actions]
+        if set(names) <= set(shared):  # shown as a/b in the shared item
+            shared = [s for s in shared if s not in names[1:]]
+            shared[shared.index(names[0])] = "/".join(names)
+        else:
+            exclusive.append(" / ".join(f"`{n}`" for n in names))
+    if shared:
+        names = ", ".join(f"`{s}`" for s in shared)
+        rows.append(f"- {names}: [shared](#shared-options)")
+    out = f"```text\n{description}\n```\n\n" + "\n".join(rows) + "\n"
+    if exclusive:
+        out += "\nExclusive: " + "; ".join(exclusive) + ".\n"
+    return out
+
+
+def render_shared() -> str:
+    """The table of :data:`SHARED`."""
+    rows = "\n".join(f"| `{option}` | {_cell(text)} |" for option, text in SHARED.items())
+    return f"| option | help |\n|---|---|\n{rows}\n"
 
 
 def blocks(text: str) -> dict[str, str]:
@@ -80,6 +156,7 @@ def blocks(text: str) -> dict[str, str]:
 
 def rewrite(text: str) -> str:
     """``text`` with every help block replaced by the command's current help."""
+    text = SHARED_BLOCK.sub(lambda m: m.group(1) + render_shared() + m.group(3), text)
     return BLOCK.sub(lambda m: m.group(1) + render(m["name"]) + m.group(4), text)
 
 
@@ -88,6 +165,9 @@ def main() -> int:
     missing = sorted(set(parsers()) - set(blocks(text)))
     if missing:
         print(f"{DOC}: no help block for {missing}", file=sys.stderr)
+        return 1
+    if not SHARED_BLOCK.search(text):
+        print(f"{DOC}: no shared-help block", file=sys.stderr)
         return 1
     DOC.write_text(rewrite(text))
     print(f"wrote {DOC}")
