@@ -1,6 +1,6 @@
 """Wall time of MaskablePPO on a decision-epoch setup, split into rollouts and updates.
 
-Where the training time goes (docs/rl.md, "Decision epochs on the native vector env")::
+Where the training time goes (docs/rl.md, "Natively batched, through SB3")::
 
     python -m experiments.epoch_training_split --setup epochs-native-64 \
         --init results/agent_v2g1/clone
