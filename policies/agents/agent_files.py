@@ -49,9 +49,12 @@ __all__ = [
     "read_json_file",
     "read_sb3_policy",
     "read_weights",
+    "read_zip",
     "require_contrib",
     "weights_sha256",
     "zip_data",
+    "zip_policy_class",
+    "zip_tensors",
 ]
 
 #: the ``format`` entry of a normalisation file (with ``version``)
@@ -296,10 +299,10 @@ def zip_data(path: Path) -> dict[str, Any]:
     """The JSON ``data`` member of an SB3 zip, checking every member's CRC first (a
     truncated or corrupted file raises ``ValueError`` naming it). Parsing JSON runs no code;
     the cloudpickled entries in it stay base64 text."""
-    return _read_zip(path)[0]
+    return read_zip(path)[0]
 
 
-def _read_zip(path: Path) -> tuple[dict[str, Any], bytes]:
+def read_zip(path: Path) -> tuple[dict[str, Any], bytes]:
     """``(data, policy.pth bytes)`` of an SB3 zip."""
     try:
         with zipfile.ZipFile(path) as zf:
@@ -333,10 +336,12 @@ def read_weights(path: str | Path) -> dict[str, Any]:
     """The tensors of an SB3 zip's ``policy.pth`` (``torch.load(weights_only=True)``: tensors
     and plain containers only); ``ValueError`` naming the file if it is not such a file."""
     path = Path(path)
-    return _tensors(path, _read_zip(path)[1])
+    return zip_tensors(path, read_zip(path)[1])
 
 
-def _tensors(path: Path, blob: bytes) -> dict[str, Any]:
+def zip_tensors(path: Path, blob: bytes) -> dict[str, Any]:
+    """The tensors of a zip's ``policy.pth`` bytes, loaded with ``weights_only=True`` (no
+    code runs); a malformed blob raises ``ValueError`` naming ``path``."""
     import torch
 
     try:
@@ -359,7 +364,7 @@ def _tensors(path: Path, blob: bytes) -> dict[str, Any]:
 def weights_sha256(path: str | Path) -> str:
     """SHA-256 of the ``policy.pth`` member of an SB3 zip (what an agent's metadata records
     as ``weights_sha256``: a copy with changed weights is refused)."""
-    return hashlib.sha256(_read_zip(Path(path))[1]).hexdigest()
+    return hashlib.sha256(read_zip(Path(path))[1]).hexdigest()
 
 
 def _space_shapes(path: Path, data: Mapping[str, Any]) -> tuple[tuple[int, ...], int | None]:
@@ -416,7 +421,7 @@ def require_contrib(purpose: str) -> ModuleType:
         ) from exc
 
 
-def _policy_class(path: Path, data: Mapping[str, Any]) -> type:
+def zip_policy_class(path: Path, data: Mapping[str, Any]) -> type:
     """The policy class the zip names, looked up by module and name in
     :data:`POLICY_PACKAGES` (never unpickled); :class:`NeedsPickle` otherwise."""
     from stable_baselines3.common.policies import BasePolicy
@@ -489,13 +494,13 @@ def read_sb3_policy(
     import gymnasium as gym
 
     path = Path(path)
-    data, blob = _read_zip(path)
+    data, blob = read_zip(path)
     check_spaces(path, data, obs_size, n_actions, env)
-    cls = _policy_class(path, data)
+    cls = zip_policy_class(path, data)
     kwargs = data.get("policy_kwargs", {})
     if not isinstance(kwargs, dict) or ":serialized:" in kwargs:
         raise NeedsPickle("its network's keywords (policy_kwargs) are pickled Python objects")
-    state = _tensors(path, blob)
+    state = zip_tensors(path, blob)
     obs_space = gym.spaces.Box(-np.inf, np.inf, shape=(obs_size,), dtype=np.float32)
     action_space = gym.spaces.Discrete(n_actions)
     extra: dict[str, Any] = {}

@@ -44,7 +44,10 @@ from policies.agents.agent_files import (
     NeedsPickle,
     ObsNormalization,
     read_json_file,
+    read_zip,
     weights_sha256,
+    zip_policy_class,
+    zip_tensors,
 )
 from policies.agents.fleet.masks import FleetObsLayout
 from policies.agents.sb3_agents import DATA_DIR, check_manifest
@@ -165,9 +168,7 @@ def read_fleet_policy(path: Path, obs_size: int, nvec: np.ndarray) -> LoadedMode
     ``MultiDiscrete(nvec)`` action, rebuilt without unpickling (module docstring)."""
     import gymnasium as gym
 
-    from policies.agents.agent_files import _policy_class, _read_zip, _tensors
-
-    data, blob = _read_zip(path)
+    data, blob = read_zip(path)
     action = data.get("action_space")
     got = _ints(action.get("nvec") if isinstance(action, dict) else None)
     obs = data.get("observation_space")
@@ -179,13 +180,13 @@ def read_fleet_policy(path: Path, obs_size: int, nvec: np.ndarray) -> LoadedMode
             "fleet"
         )
     try:
-        cls = _policy_class(path, data)
+        cls = zip_policy_class(path, data)
     except NeedsPickle as exc:
         raise ValueError(f"{path}: cannot be read without unpickling: {exc}") from None
     kwargs = data.get("policy_kwargs", {})
     if not isinstance(kwargs, dict) or ":serialized:" in kwargs:
         raise ValueError(f"{path}: its network's keywords are pickled Python objects")
-    state = _tensors(path, blob)
+    state = zip_tensors(path, blob)
     obs_space = gym.spaces.Box(-np.inf, np.inf, shape=(obs_size,), dtype=np.float32)
     action_space = gym.spaces.MultiDiscrete(np.asarray(nvec, dtype=np.int64))
     try:
