@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import functools
 import math
+import signal
 import struct
 import sys
 
@@ -84,9 +85,11 @@ def test_ray_matches_one_local_worker(ray_instance, tmp_path):
 def test_ray_local_address_starts_and_shuts_down_its_own_instance(tmp_path):
     if ray.is_initialized():
         ray.shutdown()
+    before = signal.getsignal(signal.SIGTERM)
     try:
         result = run_benchmark(SPECS, ray_address="local", **TINY)
         assert not ray.is_initialized()
+        assert signal.getsignal(signal.SIGTERM) is before  # Ray's handler not left behind
     finally:
         if ray.is_initialized():
             ray.shutdown()

@@ -20,6 +20,7 @@ COMMANDS = (
     "build.calibration",
     "build.mission_types",
     "build.surrogate",
+    "cross_error",
     "damage_scatter",
     "dashboard_animation",
     "dashboard_speed",
@@ -129,6 +130,10 @@ def test_small_runs_of_the_commands(tmp_path, capsys) -> None:
     assert (tmp_path / "c.json").is_file()
     assert reference_posterior.main(["--synthetic", "2", "--log2-points", "6", "--min-ess",
                                      "10", "--no-progress"]) == 0  # fmt: skip
+    from experiments import cross_error
+
+    assert cross_error.main(["--episodes", "1", "--scenario", '{"episode_slots": 200}',
+                             "--no-progress"]) == 0  # fmt: skip
     assert prognostics_speed.main(["--particles", "50", "--calls", "3"]) == 0
     assert renewal.main(["--lives", "3", "--episodes", "2", "--warmup", "40", "--window", "40",
                          "--out", str(tmp_path / "r.json")]) == 0  # fmt: skip

@@ -152,12 +152,22 @@ def test_workers_end_with_their_parent_even_on_sigkill(tmp_path: Path) -> None:
 
 # --- the mechanisms, in this process -----------------------------------------------------
 
-#: the in-process tests send SIGTERM to this process: only where the handler takes it
-needs_sigterm_default = pytest.mark.skipif(
-    threading.current_thread() is not threading.main_thread()
-    or signal.getsignal(signal.SIGTERM) is not signal.SIG_DFL,
-    reason="SIGTERM is handled by the test runner here",
-)
+
+@pytest.fixture
+def default_sigterm():
+    """The in-process tests send SIGTERM to this process: SIGTERM's default disposition for
+    the test's duration, whatever an earlier test in this worker installed (Ray installs its
+    own handler when it starts), the previous handler restored after."""
+    if threading.current_thread() is not threading.main_thread():
+        pytest.skip("signal handlers are set in the main thread only")
+    previous = signal.signal(signal.SIGTERM, signal.SIG_DFL)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, previous)
+
+
+needs_sigterm_default = pytest.mark.usefixtures("default_sigterm")
 
 
 @needs_sigterm_default

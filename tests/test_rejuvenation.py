@@ -328,3 +328,27 @@ def test_history_growth_changes_no_number(monkeypatch) -> None:
 def test_bad_options_are_refused(fields: dict, match: str) -> None:
     with pytest.raises(ValueError, match=match):
         Scenario(**fields)
+
+
+def _spring_history(slots: int, **fields: object) -> np.ndarray:
+    """Row 0's spring history after ``slots`` slots of ``test10`` (seed 9)."""
+    env = ScasMaintenanceEnv(**ON, n_particles=50, **fields)
+    env.reset(seed=9)
+    for t in range(slots):
+        env.step(policy_action("test10", t))
+    return env.batch.a["history"][0, : env.batch.a["history_n"][0]].copy()
+
+
+def test_the_cross_variance_inflation_multiplies_the_other_parts_variance() -> None:
+    """Up to the first spring datum whose seal estimate has a variance, the episode is the
+    default's; that datum's variance term is the default's times ``cross_variance_inflation``
+    (everything else the same); refused below 1."""
+    base = _spring_history(60)
+    inflated = _spring_history(60, cross_variance_inflation=50.0)
+    q = int(np.flatnonzero(base[:, H_EXTRA] > 0.0)[0])
+    np.testing.assert_array_equal(base[:q], inflated[:q])
+    assert inflated[q, H_EXTRA] == pytest.approx(50.0 * base[q, H_EXTRA], rel=1e-14)
+    keep = [c for c in range(base.shape[1]) if c != H_EXTRA]
+    np.testing.assert_array_equal(base[q, keep], inflated[q, keep])
+    with pytest.raises(ValueError, match=r"cross_variance_inflation = 0\.5"):
+        Scenario(cross_variance_inflation=0.5)

@@ -27,6 +27,8 @@ of a part (failure or preventive replacement) and every part still fitted at the
 from __future__ import annotations
 
 import importlib
+import signal
+import threading
 import time
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field, replace
@@ -263,6 +265,8 @@ def _map_ray(
             "or leave ray_address unset to run on local worker processes"
         ) from exc
     owner = not ray.is_initialized()
+    # ray.init installs its own SIGTERM handler and ray.shutdown leaves it: ours comes back
+    handler = signal.getsignal(signal.SIGTERM)
     if owner:
         options: dict[str, Any] = {}
         if address == "local":
@@ -290,6 +294,8 @@ def _map_ray(
     finally:
         if owner:
             ray.shutdown()
+            if threading.current_thread() is threading.main_thread() and handler is not None:
+                signal.signal(signal.SIGTERM, handler)
     return [r for chunk in done for r in chunk]
 
 

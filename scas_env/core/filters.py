@@ -80,7 +80,9 @@ class FilterModel(NamedTuple):
     bandwidth h, kernel variance kappa, gaussian kernel, shrink); ``move``: the spring
     filter's resample-move (:mod:`scas_env.core.rejuvenation`): (on, Metropolis-Hastings
     steps per particle, the prior's initial crack depth mean, sd and upper bound (m), the
-    prior sd of log theta, the random-walk scale).
+    prior sd of log theta, the random-walk scale); ``cross_inflation``: the factor on the
+    variance the other part's estimate adds to a feature's likelihood
+    (``Scenario.cross_variance_inflation``).
     """
 
     process: tuple
@@ -101,6 +103,7 @@ class FilterModel(NamedTuple):
     ground_own: tuple
     ground_other: tuple
     move: tuple
+    cross_inflation: float
 
 
 @njit(cache=True)
@@ -253,9 +256,10 @@ def _effect_update(e: int, p: int, k: int, y: float, m: float, moments: tuple,
     cross = effect_at(st, g_own, g_other, own, other, 0.0) - effect_at(
         st, g_own, g_other, own, 0.0, 0.0
     )
+    extra_var = slope * slope * other_var * model.cross_inflation
     shift = effect_likelihood(
         y, m, bx[e, p], bw[e, p], model.critical[p], st, g_own, g_other, other,
-        model.noise_scale, slope * slope * other_var, z_mean, z_var, log_lik, work,
+        model.noise_scale, extra_var, z_mean, z_var, log_lik, work,
     )  # fmt: skip
     for i in range(log_lik.size):
         if not math.isfinite(log_lik[i]):
@@ -263,7 +267,7 @@ def _effect_update(e: int, p: int, k: int, y: float, m: float, moments: tuple,
             return y - shift - cross
     if p == 0 and model.move[0]:
         j, tj = cell_of(g_other, other)
-        record_datum(e, table, k, y, m, j, tj, slope * slope * other_var, log_lik, bank)
+        record_datum(e, table, k, y, m, j, tj, extra_var, log_lik, bank)
     n_eff = _add_log_likelihood(blw[e, p], bw[e, p], log_lik)
     if not _resampled(n_eff, e, p, bank, work, model, handle):
         status[e] = 3

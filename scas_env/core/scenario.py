@@ -166,6 +166,16 @@ class Scenario(Validated):
         source="random walk of the spring filter's log theta (std per sqrt(flight); 0: none, "
         "the growth multiplier is static; docs/beliefs.md)",
     )
+    cross_variance_inflation: float = param(
+        1.0,
+        "-",
+        lo=1.0,
+        hi=1000.0,
+        source="factor on the variance the other part's estimate adds to each feature's "
+        "likelihood in the monitor's filters; 1: that estimate's error independent from datum "
+        "to datum; (1 + rho) / (1 - rho) for an error correlated rho between consecutive data "
+        "(docs/beliefs.md)",
+    )
     rejuvenation_steps: float = param(
         1,
         "MH steps",

@@ -427,6 +427,7 @@ def _filter_model(
         ground_own=tuple(tables[f][1] for f in GROUND_FEATURES),
         ground_other=tuple(tables[f][2] for f in GROUND_FEATURES),
         move=_move_model(params, s, cal),
+        cross_inflation=float(s.cross_variance_inflation),
     )
 
 
