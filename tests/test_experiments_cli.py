@@ -45,6 +45,7 @@ COMMANDS = (
     "sb3_speed",
     "sensing_sweep",
     "spring_cloud",
+    "value_pairs",
 )
 #: library modules of the experiments (no command line of their own)
 LIBRARIES = (
