@@ -15,18 +15,21 @@ from scas_env.core.setup import PARTS
 from scas_env.utils.results_folder import results_folder
 
 
-def format_stages(result: StudyResult, truth: str = "info") -> str:
-    """A text table: coverage, undercut and sd log ratio per preset, policy, part and stage."""
+def format_stages(result: StudyResult, truth: str = "info", by: str = "stage") -> str:
+    """A text table: coverage, undercut and sd log ratio per preset, policy, part and stage
+    (``by="age"``: per fixed part age, flights)."""
+    tables = result.stages if by == "stage" else result.ages
     lines = [
-        f"{'preset':8s} {'policy':7s} {'part':6s} {'stage':>5s} {'lives':>5s} "
+        f"{'preset':8s} {'policy':7s} {'part':6s} {by:>5s} {'lives':>5s} "
         f"{'coverage [95% CI]':>22s} {'undercut [95% CI]':>22s} {'sd_log':>7s} {'bias':>6s}"
     ]
-    for (preset, policy, part), rows in result.stages.items():
+    for (preset, policy, part), rows in tables.items():
         for r in rows:
             if r["truth"] != truth:
                 continue
+            at = f"{float(r['stage']):5.2f}" if by == "stage" else f"{int(r['age']):5d}"
             lines.append(
-                f"{preset:8s} {policy:7s} {part:6s} {float(r['stage']):5.2f} {int(r['lives']):5d} "
+                f"{preset:8s} {policy:7s} {part:6s} {at} {int(r['lives']):5d} "
                 f"{float(r['coverage']):6.3f} [{float(r['coverage_ci_low']):.3f}, "
                 f"{float(r['coverage_ci_high']):.3f}] "
                 f"{float(r['undercut']):6.3f} [{float(r['undercut_ci_low']):.3f}, "
@@ -72,17 +75,22 @@ def write_csv(path: Path, rows: list[dict]) -> None:
 
 
 def write_study(result: StudyResult, out: str | Path, *, overwrite: bool = False) -> list[Path]:
-    """``stages.csv``, ``reliability.csv``, ``lives.csv`` (per-life rows, for paired
-    comparisons), ``study.json``, ``coverage.png`` and ``reliability.png`` in the results
-    folder ``out`` (written atomically)."""
+    """``stages.csv``, ``ages.csv`` (fixed part ages), ``reliability.csv``, ``lives.csv``
+    (per-life rows, for paired comparisons), ``study.json``, ``coverage.png`` and
+    ``reliability.png`` in the results folder ``out`` (written atomically)."""
     names = [
-        "stages.csv", "reliability.csv", "lives.csv", "study.json", "coverage.png",
+        "stages.csv", "ages.csv", "reliability.csv", "lives.csv", "study.json", "coverage.png",
         "reliability.png",
     ]  # fmt: skip
     seeds = {"first": result.config["seed"], "episodes": result.config["episodes"]}
     with results_folder(out, config=result.config, seeds=seeds, overwrite=overwrite) as tmp:
         stages, rel = _flat(result.stages), _flat(result.reliability)
         write_csv(tmp / "stages.csv", stages)
+        ages = _flat(result.ages)
+        if ages:
+            write_csv(tmp / "ages.csv", ages)
+        else:  # a study built without them
+            (tmp / "ages.csv").write_text("")
         write_csv(tmp / "reliability.csv", rel)
         lives = _flat(result.lives)
         if lives:
@@ -90,7 +98,10 @@ def write_study(result: StudyResult, out: str | Path, *, overwrite: bool = False
         else:  # no life reached a stage: the header only
             (tmp / "lives.csv").write_text(",".join(LIFE_COLUMNS) + "\n")
         (tmp / "study.json").write_text(
-            json.dumps({"config": result.config, "stages": stages, "reliability": rel}, indent=1)
+            json.dumps(
+                {"config": result.config, "stages": stages, "ages": ages, "reliability": rel},
+                indent=1,
+            )
             + "\n"
         )
         _plot_coverage(result, tmp / "coverage.png")
