@@ -27,6 +27,10 @@ record at the first age >= stage x L gives, over lives:
   0.8 of life);
 * with the Wilson 95 % interval of each share (scipy.stats.binomtest).
 
+The same at fixed part ages (:data:`AGES`, :func:`age_rows`; lives alive there): a stage
+defined by the true life selects records by the truth, so even an exact posterior need not
+score the nominal rates there; at a fixed age it does.
+
 Reliability of the risk output ``P(fail within risk_horizon_flights)``: records (one per life
 and age) are binned by their predicted risk; per bin the mean prediction against the observed
 frequency of a failure within the horizon, with its Wilson interval (target: within +- 0.05),
