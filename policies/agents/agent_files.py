@@ -45,6 +45,7 @@ __all__ = [
     "LoadedModel",
     "NeedsPickle",
     "ObsNormalization",
+    "build_policy",
     "convert_vecnormalize",
     "read_json_file",
     "read_sb3_policy",
@@ -496,13 +497,22 @@ def read_sb3_policy(
     path = Path(path)
     data, blob = read_zip(path)
     check_spaces(path, data, obs_size, n_actions, env)
+    obs_space = gym.spaces.Box(-np.inf, np.inf, shape=(obs_size,), dtype=np.float32)
+    return build_policy(path, data, blob, obs_space, gym.spaces.Discrete(n_actions)), data
+
+
+def build_policy(
+    path: Path, data: Mapping[str, Any], blob: bytes, obs_space: Any, action_space: Any
+) -> LoadedModel:
+    """The network a zip's ``data`` names for these spaces, with the tensors of ``blob``
+    (its ``policy.pth``), in evaluation mode; nothing is unpickled. Raises
+    :class:`NeedsPickle` if the network needs pickled objects, ``ValueError`` naming
+    ``path`` if its keywords do not build it or its tensors do not fit or are not finite."""
     cls = zip_policy_class(path, data)
     kwargs = data.get("policy_kwargs", {})
     if not isinstance(kwargs, dict) or ":serialized:" in kwargs:
         raise NeedsPickle("its network's keywords (policy_kwargs) are pickled Python objects")
     state = zip_tensors(path, blob)
-    obs_space = gym.spaces.Box(-np.inf, np.inf, shape=(obs_size,), dtype=np.float32)
-    action_space = gym.spaces.Discrete(n_actions)
     extra: dict[str, Any] = {}
     if "use_sde" in inspect.signature(cls.__init__).parameters:
         extra["use_sde"] = bool(data.get("use_sde", False))
@@ -522,4 +532,4 @@ def read_sb3_policy(
     if not all(bool(t.isfinite().all()) for t in state.values() if t.is_floating_point()):
         raise ValueError(f"{path}: the policy has non-finite parameters (corrupted)")
     policy.set_training_mode(False)
-    return LoadedModel(policy, kwargs, path), data
+    return LoadedModel(policy, kwargs, path)

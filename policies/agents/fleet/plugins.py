@@ -43,11 +43,10 @@ from policies.agents.agent_files import (
     LoadedModel,
     NeedsPickle,
     ObsNormalization,
+    build_policy,
     read_json_file,
     read_zip,
     weights_sha256,
-    zip_policy_class,
-    zip_tensors,
 )
 from policies.agents.fleet.masks import FleetObsLayout
 from policies.agents.sb3_agents import DATA_DIR, check_manifest
@@ -179,28 +178,12 @@ def read_fleet_policy(path: Path, obs_size: int, nvec: np.ndarray) -> LoadedMode
             f"gives ({obs_size},) and needs {[int(v) for v in nvec]}: it was made for another "
             "fleet"
         )
-    try:
-        cls = zip_policy_class(path, data)
-    except NeedsPickle as exc:
-        raise ValueError(f"{path}: cannot be read without unpickling: {exc}") from None
-    kwargs = data.get("policy_kwargs", {})
-    if not isinstance(kwargs, dict) or ":serialized:" in kwargs:
-        raise ValueError(f"{path}: its network's keywords are pickled Python objects")
-    state = zip_tensors(path, blob)
     obs_space = gym.spaces.Box(-np.inf, np.inf, shape=(obs_size,), dtype=np.float32)
     action_space = gym.spaces.MultiDiscrete(np.asarray(nvec, dtype=np.int64))
     try:
-        policy = cls(obs_space, action_space, lambda _: 0.0, **kwargs)
-        policy.load_state_dict(state)
-    except (TypeError, RuntimeError) as exc:
-        first = str(exc).splitlines()[0]
-        raise ValueError(
-            f"{path}: its weights do not fit the network it describes: {first}"
-        ) from None
-    if not all(bool(t.isfinite().all()) for t in state.values() if t.is_floating_point()):
-        raise ValueError(f"{path}: the policy has non-finite parameters (corrupted)")
-    policy.set_training_mode(False)
-    return LoadedModel(policy, kwargs, path)
+        return build_policy(path, data, blob, obs_space, action_space)
+    except NeedsPickle as exc:
+        raise ValueError(f"{path}: cannot be read without unpickling: {exc}") from None
 
 
 def load_fleet_agent(
