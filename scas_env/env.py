@@ -188,6 +188,9 @@ class ScasMaintenanceEnv(gym.Env):
     growth, scatter or sensing constants than the monitor's filters assume (default: none);
     ``world_surrogate=SurrogateModel(...)`` draws the world's features from another feature
     surrogate than the monitor's ``surrogate`` (e.g. one built at another fluid temperature).
+    Estimator options of the monitor (off by default; docs/beliefs.md):
+    ``rejuvenation="resample_move"`` and ``cross_variance_inflation=50`` bring the spring's
+    RUL intervals to exact Bayes on the same data.
 
     ## Vectorised
 
@@ -206,7 +209,8 @@ class ScasMaintenanceEnv(gym.Env):
 
     * v2: the current version (in-flight features I8 and I9 that see the faults and feed
       the filters, the pre-flight test as an airworthiness limit, each part's life fixed at
-      fitting, the whole-flight growth scatter; both fidelities).
+      fitting, the whole-flight growth scatter; both fidelities). Unreleased fix: a fault
+      switched off (``crack_active`` or ``wear_active`` 0) is known to the monitor.
     * v0 and v1 are retired (CHANGELOG.md).
 
     ## Example
