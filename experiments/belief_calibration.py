@@ -296,13 +296,17 @@ def _belief_rows(
 def _first_at_age(table: dict[str, np.ndarray], age: int) -> np.ndarray:
     """Index of the first record of each life at or past ``age`` flights, for lives alive
     there (their life longer than ``age``)."""
-    at = np.flatnonzero((table["age"] >= age) & (table["life_length"] > age))
-    return at[np.unique(table["life"][at], return_index=True)[1]] if at.size else at
+    return _first_of_each_life(table, (table["age"] >= age) & (table["life_length"] > age))
 
 
 def _first_at(table: dict[str, np.ndarray], stage: float) -> np.ndarray:
     """Index of the first record of each life at or past ``stage`` of its life."""
-    at = np.flatnonzero(table["stage"] >= stage)
+    return _first_of_each_life(table, table["stage"] >= stage)
+
+
+def _first_of_each_life(table: dict[str, np.ndarray], mask: np.ndarray) -> np.ndarray:
+    """Index of each life's first record where ``mask`` holds."""
+    at = np.flatnonzero(mask)
     return at[np.unique(table["life"][at], return_index=True)[1]] if at.size else at
 
 

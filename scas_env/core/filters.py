@@ -366,23 +366,19 @@ def refresh_row(e: int, bank: tuple, tables: tuple, status: np.ndarray, work: tu
     bx, blt, bw = bank[0], bank[1], bank[2]
     rul_sorted, rul_cum_w, rul_suffix_w, rul_suffix_wr, rul_low = tables
     for p in range(2):
-        if not model.active[p]:
-            r = work[6]
-            r[:] = NEVER_FLIGHTS
+        if model.active[p]:
+            rul = model.rul_tables[p]
+            code, q = _build_from_cloud(
+                rul[0], rul[1], rul[2], rul[3], rul[4], model.d_threshold[p], bx[e, p],
+                blt[e, p], bw[e, p], model.low_quantile, work[6], rul_sorted[e, p],
+                rul_cum_w[e, p], rul_suffix_w[e, p], rul_suffix_wr[e, p],
+            )  # fmt: skip
+        else:
+            work[6][:] = NEVER_FLIGHTS
             code, q = _build(
-                r, bw[e, p], model.low_quantile, rul_sorted[e, p], rul_cum_w[e, p],
+                work[6], bw[e, p], model.low_quantile, rul_sorted[e, p], rul_cum_w[e, p],
                 rul_suffix_w[e, p], rul_suffix_wr[e, p],
             )  # fmt: skip
-            rul_low[e, p] = q
-            if code != 0 and status[e] == 0:
-                status[e] = 3 + code
-            continue
-        rul = model.rul_tables[p]
-        code, q = _build_from_cloud(
-            rul[0], rul[1], rul[2], rul[3], rul[4], model.d_threshold[p], bx[e, p], blt[e, p],
-            bw[e, p], model.low_quantile, work[6], rul_sorted[e, p], rul_cum_w[e, p],
-            rul_suffix_w[e, p], rul_suffix_wr[e, p],
-        )  # fmt: skip
         rul_low[e, p] = q
         if code != 0 and status[e] == 0:
             status[e] = 3 + code
