@@ -15,7 +15,16 @@ a row does not depend on its batch. One results row per episode (:data:`FLEET_RO
   per part (preventive: failures and background swaps left out), tests, stock-outs (all
   kinds), job-days waited, jobs still waiting, crew
   utilisation; rates per 1000 FH; ``wasted_life`` (mean true life thrown away by a
-  preventive replacement, flights).
+  preventive replacement, flights);
+* beliefs at decision time (a ``features+rul`` observation): the ``prog_*`` sums of
+  :func:`policies.benchmark.runner.decision_columns`, scored as the single-actuator runner
+  scores them, from the fleet's :mod:`scas_env.core.fleet.log`: every preventive
+  replacement (the latest belief before the job) and every pre-flight test (the belief the
+  test updated) against the truth at that moment.
+
+Each episode also gives its removal events (the log's failure, preventive and background
+records, then every part still fitted as ``censored``; ``age_flights`` includes the age a
+part had when the episode began, ``entry_age_flights``), for ``events.csv``.
 """
 
 from __future__ import annotations
@@ -26,6 +35,8 @@ from typing import Any
 
 import numpy as np
 
+from policies.benchmark.runner import decision_columns, decision_scores
+from scas_env.core.fleet.log import REMOVAL_KINDS
 from scas_env.core.setup import PARTS
 
 #: the per-episode columns of a fleet results row, besides policy, episode and seed
@@ -54,7 +65,10 @@ FLEET_ROW = (
     "jobs_waiting",
     "crew_utilisation",
     "wasted_life",
+    *decision_columns(),
 )
+#: the columns of a fleet's removal event (events.csv, besides policy and episode)
+EVENT_FIELDS = ("day", "aircraft", "actuator", "part", "kind", "age_flights", "entry_age_flights")
 
 
 def run_fleet_episodes(
@@ -67,9 +81,9 @@ def run_fleet_episodes(
 
     ``venv`` is a fleet vector env with ``len(seeds)`` fleets; the policy follows the
     project's protocol (``predict`` on a batch, ``reset(seed=[...])`` if it has one).
-    Returns, per episode, ``{"row": results row, "events": []}`` (fleets record no removal
-    events, the rows carry the counts) and, for the episodes ``record`` marks, ``"trace"``:
-    its :func:`day_record` of every day."""
+    Returns, per episode, ``{"row": results row, "events": removal events}`` (module
+    docstring) and, for the episodes ``record`` marks, ``"trace"``: its :func:`day_record`
+    of every day."""
     n = len(seeds)
     if venv.num_envs != n:
         raise ValueError(f"the vector env has {venv.num_envs} fleets for {n} seeds")
@@ -94,12 +108,39 @@ def run_fleet_episodes(
             break
         if done.any():
             raise RuntimeError("episodes of one batch must end together (same episode_days)")
-    out: list[dict[str, Any]] = [
-        {"row": fleet_row(info, e, float(reward[e])), "events": []} for e in range(n)
-    ]
+    fleet = venv.unwrapped.fleet
+    beliefs = venv.unwrapped.view.obs_mode == "features+rul"
+    cap = float(fleet.setup.scenario.rul_cap_flights)
+    out: list[dict[str, Any]] = []
+    for e in range(n):
+        log = fleet.episode_log(e)
+        row = fleet_row(info, e, float(reward[e]))
+        row.update(log_scores(log, cap) if beliefs else dict.fromkeys(decision_columns(), 0.0))
+        kept = (*REMOVAL_KINDS, "censored")
+        events = [{k: r[k] for k in EVENT_FIELDS} for r in log if r["kind"] in kept]
+        out.append({"row": row, "events": events})
     for e in recorded:
         out[e]["trace"] = traces[e]
     return out
+
+
+def log_scores(log: Sequence[dict[str, Any]], cap: float) -> dict[str, float]:
+    """The decision-time sums (:func:`~policies.benchmark.runner.decision_columns`) of a
+    fleet episode's log: its preventive records as ``replacement`` decisions, its test
+    records as ``test`` decisions (:func:`~policies.benchmark.runner.decision_scores`)."""
+    sums = dict.fromkeys(decision_columns(), 0.0)
+    for r in log:
+        event = {"preventive": "replacement", "test": "test"}.get(r["kind"])
+        if event is None:
+            continue
+        got = decision_scores(r["true_rul_flights"], r["rul_mean"], r["rul_low"], cap)
+        if got is None:
+            continue
+        key = f"prog_{event}_{r['part']}_"
+        sums[key + "n"] += 1
+        for stat, value in zip(("ra_sum", "alpha_hits", "covered"), got, strict=True):
+            sums[key + stat] += value
+    return sums
 
 
 def day_record(info: dict[str, Any], e: int) -> dict[str, Any]:
@@ -196,9 +237,18 @@ def fleet_bound_rows(
             cost_per_fh=b["cost_usd"] / fh if fh > 0 else math.nan,
             reward=b["bound"],
             **dict.fromkeys(RELAXED_AWAY, 0),
+            **dict.fromkeys(decision_columns(), 0.0),
         )
         out.append({"row": row, "events": []})
     return out
 
 
-__all__ = ["FLEET_ROW", "day_record", "fleet_bound_rows", "fleet_row", "run_fleet_episodes"]
+__all__ = [
+    "EVENT_FIELDS",
+    "FLEET_ROW",
+    "day_record",
+    "fleet_bound_rows",
+    "fleet_row",
+    "log_scores",
+    "run_fleet_episodes",
+]

@@ -3,8 +3,9 @@
 Files written by :func:`write_outputs` into the output folder:
 
 * ``results.csv``: one row per policy and episode (columns in :mod:`policies.benchmark.run`);
-* ``events.csv``: every removal of a part (failure, preventive) and every part still fitted
-  at the end of an episode (censored), with its age in flights;
+* ``events.csv``: every removal of a part (failure, preventive; fleets also background,
+  with day, aircraft, actuator and the age a part had when the episode began) and every
+  part still fitted at the end of an episode (censored), with its age in flights;
 * ``summary.json``: per-policy means with intervals that stay in range
   (:mod:`policies.benchmark.stats`), paired differences against the best rule-based policy
   with their minimum detectable differences, the beliefs at decision time of the policies
@@ -13,7 +14,9 @@ Files written by :func:`write_outputs` into the output folder:
 * ``summary.md``: the same as Markdown tables (the beliefs as a column group of the
   per-policy table);
 * ``cost_vs_availability.png``, ``survival.png``, ``cost_breakdown.png``;
-* fleets: ``cost_vs_availability.png`` (mission availability), and the first episode of each
+* fleets: ``cost_vs_availability.png`` (mission availability), ``survival.png`` (the parts
+  fitted during the episodes: a fleet's first parts enter part-way through life, which a
+  Kaplan-Meier estimate from age 0 cannot take), and the first episode of each
   policy day by day (spares, crew, missions missed) in ``fleet_day.csv`` and
   ``fleet_day.png``; ``summary.json`` adds each policy's share of the gap between the
   naive rule and the clairvoyant bound (``share_of_gap``).
@@ -244,11 +247,15 @@ def _plot_survival(
     events: Sequence[Mapping[str, Any]], policies: Sequence[str], path: Path
 ) -> None:
     """Kaplan-Meier survival of the age at removal (failure or preventive replacement) per
-    part, parts still fitted at the end of an episode counted as censored."""
+    part, parts still fitted at the end of an episode counted as censored; only the parts
+    fitted new (``entry_age_flights`` 0 where events have it: a fleet's first parts)."""
     fig, axes = plt.subplots(1, 2, figsize=(11, 4.2), sharey=True)
     for ax, part in zip(axes, ("spring", "seal"), strict=True):
         for policy in policies:
-            ev = [e for e in events if e["policy"] == policy and e["part"] == part]
+            ev = [
+                e for e in events
+                if e["policy"] == policy and e["part"] == part and not e.get("entry_age_flights")
+            ]  # fmt: skip
             sf = kaplan_meier(ev)
             if sf is None:
                 continue
@@ -377,7 +384,8 @@ def write_outputs(
         if fleet and result.traces:
             names["fleet_day_plot"] = "fleet_day.png"
         elif not fleet:
-            names |= {"survival": "survival.png", "cost_breakdown": "cost_breakdown.png"}
+            names["cost_breakdown"] = "cost_breakdown.png"
+        names["survival"] = "survival.png"
     seeds = {"root": result.config.get("seed"), "episodes": result.config.get("episodes")}
     with results_folder(out, config=result.config, seeds=seeds, overwrite=overwrite) as tmp:
         at = {k: tmp / v for k, v in names.items()}
@@ -396,7 +404,7 @@ def write_outputs(
             _plot_cost_availability(result.summary, at["cost_vs_availability"])
             if "fleet_day_plot" in at:
                 _plot_fleet_day(result.traces, at["fleet_day_plot"])
-            if "survival" in at:
-                _plot_survival(result.events, policies, at["survival"])
+            _plot_survival(result.events, policies, at["survival"])
+            if "cost_breakdown" in at:
                 _plot_cost_breakdown(result.rows, policies, at["cost_breakdown"])
     return {k: out / v for k, v in names.items()}

@@ -43,11 +43,11 @@ def compiled_for(kernel: Dispatcher, args: tuple) -> Callable[..., Any]:
     """``kernel``'s compiled entry point for the numba types of ``args``: a call skips the
     dispatcher's type resolution (~8 us for the slot kernel's ~100 arrays, most of a
     single-env step's kernel call). Only for arguments of exactly those types: the batch's
-    own arrays (fixed for its life) and plain rows and actions (:func:`_plain`)."""
+    own arrays (fixed for its life) and plain rows and actions (:func:`plain_rows`)."""
     return kernel.compile(tuple(typeof(x) for x in args))
 
 
-def _plain(x: np.ndarray) -> bool:
+def plain_rows(x: np.ndarray) -> bool:
     """A 1-D C-contiguous writeable int64 array (the types :func:`compiled_for` was given)."""
     return (
         type(x) is np.ndarray
@@ -86,19 +86,18 @@ class ActuatorBatch(ActuatorState):
         failed parts)`` returns False: the parts then stay broken (``a["broken"]``) until
         :meth:`repair` (a fleet's crew and spares decide when)."""
         a, st = self.a, self.setup
-        a["wasted_now"][rows] = 0.0
+        if rows.size == 1:  # a single env's row: no fancy indexing
+            a["wasted_now"][rows[0]] = 0.0
+        else:
+            a["wasted_now"][rows] = 0.0
         if self.keeps_history:  # a test (2 data), one per flight, a replacement's batch
             self.ensure_history(rows, 3 + int(a["flights"][rows].max(initial=0)))
         plan = (actions, a["flights"], a["group"], a["mtype"], a["flight_value"])
         if st.physics:
             self._physics_slot(rows, plan)
         else:
-            fixed = (
-                self._every_flight, self._interval, self._world, self._monitor, self._memory,
-                self._books, self._handles, self._out, st.go_limits, self._prices, st.world,
-                st.filters, st.detector, st.learn_cols,
-            )  # fmt: skip
-            if _plain(rows) and _plain(actions):
+            fixed = self._fixed
+            if plain_rows(rows) and plain_rows(actions):
                 if self._slot_entry is None:
                     self._slot_entry = compiled_for(slot_rows, (rows, plan, *fixed))
                 self._slot_entry(rows, plan, *fixed)
@@ -112,12 +111,20 @@ class ActuatorBatch(ActuatorState):
         """Rows the kernel left to Python: filter errors raised, replacements and failures
         handled, their slots closed."""
         a = self.a
-        bad = rows[a["status"][rows] != 0]
-        if bad.size:
-            parts.raise_status(int(a["status"][bad[0]]))
-        todo = rows[a["event"][rows] != 0]
-        if not todo.size:
-            return
+        if rows.size == 1:  # a single env's row: no fancy indexing
+            e = rows[0]
+            if a["status"][e]:
+                parts.raise_status(int(a["status"][e]))
+            if not a["event"][e]:
+                return
+            todo = rows
+        else:
+            bad = rows[a["status"][rows] != 0]
+            if bad.size:
+                parts.raise_status(int(a["status"][bad[0]]))
+            todo = rows[a["event"][rows] != 0]
+            if not todo.size:
+                return
         for e in todo.tolist():
             event = int(a["event"][e])
             if event == FAILURE:
@@ -213,7 +220,12 @@ class ActuatorBatch(ActuatorState):
     def refresh(self, rows: np.ndarray | None = None) -> None:
         """Rebuild the RUL tables of the rows (None: all) whose clouds changed since."""
         a = self.a
-        idx = np.flatnonzero(a["stale"]) if rows is None else rows[a["stale"][rows]]
+        if rows is None:
+            idx = np.flatnonzero(a["stale"])
+        elif rows.size == 1:  # a single env's row: no fancy indexing
+            idx = rows if a["stale"][rows[0]] else rows[:0]
+        else:
+            idx = rows[a["stale"][rows]]
         if not idx.size:
             return
         refresh_rows(idx, a["stale"], self.bank, self.tables, a["status"], self.setup.filters)
@@ -232,4 +244,4 @@ class ActuatorBatch(ActuatorState):
         return out
 
 
-__all__ = ["REPLACED", "ActuatorBatch"]
+__all__ = ["REPLACED", "ActuatorBatch", "compiled_for", "plain_rows"]

@@ -52,60 +52,82 @@ def build_info(batch: ActuatorBatch, row: int | None = None) -> dict[str, Any]:
     single env returns) or of all (``row=None``: a dict of (n,) arrays, as the native vector
     env returns before its info masks are added). Keys and meaning:
     :class:`scas_env.env.ScasMaintenanceEnv`."""
+    if row is not None:
+        return _row_info(batch, row)
     a = batch.a
-    if row is None:
-        kind: type[dict] = dict
 
-        def one(arr: Any, col: int | None = None) -> Any:
-            return (arr if col is None else arr[:, col]).copy()
+    def per_row(arr: Any, names: tuple[str, ...]) -> dict[str, Any]:
+        return {name: arr[:, k].copy() for k, name in enumerate(names)}
 
-        def per_row(arr: Any, names: tuple[str, ...]) -> dict[str, Any]:
-            return {name: arr[:, k].copy() for k, name in enumerate(names)}
-
-        slot = a["slot"]
-        availability: Any = np.where(slot > 0, a["flown"] / np.maximum(slot, 1), 1.0)
-    else:
-        kind = StepInfo
-
-        def one(arr: Any, col: int | None = None) -> Any:
-            return arr.item(row) if col is None else arr.item(row, col)
-
-        def per_row(arr: Any, names: tuple[str, ...]) -> dict[str, Any]:
-            return StepInfo(zip(names, arr[row].tolist(), strict=True))
-
-        slot_n = a["slot"].item(row)
-        availability = a["flown"].item(row) / slot_n if slot_n else 1.0
-
-    def per_part(arr: Any) -> dict[str, Any]:
-        return per_row(arr, PARTS)
-
-    crack, wear = one(a["crack"]), one(a["wear"])
-    terms = a["terms"]
-    return kind(
-        slot=one(a["slot"]),
-        availability=availability,
-        flights=one(a["flown"]),
-        cost_usd=one(a["cost"]),
-        revenue_usd=one(a["revenue"]),
-        failures=per_part(a["failures"]),
-        replacements=per_part(a["replacements"]),
-        tests=one(a["tests"]),
-        no_go=one(a["no_go_count"]),
-        wasted_life_flights=per_part(a["wasted_now"]),
-        wasted_life_sum_flights=per_part(a["wasted_sum"]),
-        wasted_life_count=per_part(a["wasted_count"]),
-        reward_terms=per_row(terms, REWARD_TERMS),
+    slot = a["slot"]
+    crack, wear = a["crack"].copy(), a["wear"].copy()
+    return dict(
+        slot=slot.copy(),
+        availability=np.where(slot > 0, a["flown"] / np.maximum(slot, 1), 1.0),
+        flights=a["flown"].copy(),
+        cost_usd=a["cost"].copy(),
+        revenue_usd=a["revenue"].copy(),
+        failures=per_row(a["failures"], PARTS),
+        replacements=per_row(a["replacements"], PARTS),
+        tests=a["tests"].copy(),
+        no_go=a["no_go_count"].copy(),
+        wasted_life_flights=per_row(a["wasted_now"], PARTS),
+        wasted_life_sum_flights=per_row(a["wasted_sum"], PARTS),
+        wasted_life_count=per_row(a["wasted_count"], PARTS),
+        reward_terms=per_row(a["terms"], REWARD_TERMS),
         features=per_row(a["last"], FEATURES),
-        true_state=kind(
+        true_state=dict(
             crack_depth_m=crack,
             seal_wear_m=wear,
-            crack_fraction=crack / one(a["fail"]),
+            crack_fraction=crack / a["fail"].copy(),
             wear_fraction=wear / batch.setup.calibration.seal_critical_wear_m,
-            spring_rul_flights=one(a["life"], 0),
-            seal_rul_flights=one(a["life"], 1),
+            spring_rul_flights=a["life"][:, 0].copy(),
+            seal_rul_flights=a["life"][:, 1].copy(),
         ),
-        downtime=one(a["downtime"]),
+        downtime=a["downtime"].copy(),
     )
+
+
+def _row_info(batch: ActuatorBatch, row: int) -> StepInfo:
+    """:func:`build_info` of one row, written out (a single env's step reads it: every
+    entry one lookup, in the same order and with the same Python scalars)."""
+    a = batch.a
+    slot, flown = a["slot"].item(row), a["flown"].item(row)
+    crack, wear, life = a["crack"].item(row), a["wear"].item(row), a["life"][row].tolist()
+    s0, s1 = PARTS
+    pair = {}
+    for k in _PER_PART:
+        v = a[k][row].tolist()
+        pair[k] = StepInfo({s0: v[0], s1: v[1]})
+    return StepInfo(
+        slot=slot,
+        availability=flown / slot if slot else 1.0,
+        flights=flown,
+        cost_usd=a["cost"].item(row),
+        revenue_usd=a["revenue"].item(row),
+        failures=pair["failures"],
+        replacements=pair["replacements"],
+        tests=a["tests"].item(row),
+        no_go=a["no_go_count"].item(row),
+        wasted_life_flights=pair["wasted_now"],
+        wasted_life_sum_flights=pair["wasted_sum"],
+        wasted_life_count=pair["wasted_count"],
+        reward_terms=StepInfo(zip(REWARD_TERMS, a["terms"][row].tolist(), strict=True)),
+        features=StepInfo(zip(FEATURES, a["last"][row].tolist(), strict=True)),
+        true_state=StepInfo(
+            crack_depth_m=crack,
+            seal_wear_m=wear,
+            crack_fraction=crack / a["fail"].item(row),
+            wear_fraction=wear / batch.setup.calibration.seal_critical_wear_m,
+            spring_rul_flights=life[0],
+            seal_rul_flights=life[1],
+        ),
+        downtime=a["downtime"].item(row),
+    )
+
+
+#: the per-part arrays of the info
+_PER_PART = ("failures", "replacements", "wasted_now", "wasted_sum", "wasted_count")
 
 
 __all__ = ["StepInfo", "build_info"]

@@ -13,7 +13,7 @@ from gymnasium import spaces
 from numba import njit
 
 from prognostics.rul_ageing import ageing_summary
-from scas_env.core.batch import ActuatorBatch
+from scas_env.core.batch import ActuatorBatch, compiled_for, plain_rows
 from scas_env.core.costs import CostModel
 from scas_env.core.scenario import Scenario
 from scas_env.core.setup import FLIGHT_FEATURES, GROUND_FEATURES, PARTS, UPCOMING_PARTS
@@ -62,6 +62,91 @@ def ageing_estimates(
             out[e, p, 0] = min(mean, cap)
             out[e, p, 1] = min(low_k, cap)
             out[e, p, 2] = risk
+
+
+#: group codes of :func:`flat_observation`
+GROUP_CODES = {"features": 0, "filter": 1, "monitor": 2, "state": 3}
+
+
+@njit(cache=True)
+def flat_observation(
+    rows: np.ndarray,
+    groups: np.ndarray,
+    state: tuple,
+    tables: tuple,
+    factor: np.ndarray,
+    horizon: float,
+    cap: float,
+    wear_critical: float,
+    low: np.ndarray,
+    high: np.ndarray,
+    out: np.ndarray,
+) -> None:
+    """The flat observation of ``rows`` into ``out`` (float32, one row each): the groups
+    ``groups`` (:data:`GROUP_CODES`) in order, each entry computed in float64 as
+    :meth:`ObservationLayout.groups_of` computes it, saturated at ``[low, high]`` (a NaN
+    stays NaN, as ``np.maximum``/``np.minimum`` keep it) and cast. ``state``: the arrays
+    ``(last, test_age, no_go, detected, part_age, downtime, crack, fail, wear, life,
+    upcoming)``; ``tables``: the RUL tables and ``pending`` (fresh: rebuilt by the caller)."""
+    last, test_age, no_go, detected, part_age, downtime, crack, fail, wear, life, upcoming = state
+    rul_sorted, cum_w, suffix_w, suffix_wr, rul_low, pending = tables
+    k = factor.size
+    for r in range(rows.size):
+        e = rows[r]
+        c = 0
+        for g in groups:
+            if g == 0:
+                for j in range(k):
+                    out[r, c] = _saturated(last[e, j] * factor[j], low[c], high[c])
+                    c += 1
+                out[r, c] = _saturated(float(test_age[e]), low[c], high[c])
+                out[r, c + 1] = _saturated(1.0 if no_go[e] else 0.0, low[c + 1], high[c + 1])
+                c += 2
+            elif g == 1:
+                for p in range(2):
+                    mean, low_k, risk = ageing_summary(
+                        rul_sorted[e, p], cum_w[e, p], suffix_w[e, p], suffix_wr[e, p],
+                        rul_low[e, p], float(pending[e, p]), horizon,
+                    )  # fmt: skip
+                    out[r, c] = _saturated(min(mean, cap), low[c], high[c])
+                    out[r, c + 1] = _saturated(min(low_k, cap), low[c + 1], high[c + 1])
+                    out[r, c + 2] = _saturated(risk, low[c + 2], high[c + 2])
+                    c += 3
+            elif g == 2:
+                out[r, c] = _saturated(1.0 if detected[e, 0] else 0.0, low[c], high[c])
+                out[r, c + 1] = _saturated(1.0 if detected[e, 1] else 0.0, low[c + 1], high[c + 1])
+                c = _ages(e, part_age, downtime, low, high, out, r, c + 2)
+            else:
+                out[r, c] = _saturated(crack[e] / fail[e], low[c], high[c])
+                out[r, c + 1] = _saturated(wear[e] / wear_critical, low[c + 1], high[c + 1])
+                out[r, c + 2] = _saturated(life[e, 0], low[c + 2], high[c + 2])
+                out[r, c + 3] = _saturated(life[e, 1], low[c + 3], high[c + 3])
+                c = _ages(e, part_age, downtime, low, high, out, r, c + 4)
+                for p in range(upcoming.shape[1]):
+                    for j in range(upcoming.shape[2]):
+                        out[r, c] = _saturated(upcoming[e, p, j], low[c], high[c])
+                        c += 1
+
+
+@njit(cache=True)
+def _ages(e: int, part_age: np.ndarray, downtime: np.ndarray, low: np.ndarray,
+          high: np.ndarray, out: np.ndarray, r: int, c: int) -> int:  # fmt: skip
+    """Both parts' ages and the downtime of row ``e`` into ``out[r, c:c + 3]``; the next
+    column."""
+    out[r, c] = _saturated(float(part_age[e, 0]), low[c], high[c])
+    out[r, c + 1] = _saturated(float(part_age[e, 1]), low[c + 1], high[c + 1])
+    out[r, c + 2] = _saturated(float(downtime[e]), low[c + 2], high[c + 2])
+    return c + 3
+
+
+@njit(cache=True)
+def _saturated(v: float, lo: float, hi: float) -> np.float32:
+    """``v`` clipped to [lo, hi] as ``np.minimum(np.maximum(v, lo), hi)`` (NaN kept), cast."""
+    if v < lo:
+        v = lo
+    if v > hi:
+        v = hi
+    return np.float32(v)
 
 
 class ObservationLayout:
@@ -130,6 +215,8 @@ class ObservationLayout:
                 self._columns.append((g, slice(start, start + len(self.groups[g]))))
                 start += len(self.groups[g])
             self._width = start
+            self._codes = np.array([GROUP_CODES[g] for g in self._order], dtype=np.int64)
+            self._filtered = "filter" in self._order
             layout = [r for g in GROUP_ORDER[mode] for r in self.groups[g]]
             self.bounds["flat"] = _bounds(layout)
             self.space = _box(layout)
@@ -186,14 +273,26 @@ class ObservationLayout:
         if self.scenario.obs_mode == "dict":
             values = self.groups_of(batch, rows)
             return {k: clip_to_bounds(values[k], *self.bounds[k]) for k in self.groups}
-        n = len(range(batch.n)[rows]) if isinstance(rows, slice) else len(rows)
-        flat = np.empty((n, self._width))
-        for group, cols in self._columns:
-            self._fill(group, flat[:, cols], batch, rows)
-        low, high = self.bounds["flat"]
-        np.maximum(flat, low, out=flat)
-        np.minimum(flat, high, out=flat)
-        return flat.astype(np.float32)
+        if isinstance(rows, slice):
+            idx = batch.all_rows if rows == slice(None) else batch.all_rows[rows]
+        else:
+            idx = np.asarray(rows).astype(np.int64, copy=False)
+        if self._filtered:
+            batch.refresh(idx)
+        out = np.empty((idx.size, self._width), dtype=np.float32)
+        s = self.scenario
+        args = (
+            idx, self._codes, batch.obs_state, batch.obs_tables, self._factor,
+            float(s.risk_horizon_flights), float(s.rul_cap_flights),
+            float(batch.setup.calibration.seal_critical_wear_m), *self.bounds["flat"], out,
+        )  # fmt: skip
+        if not plain_rows(idx):
+            flat_observation(*args)
+            return out
+        if batch.obs_entry is None:
+            batch.obs_entry = compiled_for(flat_observation, args)
+        batch.obs_entry(*args)
+        return out
 
 
 def _box(rows: list[tuple[str, str, float, float]]) -> spaces.Box:

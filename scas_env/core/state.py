@@ -200,6 +200,13 @@ class ActuatorState:
         self._out = tuple(a[k] for k in ("terms", "reward", "flew", "failed", "event", "status"))
         self.tables = (a["rul_sorted"], a["rul_cum_w"], a["rul_suffix_w"], a["rul_suffix_wr"],
                        a["rul_low"])  # fmt: skip
+        #: what the flat observation reads (scas_env.core.observation.flat_observation)
+        self.obs_state = tuple(a[k] for k in ("last", "test_age", "no_go", "detected",
+                                              "part_age", "downtime", "crack", "fail", "wear",
+                                              "life", "upcoming"))  # fmt: skip
+        self.obs_tables = (*self.tables, a["pending"])
+        self.obs_entry = None  # the observation kernel's entry point for these arrays
+        self.all_rows = np.arange(self.n, dtype=np.int64)
         c = st.costs
         self._prices = (
             float(c.test_usd),
@@ -209,6 +216,12 @@ class ActuatorState:
         self._slot_entry = None  # the slot kernel's entry point for these arrays (batch.py)
         self._every_flight = st.scenario.preflight == "every_flight"
         self._interval = int(st.scenario.flight_update_flights)
+        #: the slot kernel's arguments after the rows and the plan (batch.py)
+        self._fixed = (
+            self._every_flight, self._interval, self._world, self._monitor, self._memory,
+            self._books, self._handles, self._out, st.go_limits, self._prices, st.world,
+            st.filters, st.detector, st.learn_cols,
+        )  # fmt: skip
 
     def ensure_history(self, rows: np.ndarray, data: int) -> None:
         """Room for ``data`` more data in the spring histories of ``rows`` (a slot's most):
@@ -231,7 +244,8 @@ class ActuatorState:
     def __getstate__(self) -> dict[str, Any]:
         state = self.__dict__.copy()
         for key in ("_world", "bank", "_monitor", "_memory", "_books", "_handles", "_out",
-                    "tables", "_scratch", "_slot_entry"):  # fmt: skip
+                    "tables", "_scratch", "_slot_entry", "obs_state", "obs_tables", "obs_entry",
+                    "all_rows", "_fixed"):  # fmt: skip
             state.pop(key, None)
         return state
 

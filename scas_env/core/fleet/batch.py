@@ -53,6 +53,7 @@ import numpy as np
 from scas_env.core.batch import ActuatorBatch
 from scas_env.core.fleet.config import FleetConfig
 from scas_env.core.fleet.demand import draw_schedule
+from scas_env.core.fleet.log import MaintenanceLog
 from scas_env.core.fleet.resources import ACTUATOR, SEAL_KIT, SPRING_KIT, CrewQueue, SparesPool
 from scas_env.core.setup import PARTS, Setup
 from scas_env.core.slot import (
@@ -167,6 +168,8 @@ class FleetBatch:
         }
         self.rngs: list[dict[str, np.random.Generator] | None] = [None] * sh.fleets
         self._actions = np.full(sh.rows, STAND_BY, dtype=np.int64)
+        self.log = MaintenanceLog(self.actuators, sh.fleets, sh.aircraft, sh.actuators)
+        self._tests_before = np.zeros(sh.rows, dtype=np.int64)
 
     # ------------------------------------------------------------------ indices
     def rows_of(self, b: int) -> np.ndarray:
@@ -195,6 +198,7 @@ class FleetBatch:
         for b, rng in zip(fleets.tolist(), np_randoms, strict=True):
             rows = self.rows_of(b)
             self.actuators.reset(rows, [rng] * rows.size)
+            self.log.start(b, rows)
             for name in ("reward", "flew"):  # the last slot's, read by the info
                 self.actuators.a[name][rows] = 0
             seeds = rng.integers(0, 2**63 - 1, size=3)
@@ -242,6 +246,7 @@ class FleetBatch:
         rows = np.concatenate([self.rows_of(b) for b in fleets.tolist()])
         for b in fleets.tolist():
             self._morning(b, actions[b])
+        self._tests_before[rows] = self.actuators.a["tests"][rows]
         self.actuators.slot(rows, act, on_failure=self._on_failure)
         rewards = np.zeros(sh.fleets)
         for b in fleets.tolist():
@@ -271,6 +276,7 @@ class FleetBatch:
             if a["broken"][e, p]:
                 self.actuators.repair(e, (part,))
             else:
+                self.log.removal(day, e, p, "preventive", belief=True)
                 now = self._actions[e]
                 fit = REPLACE_SPRING if part == "spring" else REPLACE_SEAL
                 self._actions[e] = fit if now == STAND_BY else REPLACE_BOTH
@@ -317,6 +323,7 @@ class FleetBatch:
         sh, cfg, a = self.shape, self.config, self.actuators.a
         rows = self.rows_of(b)
         day = int(self.day[b])
+        self._log_day(b, day)
         assigned = self.today["assigned"][b]
         flew = a["flew"][rows].reshape(sh.aircraft, sh.actuators)
         completed = (assigned >= 0) & (flew[:, 0] == sh.flights)
@@ -346,6 +353,26 @@ class FleetBatch:
         self.day[b] += 1
         return reward
 
+    def _log_day(self, b: int, day: int) -> None:
+        """Fleet ``b``'s failures and tests of the day into :attr:`log`."""
+        a, rows = self.actuators.a, self.rows_of(b)
+        failed = a["failed"][rows]
+        tested = a["tests"][rows] > self._tests_before[rows]
+        for k in np.flatnonzero(tested | failed.any(axis=1)).tolist():
+            e = int(rows[k])
+            for p in range(len(PARTS)):
+                if failed[k, p]:
+                    self.log.removal(day, e, p, "failure")
+                elif tested[k]:
+                    self.log.tested(day, e, p)
+
+    def episode_log(self, b: int) -> list[dict]:
+        """Fleet ``b``'s records so far (:mod:`scas_env.core.fleet.log`), then a
+        ``"censored"`` record of each part still fitted and serviceable."""
+        rows = self.rows_of(b)
+        serviceable = ~self.actuators.a["broken"][rows] & ~self.removed[b].reshape(-1, 1)
+        return [*self.log.records[b], *self.log.censored(b, serviceable)]
+
     def _background(self, b: int, flew: np.ndarray) -> float:
         """Background removals of fleet ``b``'s day (one uniform per actuator whatever the
         policy did): each flight flown gives ``p``; the actuator goes to the shop and a pool
@@ -363,6 +390,8 @@ class FleetBatch:
             i, j = int(i), int(j)
             cost += cfg.background_removal_usd
             self.books["background_removals"][b] += 1.0
+            for p in range(len(PARTS)):
+                self.log.removal(int(self.day[b]), int(rows[i, j]), p, "background")
             if self.crew.do_now([(i, j, ACTUATOR)], self.spares, b):
                 self.actuators.repair(int(rows[i, j]), PARTS)
             else:
