@@ -82,10 +82,10 @@ def flat_observation(
     high: np.ndarray,
     out: np.ndarray,
 ) -> None:
-    """The flat observation of ``rows`` into ``out`` (float32, one row each): the groups
-    ``groups`` (:data:`GROUP_CODES`) in order, each entry computed in float64 as
-    :meth:`ObservationLayout.groups_of` computes it, saturated at ``[low, high]`` (a NaN
-    stays NaN, as ``np.maximum``/``np.minimum`` keep it) and cast. ``state``: the arrays
+    """The observation of ``rows`` into ``out`` (float32 or float64, one row each): the
+    groups ``groups`` (:data:`GROUP_CODES`) in order, each entry computed in float64,
+    saturated at ``[low, high]`` (a NaN stays NaN, as ``np.maximum``/``np.minimum`` keep
+    it; infinite bounds leave it as it is) and cast by the store. ``state``: the arrays
     ``(last, test_age, no_go, detected, part_age, downtime, crack, fail, wear, life,
     upcoming)``; ``tables``: the RUL tables and ``pending`` (fresh: rebuilt by the caller)."""
     last, test_age, no_go, detected, part_age, downtime, crack, fail, wear, life, upcoming = state
@@ -140,13 +140,14 @@ def _ages(e: int, part_age: np.ndarray, downtime: np.ndarray, low: np.ndarray,
 
 
 @njit(cache=True)
-def _saturated(v: float, lo: float, hi: float) -> np.float32:
-    """``v`` clipped to [lo, hi] as ``np.minimum(np.maximum(v, lo), hi)`` (NaN kept), cast."""
+def _saturated(v: float, lo: float, hi: float) -> float:
+    """``v`` clipped to [lo, hi] as ``np.minimum(np.maximum(v, lo), hi)`` (NaN kept); the
+    store into ``out`` casts it (float32: round to nearest, as ``astype``)."""
     if v < lo:
         v = lo
     if v > hi:
         v = hi
-    return np.float32(v)
+    return v
 
 
 class ObservationLayout:
@@ -200,6 +201,10 @@ class ObservationLayout:
         ]
         self.groups = {"features": rows, "filter": filt, "monitor": tail, "state": state}
         mode = scenario.obs_mode
+        self._group_codes = {g: np.array([GROUP_CODES[g]], dtype=np.int64) for g in self.groups}
+        self._unbounded = {
+            g: (np.full(len(v), -np.inf), np.full(len(v), np.inf)) for g, v in self.groups.items()
+        }
         #: (low, high) float64 bounds per group, and of the flat layout ("flat")
         self.bounds = {k: _bounds(v) for k, v in self.groups.items()}
         if mode == "dict":
@@ -216,7 +221,6 @@ class ObservationLayout:
                 start += len(self.groups[g])
             self._width = start
             self._codes = np.array([GROUP_CODES[g] for g in self._order], dtype=np.int64)
-            self._filtered = "filter" in self._order
             layout = [r for g in GROUP_ORDER[mode] for r in self.groups[g]]
             self.bounds["flat"] = _bounds(layout)
             self.space = _box(layout)
@@ -224,74 +228,57 @@ class ObservationLayout:
             self.units = tuple(r[1] for r in layout)
 
     def groups_of(self, batch: ActuatorBatch, rows: Any = slice(None)) -> dict[str, np.ndarray]:
-        """Float64 values of every observation group of this mode, one row per actuator of
-        ``rows`` (the filters' tables rebuilt first where they changed)."""
-        n = len(range(batch.n)[rows]) if isinstance(rows, slice) else len(rows)
-        out: dict[str, np.ndarray] = {}
-        for group in self.groups:
-            if group in self._order:
-                width = len(self.groups[group])
-                out[group] = self._fill(group, np.empty((n, width)), batch, rows)
-        return out
-
-    def _fill(self, group: str, out: np.ndarray, batch: ActuatorBatch, rows: Any) -> Any:
-        """Write ``group``'s float64 values of ``rows`` (a slice or indices) into ``out``
-        (n, width)."""
-        a, s = batch.a, self.scenario
-        if group == "features":
-            k = self._factor.size
-            np.multiply(a["last"][rows], self._factor, out=out[:, :k])
-            out[:, k] = a["test_age"][rows]
-            out[:, k + 1] = a["no_go"][rows]
-        elif group == "monitor":
-            out[:, 0:2] = a["detected"][rows]
-            out[:, 2:4] = a["part_age"][rows]
-            out[:, 4] = a["downtime"][rows]
-        elif group == "filter":
-            n = out.shape[0]
-            batch.refresh(np.arange(batch.n)[rows])
-            est = np.empty((n, 2, 3))
-            ageing_estimates(
-                a["rul_sorted"][rows], a["rul_cum_w"][rows], a["rul_suffix_w"][rows],
-                a["rul_suffix_wr"][rows], a["rul_low"][rows], a["pending"][rows],
-                float(s.risk_horizon_flights), float(s.rul_cap_flights), est,
-            )  # fmt: skip
-            out[:] = est.reshape(n, 6)
-        else:  # state
-            n = out.shape[0]
-            out[:, 0] = a["crack"][rows] / a["fail"][rows]
-            out[:, 1] = a["wear"][rows] / batch.setup.calibration.seal_critical_wear_m
-            out[:, 2:4] = a["life"][rows]
-            out[:, 4:6] = a["part_age"][rows]
-            out[:, 6] = a["downtime"][rows]
-            out[:, 7:] = a["upcoming"][rows].reshape(n, -1)
-        return out
+        """Float64 values of every observation group of this mode, unsaturated, one row per
+        actuator of ``rows`` (the filters' tables rebuilt first where they changed)."""
+        idx = self._refreshed(batch, rows)
+        return {
+            g: self._assemble(batch, idx, self._group_codes[g], self._unbounded[g], np.float64)
+            for g in self.groups
+            if g in self._order
+        }
 
     def observe(self, batch: ActuatorBatch, rows: Any = slice(None)) -> Any:
         """The observations of ``rows`` (a batch: one row each), float32, saturated at the
         documented bounds."""
+        idx = self._refreshed(batch, rows)
         if self.scenario.obs_mode == "dict":
-            values = self.groups_of(batch, rows)
-            return {k: clip_to_bounds(values[k], *self.bounds[k]) for k in self.groups}
-        if isinstance(rows, slice):
-            idx = batch.all_rows if rows == slice(None) else batch.all_rows[rows]
-        else:
-            idx = np.asarray(rows).astype(np.int64, copy=False)
-        if self._filtered:
-            batch.refresh(idx)
+            return {
+                g: self._assemble(batch, idx, self._group_codes[g], self.bounds[g], np.float32)
+                for g in self.groups
+            }
         out = np.empty((idx.size, self._width), dtype=np.float32)
-        s = self.scenario
-        args = (
-            idx, self._codes, batch.obs_state, batch.obs_tables, self._factor,
-            float(s.risk_horizon_flights), float(s.rul_cap_flights),
-            float(batch.setup.calibration.seal_critical_wear_m), *self.bounds["flat"], out,
-        )  # fmt: skip
+        args = (idx, self._codes, batch.obs_state, batch.obs_tables, *self._numbers(batch),
+                *self.bounds["flat"], out)  # fmt: skip
         if not plain_rows(idx):
             flat_observation(*args)
             return out
         if batch.obs_entry is None:
             batch.obs_entry = compiled_for(flat_observation, args)
         batch.obs_entry(*args)
+        return out
+
+    def _refreshed(self, batch: ActuatorBatch, rows: Any) -> np.ndarray:
+        """``rows`` as int64 indices, their RUL tables rebuilt where a cloud changed if this
+        mode observes the filters."""
+        if isinstance(rows, slice):
+            idx = batch.all_rows if rows == slice(None) else batch.all_rows[rows]
+        else:
+            idx = np.asarray(rows).astype(np.int64, copy=False)
+        if "filter" in self._order:
+            batch.refresh(idx)
+        return idx
+
+    def _numbers(self, batch: ActuatorBatch) -> tuple[np.ndarray, float, float, float]:
+        s = self.scenario
+        wear_critical = float(batch.setup.calibration.seal_critical_wear_m)
+        return self._factor, float(s.risk_horizon_flights), float(s.rul_cap_flights), wear_critical
+
+    def _assemble(self, batch: ActuatorBatch, idx: np.ndarray, codes: np.ndarray,
+                  bounds: tuple[np.ndarray, np.ndarray], dtype: type) -> np.ndarray:  # fmt: skip
+        """One group's values of rows ``idx`` as ``dtype``, saturated at ``bounds``."""
+        out = np.empty((idx.size, bounds[0].size), dtype=dtype)
+        flat_observation(idx, codes, batch.obs_state, batch.obs_tables, *self._numbers(batch),
+                         *bounds, out)  # fmt: skip
         return out
 
 
