@@ -14,11 +14,10 @@ Files written by :func:`write_outputs` into the output folder:
 * ``summary.md``: the same as Markdown tables (the beliefs as a column group of the
   per-policy table);
 * ``cost_vs_availability.png``, ``survival.png``, ``cost_breakdown.png``;
-* fleets: ``cost_vs_availability.png`` (mission availability), ``survival.png`` (the parts
-  fitted during the episodes: a fleet's first parts enter part-way through life, which a
-  Kaplan-Meier estimate from age 0 cannot take), and the first episode of each
-  policy day by day (spares, crew, missions missed) in ``fleet_day.csv`` and
-  ``fleet_day.png``; ``summary.json`` adds each policy's share of the gap between the
+* fleets: ``cost_vs_availability.png`` (mission availability), ``survival.png`` (a fleet's
+  first parts entering at their age: :mod:`policies.benchmark.survival`), and the first
+  episode of each policy day by day (spares, crew, missions missed) in ``fleet_day.csv``
+  and ``fleet_day.png``; ``summary.json`` adds each policy's share of the gap between the
   naive rule and the clairvoyant bound (``share_of_gap``).
 """
 
@@ -40,6 +39,7 @@ from scipy import stats
 
 from policies.benchmark.run import TERMS, BenchmarkResult
 from policies.benchmark.stats import METRICS
+from policies.benchmark.survival import kaplan_meier
 
 __all__ = ["cost_breakdown", "format_table", "kaplan_meier", "markdown_summary", "write_outputs"]
 
@@ -229,33 +229,16 @@ def _plot_cost_availability(summary: Mapping[str, Any], path: Path) -> None:
     plt.close(fig)
 
 
-def kaplan_meier(events: Sequence[Mapping[str, Any]]) -> Any:
-    """Kaplan-Meier estimate of the age (flights) at removal from ``events`` of one part and
-    policy: removals (failure or preventive) are observed, parts still fitted at the end of
-    an episode are right-censored (``scipy.stats.ecdf`` on ``CensoredData``); ``None``
-    without a removal."""
-    from scipy.stats import CensoredData, ecdf
-
-    done = np.array([e["age_flights"] for e in events if e["kind"] != "censored"], dtype=float)
-    cens = np.array([e["age_flights"] for e in events if e["kind"] == "censored"], dtype=float)
-    if done.size == 0:
-        return None
-    return ecdf(CensoredData(uncensored=done, right=cens)).sf
-
-
 def _plot_survival(
     events: Sequence[Mapping[str, Any]], policies: Sequence[str], path: Path
 ) -> None:
-    """Kaplan-Meier survival of the age at removal (failure or preventive replacement) per
-    part, parts still fitted at the end of an episode counted as censored; only the parts
-    fitted new (``entry_age_flights`` 0 where events have it: a fleet's first parts)."""
+    """Kaplan-Meier survival of the age at removal per part (:func:`kaplan_meier`: parts
+    still fitted at the end of an episode censored, a fleet's first parts entering at their
+    age)."""
     fig, axes = plt.subplots(1, 2, figsize=(11, 4.2), sharey=True)
     for ax, part in zip(axes, ("spring", "seal"), strict=True):
         for policy in policies:
-            ev = [
-                e for e in events
-                if e["policy"] == policy and e["part"] == part and not e.get("entry_age_flights")
-            ]  # fmt: skip
+            ev = [e for e in events if e["policy"] == policy and e["part"] == part]
             sf = kaplan_meier(ev)
             if sf is None:
                 continue
@@ -264,7 +247,7 @@ def _plot_survival(
             label = f"{policy} ({fails} failures / {removed} removals)"
             t = np.r_[0.0, sf.quantiles]
             ax.step(t, np.r_[1.0, sf.probabilities], where="post", label=label)
-        ax.set_title(f"{part}: age at removal (Kaplan-Meier, end censored)", fontsize=10)
+        ax.set_title(f"{part}: age at removal (Kaplan-Meier, censored, entry ages)", fontsize=10)
         ax.set_xlabel("flights since fitted")
         ax.grid(alpha=0.3)
         if ax.get_legend_handles_labels()[0]:
