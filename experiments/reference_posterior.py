@@ -371,6 +371,8 @@ class ReferencePosterior:
 
     #: proposal of :meth:`refine`: t degrees of freedom and scale inflation
     T_DOF, INFLATE = 4.0, 1.5
+    #: the proposal's sd floor (prior sds) when the fitted covariance is singular
+    FLOOR = 0.1
 
     def __init__(self, model: SpringModel, rng: np.random.Generator, log2_points: int) -> None:
         check_points(log2_points)
@@ -433,6 +435,12 @@ class ReferencePosterior:
         x = np.column_stack([self.a0 - m.a0_mean_m, self.log_theta]) / scale
         mean = w @ x
         cov = np.cov(x.T, aweights=w, bias=True) * self.INFLATE**2
+        eig = np.linalg.eigvalsh(cov)
+        if eig[0] <= 1e-12 * max(eig[-1], 1e-300):
+            # the weight sits on one point (or a line): widen the proposal by a tenth of the
+            # prior's sd in each coordinate; any proposal covering the posterior is exact
+            # after the importance weights, this one only finds it
+            cov = cov + self.FLOOR**2 * np.eye(2)
         proposal = multivariate_t(loc=mean, shape=cov, df=self.T_DOF)
         u = qmc.Sobol(d=3, scramble=True, seed=self.rng).random_base2(self.log2_points)
         radius = np.sqrt(chi2.ppf(u[:, 2], self.T_DOF) / self.T_DOF)
@@ -467,11 +475,15 @@ def reference_lives(
     log2_points: int = DEFAULT_LOG2_POINTS,
     stages: Sequence[float] = REFERENCE_STAGES,
     min_ess: float = DEFAULT_MIN_ESS,
+    risk_min: float | None = None,
 ) -> list[dict[str, float]]:
     """One episode: per spring life and stage, a row with the record (``policy``, ``seed``,
     ``life``, ``stage``, ``age``), the ``truth`` (info RUL) and risk ``horizon``, the filter's
     belief (``pf_mean``, ``pf_q_lo``, ``pf_q_hi``, ``pf_low``, ``pf_risk``) and the
-    reference's (the same with ``ref_``, and ``ref_ess``)."""
+    reference's (the same with ``ref_``, and ``ref_ess``). ``risk_min``: instead of the
+    stages, every record whose filter risk is at least ``risk_min`` (a choice made on the
+    data, so an exact posterior stays calibrated on it: the reliability of both; ``stage``
+    is then the record's own)."""
     trace = run_episode(env, policy, seed)["spring"]
     table = trace_table([trace])
     model = SpringModel.of(env.setup)
@@ -481,7 +493,11 @@ def reference_lives(
     ages, wear = np.asarray(events.ages), np.asarray(events.wear)
     rows = []
     for life in range(len(trace.fail_flight)):
-        picks = _stage_ages(table, life, stages)
+        if risk_min is None:
+            picks = _stage_ages(table, life, stages)
+        else:
+            mine = np.flatnonzero((table["life"] == life) & (table["risk"] >= risk_min))
+            picks = {float(table["stage"][r]): int(r) for r in mine}
         if not picks:
             continue
         ref = ReferencePosterior(model, rng, log2_points)
@@ -523,15 +539,18 @@ def run_reference_study(
     stages: Sequence[float] = REFERENCE_STAGES,
     min_ess: float = DEFAULT_MIN_ESS,
     seal_view: str = "true",
+    risk_min: float | None = None,
     progress: bool = True,
 ) -> list[dict[str, float]]:
     """Per-life rows of :func:`reference_lives` over seeds ``seed .. seed + episodes - 1``
     per policy; the Sobol scrambling draws from ``SeedSequence(seed)``'s children;
-    ``seal_view``: :class:`RecordingEnv`'s."""
+    ``seal_view``: :class:`RecordingEnv`'s; ``risk_min``: :func:`reference_lives`'."""
     check_episodes(episodes, seed, policies)
     check_points(log2_points, min_ess)
     if not stages or any(not 0.0 < s < 1.0 for s in stages):
         raise ValueError(f"stages = {list(stages)!r} must be fractions of life in (0, 1)")
+    if risk_min is not None and not 0.0 < risk_min <= 1.0:
+        raise ValueError(f"risk_min = {risk_min!r} must be a probability in (0, 1]")
     env = RecordingEnv(
         seal_view=seal_view, scenario=Scenario.from_dict(dict(scenario_fields or {}))
     )
@@ -549,6 +568,7 @@ def run_reference_study(
                 log2_points=log2_points,
                 stages=stages,
                 min_ess=min_ess,
+                risk_min=risk_min,
             )
             bar.update()
     bar.close()
@@ -597,6 +617,14 @@ def main(argv: Sequence[str] | None = None) -> int:
         help="the seal wear the reference reads the spring's features at: the world's "
         "('true') or the seal filter's mean ('filter')",
     )
+    parser.add_argument(
+        "--risk-min",
+        type=float,
+        default=None,
+        metavar="P",
+        help="instead of the stages, every record whose filter risk is >= P; prints the "
+        "reliability of both estimators' risk",
+    )
     parser.add_argument("--out", type=Path, default=None, help="results folder (none: print)")
     parser.add_argument("--overwrite", action="store_true", help="replace an existing --out")
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
@@ -604,6 +632,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         check_points(args.log2_points, args.min_ess)
         scenario = Scenario.from_dict(dict(args.scenario))
+        if args.risk_min is not None and not 0.0 < args.risk_min <= 1.0:
+            raise ValueError(f"--risk-min {args.risk_min!r} must be a probability in (0, 1]")
     except (TypeError, ValueError) as exc:
         parser.error(str(exc))
     if args.synthetic is not None:
@@ -636,8 +666,27 @@ def main(argv: Sequence[str] | None = None) -> int:
         log2_points=args.log2_points,
         min_ess=args.min_ess,
         seal_view=args.seal_view,
+        risk_min=args.risk_min,
         progress=not args.no_progress,
     )
+    if args.risk_min is not None:
+        from experiments.reference_report import (
+            format_reliability,
+            reliability_table,
+            write_report,
+        )
+
+        reliability = reliability_table(rows)
+        print(format_reliability(reliability))
+        if args.out is not None:
+            config = {
+                "episodes": args.episodes, "seed": args.seed, "policies": args.policies,
+                "scenario_fields": args.scenario, "log2_points": args.log2_points,
+                "min_ess": args.min_ess, "risk_min": args.risk_min, "seal_view": args.seal_view,
+            }  # fmt: skip
+            for path in write_report(rows, reliability, config, args.out, overwrite=args.overwrite):
+                print(path)
+        return 0
     table = stage_table(rows, np.random.default_rng(args.seed))
     print(format_table(table))
     if args.out is not None:

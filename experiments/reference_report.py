@@ -17,7 +17,7 @@ from typing import Any
 
 import numpy as np
 
-from experiments.belief_calibration import TARGETS, _share
+from experiments.belief_calibration import RISK_BINS, TARGETS, _share
 from experiments.belief_comparison import paired_difference
 from experiments.belief_output import write_csv
 from scas_env.utils.results_folder import results_folder
@@ -76,6 +76,50 @@ def stage_table(
     return out
 
 
+def reliability_table(
+    rows: Sequence[dict[str, Any]], bins: Sequence[float] = RISK_BINS
+) -> list[dict[str, float | str]]:
+    """Per policy, estimator (``pf``, ``ref``) and bin of its own predicted risk: records,
+    mean prediction and the observed frequency of a failure within the horizon (info RUL
+    <= ``horizon``) with its Wilson 95 % interval. Meant for rows chosen on the data
+    (``reference_lives(risk_min=...)``), where an exact posterior is calibrated."""
+    edges = np.asarray(bins, dtype=float)
+    out: list[dict[str, float | str]] = []
+    for policy in sorted({r["policy"] for r in rows}):
+        mine = [r for r in rows if r["policy"] == policy]
+        failed = np.array([r["truth"] <= r["horizon"] for r in mine], dtype=np.float64)
+        for est in ESTIMATORS:
+            risk = np.array([r[f"{est}_risk"] for r in mine])
+            which = np.clip(np.searchsorted(edges, risk, side="right") - 1, 0, edges.size - 2)
+            for b in range(edges.size - 1):
+                sel = which == b
+                share, lo, hi, n = _share(failed[sel])
+                out.append(
+                    {
+                        "policy": policy, "estimator": est, "bin_low": float(edges[b]),
+                        "bin_high": float(edges[b + 1]), "records": n,
+                        "predicted": float(risk[sel].mean()) if n else float("nan"),
+                        "observed": share, "observed_ci_low": lo, "observed_ci_high": hi,
+                    }
+                )  # fmt: skip
+    return out
+
+
+def format_reliability(table: Sequence[dict[str, float | str]]) -> str:
+    """The reliability table as text: per bin, records, predicted and observed [95 % CI]
+    of both estimators."""
+    lines = [f"{'policy':7s} {'est':3s} {'bin':>11s} {'records':>7s}  predicted  observed [95% CI]"]
+    for r in table:
+        if not r["records"]:
+            continue
+        lines.append(
+            f"{r['policy']:7s} {r['estimator']:3s} {r['bin_low']:5.2f}-{r['bin_high']:4.2f} "
+            f"{int(r['records']):7d}  {r['predicted']:9.3f}  {r['observed']:.3f} "
+            f"[{r['observed_ci_low']:.3f}, {r['observed_ci_high']:.3f}]"
+        )
+    return "\n".join(lines)
+
+
 def format_table(table: Sequence[dict[str, float | str]]) -> str:
     """The stage table as text."""
     lines = [
@@ -104,17 +148,24 @@ def write_report(
     *,
     overwrite: bool = False,
 ) -> list[Path]:
-    """``lives.csv`` (per life and stage), ``stages.csv``, ``study.json`` and
-    ``coverage.png`` in the results folder ``out`` (written atomically)."""
-    names = ["lives.csv", "stages.csv", "study.json", "coverage.png"]
+    """Into the results folder ``out`` (written atomically), for a :func:`stage_table`:
+    ``lives.csv`` (per life and stage), ``stages.csv``, ``study.json`` and ``coverage.png``;
+    for a :func:`reliability_table`: ``records.csv`` and ``reliability.csv``."""
+    risk = bool(table) and "estimator" in table[0]
+    names = (
+        ["records.csv", "reliability.csv"]
+        if risk
+        else ["lives.csv", "stages.csv", "study.json", "coverage.png"]
+    )
     seeds = {"first": config["seed"], "episodes": config["episodes"]}
     with results_folder(out, config=config, seeds=seeds, overwrite=overwrite) as tmp:
-        write_csv(tmp / "lives.csv", rows)
-        write_csv(tmp / "stages.csv", table)
-        (tmp / "study.json").write_text(
-            json.dumps({"config": config, "stages": list(table)}, indent=1) + "\n"
-        )
-        _plot(table, tmp / "coverage.png")
+        write_csv(tmp / names[0], list(rows))
+        write_csv(tmp / names[1], list(table))
+        if not risk:
+            (tmp / "study.json").write_text(
+                json.dumps({"config": config, "stages": list(table)}, indent=1) + "\n"
+            )
+            _plot(table, tmp / "coverage.png")
     return [Path(out) / n for n in names]
 
 

@@ -217,6 +217,7 @@ def test_bad_arguments_are_refused(model) -> None:
         ({"min_ess": 5000.0, "log2_points": 12}, "min_ess = 5000.0"),
         ({"stages": (0.5, 1.0)}, "stages"),
         ({"episodes": 0}, "episodes = 0"),
+        ({"risk_min": 0.0}, "risk_min = 0.0"),
     ):
         kwargs = {"episodes": 1, "seed": 0, **bad}
         with pytest.raises(ValueError, match=match):
@@ -250,3 +251,36 @@ def test_the_noise_free_life_of_the_true_spring_is_the_worlds_exact_life(model) 
     assert np.all(np.abs(ratios) < 3e-3), ratios
     # the world counts the failing flight, the model a continuous life: never shorter
     assert np.all(np.array(ratios) > -1.0 / 500.0)
+
+
+def test_risk_records_are_every_record_the_filter_gives_that_risk() -> None:
+    """``risk_min``: one row per record of the episode whose filter risk is >= risk_min
+    (the belief study's records of the same seed, read independently), at its own stage,
+    each with the reference's belief."""
+    from experiments.belief_calibration import run_episode, trace_table
+
+    rows = run_reference_study(episodes=1, seed=1003, policies=["test10"], risk_min=0.05,
+                               log2_points=10, min_ess=200.0, progress=False)  # fmt: skip
+    table = trace_table([run_episode(RecordingEnv(), "test10", 1003)["spring"]])
+    want = np.flatnonzero(table["risk"] >= 0.05)
+    assert len(rows) == want.size > 0
+    np.testing.assert_array_equal([r["age"] for r in rows], table["age"][want])
+    np.testing.assert_array_equal([r["pf_risk"] for r in rows], table["risk"][want])
+    np.testing.assert_array_equal([r["stage"] for r in rows], table["stage"][want])
+    assert all(0.0 <= r["ref_risk"] <= 1.0 + 1e-12 for r in rows)  # a sum of weights
+
+
+def test_refining_a_posterior_on_one_point_widens_the_proposal(model) -> None:
+    """All the weight on one point (the fitted covariance singular; scipy refused the t
+    proposal before): the refinement's proposal gets the floor, and the new set is 1024
+    distinct points around it with finite weights (prior over proposal)."""
+    ref = ReferencePosterior(model, np.random.default_rng(3), 10)
+    keep = int(np.argmax(ref.life))
+    ref.log_w[:] = -np.inf
+    ref.log_w[keep] = 0.0
+    assert ref.belief(10.0, 0.05, 20.0).ess == pytest.approx(1.0)
+    a0 = ref.a0[keep]
+    ref.refine(10.0)
+    assert np.unique(ref.a0).size == ref.a0.size > 1000
+    assert np.isfinite(ref.log_w).all()
+    assert abs(np.median(ref.a0) - a0) < 0.5 * model.a0_sd_m

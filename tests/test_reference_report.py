@@ -47,3 +47,28 @@ def test_stage_table_counts_both_estimators_and_pairs_them() -> None:
     assert r["ref_min_ess"] == 1998.0
     assert table[("test10", "all")]["lives"] == 4
     assert "test10" in format_table(list(table.values()))
+
+
+def test_reliability_table_bins_each_estimator_by_its_own_risk() -> None:
+    """Records binned by each estimator's predicted risk against failures within the
+    horizon (truth <= 20), counted by hand; the Wilson interval is scipy's."""
+    from scipy.stats import binomtest
+
+    from experiments.reference_report import format_reliability, reliability_table
+
+    rows = [_row(1, 0.9, truth, 0.0, risk) for truth, risk in
+            ((10.0, 0.6), (30.0, 0.6), (5.0, 0.8), (50.0, 0.05))]  # fmt: skip
+    for r, ref in zip(rows, (0.95, 0.2, 0.95, 0.0), strict=True):
+        r["ref_risk"] = ref
+    table = reliability_table(rows, bins=(0.0, 0.1, 0.5, 0.7, 1.0))
+    got = {(r["estimator"], r["bin_low"]): r for r in table}
+    pf = got["pf", 0.5]  # risks 0.6, 0.6: one failed within 20
+    assert pf["records"] == 2 and pf["predicted"] == pytest.approx(0.6)
+    assert pf["observed"] == 0.5
+    ci = binomtest(1, 2).proportion_ci(method="wilson")
+    assert (pf["observed_ci_low"], pf["observed_ci_high"]) == pytest.approx((ci.low, ci.high))
+    assert got["pf", 0.7]["records"] == 1 and got["pf", 0.7]["observed"] == 1.0
+    assert got["ref", 0.7]["records"] == 2 and got["ref", 0.7]["observed"] == 1.0
+    assert got["ref", 0.1]["records"] == 1 and got["ref", 0.1]["observed"] == 0.0
+    assert got["ref", 0.0]["records"] == 1 and got["ref", 0.0]["observed"] == 0.0
+    assert "0.50-0.70" in format_reliability(table)
