@@ -435,13 +435,15 @@ class ReferencePosterior:
         x = np.column_stack([self.a0 - m.a0_mean_m, self.log_theta]) / scale
         mean = w @ x
         cov = np.cov(x.T, aweights=w, bias=True) * self.INFLATE**2
-        eig = np.linalg.eigvalsh(cov)
-        if eig[0] <= 1e-12 * max(eig[-1], 1e-300):
-            # the weight sits on one point (or a line): widen the proposal by a tenth of the
-            # prior's sd in each coordinate; any proposal covering the posterior is exact
-            # after the importance weights, this one only finds it
+        try:
+            proposal = multivariate_t(loc=mean, shape=cov, df=self.T_DOF)
+        except np.linalg.LinAlgError:
+            # the weight sits on one point (or a line), a covariance scipy calls singular:
+            # widen the proposal by a tenth of the prior's sd in each coordinate; any
+            # proposal covering the posterior is exact after the importance weights, this
+            # one only finds it
             cov = cov + self.FLOOR**2 * np.eye(2)
-        proposal = multivariate_t(loc=mean, shape=cov, df=self.T_DOF)
+            proposal = multivariate_t(loc=mean, shape=cov, df=self.T_DOF)
         u = qmc.Sobol(d=3, scramble=True, seed=self.rng).random_base2(self.log2_points)
         radius = np.sqrt(chi2.ppf(u[:, 2], self.T_DOF) / self.T_DOF)
         pts = mean + (norm.ppf(u[:, :2]) @ np.linalg.cholesky(cov).T) / radius[:, None]
