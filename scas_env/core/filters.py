@@ -39,7 +39,6 @@ from numba import njit
 
 from prognostics.degradation_models import predict_particles
 from prognostics.measurement import random_effect_update
-from prognostics.normals import standard_normal
 from prognostics.particle_filter import (
     MAX_ABS_LOG_THETA,
     MAX_ABS_SEVERITY,
@@ -83,10 +82,7 @@ class FilterModel(NamedTuple):
     steps per particle, the prior's initial crack depth mean, sd and upper bound (m), the
     prior sd of log theta, the random-walk scale); ``cross_inflation``: the factor on the
     variance the other part's estimate adds to a feature's likelihood
-    (``Scenario.cross_variance_inflation``); ``cross_memory``: with a memory > 0
-    (``Scenario.cross_error_memory_flights``) each particle carries the other part's
-    estimate error as a normal score in ``aux[cross_row]`` (an AR(1) over flights) and
-    reads its features there, no variance added.
+    (``Scenario.cross_variance_inflation``).
     """
 
     process: tuple
@@ -108,8 +104,6 @@ class FilterModel(NamedTuple):
     ground_other: tuple
     move: tuple
     cross_inflation: float
-    cross_memory: float
-    cross_row: int
 
 
 @njit(cache=True)
@@ -162,43 +156,6 @@ def effect_likelihood(
 
 
 @njit(cache=True)
-def latent_effect_likelihood(
-    y: float,
-    m: float,
-    x: np.ndarray,
-    w: np.ndarray,
-    critical: float,
-    stack: np.ndarray,
-    own_grid: np.ndarray,
-    other_grid: np.ndarray,
-    other: float,
-    other_sd: float,
-    score: np.ndarray,
-    noise_scale: float,
-    z_mean: np.ndarray,
-    z_var: np.ndarray,
-    log_lik: np.ndarray,
-    work: tuple,
-) -> float:
-    """:func:`effect_likelihood` with the other part read per particle at ``other + other_sd
-    score_i`` (clipped to [0, 1]: the particle's own view of the other part's estimate
-    error) and no variance added."""
-    n = x.size
-    mu, tau, var = work[10], work[11], work[12]
-    shift = 0.0
-    for p in range(n):
-        i, ti = cell_of(own_grid, min(max(x[p] / critical, 0.0), 1.0))
-        j, tj = cell_of(other_grid, min(max(other + other_sd * score[p], 0.0), 1.0))
-        mu[p] = bilinear_at(stack, 0, i, ti, j, tj)
-        tau[p] = bilinear_at(stack, 1, i, ti, j, tj)
-        run = bilinear_at(stack, 2, i, ti, j, tj) * noise_scale
-        var[p] = run * run / m
-        shift += w[p] * tau[p] * z_mean[p]
-    random_effect_update(y, mu, tau, var, z_mean, z_var, log_lik)
-    return shift
-
-
-@njit(cache=True)
 def fraction_moments(x: np.ndarray, w: np.ndarray, critical: float, sq: np.ndarray) -> tuple:
     """Weighted mean (clipped to [0, 1]) and variance of a severity as a fraction of
     ``critical`` (``sq``: scratch of N). ``np.dot`` as numpy's ``@`` (the same BLAS sum)."""
@@ -240,17 +197,6 @@ def _resampled(n_eff: float, e: int, p: int, bank: tuple, work: tuple, model: Fi
 
 
 @njit(cache=True)
-def advance_scores(score: np.ndarray, d: float, memory: float, handle: tuple) -> None:
-    """Each particle's normal score of the other part's estimate error over ``d`` flights:
-    the AR(1) ``s <- r s + sqrt(1 - r^2) eps``, ``r = exp(-d / memory)``, ``eps`` standard
-    normals from ``handle`` (stationary N(0, 1), correlation ``exp(-d / memory)``)."""
-    r = math.exp(-d / memory)
-    keep = math.sqrt(max(1.0 - r * r, 0.0))
-    for i in range(score.size):
-        score[i] = r * score[i] + keep * standard_normal(handle)
-
-
-@njit(cache=True)
 def _predict(e: int, p: int, d: float, bank: tuple, pending: np.ndarray, status: np.ndarray,
              work: tuple, model: FilterModel, handle: tuple) -> None:  # fmt: skip
     """Filter p of row e predicted over ``d`` flights, taken off ``pending``; status 1 if a
@@ -266,8 +212,6 @@ def _predict(e: int, p: int, d: float, bank: tuple, pending: np.ndarray, status:
         predict_particles(bx[e, 1], blt[e, 1], d, handle, work[4], *model.process[1])
     if _first_out_of_range(bx[e, p], blt[e, p], MAX_ABS_SEVERITY, MAX_ABS_LOG_THETA) >= 0:
         status[e] = 1
-    if model.cross_memory > 0.0:
-        advance_scores(bank[4][e, p, model.cross_row], d, model.cross_memory, handle)
     pending[e, p] -= d
     if p == 0 and model.move[0]:
         bank[5][2][e, C_AGE] += d
@@ -313,17 +257,10 @@ def _effect_update(e: int, p: int, k: int, y: float, m: float, moments: tuple,
         st, g_own, g_other, own, 0.0, 0.0
     )
     extra_var = slope * slope * other_var * model.cross_inflation
-    if model.cross_memory > 0.0:
-        shift = latent_effect_likelihood(
-            y, m, bx[e, p], bw[e, p], model.critical[p], st, g_own, g_other, other,
-            math.sqrt(other_var), baux[e, p, model.cross_row], model.noise_scale, z_mean,
-            z_var, log_lik, work,
-        )  # fmt: skip
-    else:
-        shift = effect_likelihood(
-            y, m, bx[e, p], bw[e, p], model.critical[p], st, g_own, g_other, other,
-            model.noise_scale, extra_var, z_mean, z_var, log_lik, work,
-        )  # fmt: skip
+    shift = effect_likelihood(
+        y, m, bx[e, p], bw[e, p], model.critical[p], st, g_own, g_other, other,
+        model.noise_scale, extra_var, z_mean, z_var, log_lik, work,
+    )  # fmt: skip
     for i in range(log_lik.size):
         if not math.isfinite(log_lik[i]):
             status[e] = 2
@@ -467,13 +404,11 @@ __all__ = [
     "SLOPE_STEP",
     "STATUS_MESSAGES",
     "FilterModel",
-    "advance_scores",
     "bilinear_at",
     "cell_of",
     "effect_at",
     "effect_likelihood",
     "fraction_moments",
-    "latent_effect_likelihood",
     "learn_row",
     "predict_filter",
     "refresh_row",

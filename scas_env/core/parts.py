@@ -387,8 +387,6 @@ def reset_filter(batch: ActuatorState, e: int, part: str) -> None:
         for j, (mean, var) in enumerate(kept):
             a["aux"][e, 1, 2 * j] = mean
             a["aux"][e, 1, 2 * j + 1] = var
-    if st.scenario.cross_error_memory_flights > 0.0:  # a new estimate, a new error: fresh scores
-        a["aux"][e, :, st.filters.cross_row] = rng.standard_normal((2, n))
     a["det_n"][e, p] = 0
     a["detected"][e, p] = False
     a["pending"][e, p] = 0.0

@@ -176,15 +176,6 @@ class Scenario(Validated):
         "to datum; (1 + rho) / (1 - rho) for an error correlated rho between consecutive data "
         "(docs/beliefs.md)",
     )
-    cross_error_memory_flights: float = param(
-        0.0,
-        "flights",
-        lo=0.0,
-        hi=1e6,
-        source="correlation time of the other part's estimate error, carried by each particle "
-        "as a latent normal score (AR(1), correlation exp(-d / memory) over d flights) instead "
-        "of a variance added to each datum; 0: off (docs/beliefs.md)",
-    )
     rejuvenation_steps: float = param(
         1,
         "MH steps",
@@ -208,18 +199,6 @@ class Scenario(Validated):
                 raise ValueError(f"Scenario.{name} = {value!r} must be one of {allowed}")
         if not (self.crack_active or self.wear_active):
             raise ValueError("Scenario: at least one of crack_active, wear_active must be 1")
-        if self.cross_error_memory_flights > 0.0:
-            if self.cross_variance_inflation != 1.0:
-                raise ValueError(
-                    "Scenario.cross_error_memory_flights > 0 carries the other part's estimate "
-                    "error as a latent state: cross_variance_inflation must be 1, got "
-                    f"{self.cross_variance_inflation}"
-                )
-            if self.rejuvenation != "none":
-                raise ValueError(
-                    "Scenario.cross_error_memory_flights > 0 is not replayed by resample-move: "
-                    f"rejuvenation must be 'none', got {self.rejuvenation!r}"
-                )
         if self.rejuvenation == "resample_move":
             if self.initial_health == "random":
                 raise ValueError(

@@ -428,8 +428,6 @@ def _filter_model(
         ground_other=tuple(tables[f][2] for f in GROUND_FEATURES),
         move=_move_model(params, s, cal),
         cross_inflation=float(s.cross_variance_inflation),
-        cross_memory=float(s.cross_error_memory_flights),
-        cross_row=2 * max(len(f) for f in EFFECT_FEATURES),
     )
 
 

@@ -93,8 +93,6 @@ class ActuatorState:
         i8, b = np.int64, np.bool_
         p = setup.n_particles
         n_aux = 2 * max(len(f) for f in EFFECT_FEATURES)
-        if setup.scenario.cross_error_memory_flights > 0.0:  # each particle's latent score
-            n_aux += 1
         n_feat = len(FLIGHT_FEATURES) + len(GROUND_FEATURES)
         cap = HISTORY_START if setup.scenario.rejuvenation == "resample_move" else 0
         return {
