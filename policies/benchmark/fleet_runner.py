@@ -35,7 +35,7 @@ from typing import Any
 
 import numpy as np
 
-from policies.benchmark.runner import decision_columns, decision_scores
+from policies.benchmark.runner import add_decision, decision_columns, decision_scores
 from scas_env.core.fleet.log import REMOVAL_KINDS
 from scas_env.core.setup import PARTS
 
@@ -134,12 +134,7 @@ def log_scores(log: Sequence[dict[str, Any]], cap: float) -> dict[str, float]:
         if event is None:
             continue
         got = decision_scores(r["true_rul_flights"], r["rul_mean"], r["rul_low"], cap)
-        if got is None:
-            continue
-        key = f"prog_{event}_{r['part']}_"
-        sums[key + "n"] += 1
-        for stat, value in zip(("ra_sum", "alpha_hits", "covered"), got, strict=True):
-            sums[key + stat] += value
+        add_decision(sums, event, r["part"], got)
     return sums
 
 

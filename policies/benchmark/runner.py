@@ -254,15 +254,22 @@ def _score_decisions(
                 m, lo = beliefs[p]
                 truth = float(when["true_state"][f"{p}_rul_flights"][e])
                 got = decision_scores(truth, float(seen[e, m]), float(seen[e, lo]), cap)
-                if got is None:
-                    continue
-                ra, hit, covered = got
-                key = f"prog_{kind}_{p}_"
-                sums = scores[e]
-                sums[key + "n"] += 1
-                sums[key + "ra_sum"] += ra
-                sums[key + "alpha_hits"] += hit
-                sums[key + "covered"] += covered
+                add_decision(scores[e], kind, p, got)
+
+
+def add_decision(
+    sums: dict[str, float], event: str, part: str, got: tuple[float, bool, bool] | None
+) -> None:
+    """One scored prediction (:func:`decision_scores`; None: not scored) into an episode's
+    ``prog_<event>_<part>_*`` sums."""
+    if got is None:
+        return
+    ra, hit, covered = got
+    key = f"prog_{event}_{part}_"
+    sums[key + "n"] += 1
+    sums[key + "ra_sum"] += ra
+    sums[key + "alpha_hits"] += hit
+    sums[key + "covered"] += covered
 
 
 def _info_row(info: Mapping[str, Any], e: int) -> dict[str, Any]:
@@ -279,6 +286,7 @@ __all__ = [
     "DECISION_EVENTS",
     "DECISION_STATS",
     "TERMS",
+    "add_decision",
     "belief_columns",
     "decision_columns",
     "decision_scores",
