@@ -65,6 +65,7 @@ import numpy as np
 from scipy.stats import binomtest
 from tqdm.auto import tqdm
 
+from experiments.belief_common import INTERVAL, LIFE_COLUMNS, TARGETS, StudyResult
 from prognostics.rul_ageing import AgeingRul
 from scas_env.core.batch import ActuatorBatch
 from scas_env.core.scenario import Scenario
@@ -77,20 +78,8 @@ STAGES: tuple[float, ...] = (0.2, 0.4, 0.6, 0.8, 0.9)
 AGES: tuple[int, ...] = (100, 250, 500, 750, 1000)
 POLICIES: tuple[str, ...] = ("test10", "never")
 TRUTHS: tuple[str, ...] = ("info", "realised")
-#: nominal central interval of the RUL distribution
-INTERVAL: tuple[float, float] = (0.05, 0.95)
 #: bin edges of the reliability diagram (predicted risk)
 RISK_BINS: tuple[float, ...] = (0.0, 0.01, 0.03, 0.1, 0.2, 0.35, 0.5, 0.7, 0.9, 1.0)
-#: the calibration targets (docs/beliefs.md)
-TARGETS = {
-    "coverage": (0.85, 0.95),
-    "undercut_tolerance": 0.025,
-    "reliability_tolerance": 0.05,
-    "sd_log_at_0.8": 0.2,
-}
-#: columns of ``lives.csv`` (:func:`life_rows` with the key of its table)
-LIFE_COLUMNS = ("preset", "policy", "part", "stage", "episode", "life", "covered", "undercut",
-                "log_ratio")  # fmt: skip
 #: presets of the study: scenario fields over the defaults
 PRESETS: dict[str, dict[str, Any]] = {
     "default": {},
@@ -376,19 +365,6 @@ def reliability_rows(
             }
         )
     return rows
-
-
-@dataclass(frozen=True)
-class StudyResult:
-    """Tables of one study: ``stages``, ``reliability``, per-life ``lives`` rows
-    (:func:`life_rows`) and fixed-age ``ages`` rows (:func:`age_rows`) keyed by (preset,
-    policy, part); ``config`` as run."""
-
-    config: dict[str, Any]
-    stages: dict[tuple[str, str, str], list[dict[str, float | str]]]
-    reliability: dict[tuple[str, str, str], list[dict[str, float]]]
-    lives: dict[tuple[str, str, str], list[dict[str, float]]] = field(default_factory=dict)
-    ages: dict[tuple[str, str, str], list[dict[str, float | str]]] = field(default_factory=dict)
 
 
 def check_episodes(episodes: int, seed: int, policies: Sequence[str]) -> None:

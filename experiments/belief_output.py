@@ -10,7 +10,7 @@ from pathlib import Path
 
 import numpy as np
 
-from experiments.belief_calibration import INTERVAL, LIFE_COLUMNS, TARGETS, StudyResult
+from experiments.belief_common import INTERVAL, LIFE_COLUMNS, TARGETS, StudyResult
 from scas_env.core.setup import PARTS
 from scas_env.utils.results_folder import results_folder
 

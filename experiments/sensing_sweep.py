@@ -46,12 +46,13 @@ import shlex
 import sys
 import time
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, replace
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from experiments.sensing_sweep_output import SweepResult
 from policies.benchmark.run import PolicySpec, run_benchmark
 from policies.benchmark.stats import paired_comparison
 from policies.rules.nested import surrogate_reference
@@ -82,18 +83,6 @@ __all__ = [
     "summarize_sweep",
 ]
 log = logging.getLogger("experiments.sensing_sweep")
-
-
-@dataclass(frozen=True)
-class SweepResult:
-    """Held-out rows, statistics, tuning results per (replicate, level), config, timings."""
-
-    rows: list[dict[str, Any]]
-    summary: dict[str, Any]
-    tuning: dict[str, dict[str, TuningResult]]
-    config: dict[str, Any]
-    timings: dict[str, float]
-    wall_s: float
 
 
 def replicate_seeds(replicate: int) -> tuple[int, int]:

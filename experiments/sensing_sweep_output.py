@@ -9,13 +9,25 @@ import csv
 import json
 import math
 from collections.abc import Mapping
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from experiments.sensing_sweep import SweepResult
-from policies.value.tuning import HELD_OUT_SEED
+from policies.value.tuning import HELD_OUT_SEED, TuningResult
+
+
+@dataclass(frozen=True)
+class SweepResult:
+    """Held-out rows, statistics, tuning results per (replicate, level), config, timings."""
+
+    rows: list[dict[str, Any]]
+    summary: dict[str, Any]
+    tuning: dict[str, dict[str, TuningResult]]
+    config: dict[str, Any]
+    timings: dict[str, float]
+    wall_s: float
 
 
 def _money(x: float) -> str:

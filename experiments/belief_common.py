@@ -1,0 +1,37 @@
+"""What the belief study's modules share (:mod:`experiments.belief_calibration` runs it,
+:mod:`experiments.belief_output` writes it): the nominal interval, the targets, the per-life
+columns and the result type."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+#: nominal central interval of the RUL distribution
+INTERVAL: tuple[float, float] = (0.05, 0.95)
+#: the calibration targets (docs/beliefs.md)
+TARGETS = {
+    "coverage": (0.85, 0.95),
+    "undercut_tolerance": 0.025,
+    "reliability_tolerance": 0.05,
+    "sd_log_at_0.8": 0.2,
+}
+#: columns of ``lives.csv`` (:func:`life_rows` with the key of its table)
+LIFE_COLUMNS = ("preset", "policy", "part", "stage", "episode", "life", "covered", "undercut",
+                "log_ratio")  # fmt: skip
+
+
+@dataclass(frozen=True)
+class StudyResult:
+    """Tables of one study: ``stages``, ``reliability``, per-life ``lives`` rows
+    (:func:`life_rows`) and fixed-age ``ages`` rows (:func:`age_rows`) keyed by (preset,
+    policy, part); ``config`` as run."""
+
+    config: dict[str, Any]
+    stages: dict[tuple[str, str, str], list[dict[str, float | str]]]
+    reliability: dict[tuple[str, str, str], list[dict[str, float]]]
+    lives: dict[tuple[str, str, str], list[dict[str, float]]] = field(default_factory=dict)
+    ages: dict[tuple[str, str, str], list[dict[str, float | str]]] = field(default_factory=dict)
+
+
+__all__ = ["INTERVAL", "LIFE_COLUMNS", "TARGETS", "StudyResult"]
