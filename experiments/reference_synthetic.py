@@ -24,7 +24,7 @@ from scipy.interpolate import RegularGridInterpolator
 from tqdm.auto import tqdm
 
 from experiments.belief_calibration import INTERVAL, STAGES
-from experiments.reference_posterior import (
+from experiments.reference_model import (
     BATCH,
     DEFAULT_MIN_ESS,
     TEST,

@@ -43,12 +43,7 @@ ROOT = Path(__file__).resolve().parents[1]
 INSTALLED = ("scas_env", "prognostics", "policies")
 PACKAGES = (*INSTALLED, "experiments")
 MAX_MODULES = 15
-#: layout debts of the current tree, each checked to be still there (strict xfail below):
-#: remove an entry when it is paid
-KNOWN_CIRCLES = {
-    frozenset(pair)
-    for pair in (("experiments.reference_posterior", "experiments.reference_synthetic"),)
-}
+#: layout debts of the current tree (remove an entry when it is paid)
 KNOWN_LARGE_FOLDERS: set[str] = set()
 
 
@@ -271,18 +266,10 @@ def test_the_core_is_gymnasium_free_but_for_the_observation_spaces() -> None:
 
 # ----------------------------------------------------------------------------- circles
 def test_no_import_circle() -> None:
-    """No circle but the known debts (``KNOWN_CIRCLES``); every import counts."""
+    """No import circle anywhere, experiments included; every import counts (function-level
+    ones too)."""
     found = set(_cycles(_graph()))
-    assert found <= KNOWN_CIRCLES, sorted(map(sorted, found - KNOWN_CIRCLES))
-
-
-@pytest.mark.xfail(
-    strict=True,
-    reason="layout debt: experiments.reference_posterior's main() (--synthetic) <-> "
-    "experiments.reference_synthetic",
-)
-def test_the_known_import_circles_are_paid() -> None:
-    assert not set(_cycles(_graph())) & KNOWN_CIRCLES
+    assert not found, sorted(map(sorted, found))
 
 
 # ----------------------------------------------------------------------------- folders

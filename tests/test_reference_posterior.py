@@ -12,14 +12,8 @@ import pytest
 from scipy.stats import kstest, multivariate_normal
 
 from experiments.belief_calibration import policy_action
-from experiments.reference_posterior import (
-    BATCH,
-    TEST,
-    RecordingEnv,
-    ReferencePosterior,
-    SpringModel,
-    run_reference_study,
-)
+from experiments.reference_model import BATCH, TEST, ReferencePosterior, SpringModel
+from experiments.reference_posterior import RecordingEnv, run_reference_study
 from experiments.reference_synthetic import (
     format_synthetic,
     measurement_moments,
