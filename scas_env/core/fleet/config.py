@@ -147,7 +147,12 @@ class FleetConfig(Validated):
     """A fleet of helicopters with SCAS actuators, its missions and shared resources."""
 
     aircraft: float = param(
-        8, "aircraft", lo=1, hi=1000, integer=True, source="issue 25 default: a base of 8 [B]"
+        8,
+        "aircraft",
+        lo=1,
+        hi=1000,
+        integer=True,
+        source="a base of 8 helicopters, an assumed medium operator [B]",
     )
     actuators_per_aircraft: float = param(
         3,
