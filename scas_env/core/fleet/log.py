@@ -96,9 +96,9 @@ class MaintenanceLog:
         self._record(day, e, p, "test", True)
 
     def censored(self, b: int, serviceable: np.ndarray) -> list[dict[str, Any]]:
-        """Records of fleet ``b``'s parts still fitted now (kind ``"censored"``), for the rows
-        and parts ``serviceable`` marks ((N A, 2) bool, in row order): a part that failed or
-        went to the shop already has its record."""
+        """Records of fleet ``b``'s parts still fitted now (kind ``"censored"``, day -1), for
+        the rows and parts ``serviceable`` marks ((N A, 2) bool, in row order): a part that
+        failed or went to the shop already has its record."""
         n = self.aircraft * self.per
         out = []
         for k, p in zip(*np.nonzero(serviceable), strict=True):
