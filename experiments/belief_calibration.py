@@ -65,7 +65,7 @@ import numpy as np
 from scipy.stats import binomtest
 from tqdm.auto import tqdm
 
-from experiments.belief_common import INTERVAL, LIFE_COLUMNS, TARGETS, StudyResult
+from experiments.belief_common import INTERVAL, TARGETS, StudyResult
 from prognostics.rul_ageing import AgeingRul
 from scas_env.core.batch import ActuatorBatch
 from scas_env.core.scenario import Scenario
@@ -520,13 +520,9 @@ def main(argv: Sequence[str] | None = None) -> int:
 
 
 __all__ = [
-    "INTERVAL",
-    "LIFE_COLUMNS",
     "POLICIES",
     "PRESETS",
     "STAGES",
-    "TARGETS",
-    "StudyResult",
     "check_episodes",
     "filter_belief",
     "life_rows",

@@ -75,10 +75,8 @@ from experiments.reference_model import (
     DEFAULT_MIN_ESS,
     TEST,
     ReferencePosterior,
-    RulBelief,
     SpringModel,
     check_points,
-    event_update,
 )
 from scas_env.core.scenario import Scenario
 from scas_env.core.setup import FLIGHT_FEATURES, GROUND_FEATURES, LEARNING_FEATURES
@@ -459,19 +457,10 @@ def main(argv: Sequence[str] | None = None) -> int:
 
 
 __all__ = [
-    "BATCH",
-    "DEFAULT_LOG2_POINTS",
-    "DEFAULT_MIN_ESS",
     "REFERENCE_STAGES",
     "SEAL_VIEWS",
-    "TEST",
     "RecordingEnv",
-    "ReferencePosterior",
-    "RulBelief",
     "SpringEvents",
-    "SpringModel",
-    "check_points",
-    "event_update",
     "main",
     "reference_lives",
     "run_reference_study",

@@ -17,7 +17,8 @@ from typing import Any
 
 import numpy as np
 
-from experiments.belief_calibration import RISK_BINS, TARGETS, _share
+from experiments.belief_calibration import RISK_BINS, _share
+from experiments.belief_common import TARGETS
 from experiments.belief_comparison import paired_difference
 from experiments.belief_output import write_csv
 from scas_env.utils.results_folder import results_folder

@@ -23,7 +23,8 @@ import numpy as np
 from scipy.interpolate import RegularGridInterpolator
 from tqdm.auto import tqdm
 
-from experiments.belief_calibration import INTERVAL, STAGES
+from experiments.belief_calibration import STAGES
+from experiments.belief_common import INTERVAL
 from experiments.reference_model import (
     BATCH,
     DEFAULT_MIN_ESS,

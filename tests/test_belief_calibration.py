@@ -21,7 +21,8 @@ import numpy as np
 import pytest
 from scipy.stats import binomtest
 
-from experiments.belief_calibration import INTERVAL, filter_belief, policy_action, run_study
+from experiments.belief_calibration import filter_belief, policy_action, run_study
+from experiments.belief_common import INTERVAL
 from scas_env.core.setup import PARTS
 from scas_env.env import ScasMaintenanceEnv
 

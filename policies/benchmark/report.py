@@ -41,7 +41,7 @@ from policies.benchmark.run import TERMS, BenchmarkResult
 from policies.benchmark.stats import METRICS
 from policies.benchmark.survival import kaplan_meier
 
-__all__ = ["cost_breakdown", "format_table", "kaplan_meier", "markdown_summary", "write_outputs"]
+__all__ = ["cost_breakdown", "format_table", "markdown_summary", "write_outputs"]
 
 #: How the per-policy intervals are made (policies.benchmark.stats).
 INTERVALS = (
