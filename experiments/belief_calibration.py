@@ -330,10 +330,13 @@ def reliability_rows(
     horizon: float,
     bins: Sequence[float] = RISK_BINS,
     truth: str = "realised",
+    rng: np.random.Generator | None = None,
 ) -> list[dict[str, float | str]]:
     """Predicted risk binned against the observed frequency of a failure within ``horizon``
     flights: a realised failure over the records whose outcome is known (``"realised"``), or
-    an info RUL <= ``horizon`` over every record (``"info"``; module docstring)."""
+    an info RUL <= ``horizon`` over every record (``"info"``; module docstring). Per bin the
+    Wilson interval over records and, with ``rng``, the interval with the episodes resampled
+    (:func:`episode_intervals`; NaN without ``rng``)."""
     if truth == "realised":
         realised = table["realised"]
         failed_in = np.isfinite(realised) & (realised <= horizon)
@@ -348,6 +351,12 @@ def reliability_rows(
     hit = failed_in[known]
     edges = np.asarray(bins)
     which = np.clip(np.searchsorted(edges, risk, side="right") - 1, 0, edges.size - 2)
+    nan = {"episode_ci_low": math.nan, "episode_ci_high": math.nan}
+    clustered = (
+        episode_intervals(risk, hit.astype(np.float64), table["episode"][known], rng, bins)
+        if rng is not None
+        else [nan] * (edges.size - 1)
+    )
     rows = []
     for b in range(edges.size - 1):
         sel = which == b
@@ -362,9 +371,49 @@ def reliability_rows(
                 "observed": share,
                 "observed_ci_low": lo,
                 "observed_ci_high": hi,
+                **clustered[b],
             }
         )
     return rows
+
+
+def episode_intervals(
+    risk: np.ndarray,
+    hit: np.ndarray,
+    episode: np.ndarray,
+    rng: np.random.Generator,
+    bins: Sequence[float] = RISK_BINS,
+    resamples: int = 2000,
+) -> list[dict[str, float]]:
+    """Per reliability bin, the 95 % interval of the observed frequency with the episodes
+    resampled (percentile bootstrap, :func:`scipy.stats.bootstrap`): the records of one life
+    are dependent, so the Wilson interval over records is too narrow. NaN for a bin with
+    records from fewer than two episodes."""
+    from scipy.stats import bootstrap
+
+    edges = np.asarray(bins)
+    which = np.clip(np.searchsorted(edges, risk, side="right") - 1, 0, edges.size - 2)
+    episodes, ep_index = np.unique(episode, return_inverse=True)
+    out = []
+    for b in range(edges.size - 1):
+        sel = which == b
+        n = np.bincount(ep_index[sel], minlength=episodes.size).astype(np.float64)
+        k = np.bincount(ep_index[sel], weights=hit[sel], minlength=episodes.size)
+        if np.count_nonzero(n) < 2:
+            out.append({"episode_ci_low": math.nan, "episode_ci_high": math.nan})
+            continue
+        res = bootstrap(
+            (k, n),
+            lambda k_, n_, axis=-1: k_.sum(axis) / np.maximum(n_.sum(axis), 1.0),
+            paired=True,
+            vectorized=True,
+            n_resamples=resamples,
+            method="percentile",
+            random_state=rng,
+        )
+        ci = res.confidence_interval
+        out.append({"episode_ci_low": float(ci.low), "episode_ci_high": float(ci.high)})
+    return out
 
 
 def check_episodes(episodes: int, seed: int, policies: Sequence[str]) -> None:
@@ -414,6 +463,7 @@ def run_study(
     life_tables: dict[tuple[str, str, str], list] = {}
     age_tables: dict[tuple[str, str, str], list] = {}
     jobs = [(pr, po) for pr in presets for po in policies]
+    boot = np.random.default_rng(seed)  # the reliability bins' bootstrap only
     bar = tqdm(total=len(jobs) * episodes, desc="belief episodes", disable=not progress)
     for preset, policy in jobs:
         env = make(scenarios[preset])
@@ -429,7 +479,9 @@ def run_study(
             stage_tables[key] = stage_rows(table, stages, float(sc.rul_quantile))
             horizon = float(sc.risk_horizon_flights)
             rel_tables[key] = [
-                row for truth in TRUTHS for row in reliability_rows(table, horizon, truth=truth)
+                row
+                for truth in TRUTHS
+                for row in reliability_rows(table, horizon, truth=truth, rng=boot)
             ]
             life_tables[key] = life_rows(table, stages)
             age_tables[key] = age_rows(table, AGES, float(sc.rul_quantile))
@@ -524,6 +576,7 @@ __all__ = [
     "PRESETS",
     "STAGES",
     "check_episodes",
+    "episode_intervals",
     "filter_belief",
     "life_rows",
     "main",

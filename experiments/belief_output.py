@@ -5,6 +5,7 @@ for the terminal, and a results folder with ``stages.csv``, ``reliability.csv``,
 from __future__ import annotations
 
 import json
+import math
 from collections.abc import Mapping
 from pathlib import Path
 
@@ -43,7 +44,7 @@ def format_reliability(result: StudyResult, truth: str = "realised") -> str:
     """A text table of the reliability diagrams against ``truth`` (bins with records only)."""
     lines = [
         f"{'preset':8s} {'policy':7s} {'part':6s} {'bin':>11s} {'records':>7s} "
-        f"{'predicted':>9s} {'observed [95% CI]':>22s}"
+        f"{'predicted':>9s} {'observed [95% CI]':>22s} {'[episodes resampled]':>20s}"
     ]
     for (preset, policy, part), rows in result.reliability.items():
         for r in rows:
@@ -53,7 +54,8 @@ def format_reliability(result: StudyResult, truth: str = "realised") -> str:
                 f"{preset:8s} {policy:7s} {part:6s} "
                 f"{r['bin_low']:5.2f}-{r['bin_high']:4.2f} {int(r['records']):7d} "
                 f"{r['predicted']:9.4f} {r['observed']:6.4f} "
-                f"[{r['observed_ci_low']:.4f}, {r['observed_ci_high']:.4f}]"
+                f"[{r['observed_ci_low']:.4f}, {r['observed_ci_high']:.4f}] "
+                f"[{r['episode_ci_low']:.4f}, {r['episode_ci_high']:.4f}]"
             )
     return "\n".join(lines)
 
@@ -138,6 +140,12 @@ def _plot_coverage(result: StudyResult, path: Path) -> None:
     plt.close(fig)
 
 
+def _episode_or_wilson(row: Mapping[str, float], end: str) -> float:
+    """A bin's interval end with the episodes resampled, the Wilson one where it is NaN."""
+    v = row.get(f"episode_ci_{end}", math.nan)
+    return float(v) if math.isfinite(v) else float(row[f"observed_ci_{end}"])
+
+
 def _plot_reliability(result: StudyResult, path: Path) -> None:
     import matplotlib
 
@@ -153,8 +161,8 @@ def _plot_reliability(result: StudyResult, path: Path) -> None:
                 r = [x for x in rows if x["records"] and x["truth"] == truth]
                 x = np.array([x["predicted"] for x in r])
                 y = np.array([x["observed"] for x in r])
-                lo = y - np.array([x["observed_ci_low"] for x in r])
-                hi = np.array([x["observed_ci_high"] for x in r]) - y
+                lo = y - np.array([_episode_or_wilson(x, "low") for x in r])
+                hi = np.array([_episode_or_wilson(x, "high") for x in r]) - y
                 ax.errorbar(
                     x, y, yerr=[lo, hi], marker=marker, capsize=3,
                     label=f"{preset}/{policy} ({truth})",

@@ -1,4 +1,6 @@
-"""Prognostic performance metrics of Saxena, Celaya, Saha, Saha & Goebel (IJPHM 1(1), 2010).
+"""Prognostic performance metrics: of RUL predictions after Saxena, Celaya, Saha, Saha &
+Goebel (IJPHM 1(1), 2010); of failure probabilities, the Brier score, and their isotonic
+recalibration.
 
 Notation (ref §6.2): predictions at times ``t_i`` (``t_P`` the first), true end of life
 ``t_EoL``, true RUL ``r*(i) = t_EoL - t_i``, predicted RUL distribution ``r(i)`` given as
@@ -17,15 +19,44 @@ raises a ``ValueError`` or ``TypeError`` naming the argument.
     0.9
     >>> convergence(np.array([0.0, 1.0, 2.0]), np.array([2.0, 2.0, 0.0]))
     1.4142135623730951
+
+Failure probabilities. A risk output ``p = P(fail within H)`` is *reliable* when, among the
+records where it says ``p``, a share ``p`` fails within ``H`` (the reliability diagram:
+Murphy & Winkler 1977, J. R. Stat. Soc. C 26(1); DeGroot & Fienberg 1983, The Statistician
+32). Where a model's risk is not, a non-decreasing map fitted on training records with known
+outcomes makes it so on records like them: isotonic calibration (Zadrozny & Elkan 2002,
+"Transforming classifier scores into accurate multiclass probability estimates", KDD), the
+least-squares non-decreasing fit of the outcomes ordered by the prediction, computed by the
+pool-adjacent-violators algorithm (Ayer et al. 1955, Ann. Math. Stat. 26(4);
+:func:`scipy.optimize.isotonic_regression`).
+
+:func:`fit_risk_map`: the records' distinct predictions (tied ones pooled, so equal
+predictions map to one value), the isotonic fit of their outcome shares weighted by their
+counts; each block of the fit becomes a knot at its records' mean prediction with the
+block's failure share; :class:`RiskMap` interpolates linearly between knots (constant
+beyond the first and the last), so it is continuous and non-decreasing.
+
+A non-decreasing map keeps the order of the predictions: a rule acting when the risk
+crosses a threshold takes the same decisions at the mapped threshold (if the map is
+strictly increasing there). It changes what the number means (its reliability), not what
+it can tell apart (its resolution); the Brier score (:func:`brier_score`) measures both.
+
+    >>> m = fit_risk_map(np.array([0.1, 0.1, 0.2, 0.2, 0.4, 0.4]), np.array([0, 0, 0, 1, 1, 1]))
+    >>> m.predicted, m.calibrated
+    ((0.1, 0.2, 0.4), (0.0, 0.5, 1.0))
+    >>> m(np.array([0.0, 0.3, 1.0])).tolist()
+    [0.0, 0.75, 1.0]
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
+from scipy.optimize import isotonic_regression
 
 from prognostics import validation as check
 
@@ -369,3 +400,100 @@ def evaluate_predictions(
         prognostic_horizon=prognostic_horizon(t, samples, ws, eol, ph_alpha, beta, band),
         convergence=convergence(t, np.abs(true_rul - points)) if t.size >= 2 else math.nan,
     )
+
+
+# --- failure probabilities: Brier score and isotonic recalibration ---
+
+
+@dataclass(frozen=True)
+class RiskMap:
+    """A continuous non-decreasing map of a predicted probability onto [0, 1]: linear
+    between the knots ``(predicted[k], calibrated[k])``, the end values beyond them.
+
+    ``predicted``: strictly increasing probabilities; ``calibrated``: non-decreasing
+    probabilities, one per knot; ``records``: how many records the map was fitted on
+    (0 if not fitted).
+    """
+
+    predicted: tuple[float, ...]
+    calibrated: tuple[float, ...]
+    records: int = 0
+
+    def __post_init__(self) -> None:
+        x = check.array("predicted", self.predicted, ndim=1, min_size=1, ge=0.0, le=1.0)
+        y = check.array("calibrated", self.calibrated, shape=x.shape, like="predicted",
+                        ge=0.0, le=1.0)  # fmt: skip
+        if np.any(np.diff(x) <= 0.0):
+            k = int(np.flatnonzero(np.diff(x) <= 0.0)[0])
+            raise ValueError(
+                f"predicted must be strictly increasing, got {x[k]!r} then {x[k + 1]!r} "
+                f"at knots {k} and {k + 1}"
+            )
+        if np.any(np.diff(y) < 0.0):
+            k = int(np.flatnonzero(np.diff(y) < 0.0)[0])
+            raise ValueError(
+                f"calibrated must be non-decreasing, got {y[k]!r} then {y[k + 1]!r} "
+                f"at knots {k} and {k + 1}"
+            )
+        check.integer("records", self.records, ge=0)
+        object.__setattr__(self, "predicted", tuple(float(v) for v in x))
+        object.__setattr__(self, "calibrated", tuple(float(v) for v in y))
+
+    def __call__(self, risk: Any) -> np.ndarray:
+        """The map at ``risk`` (probabilities in [0, 1], any shape; float64 out)."""
+        p = check.array("risk", risk, ge=0.0, le=1.0)
+        return np.interp(p, self.predicted, self.calibrated)
+
+    def to_dict(self) -> dict[str, Any]:
+        """The map as JSON-ready values (:meth:`from_dict` reads them back)."""
+        return {
+            "predicted": list(self.predicted),
+            "calibrated": list(self.calibrated),
+            "records": self.records,
+        }
+
+    @classmethod
+    def from_dict(cls, data: Mapping[str, Any]) -> RiskMap:
+        """A map from :meth:`to_dict`'s values; other keys are refused."""
+        check.mapping("data", data)
+        allowed = ("predicted", "calibrated", "records")
+        unknown = sorted(set(data) - set(allowed))
+        if unknown:
+            raise ValueError(f"RiskMap: unknown keys {unknown}; allowed: {list(allowed)}")
+        missing = [k for k in allowed[:2] if k not in data]
+        if missing:
+            raise ValueError(f"RiskMap: missing keys {missing}")
+        return cls(tuple(data["predicted"]), tuple(data["calibrated"]), data.get("records", 0))
+
+
+def _records(predicted: Any, outcome: Any) -> tuple[np.ndarray, np.ndarray]:
+    p = check.array("predicted", predicted, ndim=1, min_size=1, ge=0.0, le=1.0)
+    y = check.array("outcome", outcome, shape=p.shape, like="predicted")
+    if not np.all((y == 0.0) | (y == 1.0)):
+        k = int(np.flatnonzero((y != 0.0) & (y != 1.0))[0])
+        raise ValueError(f"outcome must hold 0 or 1 (the event did not or did happen), "
+                         f"got {y[k]!r} at index {k}")  # fmt: skip
+    return p, y
+
+
+def fit_risk_map(predicted: Any, outcome: Any) -> RiskMap:
+    """The isotonic map of ``predicted`` probabilities onto the observed frequency of
+    ``outcome`` (1: the event happened, 0: it did not), one record per entry (module
+    docstring; Zadrozny & Elkan 2002)."""
+    p, y = _records(predicted, outcome)
+    values, inverse, counts = np.unique(p, return_inverse=True, return_counts=True)
+    share = np.bincount(inverse, weights=y) / counts
+    fit = isotonic_regression(share, weights=counts.astype(np.float64), increasing=True)
+    starts = fit.blocks[:-1]
+    w = counts.astype(np.float64)
+    knots_x = np.add.reduceat(values * w, starts) / np.add.reduceat(w, starts)
+    knots_y = np.clip(fit.x[starts], 0.0, 1.0)  # a mean of 0/1 shares, in [0, 1] up to rounding
+    return RiskMap(tuple(knots_x), tuple(knots_y), int(p.size))
+
+
+def brier_score(predicted: Any, outcome: Any) -> float:
+    """Mean squared difference between predicted probabilities and 0/1 outcomes (Brier
+    1950, Mon. Weather Rev. 78(1)); lower is better, 0 a perfect forecast."""
+    p, y = _records(predicted, outcome)
+    d = p - y
+    return math.fsum(d * d) / p.size

@@ -42,6 +42,7 @@ COMMANDS = (
     "prognostics_speed",
     "reference_posterior",
     "renewal",
+    "risk_recalibration",
     "sb3_speed",
     "sensing_sweep",
     "spring_cloud",
@@ -140,3 +141,22 @@ def test_small_runs_of_the_commands(tmp_path, capsys) -> None:
                          "--out", str(tmp_path / "r.json")]) == 0  # fmt: skip
     printed = capsys.readouterr().out
     assert "closed form" in printed and "| predict |" in printed
+
+
+def test_risk_recalibration_command(tmp_path, capsys) -> None:
+    """Fits maps on training seeds, scores them on held-out ones, writes the map file the
+    wrapper reads; overlapping seed sets are a usage error."""
+    from experiments import risk_recalibration
+    from scas_env.risk_recalibration import load_risk_maps
+
+    out = tmp_path / "rr"
+    args = ["--train-episodes", "1", "--episodes", "2", "--presets", "default", "--policies",
+            "never", "--no-progress"]  # fmt: skip
+    assert risk_recalibration.main([*args, "--out", str(out)]) == 0
+    assert "Brier raw" in capsys.readouterr().out
+    names = {p.name for p in out.iterdir()}
+    assert {"reliability.csv", "brier.csv", "summary.json", "reliability.png"} <= names
+    maps, _, _ = load_risk_maps(out / "risk_maps_default.json")
+    assert set(maps) == {"spring", "seal"} and maps["seal"].records > 0
+    with pytest.raises(SystemExit):
+        risk_recalibration.main([*args, "--seed", "0"])

@@ -343,6 +343,27 @@ def _specs() -> list[Spec]:
             lambda: {"times": [0.0, 10.0, 20.0], "metric": [4.0, 2.0, 0.0]},
         ),
         Spec(
+            "metrics.brier_score",
+            _f(metrics.brier_score),
+            lambda: {"predicted": np.array([0.1, 0.9, 0.4]), "outcome": np.array([0.0, 1.0, 1.0])},
+        ),
+        Spec(
+            "metrics.fit_risk_map",
+            _f(metrics.fit_risk_map),
+            lambda: {"predicted": np.array([0.1, 0.9, 0.4]), "outcome": np.array([0.0, 1.0, 1.0])},
+        ),
+        Spec(
+            "RiskMap",
+            _f(metrics.RiskMap),
+            lambda: {"predicted": (0.0, 0.5, 1.0), "calibrated": (0.1, 0.2, 0.9), "records": 3},
+        ),
+        Spec("RiskMap.to_dict", lambda: metrics.RiskMap((0.0, 1.0), (0.1, 0.9)).to_dict, dict),
+        Spec(
+            "RiskMap.from_dict",
+            lambda: metrics.RiskMap.from_dict,
+            lambda: {"data": {"predicted": [0.0, 1.0], "calibrated": [0.1, 0.9], "records": 2}},
+        ),
+        Spec(
             "metrics.evaluate_predictions",
             _f(metrics.evaluate_predictions),
             lambda: {
@@ -1362,13 +1383,15 @@ def test_a_refused_call_leaves_the_filter_as_it_was() -> None:
     assert pf.estimate().x_mean == pytest.approx(0.2)
 
 
-def test_metrics_cite_saxena_2010_and_are_typed_and_pure() -> None:
-    """Pure typed functions citing the definition they implement (issue 27)."""
+def test_metrics_cite_their_definitions_and_are_typed_and_pure() -> None:
+    """Pure typed functions citing the definition they implement: Saxena et al. 2010 for the
+    RUL metrics, Brier 1950 and Zadrozny & Elkan 2002 for the failure probabilities."""
     for name in dir(metrics):
         fn = getattr(metrics, name)
         if name.startswith("_") or not inspect.isfunction(fn) or fn.__module__ != metrics.__name__:
             continue
-        assert "Saxena 2010" in (fn.__doc__ or ""), f"metrics.{name} does not cite Saxena 2010"
+        cited = re.search(r"Saxena 2010|Brier\s+1950|Zadrozny & Elkan 2002", fn.__doc__ or "")
+        assert cited, f"metrics.{name} cites no definition"
         sig = inspect.signature(fn)
         assert sig.return_annotation is not inspect.Signature.empty, name
         assert all(p.annotation is not inspect.Parameter.empty for p in sig.parameters.values())

@@ -1,0 +1,315 @@
+"""Recalibrated risk: isotonic maps of the monitor's risk fitted on training lives, scored on
+held-out lives (docs/beliefs.md, "Recalibrated risk").
+
+    python -m experiments.risk_recalibration --out results/risk_recalibration    # ~25 min
+    python -m experiments.risk_recalibration --train-episodes 4 --episodes 4 --out /tmp/rr
+
+Per sensing preset (:data:`experiments.belief_calibration.PRESETS`), the belief study's
+policies (``test10``, ``never``; they never replace a part before it fails) fly
+``--train-episodes`` seeded episodes from ``--train-seed``; every record of every part life
+(one per age: :func:`experiments.belief_calibration.run_episode`) gives the filter's risk
+``P(fail within Scenario.risk_horizon_flights)`` and whether the info RUL was within the
+horizon (the exact outcome, no censoring). Per part, one map over both policies' records
+(:func:`prognostics.metrics.fit_risk_map`). Then ``--episodes`` held-out episodes from
+``--seed``: per policy, part and truth (``info``; ``realised``, censored as in the belief
+study), the reliability diagram of the raw and the mapped risk, the worst bin's
+``|observed - predicted|`` over bins of at least :data:`MIN_RECORDS` records, each bin's 95 %
+interval with the episodes resampled (the records of a life are dependent:
+:func:`experiments.belief_calibration.episode_intervals`) and the bins whose interval lies
+wholly outside ``predicted +- 0.05`` (off target), and the Brier
+score of both with their paired difference (mapped - raw: per episode the mean over its
+records, a t interval over episodes, the records of one episode being dependent).
+
+Writes ``risk_maps_<preset>.json`` (what :func:`scas_env.risk_recalibration.load_risk_maps`
+reads), ``reliability.csv``, ``brier.csv``, ``summary.json`` and ``reliability.png``.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from tqdm.auto import tqdm
+
+from experiments.belief_calibration import (
+    POLICIES,
+    PRESETS,
+    RISK_BINS,
+    check_episodes,
+    reliability_rows,
+    run_episode,
+    trace_table,
+)
+from experiments.belief_output import write_csv
+from policies.benchmark.stats import paired_difference
+from prognostics.metrics import RiskMap, brier_score, fit_risk_map
+from scas_env.core.scenario import Scenario
+from scas_env.core.setup import PARTS
+from scas_env.env import ScasMaintenanceEnv
+from scas_env.risk_recalibration import save_risk_maps
+from scas_env.utils.results_folder import results_folder
+
+#: bins with fewer records are left out of the worst-bin figure (their Wilson interval is
+#: wider than the +-5-point target)
+MIN_RECORDS = 100
+#: the target band around the predicted risk (points of probability)
+TOLERANCE = 0.05
+KINDS: tuple[str, ...] = ("raw", "mapped")
+TRUTHS: tuple[str, ...] = ("info", "realised")
+
+
+def collect(
+    scenario: Scenario, policy: str, seeds: Sequence[int], bar: Any = None
+) -> dict[str, dict[str, np.ndarray]]:
+    """Per part, the belief study's record table (:func:`trace_table`) of ``policy`` on the
+    episodes ``seeds``."""
+    env = ScasMaintenanceEnv(scenario=scenario)
+    traces: dict[str, list] = {p: [] for p in PARTS}
+    for s in seeds:
+        for p, tr in run_episode(env, policy, int(s)).items():
+            traces[p].append(tr)
+        if bar is not None:
+            bar.update()
+    return {p: trace_table(traces[p]) for p in PARTS}
+
+
+def outcome(table: Mapping[str, np.ndarray], horizon: float) -> np.ndarray:
+    """1 where a record's info RUL is within ``horizon`` flights, else 0."""
+    return (table["true_info"] <= horizon).astype(np.float64)
+
+
+def fit_maps(tables: Sequence[Mapping[str, Mapping[str, np.ndarray]]], horizon: float) -> dict:
+    """Per part, the isotonic map over the records of every table (one per policy)."""
+    return {
+        part: fit_risk_map(
+            np.concatenate([t[part]["risk"] for t in tables]),
+            np.concatenate([outcome(t[part], horizon) for t in tables]),
+        )
+        for part in PARTS
+    }
+
+
+def _off_target(row: Mapping[str, float], tolerance: float) -> bool:
+    """The bin's episode interval lies wholly outside ``predicted +- tolerance``."""
+    lo, hi, p = row["episode_ci_low"], row["episode_ci_high"], row["predicted"]
+    return bool(lo > p + tolerance or hi < p - tolerance)
+
+
+def score(
+    table: Mapping[str, np.ndarray], risk_map: RiskMap, horizon: float,
+    rng: np.random.Generator,
+) -> tuple[list[dict], dict[str, Any]]:  # fmt: skip
+    """Reliability rows of the raw and the mapped risk (both truths, with episode-resampled
+    intervals; per truth the bins whose interval misses the +- :data:`TOLERANCE` band) and
+    the Brier scores with their paired difference over episodes (module docstring)."""
+    mapped = {**table, "risk": risk_map(table["risk"])}
+    y = outcome(table, horizon)
+    rows: list[dict] = []
+    worst: dict[str, float] = {}
+    for kind, t in (("raw", table), ("mapped", mapped)):
+        for truth in TRUTHS:
+            rel = reliability_rows(t, horizon, truth=truth, rng=rng)
+            worst[f"off_target_{kind}_{truth}"] = sum(
+                1 for r in rel if r["records"] and _off_target(r, TOLERANCE)
+            )
+            rows += [{"kind": kind, **r} for r in rel]
+            dev = [abs(r["observed"] - r["predicted"]) for r in rel if r["records"] >= MIN_RECORDS]
+            worst[f"worst_{kind}_{truth}"] = max(dev) if dev else math.nan
+    episodes = np.unique(table["episode"])
+    per_ep = {
+        kind: np.array(
+            [
+                brier_score(t["risk"][table["episode"] == e], y[table["episode"] == e])
+                for e in episodes
+            ]
+        )
+        for kind, t in (("raw", table), ("mapped", mapped))
+    }
+    diff = paired_difference(per_ep["mapped"], per_ep["raw"])
+    brier = {
+        "records": int(y.size),
+        "episodes": int(episodes.size),
+        "brier_raw": brier_score(table["risk"], y),
+        "brier_mapped": brier_score(mapped["risk"], y),
+        "diff_mean": diff.mean,
+        "diff_low": diff.low,
+        "diff_high": diff.high,
+        "diff_mdd": diff.mdd,
+        **worst,
+    }
+    return rows, brier
+
+
+def run(
+    *,
+    train_episodes: int = 400,
+    train_seed: int = 0,
+    episodes: int = 200,
+    seed: int = 1000,
+    presets: Sequence[str] = tuple(PRESETS),
+    policies: Sequence[str] = POLICIES,
+    progress: bool = True,
+) -> dict[str, Any]:
+    """Fit on the training seeds, score on the held-out ones (module docstring): per preset
+    the maps and scenario, the reliability rows and the Brier rows."""
+    check_episodes(train_episodes, train_seed, policies)
+    check_episodes(episodes, seed, policies)
+    bad = [p for p in presets if p not in PRESETS]
+    if bad or not presets:
+        raise ValueError(f"presets = {list(presets)!r} must be a non-empty subset of "
+                         f"{tuple(PRESETS)}")  # fmt: skip
+    train = range(train_seed, train_seed + train_episodes)
+    held = range(seed, seed + episodes)
+    if set(train) & set(held):
+        raise ValueError(f"training seeds {train} and held-out seeds {held} overlap")
+    total = len(presets) * len(policies) * (train_episodes + episodes)
+    bar = tqdm(total=total, desc="recalibration episodes", disable=not progress)
+    out: dict[str, Any] = {"presets": {}, "reliability": [], "brier": []}
+    rng = np.random.default_rng(seed)  # the bootstrap's resampling only
+    for preset in presets:
+        sc = Scenario.from_dict(dict(PRESETS[preset]))
+        horizon = float(sc.risk_horizon_flights)
+        maps = fit_maps([collect(sc, pol, train, bar) for pol in policies], horizon)
+        out["presets"][preset] = {"scenario": sc, "maps": maps}
+        for pol in policies:
+            tables = collect(sc, pol, held, bar)
+            for part in PARTS:
+                rows, brier = score(tables[part], maps[part], horizon, rng)
+                key = {"preset": preset, "policy": pol, "part": part}
+                out["reliability"] += [{**key, **r} for r in rows]
+                out["brier"].append({**key, **brier})
+    bar.close()
+    return out
+
+
+def format_brier(rows: Sequence[Mapping[str, Any]]) -> str:
+    """A text table: per preset, policy and part, the worst bin before and after, the bins
+    off the +-5-point band (episode intervals, info truth), the Brier scores and their
+    paired difference."""
+    lines = [
+        f"{'preset':7s} {'policy':7s} {'part':6s} {'worst raw/mapped':>17s} {'off target':>10s} "
+        f"{'Brier raw':>10s} {'mapped':>8s} {'mapped - raw [95% CI]':>31s}"
+    ]
+    for r in rows:
+        lines.append(
+            f"{r['preset']:7s} {r['policy']:7s} {r['part']:6s} "
+            f"{r['worst_raw_info']:8.3f} / {r['worst_mapped_info']:.3f} "
+            f"{r['off_target_raw_info']:5d} / {r['off_target_mapped_info']:<2d} "
+            f"{r['brier_raw']:10.5f} {r['brier_mapped']:8.5f} "
+            f"{r['diff_mean']:+.6f} [{r['diff_low']:+.6f}, {r['diff_high']:+.6f}]"
+        )
+    return "\n".join(lines)
+
+
+def write(result: Mapping[str, Any], out: str | Path, config: Mapping[str, Any],
+          command: str, *, overwrite: bool = False) -> list[Path]:  # fmt: skip
+    """The results folder (module docstring), written atomically."""
+    import json
+
+    from scas_env.actuator.params import ScasParams
+
+    names = ["reliability.csv", "brier.csv", "summary.json", "reliability.png"]
+    seeds = {k: config[k] for k in ("train_seed", "train_episodes", "seed", "episodes")}
+    with results_folder(out, config=config, seeds=seeds, overwrite=overwrite) as tmp:
+        for preset, v in result["presets"].items():
+            save_risk_maps(tmp / f"risk_maps_{preset}.json", v["maps"], v["scenario"],
+                           ScasParams(), command)  # fmt: skip
+            names.append(f"risk_maps_{preset}.json")
+        write_csv(tmp / "reliability.csv", result["reliability"])
+        write_csv(tmp / "brier.csv", result["brier"])
+        (tmp / "summary.json").write_text(
+            json.dumps({"config": dict(config), "brier": result["brier"]}, indent=1) + "\n"
+        )
+        _plot(result["reliability"], tmp / "reliability.png")
+    return [Path(out) / n for n in names]
+
+
+def _plot(rows: Sequence[Mapping[str, Any]], path: Path) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    panels = sorted({(r["preset"], r["part"]) for r in rows})
+    fig, axes = plt.subplots(1, len(panels), figsize=(4.2 * len(panels), 4.2), squeeze=False)
+    for ax, (preset, part) in zip(axes[0], panels, strict=True):
+        for policy in sorted({r["policy"] for r in rows}):
+            for kind, style in (("raw", "o--"), ("mapped", "s-")):
+                sel = [r for r in rows if (r["preset"], r["part"], r["policy"], r["kind"],
+                       r["truth"]) == (preset, part, policy, kind, "info")
+                       and r["records"] >= MIN_RECORDS]  # fmt: skip
+                x = [r["predicted"] for r in sel]
+                y = [r["observed"] for r in sel]
+                ax.plot(x, y, style, ms=4, label=f"{policy}, {kind}")
+        ax.plot([0, 1], [0, 1], "k:", lw=0.8)
+        ax.fill_between([0, 1], [-0.05, 0.95], [0.05, 1.05], color="0.9", label="+-5 points")
+        ax.set(title=f"{preset}: {part}", xlabel="predicted risk", xlim=(0, 1), ylim=(0, 1))
+    axes[0][0].set_ylabel("observed frequency (info truth)")
+    axes[0][-1].legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """The command line (module docstring)."""
+    import sys
+
+    from scas_env.cli_args import check_out_dir, make_parser, nonneg_int, positive_int
+
+    parser = make_parser("python -m experiments.risk_recalibration", __doc__)
+    parser.add_argument(
+        "--train-episodes",
+        type=positive_int,
+        default=400,
+        help="training episodes per policy and preset (the maps' records)",
+    )
+    parser.add_argument("--train-seed", type=nonneg_int, default=0, help="first training seed")
+    parser.add_argument(
+        "--episodes", type=positive_int, default=200, help="held-out episodes per policy and preset"
+    )
+    parser.add_argument("--seed", type=nonneg_int, default=1000, help="first held-out seed")
+    parser.add_argument("--presets", nargs="+", default=list(PRESETS), choices=list(PRESETS))
+    parser.add_argument("--policies", nargs="+", default=list(POLICIES), choices=POLICIES)
+    parser.add_argument("--out", type=Path, default=None, help="results folder (none: print)")
+    parser.add_argument("--overwrite", action="store_true", help="replace an existing --out")
+    parser.add_argument("--no-progress", action="store_true", help="no progress bar")
+    args = parser.parse_args(argv)
+    if args.out is not None:
+        check_out_dir(parser, args.out, args.overwrite)
+    config = {
+        "train_episodes": args.train_episodes,
+        "train_seed": args.train_seed,
+        "episodes": args.episodes,
+        "seed": args.seed,
+        "presets": args.presets,
+        "policies": args.policies,
+        "risk_bins": list(RISK_BINS),
+        "min_records": MIN_RECORDS,
+    }
+    try:
+        result = run(
+            train_episodes=args.train_episodes, train_seed=args.train_seed,
+            episodes=args.episodes, seed=args.seed, presets=args.presets,
+            policies=args.policies, progress=not args.no_progress,
+        )  # fmt: skip
+    except ValueError as exc:
+        parser.error(str(exc))
+    print(format_brier(result["brier"]))
+    if args.out is not None:
+        command = "python -m experiments.risk_recalibration " + " ".join(
+            sys.argv[1:] if argv is None else argv
+        )
+        for path in write(result, args.out, config, command, overwrite=args.overwrite):
+            print(path)
+    return 0
+
+
+__all__ = ["MIN_RECORDS", "collect", "fit_maps", "format_brier", "main", "run", "score", "write"]
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

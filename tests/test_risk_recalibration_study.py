@@ -1,0 +1,38 @@
+"""The recalibration study's statistics: the episode-resampled interval of a reliability bin
+(experiments.belief_calibration.episode_intervals) covers a known frequency at about its
+level where the records of one episode share an effect (where a binomial interval over
+records does not), and the off-target test."""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.stats import binomtest
+
+from experiments.belief_calibration import episode_intervals
+from experiments.risk_recalibration import _off_target
+
+
+def test_episode_intervals_cover_where_record_intervals_do_not() -> None:
+    rng = np.random.default_rng(11)
+    covered = covered_binomial = 0
+    runs = 60
+    for _ in range(runs):
+        episodes = 40
+        effect = rng.beta(0.5, 0.5, size=episodes) * 0.6  # mean 0.3, shared in an episode
+        n = rng.integers(20, 60, size=episodes)
+        episode = np.repeat(np.arange(episodes), n)
+        hit = (rng.random(episode.size) < effect[episode]).astype(float)
+        risk = np.full(episode.size, 0.25)  # one bin
+        ci = episode_intervals(risk, hit, episode, rng, resamples=999)[4]  # bin 0.2-0.35
+        covered += ci["episode_ci_low"] <= 0.3 <= ci["episode_ci_high"]
+        b = binomtest(int(hit.sum()), hit.size).proportion_ci(0.95, method="wilson")
+        covered_binomial += b.low <= 0.3 <= b.high
+    assert covered >= 0.8 * runs  # nominal 0.95; 40 clusters: about 0.9
+    assert covered_binomial < 0.7 * runs  # about 0.45 at this design effect
+
+
+def test_off_target() -> None:
+    row = {"predicted": 0.5, "episode_ci_low": 0.56, "episode_ci_high": 0.7}
+    assert _off_target(row, 0.05)
+    assert not _off_target({**row, "episode_ci_low": 0.54}, 0.05)
+    assert _off_target({"predicted": 0.5, "episode_ci_low": 0.3, "episode_ci_high": 0.44}, 0.05)
