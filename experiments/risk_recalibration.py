@@ -1,7 +1,7 @@
 """Recalibrated risk: isotonic maps of the monitor's risk fitted on training lives, scored on
 held-out lives (docs/beliefs.md, "Recalibrated risk").
 
-    python -m experiments.risk_recalibration --out results/risk_recalibration    # ~25 min
+    python -m experiments.risk_recalibration --out results/risk_recalibration    # ~35 min
     python -m experiments.risk_recalibration --train-episodes 4 --episodes 4 --out /tmp/rr
 
 Per sensing preset (:data:`experiments.belief_calibration.PRESETS`), the belief study's
@@ -147,7 +147,7 @@ def run(
     *,
     train_episodes: int = 400,
     train_seed: int = 0,
-    episodes: int = 200,
+    episodes: int = 1000,
     seed: int = 1000,
     presets: Sequence[str] = tuple(PRESETS),
     policies: Sequence[str] = POLICIES,
@@ -269,7 +269,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     )
     parser.add_argument("--train-seed", type=nonneg_int, default=0, help="first training seed")
     parser.add_argument(
-        "--episodes", type=positive_int, default=200, help="held-out episodes per policy and preset"
+        "--episodes",
+        type=positive_int,
+        default=1000,
+        help="held-out episodes per policy and preset",
     )
     parser.add_argument("--seed", type=nonneg_int, default=1000, help="first held-out seed")
     parser.add_argument("--presets", nargs="+", default=list(PRESETS), choices=list(PRESETS))
