@@ -380,16 +380,27 @@ def main(argv: Sequence[str] | None = None) -> int:
         help="instead of the stages, every record whose filter risk is >= P; prints the "
         "reliability of both estimators' risk",
     )
+    parser.add_argument(
+        "--risk-map",
+        type=Path,
+        default=None,
+        metavar="FILE",
+        help="with --risk-min: also the filter's risk through the spring's map of FILE "
+        "(experiments.risk_recalibration; estimator 'map')",
+    )
     parser.add_argument("--out", type=Path, default=None, help="results folder (none: print)")
     parser.add_argument("--overwrite", action="store_true", help="replace an existing --out")
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
     args = parser.parse_args(argv)
+    spring_map = None
     try:
         check_points(args.log2_points, args.min_ess)
         scenario = Scenario.from_dict(dict(args.scenario))
         if args.risk_min is not None and not 0.0 < args.risk_min <= 1.0:
             raise ValueError(f"--risk-min {args.risk_min!r} must be a probability in (0, 1]")
-    except (TypeError, ValueError) as exc:
+        if args.risk_map is not None:
+            spring_map = _spring_map(args.risk_map, scenario, args.risk_min)
+    except (OSError, TypeError, ValueError) as exc:
         parser.error(str(exc))
     if args.synthetic is not None:
         if args.out is not None:
@@ -431,6 +442,9 @@ def main(argv: Sequence[str] | None = None) -> int:
             write_report,
         )
 
+        if spring_map is not None:
+            for r in rows:
+                r["map_risk"] = float(spring_map(np.float64(r["pf_risk"])))
         reliability = reliability_table(rows)
         print(format_reliability(reliability))
         if args.out is not None:
@@ -438,6 +452,7 @@ def main(argv: Sequence[str] | None = None) -> int:
                 "episodes": args.episodes, "seed": args.seed, "policies": args.policies,
                 "scenario_fields": args.scenario, "log2_points": args.log2_points,
                 "min_ess": args.min_ess, "risk_min": args.risk_min, "seal_view": args.seal_view,
+                "risk_map": None if args.risk_map is None else str(args.risk_map),
             }  # fmt: skip
             for path in write_report(rows, reliability, config, args.out, overwrite=args.overwrite):
                 print(path)
@@ -454,6 +469,21 @@ def main(argv: Sequence[str] | None = None) -> int:
         for path in write_report(rows, table, config, args.out, overwrite=args.overwrite):
             print(path)
     return 0
+
+
+def _spring_map(path: Path, scenario: Scenario, risk_min: float | None) -> Any:
+    """The spring's map of a risk-map file, checked against the study's scenario (the
+    parameters are the defaults here)."""
+    from scas_env.actuator.params import ScasParams
+    from scas_env.risk_recalibration import check_fitted_on, load_risk_maps
+
+    if risk_min is None:
+        raise ValueError("--risk-map needs --risk-min (it maps the reliability table's risk)")
+    maps, fitted, params = load_risk_maps(path)
+    if "spring" not in maps:
+        raise ValueError(f"{path} holds no spring map (parts: {sorted(maps)})")
+    check_fitted_on(scenario, ScasParams(), fitted, params)
+    return maps["spring"]
 
 
 __all__ = [

@@ -80,7 +80,8 @@ def stage_table(
 def reliability_table(
     rows: Sequence[dict[str, Any]], bins: Sequence[float] = RISK_BINS
 ) -> list[dict[str, float | str]]:
-    """Per policy, estimator (``pf``, ``ref``) and bin of its own predicted risk: records,
+    """Per policy, estimator (``pf``, ``ref``; ``map``: the filter's risk mapped, where the
+    rows hold ``map_risk``) and bin of its own predicted risk: records,
     mean prediction and the observed frequency of a failure within the horizon (info RUL
     <= ``horizon``) with its Wilson 95 % interval. Meant for rows chosen on the data
     (``reference_lives(risk_min=...)``), where an exact posterior is calibrated."""
@@ -89,7 +90,7 @@ def reliability_table(
     for policy in sorted({r["policy"] for r in rows}):
         mine = [r for r in rows if r["policy"] == policy]
         failed = np.array([r["truth"] <= r["horizon"] for r in mine], dtype=np.float64)
-        for est in ESTIMATORS:
+        for est in (*ESTIMATORS, "map") if "map_risk" in mine[0] else ESTIMATORS:
             risk = np.array([r[f"{est}_risk"] for r in mine])
             which = np.clip(np.searchsorted(edges, risk, side="right") - 1, 0, edges.size - 2)
             for b in range(edges.size - 1):

@@ -41,7 +41,7 @@ from scas_env.core.scenario import Scenario
 from scas_env.core.setup import PARTS
 from scas_env.utils.atomic_file import write_text_atomic
 
-__all__ = ["FREE_FIELDS", "load_risk_maps", "recalibrate_risk", "save_risk_maps"]
+__all__ = ["FREE_FIELDS", "check_fitted_on", "load_risk_maps", "recalibrate_risk", "save_risk_maps"]
 
 #: Scenario fields a map does not depend on: what the observation shows and how long an
 #: episode runs (the filters and the parts' lives are the same)
@@ -90,8 +90,10 @@ def _check_maps(maps: Mapping[str, RiskMap]) -> None:
             raise TypeError(f"maps[{part!r}] = {m!r} must be a prognostics.metrics.RiskMap")
 
 
-def _check_fitted_on(env_scenario: Scenario, env_params: ScasParams,
+def check_fitted_on(env_scenario: Scenario, env_params: ScasParams,
                      scenario: Scenario, params: ScasParams) -> None:  # fmt: skip
+    """Refuse maps fitted on ``scenario`` and ``params`` for an env of ``env_scenario`` and
+    ``env_params`` where beliefs depend on the difference (module docstring)."""
     ours, theirs = env_scenario.to_dict(), scenario.to_dict()
     differ = sorted(k for k in ours if k not in FREE_FIELDS and ours[k] != theirs[k])
     if differ:
@@ -119,7 +121,7 @@ def recalibrate_risk(
     if names is None or not hasattr(base, "setup"):
         raise TypeError(f"env = {env!r} must be a ScasMaintenance env or its native vector env")
     if fitted_on is not None:
-        _check_fitted_on(base.setup.scenario, base.setup.params, *fitted_on)
+        check_fitted_on(base.setup.scenario, base.setup.params, *fitted_on)
     func = _transform(tuple(names), maps, base.setup.scenario.obs_mode == "dict")
     if isinstance(env, gym.vector.VectorEnv):
         return VectorTransformObservation(env, func)

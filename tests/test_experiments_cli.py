@@ -160,3 +160,26 @@ def test_risk_recalibration_command(tmp_path, capsys) -> None:
     assert set(maps) == {"spring", "seal"} and maps["seal"].records > 0
     with pytest.raises(SystemExit):
         risk_recalibration.main([*args, "--seed", "0"])
+
+
+def test_reference_posterior_with_a_risk_map(tmp_path, capsys) -> None:
+    """--risk-map adds the filter's mapped risk ('map') to the reliability table; without
+    --risk-min, or for another scenario, it is a usage error."""
+    from experiments import reference_posterior
+    from prognostics.metrics import RiskMap
+    from scas_env.actuator.params import ScasParams
+    from scas_env.core.scenario import Scenario
+    from scas_env.risk_recalibration import save_risk_maps
+
+    path = tmp_path / "maps.json"
+    save_risk_maps(path, {"spring": RiskMap((0.0, 1.0), (0.5, 1.0))}, Scenario(), ScasParams())
+    args = ["--episodes", "1", "--policies", "test10", "--log2-points", "6", "--min-ess", "10",
+            "--no-progress", "--risk-map", str(path)]  # fmt: skip
+    assert reference_posterior.main([*args, "--risk-min", "0.5"]) == 0
+    lines = [ln for ln in capsys.readouterr().out.splitlines() if " map " in ln]
+    assert lines and all(float(ln.split()[4]) >= 0.5 for ln in lines)  # the map's floor
+    with pytest.raises(SystemExit):
+        reference_posterior.main(args)
+    with pytest.raises(SystemExit):
+        reference_posterior.main([*args, "--risk-min", "0.5", "--scenario",
+                                  '{"risk_horizon_flights": 40}'])  # fmt: skip
