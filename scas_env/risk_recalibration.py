@@ -26,7 +26,7 @@ neither what the filters believe nor how the parts live).
 from __future__ import annotations
 
 import json
-from collections.abc import Callable, Mapping
+from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
@@ -122,31 +122,35 @@ def recalibrate_risk(
         raise TypeError(f"env = {env!r} must be a ScasMaintenance env or its native vector env")
     if fitted_on is not None:
         check_fitted_on(base.setup.scenario, base.setup.params, *fitted_on)
-    func = _transform(tuple(names), maps, base.setup.scenario.obs_mode == "dict")
+    func = _RiskTransform(tuple(names), maps, base.setup.scenario.obs_mode == "dict")
     if isinstance(env, gym.vector.VectorEnv):
         return VectorTransformObservation(env, func)
     return TransformObservation(env, func, env.observation_space)
 
 
-def _transform(names: tuple[str, ...], maps: Mapping[str, RiskMap], is_dict: bool) -> Callable:
-    """The observation transform: each mapped part's risk column through its map."""
-    if is_dict:  # names "group.entry"; the risks sit in the "filter" group
-        group = [n.split(".", 1)[1] for n in names if n.startswith("filter.")]
-        cols = {part: group.index(f"{part}_risk") for part in maps}
+class _RiskTransform:
+    """The observation transform: each mapped part's risk column through its map (a class,
+    not a closure, so that the wrapped env pickles)."""
 
-        def on_dict(obs: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
+    def __init__(self, names: tuple[str, ...], maps: Mapping[str, RiskMap], is_dict: bool):
+        self.maps = dict(maps)
+        self.is_dict = is_dict
+        if is_dict:  # names "group.entry"; the risks sit in the "filter" group
+            group = [n.split(".", 1)[1] for n in names if n.startswith("filter.")]
+            self.cols = {part: group.index(f"{part}_risk") for part in maps}
+        else:
+            self.cols = {part: names.index(f"{part}_risk") for part in maps}
+
+    def __call__(self, obs: Any) -> Any:
+        if self.is_dict:
             out = dict(obs)
-            out["filter"] = _mapped(obs["filter"], cols, maps)
+            out["filter"] = self._mapped(obs["filter"])
             return out
+        return self._mapped(obs)
 
-        return on_dict
-    cols = {part: names.index(f"{part}_risk") for part in maps}
-    return lambda obs: _mapped(obs, cols, maps)
-
-
-def _mapped(values: np.ndarray, cols: Mapping[str, int], maps: Mapping[str, RiskMap]) -> Any:
-    out = values.copy()
-    for part, k in cols.items():
-        risk = out[..., k].astype(np.float64)
-        out[..., k] = maps[part](risk).astype(out.dtype)
-    return out
+    def _mapped(self, values: np.ndarray) -> np.ndarray:
+        out = values.copy()
+        for part, k in self.cols.items():
+            risk = out[..., k].astype(np.float64)
+            out[..., k] = self.maps[part](risk).astype(out.dtype)
+        return out

@@ -108,3 +108,19 @@ def test_bad_maps_and_envs_are_refused() -> None:
         recalibrate_risk(env, {})
     with pytest.raises(TypeError, match="ScasMaintenance env"):
         recalibrate_risk(gym.make("CartPole-v1"), MAPS)
+
+
+def test_the_wrapped_env_pickles_mid_episode() -> None:
+    """A copy made by pickling mid-episode continues bit for bit like the original."""
+    import pickle
+
+    env = recalibrate_risk(gym.make(scas_env.ENV_ID), MAPS)
+    env.reset(seed=5)
+    for act in _actions(120):
+        env.step(act)
+    copy = pickle.loads(pickle.dumps(env))
+    for act in _actions(200):
+        a = env.step(act)
+        b = copy.step(act)
+        np.testing.assert_array_equal(a[0], b[0])
+        assert a[1:4] == b[1:4]
