@@ -26,6 +26,7 @@ reads), ``reliability.csv``, ``brier.csv``, ``summary.json`` and ``reliability.p
 
 from __future__ import annotations
 
+import json
 import math
 from collections.abc import Mapping, Sequence
 from pathlib import Path
@@ -151,16 +152,21 @@ def run(
     seed: int = 1000,
     presets: Sequence[str] = tuple(PRESETS),
     policies: Sequence[str] = POLICIES,
+    scenario_fields: Mapping[str, Any] | None = None,
     progress: bool = True,
 ) -> dict[str, Any]:
     """Fit on the training seeds, score on the held-out ones (module docstring): per preset
-    the maps and scenario, the reliability rows and the Brier rows."""
+    the maps and scenario, the reliability rows and the Brier rows. ``scenario_fields``:
+    Scenario fields over each preset's (e.g. the monitor's options)."""
     check_episodes(train_episodes, train_seed, policies)
     check_episodes(episodes, seed, policies)
     bad = [p for p in presets if p not in PRESETS]
     if bad or not presets:
         raise ValueError(f"presets = {list(presets)!r} must be a non-empty subset of "
                          f"{tuple(PRESETS)}")  # fmt: skip
+    scenarios = {
+        p: Scenario.from_dict({**PRESETS[p], **dict(scenario_fields or {})}) for p in presets
+    }
     train = range(train_seed, train_seed + train_episodes)
     held = range(seed, seed + episodes)
     if set(train) & set(held):
@@ -170,7 +176,7 @@ def run(
     out: dict[str, Any] = {"presets": {}, "reliability": [], "brier": []}
     rng = np.random.default_rng(seed)  # the bootstrap's resampling only
     for preset in presets:
-        sc = Scenario.from_dict(dict(PRESETS[preset]))
+        sc = scenarios[preset]
         horizon = float(sc.risk_horizon_flights)
         maps = fit_maps([collect(sc, pol, train, bar) for pol in policies], horizon)
         out["presets"][preset] = {"scenario": sc, "maps": maps}
@@ -207,8 +213,6 @@ def format_brier(rows: Sequence[Mapping[str, Any]]) -> str:
 def write(result: Mapping[str, Any], out: str | Path, config: Mapping[str, Any],
           command: str, *, overwrite: bool = False) -> list[Path]:  # fmt: skip
     """The results folder (module docstring), written atomically."""
-    import json
-
     from scas_env.actuator.params import ScasParams
 
     names = ["reliability.csv", "brier.csv", "summary.json", "reliability.png"]
@@ -277,6 +281,13 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser.add_argument("--seed", type=nonneg_int, default=1000, help="first held-out seed")
     parser.add_argument("--presets", nargs="+", default=list(PRESETS), choices=list(PRESETS))
     parser.add_argument("--policies", nargs="+", default=list(POLICIES), choices=POLICIES)
+    parser.add_argument(
+        "--scenario",
+        type=json.loads,
+        default={},
+        help="Scenario fields as JSON over each preset's, e.g. "
+        '\'{"cross_variance_inflation": 50, "rejuvenation": "resample_move"}\'',
+    )
     parser.add_argument("--out", type=Path, default=None, help="results folder (none: print)")
     parser.add_argument("--overwrite", action="store_true", help="replace an existing --out")
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
@@ -290,6 +301,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         "seed": args.seed,
         "presets": args.presets,
         "policies": args.policies,
+        "scenario_fields": args.scenario,
         "risk_bins": list(RISK_BINS),
         "min_records": MIN_RECORDS,
     }
@@ -297,9 +309,10 @@ def main(argv: Sequence[str] | None = None) -> int:
         result = run(
             train_episodes=args.train_episodes, train_seed=args.train_seed,
             episodes=args.episodes, seed=args.seed, presets=args.presets,
-            policies=args.policies, progress=not args.no_progress,
+            policies=args.policies, scenario_fields=args.scenario,
+            progress=not args.no_progress,
         )  # fmt: skip
-    except ValueError as exc:
+    except (TypeError, ValueError) as exc:
         parser.error(str(exc))
     print(format_brier(result["brier"]))
     if args.out is not None:

@@ -151,13 +151,14 @@ def test_risk_recalibration_command(tmp_path, capsys) -> None:
 
     out = tmp_path / "rr"
     args = ["--train-episodes", "1", "--episodes", "2", "--presets", "default", "--policies",
-            "never", "--no-progress"]  # fmt: skip
+            "never", "--scenario", '{"episode_slots": 1500}', "--no-progress"]  # fmt: skip
     assert risk_recalibration.main([*args, "--out", str(out)]) == 0
     assert "Brier raw" in capsys.readouterr().out
     names = {p.name for p in out.iterdir()}
     assert {"reliability.csv", "brier.csv", "summary.json", "reliability.png"} <= names
-    maps, _, _ = load_risk_maps(out / "risk_maps_default.json")
+    maps, scenario, _ = load_risk_maps(out / "risk_maps_default.json")
     assert set(maps) == {"spring", "seal"} and maps["seal"].records > 0
+    assert scenario.episode_slots == 1500
     with pytest.raises(SystemExit):
         risk_recalibration.main([*args, "--seed", "0"])
 
