@@ -55,10 +55,15 @@ def save_risk_maps(
     scenario: Scenario,
     params: ScasParams,
     command: str = "",
+    *,
+    overwrite: bool = False,
 ) -> None:
     """Write ``maps`` (part -> map) with the scenario and parameters they were fitted on, and
-    the ``command`` that fitted them, to the JSON file ``path`` (atomically)."""
+    the ``command`` that fitted them, to the JSON file ``path`` (atomically; an existing file
+    only with ``overwrite``)."""
     _check_maps(maps)
+    if Path(path).exists() and not overwrite:
+        raise FileExistsError(f"{path} exists; pass overwrite=True to replace it")
     data = {
         "scenario": scenario.to_dict(),
         "params": params.to_dict(),
@@ -71,10 +76,15 @@ def save_risk_maps(
 def load_risk_maps(path: str | Path) -> tuple[dict[str, RiskMap], Scenario, ScasParams]:
     """The maps of a file written by :func:`save_risk_maps`, with the scenario and
     parameters they were fitted on (unknown keys refused)."""
-    data = json.loads(Path(path).read_text())
+    try:
+        data = json.loads(Path(path).read_text(encoding="utf-8"))
+    except json.JSONDecodeError as exc:
+        raise ValueError(f"{path} is not a JSON risk-map file: {exc}") from None
     if not isinstance(data, dict) or sorted(data) != sorted(_FILE_KEYS):
         keys = sorted(data) if isinstance(data, dict) else type(data).__name__
         raise ValueError(f"{path}: a risk-map file holds the keys {list(_FILE_KEYS)}, got {keys}")
+    if not isinstance(data["maps"], dict):
+        raise ValueError(f"{path}: 'maps' must map parts to maps, got {data['maps']!r}")
     maps = {part: RiskMap.from_dict(m) for part, m in data["maps"].items()}
     _check_maps(maps)
     return maps, Scenario.from_dict(data["scenario"]), ScasParams.from_dict(data["params"])

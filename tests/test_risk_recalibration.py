@@ -92,9 +92,15 @@ def test_file_round_trip_and_the_scenario_check(tmp_path) -> None:
     other = gym.make(scas_env.ENV_ID, risk_horizon_flights=40)
     with pytest.raises(ValueError, match="risk_horizon_flights = 40"):
         recalibrate_risk(other, maps, fitted_on=(scenario, params))
+    with pytest.raises(FileExistsError, match="overwrite=True"):
+        save_risk_maps(path, MAPS, Scenario(), ScasParams())
+    save_risk_maps(path, MAPS, Scenario(), ScasParams(), overwrite=True)
     data = json.loads(path.read_text())
     path.write_text(json.dumps({**data, "extra": 1}))
     with pytest.raises(ValueError, match="holds the keys"):
+        load_risk_maps(path)
+    path.write_text("{not json")
+    with pytest.raises(ValueError, match="not a JSON risk-map file"):
         load_risk_maps(path)
 
 
