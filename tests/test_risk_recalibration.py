@@ -130,3 +130,25 @@ def test_the_wrapped_env_pickles_mid_episode() -> None:
         b = copy.step(act)
         np.testing.assert_array_equal(a[0], b[0])
         assert a[1:4] == b[1:4]
+
+
+@pytest.mark.parametrize(
+    "name",
+    [
+        "risk_maps_default",
+        "risk_maps_paper",
+        "risk_maps_options_default",
+        "risk_maps_options_paper",
+    ],
+)
+def test_the_documented_maps_load_and_fit_their_scenario(name: str) -> None:
+    """docs/beliefs.md's maps still read, and wrap an env of the scenario they name."""
+    from pathlib import Path
+
+    path = Path(__file__).resolve().parents[1] / "docs" / "risk_recalibration" / f"{name}.json"
+    maps, scenario, params = load_risk_maps(path)
+    assert set(maps) == {"spring", "seal"} and min(m.records for m in maps.values()) > 100_000
+    env = gym.make(scas_env.ENV_ID, **scenario.to_dict())
+    wrapped = recalibrate_risk(env, maps, fitted_on=(scenario, params))
+    obs, _ = wrapped.reset(seed=0)
+    assert obs.shape == env.observation_space.shape
