@@ -1,4 +1,4 @@
-"""Configuration files that used to load wrongly or fail unclearly (issue 27).
+"""Configuration files that used to load wrongly or fail unclearly.
 
 - a boolean for a numeric field (TOML ``true``, YAML ``yes``/``on``, JSON ``true``) gave 1;
 - a key given twice in a JSON object or a YAML mapping silently kept the last value;

@@ -1,4 +1,4 @@
-"""Interrupted runs leave nothing that looks like a result, and no process behind (issue 27).
+"""Interrupted runs leave nothing that looks like a result, and no process behind.
 
 A real 2-worker run (``tests/interrupt_run.py``: :func:`scas_env.utils.parallel.map_chunks` with
 60-s tasks inside a results folder that would replace an existing one) is sent SIGTERM, SIGINT,

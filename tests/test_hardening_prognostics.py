@@ -1,4 +1,4 @@
-"""Every public entry point of ``prognostics`` against bad arguments (issue 27).
+"""Every public entry point of ``prognostics`` against bad arguments.
 
 The sweep calls each public function and method (:data:`SPECS`: one valid call each) with
 one argument at a time replaced by a bad value -- NaN, an infinity, a negative number, zero,
@@ -12,7 +12,7 @@ What the argument's type hint says decides which replacements must raise, whatev
 function does with them (:func:`must_raise`): NaN unless the function gives NaN a meaning
 (``nan_ok``), None unless the hint allows None, a string unless it allows a string, a bool
 unless it is a flag, a complex number or an arbitrary object always. So a NaN that comes
-back as a finite number (the issue's ``probability_mass_within(..., lower=nan)`` -> 0.0) is a
+back as a finite number (once ``probability_mass_within(..., lower=nan)`` -> 0.0) is a
 failure here, not a "valid result".
 
 :func:`test_every_public_callable_is_swept_or_excused` keeps the sweep complete: a new
@@ -1314,9 +1314,9 @@ def test_wrong_kinds_raise_a_type_error_that_is_also_a_value_error() -> None:
         assert isinstance(info.value, validation.ArgumentTypeError)
 
 
-# ----------------------------------------------------------------------------- issue 27
+# ----------------------------------------------------------------------------- silent answers
 def test_metrics_refuse_nan_and_negative_instead_of_answering() -> None:
-    """The issue's silent wrong answers: NaN bounds, NaN or negative true RULs."""
+    """Silent wrong answers once given: NaN bounds, NaN or negative true RULs."""
     r = np.array([35.0, 45.0, 55.0])
     cases = [
         (lambda: metrics.alpha_bounds(NAN, 0.2), "true_rul = nan must be a finite number > 0"),
@@ -1363,7 +1363,7 @@ def test_false_alarm_rate_on_an_empty_window_set_is_a_clear_error() -> None:
     ],
 )
 def test_estimators_name_a_wrong_kind_of_argument(call: Callable[[], Any], message: str) -> None:
-    """The issue's bare ``float()`` / ``isfinite`` errors, now one line naming the argument."""
+    """Once bare ``float()`` / ``isfinite`` errors, now one line naming the argument."""
     with pytest.raises(TypeError) as info:
         call()
     assert str(info.value).startswith(message), str(info.value)

@@ -178,7 +178,7 @@ def test_an_unwritable_parent_is_refused_even_for_root() -> None:
         check_destination("/proc/bench")
 
 
-# --- one rule for every --out folder (issue 27) ------------------------------------------
+# --- one rule for every --out folder ----------------------------------------------------
 
 #: the commands (pyproject.toml's console commands, experiments' lab commands) whose --out
 #: is a results folder

@@ -324,8 +324,8 @@ def test_step_equals_predict_then_update(name: str, threshold: float) -> None:
 
 
 def test_step_with_infinite_measurement_raises_before_predicting() -> None:
-    """A bad measurement is refused before any work: the cloud is not half-stepped (until
-    issue 27, step predicted first and then raised, as predict then update would)."""
+    """A bad measurement is refused before any work: the cloud is not half-stepped (step
+    once predicted first and then raised, as predict then update would)."""
     process, meas = _models()["euler-pchip"]
     x0, th0 = _wide_cloud(50, 7)
     fused, untouched = (

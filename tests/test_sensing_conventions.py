@@ -1,4 +1,4 @@
-"""The paper's conventions (leakage fraction, G2) and the sensing presets (issue #11)."""
+"""The paper's conventions (leakage fraction, G2) and the sensing presets."""
 
 from __future__ import annotations
 

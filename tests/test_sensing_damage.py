@@ -1,4 +1,4 @@
-"""Flight-to-flight damage scatter from whole flights (issue #11, item 3)."""
+"""Flight-to-flight damage scatter from whole flights."""
 
 from __future__ import annotations
 
