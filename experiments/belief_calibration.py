@@ -350,10 +350,12 @@ def reliability_rows(
     risk = table["risk"][known]
     hit = failed_in[known]
     edges = np.asarray(bins)
-    which = np.clip(np.searchsorted(edges, risk, side="right") - 1, 0, edges.size - 2)
+    which = risk_bin(risk, edges)
     nan = {"episode_ci_low": math.nan, "episode_ci_high": math.nan}
     clustered = (
-        episode_intervals(risk, hit.astype(np.float64), table["episode"][known], rng, bins)
+        _episode_intervals(
+            which, hit.astype(np.float64), table["episode"][known], rng, edges.size - 1
+        )
         if rng is not None
         else [nan] * (edges.size - 1)
     )
@@ -389,13 +391,29 @@ def episode_intervals(
     resampled (percentile bootstrap, :func:`scipy.stats.bootstrap`): the records of one life
     are dependent, so the Wilson interval over records is too narrow. NaN for a bin with
     records from fewer than two episodes."""
+    edges = np.asarray(bins)
+    return _episode_intervals(risk_bin(risk, edges), hit, episode, rng, edges.size - 1, resamples)
+
+
+def risk_bin(risk: np.ndarray, edges: np.ndarray) -> np.ndarray:
+    """Each risk's bin among ``edges`` (the last bin closed, values beyond clipped in)."""
+    return np.clip(np.searchsorted(edges, risk, side="right") - 1, 0, edges.size - 2)
+
+
+def _episode_intervals(
+    which: np.ndarray,
+    hit: np.ndarray,
+    episode: np.ndarray,
+    rng: np.random.Generator,
+    n_bins: int,
+    resamples: int = 2000,
+) -> list[dict[str, float]]:
+    """:func:`episode_intervals` for records already binned (``which``)."""
     from scipy.stats import bootstrap
 
-    edges = np.asarray(bins)
-    which = np.clip(np.searchsorted(edges, risk, side="right") - 1, 0, edges.size - 2)
     episodes, ep_index = np.unique(episode, return_inverse=True)
     out = []
-    for b in range(edges.size - 1):
+    for b in range(n_bins):
         sel = which == b
         n = np.bincount(ep_index[sel], minlength=episodes.size).astype(np.float64)
         k = np.bincount(ep_index[sel], weights=hit[sel], minlength=episodes.size)
@@ -582,6 +600,7 @@ __all__ = [
     "main",
     "policy_action",
     "reliability_rows",
+    "risk_bin",
     "run_episode",
     "run_study",
     "stage_rows",

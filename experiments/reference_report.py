@@ -17,7 +17,7 @@ from typing import Any
 
 import numpy as np
 
-from experiments.belief_calibration import RISK_BINS, _share
+from experiments.belief_calibration import RISK_BINS, _share, risk_bin
 from experiments.belief_common import TARGETS
 from experiments.belief_comparison import paired_difference
 from experiments.belief_output import write_csv
@@ -92,7 +92,7 @@ def reliability_table(
         failed = np.array([r["truth"] <= r["horizon"] for r in mine], dtype=np.float64)
         for est in (*ESTIMATORS, "map") if "map_risk" in mine[0] else ESTIMATORS:
             risk = np.array([r[f"{est}_risk"] for r in mine])
-            which = np.clip(np.searchsorted(edges, risk, side="right") - 1, 0, edges.size - 2)
+            which = risk_bin(risk, edges)
             for b in range(edges.size - 1):
                 sel = which == b
                 share, lo, hi, n = _share(failed[sel])

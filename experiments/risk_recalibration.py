@@ -39,6 +39,7 @@ from experiments.belief_calibration import (
     POLICIES,
     PRESETS,
     RISK_BINS,
+    TRUTHS,
     check_episodes,
     reliability_rows,
     run_episode,
@@ -58,8 +59,6 @@ from scas_env.utils.results_folder import results_folder
 MIN_RECORDS = 100
 #: the target band around the predicted risk (points of probability)
 TOLERANCE = 0.05
-KINDS: tuple[str, ...] = ("raw", "mapped")
-TRUTHS: tuple[str, ...] = ("info", "realised")
 
 
 def collect(
@@ -119,14 +118,10 @@ def score(
             rows += [{"kind": kind, **r} for r in rel]
             dev = [abs(r["observed"] - r["predicted"]) for r in rel if r["records"] >= MIN_RECORDS]
             worst[f"worst_{kind}_{truth}"] = max(dev) if dev else math.nan
-    episodes = np.unique(table["episode"])
-    per_ep = {
-        kind: np.array(
-            [
-                brier_score(t["risk"][table["episode"] == e], y[table["episode"] == e])
-                for e in episodes
-            ]
-        )
+    episodes, ep_index = np.unique(table["episode"], return_inverse=True)
+    per_record = np.bincount(ep_index).astype(np.float64)
+    per_ep = {  # each episode's Brier score: its records' mean squared error
+        kind: np.bincount(ep_index, weights=(t["risk"] - y) ** 2) / per_record
         for kind, t in (("raw", table), ("mapped", mapped))
     }
     diff = paired_difference(per_ep["mapped"], per_ep["raw"])

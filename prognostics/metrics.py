@@ -482,10 +482,9 @@ def fit_risk_map(predicted: Any, outcome: Any) -> RiskMap:
     docstring; Zadrozny & Elkan 2002)."""
     p, y = _records(predicted, outcome)
     values, inverse, counts = np.unique(p, return_inverse=True, return_counts=True)
-    share = np.bincount(inverse, weights=y) / counts
-    fit = isotonic_regression(share, weights=counts.astype(np.float64), increasing=True)
-    starts = fit.blocks[:-1]
     w = counts.astype(np.float64)
+    fit = isotonic_regression(np.bincount(inverse, weights=y) / w, weights=w, increasing=True)
+    starts = fit.blocks[:-1]
     knots_x = np.add.reduceat(values * w, starts) / np.add.reduceat(w, starts)
     knots_y = np.clip(fit.x[starts], 0.0, 1.0)  # a mean of 0/1 shares, in [0, 1] up to rounding
     return RiskMap(tuple(knots_x), tuple(knots_y), int(p.size))

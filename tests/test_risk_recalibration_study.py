@@ -6,6 +6,7 @@ records does not), and the off-target test."""
 from __future__ import annotations
 
 import numpy as np
+import pytest
 from scipy.stats import binomtest
 
 from experiments.belief_calibration import episode_intervals
@@ -36,3 +37,35 @@ def test_off_target() -> None:
     assert _off_target(row, 0.05)
     assert not _off_target({**row, "episode_ci_low": 0.54}, 0.05)
     assert _off_target({"predicted": 0.5, "episode_ci_low": 0.3, "episode_ci_high": 0.44}, 0.05)
+
+
+def test_score_pairs_each_episodes_brier_score() -> None:
+    """The Brier difference of the study is the mean over episodes of each episode's
+    mapped-minus-raw Brier score, computed here record by record with brier_score."""
+    from experiments.risk_recalibration import score
+    from policies.benchmark.stats import paired_difference
+    from prognostics.metrics import RiskMap, brier_score
+
+    rng = np.random.default_rng(4)
+    episode = np.repeat(np.arange(12), rng.integers(30, 80, size=12))
+    risk = rng.random(episode.size) ** 3
+    true_info = np.where(rng.random(episode.size) < np.sqrt(risk), 5.0, 100.0)
+    n = episode.size
+    table = {
+        "risk": risk,
+        "true_info": true_info,
+        "episode": episode,
+        "realised": np.full(n, np.nan),  # no failure seen, every life flew past the horizon
+        "age": np.zeros(n),
+        "end_age": np.full(n, 50.0),
+    }
+    m = RiskMap((0.0, 0.5, 1.0), (0.05, 0.7, 1.0))
+    _, brier = score(table, m, 20.0, np.random.default_rng(0))
+    y = (true_info <= 20.0).astype(float)
+    eps = np.unique(episode)
+    raw = [brier_score(risk[episode == e], y[episode == e]) for e in eps]
+    mapped = [brier_score(m(risk[episode == e]), y[episode == e]) for e in eps]
+    want = paired_difference(mapped, raw)
+    assert brier["diff_mean"] == pytest.approx(want.mean, rel=1e-12)
+    assert (brier["diff_low"], brier["diff_high"]) == pytest.approx((want.low, want.high))
+    assert brier["brier_raw"] == pytest.approx(brier_score(risk, y), rel=1e-14)
