@@ -54,18 +54,16 @@ CSV/JSON and two PNGs into a results folder
 
 from __future__ import annotations
 
-import json
 import math
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
-from pathlib import Path
 from typing import Any
 
 import numpy as np
 from scipy.stats import binomtest
 from tqdm.auto import tqdm
 
-from experiments.belief_common import INTERVAL, TARGETS, StudyResult
+from experiments.belief_common import INTERVAL, TARGETS, StudyResult, add_study_options
 from prognostics.rul_ageing import AgeingRul
 from scas_env.core.batch import ActuatorBatch
 from scas_env.core.scenario import Scenario
@@ -530,12 +528,6 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser.add_argument("--policies", nargs="+", default=list(POLICIES), choices=POLICIES)
     parser.add_argument("--presets", nargs="+", default=["default"], choices=list(PRESETS))
     parser.add_argument(
-        "--scenario",
-        type=json.loads,
-        default={},
-        help="Scenario fields as JSON over the defaults, e.g. '{\"spring_theta_walk\": 0.007}'",
-    )
-    parser.add_argument(
         "--compare",
         nargs=2,
         metavar=("A", "B"),
@@ -543,9 +535,11 @@ def main(argv: Sequence[str] | None = None) -> int:
         help="no run: compare two results folders of the same seeds, life by life (paired "
         "differences B - A with cluster-bootstrap 95%% intervals over episodes)",
     )
-    parser.add_argument("--out", type=Path, default=None, help="results folder (none: print)")
-    parser.add_argument("--overwrite", action="store_true", help="replace an existing --out")
-    parser.add_argument("--no-progress", action="store_true", help="no progress bar")
+    add_study_options(
+        parser,
+        scenario_help="Scenario fields as JSON over the defaults, e.g. "
+        "'{\"spring_theta_walk\": 0.007}'",
+    )
     args = parser.parse_args(argv)
     if args.compare is not None:
         from experiments.belief_comparison import compare_runs, format_comparison, read_lives

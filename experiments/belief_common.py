@@ -1,10 +1,13 @@
 """What the belief study's modules share (:mod:`experiments.belief_calibration` runs it,
 :mod:`experiments.belief_output` writes it): the nominal interval, the targets, the per-life
-columns and the result type."""
+columns, the result type, and the command-line options every belief study takes."""
 
 from __future__ import annotations
 
+import argparse
+import json
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any
 
 #: nominal central interval of the RUL distribution
@@ -35,3 +38,17 @@ class StudyResult:
 
 
 __all__ = ["INTERVAL", "LIFE_COLUMNS", "TARGETS", "StudyResult"]
+
+
+def add_study_options(
+    parser: argparse.ArgumentParser,
+    *,
+    scenario_help: str = "Scenario fields as JSON over the defaults",
+    out_help: str = "results folder (none: print)",
+) -> None:
+    """``--scenario JSON``, ``--out``, ``--overwrite`` and ``--no-progress``, as every
+    belief study's command line takes them."""
+    parser.add_argument("--scenario", type=json.loads, default={}, help=scenario_help)
+    parser.add_argument("--out", type=Path, default=None, help=out_help)
+    parser.add_argument("--overwrite", action="store_true", help="replace an existing --out")
+    parser.add_argument("--no-progress", action="store_true", help="no progress bar")

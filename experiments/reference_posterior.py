@@ -53,7 +53,6 @@ Command line (docs/beliefs.md, "A reference posterior")::
 
 from __future__ import annotations
 
-import json
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -69,6 +68,7 @@ from experiments.belief_calibration import (
     run_episode,
     trace_table,
 )
+from experiments.belief_common import add_study_options
 from experiments.reference_model import (
     BATCH,
     DEFAULT_LOG2_POINTS,
@@ -341,13 +341,6 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser.add_argument("--seed", type=nonneg_int, default=1000, help="first episode seed")
     parser.add_argument("--policies", nargs="+", default=list(POLICIES), choices=POLICIES)
     parser.add_argument(
-        "--scenario",
-        type=json.loads,
-        default={},
-        help="Scenario fields as JSON over the defaults, e.g. "
-        '\'{"spring_theta_walk": 0.007}\' or \'{"preflight": "every_flight"}\'',
-    )
-    parser.add_argument(
         "--log2-points", type=int, default=DEFAULT_LOG2_POINTS, help="2^k Sobol points per set"
     )
     parser.add_argument(
@@ -388,9 +381,11 @@ def main(argv: Sequence[str] | None = None) -> int:
         help="with --risk-min: also the filter's risk through the spring's map of FILE "
         "(experiments.risk_recalibration; estimator 'map')",
     )
-    parser.add_argument("--out", type=Path, default=None, help="results folder (none: print)")
-    parser.add_argument("--overwrite", action="store_true", help="replace an existing --out")
-    parser.add_argument("--no-progress", action="store_true", help="no progress bar")
+    add_study_options(
+        parser,
+        scenario_help="Scenario fields as JSON over the defaults, e.g. "
+        '\'{"spring_theta_walk": 0.007}\' or \'{"preflight": "every_flight"}\'',
+    )
     args = parser.parse_args(argv)
     spring_map = None
     try:

@@ -45,6 +45,7 @@ from experiments.belief_calibration import (
     run_episode,
     trace_table,
 )
+from experiments.belief_common import add_study_options
 from experiments.belief_output import write_csv
 from policies.benchmark.stats import paired_difference
 from prognostics.metrics import RiskMap, brier_score, fit_risk_map
@@ -276,16 +277,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser.add_argument("--seed", type=nonneg_int, default=1000, help="first held-out seed")
     parser.add_argument("--presets", nargs="+", default=list(PRESETS), choices=list(PRESETS))
     parser.add_argument("--policies", nargs="+", default=list(POLICIES), choices=POLICIES)
-    parser.add_argument(
-        "--scenario",
-        type=json.loads,
-        default={},
-        help="Scenario fields as JSON over each preset's, e.g. "
+    add_study_options(
+        parser,
+        scenario_help="Scenario fields as JSON over each preset's, e.g. "
         '\'{"cross_variance_inflation": 50, "rejuvenation": "resample_move"}\'',
     )
-    parser.add_argument("--out", type=Path, default=None, help="results folder (none: print)")
-    parser.add_argument("--overwrite", action="store_true", help="replace an existing --out")
-    parser.add_argument("--no-progress", action="store_true", help="no progress bar")
     args = parser.parse_args(argv)
     if args.out is not None:
         check_out_dir(parser, args.out, args.overwrite)

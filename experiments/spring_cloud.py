@@ -38,6 +38,7 @@ import numpy as np
 from tqdm.auto import tqdm
 
 from experiments.belief_calibration import POLICIES, policy_action
+from experiments.belief_common import add_study_options
 from scas_env.core.scenario import Scenario
 from scas_env.env import ScasMaintenanceEnv
 
@@ -178,13 +179,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser.add_argument("--episodes", type=positive_int, default=40, help="episodes")
     parser.add_argument("--seed", type=nonneg_int, default=0, help="first episode seed")
     parser.add_argument("--policy", default="test10", choices=POLICIES)
-    parser.add_argument(
-        "--scenario", type=json.loads, default={}, help="Scenario fields as JSON over the defaults"
-    )
     parser.add_argument("--every", type=positive_int, default=5, help="flights between records")
-    parser.add_argument("--out", type=Path, default=None, help="JSON of the summary (none: print)")
-    parser.add_argument("--overwrite", action="store_true", help="replace an existing --out")
-    parser.add_argument("--no-progress", action="store_true", help="no progress bar")
+    add_study_options(parser, out_help="JSON of the summary (none: print)")
     args = parser.parse_args(argv)
     if args.out is not None:
         check_out_file(parser, args.out, args.overwrite)
