@@ -326,7 +326,7 @@ def _fleet_config(parser: Any, args: Any) -> Any:
 
 def _fleet_scenario(parser: Any, args: Any) -> Scenario:
     """The actuators' Scenario of a fleet: ScasFleet-v0's defaults (parts in service), then
-    the ``[scenario]`` table of ``--scenario``, then ``--fidelity``."""
+    the ``[scenario]`` table of ``--scenario``, then ``--fidelity`` where the command has it."""
     from scas_env.actuator.config import read_mapping
     from scas_env.fleet_env import FLEET_SCENARIO
 
@@ -337,7 +337,8 @@ def _fleet_scenario(parser: Any, args: Any) -> Scenario:
         parser.error(f"{args.scenario}: [scenario]: {exc}")
     if scenario.obs_mode != Scenario().obs_mode:
         parser.error(f"{args.scenario}: obs_mode is set per policy; leave it out of the file")
-    return scenario.replace(fidelity=args.fidelity) if args.fidelity else scenario
+    fidelity = getattr(args, "fidelity", None)  # scas-benchmark's option
+    return scenario.replace(fidelity=fidelity) if fidelity else scenario
 
 
 TRAIN_DOC = """\
@@ -461,18 +462,33 @@ every trial: common random numbers); the nested families start from the tuned ag
 Writes tuning.json (chosen parameters, edge flags, every trial), tuning_history.csv and
 tuning_history.png to --out (policies.value.tuning). Held-out evaluation: scas-value.
 --quick: fewer trials and episodes, full-length episodes (docs/cli.md).
+
+Fleets (ScasFleet-v0): --fleet tunes the fleet rule families on the default fleet, a
+--scenario file with a [fleet] table on that one (policies.value.fleet_tuning; default budget
+30 trials x 16 fleets; the nested chain naive -> opportunistic -> aware in order). The
+held-out comparison is scas-benchmark --fleet.
 """
+FLEET_TUNE_SIZES = {"trials": (30, 4), "episodes": (16, 4)}
 
 
 def tune_parser() -> Any:
+    from policies.value.fleet_tuning import FLEET_FAMILIES
     from policies.value.tuning import FAMILIES
 
     parser = make_parser("scas-tune", TUNE_DOC)
     parser.add_argument(
         "--families",
-        type=name_list(FAMILIES, "rule family"),
-        default=",".join(FAMILIES),
-        help="comma-separated family labels (the age rule is always tuned first)",
+        type=name_list(set(FAMILIES) | set(FLEET_FAMILIES), "rule family"),
+        default=None,
+        help=f"comma-separated family labels (default: {','.join(FAMILIES)}; the age rule is "
+        f"always tuned first; with --fleet: {','.join(FLEET_FAMILIES)}, a nested family "
+        "brings the ones it starts from)",
+    )
+    parser.add_argument(
+        "--fleet",
+        action="store_true",
+        help="tune the fleet rules on ScasFleet-v0's default fleet (a --scenario file with a "
+        "[fleet] table tunes on that fleet); no --slots",
     )
     _size_args(parser, TUNE_SIZES, TUNE_HELP)
     parser.add_argument("--workers", type=positive_int, default=2, help="local worker processes")
@@ -495,23 +511,69 @@ def tune_main(argv: Sequence[str] | None = None) -> int:
     args = parser.parse_args(argv)
     configure_logging(args)
     out = check_out_dir(parser, args.out, args.overwrite)
-    scenario, costs = load_env_config(parser, args)
+    scenario, costs = load_env_config(parser, args, fleet=True)
+    fleet = _fleet_config(parser, args)
+    if fleet is not None:
+        return _tune_fleet(parser, args, argv, out, fleet, costs)
     if scenario.obs_mode != Scenario().obs_mode:
         parser.error(f"{args.scenario}: obs_mode is set per policy; leave it out of the file")
     env_kwargs = _env_kwargs(scenario, costs, exclude=("obs_mode", "episode_slots"))
 
-    from policies.value.tuning import tune_families, write_tuning_outputs
+    from policies.value.tuning import FAMILIES, tune_families, write_tuning_outputs
 
+    families = list(FAMILIES) if args.families is None else args.families
+    fleet_only = [f for f in families if f not in FAMILIES]
+    if fleet_only:
+        parser.error(f"--families {fleet_only}: fleet families; add --fleet")
     announce_uncached_kernels()
     size = _sizes(args, TUNE_SIZES)
     results = tune_families(
-        args.families,
+        families,
         n_workers=args.workers,
         progress=not args.quiet,
         env_kwargs=env_kwargs,
         **size,
     )
     config = {"size": size, **_config_record(parser.prog, argv, args, scenario, costs)}
+    paths = write_tuning_outputs(results, out, config=config, overwrite=args.overwrite)
+    for k, r in results.items():
+        edges = {p: e for p, e in r.edges.items() if e != "inside"}
+        print(f"{k}: {r.best_params} training reward {r.best_reward:,.0f}; edges {edges or 'none'}")
+    for path in paths.values():
+        log.info(f"wrote {path}")
+    return 0
+
+
+def _tune_fleet(
+    parser: Any, args: Any, argv: Sequence[str] | None, out: Path, fleet: Any, costs: CostModel
+) -> int:
+    """``scas-tune --fleet``: :func:`policies.value.fleet_tuning.tune_fleet_families` on
+    ``fleet``, written as the single actuator's tuning."""
+    from policies.value.fleet_tuning import FLEET_FAMILIES, tune_fleet_families
+    from policies.value.tuning import write_tuning_outputs
+
+    if args.slots is not None:
+        parser.error("--slots: a fleet's episode is its [fleet] table's episode_days")
+    families = list(FLEET_FAMILIES) if args.families is None else args.families
+    single = [f for f in families if f not in FLEET_FAMILIES]
+    if single:
+        parser.error(f"--families {single}: not fleet families ({','.join(FLEET_FAMILIES)})")
+    scenario = _fleet_scenario(parser, args)
+    announce_uncached_kernels()
+    size = _sizes(args, FLEET_TUNE_SIZES)
+    results = tune_fleet_families(
+        fleet,
+        families,
+        n_workers=args.workers,
+        progress=not args.quiet,
+        env_kwargs={"scenario": scenario, "cost_model": costs},
+        **size,
+    )
+    config = {
+        "size": size,
+        **_config_record(parser.prog, argv, args, scenario, costs),
+        "fleet": fleet.to_dict(),
+    }
     paths = write_tuning_outputs(results, out, config=config, overwrite=args.overwrite)
     for k, r in results.items():
         edges = {p: e for p, e in r.edges.items() if e != "inside"}

@@ -250,9 +250,11 @@ def load_env_config(
                 raise ValueError(
                     f"{args.scenario} holds a [fleet] table: this command runs one actuator "
                     "(ScasMaintenance-v2), not a fleet; give it a file without [fleet] "
-                    "(scas-benchmark runs fleets)"
+                    "(scas-benchmark and scas-tune run fleets)"
                 )
-            scenario = Scenario.load(args.scenario)
+            data = read_mapping(args.scenario)
+            if not (fleet and "fleet" in data and "scenario" not in data):  # a fleet alone
+                scenario = Scenario.load(args.scenario)
             if args.costs is None and "costs" in read_mapping(args.scenario):
                 costs = CostModel.load(args.scenario)
         if args.costs is not None:

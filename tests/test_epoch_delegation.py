@@ -211,8 +211,8 @@ def test_a_clone_that_delegates_plays_the_rule_after_training_and_loading(
     import torch
     from sb3_contrib import MaskablePPO
 
+    from experiments.epoch_agents.selection import _spec
     from policies.agents.delegation import DelegateSpec, delegation_demonstrations
-    from policies.agents.selection import _spec
     from policies.agents.training import clone_rule, train_epochs
     from policies.benchmark.run import PolicySpec, run_benchmark
 

@@ -1,4 +1,4 @@
-"""Selection of decision-epoch checkpoints (policies.agents.selection): per scenario, on
+"""Selection of decision-epoch checkpoints (experiments.epoch_agents.selection): per scenario, on
 validation seeds, shipped with statistics that load without unpickling.
 
 Fake training runs whose checkpoints act by construction (one action logit far above the
@@ -17,8 +17,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from policies.agents.agent_files import ObsNormalization, weights_sha256
-from policies.agents.selection import (
+from experiments.epoch_agents.selection import (
     VALIDATION_SEED,
     resolve_scenario,
     ship_best,
@@ -26,6 +25,7 @@ from policies.agents.selection import (
     tuned_rules,
     validate_checkpoints,
 )
+from policies.agents.agent_files import ObsNormalization, weights_sha256
 from policies.benchmark.run import PolicySpec, run_benchmark
 
 SLOTS = 40
@@ -281,7 +281,7 @@ def test_tuned_rules_read_the_ladder_at_full_precision(tmp_path) -> None:
 def test_paired_vs_rules_matches_scipy_paired_t() -> None:
     import scipy.stats
 
-    from policies.agents.selection import paired_vs_rules
+    from experiments.epoch_agents.selection import paired_vs_rules
 
     rng = np.random.default_rng(3)
     n = 50
@@ -310,14 +310,14 @@ def test_paired_vs_rules_matches_scipy_paired_t() -> None:
 
 @pytest.mark.parametrize("seed", [VALIDATION_SEED, 1])
 def test_held_out_refuses_validation_and_tuning_seeds(seed, tmp_path) -> None:
-    from policies.agents.selection import held_out_comparison
+    from experiments.epoch_agents.selection import held_out_comparison
 
     with pytest.raises(ValueError, match="not a held-out one"):
         held_out_comparison({}, tmp_path, seed=seed, episodes=1)
 
 
 def test_shipping_refuses_to_overwrite_an_agent(tmp_path) -> None:
-    from policies.agents.selection import _refuse_existing
+    from experiments.epoch_agents.selection import _refuse_existing
 
     _refuse_existing(tmp_path, "agent", overwrite=False)  # nothing there yet
     (tmp_path / "agent.zip").write_bytes(b"x")

@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 
 import scas_env  # noqa: F401
+from experiments.fleet_agents.selection import best_tuned_rule, checkpoints
 from policies.agents.fleet.demos import collect, discounted_returns, project_to_masks
 from policies.agents.fleet.masks import FleetObsLayout
 from policies.agents.fleet.plugins import (
@@ -19,7 +20,6 @@ from policies.agents.fleet.plugins import (
     FleetAgent,
     load_fleet_agent,
 )
-from policies.agents.fleet.selection import best_tuned_rule, checkpoints
 from policies.agents.fleet.training import FleetPPOConfig, clone_rule, train
 from policies.base import make_policy
 from policies.benchmark.run import PLUGINS
@@ -154,25 +154,34 @@ def test_agent_refuses_a_model_of_another_fleet() -> None:
         load_fleet_agent("no/such/agent.zip", names)
 
 
-def test_best_tuned_rule_reads_the_tuning_file(tmp_path: Path) -> None:
+def test_best_tuned_rule_reads_what_scas_tune_writes(tmp_path: Path) -> None:
+    """The tuning file is the one ``scas-tune --fleet`` writes (its writer, round trip)."""
+    from policies.value.tuning import TuningResult, write_tuning_outputs
+
     assert best_tuned_rule(None) == ("fleet_naive", {})
-    data = {
-        "families": {
-            "fleet_naive": {"params": {"risk_threshold": 0.1}, "train_reward": 7.0e6},
-            "fleet_aware": {"params": {"urgency": 2.0}, "train_reward": 7.1e6},
-            "fleet_oracle": {"params": {"lead_flights": 3.0}, "train_reward": 9.0e6},
-        }
+
+    def result(label: str, params: dict, reward: float) -> TuningResult:
+        history = [{"trial": 0, **params, "reward": reward, "reward_sem": 1.0}]
+        return TuningResult(label, label, params, reward, history, {}, 16, 1.0)
+
+    results = {
+        "fleet_naive": result("fleet_naive", {"risk_threshold": 0.1}, 7.0e6),
+        "fleet_aware": result("fleet_aware", {"urgency": 2.0}, 7.1e6),
+        "fleet_oracle": result("fleet_oracle", {"lead_flights": 3.0}, 9.0e6),
     }
-    path = tmp_path / "tuning.json"
-    path.write_text(json.dumps(data))
+    path = write_tuning_outputs(results, tmp_path / "tuning")["json"]
     assert best_tuned_rule(path) == ("fleet_aware", {"urgency": 2.0})  # the oracle is no rule
     assert best_tuned_rule(path, "fleet_naive") == ("fleet_naive", {"risk_threshold": 0.1})
     with pytest.raises(ValueError, match="not in"):
         best_tuned_rule(path, "fleet_opportunistic")
+    other = tmp_path / "other.json"
+    other.write_text(json.dumps({"families": {"fleet_naive": {"params": {}}}}))
+    with pytest.raises(ValueError, match=r"not a tuning\.json of scas-tune --fleet"):
+        best_tuned_rule(other)
 
 
 def test_choose_the_best_validation_checkpoint_and_its_paired_difference(tmp_path: Path) -> None:
-    from policies.agents.fleet.selection import KPIS, choose, curves, kpi_table
+    from experiments.fleet_agents.selection import KPIS, choose, curves, kpi_table
 
     rng = np.random.default_rng(0)
     base = rng.normal(7e6, 1e5, 8)

@@ -220,13 +220,13 @@ def test_single_actuator_commands_refuse_a_fleet_file(
     path: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     """A fleet file's [scenario] and [costs] tables are readable, but a command that runs one
-    actuator (here the tuner) does not silently drop its [fleet] table: a usage error before
-    any work."""
+    actuator (here the value study) does not silently drop its [fleet] table: a usage error
+    before any work."""
     from policies import cli as policies_cli
 
-    out = tmp_path / "tune"
+    out = tmp_path / "value"
     with pytest.raises(SystemExit) as exit_:
-        policies_cli.tune_main(["--scenario", str(path), "--out", str(out)])
+        policies_cli.value_main(["--scenario", str(path), "--out", str(out)])
     assert exit_.value.code == 2
     assert "holds a [fleet] table: this command runs one actuator" in capsys.readouterr().err
     assert not out.exists()

@@ -1,4 +1,4 @@
-"""The model-mismatch study (policies.value.mismatch): break-even levels, the worlds, the
+"""The model-mismatch study (experiments.mismatch_study): break-even levels, the worlds, the
 summary against the paired statistics, a quick end-to-end run and its files."""
 
 from __future__ import annotations
@@ -9,10 +9,8 @@ import math
 import numpy as np
 import pytest
 
-from policies.benchmark.run import run_benchmark
-from policies.benchmark.stats import paired_comparison
-from policies.value import mismatch as study
-from policies.value.mismatch import (
+from experiments import mismatch_study as study
+from experiments.mismatch_study import (
     AGE_NOMINAL,
     AGE_RETUNED,
     FILTER_NOMINAL,
@@ -25,6 +23,8 @@ from policies.value.mismatch import (
     world_mismatch,
     write_outputs,
 )
+from policies.benchmark.run import run_benchmark
+from policies.benchmark.stats import paired_comparison
 from scas_env.core.mismatch import Mismatch
 
 

@@ -162,7 +162,7 @@ def test_plain_ppo_copy_of_a_maskable_agent_decides_the_same(tmp_path) -> None:
     from sb3_contrib import MaskablePPO
     from stable_baselines3 import PPO
 
-    from policies.agents.selection import as_plain_ppo
+    from experiments.epoch_agents.selection import as_plain_ppo
 
     env, plain = _pair()
     model = MaskablePPO("MlpPolicy", env, seed=1, device="cpu", n_steps=64, batch_size=64)

@@ -20,10 +20,10 @@ from __future__ import annotations
 
 import argparse
 
+from experiments.epoch_agents.selection import HELD_OUT_SEED, VALIDATION_SEED, tuned_rules
 from policies.agents.dagger import DaggerPlan
 from policies.agents.delegation import DelegateSpec, delegation_demonstrations
 from policies.agents.demonstrations import demonstrations, record_rule
-from policies.agents.selection import HELD_OUT_SEED, VALIDATION_SEED, tuned_rules
 from policies.agents.training import HYPERPARAMS_DIR, candidate_hyperparams, clone_rule
 from policies.benchmark.run import episode_seeds
 from policies.value import tuning

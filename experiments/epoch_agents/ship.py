@@ -7,7 +7,7 @@ the training seeds read from the value study, held-out on its seeds)::
         --name maskable_ppo_epochs_v2 \\
         --rules-from docs/value_v2/ladder.json --held-out-seed 2 --out results/rl_v2/selection
 
-Calls :func:`policies.agents.selection.select_ship_evaluate`.
+Calls :func:`experiments.epoch_agents.selection.select_ship_evaluate`.
 """
 
 from __future__ import annotations
@@ -15,8 +15,8 @@ from __future__ import annotations
 import argparse
 import json
 
+from experiments.epoch_agents.selection import HELD_OUT_SEED, select_ship_evaluate, tuned_rules
 from policies.agents.sb3_agents import DATA_DIR
-from policies.agents.selection import HELD_OUT_SEED, select_ship_evaluate, tuned_rules
 from scas_env.cli_args import add_env_config_args, agent_scenario, scenario_changes
 
 

@@ -14,7 +14,7 @@ docs/rl.md. Example (the clone, checkpoint
         --rules-from docs/value_v2/ladder.json \\
         --episodes 200 --out results/kl/swap.csv
 
-Calls :func:`policies.agents.selection.validate_checkpoints`.
+Calls :func:`experiments.epoch_agents.selection.validate_checkpoints`.
 """
 
 from __future__ import annotations
@@ -22,7 +22,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from policies.agents.selection import tuned_rules, validate_checkpoints
+from experiments.epoch_agents.selection import tuned_rules, validate_checkpoints
 from scas_env.cli_args import add_env_config_args, agent_scenario, scenario_changes
 
 

@@ -20,7 +20,7 @@ import shlex
 import sys
 from pathlib import Path
 
-from policies.agents.fleet.selection import (
+from experiments.fleet_agents.selection import (
     FILTER_FAMILIES,
     VALIDATION_SEED,
     checkpoints,

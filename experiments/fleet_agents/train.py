@@ -21,7 +21,7 @@ import json
 import time
 from pathlib import Path
 
-from policies.agents.fleet.selection import best_tuned_rule
+from experiments.fleet_agents.selection import best_tuned_rule
 from policies.agents.fleet.training import FleetPPOConfig, clone_rule, train
 from scas_env.core.fleet.config import FleetConfig
 from scas_env.utils.parallel import single_thread

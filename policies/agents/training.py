@@ -6,7 +6,7 @@ One run (:func:`train_epochs`): ``n_envs`` decision-epoch envs (``DummyVecEnv``,
 the algorithm's ``gamma``), trained for ``total_timesteps`` *decisions* or until ``max_wall_s``
 seconds of wall time, whichever comes first. A checkpoint (model zip + VecNormalize
 statistics) is written every ``checkpoint_every`` decisions; the best one is chosen later on
-validation seeds (:mod:`policies.agents.selection`), never on the held-out ones.
+validation seeds (:mod:`experiments.epoch_agents.selection`), never on the held-out ones.
 
 Hyper-parameters come from an RL-Zoo-format YAML (:func:`load_zoo_hyperparams`): a mapping
 ``env id -> {n_envs, n_timesteps, policy, normalize, <algorithm keywords>}``.

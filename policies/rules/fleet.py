@@ -67,7 +67,7 @@ FILTER_DEFAULTS: dict[str, float] = {
 AGE_DEFAULTS: dict[str, float] = {"spring_age": 691.6326, "seal_age": 526.2141}
 PARTS = ("spring", "seal")
 #: the families' defaults, tuned on training fleets (seeds disjoint from the benchmark's):
-#: ``python -m policies.value.fleet_tuning --trials 30 --episodes 16 --workers 2 --out
+#: ``scas-tune --fleet --trials 30 --episodes 16 --workers 2 --out
 #: results/fleet_tuning`` (one Optuna budget per family, nested: naive -> opportunistic ->
 #: aware; 480 training episodes each; 4 significant digits). ``opportunity`` tunes to ~0
 #: (grouping does not pay at this fleet's crew and spares) and the seal backstop of the

@@ -12,17 +12,14 @@ before it on the training seeds (the aware rule's mission ordering is on from it
 trial). The held-out comparison (:data:`~policies.value.tuning.HELD_OUT_SEED`) is the
 benchmark's.
 
-    python -m policies.value.fleet_tuning --out results/fleet_tuning   # ~1 h on 2 cores
+    scas-tune --fleet --out results/fleet_tuning   # ~1 h on 2 cores
 """
 
 from __future__ import annotations
 
-import argparse
-import json
 import math
 import time
-from collections.abc import Mapping, Sequence
-from pathlib import Path
+from collections.abc import Iterable, Mapping, Sequence
 from typing import Any
 
 import gymnasium as gym
@@ -94,9 +91,11 @@ def tune_fleet_family(
     start: Mapping[str, float] | None = None,
     sampler_seed: int = SAMPLER_SEED,
     train_seed: int = TRAIN_SEED,
+    env_kwargs: Mapping[str, Any] | None = None,
 ) -> TuningResult:
     """Tune one fleet family with TPE on ``episodes`` training fleets (module docstring);
-    ``start`` is enqueued as the first trial."""
+    ``start`` (its entries in the family's box, each inside it) is enqueued as the first
+    trial; ``env_kwargs``: more keywords of ``ScasFleet-v0`` (``scenario``, ``cost_model``)."""
     import optuna
 
     for name, value in (("trials", trials), ("episodes", episodes)):
@@ -104,6 +103,11 @@ def tune_fleet_family(
             raise ValueError(f"{name} = {value!r} must be an integer >= 1")
     if train_seed == HELD_OUT_SEED:
         raise ValueError(f"train_seed = {train_seed!r} is the held-out seed")
+    extra = dict(env_kwargs or {})
+    taken = sorted(set(extra) & {"fleet", "obs_mode"})
+    if taken:
+        raise ValueError(f"env_kwargs {taken}: set by the tuning (fleet, the family's obs_mode)")
+    point = _start_point(family, start)
     optuna.logging.set_verbosity(optuna.logging.WARNING)
     t0 = time.perf_counter()
     env = gym.make_vec(
@@ -112,6 +116,7 @@ def tune_fleet_family(
         vectorization_mode="vector_entry_point",
         obs_mode=policy_obs_mode(family.policy),
         fleet=fleet,
+        **extra,
     )
     seeds = episode_seeds(train_seed, episodes)
     history: list[dict[str, Any]] = []
@@ -128,11 +133,8 @@ def tune_fleet_family(
     study = optuna.create_study(
         direction="maximize", sampler=optuna.samplers.TPESampler(seed=sampler_seed)
     )
-    if start is not None:
-        point = {k: float(v) for k, v in start.items() if k in family.box}
-        lows = {k: lo for k, (lo, hi, _) in family.box.items()}
-        highs = {k: hi for k, (lo, hi, _) in family.box.items()}
-        study.enqueue_trial({k: min(max(v, lows[k]), highs[k]) for k, v in point.items()})
+    if point is not None:
+        study.enqueue_trial(point)
     study.optimize(objective, n_trials=trials)
     env.close()
     best = history[study.best_trial.number]
@@ -149,6 +151,19 @@ def tune_fleet_family(
     )
 
 
+def _start_point(family: Family, start: Mapping[str, float] | None) -> dict[str, float] | None:
+    """``start``'s entries in ``family``'s box (others are another family's), each checked
+    to lie inside it: a point outside the box is refused, not moved to its edge."""
+    if start is None:
+        return None
+    point = {k: float(v) for k, v in start.items() if k in family.box}
+    for k, v in point.items():
+        lo, hi, _ = family.box[k]
+        if not lo <= v <= hi:
+            raise ValueError(f"start {k} = {v!r} is outside {family.label}'s box [{lo!r}, {hi!r}]")
+    return point
+
+
 def _tune(settings: Mapping[str, Any], chunk: Sequence[Sequence[str]]) -> list[TuningResult]:
     """Tasks of families: each one label, or the nested chain run in order."""
     out: list[TuningResult] = []
@@ -163,61 +178,36 @@ def _tune(settings: Mapping[str, Any], chunk: Sequence[Sequence[str]]) -> list[T
 
 def tune_fleet_families(
     fleet: FleetConfig | None = None,
+    families: Iterable[str] | None = None,
     *,
     trials: int = 30,
     episodes: int = 16,
     n_workers: int = 2,
     progress: bool = False,
+    env_kwargs: Mapping[str, Any] | None = None,
 ) -> dict[str, TuningResult]:
-    """Tune every fleet family with the same budget: the nested chain (naive, opportunistic,
-    aware) in order on one worker, the age rule and the oracle on the others."""
+    """Tune the fleet ``families`` (labels of :data:`FLEET_FAMILIES`; None: all) with the same
+    budget: the nested chain (naive, opportunistic, aware) in order on one worker, a nested
+    family bringing the ones it starts from; each other family on a worker of its own.
+    ``env_kwargs``: as :func:`tune_fleet_family`."""
+    wanted = list(FLEET_FAMILIES) if families is None else list(families)
+    unknown = [f for f in wanted if f not in FLEET_FAMILIES]
+    if unknown or not wanted:
+        raise ValueError(f"families = {wanted!r} must name some of {list(FLEET_FAMILIES)}")
+    last = max((CHAIN.index(f) for f in wanted if f in CHAIN), default=-1)
+    chunks = [list(CHAIN[: last + 1])] if last >= 0 else []
+    chunks += [[f] for f in FLEET_FAMILIES if f in wanted and f not in CHAIN]
     settings = {
         "fleet": FleetConfig() if fleet is None else fleet,
         "trials": trials,
         "episodes": episodes,
+        "env_kwargs": dict(env_kwargs or {}),
     }
-    chunks = [list(CHAIN), ["fleet_age"], ["fleet_oracle"]]
     out: dict[str, TuningResult] = {}
     for r in map_chunks(_tune, (settings,), chunks, n_workers=n_workers, chunk_size=1,
                         progress=progress, desc="fleet families"):  # fmt: skip
         out[r.family] = r
-    return out
-
-
-def main(argv: Sequence[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--trials", type=int, default=30)
-    parser.add_argument("--episodes", type=int, default=16)
-    parser.add_argument("--workers", type=int, default=2)
-    parser.add_argument("--fleet", type=Path, default=None, help="a fleet file ([fleet] table)")
-    parser.add_argument("--out", type=Path, required=True, help="folder for tuning.json")
-    args = parser.parse_args(argv)
-    fleet = FleetConfig.load(args.fleet) if args.fleet else FleetConfig()
-    results = tune_fleet_families(
-        fleet, trials=args.trials, episodes=args.episodes, n_workers=args.workers, progress=True
-    )
-    args.out.mkdir(parents=True, exist_ok=True)
-    rows = {
-        k: {
-            "params": r.best_params,
-            "train_reward": r.best_reward,
-            "edges": r.edges,
-            "episodes": r.episodes_simulated,
-            "wall_s": r.wall_s,
-            "history": r.history,
-        }
-        for k, r in results.items()
-    }
-    text = json.dumps({"trials": args.trials, "episodes": args.episodes, "families": rows},
-                      indent=1)  # fmt: skip
-    (args.out / "tuning.json").write_text(text + "\n")
-    for k, r in results.items():
-        print(f"{k:20s} train reward {r.best_reward:12,.0f}  {r.best_params}  edges {r.edges}")
-    return 0
-
-
-if __name__ == "__main__":
-    raise SystemExit(main())
+    return {f: out[f] for f in FLEET_FAMILIES if f in out}
 
 
 __all__ = ["CHAIN", "FLEET_FAMILIES", "STARTS", "tune_fleet_families", "tune_fleet_family"]

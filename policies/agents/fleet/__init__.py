@@ -11,9 +11,9 @@
 * :mod:`~policies.agents.fleet.demos`: a rule's demonstrations and DAgger samples;
 * :mod:`~policies.agents.fleet.clone`: masked behaviour cloning into a MaskablePPO policy;
 * :mod:`~policies.agents.fleet.training`: the clone of a rule, then MaskablePPO, checkpoints;
-* :mod:`~policies.agents.fleet.selection`: checkpoints on validation fleets, shipping;
 * :mod:`~policies.agents.fleet.plugins`: loading a trained agent (no unpickling) and the
   benchmark's ``fleet_ppo`` / ``fleet_shared_ppo``.
 
-The commands are ``python -m experiments.fleet_agents.train`` and ``...ship``.
+The commands are ``python -m experiments.fleet_agents.train`` and ``...ship`` (checkpoints
+chosen on validation fleets, the agents shipped: ``experiments/fleet_agents/selection.py``).
 """

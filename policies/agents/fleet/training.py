@@ -20,7 +20,7 @@ env up: the adapter (rewards in USD per day) -> ``VecMonitor`` (episode rewards 
 
 Seeds: the training fleets' env seeds derive from ``SeedSequence([TRAIN_SEED, seed])`` (the
 demonstrations' from :func:`policies.benchmark.run.episode_seeds` on ``TRAIN_SEED``); the
-checkpoints are chosen on validation seeds (:mod:`policies.agents.fleet.selection`).
+checkpoints are chosen on validation seeds (:mod:`experiments.fleet_agents.selection`).
 """
 
 from __future__ import annotations

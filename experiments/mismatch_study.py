@@ -29,7 +29,7 @@ interval's upper and lower bounds cross zero: beyond the first the value is no l
 significantly positive, beyond the second it is significantly negative (the levels whose
 interval holds zero). NaN: no crossing within the levels run.
 
-Command (docs/value.md, "Model mismatch"): ``python -m policies.value.mismatch --out
+Command (docs/value.md, "Model mismatch"): ``python -m experiments.mismatch_study --out
 results/mismatch --workers 2``; ``--quick`` for a smoke run.
 """
 
@@ -798,11 +798,11 @@ def _levels_arg(text: str) -> tuple[str, tuple[float, ...]]:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """``python -m policies.value.mismatch``: the mismatch study (module docstring)."""
+    """``python -m experiments.mismatch_study``: the mismatch study (module docstring)."""
     from scas_env.cli_args import check_out_dir, nonneg_int, positive_int
 
     parser = argparse.ArgumentParser(
-        prog="python -m policies.value.mismatch", description=__doc__.splitlines()[0]
+        prog="python -m experiments.mismatch_study", description=__doc__.splitlines()[0]
     )
     parser.add_argument("--out", required=True, help="results folder (created atomically)")
     parser.add_argument("--overwrite", action="store_true", help="replace an existing --out")

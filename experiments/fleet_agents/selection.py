@@ -1,7 +1,7 @@
 """Choose, measure and ship a fleet agent (after :mod:`policies.agents.fleet.training`).
 
 1. :func:`best_tuned_rule`: the rule a run clones and is measured against, from the fleet
-   tuning's ``tuning.json`` (:mod:`policies.value.fleet_tuning`): the filter-rule family with
+   tuning's ``tuning.json`` (``scas-tune --fleet``): the filter-rule family with
    the best mean reward on the **training** seeds, with its tuned parameters.
 2. :func:`validate`: every checkpoint of the runs, and the rules, on the **validation** fleets
    (``SeedSequence(VALIDATION_SEED)``, 32 episodes by default; never the held-out
@@ -53,16 +53,21 @@ _CKPT = re.compile(r"^(?:ckpt_(\d+)|clone)\.zip$")
 
 
 def tuned_rules(path: str | Path | None) -> dict[str, dict[str, Any]]:
-    """``label -> {"params", "train_reward"}`` of the tuning file (``None``: the defaults of
-    :data:`FILTER_FAMILIES`, without rewards)."""
+    """``label -> {"params", "train_reward"}`` of ``scas-tune --fleet``'s ``tuning.json``
+    (``None``: the defaults of :data:`FILTER_FAMILIES`, without rewards)."""
     if path is None:
         return {f: {"params": {}, "train_reward": None} for f in FILTER_FAMILIES}
     data = json.loads(Path(path).read_text())
-    fams = data.get("families", data)
-    return {
-        k: {"params": dict(v["params"]), "train_reward": v.get("train_reward")}
-        for k, v in fams.items()
-    }
+    try:
+        return {
+            k: {"params": dict(v["best_params"]), "train_reward": float(v["best_reward"])}
+            for k, v in data.items()
+        }
+    except (AttributeError, KeyError, TypeError) as exc:
+        raise ValueError(
+            f"{path}: not a tuning.json of scas-tune --fleet (label -> best_params, "
+            f"best_reward): {exc!r}"
+        ) from exc
 
 
 def best_tuned_rule(path: str | Path | None, rule: str | None = None) -> tuple[str, dict]:
