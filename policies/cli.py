@@ -463,10 +463,8 @@ Writes tuning.json (chosen parameters, edge flags, every trial), tuning_history.
 tuning_history.png to --out (policies.value.tuning). Held-out evaluation: scas-value.
 --quick: fewer trials and episodes, full-length episodes (docs/cli.md).
 
-Fleets (ScasFleet-v0): --fleet tunes the fleet rule families on the default fleet, a
---scenario file with a [fleet] table on that one (policies.value.fleet_tuning; default budget
-30 trials x 16 fleets; the nested chain naive -> opportunistic -> aware in order). The
-held-out comparison is scas-benchmark --fleet.
+--fleet, or a --scenario file with a [fleet] table: the fleet rules on that fleet
+(policies.value.fleet_tuning); held-out: scas-benchmark --fleet.
 """
 FLEET_TUNE_SIZES = {"trials": (30, 4), "episodes": (16, 4)}
 
@@ -480,15 +478,14 @@ def tune_parser() -> Any:
         "--families",
         type=name_list(set(FAMILIES) | set(FLEET_FAMILIES), "rule family"),
         default=None,
-        help=f"comma-separated family labels (default: {','.join(FAMILIES)}; the age rule is "
-        f"always tuned first; with --fleet: {','.join(FLEET_FAMILIES)}, a nested family "
-        "brings the ones it starts from)",
+        help="comma-separated family labels (default: every family; single: the age rule is "
+        "tuned first; fleet: a nested family brings those it starts from)",
     )
     parser.add_argument(
         "--fleet",
         action="store_true",
-        help="tune the fleet rules on ScasFleet-v0's default fleet (a --scenario file with a "
-        "[fleet] table tunes on that fleet); no --slots",
+        help="the fleet rules on ScasFleet-v0's default fleet; 30 trials x 16 fleets unless "
+        "given; no --slots",
     )
     _size_args(parser, TUNE_SIZES, TUNE_HELP)
     parser.add_argument("--workers", type=positive_int, default=2, help="local worker processes")
