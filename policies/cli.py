@@ -516,7 +516,7 @@ def tune_main(argv: Sequence[str] | None = None) -> int:
         parser.error(f"{args.scenario}: obs_mode is set per policy; leave it out of the file")
     env_kwargs = _env_kwargs(scenario, costs, exclude=("obs_mode", "episode_slots"))
 
-    from policies.value.tuning import FAMILIES, tune_families, write_tuning_outputs
+    from policies.value.tuning import FAMILIES, tune_families
 
     families = list(FAMILIES) if args.families is None else args.families
     fleet_only = [f for f in families if f not in FAMILIES]
@@ -532,7 +532,14 @@ def tune_main(argv: Sequence[str] | None = None) -> int:
         **size,
     )
     config = {"size": size, **_config_record(parser.prog, argv, args, scenario, costs)}
-    paths = write_tuning_outputs(results, out, config=config, overwrite=args.overwrite)
+    return _write_tuning(results, out, config, args.overwrite)
+
+
+def _write_tuning(results: Any, out: Path, config: dict[str, Any], overwrite: bool) -> int:
+    """scas-tune's files (:func:`policies.value.tuning.write_tuning_outputs`) and summary."""
+    from policies.value.tuning import write_tuning_outputs
+
+    paths = write_tuning_outputs(results, out, config=config, overwrite=overwrite)
     for k, r in results.items():
         edges = {p: e for p, e in r.edges.items() if e != "inside"}
         print(f"{k}: {r.best_params} training reward {r.best_reward:,.0f}; edges {edges or 'none'}")
@@ -547,7 +554,6 @@ def _tune_fleet(
     """``scas-tune --fleet``: :func:`policies.value.fleet_tuning.tune_fleet_families` on
     ``fleet``, written as the single actuator's tuning."""
     from policies.value.fleet_tuning import FLEET_FAMILIES, tune_fleet_families
-    from policies.value.tuning import write_tuning_outputs
 
     if args.slots is not None:
         parser.error("--slots: a fleet's episode is its [fleet] table's episode_days")
@@ -571,13 +577,7 @@ def _tune_fleet(
         **_config_record(parser.prog, argv, args, scenario, costs),
         "fleet": fleet.to_dict(),
     }
-    paths = write_tuning_outputs(results, out, config=config, overwrite=args.overwrite)
-    for k, r in results.items():
-        edges = {p: e for p, e in r.edges.items() if e != "inside"}
-        print(f"{k}: {r.best_params} training reward {r.best_reward:,.0f}; edges {edges or 'none'}")
-    for path in paths.values():
-        log.info(f"wrote {path}")
-    return 0
+    return _write_tuning(results, out, config, args.overwrite)
 
 
 VALUE_DOC = """\
