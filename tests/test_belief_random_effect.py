@@ -3,6 +3,8 @@ computations (scipy.stats, joint-Gaussian conditioning, the filter's own update)
 
 from __future__ import annotations
 
+import copy
+
 import numpy as np
 import pytest
 from scipy.stats import multivariate_normal, norm
@@ -72,17 +74,28 @@ def test_update_log_likelihood_equals_the_filters_own_update() -> None:
 
 
 def test_auxiliary_arrays_follow_their_particles_through_resampling() -> None:
+    """Each tag is its parent's severity: systematic resampling recomputed here (the
+    filter's next uniform u, positions (u + k) / N on the cumulative posterior weights
+    w_i exp(l_i)) gives the parent of every particle, and the tags are the parents'
+    pre-update severities, in particle order; the jitter moves x, not the tags."""
     pf = _filter(6)
+    assert pf.resampler == "systematic"
     tag = pf.add_auxiliary("tag")
-    tag[:] = pf.x  # each particle's tag is its severity before the update
+    x_before, w_before = np.array(pf.x), np.array(pf.weights)
+    tag[:] = x_before  # each particle's tag is its severity before the update
     with pytest.raises(ValueError, match="new string"):
         pf.add_auxiliary("tag")
-    ll = -0.5 * ((np.array(pf.x) - 1.0) / 0.05) ** 2  # sharp: forces a resample
+    u = copy.deepcopy(pf.rng).random()  # the uniform the resampler draws next
+    ll = -0.5 * ((x_before - 1.0) / 0.05) ** 2  # sharp: forces a resample
     assert pf.update_log_likelihood(ll)
-    # regularised resampling jitters x, not the tags: each tag is its parent's severity
-    parents = pf.aux["tag"]
-    assert np.all(np.abs(parents - 1.0) < 0.3)
-    assert np.unique(parents).size < 300  # copies of the heavier parents
+    posterior = w_before * np.exp(ll - ll.max())
+    cumsum = np.cumsum(posterior / posterior.sum())
+    n = x_before.size
+    positions = (u + np.arange(n)) / n
+    parent = np.minimum(np.searchsorted(cumsum, positions, side="right"), n - 1)
+    np.testing.assert_array_equal(pf.aux["tag"], x_before[parent])
+    assert np.unique(parent).size < n  # copies of the heavier parents
+    assert not np.array_equal(np.array(pf.x), x_before[parent])  # x jittered, tags not
 
 
 def test_condition_below_is_bayes_with_a_survival_likelihood() -> None:

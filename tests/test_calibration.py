@@ -9,6 +9,7 @@ import pytest
 
 from prognostics.degradation_models import paris_crack_model
 from scas_env.actuator.calibration import (
+    ENV_BUILD,
     build_calibration,
     default_calibration,
     params_digest,
@@ -34,16 +35,29 @@ def test_shipped_calibration_matches_default_parameters() -> None:
 
 
 def test_shipped_calibration_is_reproduced_by_the_physics() -> None:
-    fresh = build_calibration(P, seed=SHIPPED.seed, n_windows=6, progress=False)
-    assert fresh.seal_critical_wear_m == pytest.approx(SHIPPED.seal_critical_wear_m, rel=1e-9)
-    assert fresh.spring_failure_depth_m == pytest.approx(SHIPPED.spring_failure_depth_m)
+    """Rebuilt from physics with the shipped file's settings (its seed, ``ENV_BUILD``'s
+    window count; about 1.5 s), every window-based field equals the shipped one, the crack and
+    wear CVs included (rtol 1e-9: the same seeded windows, up to summation order)."""
+    fresh = build_calibration(
+        P, seed=SHIPPED.seed, n_windows=ENV_BUILD["n_windows"], progress=False
+    )
+    # lengths of microns: abs=0, or pytest.approx's default abs=1e-12 would hide any error
+    assert fresh.seal_critical_wear_m == pytest.approx(
+        SHIPPED.seal_critical_wear_m, rel=1e-9, abs=0.0
+    )
+    assert fresh.spring_failure_depth_m == pytest.approx(
+        SHIPPED.spring_failure_depth_m, rel=1e-9, abs=0.0
+    )
     np.testing.assert_allclose(fresh.crack_depth_m, SHIPPED.crack_depth_m, rtol=1e-9)
     np.testing.assert_allclose(
         fresh.crack_rate_m_per_flight, SHIPPED.crack_rate_m_per_flight, rtol=1e-9
     )
-    assert fresh.wear_rate_m_per_flight == pytest.approx(SHIPPED.wear_rate_m_per_flight, rel=1e-9)
-    # the scatter is estimated from few windows here: same order only
-    assert fresh.wear_cv == pytest.approx(SHIPPED.wear_cv, rel=1.0)
+    assert fresh.wear_rate_m_per_flight == pytest.approx(
+        SHIPPED.wear_rate_m_per_flight, rel=1e-9, abs=0.0
+    )
+    np.testing.assert_allclose(fresh.crack_cv_depth_m, SHIPPED.crack_cv_depth_m, rtol=1e-12)
+    np.testing.assert_allclose(fresh.crack_cv, SHIPPED.crack_cv, rtol=1e-9)
+    assert fresh.wear_cv == pytest.approx(SHIPPED.wear_cv, rel=1e-9)
 
 
 def test_spring_life_equals_direct_integration_of_paris_law() -> None:

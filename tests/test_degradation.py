@@ -21,7 +21,8 @@ from scas_env.actuator.missions import flight_profile, link_force_n
 from scas_env.actuator.params import ScasParams
 from scas_env.actuator.physics.actuator import simulate
 from scas_env.actuator.physics.seal import archard_beta_j_m3
-from scas_env.actuator.uncertainty import nominal_unit
+from scas_env.actuator.physics.spring import coil_stiffness_n_per_m
+from scas_env.actuator.uncertainty import draw_unit, nominal_unit
 
 P = ScasParams()
 UNIT = nominal_unit(P)
@@ -74,9 +75,24 @@ def test_crack_increment_is_linear_in_paris_c(spectrum_loads) -> None:
 
 
 def test_cracked_spring_carries_less_force() -> None:
+    """Eq. 1 for a drawn unit's cracked spring (spring 0's own wire and coil diameters):
+    uncracked, G d^4 / (8 D^3 n); cracked, n - 1 healthy coils k_coil = G d^4 / (8 D^3) in
+    series with the cracked coil's eq.-5 stiffness (exact polar moment)."""
     k0 = cracked_spring_rate_n_m(P, UNIT, 0.0)
     assert k0 == pytest.approx(P.spring.rate_n_per_m, rel=1e-12)
-    assert cracked_spring_rate_n_m(P, UNIT, 0.5e-3) < k0
+    unit = draw_unit(P, np.random.default_rng(3))
+    g, n = P.spring.shear_modulus_pa, P.spring.active_coils
+    d, big_d = unit.wire_diameter_m[0], unit.mean_coil_diameter_m[0]
+    assert d != P.spring.wire_diameter_m and d != unit.wire_diameter_m[1]  # geometry matters
+    k_coil = g * d**4 / (8.0 * big_d**3)
+    assert cracked_spring_rate_n_m(P, unit, 0.0) == pytest.approx(k_coil / n, rel=1e-12)
+    a = 0.5e-3
+    k_f = coil_stiffness_n_per_m(
+        a, shear_modulus_pa=g, wire_diameter_m=d, coil_diameter_m=big_d, j_form="exact"
+    )
+    expected = 1.0 / ((n - 1.0) / k_coil + 1.0 / k_f)
+    assert cracked_spring_rate_n_m(P, unit, a) == pytest.approx(expected, rel=1e-12)
+    assert expected < k_coil / n
 
 
 def test_growth_accelerates_to_failure(spectrum_loads) -> None:

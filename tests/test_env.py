@@ -17,6 +17,7 @@ from stable_baselines3.common.env_checker import check_env as sb3_check_env
 import scas_env
 from scas_env.core.costs import CostModel
 from scas_env.core.scenario import OBS_MODES, Scenario
+from scas_env.core.setup import PARTS
 from scas_env.env import ScasMaintenanceEnv
 
 ENV_ID = scas_env.ENV_ID
@@ -384,21 +385,69 @@ def test_wasted_life_is_the_true_rul_thrown_away_and_info_keeps_its_size() -> No
         assert info["wasted_life_sum_flights"][part] == pytest.approx(sum(values), rel=1e-12)
 
 
+def _run_to_failure_timeline(
+    lives: dict[str, list[float]], slots: int, downtime_slots: int
+) -> tuple[dict[str, int], int]:
+    """Failures per part and flights flown when only ``fly`` is chosen, from the announced
+    lives alone: every flight attempt ages both parts, a part fails on the attempt that
+    ends its life (not flown; the next announced part is fitted) and the aircraft is then
+    down for ``downtime_slots`` slots."""
+    left = {p: list(v) for p, v in lives.items()}
+    failures, flights, down = dict.fromkeys(lives, 0), 0, 0
+    for _ in range(slots):
+        if down > 0:
+            down -= 1
+            continue
+        for p in left:
+            left[p][0] -= 1.0
+        failed = [p for p in left if left[p][0] <= 0.0]
+        for p in failed:
+            failures[p] += 1
+            left[p].pop(0)
+        if failed:
+            down = downtime_slots
+        else:
+            flights += 1
+    return failures, flights
+
+
 def test_never_maintained_unit_fails_and_failed_part_is_renewed() -> None:
-    env = ScasMaintenanceEnv(episode_slots=3000)
+    """Run to failure: the failures per part and the flights flown are those the announced
+    lives imply (``part_lives``, an independent timeline); at each failure the failed part
+    (the one whose count went up) is renewed: age 0, the next announced life, a new seal
+    with no wear; the other part is kept (its age and remaining life go on)."""
+    slots = 3000
+    env = ScasMaintenanceEnv(episode_slots=slots)
     env.reset(seed=5)
+    lives = env.part_lives(count=8)
+    expected, flights = _run_to_failure_timeline(
+        lives, slots, int(env.costs.failure_downtime_slots)
+    )
+    fitted = dict.fromkeys(PARTS, 0)  # index of the fitted part in the announced lives
+    before = {p: 0 for p in PARTS}
     failures = 0
-    for _ in range(3000):
+    for _ in range(slots):
         _, r, _, _, info = env.step(0)
-        if info["reward_terms"]["failure"] < 0:
+        failed = [p for p in PARTS if info["failures"][p] > before[p]]
+        if failed:
             failures += 1
-            state = info["true_state"]
-            # the failed part was replaced: at least one part is new again
-            assert state["crack_fraction"] < 0.2 or state["wear_fraction"] < 0.01
+            state, age = info["true_state"], env.batch.a["part_age"][0]
+            for k, part in enumerate(PARTS):
+                if part in failed:
+                    fitted[part] += 1
+                    assert age[k] == 0
+                    assert state[f"{part}_rul_flights"] == lives[part][fitted[part]]
+                else:
+                    assert age[k] > 0
+            if "seal" in failed:
+                assert state["seal_wear_m"] == 0.0 == state["wear_fraction"]
             assert r == -env.costs.failure_total_usd
             assert info["downtime"] == env.costs.failure_downtime_slots
-    assert failures >= 2
+        before = dict(info["failures"])
+    assert info["failures"] == expected
+    assert expected["spring"] >= 1 and expected["seal"] >= 1  # both parts exercised
     assert sum(info["failures"].values()) == failures
+    assert info["flights"] == flights
     assert info["replacements"] == info["failures"]  # failed parts only: none preventive
     assert info["availability"] < 1.0
 

@@ -16,12 +16,18 @@ import pytest
 
 import scas_env
 from scas_env.actuator import calibration as cal_module
+from scas_env.actuator.calibration import params_digest
 from scas_env.actuator.params import ScasParams
 
 
 def test_an_env_on_other_params_builds_a_whole_flight_calibration(
     monkeypatch: pytest.MonkeyPatch,
 ) -> None:
+    """The env on ``paris_c`` x 1.5 runs on a calibration of those params, not the shipped
+    one: Paris' law is linear in C, so against the shipped file the crack-rate table is
+    exactly 1.5 x (same depths), and the seal wear rate, failure depths and dormant depth are
+    unchanged. A CV is scale-free, so the window CVs equal those of the default params built
+    with the same seed and windows (``ENV_BUILD``'s seed). The env then runs to truncation."""
     monkeypatch.setitem(cal_module.ENV_BUILD, "whole_flights", 2)
     monkeypatch.setitem(cal_module.ENV_BUILD, "n_windows", 2)
     base = ScasParams()
@@ -30,8 +36,24 @@ def test_an_env_on_other_params_builds_a_whole_flight_calibration(
     )
     env = gym.make(scas_env.ENV_ID, params=params, episode_slots=50)
     cal = env.unwrapped.setup.calibration
-    assert cal.params_digest != cal_module.default_calibration().params_digest
+    shipped = cal_module.default_calibration()
+    assert cal.params_digest == params_digest(params) != shipped.params_digest
     assert cal.whole_flights == 2
+    np.testing.assert_array_equal(cal.crack_depth_m, shipped.crack_depth_m)
+    np.testing.assert_allclose(
+        cal.crack_rate_m_per_flight, 1.5 * shipped.crack_rate_m_per_flight, rtol=1e-12
+    )
+    assert cal.wear_rate_m_per_flight == pytest.approx(
+        shipped.wear_rate_m_per_flight, rel=1e-12, abs=0.0
+    )
+    assert cal.spring_failure_depth_m == shipped.spring_failure_depth_m
+    assert cal.crack_dormant_below_m == shipped.crack_dormant_below_m
+    assert cal.seal_critical_wear_m == shipped.seal_critical_wear_m
+    same_windows = cal_module.build_calibration(
+        base, seed=cal_module.ENV_BUILD["seed"], n_windows=2, progress=False
+    )
+    np.testing.assert_allclose(cal.crack_cv, same_windows.crack_cv, rtol=1e-9)
+    assert cal.wear_cv == pytest.approx(same_windows.wear_cv, rel=1e-12)
     crack_cv, wear_cv = cal.flight_scatter("whole_flight")
     assert np.all(np.isfinite(crack_cv)) and math.isfinite(float(np.ravel(wear_cv)[0]))
     obs, _ = env.reset(seed=0)

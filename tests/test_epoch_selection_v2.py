@@ -27,6 +27,7 @@ from experiments.epoch_agents.selection import (
 )
 from policies.agents.agent_files import ObsNormalization, weights_sha256
 from policies.benchmark.run import PolicySpec, run_benchmark
+from policies.benchmark.stats import minimum_detectable_difference
 
 SLOTS = 40
 KS = (1, 20)
@@ -279,6 +280,8 @@ def test_tuned_rules_read_the_ladder_at_full_precision(tmp_path) -> None:
 
 
 def test_paired_vs_rules_matches_scipy_paired_t() -> None:
+    """Each agent-vs-rule pair (by episode, in any row order) gives scipy's paired t: mean,
+    95 % CI and p-value; its MDD is the noncentral-t one of the paired sd and n pairs."""
     import scipy.stats
 
     from experiments.epoch_agents.selection import paired_vs_rules
@@ -303,7 +306,13 @@ def test_paired_vs_rules_matches_scipy_paired_t() -> None:
             assert (res["low"], res["high"]) == pytest.approx((low, high))
             p = scipy.stats.ttest_rel(values["agent"], values[rule]).pvalue
             assert res["p_value"] == pytest.approx(p)
-            assert res["mdd"] > 0
+            # MDD: the paired sd (ddof=1) and n pairs, and (independently) the mean that a
+            # two-sided t-test at 5 % detects with power 0.8 on the noncentral t
+            sd = d.std(ddof=1)
+            assert res["mdd"] == pytest.approx(minimum_detectable_difference(sd, n), rel=1e-9)
+            crit = scipy.stats.t.ppf(0.975, n - 1)
+            power = scipy.stats.nct(n - 1, res["mdd"] * np.sqrt(n) / sd)
+            assert power.sf(crit) + power.cdf(-crit) == pytest.approx(0.8, abs=1e-6)
     with pytest.raises(ValueError, match="not run on the same episodes"):
         paired_vs_rules(rows[:-1], ["agent"], ["filter"])
 

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import dataclasses
+import math
 
 import numpy as np
 import pytest
@@ -59,9 +60,30 @@ def test_crack_bias_force_and_null_bias_current_grow_with_depth() -> None:
 
 
 def test_seal_wear_raises_leakage_and_adds_substeps_when_needed() -> None:
+    """Eq. 9 against its closed forms: laminar K_i1 = pi D h^3 / (12 mu L) with h = h0 + wear
+    (at 40 C, mu = nu_40 rho), so 20 um of wear on a 5 um gap multiplies it by (25/5)^3 = 125;
+    the orifice K_i2 = C_d phi pi D (wear - lip) sqrt(2/rho) beyond the lip allowance, zero
+    within it. A worn seal then needs integrator substeps within the stability bound."""
+    seal, rho = P.seal, P.fluid.density_kg_m3
+    mu_40 = P.fluid.viscosity_40c_m2_s * rho
     k_new = leakage_at(P, 0.0, 40.0)
     k_worn = leakage_at(P, 20e-6, 40.0)
-    assert k_worn[0] > 10 * k_new[0] and k_worn[1] > 0.0 == k_new[1]
+    laminar_new = (
+        math.pi * seal.diameter_m * seal.initial_gap_m**3 / (12.0 * mu_40 * seal.land_length_m)
+    )
+    assert k_new[0] == pytest.approx(laminar_new, rel=1e-12, abs=0.0)
+    assert seal.initial_gap_m == 5e-6 and seal.lip_wear_m == 10e-6  # the numbers above
+    assert k_worn[0] / k_new[0] == pytest.approx(((5e-6 + 20e-6) / 5e-6) ** 3, rel=1e-12)
+    orifice = (
+        seal.orifice_discharge_coeff
+        * seal.orifice_fraction
+        * math.pi
+        * seal.diameter_m
+        * (20e-6 - seal.lip_wear_m)
+        * math.sqrt(2.0 / rho)
+    )
+    assert k_worn[1] == pytest.approx(orifice, rel=1e-12, abs=0.0)
+    assert k_new[1] == 0.0 == leakage_at(P, seal.lip_wear_m, 40.0)[1]
     worn = actuator_config(P, health=HealthState(seal_wear_m=30e-6))
     assert worn.substeps > 1
     h = worn.dt_s / worn.substeps

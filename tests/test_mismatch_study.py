@@ -82,8 +82,10 @@ def test_the_age_rule_does_not_see_the_sensing_mismatch() -> None:
 def _rows(rng: np.random.Generator) -> list[dict]:
     rows = []
     for level, world in ((1.0, "nominal"), (2.0, "growth=2")):
-        for arm, shift in ((AGE_NOMINAL, 0.0), (FILTER_NOMINAL, 50.0 / level), (AGE_RETUNED, 5.0),
-                           (FILTER_RETUNED, 40.0)):  # fmt: skip
+        # filter - age, nominal-tuned: +30 at level 1, -30 at level 2 (crosses zero);
+        # re-tuned: +35 at both levels (no crossing)
+        for arm, shift in ((AGE_NOMINAL, 0.0), (FILTER_NOMINAL, 90.0 - 60.0 * level),
+                           (AGE_RETUNED, 5.0), (FILTER_RETUNED, 40.0)):  # fmt: skip
             for e in range(30):
                 rows.append(
                     {
@@ -101,6 +103,10 @@ def _rows(rng: np.random.Generator) -> list[dict]:
 
 
 def test_summary_series_are_the_paired_comparisons() -> None:
+    """Each level's series is the paired comparison of its two arms; the break-even levels
+    of each series (mean, low and high bounds; up and down) are the log-level crossings of
+    those per-level values, worked by hand where the nominal-tuned series crosses zero and
+    NaN where a series does not cross."""
     rows = _rows(np.random.default_rng(0))
     s = summarize_study(rows, {"growth": (1.0, 2.0)})
     point = s["kinds"]["growth"]["points"][1]
@@ -114,8 +120,25 @@ def test_summary_series_are_the_paired_comparisons() -> None:
     assert point["series"]["re-tuning gain (filter)"] == paired_comparison(
         reward(FILTER_RETUNED), reward(FILTER_NOMINAL)
     )
-    be = s["kinds"]["growth"]["break_even"]["nominal-tuned"]["up"]
-    assert math.isnan(be["level"]) or 1.0 <= be["level"] <= 2.0
+    points = s["kinds"]["growth"]["points"]
+    assert [p["level"] for p in points] == [1.0, 2.0]
+    for name in ("nominal-tuned", "re-tuned"):
+        at = [p["series"][name] for p in points]
+        for direction in ("up", "down"):
+            be = s["kinds"]["growth"]["break_even"][name][direction]
+            for key, bound in (("level", "mean"), ("significant_until", "low"),
+                               ("negative_beyond", "high")):  # fmt: skip
+                y1, y2 = at[0][bound], at[1][bound]
+                if direction == "up" and y1 > 0 >= y2:  # linear in log(level) from 1 to 2
+                    expected = 2.0 ** (y1 / (y1 - y2))
+                else:  # down: no level below 1; up: no crossing
+                    assert direction == "down" or y2 > 0
+                    expected = math.nan
+                assert be[key] == pytest.approx(expected, rel=1e-12, nan_ok=True), (name, key)
+                assert _same(be[key], break_even_level([1.0, 2.0], [y1, y2], direction=direction))
+    crossings = s["kinds"]["growth"]["break_even"]["nominal-tuned"]["up"]
+    assert all(1.0 < v < 2.0 for v in crossings.values())  # the crossing branch is exercised
+    assert math.isnan(s["kinds"]["growth"]["break_even"]["re-tuned"]["up"]["level"])
     shuffled = [
         dict(r, episode=(r["episode"] + 1) % 30) if r["arm"] == AGE_NOMINAL else r for r in rows
     ]

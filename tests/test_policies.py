@@ -217,17 +217,38 @@ def test_bad_input_raises():
         make_policy("corrective", FULL).predict(np.zeros(3))
 
 
-def test_sb3_evaluate_policy_drives_a_rule():
+def test_sb3_evaluate_policy_drives_a_rule() -> None:
+    """sb3's ``evaluate_policy`` runs a rule to truncation: the corrective rule flies every
+    flight and is paid each; the detection rule pays exactly its tests (the reward is the
+    accounting identity flights x flight value - tests x test cost, with the counts)."""
     env = Monitor(gym.make(scas_env.ENV_ID, obs_mode="features", episode_slots=100))
     policy = make_policy("corrective", env.unwrapped.obs_names)
     rewards, lengths = evaluate_policy(policy, env, n_eval_episodes=2, return_episode_rewards=True)
     # 100 flights, no part lives fewer than ~400 flights: every flight flown and paid
     assert lengths == [100, 100]
     assert rewards == [100 * 2500.0, 100 * 2500.0]
+    # the detection rule on a seeded episode: the first test when test_age reaches 10
+    # (slot 10), then every 10 slots; no alarm fires in 100 flights, so the episode's reward
+    # is its flights' value less exactly (100 - 1) // 10 = 9 tests
     det_env = Monitor(gym.make(scas_env.ENV_ID, obs_mode="features", episode_slots=100))
     det = make_policy("detection", det_env.unwrapped.obs_names, test_every=10)
-    mean, _ = evaluate_policy(det, det_env, n_eval_episodes=1)
-    assert mean < 100 * 2500.0  # tests cost
+    det_env.reset(seed=3)
+    last: dict[str, dict] = {}
+
+    def keep_info(local: dict, _: dict) -> None:
+        last["info"] = local["info"]
+
+    rewards, lengths = evaluate_policy(
+        det, det_env, n_eval_episodes=1, return_episode_rewards=True, callback=keep_info
+    )
+    info, costs = last["info"], det_env.unwrapped.setup.costs
+    assert lengths == [100] and info["flights"] == 100
+    assert info["tests"] == (100 - 1) // 10
+    assert info["no_go"] == 0
+    assert info["failures"] == info["replacements"] == {"spring": 0, "seal": 0}
+    expected = info["flights"] * costs.flight_value_usd - info["tests"] * costs.test_usd
+    assert rewards == [pytest.approx(expected, rel=1e-12)]
+    assert info["cost_usd"] == pytest.approx(info["tests"] * costs.test_usd, rel=1e-12)
 
 
 def test_oracle_never_fails_in_flight():
