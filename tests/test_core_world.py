@@ -10,6 +10,7 @@ whatever the policy did.
 from __future__ import annotations
 
 import copy
+import dataclasses
 
 import numpy as np
 import pytest
@@ -289,6 +290,34 @@ def test_physics_parts_have_their_lives_at_their_own_failure_depth() -> None:
     life = a["life"][0].copy()
     env.step(0)
     np.testing.assert_array_equal(a["life"][0], life - 1.0)
+
+
+def test_physics_unit_holds_the_fitted_parts_of_the_documented_streams() -> None:
+    """The physics fidelity's unit: the null bias of the unit drawn from the parts stream,
+    the spring pair drawn from the spring parts stream, the seals' Archard coefficient from
+    the seal parts stream; a new spring pair is the next draw of its stream (after the
+    fitted pair's installation effects and growth seed)."""
+    env = ScasMaintenanceEnv(fidelity="physics", window_library=1, reference_tests=1)
+    env.reset(seed=6)
+    rngs = _streams(6)
+    unit = draw_unit(env.params, rngs["parts"])
+    spring = draw_unit(env.params, rngs["spring_parts"])
+    seal = draw_unit(env.params, rngs["seal_parts"])
+    fitted = dataclasses.replace(
+        spring, wear_rate_m3_n_m=seal.wear_rate_m3_n_m, null_bias_a=unit.null_bias_a
+    )
+    assert env.batch.physics[0].unit == fitted
+    env.surrogate.draw_unit_z(rngs["spring_parts"], env.setup.unit_z_draws)
+    rngs["spring_parts"].integers(0, 2**63 - 1)
+    donor = draw_unit(env.params, rngs["spring_parts"])
+    env.step(2)  # a new spring pair
+    assert env.batch.physics[0].unit == dataclasses.replace(
+        fitted,
+        wire_diameter_m=donor.wire_diameter_m,
+        mean_coil_diameter_m=donor.mean_coil_diameter_m,
+        paris_c=donor.paris_c,
+        initial_crack_m=donor.initial_crack_m,
+    )
 
 
 # ------------------------------------------------------------------------------ interp

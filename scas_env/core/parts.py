@@ -24,7 +24,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from prognostics.normals import Handle, NormalStream, handle_of
+from prognostics.normals import Handle, fill_standard_normal, handle_of
 from scas_env.actuator.health import CRACKED_SPRING, HealthState, actuator_config
 from scas_env.actuator.physics.spring import failure_depth_from_params
 from scas_env.actuator.sensing import draw_window, flight_window, ground_test
@@ -81,7 +81,7 @@ def reset_row(batch: ActuatorState, e: int, np_random: np.random.Generator) -> N
     """Row ``e`` starts an episode: new streams from ``np_random``, a new unit with new parts
     (or parts part-way through life, ``initial_health="random"``), the installation's
     reference, filters at their priors, counters at zero."""
-    st, a = batch.setup, batch.a
+    st = batch.setup
     rngs = seed_streams(np_random)
     batch.rngs[e] = rngs
     batch.set_handle(e, "measure")
@@ -90,15 +90,14 @@ def reset_row(batch: ActuatorState, e: int, np_random: np.random.Generator) -> N
     if st.physics:
         batch.physics[e] = PhysicsRow(int(rngs["parts"].integers(0, 2**63 - 1)))
     spring = draw_unit(st.world_params, rngs["spring_parts"])
-    unit = _fit_spring(batch, e, unit, spring, rngs["spring_parts"])
+    _fit_spring(batch, e, spring, rngs["spring_parts"])
     seal = draw_unit(st.world_params, rngs["seal_parts"])
-    unit = replace(unit, wear_rate_m3_n_m=seal.wear_rate_m3_n_m)
-    a["wmult"][e] = unit.wear_rate_m3_n_m / st.params.seal.wear_rate_m3_n_m
-    a["wear"][e] = 0.0
+    _fit_seal(batch, e, seal)
     if st.scenario.initial_health == "random":
         _random_health(batch, e, rngs["parts"].random(2))
     if st.physics:
-        batch.physics[e].unit = unit
+        fitted = _with_part(unit, "spring", spring)
+        batch.physics[e].unit = _with_part(fitted, "seal", seal)
     for part in PARTS:
         _new_growth(batch, e, part, rngs[f"{part}_parts"], look_ahead=True)
     record_reference(batch, e)
@@ -120,32 +119,43 @@ def _clear_counters(batch: ActuatorState, e: int) -> None:
     a["last"][e] = batch.healthy_features
 
 
-def _fit_spring(
-    batch: ActuatorState, e: int, unit: UnitSample, donor: UnitSample, rng: np.random.Generator
-) -> UnitSample:
+def _fit_spring(batch: ActuatorState, e: int, donor: UnitSample, rng: np.random.Generator) -> None:
     """Row ``e`` takes ``donor``'s spring pair (geometry, Paris C, initial flaw) with new
-    installation effects drawn from ``rng``; returns the unit with it."""
+    installation effects drawn from ``rng``."""
     st, a = batch.setup, batch.a
-    unit = replace(
-        unit,
-        wire_diameter_m=donor.wire_diameter_m,
-        mean_coil_diameter_m=donor.mean_coil_diameter_m,
-        paris_c=donor.paris_c,
-        initial_crack_m=donor.initial_crack_m,
-    )
     a["crack"][e] = donor.initial_crack_m if st.scenario.crack_active else 0.0
-    a["theta"][e] = unit.paris_c / st.params.spring.paris_c
+    a["theta"][e] = donor.paris_c / st.params.spring.paris_c
     a["unit_z"][e] = st.surrogate.draw_unit_z(rng, st.unit_z_draws)
     a["fail"][e] = (
         failure_depth_from_params(
             st.params,
-            wire_diameter_m=unit.wire_diameter_m[CRACKED_SPRING],
-            coil_diameter_m=unit.mean_coil_diameter_m[CRACKED_SPRING],
+            wire_diameter_m=donor.wire_diameter_m[CRACKED_SPRING],
+            coil_diameter_m=donor.mean_coil_diameter_m[CRACKED_SPRING],
         ).depth_m
         if st.physics
         else st.calibration.spring_failure_depth_m
     )
-    return unit
+
+
+def _fit_seal(batch: ActuatorState, e: int, donor: UnitSample) -> None:
+    """Row ``e`` takes ``donor``'s seals (its Archard coefficient), new."""
+    a = batch.a
+    a["wmult"][e] = donor.wear_rate_m3_n_m / batch.setup.params.seal.wear_rate_m3_n_m
+    a["wear"][e] = 0.0
+
+
+def _with_part(unit: UnitSample, part: str, donor: UnitSample) -> UnitSample:
+    """The physics fidelity's ``unit`` with ``donor``'s ``part`` fitted (a new, checked
+    :class:`UnitSample`): the spring pair (geometry, Paris C, initial flaw) or the seals."""
+    if part == "spring":
+        return replace(
+            unit,
+            wire_diameter_m=donor.wire_diameter_m,
+            mean_coil_diameter_m=donor.mean_coil_diameter_m,
+            paris_c=donor.paris_c,
+            initial_crack_m=donor.initial_crack_m,
+        )
+    return replace(unit, wear_rate_m3_n_m=donor.wear_rate_m3_n_m)
 
 
 def _in_service(batch: ActuatorState, e: int, used: np.ndarray) -> None:
@@ -159,7 +169,7 @@ def _in_service(batch: ActuatorState, e: int, used: np.ndarray) -> None:
         flights = int(used[p] * life) if math.isfinite(life) else 0
         if flights == 0:
             continue
-        handle = tuple(int(v) for v in a["h_growth"][e, p])
+        handle = tuple(a["h_growth"][e, p].tolist())
         if part == "spring" and st.scenario.crack_active:
             a["crack"][e] = crack_after_flights(
                 float(a["crack"][e]), float(a["theta"][e]), handle, flights, *wm.damage,
@@ -183,7 +193,7 @@ def predict_and_survive(batch: ActuatorState, e: int) -> None:
     status = a["status"]
     status[e] = 0
     work = work_arrays(batch.setup.n_particles, len(batch.a["flight_sum"][e]))
-    handle = tuple(int(v) for v in a["h_filter"][e])
+    handle = tuple(a["h_filter"][e].tolist())
     filt = batch.setup.filters
     for p in range(2):
         d = float(a["pending"][e, p])
@@ -287,17 +297,14 @@ def _fit_part(
 ) -> None:
     """Row ``e`` gets a new ``part`` drawn from ``rng`` (its kind's parts stream), with its
     growth stream and life."""
-    st, a = batch.setup, batch.a
+    st = batch.setup
     donor = draw_unit(st.world_params, rng)
-    unit = batch.physics[e].unit if st.physics else donor
     if part == "spring":
-        unit = _fit_spring(batch, e, unit, donor, rng)
+        _fit_spring(batch, e, donor, rng)
     else:
-        unit = replace(unit, wear_rate_m3_n_m=donor.wear_rate_m3_n_m)
-        a["wmult"][e] = donor.wear_rate_m3_n_m / st.params.seal.wear_rate_m3_n_m
-        a["wear"][e] = 0.0
+        _fit_seal(batch, e, donor)
     if st.physics:
-        batch.physics[e].unit = unit
+        batch.physics[e].unit = _with_part(batch.physics[e].unit, part, donor)
     _new_growth(batch, e, part, rng, look_ahead=look_ahead)
 
 
@@ -398,10 +405,11 @@ def _reset_cloud(batch: ActuatorState, e: int, p: int, x0, theta0: np.ndarray) -
     weights (:meth:`prognostics.particle_filter.ParticleFilter.reset`)."""
     a = batch.a
     n = batch.setup.n_particles
-    a["x"][e, p] = x0
-    if not (np.all(np.isfinite(a["x"][e, p])) and np.all(np.isfinite(theta0))):
+    x = a["x"][e, p]
+    x[...] = x0
+    if not (np.isfinite(x).all() and np.isfinite(theta0).all()):
         raise ValueError("a filter prior gave a non-finite particle")
-    if not np.all(theta0 > 0.0):
+    if not (theta0 > 0.0).all():
         raise ValueError("theta0 must be > 0 for every particle")
     a["log_theta"][e, p] = np.log(theta0)
     a["w"][e, p] = 1.0 / n
@@ -410,7 +418,10 @@ def _reset_cloud(batch: ActuatorState, e: int, p: int, x0, theta0: np.ndarray) -
 
 def _lognormal(rng: np.random.Generator, sigma: float, n: int) -> np.ndarray:
     """exp(sigma z), z drawn as numba kernels draw normals from ``rng`` (the same values)."""
-    return np.exp(sigma * NormalStream(rng).standard_normal(n))
+    z = np.empty(n)
+    with rng.bit_generator.lock:
+        fill_standard_normal(handle_of(rng), z)
+    return np.exp(sigma * z)
 
 
 def _mixture_moments(w: np.ndarray, mean: np.ndarray, var: np.ndarray) -> tuple[float, float]:
@@ -446,7 +457,7 @@ def learn_now(batch: ActuatorState, e: int) -> None:
     status = a["status"]
     status[e] = 0
     work = work_arrays(batch.setup.n_particles, len(batch.a["flight_sum"][e]))
-    handle = tuple(int(v) for v in a["h_filter"][e])
+    handle = tuple(a["h_filter"][e].tolist())
     learn_row(e, batch.bank, a["pending"], a["flight_sum"], a["flight_count"], a["batch_usage"],
               status, work, batch.setup.filters, handle)  # fmt: skip
     a["stale"][e] = True
