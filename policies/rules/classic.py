@@ -147,9 +147,9 @@ class DetectionPolicy(Policy):
     """Detection-triggered: test when ``test_age >= test_every`` slots, replace the part
     whose section-5.1 alarm is on (the spring on ``spring_alarm``, the seals on
     ``seal_alarm``), and after a failed go/no-go test the part the test implicates
-    (:func:`policies.rules.healthy_band.implicated_spring`), as the nested rules do: under the
-    airworthiness go/no-go (v1, v2) a failed test holds the aircraft until a part is
-    replaced. The alarm is binary, so there is no opportunistic variant."""
+    (:func:`policies.rules.healthy_band.implicated_spring`), as the nested rules do: a failed
+    test holds the aircraft until a part is replaced. The alarm is binary, so there is no
+    opportunistic variant."""
 
     name: ClassVar[str] = "detection"
     obs_mode: ClassVar[str] = "features"

@@ -1,19 +1,14 @@
-"""The pre-flight test's go/no-go as an airworthiness limit (``Scenario.go_no_go``).
+"""The pre-flight test's go/no-go: an airworthiness limit.
 
-Two meanings of a failed pre-flight test are offered:
+The test fails when a ground feature has moved, since the installation's own reference, by
+as much as an actuator whose part has reached its critical level (the level at which it no
+longer meets its function: spring fracture, [DJS20] eq. 7; a 10 % loss of closed-loop
+bandwidth for the seals, Fig. 5). It is not a detector's alarm band: a part short of its
+critical level is fit to fly and should pass.
 
-* ``"detection_band"`` (``ScasMaintenance-v0``): every ground feature inside the healthy
-  population's two-sided band of false-alarm rate ``go_no_go_false_alarm``. This is a
-  detector's alarm band: it grounds actuators that are still fit to fly (about one in five
-  at 40 % of critical seal wear), so testing is punished.
-* ``"airworthiness"`` (``ScasMaintenance-v1``): the test fails when a ground feature has
-  moved, since the installation's own reference, by as much as an actuator whose part has
-  reached its critical level (the level at which it no longer meets its function: spring
-  fracture, [DJS20] eq. 7; a 10 % loss of closed-loop bandwidth for the seals, Fig. 5).
-
-The airworthiness limit. At fitting, a maintainer records the installation's reference
+At fitting, a maintainer records the installation's reference
 reading of each ground feature, the mean of ``reference_tests`` tests of the healthy
-installation (``ActuatorWorld.installation_reference``); the spring-pair and installation
+installation (:func:`scas_env.core.parts.record_reference`); the spring-pair and installation
 tolerances then cancel. The deviation ``d_f = G_f - ref_f`` of feature ``f`` at crack and
 wear fractions ``(c, w)`` is normal with (surrogate tables: mean ``m``, unit ``u`` and run
 ``r`` spreads; ``z`` the installation's standardised effect)
