@@ -63,15 +63,19 @@ def test_window_scaling_and_load_spectrum_agree(spectrum_loads, window_loads) ->
 
 def test_wear_increment_is_archard(spectrum_loads) -> None:
     expected = spectrum_loads.friction_work_j / (archard_beta_j_m3(P.seal) * P.seal.contact_area_m2)
-    assert wear_increment_m(P, UNIT, spectrum_loads) == pytest.approx(expected, rel=1e-12)
+    assert wear_increment_m(P, UNIT, spectrum_loads) == pytest.approx(expected, rel=1e-12, abs=0.0)
     doubled = dataclasses.replace(UNIT, wear_rate_m3_n_m=2 * UNIT.wear_rate_m3_n_m)
-    assert wear_increment_m(P, doubled, spectrum_loads) == pytest.approx(2 * expected, rel=1e-12)
+    assert wear_increment_m(P, doubled, spectrum_loads) == pytest.approx(
+        2 * expected, rel=1e-12, abs=0.0
+    )
 
 
 def test_crack_increment_is_linear_in_paris_c(spectrum_loads) -> None:
     fast = growth_model(P, dataclasses.replace(UNIT, paris_c=3 * UNIT.paris_c))
     base = crack_increment_m(P, UNIT, MODEL, 200e-6, spectrum_loads)
-    assert crack_increment_m(P, UNIT, fast, 200e-6, spectrum_loads) == pytest.approx(3 * base)
+    assert crack_increment_m(P, UNIT, fast, 200e-6, spectrum_loads) == pytest.approx(
+        3 * base, abs=0.0
+    )
 
 
 def test_cracked_spring_carries_less_force() -> None:

@@ -123,7 +123,7 @@ def test_flight_features_batch_equals_single_records():
     for idx in np.ndindex(2, 3):
         single = F.flight_features(t, i[idx], x[idx], i_h, x_h)
         for key, value in single.items():
-            assert batch[key][idx] == pytest.approx(float(value), rel=1e-10), key
+            assert batch[key][idx] == pytest.approx(float(value), rel=1e-10, abs=0.0), key
     assert set(batch) == {f"I{k}" for k in range(1, 10)}
 
 
@@ -140,7 +140,7 @@ def test_flight_features_equal_single_feature_functions():
     assert got["I4"] == pytest.approx(float(F.i4_position_autocorr(t, x)), rel=1e-12)
     assert got["I6"] == pytest.approx(float(F.i6_rms_position(x)), rel=1e-12)
     assert got["I7"] == pytest.approx(float(F.i7_current_position_rms_ratio(i, x)), rel=1e-12)
-    assert got["I8"] == pytest.approx(float(F.i8_dc_current_offset(i, i_h)), rel=1e-12)
+    assert got["I8"] == pytest.approx(float(F.i8_dc_current_offset(i, i_h)), rel=1e-12, abs=0.0)
     assert got["I9"] == pytest.approx(float(F.i9_current_ratio(i, i_h)), rel=1e-12)
 
 
@@ -256,7 +256,7 @@ def test_ground_features_dict_matches_functions():
     i = 3.0 * x + 1e-4
     got = F.ground_features(t, i, x, steps, setpoints)
     windows = F.step_windows(t, steps)
-    assert got["G1"] == pytest.approx(float(np.mean(i)), rel=1e-12)
+    assert got["G1"] == pytest.approx(float(np.mean(i)), rel=1e-12, abs=0.0)
     assert got["G2"] == pytest.approx(float(F.g2_overshoot(x, windows, setpoints)), rel=1e-12)
     assert got["G3"] == pytest.approx(
         float(F.g3_current_per_displacement(i, x, windows, setpoints)), rel=1e-12

@@ -82,6 +82,8 @@ def test_a_nan_crack_cv_ends_a_fresh_process_with_a_clear_error_not_a_segfault()
         ("crack_depth_m", [1e-4, 5e-5, 2e-4], r"crack_depth_m must rise strictly"),
         ("crack_rate_m_per_flight", [1e-9], r"crack_rate_m_per_flight has 1 values but"),
         ("crack_cv", [-0.1, 0.2, 0.2, 0.1, 0.1], r"crack_cv\[0\] = -0\.1 must be finite and >= 0"),
+        # an integer no float holds: a clear error, not an OverflowError
+        ("crack_cv", [10**400, 0.2, 0.2, 0.1, 0.1], r"crack_cv must be an array of numbers"),
         ("seed", 1.5, r"Calibration\.seed = 1\.5 must be an integer >= 0"),
         ("version", 2, r"calibration version 2 is not the supported 1"),
         ("flight_duration_s", "x", r"flight_duration_s = 'x' must be a finite number > 0"),

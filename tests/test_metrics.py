@@ -48,6 +48,17 @@ def test_bounds_alpha_lambda_and_beta() -> None:
     assert beta_criterion(samples, np.array([0.1, 0.4, 0.4, 0.1]), 40.0, 60.0, 0.8)
 
 
+def test_bounds_beyond_float64_are_refused_and_the_cone_test_uses_their_limit() -> None:
+    """(1 + 1e300) 1e300 is no float: ``alpha_bounds`` refuses it rather than return inf; a
+    test of whether a prediction lies in the cone takes the bounds' limits (-inf, inf)."""
+    with pytest.raises(ValueError, match=r"overflows float64: true_rul = 1e\+300"):
+        alpha_bounds(1e300, 1e300)
+    with pytest.raises(ValueError, match="overflows float64"):
+        alpha_bounds(1e300, 1e300, "band", eol=1e300)
+    assert alpha_lambda_point(1e300, 0.0, 1e300)
+    assert alpha_lambda_distribution(1e300, np.array([0.0, 1e308]), None, alpha=1e300)
+
+
 def test_prognostic_horizon_band_and_cone() -> None:
     times, eol = np.array([0.0, 50.0, 100.0, 150.0]), 200.0
     preds = [np.array([100.0]), np.array([168.0]), np.array([108.0]), np.array([50.0])]

@@ -182,7 +182,7 @@ def test_wear_multiplier_scales_the_wear_of_a_flight_and_flight_scatter_its_cv()
     s2 = np.log1p((4.0 * nominal_cv) ** 2)
     expected = 0.8 * cal.wear_rate_m_per_flight * mult * np.exp(np.sqrt(s2) * z - 0.5 * s2)
     got = wear_after_flight(1e-5, wm.wear_rate_m * mult, wm.wear_cv, z, 1.0) - 1e-5
-    assert got == pytest.approx(expected, rel=1e-12)
+    assert got == pytest.approx(expected, rel=1e-12, abs=0.0)
 
 
 def test_growth_multipliers_scale_every_mission_type() -> None:
@@ -232,7 +232,7 @@ def test_growth_multipliers_shorten_the_lives_and_scale_the_wear() -> None:
         *_, i1 = e1.step(0)
         *_, ig = eg.step(0)
     assert ig["true_state"]["seal_wear_m"] == pytest.approx(
-        1.25 * i1["true_state"]["seal_wear_m"], rel=1e-12
+        1.25 * i1["true_state"]["seal_wear_m"], rel=1e-12, abs=0.0
     )
     lives = np.array(
         [

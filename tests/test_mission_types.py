@@ -57,6 +57,7 @@ def test_standard_is_table_1_and_every_type_is_a_distribution() -> None:
         ({"name": "x", "occurrence": (0.5, 0.5)}, "needs 4 values"),
         ({"name": "x", "occurrence": (0.5, 0.5, 0.5, -0.5)}, r"occurrence\[3\] = -0.5"),
         ({"name": "x", "occurrence": (0.3,) * 4}, "sums to"),
+        ({"name": "x", "occurrence": (10**400, 0, 0, 0)}, "occurrence = .* must be numbers"),
         (
             {"name": "x", "occurrence": (0.25,) * 4, "scas_amplitude_scale": (1, 0, 1, 1)},
             r"scas_amplitude_scale\[1\] = 0.0 must be finite and > 0",

@@ -347,7 +347,7 @@ def test_the_cross_variance_inflation_multiplies_the_other_parts_variance() -> N
     inflated = _spring_history(60, cross_variance_inflation=50.0)
     q = int(np.flatnonzero(base[:, H_EXTRA] > 0.0)[0])
     np.testing.assert_array_equal(base[:q], inflated[:q])
-    assert inflated[q, H_EXTRA] == pytest.approx(50.0 * base[q, H_EXTRA], rel=1e-14)
+    assert inflated[q, H_EXTRA] == pytest.approx(50.0 * base[q, H_EXTRA], rel=1e-14, abs=0.0)
     keep = [c for c in range(base.shape[1]) if c != H_EXTRA]
     np.testing.assert_array_equal(base[q, keep], inflated[q, keep])
     with pytest.raises(ValueError, match=r"cross_variance_inflation = 0\.5"):

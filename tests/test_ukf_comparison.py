@@ -166,7 +166,7 @@ def test_test_readings_are_the_envs_draw_minus_the_installation_offset() -> None
     mean, unit, run = (float(sur.tables_at(0.5, 0.0)[q][k]) for q in range(3))
     drawn = mean + unit * a["unit_z"][0, k] + run * z
     offset = a["reference"][0, 0] - sur.mean[k, 0, 0]
-    assert y == pytest.approx(drawn - offset, rel=1e-12)
+    assert y == pytest.approx(drawn - offset, rel=1e-12, abs=0.0)
     pf = ctx.particle_filter(np.random.default_rng(0))
     assert pf.process is ctx.setup.spring_process and pf.n_particles == cfg.particles
     assert np.all((pf.x >= 0.0) & (pf.x <= ctx.threshold))
