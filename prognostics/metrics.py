@@ -193,8 +193,21 @@ def alpha_bounds(
 
     ``"cone"`` (alpha-lambda): ``[(1 - alpha) r*, (1 + alpha) r*]``;
     ``"band"`` (prognostic horizon): ``[r* - alpha t_EoL, r* + alpha t_EoL]`` (needs ``eol``,
-    the true end of life, > 0: the band's half-width is ``alpha t_EoL``).
+    the true end of life, > 0: the band's half-width is ``alpha t_EoL``). Bounds beyond
+    float64 are refused (``ValueError``), not returned as infinities.
     """
+    bounds = _bounds(true_rul, alpha, band, eol)
+    if not (math.isfinite(bounds[0]) and math.isfinite(bounds[1])):
+        raise ValueError(
+            f"alpha_bounds overflows float64: true_rul = {true_rul!r}, alpha = {alpha!r}, "
+            f"eol = {eol!r}"
+        )
+    return bounds
+
+
+def _bounds(true_rul: float, alpha: float, band: str, eol: float | None) -> tuple[float, float]:
+    """:func:`alpha_bounds` with its arguments checked, an overflow left as +-inf (the limit
+    of the cone or band, right for a test of whether a value lies inside)."""
     rt = _true_rul(true_rul)
     a = _alpha(alpha)
     band = check.choice("band", band, BANDS)
@@ -238,7 +251,7 @@ def beta_criterion(
 def alpha_lambda_point(true_rul: float, predicted_rul: float, alpha: float) -> bool:
     """``(1 - alpha) r*(t_lambda) <= r(t_lambda) <= (1 + alpha) r*(t_lambda)`` for a point
     prediction (Saxena 2010, "alpha-lambda accuracy"; ref §6.2)."""
-    lo, hi = alpha_bounds(true_rul, alpha, "cone")
+    lo, hi = _bounds(true_rul, alpha, "cone", None)
     return lo <= check.real("predicted_rul", predicted_rul) <= hi
 
 
@@ -251,7 +264,7 @@ def alpha_lambda_distribution(
 ) -> bool:
     """``pi[r(t_lambda)]_{-alpha}^{+alpha} >= beta`` with the cone bounds, for a predicted
     distribution (Saxena 2010, "alpha-lambda accuracy" with the beta criterion; ref §6.2)."""
-    lo, hi = alpha_bounds(true_rul, alpha, "cone")
+    lo, hi = _bounds(true_rul, alpha, "cone", None)
     return beta_criterion(rul_samples, weights, lo, hi, beta)
 
 
@@ -299,11 +312,11 @@ def prognostic_horizon(
     ``(1 +- alpha) r*(j)`` (``band="cone"``, NASA MATLAB library). NaN if never met.
     """
     t = _check_times(times, eol)
-    alpha_bounds(eol - t[0], alpha, band, eol)  # alpha, band and eol, before any work
+    _bounds(eol - t[0], alpha, band, eol)  # alpha, band and eol, before any work
     _beta(beta)
     samples, ws = _predictions(t, rul_samples, weights)
     for ti, r, w in zip(t, samples, ws, strict=True):
-        lo, hi = alpha_bounds(eol - ti, alpha, band, eol)
+        lo, hi = _bounds(eol - ti, alpha, band, eol)
         if beta_criterion(r, w, lo, hi, beta):
             return float(eol - ti)
     return math.nan
@@ -376,7 +389,7 @@ def evaluate_predictions(
     t = _check_times(times, eol)
     _alpha(alpha)
     _alpha(ph_alpha, "ph_alpha")
-    alpha_bounds(eol - t[0], ph_alpha, band, eol)  # band and eol
+    _bounds(eol - t[0], ph_alpha, band, eol)  # band and eol
     _beta(beta)
     estimator = check.choice("estimator", estimator, ESTIMATORS)
     lams = [

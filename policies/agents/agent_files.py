@@ -87,7 +87,7 @@ def read_json_file(path: Path, what: str) -> Any:
 def _finite_vector(path: Any, name: str, value: Any, size: int | None = None) -> np.ndarray:
     try:
         arr = np.asarray(value, dtype=np.float64)
-    except (TypeError, ValueError):
+    except (TypeError, ValueError, OverflowError):
         raise ValueError(f"{path}: {name} must be a list of numbers") from None
     if arr.ndim != 1 or arr.size == 0 or (size is not None and arr.size != size):
         want = f"{size} numbers" if size is not None else "a non-empty list"

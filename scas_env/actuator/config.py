@@ -147,7 +147,7 @@ def check_value(owner: str, name: str, value: Any, md: dict[str, Any]) -> None:
     if not isinstance(value, (int, float)):
         try:
             value = float(value)
-        except (TypeError, ValueError):
+        except (TypeError, ValueError, OverflowError):
             raise ValueError(
                 f"{owner}.{name} = {value!r} is not a number; expected a real value in "
                 f"{_range_text(md)} {unit}"

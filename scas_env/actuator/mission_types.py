@@ -134,7 +134,7 @@ class MissionType:
             values = getattr(self, field_name)
             try:
                 floats = tuple(float(v) for v in values)
-            except (TypeError, ValueError):
+            except (TypeError, ValueError, OverflowError):
                 raise ValueError(f"{own}.{field_name} = {values!r} must be numbers") from None
             if len(floats) != N_REGIMES:
                 raise ValueError(

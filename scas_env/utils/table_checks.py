@@ -90,7 +90,7 @@ def finite_array(
     lower bound and (``increasing``) strict rise; errors name the first bad entry."""
     try:
         arr = np.array(value, dtype=np.float64)
-    except (TypeError, ValueError) as err:
+    except (TypeError, ValueError, OverflowError) as err:  # 10**400: no float holds it
         raise ValueError(f"{owner}.{name} must be an array of numbers: {err}") from None
     if arr.ndim != ndim:
         raise ValueError(f"{owner}.{name} must be a {ndim}-D array, got shape {arr.shape}")

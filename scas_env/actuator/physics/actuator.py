@@ -449,7 +449,7 @@ def _pair(
         return default
     try:
         a, b = (float(v) for v in value)
-    except (TypeError, ValueError):
+    except (TypeError, ValueError, OverflowError):
         raise ValueError(f"{name} = {value!r} must be a pair of numbers") from None
     return a, b
 
