@@ -13,6 +13,10 @@
   counted (tests; learning updates, one per ``flight_update_flights`` flights) and each
   kind is timed alone on the same batch (a jitted loop of the kernels, the cloud's RUL
   tables rebuilt as the env does); ceiling = env-steps / (tests x t_test + learns x t_learn);
+  and what a step costs besides them when flying alone (the flight's degradation and
+  feature draws, the observation, the info: the flying step's time less its learning
+  updates), so the share of the ceiling a mix that also flies can reach at most:
+  t_filters / (t_filters + t_flight);
 * **the fleet** (``ScasFleet-v0``, 8 aircraft x 3 actuators, the naive rule at its defaults):
   actuator-flights per second and seconds per 365-day episode, beside the vector env's
   actuator-steps per second (the issue's target: the fleet flies at least half as many
@@ -129,7 +133,9 @@ def vector_rates(num_envs: int = 64, steps: int = 600, **fields: Any) -> dict[st
     tests = int(a["tests"].sum()) - tests0
     flights = int(a["flown"].sum()) - flown0
     slots = int(a["slot"].sum()) - slots0
+    flown1, slots1 = int(a["flown"].sum()), int(a["slot"].sum())
     fly_rate = max(run(np.zeros((steps, num_envs), dtype=np.int64)) for _ in range(3))
+    fly_learns = (int(a["flown"].sum()) - flown1) / (int(a["slot"].sum()) - slots1)
     cart = gym.make_vec("CartPole-v1", num_envs=num_envs, vectorization_mode="vector_entry_point")
     cart.reset(seed=0)
     zeros = np.zeros(num_envs, dtype=np.int64)
@@ -141,6 +147,8 @@ def vector_rates(num_envs: int = 64, steps: int = 600, **fields: Any) -> dict[st
     learns = flights / interval
     t_test, t_learn = update_costs(venv.unwrapped)
     ceiling = slots / (tests * t_test + learns * t_learn)
+    # flying alone, less its learning updates: the flight, observation and info of a step
+    fly_other = 1.0 / fly_rate - fly_learns / interval * t_learn
     return {
         "mix_steps_per_s": mix_rate,
         "fly_steps_per_s": fly_rate,
@@ -151,6 +159,8 @@ def vector_rates(num_envs: int = 64, steps: int = 600, **fields: Any) -> dict[st
         "learn_update_us": t_learn * 1e6,
         "filter_ceiling_steps_per_s": ceiling,
         "share_of_ceiling": mix_rate / ceiling,
+        "fly_other_us": fly_other * 1e6,
+        "share_cap_with_flight": (1.0 / ceiling) / (1.0 / ceiling + fly_other),
     }
 
 
@@ -297,6 +307,9 @@ def format_rates(r: dict[str, float]) -> str:
             f"{r['test_update_us']:.1f} and {r['learn_update_us']:.1f} us each",
             f"filter arithmetic ceiling:    {r['filter_ceiling_steps_per_s']:10,.0f} env-steps/s "
             f"(the mix reaches {100 * r['share_of_ceiling']:.0f} %)",
+            f"a step's flight, obs and info: {r['fly_other_us']:8.1f} us (flying alone, less "
+            f"its learning updates): with them the mix could reach at most "
+            f"{100 * r['share_cap_with_flight']:.0f} % of the ceiling",
             f"fleet (8 x 3, naive rule):    {r['fleet_actuator_flights_per_s']:10,.0f} "
             f"actuator-flights/s ({100 * r['fleet_share_of_vector']:.0f} % of the vector env's "
             f"actuator-steps/s), {r['fleet_episode_s']:.2f} s per 365-day episode",
