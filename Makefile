@@ -96,6 +96,8 @@ check-install:
 	  venv/bin/scas-benchmark --episodes 2 --slots 100 --out runs/benchmark && \
 	  venv/bin/scas-train --timesteps 64 --out runs/train && \
 	  venv/bin/scas-tune --trials 1 --episodes 2 --slots 100 --out runs/tune && \
+	  venv/bin/scas-tune --fleet --families fleet_age --trials 1 --episodes 1 --workers 1 \
+	    --out runs/tune_fleet && \
 	  venv/bin/scas-value --episodes 2 --slots 100 --trials 1 --train-episodes 2 \
 	    --out runs/value && \
 	  venv/bin/scas-export-dataset --units 2 --max-slots 200 --out runs/dataset; \
