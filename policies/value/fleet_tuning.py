@@ -98,9 +98,7 @@ def tune_fleet_family(
     trial; ``env_kwargs``: more keywords of ``ScasFleet-v0`` (``scenario``, ``cost_model``)."""
     import optuna
 
-    for name, value in (("trials", trials), ("episodes", episodes)):
-        if isinstance(value, bool) or not isinstance(value, int) or value < 1:
-            raise ValueError(f"{name} = {value!r} must be an integer >= 1")
+    _check_counts(trials=trials, episodes=episodes)
     if train_seed == HELD_OUT_SEED:
         raise ValueError(f"train_seed = {train_seed!r} is the held-out seed")
     extra = dict(env_kwargs or {})
@@ -151,6 +149,13 @@ def tune_fleet_family(
     )
 
 
+def _check_counts(**counts: Any) -> None:
+    """Each of ``counts`` an integer >= 1 (not a bool), else ``ValueError`` naming it."""
+    for name, value in counts.items():
+        if isinstance(value, bool) or not isinstance(value, int) or value < 1:
+            raise ValueError(f"{name} = {value!r} must be an integer >= 1")
+
+
 def _start_point(family: Family, start: Mapping[str, float] | None) -> dict[str, float] | None:
     """``start``'s entries in ``family``'s box (others are another family's), each checked
     to lie inside it: a point outside the box is refused, not moved to its edge."""
@@ -194,6 +199,9 @@ def tune_fleet_families(
     unknown = [f for f in wanted if f not in FLEET_FAMILIES]
     if unknown or not wanted:
         raise ValueError(f"families = {wanted!r} must name some of {list(FLEET_FAMILIES)}")
+    _check_counts(trials=trials, episodes=episodes, n_workers=n_workers)
+    if fleet is not None and not isinstance(fleet, FleetConfig):
+        raise ValueError(f"fleet = {fleet!r} must be a FleetConfig (or None: the default)")
     last = max((CHAIN.index(f) for f in wanted if f in CHAIN), default=-1)
     chunks = [list(CHAIN[: last + 1])] if last >= 0 else []
     chunks += [[f] for f in FLEET_FAMILIES if f in wanted and f not in CHAIN]
