@@ -17,7 +17,6 @@ benchmark's.
 
 from __future__ import annotations
 
-import math
 import time
 from collections.abc import Iterable, Mapping, Sequence
 from typing import Any
@@ -37,8 +36,9 @@ from policies.value.tuning import (
     Box,
     Family,
     TuningResult,
-    _suggest,
+    check_counts,
     edge_report,
+    search,
 )
 from scas_env import ENV_ID_FLEET
 from scas_env.core.fleet.config import FleetConfig
@@ -96,9 +96,7 @@ def tune_fleet_family(
     """Tune one fleet family with TPE on ``episodes`` training fleets (module docstring);
     ``start`` (its entries in the family's box, each inside it) is enqueued as the first
     trial; ``env_kwargs``: more keywords of ``ScasFleet-v0`` (``scenario``, ``cost_model``)."""
-    import optuna
-
-    _check_counts(trials=trials, episodes=episodes)
+    check_counts(trials=trials, episodes=episodes)
     if train_seed == HELD_OUT_SEED:
         raise ValueError(f"train_seed = {train_seed!r} is the held-out seed")
     extra = dict(env_kwargs or {})
@@ -106,7 +104,6 @@ def tune_fleet_family(
     if taken:
         raise ValueError(f"env_kwargs {taken}: set by the tuning (fleet, the family's obs_mode)")
     point = _start_point(family, start)
-    optuna.logging.set_verbosity(optuna.logging.WARNING)
     t0 = time.perf_counter()
     env = gym.make_vec(
         ENV_ID_FLEET,
@@ -117,43 +114,26 @@ def tune_fleet_family(
         **extra,
     )
     seeds = episode_seeds(train_seed, episodes)
-    history: list[dict[str, Any]] = []
 
-    def objective(trial: Any) -> float:
-        params = _suggest(trial, family)
+    def rewards(params: dict[str, Any]) -> np.ndarray:
         policy = make_policy(family.policy, env.obs_names, **params)
-        rewards = np.array([r["row"]["reward"] for r in run_fleet_episodes(env, policy, seeds)])
-        mean = float(rewards.mean())
-        sem = float(rewards.std(ddof=1) / math.sqrt(rewards.size)) if rewards.size > 1 else 0.0
-        history.append({"trial": trial.number, **params, "reward": mean, "reward_sem": sem})
-        return mean
+        return np.array([r["row"]["reward"] for r in run_fleet_episodes(env, policy, seeds)])
 
-    study = optuna.create_study(
-        direction="maximize", sampler=optuna.samplers.TPESampler(seed=sampler_seed)
+    points = [] if point is None else [point]
+    params, best_reward, history = search(
+        family, rewards, trials=trials, points=points, sampler_seed=sampler_seed
     )
-    if point is not None:
-        study.enqueue_trial(point)
-    study.optimize(objective, n_trials=trials)
     env.close()
-    best = history[study.best_trial.number]
-    params = {k: v for k, v in best.items() if k not in ("trial", "reward", "reward_sem")}
     return TuningResult(
         family.label,
         family.policy,
         params,
-        float(study.best_value),
+        best_reward,
         history,
         edge_report(params, family.box),
         trials * episodes,
         time.perf_counter() - t0,
     )
-
-
-def _check_counts(**counts: Any) -> None:
-    """Each of ``counts`` an integer >= 1 (not a bool), else ``ValueError`` naming it."""
-    for name, value in counts.items():
-        if isinstance(value, bool) or not isinstance(value, int) or value < 1:
-            raise ValueError(f"{name} = {value!r} must be an integer >= 1")
 
 
 def _start_point(family: Family, start: Mapping[str, float] | None) -> dict[str, float] | None:
@@ -199,7 +179,7 @@ def tune_fleet_families(
     unknown = [f for f in wanted if f not in FLEET_FAMILIES]
     if unknown or not wanted:
         raise ValueError(f"families = {wanted!r} must name some of {list(FLEET_FAMILIES)}")
-    _check_counts(trials=trials, episodes=episodes, n_workers=n_workers)
+    check_counts(trials=trials, episodes=episodes, n_workers=n_workers)
     if fleet is not None and not isinstance(fleet, FleetConfig):
         raise ValueError(f"fleet = {fleet!r} must be a FleetConfig (or None: the default)")
     last = max((CHAIN.index(f) for f in wanted if f in CHAIN), default=-1)

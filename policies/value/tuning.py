@@ -262,6 +262,49 @@ def _start_point(family: Family, point: Mapping[str, Any]) -> dict[str, Any]:
     return {k: point[k] for k in keys}
 
 
+def check_counts(**counts: Any) -> None:
+    """Each of ``counts`` an integer >= 1 (not a bool), else ``ValueError`` naming it."""
+    for name, value in counts.items():
+        if isinstance(value, bool) or not isinstance(value, int) or value < 1:
+            raise ValueError(f"{name} = {value!r} must be an integer >= 1")
+
+
+def search(
+    family: Family,
+    rewards: Callable[[dict[str, Any]], np.ndarray],
+    *,
+    trials: int,
+    points: Sequence[Mapping[str, Any]] = (),
+    sampler_seed: int = SAMPLER_SEED,
+    progress: bool = False,
+) -> tuple[dict[str, Any], float, list[dict[str, Any]]]:
+    """Optuna TPE (seeded) over ``family``'s box: ``points`` enqueued first, in order; a
+    trial's parameters scored by the mean of ``rewards(params)`` (one per training episode).
+    Returns the best parameters, their mean reward and every trial (number, parameters, mean,
+    standard error) in order: the search of :func:`tune_family` and of the fleet's tuning."""
+    import optuna
+
+    optuna.logging.set_verbosity(optuna.logging.WARNING)
+    history: list[dict[str, Any]] = []
+
+    def objective(trial: Any) -> float:
+        params = _suggest(trial, family)
+        r = rewards(params)
+        mean = float(r.mean())
+        sem = float(r.std(ddof=1) / math.sqrt(r.size)) if r.size > 1 else 0.0
+        history.append({"trial": trial.number, **params, "reward": mean, "reward_sem": sem})
+        return mean
+
+    sampler = optuna.samplers.TPESampler(seed=sampler_seed)
+    study = optuna.create_study(direction="maximize", sampler=sampler)
+    for point in points:
+        study.enqueue_trial(dict(point))
+    study.optimize(objective, n_trials=trials, show_progress_bar=progress)
+    best = history[study.best_trial.number]
+    params = {k: v for k, v in best.items() if k not in ("trial", "reward", "reward_sem")}
+    return params, float(study.best_value), history
+
+
 def tune_family(
     family: Family,
     *,
@@ -282,17 +325,12 @@ def tune_family(
     seed, never :data:`HELD_OUT_SEED`); ``start_points``: further points of the family
     enqueued next (a warm start, e.g. the point tuned on another scenario: the search then
     ends at least as good on the training seeds)."""
-    import optuna
-
-    for name, value in (("trials", trials), ("episodes", episodes), ("slots", slots)):
-        if isinstance(value, bool) or not isinstance(value, int) or value < 1:
-            raise ValueError(f"{name} = {value!r} must be an integer >= 1")
+    check_counts(trials=trials, episodes=episodes, slots=slots)
     if train_seed == HELD_OUT_SEED:
         raise ValueError(
             f"train_seed = {train_seed!r} is the held-out seed: tuning must not see the "
             "evaluation episodes"
         )
-    optuna.logging.set_verbosity(optuna.logging.WARNING)
     t0 = time.perf_counter()
     mode = policy_obs_mode(family.policy)
     env = gym.make_vec(
@@ -304,33 +342,24 @@ def tune_family(
         **family_env_kwargs(family, env_kwargs),
     )
     seeds = episode_seeds(train_seed, episodes)
-    history: list[dict[str, Any]] = []
 
-    def objective(trial: Any) -> float:
-        params = _suggest(trial, family)
+    def rewards(params: dict[str, Any]) -> np.ndarray:
         policy = make_policy(family.policy, env.obs_names, **params)
-        rewards = np.array([r["row"]["reward"] for r in run_episodes(env, policy, seeds)])
-        mean = float(rewards.mean())
-        sem = float(rewards.std(ddof=1) / math.sqrt(rewards.size)) if rewards.size > 1 else 0.0
-        history.append({"trial": trial.number, **params, "reward": mean, "reward_sem": sem})
-        return mean
+        return np.array([r["row"]["reward"] for r in run_episodes(env, policy, seeds)])
 
-    sampler = optuna.samplers.TPESampler(seed=sampler_seed)
-    study = optuna.create_study(direction="maximize", sampler=sampler)
     start = _age_point(family, age_params)
-    if start is not None:
-        study.enqueue_trial(start)
-    for point in start_points:
-        study.enqueue_trial(_start_point(family, point))
-    study.optimize(objective, n_trials=trials, show_progress_bar=progress)
+    points = [*([start] if start is not None else []),
+              *(_start_point(family, point) for point in start_points)]  # fmt: skip
+    best_params, best_reward, history = search(
+        family, rewards, trials=trials, points=points, sampler_seed=sampler_seed,
+        progress=progress,
+    )  # fmt: skip
     env.close()
-    best = history[study.best_trial.number]
-    best_params = {k: v for k, v in best.items() if k not in ("trial", "reward", "reward_sem")}
     return TuningResult(
         family.label,
         family.policy,
         best_params,
-        float(study.best_value),
+        best_reward,
         history,
         edge_report(best_params, relevant_box(family, best_params, slots)),
         trials * episodes,
