@@ -24,6 +24,8 @@ from scas_env.dataset.files import (
     write_dataset,
 )
 from scas_env.dataset.run_to_failure import (
+    FLIGHT_FEATURES,
+    GROUND_FEATURES,
     export_run_to_failure,
     leakage_fraction,
     simulate_units,
@@ -85,13 +87,21 @@ def test_rows_match_a_replay_of_the_env(small) -> None:
         assert rows.sum() == units["slots"][u]
         env.reset(seed=int(units["seed"][u]))
         crack = []
+        features: dict[str, list[float]] = {f: [] for f in (*FLIGHT_FEATURES, *GROUND_FEATURES)}
         failed: tuple[str, ...] = ()
+        flown_before, tests_before = 0, 0
         for slot in range(1, min(units["slots"][u] + 1, max_slots) + 1):
             _, _, _, truncated, info = env.step(1 if (slot - 1) % 7 == 0 else 0)
             if info["failures"]["spring"] or info["failures"]["seal"]:
                 failed = tuple(p for p in ("spring", "seal") if info["failures"][p])
                 break
             crack.append(info["true_state"]["crack_depth_m"])
+            flown, tested = info["flights"] > flown_before, info["tests"] > tests_before
+            flown_before, tests_before = info["flights"], info["tests"]
+            for f in FLIGHT_FEATURES:
+                features[f].append(info["features"][f] if flown else np.nan)
+            for f in GROUND_FEATURES:
+                features[f].append(info["features"][f] if tested else np.nan)
         if units["censored"][u]:
             assert not failed and truncated and slot == max_slots
             assert units["failure_mode"][u] == "none" and units["failure_flight"][u] == -1
@@ -101,6 +111,8 @@ def test_rows_match_a_replay_of_the_env(small) -> None:
             assert units["failure_mode"][u] == mode
         assert info["flights"] == units["flights"][u]
         np.testing.assert_array_equal(flights["crack_depth_m"][rows], crack)
+        for f, values in features.items():  # every feature column, the monitor's I8, I9 too
+            np.testing.assert_array_equal(flights[f][rows], values, err_msg=f)
 
 
 def test_row_semantics(small) -> None:

@@ -31,8 +31,8 @@ from scas_env.utils.results_folder import check_destination, partial_folder
 if TYPE_CHECKING:
     import pyarrow as pa
 
-#: bump when a column changes meaning, unit or type
-FORMAT_VERSION = 1
+#: bump when a column is added, removed, or changes meaning, unit or type (2: I8, I9 added)
+FORMAT_VERSION = 2
 FILES = ("flights", "units")
 FORMATS = ("parquet", "csv")
 FAILURE_MODES = ("spring", "seal", "both", "none")
@@ -65,6 +65,8 @@ FLIGHT_COLUMNS: tuple[Column, ...] = (
     ),
     _feature("I6", "m", "in-flight: rms of the LVDT position", "not flown"),
     _feature("I7", "A/m", "in-flight: rms(i) / rms(x)", "not flown"),
+    _feature("I8", "A", "in-flight: mean(i - i_h), DC current offset from healthy", "not flown"),
+    _feature("I9", "-", "in-flight: rms(i) / rms(i_h), current relative to healthy", "not flown"),
     _feature("G1", "A", "pre-flight test: mean servovalve current", "not tested"),
     _feature("G3", "A/m", "pre-flight test: current / displacement", "not tested"),
     Column("spring_alarm", "bool", "0/1", "section-5.1 detector on G1 has alarmed (latched)"),

@@ -56,7 +56,7 @@ from scas_env.utils.parallel import map_chunks
 
 FLY, TEST_AND_FLY = 0, 1
 PARTS = ("spring", "seal")
-FLIGHT_FEATURES = ("I2", "I6", "I7")
+FLIGHT_FEATURES = ("I2", "I6", "I7", "I8", "I9")
 GROUND_FEATURES = ("G1", "G3")
 #: observation entries copied into the rows (name in ``obs_names`` -> column)
 OBS_COLUMNS = {
