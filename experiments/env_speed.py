@@ -48,6 +48,7 @@ from numba import njit
 
 import scas_env
 from scas_env.core.filters import learn_row, refresh_row, test_row, work_arrays
+from scas_env.utils.atomic_file import write_text_atomic
 
 #: the trained policy's mix of actions (fly, test, replace spring, replace seal)
 MIX = (0.90, 0.09, 0.005, 0.005)
@@ -320,6 +321,7 @@ def format_rates(r: dict[str, float]) -> str:
 def main(argv: Sequence[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--json", type=Path, default=None, help="also write the figures here")
+    parser.add_argument("--overwrite", action="store_true", help="replace an existing --json")
     parser.add_argument(
         "--scenario",
         type=json.loads,
@@ -328,16 +330,18 @@ def main(argv: Sequence[str] | None = None) -> int:
         "the defaults, in one run (module docstring)",
     )
     args = parser.parse_args(argv)
+    if args.json is not None and args.json.exists() and not args.overwrite:
+        parser.error(f"--json {args.json} exists; pass --overwrite to replace it")
     if args.scenario is not None:
         result = compare(args.scenario)
         print(format_comparison(result, args.scenario))
         if args.json is not None:
-            args.json.write_text(json.dumps(result, indent=1) + "\n")
+            write_text_atomic(args.json, json.dumps(result, indent=1) + "\n")
         return 0
     rates = measure()
     print(format_rates(rates))
     if args.json is not None:
-        args.json.write_text(json.dumps(rates, indent=1) + "\n")
+        write_text_atomic(args.json, json.dumps(rates, indent=1) + "\n")
     return 0
 
 
