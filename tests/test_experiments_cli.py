@@ -143,6 +143,17 @@ def test_small_runs_of_the_commands(tmp_path, capsys) -> None:
     assert "closed form" in printed and "| predict |" in printed
 
 
+def test_env_speed_keeps_an_existing_json(tmp_path, capsys) -> None:
+    """The bench refuses to replace its --json file before measuring anything."""
+    from experiments import env_speed
+
+    kept = tmp_path / "speed.json"
+    kept.write_text("{}")
+    with pytest.raises(SystemExit):
+        env_speed.main(["--json", str(kept)])
+    assert "pass --overwrite" in capsys.readouterr().err and kept.read_text() == "{}"
+
+
 def test_risk_recalibration_command(tmp_path, capsys) -> None:
     """Fits maps on training seeds, scores them on held-out ones, writes the map file the
     wrapper reads; overlapping seed sets are a usage error."""
