@@ -504,7 +504,7 @@ def fit_measurement_model(
     if mean_kind == "pchip":
         if levels.size < 2:
             raise ValueError(f"pchip needs >= 2 distinct severity levels, got {levels.size}")
-        slopes = PchipInterpolator(levels, level_means).derivative()(levels)
+        slopes = _pchip_slopes(levels, level_means)
         curve: dict[str, Any] = {"knots": levels, "values": level_means, "slopes": slopes}
         n_params = levels.size
     else:
@@ -537,6 +537,22 @@ def fit_measurement_model(
     return MeasurementModel(kind=mean_kind, sigma_knots=knots, sigma_values=sig, **curve)
 
 
+def _pchip_slopes(x: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """PCHIP's slopes dy/dx at the knots ``x``; a ``ValueError`` where they overflow float64
+    (knots too close for the values' range), without scipy's overflow warnings."""
+    try:
+        with np.errstate(over="ignore", divide="ignore", invalid="ignore"):
+            slopes = PchipInterpolator(x, y).derivative()(x)
+    except ValueError:  # scipy refuses the non-finite slopes it computed
+        slopes = np.array([np.inf])
+    if not np.all(np.isfinite(slopes)):
+        raise ValueError(
+            f"the PCHIP slopes overflow float64: severity levels {check.show(x)} are too close "
+            f"for feature values {check.show(y)}"
+        )
+    return slopes
+
+
 def measurement_from_curve(
     severity: npt.ArrayLike, mean: npt.ArrayLike, sigma: npt.ArrayLike
 ) -> MeasurementModel:
@@ -551,7 +567,7 @@ def measurement_from_curve(
         raise ValueError(f"severity must be strictly increasing, got {check.show(sev)}")
     mu = check.array("mean", mean, shape=sev.shape, like="severity")
     sig = check.array("sigma", sigma, shape=sev.shape, like="severity", gt=0.0)
-    slopes = PchipInterpolator(sev, mu).derivative()(sev)
+    slopes = _pchip_slopes(sev, mu)
     return MeasurementModel(
         kind="pchip", sigma_knots=sev, sigma_values=sig, knots=sev, values=mu, slopes=slopes
     )

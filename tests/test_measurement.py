@@ -132,6 +132,16 @@ def test_bad_data_raise() -> None:
         MeasurementModel("poly", [0.0], [0.0], coef=[1.0])
 
 
+@pytest.mark.filterwarnings("error")  # a clear error, not scipy's overflow warnings first
+def test_pchip_slopes_beyond_float64_are_a_clear_error() -> None:
+    """A rise of 1e10 over 1e-300 has no float slope: both PCHIP builders say so."""
+    sev, mean = np.array([0.0, 1e-300, 1.0]), np.array([0.0, 1e10, -1e10])
+    with pytest.raises(ValueError, match="PCHIP slopes overflow float64"):
+        measurement_from_curve(sev, mean, np.ones(3))
+    with pytest.raises(ValueError, match="PCHIP slopes overflow float64"):
+        fit_measurement_model(np.repeat(sev, 2), np.repeat(mean, 2) + np.tile([-1.0, 1.0], 3))
+
+
 def test_measurement_from_curve_equals_the_fitted_pchip_model() -> None:
     rng = np.random.default_rng(3)
     levels = np.repeat(np.linspace(0.0, 1.0, 5), 40)
