@@ -173,6 +173,14 @@ def benchmark_parser() -> Any:
         help="a factory(obs_names) returning an object with SB3's predict (imports and runs "
         "that module: trusted code only); repeatable",
     )
+    parser.add_argument(
+        "--tuned",
+        type=existing_file,
+        default=None,
+        metavar="FILE",
+        help="scas-tune's tuning.json: each family's rule at its tuned parameters, besides "
+        "--policies, labelled '<family> tuned' (default: none)",
+    )
     parser.add_argument("--out", type=Path, default=Path("results/benchmark"), help="folder")
     parser.add_argument("--overwrite", action="store_true", help="replace an existing --out")
     parser.add_argument(
@@ -254,6 +262,8 @@ def benchmark_main(argv: Sequence[str] | None = None) -> int:
         )
     for target in args.policy:
         specs.append(PolicySpec("factory", {"target": target}, label=target, module=module))
+    if args.tuned is not None:
+        specs += _tuned_specs(parser, args.tuned, fleet=fleet is not None)
     labels = [s.key for s in specs]
     if len(set(labels)) != len(labels):
         parser.error(f"policy labels {labels} must be unique")
@@ -307,6 +317,37 @@ def benchmark_main(argv: Sequence[str] | None = None) -> int:
     for name, path in paths.items():
         log.info(f"{name}: {path}")
     return 0
+
+
+def _tuned_specs(parser: Any, path: Path, *, fleet: bool) -> list[Any]:
+    """``--tuned``: a spec per family of scas-tune's ``tuning.json``, its rule at the tuned
+    parameters, labelled ``"<family> tuned"``; a usage error for another file, a family of
+    the other kind (fleet or one actuator) or one that runs in a world of its own."""
+    import json
+
+    from policies.benchmark.run import PolicySpec
+    from policies.value.fleet_tuning import FLEET_FAMILIES
+    from policies.value.tuning import FAMILIES
+
+    families = FLEET_FAMILIES if fleet else FAMILIES
+    try:
+        data = json.loads(path.read_text())
+        tuned = {label: dict(r["best_params"]) for label, r in data.items()}
+    except (ValueError, AttributeError, KeyError, TypeError) as exc:
+        parser.error(f"--tuned {path}: not a tuning.json of scas-tune ({exc!r})")
+    specs = []
+    for label, params in tuned.items():
+        family = families.get(label)
+        if family is None:
+            kind = "fleet" if fleet else "single-actuator"
+            parser.error(f"--tuned {path}: {label!r} is not a {kind} family ({list(families)})")
+        if family.env_kwargs:
+            parser.error(
+                f"--tuned {path}: {label!r} runs in a world of its own "
+                f"({sorted(family.env_kwargs)}); scas-value compares it on held-out seeds"
+            )
+        specs.append(PolicySpec(family.policy, params, label=f"{label} tuned"))
+    return specs
 
 
 def _fleet_config(parser: Any, args: Any) -> Any:
@@ -464,7 +505,7 @@ tuning_history.png to --out (policies.value.tuning). Held-out evaluation: scas-v
 --quick: fewer trials and episodes, full-length episodes (docs/cli.md).
 
 --fleet, or a --scenario file with a [fleet] table: the fleet rules on that fleet
-(policies.value.fleet_tuning); held-out: scas-benchmark --fleet.
+(policies.value.fleet_tuning). The tuned rules on held-out seeds: scas-benchmark --tuned FILE.
 """
 FLEET_TUNE_SIZES = {"trials": (30, 4), "episodes": (16, 4)}
 

@@ -1,0 +1,93 @@
+"""``scas-benchmark --tuned FILE``: the rules of scas-tune's ``tuning.json`` at their tuned
+parameters, on the benchmark's episodes: each row equals the same rule and parameters run
+through ``run_benchmark`` directly (the parameters reach the policy); files and families the
+benchmark cannot run are usage errors before any episode."""
+
+from __future__ import annotations
+
+import csv
+import json
+from pathlib import Path
+
+import pytest
+
+from policies.benchmark.run import PolicySpec, run_benchmark
+from policies.cli import benchmark_main
+from policies.value.tuning import TuningResult, write_tuning_outputs
+
+#: a filter rule far from its defaults (it tests every 7 slots) and an age rule
+FILTER = {"spring_age": 800.0, "seal_age": 900.0, "opportunity": 0.3, "risk_threshold": 0.05,
+          "spring_lead": 10.0, "seal_lead": 12.0, "test_every": 7.0, "override": False}  # fmt: skip
+AGE = {"spring_age": 50.0, "seal_age": 70.0, "opportunity": 0.0}
+
+
+def _tuning(folder: Path, results: dict[str, tuple[str, dict]]) -> Path:
+    made = {}
+    for label, (policy, params) in results.items():
+        history = [{"trial": 0, **params, "reward": 0.0}]
+        made[label] = TuningResult(label, policy, params, 0.0, history, {}, 1, 0.0)
+    return write_tuning_outputs(made, folder)["json"]
+
+
+def _rewards(path: Path) -> dict[str, list[float]]:
+    out: dict[str, list[float]] = {}
+    with path.open() as fh:
+        for row in csv.DictReader(fh):
+            out.setdefault(row["policy"], []).append(float(row["reward"]))
+    return out
+
+
+def test_tuned_rules_run_at_their_parameters(tmp_path: Path) -> None:
+    rules = {"filter": ("rul_risk", FILTER), "age": ("preventive", AGE)}
+    path = _tuning(tmp_path / "tuning", rules)
+    out = tmp_path / "bench"
+    argv = ["--policies", "corrective", "--tuned", str(path), "--episodes", "2", "--slots",
+            "150", "--workers", "1", "--quiet", "--out", str(out)]  # fmt: skip
+    assert benchmark_main(argv) == 0
+    got = _rewards(out / "results.csv")
+    assert set(got) == {"corrective", "filter tuned", "age tuned"}
+    direct = run_benchmark(
+        [PolicySpec("rul_risk", FILTER, label="f"), PolicySpec("preventive", AGE, label="a")],
+        episodes=2,
+        slots=150,
+    )
+    want = {label: [r["reward"] for r in direct.rows if r["policy"] == label] for label in "fa"}
+    assert got["filter tuned"] == want["f"] and got["age tuned"] == want["a"]
+    assert got["age tuned"] != got["corrective"]  # the age rule replaces within 150 slots
+
+
+def test_a_tuned_fleet_rule_runs_on_the_fleet(tmp_path: Path) -> None:
+    naive = {"spring_age": 2000.0, "seal_age": 1500.0, "test_every": 50.0,
+             "risk_threshold": 0.05, "spring_lead": 10.0, "seal_lead": 9.0}  # fmt: skip
+    path = _tuning(tmp_path / "tuning", {"fleet_naive": ("fleet_naive", naive)})
+    fleet = tmp_path / "fleet.toml"
+    fleet.write_text("[fleet]\naircraft = 3\nepisode_days = 20\n")
+    out = tmp_path / "bench"
+    argv = ["--scenario", str(fleet), "--policies", "fleet_naive", "--tuned", str(path),
+            "--episodes", "2", "--workers", "1", "--quiet", "--out", str(out)]  # fmt: skip
+    assert benchmark_main(argv) == 0
+    assert set(_rewards(out / "results.csv")) == {"fleet_naive", "fleet_naive tuned"}
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["policies"]["fleet_naive tuned"]["reward"]["n"] == 2
+
+
+@pytest.mark.parametrize(
+    ("content", "fleet", "message"),
+    [
+        ('{"filter": {"params": {}}}', False, "not a tuning.json of scas-tune"),
+        ("[1, 2]", False, "not a tuning.json of scas-tune"),
+        ('{"fleet_naive": {"best_params": {}}}', False, "'fleet_naive' is not a single-actuator"),
+        ('{"filter": {"best_params": {}}}', True, "'filter' is not a fleet family"),
+        ('{"filter+tests every flight": {"best_params": {}}}', False, "a world of its own"),
+    ],
+)
+def test_files_the_benchmark_cannot_run_are_usage_errors(
+    content: str, fleet: bool, message: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    path = tmp_path / "tuning.json"
+    path.write_text(content)
+    argv = ["--tuned", str(path), "--episodes", "1", "--out", str(tmp_path / "b")]
+    with pytest.raises(SystemExit):
+        benchmark_main([*argv, *(["--fleet"] if fleet else [])])
+    assert message in capsys.readouterr().err
+    assert not (tmp_path / "b").exists()
