@@ -505,11 +505,14 @@ def train_epochs(
     if normalize:
         callbacks.append(_SaveStatistics.make(save_freq, out, "ckpt"))
     start = time.perf_counter()
-    model.learn(
-        total,
-        callback=CallbackList([*callbacks, _WallClock.make(max_wall_s)]),
-        progress_bar=progress_bar,
-    )
+    try:
+        model.learn(
+            total,
+            callback=CallbackList([*callbacks, _WallClock.make(max_wall_s)]),
+            progress_bar=progress_bar,
+        )
+    finally:
+        model.logger.close()  # progress.csv complete and closed, also on an interrupt
     wall = time.perf_counter() - start
     model.save(out / f"ckpt_{model.num_timesteps}_steps.zip")
     if normalize:

@@ -44,6 +44,7 @@ from policies.agents.fleet.adapters import (
 from policies.agents.fleet.plugins import write_agent_meta
 from policies.agents.fleet.shared_adapter import FleetAgentsVecEnv
 from policies.agents.sb3_agents import require_contrib
+from scas_env.utils.atomic_file import write_text_atomic
 
 __all__ = ["TRAIN_SEED", "FleetPPOConfig", "clone_rule", "make_model", "make_training_env", "train"]
 
@@ -303,7 +304,7 @@ def clone_rule(
         }
     )
     save_checkpoint(model, venv, out / "clone.zip", cfg, {"stage": "clone", "fleet_days": 0})
-    (out / "clone_record.json").write_text(json.dumps(record, indent=2) + "\n")
+    write_text_atomic(out / "clone_record.json", json.dumps(record, indent=2) + "\n")
     return record
 
 
@@ -386,7 +387,7 @@ def train(
         "max_wall_s": max_wall_s,
         "finished": False,
     }
-    (out / "run.json").write_text(json.dumps(record, indent=2) + "\n")
+    write_text_atomic(out / "run.json", json.dumps(record, indent=2) + "\n")
     if init is not None:
         init = Path(init)
         model = contrib.MaskablePPO.load(
@@ -405,7 +406,12 @@ def train(
         save_checkpoint(model, venv, out / "ckpt_0.zip", cfg, {**extra, "fleet_days": 0})
     t0 = time.perf_counter()
     callback = _callbacks(cfg, out, rows, checkpoint_every, max_wall_s, extra)
-    model.learn(total_timesteps=int(fleet_days) * rows, callback=callback, reset_num_timesteps=True)
+    try:
+        model.learn(
+            total_timesteps=int(fleet_days) * rows, callback=callback, reset_num_timesteps=True
+        )
+    finally:
+        model.logger.close()  # progress.csv complete and closed, also on an interrupt
     wall = time.perf_counter() - t0
     days = model.num_timesteps // rows
     save_checkpoint(model, venv, out / f"ckpt_{days}.zip", cfg, {**extra, "fleet_days": days})
@@ -417,7 +423,8 @@ def train(
             "episodes": int(days // int(venv.get_attr("config")[0].episode_days)),
         }
     )
-    (out / "run.json").write_text(json.dumps(record, indent=2) + "\n")
+    write_text_atomic(out / "run.json", json.dumps(record, indent=2) + "\n")
+    venv.close()  # monitor.csv complete and closed
     return record
 
 
