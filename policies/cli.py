@@ -335,6 +335,8 @@ def _tuned_specs(parser: Any, path: Path, *, fleet: bool) -> list[Any]:
         tuned = {label: dict(r["best_params"]) for label, r in data.items()}
     except (ValueError, AttributeError, KeyError, TypeError) as exc:
         parser.error(f"--tuned {path}: not a tuning.json of scas-tune ({exc!r})")
+    if not tuned:
+        parser.error(f"--tuned {path}: names no family")
     specs = []
     for label, params in tuned.items():
         family = families.get(label)

@@ -76,6 +76,7 @@ def test_a_tuned_fleet_rule_runs_on_the_fleet(tmp_path: Path) -> None:
     [
         ('{"filter": {"params": {}}}', False, "not a tuning.json of scas-tune"),
         ("[1, 2]", False, "not a tuning.json of scas-tune"),
+        ("{}", False, "names no family"),
         ('{"fleet_naive": {"best_params": {}}}', False, "'fleet_naive' is not a single-actuator"),
         ('{"filter": {"best_params": {}}}', True, "'filter' is not a fleet family"),
         ('{"filter+tests every flight": {"best_params": {}}}', False, "a world of its own"),
