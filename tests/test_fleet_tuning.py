@@ -19,7 +19,6 @@ from policies.cli import tune_main
 from policies.value.fleet_tuning import (
     FLEET_FAMILIES,
     STARTS,
-    _start_point,
     tune_fleet_families,
     tune_fleet_family,
 )
@@ -87,11 +86,11 @@ def test_a_trial_is_the_mean_of_the_same_fleets_run_directly_with_the_envs_setti
 
 def test_bad_input_is_refused_before_any_episode() -> None:
     naive = FLEET_FAMILIES["fleet_naive"]
-    with pytest.raises(ValueError, match=r"risk_threshold = 5.0 is outside fleet_naive's box"):
-        _start_point(naive, {"risk_threshold": 5.0})
-    assert _start_point(naive, {"risk_threshold": 0.1, "lead_flights": 3.0}) == {
-        "risk_threshold": 0.1
-    }  # another family's entry is not this family's
+    outside = {**STARTS["fleet_naive"], "risk_threshold": 5.0}
+    with pytest.raises(ValueError, match=r"risk_threshold = 5.0 is outside \[0.002, 1.0\]"):
+        tune_fleet_family(naive, FLEET, start=outside)  # refused, not moved to the box's edge
+    with pytest.raises(ValueError, match=r"lacks \['seal_age'"):
+        tune_fleet_family(naive, FLEET, start={"spring_age": 500.0})
     with pytest.raises(ValueError, match="held-out seed"):
         tune_fleet_family(naive, FLEET, train_seed=HELD_OUT_SEED)
     with pytest.raises(ValueError, match="trials = 0"):

@@ -39,6 +39,7 @@ from policies.value.tuning import (
     check_counts,
     edge_report,
     search,
+    start_point,
 )
 from scas_env import ENV_ID_FLEET
 from scas_env.core.fleet.config import FleetConfig
@@ -94,8 +95,9 @@ def tune_fleet_family(
     env_kwargs: Mapping[str, Any] | None = None,
 ) -> TuningResult:
     """Tune one fleet family with TPE on ``episodes`` training fleets (module docstring);
-    ``start`` (its entries in the family's box, each inside it) is enqueued as the first
-    trial; ``env_kwargs``: more keywords of ``ScasFleet-v0`` (``scenario``, ``cost_model``)."""
+    ``start`` (a value for each parameter of the family's box, inside it:
+    :func:`policies.value.tuning.start_point`) is enqueued as the first trial; ``env_kwargs``:
+    more keywords of ``ScasFleet-v0`` (``scenario``, ``cost_model``)."""
     check_counts(trials=trials, episodes=episodes)
     if train_seed == HELD_OUT_SEED:
         raise ValueError(f"train_seed = {train_seed!r} is the held-out seed")
@@ -103,7 +105,7 @@ def tune_fleet_family(
     taken = sorted(set(extra) & {"fleet", "obs_mode"})
     if taken:
         raise ValueError(f"env_kwargs {taken}: set by the tuning (fleet, the family's obs_mode)")
-    point = _start_point(family, start)
+    point = None if start is None else start_point(family, start)
     t0 = time.perf_counter()
     env = gym.make_vec(
         ENV_ID_FLEET,
@@ -134,19 +136,6 @@ def tune_fleet_family(
         trials * episodes,
         time.perf_counter() - t0,
     )
-
-
-def _start_point(family: Family, start: Mapping[str, float] | None) -> dict[str, float] | None:
-    """``start``'s entries in ``family``'s box (others are another family's), each checked
-    to lie inside it: a point outside the box is refused, not moved to its edge."""
-    if start is None:
-        return None
-    point = {k: float(v) for k, v in start.items() if k in family.box}
-    for k, v in point.items():
-        lo, hi, _ = family.box[k]
-        if not lo <= v <= hi:
-            raise ValueError(f"start {k} = {v!r} is outside {family.label}'s box [{lo!r}, {hi!r}]")
-    return point
 
 
 def _tune(settings: Mapping[str, Any], chunk: Sequence[Sequence[str]]) -> list[TuningResult]:

@@ -250,8 +250,9 @@ def _age_point(family: Family, age_params: Mapping[str, Any] | None) -> dict[str
     return point
 
 
-def _start_point(family: Family, point: Mapping[str, Any]) -> dict[str, Any]:
-    """A point of ``family`` to enqueue: its searched parameters, each inside the box."""
+def start_point(family: Family, point: Mapping[str, Any]) -> dict[str, Any]:
+    """A point of ``family`` to enqueue: its searched parameters (others are dropped), each
+    given and inside the box: a point outside it is refused, not moved to its edge."""
     keys = [*family.box, *(["override"] if family.nested else [])]
     missing = [k for k in keys if k not in point]
     if missing:
@@ -349,7 +350,7 @@ def tune_family(
 
     start = _age_point(family, age_params)
     points = [*([start] if start is not None else []),
-              *(_start_point(family, point) for point in start_points)]  # fmt: skip
+              *(start_point(family, point) for point in start_points)]  # fmt: skip
     best_params, best_reward, history = search(
         family, rewards, trials=trials, points=points, sampler_seed=sampler_seed,
         progress=progress,

@@ -41,6 +41,7 @@ from scas_env.actuator.params import ScasParams
 from scas_env.actuator.physics.fluid import dynamic_viscosity
 from scas_env.actuator.physics.seal import leakage_coefficients, leakage_flow_m3_s
 from scas_env.core.scenario import Scenario
+from scas_env.core.setup import FLIGHT_FEATURES, GROUND_FEATURES  # the observation's
 from scas_env.dashboard import critical_levels, unit_growth_multipliers
 from scas_env.dataset.files import (
     FLIGHT_COLUMNS,
@@ -56,8 +57,6 @@ from scas_env.utils.parallel import map_chunks
 
 FLY, TEST_AND_FLY = 0, 1
 PARTS = ("spring", "seal")
-FLIGHT_FEATURES = ("I2", "I6", "I7", "I8", "I9")
-GROUND_FEATURES = ("G1", "G3")
 #: observation entries copied into the rows (name in ``obs_names`` -> column)
 OBS_COLUMNS = {
     "spring_alarm": "spring_alarm",
