@@ -53,14 +53,15 @@ _SMALL = 1e-10  # |s d| below which expm1(s d) / s ~ d (1 + s d / 2) is used
 _SERIES = 1e-4  # |s t / g0| below which log(1 + z) / s uses its series
 
 
-@njit(cache=True)
-def _segment(grid: np.ndarray, x: float) -> int:
-    """Index k in [0, n-2] with grid[k] <= x < grid[k+1] (clamped at both ends)."""
+@njit(cache=True, inline="always")
+def _interval(knots: np.ndarray, x: float) -> int:
+    """k in [0, n-2] with knots[k] <= x < knots[k+1] (clamped, by bisection); knots.size >= 2.
+    Also the knot search of :mod:`prognostics.measurement`."""
     lo = 0
-    hi = grid.size - 1
+    hi = knots.size - 1
     while hi - lo > 1:
         mid = (lo + hi) >> 1
-        if grid[mid] <= x:
+        if knots[mid] <= x:
             lo = mid
         else:
             hi = mid
@@ -146,7 +147,7 @@ def inverse_damage_scalar(grid: np.ndarray, rate: np.ndarray, cum: np.ndarray, d
         return grid[0] + d * rate[0]
     if d >= cum[-1]:
         return grid[-1] + (d - cum[-1]) * rate[-1]
-    k = _segment(cum, d)
+    k = _interval(cum, d)
     slope = (rate[k + 1] - rate[k]) / (grid[k + 1] - grid[k])
     return grid[k] + _segment_inverse(rate[k], slope, d - cum[k])
 
@@ -174,74 +175,6 @@ def _inverse_damage_array(
         out[i] = inverse_damage_scalar(grid, rate, cum, d[i])
 
 
-@njit(cache=True)
-def _predict_kernel(
-    grid: np.ndarray,
-    rate: np.ndarray,
-    cells: np.ndarray,
-    inv_cell: float,
-    x: np.ndarray,
-    log_theta: np.ndarray,
-    usage: float,
-    sigma_x: float,
-    sigma_log_theta: float,
-    noise: np.ndarray,
-    damage_cv: float = 0.0,
-) -> None:
-    """In-place Euler step of the module-level process model for every particle.
-
-    ``noise`` holds the standard normals: ``noise[:n]`` for x (if ``sigma_x > 0`` or
-    ``damage_cv > 0``), then ``noise[n:2n]`` for log theta (if ``sigma_log_theta > 0``);
-    drawn by the caller with numpy (passing a Generator into numba costs more per call than
-    the whole step).
-    """
-    n = x.size
-    sx = sigma_x * math.sqrt(usage)
-    sd = damage_cv * math.sqrt(usage)
-    sth = sigma_log_theta * math.sqrt(usage)
-    k_th = n if (sigma_x > 0.0 or damage_cv > 0.0) else 0
-    for i in range(n):
-        g = rate_at_scalar(grid, rate, cells, inv_cell, x[i])
-        u = usage + sd * noise[i] if damage_cv > 0.0 else usage
-        x[i] += math.exp(log_theta[i]) * g * u
-        if sigma_x > 0.0:
-            x[i] += sx * noise[i]
-        if sigma_log_theta > 0.0:
-            log_theta[i] += sth * noise[k_th + i]
-
-
-@njit(cache=True)
-def _predict_exact_kernel(
-    grid: np.ndarray,
-    rate: np.ndarray,
-    cum: np.ndarray,
-    cells: np.ndarray,
-    inv_cell: float,
-    x: np.ndarray,
-    log_theta: np.ndarray,
-    usage: float,
-    sigma_x: float,
-    sigma_log_theta: float,
-    noise: np.ndarray,
-    damage_cv: float = 0.0,
-) -> None:
-    """As :func:`_predict_kernel` with the exact deterministic step ``I^{-1}(I(x) + theta u)``
-    (the multiplier of the step is the one at its start, as in the Euler step)."""
-    n = x.size
-    sx = sigma_x * math.sqrt(usage)
-    sd = damage_cv * math.sqrt(usage)
-    sth = sigma_log_theta * math.sqrt(usage)
-    k_th = n if (sigma_x > 0.0 or damage_cv > 0.0) else 0
-    for i in range(n):
-        d = damage_scalar(grid, rate, cum, cells, inv_cell, x[i])
-        u = usage + sd * noise[i] if damage_cv > 0.0 else usage
-        x[i] = inverse_damage_scalar(grid, rate, cum, d + math.exp(log_theta[i]) * u)
-        if sigma_x > 0.0:
-            x[i] += sx * noise[i]
-        if sigma_log_theta > 0.0:
-            log_theta[i] += sth * noise[k_th + i]
-
-
 @njit(cache=True, inline="always")
 def advance_scalar(
     exact: bool,
@@ -255,63 +188,65 @@ def advance_scalar(
     usage: float,
 ) -> float:
     """Noise-free step of one particle: ``I^{-1}(I(x) + theta u)`` (exact) or
-    ``x + theta g(x) u`` (Euler), with the arithmetic of the predict kernels above."""
+    ``x + theta g(x) u`` (Euler); the deterministic part of every predict kernel."""
     if exact:
         d = damage_scalar(grid, rate, cum, cells, inv_cell, x)
         return inverse_damage_scalar(grid, rate, cum, d + theta * usage)
     return x + theta * rate_at_scalar(grid, rate, cells, inv_cell, x) * usage
 
 
-#: numba options of the particle filter's hot kernels. ``_nrt=False``: no NRT reference
-#: counting -- array arguments of helpers inlined into a particle loop otherwise cost ~8
-#: atomic incref/decref pairs per particle (numba's refcount pruning gives up on helpers
-#: with loops), ~2x the kernel time; the kernels allocate nothing, so they need no NRT.
-#: ``error_model="numpy"``: no zero-divisor branch per division, so that loops vectorise
-#: (divisions are by table spacings, sigmas and weight sums, all > 0).
+#: numba options of the particle filter's hot kernels and of their reference
+#: :func:`_predict_kernel`. ``_nrt=False``: no NRT reference counting -- array arguments of
+#: helpers inlined into a particle loop otherwise cost ~8 atomic incref/decref pairs per
+#: particle (numba's refcount pruning gives up on helpers with loops), ~2x the kernel time;
+#: the kernels allocate nothing, so they need no NRT. ``error_model="numpy"``: no
+#: zero-divisor branch per division, so that loops vectorise (divisions are by table
+#: spacings, sigmas and weight sums, all > 0).
 HOT_KERNEL = {"cache": True, "_nrt": False, "error_model": "numpy"}
 
-#: rows of the filter's scratch array used by :func:`advance_severities`
-PROCESS_SCRATCH_ROWS = 2
 
-
-@njit(cache=True, inline="always")
-def advance_severities(
-    x: np.ndarray,
-    log_theta: np.ndarray,
-    usage: float,
-    handle: Handle,
-    scratch: np.ndarray,
+@njit(**HOT_KERNEL)
+def _predict_kernel(
     exact: bool,
     grid: np.ndarray,
     rate: np.ndarray,
     cum: np.ndarray,
     cells: np.ndarray,
     inv_cell: float,
+    x: np.ndarray,
+    log_theta: np.ndarray,
+    usage: float,
     sigma_x: float,
-    damage_cv: float,
+    sigma_log_theta: float,
+    noise: np.ndarray,
+    damage_cv: float = 0.0,
 ) -> None:
-    """x-part of a filter step for every particle (log theta is read, not changed).
+    """In-place step of the module-level process model for every particle, one at a time
+    (the reference :func:`predict_particles` is tested against): :func:`advance_scalar`,
+    Euler or exact (the step's multiplier is the one at its start), then the noise.
 
-    The x noise is drawn from ``handle`` (:mod:`prognostics.normals`) in particle order:
-    the first N draws of :meth:`TabulatedRateModel.predict`, and the same arithmetic, so
-    the same result bit for bit. ``scratch``: float64 array of shape (>= 2, N). Two passes,
-    ``exp`` and the draws first, then the table: measured faster than one.
+    ``noise`` holds the standard normals: ``noise[:n]`` for x (if ``sigma_x > 0`` or
+    ``damage_cv > 0``), then ``noise[n:2n]`` for log theta (if ``sigma_log_theta > 0``);
+    drawn by the caller with numpy (passing a Generator into numba costs more per call than
+    the whole step).
     """
     n = x.size
-    theta = scratch[0]
-    noise = scratch[1]
-    for i in range(n):
-        theta[i] = math.exp(log_theta[i])
-        if sigma_x > 0.0 or damage_cv > 0.0:
-            noise[i] = standard_normal(handle)
     sx = sigma_x * math.sqrt(usage)
     sd = damage_cv * math.sqrt(usage)
+    sth = sigma_log_theta * math.sqrt(usage)
+    k_th = n if (sigma_x > 0.0 or damage_cv > 0.0) else 0
     for i in range(n):
         u = usage + sd * noise[i] if damage_cv > 0.0 else usage
-        xi = advance_scalar(exact, grid, rate, cum, cells, inv_cell, x[i], theta[i], u)
+        theta = math.exp(log_theta[i])
+        x[i] = advance_scalar(exact, grid, rate, cum, cells, inv_cell, x[i], theta, u)
         if sigma_x > 0.0:
-            xi += sx * noise[i]
-        x[i] = xi
+            x[i] += sx * noise[i]
+        if sigma_log_theta > 0.0:
+            log_theta[i] += sth * noise[k_th + i]
+
+
+#: rows of the filter's scratch array used by :func:`predict_particles`
+PROCESS_SCRATCH_ROWS = 2
 
 
 @njit(**HOT_KERNEL)
@@ -332,16 +267,29 @@ def predict_particles(
     damage_cv: float,
 ) -> None:
     """:meth:`TabulatedRateModel.predict` with the normals drawn inside numba from
-    ``handle``: the same draws in the same order and the same arithmetic, so the same
-    result bit for bit. Arguments after ``scratch`` (float64, shape (>= 2, N)) are
-    :attr:`TabulatedRateModel.kernel_args`."""
-    advance_severities(
-        x, log_theta, usage, handle, scratch, exact, grid, rate, cum, cells, inv_cell, sigma_x,
-        damage_cv,
-    )  # fmt: skip
-    if sigma_log_theta > 0.0:
+    ``handle`` (:mod:`prognostics.normals`): the same draws in the same order (x noise in
+    particle order, then the log-theta walk) and the same arithmetic, so the same result bit
+    for bit. Arguments after ``scratch`` (float64, shape (>= 2, N)) are
+    :attr:`TabulatedRateModel.kernel_args`. Two passes for x, ``exp`` and the draws first,
+    then the table: measured faster than one."""
+    n = x.size
+    theta = scratch[0]
+    noise = scratch[1]
+    for i in range(n):
+        theta[i] = math.exp(log_theta[i])
+        if sigma_x > 0.0 or damage_cv > 0.0:
+            noise[i] = standard_normal(handle)
+    sx = sigma_x * math.sqrt(usage)
+    sd = damage_cv * math.sqrt(usage)
+    for i in range(n):
+        u = usage + sd * noise[i] if damage_cv > 0.0 else usage
+        xi = advance_scalar(exact, grid, rate, cum, cells, inv_cell, x[i], theta[i], u)
+        if sigma_x > 0.0:
+            xi += sx * noise[i]
+        x[i] = xi
+    if sigma_log_theta > 0.0:  # numpy draws this noise after all the x noise
         sth = sigma_log_theta * math.sqrt(usage)
-        for i in range(x.size):
+        for i in range(n):
             log_theta[i] += sth * standard_normal(handle)
 
 
@@ -368,16 +316,7 @@ def _particles(
 ) -> np.ndarray:
     """A particle array updated in place: a writeable 1-D float64 numpy array (of ``n``
     entries, like ``x``), finite unless ``check_values=False``."""
-    if not (
-        isinstance(values, np.ndarray)
-        and values.dtype == np.float64
-        and values.ndim == 1
-        and values.flags.writeable
-    ):
-        raise check.ArgumentTypeError(
-            f"{name} = {check.show(values)} must be a writeable 1-D float64 numpy array "
-            "(it is updated in place)"
-        )
+    check.writeable_vector(name, values, " (it is updated in place)")
     finite = True if check_values else None
     return check.array(name, values, shape=None if n is None else (n,), like="x", finite=finite)
 
@@ -541,23 +480,9 @@ class TabulatedRateModel:
         noise = work[:n_draws]
         if n_draws:
             rng.standard_normal(out=noise)
-        if self.scheme == "exact":
-            _predict_exact_kernel(
-                *self.table_args,
-                x,
-                log_theta,
-                float(usage),
-                self.process_noise_std,
-                self.log_theta_noise_std,
-                noise,
-                self.damage_noise_cv,
-            )
-            return
         _predict_kernel(
-            self.grid,
-            self.rate,
-            self.cells,
-            self.inv_cell,
+            self.scheme == "exact",
+            *self.table_args,
             x,
             log_theta,
             float(usage),

@@ -445,6 +445,18 @@ def _mean_norm_xcorr(
     return total / ((2 * lag + 1) * np.sqrt(energy_a * energy_b))
 
 
+def _baseline_xcorr(
+    t: ArrayLike, name: str, values: ArrayLike, base_name: str, base: ArrayLike, max_lag_s: float
+) -> FloatArray:
+    """I2 or I3: mean normalised cross-correlation of signal ``name`` with its healthy
+    baseline ``base_name`` over lags -L..L (see :func:`i2_current_xcorr`)."""
+    arr = _signal(name, values)
+    base_arr = _baseline(base_name, base, name, arr)
+    lag = _lag_samples(max_lag_s, _sample_period(t, arr.shape[-1], name), arr.shape[-1])
+    moving = _moving_sum(arr, lag)
+    return _mean_norm_xcorr(moving, base_arr, lag, _energy(arr), _energy(base_arr))
+
+
 def _i1(x: FloatArray, dt: float, freq_hz: float) -> FloatArray:
     check.real("freq_hz", freq_hz, gt=0.0)
     if not freq_hz < 0.5 / dt:
@@ -487,22 +499,14 @@ def i2_current_xcorr(
     waveform change in i lowers it. ``i_h`` must be the healthy response to the same
     command record (shape equal to ``i`` or ``(N,)``).
     """
-    i_arr = _signal("i", i)
-    ih_arr = _baseline("i_h", i_h, "i", i_arr)
-    lag = _lag_samples(max_lag_s, _sample_period(t, i_arr.shape[-1], "i"), i_arr.shape[-1])
-    moving = _moving_sum(i_arr, lag)
-    return _mean_norm_xcorr(moving, ih_arr, lag, _energy(i_arr), _energy(ih_arr))
+    return _baseline_xcorr(t, "i", i, "i_h", i_h, max_lag_s)
 
 
 def i3_position_xcorr(
     t: ArrayLike, x: ArrayLike, x_h: ArrayLike, *, max_lag_s: float = DEFAULT_MAX_LAG_S
 ) -> FloatArray:
     """I3: as :func:`i2_current_xcorr` for the position x against the healthy x_h (-)."""
-    x_arr = _signal("x", x)
-    xh_arr = _baseline("x_h", x_h, "x", x_arr)
-    lag = _lag_samples(max_lag_s, _sample_period(t, x_arr.shape[-1], "x"), x_arr.shape[-1])
-    moving = _moving_sum(x_arr, lag)
-    return _mean_norm_xcorr(moving, xh_arr, lag, _energy(x_arr), _energy(xh_arr))
+    return _baseline_xcorr(t, "x", x, "x_h", x_h, max_lag_s)
 
 
 def i4_position_autocorr(

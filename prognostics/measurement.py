@@ -60,24 +60,11 @@ from numpy.polynomial import Polynomial
 from scipy.interpolate import PchipInterpolator
 
 from prognostics import validation as check
+from prognostics.degradation_models import _interval
 
 MEAN_KINDS: tuple[str, ...] = ("poly", "pchip")
 SIGMA_KINDS: tuple[str, ...] = ("per_level", "constant")
 _HALF_LOG_2PI = 0.5 * math.log(2.0 * math.pi)
-
-
-@njit(cache=True, inline="always")
-def _interval(knots: np.ndarray, x: float) -> int:
-    """k in [0, n-2] with knots[k] <= x < knots[k+1] (clamped); knots.size >= 2."""
-    lo = 0
-    hi = knots.size - 1
-    while hi - lo > 1:
-        mid = (lo + hi) >> 1
-        if knots[mid] <= x:
-            lo = mid
-        else:
-            hi = mid
-    return lo
 
 
 @njit(cache=True, inline="always")

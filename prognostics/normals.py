@@ -223,15 +223,7 @@ class NormalStream:
 
     def fill(self, out: np.ndarray) -> None:
         """Fill a float64 array with N(0, 1) draws (same values as ``rng.standard_normal``)."""
-        if not (
-            isinstance(out, np.ndarray)
-            and out.dtype == np.float64
-            and out.ndim == 1
-            and out.flags.writeable
-        ):
-            raise check.ArgumentTypeError(
-                f"out = {check.show(out)} must be a writeable 1-D float64 numpy array"
-            )
+        check.writeable_vector("out", out)
         with self.lock:
             fill_standard_normal(self.handle, out)
 

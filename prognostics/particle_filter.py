@@ -53,7 +53,6 @@ from prognostics.degradation_models import (
     HOT_KERNEL,
     PROCESS_SCRATCH_ROWS,
     TabulatedRateModel,
-    advance_severities,
     predict_particles,
 )
 from prognostics.measurement import (
@@ -187,36 +186,14 @@ def _step_kernel(
     sigma_values: np.ndarray,
 ) -> float:
     """``predict_particles`` then ``_update_kernel`` in one call; returns N_eff."""
-    advance_severities(
+    predict_particles(
         x, log_theta, usage, handle, scratch, exact, grid, rate, cum, cells, inv_cell, sigma_x,
-        damage_cv,
+        sigma_log_theta, damage_cv,
     )  # fmt: skip
-    log_likelihood_terms(
-        y,
-        x,
-        scratch,
-        shared_knots,
-        is_poly,
-        offset,
-        scale,
-        coef,
-        knots,
-        values,
-        slopes,
-        sigma_knots,
-        sigma_values,
-    )
-    if sigma_log_theta > 0.0:  # numpy draws this noise after all the x noise
-        sth = sigma_log_theta * math.sqrt(usage)
-        for i in range(x.size):
-            log_theta[i] += sth * standard_normal(handle)
-    q = scratch[8]
-    sig = scratch[9]
-    peak = -np.inf
-    for i in range(x.size):
-        log_w[i] += log_density(q[i], sig[i])
-        peak = max(peak, log_w[i])
-    return _normalise(log_w, w, peak)
+    return _update_kernel(
+        y, x, log_w, w, scratch, shared_knots, is_poly, offset, scale, coef, knots, values,
+        slopes, sigma_knots, sigma_values,
+    )  # fmt: skip
 
 
 @njit(cache=True)

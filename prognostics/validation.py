@@ -56,6 +56,7 @@ __all__ = [
     "sequence",
     "show",
     "weights",
+    "writeable_vector",
 ]
 
 T = TypeVar("T")
@@ -417,3 +418,18 @@ def weights(
     if not math.isfinite(total):
         w = w / w.max()
     return w
+
+
+def writeable_vector(name: str, value: object, why: str = "") -> np.ndarray:
+    """``value`` if it is a writeable 1-D float64 numpy array (one a kernel writes into);
+    ``why`` ends the message. Its values are not checked."""
+    if (
+        isinstance(value, np.ndarray)
+        and value.dtype == _F64
+        and value.ndim == 1
+        and value.flags.writeable
+    ):
+        return value
+    raise ArgumentTypeError(
+        f"{name} = {show(value)} must be a writeable 1-D float64 numpy array{why}"
+    )
