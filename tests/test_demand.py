@@ -109,6 +109,7 @@ def test_same_generator_same_schedule_and_no_global_state() -> None:
     [
         ({"mission_mix": (0.5, 0.6)}, r"sum to 1"),
         ({"mission_mix": (1.5, -0.5)}, r"mission_mix\[1\] = -0.5"),
+        ({"mission_mix": (10**400, 0.5)}, r"mission_mix\[0\] = 1000.* finite probability"),
         ({"mission_mix": ()}, r"at least one"),
         ({"mission_mix": "standard"}, r"list of probabilities"),
         ({"arrivals": "timetable"}, r"arrivals = 'timetable' must be one of"),

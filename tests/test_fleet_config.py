@@ -79,6 +79,8 @@ def test_the_degenerate_fleet() -> None:
         ({"mission_types": ("standard", "standard")}, r"names a type twice"),
         ({"mission_types": ()}, r"non-empty list"),
         ({"mission_value_usd": (5.0, -1.0, 5.0)}, r"mission_value_usd\[1\] = -1.0 USD"),
+        # an int no float holds: the same clear error, not an OverflowError
+        ({"mission_value_usd": (5.0, 10**400, 5.0)}, r"mission_value_usd\[1\] = 1000"),
         ({"mission_not_flown_usd": (1.0, 2.0)}, r"needs 3 amounts"),
         (
             {"mission_types": ("standard", "training"), "mission_value_usd": (1.0, 1.0)},

@@ -25,13 +25,21 @@ constant: a unit with constant ``C_unit`` grows at ``(C_unit / C_nom)`` times th
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
+from functools import partial
 
 import numpy as np
 import numpy.typing as npt
 
 from scas_env.actuator.health import HealthState, actuator_config
-from scas_env.actuator.missions import REGIMES, flight_profile, link_force_n, regime_profile
+from scas_env.actuator.missions import (
+    REGIMES,
+    MissionProfile,
+    flight_profile,
+    link_force_n,
+    regime_profile,
+)
 from scas_env.actuator.params import ScasParams
 from scas_env.actuator.physics.actuator import ActuatorRun, simulate
 from scas_env.actuator.physics.crack_growth import (
@@ -286,6 +294,22 @@ def simulated_flight_damage(
 
     A whole flight is ~5.4 million samples (about 6 s of simulation each).
     """
+    if regime is None:
+        profile = partial(flight_profile, params.mission)
+    else:
+        profile = partial(regime_profile, regime, params.mission)
+    return _simulated_damage(params, depths_m, rngs, duration_s, profile)
+
+
+def _simulated_damage(
+    params: ScasParams,
+    depths_m: npt.ArrayLike,
+    rngs: list[np.random.Generator],
+    duration_s: float | None,
+    profile: Callable[[np.random.Generator, float, float], MissionProfile],
+) -> FlightDamage:
+    """:func:`simulated_flight_damage` of the flights ``profile(rng, sample_rate_hz,
+    duration_s)`` commands (one per generator; the mission's kind is the caller's)."""
     depths = np.asarray(depths_m, dtype=np.float64)
     if depths.ndim != 1 or depths.size == 0 or not np.all(np.isfinite(depths) & (depths > 0)):
         raise ValueError(f"depths_m = {depths_m!r} must be a non-empty 1-D array of depths > 0 m")
@@ -301,10 +325,7 @@ def simulated_flight_damage(
     crack = np.empty((len(rngs), depths.size))
     wear = np.empty(len(rngs))
     for k, rng in enumerate(rngs):
-        if regime is None:
-            prof = flight_profile(params.mission, rng, fs, duration_s=duration)
-        else:
-            prof = regime_profile(regime, params.mission, rng, fs, duration)
+        prof = profile(rng, fs, duration)
         force = link_force_n(prof.pilot_command_m, params.actuator.link_force_amplitude_n)
         run = simulate(cfg, prof.scas_command_m, rng=rng, link_force_n=force)
         loads = flight_loads_from_run(run, run.t_s.size / fs, cfg.spring_rate_1_n_m)

@@ -65,38 +65,21 @@ from __future__ import annotations
 import math
 import re
 from dataclasses import dataclass, replace
+from functools import partial
 
 import numpy as np
 import numpy.typing as npt
 
-from scas_env.actuator.flight_damage import (
-    FlightDamage,
-    crack_increment_m,
-    flight_loads_from_run,
-    growth_model,
-    wear_increment_m,
-)
-from scas_env.actuator.health import actuator_config
+from scas_env.actuator.flight_damage import FlightDamage, _simulated_damage
 from scas_env.actuator.missions import (
-    _MAX_FREQUENCY_HZ,
     DEFAULT_CROSSFADE_S,
     DEFAULT_SEGMENT_S,
     REGIMES,
-    FlightSegment,
     MissionProfile,
     Regime,
-    _allocate,
-    _channel,
-    _check_mission,
-    _check_positive,
-    _check_rate,
-    _n_samples,
-    _split,
-    link_force_n,
+    _table_flight,
 )
 from scas_env.actuator.params import MissionParams, ScasParams
-from scas_env.actuator.physics.actuator import simulate
-from scas_env.actuator.uncertainty import nominal_unit, truncated_normal
 
 FloatArray = npt.NDArray[np.float64]
 N_REGIMES = len(REGIMES)
@@ -230,57 +213,16 @@ def mission_flight_profile(
 ) -> MissionProfile:
     """Random in-flight command of mission type ``kind``.
 
-    :func:`~scas_env.actuator.missions.flight_profile`'s construction (time shares by
-    largest remainder, segments of about ``segment_s`` in a random order, amplitudes
-    N(A, (f A)^2) per segment, phase-continuous oscillators with cross-fades) with the
-    type's occurrences and SCAS amplitudes. Draws in the same order (segment order, phases,
-    amplitudes), so ``standard`` gives ``flight_profile``'s profile bit for bit.
+    :func:`~scas_env.actuator.missions.flight_profile`'s construction, the same code (time
+    shares by largest remainder, segments of about ``segment_s`` in a random order,
+    amplitudes N(A, (f A)^2) per segment, phase-continuous oscillators with cross-fades),
+    with the type's occurrences and SCAS amplitudes (:meth:`MissionType.regimes`); so
+    ``standard`` gives ``flight_profile``'s profile bit for bit.
     """
     if not isinstance(kind, MissionType):
         raise ValueError(f"kind must be a MissionType, got {type(kind).__name__}")
-    _check_mission(mission, rng)
-    fs = _check_rate(sample_rate_hz, 2.0 * _MAX_FREQUENCY_HZ)
-    n = _n_samples(mission.flight_window_s if duration_s is None else duration_s, fs)
-    seg_n = _check_positive("segment_s", segment_s) * fs
-    n_fade = max(1, round(_check_positive("crossfade_s", crossfade_s) * fs))
-    table = kind.regimes()
-    pieces: list[tuple[int, int]] = []
-    for regime, share in zip(table, _allocate(n, list(kind.occurrence)), strict=True):
-        if share > 0:
-            n_pieces = max(1, round(share / seg_n))
-            pieces += [(regime.index, length) for length in _split(share, n_pieces)]
-    order = rng.permutation(len(pieces))
-    regimes = [pieces[k][0] for k in order]
-    lengths = [pieces[k][1] for k in order]
-    rows = [table[r] for r in regimes]
-    phase_scas, phase_pilot = rng.uniform(0.0, 2.0 * math.pi, size=2)
-    frac = mission.amplitude_variation_frac
-    nominal_scas = np.array([r.scas_amplitude_m for r in rows])
-    nominal_pilot = np.array([r.pilot_amplitude_m for r in rows])
-    amp_scas = np.asarray(truncated_normal(rng, nominal_scas, frac * nominal_scas, lower=0.0))
-    amp_pilot = np.asarray(truncated_normal(rng, nominal_pilot, frac * nominal_pilot, lower=0.0))
-    freq_scas = np.array([r.scas_frequency_hz for r in rows])
-    freq_pilot = np.array([r.pilot_frequency_hz for r in rows])
-    scas = _channel(lengths, freq_scas, amp_scas, phase_scas, fs, n_fade)
-    pilot = _channel(lengths, freq_pilot, amp_pilot, phase_pilot, fs, n_fade)
-    labels = np.repeat(np.array(regimes, dtype=np.int64), lengths)
-    starts = np.concatenate(([0], np.cumsum(lengths)))
-    segments = tuple(
-        FlightSegment(
-            regimes[k], int(starts[k]), int(starts[k + 1]), float(amp_scas[k]), float(amp_pilot[k])
-        )
-        for k in range(len(lengths))
-    )
-    counts = np.bincount(labels, minlength=N_REGIMES)
-    return MissionProfile(
-        kind="flight",
-        sample_rate_hz=fs,
-        t_s=np.arange(n) / fs,
-        scas_command_m=scas,
-        pilot_command_m=pilot,
-        regime=labels,
-        regime_fraction=tuple(float(c) / n for c in counts),
-        segments=segments,
+    return _table_flight(
+        kind.regimes(), mission, rng, sample_rate_hz, duration_s, segment_s, crossfade_s
     )
 
 
@@ -300,25 +242,5 @@ def mission_flight_damage(
     rainflow-counted with no window-to-flight scaling. ``standard`` gives
     ``simulated_flight_damage``'s numbers bit for bit.
     """
-    depths = np.asarray(depths_m, dtype=np.float64)
-    if depths.ndim != 1 or depths.size == 0 or not np.all(np.isfinite(depths) & (depths > 0)):
-        raise ValueError(f"depths_m = {depths_m!r} must be a non-empty 1-D array of depths > 0 m")
-    if len(rngs) < 1:
-        raise ValueError("rngs must hold at least one generator (one per flight)")
-    duration = params.mission.flight_duration_s if duration_s is None else float(duration_s)
-    if not (math.isfinite(duration) and duration > 0.0):
-        raise ValueError(f"duration_s = {duration_s} s must be > 0")
-    unit = nominal_unit(params)
-    model = growth_model(params, unit)
-    cfg = actuator_config(params)
-    fs = params.sensors.sample_rate_hz
-    crack = np.empty((len(rngs), depths.size))
-    wear = np.empty(len(rngs))
-    for k, rng in enumerate(rngs):
-        prof = mission_flight_profile(kind, params.mission, rng, fs, duration_s=duration)
-        force = link_force_n(prof.pilot_command_m, params.actuator.link_force_amplitude_n)
-        run = simulate(cfg, prof.scas_command_m, rng=rng, link_force_n=force)
-        loads = flight_loads_from_run(run, run.t_s.size / fs, cfg.spring_rate_1_n_m)
-        crack[k] = [crack_increment_m(params, unit, model, a, loads) for a in depths]
-        wear[k] = wear_increment_m(params, unit, loads)
-    return FlightDamage(depths, crack, wear, duration)
+    profile = partial(mission_flight_profile, kind, params.mission)
+    return _simulated_damage(params, depths_m, rngs, duration_s, profile)

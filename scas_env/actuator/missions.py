@@ -40,6 +40,7 @@ The pilot command X_i reaches the SCAS only through an external link force,
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -306,22 +307,24 @@ def _synthesise(
     rng: np.random.Generator,
     fs: float,
     crossfade_s: float,
+    table: Sequence[Regime] = REGIMES,
 ) -> MissionProfile:
-    """Build the profile of consecutive segments (regime, length). Draws: phases, amplitudes."""
+    """Build the profile of consecutive segments (regime, length), each segment's sinusoids
+    from its row of ``table`` (indexed by regime). Draws: phases, amplitudes."""
     n_fade = max(1, round(_check_positive("crossfade_s", crossfade_s) * fs))
-    table = [REGIMES[r] for r in regimes]
+    rows = [table[r] for r in regimes]
     phase_scas, phase_pilot = rng.uniform(0.0, 2.0 * math.pi, size=2)
     frac = mission.amplitude_variation_frac
-    nominal_scas = np.array([r.scas_amplitude_m for r in table])
-    nominal_pilot = np.array([r.pilot_amplitude_m for r in table])
+    nominal_scas = np.array([r.scas_amplitude_m for r in rows])
+    nominal_pilot = np.array([r.pilot_amplitude_m for r in rows])
     amp_scas = np.asarray(truncated_normal(rng, nominal_scas, frac * nominal_scas, lower=0.0))
     amp_pilot = np.asarray(truncated_normal(rng, nominal_pilot, frac * nominal_pilot, lower=0.0))
     scas = _channel(
-        lengths, np.array([r.scas_frequency_hz for r in table]), amp_scas, phase_scas, fs, n_fade
+        lengths, np.array([r.scas_frequency_hz for r in rows]), amp_scas, phase_scas, fs, n_fade
     )
     pilot = _channel(
         lengths,
-        np.array([r.pilot_frequency_hz for r in table]),
+        np.array([r.pilot_frequency_hz for r in rows]),
         amp_pilot,
         phase_pilot,
         fs,
@@ -397,19 +400,35 @@ def flight_profile(
     >>> p.duration_s, p.regime_fraction
     (20.0, (0.02, 0.6, 0.3, 0.08))
     """
+    return _table_flight(REGIMES, mission, rng, sample_rate_hz, duration_s, segment_s, crossfade_s)
+
+
+def _table_flight(
+    table: Sequence[Regime],
+    mission: MissionParams,
+    rng: np.random.Generator,
+    sample_rate_hz: float,
+    duration_s: float | None,
+    segment_s: float,
+    crossfade_s: float,
+) -> MissionProfile:
+    """:func:`flight_profile` with the regime rows ``table`` (occurrences, amplitudes) in
+    place of :data:`REGIMES`: time shares by largest remainder, segments of about
+    ``segment_s`` in a random order, then :func:`_synthesise`."""
     _check_mission(mission, rng)
     fs = _check_rate(sample_rate_hz, 2.0 * _MAX_FREQUENCY_HZ)
     n = _n_samples(mission.flight_window_s if duration_s is None else duration_s, fs)
     seg_n = _check_positive("segment_s", segment_s) * fs
+    _check_positive("crossfade_s", crossfade_s)  # before any draw (used by _synthesise)
     pieces: list[tuple[int, int]] = []
-    for regime, share in zip(REGIMES, _allocate(n, [r.occurrence for r in REGIMES]), strict=True):
+    for regime, share in zip(table, _allocate(n, [r.occurrence for r in table]), strict=True):
         if share > 0:
             n_pieces = max(1, round(share / seg_n))
             pieces += [(regime.index, length) for length in _split(share, n_pieces)]
     order = rng.permutation(len(pieces))
     regimes = [pieces[k][0] for k in order]
     lengths = [pieces[k][1] for k in order]
-    return _synthesise("flight", regimes, lengths, mission, rng, fs, crossfade_s)
+    return _synthesise("flight", regimes, lengths, mission, rng, fs, crossfade_s, table)
 
 
 def regime_profile(

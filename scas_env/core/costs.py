@@ -19,6 +19,7 @@ docs/configs.md; ``examples/`` holds two documented operators).
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 from scas_env.actuator.config import Validated, param
 
@@ -27,58 +28,33 @@ from scas_env.actuator.config import Validated, param
 MAX_USD = 1e12
 
 
+def amount_usd(default: float, source: str) -> Any:
+    """Declare an amount field (:func:`~scas_env.actuator.config.param`): USD in [0, MAX_USD]."""
+    return param(default, "USD", lo=0.0, hi=MAX_USD, source=source)
+
+
 @dataclass(frozen=True)
 class CostModel(Validated):
     """Value of flying and cost of each maintenance event (USD) and of downtime (slots)."""
 
-    flight_value_usd: float = param(
-        2500.0,
-        "USD",
-        lo=0.0,
-        hi=MAX_USD,
-        source="value of lost availability $5,000 per grounded day at 2 flights/day (ref §8.2)",
+    flight_value_usd: float = amount_usd(
+        2500.0, "value of lost availability $5,000 per grounded day at 2 flights/day (ref §8.2)"
     )
-    test_usd: float = param(
-        100.0,
-        "USD",
-        lo=0.0,
-        hi=MAX_USD,
-        source="pre-flight SCAS test: minutes of crew and ground run [B]",
+    test_usd: float = amount_usd(100.0, "pre-flight SCAS test: minutes of crew and ground run [B]")
+    no_go_inspection_usd: float = amount_usd(
+        500.0, "troubleshooting after a failed pre-flight test, before any replacement [B]"
     )
-    no_go_inspection_usd: float = param(
-        500.0,
-        "USD",
-        lo=0.0,
-        hi=MAX_USD,
-        source="troubleshooting after a failed pre-flight test, before any replacement [B]",
+    spring_replacement_usd: float = amount_usd(
+        1500.0, "scheduled centering-spring replacement (ref §8.2)"
     )
-    spring_replacement_usd: float = param(
-        1500.0,
-        "USD",
-        lo=0.0,
-        hi=MAX_USD,
-        source="scheduled centering-spring replacement (ref §8.2)",
+    seal_replacement_usd: float = amount_usd(
+        6000.0, "scheduled SCAS reseal / actuator exchange (ref §8.2)"
     )
-    seal_replacement_usd: float = param(
-        6000.0,
-        "USD",
-        lo=0.0,
-        hi=MAX_USD,
-        source="scheduled SCAS reseal / actuator exchange (ref §8.2)",
+    unscheduled_removal_usd: float = amount_usd(
+        25000.0, "unscheduled removal after an in-service failure (ref §8.2)"
     )
-    unscheduled_removal_usd: float = param(
-        25000.0,
-        "USD",
-        lo=0.0,
-        hi=MAX_USD,
-        source="unscheduled removal after an in-service failure (ref §8.2)",
-    )
-    mission_abort_usd: float = param(
-        20000.0,
-        "USD",
-        lo=0.0,
-        hi=MAX_USD,
-        source="in-flight SCAS failure: return/divert (ref §8.2)",
+    mission_abort_usd: float = amount_usd(
+        20000.0, "in-flight SCAS failure: return/divert (ref §8.2)"
     )
     spring_downtime_slots: float = param(
         0, "slots", lo=0, hi=1000, integer=True, source="spring change fits in the slot [B]"

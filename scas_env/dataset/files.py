@@ -18,15 +18,13 @@ from __future__ import annotations
 
 import json
 import os
-import shutil
-import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from scas_env.utils.results_folder import check_destination, partial_folder
+from scas_env.utils.results_folder import check_destination, move_into_place, partial_folder
 
 if TYPE_CHECKING:
     import pyarrow as pa
@@ -283,21 +281,8 @@ def write_dataset(
         (tmp / "datacard.json").write_text(json.dumps(card, indent=2, sort_keys=True) + "\n")
         (tmp / "datacard.md").write_text(data_card_markdown(card))
         names["datacard.json"] = names["datacard.md"] = ""
-        _replace_folder(tmp, path, overwrite)
+        move_into_place(tmp, path, overwrite)
     return {key: path / key for key in names}
-
-
-def _replace_folder(tmp: Path, path: Path, overwrite: bool) -> None:
-    """Move ``tmp`` to ``path``; an existing ``path`` (allowed by ``overwrite``) is moved
-    aside first and removed only once the new folder is in place."""
-    if not path.exists():
-        os.rename(tmp, path)
-        return
-    check_output(path, overwrite)
-    old = Path(tempfile.mkdtemp(prefix=f".{path.name}.old.", dir=path.parent))
-    os.rename(path, old / "data")
-    os.rename(tmp, path)
-    shutil.rmtree(old, ignore_errors=True)
 
 
 # ---------------------------------------------------------------------------- read

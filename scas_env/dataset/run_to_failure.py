@@ -54,6 +54,7 @@ from scas_env.dataset.files import (
     write_dataset,
 )
 from scas_env.utils.parallel import map_chunks
+from scas_env.utils.table_checks import whole_number
 
 FLY, TEST_AND_FLY = 0, 1
 PARTS = ("spring", "seal")
@@ -106,12 +107,6 @@ def unit_seeds(n_units: int, seed: int) -> list[int]:
     """Env seed of each unit: the first 63 bits of child ``u`` of ``SeedSequence(seed)``."""
     children = np.random.SeedSequence(seed).spawn(n_units)
     return [int(c.generate_state(1, dtype=np.uint64)[0] >> np.uint64(1)) for c in children]
-
-
-def _check_int(name: str, value: Any, lo: int) -> int:
-    if isinstance(value, bool) or not isinstance(value, int | np.integer) or value < lo:
-        raise ValueError(f"{name} = {value!r} must be an integer >= {lo}")
-    return int(value)
 
 
 def dataset_scenario(scenario: Scenario | None, fidelity: str | None, max_slots: int) -> Scenario:
@@ -237,11 +232,11 @@ def simulate_units(
         depend on it.
     progress : show a tqdm bar.
     """
-    n_units = _check_int("n_units", n_units, 1)
-    seed = _check_int("seed", seed, 0)
-    test_every = _check_int("test_every", test_every, 0)
-    max_slots = _check_int("max_slots", max_slots, 1)
-    n_workers = _check_int("n_workers", n_workers, 1)
+    n_units = whole_number("", "n_units", n_units, lo=1)
+    seed = whole_number("", "seed", seed, lo=0)
+    test_every = whole_number("", "test_every", test_every, lo=0)
+    max_slots = whole_number("", "max_slots", max_slots, lo=1)
+    n_workers = whole_number("", "n_workers", n_workers, lo=1)
     if params is not None and not isinstance(params, ScasParams):
         raise ValueError(f"params must be a ScasParams, got {type(params).__name__}")
     env_kwargs: dict[str, Any] = {"scenario": dataset_scenario(scenario, fidelity, max_slots)}
@@ -304,7 +299,8 @@ def export_run_to_failure(
     check_output(out, overwrite)
     check_formats(formats)
     start = time.perf_counter()
-    the_scenario = dataset_scenario(scenario, fidelity, _check_int("max_slots", max_slots, 1))
+    slots = whole_number("", "max_slots", max_slots, lo=1)
+    the_scenario = dataset_scenario(scenario, fidelity, slots)
     the_params = ScasParams() if params is None else params
     flights, units = simulate_units(
         n_units,

@@ -32,7 +32,6 @@ from __future__ import annotations
 
 import contextlib
 import datetime as dt
-import hashlib
 import json
 import os
 import platform
@@ -47,6 +46,7 @@ from typing import Any
 
 from scas_env._version import __version__
 from scas_env.utils.atomic_file import sigterm_raises
+from scas_env.utils.shipped_files import file_sha256
 
 MANIFEST = "manifest.json"
 #: Distributions whose versions go into every manifest (absent ones are recorded as such).
@@ -170,14 +170,6 @@ def library_versions() -> dict[str, str]:
     return out
 
 
-def _sha256(path: Path) -> str:
-    digest = hashlib.sha256()
-    with open(path, "rb") as f:
-        for block in iter(lambda: f.read(1 << 20), b""):
-            digest.update(block)
-    return digest.hexdigest()
-
-
 def _files(folder: Path) -> list[str]:
     return sorted(
         p.relative_to(folder).as_posix()
@@ -188,7 +180,7 @@ def _files(folder: Path) -> list[str]:
 
 def _write_manifest(folder: Path, config_text: str, seeds_text: str) -> None:
     files = {
-        rel: {"sha256": _sha256(folder / rel), "bytes": (folder / rel).stat().st_size}
+        rel: {"sha256": file_sha256(folder / rel), "bytes": (folder / rel).stat().st_size}
         for rel in _files(folder)
     }
     manifest = {
@@ -237,7 +229,7 @@ def results_folder(
     with partial_folder(dest) as tmp:
         yield tmp
         _write_manifest(tmp, config_text, seeds_text)
-        _move_into_place(tmp, dest, overwrite)
+        move_into_place(tmp, dest, overwrite)
 
 
 @contextmanager
@@ -255,16 +247,13 @@ def partial_folder(dest: str | Path) -> Iterator[Path]:
             shutil.rmtree(tmp, ignore_errors=True)  # nothing left there after the rename
 
 
-def _move_into_place(tmp: Path, dest: Path, overwrite: bool) -> None:
-    """Rename ``tmp`` to ``dest``; an existing ``dest`` (allowed by ``overwrite``) is moved
-    aside first and deleted after, or put back if the rename fails."""
-    if not (dest.exists() or dest.is_symlink()):
-        try:
-            os.rename(tmp, dest)  # fails if a non-empty folder appeared meanwhile
-        except OSError as err:
-            raise ResultsFolderError(f"cannot move results into {dest}: {err}") from None
-        return
-    if not overwrite and not any(dest.iterdir()):  # an empty folder: replaced by the rename
+def move_into_place(tmp: Path, dest: Path, overwrite: bool) -> None:
+    """Rename the folder ``tmp`` to ``dest``; an existing ``dest`` (allowed by ``overwrite``,
+    :func:`check_destination`) is moved aside first and deleted after, or put back if the
+    rename fails."""
+    # no dest, or an empty folder (replaced by the rename); the rename fails if a non-empty
+    # folder appeared meanwhile
+    if not (dest.exists() or dest.is_symlink()) or (not overwrite and not any(dest.iterdir())):
         try:
             os.rename(tmp, dest)
         except OSError as err:
@@ -303,6 +292,6 @@ def verify_results_folder(path: str | Path) -> list[str]:
             f"{sorted(set(listed) - set(present))} are missing"
         )
     for rel, entry in listed.items():
-        if _sha256(folder / rel) != entry["sha256"]:
+        if file_sha256(folder / rel) != entry["sha256"]:
             raise ResultsFolderError(f"{folder / rel} differs from its manifest hash")
     return sorted(listed)

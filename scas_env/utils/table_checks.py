@@ -1,4 +1,5 @@
-"""Checks of the numbers in the shipped data tables (calibration, surrogate).
+"""Checks of the numbers in the shipped data tables (calibration, surrogate), in the
+configurations' lists (amounts, a mix) and in functions' whole-number arguments.
 
 Each check raises a ``ValueError`` naming the owner and field, the bad value (or the first
 bad entry and its index) and what is allowed, before any simulation uses the table: a NaN in
@@ -19,6 +20,7 @@ error of a table read from disk.
 
 from __future__ import annotations
 
+import contextlib
 import json
 import math
 from collections.abc import Callable
@@ -69,10 +71,30 @@ def finite_scalar(
 
 
 def whole_number(owner: str, name: str, value: Any, *, lo: int) -> int:
-    """``int(value)`` if it is an integer (not a bool) >= ``lo``, else ``ValueError``."""
+    """``int(value)`` if it is an integer (not a bool) >= ``lo``, else ``ValueError`` naming
+    ``owner.name`` (``name`` alone when ``owner`` is ``""``: a function's argument)."""
     if isinstance(value, bool) or not isinstance(value, int | np.integer) or value < lo:
-        raise ValueError(f"{owner}.{name} = {value!r} must be an integer >= {lo}")
+        label = f"{owner}.{name}" if owner else name
+        raise ValueError(f"{label} = {value!r} must be an integer >= {lo}")
     return int(value)
+
+
+def finite_numbers(
+    label: str, values: Any, *, lo: float, hi: float = math.inf, allowed: str
+) -> tuple[float, ...]:
+    """``values`` as a tuple of floats if each is an ``int`` or ``float`` (not a bool), finite
+    and in ``[lo, hi]``; else ``ValueError`` ``"<label>[k] = <value> <allowed>"`` naming the
+    first bad entry (``allowed``: what is allowed, with the unit if any)."""
+    out = []
+    for k, v in enumerate(values):
+        f = math.nan
+        if not isinstance(v, bool) and isinstance(v, (int, float)):
+            with contextlib.suppress(OverflowError):  # an int no float holds
+                f = float(v)
+        if not math.isfinite(f) or not lo <= f <= hi:
+            raise ValueError(f"{label}[{k}] = {v!r} {allowed}")
+        out.append(f)
+    return tuple(out)
 
 
 def finite_array(

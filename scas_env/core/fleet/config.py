@@ -32,13 +32,13 @@ from typing import Any
 
 from scas_env.actuator.config import Validated, param
 from scas_env.actuator.mission_types import MISSION_TYPES
-from scas_env.core.costs import CostModel
+from scas_env.core.costs import MAX_USD, CostModel, amount_usd
 from scas_env.core.fleet.demand import DemandModel
 from scas_env.core.fleet.resources import NO_BASE_STOCK, SparesSpec
+from scas_env.utils.table_checks import finite_numbers
 
 #: the table of a configuration file that holds a FleetConfig
 SECTION = "fleet"
-MAX_USD = 1e12
 
 
 @dataclass(frozen=True)
@@ -198,12 +198,8 @@ class FleetConfig(Validated):
         hi=1e7,
         source="SCAS actuator MTBUR, all causes, background (ref §8.2: 5,000 FH, 2,000-15,000)",
     )
-    background_removal_usd: float = param(
-        25000.0,
-        "USD",
-        lo=0.0,
-        hi=MAX_USD,
-        source="an unscheduled removal for a cause outside the model (ref §8.2: $25,000)",
+    background_removal_usd: float = amount_usd(
+        25000.0, "an unscheduled removal for a cause outside the model (ref §8.2: $25,000)"
     )
     holding_usd_per_unit_day: float = param(
         0.0,
@@ -280,13 +276,9 @@ class FleetConfig(Validated):
             raise ValueError(
                 f"{own}.{name} = {values!r} needs {n} amounts (USD), one per mission type"
             )
-        out = []
-        for k, v in enumerate(values):
-            ok = not isinstance(v, bool) and isinstance(v, (int, float))
-            if not ok or not math.isfinite(v) or not 0.0 <= v <= MAX_USD:
-                raise ValueError(f"{own}.{name}[{k}] = {v!r} USD must be in [0, {MAX_USD:g}]")
-            out.append(float(v))
-        object.__setattr__(self, name, tuple(out))
+        allowed = f"USD must be in [0, {MAX_USD:g}]"
+        amounts = finite_numbers(f"{own}.{name}", values, lo=0.0, hi=MAX_USD, allowed=allowed)
+        object.__setattr__(self, name, amounts)
 
     # ------------------------------------------------------------------ derived values
     @property

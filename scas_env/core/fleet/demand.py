@@ -52,6 +52,7 @@ import numpy as np
 import numpy.typing as npt
 
 from scas_env.actuator.config import Validated, param
+from scas_env.utils.table_checks import finite_numbers, whole_number
 
 FloatArray = npt.NDArray[np.float64]
 IntArray = npt.NDArray[np.int64]
@@ -124,20 +125,15 @@ class DemandModel(Validated):
                 f"DemandModel.mission_mix = {mix!r} must be a list of probabilities, one per "
                 "mission type"
             )
-        values = []
-        for k, v in enumerate(mix):
-            ok = not isinstance(v, bool) and isinstance(v, (int, float))
-            if not ok or not math.isfinite(v) or v < 0.0:
-                raise ValueError(
-                    f"DemandModel.mission_mix[{k}] = {v!r} must be a finite probability >= 0"
-                )
-            values.append(float(v))
+        values = finite_numbers(
+            "DemandModel.mission_mix", mix, lo=0.0, allowed="must be a finite probability >= 0"
+        )
         if not values or abs(sum(values) - 1.0) > _MIX_TOL:
             raise ValueError(
                 f"DemandModel.mission_mix = {list(mix)!r} must hold at least one probability "
                 f"and sum to 1 (sums to {sum(values)!r})"
             )
-        object.__setattr__(self, "mission_mix", tuple(values))
+        object.__setattr__(self, "mission_mix", values)
 
     @property
     def surge_start_probability(self) -> float:
@@ -152,8 +148,7 @@ class DemandModel(Validated):
     def base_missions_per_day(self, *, aircraft: int, flights_per_mission: int) -> float:
         """``U N / (F h) / 365``: the long-run mean of the daily missions (module doc)."""
         for name, value in (("aircraft", aircraft), ("flights_per_mission", flights_per_mission)):
-            if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
-                raise ValueError(f"{name} = {value!r} must be an integer >= 1")
+            whole_number("", name, value, lo=1)
         hours = self.flight_hours_per_aircraft_year * aircraft
         return hours / (flights_per_mission * self.flight_hours_per_flight) / DAYS_PER_YEAR
 
@@ -196,12 +191,6 @@ class DemandSchedule:
         return self.missions.sum(axis=1)
 
 
-def _whole(name: str, value: object, lo: int) -> int:
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < lo:
-        raise ValueError(f"{name} = {value!r} must be an integer >= {lo}")
-    return int(value)
-
-
 def draw_schedule(
     model: DemandModel,
     days: int,
@@ -225,8 +214,8 @@ def draw_schedule(
         raise ValueError(f"model must be a DemandModel, got {type(model).__name__}")
     if not isinstance(rng, np.random.Generator):
         raise ValueError(f"rng must be a numpy.random.Generator, got {type(rng).__name__}")
-    days = _whole("days", days, 1)
-    start_day = _whole("start_day", start_day, 0)
+    days = whole_number("", "days", days, lo=1)
+    start_day = whole_number("", "start_day", start_day, lo=0)
     base = model.base_missions_per_day(aircraft=aircraft, flights_per_mission=flights_per_mission)
     length = int(model.surge_days)
     starts = rng.random(days + length - 1) < model.surge_start_probability
