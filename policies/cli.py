@@ -54,7 +54,8 @@ tasks (auto, local or ray://host:10001; '' runs locally even when RAY_ADDRESS is
 Fleets (ScasFleet-v0): --fleet runs the default fleet, a --scenario file with a [fleet] table
 runs that one; the default list is then the fleet rules, the agents and the clairvoyant bound
 (fleet_bound), with each policy's share of the gap between the naive rule and the bound.
-Examples:
+The default list leaves out, with a note, a shipped agent that cannot act on the scenario
+(the fleet agents know the default fleet's observation only). Examples:
 
     scas-benchmark --episodes 40 --scenario examples/offshore_operator.toml --out results/off
     scas-benchmark --episodes 40 --scenario examples/fleet_offshore.toml --out results/fleet
@@ -274,6 +275,8 @@ def benchmark_main(argv: Sequence[str] | None = None) -> int:
             parser.error(
                 f"{spec.key!r} cannot be loaded ({exc}); install what it needs or leave it out"
             )
+    if args.policies is None:  # the default list: shipped agents only where they fit
+        specs = _fitting_agents(specs, slots=scenario.episode_slots, env_kwargs=env_kwargs)
     try:  # every policy built once on this scenario, before any episode
         prepare_benchmark(
             specs,
@@ -317,6 +320,24 @@ def benchmark_main(argv: Sequence[str] | None = None) -> int:
     for name, path in paths.items():
         log.info(f"{name}: {path}")
     return 0
+
+
+def _fitting_agents(specs: list[Any], *, slots: int, env_kwargs: dict[str, Any]) -> list[Any]:
+    """``specs`` less the shipped agents that cannot act on this scenario (trained on
+    another observation layout, e.g. the default fleet's), each left out with a note on
+    stderr; named in ``--policies`` such an agent is a usage error instead."""
+    from policies.benchmark.run import PLUGINS, prepare_benchmark
+
+    kept = []
+    for spec in specs:
+        if PLUGINS.get(spec.key) is spec:
+            try:
+                prepare_benchmark([spec], episodes=1, slots=slots, env_kwargs=env_kwargs)
+            except ValueError as exc:
+                print(f"note: {spec.key} left out of the default policies: {exc}", file=sys.stderr)
+                continue
+        kept.append(spec)
+    return kept
 
 
 def _tuned_specs(parser: Any, path: Path, *, fleet: bool) -> list[Any]:

@@ -160,7 +160,15 @@ def rewrite(text: str) -> str:
     return BLOCK.sub(lambda m: m.group(1) + render(m["name"]) + m.group(4), text)
 
 
-def main() -> int:
+def main(argv: list[str] | None = None) -> int:
+    """Rewrite docs/cli.md's help blocks; ``--check``: exit 1 if they are out of date,
+    writing nothing."""
+    parser = argparse.ArgumentParser(
+        prog="python -m tests.cli_docs",
+        description="Rewrite the --help blocks of docs/cli.md from the commands' parsers.",
+    )
+    parser.add_argument("--check", action="store_true", help="compare only; write nothing")
+    args = parser.parse_args(argv)
     text = DOC.read_text()
     missing = sorted(set(parsers()) - set(blocks(text)))
     if missing:
@@ -169,7 +177,11 @@ def main() -> int:
     if not SHARED_BLOCK.search(text):
         print(f"{DOC}: no shared-help block", file=sys.stderr)
         return 1
-    DOC.write_text(rewrite(text))
+    new = rewrite(text)
+    if args.check:
+        print(f"{DOC}: {'up to date' if new == text else 'out of date'}")
+        return int(new != text)
+    DOC.write_text(new)
     print(f"wrote {DOC}")
     return 0
 

@@ -270,3 +270,24 @@ def test_simulate_run_rejects_bad_inputs() -> None:
             flight_window_s=4.0,
             conditions=("orbit",),
         )
+
+
+def test_the_reproduction_refuses_a_campaign_too_coarse_for_its_fits(
+    tmp_path: Path, small: CampaignResult, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A saved campaign of 2 severity levels (3 distinct severities: the crack's cubic cannot
+    be fitted) is a usage error of ``reproduce --campaign`` naming the levels, before any
+    work; the module's fixture (3 levels) loads."""
+    from experiments.paper.reproduce import main as reproduce_main
+    from experiments.paper.reproduction import load_campaign
+
+    coarse = run_campaign(PARAMS, SMALL.replace(n_runs=1, n_levels=2), seed=3, n_workers=1)
+    coarse.save(tmp_path / "coarse")
+    with pytest.raises(ValueError, match=r"has n_levels = 2; the reproduction needs >= 3"):
+        load_campaign(tmp_path / "coarse")
+    with pytest.raises(SystemExit) as exit_:
+        reproduce_main(["--campaign", str(tmp_path / "coarse"), "--out", str(tmp_path / "r")])
+    assert exit_.value.code == 2 and "--levels 3 or more" in capsys.readouterr().err
+    assert not (tmp_path / "r").exists()
+    small.save(tmp_path / "fine")
+    assert load_campaign(tmp_path / "fine").n_rows == small.n_rows

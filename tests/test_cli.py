@@ -541,6 +541,11 @@ def test_docs_show_every_command_s_help() -> None:
     assert set(shown) == set(MAINS)
     stale = [c for c in MAINS if shown[c] != cli_docs.render(c)]
     assert not stale, f"docs/cli.md: --help of {stale} changed; run python -m tests.cli_docs"
+    before = cli_docs.DOC.stat().st_mtime_ns
+    assert cli_docs.main(["--check"]) == 0  # up to date, and nothing written
+    with pytest.raises(SystemExit):
+        cli_docs.main(["--help"])
+    assert cli_docs.DOC.stat().st_mtime_ns == before
 
 
 def test_check_install_runs_every_command_at_a_tiny_size() -> None:
@@ -611,3 +616,30 @@ def test_an_agent_file_with_a_pickle_runs_only_with_trust_pickle(
     assert policies_cli.benchmark_main([*argv, "--trust-pickle", "--out", str(tmp_path / "b")]) == 0
     rows = (tmp_path / "b" / "results.csv").read_text().splitlines()
     assert [r.split(",")[0] for r in rows[1:]] == ["corrective", "pickled"]
+
+
+def test_the_default_fleet_list_leaves_out_agents_that_do_not_fit(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A fleet of another shape: the default list runs every rule and the bound and leaves
+    out the shipped agents (trained on the default fleet), each with a note saying why;
+    named in --policies, the same agent is a usage error."""
+    from policies.benchmark.run import DEFAULT_FLEET_POLICIES
+
+    fleet = tmp_path / "small.toml"
+    fleet.write_text("[fleet]\naircraft = 2\nepisode_days = 5\n")
+    out = tmp_path / "bench"
+    argv = ["--episodes", "1", "--workers", "1", "--quiet", "--scenario", str(fleet)]
+    assert policies_cli.benchmark_main([*argv, "--out", str(out)]) == 0
+    err = capsys.readouterr().err
+    agents = ("fleet_ppo", "fleet_shared_ppo")
+    summary = json.loads((out / "summary.json").read_text())
+    assert list(summary["policies"]) == [p for p in DEFAULT_FLEET_POLICIES if p not in agents]
+    for agent in agents:
+        assert f"note: {agent} left out of the default policies" in err
+    assert err.count("trained on a fleet observation of 555 entries") == 2
+    with pytest.raises(SystemExit):
+        policies_cli.benchmark_main(
+            [*argv, "--policies", "fleet_naive,fleet_ppo", "--out", str(tmp_path / "b2")]
+        )
+    assert "error: policy 'fleet_ppo' cannot run on this scenario" in capsys.readouterr().err

@@ -244,3 +244,25 @@ def test_rebuilding_the_manifest_accepts_a_regenerated_file(shipped_copy: Path) 
         assert written == shipped_copy / "scas_env" / "actuator" / "data" / MANIFEST_NAME
     assert verify_shipped_file(path)
     assert verify_all()
+
+
+def test_the_manifest_command_checks_without_writing_and_help_writes_nothing(
+    shipped_copy: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``python -m scas_env.utils.shipped_files --check`` verifies (exit 1 naming a changed
+    file) and ``--help`` prints usage: neither writes the manifest; without options it
+    rebuilds it."""
+    manifest = shipped_files.manifest_path()
+    before = manifest.read_bytes()
+    with pytest.raises(SystemExit) as exit_:
+        shipped_files.main(["--help"])
+    assert exit_.value.code == 0 and "--check" in capsys.readouterr().out
+    assert shipped_files.main(["--check"]) == 0
+    path = shipped_copy / "policies" / "data" / "maskable_ppo_epochs_v2.zip"
+    path.write_bytes(path.read_bytes()[:-10])
+    assert shipped_files.main(["--check"]) == 1
+    assert "maskable_ppo_epochs_v2.zip is corrupted" in capsys.readouterr().err
+    assert manifest.read_bytes() == before
+    assert shipped_files.main([]) == 0
+    shipped_files.load_manifest.cache_clear()
+    assert shipped_files.main(["--check"]) == 0 and manifest.read_bytes() != before

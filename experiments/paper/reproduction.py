@@ -139,6 +139,29 @@ class ReproductionConfig(Validated):
 
 
 # ----------------------------------------------------------------------------- campaign
+def load_campaign(campaign_path: str | Path) -> CampaignResult:
+    """A saved campaign the reproduction can use: both faults, both conditions and at least
+    ``ReproductionConfig``'s fewest severity levels (the crack's curve is a cubic fit);
+    ``ValueError`` naming what it lacks otherwise."""
+    campaign = load(campaign_path)
+    modes = set(campaign.table["fault_mode"].tolist())
+    conds = campaign.metadata["config"]["conditions"]
+    if not set(FAULTS) <= modes or len(conds) != 2:
+        raise ValueError(
+            f"campaign {campaign_path} must hold modes {FAULTS} and both conditions, "
+            f"has {sorted(modes)} and {conds}"
+        )
+    levels = campaign.metadata["config"]["n_levels"]
+    fewest = ReproductionConfig.__dataclass_fields__["n_levels"].metadata["lo"]
+    if levels < fewest:
+        raise ValueError(
+            f"campaign {campaign_path} has n_levels = {levels}; the reproduction needs >= "
+            f"{fewest:g} (its crack curve is a cubic fit): make one with --levels "
+            f"{fewest:g} or more"
+        )
+    return campaign
+
+
 def obtain_campaign(
     params: ScasParams,
     config: ReproductionConfig,
@@ -150,15 +173,7 @@ def obtain_campaign(
 ) -> CampaignResult:
     """Load ``campaign_path`` (must hold both faults and conditions) or run the campaign."""
     if campaign_path is not None:
-        campaign = load(campaign_path)
-        modes = set(campaign.table["fault_mode"].tolist())
-        conds = campaign.metadata["config"]["conditions"]
-        if not set(FAULTS) <= modes or len(conds) != 2:
-            raise ValueError(
-                f"campaign {campaign_path} must hold modes {FAULTS} and both conditions, "
-                f"has {sorted(modes)} and {conds}"
-            )
-        return campaign
+        return load_campaign(campaign_path)
     cfg = CampaignConfig(n_runs=config.n_runs, n_levels=config.n_levels, fault_modes=FAULTS)
     return run_campaign(params, cfg, seed=seed, n_workers=n_workers, progress=progress)
 

@@ -13,15 +13,18 @@ Rebuild the manifest after regenerating a shipped file (in a source checkout: ``
 experiments.build.calibration``, ``experiments.build.surrogate``,
 ``experiments.build.mission_types``; the agent's shipping)::
 
-    python -m scas_env.utils.shipped_files
+    python -m scas_env.utils.shipped_files          # --check: verify, write nothing
 
 ``tests/test_hardening_data.py`` fails while the manifest and the files disagree.
 """
 
 from __future__ import annotations
 
+import argparse
 import hashlib
 import json
+import sys
+from collections.abc import Sequence
 from functools import lru_cache
 from pathlib import Path
 
@@ -179,6 +182,30 @@ def verify_all() -> list[str]:
     return on_disk
 
 
-if __name__ == "__main__":
+def main(argv: Sequence[str] | None = None) -> int:
+    """``python -m scas_env.utils.shipped_files [--check]``: rebuild the manifest, or check
+    the shipped files against it without writing (exit status 1 on a difference)."""
+    parser = argparse.ArgumentParser(
+        prog=_REBUILD,
+        description="Rebuild the SHA-256 manifest of the shipped data files (after "
+        "regenerating one), or check them against it.",
+    )
+    parser.add_argument(
+        "--check", action="store_true", help="verify every shipped file; write nothing"
+    )
+    args = parser.parse_args(argv)
+    if args.check:
+        try:
+            checked = verify_all()
+        except ShippedFileError as exc:
+            print(exc, file=sys.stderr)
+            return 1
+        print(f"{len(checked)} shipped files match {manifest_path()}")
+        return 0
     written = write_manifest()
     print(f"wrote {written} ({len(load_manifest())} files)")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
