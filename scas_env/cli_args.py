@@ -96,37 +96,32 @@ def make_parser(prog: str, doc: str | None) -> argparse.ArgumentParser:
 # --- argument types: each raises ArgumentTypeError with the value and what is allowed ---
 
 
-def _integer(text: str) -> int:
+def _integer_at_least(text: str, lo: int) -> int:
+    """``text`` as an integer >= ``lo``; ArgumentTypeError otherwise."""
     try:
-        return int(text)
+        value = int(text)
     except ValueError:
         raise argparse.ArgumentTypeError(f"{text!r} is not an integer") from None
+    if value < lo:
+        raise argparse.ArgumentTypeError(f"{text!r} is not an integer >= {lo}")
+    return value
 
 
 def positive_int(text: str) -> int:
     """An integer >= 1 (episodes, steps, units, workers...)."""
-    value = _integer(text)
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"{text!r} is not an integer >= 1")
-    return value
+    return _integer_at_least(text, 1)
 
 
 def nonneg_int(text: str) -> int:
     """An integer >= 0 (seeds, frequencies where 0 means "never")."""
-    value = _integer(text)
-    if value < 0:
-        raise argparse.ArgumentTypeError(f"{text!r} is not an integer >= 0")
-    return value
+    return _integer_at_least(text, 0)
 
 
 def int_at_least(lo: int) -> Any:
     """Type of an integer >= ``lo`` (e.g. grid points per axis >= 2)."""
 
     def parse(text: str) -> int:
-        value = _integer(text)
-        if value < lo:
-            raise argparse.ArgumentTypeError(f"{text!r} is not an integer >= {lo}")
-        return value
+        return _integer_at_least(text, lo)
 
     parse.__name__ = f"integer >= {lo}"
     return parse

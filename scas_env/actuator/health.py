@@ -31,7 +31,7 @@ from scas_env.actuator.params import ScasParams
 from scas_env.actuator.physics.actuator import RK4_STABILITY_LIMIT, ActuatorConfig
 from scas_env.actuator.physics.fluid import dynamic_viscosity
 from scas_env.actuator.physics.seal import leakage_coefficients
-from scas_env.actuator.physics.spring import spring_rate_n_per_m
+from scas_env.actuator.physics.spring import spring_rate_from_params
 from scas_env.actuator.uncertainty import (
     RunConditions,
     UnitSample,
@@ -71,20 +71,17 @@ def spring_rates_n_m(
     params: ScasParams, unit: UnitSample, crack_depth_m: float
 ) -> tuple[float, float]:
     """Rates of the two springs of ``unit`` (eq. 1), spring 0 cracked to ``crack_depth_m``."""
-    rates = []
-    for index in (0, 1):
-        depth = crack_depth_m if index == CRACKED_SPRING else 0.0
-        rates.append(
-            float(
-                spring_rate_n_per_m(
-                    depth,
-                    shear_modulus_pa=params.spring.shear_modulus_pa,
-                    wire_diameter_m=unit.wire_diameter_m[index],
-                    coil_diameter_m=unit.mean_coil_diameter_m[index],
-                    active_coils=params.spring.active_coils,
-                )
+    rates = [
+        float(
+            spring_rate_from_params(
+                crack_depth_m if index == CRACKED_SPRING else 0.0,
+                params.spring,
+                wire_diameter_m=unit.wire_diameter_m[index],
+                coil_diameter_m=unit.mean_coil_diameter_m[index],
             )
         )
+        for index in (0, 1)
+    ]
     return rates[0], rates[1]
 
 

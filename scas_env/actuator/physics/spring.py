@@ -251,9 +251,15 @@ def spring_rate_n_per_m(
 
 
 def spring_rate_from_params(
-    a_m: npt.ArrayLike, spring: SpringParams, j_form: JForm = "exact"
+    a_m: npt.ArrayLike,
+    spring: SpringParams,
+    j_form: JForm = "exact",
+    *,
+    wire_diameter_m: float | None = None,
+    coil_diameter_m: float | None = None,
 ) -> float | FloatArray:
-    """:func:`spring_rate_n_per_m` with the nominal geometry of ``spring`` (N/m).
+    """:func:`spring_rate_n_per_m` with the material and coil count of ``spring`` and its
+    nominal geometry, or a unit's own ``wire_diameter_m`` and ``coil_diameter_m`` (m) (N/m).
 
     >>> round(spring_rate_from_params(0.0, SpringParams()))
     16940
@@ -261,8 +267,8 @@ def spring_rate_from_params(
     return spring_rate_n_per_m(
         a_m,
         shear_modulus_pa=spring.shear_modulus_pa,
-        wire_diameter_m=spring.wire_diameter_m,
-        coil_diameter_m=spring.mean_coil_diameter_m,
+        wire_diameter_m=spring.wire_diameter_m if wire_diameter_m is None else wire_diameter_m,
+        coil_diameter_m=spring.mean_coil_diameter_m if coil_diameter_m is None else coil_diameter_m,
         active_coils=spring.active_coils,
         j_form=j_form,
     )
@@ -578,13 +584,7 @@ def failure_depth_from_params(
     s = params.spring
     d = s.wire_diameter_m if wire_diameter_m is None else wire_diameter_m
     big_d = s.mean_coil_diameter_m if coil_diameter_m is None else coil_diameter_m
-    rate = spring_rate_n_per_m(
-        0.0,
-        shear_modulus_pa=s.shear_modulus_pa,
-        wire_diameter_m=d,
-        coil_diameter_m=big_d,
-        active_coils=s.active_coils,
-    )
+    rate = spring_rate_from_params(0.0, s, wire_diameter_m=d, coil_diameter_m=big_d)
     return failure_depth(
         max_service_force_n(params, rate),
         wire_diameter_m=d,
