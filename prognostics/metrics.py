@@ -509,3 +509,34 @@ def brier_score(predicted: Any, outcome: Any) -> float:
     p, y = _records(predicted, outcome)
     d = p - y
     return math.fsum(d * d) / p.size
+
+
+def phm08_score(
+    true_rul: Any, predicted_rul: Any, *, early: float = 13.0, late: float = 10.0
+) -> np.ndarray:
+    """Per prediction, the asymmetric score of the PHM08 data challenge on C-MAPSS (Saxena,
+    Goebel, Simon & Eklund 2008, "Damage propagation modeling for aircraft engine
+    run-to-failure simulation", PHM08, eq. 1): with ``d = predicted - true``,
+    ``exp(-d / early) - 1`` for an early prediction (``d < 0``), ``exp(d / late) - 1`` for a
+    late one; 0 when exact, larger is worse, late errors cost more. ``early`` and ``late``
+    (13 and 10 cycles in the challenge) are in the RULs' unit: the score is not scale-free.
+
+    >>> phm08_score(np.array([100.0, 100.0]), np.array([87.0, 110.0])).round(4).tolist()
+    [1.7183, 1.7183]
+    """
+    r = check.array("true_rul", true_rul, ndim=1, min_size=1, ge=0.0)
+    p = check.array("predicted_rul", predicted_rul, shape=r.shape, like="true_rul", ge=0.0)
+    a1 = check.real("early", early)
+    a2 = check.real("late", late)
+    if not (a1 > 0.0 and a2 > 0.0):
+        raise ValueError(f"early = {early!r} and late = {late!r} must be > 0 (RUL units)")
+    d = p - r
+    with np.errstate(over="raise"):
+        try:
+            return np.where(d < 0.0, np.expm1(-d / a1), np.expm1(d / a2))
+        except FloatingPointError:
+            k = int(np.argmax(np.maximum(-d / a1, d / a2)))
+            raise ValueError(
+                f"the score overflows float64 at index {k} (true {float(r[k])!r}, predicted "
+                f"{float(p[k])!r}): errors of more than ~700 x early/late RUL units"
+            ) from None

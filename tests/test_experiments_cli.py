@@ -23,6 +23,7 @@ COMMANDS = (
     "cross_error",
     "damage_scatter",
     "dashboard_animation",
+    "dataset_baselines",
     "dashboard_speed",
     "epoch_training_split",
     "estimator_comparison",
@@ -195,3 +196,30 @@ def test_reference_posterior_with_a_risk_map(tmp_path, capsys) -> None:
     with pytest.raises(SystemExit):
         reference_posterior.main([*args, "--risk-min", "0.5", "--scenario",
                                   '{"risk_horizon_flights": 40}'])  # fmt: skip
+
+
+def test_dataset_baselines_writes_its_scores_and_keeps_a_folder(tmp_path, capsys) -> None:
+    """The files hold the printed scores (CSV rows = the JSON's bands of both predictors),
+    the plot is drawn; an existing folder is kept (usage error) and a test set without two
+    failed units is a usage error leaving nothing behind."""
+    import csv
+    import json
+
+    from experiments import dataset_baselines
+
+    out = tmp_path / "db"
+    argv = ["--units", "20", "--workers", "1", "--no-progress"]
+    assert dataset_baselines.main([*argv, "--out", str(out)]) == 0
+    assert "monitor - population, MAE per test unit" in capsys.readouterr().out
+    summary = json.loads((out / "summary.json").read_text())
+    rows = list(csv.DictReader((out / "scores.csv").open()))
+    flat = [(n, b, s) for n in ("population", "monitor") for b, s in summary["scores"][n].items()]
+    assert [(r["predictor"], r["band"]) for r in rows] == [(n, b) for n, b, _ in flat]
+    assert [float(r["mae"]) for r in rows] == [s["mae"] for _, _, s in flat]
+    assert summary["test_units_failed"] >= 2 and (out / "rul.png").stat().st_size > 0
+    with pytest.raises(SystemExit):
+        dataset_baselines.main([*argv, "--out", str(out)])
+    with pytest.raises(SystemExit):
+        dataset_baselines.main(["--units", "10", "--workers", "1", "--no-progress", "--out",
+                                str(tmp_path / "few")])  # fmt: skip
+    assert "needs at least 2" in capsys.readouterr().err and not (tmp_path / "few").exists()
