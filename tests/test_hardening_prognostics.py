@@ -348,6 +348,16 @@ def _specs() -> list[Spec]:
             lambda: {"predicted": np.array([0.1, 0.9, 0.4]), "outcome": np.array([0.0, 1.0, 1.0])},
         ),
         Spec(
+            "metrics.phm08_score",
+            _f(metrics.phm08_score),
+            lambda: {
+                "true_rul": np.array([50.0, 10.0]),
+                "predicted_rul": np.array([40.0, 12.0]),
+                "early": 13.0,
+                "late": 10.0,
+            },
+        ),
+        Spec(
             "metrics.fit_risk_map",
             _f(metrics.fit_risk_map),
             lambda: {"predicted": np.array([0.1, 0.9, 0.4]), "outcome": np.array([0.0, 1.0, 1.0])},
@@ -1385,12 +1395,16 @@ def test_a_refused_call_leaves_the_filter_as_it_was() -> None:
 
 def test_metrics_cite_their_definitions_and_are_typed_and_pure() -> None:
     """Pure typed functions citing the definition they implement: Saxena et al. 2010 for the
-    RUL metrics, Brier 1950 and Zadrozny & Elkan 2002 for the failure probabilities."""
+    RUL metrics (2008 for the PHM08 score), Brier 1950 and Zadrozny & Elkan 2002 for the
+    failure probabilities."""
     for name in dir(metrics):
         fn = getattr(metrics, name)
         if name.startswith("_") or not inspect.isfunction(fn) or fn.__module__ != metrics.__name__:
             continue
-        cited = re.search(r"Saxena 2010|Brier\s+1950|Zadrozny & Elkan 2002", fn.__doc__ or "")
+        cited = re.search(
+            r"Saxena 2010|Saxena,\s+Goebel, Simon & Eklund 2008|Brier\s+1950|Zadrozny & Elkan 2002",
+            fn.__doc__ or "",
+        )
         assert cited, f"metrics.{name} cites no definition"
         sig = inspect.signature(fn)
         assert sig.return_annotation is not inspect.Signature.empty, name
