@@ -18,7 +18,7 @@ import gymnasium as gym
 import numpy as np
 import pytest
 
-from scas_env import ENV_ID_EPOCHS
+from scas_env import ENV_ID, ENV_ID_EPOCHS
 from scas_env.decision_epochs import DEFAULT_KS, DecisionEpochs
 from scas_env.decision_epochs_vector import DecisionEpochsVectorEnv
 from scas_env.env import ScasMaintenanceEnv
@@ -275,6 +275,23 @@ def test_train_epochs_on_the_native_vector_env(tmp_path) -> None:
     assert sorted(p.name for p in out.glob("ckpt_*_steps.zip"))
     rows = (out / "monitor" / "0.monitor.csv").read_text().splitlines()
     assert len(rows) > 2  # header lines and at least one finished episode
+    # a checkpoint loads as the run made it: its own statistics, ks and episode length
+    from policies.agents.agent_files import ObsNormalization
+    from policies.agents.sb3_agents import load_sb3_policy
+
+    ckpt = max(out.glob("ckpt_*_steps.zip"), key=lambda p: int(p.stem.split("_")[1]))
+    steps = ckpt.stem.split("_")[1]
+    names = gym.make(ENV_ID).unwrapped.obs_names
+    agent = load_sb3_policy(ckpt, names)
+    assert run["normalize"] is True and agent.ks == tuple(run["ks"]) and agent.episode_slots == 100
+    own = ObsNormalization.load(out / f"ckpt_normalization_{steps}_steps.json")
+    np.testing.assert_array_equal(agent.normalizer.mean, own.mean)
+    (out / f"ckpt_normalization_{steps}_steps.json").unlink()
+    (out / f"ckpt_vecnormalize_{steps}_steps.pkl").unlink()
+    with pytest.raises(
+        ValueError, match="trained with VecNormalize but its statistics are missing"
+    ):
+        load_sb3_policy(ckpt, names)
     with pytest.raises(ValueError, match="native_envs"):
         train_epochs(hp, tmp_path / "bad", native_envs=0)
     assert not (tmp_path / "bad").exists()

@@ -34,6 +34,7 @@ from __future__ import annotations
 
 import importlib
 import pickle
+import re
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
@@ -325,13 +326,25 @@ _TRUST = (
 )
 
 
+#: a checkpoint of SB3's ``CheckpointCallback`` (``scas-train``'s ``ckpt_<n>_steps.zip``)
+_CHECKPOINT = re.compile(r"^(?P<prefix>.+)_(?P<n>\d+)_steps$")
+
+
 def find_statistics(path: Path) -> Path | None:
-    """The observation statistics of the zip ``path``: the first of :data:`STATISTICS_NAMES`
-    beside it (``<stem>_normalization.json`` is this project's; ``vecnormalize.pkl`` in
-    ``<stem>/`` is RL-Zoo's layout, ``<log>/<env>.zip`` with ``<log>/<env>/``)."""
+    """The observation statistics of the zip ``path``: for a checkpoint
+    ``<prefix>_<n>_steps.zip`` its ``<prefix>_normalization_<n>_steps.json`` (``scas-train``)
+    or SB3's ``<prefix>_vecnormalize_<n>_steps.pkl``, else the first of
+    :data:`STATISTICS_NAMES` beside it (``<stem>_normalization.json`` is this project's;
+    ``vecnormalize.pkl`` in ``<stem>/`` is RL-Zoo's layout, ``<log>/<env>.zip`` with
+    ``<log>/<env>/``)."""
     stem = path.name.removesuffix(".zip")
-    for name in STATISTICS_NAMES:
-        cand = path.parent / name.format(stem=stem)
+    names = [name.format(stem=stem) for name in STATISTICS_NAMES]
+    ckpt = _CHECKPOINT.match(stem)
+    if ckpt:
+        p, n = ckpt["prefix"], ckpt["n"]
+        names[:0] = [f"{p}_normalization_{n}_steps.json", f"{p}_vecnormalize_{n}_steps.pkl"]
+    for name in names:
+        cand = path.parent / name
         if cand.is_file():
             return cand
     return None
@@ -407,11 +420,37 @@ def _load_normalizer(path: Path, obs_dim: int, trust_pickle: bool) -> ObsNormali
     return normalizer
 
 
+def _run_metadata(path: Path) -> dict[str, Any]:
+    """For a checkpoint ``<prefix>_<n>_steps.zip`` of a ``scas-train`` run, what the run's
+    ``run.json`` beside it says of the agent (decision epochs ``ks``, ``episode_slots``,
+    ``delegate``, ``algo``, ``normalize``); ``{}`` otherwise."""
+    run_path = path.parent / "run.json"
+    if not (_CHECKPOINT.match(path.name.removesuffix(".zip")) and run_path.is_file()):
+        return {}
+    run = read_json_file(run_path, "training run file")
+    if not isinstance(run, dict) or not isinstance(run.get("ks"), list):
+        return {}
+    from scas_env.core.scenario import Scenario
+
+    scenario = run.get("scenario") or {}
+    meta = {
+        "formulation": "decision_epochs",
+        "ks": run["ks"],
+        "episode_slots": scenario.get("episode_slots", Scenario().episode_slots),
+        "normalize": run.get("normalize", True),  # scas-train's default
+    }
+    for key in ("algo", "delegate"):
+        if run.get(key) is not None:
+            meta[key] = run[key]
+    return meta
+
+
 def _metadata(path: Path) -> dict[str, Any]:
-    """The agent's metadata ``<stem>.json`` beside the zip (``{}`` if there is none)."""
+    """The agent's metadata ``<stem>.json`` beside the zip, else a ``scas-train``
+    checkpoint's run (:func:`_run_metadata`); ``{}`` if there is neither."""
     meta_path = path.with_name(f"{path.name.removesuffix('.zip')}.json")
     if not meta_path.is_file():
-        return {}
+        return _run_metadata(path)
     check_manifest(meta_path)
     meta = read_json_file(meta_path, "agent metadata file")
     if not isinstance(meta, dict):

@@ -493,6 +493,7 @@ def train_epochs(
         "vec_env": "NativeVecEnv(DecisionEpochsVectorEnv)" if native_envs else "DummyVecEnv",
         "n_envs": n_envs,
         "init": None if init is None else str(init),
+        "normalize": bool(normalize),
         "freeze_normalization": freeze_normalization,
         "delegate": None if delegate is None else delegate.to_json(),
     }
