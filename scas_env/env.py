@@ -203,7 +203,7 @@ class ScasMaintenanceEnv(gym.Env):
 
     ``render_mode="ansi"``: one line of text. ``"rgb_array"``: the health dashboard
     (:mod:`scas_env.dashboard`) as a (400, 640, 3) uint8 frame; ``"human"``: the same in a
-    matplotlib window. ``metadata["render_fps"]`` is 10.
+    matplotlib window, drawn by ``reset`` and every ``step``. ``metadata["render_fps"]`` is 10.
 
     ## Version History
 
@@ -306,6 +306,8 @@ class ScasMaintenanceEnv(gym.Env):
         out = self._outputs()
         if self._renderer is not None:
             self._renderer.observe(self)
+            if self.render_mode == "human":  # Gymnasium: human mode draws in reset and step
+                self._renderer.render(self)
         return out
 
     def step(self, action: Any) -> tuple[Any, float, bool, bool, dict[str, Any]]:
@@ -330,6 +332,8 @@ class ScasMaintenanceEnv(gym.Env):
         obs, info = self._outputs()
         if self._renderer is not None:
             self._renderer.observe(self)
+            if self.render_mode == "human":
+                self._renderer.render(self)
         return obs, float(a["reward"][0]), False, truncated, info
 
     def _outputs(self) -> tuple[Any, StepInfo]:

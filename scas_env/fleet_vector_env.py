@@ -22,7 +22,7 @@ from gymnasium.vector.utils import batch_space
 from scas_env.core.fleet.batch import FleetBatch
 from scas_env.core.fleet.view import FleetView
 from scas_env.fleet_env import check_fleet_action, fleet_action_space, make_fleet_setup
-from scas_env.vector_env import check_num_envs
+from scas_env.vector_env import check_no_render, check_num_envs
 
 #: entries of the single fleet env's info that are per aircraft or per actuator (left out
 #: of the vector env's info, which holds one value per fleet)
@@ -35,7 +35,8 @@ def make_fleet_vector_env(num_envs: int, **kwargs: Any) -> ScasFleetVectorEnv:
 
 
 class ScasFleetVectorEnv(VectorEnv):
-    """B fleets stepped together (module docstring); keywords as the single fleet env."""
+    """B fleets stepped together (module docstring); keywords as the single fleet env
+    (``render_mode`` None only)."""
 
     metadata = {"autoreset_mode": AutoresetMode.NEXT_STEP}  # noqa: RUF012
 
@@ -50,8 +51,10 @@ class ScasFleetVectorEnv(VectorEnv):
         calibration: Any = None,
         surrogate: Any = None,
         obs_mode: str = "features+rul",
+        render_mode: str | None = None,
         **fleet_fields: Any,
     ) -> None:
+        check_no_render(render_mode)
         n = check_num_envs(num_envs)
         self.config, self.setup = make_fleet_setup(
             fleet, scenario, cost_model, params, calibration, surrogate, fleet_fields, obs_mode

@@ -38,6 +38,16 @@ def make_vector_env(num_envs: int, **kwargs: Any) -> ScasMaintenanceVectorEnv:
     return ScasMaintenanceVectorEnv(num_envs, **kwargs)
 
 
+def check_no_render(render_mode: Any) -> None:
+    """A native vector env draws nothing: ``render_mode`` None (as ``gym.make_vec`` may pass
+    it), anything else refused."""
+    if render_mode is not None:
+        raise ValueError(
+            f"render_mode = {render_mode!r}: a native vector env does not render (None only); "
+            "render a single env, or use gym.make_vec(..., vectorization_mode='sync')"
+        )
+
+
 def check_num_envs(num_envs: Any) -> int:
     """``num_envs`` as an int >= 1 (ValueError otherwise)."""
     if isinstance(num_envs, bool) or not isinstance(num_envs, int | np.integer) or num_envs < 1:
@@ -47,7 +57,7 @@ def check_num_envs(num_envs: Any) -> int:
 
 class ScasMaintenanceVectorEnv(VectorEnv):
     """N actuators as the rows of one batch (module docstring); keywords as the single env
-    (:class:`scas_env.env.ScasMaintenanceEnv`, ``render_mode`` excepted)."""
+    (:class:`scas_env.env.ScasMaintenanceEnv`; ``render_mode`` None only)."""
 
     metadata = {"autoreset_mode": AutoresetMode.NEXT_STEP}  # noqa: RUF012
 
@@ -62,8 +72,10 @@ class ScasMaintenanceVectorEnv(VectorEnv):
         surrogate: Any = None,
         mismatch: Any = None,
         world_surrogate: Any = None,
+        render_mode: str | None = None,
         **scenario_fields: Any,
     ) -> None:
+        check_no_render(render_mode)
         n = check_num_envs(num_envs)
         self.setup = make_setup(scenario, cost_model, params, calibration, surrogate,
                                 scenario_fields, mismatch, world_surrogate)  # fmt: skip
@@ -193,4 +205,10 @@ def _all_true(n: int) -> np.ndarray:
     return mask
 
 
-__all__ = ["ScasMaintenanceVectorEnv", "check_num_envs", "make_vector_env", "with_info_masks"]
+__all__ = [
+    "ScasMaintenanceVectorEnv",
+    "check_no_render",
+    "check_num_envs",
+    "make_vector_env",
+    "with_info_masks",
+]

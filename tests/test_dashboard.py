@@ -200,3 +200,19 @@ def test_env_renders_the_dashboard_frame_by_frame() -> None:
     env.reset(seed=3)
     env.step(0)
     assert not np.array_equal(env.render(), frames[0])
+
+
+def test_human_mode_draws_in_reset_and_every_step(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Gymnasium's contract: ``render_mode="human"`` renders inside ``reset`` and ``step``
+    (without a call to ``render``); the other modes draw only when asked."""
+    drawn: list[int] = []
+    monkeypatch.setattr(DashboardRenderer, "render", lambda self, env: drawn.append(env.slot))
+    env = gym.make(scas_env.ENV_ID, render_mode="human")
+    env.reset(seed=0)
+    for _ in range(3):
+        env.step(0)
+    assert drawn == [0, 1, 2, 3]
+    env = gym.make(scas_env.ENV_ID, render_mode="rgb_array")
+    env.reset(seed=0)
+    env.step(0)
+    assert drawn == [0, 1, 2, 3]

@@ -273,3 +273,22 @@ def test_bad_num_envs_actions_and_seeds_raise() -> None:
         venv.step_active(np.zeros(2, dtype=np.int64), np.ones(2, dtype=np.int64))
     with pytest.raises(ValueError, match=r"unknown|not a field|Scenario"):
         ScasMaintenanceVectorEnv(num_envs=2, not_a_field=1)
+
+
+NATIVE_IDS = [
+    "scas_env/ScasMaintenance-v2",
+    "scas_env/ScasMaintenanceEpochs-v2",
+    "scas_env/ScasFleet-v0",
+]
+
+
+@pytest.mark.parametrize("env_id", NATIVE_IDS)
+def test_make_vec_takes_render_mode_none_and_refuses_a_mode(env_id: str) -> None:
+    """``gym.make_vec(..., render_mode=None)`` (as a user or a library passes it) builds the
+    native vector env; a mode is refused naming it, not taken for a scenario field."""
+    kw = {"num_envs": 2, "vectorization_mode": "vector_entry_point"}
+    envs = gym.make_vec(env_id, render_mode=None, **kw)
+    assert envs.render_mode is None and envs.num_envs == 2
+    envs.close()
+    with pytest.raises(ValueError, match=r"render_mode = 'human': a native vector env does not"):
+        gym.make_vec(env_id, render_mode="human", **kw)
