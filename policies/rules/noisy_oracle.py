@@ -12,7 +12,9 @@ value (a control of the study).
 The policy keeps one generator and one ``z`` per row (episode); it recognises a new part by
 its age falling (a replacement or failure resets it to 0). ``reset(seed=...)`` re-seeds:
 a sequence of seeds gives one generator per row, each drawing what a single episode with
-that seed draws, so batched and single episodes agree (tested).
+that seed draws, so batched and single episodes agree (tested). A batch of ``n`` rows never
+seeded by row (SB3's ``evaluate_policy`` over ``n`` envs) draws row ``r`` from child ``r``
+of ``SeedSequence(seed).spawn(n)``.
 
 >>> names = ("crack_fraction", "wear_fraction", "spring_rul_true", "seal_rul_true",
 ...          "spring_age", "seal_age", "downtime")
@@ -61,7 +63,8 @@ class NoisyOraclePolicy(NestedRule):
 
     def __init__(self, obs_names: Sequence[str], **kwargs: Any) -> None:
         super().__init__(obs_names, **kwargs)
-        self.rngs: list[np.random.Generator] = [np.random.default_rng(int(self.values["seed"]))]
+        self.base_seed = int(self.values["seed"])
+        self.rngs: list[np.random.Generator] = [np.random.default_rng(self.base_seed)]
         self.z: np.ndarray | None = None
         self.last_age: np.ndarray | None = None
 
@@ -77,6 +80,8 @@ class NoisyOraclePolicy(NestedRule):
         if seed is not None:
             seeds = list(seed) if isinstance(seed, Sequence) else [seed]
             self.rngs = [np.random.default_rng(int(s)) for s in seeds]
+            if len(seeds) == 1:
+                self.base_seed = int(seeds[0])
         self.z, self.last_age = None, None
 
     def _draw(self, rows: np.ndarray, part: int) -> None:
@@ -87,7 +92,11 @@ class NoisyOraclePolicy(NestedRule):
         n = obs.shape[0]
         ages = np.stack([self.column(obs, "spring_age"), self.column(obs, "seal_age")], axis=1)
         if self.z is None:
-            if len(self.rngs) not in (1, n) or (len(self.rngs) == 1 and n > 1):
+            if len(self.rngs) == 1 and n > 1:  # a batch never seeded by row (SB3's
+                # evaluate_policy over n envs): row r draws from child r of the seed
+                children = np.random.SeedSequence(self.base_seed).spawn(n)
+                self.rngs = [np.random.default_rng(c) for c in children]
+            if len(self.rngs) != n:
                 raise ValueError(
                     f"{n} observations for {len(self.rngs)} seeded rows: call "
                     "reset(seed=[one seed per row]) first"
