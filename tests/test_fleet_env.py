@@ -193,16 +193,24 @@ def test_gymnasium_and_sb3_checkers_are_clean() -> None:
         check_env(gym.make("scas_env/ScasFleet-v0", fleet=SMALL, obs_mode="dict").unwrapped)
 
 
-def test_pettingzoo_parallel_api_test_passes() -> None:
+def test_pettingzoo_parallel_and_aec_api_tests_pass() -> None:
     pytest.importorskip("pettingzoo")
     from pettingzoo.test import parallel_api_test
 
-    from scas_env.multiagent import fleet_v0
+    from scas_env.multiagent import fleet_v1
 
     with warnings.catch_warnings():
         warnings.simplefilter("error")
-        parallel_api_test(fleet_v0.parallel_env(fleet=SMALL.replace(episode_days=6)),
+        parallel_api_test(fleet_v1.parallel_env(fleet=SMALL.replace(episode_days=6)),
                           num_cycles=10)  # fmt: skip
+    # the AEC form, which samples each agent's action with its mask (MultiDiscrete: a tuple)
+    from pettingzoo.test import api_test
+    from pettingzoo.utils.conversions import parallel_to_aec
+
+    with warnings.catch_warnings():  # it suggests Box or Discrete spaces; MultiDiscrete is ours
+        warnings.filterwarnings("ignore", message="Action space for each agent probably")
+        api_test(parallel_to_aec(fleet_v1.parallel_env(fleet=SMALL.replace(episode_days=6))),
+                 num_cycles=20)  # fmt: skip
 
 
 def test_the_agents_views_concatenate_back_to_the_fleet_and_share_the_reward() -> None:
@@ -210,9 +218,9 @@ def test_the_agents_views_concatenate_back_to_the_fleet_and_share_the_reward() -
     groups of the fleet's observation; the reward is the team's, each aircraft's info holds
     its share of the actuators' reward (the shares plus the fleet's own terms are it)."""
     pytest.importorskip("pettingzoo")
-    from scas_env.multiagent import fleet_v0
+    from scas_env.multiagent import fleet_v1
 
-    env = fleet_v0.parallel_env(fleet=SMALL)
+    env = fleet_v1.parallel_env(fleet=SMALL)
     fleet = env.fleet_env
     sh = fleet.fleet.shape
     per_act = len(fleet.view.actuator_names)
@@ -228,7 +236,10 @@ def test_the_agents_views_concatenate_back_to_the_fleet_and_share_the_reward() -
             obs = observations[agent]
             assert env.observation_space(agent).contains(obs)
             assert np.array_equal(obs, np.concatenate([actuators[i], aircraft[i], shared]))
-            assert np.array_equal(infos[agent]["action_mask"], fleet.action_masks().reshape(
+            mask = infos[agent]["action_mask"]  # PettingZoo's form: an int8 array per entry
+            assert [m.dtype for m in mask] == [np.int8] * (1 + sh.actuators)
+            assert [m.size for m in mask] == env.action_space(agent).nvec.tolist()
+            assert np.array_equal(np.concatenate(mask), fleet.action_masks().reshape(
                 sh.aircraft, -1)[i])  # fmt: skip
         masks = fleet.action_masks()
         joint = masked_random(masks, fleet.action_space.nvec, rng, per_aircraft=1 + sh.actuators,
@@ -411,9 +422,9 @@ def test_bad_vector_and_agent_actions_are_refused() -> None:
         venv.step(bad)
     assert (venv.fleet.day == 0).all()
     pytest.importorskip("pettingzoo")
-    from scas_env.multiagent import fleet_v0
+    from scas_env.multiagent import fleet_v1
 
-    env = fleet_v0.parallel_env(fleet=SMALL)
+    env = fleet_v1.parallel_env(fleet=SMALL)
     env.reset(seed=0)
     good = {a: np.zeros(3, dtype=np.int64) for a in env.agents}
     for agent, value, match in (

@@ -49,9 +49,9 @@ def test_masks_from_the_observation_equal_the_envs() -> None:
 
 
 def test_agent_views_equal_pettingzoo() -> None:
-    from scas_env.multiagent import fleet_v0
+    from scas_env.multiagent import fleet_v1
 
-    pz = fleet_v0.parallel_env(**SMALL)
+    pz = fleet_v1.parallel_env(**SMALL)
     observations, infos = pz.reset(seed=3)
     layout = FleetObsLayout(pz.fleet_env.obs_names)
     rng = np.random.default_rng(1)
@@ -61,11 +61,11 @@ def test_agent_views_equal_pettingzoo() -> None:
         for i, agent in enumerate(pz.possible_agents):
             np.testing.assert_array_equal(views[i], observations[agent])
             np.testing.assert_array_equal(
-                layout.masks(flat).reshape(layout.n, -1)[i], infos[agent]["action_mask"]
+                layout.masks(flat).reshape(layout.n, -1)[i],
+                np.concatenate(infos[agent]["action_mask"]).astype(bool),
             )
-        acts = {
-            a: _random_valid(infos[a]["action_mask"][None], layout.nvec, rng)[0] for a in pz.agents
-        }
+        flat_masks = {a: np.concatenate(infos[a]["action_mask"]).astype(bool) for a in pz.agents}
+        acts = {a: _random_valid(m[None], layout.nvec, rng)[0] for a, m in flat_masks.items()}
         observations, _, _, _, infos = pz.step(acts)
     wide = layout.agent_obs(flat, agent_id=True, fleet_status=True)[0]
     assert wide.shape == (layout.n, layout.agent_size(agent_id=True, fleet_status=True))

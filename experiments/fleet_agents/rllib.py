@@ -1,10 +1,10 @@
 """RLlib's multi-agent PPO on the fleet: one policy shared by every aircraft, with action masks.
 
-The PettingZoo form of ``ScasFleet-v0`` (:mod:`scas_env.multiagent.fleet_v0`: one agent per
+The PettingZoo form of ``ScasFleet-v0`` (:mod:`scas_env.multiagent.fleet_v1`: one agent per
 aircraft, the team's reward) under RLlib's new API stack: every aircraft maps to the one
 policy ``"shared"`` (parameter sharing), whose ``RLModule`` is RLlib's action-masking PPO
 module (``ray.rllib.examples.rl_modules.classes.action_masking_rlm``): the aircraft's mask
-(``infos[agent]["action_mask"]``, the concatenated choices of its ``MultiDiscrete`` entries)
+(``infos[agent]["action_mask"]``, one array per ``MultiDiscrete`` entry, concatenated)
 travels in a ``Dict`` observation and sets the logits of invalid choices to -inf (the
 per-entry logits of a ``MultiDiscrete`` are concatenated in the same order as the mask).
 Rewards are trained on ``1e-4 * (usd - 2e4)`` per fleet-day, as the SB3 fleet agents; the
@@ -29,7 +29,7 @@ from typing import Any
 import numpy as np
 from gymnasium import spaces
 
-from scas_env.multiagent import fleet_v0
+from scas_env.multiagent import fleet_v1
 
 REWARD_SCALE, REWARD_CENTER = 1e-4, 2e4
 
@@ -42,7 +42,7 @@ def masked_fleet(**kwargs: Any) -> Any:
         metadata = {"name": "scas_fleet_masked_v0", "render_modes": []}  # noqa: RUF012
 
         def __init__(self) -> None:
-            self.env = fleet_v0.parallel_env(**kwargs)
+            self.env = fleet_v1.parallel_env(**kwargs)
             self.possible_agents = list(self.env.possible_agents)
             self.agents: list[str] = []
             inner = self.env.observation_space(self.possible_agents[0])
@@ -64,7 +64,7 @@ def masked_fleet(**kwargs: Any) -> Any:
             return {
                 a: {
                     "observations": obs[a],
-                    "action_mask": infos[a]["action_mask"].astype(np.float32),
+                    "action_mask": np.concatenate(infos[a]["action_mask"]).astype(np.float32),
                 }
                 for a in obs
             }

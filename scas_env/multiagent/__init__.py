@@ -1,2 +1,2 @@
 """Multi-agent forms of the tasks, in PettingZoo's habit: a versioned module per env with
-``parallel_env(**kwargs)`` (``scas_env.multiagent.fleet_v0``)."""
+``parallel_env(**kwargs)`` (``scas_env.multiagent.fleet_v1``)."""

@@ -2,13 +2,13 @@
 
 :class:`FleetAgentsVecEnv` flattens B fleets of N aircraft (the native vector env of
 ``ScasFleet-v0``) into ``B N`` rows, row ``b N + i`` the aircraft ``aircraft_i`` of fleet
-``b``: the PettingZoo env (:mod:`scas_env.multiagent.fleet_v0`) batched, so that one network
+``b``: the PettingZoo env (:mod:`scas_env.multiagent.fleet_v1`) batched, so that one network
 decides for every aircraft (parameter sharing; Gupta, Egorov and Kochenderfer 2017; Terry et
 al. 2020). Per row:
 
 - observation: the aircraft's view (:meth:`policies.agents.fleet.masks.FleetObsLayout.agent_obs`):
   the PettingZoo agent's observation (its actuators, its status, the fleet's spares, crew,
-  demand and calendar; equal to ``fleet_v0``'s, tested), plus, by default, its index one-hot
+  demand and calendar; equal to ``fleet_v1``'s, tested), plus, by default, its index one-hot
   (``agent_id``) and every aircraft's status row (``fleet_status``): a shared network needs
   them to tell the aircraft apart (missions go to asking aircraft in aircraft order) and to
   know which others are free;
@@ -51,7 +51,7 @@ class FleetAgentsVecEnv(_FleetBase):
     ----------
     venv : the native fleet vector env (:func:`policies.agents.fleet.adapters.make_fleet_venv`).
     agent_id, fleet_status : what each row sees besides the PettingZoo view (module doc);
-        both ``False``: exactly ``fleet_v0``'s observation.
+        both ``False``: exactly ``fleet_v1``'s observation.
     info_keys, truncation_is_terminal : as :class:`~policies.agents.fleet.adapters.FleetVecEnv`.
     """
 

@@ -1,20 +1,28 @@
 """``ScasFleet-v0`` as a PettingZoo ``ParallelEnv``: one agent per aircraft.
 
->>> from scas_env.multiagent import fleet_v0
->>> env = fleet_v0.parallel_env(episode_days=5)
+>>> from scas_env.multiagent import fleet_v1
+>>> env = fleet_v1.parallel_env(episode_days=5)
 >>> observations, infos = env.reset(seed=0)
 >>> env.agents[:2], env.action_space("aircraft_0")
 (['aircraft_0', 'aircraft_1'], MultiDiscrete([7 4 4 4]))
+>>> action = env.action_space("aircraft_0").sample(infos["aircraft_0"]["action_mask"])
 
 Each aircraft ``aircraft_i`` observes its own actuators (the single env's 20 entries each)
 and status, and the fleet's shared groups (spares, crew, demand, calendar)
 (:meth:`~scas_env.core.fleet.view.FleetView.observe_agents`); it chooses its mission and each
 of its actuators' maintenance, as one row of the fleet env's action. The reward is the
 team's (the fleet's day, the same for every agent); ``infos[agent]`` holds the aircraft's
-own share of the actuators' reward (``aircraft_reward``), its action mask and the fleet's
-KPIs. All agents are truncated together after ``episode_days`` days, then leave. ``reset``
-takes no options and does not read any given (PettingZoo passes options through as-is).
+own share of the actuators' reward (``aircraft_reward``), its action mask in PettingZoo's
+form for a ``MultiDiscrete`` space (``action_mask``: a tuple of int8 arrays, one per entry,
+1 where a choice is valid; what ``action_space(agent).sample(mask)`` takes) and the fleet's
+KPIs (``fleet``). All agents are truncated together after ``episode_days`` days, then
+leave. ``reset`` takes no options and does not read any given (PettingZoo passes options
+through as-is).
 Requires ``pettingzoo`` (``pip install 'scas-maintenance-gym[marl]'``).
+
+Version history: ``fleet_v1``: the masks in PettingZoo's form (PettingZoo's AEC
+``api_test`` refused ``fleet_v0``'s one flat bool array per agent; ``np.concatenate(mask)``
+gives it back); ``fleet_v0``: retired.
 """
 
 from __future__ import annotations
@@ -31,7 +39,7 @@ try:
     from pettingzoo import ParallelEnv
 except ImportError as exc:  # pragma: no cover - the extra is missing
     raise ImportError(
-        "scas_env.multiagent.fleet_v0 needs pettingzoo: pip install 'scas-maintenance-gym[marl]'"
+        "scas_env.multiagent.fleet_v1 needs pettingzoo: pip install 'scas-maintenance-gym[marl]'"
     ) from exc
 
 
@@ -43,7 +51,11 @@ def parallel_env(**kwargs: Any) -> FleetParallelEnv:
 class FleetParallelEnv(ParallelEnv):
     """One agent per aircraft of a :class:`~scas_env.fleet_env.ScasFleetEnv` (module doc)."""
 
-    metadata = {"name": "scas_fleet_v0", "render_modes": ["ansi"], "is_parallelizable": True}  # noqa: RUF012
+    metadata = {  # noqa: RUF012
+        "name": "scas_fleet_v1",
+        "render_modes": ScasFleetEnv.metadata["render_modes"],
+        "is_parallelizable": True,
+    }
 
     def __init__(self, **kwargs: Any) -> None:
         if kwargs.get("obs_mode", "features+rul") == "dict":
@@ -55,6 +67,7 @@ class FleetParallelEnv(ParallelEnv):
         self.render_mode = kwargs.get("render_mode")
         per = self.fleet_env.action_space.nvec[: self.fleet_env.action_space.shape[0] // n]
         self._action_space = spaces.MultiDiscrete(per)
+        self._entry_ends = np.cumsum(per)[:-1]  # where a flat mask row splits into entries
         self._obs_space = self.fleet_env.view.agent_space
 
     @functools.cache  # noqa: B019 - one space per agent, PettingZoo's habit
@@ -73,7 +86,13 @@ class FleetParallelEnv(ParallelEnv):
         shared = {k: v for k, v in info.items() if k not in ("action_mask", "aircraft_reward")}
         observations = {a: obs[i] for i, a in enumerate(self.possible_agents)}
         infos = {
-            a: {"action_mask": masks[i], "aircraft_reward": float(shares[i]), "fleet": shared}
+            a: {
+                "action_mask": tuple(
+                    m.astype(np.int8) for m in np.split(masks[i], self._entry_ends)
+                ),
+                "aircraft_reward": float(shares[i]),
+                "fleet": shared,
+            }
             for i, a in enumerate(self.possible_agents)
         }
         return observations, infos
