@@ -83,16 +83,16 @@ def run(units: int, seed: int, *, test_fraction: float = 0.2, workers: int = 2,
 
 
 def format_table(summary: dict[str, Any]) -> str:
-    """One line per predictor and band: rows, RMSE, MAE, bias, share within 20 %, PHM08."""
+    """One line per predictor and band: rows, RMSE, MAE, bias, share within 20 %."""
     lines = [
         f"{'predictor':10s} {'band (true RUL)':16s} {'rows':>7s} {'RMSE':>8s} {'MAE':>8s} "
-        f"{'bias':>8s} {'in 20 %':>8s} {'PHM08':>10s}"
+        f"{'bias':>8s} {'in 20 %':>8s}"
     ]
     for name in PREDICTORS:
         for band, s in summary["scores"][name].items():
             lines.append(
                 f"{name:10s} {band:16s} {s['rows']:7d} {s['rmse']:8.1f} {s['mae']:8.1f} "
-                f"{s['bias']:8.1f} {s['within_alpha']:8.3f} {s['phm08_mean']:10.3g}"
+                f"{s['bias']:8.1f} {s['within_alpha']:8.3f}"
             )
     d = summary["monitor_minus_population_unit_mae"]
     lines.append(
@@ -156,12 +156,11 @@ def main(argv: Sequence[str] | None = None) -> int:
                           progress=not args.no_progress)  # fmt: skip
             with (tmp / "scores.csv").open("w", newline="") as f:
                 w = csv.writer(f)
-                w.writerow(["predictor", "band", "rows", "rmse", "mae", "bias", "within_alpha",
-                            "phm08_mean"])  # fmt: skip
+                w.writerow(["predictor", "band", "rows", "rmse", "mae", "bias", "within_alpha"])
                 for name in PREDICTORS:
                     for band, s in summary["scores"][name].items():
                         w.writerow([name, band, s["rows"], s["rmse"], s["mae"], s["bias"],
-                                    s["within_alpha"], s["phm08_mean"]])  # fmt: skip
+                                    s["within_alpha"]])  # fmt: skip
             public = {k: v for k, v in summary.items() if not k.startswith("_")}
             (tmp / "summary.json").write_text(json.dumps(public, indent=1) + "\n")
             _plot(summary, tmp / "rul.png")

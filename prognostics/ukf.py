@@ -6,8 +6,9 @@ The same state, process and measurement as :class:`~prognostics.particle_filter.
 - predict over ``u`` usage units: every sigma point moves by the process model's noise-free
   step (:func:`~prognostics.degradation_models.advance_scalar`: ``I^{-1}(I(x) + theta u)`` for
   ``scheme="exact"``, ``x + theta g(x) u`` for ``"euler"``; ``l`` unchanged), then the additive
-  process noise ``Q = diag(sigma_x^2 u, sigma_theta^2 u)`` of the same
-  :class:`~prognostics.degradation_models.TabulatedRateModel`;
+  process noise ``Q = diag(sigma_x^2 u + cv^2 u E[(theta g(x))^2], sigma_theta^2 u)`` of the
+  same :class:`~prognostics.degradation_models.TabulatedRateModel` (``cv``: its
+  ``damage_noise_cv``, noise on the usage; the expectation over the prior's sigma points);
 - update with a feature ``y = h(x) + sigma_v(x) v`` of a
   :class:`~prognostics.measurement.MeasurementModel`: sigma points through ``h``; the noise is
   state-dependent, so its variance in the innovation is its expectation under the prior,
@@ -403,9 +404,14 @@ class UnscentedFilter:
         self._check_ready()
         u = check.real("usage", usage, ge=0.0)
         ukf = self._ukf
-        ukf.Q = np.diag(
-            [self.process.process_noise_std**2 * u, self.process.log_theta_noise_std**2 * u]
-        )
+        q_x = self.process.process_noise_std**2 * u
+        cv = self.process.damage_noise_cv
+        if cv > 0.0:  # noise on the usage: x moves by theta g(x) cv sqrt(u) eps, its variance
+            # state-dependent, so its expectation under the prior (as R in update)
+            pts = self._points.sigma_points(ukf.x, ukf.P)
+            growth = np.exp(pts[:, 1]) * self.process.rate_at(pts[:, 0])
+            q_x += cv**2 * u * float(self._points.Wm @ growth**2)
+        ukf.Q = np.diag([q_x, self.process.log_theta_noise_std**2 * u])
         try:
             ukf.predict(dt=u)
         except ValueError as err:  # psd_sqrt_2x2 refused the state

@@ -110,7 +110,6 @@ def test_scores_are_recomputed_on_the_flown_rows_of_failed_units() -> None:
     # within 20 %: row 1 (1 vs 2: no), 3 (0.5 vs 1: no), 4 (0 vs 0: yes), 5 (100 vs 150: no),
     # 6 (130 vs 120: yes), 7 (80 vs 90: yes), row 0 (4 vs 3: no)
     assert a["within_alpha"] == pytest.approx(3 / 7, rel=1e-15, abs=0)
-    assert a["phm08_mean"] == pytest.approx(float(np.mean(phm08_score(r, p))), rel=1e-14, abs=0)
     assert set(scores) == {"all", "[0, 100)", "[100, inf)"}
     assert scores["[0, 100)"]["rows"] == 5 and scores["[100, inf)"]["rows"] == 2
     assert scores["[100, inf)"]["mae"] == pytest.approx(30.0, rel=1e-15, abs=0)  # 50, 10
@@ -121,6 +120,26 @@ def test_unit_errors_pair_two_predictions_by_unit() -> None:
     ids, mae = unit_mae(flights, monitor_rul(flights))
     np.testing.assert_array_equal(ids, [0, 1])
     np.testing.assert_allclose(mae, [(1 + 1 + 0.5 + 0) / 4, (50 + 10 + 10) / 3], rtol=1e-15)
+    with pytest.raises(ValueError, match="finite and >= 0"):
+        unit_mae(flights, np.full(10, np.nan))
+
+
+def test_the_dataset_and_its_pyarrow_tables_are_scored_as_their_columns(tmp_path) -> None:
+    """``score_rul``, ``unit_mae``, ``monitor_rul`` and ``population_rul`` take the loaded
+    dataset or its pyarrow tables as they take ``to_numpy()``'s columns."""
+    from scas_env.dataset.files import RunToFailureDataset, to_table
+    from scas_env.dataset.run_to_failure import simulate_units
+
+    flights, units = simulate_units(3, seed=4, max_slots=3000)
+    data = RunToFailureDataset(to_table("flights", flights), to_table("units", units), {})
+    for table in (data, data.flights):
+        np.testing.assert_array_equal(monitor_rul(table), monitor_rul(flights))
+        assert score_rul(table, monitor_rul(flights)) == score_rul(flights, monitor_rul(flights))
+    for table in (data, data.units):
+        np.testing.assert_array_equal(population_rul(table, [0.0, 50.0]),
+                                      population_rul(units, [0.0, 50.0]))  # fmt: skip
+    with pytest.raises(ValueError, match="flights = list: expected the dataset"):
+        score_rul([1, 2], [0.0, 0.0])
 
 
 @pytest.mark.parametrize(

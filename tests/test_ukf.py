@@ -50,6 +50,29 @@ def test_ukf_equals_kalman_filter_on_linear_gaussian_wear() -> None:
         assert ukf.mean[1] == math.log(theta) and ukf.cov[1, 1] == 0.0
 
 
+def test_growth_scatter_on_the_usage_is_the_kalman_filter_s_process_noise() -> None:
+    """``damage_noise_cv``: x moves by theta r (u + cv sqrt(u) eps) on linear wear, so with a
+    known multiplier the model is linear-Gaussian with process variance (theta r cv)^2 u: the
+    UKF is that Kalman filter exactly (it ignored the scatter before)."""
+    rate, theta, cv, sigma_v = 2.0e-9, 1.3, 0.3, 0.02
+    c0, c1 = 0.5, 3.0e5
+    model = linear_wear_model(rate, damage_noise_cv=cv)
+    mm = MeasurementModel("poly", [0.0], [sigma_v], coef=[c0, c1])
+    rng = np.random.default_rng(5)
+    usage = rng.integers(1, 40, size=30).astype(float)
+    ys = c0 + c1 * np.cumsum(usage) * rate * theta + sigma_v * rng.standard_normal(usage.size)
+    ukf = UnscentedFilter(model, mm)
+    ukf.reset(x_mean=1e-8, x_std=5e-8, log_theta_mean=math.log(theta), log_theta_std=0.0)
+    q = (theta * rate * cv) ** 2
+    expected = _kalman(1e-8, (5e-8) ** 2, zip(usage, ys, strict=True), rate * theta, q, c0, c1,
+                       sigma_v)  # fmt: skip
+    for (u, y), (x_kf, p_kf) in zip(zip(usage, ys, strict=True), expected, strict=True):
+        ukf.predict(u)
+        assert ukf.update(y)
+        np.testing.assert_allclose(ukf.mean[0], x_kf, rtol=1e-9, atol=0.0)
+        np.testing.assert_allclose(ukf.cov[0, 0], p_kf, rtol=1e-9, atol=0.0)
+
+
 def test_ukf_update_matches_exact_gaussian_moments_of_a_quadratic_feature() -> None:
     """y = x^2 + v with sigma_v linear in x: the sigma points (kappa = 1) reproduce the
     Gaussian's moments up to the 4th, so the update is the exact linear-MMSE update."""

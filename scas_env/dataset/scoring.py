@@ -2,11 +2,20 @@
 
 The task (C-MAPSS style): after every flight of a test unit that failed (the flown rows with
 a finite ``rul_flights``), predict the unit's realised RUL in flights. :func:`score_rul`
-scores a prediction per row: RMSE, MAE, bias (mean predicted - true), the share within
-Saxena 2010's alpha bounds (``|predicted - true| <= alpha true``; :mod:`prognostics.metrics`)
-and the mean PHM08 score (:func:`prognostics.metrics.phm08_score`), over all rows and per
-band of true RUL; :func:`unit_mae` gives each unit's error, to compare two predictions
-paired by unit (a unit's rows are dependent, units are not).
+scores a prediction per row: RMSE, MAE, bias (mean predicted - true) and the share within
+Saxena 2010's alpha bounds (``|predicted - true| <= alpha true``; :mod:`prognostics.metrics`),
+over all rows and per band of true RUL; :func:`unit_mae` gives each unit's error, to compare
+two predictions paired by unit (a unit's rows are dependent, units are not). (The PHM08
+score, :func:`prognostics.metrics.phm08_score`, is left out: with C-MAPSS's constants in
+flights, errors of a few hundred flights over lives of ~1,000 put its mean beyond 1e30.)
+Tables: the column mappings of ``RunToFailureDataset.to_numpy``, the pyarrow tables, or the
+dataset itself (its ``flights`` or ``units`` table).
+
+The realised RUL ``rul_flights`` counts the flights completed before the failing one; the
+parts' true RULs (``*_rul_flights``) and the filters count the failing flight too (one
+more). Units that a failed pre-flight test grounds until ``max_slots`` are censored: they
+end close to failure, so :func:`population_rul` treats as still at risk units that were not
+(it reads high late in life) and their rows are not scored.
 
 Two references a model should beat:
 
@@ -34,29 +43,53 @@ from typing import Any
 import numpy as np
 from scipy import stats
 
-from prognostics.metrics import phm08_score
-
 #: edges (flights of true RUL) of the bands :func:`score_rul` reports besides all rows
 BAND_EDGES: tuple[float, ...] = (0.0, 100.0, 300.0, math.inf)
 
 
-def _column(table: Mapping[str, Any], name: str, owner: str) -> np.ndarray:
-    if name not in table:
-        raise ValueError(f"{owner} lacks the column {name!r} (has {sorted(table)})")
-    return np.asarray(table[name])
+def _columns(table: Any, owner: str) -> Mapping[str, Any]:
+    """A column mapping from a mapping, a pyarrow table or a ``RunToFailureDataset``."""
+    if hasattr(table, "to_numpy") and hasattr(table, "card"):  # the dataset: its own table
+        return table.to_numpy(owner)
+    if hasattr(table, "column_names") and hasattr(table, "column"):  # a pyarrow table
+        return {c: table.column(c).to_numpy(zero_copy_only=False) for c in table.column_names}
+    if not isinstance(table, Mapping):
+        raise ValueError(
+            f"{owner} = {type(table).__name__}: expected the dataset, its pyarrow table or a "
+            "mapping of column name to array"
+        )
+    return table
 
 
-def scored_rows(flights: Mapping[str, Any]) -> np.ndarray:
+def _column(table: Any, name: str, owner: str) -> np.ndarray:
+    columns = _columns(table, owner)
+    if name not in columns:
+        raise ValueError(f"{owner} lacks the column {name!r} (has {sorted(map(str, columns))})")
+    return np.asarray(columns[name])
+
+
+def _predictions(predicted: Any, true: np.ndarray, rows: np.ndarray) -> np.ndarray:
+    pred = np.asarray(predicted, dtype=np.float64)
+    if pred.shape != true.shape:
+        raise ValueError(f"predicted has shape {pred.shape}; expected one per row {true.shape}")
+    if not (np.all(np.isfinite(pred[rows])) and np.all(pred[rows] >= 0.0)):
+        raise ValueError("predicted must be finite and >= 0 on every scored row")
+    return pred
+
+
+def scored_rows(flights: Any) -> np.ndarray:
     """Indices of the rows scored: the flown rows of the units that failed (a slot on the
     ground after a failed test repeats the previous flight's RUL)."""
+    flights = _columns(flights, "flights")
     rul = _column(flights, "rul_flights", "flights")
     return np.flatnonzero(np.isfinite(rul) & _column(flights, "flown", "flights").astype(bool))
 
 
-def population_rul(units: Mapping[str, Any], flights_done: Any) -> np.ndarray:
+def population_rul(units: Any, flights_done: Any) -> np.ndarray:
     """Mean residual life (flights) after ``flights_done`` flights from the Kaplan-Meier
     estimate of ``units``' lives (the ``units`` table of training units: ``flights``,
     ``censored``); module docstring. 0 from the longest life on."""
+    units = _columns(units, "units")
     life = _column(units, "flights", "units").astype(np.float64)
     censored = _column(units, "censored", "units").astype(bool)
     if life.ndim != 1 or life.size == 0 or censored.shape != life.shape:
@@ -80,14 +113,15 @@ def population_rul(units: Mapping[str, Any], flights_done: Any) -> np.ndarray:
         return np.where((s_before > 0.0) & (f < edges[-1]), left / s_before, 0.0)
 
 
-def monitor_rul(flights: Mapping[str, Any]) -> np.ndarray:
+def monitor_rul(flights: Any) -> np.ndarray:
     """The health monitor's prediction per row: the smaller filter RUL mean of the parts."""
+    flights = _columns(flights, "flights")
     spring = _column(flights, "pf_spring_rul_mean", "flights").astype(np.float64)
     seal = _column(flights, "pf_seal_rul_mean", "flights").astype(np.float64)
     return np.minimum(spring, seal)
 
 
-def _metrics(r: np.ndarray, p: np.ndarray, alpha: float, early: float, late: float) -> dict:
+def _metrics(r: np.ndarray, p: np.ndarray, alpha: float) -> dict:
     d = p - r
     return {
         "rows": int(r.size),
@@ -95,56 +129,48 @@ def _metrics(r: np.ndarray, p: np.ndarray, alpha: float, early: float, late: flo
         "mae": float(np.mean(np.abs(d))),
         "bias": float(np.mean(d)),
         "within_alpha": float(np.mean(np.abs(d) <= alpha * r)),
-        "phm08_mean": float(np.mean(phm08_score(r, p, early=early, late=late))),
     }
 
 
 def score_rul(
-    flights: Mapping[str, Any],
+    flights: Any,
     predicted: Any,
     *,
     alpha: float = 0.2,
     edges: Sequence[float] = BAND_EDGES,
-    early: float = 13.0,
-    late: float = 10.0,
 ) -> dict[str, dict[str, float]]:
     """Scores of ``predicted`` (one RUL in flights per row of ``flights``, the dataset's
     column mapping) on the rows :func:`scored_rows` keeps (the others are ignored):
     ``"all"`` and one entry per band ``"[lo, hi)"`` of true RUL (``edges``), each with
-    ``rows``, ``rmse``, ``mae``, ``bias``, ``within_alpha`` and ``phm08_mean`` (``early``,
-    ``late``: the score's constants, in flights)."""
+    ``rows``, ``rmse``, ``mae``, ``bias`` and ``within_alpha``."""
+    flights = _columns(flights, "flights")
     true = _column(flights, "rul_flights", "flights").astype(np.float64)
-    pred = np.asarray(predicted, dtype=np.float64)
-    if pred.shape != true.shape:
-        raise ValueError(f"predicted has shape {pred.shape}; expected one per row {true.shape}")
     rows = scored_rows(flights)
     if rows.size == 0:
         raise ValueError("no flown row has a realised RUL (every unit censored)")
-    if not (np.all(np.isfinite(pred[rows])) and np.all(pred[rows] >= 0.0)):
-        raise ValueError("predicted must be finite and >= 0 on every scored row")
+    pred = _predictions(predicted, true, rows)
     if not (isinstance(alpha, int | float) and 0.0 < alpha < 1.0):
         raise ValueError(f"alpha = {alpha!r} must be in (0, 1)")
     e = np.asarray(edges, dtype=np.float64)
     if e.ndim != 1 or e.size < 2 or not np.all(np.diff(e) > 0.0):
         raise ValueError(f"edges = {edges!r} must be at least two rising values")
     r, p = true[rows], pred[rows]
-    out = {"all": _metrics(r, p, alpha, early, late)}
+    out = {"all": _metrics(r, p, alpha)}
     for lo, hi in itertools.pairwise(e.tolist()):
         band = (r >= lo) & (r < hi)
         if band.any():
-            out[f"[{lo:g}, {hi:g})"] = _metrics(r[band], p[band], alpha, early, late)
+            out[f"[{lo:g}, {hi:g})"] = _metrics(r[band], p[band], alpha)
     return out
 
 
-def unit_mae(flights: Mapping[str, Any], predicted: Any) -> tuple[np.ndarray, np.ndarray]:
+def unit_mae(flights: Any, predicted: Any) -> tuple[np.ndarray, np.ndarray]:
     """Each failed unit's mean absolute error over its rows: ``(unit ids, MAE)``, for a
     comparison of two predictions paired by unit (a unit's rows are dependent, units are
     not)."""
+    flights = _columns(flights, "flights")
     true = _column(flights, "rul_flights", "flights").astype(np.float64)
-    pred = np.asarray(predicted, dtype=np.float64)
-    if pred.shape != true.shape:
-        raise ValueError(f"predicted has shape {pred.shape}; expected one per row {true.shape}")
     rows = scored_rows(flights)
+    pred = _predictions(predicted, true, rows)
     ids, inverse = np.unique(_column(flights, "unit", "flights")[rows], return_inverse=True)
     err = np.abs(pred[rows] - true[rows])
     return ids, np.bincount(inverse, weights=err) / np.bincount(inverse)
