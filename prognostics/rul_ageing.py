@@ -11,6 +11,10 @@ the last measurement. So the summary after ``k`` steps follows from one sort of 
   ``max(Q_R(q) - k, 0)``, since ``max(r - k, 0)`` is non-decreasing in ``r``;
 * risk within a horizon h >= 0: ``P(max(R - k, 0) <= h) = P(R <= h + k)`` (prefix sums).
 
+Not conditioned on survival: particles whose RUL has run out count as RUL 0 (mean lower,
+risk higher) until a filter update conditions the cloud on the unit being alive (the
+environment's monitor does at its next update, at most ``flight_update_flights`` later).
+
 Building costs one sort of N values; each query a binary search. At ``k = 0`` the numbers
 equal :meth:`prognostics.rul.RulPredictor.summary` (up to summation order, ~1e-15).
 
