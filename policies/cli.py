@@ -108,20 +108,29 @@ VALUE_HELP = {
 
 def _size_args(parser: Any, sizes: dict[str, tuple[int, int]], helps: dict[str, str]) -> None:
     for name, (full, quick) in sizes.items():
+        default = (
+            "the scenario's episode_slots, 2000"
+            if name == "slots"
+            else f"{full}; with --quick: {quick}"
+        )
         parser.add_argument(
             f"--{name.replace('_', '-')}",
             type=positive_int,
             default=None,
-            help=f"{helps[name]} (default: {full}; with --quick: {quick})",
+            help=f"{helps[name]} (default: {default})",
         )
 
 
-def _sizes(args: Any, sizes: dict[str, tuple[int, int]]) -> dict[str, int]:
-    """Each size: the option's value if given, else its --quick or full default."""
-    return {
+def _sizes(args: Any, sizes: dict[str, tuple[int, int]], scenario: Scenario) -> dict[str, int]:
+    """Each size: the option's value if given, else its --quick or full default; the slots
+    of an episode are the scenario's (a file's ``episode_slots``; never shrunk by --quick)."""
+    out = {
         name: getattr(args, name) if getattr(args, name) is not None else sizes[name][args.quick]
         for name in sizes
     }
+    if "slots" in sizes and args.slots is None:
+        out["slots"] = int(scenario.episode_slots)
+    return out
 
 
 def benchmark_parser() -> Any:
@@ -587,7 +596,7 @@ def tune_main(argv: Sequence[str] | None = None) -> int:
     if fleet_only:
         parser.error(f"--families {fleet_only}: fleet families; add --fleet")
     announce_uncached_kernels()
-    size = _sizes(args, TUNE_SIZES)
+    size = _sizes(args, TUNE_SIZES, scenario)
     results = tune_families(
         families,
         n_workers=args.workers,
@@ -627,7 +636,7 @@ def _tune_fleet(
         parser.error(f"--families {single}: not fleet families ({','.join(FLEET_FAMILIES)})")
     scenario = _fleet_scenario(parser, args)
     announce_uncached_kernels()
-    size = _sizes(args, FLEET_TUNE_SIZES)
+    size = _sizes(args, FLEET_TUNE_SIZES, scenario)
     results = tune_fleet_families(
         fleet,
         families,
@@ -695,7 +704,7 @@ def value_main(argv: Sequence[str] | None = None) -> int:
     from policies.value.study import markdown_report, run_ladder, write_outputs
 
     announce_uncached_kernels()
-    size = _sizes(args, VALUE_SIZES)
+    size = _sizes(args, VALUE_SIZES, scenario)
     result = run_ladder(
         n_workers=args.workers,
         progress=not args.quiet,

@@ -599,9 +599,10 @@ def test_quick_sizes_are_the_modules_and_keep_full_length_episodes() -> None:
         assert quick["slots"] == sizes["slots"][0] == 2000  # quick shortens nothing
     parser = policies_cli.value_parser()
     args = parser.parse_args(["--quick", "--trials", "7"])
-    assert policies_cli._sizes(args, policies_cli.VALUE_SIZES) == {**study.QUICK, "trials": 7}
+    sizes = policies_cli._sizes(args, policies_cli.VALUE_SIZES, Scenario())
+    assert sizes == {**study.QUICK, "trials": 7}
     args = parser.parse_args([])
-    assert policies_cli._sizes(args, policies_cli.VALUE_SIZES)["episodes"] == 1000
+    assert policies_cli._sizes(args, policies_cli.VALUE_SIZES, Scenario())["episodes"] == 1000
 
 
 def test_an_agent_file_with_a_pickle_runs_only_with_trust_pickle(
@@ -643,3 +644,24 @@ def test_the_default_fleet_list_leaves_out_agents_that_do_not_fit(
             [*argv, "--policies", "fleet_naive,fleet_ppo", "--out", str(tmp_path / "b2")]
         )
     assert "error: policy 'fleet_ppo' cannot run on this scenario" in capsys.readouterr().err
+
+
+def test_tune_and_value_fly_the_scenario_file_s_episode_length(tmp_path: Path) -> None:
+    """``episode_slots`` of a --scenario file sets scas-tune's (and scas-value's) slots when
+    --slots is not given, as scas-benchmark's; the best trial's reward is that of episodes of
+    that length (recomputed by the tuning's own objective), and the manifest says so."""
+    from policies.value.tuning import tune_families
+
+    path = tmp_path / "s.toml"
+    path.write_text("[scenario]\nepisode_slots = 300\n")
+    out = tmp_path / "t"
+    argv = ["--scenario", str(path), "--families", "age", "--trials", "1", "--episodes", "1",
+            "--workers", "1", "--quiet", "--out", str(out)]  # fmt: skip
+    assert policies_cli.tune_main(argv) == 0
+    manifest = json.loads((out / "manifest.json").read_text())
+    assert manifest["config"]["size"]["slots"] == 300
+    direct = tune_families(["age"], trials=1, episodes=1, slots=300, n_workers=1)
+    saved = json.loads((out / "tuning.json").read_text())["age"]["best_reward"]
+    assert saved == direct["age"].best_reward
+    shown = " ".join(PARSERS["scas-value"]().format_help().split())
+    assert "(default: the scenario's episode_slots, 2000)" in shown
