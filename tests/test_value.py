@@ -69,6 +69,14 @@ def test_ladder_outputs_and_statistics(quick, tmp_path):
     assert paths["png"].stat().st_size > 0 and paths["md"].read_text().startswith("# Value")
     with pytest.raises(FileExistsError, match="overwrite"):
         write_outputs(quick, tmp_path)
+    # a results folder: its manifest lists every file; --overwrite replaces it whole
+    from scas_env.utils.results_folder import verify_results_folder
+
+    assert sorted(verify_results_folder(tmp_path)) == sorted(p.name for p in paths.values())
+    (tmp_path / "results.csv").write_text("another run's file\n")
+    write_outputs(quick, tmp_path, overwrite=True)
+    assert not (tmp_path / "results.csv").exists()
+    assert sorted(verify_results_folder(tmp_path)) == sorted(p.name for p in paths.values())
 
 
 def test_summary_needs_paired_episodes():

@@ -353,53 +353,52 @@ def _plot(summary: Mapping[str, Any], path: Path) -> None:
     plt.close(fig)
 
 
-def _atomic_write(path: Path, text: str) -> None:
-    tmp = path.with_suffix(path.suffix + ".tmp")
-    tmp.write_text(text)
-    tmp.replace(path)
-
-
 def write_outputs(
     result: LadderResult, out_dir: str | Path, *, plots: bool = True, overwrite: bool = False
 ) -> dict[str, Path]:
     """Write ladder.csv (held-out rows), ladder.json (statistics, tuning, config, wall
     time), ladder.md, tuning_history.csv and value_vs_information.png (+ its numbers in
-    ladder.json). Refuses to overwrite existing files unless ``overwrite``."""
+    ladder.json) into the folder ``out_dir``, atomically with ``manifest.json``
+    (:mod:`scas_env.utils.results_folder`): an existing folder is refused unless
+    ``overwrite`` (then replaced whole, never mixed)."""
+    from scas_env.utils.results_folder import results_folder
+
     out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
-    paths = {
-        "csv": out / "ladder.csv",
-        "json": out / "ladder.json",
-        "md": out / "ladder.md",
-        "history": out / "tuning_history.csv",
+    names = {
+        "csv": "ladder.csv",
+        "json": "ladder.json",
+        "md": "ladder.md",
+        "history": "tuning_history.csv",
     }
     if plots:
-        paths["png"] = out / "value_vs_information.png"
-    existing = [str(p) for p in paths.values() if p.exists()]
-    if existing and not overwrite:
-        raise FileExistsError(f"{existing} exist; pass overwrite=True (--overwrite) to replace")
-    with paths["csv"].with_suffix(".tmp").open("w", newline="") as f:
-        writer = csv.DictWriter(f, fieldnames=list(result.rows[0]))
-        writer.writeheader()
-        writer.writerows(result.rows)
-    paths["csv"].with_suffix(".tmp").replace(paths["csv"])
-    hist = [{"family": k, **h} for k, t in result.tuning.items() for h in t.history]
-    fields: list[str] = []
-    for h in hist:
-        fields += [k for k in h if k not in fields]
-    with paths["history"].with_suffix(".tmp").open("w", newline="") as f:
-        writer = csv.DictWriter(f, fieldnames=fields)
-        writer.writeheader()
-        writer.writerows(hist)
-    paths["history"].with_suffix(".tmp").replace(paths["history"])
-    payload = {
-        **result.summary,
-        "tuning": {k: t.to_dict() for k, t in result.tuning.items()},
-        "config": result.config,
-        "wall_s": result.wall_s,
+        names["png"] = "value_vs_information.png"
+    config = json.loads(json.dumps(result.config, default=_jsonable))
+    seeds = {
+        "held_out": result.config.get("held_out_seed"),
+        "episodes": result.config.get("episodes"),
     }
-    _atomic_write(paths["json"], json.dumps(payload, indent=2, default=_jsonable) + "\n")
-    _atomic_write(paths["md"], markdown_report(result))
-    if plots:
-        _plot(result.summary, paths["png"])
-    return paths
+    with results_folder(out, config=config, seeds=seeds, overwrite=overwrite) as tmp:
+        at = {k: tmp / v for k, v in names.items()}
+        with at["csv"].open("w", newline="") as f:
+            writer = csv.DictWriter(f, fieldnames=list(result.rows[0]))
+            writer.writeheader()
+            writer.writerows(result.rows)
+        hist = [{"family": k, **h} for k, t in result.tuning.items() for h in t.history]
+        fields: list[str] = []
+        for h in hist:
+            fields += [k for k in h if k not in fields]
+        with at["history"].open("w", newline="") as f:
+            writer = csv.DictWriter(f, fieldnames=fields)
+            writer.writeheader()
+            writer.writerows(hist)
+        payload = {
+            **result.summary,
+            "tuning": {k: t.to_dict() for k, t in result.tuning.items()},
+            "config": result.config,
+            "wall_s": result.wall_s,
+        }
+        at["json"].write_text(json.dumps(payload, indent=2, default=_jsonable) + "\n")
+        at["md"].write_text(markdown_report(result))
+        if plots:
+            _plot(result.summary, at["png"])
+    return {k: out / v for k, v in names.items()}
