@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from typing import Any, ClassVar
 
 import gymnasium as gym
@@ -59,6 +60,13 @@ def make_fleet_setup(
         obs_mode="state" if obs_mode == "state" else "features+rul",
     )
     params = params if params is not None else ScasParams()
+    hours = params.mission.flight_duration_s / 3600.0
+    if not math.isclose(config.demand.flight_hours_per_flight, hours, rel_tol=1e-9):
+        raise ValueError(
+            f"DemandModel.flight_hours_per_flight = {config.demand.flight_hours_per_flight!r} h "
+            f"must equal the actuator's flight, MissionParams.flight_duration_s / 3600 = "
+            f"{hours!r} h (flight hours and the damage per flight count the same flights)"
+        )
     types = ("standard", *(t for t in config.mission_types if t != "standard"))
     setup = Setup(
         params=params,

@@ -498,3 +498,14 @@ def test_the_dashboard_draws_the_fleet() -> None:
     text = ScasFleetEnv(fleet=SMALL, render_mode="ansi")
     text.reset(seed=0)
     assert "mission" in text.render().lower()
+
+
+def test_a_fleet_flight_longer_than_the_actuator_s_is_refused() -> None:
+    """Flight hours (cost per FH, failures per 1000 FH) and the damage per flight must count
+    the same flights: a demand of 3 h flights on the actuator's 1.5 h flight is refused
+    (it halved the per-FH rates)."""
+    from scas_env.core.fleet.demand import DemandModel
+
+    demand = DemandModel(flight_hours_per_flight=3.0, mission_mix=(0.5, 0.3, 0.2))
+    with pytest.raises(ValueError, match=r"flight_hours_per_flight = 3.0 h must equal .* 1.5 h"):
+        gym.make("scas_env/ScasFleet-v0", fleet=FleetConfig(demand=demand))
