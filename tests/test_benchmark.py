@@ -177,3 +177,20 @@ def test_age_replacement_cost_rate_matches_renewal_formula_long():
     # ~680 cycles: statistical error ~1.3%
     assert rate == pytest.approx(formula, rel=0.05)
     assert availability == pytest.approx(avail, abs=3e-4)
+
+
+def test_the_summary_says_finite_horizon_only_for_new_parts_and_states_a_fleet_target() -> None:
+    """The finite-horizon note (episodes from new parts) is printed only when parts start new;
+    a fleet's mission availability target is printed when the fleet states one."""
+    from policies.benchmark.report import FINITE_HORIZON, markdown_summary
+    from scas_env.core.fleet.config import FleetConfig
+
+    new = run_benchmark(["corrective"], episodes=1, slots=30)
+    used = run_benchmark(["corrective"], episodes=1, slots=30,
+                         env_kwargs={"initial_health": "random"})  # fmt: skip
+    assert FINITE_HORIZON in markdown_summary(new)
+    assert FINITE_HORIZON not in markdown_summary(used)
+    fleet = FleetConfig(aircraft=2, episode_days=3, mission_availability_target=0.9)
+    run = run_benchmark(["fleet_naive"], episodes=1, slots=1, env_kwargs={"fleet": fleet})
+    run.config["fleet"] = fleet.to_dict()  # as the command records it
+    assert "Mission availability target: 0.9 (the fleet's)." in markdown_summary(run)

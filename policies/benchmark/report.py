@@ -171,6 +171,18 @@ def format_table(summary: Mapping[str, Any]) -> str:
     return "\n".join(lines)
 
 
+def _horizon_note(s: Mapping[str, Any], c: Mapping[str, Any]) -> str:
+    """What the per-FH figures are: finite-horizon from new parts (one actuator, parts new
+    at reset); for a fleet its mission availability target, when it states one."""
+    if _is_fleet(s):
+        target = float((c.get("fleet") or {}).get("mission_availability_target", 0.0))
+        return f"Mission availability target: {target:g} (the fleet's)." if target > 0 else ""
+    given = {**(c.get("env_kwargs") or {}), **(c.get("scenario") or {})}
+    scenario = given.get("scenario")  # a Scenario object among the env keywords
+    start = getattr(scenario, "initial_health", given.get("initial_health", "new"))
+    return FINITE_HORIZON if start == "new" else ""
+
+
 def markdown_summary(result: BenchmarkResult) -> str:
     """The summary as Markdown tables with the run's configuration."""
     s, c = result.summary, result.config
@@ -184,7 +196,7 @@ def markdown_summary(result: BenchmarkResult) -> str:
         "t half-width (MDD: minimum detectable difference, 80 % power, two-sided "
         f"{100 - 100 * s['confidence']:.0f} %).",
         "",
-        "" if _is_fleet(s) else FINITE_HORIZON,
+        _horizon_note(s, c),
         "",
     ]
     beliefs = s.get("prognostics")

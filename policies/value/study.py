@@ -286,8 +286,12 @@ def markdown_report(result: LadderResult) -> str:
         f"{c['trials']} Optuna TPE trials x {c['train_episodes']} training episodes per family. "
         f"Value = paired reward difference vs the tuned age rule (USD per episode), {pct} "
         "t-interval, MDD = minimum detectable difference (80 % power, two-sided 5 %). "
-        "Cost per FH and rates are finite-horizon figures (episodes from new parts, "
-        f"{c['slots']} slots): not long-run rates (docs/value.md).",
+        + (
+            "Cost per FH and rates are finite-horizon figures (episodes from new parts, "
+            f"{c['slots']} slots): not long-run rates (docs/value.md)."
+            if (c.get("scenario") or {}).get("initial_health", "new") == "new"
+            else f"Cost per FH and rates are over {c['slots']} slots (not long-run rates)."
+        ),
         "",
         "| arm | value USD/episode | 95% CI | MDD | p | reward USD/episode | cost USD/FH "
         "(finite horizon) | availability | failures/1000 FH (Garwood) |",
