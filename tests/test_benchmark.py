@@ -194,3 +194,30 @@ def test_the_summary_says_finite_horizon_only_for_new_parts_and_states_a_fleet_t
     run = run_benchmark(["fleet_naive"], episodes=1, slots=1, env_kwargs={"fleet": fleet})
     run.config["fleet"] = fleet.to_dict()  # as the command records it
     assert "Mission availability target: 0.9 (the fleet's)." in markdown_summary(run)
+
+
+def test_parts_in_use_at_reset_enter_the_survival_data_at_their_age() -> None:
+    """With ``initial_health="in_service"`` each first part's removal age counts from its
+    fitting (its age at reset plus the flights since) and the event records where it entered
+    (delayed entry); parts fitted later enter at 0. New parts at reset: no entry column."""
+    import gymnasium as gym
+
+    import scas_env
+
+    seeds = episode_seeds(4, 2)
+    kw = {"initial_health": "in_service"}
+    result = run_benchmark(["corrective"], episodes=2, slots=1500, seed=4, env_kwargs=kw)
+    venv = gym.make_vec(scas_env.ENV_ID, num_envs=2, vectorization_mode="vector_entry_point",
+                        episode_slots=1500, **kw)  # fmt: skip
+    venv.reset(seed=[int(s) for s, _ in seeds])
+    start_age = venv.unwrapped.a["part_age"] if hasattr(venv, "unwrapped") else venv.a["part_age"]
+    for e in range(2):
+        ev = [x for x in result.events if x["episode"] == e]
+        for p, part in enumerate(("spring", "seal")):
+            first = next(x for x in ev if x["part"] == part)
+            assert first["entry_age_flights"] == int(start_age[e, p]) > 0
+            assert first["age_flights"] > first["entry_age_flights"]
+            later = [x for x in ev if x["part"] == part][1:]
+            assert all(x["entry_age_flights"] == 0 for x in later)
+    plain = run_benchmark(["corrective"], episodes=1, slots=50)
+    assert all("entry_age_flights" not in x for x in plain.events)

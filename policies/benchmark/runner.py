@@ -172,8 +172,24 @@ def run_episodes(venv: Any, policy: Any, seeds: Sequence[tuple[int, int]]) -> li
     obs, info = venv.reset(seed=[int(es) for es, _ in seeds])
     terms = {k: np.zeros(n) for k in TERMS}
     reward_sum = np.zeros(n)
-    fitted_at = np.zeros((n, len(PARTS)), dtype=np.int64)
+    # parts in use at reset (initial_health "random", "in_service") enter at their age:
+    # ages count from fitting, and the events say where each first part entered (delayed
+    # entry of the Kaplan-Meier estimate)
+    arrays = getattr(venv, "a", None)
+    entry = np.zeros((n, len(PARTS)), dtype=np.int64)
+    if arrays is not None and "part_age" in arrays:
+        entry = np.asarray(arrays["part_age"], dtype=np.int64).copy()
+    used = bool(entry.any())
+    fitted_at = -entry
     events: list[list[dict[str, Any]]] = [[] for _ in range(n)]
+
+    def event(e: int, p: int, kind: str) -> dict[str, Any]:
+        out = {"part": PARTS[p], "age_flights": int(info["flights"][e] - fitted_at[e, p]),
+               "kind": kind}  # fmt: skip
+        if used:
+            out["entry_age_flights"] = int(entry[e, p])
+        return out
+
     start = np.ones(n, dtype=np.bool_)
     state = None
     beliefs = belief_columns(getattr(venv, "obs_names", None))
@@ -196,14 +212,9 @@ def run_episodes(venv: Any, policy: Any, seeds: Sequence[tuple[int, int]]) -> li
             changed = info["replacements"][part] > before["replacements"][part]
             for e in np.flatnonzero(changed):
                 failed = info["failures"][part][e] > before["failures"][part][e]
-                events[e].append(
-                    {
-                        "part": part,
-                        "age_flights": int(info["flights"][e] - fitted_at[e, p]),
-                        "kind": "failure" if failed else "preventive",
-                    }
-                )
+                events[e].append(event(e, p, "failure" if failed else "preventive"))
                 fitted_at[e, p] = info["flights"][e]
+                entry[e, p] = 0
         done = terminated | truncated
         if done.all():
             break
@@ -211,9 +222,8 @@ def run_episodes(venv: Any, policy: Any, seeds: Sequence[tuple[int, int]]) -> li
             raise RuntimeError("episodes of one batch must end together (same episode_slots)")
     out = []
     for e in range(n):
-        for p, part in enumerate(PARTS):
-            age = int(info["flights"][e] - fitted_at[e, p])
-            events[e].append({"part": part, "age_flights": age, "kind": "censored"})
+        for p in range(len(PARTS)):
+            events[e].append(event(e, p, "censored"))
         row_info = _info_row(info, e)
         wasted = {
             part: (
