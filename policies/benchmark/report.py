@@ -171,16 +171,21 @@ def format_table(summary: Mapping[str, Any]) -> str:
     return "\n".join(lines)
 
 
+def parts_start_new(config: Mapping[str, Any]) -> bool:
+    """Whether a run's episodes start from new parts: its recorded ``scenario`` (the
+    commands), else its ``env_kwargs`` (a ``Scenario`` or an ``initial_health`` keyword)."""
+    kwargs = config.get("env_kwargs") or {}
+    start = getattr(kwargs.get("scenario"), "initial_health", kwargs.get("initial_health"))
+    return (config.get("scenario") or {}).get("initial_health", start or "new") == "new"
+
+
 def _horizon_note(s: Mapping[str, Any], c: Mapping[str, Any]) -> str:
     """What the per-FH figures are: finite-horizon from new parts (one actuator, parts new
     at reset); for a fleet its mission availability target, when it states one."""
     if _is_fleet(s):
         target = float((c.get("fleet") or {}).get("mission_availability_target", 0.0))
         return f"Mission availability target: {target:g} (the fleet's)." if target > 0 else ""
-    given = {**(c.get("env_kwargs") or {}), **(c.get("scenario") or {})}
-    scenario = given.get("scenario")  # a Scenario object among the env keywords
-    start = getattr(scenario, "initial_health", given.get("initial_health", "new"))
-    return FINITE_HORIZON if start == "new" else ""
+    return FINITE_HORIZON if parts_start_new(c) else ""
 
 
 def markdown_summary(result: BenchmarkResult) -> str:

@@ -41,6 +41,7 @@ from typing import Any
 
 import numpy as np
 
+from policies.benchmark.report import parts_start_new
 from policies.benchmark.run import PolicySpec, run_benchmark
 from policies.benchmark.stats import METRICS, metric_interval, paired_comparison
 from policies.value.tuning import (
@@ -289,7 +290,7 @@ def markdown_report(result: LadderResult) -> str:
         + (
             "Cost per FH and rates are finite-horizon figures (episodes from new parts, "
             f"{c['slots']} slots): not long-run rates (docs/value.md)."
-            if (c.get("scenario") or {}).get("initial_health", "new") == "new"
+            if parts_start_new(c)
             else f"Cost per FH and rates are over {c['slots']} slots (not long-run rates)."
         ),
         "",
