@@ -27,6 +27,7 @@ from scas_env.cli_args import (
     configure_logging,
     existing_file,
     load_env_config,
+    load_mismatch,
     make_parser,
     name_list,
     nonneg_int,
@@ -35,6 +36,7 @@ from scas_env.cli_args import (
     scenario_changes,
 )
 from scas_env.core.costs import CostModel
+from scas_env.core.mismatch import Mismatch
 from scas_env.core.scenario import FIDELITIES, Scenario
 
 log = logging.getLogger(__name__)
@@ -62,22 +64,34 @@ The default list leaves out, with a note, a shipped agent that cannot act on the
 """
 
 
-def _env_kwargs(scenario: Scenario, costs: CostModel, exclude: Sequence[str]) -> dict[str, Any]:
-    """Env keywords that give ``scenario`` and ``costs`` (only what differs from defaults)."""
+def _env_kwargs(
+    scenario: Scenario, costs: CostModel, exclude: Sequence[str], mismatch: Mismatch | None = None
+) -> dict[str, Any]:
+    """Env keywords that give ``scenario``, ``costs`` and a ``[mismatch]`` world (only what
+    differs from the defaults)."""
     kwargs = scenario_changes(scenario, exclude=exclude)
     if costs != CostModel():
         kwargs["cost_model"] = costs
+    if mismatch is not None and not mismatch.is_nominal:
+        kwargs["mismatch"] = mismatch
     return kwargs
 
 
 def _config_record(
-    prog: str, argv: Sequence[str] | None, args: Any, scenario: Scenario, costs: CostModel
+    prog: str,
+    argv: Sequence[str] | None,
+    args: Any,
+    scenario: Scenario,
+    costs: CostModel,
+    mismatch: Mismatch | None = None,
 ) -> dict[str, Any]:
     """The exact configuration of a run, for its results (files and full values)."""
     words = [prog, *(sys.argv[1:] if argv is None else argv)]
+    world = {} if mismatch is None else {"mismatch": mismatch.to_dict()}
     return {
         "scenario": scenario.to_dict(),
         "costs": costs.to_dict(),
+        **world,
         "scenario_file": None if args.scenario is None else str(args.scenario),
         "costs_file": None if args.costs is None else str(args.costs),
         "command": " ".join(shlex.quote(str(a)) for a in words),
@@ -215,7 +229,8 @@ def benchmark_main(argv: Sequence[str] | None = None) -> int:
     args = parser.parse_args(argv)
     configure_logging(args)
     out = check_out_dir(parser, args.out, args.overwrite)
-    scenario, costs = load_env_config(parser, args, fleet=True)
+    scenario, costs = load_env_config(parser, args, fleet=True, mismatch=True)
+    mismatch = load_mismatch(parser, args)
     if scenario.obs_mode != Scenario().obs_mode:
         parser.error(
             f"{args.scenario}: obs_mode = {scenario.obs_mode!r}: the benchmark gives each "
@@ -230,9 +245,11 @@ def benchmark_main(argv: Sequence[str] | None = None) -> int:
         parser.error(f"--slots {args.slots}: {exc}")
     env_kwargs = {
         "fidelity": scenario.fidelity,
-        **_env_kwargs(scenario, costs, exclude=("obs_mode", "episode_slots")),
+        **_env_kwargs(scenario, costs, ("obs_mode", "episode_slots"), mismatch),
     }
     fleet = _fleet_config(parser, args)
+    if fleet is not None and mismatch is not None:
+        parser.error(f"{args.scenario}: [mismatch]: a fleet runs the monitor's model")
     if fleet is not None:
         if args.slots is not None:
             parser.error("--slots: a fleet's episode is its [fleet] table's episode_days")
@@ -314,7 +331,8 @@ def benchmark_main(argv: Sequence[str] | None = None) -> int:
         parser.error(f"--ray-address: {exc}")
     if fleet is not None:
         scenario = env_kwargs["scenario"]
-    result.config.update(_config_record(parser.prog, argv, args, scenario, costs))
+    record = _config_record(parser.prog, argv, args, scenario, costs, mismatch)
+    result.config.update(record)
     if fleet is not None:
         result.config["fleet"] = fleet.to_dict()
     print(format_table(result.summary))
@@ -581,13 +599,16 @@ def tune_main(argv: Sequence[str] | None = None) -> int:
     args = parser.parse_args(argv)
     configure_logging(args)
     out = check_out_dir(parser, args.out, args.overwrite)
-    scenario, costs = load_env_config(parser, args, fleet=True)
+    scenario, costs = load_env_config(parser, args, fleet=True, mismatch=True)
+    mismatch = load_mismatch(parser, args)
     fleet = _fleet_config(parser, args)
+    if fleet is not None and mismatch is not None:
+        parser.error(f"{args.scenario}: [mismatch]: a fleet runs the monitor's model")
     if fleet is not None:
         return _tune_fleet(parser, args, argv, out, fleet, costs)
     if scenario.obs_mode != Scenario().obs_mode:
         parser.error(f"{args.scenario}: obs_mode is set per policy; leave it out of the file")
-    env_kwargs = _env_kwargs(scenario, costs, exclude=("obs_mode", "episode_slots"))
+    env_kwargs = _env_kwargs(scenario, costs, ("obs_mode", "episode_slots"), mismatch)
 
     from policies.value.tuning import FAMILIES, tune_families
 
@@ -604,7 +625,7 @@ def tune_main(argv: Sequence[str] | None = None) -> int:
         env_kwargs=env_kwargs,
         **size,
     )
-    config = {"size": size, **_config_record(parser.prog, argv, args, scenario, costs)}
+    config = {"size": size, **_config_record(parser.prog, argv, args, scenario, costs, mismatch)}
     return _write_tuning(results, out, config, args.overwrite)
 
 
@@ -696,10 +717,11 @@ def value_main(argv: Sequence[str] | None = None) -> int:
     args = parser.parse_args(argv)
     configure_logging(args)
     out = check_out_dir(parser, args.out, args.overwrite)
-    scenario, costs = load_env_config(parser, args)
+    scenario, costs = load_env_config(parser, args, mismatch=True)
+    mismatch = load_mismatch(parser, args)
     if scenario.obs_mode != Scenario().obs_mode:
         parser.error(f"{args.scenario}: obs_mode is set per arm; leave it out of the file")
-    env_kwargs = _env_kwargs(scenario, costs, exclude=("obs_mode", "episode_slots"))
+    env_kwargs = _env_kwargs(scenario, costs, ("obs_mode", "episode_slots"), mismatch)
 
     from policies.value.study import markdown_report, run_ladder, write_outputs
 
@@ -712,7 +734,7 @@ def value_main(argv: Sequence[str] | None = None) -> int:
         families=args.families,
         **size,
     )
-    result.config.update(_config_record(parser.prog, argv, args, scenario, costs))
+    result.config.update(_config_record(parser.prog, argv, args, scenario, costs, mismatch))
     print(markdown_report(result))
     paths = write_outputs(result, out, overwrite=args.overwrite)
     n = len(result.rows)

@@ -34,6 +34,7 @@ from prognostics.numba_cache import (
 from scas_env.actuator.config import FORMATS
 from scas_env.actuator.params import ScasParams
 from scas_env.core.costs import CostModel
+from scas_env.core.mismatch import Mismatch
 from scas_env.core.scenario import Scenario
 
 log = logging.getLogger(__name__)
@@ -57,6 +58,7 @@ __all__ = [
     "existing_file",
     "int_at_least",
     "load_env_config",
+    "load_mismatch",
     "load_params",
     "make_parser",
     "name_list",
@@ -226,37 +228,65 @@ def load_params(parser: argparse.ArgumentParser, args: argparse.Namespace) -> Sc
         parser.error(str(exc))
 
 
+#: why a command refuses a case file's table it does not read (docs/configs.md)
+_UNREAD = {
+    "fleet": "this command runs one actuator (ScasMaintenance-v2), not a fleet; give it a "
+    "file without [fleet] (scas-benchmark and scas-tune run fleets)",
+    "mismatch": "this command runs the world the monitor assumes; give it a file without "
+    "[mismatch] (scas-benchmark, scas-tune and scas-value run a [mismatch] world of one "
+    "actuator; in Python: mismatch=Mismatch.load(FILE))",
+    "params": "the commands run the built-in actuator design; give it a file without "
+    "[params] (in Python: params=ScasParams.load(FILE))",
+}
+
+
 def load_env_config(
-    parser: argparse.ArgumentParser, args: argparse.Namespace, *, fleet: bool = False
+    parser: argparse.ArgumentParser,
+    args: argparse.Namespace,
+    *,
+    fleet: bool = False,
+    mismatch: bool = False,
 ) -> tuple[Scenario, CostModel]:
     """The Scenario and CostModel of ``--scenario`` / ``--costs`` (defaults without them).
 
     A ``[costs]`` table in the ``--scenario`` file sets the costs unless ``--costs`` is given.
-    A ``[fleet]`` table is a usage error unless ``fleet`` (the command runs fleets and reads
-    it): a command of one actuator does not drop it silently. A bad file is a usage error
-    naming the file, the table and the field.
+    A table the command does not read is a usage error, never dropped silently: ``[params]``
+    always, ``[fleet]`` unless ``fleet``, ``[mismatch]`` unless ``mismatch`` (the command reads
+    it with :func:`load_mismatch`). A bad file is a usage error naming the file, the table and
+    the field.
     """
     from scas_env.actuator.config import read_mapping
 
     scenario, costs = Scenario(), CostModel()
+    reads = {"fleet": fleet, "mismatch": mismatch, "params": False}
     try:
         if args.scenario is not None:
-            if not fleet and "fleet" in read_mapping(args.scenario):
-                raise ValueError(
-                    f"{args.scenario} holds a [fleet] table: this command runs one actuator "
-                    "(ScasMaintenance-v2), not a fleet; give it a file without [fleet] "
-                    "(scas-benchmark and scas-tune run fleets)"
-                )
             data = read_mapping(args.scenario)
+            for table, why in _UNREAD.items():
+                if table in data and not reads[table]:
+                    raise ValueError(f"{args.scenario} holds a [{table}] table: {why}")
             if not (fleet and "fleet" in data and "scenario" not in data):  # a fleet alone
                 scenario = Scenario.load(args.scenario)
-            if args.costs is None and "costs" in read_mapping(args.scenario):
+            if args.costs is None and "costs" in data:
                 costs = CostModel.load(args.scenario)
         if args.costs is not None:
             costs = CostModel.load(args.costs)
     except (ValueError, FileNotFoundError) as exc:
         parser.error(str(exc))
     return scenario, costs
+
+
+def load_mismatch(parser: argparse.ArgumentParser, args: argparse.Namespace) -> Mismatch | None:
+    """The ``[mismatch]`` table of ``--scenario`` (None without one): the world's departure
+    from the monitor's model; a bad table is a usage error naming the file and the field."""
+    from scas_env.actuator.config import read_mapping
+
+    try:
+        if args.scenario is None or "mismatch" not in read_mapping(args.scenario):
+            return None
+        return Mismatch.load(args.scenario)
+    except (ValueError, FileNotFoundError) as exc:
+        parser.error(str(exc))
 
 
 def agent_scenario(parser: argparse.ArgumentParser, args: argparse.Namespace) -> Scenario:

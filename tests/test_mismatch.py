@@ -342,3 +342,73 @@ def test_a_world_surrogate_of_its_own_moves_the_world_features_only() -> None:
             sur, features=sur.features[::-1]))  # fmt: skip
     with pytest.raises(ValueError, match="physics fidelity simulates its features"):
         make_setup(None, None, None, None, None, {"fidelity": "physics"}, None, hot)
+
+
+def _case(tmp_path, **tables) -> str:
+    path = tmp_path / "case.toml"
+    save_sections(path, tables)
+    return str(path)
+
+
+def test_the_benchmark_runs_a_case_files_mismatch_table(tmp_path, capsys) -> None:
+    """``scas-benchmark --scenario case.toml`` with a ``[mismatch]`` table runs that world: its
+    episodes are those of ``run_benchmark`` with ``mismatch=`` (row for row), a spring growing
+    5x faster fails within 400 slots where the nominal one does not, and the run records and
+    prints the world."""
+    import csv
+    import json
+
+    from policies import cli as policies_cli
+    from policies.benchmark import run_benchmark
+
+    world = Mismatch(crack_growth=5.0)
+    case = _case(tmp_path, scenario=Scenario(episode_slots=400), mismatch=world)
+    out = tmp_path / "bench"
+    argv = ["--scenario", case, "--episodes", "2", "--policies", "corrective", "--workers", "1"]
+    assert policies_cli.benchmark_main([*argv, "--out", str(out), "-q"]) == 0
+    with (out / "results.csv").open() as f:
+        rewards = [float(row["reward"]) for row in csv.DictReader(f)]
+    runs = {
+        m: run_benchmark(["corrective"], episodes=2, slots=400, env_kwargs=kw)
+        for m, kw in (("world", {"mismatch": world}), ("nominal", {}))
+    }
+    assert rewards == [row["reward"] for row in runs["world"].rows]
+    assert sum(row["failures_spring"] for row in runs["world"].rows) > 0
+    assert sum(row["failures_spring"] for row in runs["nominal"].rows) == 0
+    summary = json.loads((out / "summary.json").read_text())
+    assert Mismatch.from_dict(summary["config"]["mismatch"]) == world
+    assert "(Mismatch): {'crack_growth': 5.0}" in (out / "summary.md").read_text()
+
+
+@pytest.mark.parametrize(
+    ("command", "tables", "message"),
+    [
+        ("train_main", {"mismatch": Mismatch(crack_growth=2.0)}, "holds a [mismatch] table"),
+        ("value_main", {"params": None}, "holds a [params] table"),
+        ("benchmark_main", {"fleet": None, "mismatch": Mismatch()}, "a fleet runs the monitor"),
+        ("benchmark_main", {"mismatch": {"crack_grow": 2.0}}, "unknown key(s) ['crack_grow']"),
+    ],
+)
+def test_a_table_a_command_does_not_read_is_a_usage_error(
+    command, tables, message, tmp_path, capsys
+) -> None:
+    """No command drops a case file's table silently: [params] (no command reads it),
+    [mismatch] where the command runs the monitor's world (training; fleets), a bad
+    [mismatch] key; usage errors before any work, nothing written."""
+    from policies import cli as policies_cli
+    from scas_env.actuator.params import ScasParams
+    from scas_env.core.fleet.config import FleetConfig
+
+    objects = {"params": ScasParams(), "fleet": FleetConfig()}
+    path = tmp_path / "case.toml"
+    data = {k: objects[k] if v is None else v for k, v in tables.items()}
+    if isinstance(data.get("mismatch"), dict):  # a raw table with a misspelt key
+        path.write_text("[scenario]\nepisode_slots = 50\n[mismatch]\ncrack_grow = 2.0\n")
+    else:
+        save_sections(path, {"scenario": Scenario(episode_slots=50), **data})
+    out = tmp_path / "out"
+    with pytest.raises(SystemExit) as exit_:
+        getattr(policies_cli, command)(["--scenario", str(path), "--out", str(out)])
+    assert exit_.value.code == 2
+    assert message in capsys.readouterr().err
+    assert not out.exists()

@@ -204,6 +204,9 @@ def markdown_summary(result: BenchmarkResult) -> str:
         _horizon_note(s, c),
         "",
     ]
+    world = {k: v for k, v in (c.get("mismatch") or {}).items() if v != 1.0}
+    if world:
+        out += [f"World against the monitor's model (Mismatch): {world}.", ""]
     beliefs = s.get("prognostics")
     for index, (title, header, rows) in enumerate(_blocks(s)):
         if index == 0 and beliefs:

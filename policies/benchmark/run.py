@@ -440,6 +440,8 @@ def run_benchmark(
             for s in specs
         ],
     }
+    if "mismatch" in kwargs:  # the world's departure from the monitor's model
+        config["mismatch"] = kwargs["mismatch"].to_dict()
     metrics = FLEET_METRICS if fleet else METRICS
     gap = (FLEET_GAP_BASE, FLEET_GAP_BOUND) if fleet else None
     summary = summarize(rows, keys, rules, confidence, metrics=metrics, gap=gap)
