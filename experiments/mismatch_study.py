@@ -602,7 +602,12 @@ def markdown_report(result: MismatchResult) -> str:
                 f"{fa:.3f}, {ff:.3f} | "
                 f"{_belief_text(arms[FILTER_NOMINAL]['beliefs'])} |"
             )
-        lines += ["", "Break-even (value = 0; interval: levels where the 95 % CI holds 0):", ""]
+        lines += [
+            "",
+            "Break-even (value = 0; interval: levels where the 95 % CI holds 0; both "
+            "interpolated linearly in log(level) between the levels run):",
+            "",
+        ]
         for name, b in d["break_even"].items():
             for direction, e in b.items():
                 lines.append(

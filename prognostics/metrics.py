@@ -330,6 +330,11 @@ def convergence(times: np.ndarray, metric: np.ndarray) -> float:
     ``y_c = 1/2 sum (t_{i+1} - t_i) M_i^2 / sum (t_{i+1} - t_i) M_i``,
     ``C_M = sqrt((x_c - t_P)^2 + y_c^2)``; sums over i = P .. EoUP-1 (the last time only
     closes the last interval). Smaller is better.
+
+    Raises ``ValueError`` when the area ``sum (t_{i+1} - t_i) M_i`` is 0 (the metric is 0 at
+    every time before the last): the centroid is then undefined (0 / 0), and no number
+    would say how fast a metric that is already 0 converges.
+    :func:`evaluate_predictions` reports NaN there.
     """
     t = check.array("times", times, ndim=1, min_size=2)
     if np.any(np.diff(t) <= 0.0):
@@ -340,7 +345,11 @@ def convergence(times: np.ndarray, metric: np.ndarray) -> float:
         mi = m[:-1]
         area = float(dt @ mi)
         if area == 0.0:
-            return 0.0
+            raise ValueError(
+                f"metric = {m.tolist()} is 0 at every time before the last (times = "
+                f"{t.tolist()}): the area under it is 0 and its centroid undefined; convergence "
+                "needs a metric > 0 at some time before the last one"
+            )
         x_c = 0.5 * float((t[1:] ** 2 - t[:-1] ** 2) @ mi) / area
         y_c = 0.5 * float(dt @ mi**2) / area
         result = math.hypot(x_c - t[0], y_c)
@@ -354,7 +363,11 @@ def convergence(times: np.ndarray, metric: np.ndarray) -> float:
 
 @dataclass(frozen=True)
 class PrognosticMetrics:
-    """All metrics of one prediction run (see :func:`evaluate_predictions`)."""
+    """All metrics of one prediction run (see :func:`evaluate_predictions`).
+
+    ``alpha_lambda`` holds the lambdas that have a prediction at or after ``t_lambda``;
+    ``alpha_lambda_unscored`` the others, in the order asked (no prediction to score).
+    """
 
     relative_accuracy: np.ndarray
     min_relative_accuracy: float
@@ -362,6 +375,7 @@ class PrognosticMetrics:
     alpha_lambda: dict[float, bool]
     prognostic_horizon: float
     convergence: float
+    alpha_lambda_unscored: tuple[float, ...] = ()
 
 
 def evaluate_predictions(
@@ -383,8 +397,12 @@ def evaluate_predictions(
 
     ``t_lambda = t_P + lambda (t_EoL - t_P)``; alpha-lambda uses the first prediction at or
     after ``t_lambda`` (prog_algs convention); ref §6 defaults alpha = 0.2, beta = 0.5,
-    PH band alpha = 0.1. Every argument is checked before any metric is computed.
-    ``convergence`` is NaN for a single prediction, ``prognostic_horizon`` NaN if never met.
+    PH band alpha = 0.1. A lambda whose ``t_lambda`` falls after the last prediction (e.g.
+    lambda = 1, or predictions stopped before ``t_EoL``) has no prediction to score: it is
+    left out of ``alpha_lambda`` and listed in ``alpha_lambda_unscored``. Every argument is
+    checked before any metric is computed. ``convergence`` is NaN for a single prediction
+    and where the absolute error is 0 at every prediction before the last (no area, so no
+    centroid: :func:`convergence`); ``prognostic_horizon`` NaN if never met.
     """
     t = _check_times(times, eol)
     _alpha(alpha)
@@ -401,18 +419,33 @@ def evaluate_predictions(
     points = np.array([point_prediction(r, w, estimator) for r, w in zip(samples, ws, strict=True)])
     ra = _ra(true_rul, points)
     al: dict[float, bool] = {}
+    unscored: list[float] = []
     for lam in lams:
         i = int(np.searchsorted(t, t[0] + lam * (eol - t[0]), side="left"))
         if i < t.size:
             al[float(lam)] = alpha_lambda_distribution(true_rul[i], samples[i], ws[i], alpha, beta)
+        else:
+            unscored.append(float(lam))
     return PrognosticMetrics(
         relative_accuracy=ra,
         min_relative_accuracy=float(ra.min()),
         cumulative_relative_accuracy=float(ra.mean()),
         alpha_lambda=al,
         prognostic_horizon=prognostic_horizon(t, samples, ws, eol, ph_alpha, beta, band),
-        convergence=convergence(t, np.abs(true_rul - points)) if t.size >= 2 else math.nan,
+        convergence=_error_convergence(t, np.abs(true_rul - points)),
+        alpha_lambda_unscored=tuple(unscored),
     )
+
+
+def _error_convergence(t: np.ndarray, errors: np.ndarray) -> float:
+    """:func:`convergence` of the absolute errors, NaN where it is undefined: a single
+    prediction, or no area under the errors (0 at every prediction before the last)."""
+    if t.size < 2:
+        return math.nan
+    with np.errstate(over="ignore", invalid="ignore"):
+        if float(np.diff(t) @ errors[:-1]) == 0.0:
+            return math.nan
+    return convergence(t, errors)
 
 
 # --- failure probabilities: Brier score and isotonic recalibration ---

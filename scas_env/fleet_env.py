@@ -115,9 +115,10 @@ class ScasFleetEnv(gym.Env):
     | | | ``K + k``: test every actuator before flight, then fly type ``k - 1`` |
     | actuator ``j`` | 4 | 0 nothing; 1 replace the spring; 2 replace the seals; 3 both |
 
-    A maintenance choice queues crew jobs (each needs a crew job and a spare) and puts the
-    aircraft in the hangar that day; the day the crew does a job the aircraft is in the
-    hangar too, and further jobs on it that day cost no further downtime. While a
+    A maintenance choice queues crew jobs (each needs a crew job and a spare) and, unless the
+    job is queued already, puts the aircraft in the hangar that day; the day the crew does a
+    job the aircraft is in the hangar too, and further jobs on it that day cost no further
+    downtime. While a
     preventive job waits for the crew or a spare an airworthy aircraft may fly. Missions go
     to the free aircraft asking for their type, in aircraft order, while any is left.
     :meth:`action_masks` (and ``info["action_mask"]``) gives the valid choices

@@ -22,7 +22,7 @@ from gymnasium.vector.utils import batch_space
 from scas_env.core.fleet.batch import FleetBatch
 from scas_env.core.fleet.view import FleetView
 from scas_env.fleet_env import check_fleet_action, fleet_action_space, make_fleet_setup
-from scas_env.vector_env import check_no_render, check_num_envs
+from scas_env.vector_env import check_no_render, check_num_envs, vector_seeds
 
 #: entries of the single fleet env's info that are per aircraft or per actuator (left out
 #: of the vector env's info, which holds one value per fleet)
@@ -79,14 +79,7 @@ class ScasFleetVectorEnv(VectorEnv):
         self, *, seed: int | list[int | None] | None = None, options: dict[str, Any] | None = None
     ) -> tuple[np.ndarray, dict[str, Any]]:
         n = self.num_envs
-        if seed is None or (isinstance(seed, int | np.integer) and not isinstance(seed, bool)):
-            if seed is not None and seed < 0:
-                raise ValueError(f"seed = {seed!r} must be None or an integer >= 0")
-            seeds: list[int | None] = [None if seed is None else int(seed) + b for b in range(n)]
-        elif isinstance(seed, list | tuple) and len(seed) == n:
-            seeds = list(seed)
-        else:
-            raise ValueError(f"seed = {seed!r} must be None, an integer >= 0, or a list of {n}")
+        seeds = vector_seeds(seed, n)
         if options is not None and (not isinstance(options, dict) or options):
             raise ValueError(f"options = {options!r}: this env takes no options (None or {{}})")
         for b, s in enumerate(seeds):

@@ -48,6 +48,25 @@ def check_no_render(render_mode: Any) -> None:
         )
 
 
+def vector_seeds(seed: Any, n: int) -> list[int | None]:
+    """Each of ``n`` envs' seed from a vector env's ``reset(seed=...)``: None (each env's
+    stream goes on), an integer ``s >= 0`` (env ``e`` gets ``s + e``) or a list of ``n``
+    entries, each None or an integer >= 0; anything else is a ``ValueError``."""
+
+    def whole(s: Any) -> bool:
+        return isinstance(s, int | np.integer) and not isinstance(s, bool) and s >= 0
+
+    if seed is None or whole(seed):
+        return [None if seed is None else int(seed) + e for e in range(n)]
+    if isinstance(seed, int | np.integer) and not isinstance(seed, bool):
+        raise ValueError(f"seed = {seed!r} must be None or an integer >= 0")
+    if not isinstance(seed, list | tuple) or len(seed) != n:
+        raise ValueError(f"seed = {seed!r} must be None, an integer >= 0, or a list of {n}")
+    if not all(s is None or whole(s) for s in seed):
+        raise ValueError(f"seed = {seed!r}: each entry must be None or an int >= 0")
+    return [None if s is None else int(s) for s in seed]
+
+
 def check_num_envs(num_envs: Any) -> int:
     """``num_envs`` as an int >= 1 (ValueError otherwise)."""
     if isinstance(num_envs, bool) or not isinstance(num_envs, int | np.integer) or num_envs < 1:
@@ -103,20 +122,7 @@ class ScasMaintenanceVectorEnv(VectorEnv):
     def reset(
         self, *, seed: int | list[int | None] | None = None, options: dict[str, Any] | None = None
     ) -> tuple[Any, dict[str, Any]]:
-        n = self.num_envs
-        if seed is None or (isinstance(seed, int | np.integer) and not isinstance(seed, bool)):
-            if seed is not None and seed < 0:
-                raise ValueError(f"seed = {seed!r} must be None or an integer >= 0")
-            seeds: list[int | None] = [None if seed is None else int(seed) + e for e in range(n)]
-        elif isinstance(seed, list | tuple) and len(seed) == n:
-            seeds = list(seed)
-            for s in seeds:
-                if s is not None and (
-                    isinstance(s, bool) or not isinstance(s, int | np.integer) or s < 0
-                ):
-                    raise ValueError(f"seed = {seed!r}: each entry must be None or an int >= 0")
-        else:
-            raise ValueError(f"seed = {seed!r} must be None, an integer >= 0, or a list of {n}")
+        seeds = vector_seeds(seed, self.num_envs)
         if options is not None and (not isinstance(options, dict) or options):
             raise ValueError(f"options = {options!r}: this env takes no options (None or {{}})")
         for e, s in enumerate(seeds):

@@ -6,6 +6,8 @@ from __future__ import annotations
 
 import doctest
 import importlib
+import json
+import math
 import os
 import subprocess
 import sys
@@ -47,6 +49,7 @@ COMMANDS = (
     "sb3_speed",
     "sensing_sweep",
     "spring_cloud",
+    "surrogate_check",
     "value_pairs",
 )
 #: library modules of the experiments (no command line of their own)
@@ -138,6 +141,19 @@ def test_small_runs_of_the_commands(tmp_path, capsys) -> None:
     assert cross_error.main(["--episodes", "1", "--scenario", '{"episode_slots": 200}',
                              "--no-progress"]) == 0  # fmt: skip
     assert prognostics_speed.main(["--particles", "50", "--calls", "3"]) == 0
+    from experiments import surrogate_check
+    from scas_env.actuator.surrogate import default_surrogate
+
+    out = tmp_path / "s.json"
+    argv = ["--units", "2", "--runs", "1", "--no-progress", "--json", str(out)]
+    assert surrogate_check.main(argv) == 0
+    rows, model = json.loads(out.read_text()), default_surrogate()
+    assert len(rows) == len(surrogate_check.POINTS) * len(model.features)
+    for r in rows:  # the surrogate's column: its tables' shift over the healthy total sd
+        k = model.features.index(r["feature"])
+        total = math.hypot(model.unit_std[k, 0, 0], model.run_std[k, 0, 0])
+        shift = model.mean_at(r["crack"], r["wear"])[k] - model.mean_at(0.0, 0.0)[k]
+        assert r["surrogate_shift_sd"] == pytest.approx(shift / total, rel=1e-12, abs=1e-15)
     assert renewal.main(["--lives", "3", "--episodes", "2", "--warmup", "40", "--window", "40",
                          "--out", str(tmp_path / "r.json")]) == 0  # fmt: skip
     printed = capsys.readouterr().out

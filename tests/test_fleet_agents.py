@@ -229,3 +229,41 @@ def test_a_copy_of_the_shipped_agent_needs_its_json_statistics_and_weights(tmp_p
     # the registry's names load the shipped files
     assert make_policy("fleet_shared_ppo", names).kind == "shared"
     assert make_policy("fleet_ppo", names).kind == "joint"
+
+
+def _files(folder: Path) -> dict[str, int]:
+    return {p.relative_to(folder).as_posix(): p.stat().st_mtime_ns for p in folder.rglob("*")}
+
+
+def test_training_refuses_a_used_folder_unless_overwrite(tmp_path: Path) -> None:
+    """A second run into a non-empty folder is refused before it writes anything (its
+    checkpoints would mix with the first run's); overwrite=True replaces the folder whole."""
+    from experiments.fleet_agents.train import main as train_main
+
+    cfg = FleetPPOConfig(fleets=1, n_steps=8, batch_size=8, n_epochs=1, net_arch=(8,))
+    out = tmp_path / "run"
+    kw = {"fleet_days": 8, "checkpoint_every": 8, "env_kwargs": TINY}
+    train(cfg, out, **kw)
+    first = _files(out)
+    assert {"run.json", "ckpt_8.zip", "progress.csv"} <= set(first)
+    with pytest.raises(FileExistsError, match=r"run' exists and is not empty.*overwrite=True"):
+        train(cfg, out, seed=1, **kw)
+    with pytest.raises(ValueError, match="exists and is not empty"):
+        clone_rule(cfg, "fleet_naive", {}, out, env_kwargs=TINY, demo_episodes=1)
+    with pytest.raises(ValueError, match=r"init = .*ckpt_8\.zip' is inside out"):
+        train(cfg, out, init=out / "ckpt_8.zip", overwrite=True, **kw)
+    for argv in (
+        ["--out", str(out)],
+        ["--out", str(out), "--overwrite", "--demos-cache", str(out / "demos.npz")],
+    ):
+        with pytest.raises(SystemExit) as done:
+            train_main(argv)
+        assert done.value.code == 2
+    assert _files(out) == first  # nothing written, nothing deleted
+    (out / "stale.txt").write_text("a file of the old run\n")
+    run = train(cfg, out, seed=1, overwrite=True, **kw)
+    assert run["finished"] and json.loads((out / "run.json").read_text())["seed"] == 1
+    assert not (out / "stale.txt").exists() and sorted(_files(out)) == sorted(first)
+    assert [p.name for p in tmp_path.iterdir()] == ["run"]  # the old contents: deleted
+    with pytest.raises(ValueError, match="is not a folder"):
+        train(cfg, out / "run.json", **kw)

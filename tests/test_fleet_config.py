@@ -143,6 +143,27 @@ def test_unknown_keys_are_refused_at_every_level(tmp_path: Path) -> None:
         FleetConfig.load(path)
 
 
+def test_yaml_1_1_exponent_strings_are_numbers_in_lists_as_in_single_values(
+    tmp_path: Path,
+) -> None:
+    """YAML 1.1 reads ``1e4`` (no dot) as a string: in a list (amounts, the mission mix) it
+    means the number, as it does for a single value; a string that is no number is refused
+    naming its entry."""
+    path = tmp_path / "fleet.yaml"
+    types = "[standard, utility, offshore_gusts]"
+    path.write_text(
+        f"fleet:\n  mission_types: {types}\n  mission_value_usd: [1e4, 2e4, 3e4]\n"
+        "  demand:\n    mission_mix: [5e-1, 3e-1, 2e-1]\n    surge_days: 2e0\n"
+    )
+    got = FleetConfig.load(path)
+    assert got.mission_value_usd == (10000.0, 20000.0, 30000.0)
+    assert got.demand.mission_mix == (0.5, 0.3, 0.2)
+    assert got.demand.surge_days == 2
+    path.write_text(f"fleet:\n  mission_types: {types}\n  mission_value_usd: [1e4, lots, 3e4]\n")
+    with pytest.raises(ValueError, match=r"mission_value_usd\[1\] = 'lots' \(not a number\)"):
+        FleetConfig.load(path)
+
+
 @pytest.mark.parametrize("suffix", [".toml", ".yaml", ".json"])
 def test_files_round_trip(tmp_path: Path, suffix: str) -> None:
     cfg = FleetConfig(

@@ -411,6 +411,49 @@ def test_a_mission_type_s_damage_per_flight_is_the_calibration_s_times_its_multi
             assert worn == pytest.approx(wear_mult, rel=0.003), name
 
 
+def test_every_actuator_of_an_aircraft_flies_the_flight_on_which_one_fails() -> None:
+    """A failure ends its aircraft's day after the failing flight, for every actuator alike:
+    on such a day each surviving actuator spends the seal life of the flights credited plus
+    the failing one (standard missions: one standard flight of life each), whatever its
+    index against the failing actuator's; on other days exactly the flights credited."""
+    cfg = FleetConfig(
+        flights_per_mission=4,
+        background_removals=0,
+        unlimited_crew=1,
+        mission_types=("standard",),
+        mission_value_usd=(5000.0,),
+        mission_not_flown_usd=(5000.0,),
+        demand=DemandModel(mission_mix=(1.0,), flight_hours_per_aircraft_year=1200.0),
+    )
+    env = ScasFleetEnv(fleet=cfg)
+    fb, a = env.fleet, env.fleet.actuators.a
+    sh = fb.shape
+    failing_days = {"lower": 0, "higher": 0}
+    for seed in range(3):
+        _, info = env.reset(seed=seed)
+        for day in range(120):
+            act = np.zeros((sh.aircraft, 1 + sh.actuators), dtype=np.int64)
+            act[:, 0] = info["action_mask"][:, 1]  # fly the mission wherever allowed
+            life = a["life"].copy()
+            _, _, _, _, info = env.step(act.ravel())
+            failed = {
+                (r["aircraft"], r["actuator"])
+                for r in fb.log.records[0]
+                if r["day"] == day and r["kind"] == "failure"
+            }
+            for i in range(sh.aircraft):
+                rows = [fb.row(0, i, j) for j in range(sh.actuators)]
+                lost = [j for j in range(sh.actuators) if (i, j) in failed]
+                for j, e in enumerate(rows):
+                    if j in lost:
+                        continue
+                    used = life[e, 1] - a["life"][e, 1]
+                    assert used == pytest.approx(a["flew"][e] + (1 if lost else 0)), (i, j)
+                    if lost:
+                        failing_days["lower" if j < min(lost) else "higher"] += 1
+    assert failing_days["lower"] > 0 and failing_days["higher"] > 0  # both orders seen
+
+
 # ---------------------------------------------------------------------- in-service start
 def test_parts_in_service_have_flown_their_ages_and_know_their_remaining_lives() -> None:
     """A part in service at reset is the new part of the same seed flown ``age`` standard

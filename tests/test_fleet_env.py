@@ -487,6 +487,25 @@ def test_bad_resets_and_out_of_order_calls_are_refused() -> None:
         env.step(np.zeros(12, dtype=np.int64))
 
 
+@pytest.mark.parametrize("env_id", ["scas_env/ScasMaintenance-v2", "scas_env/ScasFleet-v0"])
+def test_vector_envs_refuse_bad_seed_lists_as_the_single_env_refuses_bad_seeds(
+    env_id: str,
+) -> None:
+    """Every native vector env checks each entry of a seed list (a float, a bool, a string or
+    a negative entry was used or passed on by the fleet's); None entries and numpy integers
+    are seeds."""
+    venv = gym.make_vec(env_id, num_envs=2, vectorization_mode="vector_entry_point")
+    for seed in ([0, 1.7], [0, True], [0, "3"], [0, -1]):
+        with pytest.raises(ValueError, match=r"each entry must be None or an int >= 0"):
+            venv.reset(seed=seed)
+    for seed in (-1, True, 2.0, [0]):
+        with pytest.raises(ValueError, match=r"seed = .* must be None"):
+            venv.reset(seed=seed)
+    first, _ = venv.reset(seed=[np.int64(4), None])
+    again, _ = venv.reset(seed=[4, 9])
+    np.testing.assert_array_equal(first[0], again[0])
+
+
 # ---------------------------------------------------------------------- dashboard
 def test_the_dashboard_draws_the_fleet() -> None:
     env = ScasFleetEnv(fleet=SMALL, render_mode="rgb_array")

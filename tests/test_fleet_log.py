@@ -52,19 +52,23 @@ def episode() -> tuple[gym.Env, list[tuple], list[dict]]:
 
 
 def test_the_records_agree_with_the_envs_counters(episode: tuple) -> None:
-    """Failures per part, preventive replacements (replacements less failures and
-    background swaps), one background record per part and swap, and one test record per
-    tested actuator and part not failing that day: the info's counters, kept by the
-    kernels, give the same numbers."""
-    _, days, log = episode
+    """Failures per part, preventive replacements (parts fitted less the failures and
+    background swaps repaired: those still waiting at the end fitted none yet), one
+    background record per part and swap, and one test record per tested actuator and part
+    not failing that day: the info's counters, kept by the kernels, give the same numbers."""
+    env, days, log = episode
     info = days[-1][2]
+    fleet = env.unwrapped.fleet
+    broken = fleet.actuators.a["broken"][fleet.rows_of(0)].sum(axis=0)
     count = Counter((r["kind"], r["part"]) for r in log)
     bg = int(info["background_removals"])
-    for part in PARTS:
+    swapped = bg - int(fleet.removed[0].sum())
+    for p, part in enumerate(PARTS):
         failures = int(info["failures"][part])
         assert count["failure", part] == failures
         assert count["background", part] == bg
-        assert count["preventive", part] == int(info["replacements"][part]) - failures - bg
+        repaired = failures - int(broken[p])
+        assert count["preventive", part] == int(info["replacements"][part]) - repaired - swapped
     assert count["preventive", "spring"] + count["preventive", "seal"] > 0
     assert count["test", "spring"] > 0
     for _, before, after, records in days:
@@ -148,6 +152,53 @@ def test_the_runner_scores_and_events_come_from_the_log() -> None:
             want[key + "covered"] += got[2]
     assert {k: out["row"][k] for k in want} == want
     assert want["prog_test_spring_n"] > 0 and want["prog_replacement_seal_n"] > 0
+
+
+def test_preventive_replacements_are_counted_when_failures_and_swaps_still_wait() -> None:
+    """A row's ``replacements_*`` are its preventive replacements: 0 for the corrective rule,
+    which never replaces a serviceable part, also when failures and background swaps still
+    wait for spares at the end (no actuator pool, frequent swaps; subtracting the waiting
+    removals from the parts fitted gave negative counts)."""
+    from scas_env.core.fleet.config import SparesConfig
+
+    fleet = FleetConfig(episode_days=60, mtbur_fh=150.0, spares=SparesConfig(actuator_pool=0))
+    venv = gym.make_vec("scas_env/ScasFleet-v0", num_envs=2,
+                        vectorization_mode="vector_entry_point", fleet=fleet)  # fmt: skip
+    policy = make_policy("fleet_corrective", venv.unwrapped.obs_names)
+    rows = [r["row"] for r in run_fleet_episodes(venv, policy, [(0, 0), (1, 1)])]
+    assert all(r["jobs_waiting"] > 0 and r["background_removals"] > 0 for r in rows)
+    assert [(r["replacements_spring"], r["replacements_seal"]) for r in rows] == [(0, 0)] * 2
+
+
+def test_the_random_fleet_policy_chooses_only_what_the_mask_allows() -> None:
+    """``fleet_random`` reads tomorrow's demand and the no-go holds from the observation: every
+    entry of every day's action is allowed by the env's mask (a type asked tomorrow, a test
+    where a failed test holds the aircraft); ``reset()`` without a seed continues its streams
+    (two runs from the same seeds choose alike) and a seed restarts them."""
+    env = gym.make("scas_env/ScasFleet-v0", fleet=FleetConfig(episode_days=90))
+    sh = env.unwrapped.fleet.shape
+    k = sh.types
+    runs = []
+    for _ in range(2):
+        policy = FleetRandom(env.unwrapped.obs_names, **RANDOM)
+        policy.reset(seed=[5])
+        chosen = []
+        for episode in range(2):
+            policy.reset()
+            obs, info = env.reset(seed=episode)
+            for _ in range(90):
+                action, _ = policy.predict(obs, deterministic=True)
+                act, mask = action.reshape(sh.aircraft, -1), info["action_mask"]
+                aircraft = np.arange(sh.aircraft)
+                assert mask[aircraft, act[:, 0]].all()
+                for j in range(sh.actuators):
+                    assert mask[aircraft, 1 + 2 * k + 4 * j + act[:, 1 + j]].all()
+                chosen.append(act)
+                obs, _, _, _, info = env.step(action)
+        runs.append(np.stack(chosen))
+    np.testing.assert_array_equal(runs[0], runs[1])
+    tested = runs[0][:, :, 0] > k
+    assert tested.any() and (runs[0][:, :, 1:] > 0).any()  # tests and replacements occur
 
 
 def test_log_scores_skip_removals_and_lives_without_a_finite_truth() -> None:

@@ -75,7 +75,8 @@ def test_convergence_centroid() -> None:
     # x_c = (100 * 4 + 300 * 2) / 2 / 60 = 25/3; y_c = (10 * 16 + 10 * 4) / 2 / 60 = 5/3
     c = convergence(np.array([0.0, 10.0, 20.0]), np.array([4.0, 2.0, 0.0]))
     assert c == pytest.approx(math.hypot(25.0 / 3.0, 5.0 / 3.0))
-    assert convergence(np.array([5.0, 6.0]), np.array([0.0, 3.0])) == 0.0
+    with pytest.raises(ValueError, match="metric > 0"):  # no area: the centroid is 0 / 0
+        convergence(np.array([5.0, 6.0]), np.array([0.0, 3.0]))
 
 
 def test_evaluate_predictions_by_hand() -> None:

@@ -76,11 +76,14 @@ def test_left_truncated_lives_give_the_true_survival_back() -> None:
     assert float(_at(naive, 100.0)) - np.exp(-1.0) > 0.1
 
 
-def test_lives_removed_at_entry_are_left_out_and_bad_ages_refused() -> None:
+def test_a_removal_at_the_entry_age_counts_there_and_bad_ages_are_refused() -> None:
+    """A part entering at age 5 and removed before flying is a removal at 5 with three
+    parts at risk (ages count whole flights, as a new part removed at age 0 is one in
+    scipy's estimate): S(5) = 2/3, then at 7 two at risk, S(7) = 2/3 * 1/2."""
     got = delayed_entry_km(np.array([5.0, 7.0, 9.0]), np.array([True, True, False]),
                            np.array([5.0, 0.0, 0.0]))  # fmt: skip
-    np.testing.assert_array_equal(got.quantiles, [7.0])
-    np.testing.assert_allclose(got.probabilities, [0.5])
+    np.testing.assert_array_equal(got.quantiles, [5.0, 7.0])
+    np.testing.assert_allclose(got.probabilities, [2.0 / 3.0, 1.0 / 3.0])
     assert kaplan_meier(_events([3.0], [False])) is None
     with pytest.raises(ValueError, match="entry_age <= exit_age"):
         delayed_entry_km(np.array([2.0]), np.array([True]), np.array([3.0]))

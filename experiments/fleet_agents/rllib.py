@@ -16,6 +16,11 @@ script. Install: ``pip install "ray[rllib]" pettingzoo`` and this package (Ray p
 gymnasium: use a separate virtual environment). From the repository root, a small run::
 
     python -m experiments.fleet_agents.rllib --iterations 3 --episode-days 60
+
+``--out`` (the checkpoint and ``summary.json``, with the project's ``manifest.json``) is written
+at the end, whole (:func:`scas_env.utils.results_folder.results_folder`); an existing non-empty
+one is refused before Ray starts, unless ``--overwrite`` (then replaced whole: never two runs'
+files mixed).
 """
 
 from __future__ import annotations
@@ -29,7 +34,9 @@ from typing import Any
 import numpy as np
 from gymnasium import spaces
 
+from scas_env.cli_args import check_out_dir
 from scas_env.multiagent import fleet_v1
+from scas_env.utils.results_folder import results_folder
 
 REWARD_SCALE, REWARD_CENTER = 1e-4, 2e4
 
@@ -104,7 +111,9 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--sample-timeout-s", type=float, default=1800.0)
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--out", type=Path, default=Path("results/rllib_fleet"))
+    parser.add_argument("--overwrite", action="store_true", help="replace an existing --out")
     args = parser.parse_args(argv)
+    check_out_dir(parser, args.out, args.overwrite)  # before Ray starts
 
     import ray
     from ray.rllib.algorithms.ppo import PPOConfig
@@ -154,7 +163,6 @@ def main(argv: list[str] | None = None) -> int:
         .debugging(seed=args.seed)
     )
     algo = config.build_algo()
-    args.out.mkdir(parents=True, exist_ok=True)
     history = []
     t0 = time.perf_counter()
     for i in range(args.iterations):
@@ -170,16 +178,19 @@ def main(argv: list[str] | None = None) -> int:
         }
         history.append(row)
         print(json.dumps(row), flush=True)
-    checkpoint = algo.save(str((args.out / "checkpoint").resolve()))
     summary = {
         "ray": ray.__version__,
         "episode_days": args.episode_days,
         "iterations": args.iterations,
         "wall_s": time.perf_counter() - t0,
         "history": history,
-        "checkpoint": str(getattr(checkpoint, "checkpoint", checkpoint)),
+        "checkpoint": str((args.out / "checkpoint").resolve()),  # where it ends up
     }
-    (args.out / "summary.json").write_text(json.dumps(summary, indent=2, default=str) + "\n")
+    seeds = {"seed": args.seed}
+    with results_folder(args.out, config=vars(args), seeds=seeds, overwrite=args.overwrite) as tmp:
+        algo.save(str((tmp / "checkpoint").resolve()))
+        text = json.dumps(summary, indent=2, default=str) + "\n"
+        (tmp / "summary.json").write_text(text)  # the folder is renamed into place whole
     algo.stop()
     ray.shutdown()
     return 0

@@ -6,7 +6,9 @@
 ``--rule``) is cloned first into ``OUT/clone`` (demonstrations and DAgger on training fleets)
 and PPO fine-tunes the clone with its observation statistics fixed; without it PPO starts from
 a random network. Checkpoints go to ``OUT/run``; choose one on validation seeds with
-``python -m experiments.fleet_agents.ship`` (docs/fleet_agents.md). The shipped joint agent::
+``python -m experiments.fleet_agents.ship`` (docs/fleet_agents.md). ``OUT`` must be new or
+empty (a rerun would mix its checkpoints with the last run's): ``--overwrite`` deletes its
+contents before the run starts. The shipped joint agent::
 
     python -m experiments.fleet_agents.train --kind joint --warm-start --rule fleet_naive \\
         --clone-epochs 40 --dagger-epochs 15 --clone-batch 256 --set n_steps=64 batch_size=256 \\
@@ -22,8 +24,16 @@ import time
 from pathlib import Path
 
 from experiments.fleet_agents.selection import best_tuned_rule
-from policies.agents.fleet.training import FleetPPOConfig, clone_rule, train
+from policies.agents.fleet.training import (
+    FleetPPOConfig,
+    check_run_folder,
+    clone_rule,
+    fresh_run_folder,
+    train,
+)
+from scas_env.cli_args import check_out_dir
 from scas_env.core.fleet.config import FleetConfig
+from scas_env.utils.atomic_file import write_text_atomic
 from scas_env.utils.parallel import single_thread
 
 
@@ -63,7 +73,17 @@ def main(argv: list[str] | None = None) -> int:
     )
     parser.add_argument("--threads", type=int, default=1, help="torch threads")
     parser.add_argument("--out", type=Path, required=True)
+    parser.add_argument(
+        "--overwrite", action="store_true", help="replace a non-empty --out (contents deleted)"
+    )
     args = parser.parse_args(argv)
+    check_out_dir(parser, args.out, args.overwrite)  # before any work: --out's one rule
+    inputs = {"--demos-cache": args.demos_cache, "--fleet": args.fleet,
+              "--rules-from": args.rules_from}  # fmt: skip
+    try:
+        check_run_folder(args.out, overwrite=args.overwrite, inputs=inputs)
+    except ValueError as exc:
+        parser.error(str(exc))
     if args.threads == 1:
         single_thread()
     else:
@@ -76,11 +96,12 @@ def main(argv: list[str] | None = None) -> int:
         overrides[key] = json.loads(value) if value[:1] in "[{" else _number(value)
     cfg = FleetPPOConfig(kind=args.kind, fleets=args.fleets).with_overrides(**overrides)
     env_kwargs = {"fleet": FleetConfig.load(args.fleet) if args.fleet else FleetConfig()}
-    args.out.mkdir(parents=True, exist_ok=True)
+    if args.warm_start:
+        name, params = best_tuned_rule(args.rules_from, args.rule)
+    fresh_run_folder(args.out, overwrite=args.overwrite, inputs=inputs)  # old run deleted
     t0 = time.perf_counter()
     init = None
     if args.warm_start:
-        name, params = best_tuned_rule(args.rules_from, args.rule)
         record = clone_rule(
             cfg,
             name,
@@ -111,7 +132,7 @@ def main(argv: list[str] | None = None) -> int:
     )
     total = time.perf_counter() - t0
     summary = {"command": _command(), "wall_s_total": total, "ppo": run}
-    (args.out / "train.json").write_text(json.dumps(summary, indent=2) + "\n")
+    write_text_atomic(args.out / "train.json", json.dumps(summary, indent=2) + "\n")
     print(f"{run['fleet_days']} fleet-days of PPO in {run['wall_s']:.0f} s; total {total:.0f} s")
     return 0
 

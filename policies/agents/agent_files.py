@@ -32,7 +32,8 @@ import json
 import math
 import re
 import zipfile
-from collections.abc import Mapping
+from collections.abc import Iterator, Mapping, Sequence
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
 from types import ModuleType
@@ -45,8 +46,10 @@ __all__ = [
     "LoadedModel",
     "NeedsPickle",
     "ObsNormalization",
+    "PolicyRandom",
     "build_policy",
     "convert_vecnormalize",
+    "global_rngs_kept",
     "read_json_file",
     "read_sb3_policy",
     "read_weights",
@@ -448,8 +451,9 @@ def zip_policy_class(path: Path, data: Mapping[str, Any]) -> type:
 
 class LoadedModel:
     """The part of an SB3 algorithm that acting needs, around a policy network read by
-    :func:`read_sb3_policy`: ``policy``, the spaces, ``policy_kwargs``, ``predict`` (the
-    policy's, as ``BaseAlgorithm.predict`` calls it) and ``set_random_seed``."""
+    :func:`read_sb3_policy`: ``policy``, the spaces, ``policy_kwargs`` and ``predict`` (the
+    policy's, as ``BaseAlgorithm.predict`` calls it). No ``set_random_seed``: SB3's re-seeds
+    the process-global generators; the agents keep their own (:class:`PolicyRandom`)."""
 
     def __init__(self, policy: Any, policy_kwargs: Mapping[str, Any], source: Path) -> None:
         self.policy = policy
@@ -470,15 +474,89 @@ class LoadedModel:
     ) -> tuple[np.ndarray, Any]:
         return self.policy.predict(observation, state, episode_start, deterministic, **kwargs)
 
-    def set_random_seed(self, seed: int) -> None:
-        """``BaseAlgorithm.set_random_seed`` (no env to seed here)."""
-        from stable_baselines3.common.utils import set_random_seed
-
-        set_random_seed(seed)
-        self.action_space.seed(seed)
-
     def __repr__(self) -> str:
         return f"LoadedModel({type(self.policy).__name__} from {self.source})"
+
+
+@contextmanager
+def global_rngs_kept() -> Iterator[None]:
+    """Run a block of library code that draws from or re-seeds the process-global generators
+    and put the states of ``random``, ``numpy.random`` and torch's CPU generator back after:
+    building a network draws its initial weights (overwritten by the file's) from torch's,
+    and SB3's ``BaseAlgorithm.load`` re-seeds all three with the seed saved in the zip."""
+    import random
+
+    import torch
+
+    py_state = random.getstate()
+    np_state = np.random.get_state()  # noqa: NPY002 (saved to be put back, never drawn from)
+    try:
+        with torch.random.fork_rng(devices=[]):
+            yield
+    finally:
+        random.setstate(py_state)
+        np.random.set_state(np_state)  # noqa: NPY002 (the caller's state, put back)
+
+
+class PolicyRandom:
+    """An agent's own random streams for ``deterministic=False`` actions: the project's one
+    random path, so the process-global ``torch``, ``numpy`` and ``random`` generators are
+    neither drawn from nor re-seeded (SB3's ``set_random_seed`` would re-seed all three).
+
+    - ``torch``: the state of a CPU ``torch.Generator`` seeded with ``seed`` (the state
+      ``torch.manual_seed(seed)`` would give). SB3's ``predict`` samples from the global CPU
+      generator, so :meth:`torch_stream` runs a block with the global state swapped for this
+      one (``torch.random.fork_rng``: the caller's state is put back after, this one saved).
+      The agents act on the CPU (``device="cpu"``), so no CUDA state is involved.
+    - ``numpy``: a ``numpy.random.Generator`` seeded with ``seed``, for draws the agent makes
+      itself (a DQN's epsilon-greedy exploration, :class:`policies.agents.sb3_agents.SB3Agent`).
+
+    ``seed=None`` (also a new object given no seed) seeds both from fresh operating-system
+    entropy: not reproducible, and still no global generator touched.
+
+    >>> import torch
+    >>> rng, before = PolicyRandom(seed=3), torch.get_rng_state()
+    >>> with rng.torch_stream():
+    ...     a = torch.rand(2)
+    >>> bool((torch.get_rng_state() == before).all())  # the global generator: untouched
+    True
+    >>> bool((a == torch.rand(2, generator=torch.Generator().manual_seed(3))).all())
+    True
+    """
+
+    def __init__(self, seed: int | Sequence[int] | None = None) -> None:
+        self.seed(seed)
+
+    def seed(self, seed: int | Sequence[int] | None) -> None:
+        """Re-seed both streams. A sequence of seeds (a batch of episodes) uses its first
+        seed: one stream serves the whole batch (module docstring of the agents)."""
+        import torch
+
+        if seed is not None and np.ndim(seed) > 0:  # a batch's seeds (a list, an array)
+            batch = np.ravel(np.asarray(seed))
+            seed = int(batch[0]) if batch.size else None
+        if seed is None:
+            entropy = np.random.SeedSequence()
+            self.numpy = np.random.default_rng(entropy)
+            torch_seed = int(entropy.generate_state(1, np.uint64)[0])
+        else:
+            torch_seed = int(seed) % 2**32  # as SB3's set_random_seed did (numpy's range)
+            self.numpy = np.random.default_rng(torch_seed)
+        self._torch_state = torch.Generator().manual_seed(torch_seed).get_state()
+
+    @contextmanager
+    def torch_stream(self) -> Iterator[None]:
+        """Within the block torch's global CPU generator draws from this stream; after it,
+        the global generator is back where it was and this stream continues from where the
+        block left it (also when the block raises)."""
+        import torch
+
+        with torch.random.fork_rng(devices=[]):
+            torch.set_rng_state(self._torch_state)
+            try:
+                yield
+            finally:
+                self._torch_state = torch.get_rng_state()
 
 
 def read_sb3_policy(
@@ -517,7 +595,8 @@ def build_policy(
     if "use_sde" in inspect.signature(cls.__init__).parameters:
         extra["use_sde"] = bool(data.get("use_sde", False))
     try:
-        policy = cls(obs_space, action_space, lambda _: 0.0, **extra, **kwargs)
+        with global_rngs_kept():  # its initial weights, drawn here, are replaced below
+            policy = cls(obs_space, action_space, lambda _: 0.0, **extra, **kwargs)
     except TypeError as exc:
         raise ValueError(
             f"{path}: its policy_kwargs {kwargs} do not build a {cls.__name__}: {exc}"

@@ -28,6 +28,16 @@ agent in ``policies/data`` is also checked against the SHA-256 manifest of shipp
 (``scas_env/actuator/data/shipped_files.json``), and an agent whose metadata records
 ``weights_sha256`` against it (a corrupted or altered copy is refused). ``module:factory``
 imports and runs that module's code: trusted code only.
+
+Randomness. With ``deterministic=True`` (the benchmark's) an agent draws nothing. With
+``deterministic=False`` it samples from its own streams
+(:class:`policies.agents.agent_files.PolicyRandom`), never from the process-global ``torch``,
+``numpy`` or ``random`` generators, and ``reset(seed)`` re-seeds only those streams (SB3's
+``set_random_seed``, which re-seeds all three, is not called).
+A batch of seeds (``reset(seed=[s0, s1, ...])``, one per row, as the benchmark passes them)
+seeds **one** stream from its first seed ``s0``: the network samples the whole batch at once,
+so a row's stochastic actions depend on ``s0``, on the row's place in the batch and on the
+other rows' observations; the same batch with the same seeds gives the same actions.
 """
 
 from __future__ import annotations
@@ -44,6 +54,8 @@ import numpy as np
 from policies.agents.agent_files import (
     NeedsPickle,
     ObsNormalization,
+    PolicyRandom,
+    global_rngs_kept,
     read_json_file,
     read_sb3_policy,
     require_contrib,
@@ -160,6 +172,7 @@ class SB3Agent:
         self.normalizer = normalizer
         self.obs_names = tuple(obs_names)
         self.masked = masked
+        self.rng = PolicyRandom()
         if masked:
             missing = [n for n in MASK_READS if n not in self.obs_names]
             if missing:
@@ -186,18 +199,47 @@ class SB3Agent:
         kwargs: dict[str, Any] = {}
         if self.masked:
             kwargs["action_masks"] = maintenance_mask(*(obs[..., c] for c in self._mask_cols))
-        actions, state = self.model.predict(
+        actions, state = self._model_predict(
             norm, state=state, episode_start=episode_start, deterministic=deterministic, **kwargs
         )
         actions = np.asarray(actions, dtype=np.int64)
         return (int(actions) if obs.ndim == 1 else actions.reshape(-1)), state
 
+    def _model_predict(
+        self, obs: np.ndarray, *, deterministic: bool, **kwargs: Any
+    ) -> tuple[np.ndarray, Any]:
+        """``model.predict`` drawing from the agent's own streams (module docstring).
+
+        ``deterministic=True``: called as it is (nothing is drawn). Otherwise SB3 samples
+        from torch's global CPU generator, so the call runs on the agent's torch stream
+        (:meth:`PolicyRandom.torch_stream`). A DQN or QR-DQN loaded by SB3's own loader
+        (``trust_pickle``) explores epsilon-greedily with ``numpy.random`` and its action
+        space's generator in ``predict``; that is done here instead, from the agent's numpy
+        stream: each row independently (SB3 draws one coin for the whole batch; the same for
+        one row) takes a uniform action with probability ``model.exploration_rate``, else the
+        greedy one. (A DQN read without unpickling is a bare Q-network: always greedy.)
+        """
+        if deterministic:
+            return self.model.predict(obs, deterministic=True, **kwargs)
+        epsilon = getattr(self.model, "exploration_rate", None)
+        if epsilon is None:
+            with self.rng.torch_stream():
+                return self.model.predict(obs, deterministic=False, **kwargs)
+        actions, state = self.model.predict(obs, deterministic=True, **kwargs)
+        actions = np.array(actions, dtype=np.int64)
+        explore = self.rng.numpy.random(actions.shape) < float(epsilon)
+        space = self.model.action_space
+        start = int(getattr(space, "start", 0))
+        uniform = self.rng.numpy.integers(start, start + int(space.n), size=actions.shape)
+        return np.where(explore, uniform, actions), state
+
     def reset(self, seed: int | Sequence[int] | None = None) -> None:
-        """New episode. ``seed`` re-seeds SB3's global generators (``set_random_seed``) for
-        reproducible ``deterministic=False`` actions; for a batch the first seed is used."""
+        """New episode(s). ``seed`` re-seeds the agent's own random streams (for reproducible
+        ``deterministic=False`` actions; the global generators are left alone): an ``int``,
+        or a batch's seeds, one per row, of which the first seeds the one stream the batch
+        shares (module docstring). ``None`` keeps the streams running."""
         if seed is not None:
-            first = seed[0] if isinstance(seed, Sequence) else seed
-            self.model.set_random_seed(int(first) % 2**32)
+            self.rng.seed(seed)
 
 
 class EpochAgent(SB3Agent):
@@ -279,7 +321,7 @@ class EpochAgent(SB3Agent):
                     norm, np.repeat(m, len(self.ks), axis=-1), deterministic
                 )
             else:
-                chosen, _ = self.model.predict(norm, deterministic=deterministic)
+                chosen, _ = self._model_predict(norm, deterministic=deterministic)
             chosen = np.asarray(chosen, dtype=np.int64).reshape(-1)
             maintenance = chosen // len(self.ks)
             delegating[due] = maintenance == DELEGATE
@@ -297,7 +339,7 @@ class EpochAgent(SB3Agent):
         weights (the shipped copy, loadable without sb3-contrib) the same rule by hand: the
         masked actions' logits set to -inf, then argmax (or a sample)."""
         if _masked(self.model):
-            return self.model.predict(norm, deterministic=deterministic, action_masks=masks)[0]
+            return self._model_predict(norm, deterministic=deterministic, action_masks=masks)[0]
         import torch
 
         with torch.no_grad():
@@ -306,7 +348,8 @@ class EpochAgent(SB3Agent):
             logits = logits.masked_fill(~torch.as_tensor(masks), -torch.inf)
             if deterministic:
                 return logits.argmax(dim=1).numpy()
-            return torch.distributions.Categorical(logits=logits).sample().numpy()
+            with self.rng.torch_stream():
+                return torch.distributions.Categorical(logits=logits).sample().numpy()
 
 
 # ---------------------------------------------------------------------------- loading
@@ -563,7 +606,8 @@ def load_sb3_policy(
             raise ValueError(f"{path}: {why}; {_TRUST}") from None
         cls = algo_class(algo if algo is not None else meta.get("algo"), zip_data(path))
         try:
-            model = cls.load(path, device="cpu")  # unpickles: trusted by the caller
+            with global_rngs_kept():  # SB3's load re-seeds them with the zip's training seed
+                model = cls.load(path, device="cpu")  # unpickles: trusted by the caller
         except Exception as exc:
             raise ValueError(f"{path}: SB3 cannot load this {cls.__name__} zip: {exc!r}") from exc
         _check_model(path, model, obs_size, n_actions, env)

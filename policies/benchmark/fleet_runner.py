@@ -114,7 +114,7 @@ def run_fleet_episodes(
     out: list[dict[str, Any]] = []
     for e in range(n):
         log = fleet.episode_log(e)
-        row = fleet_row(info, e, float(reward[e]))
+        row = fleet_row(info, e, float(reward[e]), log)
         row.update(log_scores(log, cap) if beliefs else dict.fromkeys(decision_columns(), 0.0))
         kept = (*REMOVAL_KINDS, "censored")
         events = [{k: r[k] for k in EVENT_FIELDS} for r in log if r["kind"] in kept]
@@ -153,8 +153,16 @@ def day_record(info: dict[str, Any], e: int) -> dict[str, Any]:
     }
 
 
-def fleet_row(info: dict[str, Any], e: int, reward: float) -> dict[str, Any]:
-    """Fleet ``e``'s results row from a vector info at the end of its episode."""
+def fleet_row(
+    info: dict[str, Any], e: int, reward: float, log: Sequence[dict[str, Any]]
+) -> dict[str, Any]:
+    """Fleet ``e``'s results row from a vector info at the end of its episode and its
+    maintenance ``log`` (preventive replacements counted from its records: a failure or a
+    swap still waiting at the end is no replacement yet)."""
+    preventive = dict.fromkeys(PARTS, 0)
+    for r in log:
+        if r["kind"] == "preventive":
+            preventive[r["part"]] += 1
     fh = float(info["flight_hours"][e])
     per_kfh = 1000.0 / fh if fh > 0 else math.nan
     failures = {p: int(info["failures"][p][e]) for p in PARTS}
@@ -179,10 +187,8 @@ def fleet_row(info: dict[str, Any], e: int, reward: float) -> dict[str, Any]:
         "background_removals": background,
         "unscheduled_removals": unscheduled,
         "unscheduled_per_1000fh": unscheduled * per_kfh,
-        "replacements_spring": int(info["replacements"]["spring"][e])
-        - failures["spring"]
-        - background,
-        "replacements_seal": int(info["replacements"]["seal"][e]) - failures["seal"] - background,
+        "replacements_spring": preventive["spring"],
+        "replacements_seal": preventive["seal"],
         "tests": int(info["tests"][e]),
         "stock_outs": int(sum(int(v[e]) for v in info["stock_outs"].values())),
         "waiting_job_days": int(info["waiting_job_days"][e]),

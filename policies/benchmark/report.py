@@ -45,8 +45,8 @@ __all__ = ["cost_breakdown", "format_table", "markdown_summary", "write_outputs"
 
 #: How the per-policy intervals are made (policies.benchmark.stats).
 INTERVALS = (
-    "rates: exact Poisson on pooled counts; availability, cost/FH, wasted life: percentile "
-    "bootstrap; reward: t"
+    "rates: exact Poisson on pooled counts; availability, cost/FH, wasted life (fleets also "
+    "crew utilisation, stock-outs, waiting job-days): percentile bootstrap; reward: t"
 )
 #: Why the rates are finite-horizon (experiments.renewal has the long-run ones).
 FINITE_HORIZON = (

@@ -9,13 +9,17 @@ the estimate upward.
 
 Without delayed entry (every entry 0) the estimate is ``scipy.stats.ecdf`` on
 ``CensoredData``. With delayed entry scipy has no estimator, so the product-limit estimate
-with risk sets ``{entry < t <= exit}`` is written here (Klein and Moeschberger 2003,
+with risk sets ``{entry <= t <= exit}`` is written here (Klein and Moeschberger 2003,
 *Survival Analysis*, section 4.6; Tsai, Jewell and Wang 1987, *Biometrika* 74:883): at
-each removal age ``t``, ``S`` is multiplied by ``1 - d(t) / n(t)`` with ``d`` the removals
-at ``t`` and ``n`` the parts at risk (entered before ``t``, not yet gone; censored at ``t``
-still at risk). A part removed at its entry age (before flying in the episode) carries no
-information on its survival past that age and is left out. It equals scipy's estimate when
-every entry is 0 (``tests/test_survival.py``).
+each removal age ``t``, ``S`` is multiplied by ``(n(t) - d(t)) / n(t)`` with ``d`` the
+removals at ``t`` and ``n`` the parts at risk (entered at or before ``t``, not yet gone;
+censored at ``t`` still at risk). Ages count whole flights, so a part in service at age
+``a`` can be removed at ``a`` before its next flight whether it entered at ``a`` or earlier:
+a part removed at its entry age (at age 0 for a part fitted new, or at ``a0`` before flying
+in the episode) is a removal at that age, as in scipy's estimate. It equals scipy's
+estimate, value for value, when every entry is 0 (``tests/test_survival.py``,
+``tests/test_stats_edges.py``); its ``quantiles`` are the removal ages only, where scipy's
+also list the censoring ages (steps of factor 1).
 """
 
 from __future__ import annotations
@@ -58,7 +62,7 @@ def delayed_entry_km(
 ) -> Survival | None:
     """The product-limit estimate with delayed entry (module docstring): lives from
     ``entry_age`` to ``exit_age`` (flights), ``removed`` where the exit is a removal, else
-    right-censored. ``None`` without an informative removal."""
+    right-censored. ``None`` without a removal."""
     exit_age = np.asarray(exit_age, dtype=float)
     entry_age = np.asarray(entry_age, dtype=float)
     removed = np.asarray(removed, dtype=bool)
@@ -71,15 +75,13 @@ def delayed_entry_km(
         raise ValueError("ages must be finite")
     if (entry_age < 0).any() or (exit_age < entry_age).any():
         raise ValueError("ages must satisfy 0 <= entry_age <= exit_age")
-    keep = exit_age > entry_age
-    exit_age, entry_age, removed = exit_age[keep], entry_age[keep], removed[keep]
     times, deaths = np.unique(exit_age[removed], return_counts=True)
     if times.size == 0:
         return None
-    entered = np.searchsorted(np.sort(entry_age), times, side="left")  # entry < t
+    entered = np.searchsorted(np.sort(entry_age), times, side="right")  # entry <= t
     gone = np.searchsorted(np.sort(exit_age), times, side="left")  # exit < t
-    at_risk = entered - gone
-    return Survival(times, np.cumprod(1.0 - deaths / at_risk))
+    at_risk = entered - gone  # >= deaths: a part removed at t is at risk at t
+    return Survival(times, np.cumprod((at_risk - deaths) / at_risk))  # as scipy's ecdf
 
 
 __all__ = ["Survival", "delayed_entry_km", "kaplan_meier"]

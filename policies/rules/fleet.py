@@ -324,9 +324,11 @@ def _type_severity(types: Sequence[str]) -> list[float]:
 
 
 class FleetRandom:
-    """Random valid choices (``fleet_random``): a free aircraft asks for a random type
-    tomorrow with probability ``p_fly``, tests with ``p_test``; each flown part is replaced
-    with probability ``p_replace`` a day. One generator per episode (``reset(seed=...)``)."""
+    """Random valid choices (``fleet_random``): a free aircraft asks with probability
+    ``p_fly`` for one of the types asked tomorrow (uniform among them; none asked: it stands
+    by), tests with ``p_test`` (always when a failed test holds it); each flown part is
+    replaced with probability ``p_replace`` a day: every choice one the env's mask allows.
+    One generator per episode (``reset(seed=...)``; ``reset()`` keeps the current ones)."""
 
     name = "fleet_random"
 
@@ -341,6 +343,8 @@ class FleetRandom:
         self.layout = lay = FleetLayout(obs_names)
         self.obs_names = tuple(obs_names)
         self._free = lay.aircraft_cols("free")
+        self._held = lay.aircraft_cols("no_go")
+        self._asked = lay.demand_cols()
         self._age = {p: lay.actuator_cols(f"{p}_age") for p in PARTS}
         self._rngs = [np.random.default_rng(0)]
 
@@ -348,6 +352,8 @@ class FleetRandom:
         return {"p_fly": self.p[0], "p_test": self.p[1], "p_replace": self.p[2]}
 
     def reset(self, seed: Any = None) -> None:
+        if seed is None:  # the protocol's reset between episodes: the streams go on
+            return
         seeds = seed if isinstance(seed, list | tuple) else [seed]
         self._rngs = [np.random.default_rng(s) for s in seeds]
 
@@ -361,9 +367,10 @@ class FleetRandom:
         for b in range(obs.shape[0]):
             rng = self._rngs[b % len(self._rngs)]
             u = rng.random((lay.n, 3 + 2 * lay.a))
-            fly = (obs[b, self._free] > 0.5) & (u[:, 0] < self.p[0])
-            kind = (u[:, 1] * lay.k).astype(np.int64)
-            test = u[:, 2] < self.p[1]
+            asked = np.flatnonzero(obs[b, self._asked] > 0)
+            fly = (obs[b, self._free] > 0.5) & (u[:, 0] < self.p[0]) & (asked.size > 0)
+            kind = asked[(u[:, 1] * asked.size).astype(np.int64)] if asked.size else 0
+            test = (u[:, 2] < self.p[1]) | (obs[b, self._held] > 0.5)
             out[b, :, 0] = np.where(fly, 1 + kind + lay.k * test, 0)
             rep = u[:, 3:].reshape(lay.n, lay.a, 2) < self.p[2]
             rep &= np.stack([obs[b, self._age[p]] > 0 for p in PARTS], axis=-1)

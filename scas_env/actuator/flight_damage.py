@@ -201,7 +201,8 @@ class CrackRateTable:
 
     Attributes
     ----------
-    depth_m : depth grid (m), from the smallest depth that grows to the failure depth.
+    depth_m : depth grid (m), from the smallest depth that grows (0.1 um if every depth
+        grows) to the failure depth.
     rate_m_per_flight : growth per flight at each depth (m), all > 0.
     failure_depth_m : failure depth of the (nominal) spring (m).
     dormant_below_m : below this depth no cycle of the spectrum exceeds the threshold and
@@ -214,13 +215,20 @@ class CrackRateTable:
     dormant_below_m: float
 
 
+#: Smallest depth (m) :func:`crack_rate_table` considers: the lower end of its search for the
+#: dormant depth, and the start of its grid when every depth grows (no threshold).
+_SMALLEST_DEPTH_M = 1e-7
+
+
 def crack_rate_table(
     params: ScasParams, loads: FlightLoads, *, n_grid: int = 160
 ) -> CrackRateTable:
     """Tabulate growth per flight of the nominal unit on a grid up to the failure depth.
 
     The grid is geometric (dense where the crack is small and the rate varies most) and
-    starts at the smallest depth with a positive rate (found by bisection).
+    starts at the smallest depth with a positive rate (found by bisection), or at
+    ``_SMALLEST_DEPTH_M`` = 0.1 um when the crack grows there already (threshold 0, plain
+    Paris: no dormant depth).
     """
     if n_grid < 8:
         raise ValueError(f"n_grid = {n_grid} must be >= 8")
@@ -231,17 +239,18 @@ def crack_rate_table(
     def rate(a: float) -> float:
         return crack_increment_m(params, unit, model, a, loads)
 
-    lo, hi = 1e-7, a_fail
+    lo, hi = _SMALLEST_DEPTH_M, a_fail
     if rate(hi) <= 0.0:
         raise ValueError("no cycle of the flight loads grows a crack even at the failure depth")
-    if rate(lo) > 0.0:
+    if rate(lo) > 0.0:  # no threshold (or none reached): the crack grows from any depth
         dormant = 0.0
+        start = lo
     else:
         for _ in range(60):
             mid = math.sqrt(lo * hi)
             lo, hi = (mid, hi) if rate(mid) <= 0.0 else (lo, mid)
-        dormant = hi
-    depth = np.geomspace(hi, a_fail, n_grid)
+        dormant = start = hi
+    depth = np.geomspace(start, a_fail, n_grid)
     rates = np.array([rate(a) for a in depth])
     return CrackRateTable(depth, rates, a_fail, dormant)
 

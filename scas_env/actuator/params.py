@@ -159,7 +159,9 @@ class ActuatorParams(Validated):
         hi=1.0,
         lo_open=True,
         source="tanh regularisation of sign(v) in the Coulomb term; F_c/v_s sets the stiffest "
-        "mode, 2 mm/s keeps RK4 stable at sim_dt_s and friction work within 1.4% of 1 mm/s [B]",
+        "mode, 2 mm/s keeps RK4 stable at sim_dt_s; it counts a Table-1 window's friction "
+        "work 13% below the converged value (0.86 against 0.98 J at 0.25 mm/s: its small "
+        "cycles peak near 3 mm/s), so seal wear per flight is biased low by that [B]",
     )
     link_force_amplitude_n: float = param(
         0.0,
@@ -219,7 +221,9 @@ class SpringParams(Validated):
         lo=0.0,
         hi=1e-6,
         lo_open=True,
-        source="Barsom martensitic C/20 for mode III, ref §2.2 [B]; calibrated in docs/physics.md",
+        source="Barsom martensitic C/20 for mode III, ref §2.2 [B], not fitted; with Walker "
+        "(R 0.56 on the damaging cycles) a 100 um flaw fails in 1,051 flights (1,576 FH), "
+        "without it 3,290 (the reference's ~4,700 FH); lives: docs/physics.md",
     )
     paris_m: float = param(2.25, "-", lo=1.0, hi=6.0, source="ref §2.2 [B]")
     delta_k_threshold_mpa_sqrt_m: float = param(
@@ -287,7 +291,8 @@ class SealParams(Validated):
         lo=0.0,
         hi=1e-10,
         lo_open=True,
-        source="specific wear rate k_w (filled PTFE), ref §4.2 [B]; calibrated in docs/physics.md",
+        source="specific wear rate k_w (filled PTFE), ref §4.2 [B], not fitted; lives: "
+        "docs/physics.md",
     )
     friction_coefficient: float = param(0.1, "-", lo=0.0, hi=2.0, lo_open=True, source="ref §9")
     contact_width_m: float = param(0.001, "m", lo=0.0, hi=0.05, lo_open=True, source="ref §9")

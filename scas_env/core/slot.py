@@ -303,11 +303,12 @@ def slot_rows(
         if not ok:
             go[group[e]] = False
         most = max(most, flights[e])
-    # 2. the flights, flight by flight; a group's failure ends its flying
+    # 2. the flights, flight by flight; a failure ends its group's flying after that flight
+    # (every row of the group flies the failing flight, whatever its index)
     for f in range(most):
         for e in rows:
             g = group[e]
-            if not (wants[e] and go[g] and broken_at[g] < 0 and f < flights[e]):
+            if not (wants[e] and go[g] and broken_at[g] in (-1, f) and f < flights[e]):
                 continue
             c = min(crack[e] / fail[e], 1.0)
             w = min(wear[e] / wm.seal_critical_m, 1.0)

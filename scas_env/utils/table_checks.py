@@ -82,17 +82,19 @@ def whole_number(owner: str, name: str, value: Any, *, lo: int) -> int:
 def finite_numbers(
     label: str, values: Any, *, lo: float, hi: float = math.inf, allowed: str
 ) -> tuple[float, ...]:
-    """``values`` as a tuple of floats if each is an ``int`` or ``float`` (not a bool), finite
-    and in ``[lo, hi]``; else ``ValueError`` ``"<label>[k] = <value> <allowed>"`` naming the
-    first bad entry (``allowed``: what is allowed, with the unit if any)."""
+    """``values`` as a tuple of floats if each is an ``int``, a ``float`` or a numeric string
+    (YAML 1.1 reads ``1e5`` as one, as single values allow: ``check_value``), not a bool,
+    finite and in ``[lo, hi]``; else ``ValueError`` ``"<label>[k] = <value> <allowed>"``
+    naming the first bad entry (``allowed``: what is allowed, with the unit if any)."""
     out = []
     for k, v in enumerate(values):
         f = math.nan
-        if not isinstance(v, bool) and isinstance(v, (int, float)):
-            with contextlib.suppress(OverflowError):  # an int no float holds
+        if not isinstance(v, bool) and isinstance(v, (int, float, str)):
+            with contextlib.suppress(OverflowError, ValueError):  # an int no float holds
                 f = float(v)
         if not math.isfinite(f) or not lo <= f <= hi:
-            raise ValueError(f"{label}[{k}] = {v!r} {allowed}")
+            number = "" if not isinstance(v, str) or math.isfinite(f) else " (not a number)"
+            raise ValueError(f"{label}[{k}] = {v!r}{number} {allowed}")
         out.append(f)
     return tuple(out)
 

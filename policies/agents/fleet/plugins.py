@@ -27,6 +27,12 @@ pickled objects, or a ``*_vecnormalize.pkl`` without its JSON twin, is refused (
 trusted pickle once with :func:`policies.agents.agent_files.convert_vecnormalize`). The shipped
 files are checked against the package's SHA-256 manifest first, and the zip's weights against
 the ``weights_sha256`` its metadata records.
+
+Randomness, as for the single-actuator agents: ``deterministic=True`` (the benchmark's) draws
+nothing; ``deterministic=False`` samples from the agent's own torch stream
+(:class:`policies.agents.agent_files.PolicyRandom`), never from the process-global
+generators, and ``reset(seed)`` re-seeds that stream only (a batch's seeds: the first seeds
+the one stream the whole batch shares).
 """
 
 from __future__ import annotations
@@ -43,6 +49,7 @@ from policies.agents.agent_files import (
     LoadedModel,
     NeedsPickle,
     ObsNormalization,
+    PolicyRandom,
     build_policy,
     read_json_file,
     read_zip,
@@ -51,6 +58,7 @@ from policies.agents.agent_files import (
 from policies.agents.fleet.masks import FleetObsLayout
 from policies.agents.sb3_agents import DATA_DIR, check_manifest
 from policies.base import register_policy
+from scas_env.utils.atomic_file import write_text_atomic
 
 __all__ = [
     "FLEET_JOINT_AGENT",
@@ -94,6 +102,7 @@ class FleetAgent:
         if kind not in KINDS:
             raise ValueError(f"kind = {kind!r} must be one of {KINDS}")
         self.model, self.normalizer, self.kind = model, normalizer, kind
+        self.rng = PolicyRandom()
         self.obs_names = tuple(obs_names)
         self.layout = lay = FleetObsLayout(self.obs_names, tests_every_flight=tests_every_flight)
         self.agent_id, self.fleet_status = bool(agent_id), bool(fleet_status)
@@ -138,21 +147,29 @@ class FleetAgent:
         single = obs.ndim == 1
         batch = np.atleast_2d(obs)
         rows, masks = self.network_input(batch)
-        actions, _ = self.model.predict(rows, deterministic=deterministic, action_masks=masks)
+        if deterministic:
+            actions, _ = self.model.predict(rows, deterministic=True, action_masks=masks)
+        else:  # MaskablePPO samples from torch's global generator: run it on the agent's own
+            with self.rng.torch_stream():
+                actions, _ = self.model.predict(rows, deterministic=False, action_masks=masks)
         out = np.asarray(actions, dtype=np.int64).reshape(batch.shape[0], -1)
         return (out[0] if single else out), state
 
     def reset(self, seed: int | Sequence[int] | None = None) -> None:
-        """New episodes; ``seed`` seeds SB3's generators for ``deterministic=False``."""
+        """New episodes. ``seed`` re-seeds the agent's own stream for reproducible
+        ``deterministic=False`` actions (the global generators are left alone): an ``int``, or
+        a batch's seeds, one per fleet, of which the first seeds the one stream the batch
+        shares (the network samples every row at once). ``None`` keeps the stream running."""
         if seed is not None:
-            first = seed[0] if isinstance(seed, Sequence) else seed
-            self.model.set_random_seed(int(first) % 2**32)
+            self.rng.seed(seed)
 
 
 def write_agent_meta(path: Path, meta: dict[str, Any]) -> None:
-    """``<stem>.json`` beside the zip ``path`` (what :func:`load_fleet_agent` reads)."""
+    """``<stem>.json`` beside the zip ``path`` (what :func:`load_fleet_agent` reads), written
+    atomically (a reader never sees half a file)."""
     stem = path.name.removesuffix(".zip")
-    path.with_name(f"{stem}.json").write_text(json.dumps(meta, indent=2, sort_keys=True) + "\n")
+    text = json.dumps(meta, indent=2, sort_keys=True) + "\n"
+    write_text_atomic(path.with_name(f"{stem}.json"), text)
 
 
 def _ints(entry: Any) -> list[int]:

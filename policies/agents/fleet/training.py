@@ -18,6 +18,13 @@ env up: the adapter (rewards in USD per day) -> ``VecMonitor`` (episode rewards 
   and ``.json``: what :func:`policies.agents.fleet.plugins.load_fleet_agent` reads); the clone
   is checkpoint 0. ``progress.csv`` is SB3's log (``rollout/ep_rew_mean`` in USD).
 
+Output folders: each function writes into a folder of its own run. An existing non-empty
+folder is refused before any work (as ``scas-train`` refuses one: checkpoints of two runs
+would mix), unless ``overwrite=True``: then its old contents are deleted before the run writes
+(the folder replaced whole, as every results folder's ``overwrite``), and an input of the run
+inside it (the ``init`` checkpoint, a ``demos_cache``) is refused instead of deleted
+(:func:`fresh_run_folder`).
+
 Seeds: the training fleets' env seeds derive from ``SeedSequence([TRAIN_SEED, seed])`` (the
 demonstrations' from :func:`policies.benchmark.run.episode_seeds` on ``TRAIN_SEED``); the
 checkpoints are chosen on validation seeds (:mod:`experiments.fleet_agents.selection`).
@@ -26,6 +33,9 @@ checkpoints are chosen on validation seeds (:mod:`experiments.fleet_agents.selec
 from __future__ import annotations
 
 import json
+import os
+import shutil
+import tempfile
 import time
 from collections.abc import Mapping
 from dataclasses import asdict, dataclass, replace
@@ -45,8 +55,18 @@ from policies.agents.fleet.plugins import write_agent_meta
 from policies.agents.fleet.shared_adapter import FleetAgentsVecEnv
 from policies.agents.sb3_agents import require_contrib
 from scas_env.utils.atomic_file import write_text_atomic
+from scas_env.utils.results_folder import ResultsFolderError, ResultsFolderExistsError
 
-__all__ = ["TRAIN_SEED", "FleetPPOConfig", "clone_rule", "make_model", "make_training_env", "train"]
+__all__ = [
+    "TRAIN_SEED",
+    "FleetPPOConfig",
+    "check_run_folder",
+    "clone_rule",
+    "fresh_run_folder",
+    "make_model",
+    "make_training_env",
+    "train",
+]
 
 #: the project's training seed (``policies.value.tuning.TRAIN_SEED``)
 TRAIN_SEED = 1
@@ -102,6 +122,59 @@ class FleetPPOConfig:
         out = asdict(self)
         out["net_arch"] = list(self.net_arch)
         return out
+
+
+def check_run_folder(
+    out: str | Path,
+    *,
+    overwrite: bool = False,
+    inputs: Mapping[str, str | Path | None] | None = None,
+) -> Path:
+    """Check, doing nothing, that ``out`` can receive a run (module docstring): a missing or
+    empty folder can; a non-empty one only with ``overwrite`` (else
+    :class:`~scas_env.utils.results_folder.ResultsFolderExistsError`, a ``ValueError`` and a
+    ``FileExistsError``, naming the folder and the ways on); a file in its place never. With
+    ``overwrite``, ``inputs`` (name -> path) that lie inside a non-empty ``out`` are refused
+    (``ValueError``): replacing the folder would delete them."""
+    if not isinstance(overwrite, bool):
+        raise TypeError(f"overwrite = {overwrite!r} must be True or False")
+    out = Path(out)
+    if (out.exists() or out.is_symlink()) and not out.is_dir():
+        raise ResultsFolderError(f"out = {str(out)!r} exists and is not a folder; choose another")
+    if not (out.is_dir() and any(out.iterdir())):
+        return out
+    if not overwrite:
+        raise ResultsFolderExistsError(
+            f"out = {str(out)!r} exists and is not empty (another run's files: its checkpoints "
+            "would mix with this run's); choose a new one, or pass overwrite=True (--overwrite) "
+            "to delete its contents first"
+        )
+    root = out.resolve()
+    for name, path in (inputs or {}).items():
+        if path is not None and Path(path).resolve().is_relative_to(root):
+            raise ValueError(
+                f"{name} = {str(path)!r} is inside out = {str(out)!r}, whose contents "
+                "overwrite=True deletes; move it elsewhere first, or choose a new out"
+            )
+    return out
+
+
+def fresh_run_folder(
+    out: str | Path,
+    *,
+    overwrite: bool = False,
+    inputs: Mapping[str, str | Path | None] | None = None,
+) -> Path:
+    """``out`` as an empty folder for a run (:func:`check_run_folder` first): created if
+    missing; with ``overwrite`` a non-empty one is replaced whole, its old contents moved
+    aside (``.<name>.old-XXXX`` beside it) and deleted before the run writes anything."""
+    out = check_run_folder(out, overwrite=overwrite, inputs=inputs)
+    if out.is_dir() and any(out.iterdir()):  # allowed by overwrite
+        old = Path(tempfile.mkdtemp(prefix=f".{out.name}.old-", dir=out.parent))
+        os.rename(out, old / out.name)
+        shutil.rmtree(old, ignore_errors=True)
+    out.mkdir(parents=True, exist_ok=True)
+    return out
 
 
 def make_training_env(
@@ -201,11 +274,13 @@ def clone_rule(
     seed: int = 0,
     demos_cache: str | Path | None = None,
     progress: bool = False,
+    overwrite: bool = False,
 ) -> dict[str, Any]:
     """Clone the rule into a new network of ``cfg`` (module docstring); writes ``clone.zip``,
-    ``clone_normalization.json`` and ``clone.json`` into ``out``; returns the record.
-    ``demos_cache``: an ``.npz`` of the rule's demonstrations, read if it exists (the same
-    rule, seeds and reward units: not checked), else written."""
+    ``clone_normalization.json``, ``clone.json`` and ``clone_record.json`` into ``out``;
+    returns the record. ``demos_cache``: an ``.npz`` of the rule's demonstrations, read if it
+    exists (the same rule, seeds and reward units: not checked), else written. ``out`` must be
+    new or empty, unless ``overwrite`` (its old contents deleted first; module docstring)."""
     from policies.agents.fleet.clone import clone
     from policies.agents.fleet.demos import FleetDemos, collect, merged
     from policies.agents.fleet.masks import FleetObsLayout
@@ -213,13 +288,14 @@ def clone_rule(
     from policies.base import make_policy
     from policies.benchmark.run import episode_seeds
 
-    out = Path(out)
-    out.mkdir(parents=True, exist_ok=True)
+    inputs = {"demos_cache": demos_cache}
+    out = check_run_folder(out, overwrite=overwrite, inputs=inputs)  # before any work
     env_kwargs = dict(env_kwargs or {})
     t0 = time.perf_counter()
     venv = make_training_env(cfg, env_kwargs, fleets=1)
     names = tuple(venv.get_attr("obs_names")[0])
     rule = make_policy(rule_name, names, **dict(rule_params))
+    fresh_run_folder(out, overwrite=overwrite, inputs=inputs)  # the arguments hold: now clear
     layout = FleetObsLayout(names)
     total = demo_episodes + sum(dagger_rounds)
     seeds = [s for s, _ in episode_seeds(TRAIN_SEED, total)]
@@ -361,16 +437,21 @@ def train(
     env_kwargs: Mapping[str, Any] | None = None,
     seed: int = 0,
     max_wall_s: float | None = None,
+    overwrite: bool = False,
 ) -> dict[str, Any]:
     """MaskablePPO of ``cfg`` for ``fleet_days`` decisions (module docstring) into ``out``;
-    returns the run's record (also ``run.json``)."""
+    returns the run's record (also ``run.json``). ``out`` must be new or empty, unless
+    ``overwrite`` (its old contents deleted first; an ``init`` inside it is refused)."""
     from stable_baselines3.common.logger import configure
 
     from policies.agents.agent_files import ObsNormalization
 
+    inputs = {"init": init}
+    check_run_folder(out, overwrite=overwrite, inputs=inputs)  # before any work
+    if init is not None and not Path(init).is_file():
+        raise ValueError(f"init = {str(init)!r} does not exist (expected a clone's .zip)")
     contrib = require_contrib("train a fleet agent (MaskablePPO)")
-    out = Path(out)
-    out.mkdir(parents=True, exist_ok=True)
+    out = fresh_run_folder(out, overwrite=overwrite, inputs=inputs)
     env_kwargs = dict(env_kwargs or {})
     venv = make_training_env(cfg, env_kwargs, monitor_file=out / "monitor.csv")
     env_seed = int(np.random.SeedSequence([TRAIN_SEED, int(seed)]).generate_state(1)[0])

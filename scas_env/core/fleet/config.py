@@ -47,8 +47,8 @@ class SparesConfig(Validated):
 
     Kinds: spring kits and seal kits (a part replaced on the aircraft), and whole actuators
     from a rotable pool (both parts new; the removed unit comes back from the shop after the
-    turnaround: a base stock equal to the pool). ``base_stock = -1``: ordered only
-    explicitly (by the policy).
+    turnaround: a base stock equal to the pool). ``base_stock = -1``: never reordered
+    (the initial stock only: the actions order nothing).
     """
 
     spring_kit_initial: float = param(
@@ -60,7 +60,8 @@ class SparesConfig(Validated):
         lo=NO_BASE_STOCK,
         hi=10_000,
         integer=True,
-        source="(S-1, S) replenishment up to the initial shelf [B]; -1: explicit orders only",
+        source="(S-1, S) replenishment up to the initial shelf [B]; -1: never reordered "
+        "(no action orders)",
     )
     spring_kit_lead_days: float = param(
         10,
@@ -80,7 +81,8 @@ class SparesConfig(Validated):
         lo=NO_BASE_STOCK,
         hi=10_000,
         integer=True,
-        source="(S-1, S) replenishment up to the initial shelf [B]; -1: explicit orders only",
+        source="(S-1, S) replenishment up to the initial shelf [B]; -1: never reordered "
+        "(no action orders)",
     )
     seal_kit_lead_days: float = param(
         10, "days", lo=0, hi=365, integer=True, source="a seal kit from the distributor [B]"
