@@ -203,7 +203,8 @@ def benchmark_parser() -> Any:
         default=None,
         metavar="FILE",
         help="scas-tune's tuning.json: each family's rule at its tuned parameters, besides "
-        "--policies, labelled '<family> tuned' (default: none)",
+        "--policies, labelled '<family> tuned'; not with --seed 1, the tuning's episodes "
+        "(default: none)",
     )
     parser.add_argument("--out", type=Path, default=Path("results/benchmark"), help="folder")
     parser.add_argument("--overwrite", action="store_true", help="replace an existing --out")
@@ -290,6 +291,13 @@ def benchmark_main(argv: Sequence[str] | None = None) -> int:
     for target in args.policy:
         specs.append(PolicySpec("factory", {"target": target}, label=target, module=module))
     if args.tuned is not None:
+        from policies.value.tuning import TRAIN_SEED
+
+        if args.seed == TRAIN_SEED:  # scas-tune's episodes (one actuator and fleets)
+            parser.error(
+                f"--seed {args.seed} with --tuned: the tuning's training episodes; score tuned "
+                "rules on held-out seeds (e.g. --seed 2, the documented held-out root)"
+            )
         specs += _tuned_specs(parser, args.tuned, fleet=fleet is not None)
     labels = [s.key for s in specs]
     if len(set(labels)) != len(labels):

@@ -80,14 +80,19 @@ def test_a_tuned_fleet_rule_runs_on_the_fleet(tmp_path: Path) -> None:
         ('{"fleet_naive": {"best_params": {}}}', False, "'fleet_naive' is not a single-actuator"),
         ('{"filter": {"best_params": {}}}', True, "'filter' is not a fleet family"),
         ('{"filter+tests every flight": {"best_params": {}}}', False, "a world of its own"),
+        # scored on the tuning's own training episodes (scas-tune's root seed)
+        ('{"filter": {"best_params": {}}} --seed 1', False, "the tuning's training episodes"),
+        ('{"fleet_naive": {"best_params": {}}} --seed 1', True, "the tuning's training"),
     ],
 )
 def test_files_the_benchmark_cannot_run_are_usage_errors(
     content: str, fleet: bool, message: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     path = tmp_path / "tuning.json"
+    content, *seed = content.split(" --seed ")
     path.write_text(content)
     argv = ["--tuned", str(path), "--episodes", "1", "--out", str(tmp_path / "b")]
+    argv += ["--seed", *seed] if seed else []
     with pytest.raises(SystemExit):
         benchmark_main([*argv, *(["--fleet"] if fleet else [])])
     assert message in capsys.readouterr().err

@@ -212,6 +212,14 @@ def test_split_by_unit(tmp_path: Path) -> None:
     assert again.units["unit"].to_pylist() == test.units["unit"].to_pylist()
     with pytest.raises(ValueError, match="test_fraction"):
         split_by_unit(data, test_fraction=1.0)
+    # a caller's Generator draws the same units as its seed, and advances
+    rng = np.random.default_rng(4)
+    drawn = split_by_unit(data, test_fraction=0.3, seed=rng)[1]
+    assert drawn.units["unit"].to_pylist() == test.units["unit"].to_pylist()
+    assert rng.bit_generator.state != np.random.default_rng(4).bit_generator.state
+    for bad in (-1, True, 1.5):
+        with pytest.raises(ValueError, match=r"seed = .* integer >= 0 or a numpy Generator"):
+            split_by_unit(data, seed=bad)
 
 
 @pytest.mark.parametrize(

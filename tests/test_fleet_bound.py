@@ -196,7 +196,13 @@ def test_the_bound_is_its_relaxation_s_best_plan_by_enumeration(seed: int) -> No
         (
             FleetConfig(),
             CostModel(unscheduled_removal_usd=7000.0, mission_abort_usd=0.0),
-            r"failure_total_usd = 7000.0 .* >= 8500",
+            r"failure_total_usd = 7000.0 .* >= 10000",
+        ),
+        # a failure of both parts on one flight: one failure charge, two new parts
+        (
+            FleetConfig(),
+            CostModel(unscheduled_removal_usd=9000.0, mission_abort_usd=0.0),
+            r"both parts' preventive replacements \(7500.0 USD\).* >= 10000",
         ),
         (
             FleetConfig(background_removal_usd=7000.0),

@@ -142,6 +142,32 @@ def test_left_truncated_lives_against_a_direct_count() -> None:
     np.testing.assert_allclose(got.probabilities, want_s, rtol=1e-13)
 
 
+def test_the_bands_are_scipys_log_log_greenwood_bands() -> None:
+    """Without late entries the delayed-entry path's 95 % band equals scipy's log-log
+    (exponential Greenwood) band at every removal age; the hand example's first step by the
+    formula: S = 1/2 after 1 of 2, V = (1 / (2 * 1)) / log(1/2)^2, band S^exp(-+z sqrt V)."""
+    rng = np.random.default_rng(7)
+    age = rng.integers(1, 40, size=400).astype(float)
+    removed = rng.random(400) < 0.6
+    want = ecdf(CensoredData(uncensored=age[removed], right=age[~removed])).sf
+    band = want.confidence_interval(0.95, method="log-log")
+    got = delayed_entry_km(age, removed, np.zeros(400))
+    times = got.quantiles
+    for mine, theirs in ((got.low, band.low), (got.high, band.high)):
+        np.testing.assert_allclose(mine, _at(theirs, times), rtol=1e-12, equal_nan=True)
+    via_scipy = kaplan_meier(_events(age, removed, np.zeros(400)))  # scipy's own band
+    k = np.searchsorted(via_scipy.quantiles, times)
+    np.testing.assert_allclose(via_scipy.low[k], got.low, rtol=1e-12, equal_nan=True)
+    np.testing.assert_allclose(via_scipy.high[k], got.high, rtol=1e-12, equal_nan=True)
+
+    entry, exit_age = np.array([0, 0, 2, 2, 3, 1]), np.array([0, 4, 2, 6, 4, 5])
+    hand = delayed_entry_km(exit_age, np.array([1, 1, 1, 0, 1, 0], dtype=bool), entry)
+    z, v = 1.959963984540054, (1 / 2) / np.log(0.5) ** 2
+    np.testing.assert_allclose([hand.low[0], hand.high[0]],
+                               [0.5 ** np.exp(z * np.sqrt(v)), 0.5 ** np.exp(-z * np.sqrt(v))],
+                               rtol=1e-12)  # fmt: skip
+
+
 # ------------------------------------------------------------------ Saxena metrics
 
 

@@ -267,8 +267,13 @@ def _plot_survival(
             removed = sum(e["kind"] != "censored" for e in ev)
             label = f"{policy} ({fails} failures / {removed} removals)"
             t = np.r_[0.0, sf.quantiles]
-            ax.step(t, np.r_[1.0, sf.probabilities], where="post", label=label)
-        ax.set_title(f"{part}: age at removal (Kaplan-Meier, censored, entry ages)", fontsize=10)
+            (line,) = ax.step(t, np.r_[1.0, sf.probabilities], where="post", label=label)
+            low, high = np.r_[1.0, sf.low], np.r_[1.0, sf.high]
+            ok = np.isfinite(low) & np.isfinite(high)
+            ax.fill_between(t[ok], low[ok], high[ok], step="post", color=line.get_color(),
+                            alpha=0.15, linewidth=0)  # fmt: skip
+        title = f"{part}: age at removal (Kaplan-Meier, censored, entry ages; 95 % bands)"
+        ax.set_title(title, fontsize=10)
         ax.set_xlabel("flights since fitted")
         ax.grid(alpha=0.3)
         if ax.get_legend_handles_labels()[0]:

@@ -30,15 +30,33 @@ from typing import Any
 
 import numpy as np
 
+#: confidence level of the pointwise bands (Greenwood's variance, log-log transform)
+CONFIDENCE = 0.95
+
 
 @dataclass(frozen=True)
 class Survival:
     """A survival function as a step function: ``probabilities[k]`` is ``S(t)`` for
     ``quantiles[k] <= t < quantiles[k + 1]`` (1 before the first), as scipy's
-    ``ECDFResult.sf``."""
+    ``ECDFResult.sf``; ``low``, ``high``: its pointwise :data:`CONFIDENCE` interval,
+    Greenwood's variance on the log-log scale (Kalbfleisch and Prentice 2002, section 4.3;
+    scipy's ``confidence_interval(method="log-log")``; NaN where ``S`` is 0 or 1)."""
 
     quantiles: np.ndarray
     probabilities: np.ndarray
+    low: np.ndarray
+    high: np.ndarray
+
+
+def _loglog_band(sf: np.ndarray, deaths: np.ndarray, at_risk: np.ndarray) -> tuple:
+    """Greenwood's log-log band of a product-limit estimate (:class:`Survival`)."""
+    from scipy.special import ndtri
+
+    with np.errstate(divide="ignore", invalid="ignore"):
+        var = np.cumsum(deaths / (at_risk * (at_risk - deaths))) / np.log(sf) ** 2
+        centre = np.log(-np.log(sf))
+    z_se = ndtri(0.5 + CONFIDENCE / 2.0) * np.sqrt(var)
+    return np.exp(-np.exp(centre + z_se)), np.exp(-np.exp(centre - z_se))
 
 
 def kaplan_meier(events: Sequence[Mapping[str, Any]]) -> Survival | None:
@@ -53,7 +71,10 @@ def kaplan_meier(events: Sequence[Mapping[str, Any]]) -> Survival | None:
         from scipy.stats import CensoredData, ecdf
 
         sf = ecdf(CensoredData(uncensored=age[removed], right=age[~removed])).sf
-        return Survival(np.asarray(sf.quantiles), np.asarray(sf.probabilities))
+        with np.errstate(divide="ignore", invalid="ignore"):
+            band = sf.confidence_interval(CONFIDENCE, method="log-log")
+        low, high = band.low.probabilities, band.high.probabilities
+        return Survival(*(np.asarray(v) for v in (sf.quantiles, sf.probabilities, low, high)))
     return delayed_entry_km(age, removed, entry)
 
 
@@ -81,7 +102,8 @@ def delayed_entry_km(
     entered = np.searchsorted(np.sort(entry_age), times, side="right")  # entry <= t
     gone = np.searchsorted(np.sort(exit_age), times, side="left")  # exit < t
     at_risk = entered - gone  # >= deaths: a part removed at t is at risk at t
-    return Survival(times, np.cumprod((at_risk - deaths) / at_risk))  # as scipy's ecdf
+    sf = np.cumprod((at_risk - deaths) / at_risk)  # as scipy's ecdf
+    return Survival(times, sf, *_loglog_band(sf, deaths, at_risk))
 
 
-__all__ = ["Survival", "delayed_entry_km", "kaplan_meier"]
+__all__ = ["CONFIDENCE", "Survival", "delayed_entry_km", "kaplan_meier"]

@@ -25,7 +25,7 @@ it completes (a part flown to failure costs an in-flight failure, more than its 
 replacement; a background swap fits new parts for more than their preventive cost; a
 damaging mission uses up lives at least as fast), earns at most ``v_k`` per mission
 (an aborted mission earns at most ``(F - 1) / F`` of ``v_k`` and pays ``p_k`` and the failure
-that aborted it, which costs at least the part it replaces plus that value), and pays
+that aborted it, which costs at least the parts it replaces plus that value), and pays
 every penalty the plan pays. ``fleet_upper_bound`` checks the cost conditions this needs;
 ``tests/test_fleet_bound.py`` checks the bound against every rule on fixed seeds and its
 plan against an enumeration.
@@ -130,17 +130,17 @@ register_policy("fleet_bound", FleetBound, obs_mode="features+rul", family="boun
 
 def _check_costs(cfg: FleetConfig, costs: Any, price: dict[str, float]) -> None:
     """The cost conditions that make the relaxation a bound (module docstring): a failure
-    pays for the part it replaces (at least its preventive price) and for the value of the
-    flights its mission flew before it (at most ``F - 1`` of ``F``), which the relaxation
-    does not earn."""
+    pays for the parts it replaces (at least their preventive prices: both parts can fail on
+    one flight for one failure charge) and for the value of the flights its mission flew
+    before it (at most ``F - 1`` of ``F``), which the relaxation does not earn."""
     flights = int(cfg.flights_per_mission)
     before = max(cfg.mission_value_usd) * (flights - 1) / flights
-    need = max(price.values()) + before
+    need = sum(price.values()) + before
     if costs.failure_total_usd < need:
         raise ValueError(
-            "the bound needs an in-flight failure to cost at least a preventive replacement "
-            f"({max(price.values())} USD) plus the value of the {flights - 1} flights of a "
-            f"mission before it ({before} USD): failure_total_usd = "
+            "the bound needs an in-flight failure to cost at least both parts' preventive "
+            f"replacements ({sum(price.values())} USD) plus the value of the {flights - 1} "
+            f"flights of a mission before it ({before} USD): failure_total_usd = "
             f"{costs.failure_total_usd} must be >= {need}"
         )
     if cfg.background_removals and cfg.background_removal_usd < sum(price.values()):

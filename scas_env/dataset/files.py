@@ -364,19 +364,26 @@ def load_run_to_failure(
 
 
 def split_by_unit(
-    data: RunToFailureDataset, *, test_fraction: float = 0.2, seed: int = 0
+    data: RunToFailureDataset,
+    *,
+    test_fraction: float = 0.2,
+    seed: int | np.random.Generator = 0,
 ) -> tuple[RunToFailureDataset, RunToFailureDataset]:
     """Train and test sets holding disjoint units (C-MAPSS style): ``round(test_fraction *
-    n_units)`` units drawn without replacement by ``numpy.random.default_rng(seed)``."""
+    n_units)`` units drawn without replacement by ``seed``: a ``numpy.random.Generator``
+    (drawn from), or an integer >= 0 (``numpy.random.default_rng(seed)``)."""
     if not (isinstance(test_fraction, float | int) and 0.0 < test_fraction < 1.0):
         raise ValueError(f"test_fraction = {test_fraction!r} must be in (0, 1)")
+    whole = isinstance(seed, int | np.integer) and not isinstance(seed, bool) and seed >= 0
+    if not (whole or isinstance(seed, np.random.Generator)):
+        raise ValueError(f"seed = {seed!r} must be an integer >= 0 or a numpy Generator")
     units = np.sort(data.units["unit"].to_numpy())
     n_test = round(test_fraction * len(units))
     if not 0 < n_test < len(units):
         raise ValueError(
             f"test_fraction = {test_fraction} of {len(units)} units leaves an empty set"
         )
-    rng = np.random.default_rng(seed)
+    rng = seed if isinstance(seed, np.random.Generator) else np.random.default_rng(seed)
     test = np.sort(rng.choice(units, size=n_test, replace=False))
     train = np.setdiff1d(units, test)
     return data.select_units(train), data.select_units(test)
