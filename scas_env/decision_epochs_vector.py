@@ -16,7 +16,9 @@ Spaces, reward, discount and masks are :class:`~scas_env.decision_epochs.Decisio
   whose episode truncated is reset before the step returns; its last observation is in
   ``info["final_obs"]`` (rows where ``info["_final_obs"]`` is true), as SB3 expects;
 * ``info`` holds the epoch keys only (``epoch_slots``, ``epoch_discount``, ``epoch_action``,
-  ``epoch_k``: arrays of N), not the per-slot info of the env underneath.
+  ``epoch_k``: arrays of N, with Gymnasium's ``_key`` masks), not the per-slot info of the env
+  underneath; at an autoreset ``info["final_info"]`` holds them too (rows where
+  ``info["_final_info"]``), and ``reset`` returns an empty info.
 
 Throughput: a step costs as many batched slots as the largest ``k`` chosen; the actuators
 that chose a smaller one wait (docs/rl.md measures SB3's frames per second against
@@ -55,7 +57,10 @@ from scas_env.decision_epochs import (
     maintenance_mask,
     with_delegation,
 )
-from scas_env.vector_env import ScasMaintenanceVectorEnv
+from scas_env.vector_env import ScasMaintenanceVectorEnv, with_info_masks
+
+#: the keys of a step's info (arrays of N)
+EPOCH_KEYS = ("epoch_slots", "epoch_discount", "epoch_action", "epoch_k")
 
 __all__ = ["DecisionEpochsVectorEnv", "make_decision_epochs_vector_env"]
 
@@ -165,12 +170,9 @@ class DecisionEpochsVectorEnv(VectorEnv):
                 act[asked] = delegate_actions(self.delegate, self.inner.observe()[asked])
         inner_obs = self.inner.observe()
         out = self._obs(inner_obs)
-        info: dict[str, Any] = {
-            "epoch_slots": slots,
-            "epoch_discount": weight,
-            "epoch_action": maintenance,
-            "epoch_k": k,
-        }
+        info: dict[str, Any] = with_info_masks(
+            dict(zip(EPOCH_KEYS, (slots, weight, maintenance, k), strict=True)), n
+        )
         if truncated.any():
             # same-step autoreset: the truncated actuators start their next episode now
             final = np.empty(n, dtype=object)
@@ -178,6 +180,8 @@ class DecisionEpochsVectorEnv(VectorEnv):
                 final[e] = out[e]
             info["final_obs"] = final
             info["_final_obs"] = truncated.copy()
+            info["final_info"] = with_info_masks({k: info[k].copy() for k in EPOCH_KEYS}, n)
+            info["_final_info"] = truncated.copy()
             self.inner.step_active(np.zeros(n, dtype=np.int64), truncated, outputs=False)
             inner_obs = self.inner.observe()
             out = self._obs(inner_obs)

@@ -169,7 +169,9 @@ class ScasMaintenanceEnv(gym.Env):
 
     A new unit drawn from the design's scatter (spring geometry, Paris constant, initial
     flaw, seal wear rate), new parts (``initial_health="new"``) or each part at a uniform
-    fraction of its life (``"random"``); the filters start from their priors.
+    fraction of its life (``"random"``: its earlier life unknown, so its age counts from the
+    reset and the decision-epoch mask allows replacing it once it has flown; ``"in_service"``
+    gives parts with known ages); the filters start from their priors.
 
     ## Episode End
 

@@ -17,6 +17,7 @@ import warnings
 import gymnasium as gym
 import numpy as np
 import pytest
+from gymnasium.vector import AutoresetMode
 
 from scas_env import ENV_ID, ENV_ID_EPOCHS
 from scas_env.decision_epochs import DEFAULT_KS, DecisionEpochs
@@ -179,10 +180,11 @@ def test_vector_epochs_equal_single_decision_epoch_envs_across_episodes() -> Non
             o, r, te, tr, inf = env.step(int(actions[e]))
             assert r == rewards[e] and te == term[e] and tr == trunc[e], (t, e)
             for key in ("epoch_slots", "epoch_discount", "epoch_action", "epoch_k"):
-                assert inf[key] == info[key][e], key
-            if tr:
-                assert info["_final_obs"][e]
+                assert inf[key] == info[key][e] and info[f"_{key}"][e], key
+            if tr:  # Gymnasium's same-step autoreset: the final observation and info
+                assert info["_final_obs"][e] and info["_final_info"][e]
                 np.testing.assert_array_equal(o, info["final_obs"][e])
+                assert inf["epoch_slots"] == info["final_info"]["epoch_slots"][e]
                 o, _ = env.reset()
                 ends += 1
             np.testing.assert_array_equal(o, obs[e], err_msg=f"step {t}, env {e}")
@@ -204,7 +206,11 @@ def test_copies_of_the_vector_epochs_env_continue_identically(how: str) -> None:
             np.testing.assert_array_equal(x, y)
         assert a[4].keys() == b[4].keys()
         for k in a[4]:
-            if k != "final_obs":
+            if k == "final_info":
+                assert a[4][k].keys() == b[4][k].keys()
+                for kk in a[4][k]:
+                    np.testing.assert_array_equal(a[4][k][kk], b[4][k][kk])
+            elif k != "final_obs":
                 np.testing.assert_array_equal(a[4][k], b[4][k])
 
 
@@ -295,3 +301,21 @@ def test_train_epochs_on_the_native_vector_env(tmp_path) -> None:
     with pytest.raises(ValueError, match="native_envs"):
         train_epochs(hp, tmp_path / "bad", native_envs=0)
     assert not (tmp_path / "bad").exists()
+
+
+@pytest.mark.parametrize("mode", [AutoresetMode.SAME_STEP, "SameStep"])
+def test_the_sb3_adapter_reads_same_step_autoreset_as_enum_or_value(mode) -> None:
+    """A vector env declaring same-step autoreset by the enum or its value gets SB3's terminal
+    observation from ``final_obs`` and an empty reset info for the rows reset in the step."""
+    from policies.agents.sb3_vec_env import NativeVecEnv
+
+    venv = DecisionEpochsVectorEnv(2, episode_slots=40)
+    venv.metadata = {**venv.metadata, "autoreset_mode": mode}
+    native = NativeVecEnv(venv)
+    native.reset()
+    native.reset_infos = [{"stale": 1}, {"stale": 1}]
+    longest = len(venv.ks) - 1  # fly (maintenance 0) for the largest k
+    obs, _, dones, infos = native.step(np.full(2, longest))
+    assert dones.all() and native.reset_infos == [{}, {}]
+    for e in range(2):
+        assert infos[e]["terminal_observation"][-1] == 0.0 and obs[e][-1] == 40.0

@@ -11,8 +11,9 @@ import numpy as np
 import pytest
 
 import scas_env  # noqa: F401
+from experiments.fleet_agents.demos import collect, discounted_returns, project_to_masks
 from experiments.fleet_agents.selection import best_tuned_rule, checkpoints
-from policies.agents.fleet.demos import collect, discounted_returns, project_to_masks
+from experiments.fleet_agents.training import FleetPPOConfig, clone_rule, train
 from policies.agents.fleet.masks import FleetObsLayout
 from policies.agents.fleet.plugins import (
     FLEET_JOINT_AGENT,
@@ -20,7 +21,6 @@ from policies.agents.fleet.plugins import (
     FleetAgent,
     load_fleet_agent,
 )
-from policies.agents.fleet.training import FleetPPOConfig, clone_rule, train
 from policies.base import make_policy
 from policies.benchmark.run import PLUGINS
 

@@ -8,10 +8,10 @@ import numpy as np
 import pytest
 
 import scas_env  # noqa: F401
-from policies.agents.fleet.clone import clone, masked_forward
-from policies.agents.fleet.demos import collect
+from experiments.fleet_agents.clone import clone, masked_forward
+from experiments.fleet_agents.demos import collect
+from experiments.fleet_agents.training import FleetPPOConfig, make_model, make_training_env
 from policies.agents.fleet.masks import FleetObsLayout
-from policies.agents.fleet.training import FleetPPOConfig, make_model, make_training_env
 from policies.base import make_policy
 from scas_env.core.scenario import Scenario
 

@@ -1,4 +1,4 @@
-"""The SB3 adapters of the fleet (policies.agents.fleet.adapters, shared_adapter,
+"""The SB3 adapters of the fleet (experiments.fleet_agents.adapters, shared_adapter,
 masks): masks, per-aircraft views, vector against single fleets, the joint action."""
 
 from __future__ import annotations
@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 
 import scas_env  # noqa: F401
-from policies.agents.fleet.adapters import FleetVecEnv, VecRewardScale, make_fleet_venv
+from experiments.fleet_agents.adapters import FleetVecEnv, VecRewardScale, make_fleet_venv
+from experiments.fleet_agents.shared_adapter import FleetAgentsVecEnv
 from policies.agents.fleet.masks import FleetObsLayout
-from policies.agents.fleet.shared_adapter import FleetAgentsVecEnv
 
 SMALL = {"aircraft": 3, "episode_days": 6}
 

@@ -1,4 +1,4 @@
-"""Choose, measure and ship a fleet agent (after :mod:`policies.agents.fleet.training`).
+"""Choose, measure and ship a fleet agent (after :mod:`experiments.fleet_agents.training`).
 
 1. :func:`best_tuned_rule`: the rule a run clones and is measured against, from the fleet
    tuning's ``tuning.json`` (``scas-tune --fleet``): the filter-rule family with

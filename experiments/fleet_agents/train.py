@@ -24,7 +24,7 @@ import time
 from pathlib import Path
 
 from experiments.fleet_agents.selection import best_tuned_rule
-from policies.agents.fleet.training import (
+from experiments.fleet_agents.training import (
     FleetPPOConfig,
     check_run_folder,
     clone_rule,

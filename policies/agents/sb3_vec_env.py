@@ -137,7 +137,10 @@ class NativeVecEnv(VectorEnvAccess, VecEnv):
         #: the vector env resets done envs in the step itself (e.g. the decision-epoch
         #: vector env) instead of on the next one (the per-flight native env)
         mode = getattr(venv, "metadata", {}).get("autoreset_mode")
-        self._same_step = mode == AutoresetMode.SAME_STEP or str(mode) == "same-step"
+        try:  # the enum or its value ("SameStep")
+            self._same_step = AutoresetMode(mode) == AutoresetMode.SAME_STEP
+        except ValueError:  # none declared: Gymnasium's default, next step
+            self._same_step = False
         self._actions: np.ndarray | None = None
         super().__init__(venv.num_envs, space, venv.single_action_space)
 
@@ -170,6 +173,7 @@ class NativeVecEnv(VectorEnvAccess, VecEnv):
             for e in np.flatnonzero(dones):
                 infos[e]["terminal_observation"] = np.asarray(info["final_obs"][e])
                 infos[e]["TimeLimit.truncated"] = bool(truncated[e] and not terminated[e])
+                self.reset_infos[e] = {}  # a same-step reset returns no info of its own
         elif dones.any():
             if not dones.all():
                 raise RuntimeError(

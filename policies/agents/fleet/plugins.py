@@ -5,11 +5,12 @@ project's policy protocol): it rebuilds the action masks from the observation
 (:meth:`policies.agents.fleet.masks.FleetObsLayout.masks`, equal to the env's), normalises with
 the agent's frozen ``VecNormalize`` statistics and asks the MaskablePPO network for
 
-* ``kind = "joint"`` (the centralised agent, :class:`~policies.agents.fleet.adapters.FleetVecEnv`):
-  the fleet's whole ``MultiDiscrete`` action from the fleet's observation;
+* ``kind = "joint"`` (the centralised agent,
+  :class:`~experiments.fleet_agents.adapters.FleetVecEnv`): the fleet's whole
+  ``MultiDiscrete`` action from the fleet's observation;
 * ``kind = "shared"`` (one network for every aircraft,
-  :class:`~policies.agents.fleet.shared_adapter.FleetAgentsVecEnv`): each aircraft's row from its
-  own view, the rows joined into the fleet's action.
+  :class:`~experiments.fleet_agents.shared_adapter.FleetAgentsVecEnv`): each aircraft's row
+  from its own view, the rows joined into the fleet's action.
 
 :func:`load_fleet_agent` reads ``<stem>.zip`` (MaskablePPO), ``<stem>_normalization.json`` (the
 observation statistics, :class:`policies.agents.agent_files.ObsNormalization`) and ``<stem>.json``

@@ -16,7 +16,7 @@ Zaheer et al. 2017):
 4. the critic reads ``[h_1 .. h_N]`` (flattened) through its own MLP.
 
 Use ``policy=FleetPolicy, policy_kwargs={"obs_names": names, "hidden": 128}`` with
-MaskablePPO on :class:`~policies.agents.fleet.adapters.FleetVecEnv` (the observation is the
+MaskablePPO on :class:`~experiments.fleet_agents.adapters.FleetVecEnv` (the observation is the
 flat fleet observation, normalised).
 """
 

@@ -2,7 +2,7 @@
 
 :class:`FleetVecEnv` (the centralised agent): one row per fleet, the fleet's flat observation
 ``(D,)`` and its joint ``MultiDiscrete`` action (per aircraft its mission choice, then each
-actuator's maintenance choice). :class:`~policies.agents.fleet.shared_adapter.FleetAgentsVecEnv`
+actuator's maintenance choice). :class:`~experiments.fleet_agents.shared_adapter.FleetAgentsVecEnv`
 (the parameter-shared agent) flattens the same fleets into one row per aircraft.
 
 Semantics (SB3's ``VecEnv`` contract, as :class:`policies.agents.sb3_vec_env.NativeVecEnv`):

@@ -16,7 +16,7 @@ al. 2020). Per row:
   rows of a fleet, in aircraft order, are its joint action: :meth:`joint_actions`);
 - reward: the fleet's (the team's) day, the same on every row of a fleet;
 - ``action_masks()``: ``(B N, 1 + 2K + 4A)``, its row of the env's masks;
-- dones, terminal observations and seeding as :class:`policies.agents.fleet.adapters.FleetVecEnv`
+- dones, terminal observations and seeding as :class:`experiments.fleet_agents.adapters.FleetVecEnv`
   (fleet ``b`` seeded ``s + b``; the end of an episode terminal by default).
 """
 
@@ -28,7 +28,7 @@ from typing import Any
 import numpy as np
 from gymnasium import spaces
 
-from policies.agents.fleet.adapters import _FleetBase
+from experiments.fleet_agents.adapters import _FleetBase
 from policies.agents.fleet.masks import FleetObsLayout
 
 __all__ = ["FleetAgentsVecEnv", "agent_space"]
@@ -49,10 +49,10 @@ class FleetAgentsVecEnv(_FleetBase):
 
     Parameters
     ----------
-    venv : the native fleet vector env (:func:`policies.agents.fleet.adapters.make_fleet_venv`).
+    venv : the native fleet vector env (:func:`experiments.fleet_agents.adapters.make_fleet_venv`).
     agent_id, fleet_status : what each row sees besides the PettingZoo view (module doc);
         both ``False``: exactly ``fleet_v1``'s observation.
-    info_keys, truncation_is_terminal : as :class:`~policies.agents.fleet.adapters.FleetVecEnv`.
+    info_keys, truncation_is_terminal : as :class:`~experiments.fleet_agents.adapters.FleetVecEnv`.
     """
 
     def __init__(

@@ -19,7 +19,7 @@ from typing import Any
 
 import numpy as np
 
-from policies.agents.fleet.adapters import REWARD_CENTER, REWARD_SCALE, make_fleet_venv
+from experiments.fleet_agents.adapters import REWARD_CENTER, REWARD_SCALE, make_fleet_venv
 from policies.agents.fleet.masks import FleetObsLayout
 
 __all__ = ["FleetDemos", "collect", "discounted_returns", "merged", "project_to_masks"]

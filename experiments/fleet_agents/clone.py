@@ -1,7 +1,7 @@
 """Behaviour cloning of a fleet rule into a MaskablePPO policy with ``MultiDiscrete`` actions.
 
 The warm start of the fleet agents (as :mod:`policies.agents.imitation` for the single
-actuator): :func:`clone` fits, on :class:`policies.agents.fleet.demos.FleetDemos` (the
+actuator): :func:`clone` fits, on :class:`experiments.fleet_agents.demos.FleetDemos` (the
 fleet's samples for the centralised agent, their per-aircraft rows for the shared one):
 
 * the actor by the log-likelihood of the rule's choice of **every entry** under the env's
@@ -11,7 +11,7 @@ fleet's samples for the centralised agent, their per-aircraft rows for the share
   carry no gradient;
 * the critic by least squares on the rule's discounted returns (on its own path; DAgger's
   samples have none), in the training units of
-  :class:`policies.agents.fleet.adapters.VecRewardScale`;
+  :class:`experiments.fleet_agents.adapters.VecRewardScale`;
 * the observation statistics of the ``VecNormalize`` the agent trains under, from the rule's
   own states (:func:`set_obs_statistics`; then kept fixed: moving them after the clone moves
   its actions, as the single actuator found).
@@ -26,7 +26,7 @@ from typing import Any
 
 import numpy as np
 
-from policies.agents.fleet.demos import FleetDemos
+from experiments.fleet_agents.demos import FleetDemos
 
 __all__ = ["CloneHistory", "clone", "masked_forward", "set_obs_statistics"]
 

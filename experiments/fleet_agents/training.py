@@ -1,15 +1,15 @@
 """Training of the fleet agents: MaskablePPO on the native vector env of ``ScasFleet-v0``.
 
 Two kinds (:data:`policies.agents.fleet.plugins.KINDS`): ``"joint"``, one network over the fleet
-(:class:`~policies.agents.fleet.adapters.FleetVecEnv`), and ``"shared"``, one network for every
-aircraft (:class:`~policies.agents.fleet.shared_adapter.FleetAgentsVecEnv`). The stack, from the
+(:class:`~experiments.fleet_agents.adapters.FleetVecEnv`), and ``"shared"``, one network for every
+aircraft (:class:`~experiments.fleet_agents.shared_adapter.FleetAgentsVecEnv`). The stack, from the
 env up: the adapter (rewards in USD per day) -> ``VecMonitor`` (episode rewards logged in USD)
--> :class:`~policies.agents.fleet.adapters.VecRewardScale` (``1e-4 * (usd - 2e4)``) ->
+-> :class:`~experiments.fleet_agents.adapters.VecRewardScale` (``1e-4 * (usd - 2e4)``) ->
 ``VecNormalize`` (observations only; the rewards are scaled by the constant).
 
 * :func:`clone_rule`: the warm start. The rule's demonstrations on training fleets
-  (:func:`policies.agents.fleet.demos.collect`), then DAgger rounds (the clone acts, the rule
-  labels), cloned into the network (:func:`policies.agents.fleet.clone.clone`); saved as a
+  (:func:`experiments.fleet_agents.demos.collect`), then DAgger rounds (the clone acts, the rule
+  labels), cloned into the network (:func:`experiments.fleet_agents.clone.clone`); saved as a
   checkpoint (``clone.zip``, its statistics, ``clone.json`` with the history).
 * :func:`train`: MaskablePPO, from the clone (``init``: its weights and its observation
   statistics, then **kept fixed**) or from scratch (statistics running), for ``fleet_days``
@@ -44,15 +44,15 @@ from typing import Any
 
 import numpy as np
 
-from policies.agents.fleet.adapters import (
+from experiments.fleet_agents.adapters import (
     REWARD_CENTER,
     REWARD_SCALE,
     FleetVecEnv,
     VecRewardScale,
     make_fleet_venv,
 )
+from experiments.fleet_agents.shared_adapter import FleetAgentsVecEnv
 from policies.agents.fleet.plugins import write_agent_meta
-from policies.agents.fleet.shared_adapter import FleetAgentsVecEnv
 from policies.agents.sb3_agents import require_contrib
 from scas_env.utils.atomic_file import write_text_atomic
 from scas_env.utils.results_folder import ResultsFolderError, ResultsFolderExistsError
@@ -281,8 +281,8 @@ def clone_rule(
     returns the record. ``demos_cache``: an ``.npz`` of the rule's demonstrations, read if it
     exists (the same rule, seeds and reward units: not checked), else written. ``out`` must be
     new or empty, unless ``overwrite`` (its old contents deleted first; module docstring)."""
-    from policies.agents.fleet.clone import clone
-    from policies.agents.fleet.demos import FleetDemos, collect, merged
+    from experiments.fleet_agents.clone import clone
+    from experiments.fleet_agents.demos import FleetDemos, collect, merged
     from policies.agents.fleet.masks import FleetObsLayout
     from policies.agents.fleet.plugins import FleetAgent
     from policies.base import make_policy
