@@ -94,6 +94,8 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
+from scas_env.env import maintenance_mask
+
 FLY, TEST_AND_FLY, REPLACE_SPRING, REPLACE_SEAL = range(4)
 N_MAINTENANCE = 4
 #: the maintenance choice "the delegate for k slots" (with ``delegate`` only)
@@ -117,27 +119,6 @@ __all__ = [
 
 #: registered id: ``gym.make(EPOCHS_ENV_ID, ks=..., gamma=..., **ScasMaintenance-v2 keywords)``
 EPOCHS_ENV_ID = "scas_env/ScasMaintenanceEpochs-v2"
-
-
-def maintenance_mask(downtime: Any, spring_age: Any, seal_age: Any) -> np.ndarray:
-    """Valid per-flight actions (bool, shape ``(..., 4)``) from downtime (slots) and part ages
-    (flights): ``fly`` always; ``test_and_fly`` iff ``downtime == 0``; ``replace_spring`` iff
-    ``spring_age > 0``; ``replace_seal`` iff ``seal_age > 0``.
-
-    >>> maintenance_mask(0, 0, 0).tolist()
-    [True, True, False, False]
-    >>> maintenance_mask([1, 0], [5, 5], [0, 7]).tolist()
-    [[True, False, True, False], [True, True, True, True]]
-    """
-    down, spring, seal = np.broadcast_arrays(
-        *(np.asarray(v, dtype=np.float64) for v in (downtime, spring_age, seal_age))
-    )
-    mask = np.empty((*down.shape, N_MAINTENANCE), dtype=bool)
-    mask[..., FLY] = True
-    mask[..., TEST_AND_FLY] = down <= 0
-    mask[..., REPLACE_SPRING] = spring > 0
-    mask[..., REPLACE_SEAL] = seal > 0
-    return mask
 
 
 def with_delegation(mask: np.ndarray) -> np.ndarray:

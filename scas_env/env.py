@@ -27,6 +27,27 @@ ACTION_NAMES = ("fly", "test_and_fly", "replace_spring", "replace_seal")
 _PLAIN_INTS = (int, np.int64)
 
 
+def maintenance_mask(downtime: Any, spring_age: Any, seal_age: Any) -> np.ndarray:
+    """Valid per-flight actions (bool, shape ``(..., 4)``) from downtime (slots) and part ages
+    (flights): ``fly`` always; ``test_and_fly`` iff ``downtime == 0``; ``replace_spring`` iff
+    ``spring_age > 0``; ``replace_seal`` iff ``seal_age > 0``.
+
+    >>> maintenance_mask(0, 0, 0).tolist()
+    [True, True, False, False]
+    >>> maintenance_mask([1, 0], [5, 5], [0, 7]).tolist()
+    [[True, False, True, False], [True, True, True, True]]
+    """
+    down, spring, seal = np.broadcast_arrays(
+        *(np.asarray(v, dtype=np.float64) for v in (downtime, spring_age, seal_age))
+    )
+    mask = np.empty((*down.shape, len(ACTION_NAMES)), dtype=bool)
+    mask[..., 0] = True  # fly
+    mask[..., 1] = down <= 0  # test_and_fly
+    mask[..., 2] = spring > 0  # replace_spring
+    mask[..., 3] = seal > 0  # replace_seal
+    return mask
+
+
 def make_setup(
     scenario: Scenario | None,
     cost_model: CostModel | None,
@@ -96,7 +117,9 @@ class ScasMaintenanceEnv(gym.Env):
     | 3 | replace_seal | fit a new piston-seal set; the slot (plus downtime) on ground |
 
     While the aircraft is on the ground for earlier downtime, 0 and 1 do nothing and 2, 3
-    replace the part at no extra downtime beyond the longest pending one.
+    replace the part at no extra downtime beyond the longest pending one. ``action_masks()``
+    (MaskablePPO's protocol) marks the useful ones: no test on the ground, no replacement of
+    a part that has not flown (both allowed, neither does anything useful).
 
     The go/no-go is an airworthiness limit (:mod:`scas_env.core.acceptance`): the test fails
     when a ground feature has moved from the installation's reference (recorded at fitting)
@@ -291,6 +314,14 @@ class ScasMaintenanceEnv(gym.Env):
     def part_age(self) -> dict[str, int]:
         """Flights since each part was fitted."""
         return dict(zip(PARTS, self.batch.a["part_age"][0].tolist(), strict=True))
+
+    def action_masks(self) -> np.ndarray:
+        """Valid actions now (bool, ``(4,)``; MaskablePPO's protocol, :func:`maintenance_mask`):
+        no test while on the ground, no replacement of a part that has not flown."""
+        if not self._started:
+            raise RuntimeError("call reset() before action_masks()")
+        a = self.batch.a
+        return maintenance_mask(a["downtime"][0], a["part_age"][0, 0], a["part_age"][0, 1])
 
     # ------------------------------------------------------------------ gym API
     def reset(

@@ -313,6 +313,37 @@ def test_ansi_render_shows_the_state() -> None:
 
 
 # ----------------------------------------------------------------------------- mechanics
+def test_action_masks_read_the_ground_and_the_parts_ages() -> None:
+    """The single env's ``action_masks()`` (MaskablePPO's protocol) over a random episode with
+    failures, replacements and downtime: test only off the ground, replace only a part that
+    has flown, read from the observation's downtime and ages independently; the decision-epoch
+    wrapper's mask is it, repeated per k; before reset it is refused."""
+    from scas_env.decision_epochs import DecisionEpochs
+
+    env = ScasMaintenanceEnv(episode_slots=400, cost_model=CostModel(seal_downtime_slots=3))
+    with pytest.raises(RuntimeError, match="reset"):
+        env.action_masks()
+    names = env.obs_names
+    col = {k: names.index(k) for k in ("downtime", "spring_age", "seal_age")}
+    obs, _ = env.reset(seed=5)
+    rng = np.random.default_rng(5)
+    seen = {"ground": 0, "new part": 0}
+    for _ in range(400):
+        mask = env.action_masks()
+        down, spring, seal = (obs[col[k]] for k in col)
+        assert mask.tolist() == [True, down == 0, spring > 0, seal > 0]
+        seen["ground"] += down > 0
+        seen["new part"] += spring == 0 or seal == 0
+        obs, *_ = env.step(int(rng.choice(4, p=[0.9, 0.05, 0.02, 0.03])))
+    assert seen["ground"] > 0 and seen["new part"] > 1
+    epochs = DecisionEpochs(ScasMaintenanceEnv(episode_slots=400), ks=(1, 5))
+    epochs.reset(seed=0)
+    for action in (6, 0, 1):  # replace the seals (on the ground), then fly
+        inner = epochs.env.unwrapped.action_masks()
+        np.testing.assert_array_equal(epochs.action_masks(), np.repeat(inner, 2))
+        epochs.step(action)
+
+
 def test_reward_accounting_matches_cost_model() -> None:
     costs = CostModel(test_usd=123.0, flight_value_usd=1000.0, spring_downtime_slots=2)
     env = ScasMaintenanceEnv(cost_model=costs)
