@@ -4,7 +4,8 @@ Table 2's ten (G1-G3, I1-I7, :data:`FEATURE_INFO`) are as the paper lists them. 
 candidates are added beside them (:data:`EXTRA_FEATURE_INFO`), because none of I1-I7 sees the
 spring crack and I7 sees seal wear only weakly (docs/prognostics.md, "In-flight features"):
 I8 = mean(i - i_h) keeps the DC null-bias current the crack creates, which I2's normalised
-correlation removes, and I9 = rms(i)/rms(i_h) divides the command out of the current.
+correlation barely sees (a second-order change), and I9 = rms(i)/rms(i_h) divides the
+command out of the current.
 :data:`CANDIDATE_INFO` holds all twelve for the selection procedure.
 
 Signals (SI units): ``t`` time (s, uniform sampling), ``i`` servovalve current (A), ``x`` SCAS
@@ -570,9 +571,9 @@ def i8_dc_current_offset(i: ArrayLike, i_h: ArrayLike) -> FloatArray:
 
     The crack lowers one spring's stiffness, so the centering springs no longer balance at
     null and the loop holds the actuator there with a constant (null-bias) current. I2's
-    normalised correlation removes that DC term; I8 keeps it. Subtracting the healthy
-    response ``i_h`` to the same command record removes what the command itself puts into
-    the mean. What remains also holds the installation's own offset (spring-pair and valve
+    normalised correlation barely sees that DC term (second order); I8 keeps it. Subtracting
+    the healthy response ``i_h`` to the same command record removes what the command itself
+    puts into the mean. What remains also holds the installation's own offset (spring-pair and valve
     null tolerances, microamperes), which a monitor removes with a baseline recorded after
     fitting.
 

@@ -214,9 +214,14 @@ def test_quick_reproduction_verdict_structure(quick_reproduction, tmp_path) -> N
         for claim in ("min RA", "final CRA", "severity at detection"):
             assert f"{name}: {claim} (installation baseline)" in by_claim
         # verdicts follow the stated rules, recomputed here from the reproduction
-        for claim in ("ground feature", "flight feature"):
-            row = by_claim[f"{name}: {claim}"]
-            assert (row["verdict"] == "holds") == (row["paper"] == row["ours"])
+        row = by_claim[f"{name}: ground feature"]
+        assert (row["verdict"] == "holds") == (row["paper"] == row["ours"])
+        # the flight feature holds only if the paper's feature is chosen and responds
+        row = by_claim[f"{name}: flight feature"]
+        responds = "no Table-2 in-flight feature responds" not in row["reason"] and (
+            "leakage barely changes" not in row["reason"]
+        )
+        assert (row["verdict"] == "holds") == (row["paper"] == row["ours"] and responds)
         # the paper's convention: seal severity as a fraction of critical leakage growth
         det = paper_mean(rep, fault, rep.detection[fault]["combined_severity_at_detection"])
         holds = math.isfinite(det) and abs(det - PAPER[fault]["detect"]) <= 0.10

@@ -98,7 +98,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
     configure_logging(args)
-    from experiments.paper.reproduction import ReproductionConfig, load_campaign, run_reproduction
+    from experiments.paper.reproduction import (
+        ReproductionConfig,
+        check_campaign_params,
+        load_campaign,
+        run_reproduction,
+    )
     from experiments.paper.reproduction_report import write_report
 
     if args.campaign is not None and (args.runs is not None or args.levels is not None):
@@ -110,11 +115,12 @@ def main(argv: Sequence[str] | None = None) -> int:
             if not args.campaign.with_suffix(suffix).is_file():
                 parser.error(f"--campaign {args.campaign}: {args.campaign.with_suffix(suffix)} "
                              "does not exist")  # fmt: skip
+    params = load_params(parser, args)
+    if args.campaign is not None:
         try:
-            load_campaign(args.campaign)
+            check_campaign_params(load_campaign(args.campaign), params, args.campaign)
         except ValueError as exc:
             parser.error(f"--campaign: {exc}")
-    params = load_params(parser, args)
     config = ReproductionConfig.quick() if args.quick else ReproductionConfig()
     for option, field in (("runs", "n_runs"), ("levels", "n_levels"), ("paths", "n_paths")):
         value = getattr(args, option)

@@ -162,6 +162,20 @@ def load_campaign(campaign_path: str | Path) -> CampaignResult:
     return campaign
 
 
+def check_campaign_params(campaign: CampaignResult, params: ScasParams, path: Any) -> None:
+    """Refuse a campaign run with other parameters than ``params`` (naming the fields)."""
+    if campaign.params == params:
+        return
+    ours, theirs = params.to_dict(), campaign.params.to_dict()
+    differ = sorted(
+        f"{g}.{k}" for g in ours for k in ours[g] if ours[g][k] != theirs.get(g, {}).get(k)
+    )
+    raise ValueError(
+        f"campaign {path} was run with other parameters than --params (they differ in "
+        f"{differ}); give the campaign's --params or run a new campaign"
+    )
+
+
 def obtain_campaign(
     params: ScasParams,
     config: ReproductionConfig,
@@ -171,9 +185,13 @@ def obtain_campaign(
     campaign_path: str | Path | None = None,
     progress: bool = False,
 ) -> CampaignResult:
-    """Load ``campaign_path`` (must hold both faults and conditions) or run the campaign."""
+    """Load ``campaign_path`` (must hold both faults and conditions, run with ``params``: a
+    reproduction mixing a campaign of one design with another's prognosis is refused) or run
+    the campaign."""
     if campaign_path is not None:
-        return load_campaign(campaign_path)
+        campaign = load_campaign(campaign_path)
+        check_campaign_params(campaign, params, campaign_path)
+        return campaign
     cfg = CampaignConfig(n_runs=config.n_runs, n_levels=config.n_levels, fault_modes=FAULTS)
     return run_campaign(params, cfg, seed=seed, n_workers=n_workers, progress=progress)
 

@@ -1,6 +1,6 @@
 """Severity at detection with an installation baseline, beside the paper and the targets.
 
-    python -m experiments.paper.reproduction_detection --campaign results/campaign/default_100x8 \
+    python -m experiments.paper.reproduction_detection --campaign results/campaign/paper_100x8 \
         --paths 40 --out results/severity_at_detection.json
 
 For each fault, ``n_paths`` degradation paths exactly as the reproduction's prognosis paths
@@ -37,6 +37,7 @@ from experiments.paper.campaign_table import CampaignResult
 from experiments.paper.reproduction import (
     FAULTS,
     ReproductionConfig,
+    check_campaign_params,
     healthy_set_for,
     select_features,
 )
@@ -320,6 +321,11 @@ def main(argv: Sequence[str] | None = None) -> int:
             parser.error(f"--campaign {args.campaign}: {args.campaign.with_suffix(suffix)} missing")
     check_out_file(parser, args.out, args.overwrite)
     params = load_params(parser, args)
+    campaign = load(args.campaign)
+    try:  # the campaign's feature choice belongs to its design and sensing
+        check_campaign_params(campaign, params, args.campaign)
+    except ValueError as exc:
+        parser.error(f"--campaign: {exc}")
     config = ReproductionConfig()
     if args.tests_per_path is not None:
         try:
@@ -328,7 +334,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             parser.error(f"--tests-per-path: {exc}")
     result = installation_detection(
         params,
-        load(args.campaign),
+        campaign,
         config,
         seed=args.seed,
         n_paths=args.paths,

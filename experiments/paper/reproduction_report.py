@@ -191,10 +191,16 @@ def _min_ra_reason(rep: Reproduction, fault: str, variant: str, s: dict[str, flo
             f"({f['temp_r2_0']:.0%} healthy): late tests are noisy where the RUL is short; {when}"
         )
     if variant == "paper":
+        share = s["detected_paths"]
+        detected = (
+            "never detected, predictions start at half life"
+            if share == 0.0
+            else f"detected on {share:.0%} of the paths (the others start at half life)"
+        )
         return (
             f"{feature} moves {f['change']:.1f} {unit} from healthy to critical against a "
-            f"{f['std0']:.1f} {unit} spread between units: never detected, predictions start "
-            f"at half life with the growth multiplier barely learnt; {when}"
+            f"{f['std0']:.1f} {unit} spread between units: {detected}, the growth multiplier "
+            f"barely learnt; {when}"
         )
     run = rep.healthy.run_std(feature) * _scale(feature)[0]
     half = np.mean(
@@ -270,7 +276,7 @@ def verdicts(rep: Reproduction) -> list[dict[str, Any]]:
                 f"{_NAMES[fault]}: flight feature",
                 paper["flight"],
                 t2.name,
-                t2.name == paper["flight"],
+                t2.name == paper["flight"] and t2_responds,  # the top of none responding: no
                 reason,
             )
         )
