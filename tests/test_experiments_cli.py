@@ -228,7 +228,7 @@ def test_dataset_baselines_writes_its_scores_and_keeps_a_folder(tmp_path, capsys
     assert dataset_baselines.main([*argv, "--out", str(out)]) == 0
     assert "monitor - population, MAE per test unit" in capsys.readouterr().out
     summary = json.loads((out / "summary.json").read_text())
-    rows = list(csv.DictReader((out / "scores.csv").open()))
+    rows = list(csv.DictReader((out / "scores.csv").read_text().splitlines()))
     flat = [(n, b, s) for n in ("population", "monitor") for b, s in summary["scores"][n].items()]
     assert [(r["predictor"], r["band"]) for r in rows] == [(n, b) for n, b, _ in flat]
     assert [float(r["mae"]) for r in rows] == [s["mae"] for _, _, s in flat]

@@ -133,7 +133,7 @@ def sweep(tiny_variant, tmp_path_factory):
 
 def test_sweep_paired_values_match_an_independent_computation(sweep):
     _result, paths = sweep
-    rows = list(csv.DictReader(paths["csv"].open()))
+    rows = list(csv.DictReader(paths["csv"].read_text().splitlines()))
     data = json.loads(paths["json"].read_text())
     assert paths["png"].stat().st_size > 0 and paths["md"].read_text().startswith("# Value")
 

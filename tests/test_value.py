@@ -53,7 +53,7 @@ def test_ladder_outputs_and_statistics(quick, tmp_path):
     arms = [a for a in ("corrective", *LADDER) if a in quick.summary["arms"]]
     assert REFERENCE in arms and "oracle" in arms
     paths = write_outputs(quick, tmp_path)
-    rows = list(csv.DictReader(paths["csv"].open()))
+    rows = list(csv.DictReader(paths["csv"].read_text().splitlines()))
     assert {r["arm"] for r in rows} == set(quick.summary["arms"])
     # the paired value against the age rule, recomputed from ladder.csv
     for arm in arms:

@@ -24,6 +24,7 @@ also list the censoring ages (steps of factor 1).
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -71,7 +72,8 @@ def kaplan_meier(events: Sequence[Mapping[str, Any]]) -> Survival | None:
         from scipy.stats import CensoredData, ecdf
 
         sf = ecdf(CensoredData(uncensored=age[removed], right=age[~removed])).sf
-        with np.errstate(divide="ignore", invalid="ignore"):
+        with warnings.catch_warnings():  # NaN where S is 0 or 1: documented (Survival)
+            warnings.filterwarnings("ignore", "The confidence interval is undefined")
             band = sf.confidence_interval(CONFIDENCE, method="log-log")
         low, high = band.low.probabilities, band.high.probabilities
         return Survival(*(np.asarray(v) for v in (sf.quantiles, sf.probabilities, low, high)))
