@@ -147,6 +147,15 @@ def _sizes(args: Any, sizes: dict[str, tuple[int, int]], scenario: Scenario) -> 
     return out
 
 
+def _labelled_file(text: str) -> tuple[str, Path]:
+    """``--agent [LABEL=]FILE``: the label (default: the file's stem) and the existing file."""
+    label, sep, rest = text.partition("=")
+    if sep and label and not Path(text).is_file():  # a file named with "=" stays a file
+        return label, existing_file(rest)
+    path = existing_file(text)
+    return path.stem, path
+
+
 def benchmark_parser() -> Any:
     from policies.base import POLICIES
     from policies.benchmark.run import DEFAULT_FLEET_POLICIES, DEFAULT_POLICIES, PLUGINS
@@ -176,12 +185,14 @@ def benchmark_parser() -> Any:
     )
     parser.add_argument(
         "--agent",
-        type=existing_file,
+        type=_labelled_file,
         action="append",
         default=[],
+        metavar="[LABEL=]FILE",
         help="an SB3 zip to benchmark besides --policies (its normalisation statistics and "
-        "metadata beside it, RL-Zoo layouts too); repeatable. Read without unpickling; a "
-        "file that needs unpickling is refused unless --trust-pickle",
+        "metadata beside it, RL-Zoo layouts too), labelled LABEL (default: the file's stem); "
+        "repeatable. Read without unpickling; a file that needs unpickling is refused unless "
+        "--trust-pickle",
     )
     parser.add_argument(
         "--trust-pickle",
@@ -284,10 +295,8 @@ def benchmark_main(argv: Sequence[str] | None = None) -> int:
     specs = [resolve_spec(name) for name in names]
     module = "policies.agents.sb3_agents"
     trust = {"trust_pickle": True} if args.trust_pickle else {}
-    for path in args.agent:
-        specs.append(
-            PolicySpec("sb3", {"path": str(path), **trust}, label=Path(path).stem, module=module)
-        )
+    for label, path in args.agent:
+        specs.append(PolicySpec("sb3", {"path": str(path), **trust}, label=label, module=module))
     for target in args.policy:
         specs.append(PolicySpec("factory", {"target": target}, label=target, module=module))
     if args.tuned is not None:
@@ -301,7 +310,7 @@ def benchmark_main(argv: Sequence[str] | None = None) -> int:
         specs += _tuned_specs(parser, args.tuned, fleet=fleet is not None)
     labels = [s.key for s in specs]
     if len(set(labels)) != len(labels):
-        parser.error(f"policy labels {labels} must be unique")
+        parser.error(f"policy labels {labels} must be unique (--agent LABEL=FILE names an agent)")
     for spec in specs:  # plug-ins import their modules (e.g. SB3) here, not in workers
         try:
             spec.build_mode()

@@ -619,6 +619,32 @@ def test_an_agent_file_with_a_pickle_runs_only_with_trust_pickle(
     assert [r.split(",")[0] for r in rows[1:]] == ["corrective", "pickled"]
 
 
+def test_two_agents_with_one_file_name_run_under_their_labels(
+    bad_files: dict[str, Path], tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Two training runs' checkpoints share a file name: unlabelled they are a usage error
+    naming the way out, ``--agent LABEL=FILE`` runs both under their labels."""
+    import shutil
+
+    first, second = tmp_path / "run_a", tmp_path / "run_b"
+    for folder in (first, second):
+        folder.mkdir()
+        shutil.copy(bad_files["pickled"], folder / "ckpt.zip")
+    common = ["--policies", "corrective", "--episodes", "1", "--slots", "20", "--workers", "1",
+              "-q", "--trust-pickle"]  # fmt: skip
+    argv = ["--agent", str(first / "ckpt.zip"), "--agent", str(second / "ckpt.zip"), *common]
+    with pytest.raises(SystemExit):
+        policies_cli.benchmark_main([*argv, "--out", str(tmp_path / "a")])
+    assert "--agent LABEL=FILE" in capsys.readouterr().err
+    argv = ["--agent", f"a={first / 'ckpt.zip'}", "--agent", f"b={second / 'ckpt.zip'}", *common]
+    assert policies_cli.benchmark_main([*argv, "--out", str(tmp_path / "b")]) == 0
+    rows = (tmp_path / "b" / "results.csv").read_text().splitlines()
+    assert [r.split(",")[0] for r in rows[1:]] == ["corrective", "a", "b"]
+    with pytest.raises(SystemExit):  # a label with a missing file: the file is named
+        policies_cli.benchmark_main(["--agent", "a=nowhere.zip", "--out", str(tmp_path / "c")])
+    assert "'nowhere.zip' does not exist" in capsys.readouterr().err
+
+
 def test_the_default_fleet_list_leaves_out_agents_that_do_not_fit(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:

@@ -397,7 +397,13 @@ class MissionParams(Validated):
         0.10, "-", lo=0.0, hi=1.0, source="random variation, 10% of amplitude ([DJS20] Table 1)"
     )
     test_step_m: float = param(
-        0.002, "m", lo=0.0, hi=0.01, lo_open=True, source="pre-flight test steps +-1, +-2 mm [B]"
+        0.002,
+        "m",
+        lo=0.0,
+        hi=0.01,
+        lo_open=True,
+        source="pre-flight test step s: levels 0, +s/4, +s, 0, -s, 0 (+-2 mm, a 0.5 mm small "
+        "step) [B]",
     )
     test_dwell_s: float = param(
         1.0,
