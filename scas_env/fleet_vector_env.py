@@ -6,7 +6,7 @@ returns a :class:`ScasFleetVectorEnv`: the fleets' actuators are the rows of one
 ``B`` fleets), so fleet ``b`` gives exactly the episode of a single fleet env seeded
 ``seed + b`` (tested bit for bit). Autoreset is Gymnasium's next-step mode; ``info`` is a
 dict of per-fleet arrays (the KPIs of :class:`~scas_env.fleet_env.ScasFleetEnv`, nested
-dicts kept; per-aircraft entries left out), and
+dicts kept; per-aircraft entries left out; Gymnasium's ``_key`` masks), and
 :meth:`action_masks` gives each fleet's masks (MaskablePPO's format).
 """
 
@@ -22,7 +22,7 @@ from gymnasium.vector.utils import batch_space
 from scas_env.core.fleet.batch import FleetBatch
 from scas_env.core.fleet.view import FleetView
 from scas_env.fleet_env import check_fleet_action, fleet_action_space, make_fleet_setup
-from scas_env.vector_env import check_no_render, check_num_envs, vector_seeds
+from scas_env.vector_env import check_no_render, check_num_envs, vector_seeds, with_info_masks
 
 #: entries of the single fleet env's info that are per aircraft or per actuator (left out
 #: of the vector env's info, which holds one value per fleet)
@@ -132,7 +132,7 @@ class ScasFleetVectorEnv(VectorEnv):
             else:
                 info[key] = np.array([i[key] for i in infos])
         info["action_mask"] = self._masks
-        return np.stack(obs), info
+        return np.stack(obs), with_info_masks(info, self.num_envs)
 
     def action_masks(self) -> np.ndarray:
         """Valid choices of every fleet, (B, sum of the choices) bool."""

@@ -71,17 +71,23 @@ def test_the_degenerate_fleet_is_the_single_env_bit_for_bit() -> None:
 # ---------------------------------------------------------------------- vector env
 def _info_equal(vector: dict[str, Any], single: dict[str, Any], b: int) -> None:
     for key, value in vector.items():
-        if key == "action_mask":
+        if key.startswith("_"):  # Gymnasium's mask of a key: every fleet has every key
+            assert key[1:] in vector and bool(value[b]), key
+        elif key == "action_mask":
             assert np.array_equal(value[b], single["action_mask"].ravel())
         elif isinstance(value, dict):
             for k, v in value.items():
+                if k.startswith("_"):
+                    assert bool(v[b]), (key, k)
+                    continue
                 assert v[b] == single[key][k] or (math.isnan(v[b]) and math.isnan(single[key][k]))
         else:
             same = value[b] == single[key] or (
                 isinstance(single[key], float) and math.isnan(value[b]) and math.isnan(single[key])
             )
             assert same, (key, value[b], single[key])
-    assert set(vector) | set(PER_AIRCRAFT) == set(single)
+    keys = {k for k in vector if not k.startswith("_")}
+    assert keys | set(PER_AIRCRAFT) == set(single)
 
 
 def test_the_vector_env_is_single_fleets_bit_for_bit_with_autoreset() -> None:
