@@ -135,15 +135,23 @@ def _size_args(parser: Any, sizes: dict[str, tuple[int, int]], helps: dict[str, 
         )
 
 
-def _sizes(args: Any, sizes: dict[str, tuple[int, int]], scenario: Scenario) -> dict[str, int]:
+def _sizes(
+    args: Any, sizes: dict[str, tuple[int, int]], scenario: Scenario, parser: Any = None
+) -> dict[str, int]:
     """Each size: the option's value if given, else its --quick or full default; the slots
-    of an episode are the scenario's (a file's ``episode_slots``; never shrunk by --quick)."""
+    of an episode are the scenario's (a file's ``episode_slots``; never shrunk by --quick);
+    ``--slots`` outside ``Scenario.episode_slots``'s range is a usage error (``parser``)."""
     out = {
         name: getattr(args, name) if getattr(args, name) is not None else sizes[name][args.quick]
         for name in sizes
     }
     if "slots" in sizes and args.slots is None:
         out["slots"] = int(scenario.episode_slots)
+    elif "slots" in sizes and parser is not None:
+        try:
+            scenario.replace(episode_slots=out["slots"])
+        except ValueError as exc:
+            parser.error(f"--slots {out['slots']}: {exc}")
     return out
 
 
@@ -434,11 +442,14 @@ def _fleet_config(parser: Any, args: Any) -> Any:
 
 def _fleet_scenario(parser: Any, args: Any) -> Scenario:
     """The actuators' Scenario of a fleet: ScasFleet-v0's defaults (parts in service), then
-    the ``[scenario]`` table of ``--scenario``, then ``--fidelity`` where the command has it."""
-    from scas_env.actuator.config import read_mapping
+    the ``--scenario`` file's ``[scenario]`` table (or its top-level fields), then
+    ``--fidelity`` where the command has it."""
+    from scas_env.actuator.config import FILE_SECTIONS, read_mapping
     from scas_env.fleet_env import FLEET_SCENARIO
 
-    table = read_mapping(args.scenario).get("scenario", {}) if args.scenario else {}
+    data = read_mapping(args.scenario) if args.scenario else {}
+    tables = any(k in FILE_SECTIONS for k in data)  # a case file, else one group's fields
+    table = data.get("scenario", {}) if tables else data
     try:
         scenario = Scenario.from_dict({**FLEET_SCENARIO, **table})
     except ValueError as exc:
@@ -519,6 +530,7 @@ def train_main(argv: Sequence[str] | None = None) -> int:
     parser = train_parser()
     args = parser.parse_args(argv)
     configure_logging(args)
+    check_out_dir(parser, args.out, overwrite=False)  # the results folders' rule, no overwrite
     if args.running_normalization and args.init is None:
         parser.error("--running-normalization needs --init")
     scenario = agent_scenario(parser, args)
@@ -634,7 +646,7 @@ def tune_main(argv: Sequence[str] | None = None) -> int:
     if fleet_only:
         parser.error(f"--families {fleet_only}: fleet families; add --fleet")
     announce_uncached_kernels()
-    size = _sizes(args, TUNE_SIZES, scenario)
+    size = _sizes(args, TUNE_SIZES, scenario, parser)
     results = tune_families(
         families,
         n_workers=args.workers,
@@ -674,7 +686,7 @@ def _tune_fleet(
         parser.error(f"--families {single}: not fleet families ({','.join(FLEET_FAMILIES)})")
     scenario = _fleet_scenario(parser, args)
     announce_uncached_kernels()
-    size = _sizes(args, FLEET_TUNE_SIZES, scenario)
+    size = _sizes(args, FLEET_TUNE_SIZES, scenario, parser)
     results = tune_fleet_families(
         fleet,
         families,
@@ -743,7 +755,7 @@ def value_main(argv: Sequence[str] | None = None) -> int:
     from policies.value.study import markdown_report, run_ladder, write_outputs
 
     announce_uncached_kernels()
-    size = _sizes(args, VALUE_SIZES, scenario)
+    size = _sizes(args, VALUE_SIZES, scenario, parser)
     result = run_ladder(
         n_workers=args.workers,
         progress=not args.quiet,

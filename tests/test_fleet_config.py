@@ -255,6 +255,25 @@ def test_single_actuator_commands_refuse_a_fleet_file(
     assert not out.exists()
 
 
+def test_a_fleet_run_reads_a_scenario_file_of_top_level_fields(tmp_path: Path) -> None:
+    """``--fleet --scenario FILE`` with the Scenario's fields at the top level (one group per
+    file) sets the fleet's actuators' scenario over the fleet's defaults, as a [scenario]
+    table does (they were validated, then dropped)."""
+    from policies import cli as policies_cli
+
+    flat = tmp_path / "flat.toml"
+    flat.write_text('initial_health = "new"\nn_particles = 50\n')
+    table = tmp_path / "table.toml"
+    table.write_text('[scenario]\ninitial_health = "new"\nn_particles = 50\n')
+    parser = policies_cli.benchmark_parser()
+    for path in (flat, table):
+        args = parser.parse_args(["--fleet", "--scenario", str(path)])
+        got = policies_cli._fleet_scenario(parser, args)
+        assert (got.initial_health, got.n_particles) == ("new", 50)
+    args = parser.parse_args(["--fleet"])
+    assert policies_cli._fleet_scenario(parser, args).initial_health == "in_service"
+
+
 @pytest.mark.filterwarnings("ignore:No artists with labels:UserWarning")
 def test_the_benchmark_runs_a_fleet_file_with_its_three_tables(tmp_path: Path) -> None:
     """``scas-benchmark --scenario <fleet file>`` reads the file's [scenario], [costs] and

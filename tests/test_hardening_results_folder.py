@@ -124,6 +124,23 @@ def test_check_destination_validates_before_any_work(tmp_path: Path) -> None:
     assert _siblings(blocker) == ["file.txt"]  # the write probe is removed
 
 
+def test_the_working_folder_its_parents_home_and_no_name_are_refused(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A results folder replaces its destination whole, so ``--out ''`` (an unset variable),
+    ``.``, a folder holding the working folder and home are refused, with ``overwrite`` too,
+    and nothing there is touched; a folder inside the working one is fine."""
+    work = tmp_path / "work" / "here"
+    work.mkdir(parents=True)
+    (work / "keep.txt").write_text("mine")
+    monkeypatch.chdir(work)
+    for path in ("", ".", "..", str(tmp_path), str(work), "~"):
+        with pytest.raises(ResultsFolderError, match=r"names no folder|current folder"):
+            check_destination(path, overwrite=True, option="--out")
+    assert (work / "keep.txt").read_text() == "mine"
+    assert check_destination("results/run", overwrite=True) == work / "results" / "run"
+
+
 @pytest.mark.skipif(os.geteuid() == 0, reason="root writes into read-only folders")
 def test_a_read_only_parent_is_refused(tmp_path: Path) -> None:
     parent = tmp_path / "ro"

@@ -199,3 +199,15 @@ def test_convergence_of_a_metric_with_no_area_is_refused() -> None:
                                            np.array([90.0])], None, eol)  # fmt: skip
     assert math.isnan(perfect.convergence)  # errors 0, 0 (and 10 at the last time)
     np.testing.assert_allclose(perfect.relative_accuracy, [1.0, 1.0, 0.9])
+
+
+def test_kaplan_meier_refuses_unknown_kinds_and_bad_ages() -> None:
+    """A misspelt kind was counted as a removal and a negative age passed on the path without
+    late entries: both refused, naming what is allowed."""
+    good = _events([3.0, 5.0], [True, False], [0.0, 0.0])
+    with pytest.raises(ValueError, match=r"kinds \['censord'\] unknown"):
+        kaplan_meier([*good, {"age_flights": 4.0, "kind": "censord"}])
+    with pytest.raises(ValueError, match=r"kinds \['None'\] unknown"):
+        kaplan_meier([*good, {"age_flights": 4.0}])
+    with pytest.raises(ValueError, match="finite and >= 0"):
+        kaplan_meier([*good, {"age_flights": -1.0, "kind": "failure"}])

@@ -42,6 +42,18 @@ def test_nested_family_starts_from_the_age_rule_and_never_trains_worse():
     assert filt.episodes_simulated == age.episodes_simulated == 9  # one budget
 
 
+def test_the_first_trial_is_the_age_rule_also_beyond_the_test_box():
+    """Episodes longer than the test-interval box's top (4000 slots): the filter family's
+    first trial still tests never (the box reaches past the episode), so it earns exactly
+    the age rule's reward on the same seeds (it paid a test at slot 4000 before)."""
+    age = tune_family(FAMILIES["age"], trials=1, episodes=1, slots=4300)
+    filt = tune_family(
+        FAMILIES["filter"], trials=1, episodes=1, slots=4300, age_params=age.best_params
+    )
+    assert filt.history[0]["test_every"] > 4300
+    assert filt.history[0]["reward"] == age.best_reward
+
+
 def test_every_trial_runs_on_the_same_training_episodes():
     fam = FAMILIES["age"]
     a = tune_family(fam, trials=2, episodes=2, slots=200, sampler_seed=1)
@@ -131,3 +143,12 @@ def test_a_family_s_own_costs_are_changes_made_on_the_user_s() -> None:
                          env_kwargs={"cost_model": mine})  # fmt: skip
     assert result.history[0]["override"] is False
     assert result.best_reward == 20 * 3000.0
+
+
+def test_run_ladder_refuses_unknown_families_and_a_bare_string() -> None:
+    """An unknown label was dropped silently and a bare string matched by substring
+    ("filter+tests every flight" also tuned "filter"): refused before any work."""
+    with pytest.raises(ValueError, match=r"families \['filtre'\] unknown"):
+        run_ladder(families=["filtre"], episodes=1, slots=10, trials=1, train_episodes=1)
+    with pytest.raises(ValueError, match="must be None or a list"):
+        run_ladder(families="filter", episodes=1, slots=10, trials=1, train_episodes=1)

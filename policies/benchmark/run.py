@@ -142,8 +142,8 @@ def episode_seeds(seed: int, episodes: int) -> list[tuple[int, int]]:
     >>> episode_seeds(0, 2) == episode_seeds(0, 3)[:2]
     True
     """
-    if isinstance(episodes, bool) or not isinstance(episodes, int) or episodes < 1:
-        raise ValueError(f"episodes = {episodes!r} must be an integer >= 1")
+    if isinstance(episodes, bool) or not isinstance(episodes, int) or not 1 <= episodes <= 10**8:
+        raise ValueError(f"episodes = {episodes!r} must be an integer in [1, 10**8]")
     children = np.random.SeedSequence(seed).spawn(episodes)
     return [tuple(int(v) for v in c.generate_state(2, np.uint64)) for c in children]
 

@@ -31,6 +31,8 @@ from typing import Any
 
 import numpy as np
 
+#: the kinds of event: the removals (a part's life ends) and ``censored`` (still fitted)
+KINDS = ("failure", "preventive", "background", "censored")
 #: confidence level of the pointwise bands (Greenwood's variance, log-log transform)
 CONFIDENCE = 0.95
 
@@ -63,8 +65,14 @@ def _loglog_band(sf: np.ndarray, deaths: np.ndarray, at_risk: np.ndarray) -> tup
 def kaplan_meier(events: Sequence[Mapping[str, Any]]) -> Survival | None:
     """The Kaplan-Meier estimate of the age (flights) at removal of ``events`` (module
     docstring); ``None`` without a removal."""
+    kinds = [e.get("kind") for e in events]
+    unknown = sorted({str(k) for k in kinds} - {*KINDS})
+    if unknown:
+        raise ValueError(f"event kinds {unknown} unknown; allowed: {list(KINDS)}")
     age = np.array([e["age_flights"] for e in events], dtype=float)
-    removed = np.array([e["kind"] != "censored" for e in events], dtype=bool)
+    if not np.isfinite(age).all() or (age < 0).any():
+        raise ValueError("event ages (age_flights) must be finite and >= 0")
+    removed = np.array([k != "censored" for k in kinds], dtype=bool)
     entry = np.array([e.get("entry_age_flights", 0) or 0 for e in events], dtype=float)
     if not removed.any():
         return None
@@ -108,4 +116,4 @@ def delayed_entry_km(
     return Survival(times, sf, *_loglog_band(sf, deaths, at_risk))
 
 
-__all__ = ["CONFIDENCE", "Survival", "delayed_entry_km", "kaplan_meier"]
+__all__ = ["CONFIDENCE", "KINDS", "Survival", "delayed_entry_km", "kaplan_meier"]

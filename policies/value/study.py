@@ -158,6 +158,12 @@ def run_ladder(
     train_episodes`` training episodes each), then run every arm on ``episodes`` held-out
     episodes and summarise (:func:`summarize_ladder`). ``env_kwargs``: the user's scenario
     and costs, under each arm's own keywords."""
+    if families is not None:  # a list of labels: a bare string would match by substring
+        if isinstance(families, str) or not all(isinstance(f, str) for f in families):
+            raise ValueError(f"families = {families!r} must be None or a list of family labels")
+        unknown = sorted(set(families) - set(FAMILIES))
+        if unknown:
+            raise ValueError(f"families {unknown} unknown; known: {list(FAMILIES)}")
     t0 = time.perf_counter()
     base = dict(env_kwargs or {})
     labels = [k for k in FAMILIES if families is None or k in families or k == REFERENCE]

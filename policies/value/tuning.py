@@ -11,7 +11,9 @@ Every family (:data:`FAMILIES`) is tuned the same way:
   so trials are compared on the same units and the same degradation draws.
 * **Nesting**: for the nested families the first trial is the age rule's tuned point with
   the override off (``override=False``, no tests): the family's best can only match or
-  beat the age rule on the training seeds.
+  beat the age rule on the training seeds. Not so "filter+tests every flight", whose world
+  tests before every flight (its trial 0 is the age rule with free tests that replace a
+  part failing one).
 * **Edges**: each numeric parameter's best value is checked against its search box
   (:func:`edge_report`): within 5 % of an end of the box (in the parameter's own scale,
   log or linear) it is flagged, and the box should be widened.
@@ -28,7 +30,7 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -244,7 +246,7 @@ def _age_point(family: Family, age_params: Mapping[str, Any] | None) -> dict[str
     for name, (lo, hi, _) in family.box.items():
         if name not in point:
             point[name] = math.sqrt(lo * hi) if lo > 0 else 0.5 * (lo + hi)
-    if "test_every" in family.box:  # the box's top is beyond any episode here: no tests
+    if "test_every" in family.box:  # the box's top is beyond the episode (tune_family): none
         point["test_every"] = family.box["test_every"][1]
     point["override"] = False
     return point
@@ -333,6 +335,9 @@ def tune_family(
             "evaluation episodes"
         )
     t0 = time.perf_counter()
+    if "test_every" in family.box and family.box["test_every"][1] <= slots:
+        lo, _, log = family.box["test_every"]  # its top must mean "no test" in this episode
+        family = replace(family, box={**family.box, "test_every": (lo, slots + 1, log)})
     mode = policy_obs_mode(family.policy)
     env = gym.make_vec(
         ENV_ID,
@@ -433,19 +438,21 @@ def write_tuning_outputs(
     *,
     config: Mapping[str, Any] | None = None,
     overwrite: bool = False,
+    train_seed: int = TRAIN_SEED,
+    sampler_seed: int = SAMPLER_SEED,
 ) -> dict[str, Path]:
     """Write ``tuning.json`` (chosen parameters, edge flags, every trial),
     ``tuning_history.csv`` (one row per trial) and ``tuning_history.png`` (best training
     reward so far per trial) into the folder ``out``, atomically with a manifest
     (:func:`scas_env.utils.results_folder.results_folder`; an existing folder is refused unless
-    ``overwrite``)."""
+    ``overwrite``); ``train_seed``, ``sampler_seed``: the tuning's, recorded in the manifest."""
     import csv
     import json
 
     from scas_env.utils.results_folder import results_folder
 
     names = {"json": "tuning.json", "csv": "tuning_history.csv", "png": "tuning_history.png"}
-    seeds = {"train_seed": TRAIN_SEED, "sampler_seed": SAMPLER_SEED}
+    seeds = {"train_seed": train_seed, "sampler_seed": sampler_seed}  # those of the results
     with results_folder(out, config=dict(config or {}), seeds=seeds, overwrite=overwrite) as tmp:
         payload = {k: r.to_dict() for k, r in results.items()}
         (tmp / names["json"]).write_text(json.dumps(payload, indent=2, default=repr) + "\n")

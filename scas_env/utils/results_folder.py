@@ -106,6 +106,8 @@ def check_destination(
 
     The one rule of every command that writes a results folder (``--out``):
 
+    - an empty name, the current folder, a folder holding it and the home folder are refused
+      (a results folder replaces its destination whole);
     - a name ending in a file suffix (:data:`FILE_SUFFIXES`, e.g. ``.json``) is refused: the
       path names a folder, the files go inside it;
     - an existing folder is accepted if empty, and if not empty only with ``overwrite``
@@ -119,8 +121,18 @@ def check_destination(
     """
     if not isinstance(overwrite, bool):
         raise TypeError(f"overwrite = {overwrite!r} must be True or False")
+    if not str(path).strip():  # Path("") is the current folder: an unset variable, not a name
+        raise ResultsFolderError(
+            f"{option or 'the results destination'} = {str(path)!r} names no folder; give one"
+        )
     dest = Path(path).expanduser().absolute()
     label = f"{option} {path}" if option else f"results folder {dest}"
+    here = Path.cwd().resolve()
+    if dest.resolve() in (here, *here.parents, Path.home().resolve()):
+        raise ResultsFolderError(
+            f"{label} is the current folder, one holding it or the home folder, which a "
+            "results folder would replace whole; choose a folder of its own (e.g. results/run)"
+        )
     replace = "--overwrite" if option else "overwrite=True (--overwrite)"
     exists = dest.exists() or dest.is_symlink()
     if exists and (not dest.is_dir() or dest.is_symlink()):
