@@ -530,7 +530,9 @@ def train_main(argv: Sequence[str] | None = None) -> int:
     parser = train_parser()
     args = parser.parse_args(argv)
     configure_logging(args)
-    check_out_dir(parser, args.out, overwrite=False)  # the results folders' rule, no overwrite
+    used = Path(args.out).is_dir() and any(Path(args.out).iterdir())  # refused below, no
+    if not used:  # --overwrite here: else the results folders' rule (names, writable)
+        check_out_dir(parser, args.out, overwrite=False)
     if args.running_normalization and args.init is None:
         parser.error("--running-normalization needs --init")
     scenario = agent_scenario(parser, args)

@@ -101,7 +101,7 @@ def test_bad_input_is_refused_before_any_episode() -> None:
         tune_fleet_families(FLEET, ["preventive"])
     with pytest.raises(ValueError, match="must name some of"):
         tune_fleet_families(FLEET, [])
-    with pytest.raises(ValueError, match=r"episodes = 0 must be an integer in \[1, 10\*\*8\]"):
+    with pytest.raises(ValueError, match="episodes = 0 must be an integer >= 1"):
         tune_fleet_families(FLEET, ["fleet_age"], episodes=0)  # before any worker starts
     with pytest.raises(ValueError, match=r"n_workers = 1\.5"):
         tune_fleet_families(FLEET, ["fleet_age"], n_workers=1.5)
