@@ -7,6 +7,7 @@ import math
 import re
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from scas_env.actuator.config import read_mapping
@@ -162,6 +163,25 @@ def test_yaml_1_1_exponent_strings_are_numbers_in_lists_as_in_single_values(
     path.write_text(f"fleet:\n  mission_types: {types}\n  mission_value_usd: [1e4, lots, 3e4]\n")
     with pytest.raises(ValueError, match=r"mission_value_usd\[1\] = 'lots' \(not a number\)"):
         FleetConfig.load(path)
+
+
+def test_tables_and_nested_lists_are_no_lists_of_names_or_numbers() -> None:
+    """A table where a list belongs (its keys taken as the names, its values dropped) and a
+    nested name were accepted or raised a bare TypeError: ValueErrors naming the field;
+    numpy numbers are numbers in a list as in a single value."""
+    bad = [
+        (
+            {"mission_types": {"standard": 0.5, "utility": 0.5}},
+            r"mission_types = .* non-empty list",
+        ),
+        ({"mission_types": [["standard"]]}, r"mission_types\[0\] = \['standard'\] is not"),
+        ({"mission_value_usd": {"a": 1.0, "b": 2.0, "c": 3.0}}, r"must be a list of numbers"),
+    ]
+    for data, match in bad:
+        with pytest.raises(ValueError, match=match):
+            FleetConfig.from_dict(data)
+    mix = DemandModel(mission_mix=(np.float32(0.5), np.float32(0.25), np.float32(0.25)))
+    assert mix.mission_mix == (0.5, 0.25, 0.25)
 
 
 @pytest.mark.parametrize("suffix", [".toml", ".yaml", ".json"])

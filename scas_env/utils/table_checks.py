@@ -23,6 +23,7 @@ from __future__ import annotations
 import contextlib
 import json
 import math
+import numbers
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any, TypeVar
@@ -86,10 +87,12 @@ def finite_numbers(
     (YAML 1.1 reads ``1e5`` as one, as single values allow: ``check_value``), not a bool,
     finite and in ``[lo, hi]``; else ``ValueError`` ``"<label>[k] = <value> <allowed>"``
     naming the first bad entry (``allowed``: what is allowed, with the unit if any)."""
+    if not isinstance(values, list | tuple | np.ndarray):  # a table's keys are no numbers
+        raise ValueError(f"{label} = {values!r} must be a list of numbers")
     out = []
     for k, v in enumerate(values):
         f = math.nan
-        if not isinstance(v, bool) and isinstance(v, (int, float, str)):
+        if not isinstance(v, bool | np.bool_) and isinstance(v, numbers.Real | str):
             with contextlib.suppress(OverflowError, ValueError):  # an int no float holds
                 f = float(v)
         if not math.isfinite(f) or not lo <= f <= hi:

@@ -259,10 +259,10 @@ class FleetConfig(Validated):
 
     def _names(self, own: str) -> tuple[str, ...]:
         names = self.mission_types
-        if isinstance(names, str) or not hasattr(names, "__len__") or len(names) == 0:
+        if not isinstance(names, list | tuple) or len(names) == 0:  # a table's keys: no
             raise ValueError(f"{own}.mission_types = {names!r} must be a non-empty list of names")
         for k, name in enumerate(names):
-            if name not in MISSION_TYPES:
+            if not isinstance(name, str) or name not in MISSION_TYPES:
                 raise ValueError(
                     f"{own}.mission_types[{k}] = {name!r} is not a mission type; allowed: "
                     f"{sorted(MISSION_TYPES)}"
