@@ -265,7 +265,8 @@ def load_env_config(
             for table, why in _UNREAD.items():
                 if table in data and not reads[table]:
                     raise ValueError(f"{args.scenario} holds a [{table}] table: {why}")
-            if not (fleet and "fleet" in data and "scenario" not in data):  # a fleet alone
+            alone = (fleet and "fleet" in data) or (mismatch and "mismatch" in data)
+            if not (alone and "scenario" not in data):  # a fleet or a world: the defaults
                 scenario = Scenario.load(args.scenario)
             if args.costs is None and "costs" in data:
                 costs = CostModel.load(args.scenario)

@@ -162,10 +162,16 @@ def _check_ks(ks: Sequence[int]) -> tuple[int, ...]:
     out = tuple(ks)
     if (
         not out
-        or any(isinstance(k, bool) or not isinstance(k, int | np.integer) or k < 1 for k in out)
+        or any(
+            isinstance(k, bool) or not isinstance(k, int | np.integer) or not 1 <= k <= 10**7
+            for k in out
+        )
         or len(set(out)) != len(out)
     ):
-        raise ValueError(f"ks = {ks!r} must be distinct integers >= 1 (slots per decision)")
+        raise ValueError(
+            f"ks = {ks!r} must be distinct integers in [1, 10**7] (slots per decision; an "
+            "episode has at most 10**7)"
+        )
     return tuple(int(k) for k in out)
 
 

@@ -247,3 +247,10 @@ def test_example_loads_and_every_changed_value_is_explained(path: Path) -> None:
         for key in table:
             at = next(i for i, s in enumerate(lines) if re.match(rf"\s*{key}\s*[=:]", s))
             assert lines[at - 1].strip().startswith("#"), f"{path.name}: {key} has no comment"
+
+
+def test_save_refuses_a_section_load_cannot_read(tmp_path) -> None:
+    """``save(section=...)`` wrote any table name, which ``load`` never reads back."""
+    with pytest.raises(ValueError, match=r"section = 'bogus' must be None .*'scenario'"):
+        Scenario().save(tmp_path / "s.toml", section="bogus")
+    assert not (tmp_path / "s.toml").exists()

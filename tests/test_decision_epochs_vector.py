@@ -319,3 +319,13 @@ def test_the_sb3_adapter_reads_same_step_autoreset_as_enum_or_value(mode) -> Non
     assert dones.all() and native.reset_infos == [{}, {}]
     for e in range(2):
         assert infos[e]["terminal_observation"][-1] == 0.0 and obs[e][-1] == 40.0
+
+
+@pytest.mark.parametrize("ks", [(2**63,), (0,), (5, 5), (True,)])
+def test_bad_epoch_lengths_are_refused_alike_by_single_and_vector_envs(ks) -> None:
+    """A k beyond any episode overflowed in the vector env and passed the single one."""
+    from scas_env.decision_epochs import make_decision_epoch_env
+
+    for make in (make_decision_epoch_env, lambda ks: DecisionEpochsVectorEnv(2, ks=ks)):
+        with pytest.raises(ValueError, match=r"must be distinct integers in \[1, 10\*\*7\]"):
+            make(ks=ks)

@@ -412,3 +412,21 @@ def test_a_table_a_command_does_not_read_is_a_usage_error(
     assert exit_.value.code == 2
     assert message in capsys.readouterr().err
     assert not out.exists()
+
+
+def test_a_case_file_of_a_mismatch_alone_runs_the_default_scenario(tmp_path, capsys) -> None:
+    """A file holding only ``[mismatch]`` reads as the default scenario in that world (as a
+    fleet alone does); its bad value is the error, not a missing [scenario] table."""
+    from policies import cli as policies_cli
+    from scas_env.cli_args import load_env_config, load_mismatch
+
+    path = tmp_path / "world.toml"
+    path.write_text("[mismatch]\ncrack_growth = 2.0\n")
+    parser = policies_cli.benchmark_parser()
+    args = parser.parse_args(["--scenario", str(path)])
+    scenario, _ = load_env_config(parser, args, fleet=True, mismatch=True)
+    assert scenario == Scenario() and load_mismatch(parser, args) == Mismatch(crack_growth=2.0)
+    path.write_text("[mismatch]\ncrack_growth = 0\n")
+    with pytest.raises(SystemExit):
+        policies_cli.benchmark_main(["--scenario", str(path), "--out", str(tmp_path / "o")])
+    assert "Mismatch.crack_growth = 0" in capsys.readouterr().err

@@ -259,6 +259,11 @@ class Validated:
         An existing file raises ``FileExistsError`` unless ``overwrite``. :meth:`load` gives
         back an equal object.
         """
+        if section is not None and section not in FILE_SECTIONS:
+            raise ValueError(
+                f"section = {section!r} must be None (the top level) or one of "
+                f"{list(FILE_SECTIONS)} (the tables load reads)"
+            )
         data = self.to_dict()
         return save_sections(path, {section: self} if section else data, overwrite=overwrite)
 
