@@ -758,6 +758,8 @@ def value_main(argv: Sequence[str] | None = None) -> int:
 
     announce_uncached_kernels()
     size = _sizes(args, VALUE_SIZES, scenario, parser)
+    if size["episodes"] < 2:
+        parser.error(f"--episodes {size['episodes']}: a paired interval needs at least 2")
     result = run_ladder(
         n_workers=args.workers,
         progress=not args.quiet,
