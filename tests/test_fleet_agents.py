@@ -246,7 +246,9 @@ def test_training_refuses_a_used_folder_unless_overwrite(tmp_path: Path) -> None
     train(cfg, out, **kw)
     first = _files(out)
     assert {"run.json", "ckpt_8.zip", "progress.csv"} <= set(first)
-    with pytest.raises(FileExistsError, match=r"run' exists and is not empty.*overwrite=True"):
+    with pytest.raises(
+        FileExistsError, match=r"run already exists and is not empty.*overwrite=True"
+    ):
         train(cfg, out, seed=1, **kw)
     with pytest.raises(ValueError, match="exists and is not empty"):
         clone_rule(cfg, "fleet_naive", {}, out, env_kwargs=TINY, demo_episodes=1)

@@ -55,7 +55,7 @@ from experiments.fleet_agents.shared_adapter import FleetAgentsVecEnv
 from policies.agents.fleet.plugins import write_agent_meta
 from policies.agents.sb3_agents import require_contrib
 from scas_env.utils.atomic_file import write_text_atomic
-from scas_env.utils.results_folder import ResultsFolderError, ResultsFolderExistsError
+from scas_env.utils.results_folder import check_destination
 
 __all__ = [
     "TRAIN_SEED",
@@ -136,19 +136,10 @@ def check_run_folder(
     ``FileExistsError``, naming the folder and the ways on); a file in its place never. With
     ``overwrite``, ``inputs`` (name -> path) that lie inside a non-empty ``out`` are refused
     (``ValueError``): replacing the folder would delete them."""
-    if not isinstance(overwrite, bool):
-        raise TypeError(f"overwrite = {overwrite!r} must be True or False")
+    check_destination(out, overwrite)  # the results folders' rule (a used one: overwrite)
     out = Path(out)
-    if (out.exists() or out.is_symlink()) and not out.is_dir():
-        raise ResultsFolderError(f"out = {str(out)!r} exists and is not a folder; choose another")
     if not (out.is_dir() and any(out.iterdir())):
         return out
-    if not overwrite:
-        raise ResultsFolderExistsError(
-            f"out = {str(out)!r} exists and is not empty (another run's files: its checkpoints "
-            "would mix with this run's); choose a new one, or pass overwrite=True (--overwrite) "
-            "to delete its contents first"
-        )
     root = out.resolve()
     for name, path in (inputs or {}).items():
         if path is not None and Path(path).resolve().is_relative_to(root):
