@@ -122,7 +122,7 @@ reproduce: install
 ## native decision-epoch env (the three at once), choose on validation seeds, write the agent
 ## to $(AGENT_DIR)/agent (the shipped one stays), compare on 1000 held-out episodes.
 AGENT_DIR ?= $(RESULTS)/agent_v2
-TRAIN_ARGS = --candidate imitation_g1 --init $(AGENT_DIR)/clone \
+TRAIN_ARGS = --candidate imitation_g1 --init $(AGENT_DIR)/clone --bootstrap-horizon \
 	--native-envs 64 --timesteps 5000000 --checkpoint-every 500000
 train-agent-v2: install
 	$(PY) -m experiments.epoch_agents.imitate_rule --candidate imitation_g1 \

@@ -2,19 +2,57 @@
 
 :func:`dashboard_frame_ms` flies ``slots`` slots with a test every 10, then times ``frames``
 consecutive frames with the history of all of them drawn
-(:func:`scas_env.dashboard.benchmark_frame_ms`). Command line::
+(:func:`benchmark_frame_ms`). Command line::
 
     python -m experiments.dashboard_speed --slots 500 --frames 200
 """
 
 from __future__ import annotations
 
+import time
 from collections.abc import Sequence
+from typing import Any
 
 import gymnasium as gym
+import numpy as np
 
 from scas_env import ENV_ID
-from scas_env.dashboard import HealthTrace, benchmark_frame_ms
+from scas_env.dashboard import HealthDashboard, HealthTrace, frame_record_from_env
+
+
+def benchmark_frame_ms(
+    env: Any, trace: HealthTrace | None = None, *, frames: int = 100, test_every: int = 10
+) -> dict[str, float]:
+    """Time (ms) of ``rgb_array`` frames (record + draw) of ``env`` along an episode.
+
+    ``env`` is reset by the caller and possibly flown for a while, recorded in ``trace``
+    (default: a history that starts now). Between two timed frames the env flies one slot
+    untimed (a test every ``test_every`` slots), so records change as in an episode and the
+    cached background is redrawn when an axis limit moves. Returns the median, mean and max
+    wall time over ``frames`` frames, and the median CPU time of this process
+    (``cpu_median``: less sensitive to other jobs on a shared machine).
+    """
+    if trace is None:
+        trace = HealthTrace()
+        trace.record(env)
+    dash = HealthDashboard()
+    dash.draw(frame_record_from_env(env, trace))  # first frame: the figure's own setup
+    wall, cpu = [], []
+    for k in range(frames):
+        env.step(1 if k % test_every == 0 else 0)
+        trace.record(env)
+        start, start_cpu = time.perf_counter(), time.process_time()
+        dash.draw(frame_record_from_env(env, trace))
+        wall.append(time.perf_counter() - start)
+        cpu.append(time.process_time() - start_cpu)
+    dash.close()
+    ms = 1e3 * np.asarray(wall)
+    return {
+        "median": float(np.median(ms)),
+        "mean": float(ms.mean()),
+        "max": float(ms.max()),
+        "cpu_median": 1e3 * float(np.median(cpu)),
+    }
 
 
 def dashboard_frame_ms(*, slots: int = 500, frames: int = 200, seed: int = 0) -> dict:

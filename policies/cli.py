@@ -519,6 +519,12 @@ def train_parser() -> Any:
         help="with --init: let VecNormalize's statistics follow the rollouts (default: keep "
         "the clone's; docs/rl.md)",
     )
+    parser.add_argument(
+        "--bootstrap-horizon",
+        action="store_true",
+        help="treat the episode's end as a truncation (SB3 bootstraps past it), as the shipped "
+        "agent was trained; default: terminal, the observation counts down to it (docs/rl.md)",
+    )
     parser.add_argument("--out", required=True, help="new, empty output folder")
     add_env_config_args(parser)
     add_logging_args(parser)
@@ -569,6 +575,7 @@ def train_main(argv: Sequence[str] | None = None) -> int:
         args.out,
         seed=args.seed,
         max_wall_s=args.max_wall_s,
+        horizon_is_terminal=not args.bootstrap_horizon,
         **settings,
         **changes,
     )

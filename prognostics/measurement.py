@@ -151,11 +151,12 @@ def log_likelihood_terms(
     (then :func:`log_density` ``(q_i, s_i)``); arguments after ``scratch`` (float64, shape
     (10, N)) are :attr:`MeasurementModel.likelihood_args`.
 
-    The arithmetic of :func:`log_likelihood_kernel`, bit for bit. With ``shared_knots``
-    (PCHIP mean with ``sigma_knots`` equal to ``knots``, as :func:`measurement_from_curve`
-    builds) one interval search serves both curves, and the arithmetic is vectorised: with
-    the knot values of each particle's interval copied out (rows 0-7), or, when the whole
-    cloud lies in one interval (the usual case), with no copy at all.
+    The arithmetic of the tests' two-pass reference (``tests/likelihood_reference.py``), bit
+    for bit. With ``shared_knots`` (PCHIP mean with ``sigma_knots`` equal to ``knots``, as
+    :func:`measurement_from_curve` builds) one interval search serves both curves, and the
+    arithmetic is vectorised: with the knot values of each particle's interval copied out
+    (rows 0-7), or, when the whole cloud lies in one interval (the usual case), with no copy
+    at all.
     """
     n = x.size
     q = scratch[8]
@@ -238,34 +239,6 @@ def log_likelihood_terms(
         z = (y - mean) / s
         sig[i] = s
         q[i] = -0.5 * z * z
-
-
-@njit(cache=True)
-def log_likelihood_kernel(
-    y: float,
-    x: np.ndarray,
-    out: np.ndarray,
-    is_poly: bool,
-    offset: float,
-    scale: float,
-    coef: np.ndarray,
-    knots: np.ndarray,
-    values: np.ndarray,
-    slopes: np.ndarray,
-    sigma_knots: np.ndarray,
-    sigma_values: np.ndarray,
-) -> None:
-    """``out[i] = log N(y; h(x_i), sigma_v(x_i)^2)`` for one measurement and all particles.
-
-    Two passes (mean first, then sigma and the log-density): measured 2x faster with numba
-    than one fused loop.
-    """
-    for i in range(x.size):
-        out[i] = mean_scalar(is_poly, offset, scale, coef, knots, values, slopes, x[i])
-    for i in range(x.size):
-        s = sigma_scalar(sigma_knots, sigma_values, x[i])
-        z = (y - out[i]) / s
-        out[i] = -0.5 * z * z - math.log(s) - _HALF_LOG_2PI
 
 
 @njit(cache=True)
@@ -361,7 +334,7 @@ class MeasurementModel:
 
     @property
     def kernel_args(self) -> tuple:
-        """Arguments after ``(y, x, out)`` of :func:`log_likelihood_kernel`."""
+        """Arguments after ``(y, x, out)`` of the likelihood kernels."""
         return (
             self.kind == "poly",
             float(self.offset),

@@ -90,7 +90,8 @@ def _true_rul(value: float, name: str = "true_rul") -> float:
 
 
 def _alpha(value: float, name: str = "alpha") -> float:
-    return check.real(name, value, gt=0.0)
+    """Saxena 2010's accuracy modifier: ``0 < alpha <= 1`` (a wider cone admits negative RULs)."""
+    return check.real(name, value, gt=0.0, le=1.0)
 
 
 def _beta(value: float) -> float:
@@ -551,14 +552,15 @@ def phm08_score(
     Goebel, Simon & Eklund 2008, "Damage propagation modeling for aircraft engine
     run-to-failure simulation", PHM08, eq. 1): with ``d = predicted - true``,
     ``exp(-d / early) - 1`` for an early prediction (``d < 0``), ``exp(d / late) - 1`` for a
-    late one; 0 when exact, larger is worse, late errors cost more. ``early`` and ``late``
+    late one; 0 when exact, larger is worse, late errors cost more (a negative prediction, as
+    a regression may give, is an early one). ``early`` and ``late``
     (13 and 10 cycles in the challenge) are in the RULs' unit: the score is not scale-free.
 
     >>> phm08_score(np.array([100.0, 100.0]), np.array([87.0, 110.0])).round(4).tolist()
     [1.7183, 1.7183]
     """
     r = check.array("true_rul", true_rul, ndim=1, min_size=1, ge=0.0)
-    p = check.array("predicted_rul", predicted_rul, shape=r.shape, like="true_rul", ge=0.0)
+    p = check.array("predicted_rul", predicted_rul, shape=r.shape, like="true_rul")
     a1 = check.real("early", early)
     a2 = check.real("late", late)
     if not (a1 > 0.0 and a2 > 0.0):

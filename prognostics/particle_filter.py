@@ -33,7 +33,7 @@ same order), run without NRT reference counting, and split each particle loop in
 passes (``exp``, ``log``, normal draws, table searches) and vectorised ones (interpolation,
 divisions, normalisation). Every result is the same, bit for bit, as with the plain
 one-particle-at-a-time arithmetic (``TabulatedRateModel.predict``,
-:func:`~prognostics.measurement.log_likelihood_kernel`; tested): same seed, same numbers.
+the tests' ``likelihood_reference``; tested): same seed, same numbers.
 
 Randomness: only the ``numpy.random.Generator`` given at construction (numba kernels draw
 from the same Generator, sharing its state).

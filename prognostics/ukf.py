@@ -317,12 +317,9 @@ class UnscentedFilter:
         check.real("alpha", alpha, gt=0.0)
         check.real("beta", beta, ge=0.0)
         check.real("kappa", kappa, gt=-_DIM)
-        try:  # an optional dependency: only this estimator needs it
-            from filterpy.kalman import MerweScaledSigmaPoints, UnscentedKalmanFilter
-        except ImportError as err:
-            raise ImportError(
-                "prognostics.ukf needs filterpy (pip install 'filterpy>=1.4.5')"
-            ) from err
+        # filterpy (a dependency of the package) is imported here: only this estimator needs it
+        from filterpy.kalman import MerweScaledSigmaPoints, UnscentedKalmanFilter
+
         points = MerweScaledSigmaPoints(_DIM, alpha, beta, kappa, sqrt_method=psd_sqrt_2x2)
         if np.any(points.Wm < 0.0):
             raise ValueError(

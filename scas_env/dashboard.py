@@ -13,7 +13,7 @@ Three pieces, so that drawing never reaches into the env:
   bundles trace, figure and the env's ``render_mode`` (``"rgb_array"`` or ``"human"``).
 
 matplotlib is imported inside :class:`HealthDashboard` only (the env layer does not need
-it otherwise). Frame cost: :func:`benchmark_frame_ms` (``scripts``: see docs/dashboard.md).
+it otherwise). Frame cost: ``python -m experiments.dashboard_speed`` (docs/dashboard.md).
 
 The env is read through row 0 of its batch (``env.unwrapped.batch``, the
 :class:`~scas_env.core.batch.ActuatorBatch` of the single env), all in the small functions
@@ -24,7 +24,6 @@ The env is read through row 0 of its batch (``env.unwrapped.batch``, the
 from __future__ import annotations
 
 import math
-import time
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -552,48 +551,12 @@ class DashboardRenderer:
             self._dashboard = None
 
 
-def benchmark_frame_ms(
-    env: Any, trace: HealthTrace | None = None, *, frames: int = 100, test_every: int = 10
-) -> dict[str, float]:
-    """Time (ms) of ``rgb_array`` frames (record + draw) of ``env`` along an episode.
-
-    ``env`` is reset by the caller and possibly flown for a while, recorded in ``trace``
-    (default: a history that starts now). Between two timed frames the env flies one slot
-    untimed (a test every ``test_every`` slots), so records change as in an episode and the
-    cached background is redrawn when an axis limit moves. Returns the median, mean and max
-    wall time over ``frames`` frames, and the median CPU time of this process
-    (``cpu_median``: less sensitive to other jobs on a shared machine).
-    """
-    if trace is None:
-        trace = HealthTrace()
-        trace.record(env)
-    dash = HealthDashboard()
-    dash.draw(frame_record_from_env(env, trace))  # first frame: the figure's own setup
-    wall, cpu = [], []
-    for k in range(frames):
-        env.step(1 if k % test_every == 0 else 0)
-        trace.record(env)
-        start, start_cpu = time.perf_counter(), time.process_time()
-        dash.draw(frame_record_from_env(env, trace))
-        wall.append(time.perf_counter() - start)
-        cpu.append(time.process_time() - start_cpu)
-    dash.close()
-    ms = 1e3 * np.asarray(wall)
-    return {
-        "median": float(np.median(ms)),
-        "mean": float(ms.mean()),
-        "max": float(ms.max()),
-        "cpu_median": 1e3 * float(np.median(cpu)),
-    }
-
-
 __all__ = [
     "DashboardRenderer",
     "HealthDashboard",
     "HealthRecord",
     "HealthTrace",
     "PartRul",
-    "benchmark_frame_ms",
     "critical_levels",
     "episode_totals",
     "frame_record_from_env",

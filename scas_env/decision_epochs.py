@@ -21,6 +21,8 @@ Registered as ``scas_env/ScasMaintenanceEpochs-v2`` (the version of the env it w
 | 3 | replace_seal | new seal set (ground time) |
 
 The remaining ``k - 1`` slots are ``fly``. A step ends early when the episode truncates.
+The episode ends truncated at ``flights_left = 0``; as the observation counts down to it,
+that end is terminal for a learner (no value past it: ``policies.agents.sb3_vec_env``).
 
 ## Observation space
 

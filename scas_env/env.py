@@ -144,7 +144,7 @@ class ScasMaintenanceEnv(gym.Env):
     | 5 | G1 | uA | [-1e4, 1e4] | last pre-flight test: mean current |
     | 6 | G3 | uA/mm | [-4e4, 4e4] | last pre-flight test: current / displacement |
     | 7 | test_age | slots | [0, slots] | slots since that test (since reset if none) |
-    | 8 | no_go | 0/1 | [0, 1] | that test failed go/no-go (cleared by a replacement) |
+    | 8 | no_go | 0/1 | [0, 1] | that test failed go/no-go (until a passing test or a replacement) |
     | 9 | spring_rul_mean | flights | [0, cap] | particle-filter RUL of the spring, mean |
     | 10 | spring_rul_low | flights | [0, cap] | its low quantile (``rul_quantile``) |
     | 11 | spring_risk | - | [0, 1] | P(spring fails within ``risk_horizon_flights``) |

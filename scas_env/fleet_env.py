@@ -51,6 +51,13 @@ def make_fleet_setup(
     ):
         if value is not None and not isinstance(value, cls):
             raise ValueError(f"{name} = {value!r} must be None (the default) or a {cls.__name__}")
+    default_value = CostModel().flight_value_usd
+    if cost_model is not None and cost_model.flight_value_usd != default_value:
+        raise ValueError(
+            f"cost_model.flight_value_usd = {cost_model.flight_value_usd!r} is not read by the "
+            f"fleet: a flight's value is its mission's, FleetConfig.mission_value_usd (per "
+            f"mission type); leave flight_value_usd at its default {default_value!r}"
+        )
     config = fleet if fleet is not None else FleetConfig.from_dict(fleet_fields)
     base = scenario if scenario is not None else Scenario(**FLEET_SCENARIO)
     # the observation's bounds of ages and test age: the episode's flights
@@ -129,7 +136,8 @@ class ScasFleetEnv(gym.Env):
 
     ## Observation Space
 
-    ``Box`` (float32, documented bounds; ``env.unwrapped.obs_names`` names every entry), the
+    ``Box`` (float32, documented bounds; ``env.unwrapped.obs_names`` names every entry and
+    ``obs_units`` gives its unit: an actuator's slots are the fleet's days), the
     groups of :mod:`scas_env.core.fleet.view`: per actuator the single env's 20 entries
     (latest features I2, I6, I7, I8, I9, G1, G3; test age; no-go; RUL mean, low quantile and
     risk of spring and seals; detector flags; part ages; downtime), per aircraft its status
@@ -166,7 +174,8 @@ class ScasFleetEnv(gym.Env):
 
     ## Episode End
 
-    Truncation after ``episode_days`` days (default 365). No termination.
+    Truncation after ``episode_days`` days (default 365). No termination. The observation
+    counts down to the end (``days_left``): for a learner it is terminal (no value past it).
 
     ## Arguments
 
@@ -219,7 +228,7 @@ class ScasFleetEnv(gym.Env):
         self.view = FleetView(self.fleet, obs_mode)
         self.observation_space = self.view.space
         self.action_space = fleet_action_space(self.config)
-        self.obs_names = self.view.names
+        self.obs_names, self.obs_units = self.view.names, self.view.units
         self._fleets = np.zeros(1, dtype=np.int64)
         self._actions = np.zeros(
             (1, int(self.config.aircraft), 1 + int(self.config.actuators_per_aircraft)),
@@ -285,7 +294,8 @@ def check_fleet_action(
     per = 1 + n_act
     n = int(space.shape[0])
     allowed = (
-        f"{n} integers, aircraft by aircraft: a mission choice in 0..{int(space.nvec[0]) - 1} "
+        f"{n} integers{', aircraft by aircraft' if n > per else ''}: a mission choice in "
+        f"0..{int(space.nvec[0]) - 1} "
         f"then {n_act} maintenance choices in 0..3 {MAINTENANCE_CHOICES}"
     )
     if isinstance(action, list | tuple) and any(isinstance(v, bool | np.bool_) for v in action):

@@ -68,7 +68,7 @@ class ScasFleetVectorEnv(VectorEnv):
         self.single_action_space = fleet_action_space(self.config)
         self.observation_space = batch_space(self.single_observation_space, n)
         self.action_space = batch_space(self.single_action_space, n)
-        self.obs_names = self.view.names
+        self.obs_names, self.obs_units = self.view.names, self.view.units
         self._np_randoms: list[np.random.Generator | None] = [None] * n
         self._autoreset = np.zeros(n, dtype=np.bool_)
         shape = (n, int(self.config.aircraft), 1 + int(self.config.actuators_per_aircraft))

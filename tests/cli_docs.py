@@ -1,5 +1,5 @@
-"""Each command's ``--help`` in docs/cli.md, as a compact list (tests/test_cli.py checks it):
-the console commands and the lab commands of ``experiments/`` that were console commands.
+"""Each console command's ``--help`` in docs/cli.md, as a compact list (tests/test_cli.py
+checks it).
 
 After changing an option or a command's description, rewrite the blocks with::
 
@@ -28,16 +28,9 @@ DOC = ROOT / "docs" / "cli.md"
 WIDTH = 100
 BLOCK = re.compile(r"(<!-- help: (?P<name>[\w .-]+?) -->\n)(?P<body>.*?)(<!-- /help -->)", re.S)
 SHARED_BLOCK = re.compile(r"(<!-- shared-help -->\n)(.*?)(<!-- /shared-help -->)", re.S)
-#: the lab commands (``python -m experiments.<name>``) whose help docs/cli.md shows: the
-#: paper's reproduction, campaigns, figures and demo, and the builders of the shipped data
-EXPERIMENTS = (
-    "paper.reproduce",
-    "paper.campaign",
-    "paper.demo",
-    "paper.figures",
-    "build.surrogate",
-    "build.calibration",
-)
+#: the lab commands (``python -m experiments.<name>``) whose help docs/cli.md shows: none
+#: (they are not installed; ``--help`` on each)
+EXPERIMENTS: tuple[str, ...] = ()
 #: options several commands share, with the help they print (shown once on the page)
 SHARED = {
     "-h, --help": "show this help message and exit",

@@ -163,6 +163,11 @@ def _positive_number(v: Any) -> bool:
     return _is_number(v) and math.isfinite(v) and v > 0
 
 
+def _alpha_ok(v: Any) -> bool:
+    """Saxena's accuracy modifier: a number in (0, 1]."""
+    return _positive_number(v) and v <= 1.0
+
+
 def _raised_naming(got: Any, *names: str) -> bool:
     return isinstance(got, Raised) and any(n in str(got.err) for n in names)
 
@@ -180,12 +185,13 @@ def run_alpha_bounds(case: tuple) -> Any:
     got = outcome(metrics.alpha_bounds, true_rul, alpha, band, eol)
     valid = (
         _positive_number(true_rul)
-        and _positive_number(alpha)
+        and _alpha_ok(alpha)
         and band in metrics.BANDS
         and (eol is None if band == "cone" and not _is_number(eol) else _positive_number(eol))
     )
     if not valid:
-        bad = [n for n, v in (("true_rul", true_rul), ("alpha", alpha)) if not _positive_number(v)]
+        checks = (("true_rul", _positive_number(true_rul)), ("alpha", _alpha_ok(alpha)))
+        bad = [n for n, ok in checks if not ok]
         assert _raised_naming(got, *bad, "band", "eol"), f"alpha_bounds: {case} -> {got}"
         return got
     half = alpha * true_rul if band == "cone" else alpha * eol
@@ -251,7 +257,7 @@ def run_alpha_lambda(case: tuple) -> Any:
         for name, ok in (
             ("true_rul", _positive_number(true_rul)),
             ("predicted_rul", _is_number(predicted) and math.isfinite(predicted)),
-            ("alpha", _positive_number(alpha)),
+            ("alpha", _alpha_ok(alpha)),
         )
         if not ok
     ]
@@ -308,7 +314,7 @@ def run_horizon(case: tuple) -> Any:
         and math.isfinite(eol)
         and times[-1] < eol
         and (band == "cone" or eol > 0)
-        and _positive_number(alpha)
+        and _alpha_ok(alpha)
         and len(samples) == times.size
         and all(s.size > 0 and all_finite(s) for s in samples)
     )

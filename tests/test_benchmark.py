@@ -221,3 +221,27 @@ def test_parts_in_use_at_reset_enter_the_survival_data_at_their_age() -> None:
             assert all(x["entry_age_flights"] == 0 for x in later)
     plain = run_benchmark(["corrective"], episodes=1, slots=50)
     assert all("entry_age_flights" not in x for x in plain.events)
+
+
+def test_the_cost_breakdown_stacks_to_the_value_of_every_slot_minus_the_reward() -> None:
+    """Costs plus the revenue lost on the ground are ``flight_value * slots - reward`` per
+    episode, also for a policy that never flies (its lost revenue is every slot's value, the
+    run's flight value, not 0): the stacked bars rank like the reward."""
+    from policies.benchmark.report import cost_breakdown, flight_value
+    from policies.benchmark.run import TERMS
+
+    result = run_benchmark(["corrective", "preventive"], episodes=3, slots=200, n_workers=1)
+    grounded = [
+        {**r, "policy": "grounded", "flights": 0, "revenue_usd": 0.0, "reward": -500.0,
+         "term_flight": 0.0, **{f"term_{t}": 0.0 for t in TERMS if t != "flight"},
+         "term_test": -500.0}
+        for r in result.rows if r["policy"] == "corrective"
+    ]  # fmt: skip
+    rows = [*result.rows, *grounded]
+    value = flight_value(rows)
+    assert value == CostModel().flight_value_usd
+    for policy in ("corrective", "preventive", "grounded"):
+        mine = [r for r in rows if r["policy"] == policy]
+        parts = cost_breakdown(mine, value)
+        want = np.mean([value * r["slots"] - r["reward"] for r in mine])
+        assert sum(mean for mean, _ in parts.values()) == pytest.approx(want, rel=1e-12)

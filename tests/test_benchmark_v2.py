@@ -10,7 +10,13 @@ import gymnasium as gym
 import pytest
 
 from policies.agents.sb3_agents import DEFAULT_AGENT, load_sb3_policy
-from policies.benchmark.run import DEFAULT_POLICIES, PolicySpec, check_specs, run_benchmark
+from policies.benchmark.run import (
+    DEFAULT_POLICIES,
+    PolicySpec,
+    check_specs,
+    policy_params,
+    run_benchmark,
+)
 from policies.cli import benchmark_main
 from scas_env import ENV_ID
 
@@ -59,3 +65,46 @@ def test_decision_epoch_agents_see_the_run_s_horizon() -> None:
         DEFAULT_AGENT, names, **{k: v for k, v in params["ppo"].items() if k != "path"}
     )
     assert agent.episode_slots == 300
+
+
+def test_the_benchmark_s_oracle_plans_with_the_run_s_cost_model() -> None:
+    """The oracle plans with the prices the env charges: under a cost model where grounded
+    slots are dear, the benchmark's oracle acts as one built with that model (an oracle
+    planning with the default prices chose other replacements in one of these episodes)."""
+    from scas_env.core.costs import CostModel
+
+    c = CostModel(
+        flight_value_usd=10000.0,
+        seal_downtime_slots=10,
+        spring_downtime_slots=3,
+        seal_replacement_usd=500.0,
+        spring_replacement_usd=500.0,
+    )
+    told = PolicySpec("oracle", params={"cost_model": c}, label="told")
+    assert policy_params(PolicySpec("oracle"), {"cost_model": c})["cost_model"] is c
+    assert policy_params(told, {"cost_model": CostModel()})["cost_model"] is c
+    result = run_benchmark(
+        [PolicySpec("oracle"), told], episodes=20, n_workers=1, env_kwargs={"cost_model": c}
+    )
+    rewards = {
+        key: [r["reward"] for r in result.rows if r["policy"] == key] for key in ("oracle", "told")
+    }
+    assert rewards["oracle"] == rewards["told"]
+
+
+def test_the_run_record_holds_each_policy_s_parameters_as_built() -> None:
+    """``config["policies"][i]["built_params"]`` is the built policy's ``params()`` (the
+    tuned defaults a spec without parameters got), JSON-able, and summary.md prints it."""
+    import json
+
+    from policies.base import make_policy
+    from policies.benchmark.report import markdown_summary
+
+    result = run_benchmark(["preventive", "oracle"], episodes=2, slots=50, n_workers=1)
+    env = gym.make(ENV_ID, obs_mode="features")
+    want = make_policy("preventive", env.unwrapped.obs_names).params()
+    env.close()
+    record = {p["label"]: p for p in json.loads(json.dumps(result.config))["policies"]}
+    assert record["preventive"]["params"] == {} and record["preventive"]["built_params"] == want
+    assert record["oracle"]["built_params"]["episode_slots"] == 50
+    assert f"`{want}`" in markdown_summary(result)

@@ -176,7 +176,7 @@ def test_bad_part_rul_raises() -> None:
 def test_benchmark_function_runs() -> None:
     """The frame benchmark (timings are reported by python -m experiments.dashboard_speed, not
     tested)."""
-    from scas_env.dashboard import benchmark_frame_ms
+    from experiments.dashboard_speed import benchmark_frame_ms
 
     env = gym.make(scas_env.ENV_ID)
     env.reset(seed=0)

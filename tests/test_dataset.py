@@ -127,6 +127,15 @@ def test_row_semantics(small) -> None:
         assert np.all(np.isnan(r["G1"]) == ~r["tested"])
         assert not np.any(r["flown"] & r["no_go"])
         assert np.all(r["no_go"] <= r["tested"])  # only a test can hold the aircraft
+        flown_slots = r["slot"][r["flown"]]
+        assert units["last_flown_slot"][u] == (flown_slots[-1] if len(flown_slots) else 0)
+        held = bool(units["censored"][u]) and not r["flown"][-1]
+        assert units["end"][u] == (
+            "grounded" if held else "max_slots" if units["censored"][u] else "failure"
+        )
+        if held:  # grounded by a failed test, never flown again
+            assert not r["flown"][r["slot"] > units["last_flown_slot"][u]].any()
+            assert r["no_go"][r["slot"] > units["last_flown_slot"][u]].any()
         if units["censored"][u]:
             assert np.all(np.isnan(r["rul_flights"])) and n == units["slots"][u]
         else:
@@ -173,6 +182,14 @@ def test_same_seed_same_files_and_loader_round_trip(tmp_path: Path) -> None:
     assert from_parquet.card["counts"]["flights_rows"] == len(flights["unit"])
     assert from_csv.flights.schema.equals(to_table("flights", flights).schema)
     assert not [p for p in tmp_path.iterdir() if p.name.startswith(".")]  # no temp left
+
+
+def test_a_csv_only_folder_loads_by_default_and_a_missing_format_is_named(tmp_path: Path) -> None:
+    export_run_to_failure(2, out=tmp_path / "c", seed=1, formats=("csv",), progress=False)
+    data = load_run_to_failure(tmp_path / "c")
+    assert data.card["formats"] == ["csv"] and data.units.num_rows == 2
+    with pytest.raises(ValueError, match=r"file_format = 'parquet': .* holds \['csv'\] only"):
+        load_run_to_failure(tmp_path / "c", file_format="parquet")
 
 
 def test_existing_output_refused_before_work_and_replaced_on_request(tmp_path: Path) -> None:

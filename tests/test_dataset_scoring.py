@@ -21,9 +21,9 @@ from scas_env.dataset.scoring import (
 
 def test_phm08_score_is_the_challenge_s_exponential_on_each_side() -> None:
     """``exp(-d/13) - 1`` early, ``exp(d/10) - 1`` late (Saxena et al. 2008, eq. 1)."""
-    true = np.array([50.0, 50.0, 50.0, 50.0, 0.0])
-    pred = np.array([37.0, 60.0, 50.0, 24.0, 5.0])
-    want = [math.e - 1.0, math.e - 1.0, 0.0, math.exp(2.0) - 1.0, math.exp(0.5) - 1.0]
+    true = np.array([50.0, 50.0, 50.0, 50.0, 0.0, 0.0])  # a regression's -13 is 13 early
+    pred = np.array([37.0, 60.0, 50.0, 24.0, 5.0, -13.0])
+    want = [math.e - 1.0, math.e - 1.0, 0.0, math.exp(2.0) - 1.0, math.exp(0.5) - 1.0, math.e - 1]
     np.testing.assert_allclose(phm08_score(true, pred), want, rtol=1e-15, atol=0)
     # late costs more than early for the same error
     assert (

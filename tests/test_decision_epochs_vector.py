@@ -214,18 +214,23 @@ def test_copies_of_the_vector_epochs_env_continue_identically(how: str) -> None:
                 np.testing.assert_array_equal(a[4][k], b[4][k])
 
 
-def test_make_vec_and_sb3_adapter_match_dummy_vec_env() -> None:
+@pytest.mark.parametrize("terminal", [True, False])
+def test_make_vec_and_sb3_adapter_match_dummy_vec_env(terminal: bool) -> None:
+    """The adapter over the native vector env is ``DummyVecEnv`` of single epoch envs, the
+    end at the horizon terminal (``HorizonIsTerminal``; SB3 does not bootstrap past it) by
+    default, or a truncation as the env reports it."""
     from stable_baselines3.common.vec_env import DummyVecEnv
 
-    from policies.agents.sb3_vec_env import NativeVecEnv
+    from policies.agents.sb3_vec_env import HorizonIsTerminal, NativeVecEnv
 
     n = 3
     venv = gym.make_vec(
         ENV_ID_EPOCHS, num_envs=n, vectorization_mode="vector_entry_point", episode_slots=200
     )
     assert isinstance(venv, DecisionEpochsVectorEnv)
-    native = NativeVecEnv(venv)
-    dummy = DummyVecEnv([lambda: _epochs(episode_slots=200)] * n)
+    native = NativeVecEnv(venv) if terminal else NativeVecEnv(venv, truncation_is_terminal=False)
+    wrap = HorizonIsTerminal if terminal else (lambda env: env)
+    dummy = DummyVecEnv([lambda: wrap(_epochs(episode_slots=200))] * n)
     native.seed(3)
     dummy.seed(3)
     np.testing.assert_array_equal(native.reset(), dummy.reset())
@@ -243,9 +248,28 @@ def test_make_vec_and_sb3_adapter_match_dummy_vec_env() -> None:
             np.testing.assert_array_equal(
                 a[3][e]["terminal_observation"], b[3][e]["terminal_observation"]
             )
-            assert a[3][e]["TimeLimit.truncated"] == b[3][e]["TimeLimit.truncated"]
+            assert a[3][e]["TimeLimit.truncated"] is b[3][e]["TimeLimit.truncated"] is not terminal
             dones_seen += 1
     assert dones_seen >= 3
+
+
+def test_a_cut_before_the_horizon_stays_a_truncation() -> None:
+    """``HorizonIsTerminal`` ends an episode as terminal only at 0 slots left: a
+    ``TimeLimit`` before that is still a truncation (SB3 bootstraps there, rightly)."""
+    from policies.agents.sb3_vec_env import HorizonIsTerminal
+
+    env = HorizonIsTerminal(gym.wrappers.TimeLimit(_epochs(episode_slots=200), 3))
+    env.reset(seed=0)
+    ends = [env.step(0)[2:4] for _ in range(3)]
+    assert ends == [(False, False), (False, False), (False, True)]
+    env = HorizonIsTerminal(_epochs(episode_slots=3))
+    obs, _ = env.reset(seed=0)
+    *_, terminated, truncated, _ = env.step(0)  # k = 1 slot at a time
+    while not (terminated or truncated):
+        obs, _, terminated, truncated, _ = env.step(0)
+    assert (terminated, truncated) == (True, False) and obs[-1] == 0.0
+    with pytest.raises(ValueError, match="none of"):
+        HorizonIsTerminal(gym.make(ENV_ID))
 
 
 def test_vector_bad_actions_raise() -> None:
@@ -277,6 +301,7 @@ def test_train_epochs_on_the_native_vector_env(tmp_path) -> None:
     )  # fmt: skip
     run = json.loads((out / "run.json").read_text())
     assert run["vec_env"].startswith("NativeVecEnv") and run["n_envs"] == 8
+    assert run["horizon_is_terminal"] is True  # the default (docs/rl.md)
     assert run["decisions"] >= 256
     assert sorted(p.name for p in out.glob("ckpt_*_steps.zip"))
     rows = (out / "monitor" / "0.monitor.csv").read_text().splitlines()
@@ -300,7 +325,14 @@ def test_train_epochs_on_the_native_vector_env(tmp_path) -> None:
         load_sb3_policy(ckpt, names)
     with pytest.raises(ValueError, match="native_envs"):
         train_epochs(hp, tmp_path / "bad", native_envs=0)
+    with pytest.raises(ValueError, match="horizon_is_terminal = 'no' must be a bool"):
+        train_epochs(hp, tmp_path / "bad", horizon_is_terminal="no")
     assert not (tmp_path / "bad").exists()
+    from policies.agents.sb3_vec_env import HorizonIsTerminal
+    from policies.agents.training import make_epoch_env
+
+    assert isinstance(make_epoch_env(episode_slots=10), HorizonIsTerminal)
+    assert isinstance(make_epoch_env(horizon_is_terminal=False, episode_slots=10), DecisionEpochs)
 
 
 @pytest.mark.parametrize("mode", [AutoresetMode.SAME_STEP, "SameStep"])

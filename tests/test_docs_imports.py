@@ -71,3 +71,14 @@ def test_the_check_catches_a_wrong_module_and_a_wrong_name() -> None:
     for code in wrong:
         with pytest.raises(pytest.fail.Exception):
             test_a_docs_example_parses_and_imports_what_exists("probe.md", 1, code)
+
+
+def test_the_prognostics_page_s_example_runs_and_its_filter_enters_the_band() -> None:
+    """docs/prognostics.md's example on a synthetic Paris crack runs as printed, and the
+    filter's RUL enters Saxena's +-10 % band before the end of life (a finite prognostic
+    horizon) with its growth-multiplier estimate nearer the true 1.3 than the prior's 1."""
+    [code] = [c for page, _, c in BLOCKS if page == "docs/prognostics.md"]
+    scope: dict = {}
+    exec(compile(code, "docs/prognostics.md", "exec"), scope)
+    assert 0 < scope["metrics"].prognostic_horizon < scope["eol"]
+    assert abs(scope["trace"].theta_mean[-1] - 1.3) < abs(1.0 - 1.3)

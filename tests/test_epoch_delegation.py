@@ -159,7 +159,7 @@ def test_bad_delegates_are_refused() -> None:
 # ---------------------------------------------------------------- the residual agent's chain
 @pytest.fixture(scope="module")
 def recorded():
-    from policies.agents.demonstrations import record_rule
+    from experiments.epoch_agents.demonstrations import record_rule
 
     scenario = {"episode_slots": SLOTS}
     return record_rule("rul_risk", BUSY, episodes=4, seed=1, scenario=scenario, batch=2)
@@ -167,7 +167,7 @@ def recorded():
 
 @pytest.mark.parametrize("gamma", [1.0, 0.9])
 def test_delegation_demonstrations_label_the_rule_and_its_returns(recorded, gamma) -> None:
-    from policies.agents.delegation import delegation_demonstrations
+    from experiments.epoch_agents.clone import delegation_demonstrations
 
     demos = delegation_demonstrations(recorded, KS, 5, gamma)
     n = recorded.actions.size
@@ -211,9 +211,10 @@ def test_a_clone_that_delegates_plays_the_rule_after_training_and_loading(
     import torch
     from sb3_contrib import MaskablePPO
 
+    from experiments.epoch_agents.clone import clone_rule, delegation_demonstrations
     from experiments.epoch_agents.selection import _spec
-    from policies.agents.delegation import DelegateSpec, delegation_demonstrations
-    from policies.agents.training import clone_rule, train_epochs
+    from policies.agents.delegation import DelegateSpec
+    from policies.agents.training import train_epochs
     from policies.benchmark.run import PolicySpec, run_benchmark
 
     scenario = {"episode_slots": SLOTS}
@@ -259,8 +260,8 @@ def test_label_smoothing_leaves_the_closed_form_share_on_the_other_valid_actions
     pytest.importorskip("sb3_contrib")
     import torch
 
-    from policies.agents.demonstrations import Demonstrations
-    from policies.agents.imitation import clone
+    from experiments.epoch_agents.demonstrations import Demonstrations
+    from experiments.epoch_agents.imitation import clone
     from tests.clone_cases import box3_model
 
     n, alpha = 2000, 0.1

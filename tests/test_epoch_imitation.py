@@ -8,8 +8,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from policies.agents.agent_files import ObsNormalization
-from policies.agents.demonstrations import (
+from experiments.epoch_agents.demonstrations import (
     RuleEpisodes,
     demonstrations,
     epoch_labels,
@@ -17,6 +16,7 @@ from policies.agents.demonstrations import (
     epoch_returns,
     record_rule,
 )
+from policies.agents.agent_files import ObsNormalization
 from policies.benchmark.run import episode_seeds
 from scas_env import ENV_ID
 from scas_env.decision_epochs import DEFAULT_KS, DecisionEpochs
@@ -140,7 +140,7 @@ def test_return_statistics_are_those_vecnormalize_accumulates(recorded: RuleEpis
     epochs are played on the decision-epoch env (independent: SB3's own accumulation)."""
     from stable_baselines3.common.vec_env import DummyVecEnv, VecNormalize
 
-    from policies.agents.imitation import set_statistics
+    from experiments.epoch_agents.imitation import set_statistics
 
     gamma = 0.99
     demos = demonstrations(recorded, DEFAULT_KS, gamma=gamma)
@@ -171,7 +171,7 @@ def test_return_statistics_are_those_vecnormalize_accumulates(recorded: RuleEpis
 
 def _synthetic_demos(n_episodes: int = 20, slots: int = 50):
     """Demonstrations whose action is a threshold of one observation entry (learnable)."""
-    from policies.agents.demonstrations import Demonstrations
+    from experiments.epoch_agents.demonstrations import Demonstrations
 
     rng = np.random.default_rng(0)
     n = n_episodes * slots
@@ -196,7 +196,7 @@ def _synthetic_demos(n_episodes: int = 20, slots: int = 50):
 
 def test_clone_learns_a_learnable_expert_and_rejects_bad_settings() -> None:
     pytest.importorskip("sb3_contrib")
-    from policies.agents.imitation import clone
+    from experiments.epoch_agents.imitation import clone
     from tests.clone_cases import box3_model
 
     demos = _synthetic_demos()
@@ -227,7 +227,8 @@ def test_training_starts_from_the_clone(tmp_path, recorded: RuleEpisodes) -> Non
     import torch
     from sb3_contrib import MaskablePPO
 
-    from policies.agents.training import clone_rule, train_epochs
+    from experiments.epoch_agents.clone import clone_rule
+    from policies.agents.training import train_epochs
 
     hp = {"n_steps": 32, "batch_size": 32, "n_epochs": 1, "policy_kwargs": {"net_arch": [16]}}
     demos = demonstrations(recorded, DEFAULT_KS)
@@ -331,7 +332,7 @@ def test_dagger_labels_of_the_rules_own_states_are_its_demonstrations(
     """Run on the rule's own path, DAgger's look-ahead labels (a copied env played forward,
     cached along the path) equal the labels cut from the recorded episode (independent:
     epoch_labels on the whole recorded episode)."""
-    from policies.agents.dagger import dagger_samples
+    from experiments.epoch_agents.dagger import dagger_samples
 
     seeds = episode_seeds(1, 3)[:2]
     got = dagger_samples(
@@ -354,7 +355,7 @@ def test_dagger_labels_of_the_rules_own_states_are_its_demonstrations(
 def test_lookahead_counts_the_slots_left_at_the_end_of_an_episode() -> None:
     """With a rule that never acts, the look-ahead is the slots left (1 at the last slot),
     never a step past truncation; and it stops at its limit."""
-    from policies.agents.dagger import _lookahead
+    from experiments.epoch_agents.dagger import _lookahead
     from policies.base import make_policy
 
     env = gym.make(ENV_ID, disable_env_checker=True, **SCENARIO).unwrapped
@@ -374,8 +375,8 @@ def test_clone_rule_runs_dagger_rounds_and_records_them(tmp_path, recorded: Rule
     pytest.importorskip("sb3_contrib")
     import json
 
-    from policies.agents.dagger import DaggerPlan, merged
-    from policies.agents.training import clone_rule
+    from experiments.epoch_agents.clone import clone_rule
+    from experiments.epoch_agents.dagger import DaggerPlan, merged
 
     demos = demonstrations(recorded, DEFAULT_KS, safety=3.0)
     both = merged(demos, demos)

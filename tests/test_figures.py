@@ -28,8 +28,8 @@ from scas_env.actuator.flight_damage import (
 )
 from scas_env.actuator.health import HealthState
 from scas_env.actuator.params import ScasParams
-from scas_env.actuator.physics.crack_growth import block_growth_rate_m, crack_history
 from scas_env.actuator.uncertainty import nominal_unit
+from tests.crack_growth_reference import block_growth_rate_m, crack_history
 
 P = ScasParams()
 

@@ -16,6 +16,7 @@ from scas_env.core.fleet.config import FleetConfig, SparesConfig
 from scas_env.core.fleet.demand import DemandModel
 from scas_env.core.fleet.resources import SparesSpec
 from scas_env.core.scenario import Scenario
+from scas_env.fleet_env import ScasFleetEnv
 
 ROOT = Path(__file__).resolve().parents[1]
 FLEET_EXAMPLES = sorted((ROOT / "examples").glob("fleet_*.*"))
@@ -214,10 +215,9 @@ def test_fleet_examples_load_and_every_value_is_explained(path: Path) -> None:
     assert set(data) == {"scenario", "costs", "fleet"}
     Scenario.from_dict(data["scenario"])  # the single actuator's tables are valid too
     costs = CostModel.from_dict(data["costs"])
-    # the single env's flight value is the mission's value per flight
-    assert costs.flight_value_usd * cfg.flights_per_mission == pytest.approx(
-        cfg.mission_value_usd[0]
-    )
+    # a fleet's flight is worth its mission's value (the fleet refuses another flight value)
+    assert costs.flight_value_usd == CostModel().flight_value_usd
+    ScasFleetEnv(fleet=cfg.replace(episode_days=2), cost_model=costs).close()
     lines = path.read_text().splitlines()
     for table, start in (
         ("scenario", "[scenario]"),

@@ -15,6 +15,7 @@ import numpy as np
 import pytest
 
 import scas_env
+from scas_env.core.costs import CostModel
 from scas_env.core.fleet.config import FleetConfig
 from scas_env.core.fleet.demand import DemandModel
 from scas_env.core.fleet.view import AIRCRAFT_FIELDS, GROUPS
@@ -40,6 +41,12 @@ def test_the_degenerate_fleet_is_the_single_env_bit_for_bit() -> None:
     n = len(single.unwrapped.obs_names)
     assert fleet.obs_names[:n] == tuple(f"aircraft_0.actuator_0.{k}" for k in
                                         single.unwrapped.obs_names)  # fmt: skip
+    # the same units, a slot being a day of the fleet; every entry has one
+    days_for_slots = tuple("days" if u == "slots" else u for u in single.unwrapped.obs_units)
+    assert fleet.obs_units[:n] == days_for_slots and len(fleet.obs_units) == len(fleet.obs_names)
+    units = dict(zip(fleet.obs_names, fleet.obs_units, strict=True))
+    assert units["aircraft_0.downtime"] == units["days_left"] == "days"
+    assert units["demand_day0.standard"] == "missions"
     seen = {"failures": 0, "replacements": 0, "tests": 0, "no_go": 0}
     # mostly fly (parts in service run to failure), tests now and then, rare replacements
     p = (0.95, 0.04, 0.005, 0.005)
@@ -238,6 +245,7 @@ def test_the_agents_views_concatenate_back_to_the_fleet_and_share_the_reward() -
         actuators = flat[:n_act].reshape(sh.aircraft, -1)
         aircraft = flat[n_act : n_act + n_air].reshape(sh.aircraft, -1)
         shared = flat[n_act + n_air :]
+        assert np.array_equal(env.state(), flat) and env.state_space.contains(env.state())
         for i, agent in enumerate(env.possible_agents):
             obs = observations[agent]
             assert env.observation_space(agent).contains(obs)
@@ -259,6 +267,22 @@ def test_the_agents_views_concatenate_back_to_the_fleet_and_share_the_reward() -
         assert sum(shares) == pytest.approx(terms[3], abs=1e-6)
         assert team == pytest.approx(sum(shares) + terms[:3].sum(), abs=1e-6)
         assert not any(truncations.values()) or t == SMALL.episode_days - 1
+
+
+def test_a_parallel_env_is_freed_when_dropped() -> None:
+    """Asking for the spaces keeps no reference to the env (a cache on the methods did)."""
+    pytest.importorskip("pettingzoo")
+    import gc
+    import weakref
+
+    from scas_env.multiagent import fleet_v1
+
+    env = fleet_v1.parallel_env(fleet=SMALL)
+    env.observation_space("aircraft_0"), env.action_space("aircraft_0")
+    ref = weakref.ref(env)
+    del env
+    gc.collect()
+    assert ref() is None
 
 
 def test_the_dict_view_holds_the_flat_observation_s_groups() -> None:
@@ -467,6 +491,10 @@ def test_bad_vector_and_agent_actions_are_refused() -> None:
         ({"fleet": FleetConfig(), "aircraft": 2}, r"pass either fleet=FleetConfig\(\.\.\.\)"),
         ({"fleet": {"aircraft": 2}}, r"fleet = \{'aircraft': 2\} must be None .* FleetConfig"),
         ({"obs_mode": "pixels"}, r"obs_mode = 'pixels' must be one of"),
+        (
+            {"cost_model": CostModel(flight_value_usd=1000.0)},
+            r"cost_model\.flight_value_usd = 1000\.0 is not read by the fleet",
+        ),
         ({"render_mode": "human"}, r"render_mode = 'human' must be None or one of"),
     ],
 )

@@ -49,14 +49,18 @@ def test_bounds_alpha_lambda_and_beta() -> None:
 
 
 def test_bounds_beyond_float64_are_refused_and_the_cone_test_uses_their_limit() -> None:
-    """(1 + 1e300) 1e300 is no float: ``alpha_bounds`` refuses it rather than return inf; a
-    test of whether a prediction lies in the cone takes the bounds' limits (-inf, inf)."""
-    with pytest.raises(ValueError, match=r"overflows float64: true_rul = 1e\+300"):
-        alpha_bounds(1e300, 1e300)
+    """(1 + 1) 1e308 is no float: ``alpha_bounds`` refuses it rather than return inf; a
+    test of whether a prediction lies in the cone takes the bounds' limits (0, inf). Saxena's
+    alpha lies in (0, 1]."""
+    with pytest.raises(ValueError, match=r"overflows float64: true_rul = 1e\+308"):
+        alpha_bounds(1e308, 1.0)
     with pytest.raises(ValueError, match="overflows float64"):
-        alpha_bounds(1e300, 1e300, "band", eol=1e300)
-    assert alpha_lambda_point(1e300, 0.0, 1e300)
-    assert alpha_lambda_distribution(1e300, np.array([0.0, 1e308]), None, alpha=1e300)
+        alpha_bounds(1e308, 1.0, "band", eol=1e308)
+    assert alpha_lambda_point(1e308, 0.0, 1.0)
+    assert alpha_lambda_distribution(1e308, np.array([0.0, 1.7e308]), None, alpha=1.0)
+    for alpha in (1.5, 0.0):
+        with pytest.raises(ValueError, match=f"alpha = {alpha}"):
+            alpha_bounds(10.0, alpha)
 
 
 def test_prognostic_horizon_band_and_cone() -> None:

@@ -17,7 +17,6 @@ from prognostics.degradation_models import TabulatedRateModel, rate_at_scalar
 from prognostics.measurement import (
     MeasurementModel,
     log_density,
-    log_likelihood_kernel,
     log_likelihood_terms,
     measurement_from_curve,
 )
@@ -30,6 +29,7 @@ from prognostics.normals import (
     standard_normal,
 )
 from prognostics.particle_filter import ParticleFilter
+from tests.likelihood_reference import log_likelihood_kernel
 
 BIT_GENERATORS = (
     np.random.PCG64,

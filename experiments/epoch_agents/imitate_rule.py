@@ -1,9 +1,10 @@
 """Clone a tuned rule into a decision-epoch agent: the warm start of the RL training.
 
 Records the rule's per-flight episodes on training seeds, cuts them into decision epochs
-(policies.agents.demonstrations), behaviour-clones them into the network of a search
-candidate (policies.agents.imitation), then runs DAgger rounds (policies.agents.dagger: the
-rule labels the states the clone visits on further training episodes);
+(experiments.epoch_agents.demonstrations), behaviour-clones them into the network of a search
+candidate (experiments.epoch_agents.imitation), then runs DAgger rounds
+(experiments.epoch_agents.dagger: the rule labels the states the clone visits on further
+training episodes);
 ``scas-train --init OUT`` then trains PPO from the clone. Example (the filter rule of the
 value study)::
 
@@ -20,11 +21,12 @@ from __future__ import annotations
 
 import argparse
 
+from experiments.epoch_agents.clone import clone_rule, delegation_demonstrations
+from experiments.epoch_agents.dagger import DaggerPlan
+from experiments.epoch_agents.demonstrations import demonstrations, record_rule
 from experiments.epoch_agents.selection import HELD_OUT_SEED, VALIDATION_SEED, tuned_rules
-from policies.agents.dagger import DaggerPlan
-from policies.agents.delegation import DelegateSpec, delegation_demonstrations
-from policies.agents.demonstrations import demonstrations, record_rule
-from policies.agents.training import HYPERPARAMS_DIR, candidate_hyperparams, clone_rule
+from policies.agents.delegation import DelegateSpec
+from policies.agents.training import HYPERPARAMS_DIR, candidate_hyperparams
 from policies.benchmark.run import episode_seeds
 from policies.value import tuning
 from scas_env.cli_args import add_env_config_args, agent_scenario, scenario_changes

@@ -1,6 +1,6 @@
 """Behaviour cloning of a fleet rule into a MaskablePPO policy with ``MultiDiscrete`` actions.
 
-The warm start of the fleet agents (as :mod:`policies.agents.imitation` for the single
+The warm start of the fleet agents (as :mod:`experiments.epoch_agents.imitation` for the single
 actuator): :func:`clone` fits, on :class:`experiments.fleet_agents.demos.FleetDemos` (the
 fleet's samples for the centralised agent, their per-aircraft rows for the shared one):
 

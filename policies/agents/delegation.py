@@ -6,7 +6,7 @@ the rule, flight by flight; RL then only has to learn where overruling the rule 
 (residual policy learning: Silver et al. 2018, "Residual Policy Learning"; Johannink et al.
 2019, "Residual Reinforcement Learning for Robot Control"). The warm start is a clone of
 "always delegate ``k``" with the critic fitted to the rule's own returns
-(:func:`delegation_demonstrations`), so PPO starts at the rule's reward with a critic that
+(``experiments.epoch_agents.clone``), so PPO starts at the rule's reward with a critic that
 knows its values.
 
 A delegate is declared, never pickled: :class:`DelegateSpec` (a registered policy name and
@@ -22,19 +22,9 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
-import numpy as np
-
-from policies.agents.demonstrations import (
-    Demonstrations,
-    RuleEpisodes,
-    epoch_masks,
-    epoch_path,
-    epoch_returns,
-)
 from policies.base import make_policy, policy_obs_mode
-from scas_env.decision_epochs import DELEGATE, _check_ks
 
-__all__ = ["DelegateSpec", "delegation_demonstrations", "flight_obs_names"]
+__all__ = ["DelegateSpec", "flight_obs_names"]
 
 
 @dataclass(frozen=True)
@@ -89,30 +79,3 @@ def flight_obs_names(**scenario: Any) -> tuple[str, ...]:
         return tuple(env.obs_names)
     finally:
         env.close()
-
-
-def delegation_demonstrations(
-    recorded: RuleEpisodes, ks: Sequence[int], k: int, gamma: float
-) -> Demonstrations:
-    """Every recorded slot of the delegate's own episodes labelled "the delegate for ``k``
-    slots" (the epoch action ``DELEGATE * len(ks) + index(k)``), with the return of
-    following that from the slot (:func:`policies.agents.demonstrations.epoch_returns` with
-    ``k`` everywhere; ``gamma`` per decision) and the epoch env's masks with delegation.
-    Played from slot 0 they replay the recorded episodes: delegating replays the rule."""
-    ks = _check_ks(ks)
-    if k not in ks:
-        raise ValueError(f"k = {k!r} must be one of ks = {ks}")
-    n_ep, slots, _ = recorded.obs.shape
-    left = (slots - np.arange(slots)).astype(np.float32)
-    every = np.full(slots, k, dtype=np.int64)
-    obs = np.concatenate([np.column_stack([recorded.obs[e], left]) for e in range(n_ep)])
-    returns = np.concatenate([epoch_returns(r, every, gamma) for r in recorded.rewards])
-    return Demonstrations(
-        obs=obs,
-        actions=np.full(len(obs), DELEGATE * len(ks) + ks.index(k), dtype=np.int64),
-        masks=epoch_masks(obs, recorded.obs_names, len(ks), delegate=True),
-        returns=returns,
-        on_path=np.tile(epoch_path(every), n_ep),
-        episode=np.repeat(np.arange(n_ep, dtype=np.int64), slots),
-        ks=ks,
-    )

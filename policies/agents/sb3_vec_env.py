@@ -21,6 +21,16 @@ Semantics (SB3's ``VecEnv`` contract):
 - ``get_attr`` / ``set_attr`` / ``env_method``: on the vector env itself (attributes shared
   by its N actuators), the value once per index.
 
+**The end of an episode whose observation counts down to it is terminal.** An env that
+observes the time left (the decision-epoch env's ``flights_left``) is a finite-horizon MDP:
+its last state is terminal, and bootstrapping past it adds a value the agent never earns
+(Pardo et al. 2018, "Time Limits in Reinforcement Learning", ICML). The envs report the end
+as ``truncated`` (Gymnasium's habit for a fixed horizon); the adapter reports
+``TimeLimit.truncated = False`` when the last observation's time left is 0
+(``truncation_is_terminal``: default, when the observation has a :data:`TIME_LEFT` entry),
+and :class:`HorizonIsTerminal` does the same for a single env in a ``DummyVecEnv``. A cut
+before the horizon (a ``TimeLimit``) stays a truncation.
+
 A vector env that autoresets in the same step (``AutoresetMode.SAME_STEP``, e.g.
 :class:`scas_env.decision_epochs_vector.DecisionEpochsVectorEnv`) already returns the new
 observations; the last ones come from its ``info["final_obs"]``, env by env.
@@ -38,6 +48,7 @@ from __future__ import annotations
 from collections.abc import Iterable, Sequence
 from typing import Any
 
+import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 from gymnasium.vector import AutoresetMode
@@ -45,7 +56,34 @@ from stable_baselines3.common.vec_env.base_vec_env import VecEnv
 
 from scas_env.decision_epochs import MASK_READS, maintenance_mask
 
-__all__ = ["NativeVecEnv"]
+__all__ = ["TIME_LEFT", "HorizonIsTerminal", "NativeVecEnv", "time_left_column"]
+
+#: observation entries that count the episode down (decision epochs, the fleet)
+TIME_LEFT = ("flights_left", "days_left")
+
+
+def time_left_column(obs_names: Sequence[str]) -> int | None:
+    """Index of the observation's :data:`TIME_LEFT` entry, or None."""
+    return next((list(obs_names).index(n) for n in TIME_LEFT if n in obs_names), None)
+
+
+class HorizonIsTerminal(gym.Wrapper):
+    """A single env whose observation holds the time left, its end at the horizon (time
+    left 0) reported as ``terminated`` instead of ``truncated`` (module docstring), so that
+    SB3 does not bootstrap past it; any other truncation is kept."""
+
+    def __init__(self, env: gym.Env) -> None:
+        super().__init__(env)
+        column = time_left_column(tuple(env.get_wrapper_attr("obs_names")))
+        if column is None:
+            raise ValueError(f"the observation has none of {TIME_LEFT}: no horizon to end at")
+        self._column = column
+
+    def step(self, action: Any) -> tuple[Any, Any, bool, bool, dict[str, Any]]:
+        obs, reward, terminated, truncated, info = self.env.step(action)
+        if truncated and not terminated and float(obs[self._column]) == 0.0:
+            return obs, reward, True, False, info
+        return obs, reward, terminated, truncated, info
 
 
 def _split(info: dict[str, Any], n: int, keys: Sequence[str] | None) -> list[dict[str, Any]]:
@@ -121,15 +159,32 @@ class NativeVecEnv(VectorEnvAccess, VecEnv):
     info_keys : keys of the vector info copied into each env's info dict (None: all;
         ``()``: none, the fastest; ``terminal_observation`` and ``TimeLimit.truncated`` are
         always set at a done).
+    truncation_is_terminal : an end whose last observation has 0 time left is terminal
+        (``TimeLimit.truncated = False``; module docstring). None (default): when the
+        observation has a :data:`TIME_LEFT` entry.
     """
 
-    def __init__(self, venv: Any, info_keys: Iterable[str] | None = None) -> None:
+    def __init__(
+        self,
+        venv: Any,
+        info_keys: Iterable[str] | None = None,
+        truncation_is_terminal: bool | None = None,
+    ) -> None:
         self.venv = venv
         space = venv.single_observation_space
         if not isinstance(space, spaces.Box) or len(space.shape) != 1:
             raise ValueError(f"the vector env's observation space {space} must be a flat Box")
         self.info_keys = None if info_keys is None else tuple(info_keys)
         names = tuple(getattr(venv, "obs_names", ()))
+        column = time_left_column(names)
+        if truncation_is_terminal not in (None, True, False):
+            raise ValueError(
+                f"truncation_is_terminal = {truncation_is_terminal!r} must be None or a bool"
+            )
+        if truncation_is_terminal and column is None:
+            raise ValueError(f"truncation_is_terminal needs an observation entry of {TIME_LEFT}")
+        #: the observation column of the time left when its end is terminal, else None
+        self._horizon = column if truncation_is_terminal is not False else None
         self._mask_cols = (
             [names.index(n) for n in MASK_READS] if all(n in names for n in MASK_READS) else None
         )
@@ -171,8 +226,9 @@ class NativeVecEnv(VectorEnvAccess, VecEnv):
             # the vector env reset the done envs already; their last observations are in
             # info["final_obs"] (Gymnasium's same-step autoreset)
             for e in np.flatnonzero(dones):
-                infos[e]["terminal_observation"] = np.asarray(info["final_obs"][e])
-                infos[e]["TimeLimit.truncated"] = bool(truncated[e] and not terminated[e])
+                last = np.asarray(info["final_obs"][e])
+                infos[e]["terminal_observation"] = last
+                infos[e]["TimeLimit.truncated"] = self._cut(last, truncated[e], terminated[e])
                 self.reset_infos[e] = {}  # a same-step reset returns no info of its own
         elif dones.any():
             if not dones.all():
@@ -182,12 +238,18 @@ class NativeVecEnv(VectorEnvAccess, VecEnv):
                 )
             for e in range(self.num_envs):
                 infos[e]["terminal_observation"] = obs[e]
-                infos[e]["TimeLimit.truncated"] = bool(truncated[e] and not terminated[e])
+                infos[e]["TimeLimit.truncated"] = self._cut(obs[e], truncated[e], terminated[e])
             obs, reset_info = self.venv.reset()
             self.reset_infos = _split(reset_info, self.num_envs, self.info_keys)
             obs = np.array(obs, copy=True)
         self._obs = obs
         return obs.copy(), np.asarray(rewards, dtype=np.float32), dones, infos
+
+    def _cut(self, last: np.ndarray, truncated: Any, terminated: Any) -> bool:
+        """SB3's ``TimeLimit.truncated``: truncated, not terminated, and not at the horizon
+        of an observation that counts down to it."""
+        at_horizon = self._horizon is not None and float(last[self._horizon]) == 0.0
+        return bool(truncated and not terminated and not at_horizon)
 
     def close(self) -> None:
         self.venv.close()

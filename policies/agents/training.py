@@ -30,8 +30,8 @@ from scas_env import ENV_ID, ENV_ID_EPOCHS
 from scas_env.decision_epochs import DEFAULT_KS, DecisionEpochs
 from scas_env.utils.atomic_file import write_text_atomic
 
-#: the observation and return statistics of a clone (:func:`clone_rule`), read without
-#: unpickling (:class:`policies.agents.agent_files.ObsNormalization`)
+#: the observation and return statistics of a clone (``experiments.epoch_agents.clone``),
+#: read without unpickling (:class:`policies.agents.agent_files.ObsNormalization`)
 NORMALIZATION_FILE = "normalization.json"
 #: id of the decision-epoch formulation in the hyper-parameter YAML files
 EPOCH_ENV_ID = ENV_ID_EPOCHS
@@ -46,11 +46,15 @@ __all__ = [
     "EPOCH_ENV_ID",
     "HYPERPARAMS_DIR",
     "candidate_hyperparams",
+    "check_delegate",
+    "check_run",
     "check_training",
-    "clone_rule",
     "init_delegate",
     "load_zoo_hyperparams",
     "make_epoch_env",
+    "new_out_dir",
+    "prepared_run",
+    "save_statistics",
     "train_epochs",
     "warm_start",
     "with_schedules",
@@ -107,13 +111,22 @@ def _schedule(name: str, value: Any) -> Any:
 
 
 def make_epoch_env(
-    ks: Sequence[int] = DEFAULT_KS, delegate: DelegateSpec | None = None, **scenario: Any
+    ks: Sequence[int] = DEFAULT_KS,
+    delegate: DelegateSpec | None = None,
+    horizon_is_terminal: bool = True,
+    **scenario: Any,
 ) -> gym.Env:
     """One ``ScasMaintenance-v2`` (``scenario`` keywords) in :class:`DecisionEpochs`, with
-    ``delegate`` (:mod:`policies.agents.delegation`) built for its observation if given."""
+    ``delegate`` (:mod:`policies.agents.delegation`) built for its observation if given; its
+    end at the horizon reported as terminal unless ``horizon_is_terminal=False``
+    (:class:`policies.agents.sb3_vec_env.HorizonIsTerminal`: the observation counts down to
+    it, so SB3 must not bootstrap past it)."""
+    from policies.agents.sb3_vec_env import HorizonIsTerminal
+
     env = gym.make(ENV_ID, disable_env_checker=True, **scenario)
     rule = None if delegate is None else delegate.build(env.unwrapped.obs_names)
-    return DecisionEpochs(env, ks=ks, delegate=rule)
+    epochs = DecisionEpochs(env, ks=ks, delegate=rule)
+    return HorizonIsTerminal(epochs) if horizon_is_terminal else epochs
 
 
 class _WallClock:
@@ -141,9 +154,10 @@ def _native_epochs(
     ks: Sequence[int],
     scenario: dict[str, Any],
     delegate: DelegateSpec | None = None,
+    horizon_is_terminal: bool = True,
 ) -> Any:
     """``num_envs`` decision-epoch actuators on the native vector env, monitored (one CSV,
-    ``monitor_dir/0.monitor.csv``), seeded ``seed + e``."""
+    ``monitor_dir/0.monitor.csv``), seeded ``seed + e``, the horizon terminal or not."""
     from stable_baselines3.common.vec_env import VecMonitor
 
     from policies.agents.sb3_vec_env import NativeVecEnv
@@ -154,6 +168,7 @@ def _native_epochs(
     native = NativeVecEnv(
         DecisionEpochsVectorEnv(num_envs, ks=tuple(ks), delegate=rule, **scenario),
         info_keys=(),
+        truncation_is_terminal=horizon_is_terminal,
     )
     native.seed(seed)
     return VecMonitor(native, filename=str(monitor_dir / "0"))
@@ -162,7 +177,7 @@ def _native_epochs(
 ALGOS = ("maskable_ppo", "ppo")
 
 
-def _check_delegate(delegate: Any, scenario: Mapping[str, Any]) -> None:
+def check_delegate(delegate: Any, scenario: Mapping[str, Any]) -> None:
     """Refuse a ``delegate`` that is not a :class:`DelegateSpec` (or None) or whose policy
     cannot be built for the scenario's observation (before any folder is made)."""
     if delegate is None:
@@ -172,7 +187,7 @@ def _check_delegate(delegate: Any, scenario: Mapping[str, Any]) -> None:
     delegate.build(flight_obs_names(**scenario))
 
 
-def _new_out_dir(out_dir: str | Path) -> Path:
+def new_out_dir(out_dir: str | Path) -> Path:
     """``out_dir`` created, refused if it exists and is not empty (nothing overwritten)."""
     out = Path(out_dir)
     if out.exists() and any(out.iterdir()):
@@ -191,7 +206,7 @@ def with_schedules(hp: Mapping[str, Any]) -> dict[str, Any]:
     return out
 
 
-def _check_run(algo: str, native_envs: int | None) -> None:
+def check_run(algo: str, native_envs: int | None) -> None:
     """Refuse an unknown ``algo`` or a bad ``native_envs`` (before any folder is made)."""
     if native_envs is not None and (
         isinstance(native_envs, bool) or not isinstance(native_envs, int) or native_envs < 1
@@ -201,7 +216,7 @@ def _check_run(algo: str, native_envs: int | None) -> None:
         raise ValueError(f"algo = {algo!r} must be one of {sorted(ALGOS)}")
 
 
-def _prepared(
+def prepared_run(
     hyperparams: Mapping[str, Any],
     out: Path,
     *,
@@ -211,6 +226,7 @@ def _prepared(
     native_envs: int | None,
     scenario: dict[str, Any],
     delegate: DelegateSpec | None = None,
+    horizon_is_terminal: bool = True,
 ) -> tuple[Any, Any, int, bool, dict[str, Any]]:
     """The model, its (normalised) vector env, ``n_envs``, ``normalize`` and the algorithm
     keywords of one run (:func:`train_epochs`), seeded as documented there."""
@@ -221,7 +237,7 @@ def _prepared(
     from stable_baselines3.common.utils import set_random_seed
     from stable_baselines3.common.vec_env import VecNormalize
 
-    _check_run(algo, native_envs)
+    check_run(algo, native_envs)
     classes = {"maskable_ppo": contrib.MaskablePPO, "ppo": PPO}
     hp = dict(hyperparams)
     n_envs = int(hp.pop("n_envs", 4))
@@ -245,7 +261,12 @@ def _prepared(
             make_epoch_env,
             n_envs=n_envs,
             seed=seed * 1000,
-            env_kwargs={"ks": tuple(ks), "delegate": delegate, **scenario},
+            env_kwargs={
+                "ks": tuple(ks),
+                "delegate": delegate,
+                "horizon_is_terminal": horizon_is_terminal,
+                **scenario,
+            },
             monitor_dir=str(out / "monitor"),
         )
     else:
@@ -256,6 +277,7 @@ def _prepared(
             ks,
             scenario,
             delegate=delegate,
+            horizon_is_terminal=horizon_is_terminal,
         )
         n_envs = venv.num_envs
     gamma = float(hp.get("gamma", 0.99))
@@ -376,7 +398,7 @@ def check_training(
         raise ValueError(f"freeze_normalization = {freeze_normalization!r} must be a bool or None")
     elif freeze_normalization and init is None:
         raise ValueError("freeze_normalization = True needs init (the statistics to keep)")
-    _check_run(algo, native_envs)
+    check_run(algo, native_envs)
     scenario = dict(scenario or {})
     try:
         make_epoch_env(ks=tuple(ks), **scenario).close()
@@ -384,7 +406,7 @@ def check_training(
         raise ValueError(f"scenario {scenario}: {exc}") from None
     if delegate is None and init is not None:
         delegate = init_delegate(Path(init))
-    _check_delegate(delegate, scenario)
+    check_delegate(delegate, scenario)
     return total, freeze_normalization, delegate
 
 
@@ -403,6 +425,7 @@ def train_epochs(
     init: str | Path | None = None,
     freeze_normalization: bool | None = None,
     delegate: DelegateSpec | None = None,
+    horizon_is_terminal: bool = True,
     **scenario: Any,
 ) -> Path:
     """Train one agent on decision epochs; returns ``out_dir``.
@@ -413,8 +436,8 @@ def train_epochs(
     that many actuators of the decision-epoch vector env
     (:class:`scas_env.decision_epochs_vector.DecisionEpochsVectorEnv` through
     :class:`policies.agents.sb3_vec_env.NativeVecEnv`) instead of the YAML's ``n_envs`` single envs
-    in a ``DummyVecEnv``. ``init``: a folder written by :func:`clone_rule` (or any folder
-    with ``model.zip`` and ``normalization.json`` of the same network) to start from; its
+    in a ``DummyVecEnv``. ``init``: a clone folder (``experiments.epoch_agents.clone``; or any
+    folder with ``model.zip`` and ``normalization.json`` of the same network) to start from; its
     policy is also saved as checkpoint 0, so selection can keep it. With the hyper-parameter
     ``reference_mix`` (needs ``init``) PPO is regularised towards the ``init`` policy
     (:mod:`policies.agents.reference`: ``ent_coef`` weighs ``KL(pi || rho)``, ``rho`` the
@@ -422,7 +445,10 @@ def train_epochs(
     (default: True with ``init``, else False; True needs ``init``): keep ``init``'s
     ``VecNormalize`` statistics fixed. ``delegate``: the rule the agent may hand ``k`` slots
     to (:mod:`policies.agents.delegation`; default: the one ``init``'s ``clone.json`` records,
-    if any: the warm start's network has its actions). The normalisation statistics are
+    if any: the warm start's network has its actions). ``horizon_is_terminal`` (default):
+    the episode's end, which the observation counts down to, is terminal for SB3 (no value
+    bootstrapped past it; :mod:`policies.agents.sb3_vec_env`); False: a truncation, as the
+    shipped agent was trained. The normalisation statistics are
     part of the policy: the network acts on
     observations standardised by them, and letting them follow the training rollouts
     changes its actions without a gradient step (measured: the clone with the statistics a
@@ -443,6 +469,8 @@ def train_epochs(
 
         if importlib.util.find_spec("rich") is None:
             raise ImportError("progress_bar = True needs rich (pip install rich); or leave it off")
+    if not isinstance(horizon_is_terminal, bool):
+        raise ValueError(f"horizon_is_terminal = {horizon_is_terminal!r} must be a bool")
     total, freeze_normalization, delegate = check_training(
         hyperparams,
         out_dir,
@@ -457,8 +485,8 @@ def train_epochs(
         scenario=scenario,
     )
     mix = dict(hyperparams).get(REFERENCE_KEY)
-    out = _new_out_dir(out_dir)
-    model, venv, n_envs, normalize, _ = _prepared(
+    out = new_out_dir(out_dir)
+    model, venv, n_envs, normalize, _ = prepared_run(
         hyperparams,
         out,
         seed=seed,
@@ -467,6 +495,7 @@ def train_epochs(
         native_envs=native_envs,
         scenario=scenario,
         delegate=delegate,
+        horizon_is_terminal=bool(horizon_is_terminal),
     )
     if init is not None:
         warm_start(model, venv, Path(init))
@@ -496,6 +525,7 @@ def train_epochs(
         "normalize": bool(normalize),
         "freeze_normalization": freeze_normalization,
         "delegate": None if delegate is None else delegate.to_json(),
+        "horizon_is_terminal": bool(horizon_is_terminal),
     }
     write_text_atomic(out / "run.json", json.dumps(run, indent=1))
     model.set_logger(configure(str(out), ["csv"]))
@@ -531,104 +561,8 @@ def train_epochs(
 
 
 def init_delegate(init: Path) -> DelegateSpec | None:
-    """The delegate a :func:`clone_rule` folder was cloned with (``clone.json``), or None."""
+    """The delegate a clone folder was cloned with (its ``clone.json``), or None."""
     summary = init / "clone.json"
     if not summary.is_file():
         return None
     return DelegateSpec.from_json(json.loads(summary.read_text()).get("delegate"))
-
-
-def clone_rule(
-    hyperparams: Mapping[str, Any],
-    demos: Any,
-    out_dir: str | Path,
-    *,
-    seed: int = 0,
-    algo: str = "maskable_ppo",
-    epochs: int = 30,
-    batch_size: int = 4096,
-    learning_rate: float = 1e-3,
-    maintenance_weight: float = 100.0,
-    label_smoothing: float = 0.0,
-    dagger: Any = None,
-    progress: bool = False,
-    delegate: DelegateSpec | None = None,
-    **scenario: Any,
-) -> Any:
-    """Behaviour-clone ``demos`` (:class:`policies.agents.demonstrations.Demonstrations`)
-    into a fresh model of ``hyperparams`` (the network a later :func:`train_epochs` with
-    ``init=out_dir`` trains) with :func:`policies.agents.imitation.clone`; writes
-    ``out_dir/model.zip``, ``normalization.json`` (and SB3's ``vecnormalize.pkl``) and
-    ``clone.json`` (history, settings).
-    ``dagger``: a :class:`policies.agents.dagger.DaggerPlan` (rounds of the rule labelling
-    the clone's own states, each followed by ``dagger.epochs`` more passes over all samples).
-    ``delegate``: the network gets the delegation actions (demonstrations of
-    :func:`policies.agents.delegation.delegation_demonstrations`); recorded in ``clone.json``
-    so that :func:`train_epochs` from this folder uses it too.
-    Returns the last :class:`policies.agents.imitation.CloneResult`."""
-    import dataclasses
-
-    import numpy as np
-
-    from policies.agents.dagger import merged
-    from policies.agents.imitation import clone
-
-    _check_run(algo, None)
-    if delegate is not None and dagger is not None:
-        raise ValueError("dagger needs the rule's own labels; a delegate clone has none to add")
-    _check_delegate(delegate, scenario)
-    out = _new_out_dir(out_dir)
-    model, venv, _, normalize, _ = _prepared(
-        hyperparams,
-        out,
-        seed=seed,
-        algo=algo,
-        ks=demos.ks,
-        native_envs=2,
-        scenario=scenario,
-        delegate=delegate,
-    )
-    if not normalize:
-        raise ValueError(
-            "clone_rule needs normalize: true (the clone sets VecNormalize's statistics)"
-        )
-    rng = np.random.default_rng(seed)
-    settings = {
-        "batch_size": batch_size,
-        "learning_rate": learning_rate,
-        "maintenance_weight": maintenance_weight,
-        "label_smoothing": label_smoothing,
-        "rng": rng,
-        "progress": progress,
-    }
-    result = clone(model, venv, demos, epochs=epochs, **settings)
-    rounds = [dataclasses.asdict(result)]
-    for seeds in () if dagger is None else dagger.rounds:
-        agent = dagger.agent(model, venv, scenario)
-        more = dagger.samples(agent, seeds, scenario, progress=progress)
-        demos = merged(demos, more)
-        result = clone(model, venv, demos, epochs=dagger.epochs, **settings)
-        rounds.append({**dataclasses.asdict(result), "new_samples": len(more.actions)})
-    model.save(out / "model.zip")
-    venv.save(str(out / "vecnormalize.pkl"))
-    save_statistics(venv, out / NORMALIZATION_FILE)
-    summary = {
-        "algo": algo,
-        "seed": seed,
-        "ks": list(demos.ks),
-        "scenario": scenario,
-        "hyperparams": {k: repr(v) for k, v in dict(hyperparams).items()},
-        "epochs": epochs,
-        "batch_size": batch_size,
-        "learning_rate": learning_rate,
-        "maintenance_weight": maintenance_weight,
-        "label_smoothing": label_smoothing,
-        "samples": len(demos.actions),
-        "episodes": len(np.unique(demos.episode)),
-        "dagger": None if dagger is None else dagger.describe(),
-        "delegate": None if delegate is None else delegate.to_json(),
-        "history": rounds,
-    }
-    (out / "clone.json").write_text(json.dumps(summary, indent=1))
-    venv.close()
-    return result

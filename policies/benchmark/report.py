@@ -219,7 +219,10 @@ def markdown_summary(result: BenchmarkResult) -> str:
             out += ["", BELIEFS_NOTE]
         out.append("")
     out += ["## Parameters", ""]
-    out += [f"- `{p['label']}` ({p['family']}): `{p['params']}`" for p in c["policies"]]
+    out += [
+        f"- `{p['label']}` ({p['family']}): `{p.get('built_params', p['params'])}`"
+        for p in c["policies"]
+    ]
     return "\n".join(out) + "\n"
 
 
@@ -286,14 +289,23 @@ def _plot_survival(
     plt.close(fig)
 
 
-def cost_breakdown(rows: Sequence[Mapping[str, Any]]) -> dict[str, tuple[float, float]]:
+def flight_value(rows: Sequence[Mapping[str, Any]]) -> float:
+    """The run's flight value (USD), ``revenue_usd / flights`` of any episode that flew (one
+    cost model per run); 0 if no episode of the run flew."""
+    return next((r["revenue_usd"] / r["flights"] for r in rows if r["flights"]), 0.0)
+
+
+def cost_breakdown(
+    rows: Sequence[Mapping[str, Any]], value_usd: float | None = None
+) -> dict[str, tuple[float, float]]:
     """Mean and 95 % t half-width per episode of each cost term (USD, positive) and of the
-    revenue lost on the ground, ``flight_value * (slots - flights)`` (the flight value from
-    ``revenue_usd / flights``), so that the stacked costs rank like the reward."""
+    revenue lost on the ground, ``value_usd * (slots - flights)`` (default: the rows'
+    :func:`flight_value`; pass the run's when ``rows`` are one policy's, which may never
+    fly), so that the stacked costs rank like the reward."""
     out: dict[str, tuple[float, float]] = {}
-    value = np.array([r["revenue_usd"] / r["flights"] if r["flights"] else 0.0 for r in rows])
+    value = flight_value(rows) if value_usd is None else float(value_usd)
     series = {t: np.array([-float(r[f"term_{t}"]) for r in rows]) for t in TERMS if t != "flight"}
-    series["lost revenue"] = value * np.array([r["slots"] - r["flights"] for r in rows])
+    series["lost revenue"] = value * np.array([r["slots"] - r["flights"] for r in rows], float)
     for name, x in series.items():
         half = (
             float(stats.t.ppf(0.975, x.size - 1) * x.std(ddof=1) / math.sqrt(x.size))
@@ -310,7 +322,8 @@ def _plot_cost_breakdown(
     """Stacked mean cost per episode by term plus the revenue lost on the ground; error
     bar: 95 % t half-width of each policy's total (costs + lost revenue)."""
     fig, ax = plt.subplots(figsize=(8, 4.8))
-    parts = {p: cost_breakdown([r for r in rows if r["policy"] == p]) for p in policies}
+    value = flight_value(rows)  # the run's: a policy that never flies loses it too
+    parts = {p: cost_breakdown([r for r in rows if r["policy"] == p], value) for p in policies}
     names = list(next(iter(parts.values())))
     bottom = np.zeros(len(policies))
     for name in names:
@@ -320,12 +333,11 @@ def _plot_cost_breakdown(
     totals = []
     for p in policies:
         mine = [r for r in rows if r["policy"] == p]
-        value = [r["revenue_usd"] / r["flights"] if r["flights"] else 0.0 for r in mine]
         x = np.array(
             [
                 -(sum(r[f"term_{t}"] for t in TERMS if t != "flight"))
-                + v * (r["slots"] - r["flights"])
-                for r, v in zip(mine, value, strict=True)
+                + value * (r["slots"] - r["flights"])
+                for r in mine
             ]
         )
         totals.append(

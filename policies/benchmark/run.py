@@ -151,10 +151,34 @@ def episode_seeds(seed: int, episodes: int) -> list[tuple[int, int]]:
 Batch = tuple[int, tuple[tuple[int, int, int], ...]]
 
 
-def check_specs(specs: Sequence[PolicySpec], env_kwargs: Mapping[str, Any]) -> None:
+def policy_params(spec: PolicySpec, env_kwargs: Mapping[str, Any]) -> dict[str, Any]:
+    """A policy's keywords: its spec's, and for the oracle the run's ``cost_model`` (it plans
+    with the prices the env charges) unless the spec sets one."""
+    params = dict(spec.params)
+    if spec.name == "oracle" and "cost_model" in env_kwargs:
+        params.setdefault("cost_model", env_kwargs["cost_model"])
+    return params
+
+
+def _plain(value: Any) -> Any:
+    """A parameter as JSON: numbers, strings, bools and lists of them as they are, else repr."""
+    if isinstance(value, list | tuple):
+        return [_plain(v) for v in value]
+    if isinstance(value, bool | int | float | str) or value is None:
+        return value
+    if isinstance(value, np.generic):
+        return value.item()
+    return repr(value)
+
+
+def check_specs(
+    specs: Sequence[PolicySpec], env_kwargs: Mapping[str, Any]
+) -> dict[str, dict[str, Any]]:
     """Build every policy once against its env's observation, before any episode runs: a
     policy that cannot act on this scenario (e.g. an agent trained on another observation
-    layout) raises its ``ValueError`` here, naming the policy."""
+    layout) raises its ``ValueError`` here, naming the policy. Returns each policy's
+    parameters as built (``params()``: defaults filled in, JSON-able), by label."""
+    built: dict[str, dict[str, Any]] = {}
     names: dict[str, tuple[str, ...]] = {}
     for spec in specs:
         mode = spec.build_mode()
@@ -164,9 +188,12 @@ def check_specs(specs: Sequence[PolicySpec], env_kwargs: Mapping[str, Any]) -> N
             names[mode] = tuple(env.unwrapped.obs_names)
             env.close()
         try:
-            make_policy(spec.name, names[mode], **dict(spec.params))
+            policy = make_policy(spec.name, names[mode], **policy_params(spec, env_kwargs))
         except (ValueError, TypeError) as exc:  # TypeError: parameters the policy lacks
             raise ValueError(f"policy {spec.key!r} cannot run on this scenario: {exc}") from exc
+        params = policy.params() if callable(getattr(policy, "params", None)) else {}
+        built[spec.key] = {str(k): _plain(v) for k, v in dict(params).items()}
+    return built
 
 
 def is_fleet(env_kwargs: Mapping[str, Any]) -> bool:
@@ -204,7 +231,7 @@ def _run_chunk(
             )
         env = envs[mode, n]
         if p not in built:
-            built[p] = make_policy(spec.name, env.obs_names, **dict(spec.params))
+            built[p] = make_policy(spec.name, env.obs_names, **policy_params(spec, env_kwargs))
             if in_worker():
                 single_thread()  # the policy may have loaded torch
         pairs = [(es, ps) for _, es, ps in batch]
@@ -327,12 +354,13 @@ def prepare_benchmark(
     slots: int,
     env_kwargs: Mapping[str, Any] | None = None,
     ray_address: str | None = None,
-) -> tuple[tuple[PolicySpec, ...], dict[str, Any]]:
+) -> tuple[tuple[PolicySpec, ...], dict[str, Any], dict[str, dict[str, Any]]]:
     """Every check :func:`run_benchmark` makes before any episode: the policies resolved
     (names, unique labels, the run's horizon given to those that plan over it) and each built
     once against its env's observation (:func:`check_specs`), the env keywords, the sizes
     and, with ``ray_address``, that Ray is installed. Returns the specs and env keywords
-    the run uses; raises ``ValueError`` (``ImportError`` for a missing package) otherwise.
+    the run uses and each policy's parameters as built (:func:`check_specs`); raises
+    ``ValueError`` (``ImportError`` for a missing package) otherwise.
     Commands call it first to turn a bad input into a usage error."""
     if ray_address is not None and not isinstance(ray_address, str):
         raise ValueError(f"ray_address = {ray_address!r} must be a string or None")
@@ -367,8 +395,8 @@ def prepare_benchmark(
             raise ValueError(f"env_kwargs must not set {reserved!r} (set per policy / slots)")
     if not fleet:  # a fleet's episode is its FleetConfig's episode_days
         kwargs["episode_slots"] = slots
-    check_specs(specs, kwargs)
-    return specs, kwargs
+    built = check_specs(specs, kwargs)
+    return specs, kwargs, built
 
 
 def run_benchmark(
@@ -392,7 +420,7 @@ def run_benchmark(
     same results (:func:`_map_ray`). Paired differences are taken against the rule-based
     policy (family ``"rule"``) with the highest mean reward.
     """
-    specs, kwargs = prepare_benchmark(
+    specs, kwargs, built = prepare_benchmark(
         specs, episodes=episodes, slots=slots, env_kwargs=env_kwargs, ray_address=ray_address
     )
     fleet = is_fleet(kwargs)
@@ -436,7 +464,13 @@ def run_benchmark(
             k: repr(v) if not isinstance(v, int | float | str) else v for k, v in kwargs.items()
         },
         "policies": [
-            {"label": s.key, "name": s.name, "params": dict(s.params), "family": _family(s)}
+            {
+                "label": s.key,
+                "name": s.name,
+                "params": {k: _plain(v) for k, v in dict(s.params).items()},
+                "built_params": built[s.key],
+                "family": _family(s),
+            }
             for s in specs
         ],
     }

@@ -189,7 +189,9 @@ class DetectionPolicy(Policy):
 @register
 class RandomPolicy(Policy):
     """Random actions with ``probabilities`` (fly, test_and_fly, replace_spring,
-    replace_seal) from a seeded ``numpy.random.Generator``: a lower bound."""
+    replace_seal) from a seeded ``numpy.random.Generator``: a baseline, not a bound (a
+    policy that never flies does worse); family ``"bound"`` as a reference point, never a
+    candidate rule."""
 
     name: ClassVar[str] = "random"
     obs_mode: ClassVar[str] = "features"

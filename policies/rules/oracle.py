@@ -18,8 +18,11 @@ life to within about 1 %, ``docs/value.md``). It counts the slots of the episode
   Costs are the replacement prices and ``flight_value`` per slot spent on the ground.
 
 It never tests (the state needs no test) and never lets a part fail when its life exceeds
-the margin, so it is an upper bound for the benchmark's policies; the bound is checked
-episode by episode against every other policy (tests/test_oracle_bound.py).
+the margin, so it is an upper bound for the benchmark's policies when a failure costs more
+than the replacement it forces (true of every cost model shipped; with failures nearly free,
+letting a part fail can pay, and the oracle never plans that); the bound is checked episode
+by episode against every other policy (tests/test_oracle_bound.py). The benchmark gives it
+the run's cost model.
 
 **Clairvoyant mode.** With per-part degradation draws (``Scenario(degradation_draws=
 "per_part")``, v2) every part's life is fixed when it is fitted, the true RUL is the exact

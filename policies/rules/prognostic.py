@@ -32,7 +32,6 @@ __all__ = [
     "RUL_RISK_DEFAULTS",
     "FeatureRulePolicy",
     "RulRiskPolicy",
-    "flight_reference",
 ]
 
 #: Defaults of the filter rule: the tuned point of the family with the override forced on
@@ -85,13 +84,6 @@ class RulRiskPolicy(NestedRule):
             short = self.column(obs, f"{part}_rul_low") * scale <= self.values[f"{part}_lead"]
             out.append(risky | short)
         return out[0], out[1]
-
-
-def flight_reference() -> dict[str, tuple[float, float]]:
-    """Healthy mean and total sd of the in-flight features I2 (-) and I7 (uA/mm, the
-    observation's unit) from the shipped surrogate."""
-    ref = shipped_reference()
-    return {f: ref[f] for f in ("I2", "I7")}
 
 
 @register

@@ -65,15 +65,12 @@ LADDER = (
     "noisy oracle sigma=0",
     "oracle",
 )
-#: Context arms (not rungs): run to failure and the detection rule.
-CONTEXT = ("corrective", "detection")
 REFERENCE = "age"
 #: Quick mode (``scas-value --quick``): fewer episodes and trials, but episodes of full length,
 #: so that the arms still separate (figures and wall time: docs/cli.md).
 QUICK: dict[str, int] = {"episodes": 16, "slots": 2000, "trials": 4, "train_episodes": 4}
 
 __all__ = [
-    "CONTEXT",
     "LADDER",
     "QUICK",
     "REFERENCE",

@@ -23,7 +23,6 @@ from dataclasses import dataclass, field
 
 from scas_env.actuator.config import Validated, param
 
-GRAVITY = 9.80665  # m/s^2
 ATM_PA = 101_325.0  # Pa
 
 

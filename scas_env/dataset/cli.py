@@ -48,7 +48,10 @@ def export_dataset_parser() -> argparse.ArgumentParser:
         "--test-every", type=nonneg_int, default=10, help="pre-flight test every k slots (0: never)"
     )
     parser.add_argument(
-        "--max-slots", type=positive_int, default=DEFAULT_MAX_SLOTS, help="censor a unit after"
+        "--max-slots",
+        type=positive_int,
+        default=DEFAULT_MAX_SLOTS,
+        help="censor a unit after this many slots",
     )
     parser.add_argument("--workers", type=positive_int, default=2, help="worker processes")
     parser.add_argument(

@@ -29,11 +29,15 @@ from scas_env.utils.results_folder import check_destination, move_into_place, pa
 if TYPE_CHECKING:
     import pyarrow as pa
 
-#: bump when a column is added, removed, or changes meaning, unit or type (2: I8, I9 added)
-FORMAT_VERSION = 2
+#: bump when a column is added, removed, or changes meaning, unit or type (2: I8, I9 added;
+#: 3: units' last_flown_slot and end)
+FORMAT_VERSION = 3
 FILES = ("flights", "units")
 FORMATS = ("parquet", "csv")
-FAILURE_MODES = ("spring", "seal", "both", "none")
+#: how a unit ends: its first in-flight failure; censored at max_slots while held on the
+#: ground by failed tests since its last flight (informative: the test saw the damage); or
+#: censored at max_slots while still flying
+ENDS = ("failure", "grounded", "max_slots")
 
 
 @dataclass(frozen=True)
@@ -134,6 +138,14 @@ UNIT_COLUMNS: tuple[Column, ...] = (
     ),
     Column("failure_mode", "string", "-", "spring, seal, both, or none (censored at max_slots)"),
     Column("censored", "bool", "0/1", "no failure within max_slots"),
+    Column(
+        "end",
+        "string",
+        "-",
+        "failure; grounded (censored, held on the ground by failed tests since "
+        "last_flown_slot: informative censoring); max_slots (censored while flying)",
+    ),
+    Column("last_flown_slot", "int32", "slots", "slot of the unit's last flight flown (0: none)"),
     Column("spring_critical_depth_m", "float64", "m", "critical crack depth of the unit"),
     Column("seal_critical_wear_m", "float64", "m", "critical seal wear"),
     Column("paris_c_multiplier", "float64", "-", "TRUE C_unit / C_nominal of the spring"),
@@ -199,6 +211,7 @@ def data_card_markdown(card: dict[str, Any]) -> str:
         f"format version {card['format_version']}.",
         "",
         f"- units: {card['n_units']} (failures: {modes}), rows: {card['counts']['flights_rows']}",
+        "- ends: " + ", ".join(f"{e} {n}" for e, n in card["counts"]["ends"].items()),
         f"- root seed: {card['seed']}; {card['seeding']}",
         f"- fidelity: {card['scenario']['fidelity']}; policy: {card['policy']}",
         f"- censoring: {card['censoring']}",
@@ -278,6 +291,7 @@ def write_dataset(
             if "csv" in formats:
                 pacsv.write_csv(table, tmp / f"{name}.csv")
                 names[f"{name}.csv"] = f"{name}.csv"
+        card = {**card, "formats": [f for f in FORMATS if f in formats]}
         (tmp / "datacard.json").write_text(json.dumps(card, indent=2, sort_keys=True) + "\n")
         (tmp / "datacard.md").write_text(data_card_markdown(card))
         names["datacard.json"] = names["datacard.md"] = ""
@@ -323,16 +337,17 @@ class RunToFailureDataset:
 
 
 def load_run_to_failure(
-    path: str | os.PathLike[str], *, file_format: str = "parquet"
+    path: str | os.PathLike[str], *, file_format: str | None = None
 ) -> RunToFailureDataset:
     """Read a dataset folder written by :func:`write_dataset` (Parquet or CSV, typed by the
-    schema) and check it against its data card."""
+    schema) and check it against its data card. ``file_format``: ``"parquet"`` or ``"csv"``;
+    None reads the first of those the folder holds (the card's ``formats``)."""
     _pyarrow()
     import pyarrow.csv as pacsv
     import pyarrow.parquet as pq
 
-    if file_format not in FORMATS:
-        raise ValueError(f"file_format = {file_format!r} must be one of {FORMATS}")
+    if file_format is not None and file_format not in FORMATS:
+        raise ValueError(f"file_format = {file_format!r} must be None or one of {FORMATS}")
     folder = Path(path)
     card_path = folder / "datacard.json"
     if not card_path.is_file():
@@ -342,6 +357,13 @@ def load_run_to_failure(
         raise ValueError(
             f"{card_path}: format_version = {card.get('format_version')!r}, "
             f"this loader reads {FORMAT_VERSION}"
+        )
+    written = tuple(card.get("formats", ()))
+    if file_format is None:
+        file_format = next((f for f in FORMATS if f in written), "parquet")
+    elif file_format not in written:
+        raise ValueError(
+            f"file_format = {file_format!r}: {str(folder)!r} holds {list(written)} only"
         )
     tables = {}
     for name in FILES:

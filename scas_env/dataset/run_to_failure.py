@@ -44,6 +44,7 @@ from scas_env.core.scenario import Scenario
 from scas_env.core.setup import FLIGHT_FEATURES, GROUND_FEATURES  # the observation's
 from scas_env.dashboard import critical_levels, unit_growth_multipliers
 from scas_env.dataset.files import (
+    ENDS,
     FLIGHT_COLUMNS,
     FORMAT_VERSION,
     UNIT_COLUMNS,
@@ -132,7 +133,7 @@ def simulate_unit(env: gym.Env, task: UnitTask, test_every: int) -> tuple[dict, 
     rows: dict[str, list] = {c.name: [] for c in FLIGHT_COLUMNS}
     slots = max_slots = int(base.scenario.episode_slots)
     failed: tuple[str, ...] = ()
-    flights = tests = no_go = 0
+    flights = tests = no_go = last_flown = 0
     for slot in range(1, max_slots + 1):
         test = test_every > 0 and (slot - 1) % test_every == 0
         obs, _, _, _, info = env.step(TEST_AND_FLY if test else FLY)
@@ -145,6 +146,7 @@ def simulate_unit(env: gym.Env, task: UnitTask, test_every: int) -> tuple[dict, 
         tested = info["tests"] > tests
         refused = info["no_go"] > no_go
         flights, tests, no_go = info["flights"], info["tests"], info["no_go"]
+        last_flown = slot if flown else last_flown
         feats, truth = info["features"], info["true_state"]
         rows["slot"].append(slot)
         rows["flight"].append(flights)
@@ -165,6 +167,8 @@ def simulate_unit(env: gym.Env, task: UnitTask, test_every: int) -> tuple[dict, 
         rows["seal_rul_flights"].append(truth["seal_rul_flights"])
     censored = not failed
     mode = "none" if censored else ("both" if len(failed) == 2 else failed[0])
+    held = censored and bool(rows["no_go"]) and not rows["flown"][-1]
+    end = "grounded" if held else ("max_slots" if censored else "failure")
     n = len(rows["slot"])
     flight = np.asarray(rows["flight"], dtype=np.int64)
     rows["unit"] = [task.unit] * n
@@ -185,6 +189,8 @@ def simulate_unit(env: gym.Env, task: UnitTask, test_every: int) -> tuple[dict, 
         "failure_flight": -1 if censored else flights + 1,
         "failure_mode": mode,
         "censored": censored,
+        "end": end,
+        "last_flown_slot": last_flown,
         "spring_critical_depth_m": spring_crit,
         "seal_critical_wear_m": seal_crit,
         "paris_c_multiplier": theta,
@@ -348,7 +354,9 @@ def data_card(
         "policy": f"maintenance-free: fly every slot; {test} (test_every = {test_every})",
         "test_every": test_every,
         "censoring": "a unit ends at its first in-flight failure (the failing flight has no "
-        f"row) or is censored after {int(scenario.episode_slots)} slots",
+        f"row) or is censored after {int(scenario.episode_slots)} slots, then either held on "
+        "the ground by failed tests since units.last_flown_slot (end = grounded: informative "
+        "censoring, the test saw the damage) or still flying (end = max_slots)",
         "split": "by unit (C-MAPSS): scas_env.dataset.files.split_by_unit",
         "scenario": scenario.to_dict(),
         "params_digest": params_digest(params),
@@ -356,6 +364,7 @@ def data_card(
         "counts": {
             "flights_rows": int(n_rows),
             "failure_modes": {str(m): int(c) for m, c in zip(modes, counts, strict=True)},
+            "ends": {e: int(np.sum(units["end"].astype(str) == e)) for e in ENDS},
             "flights_to_failure_mean": _mean_or_none(units["flights"][~units["censored"]]),
         },
         "columns": columns_for_card(),

@@ -15,7 +15,10 @@ team's (the fleet's day, the same for every agent); ``infos[agent]`` holds the a
 own share of the actuators' reward (``aircraft_reward``), its action mask in PettingZoo's
 form for a ``MultiDiscrete`` space (``action_mask``: a tuple of int8 arrays, one per entry,
 1 where a choice is valid; what ``action_space(agent).sample(mask)`` takes) and the fleet's
-KPIs (``fleet``). All agents are truncated together after ``episode_days`` days, then
+KPIs (``fleet``). ``state()`` is the fleet env's whole observation (``state_space``), for
+centralised critics; an agent's own observation carries no index (the mission rule serves
+aircraft in index order: append ``possible_agents.index(agent)`` where it matters). All
+agents are truncated together after ``episode_days`` days, then
 leave. ``reset`` takes no options and does not read any given (PettingZoo passes options
 through as-is).
 Requires ``pettingzoo`` (``pip install 'scas-maintenance-gym[marl]'``).
@@ -27,7 +30,6 @@ gives it back); ``fleet_v0``: retired.
 
 from __future__ import annotations
 
-import functools
 from typing import Any
 
 import numpy as np
@@ -69,14 +71,19 @@ class FleetParallelEnv(ParallelEnv):
         self._action_space = spaces.MultiDiscrete(per)
         self._entry_ends = np.cumsum(per)[:-1]  # where a flat mask row splits into entries
         self._obs_space = self.fleet_env.view.agent_space
+        self.state_space = self.fleet_env.observation_space
 
-    @functools.cache  # noqa: B019 - one space per agent, PettingZoo's habit
     def observation_space(self, agent: str) -> spaces.Box:
-        return self._obs_space
+        return self._obs_space  # one space object for every agent
 
-    @functools.cache  # noqa: B019
     def action_space(self, agent: str) -> spaces.MultiDiscrete:
         return self._action_space
+
+    def state(self) -> np.ndarray:
+        """The global state for centralised training (MAPPO, QMIX): the fleet env's whole
+        observation (every aircraft's actuators and status, the shared groups), in
+        :attr:`state_space`."""
+        return self.fleet_env.view.observe(0)
 
     def _split(self, info: dict[str, Any]) -> tuple[dict[str, np.ndarray], dict[str, dict]]:
         view = self.fleet_env.view
@@ -132,7 +139,7 @@ class FleetParallelEnv(ParallelEnv):
             self.agents = []
         return observations, rewards, terminations, truncations, infos
 
-    def render(self) -> str | None:
+    def render(self) -> str | np.ndarray | None:
         return self.fleet_env.render()
 
     def close(self) -> None:

@@ -386,13 +386,6 @@ def ft_blended(eta: npt.ArrayLike) -> FloatArray:
     )
 
 
-GEOMETRY_FACTORS: dict[str, GeometryFactor] = {
-    "blended": ft_blended,
-    "circumferential_proxy": ft_circumferential_proxy,
-    "shallow_limit": ft_shallow_limit,
-}
-
-
 # --------------------------------------------------------------------- SIF (eq. 7)
 def mode_iii_sif_pa_sqrt_m(
     tau_pa: npt.ArrayLike,

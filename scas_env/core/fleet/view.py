@@ -63,6 +63,8 @@ class FleetView:
         self._order = order
         rows = [r for g in order for r in self.layout.groups[g]]
         self.actuator_names = tuple(r[0] for r in rows)
+        # an actuator's slot is a day of the fleet (its flights fly together)
+        self._actuator_units = tuple("days" if r[1] == "slots" else r[1] for r in rows)
         self._act_low = np.array([r[2] for r in rows])
         self._act_high = np.array([r[3] for r in rows])
         cfg = fleet.config
@@ -89,6 +91,7 @@ class FleetView:
         }
         self.types = cfg.mission_types
         self.names = self._names()
+        self.units = self._units()
         low = np.concatenate([np.ravel(self.bounds[g][0]) for g in GROUPS])
         high = np.concatenate([np.ravel(self.bounds[g][1]) for g in GROUPS])
         self.flat_bounds = (low, high)
@@ -111,6 +114,16 @@ class FleetView:
         out += [n for n, _ in RESOURCE_FIELDS]
         out += [f"demand_day{d}.{t}" for d in range(sh.lookahead + 1) for t in self.types]
         out += [n for n, _ in CALENDAR_FIELDS]
+        return tuple(out)
+
+    def _units(self) -> tuple[str, ...]:
+        """The unit of each entry of the flat observation, as :meth:`_names` orders them."""
+        sh = self.fleet.shape
+        out = list(self._actuator_units) * (sh.aircraft * sh.actuators)
+        out += [u for _ in range(sh.aircraft) for _, u in AIRCRAFT_FIELDS]
+        out += [u for _, u in RESOURCE_FIELDS]
+        out += ["missions"] * ((sh.lookahead + 1) * len(self.types))
+        out += [u for _, u in CALENDAR_FIELDS]
         return tuple(out)
 
     def _agent_space(self) -> spaces.Box:

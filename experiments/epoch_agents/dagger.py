@@ -8,7 +8,7 @@ does), and there it has no example to follow. DAgger (Ross, Gordon and Bagnell 2
 learning") runs the clone, asks the expert what it would do in each state the clone
 decides in, and adds those labels to the data.
 
-The expert here is the same as in :mod:`policies.agents.demonstrations`: the rule's action
+The expert here is the same as in :mod:`experiments.epoch_agents.demonstrations`: the rule's action
 now (a function of the observation) with the largest ``k`` that keeps the margin
 ``safety`` against the rule's next non-``fly`` action (1 after a test), found by playing the
 rule forward on a copy of the env (``copy.deepcopy``: the same draws, so the look-ahead is
@@ -17,7 +17,7 @@ so it is recomputed only where the clone leaves the rule's path; it stops after
 ``safety * max(ks)`` slots (every ``k`` is safe then).
 
 The new samples carry no return (``returns`` NaN: the clone's states are not followed by
-the expert's episode), so :func:`policies.agents.imitation.clone` fits only the actor on
+the expert's episode), so :func:`experiments.epoch_agents.imitation.clone` fits only the actor on
 them; ``on_path`` is false (the observation statistics stay the expert's).
 """
 
@@ -30,7 +30,7 @@ from typing import Any
 
 import numpy as np
 
-from policies.agents.demonstrations import (
+from experiments.epoch_agents.demonstrations import (
     Demonstrations,
     _checked_labelling,
     epoch_masks,

@@ -5,12 +5,12 @@ a random policy must discover, through costly exploration, when to replace a par
 from a clone of the tuned filter rule (Hester et al. 2018, DQfD; Uchendu et al. 2023,
 "Jump-start RL") it starts at the rule's level and PPO only has to improve on it.
 
-:func:`clone` fits, on :class:`policies.agents.demonstrations.Demonstrations`:
+:func:`clone` fits, on :class:`experiments.epoch_agents.demonstrations.Demonstrations`:
 
 * the actor by cross-entropy of the demonstrated epoch action under the epoch env's action
   mask (the masked logits MaskablePPO samples from);
 * the critic by least squares on the demonstrations' returns (where they have one: DAgger's
-  samples, :mod:`policies.agents.dagger`, have none) in the units PPO's critic will see:
+  samples, :mod:`experiments.epoch_agents.dagger`, have none) in the units PPO's critic will see:
   rewards divided by the std of the discounted running return, as ``VecNormalize`` scales
   them (its statistics are set from the demonstrations, :func:`set_statistics`);
 * the observation statistics of ``VecNormalize`` from the expert's own decision slots (the
@@ -29,7 +29,7 @@ from typing import Any
 
 import numpy as np
 
-from policies.agents.demonstrations import Demonstrations
+from experiments.epoch_agents.demonstrations import Demonstrations
 from scas_env.decision_epochs import FLY
 
 __all__ = ["CloneResult", "clone", "set_statistics"]
