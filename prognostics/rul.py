@@ -132,9 +132,12 @@ def probability_of_failure(
     w = _normalised(weights)
     if hazard.std == 0.0:
         rul = model.usage_to_threshold(xa, th, hazard.mean) / usage_per_step
-        return float(w @ (rul <= horizon_steps))
-    x_h = model.inverse_damage(model.damage(xa) + th * horizon_steps * usage_per_step)
-    return float(w @ ndtr((x_h - hazard.mean) / hazard.std))
+        p = float(w @ (rul <= horizon_steps))
+    else:
+        x_h = model.inverse_damage(model.damage(xa) + th * horizon_steps * usage_per_step)
+        p = float(w @ ndtr((x_h - hazard.mean) / hazard.std))
+    # a weighted mean of probabilities with weights summing to 1: above 1 only by rounding
+    return min(p, 1.0)
 
 
 def _normalised(weights: np.ndarray) -> np.ndarray:
@@ -183,8 +186,15 @@ def _weighted_summary(
 
 
 def _summary_or_raise(
-    r: np.ndarray, w: np.ndarray, levels: np.ndarray, horizon: float, name: str = "values"
+    r: np.ndarray,
+    w: np.ndarray,
+    levels: np.ndarray,
+    horizon: float,
+    name: str = "values",
+    moments: bool = True,
 ) -> tuple[np.ndarray, float, float, float]:
+    """The kernel's quantiles, mean, std and risk, or ``ValueError``; ``moments=False``: the
+    mean and std are not used (quantiles only), so their overflow is no error."""
     ra = np.ascontiguousarray(check.array(name, r, ndim=1, min_size=1))
     check.weights("weights", w, ra.shape, like=name)  # checked; the kernel reads them as given
     wa = np.ascontiguousarray(w, dtype=np.float64)
@@ -194,7 +204,8 @@ def _summary_or_raise(
         raise ValueError("weights must be finite, >= 0, with a positive sum")
     if status == 2:
         raise ValueError("RUL values must be finite")
-    _check_moments(mean, std, ra)
+    if moments:
+        _check_moments(mean, std, ra)
     return out, mean, std, risk
 
 
@@ -223,7 +234,9 @@ def weighted_quantile(values: np.ndarray, weights: np.ndarray, q: np.ndarray) ->
     """
     qa = check.array("q (quantile levels)", q, ge=0.0, le=1.0)
     order = np.argsort(qa.ravel())
-    sorted_q, _, _, _ = _summary_or_raise(values, weights, qa.ravel()[order], math.inf)
+    sorted_q, _, _, _ = _summary_or_raise(
+        values, weights, qa.ravel()[order], math.inf, moments=False
+    )
     out = np.empty(qa.size)
     out[order] = sorted_q
     return out.reshape(qa.shape)

@@ -133,7 +133,10 @@ def _renewal_rates(age: float) -> tuple[float, float]:
     return cost.mean() / flights.mean(), flights.mean() / slots.mean()
 
 
-def _benchmark_rates(age: float, episodes: int, slots: int, workers: int) -> tuple[float, float]:
+def _benchmark_rates(age: float, episodes: int, slots: int, workers: int) -> dict[str, float]:
+    """The benchmark's seal renewal cycles under the age rule ``age``: the renewal-reward
+    cost rate (USD per flight, completed cycles only), its standard error (ratio estimator),
+    the cycles, the failures among them and the availability."""
     spec = PolicySpec("preventive", {"spring_age": math.inf, "seal_age": age, "opportunity": 0})
     res = run_benchmark(
         [spec],
@@ -149,34 +152,51 @@ def _benchmark_rates(age: float, episodes: int, slots: int, workers: int) -> tup
     # an episode's end has flown without paying its removal yet)
     seal = [ev for ev in res.events if ev["part"] == "seal"]
     ended = [ev for ev in seal if ev["kind"] != "censored"]
-    n_fail = sum(ev["kind"] == "failure" for ev in ended)
-    assert (
-        cost
-        == n_fail * COSTS.failure_total_usd + (len(ended) - n_fail) * COSTS.seal_replacement_usd
+    failed = np.array([ev["kind"] == "failure" for ev in ended])
+    assert cost == failed.sum() * COSTS.failure_total_usd + (~failed).sum() * (
+        COSTS.seal_replacement_usd
     )
-    flights = sum(ev["age_flights"] for ev in ended)
-    assert flights + sum(ev["age_flights"] for ev in seal if ev["kind"] == "censored") == sum(
-        r["flights"] for r in res.rows
+    flights = np.array([ev["age_flights"] for ev in ended], dtype=float)
+    assert flights.sum() + sum(ev["age_flights"] for ev in seal if ev["kind"] == "censored") == (
+        sum(r["flights"] for r in res.rows)
     )
-    return cost / flights, sum(r["flights"] for r in res.rows) / sum(r["slots"] for r in res.rows)
+    costs = np.where(failed, COSTS.failure_total_usd, COSTS.seal_replacement_usd)
+    rate = costs.sum() / flights.sum()
+    n = flights.size
+    se = math.sqrt(np.sum((costs - rate * flights) ** 2) / (n * (n - 1))) / flights.mean()
+    availability = sum(r["flights"] for r in res.rows) / sum(r["slots"] for r in res.rows)
+    return {"rate": rate, "se": se, "cycles": n, "failures": int(failed.sum()),
+            "availability": availability}  # fmt: skip
+
+
+def _failure_probability(age: float) -> float:
+    """P(a seal fails before its age-``age`` replacement), from 100,000 drawn lives."""
+    lives = sample_lives(ScasParams(), default_calibration(), np.random.default_rng(0), 100_000)
+    return float(np.mean(lives.seal_flights <= age))
 
 
 def test_age_replacement_cost_rate_matches_renewal_formula_fast():
+    """~90 seal cycles of the age rule: the failures among them are binomial with the life
+    distribution's P(life <= 900) and the cost rate is the renewal-reward formula's within 4
+    standard errors of the ratio estimator (a rule whose parts never fail, -17 %, fails)."""
     formula, avail = _renewal_rates(900.0)
-    rate, availability = _benchmark_rates(900.0, episodes=4, slots=5000, workers=1)
-    # ~20 completed cycles: statistical error ~8% (-17% on these episodes: no failure in 20
-    # cycles against 18% expected)
-    assert rate == pytest.approx(formula, rel=0.25)
-    assert availability == pytest.approx(avail, abs=1.5e-3)
+    got = _benchmark_rates(900.0, episodes=8, slots=10_000, workers=1)
+    p_fail = _failure_probability(900.0)
+    assert stats.binomtest(got["failures"], got["cycles"], p_fail).pvalue > 1e-3
+    assert abs(got["rate"] - formula) < 4 * got["se"]
+    assert got["availability"] == pytest.approx(avail, abs=1.5e-3)
 
 
 @pytest.mark.slow
 def test_age_replacement_cost_rate_matches_renewal_formula_long():
     formula, avail = _renewal_rates(900.0)
-    rate, availability = _benchmark_rates(900.0, episodes=16, slots=40_000, workers=2)
-    # ~680 cycles: statistical error ~1.3%
-    assert rate == pytest.approx(formula, rel=0.05)
-    assert availability == pytest.approx(avail, abs=3e-4)
+    got = _benchmark_rates(900.0, episodes=16, slots=40_000, workers=2)
+    # ~680 cycles: the standard error is ~1.3 % of the rate
+    assert (
+        stats.binomtest(got["failures"], got["cycles"], _failure_probability(900.0)).pvalue > 1e-3
+    )
+    assert abs(got["rate"] - formula) < 4 * got["se"]
+    assert got["availability"] == pytest.approx(avail, abs=3e-4)
 
 
 def test_the_summary_says_finite_horizon_only_for_new_parts_and_states_a_fleet_target() -> None:

@@ -263,9 +263,40 @@ def test_ground_features_dict_matches_functions():
     )
 
 
-def test_feature_info_table():
-    assert list(F.FEATURE_INFO) == ["G1", "G2", "G3", *(f"I{k}" for k in range(1, 8))]
+#: [DJS20] Table 2, the candidates' formulas as printed (whitespace removed)
+PAPER_TABLE_2 = {
+    "G1": "mean(i)",
+    "G2": "(max(x)-set)/set",
+    "G3": "i/x",
+    "I1": "abs(fft(x))(2Hz)",
+    "I2": "mean(xcorr(i,i_h))",
+    "I3": "mean(xcorr(x,x_h))",
+    "I4": "mean(xcorr(x))",
+    "I5": "rms(abs(fft(x)))",
+    "I6": "rms(x)",
+    "I7": "rms(i)/rms(x)",
+}
+
+
+def _rubric_rank(formula: str) -> int:
+    """FeatureInfo's documented complexity rubric applied to a formula: 4 = correlation over
+    lags, 3 = spectral (FFT), 2 = ratio of statistics, 1 = one mean/RMS pass."""
+    if "xcorr" in formula:
+        return 4
+    if "fft" in formula:
+        return 3
+    return 2 if "/" in formula else 1
+
+
+def test_feature_info_table() -> None:
+    """The candidates, their formulas and conditions as in [DJS20] Table 2, and each
+    complexity rank the rubric's for the paper's formula: so I5 (an FFT) outranks I6 (one RMS
+    pass), the paper's reason for dropping I5 against I6 (§4, "due to complexity")."""
+    assert list(F.FEATURE_INFO) == list(PAPER_TABLE_2)
     assert {k for k, v in F.FEATURE_INFO.items() if v.condition == "ground"} == {"G1", "G2", "G3"}
+    for k, formula in PAPER_TABLE_2.items():
+        assert F.FEATURE_INFO[k].name == formula, k
+        assert F.FEATURE_INFO[k].complexity == _rubric_rank(formula), k
     assert F.FEATURE_INFO["I5"].complexity > F.FEATURE_INFO["I6"].complexity
     assert list(F.CANDIDATE_INFO) == [*F.FEATURE_INFO, "I8", "I9"]
 

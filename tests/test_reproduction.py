@@ -247,6 +247,11 @@ def test_quick_reproduction_key_physical_verdicts(quick_reproduction) -> None:
     rep = quick_reproduction
     verdict = {r["claim"]: r["verdict"] for r in verdicts(rep)}
     assert all(rep.selection["selected"][f]["ground"] == "G3" for f in FAULTS)
+    # docs/reproduction.md: the in-flight winners with I8, I9 are the crack's DC null-bias
+    # current I8 and the seals' current ratio I9, and both respond
+    winners = {f: rep.selection["selected"][f] for f in FAULTS}
+    assert (winners["crack"]["flight"], winners["wear"]["flight"]) == ("I8", "I9")
+    assert all(w["flight_responsive"] for w in winners.values())
     assert verdict["G3 moves in opposite directions with the two faults"] == "holds"
     assert verdict["I5/I6 redundant, I5 dropped"] == "holds"
     wear, crack = detection_severity(rep, "wear"), detection_severity(rep, "crack")

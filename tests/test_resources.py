@@ -148,11 +148,11 @@ def test_crew_serves_first_come_first_served_up_to_its_capacity() -> None:
     done = crew.dispatch(spares)
     assert done.tolist() == [list(jobs[0]), list(jobs[1])]
     assert crew.free_today() == 0 and crew.dispatch(spares).size == 0
-    crew.end_day()
-    assert crew.waiting_job_days.tolist() == [2]
+    crew.end_day_for(0)
+    assert crew.waiting_job_days.tolist() == [2] and crew.free_today() == 2
     assert crew.dispatch(spares).tolist() == [list(jobs[2]), list(jobs[3])]
-    crew.end_day()
-    assert crew.jobs_done.tolist() == [4] and crew.utilisation.tolist() == [1.0]
+    crew.end_day_for(0)
+    assert crew.jobs_done.tolist() == [4] and crew.waiting_job_days.tolist() == [2]
 
 
 def test_a_job_without_its_spare_waits_and_the_next_one_is_done() -> None:
@@ -164,8 +164,8 @@ def test_a_job_without_its_spare_waits_and_the_next_one_is_done() -> None:
     assert crew.skipped_for_spares.tolist() == [1]
     assert spares.stock_outs[0].tolist() == [0, 1, 0]
     assert crew.pending().tolist() == [[0, 0, SEAL_KIT]]
-    crew.end_day()
-    assert crew.utilisation.tolist() == [pytest.approx(1 / 3)]
+    crew.end_day_for(0)
+    assert crew.jobs_done.tolist() == [1] and crew.waiting_job_days.tolist() == [1]
 
 
 def test_priority_and_cancel() -> None:

@@ -205,3 +205,20 @@ def test_non_finite_particles_and_overflowing_summaries_raise() -> None:
         summarize_rul(np.array([1e300, 0.0]), np.ones(2), horizon_steps=0.0)
     with pytest.raises(ValueError, match="x must be an array of finite numbers, got nan"):
         model.damage(np.array([np.nan]))
+
+
+def test_a_risk_of_one_in_a_gaussian_zone_is_one_not_refused() -> None:
+    """Six particles far past a Gaussian zone: the weighted mean of Phi ~ 1 with weights 0.1
+    summed to 1 + 1 ulp, which ``rul_summary`` refused as a probability above 1."""
+    from prognostics.degradation_models import linear_wear_model
+
+    summary = rul_summary(np.zeros(6), np.ones(6), np.full(6, 0.1), linear_wear_model(1.0),
+                          HazardZone(-10.0, 1.0), horizon_steps=1.0,
+                          rng=np.random.default_rng(0))  # fmt: skip
+    assert summary.prob_failure == 1.0
+
+
+def test_weighted_quantile_needs_no_moments() -> None:
+    """Weights whose variance sum overflows still have quantiles (inverted CDF)."""
+    values, weights = np.array([0.0, 1e6]), np.array([1e300, 1e300])
+    assert weighted_quantile(values, weights, np.array([0.5, 0.75])).tolist() == [0.0, 1e6]

@@ -97,8 +97,15 @@ def test_leakage_flow_eq9() -> None:
 
 
 def test_archard_wear_rate_reference_figure() -> None:
+    """beta = mu_f / k_w from the SealParams fields (and the override), then the ref §4.2
+    wear-per-flight-hour figures."""
     seal = SealParams()
-    assert archard_beta_j_m3(seal) == pytest.approx(5e14)
+    beta = seal.friction_coefficient / seal.wear_rate_m3_n_m
+    assert archard_beta_j_m3(seal) == pytest.approx(beta, rel=1e-12, abs=0.0)
+    override = archard_beta_j_m3(seal, wear_rate_override=1e-15)
+    assert override == pytest.approx(seal.friction_coefficient / 1e-15, rel=1e-12, abs=0.0)
+    other = SealParams(friction_coefficient=0.25, wear_rate_m3_n_m=4e-16)
+    assert archard_beta_j_m3(other) == pytest.approx(0.25 / 4e-16, rel=1e-12, abs=0.0)
     # ref §4.2: ~9 m of sliding per FH at F_f = 20 N -> ~0.007 um/FH, 25 um after ~3,500 FH
     per_fh = wear_depth_m(20.0 * 9.0, seal)
     assert per_fh * 1e6 == pytest.approx(0.007, rel=0.05)

@@ -9,6 +9,8 @@ import pytest
 from scipy import optimize, stats
 
 from policies.benchmark.stats import (
+    BOOTSTRAP_RESAMPLES,
+    BOOTSTRAP_SEED,
     bootstrap_mean,
     garwood_interval,
     garwood_rate,
@@ -55,15 +57,71 @@ def test_wilson_matches_scipy(k, n):
     assert 0.0 <= iv.low <= iv.high <= 1.0
 
 
-def test_bootstrap_interval_stays_in_range_where_t_leaves_it():
-    x = np.array([1.0] * 9 + [0.98])  # availabilities
+def _percentile_bootstrap_of_mean(x: np.ndarray, confidence: float) -> tuple[float, float]:
+    """The percentile bootstrap of the mean written out with numpy, drawing as documented for
+    ``bootstrap_mean`` (``scipy.stats.bootstrap`` with ``default_rng(BOOTSTRAP_SEED)``: one
+    ``integers(0, n, (BOOTSTRAP_RESAMPLES, n))`` call, then linear-interpolated percentiles
+    at ``(1 -+ confidence) / 2``)."""
+    n = x.size
+    idx = np.random.default_rng(BOOTSTRAP_SEED).integers(0, n, (BOOTSTRAP_RESAMPLES, n))
+    tail = 50.0 * (1.0 - confidence)
+    low, high = np.percentile(x[idx].mean(axis=1), [tail, 100.0 - tail])
+    return float(low), float(high)
+
+
+@pytest.mark.parametrize("confidence", [0.95, 0.8])
+def test_bootstrap_mean_is_the_percentile_bootstrap_of_its_documented_draws(
+    confidence: float,
+) -> None:
+    """``bootstrap_mean`` equals a hand-written percentile bootstrap (numpy, same seed,
+    resample count and generator calls) to rounding, on a skewed sample."""
+    x = np.random.default_rng(1).exponential(2.0, 50)
+    iv = bootstrap_mean(x, confidence)
+    assert iv.mean == pytest.approx(x.mean(), rel=1e-14)
+    assert (iv.low, iv.high) == pytest.approx(
+        _percentile_bootstrap_of_mean(x, confidence), rel=1e-12, abs=1e-12
+    )
+
+
+@pytest.mark.parametrize(("ones", "n"), [(2, 1000), (6, 100)])
+def test_bootstrap_of_a_0_1_sample_ends_on_binomial_quantiles(ones: int, n: int) -> None:
+    """For a 0/1 sample with ``k`` ones the bootstrap mean is Binomial(n, k / n) / n, so the
+    95 % percentile interval is ``[binom.ppf(0.025), binom.ppf(0.975)] / n`` exactly once
+    the empirical quantiles of the 4999 resamples land on the same lattice points: the
+    target levels lie >= 4.5 Monte-Carlo sd (sqrt(F (1 - F) / 4999)) away from the binomial
+    CDF steps either side, so equality to rounding is the justified tolerance. (100, 6) also
+    tells 95 % from 90 %: ``binom(100, 0.06).ppf(0.95) = 10``, ``ppf(0.975) = 11``."""
+    x = np.zeros(n)
+    x[:ones] = 1.0
+    iv = bootstrap_mean(x)
+    k = stats.binom(n, ones / n)
+    assert (iv.low, iv.high) == pytest.approx(
+        (k.ppf(0.025) / n, k.ppf(0.975) / n), rel=1e-12, abs=1e-12
+    )
+
+
+def test_bootstrap_interval_stays_in_range_where_t_leaves_it() -> None:
+    """Availabilities [1] * 9 + [0.98]: the t-interval leaves [0, 1]; the bootstrap mean is
+    1 - 0.002 K with K ~ Binomial(10, 0.1), so the percentile interval is exactly
+    ``[1 - 0.002 ppf(0.975), 1 - 0.002 ppf(0.025)] = [0.994, 1.0]`` (levels >= 7.6
+    Monte-Carlo sd from the CDF steps); a 2000-value normal sample's interval lies within
+    0.1 t half-widths of the t-interval (Monte-Carlo sd of a bootstrap end: 0.02 half-widths;
+    a 90 % interval would be off by 0.16 half-widths)."""
+    x = np.array([1.0] * 9 + [0.98])
     iv = bootstrap_mean(x)
     half = stats.t.ppf(0.975, 9) * x.std(ddof=1) / math.sqrt(10)
     assert x.mean() + half > 1.0  # the t-interval leaves [0, 1]
-    assert 0.98 <= iv.low <= iv.mean <= iv.high <= 1.0
+    k = stats.binom(10, 0.1)
+    assert (iv.low, iv.high) == pytest.approx(
+        (1.0 - 0.002 * k.ppf(0.975), 1.0 - 0.002 * k.ppf(0.025)), rel=1e-12, abs=1e-12
+    )
+    assert (iv.low, iv.high) == pytest.approx((0.994, 1.0), abs=1e-12)
     big = np.random.default_rng(0).normal(5.0, 1.0, 2000)
-    b, t = bootstrap_mean(big), stats.t.interval(0.95, 1999, big.mean(), stats.sem(big))
-    assert (b.low, b.high) == pytest.approx(t, abs=0.01)  # agree where t is right
+    b = bootstrap_mean(big)
+    t_low, t_high = stats.t.interval(0.95, 1999, big.mean(), stats.sem(big))
+    t_half = 0.5 * (t_high - t_low)
+    assert abs(b.low - t_low) <= 0.1 * t_half  # agree where t is right
+    assert abs(b.high - t_high) <= 0.1 * t_half
 
 
 @pytest.mark.parametrize("n", [8, 30])

@@ -2,8 +2,11 @@
 
 from __future__ import annotations
 
+import re
+
 import numpy as np
 import pytest
+import scipy.stats
 
 from experiments.build.surrogate import random_effects, unit_runs
 from scas_env.actuator.calibration import default_calibration, params_digest
@@ -21,11 +24,47 @@ def test_shipped_surrogate_matches_default_parameters() -> None:
     )
 
 
+def _design(feature: str) -> tuple[int, int]:
+    """(units, runs per unit) of the physics design the surrogate's tables of ``feature``
+    were estimated from (the paired features record theirs in ``feature_designs``)."""
+    found = re.search(r"(\d+) units x (\d+) runs", MODEL.feature_designs.get(feature, ""))
+    if found is None:
+        return MODEL.units_per_point, MODEL.runs_per_unit
+    return int(found[1]), int(found[2])
+
+
+def _two_sided_f(ratio: float, df1: float, df2: float) -> float:
+    """Two-sided p-value of a variance ratio under F(df1, df2)."""
+    return 2.0 * min(scipy.stats.f.cdf(ratio, df1, df2), scipy.stats.f.sf(ratio, df1, df2))
+
+
+def _kurtosis_df(df: int, n: int, kappa: float) -> float:
+    """Effective df of a pooled variance estimate with ``df`` df from ``n`` values of excess
+    kurtosis ``kappa``: Var(s^2) / sigma^4 = 2 / df + kappa / n = 2 / df_eff."""
+    return 2.0 / (2.0 / df + kappa / n)
+
+
 @pytest.mark.parametrize("crack,wear", [(0.0, 0.0), (0.9, 0.0), (0.0, 0.7), (0.6, 0.6)])
 def test_surrogate_matches_fresh_physics(crack: float, wear: float) -> None:
-    # fresh units (seeds the build never used), several runs each: compare the mean and the
-    # total spread of every feature with the surrogate at the same health state
-    n_units, runs = 8, 3
+    """Fresh units (seeds the build never used), each run as often as the build ran its
+    units, against the surrogate at the same health state: the mean within 4 standard errors,
+    and the two variance components each by an F test at two-sided p > 1e-3 (one-way
+    random-effects ANOVA, the build's own design, so the surrogate's values carry their own
+    degrees of freedom):
+
+    * run: the physics within-unit mean square MS_W (units x (runs - 1) df) over the
+      surrogate's sigma^2 (its units x (runs - 1) df), both df scaled for the run noise's
+      excess kurtosis kappa (Var s^2 = sigma^4 (2/df + kappa/n); kappa from the physics
+      residuals: the I2 run noise has outliers);
+    * unit: the physics between-unit mean square MS_B (units - 1 df), expectation
+      sigma^2 + R tau^2, over the surrogate's sigma^2 + R tau^2, its own MS_B (units - 1 df).
+      Its power is bounded by the build's 8 units (F(7, 7) bounds 0.05-19 at 1e-3): it
+      catches a unit spread several times off, not 1.7x.
+
+    The surrogate's values at off-grid points are interpolated from independent grid
+    estimates, so one grid point's df is the conservative choice.
+    """
+    n_units, runs = 8, MODEL.runs_per_unit
     block = np.stack(
         [
             unit_runs(
@@ -40,14 +79,34 @@ def test_surrogate_matches_fresh_physics(crack: float, wear: float) -> None:
         ]
     )
     mean = MODEL.mean_at(crack, wear)
-    total = np.hypot(MODEL.unit_std_at(crack, wear), MODEL.run_std_at(crack, wear))
+    tau = MODEL.unit_std_at(crack, wear)
+    sigma = MODEL.run_std_at(crack, wear)
+    total = np.hypot(tau, sigma)
     physics_mean = block.mean(axis=(0, 1))
-    physics_std = block.reshape(-1, block.shape[2]).std(axis=0, ddof=1)
+    unit_means = block.mean(axis=1)
+    resid = block - unit_means[:, None, :]
+    ms_within = (resid**2).sum(axis=(0, 1)) / (n_units * (runs - 1))
+    ms_between = runs * unit_means.var(axis=0, ddof=1)
     # standard error of the physics mean with unit clustering: total / sqrt(n_units) at most
     se = total / np.sqrt(n_units)
     for k, f in enumerate(MODEL.features):
         assert abs(physics_mean[k] - mean[k]) < 4.0 * se[k] + 1e-12, f
-        assert 0.4 < physics_std[k] / total[k] < 2.0, f
+        units_s, runs_s = _design(f)
+        assert runs_s == runs, f  # equal runs per unit: the MS_B ratio is F-distributed
+        # excess kurtosis of the run noise: residuals from groups of R have
+        # ((R-1)^3 + 1) / (R^2 (R-1)) of it
+        r = resid[:, :, k].ravel()
+        kappa_resid = np.mean(r**4) / np.mean(r**2) ** 2 - 3.0
+        kappa = max(kappa_resid * runs**2 * (runs - 1) / ((runs - 1) ** 3 + 1), 0.0)
+        p_run = _two_sided_f(
+            ms_within[k] / sigma[k] ** 2,
+            _kurtosis_df(n_units * (runs - 1), n_units * runs, kappa),
+            _kurtosis_df(units_s * (runs - 1), units_s * runs, kappa),
+        )
+        assert p_run > 1e-3, (f, "run", ms_within[k] / sigma[k] ** 2, p_run)
+        ratio_unit = ms_between[k] / (sigma[k] ** 2 + runs * tau[k] ** 2)
+        p_unit = _two_sided_f(ratio_unit, n_units - 1, units_s - 1)
+        assert p_unit > 1e-3, (f, "unit", ratio_unit, p_unit)
 
 
 def test_random_effects_recovers_known_components() -> None:

@@ -251,7 +251,6 @@ class FleetBatch:
         rewards = np.zeros(sh.fleets)
         for b in fleets.tolist():
             rewards[b] = self._evening(b)
-        self.crew.used_today[fleets] = 0
         return rewards
 
     def _morning(self, b: int, act: np.ndarray) -> None:
@@ -336,7 +335,7 @@ class FleetBatch:
         on_hand = self.spares.on_hand[b]
         holding_usd = cfg.holding_usd_per_unit_day * float(on_hand.sum())
         self.spares.advance_day_for(b, self.rngs[b]["lead"])
-        self.crew.waiting_job_days[b] += int((self.crew.sequence[b] >= 0).sum())
+        self.crew.end_day_for(b)
         actuators_reward = float(a["reward"][rows].sum())
         reward = ((actuators_reward + -missed_usd) + -background_usd) + -holding_usd
         self.today["terms"][b] = (-missed_usd, -background_usd, -holding_usd, actuators_reward)

@@ -27,7 +27,8 @@ are served first come, first served (or by a priority the caller gives), up to `
 A job needs a crew slot and a spare of its kind: a job whose spare is out of stock is skipped
 and waits (the mechanic takes the next job rather than idling); its stock-out is counted
 once, when it first finds the shelf empty. Counters: jobs done, jobs
-waiting, job-days waited, utilisation (jobs done / (C x days)).
+waiting, job-days waited (:meth:`CrewQueue.end_day_for`); the env reports the utilisation,
+jobs done / (C x days).
 
 >>> pool = SparesPool(SparesSpec(initial=(2, 0, 0), base_stock=(2, -1, -1), lead_days=(3, 1, 1)))
 >>> [pool.take(SPRING_KIT) for _ in range(3)], pool.stock_outs[0].tolist()
@@ -260,7 +261,6 @@ class CrewQueue:
         self.jobs_done = np.zeros(self.batch, dtype=np.int64)
         self.skipped_for_spares = np.zeros(self.batch, dtype=np.int64)
         self.waiting_job_days = np.zeros(self.batch, dtype=np.int64)
-        self.days = 0
 
     def _job(self, fleet: int, aircraft: int, actuator: int, kind: int) -> tuple[int, ...]:
         return (
@@ -363,15 +363,9 @@ class CrewQueue:
         self.jobs_done[fleet] += len(jobs)
         return True
 
-    def end_day(self) -> None:
-        """Count the day: job-days waited by the jobs still pending; free the crew."""
-        self.waiting_job_days += self.jobs_waiting
-        self.used_today[:] = 0
-        self.days += 1
-
-    @property
-    def utilisation(self) -> npt.NDArray[np.float64]:
-        """Jobs done / (capacity x days) per fleet (0 before the first day or if unlimited)."""
-        if self.capacity is None or self.days == 0:
-            return np.zeros(self.batch)
-        return self.jobs_done / float(self.capacity * self.days)
+    def end_day_for(self, fleet: int) -> None:
+        """Count one fleet's day: the job-days waited by its jobs still pending; free its
+        crew for the next day."""
+        b = _index("fleet", fleet, self.batch)
+        self.waiting_job_days[b] += int((self.sequence[b] >= 0).sum())
+        self.used_today[b] = 0
