@@ -392,7 +392,7 @@ class ScasMaintenanceEnv(gym.Env):
         return (
             f"slot {slot}: crack {crack * 1e6:.0f} um ({crack / a['fail'][0]:.0%}), wear "
             f"{wear * 1e6:.2f} um ({wear / self.calibration.seal_critical_wear_m:.0%}), "
-            f"downtime {self.downtime}, availability {flown / max(slot, 1):.3f}"
+            f"downtime {self.downtime}, availability {flown / slot if slot else 1.0:.3f}"
         )
 
     def part_lives(self, count: int = 2) -> dict[str, list[float]]:

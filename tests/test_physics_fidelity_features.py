@@ -103,3 +103,29 @@ def test_physics_flight_features_are_the_flight_window_at_the_parts_state(
     assert measured == _direct_flight(env, health, rng)
     healthy = _direct_flight(env, HealthState(), rng)
     assert all(np.isfinite(measured)) and measured != healthy, (measured, healthy)
+
+
+@pytest.mark.parametrize("fidelity", ["surrogate", "physics"])
+@pytest.mark.parametrize("failing", [0, 1])
+def test_an_aircraft_s_other_actuator_flies_the_failing_flight_in_either_order(
+    fidelity: str, failing: int
+) -> None:
+    """Two actuators of one aircraft (one group); one fails on this flight: the other flies
+    it too (its crack grows, the flight's usage is pending), whichever row fails, in both
+    fidelities alike (the physics path let only the rows before the failing one fly it)."""
+    from scas_env.core.batch import ActuatorBatch
+    from scas_env.env import make_setup
+
+    setup = make_setup(None, None, None, None, None, {"fidelity": fidelity, "window_library": 1})
+    batch = ActuatorBatch(setup, 2)
+    rows = np.arange(2, dtype=np.int64)
+    batch.reset(rows, [np.random.default_rng(0), np.random.default_rng(1)])
+    a = batch.a
+    a["group"][:] = 0
+    a["crack"][failing] = a["fail"][failing] * 0.99999  # fails on this flight
+    other = 1 - failing
+    crack_before = float(a["crack"][other])
+    batch.slot(rows, np.zeros(2, dtype=np.int64))
+    assert a["failures"][failing].sum() == 1 and a["failures"][other].sum() == 0
+    assert a["crack"][other] > crack_before
+    assert a["pending"][other].tolist() == [1.0, 1.0]

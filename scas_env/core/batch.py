@@ -197,7 +197,7 @@ class ActuatorBatch(ActuatorState):
         for f in range(most):
             for e in wants:
                 g = int(group[e])
-                if not (go[g] and broken_at.get(g, -1) < 0 and f < flights[e]):
+                if not (go[g] and broken_at.get(g, -1) in (-1, f) and f < flights[e]):
                     continue
                 feats = parts.physics_flight(self, e, self.rngs[e]["measure"])
                 broke = fly_measured(
