@@ -11,6 +11,7 @@ The reference runs the public physics chain by hand: the run's conditions drawn 
 from __future__ import annotations
 
 import copy
+from typing import Any
 
 import numpy as np
 import pytest
@@ -40,17 +41,21 @@ def _env_at(crack_frac: float, wear_frac: float) -> tuple[ScasMaintenanceEnv, He
     return env, health
 
 
+def _unit_config(env: ScasMaintenanceEnv, health: HealthState, rng: np.random.Generator) -> Any:
+    """The fitted unit's actuator at ``health``, the run's conditions drawn first from
+    ``rng`` (as the physics path draws them)."""
+    conditions = draw_run_conditions(env.params, rng)
+    return actuator_config(
+        env.params, unit=env.batch.physics[0].unit, conditions=conditions, health=health
+    )
+
+
 def _direct_ground(
     env: ScasMaintenanceEnv, health: HealthState, rng: np.random.Generator
 ) -> list[float]:
     """G1, G3 of ``ground_test`` on the fitted unit at ``health`` (conditions drawn first)."""
     rng = copy.deepcopy(rng)
-    p = env.params
-    conditions = draw_run_conditions(p, rng)
-    config = actuator_config(
-        p, unit=env.batch.physics[0].unit, conditions=conditions, health=health
-    )
-    feats = ground_test(p, config, rng).features
+    feats = ground_test(env.params, _unit_config(env, health, rng), rng).features
     return [feats[f] for f in GROUND_FEATURES]
 
 
@@ -59,12 +64,8 @@ def _direct_flight(
 ) -> list[float]:
     """I-features of ``flight_window`` (window drawn from the stream) at ``health``."""
     rng = copy.deepcopy(rng)
-    p = env.params
-    conditions = draw_run_conditions(p, rng)
-    config = actuator_config(
-        p, unit=env.batch.physics[0].unit, conditions=conditions, health=health
-    )
-    feats = flight_window(p, config, rng, p.mission.flight_window_s).features
+    window_s = env.params.mission.flight_window_s
+    feats = flight_window(env.params, _unit_config(env, health, rng), rng, window_s).features
     return [feats[f] for f in FLIGHT_FEATURES]
 
 
