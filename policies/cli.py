@@ -663,7 +663,8 @@ def tune_main(argv: Sequence[str] | None = None) -> int:
         env_kwargs=env_kwargs,
         **size,
     )
-    config = {"size": size, **_config_record(parser.prog, argv, args, scenario, costs, mismatch)}
+    ran = scenario.replace(episode_slots=size["slots"]) if "slots" in size else scenario
+    config = {"size": size, **_config_record(parser.prog, argv, args, ran, costs, mismatch)}
     return _write_tuning(results, out, config, args.overwrite)
 
 
@@ -774,7 +775,8 @@ def value_main(argv: Sequence[str] | None = None) -> int:
         families=args.families,
         **size,
     )
-    result.config.update(_config_record(parser.prog, argv, args, scenario, costs, mismatch))
+    ran = scenario.replace(episode_slots=size["slots"]) if "slots" in size else scenario
+    result.config.update(_config_record(parser.prog, argv, args, ran, costs, mismatch))
     print(markdown_report(result))
     paths = write_outputs(result, out, overwrite=args.overwrite)
     n = len(result.rows)

@@ -255,7 +255,7 @@ def load_env_config(
     it with :func:`load_mismatch`). A bad file is a usage error naming the file, the table and
     the field.
     """
-    from scas_env.actuator.config import read_mapping
+    from scas_env.actuator.config import FILE_SECTIONS, read_mapping
 
     scenario, costs = Scenario(), CostModel()
     reads = {"fleet": fleet, "mismatch": mismatch, "params": False}
@@ -271,6 +271,15 @@ def load_env_config(
             if args.costs is None and "costs" in data:
                 costs = CostModel.load(args.scenario)
         if args.costs is not None:
+            data = read_mapping(args.costs)
+            tables = sorted(set(data) & set(FILE_SECTIONS) - {"costs"})
+            if tables and "costs" in data:  # the others would be dropped: a case file is
+                # --scenario's (without [costs], load names the missing table)
+                raise ValueError(
+                    f"--costs {args.costs} holds the table(s) {tables}: --costs reads a cost "
+                    "model alone (a [costs] table or its fields); give a whole case file as "
+                    "--scenario"
+                )
             costs = CostModel.load(args.costs)
     except (ValueError, FileNotFoundError) as exc:
         parser.error(str(exc))

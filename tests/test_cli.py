@@ -125,6 +125,8 @@ def _cases(tmp: Path) -> list[tuple[str, list[str], str]]:
     bad.write_text("[scenario]\nepisode_slots = -5\n")
     costs = tmp / "costs.yaml"
     costs.write_text("mission_abort_usd: 1.0\n")
+    case = tmp / "case.toml"  # a whole case file given as --costs: its [mismatch] unread
+    case.write_text("[costs]\ntest_usd = 7.0\n[mismatch]\ncrack_growth = 2.0\n")
     (tmp / "c.csv").write_text("")
     return [
         ("scas-benchmark", ["--episodes", "0"], "--episodes: '0' is not an integer >= 1"),
@@ -145,6 +147,11 @@ def _cases(tmp: Path) -> list[tuple[str, list[str], str]]:
             "bad.toml [scenario]: Scenario.episode_slots = -5 slots is outside",
         ),
         ("scas-benchmark", ["--costs", str(bad), "--out", str(tmp / "o")], "no [costs] table"),
+        (
+            "scas-benchmark",
+            ["--costs", str(case), "--out", str(tmp / "o")],
+            "case.toml holds the table(s) ['mismatch']: --costs reads a cost model alone",
+        ),
         ("scas-benchmark", ["--trust-pickle"], "--trust-pickle applies to --agent files"),
         ("scas-benchmark", ["--policy", "nomod:f"], "cannot import 'nomod'"),
         ("scas-benchmark", ["--policy", "os:getcwd"], "getcwd(obs_names) failed: TypeError"),
@@ -716,3 +723,9 @@ def test_tune_and_value_fly_the_scenario_file_s_episode_length(tmp_path: Path) -
     assert saved == direct["age"].best_reward
     shown = " ".join(PARSERS["scas-value"]().format_help().split())
     assert "(default: the scenario's episode_slots, 2000)" in shown
+    # --slots over the file's: the recorded scenario is the one that ran (rerun recipe)
+    again = tmp_path / "t2"
+    argv = [*argv[:-1], str(again), "--slots", "200"]
+    assert policies_cli.tune_main(argv) == 0
+    config = json.loads((again / "manifest.json").read_text())["config"]
+    assert config["size"]["slots"] == config["scenario"]["episode_slots"] == 200

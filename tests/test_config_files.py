@@ -250,7 +250,63 @@ def test_example_loads_and_every_changed_value_is_explained(path: Path) -> None:
 
 
 def test_save_refuses_a_section_load_cannot_read(tmp_path) -> None:
-    """``save(section=...)`` wrote any table name, which ``load`` never reads back."""
-    with pytest.raises(ValueError, match=r"section = 'bogus' must be None .*'scenario'"):
-        Scenario().save(tmp_path / "s.toml", section="bogus")
+    """``save(section=...)`` wrote any table name, also another class's or one of a nested
+    group, which ``load`` never reads back; ``save_sections`` likewise."""
+    from scas_env.actuator.config import save_sections
+    from scas_env.core.fleet.demand import DemandModel
+
+    for group, section in ((Scenario(), "bogus"), (Scenario(), "costs"), (DemandModel(), "fleet")):
+        with pytest.raises(ValueError, match=rf"section = '{section}': {type(group).__name__}"):
+            group.save(tmp_path / "s.toml", section=section)
+    with pytest.raises(ValueError, match=r"table 'costz' must be one of"):
+        save_sections(tmp_path / "s.toml", {"scenario": Scenario(), "costz": CostModel()})
+    with pytest.raises(ValueError, match=r"table 'costs' holds a Scenario: it must hold a Cost"):
+        save_sections(tmp_path / "s.toml", {"costs": Scenario()})
     assert not (tmp_path / "s.toml").exists()
+    Scenario().save(tmp_path / "s.toml", section="scenario")
+    assert Scenario.load(tmp_path / "s.toml") == Scenario()
+
+
+def test_an_empty_yaml_table_reads_as_an_empty_toml_table(tmp_path) -> None:
+    """YAML's ``scenario:`` with every line commented out is null: the defaults, as TOML's
+    empty ``[scenario]`` (it was "expected a dict, got NoneType"); a nested one too."""
+    (tmp_path / "e.yaml").write_text(
+        "scenario:\n  # initial_health: random\ncosts:\n  test_usd: 7.0\n"
+    )
+    (tmp_path / "e.toml").write_text("[scenario]\n[costs]\ntest_usd = 7.0\n")
+    for suffix in (".yaml", ".toml"):
+        assert Scenario.load(tmp_path / f"e{suffix}") == Scenario()
+        assert CostModel.load(tmp_path / f"e{suffix}") == CostModel(test_usd=7.0)
+    (tmp_path / "p.yaml").write_text("params:\n  spring:\n    # paris_m: 3.0\n")
+    assert ScasParams.load(tmp_path / "p.yaml") == ScasParams()
+
+
+def test_a_parameter_group_in_another_group_s_place_is_refused() -> None:
+    """``ScasParams(fluid=SpringParams())`` was accepted (any group in any slot)."""
+    from scas_env.actuator.params import FluidParams, SpringParams
+
+    with pytest.raises(ValueError, match=r"ScasParams.fluid must be a FluidParams, got Spring"):
+        ScasParams(fluid=SpringParams())
+    with pytest.raises(ValueError, match=r"ScasParams.spring must be a SpringParams, got Fluid"):
+        ScasParams().replace(spring=FluidParams())
+
+
+def test_save_keeps_a_file_s_mode_and_writes_through_a_symlink(tmp_path) -> None:
+    """An overwritten file keeps its permissions (it became 0600, ``mkstemp``'s) and a
+    symbolic link keeps pointing at the file that now holds the new values."""
+    import os
+
+    path = tmp_path / "k.toml"
+    CostModel().save(path)
+    os.chmod(path, 0o640)
+    CostModel(test_usd=6.0).save(path, overwrite=True)
+    assert path.stat().st_mode & 0o777 == 0o640
+    link = tmp_path / "link.toml"
+    link.symlink_to(path)
+    CostModel(test_usd=7.0).save(link, overwrite=True)
+    assert link.is_symlink() and CostModel.load(path) == CostModel(test_usd=7.0)
+
+
+def test_a_boolean_in_a_list_of_numbers_is_named_as_one() -> None:
+    with pytest.raises(ValueError, match=r"mission_value_usd\[0\] = True \(a boolean, not a"):
+        FleetConfig(mission_value_usd=(True, 1.0, 1.0))

@@ -44,14 +44,14 @@ from __future__ import annotations
 import dataclasses
 import json
 import math
-import os
 import re
 import sys
-import tempfile
 from collections.abc import Mapping
 from dataclasses import dataclass, field, fields
 from pathlib import Path
 from typing import Any, TypeVar
+
+from scas_env.utils.atomic_file import write_text_atomic
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -243,6 +243,12 @@ class Validated:
                     f"{sorted(set(data) & set(FILE_SECTIONS))}; a file holds either the fields "
                     f"of one group or only the tables {list(FILE_SECTIONS)}"
                 )
+            if not table:
+                raise ValueError(
+                    f"{path}: {cls.__name__} is a group of another table's class, read from "
+                    f"a file of its fields alone; the file has the tables {sorted(data)} (load "
+                    "their class)"
+                )
             if table not in data:
                 raise ValueError(
                     f"{path}: no [{table}] table for {cls.__name__}; the file has {sorted(data)}"
@@ -259,13 +265,16 @@ class Validated:
         An existing file raises ``FileExistsError`` unless ``overwrite``. :meth:`load` gives
         back an equal object.
         """
-        if section is not None and section not in FILE_SECTIONS:
+        own = _section_of(type(self))
+        if section is not None and section != own:
+            allowed = "None (the top level)" + (f" or {own!r}" if own else "")
             raise ValueError(
-                f"section = {section!r} must be None (the top level) or one of "
-                f"{list(FILE_SECTIONS)} (the tables load reads)"
+                f"section = {section!r}: {type(self).__name__}.load reads {allowed}; it "
+                f"must be that"
             )
-        data = self.to_dict()
-        return save_sections(path, {section: self} if section else data, overwrite=overwrite)
+        if section is None:
+            return write_mapping(path, self.to_dict(), overwrite=overwrite)
+        return save_sections(path, {section: self}, overwrite=overwrite)
 
     @classmethod
     def describe(cls) -> list[tuple[str, Any, str, str, str]]:
@@ -284,14 +293,33 @@ def save_sections(path: str | Path, groups: Mapping[str, Any], *, overwrite: boo
     Example: ``save_sections("case.toml", {"scenario": Scenario(), "costs": CostModel()})``;
     each table is read back by ``Scenario.load`` / ``CostModel.load``.
     """
+    for table, group in groups.items():
+        if table not in FILE_SECTIONS:
+            raise ValueError(
+                f"table {table!r} must be one of {list(FILE_SECTIONS)} (the tables load reads)"
+            )
+        if isinstance(group, Validated) and _section_of(type(group)) != table:
+            raise ValueError(
+                f"table {table!r} holds a {type(group).__name__}: it must hold a "
+                f"{FILE_SECTIONS[table]} (what {table!r} is read back as)"
+            )
+        if not isinstance(group, Validated | Mapping):
+            raise ValueError(f"table {table!r} = {group!r} must be a parameter group or a dict")
     data = {k: v.to_dict() if isinstance(v, Validated) else v for k, v in groups.items()}
     return write_mapping(path, data, overwrite=overwrite)
 
 
 def _build(cls: type[T], data: Any, path: str | Path, table: str) -> T:
-    """``cls.from_dict(data)``; errors name the file and the table (``[params.spring]``)."""
+    """``cls.from_dict(data)``; errors name the file and the table (``[params.spring]``). An
+    empty table (YAML's ``scenario:`` with every line commented out reads as null) is ``{}``,
+    as TOML's is."""
+    data = {} if data is None else data
     if isinstance(data, dict):
         names = {f.name for f in fields(cls)}
+        data = {
+            k: {} if v is None and k in names and _nested_type(cls, k) is not None else v
+            for k, v in data.items()
+        }
         for key, value in data.items():
             ftype = _nested_type(cls, key) if key in names else None
             if ftype is not None and isinstance(value, dict):
@@ -472,14 +500,7 @@ def write_mapping(path: str | Path, data: Mapping[str, Any], *, overwrite: bool 
         text = yaml.safe_dump(_plain(data), sort_keys=False, allow_unicode=True)
     else:
         text = json.dumps(_plain(data), indent=2) + "\n"
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8") as fh:
-            fh.write(text)
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
+    write_text_atomic(path, text)
     return path
 
 

@@ -444,6 +444,20 @@ class UncertaintyParams(Validated):
     )
 
 
+#: the class of each group of :class:`ScasParams`
+GROUP_TYPES: dict[str, type[Validated]] = {
+    "fluid": FluidParams,
+    "servovalve": ServovalveParams,
+    "actuator": ActuatorParams,
+    "spring": SpringParams,
+    "seal": SealParams,
+    "sensors": SensorParams,
+    "controller": ControllerParams,
+    "mission": MissionParams,
+    "uncertainty": UncertaintyParams,
+}
+
+
 @dataclass(frozen=True)
 class ScasParams(Validated):
     """All parameter groups of one SCAS actuator design (nominal values)."""
@@ -461,11 +475,9 @@ class ScasParams(Validated):
     def _check(self) -> None:
         for name in self.__dataclass_fields__:
             value = getattr(self, name)
-            expected = self.__dataclass_fields__[name].type
-            if not isinstance(value, Validated):
-                raise ValueError(
-                    f"ScasParams.{name} must be a parameter group ({expected}), got {value!r}"
-                )
+            expected = GROUP_TYPES[name]
+            if not isinstance(value, expected):
+                raise ValueError(f"ScasParams.{name} must be a {expected.__name__}, got {value!r}")
         stroke_force = self.spring.rate_n_per_m * self.actuator.end_stop_m
         if stroke_force >= self.spring.preload_n:
             raise ValueError(

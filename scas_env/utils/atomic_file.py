@@ -76,8 +76,11 @@ def sigterm_raises() -> Iterator[None]:
 
 
 def write_bytes_atomic(path: str | Path, data: bytes) -> None:
-    """Replace ``path`` with ``data`` in one step (same folder, flushed to disk first)."""
+    """Replace ``path`` with ``data`` in one step (same folder, flushed to disk first). A
+    symbolic link's target is replaced, the link kept; an existing file keeps its mode."""
     target = Path(path)
+    if target.is_symlink():
+        target = target.resolve()
     with sigterm_raises():
         fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".tmp", dir=target.parent)
         try:  # mkstemp makes the file private: keep the old file's mode, else rw-r--r--

@@ -97,6 +97,7 @@ def finite_numbers(
                 f = float(v)
         if not math.isfinite(f) or not lo <= f <= hi:
             number = "" if not isinstance(v, str) or math.isfinite(f) else " (not a number)"
+            number = " (a boolean, not a number)" if isinstance(v, bool | np.bool_) else number
             raise ValueError(f"{label}[{k}] = {v!r}{number} {allowed}")
         out.append(f)
     return tuple(out)
