@@ -73,29 +73,65 @@ def test_leakage_fraction_is_eq9_by_hand() -> None:
     assert got[-1] == pytest.approx(1.0)
 
 
+#: the observation entry behind each observation-derived column (the data card's meaning of
+#: the columns, written out here rather than read from the module's OBS_COLUMNS)
+OBS_OF_COLUMN = {
+    "pf_spring_rul_mean": "spring_rul_mean",
+    "pf_spring_rul_low": "spring_rul_low",
+    "pf_spring_risk": "spring_risk",
+    "pf_seal_rul_mean": "seal_rul_mean",
+    "pf_seal_rul_low": "seal_rul_low",
+    "pf_seal_risk": "seal_risk",
+    "spring_alarm": "spring_alarm",
+    "seal_alarm": "seal_alarm",
+}
+#: truth columns, each the env's ``info["true_state"]`` entry of the same name
+TRUTH_COLUMNS = (
+    "crack_depth_m",
+    "seal_wear_m",
+    "crack_fraction",
+    "wear_fraction",
+    "spring_rul_flights",
+    "seal_rul_flights",
+)
+
+
 def test_rows_match_a_replay_of_the_env(small) -> None:
     """Each unit replayed from its stored seed with the same actions fails at the stored flight
-    with the stored part (or, censored, runs to ``max_slots`` without failing), and its truth
-    matches the rows."""
+    with the stored part (or, censored, runs to ``max_slots`` without failing), and its rows
+    equal the replay slot by slot: every feature (``info["features"]``, NaN when not
+    measured), every observation-derived column (the float32 observation entry it names, as
+    float64), every truth column (``info["true_state"]``), the critical levels (the truth's
+    damage over its fraction) and ``leakage_fraction`` (eq. 9's ratio of the replayed wear,
+    :func:`leakage_fraction`, checked by hand in ``test_leakage_fraction_is_eq9_by_hand``)."""
     flights, units = small
     assert len(units["unit"]) == 4
     assert set(units["censored"]) == {False, True}  # the fixture has both kinds
+    assert set(OBS_OF_COLUMN) | set(TRUTH_COLUMNS) <= set(flights)
     max_slots = 20_000
-    env = gym.make(scas_env.ENV_ID, scenario=Scenario(episode_slots=max_slots))
+    env = gym.make(
+        scas_env.ENV_ID, scenario=Scenario(obs_mode="features+rul", episode_slots=max_slots)
+    )
+    names = list(env.unwrapped.obs_names)
+    params = ScasParams()
     for u in range(4):
         rows = flights["unit"] == u
         assert rows.sum() == units["slots"][u]
         env.reset(seed=int(units["seed"][u]))
-        crack = []
         features: dict[str, list[float]] = {f: [] for f in (*FLIGHT_FEATURES, *GROUND_FEATURES)}
+        observed: dict[str, list[float]] = {c: [] for c in OBS_OF_COLUMN}
+        truth: dict[str, list[float]] = {c: [] for c in TRUTH_COLUMNS}
         failed: tuple[str, ...] = ()
         flown_before, tests_before = 0, 0
         for slot in range(1, min(units["slots"][u] + 1, max_slots) + 1):
-            _, _, _, truncated, info = env.step(1 if (slot - 1) % 7 == 0 else 0)
+            obs, _, _, truncated, info = env.step(1 if (slot - 1) % 7 == 0 else 0)
             if info["failures"]["spring"] or info["failures"]["seal"]:
                 failed = tuple(p for p in ("spring", "seal") if info["failures"][p])
                 break
-            crack.append(info["true_state"]["crack_depth_m"])
+            for c in TRUTH_COLUMNS:
+                truth[c].append(info["true_state"][c])
+            for c, name in OBS_OF_COLUMN.items():
+                observed[c].append(np.float64(obs[names.index(name)]))
             flown, tested = info["flights"] > flown_before, info["tests"] > tests_before
             flown_before, tests_before = info["flights"], info["tests"]
             for f in FLIGHT_FEATURES:
@@ -110,9 +146,29 @@ def test_rows_match_a_replay_of_the_env(small) -> None:
             mode = "both" if len(failed) == 2 else failed[0]
             assert units["failure_mode"][u] == mode
         assert info["flights"] == units["flights"][u]
-        np.testing.assert_array_equal(flights["crack_depth_m"][rows], crack)
+        for c, values in truth.items():
+            np.testing.assert_array_equal(flights[c][rows], values, err_msg=c)
+        for c, values in observed.items():  # the particle filter's outputs and the alarms
+            np.testing.assert_array_equal(flights[c][rows], values, err_msg=c)
         for f, values in features.items():  # every feature column, the monitor's I8, I9 too
             np.testing.assert_array_equal(flights[f][rows], values, err_msg=f)
+        damaged = np.asarray(truth["wear_fraction"]) > 0
+        crit_wear = (
+            np.asarray(truth["seal_wear_m"])[damaged] / np.asarray(truth["wear_fraction"])[damaged]
+        )
+        crit_crack = np.asarray(truth["crack_depth_m"]) / np.asarray(truth["crack_fraction"])
+        for c, crit in (
+            ("seal_critical_wear_m", crit_wear),
+            ("spring_critical_depth_m", crit_crack),
+        ):
+            np.testing.assert_allclose(flights[c][rows], units[c][u], rtol=0, err_msg=c)
+            np.testing.assert_allclose(crit, units[c][u], rtol=1e-12, err_msg=c)
+        np.testing.assert_array_equal(
+            flights["leakage_fraction"][rows],
+            leakage_fraction(
+                np.asarray(truth["seal_wear_m"]), units["seal_critical_wear_m"][u], params
+            ),
+        )
 
 
 def test_row_semantics(small) -> None:

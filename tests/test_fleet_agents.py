@@ -269,3 +269,64 @@ def test_training_refuses_a_used_folder_unless_overwrite(tmp_path: Path) -> None
     assert [p.name for p in tmp_path.iterdir()] == ["run"]  # the old contents: deleted
     with pytest.raises(ValueError, match="is not a folder"):
         train(cfg, out / "run.json", **kw)
+
+
+#: each aircraft's status entries, in the per-aircraft view's order (masks.py docstring)
+STATUS_FIELDS = ("jobs_queued", "broken", "downtime", "no_go", "free")
+
+
+def _sb3_rows(obs: np.ndarray, names: tuple[str, ...], kind: str) -> np.ndarray:
+    """What the network reads, built by name from the flat fleet observation: the whole
+    observation (``joint``), or one row per aircraft (``shared``): its actuators, its status,
+    the fleet's shared entries, its index one-hot and every aircraft's status."""
+    if kind == "joint":
+        return obs[None, :]
+    n = 1 + max(int(s.split(".")[0][9:]) for s in names if s.startswith("aircraft_"))
+    shared = [k for k, s in enumerate(names) if not s.startswith("aircraft_")]
+    status = [names.index(f"aircraft_{j}.{f}") for j in range(n) for f in STATUS_FIELDS]
+    rows = []
+    for i in range(n):
+        acts = [k for k, s in enumerate(names) if s.startswith(f"aircraft_{i}.actuator_")]
+        own = [names.index(f"aircraft_{i}.{f}") for f in STATUS_FIELDS]
+        rows.append(np.concatenate([obs[acts + own + shared], np.eye(n)[i], obs[status]]))
+    return np.asarray(rows, dtype=np.float32)
+
+
+@pytest.mark.parametrize("path", [FLEET_JOINT_AGENT, FLEET_SHARED_AGENT])
+def test_shipped_agents_act_as_sb3_maskable_ppo_on_normalised_observations(path: Path) -> None:
+    """The plugin agent's ``predict(obs, deterministic=True)`` equals, day by day over 25 days
+    of the default fleet (the one the agent was trained on), sb3-contrib's own
+    ``MaskablePPO.load(zip).predict`` given the observation normalised with the JSON
+    statistics as documented (``clip((obs - mean) / sqrt(var + epsilon), +-clip_obs)`` as
+    float32, per aircraft row for the shared agent) and the env's action masks."""
+    if not path.is_file():
+        pytest.skip(f"{path.name} not shipped")
+    from sb3_contrib import MaskablePPO
+
+    from policies.agents.agent_files import global_rngs_kept
+
+    stem = path.name.removesuffix(".zip")
+    meta = json.loads(path.with_name(f"{stem}.json").read_text())
+    stats = json.loads(path.with_name(f"{stem}_normalization.json").read_text())
+    env = gym.make("scas_env/ScasFleet-v0", disable_env_checker=True)
+    names = tuple(env.unwrapped.obs_names)
+    assert tuple(meta["obs_names"]) == names  # the default fleet is the agent's
+    assert meta["agent_id"] and meta["fleet_status"] and not meta["tests_every_flight"]
+    agent = load_fleet_agent(path, names)
+    with global_rngs_kept():  # load re-seeds the global generators; the files are ours
+        model = MaskablePPO.load(path, device="cpu")
+    mean, var = np.asarray(stats["mean"]), np.asarray(stats["var"])
+    scale, clip = np.sqrt(var + stats["epsilon"]), stats["clip_obs"]
+    nvec = env.action_space.nvec
+    obs, _ = env.reset(seed=11)
+    for day in range(25):
+        rows = _sb3_rows(obs, names, meta["kind"])
+        normed = np.clip((rows - mean) / scale, -clip, clip).astype(np.float32)
+        masks = env.unwrapped.action_masks().reshape(rows.shape[0], -1)
+        want, _ = model.predict(normed, deterministic=True, action_masks=masks)
+        want = np.asarray(want, dtype=np.int64).reshape(-1)
+        assert want.shape == nvec.shape
+        got, _ = agent.predict(obs, deterministic=True)
+        np.testing.assert_array_equal(got, want, err_msg=f"{meta['kind']} agent, day {day}")
+        obs, _, terminated, truncated, _ = env.step(want)
+        assert not (terminated or truncated)

@@ -13,7 +13,7 @@ import pytest
 
 import policies  # noqa: F401  (registers the policies)
 from policies.base import make_policy, policy_obs_mode
-from policies.benchmark.fleet_runner import run_fleet_episodes
+from policies.benchmark.fleet_runner import fleet_bound_rows, run_fleet_episodes
 from policies.rules.fleet import FLEET_FAMILIES
 from policies.rules.fleet_bound import _min_plus_over_aircraft, fleet_upper_bound
 from scas_env.core.costs import CostModel
@@ -138,34 +138,62 @@ def _spent(lives: list[list[list[float]]], missions: tuple[int, ...]) -> float:
     )
 
 
-@pytest.mark.parametrize("seed", [0, 4, 38])
-def test_the_bound_is_its_relaxation_s_best_plan_by_enumeration(seed: int) -> None:
+#: seed 99 leaves missions unflown: at the standard mission's $5,000 its best plans tie (7 or 8
+#: missions: the marginal standard mission's worth, $6,000, is a seal's replacement), at
+#: $4,000 the fewer missions are strictly best
+@pytest.mark.parametrize(
+    ("seed", "standard_usd"), [(0, 5000.0), (4, 5000.0), (38, 5000.0), (99, 5000.0), (99, 4000.0)]
+)
+def test_the_bound_is_its_relaxation_s_best_plan_by_enumeration(
+    seed: int, standard_usd: float
+) -> None:
     """On a tiny case, enumerated: every choice of the missions flown (at most one per
     aircraft a day, so at most ``N`` a day) and every split of them over the aircraft (at
     most one mission a day each): the best plan's worth less every penalty is the bound. And
     the bound is at least the best plan that also flies each day's missions with that day's
-    aircraft (each aircraft idle or on one of the day's missions): a relaxation of it."""
-    demand, lives = _tiny_case(seed)
+    aircraft (each aircraft idle or on one of the day's missions): a relaxation of it.
+
+    The ``fleet_bound`` arm's results row (the README's bound row) is that best plan: its
+    missions flown the plan's ``M`` (the fewest of the best), ``F M`` flights of 1.5 h, its
+    reward the bound and its cost the value the plan flies less the bound (the penalties of
+    the missions it leaves and its replacements)."""
+    demand, lives = _tiny_case(seed)  # neither depends on the missions' values
+    fleet = TINY.replace(mission_value_usd=(standard_usd, 9000.0))
     n, days = int(TINY.aircraft), int(TINY.episode_days)
-    worth = np.array(TINY.mission_value_usd) + np.array(TINY.mission_not_flown_usd)
-    penalties = float((demand @ np.array(TINY.mission_not_flown_usd)).sum())
+    value = np.array(fleet.mission_value_usd)
+    worth = value + np.array(fleet.mission_not_flown_usd)
+    penalties = float((demand @ np.array(fleet.mission_not_flown_usd)).sum())
     per_day = []
     for d in range(days):
         per_day.append(
             [
-                (int(sum(c)), float(np.dot(c, worth)))
+                (int(sum(c)), float(np.dot(c, worth)), float(np.dot(c, value)))
                 for c in itertools.product(*(range(int(x) + 1) for x in demand[d]))
                 if sum(c) <= n
             ]
         )
-    gain = {}
+    gain: dict[int, tuple[float, float]] = {}  # missions -> the best plan's (worth, value)
     for plan in itertools.product(*per_day):
-        m = sum(c for c, _ in plan)
-        gain[m] = max(gain.get(m, -np.inf), sum(g for _, g in plan))
+        m = sum(c for c, _, _ in plan)
+        best = (sum(g for _, g, _ in plan), sum(v for _, _, v in plan))
+        gain[m] = max(gain.get(m, (-np.inf, 0.0)), best)
     splits = list(itertools.product(range(days + 1), repeat=n))
-    relaxed = max(gain[m] - min(_spent(lives, s) for s in splits if sum(s) == m) for m in gain)
-    bound = fleet_upper_bound(seed, TINY)["bound"]
+    net = {m: gain[m][0] - min(_spent(lives, s) for s in splits if sum(s) == m) for m in gain}
+    relaxed = max(net.values())
+    plan_m = min(m for m in net if net[m] == relaxed)  # the fewest missions of the best
+    bound = fleet_upper_bound(seed, fleet)["bound"]
     assert bound == pytest.approx(relaxed - penalties, abs=1e-6)
+    # the arm's results row: the best plan's missions, flights, reward and cost
+    row = fleet_bound_rows({"fleet": fleet}, [(seed, seed)])[0]["row"]
+    f = int(TINY.flights_per_mission)
+    assert row["missions_flown"] == plan_m and row["missions_demanded"] == demand.sum()
+    assert row["mission_availability"] == pytest.approx(plan_m / demand.sum(), rel=1e-12)
+    assert row["flights"] == f * plan_m
+    assert row["flight_hours"] == pytest.approx(1.5 * f * plan_m, rel=1e-12)
+    assert row["reward"] == pytest.approx(relaxed - penalties, abs=1e-6)
+    cost = gain[plan_m][1] - (relaxed - penalties)
+    assert row["cost_usd"] == pytest.approx(cost, abs=1e-6)
+    assert row["cost_per_fh"] == pytest.approx(cost / (1.5 * f * plan_m), rel=1e-9)
     # day by day: each aircraft idle or on one of the day's missions
     options = []
     for d in range(days):

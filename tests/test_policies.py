@@ -261,7 +261,7 @@ def test_sb3_evaluate_policy_drives_a_rule() -> None:
     rewards, lengths = evaluate_policy(policy, env, n_eval_episodes=2, return_episode_rewards=True)
     # 100 flights, no part lives fewer than ~400 flights: every flight flown and paid
     assert lengths == [100, 100]
-    assert rewards == [100 * 2500.0, 100 * 2500.0]
+    assert rewards == [100 * env.unwrapped.setup.costs.flight_value_usd] * 2
     # the detection rule on a seeded episode: the first test when test_age reaches 10
     # (slot 10), then every 10 slots; no alarm fires in 100 flights, so the episode's reward
     # is its flights' value less exactly (100 - 1) // 10 = 9 tests

@@ -7,15 +7,21 @@ module (``ray.rllib.examples.rl_modules.classes.action_masking_rlm``): the aircr
 (``infos[agent]["action_mask"]``, one array per ``MultiDiscrete`` entry, concatenated)
 travels in a ``Dict`` observation and sets the logits of invalid choices to -inf (the
 per-entry logits of a ``MultiDiscrete`` are concatenated in the same order as the mask).
-Rewards are trained on ``1e-4 * (usd - 2e4)`` per fleet-day, as the SB3 fleet agents; the
-printed returns are per aircraft in those units (RLlib sums them over the 8 agents).
+Rewards are trained on ``1e-4 * (usd - 2e4)`` per fleet-day, as the SB3 fleet agents. Every
+aircraft receives the team's reward and RLlib sums the agents' returns, so the printed
+``episode_return_mean`` is 8 times the fleet's episode return in those units.
 
 RLlib is the distributed engine users grow into (Ray is already the benchmark's fan-out
 engine): ``--env-runners`` and a cluster (``ray start``; ``--address auto``) scale the same
-script. Install: ``pip install "ray[rllib]" pettingzoo`` and this package (Ray pins its own
-gymnasium: use a separate virtual environment). From the repository root, a small run::
+script. Install: ``pip install torch==2.13.0`` (the CPU build, as ``make``), then ``pip install
+"ray[rllib]" pettingzoo`` and this package (Ray pins its own gymnasium: use a separate virtual
+environment). From the repository root, a small run (about 5 minutes on 2 cores)::
 
-    python -m experiments.fleet_agents.rllib --iterations 3 --episode-days 60
+    PYTHONHASHSEED=0 python -m experiments.fleet_agents.rllib --iterations 3 --episode-days 60
+
+``--seed`` alone does not reproduce a run: RLlib's sampling and learner depend on Python's
+string hashing, so the same ``--seed`` gives other returns unless ``PYTHONHASHSEED`` is fixed
+(recorded in ``summary.json``; passed to a cluster's workers).
 
 ``--out`` (the checkpoint and ``summary.json``, with the project's ``manifest.json``) is written
 at the end, whole (:func:`scas_env.utils.results_folder.results_folder`); an existing non-empty
@@ -27,6 +33,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import time
 from pathlib import Path
 from typing import Any
@@ -125,7 +132,14 @@ def main(argv: list[str] | None = None) -> int:
     )
     from ray.tune.registry import register_env
 
-    ray.init(address=args.address, include_dashboard=False, num_cpus=None)
+    hashseed = os.environ.get("PYTHONHASHSEED")  # RLlib's results depend on it (docstring)
+    env_vars = {"PYTHONHASHSEED": hashseed} if hashseed is not None else {}
+    ray.init(
+        address=args.address,
+        include_dashboard=False,
+        num_cpus=None,
+        runtime_env={"env_vars": env_vars},
+    )
     register_env(
         "scas_fleet",
         lambda cfg: ParallelPettingZooEnv(masked_fleet(episode_days=cfg["episode_days"])),
@@ -180,6 +194,7 @@ def main(argv: list[str] | None = None) -> int:
         print(json.dumps(row), flush=True)
     summary = {
         "ray": ray.__version__,
+        "pythonhashseed": hashseed,
         "episode_days": args.episode_days,
         "iterations": args.iterations,
         "wall_s": time.perf_counter() - t0,

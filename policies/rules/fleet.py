@@ -25,8 +25,9 @@ aircraft ask for tomorrow's missions (the pre-flight test when an actuator's las
   its parts within ``opportunity`` of their thresholds replaced;
 * ``fleet_aware``: the opportunistic rule plus fleet-aware scheduling: the healthiest free
   aircraft (lowest risk) fly the most damaging mission types; a replacement that is not
-  urgent (risk below ``r / urgency``, RUL low quantile above ``urgency * L_p``) waits for a day
-  when the fleet has a free aircraft beyond tomorrow's demand;
+  urgent (risk below ``urgency * r``, RUL low quantile above ``L_p / urgency``, age below the
+  backstop, no failed test) waits for a day when the fleet has a free aircraft beyond
+  tomorrow's demand (``urgency = 1``: every due part is urgent, no deferral);
 * ``fleet_oracle`` (bound, ``obs_mode="state"``): each part replaced when its true remaining
   life (standard flights, known) falls to ``lead_flights`` (a damaging mission uses up to
   ~3 standard flights' worth per flight), grouped in the hangar;
@@ -99,7 +100,7 @@ FLEET_TUNED: dict[str, dict[str, float]] = {
         "spring_lead": 4.005,
         "seal_lead": 1.811,
         "opportunity": 0.008306,
-        "urgency": 1.837,
+        "urgency": 1.0,  # the tuned 1.837 was inert (deferral never fired): no deferral
     },
     "fleet_oracle": {"lead_flights": 10.05, "opportunity": 0.06485},
 }
@@ -220,12 +221,14 @@ class FleetRule:
             elif self.filters:
                 due |= obs[:, self._risk[p]] >= scale * v["risk_threshold"]
                 due |= obs[:, self._low[p]] * scale <= v[f"{p}_lead"]
-            out[p] = due & (age > 0)
+            out[p] = due
         if self.filters:
             failed = obs[:, self._no_go] > 0.5
             spring = implicated_spring(obs[:, self._g["G1"]], obs[:, self._g["G3"]])
             out["spring"] |= failed & spring
             out["seal"] |= failed & ~spring
+        for p in PARTS:  # a part that has not flown is never replaced (the env's mask)
+            out[p] &= obs[:, self._age[p]] > 0
         return out
 
     def predict(
@@ -301,8 +304,8 @@ class FleetRule:
         u = v["urgency"]
         urgent = np.zeros(needs.shape, dtype=bool)
         for p in PARTS:
-            hot = obs[:, self._risk[p]] >= v["risk_threshold"] / u
-            short = obs[:, self._low[p]] <= u * v[f"{p}_lead"]
+            hot = obs[:, self._risk[p]] >= u * v["risk_threshold"]
+            short = obs[:, self._low[p]] <= v[f"{p}_lead"] / u
             old = obs[:, self._age[p]] >= v[f"{p}_age"]
             urgent |= (due[p] & (hot | short | old)).any(axis=2)
         failed = (obs[:, self._no_go] > 0.5).any(axis=2)
