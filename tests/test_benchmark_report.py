@@ -330,3 +330,27 @@ def test_wasted_life_per_episode_is_that_of_a_single_env_replay(single: Benchmar
     # the rows are not vacuous: policies replaced both parts, with different life thrown away
     assert distinct >= 6
     assert all(math.isnan(r["wasted_life"]) for r in single.rows if r["policy"] == "corrective")
+
+
+def test_fleet_rows_count_the_stock_outs_a_single_fleet_reports() -> None:
+    """A fleet row's stock-outs are the sum over the spare kinds of the single env's
+    ``info["stock_outs"]`` at the episode's end (the vector info's ``_kind`` masks, three
+    ``True``, were summed too: +3 in every row)."""
+    from policies.base import make_policy
+    from scas_env.core.fleet.config import FleetConfig, SparesConfig
+
+    fleet = FleetConfig(aircraft=2, actuators_per_aircraft=2, episode_days=60,
+                        spares=SparesConfig(spring_kit_initial=0, seal_kit_initial=0))  # fmt: skip
+    result = run_benchmark(["fleet_naive"], episodes=2, seed=4, n_workers=1,
+                           env_kwargs={"fleet": fleet})  # fmt: skip
+    for row, (env_seed, policy_seed) in zip(result.rows, episode_seeds(4, 2), strict=True):
+        env = gym.make("scas_env/ScasFleet-v0", fleet=fleet)
+        policy = make_policy("fleet_naive", env.unwrapped.obs_names)
+        policy.reset(policy_seed)
+        obs, info = env.reset(seed=int(env_seed))
+        done = False
+        while not done:
+            obs, _, terminated, truncated, info = env.step(policy.predict(obs)[0])
+            done = terminated or truncated
+        assert row["stock_outs"] == sum(info["stock_outs"].values())
+    assert any(row["stock_outs"] > 0 for row in result.rows)  # the kits run out

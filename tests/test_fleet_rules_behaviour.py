@@ -155,23 +155,23 @@ def test_aware_rule_flies_the_healthiest_aircraft_on_the_most_damaging_type(
 def test_aware_rule_defers_a_non_urgent_replacement_until_an_aircraft_is_spare(
     names: tuple[str, ...],
 ) -> None:
-    """docs/fleet.md, fleet_aware: a replacement that is not urgent (risk below r / urgency,
-    RUL low quantile above urgency * L) waits for a day with a free aircraft beyond
-    tomorrow's demand. At urgency 1/2 a spring with risk 1.5 r is due (>= r) and not
-    urgent (< 2 r): with 3 free aircraft and 3 missions asked it waits (its aircraft flies);
-    with 2 asked (one aircraft spare) it is replaced and its aircraft stays on the ground.
-    An urgent part (risk 2 r) and a failed pre-flight test are replaced either way."""
-    urgency = 0.5
+    """docs/fleet.md, fleet_aware: a replacement that is not urgent (risk below urgency * r,
+    RUL low quantile above L / urgency) waits for a day with a free aircraft beyond
+    tomorrow's demand. At urgency 2 a spring with risk 1.5 r is due (>= r) and not urgent
+    (< 2 r): with 3 free aircraft and 3 missions asked it waits (its aircraft flies); with 2
+    asked (one aircraft spare) it is replaced and its aircraft stays on the ground. An
+    urgent part (risk 2 r) and a failed pre-flight test are replaced either way."""
+    urgency = 2.0
     rule = FleetRule("fleet_aware", names, urgency=urgency)
     r = rule.values["risk_threshold"]
-    mild = {(0, 0): {"spring_risk": 0.5 * (r + r / urgency)}}
+    mild = {(0, 0): {"spring_risk": 0.5 * (r + urgency * r)}}
     no_slack = decide(rule, fleet_obs(names, parts=mild, demand=(2, 1)))
     assert no_slack[0, 1:].tolist() == [0, 0]
     assert no_slack[0, 0] != 0  # it flies one of the three missions
     spare = decide(rule, fleet_obs(names, parts=mild, demand=(1, 1)))
     assert spare[0].tolist() == [0, 1, 0]
     assert sorted(spare[1:, 0].tolist()) == sorted([fly(t) for t in TYPES])
-    urgent = {(0, 0): {"spring_risk": r / urgency}}
+    urgent = {(0, 0): {"spring_risk": urgency * r}}
     assert decide(rule, fleet_obs(names, parts=urgent, demand=(2, 1)))[0].tolist() == [0, 1, 0]
     failed = {(0, 1): {"no_go": 1.0, **WEAR}}
     assert decide(rule, fleet_obs(names, parts=failed, demand=(2, 1)))[0].tolist() == [0, 0, 2]
@@ -180,21 +180,14 @@ def test_aware_rule_defers_a_non_urgent_replacement_until_an_aircraft_is_spare(
     assert decide(opp, fleet_obs(names, parts=mild, demand=(2, 1)))[0].tolist() == [0, 1, 0]
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="package bug: urgent = due & (risk >= r/u | low <= u*L | age >= T) holds for every "
-    "due part when urgency u >= 1, so the aware rule defers nothing on its whole tuning box "
-    "[1, 20] (tuned u = 1.837), although fleet_tuning calls u = 1 'no deferral'",
-)
-def test_aware_rule_defers_at_its_tuned_urgency(names: tuple[str, ...]) -> None:
-    """At the tuned urgency (> 1, where fleet_tuning's u = 1 means "no deferral") the least
-    urgent due part, a spring with risk exactly r (nothing else near a threshold), waits
-    when the fleet has no free aircraft beyond tomorrow's demand."""
-    rule = FleetRule("fleet_aware", names)
-    assert rule.values["urgency"] > 1.0
+def test_urgency_one_defers_nothing(names: tuple[str, ...]) -> None:
+    """fleet_tuning's start, urgency 1: every due part is urgent, so the least urgent one, a
+    spring with risk exactly r, is replaced even with no aircraft spare (the rule's
+    default, the measured one: its deferral was inert until fixed)."""
+    rule = FleetRule("fleet_aware", names, urgency=1.0)
     r = rule.values["risk_threshold"]
     act = decide(rule, fleet_obs(names, parts={(0, 0): {"spring_risk": r}}, demand=(2, 1)))
-    assert act[0, 1:].tolist() == [0, 0]
+    assert act[0].tolist() == [0, 1, 0]
 
 
 def test_age_rule_groups_parts_near_their_backstop_only_on_aircraft_in_the_hangar(
@@ -310,12 +303,6 @@ def test_naive_rule_tests_on_schedule_and_blames_the_implicated_part(
     assert decide(rule, fleet_obs(names, parts=wear, demand=(1, 0)))[0].tolist() == [0, 2, 0]
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="package bug: FleetRule._due ORs the failed-test blame in after the 'age > 0' mask, "
-    "so a failed test that implicates a part that has not flown asks to replace it (the env's "
-    "mask forbids it; the single-actuator rule keeps new seals)",
-)
 @pytest.mark.parametrize("family", ["fleet_naive", "fleet_aware"])
 def test_failed_test_never_replaces_a_part_that_has_not_flown(
     names: tuple[str, ...], family: str

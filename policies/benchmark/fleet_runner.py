@@ -37,6 +37,7 @@ import numpy as np
 
 from policies.benchmark.runner import add_decision, decision_columns, decision_scores
 from scas_env.core.fleet.log import REMOVAL_KINDS
+from scas_env.core.fleet.resources import SPARE_KINDS
 from scas_env.core.setup import PARTS
 
 #: the per-episode columns of a fleet results row, besides policy, episode and seed
@@ -190,7 +191,7 @@ def fleet_row(
         "replacements_spring": preventive["spring"],
         "replacements_seal": preventive["seal"],
         "tests": int(info["tests"][e]),
-        "stock_outs": int(sum(int(v[e]) for v in info["stock_outs"].values())),
+        "stock_outs": int(sum(int(info["stock_outs"][k][e]) for k in SPARE_KINDS)),
         "waiting_job_days": int(info["waiting_job_days"][e]),
         "jobs_waiting": int(info["jobs_waiting"][e]),
         "crew_utilisation": float(info["crew_utilisation"][e]),

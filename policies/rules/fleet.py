@@ -92,15 +92,15 @@ FLEET_TUNED: dict[str, dict[str, float]] = {
         "seal_lead": 0.9441,
         "opportunity": 0.0,
     },
-    "fleet_aware": {
-        "spring_age": 3623.0,
-        "seal_age": 9318.0,
-        "test_every": 881.4,
-        "risk_threshold": 0.09493,
-        "spring_lead": 4.005,
-        "seal_lead": 1.811,
-        "opportunity": 0.008306,
-        "urgency": 1.0,  # the tuned 1.837 was inert (deferral never fired): no deferral
+    "fleet_aware": {  # re-tuned with its deferral working (docs/findings.md#fleet)
+        "spring_age": 2015.0,
+        "seal_age": 2788.0,
+        "test_every": 1856.0,
+        "risk_threshold": 0.1636,
+        "spring_lead": 1.003,
+        "seal_lead": 6.195,
+        "opportunity": 0.04201,
+        "urgency": 1.877,
     },
     "fleet_oracle": {"lead_flights": 10.05, "opportunity": 0.06485},
 }

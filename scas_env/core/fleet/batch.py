@@ -31,7 +31,8 @@ over ``B`` (:mod:`scas_env.core.fleet.demand`, :mod:`scas_env.core.fleet.resourc
    drawn per actuator and day from the fleet's own stream whatever the policy does) sends
    the actuator to the shop: a whole actuator from the rotable pool replaces it, now or when
    the crew and pool allow.
-5. **Evening.** Base-stock orders, arrivals, the crew's day counted, holding costs.
+5. **Evening.** The holding cost of the stock on hand after the day's takes, then base-stock
+   orders and arrivals; the crew's day counted.
 
 Reward of a fleet's day (USD): each flight flown earns its mission's value over ``F`` (on the
 aircraft's first actuator), minus every actuator's tests, no-go inspections, replacements and
