@@ -27,6 +27,7 @@ of a part (failure or preventive replacement) and every part still fitted at the
 from __future__ import annotations
 
 import importlib
+import math
 import signal
 import threading
 import time
@@ -39,7 +40,7 @@ import numpy as np
 from tqdm.auto import tqdm
 
 import policies  # noqa: F401  (registers the built-in policies)
-from policies.base import make_policy, policy_family, policy_obs_mode
+from policies.base import POLICIES, make_policy, policy_family, policy_obs_mode
 from policies.benchmark.fleet_runner import fleet_bound_rows, run_fleet_episodes
 from policies.benchmark.runner import TERMS, run_episode, run_episodes
 from policies.benchmark.stats import FLEET_METRICS, METRICS, summarize
@@ -83,6 +84,7 @@ __all__ = [
     "BenchmarkResult",
     "PolicySpec",
     "episode_seeds",
+    "json_param",
     "prepare_benchmark",
     "resolve_spec",
     "run_benchmark",
@@ -152,22 +154,35 @@ Batch = tuple[int, tuple[tuple[int, int, int], ...]]
 
 
 def policy_params(spec: PolicySpec, env_kwargs: Mapping[str, Any]) -> dict[str, Any]:
-    """A policy's keywords: its spec's, and for the oracle the run's ``cost_model`` (it plans
-    with the prices the env charges) unless the spec sets one."""
+    """A policy's keywords: its spec's, and the run's ``cost_model`` for a registered policy
+    that plans with prices (its constructor takes ``cost_model``; e.g. the oracle), unless
+    the spec sets one: it plans with the prices the env charges."""
     params = dict(spec.params)
-    if spec.name == "oracle" and "cost_model" in env_kwargs:
+    if "cost_model" in env_kwargs and _takes(spec.name, "cost_model"):
         params.setdefault("cost_model", env_kwargs["cost_model"])
     return params
 
 
-def _plain(value: Any) -> Any:
-    """A parameter as JSON: numbers, strings, bools and lists of them as they are, else repr."""
-    if isinstance(value, list | tuple):
-        return [_plain(v) for v in value]
-    if isinstance(value, bool | int | float | str) or value is None:
-        return value
+def _takes(name: str, keyword: str) -> bool:
+    """Whether the policy registered as ``name`` is built with ``keyword``."""
+    import inspect
+
+    factory = POLICIES.get(name)
+    return factory is not None and keyword in inspect.signature(factory).parameters
+
+
+def json_param(value: Any) -> Any:
+    """A policy parameter as strict JSON, for run records: bools, ints, strings and finite
+    floats as they are (numpy scalars as Python's), lists of them element-wise, anything else
+    (a non-finite float, an object) as its ``repr``."""
     if isinstance(value, np.generic):
-        return value.item()
+        value = value.item()
+    if isinstance(value, list | tuple):
+        return [json_param(v) for v in value]
+    if isinstance(value, bool | int | str) or value is None:
+        return value
+    if isinstance(value, float) and math.isfinite(value):
+        return value
     return repr(value)
 
 
@@ -192,7 +207,7 @@ def check_specs(
         except (ValueError, TypeError) as exc:  # TypeError: parameters the policy lacks
             raise ValueError(f"policy {spec.key!r} cannot run on this scenario: {exc}") from exc
         params = policy.params() if callable(getattr(policy, "params", None)) else {}
-        built[spec.key] = {str(k): _plain(v) for k, v in dict(params).items()}
+        built[spec.key] = {str(k): json_param(v) for k, v in dict(params).items()}
     return built
 
 
@@ -467,7 +482,7 @@ def run_benchmark(
             {
                 "label": s.key,
                 "name": s.name,
-                "params": {k: _plain(v) for k, v in dict(s.params).items()},
+                "params": {k: json_param(v) for k, v in dict(s.params).items()},
                 "built_params": built[s.key],
                 "family": _family(s),
             }

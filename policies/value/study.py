@@ -42,7 +42,7 @@ from typing import Any
 import numpy as np
 
 from policies.benchmark.report import parts_start_new
-from policies.benchmark.run import PolicySpec, run_benchmark
+from policies.benchmark.run import PolicySpec, json_param, run_benchmark
 from policies.benchmark.stats import METRICS, metric_interval, paired_comparison
 from policies.value.tuning import (
     FAMILIES,
@@ -207,7 +207,7 @@ def run_ladder(
             {
                 "arm": a,
                 "policy": s.name,
-                "params": {k: _jsonable(v) for k, v in dict(s.params).items()},
+                "params": {k: json_param(v) for k, v in dict(s.params).items()},
                 # the arm's own keywords: where it differs from the user's world
                 "env_kwargs": {k: repr(v) for k, v in e.items() if k not in base or base[k] != v},
             }
@@ -215,14 +215,6 @@ def run_ladder(
         ],
     }
     return LadderResult(rows, summary, tuning, config, time.perf_counter() - t0)
-
-
-def _jsonable(v: Any) -> Any:
-    if isinstance(v, bool | int | str) or v is None:
-        return v
-    if isinstance(v, float):
-        return v if math.isfinite(v) else repr(v)
-    return repr(v)
 
 
 def _event_counts(events: Sequence[Mapping[str, Any]]) -> dict[str, dict[str, int]]:
@@ -380,7 +372,7 @@ def write_outputs(
     }
     if plots:
         names["png"] = "value_vs_information.png"
-    config = json.loads(json.dumps(result.config, default=_jsonable))
+    config = json.loads(json.dumps(result.config, default=json_param))
     seeds = {
         "held_out": result.config.get("held_out_seed"),
         "episodes": result.config.get("episodes"),
@@ -405,7 +397,7 @@ def write_outputs(
             "config": result.config,
             "wall_s": result.wall_s,
         }
-        at["json"].write_text(json.dumps(payload, indent=2, default=_jsonable) + "\n")
+        at["json"].write_text(json.dumps(payload, indent=2, default=json_param) + "\n")
         at["md"].write_text(markdown_report(result))
         if plots:
             _plot(result.summary, at["png"])
