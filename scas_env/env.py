@@ -171,8 +171,9 @@ class ScasMaintenanceEnv(gym.Env):
     Per step, in USD (``CostModel``): ``+flight_value`` for a flight flown, ``-test`` per
     pre-flight test, ``-no_go_inspection`` when the test fails, ``-spring_replacement`` /
     ``-seal_replacement``, and ``-(unscheduled_removal + mission_abort)`` for an in-flight
-    failure (the flight earns nothing; failed parts are replaced; ``failure_downtime_slots``
-    on the ground). ``info["reward_terms"]`` splits it.
+    failure (the flight earns nothing; failed parts are replaced, priced within the failure:
+    ``info["replacements"]`` counts them, the ``replacement`` term does not;
+    ``failure_downtime_slots`` on the ground). ``info["reward_terms"]`` splits it.
 
     ## Info
 
@@ -200,6 +201,8 @@ class ScasMaintenanceEnv(gym.Env):
 
     Truncation after ``episode_slots`` flight slots (default 2000, about 1.7 mean part lives).
     There is no termination: a failure is an event with its cost, not the end.
+    ``spec.max_episode_steps`` is None (the env truncates itself): read
+    ``scenario.episode_slots``.
 
     ## Arguments
 
@@ -208,7 +211,11 @@ class ScasMaintenanceEnv(gym.Env):
     Keywords are the fields of :class:`~scas_env.core.scenario.Scenario` (or pass
     ``scenario``); unknown keywords raise ``ValueError``. ``fidelity="physics"`` simulates the
     actuator for every test and flight window (the parts grow as in the surrogate fidelity).
-    ``params`` other than the default are calibrated from physics at construction.
+    ``params`` other than the default are calibrated from physics at construction;
+    ``calibration=Calibration(...)`` (:mod:`scas_env.actuator.calibration`: the parts'
+    failure thresholds and lives) and ``surrogate=SurrogateModel(...)``
+    (:mod:`scas_env.actuator.surrogate`: the feature surrogate the world and the monitor use)
+    replace the shipped ones.
     ``mismatch=Mismatch(...)`` (:mod:`scas_env.core.mismatch`) makes the world run other
     growth, scatter or sensing constants than the monitor's filters assume (default: none);
     ``world_surrogate=SurrogateModel(...)`` draws the world's features from another feature

@@ -37,6 +37,12 @@ def make_fleet_setup(
     """The fleet's configuration and its actuators' :class:`~scas_env.core.setup.Setup` from
     an env's keywords, each checked (``fleet_fields``: fields of :class:`FleetConfig`;
     ``obs_mode`` sets the actuators' scenario's: ``"state"`` shows each actuator's truth)."""
+    unread = sorted(set(fleet_fields) & {"mismatch", "world_surrogate"})
+    if unread:
+        raise ValueError(
+            f"{unread} are keywords of the single env (ScasMaintenance-v2); the fleet's world "
+            "is the monitor's model and takes none"
+        )
     if fleet is not None and fleet_fields:
         raise ValueError(
             f"pass either fleet=FleetConfig(...) or its fields, not both: {sorted(fleet_fields)}"
@@ -60,11 +66,18 @@ def make_fleet_setup(
         )
     config = fleet if fleet is not None else FleetConfig.from_dict(fleet_fields)
     base = scenario if scenario is not None else Scenario(**FLEET_SCENARIO)
+    wanted = "state" if obs_mode == "state" else "features+rul"
+    if base.obs_mode not in (Scenario().obs_mode, wanted):
+        raise ValueError(
+            f"scenario.obs_mode = {base.obs_mode!r} is not read by the fleet: its view is set "
+            f"by the env's obs_mode= keyword (one of 'features+rul', 'state', 'dict'; given "
+            f"{obs_mode!r}); leave scenario.obs_mode at its default"
+        )
     # the observation's bounds of ages and test age: the episode's flights
     slots = int(config.episode_days) * int(config.flights_per_mission)
     base = base.replace(
         episode_slots=max(int(base.episode_slots), slots),
-        obs_mode="state" if obs_mode == "state" else "features+rul",
+        obs_mode=wanted,
     )
     params = params if params is not None else ScasParams()
     hours = params.mission.flight_duration_s / 3600.0
@@ -157,13 +170,20 @@ class ScasFleetEnv(gym.Env):
 
     ## Info
 
-    Mission availability (missions flown / asked), aircraft availability (aircraft-days free
-    / aircraft-days), flights, flight hours, cost and cost per FH, in-flight failures per
-    part, background and unscheduled removals, replacements, tests, stock-outs per spare
-    kind, jobs waiting and done, job-days waited, crew utilisation, wasted life, today's
-    terms and each aircraft's share (``aircraft_reward``), the missions missed and assigned
-    today, every actuator's true remaining life (flights of the standard mission), the
-    action mask.
+    The day, missions asked and flown, revenue; mission availability (missions flown /
+    asked), aircraft availability (aircraft-days free / aircraft-days), flights, flight
+    hours, cost and cost per FH, in-flight failures per part, background and unscheduled
+    removals, replacements, tests, stock-outs per spare kind, jobs waiting and done,
+    job-days waited, crew utilisation, wasted life, today's terms and each aircraft's share
+    (``aircraft_reward``), the missions missed and assigned today, every actuator's true
+    remaining life (flights of the standard mission), spares on hand and on order, the
+    crew's books, the action mask. A part replaced after an in-flight failure is counted in
+    ``replacements`` but not priced there: the failure's cost includes it.
+
+    ## Rendering
+
+    ``"ansi"``: a text table of the day (aircraft, jobs, spares); ``"rgb_array"``: the
+    fleet's day drawn (:mod:`scas_env.fleet_dashboard`).
 
     ## Starting State
 
@@ -176,16 +196,36 @@ class ScasFleetEnv(gym.Env):
 
     Truncation after ``episode_days`` days (default 365). No termination. The observation
     counts down to the end (``days_left``): for a learner it is terminal (no value past it).
+    ``spec.max_episode_steps`` is None (the env truncates itself): read
+    ``config.episode_days``.
 
     ## Arguments
 
-    ``gym.make("scas_env/ScasFleet-v0", fleet=FleetConfig(...) or its fields,
-    scenario=Scenario(...), cost_model=CostModel(...), obs_mode=...)``. Files:
-    ``FleetConfig.load("examples/fleet_offshore.toml")``.
+    ``gym.make("scas_env/ScasFleet-v0", **kwargs)``, every keyword optional:
+
+    * ``fleet``: a :class:`~scas_env.core.fleet.config.FleetConfig`, or its fields as
+      keywords (``episode_days=30``; not both); files:
+      ``FleetConfig.load("examples/fleet_offshore.toml")``;
+    * ``scenario``: the actuators' :class:`~scas_env.core.scenario.Scenario` (default
+      ``initial_health="in_service"``); its ``obs_mode`` stays at its default (the view is
+      the keyword below), ``episode_slots`` is raised to the episode's flights;
+    * ``cost_model``: tests, inspections, replacements and failures
+      (:class:`~scas_env.core.costs.CostModel`); ``flight_value_usd`` stays at its default
+      (a flight earns its mission's value);
+    * ``params``, ``calibration``, ``surrogate``: the actuator model, its failure thresholds
+      and its feature surrogate (defaults: the shipped ones);
+    * ``obs_mode``: ``"features+rul"`` (default), ``"state"`` or ``"dict"`` (above);
+    * ``render_mode``: ``None``, ``"ansi"`` (a text table) or ``"rgb_array"`` (the fleet's
+      day drawn).
+
+    The fleet's world is the monitor's model: it takes no ``mismatch`` (single env only).
 
     ## Version History
 
-    * v0: initial release.
+    * v0: initial release (0.2.0). Unreleased: every actuator of an aircraft flies the
+      flight on which one of them fails (only those before it in the row order did);
+      physics-fidelity fleets likewise. Episodes with an in-flight failure differ from that
+      day on.
 
     ## Example
 

@@ -8,6 +8,14 @@ returns a :class:`ScasFleetVectorEnv`: the fleets' actuators are the rows of one
 dict of per-fleet arrays (the KPIs of :class:`~scas_env.fleet_env.ScasFleetEnv`, nested
 dicts kept; per-aircraft entries left out; Gymnasium's ``_key`` masks), and
 :meth:`action_masks` gives each fleet's masks (MaskablePPO's format).
+
+>>> import gymnasium as gym
+>>> import scas_env
+>>> envs = gym.make_vec("scas_env/ScasFleet-v0", num_envs=2,
+...                     vectorization_mode="vector_entry_point", episode_days=5)
+>>> obs, info = envs.reset(seed=0)
+>>> obs.shape == (2, *envs.single_observation_space.shape), envs.action_masks().shape[0]
+(True, 2)
 """
 
 from __future__ import annotations

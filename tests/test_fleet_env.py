@@ -496,6 +496,15 @@ def test_bad_vector_and_agent_actions_are_refused() -> None:
             r"cost_model\.flight_value_usd = 1000\.0 is not read by the fleet",
         ),
         ({"render_mode": "human"}, r"render_mode = 'human' must be None or one of"),
+        (
+            {"scenario": Scenario(obs_mode="state", initial_health="in_service")},
+            r"scenario\.obs_mode = 'state' is not read by the fleet",
+        ),
+        (
+            {"scenario": Scenario(obs_mode="features"), "obs_mode": "state"},
+            r"scenario\.obs_mode = 'features' is not read",
+        ),
+        ({"mismatch": None}, r"\['mismatch'\] are keywords of the single env"),
     ],
 )
 def test_bad_configurations_are_refused_with_a_message(kwargs: dict, match: str) -> None:

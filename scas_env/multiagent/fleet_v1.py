@@ -56,6 +56,7 @@ class FleetParallelEnv(ParallelEnv):
     metadata = {  # noqa: RUF012
         "name": "scas_fleet_v1",
         "render_modes": ScasFleetEnv.metadata["render_modes"],
+        "render_fps": ScasFleetEnv.metadata["render_fps"],
         "is_parallelizable": True,
     }
 
