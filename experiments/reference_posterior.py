@@ -14,7 +14,7 @@ computes the posterior directly. Given ``(a0, theta)`` the crack path is known
 run noise ``sigma`` follow from the surrogate's tables as the world draws them
 (:func:`scas_env.core.flight.features_at`), and each feature's ``z ~ N(0, 1)`` is
 integrated out exactly by the scalar Kalman recursion of
-:func:`prognostics.random_effect.random_effect_update` (the predictive densities multiply to
+:func:`prognostics.measurement.random_effect_update` (the predictive densities multiply to
 the joint Gaussian density with covariance ``diag(sigma^2) + tau tau^T``; tested). The
 posterior is represented by ``2^k`` scrambled Sobol points of the prior (a0 truncated normal,
 log theta normal: the laws the world draws), weighted by their likelihood and by survival

@@ -751,7 +751,7 @@ def value_parser() -> Any:
 
 
 def value_main(argv: Sequence[str] | None = None) -> int:
-    """``scas-value``: :func:`policies.value.run_ladder` and its writer."""
+    """``scas-value``: :func:`policies.value.study.run_ladder` and its writer."""
     parser = value_parser()
     args = parser.parse_args(argv)
     configure_logging(args)

@@ -237,7 +237,7 @@ class AgeingRul:
 
     def tables(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, float]:
         """``(sorted R, prefix sums of w, suffix sums of w, suffix sums of w R, low quantile)``,
-        the state a batched query (e.g. ``scas_env.fleet_kernels.ageing_estimates``) reads."""
+        the state a batched query (a numba kernel ageing many predictions) reads."""
         return self._r, self._cum_w, self._suffix_w, self._suffix_wr, self._low
 
     def mean(self, k: float) -> float:

@@ -143,7 +143,7 @@ def merged(first: Demonstrations, second: Demonstrations) -> Demonstrations:
 
 @dataclass(frozen=True)
 class DaggerPlan:
-    """DAgger rounds for :func:`policies.agents.training.clone_rule`: the rule (``rule_name``,
+    """DAgger rounds for :func:`experiments.epoch_agents.clone.clone_rule`: the rule (``rule_name``,
     ``rule_params``) labels the clone's states on the episodes of each entry of ``rounds``
     (``(env_seed, policy_seed)`` pairs: training seeds, disjoint from the demonstrations'),
     with the clone's ``ks`` and margin ``safety``; after each round ``epochs`` passes over

@@ -61,8 +61,7 @@ def shipped_reference() -> Reference:
 
 def ground_test_reference() -> Reference:
     """Healthy mean and total standard deviation of G1 and G3 (observation units) from the
-    shipped surrogate (the go/no-go band of the env is ``mean +- z * sd`` with one ``z``
-    for both, ``scas_env.observation``)."""
+    shipped surrogate: the band :func:`implicated_spring` measures a failed test against."""
     ref = shipped_reference()
     return {f: ref[f] for f in _GROUND_UNITS}
 

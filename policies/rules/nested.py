@@ -7,7 +7,7 @@ source in use says it is close to failure, plus an optional pre-flight **test in
 and the answer to a failed test. Per row and slot:
 
 1. ``scale = 1 - opportunity`` while grounded (``downtime > 0``), else 1: opportunistic
-   grouping, exactly as :class:`policies.rules.PreventivePolicy`.
+   grouping, exactly as :class:`policies.rules.classic.PreventivePolicy`.
 2. Age backstop: part ``p`` is due when ``age_p > 0`` and ``age_p >= scale * T_p``.
 3. Override (``override=True``): part ``p`` is also due when ``age_p > 0`` and the
    subclass's :meth:`NestedRule._override` says so at that ``scale`` (thresholds relaxed by
@@ -16,7 +16,7 @@ and the answer to a failed test. Per row and slot:
    implicates (:func:`implicated_spring`) is replaced, whoever asked for the test (this
    rule's interval or the scenario's test before every flight).
 5. A test is requested when flying and ``test_age >= test_every`` (``inf``: never).
-6. One action per slot, seals first (:func:`policies.rules.choose`).
+6. One action per slot, seals first (:func:`policies.rules.classic.choose`).
 
 With ``override=False`` and ``test_every=inf`` every step is the age rule's (tested on
 whole episodes), so tuning the family over a box that contains that point can only match

@@ -4,7 +4,7 @@ Every row of a batch carries two filters (spring = 0, seal = 1) in the batch's p
 arrays ``bank = (x, log_theta, w, log_w, aux)``: severity (m), log growth multiplier,
 weights, log-weights and, per feature, each particle's Gaussian belief about the
 installation effect of that feature (``aux[k]`` its mean, ``aux[k + 1]`` its variance;
-Rao-Blackwellised, :func:`prognostics.random_effect.random_effect_update`).
+Rao-Blackwellised, :func:`prognostics.measurement.random_effect_update`).
 
 * :func:`learn_row`: the batch of in-flight learning features (I8 into the spring filter,
   I9 into the seal filter) is learnt from: both filters predicted to the middle of the

@@ -9,7 +9,7 @@ integral of the filter's growth table), and each datum ``y_j`` it learns (an I8 
 or a test's G1, at the filter's age ``t_j``) has the Gaussian likelihood of
 :func:`scas_env.core.filters.effect_likelihood` with the feature's installation effect
 ``z ~ N(0, 1)`` integrated out by the scalar Kalman recursion
-(:func:`prognostics.random_effect.random_effect_update`). The full-history posterior is
+(:func:`prognostics.measurement.random_effect_update`). The full-history posterior is
 
     pi(a0, lambda) ~ p(a0) p(lambda) 1[x(t_s) < a_fail] prod_j p(y_j | y_<j, a0, lambda)
 
@@ -120,7 +120,7 @@ def history_loglik(d: float, lam: float, e: int, bank: tuple, model: tuple,
     at the crack ``D^-1(d - theta (t - t_j))``, the installation effects' beliefs ``z``
     (mean, variance per slot, from N(0, 1)) conditioned datum by datum, as
     :func:`scas_env.core.filters.effect_likelihood` and
-    :func:`prognostics.random_effect.random_effect_update` compute them."""
+    :func:`prognostics.measurement.random_effect_update` compute them."""
     history, count, clock = bank[5][0], bank[5][1], bank[5][2]
     grid, rate, cum = model.rul_tables[0][0], model.rul_tables[0][1], model.rul_tables[0][2]
     critical, noise_scale = model.critical[0], model.noise_scale
