@@ -18,7 +18,12 @@ from policies.benchmark.runner import (
     decision_scores,
     run_episodes,
 )
-from policies.benchmark.stats import prognostics_block, ratio_interval, summarize
+from policies.benchmark.stats import (
+    cluster_ratio_bootstrap,
+    prognostics_block,
+    ratio_interval,
+    summarize,
+)
 from scas_env.core.setup import PARTS, REWARD_TERMS
 
 NAMES = ("spring_rul_mean", "spring_rul_low", "seal_rul_mean", "seal_rul_low", "other")
@@ -185,12 +190,13 @@ def test_block_summary_and_table_from_rows() -> None:
     hits = sum(r[c] for r in rows for c in decision_columns() if c.endswith("alpha_hits"))
     cov = sum(r[c] for r in rows for c in decision_columns() if c.endswith("covered"))
     assert block["n"] == n == 8 and block["alpha"] == 0.2
-    ci = stats.binomtest(int(cov), n).proportion_ci(0.95, method="wilson")
     assert block["coverage"]["mean"] == cov / n
-    assert (block["coverage"]["low"], block["coverage"]["high"]) == (
-        pytest.approx(ci.low),
-        pytest.approx(ci.high),
-    )
+    # intervals resample whole episodes: each episode's own counts, summed by hand
+    for name, stat in (("coverage", "covered"), ("alpha_lambda", "alpha_hits")):
+        per_episode = [sum(r[c] for c in decision_columns() if c.endswith(stat)) for r in rows]
+        n_e = [sum(r[c] for c in decision_columns() if c.endswith("_n")) for r in rows]
+        want = cluster_ratio_bootstrap(per_episode, n_e)
+        assert (block[name]["low"], block[name]["high"]) == (want.low, want.high)
     assert block["alpha_lambda"]["mean"] == hits / n
     assert block["by_event"]["replacement"]["n"] == 2 and block["by_part"]["seal"]["n"] == 3
     no_beliefs = [{**r, **dict.fromkeys(decision_columns(), 0)} for r in rows]

@@ -99,6 +99,7 @@ __all__ = [
     "Interval",
     "best_policy",
     "bootstrap_mean",
+    "cluster_ratio_bootstrap",
     "garwood_interval",
     "garwood_rate",
     "minimum_detectable_difference",
@@ -380,15 +381,68 @@ def ratio_interval(
     return Interval(r, r - half, r + half, int(total))
 
 
+def cluster_ratio_bootstrap(
+    sums: Sequence[float] | np.ndarray,
+    counts: Sequence[float] | np.ndarray,
+    confidence: float = 0.95,
+    *,
+    resamples: int = BOOTSTRAP_RESAMPLES,
+    seed: int = BOOTSTRAP_SEED,
+) -> Interval:
+    """``r = sum(sums) / sum(counts)`` over clusters (episodes) with ``counts > 0``, and the
+    percentile-bootstrap interval resampling whole clusters (``scipy.stats.bootstrap``,
+    ``paired=True``, fixed seed): items of one episode are not taken as independent, and
+    the interval stays within the clusters' own ratios (a rate in [0, 1] keeps its range).
+    ``n`` is the number of items.
+
+    >>> iv = cluster_ratio_bootstrap([1.0, 3.0], [2, 4])
+    >>> iv.mean, iv.n, 0.5 <= iv.low <= iv.high <= 0.75
+    (0.6666666666666666, 6, True)
+    """
+    _confidence(confidence)
+    s, c = np.asarray(sums, dtype=np.float64), np.asarray(counts, dtype=np.float64)
+    if s.shape != c.shape or s.ndim != 1:
+        raise ValueError(f"sums and counts need equal 1-D shapes, got {s.shape} and {c.shape}")
+    if not (np.all(np.isfinite(s)) and np.all(np.isfinite(c)) and np.all(c >= 0)):
+        raise ValueError("sums must be finite and counts finite and >= 0")
+    keep = c > 0
+    s, c = s[keep], c[keep]
+    total = float(c.sum())
+    if total == 0.0:
+        return Interval(math.nan, math.nan, math.nan, 0)
+    r = float(s.sum() / total)
+    if c.size < 2:
+        return Interval(r, math.nan, math.nan, int(total))
+    ratios = s / c
+    if np.all(ratios == ratios[0]):
+        return Interval(r, r, r, int(total))
+
+    def ratio(s: np.ndarray, c: np.ndarray, axis: int = -1) -> np.ndarray:
+        return np.sum(s, axis=axis) / np.sum(c, axis=axis)
+
+    res = stats.bootstrap(
+        (s, c),
+        ratio,
+        paired=True,
+        confidence_level=confidence,
+        n_resamples=resamples,
+        method="percentile",
+        rng=np.random.default_rng(seed),
+    )
+    ci = res.confidence_interval
+    return Interval(r, float(ci.low), float(ci.high), int(total))
+
+
 def prognostics_block(
     rows: Sequence[Mapping[str, Any]], confidence: float = 0.95
 ) -> dict[str, Any] | None:
     """The decision-time scores of one policy's rows (``prog_<event>_<part>_<stat>``
     columns of :func:`policies.benchmark.runner.decision_columns`): predictions ``n``, the
-    mean relative accuracy (:func:`ratio_interval` over episodes), the alpha-lambda hit
-    rate and the coverage of ``[rul_low, inf)`` (:func:`wilson_interval`); overall, per
-    event (``replacement``, ``test``) and per part. None if the rows have no such columns
-    or no scored prediction."""
+    mean relative accuracy, the alpha-lambda hit rate and the coverage of ``[rul_low,
+    inf)``, each a ratio over episodes with :func:`cluster_ratio_bootstrap`'s interval (a
+    policy's predictions within an episode are dependent); overall, per event
+    (``replacement``, ``test``) and per part. None if the rows have no such columns or no
+    scored prediction."""
     groups = [(k, p) for k in DECISION_EVENTS for p in PARTS]
     if not rows or not all(f"prog_{k}_{p}_n" in rows[0] for k, p in groups):
         return None
@@ -403,13 +457,17 @@ def prognostics_block(
         n = int(n_e.sum())
         if n == 0:
             return None
-        hits, covered = int(per_episode("alpha_hits").sum()), int(per_episode("covered").sum())
         return {
             "n": n,
             "episodes": int(np.count_nonzero(n_e)),
-            "relative_accuracy": ratio_interval(per_episode("ra_sum"), n_e, confidence).to_dict(),
-            "alpha_lambda": wilson_interval(hits, n, confidence).to_dict(),
-            "coverage": wilson_interval(covered, n, confidence).to_dict(),
+            **{
+                name: cluster_ratio_bootstrap(per_episode(stat), n_e, confidence).to_dict()
+                for name, stat in (
+                    ("relative_accuracy", "ra_sum"),
+                    ("alpha_lambda", "alpha_hits"),
+                    ("coverage", "covered"),
+                )
+            },
         }
 
     overall = block(groups)
