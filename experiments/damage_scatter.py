@@ -4,9 +4,8 @@
 is not a flight's"): the calibration's scaled-window CV, the CV over whole simulated
 flights (:func:`scas_env.actuator.calibration.whole_flight_scatter`, the calibration's
 seeds) and the closed form of a flight as a sum of independent regime windows
-(:func:`scas_env.actuator.flight_damage.summed_cv`, each Table-1 regime simulated alone in
-``n_windows`` windows of ``window_s``). The command line (docs/findings.md, "Environment";
-about 8 min)::
+(:func:`summed_cv`, each Table-1 regime simulated alone in ``n_windows`` windows of
+``window_s``). The command line (docs/findings.md, "Environment"; about 8 min)::
 
     python -m experiments.damage_scatter --flights 40 --windows 60 --out results/damage_scatter.json
 """
@@ -19,14 +18,45 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+import numpy.typing as npt
 from tqdm.auto import tqdm
 
 from scas_env.actuator.calibration import calibration_for, whole_flight_scatter
-from scas_env.actuator.flight_damage import simulated_flight_damage, summed_cv
+from scas_env.actuator.flight_damage import simulated_flight_damage
 from scas_env.actuator.missions import REGIMES
 from scas_env.actuator.params import ScasParams
 
-__all__ = ["damage_scatter", "main"]
+FloatArray = npt.NDArray[np.float64]
+
+__all__ = ["damage_scatter", "main", "summed_cv"]
+
+
+def summed_cv(means: npt.ArrayLike, variances: npt.ArrayLike, counts: npt.ArrayLike) -> FloatArray:
+    """Coefficient of variation of a sum of independent blocks.
+
+    Block type ``r`` (e.g. a window of one Table-1 regime) has mean ``means[r]`` and
+    variance ``variances[r]`` and occurs ``counts[r]`` times; the sum has mean
+    ``sum_r n_r m_r`` and variance ``sum_r n_r v_r``, so for one block type the CV falls as
+    ``1 / sqrt(n)``. Axis 0 runs over block types; further axes (e.g. crack depths) are
+    kept.
+
+    >>> float(summed_cv([2.0], [1.0], [4.0])[()])
+    0.25
+    """
+    m = np.asarray(means, dtype=np.float64)
+    v = np.asarray(variances, dtype=np.float64)
+    n = np.asarray(counts, dtype=np.float64)
+    if m.shape != v.shape or m.shape[:1] != n.shape:
+        raise ValueError(
+            f"means {m.shape}, variances {v.shape} and counts {n.shape} must share axis 0"
+        )
+    if np.any(v < 0.0) or np.any(n < 0.0):
+        raise ValueError("variances and counts must be >= 0")
+    n = n.reshape(n.shape + (1,) * (m.ndim - 1))
+    total = (n * m).sum(axis=0)
+    if np.any(total <= 0.0):
+        raise ValueError(f"the summed mean {total} must be > 0 to define a CV")
+    return np.sqrt((n * v).sum(axis=0)) / total
 
 
 def damage_scatter(
@@ -77,14 +107,8 @@ def damage_scatter(
 
 def main(argv: Sequence[str] | None = None) -> int:
     """The command line (module docstring): the estimates as JSON, printed and written."""
-    from scas_env.cli_args import (
-        add_params_arg,
-        check_out_file,
-        int_at_least,
-        load_params,
-        make_parser,
-        nonneg_int,
-    )
+    from experiments.cli_common import add_params_arg, int_at_least, load_params
+    from scas_env.cli_args import check_out_file, make_parser, nonneg_int
     from scas_env.utils.atomic_file import write_text_atomic
 
     parser = make_parser("python -m experiments.damage_scatter", __doc__)

@@ -7,8 +7,8 @@ measures, after JIT warm-up and as the best of ``repeats`` timings:
 * the real-time factor of one actuator on one core, ``duration / wall time``, for the
   noise-free kernel run and for a full :func:`simulate` call with noise (noise drawing
   included);
-* the batch throughput on all cores (:func:`simulate_batch`, simulated actuator-seconds
-  per wall-clock second, noise on);
+* the batch throughput on all cores (:func:`experiments.physics_batch.simulate_batch`,
+  simulated actuator-seconds per wall-clock second, noise on);
 * the accuracy against a fine-step reference: the same kernel with ``reference_substeps``
   RK4 substeps per controller step (the digital controller keeps its rate, so only the
   integration error is measured), noise off, same command: max position error (m) and the
@@ -26,8 +26,9 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from experiments.physics_batch import simulate_batch
 from scas_env.actuator.params import ScasParams
-from scas_env.actuator.physics.actuator import ActuatorConfig, simulate, simulate_batch
+from scas_env.actuator.physics.actuator import ActuatorConfig, simulate
 
 STEP_LEVELS_MM = (0.0, 1.0, 0.0, -1.0, 0.0, 2.0, 0.0, -2.0)  # pre-flight-like step cycle
 
@@ -155,11 +156,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     ``--dt``, ``--friction-velocity`` override it)."""
     import numba
 
+    from experiments.cli_common import add_params_arg, load_params
     from scas_env.cli_args import (
         add_logging_args,
-        add_params_arg,
         configure_logging,
-        load_params,
         make_parser,
         positive_float,
         positive_int,

@@ -100,12 +100,12 @@ def preflight_availability(
 def main(argv: Sequence[str] | None = None) -> int:
     """The command line (module docstring): ``preflight.csv`` and ``preflight.json`` in
     ``--out``, the table printed."""
+    from experiments.cli_common import int_at_least
     from scas_env.cli_args import (
         add_logging_args,
         announce_uncached_kernels,
         check_out_dir,
         configure_logging,
-        int_at_least,
         make_parser,
         nonneg_int,
     )

@@ -32,7 +32,6 @@ from prognostics.numba_cache import (
     show_compile_notice,
 )
 from scas_env.actuator.config import FORMATS
-from scas_env.actuator.params import ScasParams
 from scas_env.core.costs import CostModel
 from scas_env.core.mismatch import Mismatch
 from scas_env.core.scenario import Scenario
@@ -46,20 +45,16 @@ __all__ = [
     "Parser",
     "add_env_config_args",
     "add_logging_args",
-    "add_params_arg",
     "agent_scenario",
     "announce_numba_compilation",
     "announce_uncached_kernels",
     "check_out_dir",
     "check_out_file",
-    "check_out_stem",
     "config_file",
     "configure_logging",
     "existing_file",
-    "int_at_least",
     "load_env_config",
     "load_mismatch",
-    "load_params",
     "make_parser",
     "name_list",
     "nonneg_int",
@@ -117,16 +112,6 @@ def positive_int(text: str) -> int:
 def nonneg_int(text: str) -> int:
     """An integer >= 0 (seeds, frequencies where 0 means "never")."""
     return _integer_at_least(text, 0)
-
-
-def int_at_least(lo: int) -> Any:
-    """Type of an integer >= ``lo`` (e.g. grid points per axis >= 2)."""
-
-    def parse(text: str) -> int:
-        return _integer_at_least(text, lo)
-
-    parse.__name__ = f"integer >= {lo}"
-    return parse
 
 
 def positive_float(text: str) -> float:
@@ -205,27 +190,6 @@ def add_env_config_args(parser: argparse.ArgumentParser) -> None:
         help="cost model (CostModel fields, or a [costs] table); replaces a [costs] table of "
         "--scenario. Default: the built-in CostModel()",
     )
-
-
-def add_params_arg(parser: argparse.ArgumentParser) -> None:
-    """``--params FILE``: the actuator design (ScasParams groups, or a [params] table)."""
-    parser.add_argument(
-        "--params",
-        type=config_file,
-        metavar="FILE",
-        help="actuator design (ScasParams groups such as [spring], or a [params] table). "
-        "Default: the built-in ScasParams()",
-    )
-
-
-def load_params(parser: argparse.ArgumentParser, args: argparse.Namespace) -> ScasParams:
-    """The ScasParams of ``--params`` (defaults without it); a bad file is a usage error."""
-    if args.params is None:
-        return ScasParams()
-    try:
-        return ScasParams.load(args.params)
-    except (ValueError, FileNotFoundError) as exc:
-        parser.error(str(exc))
 
 
 #: why a command refuses a case file's table it does not read (docs/configs.md)
@@ -343,16 +307,6 @@ def check_out_file(
         parser.error(f"{option} {path} exists; pass --overwrite to replace it")
     _check_writable(parser, _existing_ancestor(parser, path.parent, option), option)
     return path
-
-
-def check_out_stem(
-    parser: argparse.ArgumentParser, stem: str | Path, suffixes: Sequence[str], overwrite: bool
-) -> Path:
-    """Validate the files ``<stem><suffix>`` of one output (e.g. a campaign's CSV + JSON)."""
-    stem = Path(stem)
-    for suffix in suffixes:
-        check_out_file(parser, stem.with_suffix(suffix), overwrite)
-    return stem
 
 
 def _existing_ancestor(parser: argparse.ArgumentParser, path: Path, option: str = "--out") -> Path:

@@ -15,15 +15,15 @@ import pytest
 from scipy.integrate import solve_ivp
 from scipy.optimize import brentq
 
+from experiments.physics_batch import simulate_batch
 from scas_env.actuator.params import ActuatorParams, ScasParams, SensorParams
 from scas_env.actuator.physics.actuator import (
     ActuatorConfig,
     ActuatorRun,
     initial_state,
     simulate,
-    simulate_batch,
 )
-from scas_env.actuator.physics.fluid import effective_bulk_modulus
+from tests.fluid_reference import effective_bulk_modulus
 
 # Step and friction regularisation recommended for the compiled RK4 (see bench_integrator).
 PARAMS = ScasParams(

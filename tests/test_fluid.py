@@ -9,11 +9,10 @@ from scas_env.actuator.params import ATM_PA
 from scas_env.actuator.physics import actuator_kernels as km
 from scas_env.actuator.physics.fluid import (
     dynamic_viscosity,
-    effective_bulk_modulus,
     effective_bulk_modulus_nb,
     kinematic_viscosity,
-    liquid_bulk_modulus,
 )
+from tests.fluid_reference import effective_bulk_modulus, liquid_bulk_modulus
 
 # ref §1.1 table: E_eff (GPa) for E_l = 1.5 GPa, n = 1.4
 PRESSURES_MPA = (0.2, 1.0, 5.0, 10.0, 20.7)

@@ -19,7 +19,8 @@ from scas_env.actuator.bandwidth import (
 )
 from scas_env.actuator.health import HealthState, actuator_config
 from scas_env.actuator.params import ScasParams
-from scas_env.actuator.physics.fluid import dynamic_viscosity, effective_bulk_modulus
+from scas_env.actuator.physics.fluid import dynamic_viscosity
+from tests.fluid_reference import effective_bulk_modulus
 
 P = ScasParams()
 

@@ -8,21 +8,20 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from experiments.build.mission_types import regime_mix_multipliers
+from experiments.build.mission_types import (
+    mission_flight_damage,
+    mission_flight_profile,
+    ratio_se,
+    regime_mix_multipliers,
+)
 from scas_env.actuator.calibration import default_calibration
 from scas_env.actuator.flight_damage import simulated_flight_damage
-from scas_env.actuator.mission_damage import (
-    MissionDamageTable,
-    default_mission_damage,
-    ratio_se,
-)
+from scas_env.actuator.mission_damage import MissionDamageTable, default_mission_damage
 from scas_env.actuator.mission_types import (
     MISSION_TYPES,
     OFFSHORE_GUSTS,
     STANDARD,
     MissionType,
-    mission_flight_damage,
-    mission_flight_profile,
     mission_type,
 )
 from scas_env.actuator.missions import REGIMES, flight_profile

@@ -5,8 +5,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from experiments.damage_scatter import summed_cv
 from scas_env.actuator.calibration import Calibration, default_calibration, whole_flight_scatter
-from scas_env.actuator.flight_damage import simulated_flight_damage, summed_cv
+from scas_env.actuator.flight_damage import simulated_flight_damage
 from scas_env.actuator.params import ScasParams
 
 P = ScasParams()

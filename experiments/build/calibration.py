@@ -22,13 +22,12 @@ from pathlib import Path
 
 import numpy as np
 
+from experiments.cli_common import add_params_arg, load_params
 from scas_env.actuator.calibration import DATA_FILE, build_calibration, sample_lives
 from scas_env.cli_args import (
     add_logging_args,
-    add_params_arg,
     check_out_file,
     configure_logging,
-    load_params,
     make_parser,
     nonneg_int,
     positive_int,

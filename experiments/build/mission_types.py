@@ -4,10 +4,10 @@
     python -m scas_env.utils.shipped_files                 # then rebuild the manifest
 
 :func:`build_mission_types` simulates whole flights of every mission type
-(:func:`scas_env.actuator.mission_types.mission_flight_damage`: the nominal unit, noise on,
-the whole 1.5 h flight rainflow-counted, no window scaling, as the v2 calibration's
-whole-flight scatter) and divides each type's mean damage per flight by the standard mix's,
-at every depth of the calibration's growth grid. Type ``k`` (its place in
+(:func:`mission_flight_damage`: the nominal unit, noise on, the whole 1.5 h flight
+rainflow-counted, no window scaling, as the v2 calibration's whole-flight scatter) and
+divides each type's mean damage per flight by the standard mix's, at every depth of the
+calibration's growth grid. Type ``k`` (its place in
 :data:`~scas_env.actuator.mission_types.MISSION_TYPES`) flies the children of
 ``SeedSequence(seed, spawn_key=(k,))``, so adding a type leaves the others' flights alone.
 
@@ -25,6 +25,7 @@ import argparse
 import json
 import math
 from collections.abc import Sequence
+from functools import partial
 from pathlib import Path
 from typing import Any
 
@@ -35,16 +36,25 @@ from tqdm.auto import tqdm
 from scas_env.actuator.calibration import calibration_for, params_digest
 from scas_env.actuator.flight_damage import (
     FlightDamage,
+    _simulated_damage,
     crack_increment_m,
     flight_loads_from_run,
     growth_model,
     wear_increment_m,
 )
 from scas_env.actuator.health import actuator_config
-from scas_env.actuator.mission_damage import MissionDamageTable, MissionTypeDamage, ratio_se
-from scas_env.actuator.mission_types import MISSION_TYPES, MissionType, mission_flight_damage
-from scas_env.actuator.missions import REGIMES, link_force_n, regime_profile
-from scas_env.actuator.params import ScasParams
+from scas_env.actuator.mission_damage import MissionDamageTable, MissionTypeDamage
+from scas_env.actuator.mission_types import MISSION_TYPES, MissionType
+from scas_env.actuator.missions import (
+    DEFAULT_CROSSFADE_S,
+    DEFAULT_SEGMENT_S,
+    REGIMES,
+    MissionProfile,
+    _table_flight,
+    link_force_n,
+    regime_profile,
+)
+from scas_env.actuator.params import MissionParams, ScasParams
 from scas_env.actuator.physics.actuator import simulate
 from scas_env.actuator.uncertainty import nominal_unit
 
@@ -58,7 +68,10 @@ __all__ = [
     "build_mission_types",
     "build_parser",
     "main",
+    "mission_flight_damage",
+    "mission_flight_profile",
     "mission_type_flights",
+    "ratio_se",
     "regime_mix_multipliers",
     "summary_rows",
 ]
@@ -72,6 +85,66 @@ def _cv(samples: FloatArray) -> FloatArray:
     return np.divide(
         std, mean, out=np.zeros_like(np.asarray(mean, dtype=np.float64)), where=mean > 0
     )
+
+
+# --- flights of a mission type ----------------------------------------------------------
+def mission_flight_profile(
+    kind: MissionType,
+    mission: MissionParams,
+    rng: np.random.Generator,
+    sample_rate_hz: float,
+    duration_s: float | None = None,
+    *,
+    segment_s: float = DEFAULT_SEGMENT_S,
+    crossfade_s: float = DEFAULT_CROSSFADE_S,
+) -> MissionProfile:
+    """Random in-flight command of mission type ``kind``.
+
+    :func:`~scas_env.actuator.missions.flight_profile`'s construction, the same code (time
+    shares by largest remainder, segments of about ``segment_s`` in a random order,
+    amplitudes N(A, (f A)^2) per segment, phase-continuous oscillators with cross-fades),
+    with the type's occurrences and SCAS amplitudes (:meth:`MissionType.regimes`); so
+    ``standard`` gives ``flight_profile``'s profile bit for bit.
+    """
+    if not isinstance(kind, MissionType):
+        raise ValueError(f"kind must be a MissionType, got {type(kind).__name__}")
+    return _table_flight(
+        kind.regimes(), mission, rng, sample_rate_hz, duration_s, segment_s, crossfade_s
+    )
+
+
+def mission_flight_damage(
+    params: ScasParams,
+    kind: MissionType,
+    depths_m: npt.ArrayLike,
+    rngs: list[np.random.Generator],
+    *,
+    duration_s: float | None = None,
+) -> FlightDamage:
+    """Crack growth and seal wear of one simulated flight of type ``kind`` per generator.
+
+    :func:`~scas_env.actuator.flight_damage.simulated_flight_damage` with the type's
+    command (:func:`mission_flight_profile`): the nominal unit at nominal conditions, noise
+    on, the whole flight simulated (default ``MissionParams.flight_duration_s``) and
+    rainflow-counted with no window-to-flight scaling. ``standard`` gives
+    ``simulated_flight_damage``'s numbers bit for bit.
+    """
+    profile = partial(mission_flight_profile, kind, params.mission)
+    return _simulated_damage(params, depths_m, rngs, duration_s, profile)
+
+
+def ratio_se(ratio: float | FloatArray, cv_num: Any, n_num: int, cv_den: Any, n_den: int) -> Any:
+    """Standard error of ``mean_num / mean_den`` from two independent samples (delta method):
+    ``ratio * sqrt(cv_num^2 / n_num + cv_den^2 / n_den)``.
+
+    >>> round(float(ratio_se(2.0, 0.1, 4, 0.0, 4)), 6)
+    0.1
+    """
+    if n_num < 1 or n_den < 1:
+        raise ValueError(f"sample sizes {n_num}, {n_den} must be >= 1")
+    r = np.asarray(ratio, dtype=np.float64)
+    out = r * np.sqrt(np.asarray(cv_num) ** 2 / n_num + np.asarray(cv_den) ** 2 / n_den)
+    return float(out) if out.ndim == 0 else out
 
 
 def mission_type_flights(
@@ -270,8 +343,9 @@ SHA-256 manifest with python -m scas_env.utils.shipped_files.
 
 def build_parser() -> argparse.ArgumentParser:
     """The command's parser."""
+    from experiments.cli_common import add_params_arg, int_at_least
     from scas_env.actuator.mission_damage import DATA_FILE
-    from scas_env.cli_args import add_params_arg, int_at_least, make_parser, nonneg_int
+    from scas_env.cli_args import make_parser, nonneg_int
 
     parser = make_parser("python -m experiments.build.mission_types", COMMAND_DOC)
     parser.add_argument("--seed", type=nonneg_int, default=DEFAULT_SEED, help="root seed")
@@ -291,7 +365,8 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Build the table, write it to ``--out`` and print its summary rows."""
-    from scas_env.cli_args import check_out_file, load_params
+    from experiments.cli_common import load_params
+    from scas_env.cli_args import check_out_file
 
     parser = build_parser()
     args = parser.parse_args(argv)

@@ -220,15 +220,9 @@ SHIPPED_DIR = Path("scas_env/actuator/data")
 
 def build_parser() -> argparse.ArgumentParser:
     """The command's parser (``--help``: docs/cli.md)."""
+    from experiments.cli_common import add_params_arg, int_at_least
     from scas_env.actuator.surrogate import DATA_FILE
-    from scas_env.cli_args import (
-        add_logging_args,
-        add_params_arg,
-        int_at_least,
-        make_parser,
-        nonneg_int,
-        positive_int,
-    )
+    from scas_env.cli_args import add_logging_args, make_parser, nonneg_int, positive_int
 
     parser = make_parser("python -m experiments.build.surrogate", COMMAND_DOC)
     parser.add_argument("--seed", type=nonneg_int, default=2020, help="root seed")
@@ -265,12 +259,8 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Build the surrogate, write it to ``--out`` and print each feature's extremes."""
-    from scas_env.cli_args import (
-        announce_uncached_kernels,
-        check_out_file,
-        configure_logging,
-        load_params,
-    )
+    from experiments.cli_common import load_params
+    from scas_env.cli_args import announce_uncached_kernels, check_out_file, configure_logging
 
     parser = build_parser()
     args = parser.parse_args(argv)

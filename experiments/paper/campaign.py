@@ -323,10 +323,9 @@ Logic in experiments.paper.campaign; files as in experiments.paper.campaign_tabl
 
 def build_parser() -> argparse.ArgumentParser:
     """The command's parser (``--help``: docs/cli.md)."""
+    from experiments.cli_common import add_params_arg, int_at_least
     from scas_env.cli_args import (
         add_logging_args,
-        add_params_arg,
-        int_at_least,
         make_parser,
         nonneg_int,
         positive_float,
@@ -376,12 +375,8 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Run a campaign and save its table (``<out>.csv`` + ``<out>.json``)."""
-    from scas_env.cli_args import (
-        announce_uncached_kernels,
-        check_out_stem,
-        configure_logging,
-        load_params,
-    )
+    from experiments.cli_common import check_out_stem, load_params
+    from scas_env.cli_args import announce_uncached_kernels, configure_logging
 
     parser = build_parser()
     args = parser.parse_args(argv)

@@ -209,13 +209,8 @@ See experiments.paper.demo.run_demo. Example:
 
 def build_parser() -> argparse.ArgumentParser:
     """The command's parser (``--help``: docs/cli.md)."""
-    from scas_env.cli_args import (
-        add_logging_args,
-        add_params_arg,
-        make_parser,
-        nonneg_int,
-        positive_float,
-    )
+    from experiments.cli_common import add_params_arg
+    from scas_env.cli_args import add_logging_args, make_parser, nonneg_int, positive_float
 
     parser = make_parser("python -m experiments.paper.demo", COMMAND_DOC)
     parser.add_argument("--out", type=Path, required=True, help="output folder")
@@ -231,7 +226,8 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the demo into ``--out`` and print its table."""
-    from scas_env.cli_args import check_out_dir, configure_logging, load_params
+    from experiments.cli_common import load_params
+    from scas_env.cli_args import check_out_dir, configure_logging
 
     parser = build_parser()
     args = parser.parse_args(argv)

@@ -314,7 +314,8 @@ See experiments.paper.figure_data.paper_figures and figures.save_paper_figures. 
 
 def build_parser() -> argparse.ArgumentParser:
     """The command's parser (``--help``: docs/cli.md)."""
-    from scas_env.cli_args import add_logging_args, add_params_arg, make_parser, nonneg_int
+    from experiments.cli_common import add_params_arg
+    from scas_env.cli_args import add_logging_args, make_parser, nonneg_int
 
     parser = make_parser("python -m experiments.paper.figures", COMMAND_DOC)
     parser.add_argument("--out", type=Path, required=True, help="output folder")
@@ -329,7 +330,8 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Compute the figures' data and write one PNG per figure and ``figures.json``."""
-    from scas_env.cli_args import check_out_dir, configure_logging, load_params
+    from experiments.cli_common import load_params
+    from scas_env.cli_args import check_out_dir, configure_logging
 
     parser = build_parser()
     args = parser.parse_args(argv)

@@ -18,14 +18,12 @@ import time
 from collections.abc import Sequence
 from pathlib import Path
 
+from experiments.cli_common import add_params_arg, int_at_least, load_params
 from scas_env.cli_args import (
     add_logging_args,
-    add_params_arg,
     announce_uncached_kernels,
     check_out_dir,
     configure_logging,
-    int_at_least,
-    load_params,
     make_parser,
     nonneg_int,
     positive_int,

@@ -283,7 +283,8 @@ Paths as the reproduction's prognosis paths, no particle filter
 
 def build_parser() -> argparse.ArgumentParser:
     """The command's parser."""
-    from scas_env.cli_args import add_params_arg, int_at_least, make_parser, nonneg_int
+    from experiments.cli_common import add_params_arg, int_at_least
+    from scas_env.cli_args import make_parser, nonneg_int
 
     parser = make_parser("python -m experiments.paper.reproduction_detection", COMMAND_DOC)
     parser.add_argument("--campaign", type=Path, required=True, help="saved campaign stem")
@@ -310,8 +311,9 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Write the detection result to ``--out`` (JSON) and print it beside the targets."""
+    from experiments.cli_common import load_params
     from experiments.paper.campaign_table import load
-    from scas_env.cli_args import check_out_file, load_params
+    from scas_env.cli_args import check_out_file
     from scas_env.utils.atomic_file import write_text_atomic
 
     parser = build_parser()

@@ -341,31 +341,3 @@ def _simulated_damage(
         crack[k] = [crack_increment_m(params, unit, model, a, loads) for a in depths]
         wear[k] = wear_increment_m(params, unit, loads)
     return FlightDamage(depths, crack, wear, duration)
-
-
-def summed_cv(means: npt.ArrayLike, variances: npt.ArrayLike, counts: npt.ArrayLike) -> FloatArray:
-    """Coefficient of variation of a sum of independent blocks.
-
-    Block type ``r`` (e.g. a window of one Table-1 regime) has mean ``means[r]`` and
-    variance ``variances[r]`` and occurs ``counts[r]`` times; the sum has mean
-    ``sum_r n_r m_r`` and variance ``sum_r n_r v_r``, so for one block type the CV falls as
-    ``1 / sqrt(n)``. Axis 0 runs over block types; further axes (e.g. crack depths) are
-    kept.
-
-    >>> float(summed_cv([2.0], [1.0], [4.0])[()])
-    0.25
-    """
-    m = np.asarray(means, dtype=np.float64)
-    v = np.asarray(variances, dtype=np.float64)
-    n = np.asarray(counts, dtype=np.float64)
-    if m.shape != v.shape or m.shape[:1] != n.shape:
-        raise ValueError(
-            f"means {m.shape}, variances {v.shape} and counts {n.shape} must share axis 0"
-        )
-    if np.any(v < 0.0) or np.any(n < 0.0):
-        raise ValueError("variances and counts must be >= 0")
-    n = n.reshape(n.shape + (1,) * (m.ndim - 1))
-    total = (n * m).sum(axis=0)
-    if np.any(total <= 0.0):
-        raise ValueError(f"the summed mean {total} must be > 0 to define a CV")
-    return np.sqrt((n * v).sum(axis=0)) / total

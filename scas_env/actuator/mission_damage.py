@@ -284,24 +284,9 @@ def default_mission_damage() -> MissionDamageTable:
     return table
 
 
-def ratio_se(ratio: float | FloatArray, cv_num: Any, n_num: int, cv_den: Any, n_den: int) -> Any:
-    """Standard error of ``mean_num / mean_den`` from two independent samples (delta method):
-    ``ratio * sqrt(cv_num^2 / n_num + cv_den^2 / n_den)``.
-
-    >>> round(float(ratio_se(2.0, 0.1, 4, 0.0, 4)), 6)
-    0.1
-    """
-    if n_num < 1 or n_den < 1:
-        raise ValueError(f"sample sizes {n_num}, {n_den} must be >= 1")
-    r = np.asarray(ratio, dtype=np.float64)
-    out = r * np.sqrt(np.asarray(cv_num) ** 2 / n_num + np.asarray(cv_den) ** 2 / n_den)
-    return float(out) if out.ndim == 0 else out
-
-
 __all__ = [
     "DATA_FILE",
     "MissionDamageTable",
     "MissionTypeDamage",
     "default_mission_damage",
-    "ratio_se",
 ]

@@ -1,4 +1,5 @@
-"""Mission types: Table-1 regime mixes that differ in severity, and their simulated flights.
+"""Mission types: Table-1 regime mixes that differ in severity (their simulated flights and
+damage: :mod:`experiments.build.mission_types`).
 
 A mission type re-weights the four in-flight regimes of [DJS20] Table 1
 (:data:`~scas_env.actuator.missions.REGIMES`) and may scale a regime's SCAS command
@@ -65,21 +66,11 @@ from __future__ import annotations
 import math
 import re
 from dataclasses import dataclass, replace
-from functools import partial
 
 import numpy as np
 import numpy.typing as npt
 
-from scas_env.actuator.flight_damage import FlightDamage, _simulated_damage
-from scas_env.actuator.missions import (
-    DEFAULT_CROSSFADE_S,
-    DEFAULT_SEGMENT_S,
-    REGIMES,
-    MissionProfile,
-    Regime,
-    _table_flight,
-)
-from scas_env.actuator.params import MissionParams, ScasParams
+from scas_env.actuator.missions import REGIMES, Regime
 
 FloatArray = npt.NDArray[np.float64]
 N_REGIMES = len(REGIMES)
@@ -198,49 +189,3 @@ def mission_type(name: str) -> MissionType:
     if name not in MISSION_TYPES:
         raise ValueError(f"mission type {name!r} is unknown; allowed: {sorted(MISSION_TYPES)}")
     return MISSION_TYPES[name]
-
-
-# ------------------------------------------------------------------------------ flights
-def mission_flight_profile(
-    kind: MissionType,
-    mission: MissionParams,
-    rng: np.random.Generator,
-    sample_rate_hz: float,
-    duration_s: float | None = None,
-    *,
-    segment_s: float = DEFAULT_SEGMENT_S,
-    crossfade_s: float = DEFAULT_CROSSFADE_S,
-) -> MissionProfile:
-    """Random in-flight command of mission type ``kind``.
-
-    :func:`~scas_env.actuator.missions.flight_profile`'s construction, the same code (time
-    shares by largest remainder, segments of about ``segment_s`` in a random order,
-    amplitudes N(A, (f A)^2) per segment, phase-continuous oscillators with cross-fades),
-    with the type's occurrences and SCAS amplitudes (:meth:`MissionType.regimes`); so
-    ``standard`` gives ``flight_profile``'s profile bit for bit.
-    """
-    if not isinstance(kind, MissionType):
-        raise ValueError(f"kind must be a MissionType, got {type(kind).__name__}")
-    return _table_flight(
-        kind.regimes(), mission, rng, sample_rate_hz, duration_s, segment_s, crossfade_s
-    )
-
-
-def mission_flight_damage(
-    params: ScasParams,
-    kind: MissionType,
-    depths_m: npt.ArrayLike,
-    rngs: list[np.random.Generator],
-    *,
-    duration_s: float | None = None,
-) -> FlightDamage:
-    """Crack growth and seal wear of one simulated flight of type ``kind`` per generator.
-
-    :func:`~scas_env.actuator.flight_damage.simulated_flight_damage` with the type's
-    command (:func:`mission_flight_profile`): the nominal unit at nominal conditions, noise
-    on, the whole flight simulated (default ``MissionParams.flight_duration_s``) and
-    rainflow-counted with no window-to-flight scaling. ``standard`` gives
-    ``simulated_flight_damage``'s numbers bit for bit.
-    """
-    profile = partial(mission_flight_profile, kind, params.mission)
-    return _simulated_damage(params, depths_m, rngs, duration_s, profile)

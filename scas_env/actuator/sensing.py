@@ -92,8 +92,8 @@ def flight_window(
     The window is drawn from ``rng`` (:func:`draw_window`) unless ``window`` is given (a
     window drawn earlier, with its baseline: the physics env's window library).
     """
-    # In turn, not as a two-run batch: measured here, simulate_batch of the two runs took
-    # 22 ms against 12 + 9 ms in turn (two vCPUs gain nothing on a 20 s window).
+    # In turn, not as a two-run batch (experiments.physics_batch): measured here, the two runs
+    # took 22 ms as a batch against 12 + 9 ms in turn (two vCPUs gain nothing on a 20 s window).
     if window is None:
         window = draw_window(params, rng, window_s)
     profile, base = window.profile, window.baseline

@@ -77,12 +77,8 @@ True
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
-from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, fields
-from itertools import repeat
 
-import numba
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.optimize import brentq
@@ -94,7 +90,6 @@ from scas_env.actuator.physics.seal import laminar_leakage_coeff_m3_s_pa
 
 SUPPLY_NOISE_BANDWIDTH_HZ = 20.0  # Hz, corner of the supply fluctuation low-pass [B]
 RK4_STABILITY_LIMIT = 2.78  # |lambda| dt bound of classic RK4 on the real axis (2.785)
-BATCH_CHUNK_RUNS = 16  # runs whose noise is held in memory at once by simulate_batch
 
 _POSITIVE_FIELDS = (
     "area_m2",
@@ -608,120 +603,3 @@ def simulate(
     out, work, status = km.run_single(config.to_array(), cmd, link, state0, w[0], w[1], w[2])
     _raise_status(status)
     return _to_run(cmd, out, work, config.sample_rate_hz)
-
-
-def simulate_batch(
-    configs: Sequence[ActuatorConfig],
-    commands: ArrayLike,
-    *,
-    rngs: Sequence[np.random.Generator | np.random.SeedSequence | None] | None,
-    link_forces_n: ArrayLike | None = None,
-    noise: bool | Sequence[bool] = True,
-    x0: float = 0.0,
-) -> list[ActuatorRun]:
-    """Simulate many runs in parallel (numba ``prange`` over runs, all cores).
-
-    Bit-identical to ``[simulate(c, cmd, rng=g, noise=flag, ...) for ...]`` with the same
-    per-run Generators: run r draws its noise from ``rngs[r]`` only (a SeedSequence is turned
-    into ``np.random.default_rng(seq)``). ``noise`` is one flag for all runs or one per run
-    (a noise-free run integrates zero noise sequences, which is exactly the noise-free model;
-    its ``rngs`` entry may be None). ``commands`` is ``(n_runs, n)`` or one ``(n,)`` command
-    for every run; ``link_forces_n`` likewise or None. All configs must share ``dt_s``,
-    ``substeps`` and ``sample_rate_hz``. Noise is drawn ``BATCH_CHUNK_RUNS`` runs at a time
-    to bound memory.
-    """
-    configs = list(configs)
-    if not configs or not all(isinstance(c, ActuatorConfig) for c in configs):
-        raise ValueError("configs must be a non-empty sequence of ActuatorConfig")
-    n_runs = len(configs)
-    base = configs[0]
-    for c in configs:
-        if (c.dt_s, c.sample_rate_hz, c.substeps) != (
-            base.dt_s,
-            base.sample_rate_hz,
-            base.substeps,
-        ):
-            raise ValueError("all configs must share dt_s, sample_rate_hz and substeps")
-    cmds = _batch_rows(commands, n_runs, "commands")
-    cmds = np.stack(
-        [
-            _check_command(c, row, f"commands[{r}]")
-            for r, (c, row) in enumerate(zip(configs, cmds, strict=True))
-        ]
-    )
-    n = cmds.shape[1]
-    if link_forces_n is None:
-        links = np.zeros((n_runs, 0))
-    else:
-        links = _batch_rows(link_forces_n, n_runs, "link_forces_n")
-        links = np.stack(
-            [_check_link(row, n, f"link_forces_n[{r}]") for r, row in enumerate(links)]
-        )
-    flags = [bool(noise)] * n_runs if isinstance(noise, bool) else [bool(f) for f in noise]
-    if len(flags) != n_runs:
-        raise ValueError(f"noise must be a bool or {n_runs} flags, got {len(flags)}")
-    gens = _generators(rngs, n_runs, flags) if any(flags) else None
-    prm = np.stack([c.to_array() for c in configs])
-    state0 = np.stack(
-        [
-            initial_state(c, x0, float(cmds[r, 0]), float(links[r, 0]) if links.shape[1] else 0.0)
-            for r, c in enumerate(configs)
-        ]
-    )
-    runs: list[ActuatorRun] = []
-    for lo in range(0, n_runs, BATCH_CHUNK_RUNS):
-        hi = min(lo + BATCH_CHUNK_RUNS, n_runs)
-        w = np.zeros((3, hi - lo, 0))
-        if gens is not None:
-            w = np.zeros((3, hi - lo, n * base.steps_per_sample))
-            noisy = [r for r in range(lo, hi) if flags[r]]
-            # numpy releases the GIL while filling: draw the runs' noise on all cores
-            with ThreadPoolExecutor(max_workers=numba.get_num_threads()) as pool:
-                outs = [w[:, r - lo] for r in noisy]
-                list(
-                    pool.map(
-                        draw_noise,
-                        [configs[r] for r in noisy],
-                        repeat(n),
-                        [gens[r] for r in noisy],
-                        outs,
-                    )
-                )
-        out, work, status = km.run_batch(
-            prm[lo:hi], cmds[lo:hi], links[lo:hi], state0[lo:hi], w[0], w[1], w[2]
-        )
-        for r in range(hi - lo):
-            _raise_status(int(status[r]), lo + r)
-            runs.append(_to_run(cmds[lo + r], out[r], work[r], base.sample_rate_hz))
-    return runs
-
-
-def _batch_rows(values: ArrayLike, n_runs: int, name: str) -> NDArray:
-    arr = np.asarray(values, dtype=np.float64)
-    if arr.ndim == 1:
-        return np.broadcast_to(arr, (n_runs, arr.size))
-    if arr.ndim != 2 or arr.shape[0] != n_runs:
-        raise ValueError(f"{name} must have shape (n,) or ({n_runs}, n), got {arr.shape}")
-    return arr
-
-
-def _generators(
-    rngs: Sequence[np.random.Generator | np.random.SeedSequence | None] | None,
-    n_runs: int,
-    flags: Sequence[bool],
-) -> list[np.random.Generator | None]:
-    if rngs is None or len(rngs) != n_runs:
-        raise ValueError(
-            f"rngs must be a sequence of {n_runs} Generators or SeedSequences when noise=True"
-        )
-    gens: list[np.random.Generator | None] = []
-    for r, g in enumerate(rngs):
-        if not flags[r]:
-            gens.append(None)
-        elif isinstance(g, np.random.SeedSequence):
-            gens.append(np.random.default_rng(g))
-        elif isinstance(g, np.random.Generator):
-            gens.append(g)
-        else:
-            raise ValueError(f"rngs[{r}] = {g!r} is not a Generator or SeedSequence")
-    return gens

@@ -1,4 +1,4 @@
-"""Compiled (numba) kernels of the SCAS actuator model: right-hand side, RK4 loop, batch.
+"""Compiled (numba) kernels of the SCAS actuator model: right-hand side, RK4 loop.
 
 The equations are documented in :mod:`scas_env.actuator.physics.actuator`; this module holds the
 flat parameter layout (the ``I_*`` indices below, the only place it is defined), the
@@ -34,7 +34,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit, prange
+from numba import njit
 from numpy.typing import NDArray
 
 from scas_env.actuator.physics.fluid import ABS_PRESSURE_FLOOR_PA, effective_bulk_modulus_nb
@@ -395,31 +395,4 @@ def run_single(
     """One run: returns (``out[channel, sample]``, friction work J, status)."""
     out = np.empty((N_CHANNELS, command.shape[0]))
     work, status = _run_one(prm, command, link, state0, w_current, w_lvdt, w_supply, out)
-    return out, work, status
-
-
-@njit(cache=True, parallel=True)
-def run_batch(
-    prm: NDArray[np.float64],
-    command: NDArray[np.float64],
-    link: NDArray[np.float64],
-    state0: NDArray[np.float64],
-    w_current: NDArray[np.float64],
-    w_lvdt: NDArray[np.float64],
-    w_supply: NDArray[np.float64],
-) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.int64]]:
-    """Many runs in parallel (``prange``): row r of every 2-D input is run r.
-
-    Shapes: ``prm (R, N_PARAMS)``, ``command (R, n)``, ``link (R, n)`` or ``(R, 0)``,
-    ``state0 (R, 7)``, ``w_* (R, n_steps)`` or ``(R, 0)``. Returns ``out (R, N_CHANNELS, n)``,
-    friction work ``(R,)`` and status ``(R,)``.
-    """
-    n_runs = prm.shape[0]
-    out = np.empty((n_runs, N_CHANNELS, command.shape[1]))
-    work = np.empty(n_runs)
-    status = np.empty(n_runs, dtype=np.int64)
-    for r in prange(n_runs):
-        work[r], status[r] = _run_one(
-            prm[r], command[r], link[r], state0[r], w_current[r], w_lvdt[r], w_supply[r], out[r]
-        )
     return out, work, status

@@ -1,0 +1,57 @@
+"""Command-line pieces only the lab commands of ``experiments/`` use: an integer type with a
+lower bound, the ``--params`` option (an actuator design) and a check of the files of one
+output stem. The rest is :mod:`scas_env.cli_args`.
+"""
+
+from __future__ import annotations
+
+import argparse
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+from scas_env.actuator.params import ScasParams
+from scas_env.cli_args import _integer_at_least, check_out_file, config_file
+
+__all__ = ["add_params_arg", "check_out_stem", "int_at_least", "load_params"]
+
+
+def int_at_least(lo: int) -> Any:
+    """Type of an integer >= ``lo`` (e.g. grid points per axis >= 2)."""
+
+    def parse(text: str) -> int:
+        return _integer_at_least(text, lo)
+
+    parse.__name__ = f"integer >= {lo}"
+    return parse
+
+
+def add_params_arg(parser: argparse.ArgumentParser) -> None:
+    """``--params FILE``: the actuator design (ScasParams groups, or a [params] table)."""
+    parser.add_argument(
+        "--params",
+        type=config_file,
+        metavar="FILE",
+        help="actuator design (ScasParams groups such as [spring], or a [params] table). "
+        "Default: the built-in ScasParams()",
+    )
+
+
+def load_params(parser: argparse.ArgumentParser, args: argparse.Namespace) -> ScasParams:
+    """The ScasParams of ``--params`` (defaults without it); a bad file is a usage error."""
+    if args.params is None:
+        return ScasParams()
+    try:
+        return ScasParams.load(args.params)
+    except (ValueError, FileNotFoundError) as exc:
+        parser.error(str(exc))
+
+
+def check_out_stem(
+    parser: argparse.ArgumentParser, stem: str | Path, suffixes: Sequence[str], overwrite: bool
+) -> Path:
+    """Validate the files ``<stem><suffix>`` of one output (e.g. a campaign's CSV + JSON)."""
+    stem = Path(stem)
+    for suffix in suffixes:
+        check_out_file(parser, stem.with_suffix(suffix), overwrite)
+    return stem
