@@ -42,9 +42,6 @@ ENV_ID_EPOCHS = "scas_env/ScasMaintenanceEpochs-v2"
 #: a fleet of helicopters with SCAS actuators, one crew, spares, day by day
 #: (``scas_env.fleet_env.ScasFleetEnv``)
 ENV_ID_FLEET = "scas_env/ScasFleet-v0"
-#: the decision-epoch env's previous name, kept for one release (Gymnasium then warns that
-#: it is out of date and names ``ENV_ID_EPOCHS``)
-_ENV_ID_EPOCHS_OLD = "scas_env/ScasMaintenanceEpochs-v1"
 
 # Episode length is the scenario's ``episode_slots`` (2000 by default): the env truncates
 # itself, so no TimeLimit wrapper is added.
@@ -54,13 +51,12 @@ if ENV_ID not in registry:
         entry_point="scas_env.env:ScasMaintenanceEnv",
         vector_entry_point="scas_env.vector_env:make_vector_env",
     )
-for _id in (ENV_ID_EPOCHS, _ENV_ID_EPOCHS_OLD):
-    if _id not in registry:
-        register(
-            id=_id,
-            entry_point="scas_env.decision_epochs:make_decision_epoch_env",
-            vector_entry_point="scas_env.decision_epochs_vector:make_decision_epochs_vector_env",
-        )
+if ENV_ID_EPOCHS not in registry:
+    register(
+        id=ENV_ID_EPOCHS,
+        entry_point="scas_env.decision_epochs:make_decision_epoch_env",
+        vector_entry_point="scas_env.decision_epochs_vector:make_decision_epochs_vector_env",
+    )
 if ENV_ID_FLEET not in registry:
     register(
         id=ENV_ID_FLEET,

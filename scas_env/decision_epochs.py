@@ -76,6 +76,18 @@ Johannink et al. 2019, "Residual Reinforcement Learning for Robot Control"). The
 must be stateless (its action a function of the current observation), as the project's
 rules are; its actions must be per-flight actions (0..3).
 
+## Starting state, episode end, arguments
+
+The per-flight env's reset (``flights_left = episode_slots``); truncation at
+``flights_left = 0``, never termination (``spec.max_episode_steps`` is None).
+``gym.make("scas_env/ScasMaintenanceEpochs-v2", ks=..., gamma=..., delegate=..., **kw)``:
+``kw`` are the per-flight env's keywords (``Scenario`` fields, ``cost_model``, ...).
+
+## Version History
+
+* Epochs-v2: over ``ScasMaintenance-v2`` (0.2.0; the name says the version it wraps).
+  Epochs-v0 (over v0) and the name Epochs-v1 are retired.
+
 >>> import gymnasium as gym
 >>> import scas_env
 >>> env = gym.make("scas_env/ScasMaintenanceEpochs-v2", episode_slots=100)
