@@ -30,7 +30,7 @@ $(STAMP): pyproject.toml
 	$(call install_torch,$(PY) -m pip)
 	$(PY) -m pip install --disable-pip-version-check -q -e ".[dev,ray]"
 	touch $(STAMP)
-	@echo "installed; the first run compiles the numba kernels once (~30 s, announced)"
+	@echo "installed; the first run compiles the numba kernels once (1-2 min, announced)"
 
 install: $(STAMP)
 

@@ -92,7 +92,7 @@ def save_gif(
     numbers = gif.with_suffix(".json")
     for p in (gif, numbers):
         if p.exists() and not overwrite:
-            raise FileExistsError(f"{p} exists; pass overwrite=True to replace it")
+            raise FileExistsError(f"{p} exists; pass overwrite=True (--overwrite) to replace it")
     if not (0.0 < fps <= 50.0) or not (0.0 < scale <= 1.0):
         raise ValueError(f"fps = {fps} must be in (0, 50] and scale = {scale} in (0, 1]")
     images = [Image.fromarray(f) for f in episode.frames]

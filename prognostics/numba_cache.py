@@ -142,7 +142,7 @@ def uses_project_stamp(dispatcher: CPUDispatcher) -> bool:
 
 #: what a process logs (once, at WARNING) when numba first compiles a kernel in it
 COMPILE_NOTICE = (
-    "compiling numba kernels (first run only, a minute or less; later runs load them from "
+    "compiling numba kernels (first run only, a minute or two; later runs load them from "
     "numba's cache)"
 )
 _NOTICE = {"listener": False, "shown": False}

@@ -1,5 +1,5 @@
 """Resample-move rejuvenation of the spring filter (``Scenario.rejuvenation``,
-:mod:`scas_env.core.rejuvenation`, docs/beliefs.md "Resample-move rejuvenation").
+:mod:`scas_env.core.rejuvenation`, docs/beliefs.md "The resample-move option").
 
 Checked against independent computations: the history's log-likelihood is the joint Gaussian
 density of each feature's data with its installation effect integrated out (matrix

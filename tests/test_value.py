@@ -91,6 +91,22 @@ def test_ladder_outputs_and_statistics(quick, tmp_path):
     assert sorted(verify_results_folder(tmp_path)) == sorted(p.name for p in paths.values())
 
 
+def test_the_report_says_what_it_could_not_compute(quick) -> None:
+    """A ladder without a break-even (no crossing: NaN) says so in words, and one noisy
+    oracle alone gives no monotonicity section (nothing to pair)."""
+    from dataclasses import replace
+
+    from policies.value.study import markdown_report
+
+    s = quick.summary
+    crossing = markdown_report(quick)
+    assert "Monotonicity control" in crossing and ": nan" not in crossing
+    none = replace(quick, summary={**s, "break_even_sigma": math.nan, "monotone_steps": []})
+    text = markdown_report(none)
+    assert "Break-even sigma (noisy oracle = age rule): none within the sigmas run" in text
+    assert "Monotonicity control" not in text and "): nan" not in text
+
+
 def test_summary_needs_paired_episodes():
     rows = [{"arm": "age", "episode": 0, "reward": 1.0}, {"arm": "x", "episode": 1, "reward": 2.0}]
     with pytest.raises(ValueError, match="same episodes"):

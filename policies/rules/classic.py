@@ -40,7 +40,8 @@ from policies.base import (
 )
 from policies.rules.healthy_band import implicated_spring
 
-#: Tuned defaults (policies.value.tuning; docs/value_ladder.md: family ``age`` and ``detection``).
+#: Defaults: points tuned on the v0 scenario (policies.value.tuning; docs/value_ladder.md,
+#: families ``age`` and ``detection``); v2's tuned points: docs/value_v2/ladder.json.
 PREVENTIVE_DEFAULTS: dict[str, float] = {
     "spring_age": 691.6326,
     "seal_age": 526.2141,

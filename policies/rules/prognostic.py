@@ -34,9 +34,10 @@ __all__ = [
     "RulRiskPolicy",
 ]
 
-#: Defaults of the filter rule: the tuned point of the family with the override forced on
-#: (docs/value.md, "search sensitivity"; the family with the override free prefers it off,
-#: i.e. an age rule). Age backstop and test interval, then the override's thresholds.
+#: Defaults of the filter rule: the point of the family with the override forced on, tuned
+#: on the v0 scenario (docs/findings.md, "Value of prognostics"; the family with the override
+#: free prefers it off there, i.e. an age rule). Age backstop and test interval, then the
+#: override's thresholds.
 RUL_RISK_AGE_DEFAULTS: dict[str, float] = {
     "spring_age": 2133.805,
     "seal_age": 1354.313,

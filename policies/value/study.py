@@ -309,7 +309,10 @@ def markdown_report(result: LadderResult) -> str:
             f"{fl['mean']:.3f} [{fl['low']:.3f}, {fl['high']:.3f}] |"
         )
     if "break_even_sigma" in s:
-        lines += ["", f"Break-even sigma (noisy oracle = age rule): {s['break_even_sigma']:.3f}"]
+        sigma = s["break_even_sigma"]
+        found = f"{sigma:.3f}" if math.isfinite(sigma) else "none within the sigmas run"
+        lines += ["", f"Break-even sigma (noisy oracle = age rule): {found}"]
+    if s.get("monotone_steps"):
         lines += ["", "Monotonicity control (paired, next sigma minus previous, USD/episode):", ""]
         for st in s["monotone_steps"]:
             lines.append(
