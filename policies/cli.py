@@ -428,8 +428,8 @@ def _tuned_specs(parser: Any, path: Path, *, fleet: bool) -> list[Any]:
 def _fleet_config(parser: Any, args: Any) -> Any:
     """The FleetConfig of ``--scenario``'s ``[fleet]`` table, the default fleet for
     ``--fleet``, else None (the single actuator)."""
-    from scas_env.actuator.config import read_mapping
     from scas_env.core.fleet.config import FleetConfig
+    from scas_env.utils.config_files import read_mapping
 
     has_table = args.scenario is not None and "fleet" in read_mapping(args.scenario)
     if not (has_table or args.fleet):
@@ -444,8 +444,9 @@ def _fleet_scenario(parser: Any, args: Any) -> Scenario:
     """The actuators' Scenario of a fleet: ScasFleet-v0's defaults (parts in service), then
     the ``--scenario`` file's ``[scenario]`` table (or its top-level fields), then
     ``--fidelity`` where the command has it."""
-    from scas_env.actuator.config import FILE_SECTIONS, read_mapping
+    from scas_env.actuator.config import FILE_SECTIONS
     from scas_env.fleet_env import FLEET_SCENARIO
+    from scas_env.utils.config_files import read_mapping
 
     data = read_mapping(args.scenario) if args.scenario else {}
     tables = any(k in FILE_SECTIONS for k in data)  # a case file, else one group's fields

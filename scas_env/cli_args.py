@@ -31,13 +31,13 @@ from prognostics.numba_cache import (
     announce_compilation,
     show_compile_notice,
 )
-from scas_env.actuator.config import FORMATS
 from scas_env.core.costs import CostModel
 from scas_env.core.mismatch import Mismatch
 from scas_env.core.scenario import Scenario
+from scas_env.utils.config_files import FORMATS
 
 log = logging.getLogger(__name__)
-#: Logged once per process when numba compiles (instead of sitting silent for ~30 s).
+#: Logged once per process when numba compiles (instead of sitting silent for a minute or two).
 
 __all__ = [
     "COMPILE_NOTICE",
@@ -219,7 +219,8 @@ def load_env_config(
     it with :func:`load_mismatch`). A bad file is a usage error naming the file, the table and
     the field.
     """
-    from scas_env.actuator.config import FILE_SECTIONS, read_mapping
+    from scas_env.actuator.config import FILE_SECTIONS
+    from scas_env.utils.config_files import read_mapping
 
     scenario, costs = Scenario(), CostModel()
     reads = {"fleet": fleet, "mismatch": mismatch, "params": False}
@@ -253,7 +254,7 @@ def load_env_config(
 def load_mismatch(parser: argparse.ArgumentParser, args: argparse.Namespace) -> Mismatch | None:
     """The ``[mismatch]`` table of ``--scenario`` (None without one): the world's departure
     from the monitor's model; a bad table is a usage error naming the file and the field."""
-    from scas_env.actuator.config import read_mapping
+    from scas_env.utils.config_files import read_mapping
 
     try:
         if args.scenario is None or "mismatch" not in read_mapping(args.scenario):

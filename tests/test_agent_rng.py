@@ -15,8 +15,8 @@ import pytest
 import torch
 
 import scas_env  # noqa: F401
-from policies.agents.agent_files import PolicyRandom
 from policies.agents.fleet.plugins import FLEET_JOINT_AGENT, load_fleet_agent
+from policies.agents.policy_random import PolicyRandom
 from policies.agents.sb3_agents import DEFAULT_AGENT, SB3Agent, load_sb3_policy
 from scas_env import ENV_ID
 

@@ -28,10 +28,10 @@ from hypothesis import strategies as st
 from policies import cli as policies_cli
 from prognostics import numba_cache
 from scas_env import cli_args
-from scas_env.actuator.config import tomllib
 from scas_env.core.costs import CostModel
 from scas_env.core.scenario import Scenario
 from scas_env.dataset import cli as dataset_cli
+from scas_env.utils.config_files import tomllib
 from tests import cli_docs
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -15,18 +15,16 @@ import yaml
 from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 
-from scas_env.actuator.config import (
-    FILE_SECTIONS,
-    Validated,
-    save_sections,
-    toml_text,
-    tomllib,  # the standard library's, or the tomli backport on Python 3.10
-)
+from scas_env.actuator.config import FILE_SECTIONS, Validated, save_sections
 from scas_env.actuator.params import ScasParams
 from scas_env.core.costs import CostModel
 from scas_env.core.fleet.config import FleetConfig
 from scas_env.core.mismatch import Mismatch
 from scas_env.core.scenario import FIDELITIES, INITIAL_HEALTH, OBS_MODES, Scenario
+from scas_env.utils.config_files import (
+    toml_text,
+    tomllib,  # the standard library's, or the tomli backport on Python 3.10
+)
 
 ROOT = Path(__file__).resolve().parents[1]
 #: the single-actuator examples; the fleet's (fleet_*) hold a [fleet] table that only

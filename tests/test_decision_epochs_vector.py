@@ -307,7 +307,7 @@ def test_train_epochs_on_the_native_vector_env(tmp_path) -> None:
     rows = (out / "monitor" / "0.monitor.csv").read_text().splitlines()
     assert len(rows) > 2  # header lines and at least one finished episode
     # a checkpoint loads as the run made it: its own statistics, ks and episode length
-    from policies.agents.agent_files import ObsNormalization
+    from policies.agents.obs_normalization import ObsNormalization
     from policies.agents.sb3_agents import load_sb3_policy
 
     ckpt = max(out.glob("ckpt_*_steps.zip"), key=lambda p: int(p.stem.split("_")[1]))

@@ -16,7 +16,7 @@ from experiments.epoch_agents.demonstrations import (
     epoch_returns,
     record_rule,
 )
-from policies.agents.agent_files import ObsNormalization
+from policies.agents.obs_normalization import ObsNormalization
 from policies.benchmark.run import episode_seeds
 from scas_env import ENV_ID
 from scas_env.decision_epochs import DEFAULT_KS, DecisionEpochs

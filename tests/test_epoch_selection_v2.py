@@ -25,7 +25,8 @@ from experiments.epoch_agents.selection import (
     tuned_rules,
     validate_checkpoints,
 )
-from policies.agents.agent_files import ObsNormalization, weights_sha256
+from policies.agents.agent_files import weights_sha256
+from policies.agents.obs_normalization import ObsNormalization
 from policies.benchmark.run import PolicySpec, run_benchmark
 from policies.benchmark.stats import minimum_detectable_difference
 

@@ -303,7 +303,7 @@ def test_shipped_agents_act_as_sb3_maskable_ppo_on_normalised_observations(path:
         pytest.skip(f"{path.name} not shipped")
     from sb3_contrib import MaskablePPO
 
-    from policies.agents.agent_files import global_rngs_kept
+    from policies.agents.policy_random import global_rngs_kept
 
     stem = path.name.removesuffix(".zip")
     meta = json.loads(path.with_name(f"{stem}.json").read_text())

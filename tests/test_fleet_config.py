@@ -10,13 +10,13 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from scas_env.actuator.config import read_mapping
 from scas_env.core.costs import CostModel
 from scas_env.core.fleet.config import FleetConfig, SparesConfig
 from scas_env.core.fleet.demand import DemandModel
 from scas_env.core.fleet.resources import SparesSpec
 from scas_env.core.scenario import Scenario
 from scas_env.fleet_env import ScasFleetEnv
+from scas_env.utils.config_files import read_mapping
 
 ROOT = Path(__file__).resolve().parents[1]
 FLEET_EXAMPLES = sorted((ROOT / "examples").glob("fleet_*.*"))

@@ -25,10 +25,11 @@ import yaml
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from scas_env.actuator.config import param, read_mapping
+from scas_env.actuator.config import param
 from scas_env.actuator.params import ScasParams
 from scas_env.core.costs import CostModel
 from scas_env.core.scenario import Scenario
+from scas_env.utils.config_files import read_mapping
 from tests.config_cases import CLASSES, numeric_fields
 
 SETTINGS = settings(

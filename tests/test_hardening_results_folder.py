@@ -215,7 +215,7 @@ def _main(command: str) -> Any:
     command (``python -m experiments.<name>``: that module's ``main``)."""
     import importlib
 
-    from scas_env.actuator.config import tomllib
+    from scas_env.utils.config_files import tomllib
 
     if command.startswith("python -m "):
         return importlib.import_module(command.removeprefix("python -m ")).main

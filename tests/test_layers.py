@@ -289,7 +289,7 @@ def test_no_folder_holds_more_than_15_modules() -> None:
 def test_the_lab_work_is_not_installed() -> None:
     """The paper's reproduction, figures, campaigns and the builders of the shipped data live
     in ``experiments/`` (outside pyproject's packages); no installed folder is "studies"."""
-    from scas_env.actuator.config import tomllib
+    from scas_env.utils.config_files import tomllib
 
     found = tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["setuptools"]
     assert found["packages"]["find"]["include"] == [f"{p}*" for p in INSTALLED]

@@ -21,7 +21,8 @@ from stable_baselines3 import PPO
 from stable_baselines3.common.vec_env import DummyVecEnv, VecNormalize
 
 import policies.agents.sb3_agents as agents
-from policies.agents.agent_files import ObsNormalization, read_weights, weights_sha256, zip_data
+from policies.agents.agent_files import read_weights, weights_sha256, zip_data
+from policies.agents.obs_normalization import ObsNormalization
 from policies.agents.sb3_agents import (
     DEFAULT_AGENT,
     EpochAgent,

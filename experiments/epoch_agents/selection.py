@@ -420,7 +420,7 @@ def ship_best(
     if stats.suffix == ".json":
         shutil.copyfile(stats, stats_dst)
     else:
-        from policies.agents.agent_files import convert_vecnormalize
+        from policies.agents.obs_normalization import convert_vecnormalize
 
         convert_vecnormalize(stats, stats_dst)  # trusted: checked above
     import gymnasium as gym

@@ -240,7 +240,7 @@ def save_checkpoint(
 ) -> None:
     """``path`` (zip), its ``_normalization.json`` (the ``VecNormalize`` statistics, no
     pickle) and ``.json``."""
-    from policies.agents.agent_files import ObsNormalization
+    from policies.agents.obs_normalization import ObsNormalization
 
     model.save(path)
     stem = path.name.removesuffix(".zip")
@@ -435,7 +435,7 @@ def train(
     ``overwrite`` (its old contents deleted first; an ``init`` inside it is refused)."""
     from stable_baselines3.common.logger import configure
 
-    from policies.agents.agent_files import ObsNormalization
+    from policies.agents.obs_normalization import ObsNormalization
 
     inputs = {"init": init}
     check_run_folder(out, overwrite=overwrite, inputs=inputs)  # before any work

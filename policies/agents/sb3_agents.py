@@ -20,7 +20,7 @@ module="policies.agents.sb3_agents")``.
 Safety. Loading an agent unpickles nothing by default: the network is rebuilt from the JSON
 of the zip and its ``policy.pth`` tensors (``torch.load(weights_only=True)``), the
 observation statistics come from a JSON file (``<name>_normalization.json``,
-:mod:`policies.agents.agent_files`), and the model's observation and action spaces are
+:mod:`policies.agents.obs_normalization`), and the model's observation and action spaces are
 checked against the env before it acts. A file that only SB3's own loader can read (a zip
 whose network keywords are pickled objects, a ``*_vecnormalize.pkl``) is refused unless
 ``trust_pickle=True``: unpickling runs code chosen by whoever made the file. The shipped
@@ -31,7 +31,7 @@ imports and runs that module's code: trusted code only.
 
 Randomness. With ``deterministic=True`` (the benchmark's) an agent draws nothing. With
 ``deterministic=False`` it samples from its own streams
-(:class:`policies.agents.agent_files.PolicyRandom`), never from the process-global ``torch``,
+(:class:`policies.agents.policy_random.PolicyRandom`), never from the process-global ``torch``,
 ``numpy`` or ``random`` generators, and ``reset(seed)`` re-seeds only those streams (SB3's
 ``set_random_seed``, which re-seeds all three, is not called).
 A batch of seeds (``reset(seed=[s0, s1, ...])``, one per row, as the benchmark passes them)
@@ -53,15 +53,14 @@ import numpy as np
 
 from policies.agents.agent_files import (
     NeedsPickle,
-    ObsNormalization,
-    PolicyRandom,
-    global_rngs_kept,
     read_json_file,
     read_sb3_policy,
     require_contrib,
     weights_sha256,
     zip_data,
 )
+from policies.agents.obs_normalization import ObsNormalization
+from policies.agents.policy_random import PolicyRandom, global_rngs_kept
 from policies.base import register_policy
 from scas_env.decision_epochs import (
     DELEGATE,
@@ -159,7 +158,7 @@ class SB3Agent:
     ----------
     model : the SB3 model.
     normalizer : observation statistics with ``normalize_obs`` (an
-        :class:`~policies.agents.agent_files.ObsNormalization` or a ``VecNormalize``), or
+        :class:`~policies.agents.obs_normalization.ObsNormalization` or a ``VecNormalize``), or
         ``None``.
     obs_names : names of the observation entries (the env's ``obs_names``).
     masked : pass action masks to ``model.predict``.
@@ -541,7 +540,7 @@ def load_sb3_policy(
     path : the model zip (this project's, RL-Zoo's, or any ``model.save``).
     obs_names : the env's observation names; checked against the agent's metadata when known.
     vecnormalize : its observation statistics: a normalisation ``.json``
-        (:class:`policies.agents.agent_files.ObsNormalization`) or a VecNormalize ``.pkl``
+        (:class:`policies.agents.obs_normalization.ObsNormalization`) or a VecNormalize ``.pkl``
         (needs ``trust_pickle``); default :func:`find_statistics`.
     algo : SB3 algorithm name (:data:`ALGO_NAMES`) for SB3's own loader (``trust_pickle``);
         default from metadata or the zip.

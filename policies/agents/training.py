@@ -31,7 +31,7 @@ from scas_env.decision_epochs import DEFAULT_KS, DecisionEpochs
 from scas_env.utils.atomic_file import write_text_atomic
 
 #: the observation and return statistics of a clone (``experiments.epoch_agents.clone``),
-#: read without unpickling (:class:`policies.agents.agent_files.ObsNormalization`)
+#: read without unpickling (:class:`policies.agents.obs_normalization.ObsNormalization`)
 NORMALIZATION_FILE = "normalization.json"
 #: id of the decision-epoch formulation in the hyper-parameter YAML files
 EPOCH_ENV_ID = ENV_ID_EPOCHS
@@ -292,7 +292,8 @@ def warm_start(model: Any, venv: Any, init: Path) -> None:
     statistics (``init/normalization.json``) into ``model`` and ``venv``; the architectures
     must match (same ``policy_kwargs``). Nothing is unpickled: the weights are read with
     ``torch.load(weights_only=True)`` (:func:`policies.agents.agent_files.read_weights`)."""
-    from policies.agents.agent_files import ObsNormalization, read_weights
+    from policies.agents.agent_files import read_weights
+    from policies.agents.obs_normalization import ObsNormalization
 
     _init_files(init)
     zip_path, stats = init / "model.zip", init / NORMALIZATION_FILE
@@ -313,7 +314,7 @@ def warm_start(model: Any, venv: Any, init: Path) -> None:
 class _SaveStatistics:
     """SB3 callback factory: beside each checkpoint of SB3's ``CheckpointCallback`` (same
     frequency), the ``VecNormalize`` statistics as ``<prefix>_normalization_<n>_steps.json``
-    (:class:`policies.agents.agent_files.ObsNormalization`), which load without
+    (:class:`policies.agents.obs_normalization.ObsNormalization`), which load without
     unpickling."""
 
     @staticmethod
@@ -334,7 +335,7 @@ class _SaveStatistics:
 
 def save_statistics(venv: Any, path: Path) -> None:
     """Write a ``VecNormalize``'s statistics as a normalisation JSON file."""
-    from policies.agents.agent_files import ObsNormalization
+    from policies.agents.obs_normalization import ObsNormalization
 
     ObsNormalization.from_vecnormalize(venv).save(path)
 
@@ -348,7 +349,7 @@ def _init_files(init: Path) -> None:
         old = init / "vecnormalize.pkl"
         hint = (
             f"; it has {old.name}: convert it once, if you trust it, with "
-            "policies.agents.agent_files.convert_vecnormalize"
+            "policies.agents.obs_normalization.convert_vecnormalize"
             if old.is_file()
             else ""
         )

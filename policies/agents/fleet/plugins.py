@@ -13,25 +13,25 @@ the agent's frozen ``VecNormalize`` statistics and asks the MaskablePPO network 
   from its own view, the rows joined into the fleet's action.
 
 :func:`load_fleet_agent` reads ``<stem>.zip`` (MaskablePPO), ``<stem>_normalization.json`` (the
-observation statistics, :class:`policies.agents.agent_files.ObsNormalization`) and ``<stem>.json``
-(kind, the observation names it was trained on, the per-aircraft view's options, whether the
-scenario tests before every flight) and checks the model's observation and action spaces
-against the env's before it acts, with an error that says what differs. Registered for the
-benchmark: ``"fleet_ppo"`` (default: the shipped :data:`FLEET_JOINT_AGENT`) and
-``"fleet_shared_ppo"`` (:data:`FLEET_SHARED_AGENT`), both with
-``params={"path": ...}`` for another file.
+observation statistics, :class:`policies.agents.obs_normalization.ObsNormalization`) and
+``<stem>.json`` (kind, the observation names it was trained on, the per-aircraft view's
+options, whether the scenario tests before every flight) and checks the model's observation and
+action spaces against the env's before it acts, with an error that says what differs.
+Registered for the benchmark: ``"fleet_ppo"`` (default: the shipped :data:`FLEET_JOINT_AGENT`)
+and ``"fleet_shared_ppo"`` (:data:`FLEET_SHARED_AGENT`), both with ``params={"path": ...}`` for
+another file.
 
 **Nothing is unpickled**, as for the single-actuator agent (:mod:`policies.agents.sb3_agents`):
 the network is rebuilt from the zip's JSON ``data`` and its ``policy.pth`` tensors
 (``torch.load(weights_only=True)``), the statistics come from JSON. A zip whose network needs
 pickled objects, or a ``*_vecnormalize.pkl`` without its JSON twin, is refused (convert a
-trusted pickle once with :func:`policies.agents.agent_files.convert_vecnormalize`). The shipped
-files are checked against the package's SHA-256 manifest first, and the zip's weights against
-the ``weights_sha256`` its metadata records.
+trusted pickle once with :func:`policies.agents.obs_normalization.convert_vecnormalize`). The
+shipped files are checked against the package's SHA-256 manifest first, and the zip's weights
+against the ``weights_sha256`` its metadata records.
 
 Randomness, as for the single-actuator agents: ``deterministic=True`` (the benchmark's) draws
 nothing; ``deterministic=False`` samples from the agent's own torch stream
-(:class:`policies.agents.agent_files.PolicyRandom`), never from the process-global
+(:class:`policies.agents.policy_random.PolicyRandom`), never from the process-global
 generators, and ``reset(seed)`` re-seeds that stream only (a batch's seeds: the first seeds
 the one stream the whole batch shares).
 """
@@ -49,14 +49,14 @@ import numpy as np
 from policies.agents.agent_files import (
     LoadedModel,
     NeedsPickle,
-    ObsNormalization,
-    PolicyRandom,
     build_policy,
     read_json_file,
     read_zip,
     weights_sha256,
 )
 from policies.agents.fleet.masks import FleetObsLayout
+from policies.agents.obs_normalization import ObsNormalization
+from policies.agents.policy_random import PolicyRandom
 from policies.agents.sb3_agents import DATA_DIR, check_manifest
 from policies.base import register_policy
 from scas_env.utils.atomic_file import write_text_atomic
@@ -257,7 +257,7 @@ def load_fleet_agent(
         pkl = path.with_name(f"{stem}_vecnormalize.pkl")
         hint = (
             f" ({pkl.name} is a pickle: convert a trusted one with "
-            "policies.agents.agent_files.convert_vecnormalize)"
+            "policies.agents.obs_normalization.convert_vecnormalize)"
             if pkl.is_file()
             else ""
         )
