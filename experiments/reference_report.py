@@ -1,4 +1,5 @@
-"""Tables and figures of the reference-posterior study (``reference_posterior``).
+"""Tables and figures of the reference-posterior study (``reference_posterior``), for the
+part studied (spring or seal: the rows are one part's lives).
 
 Per policy and life stage, for the particle filter (``pf``) and the reference (``ref``) on the
 same lives: coverage of the 90 % interval, undercut of the low quantile (each with its Wilson
@@ -149,10 +150,12 @@ def write_report(
     out: str | Path,
     *,
     overwrite: bool = False,
+    part: str = "spring",
 ) -> list[Path]:
     """Into the results folder ``out`` (written atomically), for a :func:`stage_table`:
-    ``lives.csv`` (per life and stage), ``stages.csv``, ``study.json`` and ``coverage.png``;
-    for a :func:`reliability_table`: ``records.csv`` and ``reliability.csv``."""
+    ``lives.csv`` (per life and stage), ``stages.csv``, ``study.json`` and ``coverage.png``
+    (titled with ``part``); for a :func:`reliability_table`: ``records.csv`` and
+    ``reliability.csv``."""
     risk = bool(table) and "estimator" in table[0]
     names = (
         ["records.csv", "reliability.csv"]
@@ -167,11 +170,11 @@ def write_report(
             (tmp / "study.json").write_text(
                 json.dumps({"config": config, "stages": list(table)}, indent=1) + "\n"
             )
-            _plot(table, tmp / "coverage.png")
+            _plot(table, tmp / "coverage.png", part)
     return [Path(out) / n for n in names]
 
 
-def _plot(table: Sequence[dict[str, float | str]], path: Path) -> None:
+def _plot(table: Sequence[dict[str, float | str]], path: Path, part: str = "spring") -> None:
     import matplotlib
 
     matplotlib.use("Agg")
@@ -189,10 +192,10 @@ def _plot(table: Sequence[dict[str, float | str]], path: Path) -> None:
                 hi = np.array([float(r[f"{est}_{name}_ci_high"]) for r in rs]) - v
                 ax.errorbar(s, v, yerr=[lo, hi], fmt=style, capsize=3, label=f"{policy} {est}")
     axes[0].axhspan(*TARGETS["coverage"], color="0.9")
-    axes[0].set_title("spring: coverage of the 90 % RUL interval")
+    axes[0].set_title(f"{part}: coverage of the 90 % RUL interval")
     tol = TARGETS["undercut_tolerance"]
     axes[1].axhspan(0.05 - tol, 0.05 + tol, color="0.9")
-    axes[1].set_title("spring: undercut of the 5 % quantile")
+    axes[1].set_title(f"{part}: undercut of the 5 % quantile")
     for ax in axes:
         ax.set_xlabel("fraction of true life")
     axes[1].legend(fontsize=8)
@@ -201,4 +204,11 @@ def _plot(table: Sequence[dict[str, float | str]], path: Path) -> None:
     plt.close(fig)
 
 
-__all__ = ["ESTIMATORS", "format_table", "stage_table", "write_report"]
+__all__ = [
+    "ESTIMATORS",
+    "format_reliability",
+    "format_table",
+    "reliability_table",
+    "stage_table",
+    "write_report",
+]

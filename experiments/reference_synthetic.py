@@ -4,12 +4,13 @@ The belief study (:mod:`experiments.belief_calibration`) judges a RUL distributi
 *stages*, fractions of each part's true life: a short life is judged early, when every belief
 is still near the prior, a long one late. A posterior calibrated at every fixed age need not
 be calibrated at such truth-defined ages. This module measures by how much, where the
-posterior is exact by construction: each life's ``(a0, theta)`` from the prior, its
-installation effects from ``N(0, 1)``, its in-flight batches (I8, the mean of 10 flights) and
-tests (G1, one after each batch, optional) from the surrogate's tables with the stated run
-noise and the seal at a linear wear ``age / seal_life_flights``; then the
-:class:`~experiments.reference_posterior.ReferencePosterior` on those data, and the PIT
-of the true RUL at each stage.
+posterior is exact by construction: each life's static parameters (the spring's ``(a0,
+theta)``, the seal's ``theta``) from the prior, its installation effects from ``N(0, 1)``,
+its in-flight batches (I8 or I9, the mean of 10 flights) and tests (G1 or G3, one after each
+batch, optional) from the surrogate's tables with the stated run noise and the other part's
+severity fraction growing linearly, ``age /`` :data:`OTHER_LIFE_FLIGHTS`; then the
+:class:`~experiments.reference_model.ReferencePosterior` on those data, and the PIT of the
+true RUL at each stage.
 
 ``python -m experiments.reference_posterior --synthetic N`` is the command line
 (docs/beliefs.md).
@@ -29,40 +30,41 @@ from experiments.reference_model import (
     BATCH,
     DEFAULT_MIN_ESS,
     TEST,
+    PartModel,
     ReferencePosterior,
-    SpringModel,
     check_points,
 )
 
-#: flights of a seal's life in the synthetic lives (the wear fraction grows linearly)
-SEAL_LIFE_FLIGHTS = 3000.0
+#: flights of the other part's life in the synthetic lives (its fraction grows linearly)
+OTHER_LIFE_FLIGHTS = 3000.0
 #: flights per in-flight batch (``Scenario.flight_update_flights``)
 BATCH_FLIGHTS = 10
 
 
 def measurement_moments(
-    model: SpringModel,
+    model: PartModel,
     kind: int,
-    a0_m: float,
+    x0_m: float,
     log_theta: float,
     ages: np.ndarray,
-    wear: np.ndarray,
+    other: np.ndarray,
 ) -> tuple[float, float, float]:
     """Mean over the runs at ``ages`` (flights) of ``mu`` and ``tau``, and the variance
-    ``sum sigma^2 / m^2`` of the runs' mean, for a spring of ``(a0_m, log_theta)`` and the
-    seal at wear fractions ``wear``: scipy's bilinear interpolation of the surrogate tables on
-    the growth model's own path (an implementation independent of the reference's kernel)."""
-    d0 = model.growth.damage(np.array([a0_m]))[0]
+    ``sum sigma^2 / m^2`` of the runs' mean, for a part of ``(x0_m, log_theta)`` and the
+    other part at fractions ``other``: scipy's bilinear interpolation of the surrogate tables
+    on the growth model's own path (an implementation independent of the reference's
+    kernel)."""
+    d0 = model.growth.damage(np.array([x0_m]))[0]
     depth = model.growth.inverse_damage(d0 + np.exp(log_theta) * np.asarray(ages, dtype=float))
-    points = np.column_stack([np.clip(depth / model.a_fail_m, 0.0, 1.0), wear])
-    grids = (model.crack_grid, model.wear_grid)
+    points = np.column_stack([np.clip(depth / model.critical_m, 0.0, 1.0), other])
+    grids = (model.own_grid, model.other_grid)
     mu, tau, run = (RegularGridInterpolator(grids, model.stacks[kind][q])(points) for q in range(3))
     m = len(ages)
     return float(mu.mean()), float(tau.mean()), float((run**2).sum() / m**2)
 
 
 def synthetic_stage_pits(
-    model: SpringModel,
+    model: PartModel,
     lives: int,
     rng: np.random.Generator,
     *,
@@ -82,9 +84,9 @@ def synthetic_stage_pits(
     check_points(log2_points, min_ess)
     pits: dict[float, list[float]] = {s: [] for s in sorted(stages)}
     for _ in tqdm(range(lives), desc="synthetic lives", disable=not progress):
-        a0, log_theta = (float(v[0]) for v in model.prior_points(rng.random((1, 2))))
-        life = float(model.lives(np.array([a0]), np.array([log_theta]))[1][0])
-        z = rng.normal(size=2)  # I8's and G1's installation effects
+        x0, log_theta = (float(v[0]) for v in model.prior_points(rng.random((1, model.dims))))
+        life = float(model.lives(np.array([x0]), np.array([log_theta]))[1][0])
+        z = rng.normal(size=2)  # the batch feature's and the test feature's effects
         ref = ReferencePosterior(model, rng, log2_points)
         age = 0
         for stage in pits:
@@ -92,9 +94,9 @@ def synthetic_stage_pits(
                 ages = np.arange(age, age + BATCH_FLIGHTS, dtype=np.float64)
                 runs = [(BATCH, ages)] + ([(TEST, ages[-1:] + 1.0)] if tests else [])
                 for kind, at in runs:
-                    wear = np.minimum(at / SEAL_LIFE_FLIGHTS, 1.0)
-                    mu, tau, var = measurement_moments(model, kind, a0, log_theta, at, wear)
-                    ref.update(kind, mu + tau * z[kind] + np.sqrt(var) * rng.normal(), at, wear)
+                    other = np.minimum(at / OTHER_LIFE_FLIGHTS, 1.0)
+                    mu, tau, var = measurement_moments(model, kind, x0, log_theta, at, other)
+                    ref.update(kind, mu + tau * z[kind] + np.sqrt(var) * rng.normal(), at, other)
                 age += BATCH_FLIGHTS
             if age >= life:
                 break  # the life ended inside the last batch: no later stage
@@ -124,7 +126,7 @@ def format_synthetic(pits: dict[float, np.ndarray], low_quantile: float = 0.05) 
 
 
 __all__ = [
-    "SEAL_LIFE_FLIGHTS",
+    "OTHER_LIFE_FLIGHTS",
     "format_synthetic",
     "measurement_moments",
     "synthetic_stage_pits",

@@ -221,8 +221,10 @@ def benchmark_parser() -> Any:
         type=existing_file,
         default=None,
         metavar="FILE",
-        help="scas-tune's tuning.json: each family's rule at its tuned parameters, besides "
-        "--policies, labelled '<family> tuned'; not with --seed 1, the tuning's episodes "
+        help="scas-tune's tuning.json or scas-value's ladder.json (e.g. "
+        "docs/value_v2/ladder.json): each family's rule at its tuned parameters, besides "
+        "--policies, labelled '<family> tuned' (a ladder's families that run in a world of "
+        "their own are left out, named); not with --seed 1, the tuning's episodes "
         "(default: none)",
     )
     parser.add_argument("--out", type=Path, default=Path("results/benchmark"), help="folder")
@@ -393,9 +395,11 @@ def _fitting_agents(specs: list[Any], *, slots: int, env_kwargs: dict[str, Any])
 
 
 def _tuned_specs(parser: Any, path: Path, *, fleet: bool) -> list[Any]:
-    """``--tuned``: a spec per family of scas-tune's ``tuning.json``, its rule at the tuned
-    parameters, labelled ``"<family> tuned"``; a usage error for another file, a family of
-    the other kind (fleet or one actuator) or one that runs in a world of its own."""
+    """``--tuned``: a spec per family of scas-tune's ``tuning.json`` (or the ``tuning`` of
+    scas-value's ``ladder.json``), its rule at the tuned parameters, labelled ``"<family>
+    tuned"``; a usage error for another file, a family of the other kind (fleet or one
+    actuator) or, in a tuning.json, one that runs in a world of its own (a ladder's such
+    families are left out and named on stderr)."""
     import json
 
     from policies.benchmark.run import PolicySpec
@@ -405,23 +409,35 @@ def _tuned_specs(parser: Any, path: Path, *, fleet: bool) -> list[Any]:
     families = FLEET_FAMILIES if fleet else FAMILIES
     try:
         data = json.loads(path.read_text())
+        ladder = isinstance(data, dict) and {"tuning", "arms"} <= set(data)
+        if ladder:
+            data = data["tuning"]
         tuned = {label: dict(r["best_params"]) for label, r in data.items()}
     except (ValueError, AttributeError, KeyError, TypeError) as exc:
         parser.error(f"--tuned {path}: not a tuning.json of scas-tune ({exc!r})")
     if not tuned:
         parser.error(f"--tuned {path}: names no family")
-    specs = []
+    specs, skipped = [], []
     for label, params in tuned.items():
         family = families.get(label)
         if family is None:
             kind = "fleet" if fleet else "single-actuator"
             parser.error(f"--tuned {path}: {label!r} is not a {kind} family ({list(families)})")
+        if family.env_kwargs and ladder:
+            skipped.append(label)
+            continue
         if family.env_kwargs:
             parser.error(
                 f"--tuned {path}: {label!r} runs in a world of its own "
                 f"({sorted(family.env_kwargs)}); scas-value compares it on held-out seeds"
             )
         specs.append(PolicySpec(family.policy, params, label=f"{label} tuned"))
+    if skipped:
+        print(
+            f"--tuned {path}: left out {skipped} (each runs in a world of its own; scas-value "
+            "compares them)",
+            file=sys.stderr,
+        )
     return specs
 
 

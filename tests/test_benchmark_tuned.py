@@ -1,7 +1,7 @@
-"""``scas-benchmark --tuned FILE``: the rules of scas-tune's ``tuning.json`` at their tuned
-parameters, on the benchmark's episodes: each row equals the same rule and parameters run
-through ``run_benchmark`` directly (the parameters reach the policy); files and families the
-benchmark cannot run are usage errors before any episode."""
+"""``scas-benchmark --tuned FILE``: the rules of scas-tune's ``tuning.json`` (or scas-value's
+``ladder.json``) at their tuned parameters, on the benchmark's episodes: each row equals the
+same rule and parameters run through ``run_benchmark`` directly (the parameters reach the
+policy); files and families the benchmark cannot run are usage errors before any episode."""
 
 from __future__ import annotations
 
@@ -97,3 +97,39 @@ def test_files_the_benchmark_cannot_run_are_usage_errors(
         benchmark_main([*argv, *(["--fleet"] if fleet else [])])
     assert message in capsys.readouterr().err
     assert not (tmp_path / "b").exists()
+
+
+def test_the_shipped_ladder_s_rules_run_at_its_tuned_points(tmp_path: Path) -> None:
+    """``--tuned docs/value_v2/ladder.json`` (scas-value's file): each family at the ladder's
+    tuned parameters (the noisy oracles with their sigma), row for row as run directly."""
+    ladder = Path(__file__).resolve().parents[1] / "docs" / "value_v2" / "ladder.json"
+    tuning = json.loads(ladder.read_text())["tuning"]
+    out = tmp_path / "bench"
+    argv = ["--policies", "corrective", "--tuned", str(ladder), "--episodes", "2", "--slots",
+            "150", "--workers", "1", "--quiet", "--out", str(out)]  # fmt: skip
+    assert benchmark_main(argv) == 0
+    got = _rewards(out / "results.csv")
+    assert set(got) == {"corrective", *(f"{f} tuned" for f in tuning)}
+    specs = [PolicySpec(r["policy"], r["best_params"], label=f) for f, r in tuning.items()]
+    direct = run_benchmark(specs, episodes=2, slots=150)
+    for f in tuning:
+        assert got[f"{f} tuned"] == [r["reward"] for r in direct.rows if r["policy"] == f]
+
+
+def test_a_ladder_s_families_of_their_own_world_are_left_out_and_named(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A ladder's family that runs in a world of its own is left out (named on stderr), where
+    a tuning.json naming it is a usage error (above)."""
+    ladder = tmp_path / "ladder.json"
+    tuning = {
+        "age": {"policy": "preventive", "best_params": AGE},
+        "filter+tests every flight": {"policy": "rul_risk", "best_params": FILTER},
+    }
+    ladder.write_text(json.dumps({"arms": {}, "tuning": tuning}))
+    out = tmp_path / "bench"
+    argv = ["--policies", "corrective", "--tuned", str(ladder), "--episodes", "1", "--slots",
+            "100", "--workers", "1", "--quiet", "--out", str(out)]  # fmt: skip
+    assert benchmark_main(argv) == 0
+    assert "left out ['filter+tests every flight']" in capsys.readouterr().err
+    assert set(_rewards(out / "results.csv")) == {"corrective", "age tuned"}

@@ -12,7 +12,7 @@ import pytest
 from scipy.stats import kstest, multivariate_normal
 
 from experiments.belief_calibration import policy_action
-from experiments.reference_model import BATCH, TEST, ReferencePosterior, SpringModel
+from experiments.reference_model import BATCH, TEST, PartModel, ReferencePosterior
 from experiments.reference_posterior import RecordingEnv, run_reference_study
 from experiments.reference_synthetic import (
     format_synthetic,
@@ -23,8 +23,8 @@ from scas_env.env import ScasMaintenanceEnv
 
 
 @pytest.fixture(scope="module")
-def model() -> SpringModel:
-    return SpringModel.of(ScasMaintenanceEnv().setup)
+def model() -> PartModel:
+    return PartModel.of(ScasMaintenanceEnv().setup, "spring")
 
 
 def _events(rng: np.random.Generator) -> list[tuple[int, np.ndarray, np.ndarray]]:
@@ -45,15 +45,15 @@ def test_log_weights_are_the_joint_gaussian_density_with_the_effects_integrated(
     ys = rng.normal(size=len(events)) * 1e-6
     for (kind, ages, wear), y in zip(events, ys, strict=True):
         # the data: the mean of the first point's features, plus noise
-        mu, _, var = measurement_moments(model, kind, ref.a0[0], ref.log_theta[0], ages, wear)
+        mu, _, var = measurement_moments(model, kind, ref.x0[0], ref.log_theta[0], ages, wear)
         ref.update(kind, mu + y + np.sqrt(var) * rng.normal(), ages, wear)
-    for p in range(0, ref.a0.size, 9):
+    for p in range(0, ref.x0.size, 9):
         total = 0.0
         for kind in (BATCH, TEST):
             sel = [i for i, e in enumerate(events) if e[0] == kind]
             mom = np.array(
                 [
-                    measurement_moments(model, kind, ref.a0[p], ref.log_theta[p], *events[i][1:])
+                    measurement_moments(model, kind, ref.x0[p], ref.log_theta[p], *events[i][1:])
                     for i in sel
                 ]
             )
@@ -63,7 +63,7 @@ def test_log_weights_are_the_joint_gaussian_density_with_the_effects_integrated(
         assert ref.log_w[p] == pytest.approx(total, rel=1e-9, abs=1e-6)
 
 
-def _synthetic_pits(model: SpringModel, noise_factor: float, lives: int) -> np.ndarray:
+def _synthetic_pits(model: PartModel, noise_factor: float, lives: int) -> np.ndarray:
     """PIT of the true RUL after 300 flights in the posterior of lives drawn from the model
     (prior, z ~ N(0, 1), run noise), surviving 300 flights; the posterior's model states the
     run noise ``noise_factor`` times the truth's."""
@@ -161,7 +161,7 @@ def test_the_recorder_refuses_to_lose_track_of_the_batch() -> None:
     rec = RecordingEnv(episode_slots=30)
     rec.reset(seed=0)
     rec.step(0)
-    rec._sum += 1e-9  # a copy that is no longer the monitor's batch
+    rec._sums[0] += 1e-9  # a copy that is no longer the monitor's batch
     with pytest.raises(RuntimeError, match="not the monitor's"):
         rec.step(0)
 
@@ -189,9 +189,9 @@ def test_the_seal_view_records_the_world_or_the_seal_filters_mean() -> None:
     ev_t, ev_f = views["true"].events, views["filter"].events
     assert ev_t.y == ev_f.y and ev_t.ages == ev_f.ages and len(ev_t.y) > 5
     batches_t = [w for e in range(len(ev_t.kind)) if ev_t.kind[e] == BATCH
-                 for w in ev_t.wear[ev_t.start[e] : ev_t.stop[e]]]  # fmt: skip
+                 for w in ev_t.other[ev_t.start[e] : ev_t.stop[e]]]  # fmt: skip
     batches_f = [w for e in range(len(ev_f.kind)) if ev_f.kind[e] == BATCH
-                 for w in ev_f.wear[ev_f.start[e] : ev_f.stop[e]]]  # fmt: skip
+                 for w in ev_f.other[ev_f.start[e] : ev_f.stop[e]]]  # fmt: skip
     n = len(batches_t)
     assert n > 50
     np.testing.assert_allclose(batches_t, true_wear[:n], rtol=1e-15)
@@ -273,8 +273,8 @@ def test_refining_a_posterior_on_one_point_widens_the_proposal(model) -> None:
     ref.log_w[:] = -np.inf
     ref.log_w[keep] = 0.0
     assert ref.belief(10.0, 0.05, 20.0).ess == pytest.approx(1.0)
-    a0 = ref.a0[keep]
+    a0 = ref.x0[keep]
     ref.refine(10.0)
-    assert np.unique(ref.a0).size == ref.a0.size > 1000
+    assert np.unique(ref.x0).size == ref.x0.size > 1000
     assert np.isfinite(ref.log_w).all()
-    assert abs(np.median(ref.a0) - a0) < 0.5 * model.a0_sd_m
+    assert abs(np.median(ref.x0) - a0) < 0.5 * model.x0_sd_m
