@@ -28,6 +28,7 @@ from scas_env.cli_args import (
     existing_file,
     load_env_config,
     load_mismatch,
+    load_world_surrogate,
     make_parser,
     name_list,
     nonneg_int,
@@ -65,15 +66,21 @@ The default list leaves out, with a note, a shipped agent that cannot act on the
 
 
 def _env_kwargs(
-    scenario: Scenario, costs: CostModel, exclude: Sequence[str], mismatch: Mismatch | None = None
+    scenario: Scenario,
+    costs: CostModel,
+    exclude: Sequence[str],
+    mismatch: Mismatch | None = None,
+    world_surrogate: Any = None,
 ) -> dict[str, Any]:
-    """Env keywords that give ``scenario``, ``costs`` and a ``[mismatch]`` world (only what
-    differs from the defaults)."""
+    """Env keywords that give ``scenario``, ``costs`` and a ``[mismatch]`` world (its
+    multipliers and its ``world_surrogate`` file; only what differs from the defaults)."""
     kwargs = scenario_changes(scenario, exclude=exclude)
     if costs != CostModel():
         kwargs["cost_model"] = costs
     if mismatch is not None and not mismatch.is_nominal:
         kwargs["mismatch"] = mismatch
+    if world_surrogate is not None:
+        kwargs["world_surrogate"] = world_surrogate
     return kwargs
 
 
@@ -85,9 +92,19 @@ def _config_record(
     costs: CostModel,
     mismatch: Mismatch | None = None,
 ) -> dict[str, Any]:
-    """The exact configuration of a run, for its results (files and full values)."""
+    """The exact configuration of a run, for its results (files and full values; a
+    ``[mismatch]`` world surrogate by its file name and SHA-256)."""
     words = [prog, *(sys.argv[1:] if argv is None else argv)]
     world = {} if mismatch is None else {"mismatch": mismatch.to_dict()}
+    if args.scenario is not None and mismatch is not None:
+        from scas_env.cli_args import WORLD_SURROGATE_KEY
+        from scas_env.utils.config_files import read_mapping
+        from scas_env.utils.shipped_files import file_sha256
+
+        name = read_mapping(args.scenario)["mismatch"].get(WORLD_SURROGATE_KEY)
+        if name is not None:
+            path = Path(args.scenario).parent / name
+            world[WORLD_SURROGATE_KEY] = {"file": str(path), "sha256": file_sha256(path)}
     return {
         "scenario": scenario.to_dict(),
         "costs": costs.to_dict(),
@@ -253,6 +270,7 @@ def benchmark_main(argv: Sequence[str] | None = None) -> int:
     out = check_out_dir(parser, args.out, args.overwrite)
     scenario, costs = load_env_config(parser, args, fleet=True, mismatch=True)
     mismatch = load_mismatch(parser, args)
+    world_surrogate = load_world_surrogate(parser, args)
     if scenario.obs_mode != Scenario().obs_mode:
         parser.error(
             f"{args.scenario}: obs_mode = {scenario.obs_mode!r}: the benchmark gives each "
@@ -267,7 +285,7 @@ def benchmark_main(argv: Sequence[str] | None = None) -> int:
         parser.error(f"--slots {args.slots}: {exc}")
     env_kwargs = {
         "fidelity": scenario.fidelity,
-        **_env_kwargs(scenario, costs, ("obs_mode", "episode_slots"), mismatch),
+        **_env_kwargs(scenario, costs, ("obs_mode", "episode_slots"), mismatch, world_surrogate),
     }
     fleet = _fleet_config(parser, args)
     if fleet is not None and mismatch is not None:
@@ -656,6 +674,7 @@ def tune_main(argv: Sequence[str] | None = None) -> int:
     out = check_out_dir(parser, args.out, args.overwrite)
     scenario, costs = load_env_config(parser, args, fleet=True, mismatch=True)
     mismatch = load_mismatch(parser, args)
+    world_surrogate = load_world_surrogate(parser, args)
     fleet = _fleet_config(parser, args)
     if fleet is not None and mismatch is not None:
         parser.error(f"{args.scenario}: [mismatch]: a fleet runs the monitor's model")
@@ -663,7 +682,9 @@ def tune_main(argv: Sequence[str] | None = None) -> int:
         return _tune_fleet(parser, args, argv, out, fleet, costs)
     if scenario.obs_mode != Scenario().obs_mode:
         parser.error(f"{args.scenario}: obs_mode is set per policy; leave it out of the file")
-    env_kwargs = _env_kwargs(scenario, costs, ("obs_mode", "episode_slots"), mismatch)
+    env_kwargs = _env_kwargs(
+        scenario, costs, ("obs_mode", "episode_slots"), mismatch, world_surrogate
+    )
 
     from policies.value.tuning import FAMILIES, tune_families
 
@@ -777,7 +798,9 @@ def value_main(argv: Sequence[str] | None = None) -> int:
     mismatch = load_mismatch(parser, args)
     if scenario.obs_mode != Scenario().obs_mode:
         parser.error(f"{args.scenario}: obs_mode is set per arm; leave it out of the file")
-    env_kwargs = _env_kwargs(scenario, costs, ("obs_mode", "episode_slots"), mismatch)
+    env_kwargs = _env_kwargs(
+        scenario, costs, ("obs_mode", "episode_slots"), mismatch, load_world_surrogate(parser, args)
+    )
 
     from policies.value.study import markdown_report, run_ladder, write_outputs
 

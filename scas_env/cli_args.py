@@ -41,6 +41,7 @@ log = logging.getLogger(__name__)
 
 __all__ = [
     "COMPILE_NOTICE",
+    "WORLD_SURROGATE_KEY",
     "HelpFormatter",
     "Parser",
     "add_env_config_args",
@@ -55,6 +56,7 @@ __all__ = [
     "existing_file",
     "load_env_config",
     "load_mismatch",
+    "load_world_surrogate",
     "make_parser",
     "name_list",
     "nonneg_int",
@@ -251,17 +253,57 @@ def load_env_config(
     return scenario, costs
 
 
+#: the ``[mismatch]`` key naming a feature-surrogate file the world draws its features from
+WORLD_SURROGATE_KEY = "world_surrogate"
+
+
 def load_mismatch(parser: argparse.ArgumentParser, args: argparse.Namespace) -> Mismatch | None:
     """The ``[mismatch]`` table of ``--scenario`` (None without one): the world's departure
-    from the monitor's model; a bad table is a usage error naming the file and the field."""
+    from the monitor's model (its multipliers; :func:`load_world_surrogate` reads its
+    ``world_surrogate`` file); a bad table is a usage error naming the file and the field."""
     from scas_env.utils.config_files import read_mapping
 
     try:
-        if args.scenario is None or "mismatch" not in read_mapping(args.scenario):
+        if args.scenario is None or "mismatch" not in (data := read_mapping(args.scenario)):
             return None
-        return Mismatch.load(args.scenario)
+        table = data["mismatch"]
+        if not isinstance(table, dict):
+            raise ValueError(f"{args.scenario}: [mismatch] must be a table, got {table!r}")
+        fields = {k: v for k, v in table.items() if k != WORLD_SURROGATE_KEY}
+        return Mismatch.from_dict(fields)
+    except (ValueError, FileNotFoundError) as exc:
+        parser.error(f"{args.scenario}: [mismatch]: {exc}")
+
+
+def load_world_surrogate(parser: argparse.ArgumentParser, args: argparse.Namespace) -> Any:
+    """The feature surrogate named by ``world_surrogate = "FILE"`` in the ``[mismatch]``
+    table of ``--scenario`` (a path relative to that file; ``SurrogateModel.save``'s JSON,
+    e.g. built at another fluid temperature by ``python -m experiments.build.surrogate``),
+    or None. A missing or unreadable file is a usage error naming the key."""
+    from scas_env.actuator.surrogate import SurrogateModel
+    from scas_env.utils.config_files import read_mapping
+
+    if args.scenario is None:
+        return None
+    try:
+        table = read_mapping(args.scenario).get("mismatch")
     except (ValueError, FileNotFoundError) as exc:
         parser.error(str(exc))
+    if not isinstance(table, dict) or WORLD_SURROGATE_KEY not in table:
+        return None
+    name = table[WORLD_SURROGATE_KEY]
+    if not isinstance(name, str) or not name:
+        parser.error(
+            f"{args.scenario}: [mismatch] {WORLD_SURROGATE_KEY} = {name!r} must be a file name"
+        )
+    path = Path(args.scenario).parent / name
+    try:
+        return SurrogateModel.load(path)
+    except (ValueError, OSError, KeyError, TypeError) as exc:
+        parser.error(
+            f"{args.scenario}: [mismatch] {WORLD_SURROGATE_KEY} = {name!r}: cannot read {path} "
+            f"as a feature surrogate ({exc})"
+        )
 
 
 def agent_scenario(parser: argparse.ArgumentParser, args: argparse.Namespace) -> Scenario:

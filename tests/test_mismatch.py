@@ -380,6 +380,53 @@ def test_the_benchmark_runs_a_case_files_mismatch_table(tmp_path, capsys) -> Non
     assert "(Mismatch): {'crack_growth': 5.0}" in (out / "summary.md").read_text()
 
 
+def test_a_case_file_names_the_world_s_feature_surrogate(tmp_path, capsys) -> None:
+    """``[mismatch] world_surrogate = "FILE"`` (relative to the case file) makes the world
+    draw its features from that surrogate while the monitor keeps its own: the benchmark's
+    episodes are those of ``run_benchmark`` with ``world_surrogate=`` row for row (the filter
+    rule's rewards move with 5x run noise), alone or beside multipliers; the run records the
+    file and its SHA-256; a missing file is a usage error naming the key."""
+    import csv
+    import dataclasses
+    import hashlib
+    import json
+
+    from policies import cli as policies_cli
+    from policies.benchmark import run_benchmark
+
+    nominal = default_surrogate()
+    noisy = dataclasses.replace(nominal, run_std=nominal.run_std * 5.0)
+    (tmp_path / "worlds").mkdir()
+    noisy.save(tmp_path / "worlds" / "noisy.json")
+    case = tmp_path / "case.toml"
+    case.write_text('[scenario]\nepisode_slots = 1500\n[mismatch]\nworld_surrogate = '
+                    '"worlds/noisy.json"\n')  # fmt: skip
+    out = tmp_path / "bench"
+    argv = ["--scenario", str(case), "--episodes", "2", "--policies", "rul_risk", "--workers",
+            "1", "--out", str(out), "-q"]  # fmt: skip
+    assert policies_cli.benchmark_main(argv) == 0
+    with (out / "results.csv").open() as f:
+        rewards = [float(row["reward"]) for row in csv.DictReader(f)]
+    runs = {
+        name: run_benchmark(["rul_risk"], episodes=2, slots=1500, env_kwargs=kw)
+        for name, kw in (("world", {"world_surrogate": noisy}), ("nominal", {}))
+    }
+    assert rewards == [row["reward"] for row in runs["world"].rows]
+    assert rewards != [row["reward"] for row in runs["nominal"].rows]
+    config = json.loads((out / "summary.json").read_text())["config"]
+    digest = hashlib.sha256((tmp_path / "worlds" / "noisy.json").read_bytes()).hexdigest()
+    assert config["world_surrogate"] == {
+        "file": str(tmp_path / "worlds" / "noisy.json"),
+        "sha256": digest,
+    }
+    case.write_text('[mismatch]\nworld_surrogate = "missing.json"\ncrack_growth = 2.0\n')
+    with pytest.raises(SystemExit):
+        policies_cli.benchmark_main([*argv[:-3], "--out", str(tmp_path / "b2")])
+    err = capsys.readouterr().err
+    assert "[mismatch] world_surrogate = 'missing.json': cannot read" in err
+    assert not (tmp_path / "b2").exists()
+
+
 @pytest.mark.parametrize(
     ("command", "tables", "message"),
     [

@@ -26,7 +26,9 @@ of a part (failure or preventive replacement) and every part still fitted at the
 
 from __future__ import annotations
 
+import hashlib
 import importlib
+import json
 import math
 import signal
 import threading
@@ -475,9 +477,7 @@ def run_benchmark(
         "seed": seed,
         "n_workers": n_workers,
         "ray_address": ray_address,
-        "env_kwargs": {
-            k: repr(v) if not isinstance(v, int | float | str) else v for k, v in kwargs.items()
-        },
+        "env_kwargs": {k: _recorded(v) for k, v in kwargs.items()},
         "policies": [
             {
                 "label": s.key,
@@ -495,6 +495,21 @@ def run_benchmark(
     gap = (FLEET_GAP_BASE, FLEET_GAP_BOUND) if fleet else None
     summary = summarize(rows, keys, rules, confidence, metrics=metrics, gap=gap)
     return BenchmarkResult(rows, events, summary, config, wall, traces)
+
+
+def _recorded(value: Any) -> Any:
+    """An env keyword as the run's record keeps it: numbers and strings as they are, a
+    feature surrogate by its features and the SHA-256 of its JSON (its tables run to 11 kB),
+    anything else by ``repr``."""
+    from scas_env.actuator.surrogate import SurrogateModel
+
+    if isinstance(value, int | float | str):
+        return value
+    if isinstance(value, SurrogateModel):
+        text = json.dumps(value.to_dict(), sort_keys=True)
+        digest = hashlib.sha256(text.encode()).hexdigest()
+        return f"SurrogateModel(features={list(value.features)}, sha256={digest})"
+    return repr(value)
 
 
 def _family(spec: PolicySpec) -> str:
