@@ -276,6 +276,31 @@ def wilson_interval(successes: int, trials: int, confidence: float = 0.95) -> In
     return Interval(p, max(0.0, centre - half), min(1.0, centre + half), trials)
 
 
+def _percentile_bootstrap(
+    samples: tuple[np.ndarray, ...],
+    statistic: Any,
+    confidence: float,
+    resamples: int,
+    seed: int,
+    *,
+    paired: bool,
+) -> tuple[float, float]:
+    """The percentile-bootstrap interval of ``statistic`` (``scipy.stats.bootstrap``, a
+    generator seeded ``seed``; ``paired``: one index draw for every sample)."""
+    res = stats.bootstrap(
+        samples,
+        statistic,
+        paired=paired,
+        vectorized=True,
+        confidence_level=confidence,
+        n_resamples=resamples,
+        method="percentile",
+        rng=np.random.default_rng(seed),
+    )
+    ci = res.confidence_interval
+    return float(ci.low), float(ci.high)
+
+
 def bootstrap_mean(
     values: Sequence[float] | np.ndarray,
     confidence: float = 0.95,
@@ -293,16 +318,8 @@ def bootstrap_mean(
     n = int(x.size)
     if np.all(x == x[0]):
         return Interval(mean, mean, mean, n)
-    res = stats.bootstrap(
-        (x,),
-        np.mean,
-        confidence_level=confidence,
-        n_resamples=resamples,
-        method="percentile",
-        rng=np.random.default_rng(seed),
-    )
-    ci = res.confidence_interval
-    return Interval(mean, float(ci.low), float(ci.high), n)
+    low, high = _percentile_bootstrap((x,), np.mean, confidence, resamples, seed, paired=False)
+    return Interval(mean, low, high, n)
 
 
 def share_of_gap(
@@ -336,18 +353,8 @@ def share_of_gap(
     share = float(ratio(x, b, u))
     if n < 2:
         return Interval(share, math.nan, math.nan, n)
-    res = stats.bootstrap(
-        (x, b, u),
-        ratio,
-        paired=True,
-        vectorized=True,
-        confidence_level=confidence,
-        n_resamples=resamples,
-        method="percentile",
-        rng=np.random.default_rng(seed),
-    )
-    ci = res.confidence_interval
-    return Interval(share, float(ci.low), float(ci.high), n)
+    low, high = _percentile_bootstrap((x, b, u), ratio, confidence, resamples, seed, paired=True)
+    return Interval(share, low, high, n)
 
 
 def ratio_interval(
@@ -420,17 +427,8 @@ def cluster_ratio_bootstrap(
     def ratio(s: np.ndarray, c: np.ndarray, axis: int = -1) -> np.ndarray:
         return np.sum(s, axis=axis) / np.sum(c, axis=axis)
 
-    res = stats.bootstrap(
-        (s, c),
-        ratio,
-        paired=True,
-        confidence_level=confidence,
-        n_resamples=resamples,
-        method="percentile",
-        rng=np.random.default_rng(seed),
-    )
-    ci = res.confidence_interval
-    return Interval(r, float(ci.low), float(ci.high), int(total))
+    low, high = _percentile_bootstrap((s, c), ratio, confidence, resamples, seed, paired=True)
+    return Interval(r, low, high, int(total))
 
 
 def prognostics_block(
