@@ -177,3 +177,25 @@ def test_paired_features_shift_from_healthy_as_fresh_physics(
     assert abs(diffs.mean() - expected) < 4.0 * se  # (0.5, 0) and (0, 0.75) are grid points
     assert abs(expected) > 5.0 * se  # the change is resolved, not noise
     assert MODEL.feature_designs[feature].startswith("paired")
+
+
+def test_a_world_surrogate_is_tabulated_on_the_default_monitor_s_axes() -> None:
+    """``build_surrogate(params, axes=ScasParams())`` (``--world``): a colder fluid's
+    features at each lattice point are those of fresh units at the default design's
+    fractions of critical size (the seal's critical wear is 1.07e-5 m at 40 degC and
+    1.18e-5 m at 20 degC: on its own axes the cold table would read other physical wear)."""
+    import dataclasses
+
+    from experiments.build.surrogate import build_surrogate
+
+    cold = dataclasses.replace(P, fluid=dataclasses.replace(P.fluid, temperature_c=20.0))
+    model = build_surrogate(cold, seed=7, grid=2, units_per_point=2, runs_per_unit=2, axes=P)
+    seal_crit = default_calibration().seal_critical_wear_m
+    for p, (c, w) in enumerate([(0.0, 0.0), (0.0, 1.0), (1.0, 0.0), (1.0, 1.0)]):
+        runs = [
+            unit_runs(cold, c, w, np.random.SeedSequence(7, spawn_key=(p, u)), 2, seal_crit, P)
+            for u in range(2)
+        ]
+        i, j = divmod(p, 2)
+        np.testing.assert_allclose(model.mean[:, i, j], np.mean(runs, axis=(0, 1)), rtol=1e-12)
+    assert model.params_digest == params_digest(cold)  # the table is the cold design's

@@ -50,12 +50,14 @@ def unit_runs(
     seed_sequence: np.random.SeedSequence,
     runs_per_unit: int,
     seal_critical_m: float,
+    axes: ScasParams | None = None,
 ) -> np.ndarray:
-    """Features (runs, features) of one drawn unit at (c, w), in FEATURE_CONDITION order."""
+    """Features (runs, features) of one drawn unit at (c, w), in FEATURE_CONDITION order;
+    ``c`` a fraction of the unit's failure depth under ``axes`` (default: ``params``)."""
     rng = np.random.default_rng(seed_sequence)
     unit = draw_unit(params, rng)
     a_crit = failure_depth_from_params(
-        params,
+        params if axes is None else axes,
         wire_diameter_m=unit.wire_diameter_m[CRACKED_SPRING],
         coil_diameter_m=unit.mean_coil_diameter_m[CRACKED_SPRING],
     ).depth_m
@@ -78,6 +80,7 @@ def _chunk(
     runs_per_unit: int,
     seal_critical_m: float,
     paired: bool,
+    axes: ScasParams | None,
     specs: list[tuple[int, int]],
 ) -> list[np.ndarray]:
     return [
@@ -87,6 +90,7 @@ def _chunk(
             np.random.SeedSequence(seed, spawn_key=(u,) if paired else (p, u)),
             runs_per_unit,
             seal_critical_m,
+            axes,
         )
         for p, u in specs
     ]
@@ -118,19 +122,24 @@ def build_surrogate(
     n_workers: int = 1,
     progress: bool = False,
     paired: bool = False,
+    axes: ScasParams | None = None,
 ) -> SurrogateModel:
     """Run the nested design on a ``grid x grid`` lattice of [0, 1]^2 and fit the tables
-    (``paired``: the same units and runs at every point; module docstring)."""
+    (``paired``: the same units and runs at every point; module docstring). The lattice's
+    fractions are of the critical crack depth and seal wear of ``axes`` (default
+    ``params``): with ``axes=ScasParams()`` a design's features are tabulated on the default
+    monitor's fault axes, a world surrogate for model mismatch (the monitor reads a fraction
+    of its own critical sizes)."""
     if grid < 2:
         raise ValueError(f"grid = {grid} must be >= 2")
     crack_grid = np.linspace(0.0, 1.0, grid)
     wear_grid = np.linspace(0.0, 1.0, grid)
     points = [(float(c), float(w)) for c in crack_grid for w in wear_grid]
-    seal_critical_m = calibration_for(params).seal_critical_wear_m
+    seal_critical_m = calibration_for(params if axes is None else axes).seal_critical_wear_m
     specs = [(p, u) for p in range(len(points)) for u in range(units_per_point)]
     results = map_chunks(
         _chunk,
-        (params, seed, points, runs_per_unit, seal_critical_m, paired),
+        (params, seed, points, runs_per_unit, seal_critical_m, paired, axes),
         specs,
         n_workers=n_workers,
         progress=progress,
@@ -174,9 +183,11 @@ def build_shipped_surrogate(
     runs_per_unit: int = 5,
     n_workers: int = 1,
     progress: bool = False,
+    axes: ScasParams | None = None,
 ) -> SurrogateModel:
     """The shipped surrogate's recipe: Table 2's features from the independent design,
-    :data:`PAIRED_FEATURES` from the paired one (module docstring)."""
+    :data:`PAIRED_FEATURES` from the paired one (module docstring); ``axes``: as
+    :func:`build_surrogate`'s."""
     main = build_surrogate(
         params,
         seed=seed,
@@ -185,6 +196,7 @@ def build_shipped_surrogate(
         runs_per_unit=runs_per_unit,
         n_workers=n_workers,
         progress=progress,
+        axes=axes,
     )
     paired = build_surrogate(
         params,
@@ -195,6 +207,7 @@ def build_shipped_surrogate(
         n_workers=n_workers,
         progress=progress,
         paired=True,
+        axes=axes,
     )
     design = f"paired: seed {paired_seed}, {paired_units} units x {runs_per_unit} runs"
     return main.with_features_from(paired, PAIRED_FEATURES, design)
@@ -252,6 +265,13 @@ def build_parser() -> argparse.ArgumentParser:
         "with --overwrite, then python -m scas_env.utils.shipped_files)",
     )
     parser.add_argument("--overwrite", action="store_true", help="replace an existing --out")
+    parser.add_argument(
+        "--world",
+        action="store_true",
+        help="tabulate on the default design's fault axes (fractions of its critical crack "
+        "depth and seal wear): a world surrogate for the default monitor (model mismatch: "
+        "[mismatch] world_surrogate)",
+    )
     add_params_arg(parser)
     add_logging_args(parser)
     return parser
@@ -278,6 +298,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         runs_per_unit=args.runs,
         n_workers=args.workers or os.cpu_count() or 1,
         progress=not args.quiet,
+        axes=ScasParams() if args.world else None,
     )
     args.out.parent.mkdir(parents=True, exist_ok=True)
     model.save(args.out)
