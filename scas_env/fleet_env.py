@@ -150,7 +150,8 @@ class ScasFleetEnv(gym.Env):
     ## Observation Space
 
     ``Box`` (float32, documented bounds; ``env.unwrapped.obs_names`` names every entry and
-    ``obs_units`` gives its unit: an actuator's slots are the fleet's days), the
+    ``obs_units`` gives its unit: an actuator's slots are the fleet's days; the upper bounds
+    of part ages and test age are the episode's flights, a bound on its days too), the
     groups of :mod:`scas_env.core.fleet.view`: per actuator the single env's 20 entries
     (latest features I2, I6, I7, I8, I9, G1, G3; test age; no-go; RUL mean, low quantile and
     risk of spring and seals; detector flags; part ages; downtime), per aircraft its status
