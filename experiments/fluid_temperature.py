@@ -8,10 +8,14 @@ surrogate exactly), and the world draws its features from that table while the m
 keeps its own (``world_surrogate=``; a case file's ``[mismatch] world_surrogate``). The
 damage model is the nominal one (temperature's effect on wear is a growth mismatch of its
 own). The filter rule and the age rule at v2's tuned points (``docs/value_v2/ladder.json``,
-tuned on the nominal model, not re-tuned) run on the same held-out episodes (seed
+tuned on the nominal model) run on the same held-out episodes (seed
 :data:`policies.value.tuning.HELD_OUT_SEED`) at every temperature; value = paired reward
 difference filter - age with its t-interval and minimum detectable difference; the
-break-even temperature interpolates linearly between the temperatures run.
+break-even temperature interpolates linearly between the temperatures run. **Re-tuned**
+(``--retune-trials``, default the mismatch study's 24 trials x 30 training episodes): the
+filter family tuned again in each world on the training seeds, nested on the ladder's age
+rule and warm-started from the ladder's filter point (as :mod:`experiments.mismatch_study`
+does); the age rule is not re-tuned (its episodes do not depend on the features).
 
 Command line (docs/value.md, "Model mismatch")::
 
@@ -36,7 +40,7 @@ import numpy as np
 from experiments.build.surrogate import build_shipped_surrogate
 from policies.benchmark.run import PolicySpec, run_benchmark
 from policies.benchmark.stats import paired_comparison
-from policies.value.tuning import HELD_OUT_SEED
+from policies.value.tuning import FAMILIES, HELD_OUT_SEED, tune_family
 from scas_env.actuator.params import ScasParams
 from scas_env.actuator.surrogate import SurrogateModel
 
@@ -87,21 +91,41 @@ def run_study(
     n_workers: int = 1,
     quick: bool = False,
     progress: bool = True,
+    retune_trials: int = 24,
+    retune_episodes: int = 30,
 ) -> dict[str, Any]:
-    """Rows (one per temperature) and the break-evens of the value and its interval bounds."""
+    """Rows (one per temperature) and the break-evens of the value and its interval bounds,
+    nominal-tuned and (``retune_trials > 0``) with the filter rule re-tuned in each world."""
     tuning = json.loads(LADDER.read_text())["tuning"]
     specs = [
         PolicySpec(tuning[f]["policy"], tuning[f]["best_params"], label=k) for k, f in RULES.items()
     ]
     rows = []
+    retuned: dict[str, Any] = {}
     for temp in temperatures:
         kwargs = (
             {}
             if float(temp) == NOMINAL_C
             else {"world_surrogate": world_surrogate(temp, n_workers=n_workers, quick=quick)}
         )
+        arms = list(specs)
+        if retune_trials > 0:
+            best = dict(tuning["filter"]["best_params"])  # the nominal world's tuning
+            if float(temp) != NOMINAL_C:
+                best = tune_family(
+                    FAMILIES["filter"],
+                    trials=retune_trials,
+                    episodes=retune_episodes,
+                    slots=slots,
+                    age_params=tuning["age"]["best_params"],
+                    env_kwargs=kwargs,
+                    start_points=(best,),
+                ).best_params
+            retuned[f"{float(temp):g}"] = best
+            if float(temp) != NOMINAL_C:  # at the nominal temperature it is the ladder's rule
+                arms.append(PolicySpec(tuning["filter"]["policy"], best, label="filter re-tuned"))
         res = run_benchmark(
-            specs,
+            arms,
             episodes=episodes,
             slots=slots,
             seed=HELD_OUT_SEED,
@@ -109,7 +133,10 @@ def run_study(
             env_kwargs=kwargs,
             progress=progress,
         )
-        reward = {k: np.array([r["reward"] for r in res.rows if r["policy"] == k]) for k in RULES}
+        reward = {
+            a.label: np.array([r["reward"] for r in res.rows if r["policy"] == a.label])
+            for a in arms
+        }
         pc = paired_comparison(reward["filter"], reward["age"])
         fh = {k: sum(r["flight_hours"] for r in res.rows if r["policy"] == k) for k in RULES}
         row: dict[str, Any] = {
@@ -117,23 +144,32 @@ def run_study(
             "episodes": episodes,
             **{f"value_{s}": pc[s] for s in ("mean", "low", "high", "mdd")},
         }
+        if retune_trials > 0:
+            re = paired_comparison(reward.get("filter re-tuned", reward["filter"]), reward["age"])
+            row |= {f"value_retuned_{s}": re[s] for s in ("mean", "low", "high", "mdd")}
         for k in RULES:
             for part in ("spring", "seal"):
                 n = sum(r[f"failures_{part}"] for r in res.rows if r["policy"] == k)
                 row[f"failures_per_kfh_{k}_{part}"] = 1000.0 * n / fh[k] if fh[k] else math.nan
         rows.append(row)
     temps = [r["temperature_c"] for r in rows]
+    series = ("value", "value_retuned") if retune_trials > 0 else ("value",)
     return {
         "rows": rows,
         "break_even_c": {
-            s: break_even(temps, [r[f"value_{s}"] for r in rows]) for s in ("mean", "low", "high")
+            f"{v}_{s}": break_even(temps, [r[f"{v}_{s}"] for r in rows])
+            for v in series
+            for s in ("mean", "low", "high")
         },
+        "retuned_params": retuned,
         "config": {
             "episodes": episodes,
             "slots": slots,
             "seed": HELD_OUT_SEED,
             "ladder": str(LADDER.name),
             "quick": quick,
+            "retune_trials": retune_trials,
+            "retune_episodes": retune_episodes,
         },
     }
 
@@ -145,12 +181,18 @@ def _plot(study: dict[str, Any], path: Path) -> None:
     import matplotlib.pyplot as plt
 
     rows = study["rows"]
-    t = [r["temperature_c"] for r in rows]
-    m = np.array([r["value_mean"] for r in rows])
-    lo = m - np.array([r["value_low"] for r in rows])
-    hi = np.array([r["value_high"] for r in rows]) - m
+    t = np.array([r["temperature_c"] for r in rows])
     fig, ax = plt.subplots(figsize=(6.4, 3.6))
-    ax.errorbar(t, m / 1e3, yerr=[lo / 1e3, hi / 1e3], marker="o", capsize=3)
+    for v, label, shift in (("value", "nominal-tuned", -0.4), ("value_retuned", "re-tuned", 0.4)):
+        if f"{v}_mean" not in rows[0]:
+            continue
+        m = np.array([r[f"{v}_mean"] for r in rows])
+        lo = m - np.array([r[f"{v}_low"] for r in rows])
+        hi = np.array([r[f"{v}_high"] for r in rows]) - m
+        ax.errorbar(
+            t + shift, m / 1e3, yerr=[lo / 1e3, hi / 1e3], marker="o", capsize=3, label=label
+        )
+    ax.legend()
     ax.axhline(0.0, color="grey", lw=0.8)
     ax.axvline(NOMINAL_C, color="grey", ls=":", lw=0.8)
     ax.set_xlabel("fluid temperature of the world (degC); the monitor assumes 40")
@@ -196,6 +238,15 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser.add_argument("--slots", type=positive_int, default=2000)
     parser.add_argument("--workers", type=positive_int, default=1)
     parser.add_argument("--quick", action="store_true", help="small surrogates (smoke runs)")
+    parser.add_argument(
+        "--retune-trials",
+        type=int_at_least(0),
+        default=24,
+        help="TPE trials re-tuning the filter rule per world (0: none)",
+    )
+    parser.add_argument(
+        "--retune-episodes", type=int_at_least(2), default=30, help="training episodes per trial"
+    )
     parser.add_argument("--no-progress", action="store_true")
     args = parser.parse_args(argv)
     out = check_out_dir(parser, args.out, args.overwrite)
@@ -213,14 +264,19 @@ def main(argv: Sequence[str] | None = None) -> int:
         n_workers=args.workers,
         quick=args.quick,
         progress=not args.no_progress,
+        retune_trials=args.retune_trials,
+        retune_episodes=args.retune_episodes,
     )
     for path in write_outputs(study, out, overwrite=args.overwrite):
         print(path)
     for r in study["rows"]:
-        print(
-            f"{r['temperature_c']:5.1f} degC: {r['value_mean']:+,.0f} "
-            f"[{r['value_low']:+,.0f}, {r['value_high']:+,.0f}] (MDD {r['value_mdd']:,.0f})"
-        )
+        for v in ("value", "value_retuned"):
+            if f"{v}_mean" in r:
+                print(
+                    f"{r['temperature_c']:5.1f} degC {v}: {r[f'{v}_mean']:+,.0f} "
+                    f"[{r[f'{v}_low']:+,.0f}, {r[f'{v}_high']:+,.0f}] "
+                    f"(MDD {r[f'{v}_mdd']:,.0f})"
+                )
     print(f"break-even: {study['break_even_c']}")
     return 0
 

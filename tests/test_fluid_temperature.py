@@ -26,7 +26,8 @@ def test_break_even_interpolates_each_sign_change() -> None:
 def test_a_smoke_run_writes_the_paired_values(tmp_path: Path) -> None:
     out = tmp_path / "ft"
     argv = ["--out", str(out), "--temperatures", "20,40", "--episodes", "3", "--slots", "900",
-            "--quick", "--no-progress"]  # fmt: skip
+            "--quick", "--no-progress", "--retune-trials", "2",
+            "--retune-episodes", "2"]  # fmt: skip
     assert main(argv) == 0
     rows = list(csv.DictReader((out / "points.csv").open()))
     assert [float(r["temperature_c"]) for r in rows] == [20.0, 40.0]
@@ -43,6 +44,9 @@ def test_a_smoke_run_writes_the_paired_values(tmp_path: Path) -> None:
     )
     nominal = rows[1]
     assert float(nominal["value_mean"]) == pytest.approx(float(np.mean(x - y)))
+    # at the nominal temperature the re-tuned rule is the ladder's: the same value
+    assert nominal["value_retuned_mean"] == nominal["value_mean"]
+    assert set(study["retuned_params"]) == {"20", "40"}
     assert np.std(x - y) > 0  # 900 slots: the episodes differ, so the interval is a test
     ci = stats.ttest_rel(x, y).confidence_interval(0.95)
     got = (float(nominal["value_low"]), float(nominal["value_high"]))
