@@ -19,6 +19,7 @@ from pathlib import Path
 from typing import Any
 
 from scas_env.cli_args import (
+    WORLD_SURROGATE_KEY,
     add_env_config_args,
     add_logging_args,
     agent_scenario,
@@ -35,6 +36,7 @@ from scas_env.cli_args import (
     positive_float,
     positive_int,
     scenario_changes,
+    world_surrogate_path,
 )
 from scas_env.core.costs import CostModel
 from scas_env.core.mismatch import Mismatch
@@ -91,20 +93,16 @@ def _config_record(
     scenario: Scenario,
     costs: CostModel,
     mismatch: Mismatch | None = None,
+    world_file: Path | None = None,
 ) -> dict[str, Any]:
     """The exact configuration of a run, for its results (files and full values; a
     ``[mismatch]`` world surrogate by its file name and SHA-256)."""
     words = [prog, *(sys.argv[1:] if argv is None else argv)]
     world = {} if mismatch is None else {"mismatch": mismatch.to_dict()}
-    if args.scenario is not None and mismatch is not None:
-        from scas_env.cli_args import WORLD_SURROGATE_KEY
-        from scas_env.utils.config_files import read_mapping
+    if world_file is not None:
         from scas_env.utils.shipped_files import file_sha256
 
-        name = read_mapping(args.scenario)["mismatch"].get(WORLD_SURROGATE_KEY)
-        if name is not None:
-            path = Path(args.scenario).parent / name
-            world[WORLD_SURROGATE_KEY] = {"file": str(path), "sha256": file_sha256(path)}
+        world[WORLD_SURROGATE_KEY] = {"file": str(world_file), "sha256": file_sha256(world_file)}
     return {
         "scenario": scenario.to_dict(),
         "costs": costs.to_dict(),
@@ -271,6 +269,7 @@ def benchmark_main(argv: Sequence[str] | None = None) -> int:
     scenario, costs = load_env_config(parser, args, fleet=True, mismatch=True)
     mismatch = load_mismatch(parser, args)
     world_surrogate = load_world_surrogate(parser, args)
+    world_file = world_surrogate_path(parser, args)
     if scenario.obs_mode != Scenario().obs_mode:
         parser.error(
             f"{args.scenario}: obs_mode = {scenario.obs_mode!r}: the benchmark gives each "
@@ -376,7 +375,7 @@ def benchmark_main(argv: Sequence[str] | None = None) -> int:
         parser.error(f"--ray-address: {exc}")
     if fleet is not None:
         scenario = env_kwargs["scenario"]
-    record = _config_record(parser.prog, argv, args, scenario, costs, mismatch)
+    record = _config_record(parser.prog, argv, args, scenario, costs, mismatch, world_file)
     result.config.update(record)
     if fleet is not None:
         result.config["fleet"] = fleet.to_dict()
@@ -675,6 +674,7 @@ def tune_main(argv: Sequence[str] | None = None) -> int:
     scenario, costs = load_env_config(parser, args, fleet=True, mismatch=True)
     mismatch = load_mismatch(parser, args)
     world_surrogate = load_world_surrogate(parser, args)
+    world_file = world_surrogate_path(parser, args)
     fleet = _fleet_config(parser, args)
     if fleet is not None and mismatch is not None:
         parser.error(f"{args.scenario}: [mismatch]: a fleet runs the monitor's model")
@@ -702,7 +702,8 @@ def tune_main(argv: Sequence[str] | None = None) -> int:
         **size,
     )
     ran = scenario.replace(episode_slots=size["slots"]) if "slots" in size else scenario
-    config = {"size": size, **_config_record(parser.prog, argv, args, ran, costs, mismatch)}
+    record = _config_record(parser.prog, argv, args, ran, costs, mismatch, world_file)
+    config = {"size": size, **record}
     return _write_tuning(results, out, config, args.overwrite)
 
 
@@ -798,6 +799,7 @@ def value_main(argv: Sequence[str] | None = None) -> int:
     mismatch = load_mismatch(parser, args)
     if scenario.obs_mode != Scenario().obs_mode:
         parser.error(f"{args.scenario}: obs_mode is set per arm; leave it out of the file")
+    world_file = world_surrogate_path(parser, args)
     env_kwargs = _env_kwargs(
         scenario, costs, ("obs_mode", "episode_slots"), mismatch, load_world_surrogate(parser, args)
     )
@@ -816,7 +818,7 @@ def value_main(argv: Sequence[str] | None = None) -> int:
         **size,
     )
     ran = scenario.replace(episode_slots=size["slots"]) if "slots" in size else scenario
-    result.config.update(_config_record(parser.prog, argv, args, ran, costs, mismatch))
+    result.config.update(_config_record(parser.prog, argv, args, ran, costs, mismatch, world_file))
     print(markdown_report(result))
     paths = write_outputs(result, out, overwrite=args.overwrite)
     n = len(result.rows)

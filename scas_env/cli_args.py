@@ -64,6 +64,7 @@ __all__ = [
     "positive_float",
     "positive_int",
     "scenario_changes",
+    "world_surrogate_path",
 ]
 
 
@@ -275,12 +276,10 @@ def load_mismatch(parser: argparse.ArgumentParser, args: argparse.Namespace) -> 
         parser.error(f"{args.scenario}: [mismatch]: {exc}")
 
 
-def load_world_surrogate(parser: argparse.ArgumentParser, args: argparse.Namespace) -> Any:
-    """The feature surrogate named by ``world_surrogate = "FILE"`` in the ``[mismatch]``
-    table of ``--scenario`` (a path relative to that file; ``SurrogateModel.save``'s JSON,
-    e.g. built at another fluid temperature by ``python -m experiments.build.surrogate``),
-    or None. A missing or unreadable file is a usage error naming the key."""
-    from scas_env.actuator.surrogate import SurrogateModel
+def world_surrogate_path(parser: argparse.ArgumentParser, args: argparse.Namespace) -> Path | None:
+    """The file named by ``world_surrogate = "FILE"`` in the ``[mismatch]`` table of
+    ``--scenario`` (a path relative to that file), or None; a name that is not a non-empty
+    string is a usage error naming the key."""
     from scas_env.utils.config_files import read_mapping
 
     if args.scenario is None:
@@ -296,13 +295,24 @@ def load_world_surrogate(parser: argparse.ArgumentParser, args: argparse.Namespa
         parser.error(
             f"{args.scenario}: [mismatch] {WORLD_SURROGATE_KEY} = {name!r} must be a file name"
         )
-    path = Path(args.scenario).parent / name
+    return Path(args.scenario).parent / name
+
+
+def load_world_surrogate(parser: argparse.ArgumentParser, args: argparse.Namespace) -> Any:
+    """The feature surrogate of :func:`world_surrogate_path` (``SurrogateModel.save``'s JSON,
+    e.g. built at another fluid temperature by ``python -m experiments.build.surrogate
+    --world``), or None. A missing or unreadable file is a usage error naming the key."""
+    from scas_env.actuator.surrogate import SurrogateModel
+
+    path = world_surrogate_path(parser, args)
+    if path is None:
+        return None
     try:
         return SurrogateModel.load(path)
     except (ValueError, OSError, KeyError, TypeError) as exc:
         parser.error(
-            f"{args.scenario}: [mismatch] {WORLD_SURROGATE_KEY} = {name!r}: cannot read {path} "
-            f"as a feature surrogate ({exc})"
+            f"{args.scenario}: [mismatch] {WORLD_SURROGATE_KEY} = {path.name!r}: cannot read "
+            f"{path} as a feature surrogate ({exc})"
         )
 
 

@@ -8,7 +8,6 @@ from types import SimpleNamespace
 
 import numpy as np
 import pytest
-from scipy import stats
 
 from policies.benchmark.report import BELIEF_COLUMNS, markdown_summary
 from policies.benchmark.run import BenchmarkResult, PolicySpec, run_benchmark
@@ -21,7 +20,6 @@ from policies.benchmark.runner import (
 from policies.benchmark.stats import (
     cluster_ratio_bootstrap,
     prognostics_block,
-    ratio_interval,
     summarize,
 )
 from scas_env.core.setup import PARTS, REWARD_TERMS
@@ -166,21 +164,6 @@ def test_decision_scores_edge_cases() -> None:
     assert ra == pytest.approx(0.79) and not hit and not cov
     assert belief_columns(("spring_rul_mean", "spring_rul_low")) is None
     assert belief_columns(NAMES) == {"spring": (0, 1), "seal": (2, 3)}
-
-
-def test_ratio_interval_is_the_cluster_ratio_estimator() -> None:
-    rng = np.random.default_rng(3)
-    counts = rng.integers(1, 9, size=40)
-    sums = np.array([rng.normal(0.8, 0.2, c).sum() for c in counts])
-    iv = ratio_interval(np.append(sums, 0.0), np.append(counts, 0), 0.9)
-    r = sums.sum() / counts.sum()
-    # the linearised variance written out: residuals of each cluster's sum from r * count
-    m = counts.size
-    se = math.sqrt(m / (m - 1) * np.sum((sums - r * counts) ** 2)) / counts.sum()
-    half = stats.t.ppf(0.95, m - 1) * se
-    assert (iv.mean, iv.n) == (pytest.approx(r), int(counts.sum()))
-    assert (iv.low, iv.high) == (pytest.approx(r - half), pytest.approx(r + half))
-    assert math.isnan(ratio_interval([1.0], [0]).mean)
 
 
 def test_block_summary_and_table_from_rows() -> None:

@@ -106,7 +106,6 @@ __all__ = [
     "paired_comparison",
     "paired_difference",
     "prognostics_block",
-    "ratio_interval",
     "share_of_gap",
     "summarize",
     "t_interval",
@@ -355,37 +354,6 @@ def share_of_gap(
         return Interval(share, math.nan, math.nan, n)
     low, high = _percentile_bootstrap((x, b, u), ratio, confidence, resamples, seed, paired=True)
     return Interval(share, low, high, n)
-
-
-def ratio_interval(
-    sums: Sequence[float] | np.ndarray,
-    counts: Sequence[float] | np.ndarray,
-    confidence: float = 0.95,
-) -> Interval:
-    """``r = sum(sums) / sum(counts)`` over clusters (episodes) with ``counts > 0``, and the
-    t-interval (``m - 1`` degrees of freedom, ``m`` clusters) of its linearised variance
-    ``m / (m - 1) * sum((s_e - r c_e)^2) / (sum c)^2``; ``n`` is the number of items.
-
-    >>> iv = ratio_interval([2.0, 4.0], [2, 4])
-    >>> iv.mean, iv.low, iv.high, iv.n
-    (1.0, 1.0, 1.0, 6)
-    """
-    _confidence(confidence)
-    s, c = np.asarray(sums, dtype=np.float64), np.asarray(counts, dtype=np.float64)
-    if s.shape != c.shape:
-        raise ValueError(f"sums and counts need equal shapes, got {s.shape} and {c.shape}")
-    keep = c > 0
-    s, c = s[keep], c[keep]
-    total = float(c.sum())
-    if total == 0.0:
-        return Interval(math.nan, math.nan, math.nan, 0)
-    r = float(s.sum() / total)
-    m = int(c.size)
-    if m < 2:
-        return Interval(r, math.nan, math.nan, int(total))
-    var = m / (m - 1) * float(np.sum((s - r * c) ** 2)) / total**2
-    half = float(student_t.ppf(0.5 + 0.5 * confidence, m - 1) * math.sqrt(var))
-    return Interval(r, r - half, r + half, int(total))
 
 
 def cluster_ratio_bootstrap(
