@@ -12,7 +12,7 @@ from pathlib import Path
 import pytest
 
 from policies.benchmark.run import PolicySpec, run_benchmark
-from policies.cli import benchmark_main
+from policies.cli.benchmark import main as benchmark_main
 from policies.value.tuning import TuningResult, write_tuning_outputs
 
 #: a filter rule far from its defaults (it tests every 7 slots) and an age rule

@@ -17,7 +17,7 @@ from policies.benchmark.run import (
     policy_params,
     run_benchmark,
 )
-from policies.cli import benchmark_main
+from policies.cli.benchmark import main as benchmark_main
 from scas_env import ENV_ID
 
 

@@ -265,11 +265,11 @@ def test_single_actuator_commands_refuse_a_fleet_file(
     """A fleet file's [scenario] and [costs] tables are readable, but a command that runs one
     actuator (here the value study) does not silently drop its [fleet] table: a usage error
     before any work."""
-    from policies import cli as policies_cli
+    from policies.cli import value as value_cli
 
     out = tmp_path / "value"
     with pytest.raises(SystemExit) as exit_:
-        policies_cli.value_main(["--scenario", str(path), "--out", str(out)])
+        value_cli.main(["--scenario", str(path), "--out", str(out)])
     assert exit_.value.code == 2
     assert "holds a [fleet] table: this command runs one actuator" in capsys.readouterr().err
     assert not out.exists()
@@ -279,31 +279,32 @@ def test_a_fleet_run_reads_a_scenario_file_of_top_level_fields(tmp_path: Path) -
     """``--fleet --scenario FILE`` with the Scenario's fields at the top level (one group per
     file) sets the fleet's actuators' scenario over the fleet's defaults, as a [scenario]
     table does (they were validated, then dropped)."""
-    from policies import cli as policies_cli
+    from policies.cli import benchmark as benchmark_cli
+    from policies.cli import run_config
 
     flat = tmp_path / "flat.toml"
     flat.write_text('initial_health = "new"\nn_particles = 50\n')
     table = tmp_path / "table.toml"
     table.write_text('[scenario]\ninitial_health = "new"\nn_particles = 50\n')
-    parser = policies_cli.benchmark_parser()
+    parser = benchmark_cli.build_parser()
     for path in (flat, table):
         args = parser.parse_args(["--fleet", "--scenario", str(path)])
-        got = policies_cli._fleet_scenario(parser, args)
+        got = run_config.fleet_scenario(parser, args)
         assert (got.initial_health, got.n_particles) == ("new", 50)
     args = parser.parse_args(["--fleet"])
-    assert policies_cli._fleet_scenario(parser, args).initial_health == "in_service"
+    assert run_config.fleet_scenario(parser, args).initial_health == "in_service"
 
 
 @pytest.mark.filterwarnings("ignore:No artists with labels:UserWarning")
 def test_the_benchmark_runs_a_fleet_file_with_its_three_tables(tmp_path: Path) -> None:
     """``scas-benchmark --scenario <fleet file>`` reads the file's [scenario], [costs] and
     [fleet] tables (FILE_SECTIONS) and records them."""
-    from policies import cli as policies_cli
+    from policies.cli import benchmark as benchmark_cli
 
     path = ROOT / "examples" / "fleet_military_training.toml"
     out = tmp_path / "bench"
     argv = ["--scenario", str(path), "--episodes", "1", "--policies", "fleet_naive"]
-    assert policies_cli.benchmark_main([*argv, "--workers", "1", "--out", str(out), "-q"]) == 0
+    assert benchmark_cli.main([*argv, "--workers", "1", "--out", str(out), "-q"]) == 0
     config = json.loads((out / "summary.json").read_text())["config"]
     assert FleetConfig.from_dict(config["fleet"]) == FleetConfig.load(path)
     assert CostModel.from_dict(config["costs"]) == CostModel.load(path)

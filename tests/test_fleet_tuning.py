@@ -15,7 +15,7 @@ import pytest
 from policies.base import make_policy, policy_obs_mode
 from policies.benchmark.fleet_runner import run_fleet_episodes
 from policies.benchmark.run import episode_seeds
-from policies.cli import tune_main
+from policies.cli.tune import main as tune_main
 from policies.value.fleet_tuning import (
     FLEET_FAMILIES,
     STARTS,

@@ -358,14 +358,14 @@ def test_the_benchmark_runs_a_case_files_mismatch_table(tmp_path, capsys) -> Non
     import csv
     import json
 
-    from policies import cli as policies_cli
     from policies.benchmark import run_benchmark
+    from policies.cli import benchmark as benchmark_cli
 
     world = Mismatch(crack_growth=5.0)
     case = _case(tmp_path, scenario=Scenario(episode_slots=400), mismatch=world)
     out = tmp_path / "bench"
     argv = ["--scenario", case, "--episodes", "2", "--policies", "corrective", "--workers", "1"]
-    assert policies_cli.benchmark_main([*argv, "--out", str(out), "-q"]) == 0
+    assert benchmark_cli.main([*argv, "--out", str(out), "-q"]) == 0
     with (out / "results.csv").open() as f:
         rewards = [float(row["reward"]) for row in csv.DictReader(f)]
     runs = {
@@ -391,8 +391,8 @@ def test_a_case_file_names_the_world_s_feature_surrogate(tmp_path, capsys) -> No
     import hashlib
     import json
 
-    from policies import cli as policies_cli
     from policies.benchmark import run_benchmark
+    from policies.cli import benchmark as benchmark_cli
 
     nominal = default_surrogate()
     noisy = dataclasses.replace(nominal, run_std=nominal.run_std * 5.0)
@@ -404,7 +404,7 @@ def test_a_case_file_names_the_world_s_feature_surrogate(tmp_path, capsys) -> No
     out = tmp_path / "bench"
     argv = ["--scenario", str(case), "--episodes", "2", "--policies", "rul_risk", "--workers",
             "1", "--out", str(out), "-q"]  # fmt: skip
-    assert policies_cli.benchmark_main(argv) == 0
+    assert benchmark_cli.main(argv) == 0
     with (out / "results.csv").open() as f:
         rewards = [float(row["reward"]) for row in csv.DictReader(f)]
     runs = {
@@ -421,7 +421,7 @@ def test_a_case_file_names_the_world_s_feature_surrogate(tmp_path, capsys) -> No
     }
     case.write_text('[mismatch]\nworld_surrogate = "missing.json"\ncrack_growth = 2.0\n')
     with pytest.raises(SystemExit):
-        policies_cli.benchmark_main([*argv[:-3], "--out", str(tmp_path / "b2")])
+        benchmark_cli.main([*argv[:-3], "--out", str(tmp_path / "b2")])
     err = capsys.readouterr().err
     assert "[mismatch] world_surrogate = 'missing.json': cannot read" in err
     assert not (tmp_path / "b2").exists()
@@ -430,10 +430,10 @@ def test_a_case_file_names_the_world_s_feature_surrogate(tmp_path, capsys) -> No
 @pytest.mark.parametrize(
     ("command", "tables", "message"),
     [
-        ("train_main", {"mismatch": Mismatch(crack_growth=2.0)}, "holds a [mismatch] table"),
-        ("value_main", {"params": None}, "holds a [params] table"),
-        ("benchmark_main", {"fleet": None, "mismatch": Mismatch()}, "a fleet runs the monitor"),
-        ("benchmark_main", {"mismatch": {"crack_grow": 2.0}}, "unknown key(s) ['crack_grow']"),
+        ("train", {"mismatch": Mismatch(crack_growth=2.0)}, "holds a [mismatch] table"),
+        ("value", {"params": None}, "holds a [params] table"),
+        ("benchmark", {"fleet": None, "mismatch": Mismatch()}, "a fleet runs the monitor"),
+        ("benchmark", {"mismatch": {"crack_grow": 2.0}}, "unknown key(s) ['crack_grow']"),
     ],
 )
 def test_a_table_a_command_does_not_read_is_a_usage_error(
@@ -442,7 +442,8 @@ def test_a_table_a_command_does_not_read_is_a_usage_error(
     """No command drops a case file's table silently: [params] (no command reads it),
     [mismatch] where the command runs the monitor's world (training; fleets), a bad
     [mismatch] key; usage errors before any work, nothing written."""
-    from policies import cli as policies_cli
+    import importlib
+
     from scas_env.actuator.params import ScasParams
     from scas_env.core.fleet.config import FleetConfig
 
@@ -454,8 +455,9 @@ def test_a_table_a_command_does_not_read_is_a_usage_error(
     else:
         save_sections(path, {"scenario": Scenario(episode_slots=50), **data})
     out = tmp_path / "out"
+    main = importlib.import_module(f"policies.cli.{command}").main
     with pytest.raises(SystemExit) as exit_:
-        getattr(policies_cli, command)(["--scenario", str(path), "--out", str(out)])
+        main(["--scenario", str(path), "--out", str(out)])
     assert exit_.value.code == 2
     assert message in capsys.readouterr().err
     assert not out.exists()
@@ -464,16 +466,16 @@ def test_a_table_a_command_does_not_read_is_a_usage_error(
 def test_a_case_file_of_a_mismatch_alone_runs_the_default_scenario(tmp_path, capsys) -> None:
     """A file holding only ``[mismatch]`` reads as the default scenario in that world (as a
     fleet alone does); its bad value is the error, not a missing [scenario] table."""
-    from policies import cli as policies_cli
+    from policies.cli import benchmark as benchmark_cli
     from scas_env.cli_args import load_env_config, load_mismatch
 
     path = tmp_path / "world.toml"
     path.write_text("[mismatch]\ncrack_growth = 2.0\n")
-    parser = policies_cli.benchmark_parser()
+    parser = benchmark_cli.build_parser()
     args = parser.parse_args(["--scenario", str(path)])
     scenario, _ = load_env_config(parser, args, fleet=True, mismatch=True)
     assert scenario == Scenario() and load_mismatch(parser, args) == Mismatch(crack_growth=2.0)
     path.write_text("[mismatch]\ncrack_growth = 0\n")
     with pytest.raises(SystemExit):
-        policies_cli.benchmark_main(["--scenario", str(path), "--out", str(tmp_path / "o")])
+        benchmark_cli.main(["--scenario", str(path), "--out", str(tmp_path / "o")])
     assert "Mismatch.crack_growth = 0" in capsys.readouterr().err
