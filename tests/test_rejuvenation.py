@@ -9,7 +9,8 @@ prior (closed form: truncated normal initial depth, normal log theta) and the fu
 posterior (numerical quadrature on a grid) invariant, and a mis-stated noise makes the same
 test fail. The option is off by default (the committed fingerprint unchanged), the single env
 and the native vector env stay equal bit for bit with it on, the history's growth changes no
-number, and bad values are refused.
+number, and bad values are refused. The move's batched replay of the history gives the
+reference's numbers bit for bit, and the move is the per-proposal algorithm, bit for bit.
 """
 
 from __future__ import annotations
@@ -26,6 +27,7 @@ from scipy.stats import kstest, multivariate_normal, norm, truncnorm
 
 from experiments.belief_calibration import policy_action
 from experiments.fingerprint import episodes_digest
+from prognostics.degradation_models import inverse_damage_scalar
 from prognostics.normals import NormalStream
 from scas_env import ENV_ID
 from scas_env.core import state as state_module
@@ -40,8 +42,11 @@ from scas_env.core.rejuvenation import (
     H_TABLE,
     H_Y,
     history_loglik,
+    log_prior,
     move_particles,
+    prepare_history,
     proposal_factor,
+    replay_histories,
 )
 from scas_env.core.scenario import Scenario
 from scas_env.env import ScasMaintenanceEnv
@@ -220,6 +225,96 @@ def test_history_loglik_is_the_joint_gaussian_density(history_env) -> None:
     assert single.loglik(a0[:1], lam[:1])[0] == pytest.approx(
         multivariate_normal(mu, cov).logpdf(rows[:, H_Y]), rel=1e-9
     )
+
+
+def _bits(v: np.ndarray) -> np.ndarray:
+    return np.ascontiguousarray(v, dtype=np.float64).view(np.int64)
+
+
+def test_the_batched_replay_is_the_reference_bit_for_bit(history_env) -> None:
+    """:func:`replay_histories` (the move's replay: a prepared history, all the points at
+    once) returns :func:`history_loglik`'s log-likelihood and beliefs bit for bit: at the
+    cloud's points, far outside the growth table on either side, and at points whose
+    damage at a datum lands on the table's start or just past one of its knots (the
+    series branch of the segment's inverse)."""
+    env = history_env
+    a, bank, filt = env.batch.a, env.batch.bank, env.setup.filters
+    cum = filt.rul_tables[0][2]
+    rows = a["history"][0, : a["history_n"][0]]
+    dt = a["clock"][0, C_AGE] - rows[:, H_AGE]
+    x, lam = a["x"][0, 0], a["log_theta"][0, 0]
+    d = [env.setup.spring_process.damage(x)]
+    lams = [lam]
+    lo, hi = -2.0 * cum[-1], 3.0 * cum[-1]
+    d.append(np.array([lo, hi, lo, hi]))
+    lams.append(np.array([0.0, 0.0, 2.0, -2.0]))
+    for q in (0, dt.size // 2, dt.size - 1):  # at datum q: 0, a knot and just past it
+        for target in (0.0, cum[40], cum[40] + 5e-8, cum[-1]):
+            d.append(np.array([target + dt[q], target + math.exp(0.3) * dt[q]]))
+            lams.append(np.array([0.0, 0.3]))
+    d, lam = np.concatenate(d), np.concatenate(lams)
+    n_aux = a["aux"].shape[2]
+    z_ref = np.empty((n_aux, d.size))
+    ref = np.empty(d.size)
+    z = np.empty(n_aux)
+    for r in range(d.size):
+        ref[r] = history_loglik(d[r], lam[r], 0, bank, filt, z)
+        z_ref[:, r] = z
+    total, z_all = np.empty(d.size), np.empty((n_aux, d.size))
+    replay_histories(d, lam, d.size, prepare_history(0, bank, filt), filt, z_all, total)
+    assert np.isfinite(ref).all()
+    np.testing.assert_array_equal(_bits(total), _bits(ref))
+    np.testing.assert_array_equal(_bits(z_all), _bits(z_ref))
+
+
+def test_the_move_is_the_per_proposal_algorithm_bit_for_bit() -> None:
+    """Three steps of :func:`move_particles` leave the cloud, its log-likelihoods, beliefs
+    and tally bit for bit where the algorithm of the module docstring, written out per
+    proposal (each proposal's history replayed alone, the current particle's log prior
+    computed afresh at every step), leaves them with the same draws."""
+    env = _env_with_history(150, n_particles=60)
+    a, bank, st = env.batch.a, env.batch.bank, env.setup
+    filt = st.filters._replace(move=(True, 3, *st.filters.move[2:]))
+    keys = ("x", "log_theta", "aux", "loglik", "tally")
+    start = {k: a[k].copy() for k in keys}
+    x0 = a["x"][0, 0]
+    d0 = st.spring_process.damage(x0)
+    factor = proposal_factor(x0, a["log_theta"][0, 0], a["w"][0, 0], filt, np.empty(x0.size))
+    d = d0.copy()
+    stream = NormalStream(np.random.default_rng(8))  # alive while the kernel draws
+    move_particles(0, bank, filt, factor, d, stream.handle)
+    kernel = {k: a[k].copy() for k in keys}
+    for k in keys:
+        a[k][...] = start[k]
+    x, lt, aux = a["x"][0, 0], a["log_theta"][0, 0], a["aux"][0, 0]
+    loglik, tally = a["loglik"][0], a["tally"][0]
+    grid, rate, cum = filt.rul_tables[0][:3]
+    rng = np.random.default_rng(8)
+    z = np.empty(aux.shape[0])
+    ref_d = d0.copy()
+    for _ in range(3):
+        for i in range(x.size):
+            e1, e2, u = rng.standard_normal(), rng.standard_normal(), rng.random()
+            d_new = ref_d[i] + factor[0] * e1
+            lam_new = lt[i] + (factor[1] * e1 + factor[2] * e2)
+            tally[0] += 1
+            lp_new = log_prior(d_new, lam_new, 0, bank, filt)
+            if lp_new == -np.inf:
+                continue
+            ll_new = history_loglik(d_new, lam_new, 0, bank, filt, z)
+            lp_now = log_prior(ref_d[i], lt[i], 0, bank, filt)
+            if not (math.log(u) < (lp_new + ll_new) - (lp_now + loglik[i])):
+                continue
+            tally[1] += 1
+            ref_d[i], lt[i], loglik[i] = d_new, lam_new, ll_new
+            x[i] = inverse_damage_scalar(grid, rate, cum, d_new)
+            aux[:, i] = z
+    moved = tally - start["tally"][0]
+    assert moved[0] == 3 * x.size and 0 < moved[1] < moved[0]
+    for k in keys:
+        bits = _bits if a[k].dtype == np.float64 else np.asarray
+        np.testing.assert_array_equal(bits(a[k]), bits(kernel[k]), err_msg=k)
+    np.testing.assert_array_equal(_bits(d), _bits(ref_d))
 
 
 def test_the_move_keeps_the_prior() -> None:

@@ -34,6 +34,13 @@ coordinates ``pi(u) = p(a0) g(a0) p(lambda) x likelihood`` (``g = 1 / D'``, the 
 ``a0 -> D(x(t))``). The proposal's likelihood is the whole history replayed (its
 installation-effect beliefs with it); the current particle's is its ``loglik``. Each step
 draws two normals and a uniform from the row's filter stream, in particle order.
+
+The replay is the move's cost (one pass over the history per proposal). :func:`history_loglik`
+states it for one proposal; :func:`move_particles` computes the same numbers, bit for bit,
+with the history prepared once per move (:func:`prepare_history`: what does not depend on
+the proposal) and all the proposals of a step replayed together, datum by datum
+(:func:`replay_histories`: the proposals are independent, so their arithmetic overlaps),
+each proposal's terms summed in the history's order as before.
 """
 
 from __future__ import annotations
@@ -44,6 +51,8 @@ import numpy as np
 from numba import njit
 
 from prognostics.degradation_models import (
+    _SMALL,
+    _interval,
     damage_scalar,
     inverse_damage_scalar,
     rate_at_scalar,
@@ -155,6 +164,155 @@ def history_loglik(d: float, lam: float, e: int, bank: tuple, model: tuple,
     return total
 
 
+#: per-datum columns of a prepared history (:func:`prepare_history`): floats (the datum's
+#: age before the filter's ``t - t_j``, value, runs, extra variance, the other part's
+#: fraction in its cell and one minus it), integers (table, the other part's cell, the
+#: installation effect's slot)
+P_DT, P_Y, P_RUNS, P_EXTRA, P_FRAC, P_FRAC_C = range(6)
+P_TABLE, P_CELL, P_AUX = range(3)
+
+
+@njit(cache=True)
+def prepare_history(e: int, bank: tuple, model: tuple) -> tuple:
+    """Row e's spring history as :func:`replay_histories` reads it, once for all the
+    proposals of a move: the per-datum columns (``P_*``), the filter's tables in one
+    zero-padded array (learning features, then tests: the history's table index) with their
+    own grids (padded) and sizes, and the growth table's segment slopes. Each value is the
+    one :func:`history_loglik` computes per datum and proposal, by the same operation."""
+    history, count, clock = bank[5][0], bank[5][1], bank[5][2]
+    grid, rate = model.rul_tables[0][0], model.rul_tables[0][1]
+    n = max(count[e], 0)
+    age = clock[e, C_AGE]
+    n_learn = model.learn_part.size
+    n_tab = n_learn + len(model.ground_stack)
+    ni, nj, ng = 0, 0, 0
+    for t in range(n_tab):
+        st = model.learn_stack[t] if t < n_learn else model.ground_stack[t - n_learn]
+        own = model.learn_own[t] if t < n_learn else model.ground_own[t - n_learn]
+        ni, nj, ng = max(ni, st.shape[1]), max(nj, st.shape[2]), max(ng, own.size)
+    stacks = np.zeros((n_tab, 3, ni, nj))
+    owns = np.zeros((n_tab, ng))
+    own_n = np.empty(n_tab, dtype=np.int64)
+    for t in range(n_tab):
+        st = model.learn_stack[t] if t < n_learn else model.ground_stack[t - n_learn]
+        own = model.learn_own[t] if t < n_learn else model.ground_own[t - n_learn]
+        stacks[t, :, : st.shape[1], : st.shape[2]] = st
+        owns[t, : own.size] = own
+        own_n[t] = own.size
+    slopes = np.empty(grid.size - 1)
+    for k in range(grid.size - 1):
+        slopes[k] = (rate[k + 1] - rate[k]) / (grid[k + 1] - grid[k])
+    cols = np.empty((n, 6))
+    ints = np.empty((n, 3), dtype=np.int64)
+    for q in range(n):
+        cols[q, P_DT] = age - history[e, q, H_AGE]
+        cols[q, P_Y] = history[e, q, H_Y]
+        cols[q, P_RUNS] = history[e, q, H_RUNS]
+        cols[q, P_EXTRA] = history[e, q, H_EXTRA]
+        cols[q, P_FRAC] = history[e, q, H_FRAC]
+        cols[q, P_FRAC_C] = 1 - history[e, q, H_FRAC]
+        ints[q, P_TABLE] = int(history[e, q, H_TABLE])
+        ints[q, P_CELL] = int(history[e, q, H_CELL])
+        ints[q, P_AUX] = int(history[e, q, H_AUX])
+    return cols, ints, stacks, owns, own_n, slopes
+
+
+# error_model="numpy": no zero-divisor branch per division (the divisors are the critical
+# depth, grid spacings, run counts and variances, all > 0; a slope of 0 takes the series)
+@njit(cache=True, error_model="numpy")
+def replay_histories(d: np.ndarray, lam: np.ndarray, m: int, prepared: tuple, model: tuple,
+                     z: np.ndarray, total: np.ndarray) -> None:  # fmt: skip
+    """:func:`history_loglik` at the ``m`` points ``(d[r], lam[r])`` of a
+    :func:`prepare_history`, bit for bit: ``total[r]`` its value, ``z[:, r]`` its
+    installation-effect beliefs. Datum by datum for all the points (each point's terms
+    summed in the history's order), each operation the reference's on the same values. The
+    growth table's segment of a point's datum (:func:`inverse_damage_scalar`'s bisection)
+    is found by a forward scan from the point's previous datum's: the data are in the order
+    learnt, so their damages ``d - theta (t - t_j)`` never decrease (one that did would be
+    bisected)."""
+    cols, ints, stacks, owns, own_n, slopes = prepared
+    grid, rate, cum = model.rul_tables[0][0], model.rul_tables[0][1], model.rul_tables[0][2]
+    critical, noise_scale = model.critical[0], model.noise_scale
+    last = cum.size - 2
+    theta, xs, zs, vs, rs = np.empty(m), np.empty(m), np.empty(m), np.empty(m), np.empty(m)
+    mus, taus, runs = np.empty(m), np.empty(m), np.empty(m)
+    seg = np.full(m, -1, dtype=np.int64)
+    inside = np.zeros(m, dtype=np.bool_)
+    for r in range(m):
+        theta[r] = math.exp(lam[r])
+        total[r] = 0.0
+    for k in range(0, z.shape[0], 2):
+        for r in range(m):
+            z[k, r] = 0.0
+            z[k + 1, r] = 1.0
+    for q in range(cols.shape[0]):
+        # the crack: inverse_damage_scalar(grid, rate, cum, d - theta * (t - t_j)); inside
+        # the table, xs holds the damage into the segment until the expm1 below
+        dt = cols[q, P_DT]
+        for r in range(m):
+            s = d[r] - theta[r] * dt
+            inside[r] = False
+            if s <= 0.0:
+                xs[r] = grid[0] + s * rate[0]
+            elif s >= cum[-1]:
+                xs[r] = grid[-1] + (s - cum[-1]) * rate[-1]
+            else:
+                k = seg[r]
+                if k < 0 or cum[k] > s:
+                    k = _interval(cum, s)
+                else:
+                    while k < last and cum[k + 1] <= s:
+                        k += 1
+                seg[r] = k
+                xs[r] = s - cum[k]
+                zs[r] = slopes[k] * xs[r]
+                inside[r] = True
+        for r in range(m):
+            if inside[r]:
+                k = seg[r]
+                if abs(zs[r]) < _SMALL:
+                    xs[r] = grid[k] + rate[k] * xs[r] * (1.0 + 0.5 * zs[r])
+                else:
+                    xs[r] = grid[k] + rate[k] * math.expm1(zs[r]) / slopes[k]
+        # the feature's tables there: cell_of and bilinear_at
+        table = ints[q, P_TABLE]
+        own = owns[table]
+        ng = own_n[table]
+        st = stacks[table]
+        j = ints[q, P_CELL]
+        tj, tj_c = cols[q, P_FRAC], cols[q, P_FRAC_C]
+        for r in range(m):
+            v = min(max(xs[r] / critical, 0.0), 1.0)
+            v = min(max(v, own[0]), own[ng - 1])
+            i = 0
+            while i < ng - 2 and own[i + 1] <= v:
+                i += 1
+            ti = (v - own[i]) / (own[i + 1] - own[i])
+            w00, w10, w01, w11 = (1 - ti) * tj_c, ti * tj_c, (1 - ti) * tj, ti * tj
+            mus[r] = (st[0, i, j] * w00 + st[0, i + 1, j] * w10 + st[0, i, j + 1] * w01
+                      + st[0, i + 1, j + 1] * w11)  # fmt: skip
+            taus[r] = (st[1, i, j] * w00 + st[1, i + 1, j] * w10 + st[1, i, j + 1] * w01
+                       + st[1, i + 1, j + 1] * w11)  # fmt: skip
+            runs[r] = (st[2, i, j] * w00 + st[2, i + 1, j] * w10 + st[2, i, j + 1] * w01
+                       + st[2, i + 1, j + 1] * w11) * noise_scale  # fmt: skip
+        # the installation effect's belief: likelihood term and Kalman update
+        k = ints[q, P_AUX]
+        y, m_runs, extra = cols[q, P_Y], cols[q, P_RUNS], cols[q, P_EXTRA]
+        zm, zv = z[k], z[k + 1]
+        for r in range(m):
+            a, run, p = taus[r], runs[r], zv[r]
+            v = (run * run / m_runs + extra) + a * a * p
+            res = y - mus[r] - a * zm[r]
+            vs[r] = v
+            rs[r] = res
+            gain = p * a / v
+            zm[r] += gain * res
+            zv[r] = p - gain * a * p
+        for r in range(m):
+            v, res = vs[r], rs[r]
+            total[r] += -0.5 * res * res / v - 0.5 * math.log(v) - _HALF_LOG_2PI
+
+
 @njit(cache=True)
 def proposal_factor(x: np.ndarray, lam: np.ndarray, w: np.ndarray, model: tuple,
                     d: np.ndarray) -> tuple[float, float, float]:  # fmt: skip
@@ -210,37 +368,58 @@ def _gather(e: int, bank: tuple, idx: np.ndarray, buf: np.ndarray) -> None:
 def move_particles(e: int, bank: tuple, model: tuple, factor: tuple, d: np.ndarray,
                    handle: tuple) -> None:  # fmt: skip
     """``model.move``'s steps of random-walk Metropolis-Hastings for every spring particle
-    of row e (module docstring); ``d`` holds each particle's ``D(x)``."""
+    of row e (module docstring); ``d`` holds each particle's ``D(x)``. A step draws every
+    particle's proposal (two normals, a uniform, in particle order), replays the history at
+    those inside the prior's support together (:func:`replay_histories`), then accepts or
+    rejects each in turn; a particle's log prior is kept while it stays."""
     bx, blt, baux = bank[0], bank[1], bank[4]
     loglik, tally = bank[5][3], bank[5][4]
     grid, rate, cum = model.rul_tables[0][0], model.rul_tables[0][1], model.rul_tables[0][2]
     l11, l21, l22 = factor
     steps = model.move[1]
     n_aux = baux.shape[2]
-    z = np.empty(n_aux)
+    n = bx.shape[2]
+    prepared = prepare_history(e, bank, model)
+    lp = np.empty(n)  # each particle's log prior
+    for i in range(n):
+        lp[i] = log_prior(d[i], blt[e, 0, i], e, bank, model)
+    u = np.empty(n)
+    lp_new = np.empty(n)
+    who = np.empty(n, dtype=np.int64)  # the particles of the proposals replayed, in order
+    d_new = np.empty(n)
+    lam_new = np.empty(n)
+    ll_new = np.empty(n)
+    z = np.empty((n_aux, n))
     for _ in range(steps):
-        for i in range(bx.shape[2]):
+        m = 0
+        for i in range(n):
             e1 = standard_normal(handle)
             e2 = standard_normal(handle)
-            u = random(handle)
-            d_new = d[i] + l11 * e1
-            lam_new = blt[e, 0, i] + (l21 * e1 + l22 * e2)
+            u[i] = random(handle)
+            d_i = d[i] + l11 * e1
+            lam_i = blt[e, 0, i] + (l21 * e1 + l22 * e2)
             tally[e, 0] += 1
-            lp_new = log_prior(d_new, lam_new, e, bank, model)
-            if lp_new == -np.inf:
+            lp_new[i] = log_prior(d_i, lam_i, e, bank, model)
+            if lp_new[i] == -np.inf:
                 continue
-            ll_new = history_loglik(d_new, lam_new, e, bank, model, z)
-            log_ratio = (lp_new + ll_new) - (log_prior(d[i], blt[e, 0, i], e, bank, model)
-                                             + loglik[e, i])  # fmt: skip
-            if not (math.log(u) < log_ratio):
+            who[m] = i
+            d_new[m] = d_i
+            lam_new[m] = lam_i
+            m += 1
+        replay_histories(d_new, lam_new, m, prepared, model, z, ll_new)
+        for r in range(m):
+            i = who[r]
+            log_ratio = (lp_new[i] + ll_new[r]) - (lp[i] + loglik[e, i])
+            if not (math.log(u[i]) < log_ratio):
                 continue
             tally[e, 1] += 1
-            d[i] = d_new
-            bx[e, 0, i] = inverse_damage_scalar(grid, rate, cum, d_new)
-            blt[e, 0, i] = lam_new
-            loglik[e, i] = ll_new
+            d[i] = d_new[r]
+            bx[e, 0, i] = inverse_damage_scalar(grid, rate, cum, d_new[r])
+            blt[e, 0, i] = lam_new[r]
+            lp[i] = lp_new[i]
+            loglik[e, i] = ll_new[r]
             for k in range(n_aux):
-                baux[e, 0, k, i] = z[k]
+                baux[e, 0, k, i] = z[k, r]
 
 
 @njit(cache=True)
@@ -260,9 +439,11 @@ def resample_move(ess: float, threshold_n: float, e: int, bank: tuple, work: tup
     factor = proposal_factor(x, lam, w, model, d)
     _systematic_from_weights(w, work[0], random(handle), work[1])
     _gather(e, bank, work[1], work[2])
-    grid, rate, cum, cells, inv_cell = model.rul_tables[0]
+    idx, buf = work[1], work[2]
+    for i in range(x.size):  # D(x) of the resampled particles: their parents'
+        buf[i] = d[idx[i]]
     for i in range(x.size):
-        d[i] = damage_scalar(grid, rate, cum, cells, inv_cell, x[i])
+        d[i] = buf[i]
     move_particles(e, bank, model, factor, d, handle)
     return 1
 
@@ -281,8 +462,10 @@ __all__ = [
     "history_loglik",
     "log_prior",
     "move_particles",
+    "prepare_history",
     "proposal_factor",
     "record_datum",
+    "replay_histories",
     "resample_move",
     "restart",
 ]
