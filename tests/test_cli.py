@@ -25,7 +25,11 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from policies import cli as policies_cli
+from policies.cli import benchmark as benchmark_cli
+from policies.cli import run_config
+from policies.cli import train as train_cli
+from policies.cli import tune as tune_cli
+from policies.cli import value as value_cli
 from prognostics import numba_cache
 from scas_env import cli_args
 from scas_env.core.costs import CostModel
@@ -54,10 +58,10 @@ PARSERS: dict[str, Callable[[], argparse.ArgumentParser]] = {
 }
 #: the console commands of pyproject.toml
 CONSOLE: dict[str, Callable[..., int]] = {
-    "scas-benchmark": policies_cli.benchmark_main,
-    "scas-train": policies_cli.train_main,
-    "scas-tune": policies_cli.tune_main,
-    "scas-value": policies_cli.value_main,
+    "scas-benchmark": benchmark_cli.main,
+    "scas-train": train_cli.main,
+    "scas-tune": tune_cli.main,
+    "scas-value": value_cli.main,
     "scas-export-dataset": dataset_cli.export_dataset_main,
 }
 LAB: dict[str, Callable[..., int]] = {
@@ -214,9 +218,16 @@ def _cases(tmp: Path) -> list[tuple[str, list[str], str]]:
 
 
 def test_bad_values_are_usage_errors(
-    tmp_path: Path, busy_dir: Path, capsys: pytest.CaptureFixture[str]
+    tmp_path: Path,
+    busy_dir: Path,
+    capsys: pytest.CaptureFixture[str],
+    monkeypatch: pytest.MonkeyPatch,
 ) -> None:
-    """Each case exits with status 2 and a message naming the value, before any work."""
+    """Each case exits with status 2 and a message naming the value, before any work; run
+    from an empty folder, so that the default ``--out`` folders (``results/...``) of an
+    earlier ``make benchmark`` in the checkout do not answer first."""
+    (tmp_path / "cwd").mkdir()
+    monkeypatch.chdir(tmp_path / "cwd")
     for command, argv, message in _cases(tmp_path):
         with pytest.raises(SystemExit) as exit_:
             MAINS[command](argv)
@@ -238,12 +249,12 @@ def test_no_script_duplicates_a_command() -> None:
         "split_epoch_training",
     ]  # fmt: skip
     assert not [n for n in gone if (ROOT / "scripts" / f"{n}.py").exists()]
-    mains = {f.__name__ for f in CONSOLE.values()}
+    mains = {(f.__module__, f.__name__) for f in CONSOLE.values()}
     for script in sorted((ROOT / "scripts").glob("*.py")):
         for node in ast.walk(ast.parse(script.read_text())):
             if isinstance(node, ast.ImportFrom) and node.module:
                 names = {a.name for a in node.names}
-                assert not (node.module == "policies.cli" and names & mains), script.name
+                assert not {(node.module, n) for n in names} & mains, script.name
                 assert not (node.module.startswith("experiments") and "main" in names), script
 
 
@@ -254,9 +265,7 @@ def test_policy_whose_module_is_missing_is_a_usage_error(
 
     monkeypatch.setitem(PLUGINS, "ghost", PolicySpec("sb3", label="ghost", module="no_such_mod"))
     with pytest.raises(SystemExit) as exit_:
-        policies_cli.benchmark_main(
-            ["--policies", "corrective,ghost", "--out", str(tmp_path / "o")]
-        )
+        benchmark_cli.main(["--policies", "corrective,ghost", "--out", str(tmp_path / "o")])
     assert exit_.value.code == 2
     err = capsys.readouterr().err
     assert "'ghost' cannot be loaded (No module named 'no_such_mod')" in err
@@ -266,7 +275,7 @@ def test_policy_whose_module_is_missing_is_a_usage_error(
 def test_train_algorithms_are_the_training_module_s() -> None:
     from policies.agents.training import ALGOS
 
-    (action,) = [a for a in policies_cli.train_parser()._actions if a.dest == "algo"]
+    (action,) = [a for a in train_cli.build_parser()._actions if a.dest == "algo"]
     assert tuple(action.choices) == ALGOS
 
 
@@ -303,7 +312,7 @@ def test_positive_float_accepts_finite_positive_numbers_only(text: str) -> None:
 
 
 def test_scenario_file_with_costs_table_sets_both(tmp_path: Path) -> None:
-    parser = policies_cli.benchmark_parser()
+    parser = benchmark_cli.build_parser()
     path = ROOT / "examples" / "offshore_operator.toml"
     args = parser.parse_args(["--scenario", str(path)])
     assert cli_args.load_env_config(parser, args) == (
@@ -319,6 +328,10 @@ def test_scenario_file_with_costs_table_sets_both(tmp_path: Path) -> None:
 # --- runs -----------------------------------------------------------------------------
 
 
+def _refuse_constant(name: str) -> None:
+    raise AssertionError(f"{name} in a JSON output: strict parsers refuse it")
+
+
 @pytest.mark.filterwarnings("error::UserWarning")  # no removal to plot is said on the plot
 def test_benchmark_runs_the_scenario_file_and_records_it(tmp_path: Path) -> None:
     """Same rows as run_benchmark called with the file's values by hand; the summary keeps
@@ -328,8 +341,10 @@ def test_benchmark_runs_the_scenario_file_and_records_it(tmp_path: Path) -> None
     example = ROOT / "examples" / "training_fleet.yaml"
     out = tmp_path / "bench"
     argv = ["--episodes", "2", "--slots", "30", "--workers", "1", "--policies", "corrective,oracle"]
-    assert policies_cli.benchmark_main([*argv, "--scenario", str(example), "--out", str(out)]) == 0
-    summary = json.loads((out / "summary.json").read_text())
+    assert benchmark_cli.main([*argv, "--scenario", str(example), "--out", str(out)]) == 0
+    text = (out / "summary.json").read_text()
+    assert "null" in text  # missing values (e.g. the reference's own paired interval) ...
+    summary = json.loads(text, parse_constant=_refuse_constant)  # strict JSON: null, not NaN
     config = summary["config"]
     assert Scenario.from_dict(config["scenario"]) == Scenario.load(example).replace(
         episode_slots=30
@@ -351,7 +366,7 @@ def test_benchmark_runs_the_scenario_file_and_records_it(tmp_path: Path) -> None
         r["reward"] for r in direct.rows
     ]
     with pytest.raises(SystemExit):
-        policies_cli.benchmark_main([*argv, "--out", str(out)])
+        benchmark_cli.main([*argv, "--out", str(out)])
 
 
 def test_numba_compile_is_announced_once(
@@ -402,7 +417,7 @@ def test_benchmark_takes_agents_and_factories_beside_named_policies(tmp_path: Pa
     """``--policy module:factory`` runs an object with SB3's predict; a bad target or a
     missing agent file is a usage error before any episode."""
     out = tmp_path / "bench"
-    code = policies_cli.benchmark_main(
+    code = benchmark_cli.main(
         ["--episodes", "1", "--slots", "20", "--workers", "1", "--policies", "preventive",
          "--policy", "policies.rules.classic:PreventivePolicy", "--out", str(out), "-q"]
     )  # fmt: skip
@@ -415,7 +430,7 @@ def test_benchmark_takes_agents_and_factories_beside_named_policies(tmp_path: Pa
         (["--agent", str(tmp_path / "missing.zip")], "missing.zip"),
     ):
         with pytest.raises(SystemExit) as exit_:
-            policies_cli.benchmark_main([*bad, "--out", str(tmp_path / "x")])
+            benchmark_cli.main([*bad, "--out", str(tmp_path / "x")])
         assert exit_.value.code == 2, message
 
 
@@ -624,19 +639,19 @@ def test_quick_sizes_are_the_modules_and_keep_full_length_episodes() -> None:
     from policies.value import study, tuning
 
     for sizes, quick, function in (
-        (policies_cli.TUNE_SIZES, tuning.QUICK, tuning.tune_families),
-        (policies_cli.VALUE_SIZES, study.QUICK, study.run_ladder),
+        (tune_cli.TUNE_SIZES, tuning.QUICK, tuning.tune_families),
+        (value_cli.VALUE_SIZES, study.QUICK, study.run_ladder),
     ):
         assert {k: q for k, (_, q) in sizes.items()} == quick
         defaults = inspect.signature(function).parameters
         assert {k: f for k, (f, _) in sizes.items()} == {k: defaults[k].default for k in sizes}
         assert quick["slots"] == sizes["slots"][0] == 2000  # quick shortens nothing
-    parser = policies_cli.value_parser()
+    parser = value_cli.build_parser()
     args = parser.parse_args(["--quick", "--trials", "7"])
-    sizes = policies_cli._sizes(args, policies_cli.VALUE_SIZES, Scenario())
+    sizes = run_config.resolve_sizes(args, value_cli.VALUE_SIZES, Scenario())
     assert sizes == {**study.QUICK, "trials": 7}
     args = parser.parse_args([])
-    assert policies_cli._sizes(args, policies_cli.VALUE_SIZES, Scenario())["episodes"] == 1000
+    assert run_config.resolve_sizes(args, value_cli.VALUE_SIZES, Scenario())["episodes"] == 1000
 
 
 def test_an_agent_file_with_a_pickle_runs_only_with_trust_pickle(
@@ -645,10 +660,10 @@ def test_an_agent_file_with_a_pickle_runs_only_with_trust_pickle(
     argv = ["--agent", str(bad_files["pickled"]), "--policies", "corrective", "--episodes", "1",
             "--slots", "20", "--workers", "1", "-q"]  # fmt: skip
     with pytest.raises(SystemExit) as exit_:
-        policies_cli.benchmark_main([*argv, "--out", str(tmp_path / "a")])
+        benchmark_cli.main([*argv, "--out", str(tmp_path / "a")])
     assert exit_.value.code == 2 and "pass trust_pickle=True" in capsys.readouterr().err
     assert not (tmp_path / "a").exists()
-    assert policies_cli.benchmark_main([*argv, "--trust-pickle", "--out", str(tmp_path / "b")]) == 0
+    assert benchmark_cli.main([*argv, "--trust-pickle", "--out", str(tmp_path / "b")]) == 0
     rows = (tmp_path / "b" / "results.csv").read_text().splitlines()
     assert [r.split(",")[0] for r in rows[1:]] == ["corrective", "pickled"]
 
@@ -668,14 +683,14 @@ def test_two_agents_with_one_file_name_run_under_their_labels(
               "-q", "--trust-pickle"]  # fmt: skip
     argv = ["--agent", str(first / "ckpt.zip"), "--agent", str(second / "ckpt.zip"), *common]
     with pytest.raises(SystemExit):
-        policies_cli.benchmark_main([*argv, "--out", str(tmp_path / "a")])
+        benchmark_cli.main([*argv, "--out", str(tmp_path / "a")])
     assert "--agent LABEL=FILE" in capsys.readouterr().err
     argv = ["--agent", f"a={first / 'ckpt.zip'}", "--agent", f"b={second / 'ckpt.zip'}", *common]
-    assert policies_cli.benchmark_main([*argv, "--out", str(tmp_path / "b")]) == 0
+    assert benchmark_cli.main([*argv, "--out", str(tmp_path / "b")]) == 0
     rows = (tmp_path / "b" / "results.csv").read_text().splitlines()
     assert [r.split(",")[0] for r in rows[1:]] == ["corrective", "a", "b"]
     with pytest.raises(SystemExit):  # a label with a missing file: the file is named
-        policies_cli.benchmark_main(["--agent", "a=nowhere.zip", "--out", str(tmp_path / "c")])
+        benchmark_cli.main(["--agent", "a=nowhere.zip", "--out", str(tmp_path / "c")])
     assert "'nowhere.zip' does not exist" in capsys.readouterr().err
 
 
@@ -691,7 +706,7 @@ def test_the_default_fleet_list_leaves_out_agents_that_do_not_fit(
     fleet.write_text("[fleet]\naircraft = 2\nepisode_days = 5\n")
     out = tmp_path / "bench"
     argv = ["--episodes", "1", "--workers", "1", "--quiet", "--scenario", str(fleet)]
-    assert policies_cli.benchmark_main([*argv, "--out", str(out)]) == 0
+    assert benchmark_cli.main([*argv, "--out", str(out)]) == 0
     err = capsys.readouterr().err
     agents = ("fleet_ppo", "fleet_shared_ppo")
     summary = json.loads((out / "summary.json").read_text())
@@ -700,7 +715,7 @@ def test_the_default_fleet_list_leaves_out_agents_that_do_not_fit(
         assert f"note: {agent} left out of the default policies" in err
     assert err.count("trained on a fleet observation of 555 entries") == 2
     with pytest.raises(SystemExit):
-        policies_cli.benchmark_main(
+        benchmark_cli.main(
             [*argv, "--policies", "fleet_naive,fleet_ppo", "--out", str(tmp_path / "b2")]
         )
     assert "error: policy 'fleet_ppo' cannot run on this scenario" in capsys.readouterr().err
@@ -717,7 +732,7 @@ def test_tune_and_value_fly_the_scenario_file_s_episode_length(tmp_path: Path) -
     out = tmp_path / "t"
     argv = ["--scenario", str(path), "--families", "age", "--trials", "1", "--episodes", "1",
             "--workers", "1", "--quiet", "--out", str(out)]  # fmt: skip
-    assert policies_cli.tune_main(argv) == 0
+    assert tune_cli.main(argv) == 0
     manifest = json.loads((out / "manifest.json").read_text())
     assert manifest["config"]["size"]["slots"] == 300
     direct = tune_families(["age"], trials=1, episodes=1, slots=300, n_workers=1)
@@ -728,6 +743,6 @@ def test_tune_and_value_fly_the_scenario_file_s_episode_length(tmp_path: Path) -
     # --slots over the file's: the recorded scenario is the one that ran (rerun recipe)
     again = tmp_path / "t2"
     argv = [*argv[:-1], str(again), "--slots", "200"]
-    assert policies_cli.tune_main(argv) == 0
+    assert tune_cli.main(argv) == 0
     config = json.loads((again / "manifest.json").read_text())["config"]
     assert config["size"]["slots"] == config["scenario"]["episode_slots"] == 200

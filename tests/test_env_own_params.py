@@ -48,9 +48,14 @@ def test_an_env_on_other_params_builds_a_whole_flight_calibration(
     )
     assert cal.spring_failure_depth_m == shipped.spring_failure_depth_m
     assert cal.crack_dormant_below_m == shipped.crack_dormant_below_m
-    assert cal.seal_critical_wear_m == shipped.seal_critical_wear_m
     same_windows = cal_module.build_calibration(
         base, seed=cal_module.ENV_BUILD["seed"], n_windows=2, progress=False
+    )
+    # exact against the default params built here; the shipped file (built with other
+    # library versions) agrees to its root finder's last digits
+    assert cal.seal_critical_wear_m == same_windows.seal_critical_wear_m
+    assert cal.seal_critical_wear_m == pytest.approx(
+        shipped.seal_critical_wear_m, rel=1e-12, abs=0.0
     )
     np.testing.assert_allclose(cal.crack_cv, same_windows.crack_cv, rtol=1e-9)
     assert cal.wear_cv == pytest.approx(same_windows.wear_cv, rel=1e-12)

@@ -16,6 +16,7 @@ from scas_env.utils.results_folder import (
     MANIFEST,
     ResultsFolderError,
     check_destination,
+    json_text,
     library_versions,
     results_folder,
     timestamped,
@@ -314,3 +315,40 @@ def test_export_dataset_writes_into_an_empty_folder(
         "datacard.json", "datacard.md", "flights.csv", "units.csv"
     ]  # fmt: skip
     assert _siblings(out) == ["rtf"]
+
+
+def _refuse_constant(name: str) -> None:
+    raise AssertionError(f"{name} in strict JSON")
+
+
+def test_json_text_writes_null_for_what_is_not_a_finite_number() -> None:
+    """NaN and infinities, as Python floats, numpy scalars, inside arrays and inside what
+    ``default`` returns, become ``null``; every other value is what ``json.dumps`` writes."""
+    value = {
+        "a": float("nan"),
+        "b": [1.0, float("inf"), -np.inf],
+        "c": np.float64("nan"),
+        "d": np.array([[0.5, np.nan]]),
+        "e": (np.int64(3), "NaN", True, None),
+        "f": Path("x"),
+    }
+    text = json_text(value, indent=1)
+    back = json.loads(text, parse_constant=_refuse_constant)
+    assert back == {
+        "a": None,
+        "b": [1.0, None, None],
+        "c": None,
+        "d": [[0.5, None]],
+        "e": [3, "NaN", True, None],
+        "f": "x",
+    }
+    assert text.endswith("\n")
+    finite = {"x": [1, 2.5, "s"], "y": {"z": False}}
+    assert json_text(finite, indent=2) == json.dumps(finite, indent=2) + "\n"
+
+    class Odd:
+        pass
+
+    assert json.loads(json_text({"o": Odd()}, default=lambda o: float("nan"))) == {"o": None}
+    with pytest.raises(TypeError, match="Odd value"):
+        json_text({"o": Odd()})

@@ -24,7 +24,6 @@ Files written by :func:`write_outputs` into the output folder:
 from __future__ import annotations
 
 import csv
-import json
 import math
 from collections.abc import Mapping, Sequence
 from pathlib import Path
@@ -93,9 +92,9 @@ BELIEFS_NOTE = (
     "Beliefs at decision time (policies that act on the filters' RUL): every preventive "
     "replacement (the beliefs decided on) and every pre-flight test (the beliefs after it), "
     "each part's mean RUL and low quantile against its true remaining life. RA: Saxena's "
-    "relative accuracy of the mean, episodes as clusters; alpha-lambda hits: the mean within "
-    "+-20 % of the truth; coverage: truth >= rul_low (nominal 1 - rul_quantile, 0.95 by "
-    "default); Wilson intervals over the predictions."
+    "relative accuracy of the mean; alpha-lambda hits: the mean within +-20 % of the truth; "
+    "coverage: truth >= rul_low (nominal 1 - rul_quantile, 0.95 by default); intervals: a "
+    "percentile bootstrap resampling whole episodes (their predictions are not independent)."
 )
 
 
@@ -387,7 +386,7 @@ def write_outputs(
     a temporary sibling renamed into place when complete, with ``manifest.json`` (config,
     seeds, versions, SHA-256 of every file; :mod:`scas_env.utils.results_folder`). An existing
     folder is refused unless ``overwrite`` (then replaced whole). Returns paths by name."""
-    from scas_env.utils.results_folder import results_folder
+    from scas_env.utils.results_folder import json_text, results_folder
 
     out = Path(out_dir)
     policies = list(result.summary["policies"])
@@ -419,7 +418,7 @@ def write_outputs(
             _write_csv(at["fleet_day"], [{"policy": p, **r} for p, days in result.traces.items()
                                          for r in days])  # fmt: skip
         payload = {**result.summary, "config": result.config, "wall_s": result.wall_s}
-        at["summary_json"].write_text(json.dumps(payload, indent=2, default=repr) + "\n")
+        at["summary_json"].write_text(json_text(payload, indent=2, default=repr))
         at["summary_md"].write_text(markdown_summary(result))
         if plots:
             _plot_cost_availability(result.summary, at["cost_vs_availability"])

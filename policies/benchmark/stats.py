@@ -19,10 +19,9 @@ Per-policy intervals are chosen so that they never leave the metric's possible r
 
 Beliefs at decision time (:func:`prognostics_block`, policies that act on beliefs;
 :mod:`policies.benchmark.runner`): the mean relative accuracy over every scored prediction
-is a ratio of per-episode sums, with a t-interval of its linearised variance taking the
-episodes as clusters (predictions of one episode are not independent); the alpha-lambda hit
-rate and the coverage of ``[rul_low, inf)`` get Wilson intervals over the predictions
-(treated as independent trials: read them as lower bounds of the uncertainty).
+is a ratio of per-episode sums, as are the alpha-lambda hit rate and the coverage of
+``[rul_low, inf)``; each gets a percentile bootstrap resampling whole episodes
+(:func:`cluster_ratio_bootstrap`: predictions of one episode are not independent).
 
 >>> iv = t_interval([1.0, 2.0, 3.0])
 >>> round(iv.mean, 3), round(iv.half_width, 3)  # t_{0.975, 2} * 1 / sqrt(3)

@@ -45,7 +45,6 @@ import numpy as np
 
 from policies.base import register_policy
 from policies.rules.healthy_band import implicated_spring
-from policies.rules.prognostic import RUL_RISK_AGE_DEFAULTS, RUL_RISK_DEFAULTS
 
 #: the families of this module, in the benchmark's order
 FLEET_FAMILIES = (
@@ -57,15 +56,6 @@ FLEET_FAMILIES = (
     "fleet_oracle",
     "fleet_random",
 )
-#: defaults of the per-part rules: the single actuator's tuned filter rule (its backstop,
-#: test interval and override) and its tuned age rule's backstop
-FILTER_DEFAULTS: dict[str, float] = {
-    "spring_age": RUL_RISK_AGE_DEFAULTS["spring_age"],
-    "seal_age": RUL_RISK_AGE_DEFAULTS["seal_age"],
-    "test_every": RUL_RISK_AGE_DEFAULTS["test_every"],
-    **RUL_RISK_DEFAULTS,
-}
-AGE_DEFAULTS: dict[str, float] = {"spring_age": 691.6326, "seal_age": 526.2141}
 PARTS = ("spring", "seal")
 #: the families' defaults, tuned on training fleets (seeds disjoint from the benchmark's):
 #: ``scas-tune --fleet --trials 30 --episodes 16 --workers 2 --out
@@ -391,5 +381,4 @@ for _family, (_kind, _mode, *_rest) in FleetRule.FAMILIES.items():
     )
 register_policy("fleet_random", FleetRandom, obs_mode="features+rul", family="bound")
 
-__all__ = ["AGE_DEFAULTS", "FILTER_DEFAULTS", "FLEET_FAMILIES", "FleetLayout", "FleetRandom",
-           "FleetRule"]  # fmt: skip
+__all__ = ["FLEET_FAMILIES", "FleetLayout", "FleetRandom", "FleetRule"]

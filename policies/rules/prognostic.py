@@ -34,20 +34,22 @@ __all__ = [
     "RulRiskPolicy",
 ]
 
-#: Defaults of the filter rule: the point of the family with the override forced on, tuned
-#: on the v0 scenario (docs/findings.md, "Value of prognostics"; the family with the override
-#: free prefers it off there, i.e. an age rule). Age backstop and test interval, then the
-#: override's thresholds.
+#: Defaults of the filter rule: chosen as :data:`policies.rules.classic.PREVENTIVE_DEFAULTS`,
+#: the point of the second tuning replicate on the current scenario (training seed 11,
+#: docs/value_v2/replicates.json; override on). Its test interval exceeds an episode (no
+#: scheduled test: the in-flight features decide) and its thresholds are a low RUL lead of
+#: 1.4 flights for the spring, 23 for the seals, and a 20-flight risk of 0.0076. Age
+#: backstop and test interval, then the override's thresholds.
 RUL_RISK_AGE_DEFAULTS: dict[str, float] = {
-    "spring_age": 2133.805,
-    "seal_age": 1354.313,
-    "opportunity": 0.7008807,
-    "test_every": 844.3342,
+    "spring_age": 2944.785,
+    "seal_age": 2328.126,
+    "opportunity": 0.2679923,
+    "test_every": 3746.663,
 }
 RUL_RISK_DEFAULTS: dict[str, float] = {
-    "risk_threshold": 0.03093727,
-    "spring_lead": 12.11473,
-    "seal_lead": 9.070705,
+    "risk_threshold": 0.007628029,
+    "spring_lead": 1.366284,
+    "seal_lead": 23.33501,
 }
 
 

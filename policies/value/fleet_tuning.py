@@ -28,7 +28,6 @@ import policies  # noqa: F401  (registers the policies)
 from policies.base import make_policy, policy_obs_mode
 from policies.benchmark.fleet_runner import run_fleet_episodes
 from policies.benchmark.run import episode_seeds
-from policies.rules.fleet import AGE_DEFAULTS, FILTER_DEFAULTS
 from policies.value.tuning import (
     HELD_OUT_SEED,
     SAMPLER_SEED,
@@ -71,10 +70,19 @@ FLEET_FAMILIES: dict[str, Family] = {
                {"lead_flights": (1.0, 100.0, True), **OPPORTUNITY}, nested=False),
     )
 }  # fmt: skip
-#: where each family's search starts (None: TPE's first draw)
+#: where each family's search starts (None: TPE's first draw): the single actuator's age and
+#: filter rules as first tuned (on the retired v0 scenario), the points the shipped
+#: ``FLEET_TUNED`` were searched from; kept so that the tuning's command reproduces them
 STARTS: dict[str, dict[str, float] | None] = {
-    "fleet_age": {**AGE_DEFAULTS, "opportunity": 0.6087},
-    "fleet_naive": dict(FILTER_DEFAULTS),
+    "fleet_age": {"spring_age": 691.6326, "seal_age": 526.2141, "opportunity": 0.6087},
+    "fleet_naive": {
+        "spring_age": 2133.805,
+        "seal_age": 1354.313,
+        "test_every": 844.3342,
+        "risk_threshold": 0.03093727,
+        "spring_lead": 12.11473,
+        "seal_lead": 9.070705,
+    },
     "fleet_oracle": {"lead_flights": 8.0, "opportunity": 0.5},
 }
 #: the chain of nested families: each starts from the one before's best

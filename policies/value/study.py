@@ -364,7 +364,7 @@ def write_outputs(
     ladder.json) into the folder ``out_dir``, atomically with ``manifest.json``
     (:mod:`scas_env.utils.results_folder`): an existing folder is refused unless
     ``overwrite`` (then replaced whole, never mixed)."""
-    from scas_env.utils.results_folder import results_folder
+    from scas_env.utils.results_folder import json_text, results_folder
 
     out = Path(out_dir)
     names = {
@@ -400,7 +400,7 @@ def write_outputs(
             "config": result.config,
             "wall_s": result.wall_s,
         }
-        at["json"].write_text(json.dumps(payload, indent=2, default=json_param) + "\n")
+        at["json"].write_text(json_text(payload, indent=2, default=json_param))
         at["md"].write_text(markdown_report(result))
         if plots:
             _plot(result.summary, at["png"])

@@ -447,15 +447,14 @@ def write_tuning_outputs(
     (:func:`scas_env.utils.results_folder.results_folder`; an existing folder is refused unless
     ``overwrite``); ``train_seed``, ``sampler_seed``: the tuning's, recorded in the manifest."""
     import csv
-    import json
 
-    from scas_env.utils.results_folder import results_folder
+    from scas_env.utils.results_folder import json_text, results_folder
 
     names = {"json": "tuning.json", "csv": "tuning_history.csv", "png": "tuning_history.png"}
     seeds = {"train_seed": train_seed, "sampler_seed": sampler_seed}  # those of the results
     with results_folder(out, config=dict(config or {}), seeds=seeds, overwrite=overwrite) as tmp:
         payload = {k: r.to_dict() for k, r in results.items()}
-        (tmp / names["json"]).write_text(json.dumps(payload, indent=2, default=repr) + "\n")
+        (tmp / names["json"]).write_text(json_text(payload, indent=2, default=repr))
         rows = [{"family": k, **h} for k, r in results.items() for h in r.history]
         fields: list[str] = []
         for row in rows:

@@ -33,6 +33,7 @@ from __future__ import annotations
 import contextlib
 import datetime as dt
 import json
+import math
 import os
 import platform
 import shutil
@@ -88,6 +89,34 @@ def _json_default(value: Any) -> Any:
     if isinstance(value, set | frozenset):
         return sorted(value)
     raise TypeError(f"{type(value).__name__} value {value!r} is not JSON serialisable")
+
+
+def _strict(value: Any) -> Any:
+    if isinstance(value, float):  # numpy float64 included
+        return value if math.isfinite(value) else None
+    if isinstance(value, dict):
+        return {k: _strict(v) for k, v in value.items()}
+    if isinstance(value, list | tuple):
+        return [_strict(v) for v in value]
+    if hasattr(value, "tolist") and not isinstance(value, str):  # numpy scalars and arrays
+        return _strict(value.tolist())
+    return value
+
+
+def json_text(value: Any, *, indent: int | None = None, default: Any = _json_default) -> str:
+    """``value`` as strict JSON (RFC 8259), ending in a newline: a number that is not finite
+    (NaN, an interval of one sample; infinity) is written ``null``, where ``json.dumps``
+    would write ``NaN``, which strict parsers (JavaScript's, ``jq``) refuse. ``default``
+    serialises other objects, as ``json.dumps``'s.
+
+    >>> json_text({"mean": 1.5, "low": float("nan"), "n": [1, float("inf")]})
+    '{"mean": 1.5, "low": null, "n": [1, null]}\\n'
+    """
+
+    def strict_default(obj: Any) -> Any:
+        return _strict(default(obj))
+
+    return json.dumps(_strict(value), indent=indent, default=strict_default, allow_nan=False) + "\n"
 
 
 def _nearest_existing(path: Path) -> Path:

@@ -1,0 +1,68 @@
+"""The single actuator's rule defaults: the candidates chosen on validation seeds
+(``experiments.rule_defaults``) are the defaults the rules take."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+from experiments import rule_defaults
+from policies.rules.classic import DETECTION_DEFAULTS, PREVENTIVE_DEFAULTS
+from policies.rules.prognostic import RUL_RISK_AGE_DEFAULTS, RUL_RISK_DEFAULTS
+
+ROOT = Path(__file__).resolve().parents[1]
+RECORD = ROOT / "docs" / "value_v2" / "rule_defaults.json"
+
+
+def _significant(params: dict, digits: int = 7) -> dict:
+    return {k: float(f"{v:.{digits}g}") for k, v in params.items() if k != "override"}
+
+
+def test_the_defaults_are_the_chosen_candidates_of_the_committed_study() -> None:
+    """Each rule's default point is, to 7 significant digits, the candidate the committed
+    record chose, and that candidate has the highest validation mean of its rule."""
+    record = json.loads(RECORD.read_text())
+    assert record["validation_seed"] not in (1, 2) and record["episodes"] >= 1000
+    defaults = {
+        "preventive": PREVENTIVE_DEFAULTS,
+        "detection": DETECTION_DEFAULTS,
+        "rul_risk": {**RUL_RISK_AGE_DEFAULTS, **RUL_RISK_DEFAULTS},
+    }
+    for rule, r in record["rules"].items():
+        best = max(r["candidates"], key=lambda c: c["validation_mean"])
+        assert best["candidate"] == r["chosen"]
+        assert _significant(best["params"]) == defaults[rule], rule
+    # the candidates are those the module builds from the shipped tuning files
+    built = rule_defaults.candidates()
+    for rule, r in record["rules"].items():
+        assert {c["candidate"]: c["params"] for c in r["candidates"]} == built[rule]
+
+
+def test_the_choice_never_sees_the_training_or_held_out_seeds() -> None:
+    for seed in (1, 2):
+        with pytest.raises(ValueError, match=f"validation_seed = {seed}"):
+            rule_defaults.choose(episodes=2, validation_seed=seed, n_workers=1, progress=False)
+
+
+def test_a_small_choice_takes_the_best_validation_mean(tmp_path: Path) -> None:
+    """Two episodes per seed: the chosen candidate has the highest validation mean, every
+    other candidate is paired against it on the held-out episodes, and the files say so."""
+    record = rule_defaults.choose(episodes=2, validation_seed=5, n_workers=1, progress=False)
+    for r in record["rules"].values():
+        means = {c["candidate"]: c["validation_mean"] for c in r["candidates"]}
+        assert r["chosen"] == max(means, key=means.__getitem__)
+        for c in r["candidates"]:
+            chosen = next(x for x in r["candidates"] if x["candidate"] == r["chosen"])
+            if c["candidate"] == r["chosen"]:
+                assert "chosen_minus_this_held_out" not in c
+            else:
+                diff = c["chosen_minus_this_held_out"]
+                assert diff["mean"] == pytest.approx(chosen["held_out_mean"] - c["held_out_mean"])
+    rule_defaults.write(record, tmp_path)
+    rows = (tmp_path / "rule_defaults.csv").read_text().splitlines()
+    assert len(rows) == 1 + sum(len(r["candidates"]) for r in record["rules"].values())
+    assert json.loads((tmp_path / "rule_defaults.json").read_text()) == json.loads(
+        json.dumps(record)
+    )
