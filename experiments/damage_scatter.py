@@ -107,8 +107,8 @@ def damage_scatter(
 
 def main(argv: Sequence[str] | None = None) -> int:
     """The command line (module docstring): the estimates as JSON, printed and written."""
-    from experiments.cli_common import add_params_arg, int_at_least, load_params
-    from scas_env.cli_args import check_out_file, make_parser, nonneg_int
+    from experiments.cli_common import add_params_arg, check_out_file, int_at_least, load_params
+    from scas_env.cli_args import make_parser, nonneg_int
     from scas_env.utils.atomic_file import write_text_atomic
 
     parser = make_parser("python -m experiments.damage_scatter", __doc__)

@@ -250,13 +250,8 @@ def _check_rows(
 def main(argv: Sequence[str] | None = None) -> int:
     """The command line (module docstring): the check of the closed form against simulation,
     or (``--ladder``) the long-run rates of a ladder's arms; printed, ``--out`` as JSON."""
-    from scas_env.cli_args import (
-        check_out_file,
-        existing_file,
-        make_parser,
-        nonneg_int,
-        positive_int,
-    )
+    from experiments.cli_common import check_out_file
+    from scas_env.cli_args import existing_file, make_parser, nonneg_int, positive_int
     from scas_env.utils.atomic_file import write_text_atomic
 
     parser = make_parser("python -m experiments.renewal", __doc__)

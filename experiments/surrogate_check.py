@@ -79,7 +79,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     """The command line (module docstring)."""
     from pathlib import Path
 
-    from scas_env.cli_args import check_out_file, make_parser, nonneg_int, positive_int
+    from experiments.cli_common import check_out_file
+    from scas_env.cli_args import make_parser, nonneg_int, positive_int
     from scas_env.utils.atomic_file import write_text_atomic
 
     parser = make_parser("python -m experiments.surrogate_check", __doc__)

@@ -47,7 +47,6 @@ __all__ = [
     "array",
     "choice",
     "flag",
-    "function",
     "generator",
     "instance",
     "integer",
@@ -243,13 +242,6 @@ def instance(name: str, value: T, cls: type | tuple[type, ...], what: str | None
 def generator(name: str, value: object) -> np.random.Generator:
     """``value`` if it is a ``numpy.random.Generator``."""
     return instance(name, value, np.random.Generator, "numpy.random.Generator")
-
-
-def function(name: str, value: T) -> T:
-    """``value`` if it is callable."""
-    if callable(value):
-        return value
-    raise ArgumentTypeError(f"{name} = {show(value)} {_kind(value)} must be callable")
 
 
 def mapping(name: str, value: object) -> Mapping[Any, Any]:

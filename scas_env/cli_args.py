@@ -4,9 +4,8 @@ Every ``scas-*`` command (:mod:`policies.cli`, :mod:`scas_env.dataset.cli`) and 
 command of ``experiments/`` builds its parser with :func:`make_parser` (``--help`` shows
 every option's default), validates values with the argument types below (a bad value is a
 usage error naming the option, its value and what is allowed, exit status 2, before any work
-starts), and checks its outputs with :func:`check_out_dir` / :func:`check_out_file` (an
-existing result is refused unless ``--overwrite``; an unwritable place is refused at once,
-not after the run).
+starts), and checks its output folder with :func:`check_out_dir` (an existing result is
+refused unless ``--overwrite``; an unwritable place is refused at once, not after the run).
 
 >>> positive_int("3")
 3
@@ -21,7 +20,6 @@ from __future__ import annotations
 import argparse
 import logging
 import sys
-import tempfile
 from collections.abc import Iterable, Sequence
 from pathlib import Path
 from typing import Any, NoReturn
@@ -50,7 +48,6 @@ __all__ = [
     "announce_numba_compilation",
     "announce_uncached_kernels",
     "check_out_dir",
-    "check_out_file",
     "config_file",
     "configure_logging",
     "existing_file",
@@ -347,38 +344,6 @@ def check_out_dir(parser: argparse.ArgumentParser, path: str | Path, overwrite: 
     except ResultsFolderError as exc:
         parser.error(str(exc))
     return Path(path)
-
-
-def check_out_file(
-    parser: argparse.ArgumentParser, path: str | Path, overwrite: bool, option: str = "--out"
-) -> Path:
-    """Validate an output file before any work: an existing file needs ``--overwrite``."""
-    path = Path(path)
-    if path.is_dir():
-        parser.error(f"{option} {path} is a folder; expected a file name")
-    if path.exists() and not overwrite:
-        parser.error(f"{option} {path} exists; pass --overwrite to replace it")
-    _check_writable(parser, _existing_ancestor(parser, path.parent, option), option)
-    return path
-
-
-def _existing_ancestor(parser: argparse.ArgumentParser, path: Path, option: str = "--out") -> Path:
-    for parent in (path, *path.parents):
-        if parent.exists():
-            if not parent.is_dir():
-                parser.error(f"{option} {path}: {parent} is a file, not a folder")
-            return parent
-    return Path.cwd()  # pragma: no cover - a relative path's ancestors end at "."
-
-
-def _check_writable(parser: argparse.ArgumentParser, folder: Path, option: str = "--out") -> None:
-    """Create and delete a temporary file in ``folder`` (permission bits alone miss read-only
-    file systems and root's rights)."""
-    try:
-        with tempfile.TemporaryFile(dir=folder):
-            pass
-    except OSError as exc:
-        parser.error(f"{option}: cannot write in {folder} ({exc.strerror or exc})")
 
 
 # --- logging and the numba notice -------------------------------------------------------

@@ -15,6 +15,9 @@ unless it is a flag, a complex number or an arbitrary object always. So a NaN th
 back as a finite number (once ``probability_mass_within(..., lower=nan)`` -> 0.0) is a
 failure here, not a "valid result".
 
+The paper's prognosis helpers that moved out of the package
+(:mod:`experiments.paper.prognosis_setup`, :data:`PAPER_SPECS`) are swept the same way.
+
 :func:`test_every_public_callable_is_swept_or_excused` keeps the sweep complete: a new
 public function or method of ``prognostics`` fails it until it has a spec here (or a reason
 in :data:`EXCUSED`). :func:`test_public_callables_are_fully_annotated` keeps the type hints
@@ -37,6 +40,8 @@ import pytest
 from numba.core.dispatcher import Dispatcher
 
 import prognostics
+from experiments.paper import prognosis_setup
+from experiments.paper.prognosis_setup import HealthySet
 from prognostics import (
     detection,
     features,
@@ -59,7 +64,6 @@ from prognostics.detection import DetectorConfig, PercentileDetector
 from prognostics.measurement import MeasurementModel
 from prognostics.normals import NormalStream, handle_of
 from prognostics.particle_filter import ParticleFilter
-from prognostics.prognosis_run import HealthySet
 from prognostics.rul import HazardZone, RulPredictor
 from prognostics.rul_ageing import AgeingRul
 from prognostics.ukf import GaussianRul, UnscentedFilter
@@ -775,11 +779,6 @@ def _specs() -> list[Spec]:
         Spec("ParticleFilter.estimate", lambda: _pf().estimate, dict),
         # ------------------------------------------------------------------ prognosis runs
         Spec(
-            "HealthySet.run_std",
-            lambda: HealthySet({"G1": _rng().normal(size=(3, 4))}, 2).run_std,
-            lambda: {"feature": "G1"},
-        ),
-        Spec(
             "PrognosisTrace.metrics",
             lambda: _trace().metrics,
             lambda: {"eol": 6.0, "end": 5.5},
@@ -792,67 +791,6 @@ def _specs() -> list[Spec]:
             _prognosis_args,
             nan_ok=frozenset({"measurements"}),  # NaN: a missing test
             nan_result=True,  # RULs before start_index
-        ),
-        Spec(
-            "prognosis_run.grow_path",
-            _f(prognosis_run.grow_path),
-            lambda: {
-                "model": linear_wear_model(1.0),
-                "x0": 0.0,
-                "theta": 1.0,
-                "cv_at": lambda x: 0.1,
-                "threshold": 5.0,
-                "rng": _rng(),
-                "max_flights": 100,
-            },
-        ),
-        Spec(
-            "prognosis_run.healthy_residuals",
-            _f(prognosis_run.healthy_residuals),
-            lambda: {"series": _rng().normal(size=(3, 4))},
-        ),
-        Spec(
-            "prognosis_run.installation_detector",
-            _f(prognosis_run.installation_detector),
-            lambda: {
-                "level": 1.0,
-                "residuals": _rng().normal(size=20),
-                "n_reference": 2,
-                "direction": "both",
-                "window": 3,
-            },
-        ),
-        Spec(
-            "prognosis_run.installation_measurement_model",
-            _f(prognosis_run.installation_measurement_model),
-            lambda: {"population": _poly(), "run_std": 0.05, "n_reference": 3},
-        ),
-        Spec(
-            "prognosis_run.installation_reference",
-            _f(prognosis_run.installation_reference),
-            lambda: {
-                "y": [1.0, 1.1, 0.9],
-                "x_prior": [0.0, 0.1, 0.2],
-                "measurement": _poly(),
-                "relative": True,
-            },
-        ),
-        Spec(
-            "prognosis_run.prior_severity",
-            _f(prognosis_run.prior_severity),
-            lambda: {"model": _wear(), "x0": 0.0, "flights": [1.0, 2.0, 3.0]},
-        ),
-        Spec(
-            "prognosis_run.unit_reference",
-            _f(prognosis_run.unit_reference),
-            lambda: {
-                "y": [0.11, 0.19, 0.32, 0.41],
-                "flights": [1.0, 2.0, 3.0, 4.0],
-                "model": _wear(),
-                "x0": 0.0,
-                "measurement": _poly(),
-                "n_tests": 4,
-            },
         ),
         # ------------------------------------------------------------------ RUL
         Spec("HazardZone", _f(HazardZone), lambda: {"mean": 1.0, "std": 0.1}),
@@ -1095,6 +1033,82 @@ def _specs() -> list[Spec]:
 
 SPECS: list[Spec] = _specs()
 
+
+def _paper_specs() -> list[Spec]:
+    """The paper's prognosis helpers that left the package
+    (:mod:`experiments.paper.prognosis_setup`): swept alike, outside the inventory."""
+    return [
+        Spec(
+            "HealthySet.run_std",
+            lambda: HealthySet({"G1": _rng().normal(size=(3, 4))}, 2).run_std,
+            lambda: {"feature": "G1"},
+        ),
+        Spec(
+            "prognosis_setup.grow_path",
+            _f(prognosis_setup.grow_path),
+            lambda: {
+                "model": linear_wear_model(1.0),
+                "x0": 0.0,
+                "theta": 1.0,
+                "cv_at": lambda x: 0.1,
+                "threshold": 5.0,
+                "rng": _rng(),
+                "max_flights": 100,
+            },
+        ),
+        Spec(
+            "prognosis_setup.healthy_residuals",
+            _f(prognosis_setup.healthy_residuals),
+            lambda: {"series": _rng().normal(size=(3, 4))},
+        ),
+        Spec(
+            "prognosis_setup.installation_detector",
+            _f(prognosis_setup.installation_detector),
+            lambda: {
+                "level": 1.0,
+                "residuals": _rng().normal(size=20),
+                "n_reference": 2,
+                "direction": "both",
+                "window": 3,
+            },
+        ),
+        Spec(
+            "prognosis_setup.installation_measurement_model",
+            _f(prognosis_setup.installation_measurement_model),
+            lambda: {"population": _poly(), "run_std": 0.05, "n_reference": 3},
+        ),
+        Spec(
+            "prognosis_setup.installation_reference",
+            _f(prognosis_setup.installation_reference),
+            lambda: {
+                "y": [1.0, 1.1, 0.9],
+                "x_prior": [0.0, 0.1, 0.2],
+                "measurement": _poly(),
+                "relative": True,
+            },
+        ),
+        Spec(
+            "prognosis_setup.prior_severity",
+            _f(prognosis_setup.prior_severity),
+            lambda: {"model": _wear(), "x0": 0.0, "flights": [1.0, 2.0, 3.0]},
+        ),
+        Spec(
+            "prognosis_setup.unit_reference",
+            _f(prognosis_setup.unit_reference),
+            lambda: {
+                "y": [0.11, 0.19, 0.32, 0.41],
+                "flights": [1.0, 2.0, 3.0, 4.0],
+                "model": _wear(),
+                "x0": 0.0,
+                "measurement": _poly(),
+                "n_tests": 4,
+            },
+        ),
+    ]
+
+
+PAPER_SPECS: list[Spec] = _paper_specs()
+
 #: public callables the sweep leaves out, and why
 EXCUSED: dict[str, str] = {
     **dict.fromkeys(
@@ -1107,7 +1121,6 @@ EXCUSED: dict[str, str] = {
             "RedundantPair",
             "FeatureInfo",
             "PrognosisTrace",
-            "HealthySet",
         ),
         "a record the package fills (a result, or the data of one study); its methods are swept",
     ),
@@ -1232,7 +1245,9 @@ def _verdict(spec: Spec, arg: str, bad: Bad, kinds: set[str]) -> str | None:
     return None
 
 
-@pytest.mark.parametrize("spec", SPECS, ids=[s.target for s in SPECS])
+@pytest.mark.parametrize(
+    "spec", [*SPECS, *PAPER_SPECS], ids=[s.target for s in (*SPECS, *PAPER_SPECS)]
+)
 def test_bad_arguments_get_a_clear_error_or_a_valid_result(
     spec: Spec, tmp_path: Any, monkeypatch: pytest.MonkeyPatch
 ) -> None:

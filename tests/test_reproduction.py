@@ -1,4 +1,5 @@
-"""Tests of the paper reproduction (experiments.paper.reproduction*, prognostics.prognosis_run)."""
+"""Tests of the paper reproduction (experiments.paper.reproduction*, its prognosis setup
+experiments.paper.prognosis_setup, and prognostics.prognosis_run)."""
 
 from __future__ import annotations
 
@@ -9,6 +10,14 @@ import numpy as np
 import pytest
 import scipy.stats
 
+from experiments.paper.prognosis_setup import (
+    grow_path,
+    healthy_residuals,
+    installation_detector,
+    installation_measurement_model,
+    installation_reference,
+    unit_reference,
+)
 from experiments.paper.reproduction import FAULTS, ReproductionConfig, run_reproduction
 from experiments.paper.reproduction_conventions import G2_REASON, leakage_fraction
 from experiments.paper.reproduction_detection import installation_detection
@@ -25,15 +34,7 @@ from experiments.paper.reproduction_report import (
 from prognostics.degradation_models import linear_wear_model, paris_crack_model
 from prognostics.detection import DetectorConfig, PercentileDetector
 from prognostics.measurement import MeasurementModel, fit_measurement_model
-from prognostics.prognosis_run import (
-    grow_path,
-    healthy_residuals,
-    installation_detector,
-    installation_measurement_model,
-    installation_reference,
-    run_prognosis,
-    unit_reference,
-)
+from prognostics.prognosis_run import run_prognosis
 from prognostics.rul import HazardZone
 from scas_env.actuator.params import ScasParams
 from scas_env.actuator.surrogate import default_surrogate

@@ -22,11 +22,10 @@ from pathlib import Path
 
 import numpy as np
 
-from experiments.cli_common import add_params_arg, load_params
+from experiments.cli_common import add_params_arg, check_out_file, load_params
 from scas_env.actuator.calibration import DATA_FILE, build_calibration, sample_lives
 from scas_env.cli_args import (
     add_logging_args,
-    check_out_file,
     configure_logging,
     make_parser,
     nonneg_int,

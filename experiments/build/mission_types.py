@@ -365,8 +365,7 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Build the table, write it to ``--out`` and print its summary rows."""
-    from experiments.cli_common import load_params
-    from scas_env.cli_args import check_out_file
+    from experiments.cli_common import check_out_file, load_params
 
     parser = build_parser()
     args = parser.parse_args(argv)

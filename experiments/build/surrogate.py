@@ -279,8 +279,8 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Build the surrogate, write it to ``--out`` and print each feature's extremes."""
-    from experiments.cli_common import load_params
-    from scas_env.cli_args import announce_uncached_kernels, check_out_file, configure_logging
+    from experiments.cli_common import check_out_file, load_params
+    from scas_env.cli_args import announce_uncached_kernels, configure_logging
 
     parser = build_parser()
     args = parser.parse_args(argv)

@@ -49,13 +49,11 @@ from numpy.typing import NDArray
 
 from experiments.paper.campaign import CampaignConfig, run_campaign
 from experiments.paper.campaign_table import CampaignResult, load
+from experiments.paper.prognosis_setup import HealthySet, healthy_residuals, installation_detector
 from experiments.paper.reproduction_conventions import EXCLUDED_FEATURES
 from experiments.paper.reproduction_prognosis import (
-    HealthySet,
     PathPrognosis,
     feature_score,
-    healthy_residuals,
-    installation_detector,
     population_detector,
     prognose_path,
     simulate_healthy_set,

@@ -34,6 +34,7 @@ from scipy import stats
 from tqdm.auto import tqdm
 
 from experiments.paper.campaign_table import CampaignResult
+from experiments.paper.prognosis_setup import grow_path, healthy_residuals, installation_detector
 from experiments.paper.reproduction import (
     FAULTS,
     ReproductionConfig,
@@ -51,7 +52,6 @@ from experiments.paper.reproduction_prognosis import (
     feature_score,
     ground_test_features,
 )
-from prognostics.prognosis_run import grow_path, healthy_residuals, installation_detector
 from scas_env.actuator.calibration import Calibration, calibration_for
 from scas_env.actuator.health import HealthState, actuator_config
 from scas_env.actuator.params import ScasParams
@@ -311,9 +311,8 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Write the detection result to ``--out`` (JSON) and print it beside the targets."""
-    from experiments.cli_common import load_params
+    from experiments.cli_common import check_out_file, load_params
     from experiments.paper.campaign_table import load
-    from scas_env.cli_args import check_out_file
     from scas_env.utils.atomic_file import write_text_atomic
 
     parser = build_parser()

@@ -1,8 +1,9 @@
 """Prognosis paths of the [DJS20] reproduction (:mod:`experiments.paper.reproduction`, step 4).
 
-A unit (drawn, or nominal) degrades flight by flight (:func:`prognostics.prognosis_run.
-grow_path`: the calibration's damage integral, the unit's growth multiplier theta and the
-calibration's flight-to-flight CV) until the calibration threshold. Every k flights
+A unit (drawn, or nominal) degrades flight by flight
+(:func:`experiments.paper.prognosis_setup.grow_path`: the calibration's damage integral, the
+unit's growth multiplier theta and the calibration's flight-to-flight CV) until the
+calibration threshold. Every k flights
 (k = nominal life / ``tests_per_path``) a physics pre-flight test at the true severity gives
 the ground features. Two variants (:data:`VARIANTS`) filter the same tests:
 
@@ -33,22 +34,21 @@ from numpy.typing import NDArray
 from tqdm.auto import tqdm
 
 from experiments.paper.campaign_table import CampaignResult
-from prognostics.degradation_models import linear_wear_model, paris_crack_model
-from prognostics.detection import DetectorConfig, PercentileDetector
-from prognostics.measurement import MeasurementModel, fit_measurement_model
-from prognostics.metrics import PrognosticMetrics
-from prognostics.prognosis_run import (
+from experiments.paper.prognosis_setup import (
     HealthySet,
-    PrognosisTrace,
     grow_path,
     healthy_residuals,
     installation_detector,
     installation_measurement_model,
     installation_reference,
     prior_severity,
-    run_prognosis,
     unit_reference,
 )
+from prognostics.degradation_models import linear_wear_model, paris_crack_model
+from prognostics.detection import DetectorConfig, PercentileDetector
+from prognostics.measurement import MeasurementModel, fit_measurement_model
+from prognostics.metrics import PrognosticMetrics
+from prognostics.prognosis_run import PrognosisTrace, run_prognosis
 from prognostics.rul import HazardZone
 from prognostics.selection import FeatureScore
 from scas_env.actuator.calibration import Calibration

@@ -2,7 +2,9 @@
 belief and the truth at that moment.
 
 :class:`MaintenanceLog` keeps, per fleet, one record per event of the running episode
-(a dict; :data:`LOG_FIELDS`):
+(a dict with the keys ``day``, ``aircraft``, ``actuator``, ``part``, ``kind``,
+``age_flights``, ``entry_age_flights``, ``rul_mean``, ``rul_low``, ``true_rul_flights``, in
+that order); the kinds:
 
 * ``"failure"``: a part failed in flight (its life ends there; repaired now or later);
 * ``"preventive"``: a maintenance job replaced a serviceable part;
@@ -35,19 +37,6 @@ from scas_env.core.batch import ActuatorBatch
 from scas_env.core.observation import ageing_estimates
 from scas_env.core.setup import PARTS
 
-#: the fields of every record, in order
-LOG_FIELDS = (
-    "day",
-    "aircraft",
-    "actuator",
-    "part",
-    "kind",
-    "age_flights",
-    "entry_age_flights",
-    "rul_mean",
-    "rul_low",
-    "true_rul_flights",
-)
 #: the kinds of record that end a part's life (the removals of survival analysis)
 REMOVAL_KINDS = ("failure", "preventive", "background")
 
@@ -146,4 +135,4 @@ class MaintenanceLog:
         return float(mean), float(low)
 
 
-__all__ = ["LOG_FIELDS", "REMOVAL_KINDS", "MaintenanceLog"]
+__all__ = ["REMOVAL_KINDS", "MaintenanceLog"]
