@@ -38,11 +38,11 @@ install: $(STAMP)
 ## ScasMaintenance-v2 (2 workers); prints the table, writes CSV/JSON/Markdown and plots.
 ## An earlier run's folder is kept unless OVERWRITE=1.
 benchmark: install
-	@if [ -z "$(OVERWRITE)" ] && [ -n "$$(ls -A $(RESULTS)/benchmark 2>/dev/null)" ]; then \
+	@if [ -z "$(filter 1,$(OVERWRITE))" ] && [ -n "$$(ls -A $(RESULTS)/benchmark 2>/dev/null)" ]; then \
 	  echo "$(RESULTS)/benchmark holds an earlier run: 'make benchmark OVERWRITE=1' replaces it" >&2; \
 	  exit 2; \
 	fi
-	$(VENV)/bin/scas-benchmark --out $(RESULTS)/benchmark $(if $(OVERWRITE),--overwrite)
+	$(VENV)/bin/scas-benchmark --out $(RESULTS)/benchmark $(if $(filter 1,$(OVERWRITE)),--overwrite)
 
 ## Physics demonstration: a pre-flight test and a flight window at three health states
 ## (signals as CSV, plots) and the paper's physics figures (experiments/, not installed).

@@ -3,14 +3,16 @@ seeds, and report the choice on held-out seeds.
 
 Each rule (``preventive``, ``detection``, ``rul_risk``) has candidate points: the one tuned on
 the retired v0 scenario (the defaults before), the one of ``docs/value_v2/ladder.json``
-(training seed 1) and, where there is one, the second tuning replicate of
-``docs/value_v2/replicates.json`` (training seed 11). Every candidate runs on the same
-``--episodes`` validation episodes (root seed ``--validation-seed``, never the held-out one);
-the one of highest mean reward is the default. Then every candidate runs on the held-out
-episodes (seed 2, as the value study) and the chosen point is paired against each other
-candidate (t-interval, MDD). Writes ``rule_defaults.json`` and ``rule_defaults.csv``; the
-run behind the defaults is in ``docs/value_v2/`` (``tests/test_rule_defaults.py`` checks the
-defaults against it):
+(training seed 1; the detection rule's: ``docs/value_v2/tuning_detection.json``, ``scas-tune
+--families detection --trials 24 --episodes 30``) and, for the age and filter rules, the
+second tuning replicate of ``docs/value_v2/replicates.json`` (training seed 11). Every
+candidate runs on the same ``--episodes`` validation episodes (root seed
+``--validation-seed``: none of the tunings' training seeds, the held-out seed or the
+benchmark's default seed 0); the one of highest mean reward is the default. Then every
+candidate runs on the held-out episodes (seed 2, as the value study) and the chosen point is
+paired against each other candidate (t-interval, MDD). Writes ``rule_defaults.json`` and
+``rule_defaults.csv`` into a results folder (with its manifest); the run behind the defaults
+is in ``docs/value_v2/`` (``tests/test_rule_defaults.py`` checks the defaults against it):
 
     python -m experiments.rule_defaults --episodes 1000 --workers 2 --out results/rule_defaults
 """
@@ -31,7 +33,6 @@ from policies.benchmark import run_benchmark
 from policies.benchmark.run import PolicySpec
 from policies.benchmark.stats import paired_difference
 from policies.value.tuning import HELD_OUT_SEED, TRAIN_SEED
-from scas_env.utils.atomic_file import write_text_atomic
 from scas_env.utils.results_folder import json_text
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -49,9 +50,8 @@ V0_POINTS: dict[str, dict[str, float]] = {
         "seal_lead": 9.070705,
     },
 }
-#: the detection rule tuned on the current scenario (policies.rules.classic)
-DETECTION_V2 = {"test_every": 20.18261509703733}
 _FAMILY = {"preventive": "age", "rul_risk": "filter"}
+V2 = ROOT / "docs" / "value_v2"
 
 
 def _clean(params: Mapping[str, Any]) -> dict[str, Any]:
@@ -59,21 +59,35 @@ def _clean(params: Mapping[str, Any]) -> dict[str, Any]:
     return {k: v for k, v in params.items() if k != "reference"}
 
 
+def _replicates() -> tuple[dict[str, Any], list[int]]:
+    data = json.loads((V2 / "replicates.json").read_text())
+    return data["tuning"], [int(seeds[0]) for seeds in data["config"]["replicate_seeds"]]
+
+
 def candidates() -> dict[str, dict[str, dict[str, Any]]]:
-    """rule -> candidate label -> parameters."""
-    ladder = json.loads((ROOT / "docs/value_v2/ladder.json").read_text())["tuning"]
-    replicates = json.loads((ROOT / "docs/value_v2/replicates.json").read_text())["tuning"]
+    """rule -> candidate label -> parameters, from the shipped tuning records."""
+    ladder = json.loads((V2 / "ladder.json").read_text())["tuning"]
+    tunings, seeds = _replicates()
     out: dict[str, dict[str, dict[str, Any]]] = {}
     for rule, family in _FAMILY.items():
-        out[rule] = {
-            "v0": dict(V0_POINTS[rule]),
-            f"v2 seed {TRAIN_SEED}": _clean(ladder[family]["best_params"]),
-        }
-        for key, tuned in replicates.items():
-            if key.startswith("1|"):
-                out[rule]["v2 seed 11"] = _clean(tuned[family]["best_params"])
-    out["detection"] = {"v0": dict(V0_POINTS["detection"]), f"v2 seed {TRAIN_SEED}": DETECTION_V2}
+        out[rule] = {"v0": dict(V0_POINTS[rule])}
+        out[rule][f"v2 seed {TRAIN_SEED}"] = _clean(ladder[family]["best_params"])
+        for key, tuned in tunings.items():  # "<replicate>|<level>"
+            seed = seeds[int(key.split("|", 1)[0])]
+            if seed != TRAIN_SEED:  # the replicate of the training seed is the ladder's
+                out[rule][f"v2 seed {seed}"] = _clean(tuned[family]["best_params"])
+    detection = json.loads((V2 / "tuning_detection.json").read_text())["detection"]
+    out["detection"] = {
+        "v0": dict(V0_POINTS["detection"]),
+        f"v2 seed {TRAIN_SEED}": _clean(detection["best_params"]),
+    }
     return out
+
+
+def seeds_seen() -> list[int]:
+    """Root seeds a validation run must not use: the tunings' training seeds, the held-out
+    seed and the benchmark's default seed."""
+    return sorted({0, TRAIN_SEED, HELD_OUT_SEED, *_replicates()[1]})
 
 
 def _specs(points: Mapping[str, Mapping[str, Mapping[str, Any]]]) -> list[PolicySpec]:
@@ -95,10 +109,10 @@ def choose(
     *, episodes: int, validation_seed: int, n_workers: int, progress: bool = True
 ) -> dict[str, Any]:
     """The study of the module docstring; returns its record."""
-    if validation_seed in (HELD_OUT_SEED, TRAIN_SEED):
+    if validation_seed in seeds_seen():
         raise ValueError(
-            f"validation_seed = {validation_seed!r} must differ from the training seed "
-            f"{TRAIN_SEED} and the held-out seed {HELD_OUT_SEED}"
+            f"validation_seed = {validation_seed!r} must be none of {seeds_seen()} (the "
+            "tunings' training seeds, the held-out seed, the benchmark's default seed)"
         )
     points = candidates()
     specs = _specs(points)
@@ -132,8 +146,8 @@ def choose(
 
 
 def write(record: Mapping[str, Any], out: Path) -> None:
-    out.mkdir(parents=True, exist_ok=True)
-    write_text_atomic(out / "rule_defaults.json", json_text(record, indent=1))
+    """``rule_defaults.json`` and ``rule_defaults.csv`` into the folder ``out``."""
+    (out / "rule_defaults.json").write_text(json_text(record, indent=1))
     lines = [["rule", "candidate", "chosen", "validation_mean", "held_out_mean",
               "chosen_minus_this", "low", "high", "mdd"]]  # fmt: skip
     for rule, r in record["rules"].items():
@@ -142,42 +156,41 @@ def write(record: Mapping[str, Any], out: Path) -> None:
             lines.append([rule, c["candidate"], c["candidate"] == r["chosen"],
                           c["validation_mean"], c["held_out_mean"], d.get("mean", ""),
                           d.get("low", ""), d.get("high", ""), d.get("mdd", "")])  # fmt: skip
-    tmp = out / "rule_defaults.csv.tmp"
-    with open(tmp, "w", newline="") as f:
+    with open(out / "rule_defaults.csv", "w", newline="") as f:
         csv.writer(f).writerows(lines)
-    tmp.replace(out / "rule_defaults.csv")
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--episodes", type=int, default=1000)
-    parser.add_argument("--validation-seed", type=int, default=3)
-    parser.add_argument("--workers", type=int, default=2)
+    from experiments.cli_common import int_at_least
+    from scas_env.cli_args import check_out_dir, positive_int
+    from scas_env.utils.results_folder import results_folder
+
+    parser = argparse.ArgumentParser(
+        prog="python -m experiments.rule_defaults", description=__doc__.split("\n\n")[0]
+    )
+    parser.add_argument("--episodes", type=int_at_least(2), default=1000)
+    parser.add_argument("--validation-seed", type=int_at_least(0), default=3)
+    parser.add_argument("--workers", type=positive_int, default=2)
     parser.add_argument("--out", type=Path, default=Path("results/rule_defaults"))
-    parser.add_argument("--overwrite", action="store_true")
+    parser.add_argument("--overwrite", action="store_true", help="replace an existing --out")
     args = parser.parse_args(argv)
-    if args.episodes < 2:
-        parser.error(f"--episodes {args.episodes}: a paired interval needs at least 2")
-    if args.out.exists() and any(args.out.iterdir()) and not args.overwrite:
-        parser.error(f"--out {args.out} exists and is not empty; pass --overwrite")
-    try:
-        record = choose(episodes=args.episodes, validation_seed=args.validation_seed,
-                        n_workers=args.workers)  # fmt: skip
-    except ValueError as err:
-        parser.error(str(err))
-    write(record, args.out)
+    out = check_out_dir(parser, args.out, args.overwrite)
+    if args.validation_seed in seeds_seen():
+        parser.error(f"--validation-seed {args.validation_seed}: not one of {seeds_seen()}")
+    record = choose(episodes=args.episodes, validation_seed=args.validation_seed,
+                    n_workers=args.workers)  # fmt: skip
+    config = {"episodes": args.episodes, "validation_seed": args.validation_seed}
+    seeds = {"validation": args.validation_seed, "held_out": HELD_OUT_SEED}
+    with results_folder(out, config=config, seeds=seeds, overwrite=args.overwrite) as tmp:
+        write(record, tmp)
     for rule, r in record["rules"].items():
         print(f"{rule}: chosen {r['chosen']}")
         for c in r["candidates"]:
             d = c.get("chosen_minus_this_held_out")
-            vs = (
-                ""
-                if d is None
-                else (
-                    f"; chosen - this, held out: {d['mean']:+,.0f} [{d['low']:+,.0f}, "
-                    f"{d['high']:+,.0f}] (MDD {d['mdd']:,.0f})"
-                )
-            )
+            vs = "" if d is None else (
+                f"; chosen - this, held out: {d['mean']:+,.0f} [{d['low']:+,.0f}, "
+                f"{d['high']:+,.0f}] (MDD {d['mdd']:,.0f})"
+            )  # fmt: skip
             print(f"  {c['candidate']:12s} validation {c['validation_mean']:,.0f}, held out "
                   f"{c['held_out_mean']:,.0f}{vs}")  # fmt: skip
     return 0

@@ -46,6 +46,7 @@ COMMANDS = (
     "reference_posterior",
     "renewal",
     "risk_recalibration",
+    "rule_defaults",
     "sb3_speed",
     "sensing_sweep",
     "spring_cloud",

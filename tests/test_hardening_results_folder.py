@@ -352,3 +352,5 @@ def test_json_text_writes_null_for_what_is_not_a_finite_number() -> None:
     assert json.loads(json_text({"o": Odd()}, default=lambda o: float("nan"))) == {"o": None}
     with pytest.raises(TypeError, match="Odd value"):
         json_text({"o": Odd()})
+    # a numpy type (a class with a ``tolist`` attribute) goes to ``default``, as json.dumps'
+    assert json.loads(json_text({"t": np.float32}, default=repr)) == {"t": repr(np.float32)}

@@ -24,7 +24,8 @@ def test_the_defaults_are_the_chosen_candidates_of_the_committed_study() -> None
     """Each rule's default point is, to 7 significant digits, the candidate the committed
     record chose, and that candidate has the highest validation mean of its rule."""
     record = json.loads(RECORD.read_text())
-    assert record["validation_seed"] not in (1, 2) and record["episodes"] >= 1000
+    assert record["validation_seed"] not in rule_defaults.seeds_seen()
+    assert record["episodes"] >= 1000
     defaults = {
         "preventive": PREVENTIVE_DEFAULTS,
         "detection": DETECTION_DEFAULTS,
@@ -40,10 +41,17 @@ def test_the_defaults_are_the_chosen_candidates_of_the_committed_study() -> None
         assert {c["candidate"]: c["params"] for c in r["candidates"]} == built[rule]
 
 
-def test_the_choice_never_sees_the_training_or_held_out_seeds() -> None:
-    for seed in (1, 2):
+def test_the_choice_never_sees_the_training_held_out_or_benchmark_seeds() -> None:
+    """Refused up front: the tunings' training seeds (the ladder's and each replicate's, read
+    from the shipped record), the held-out seed, the benchmark's default seed."""
+    replicates = json.loads((ROOT / "docs" / "value_v2" / "replicates.json").read_text())
+    training = {int(s[0]) for s in replicates["config"]["replicate_seeds"]}
+    assert training == {1, 11}
+    for seed in sorted(training | {0, 2}):
         with pytest.raises(ValueError, match=f"validation_seed = {seed}"):
             rule_defaults.choose(episodes=2, validation_seed=seed, n_workers=1, progress=False)
+        with pytest.raises(SystemExit):
+            rule_defaults.main(["--validation-seed", str(seed), "--out", "/nonexistent/x"])
 
 
 def test_a_small_choice_takes_the_best_validation_mean(tmp_path: Path) -> None:

@@ -15,10 +15,9 @@ conventions:
   the age rule with the same grouping.
 * Tests are never requested while grounded (``test_and_fly`` does nothing then).
 
-Default parameters are the constants ``*_DEFAULTS`` below: tuned with Optuna TPE on
-training seeds, one budget per family (:mod:`policies.value.tuning`,
-``scas-value``; docs/value.md and docs/value_ladder.md give the
-held-out figures).
+Default parameters are the constants ``*_DEFAULTS`` below: points tuned with Optuna TPE on
+training seeds, one budget per family (:mod:`policies.value.tuning`), the best of them chosen
+on validation seeds (docs/value_v2/rule_defaults.json gives the held-out figures).
 """
 
 from __future__ import annotations
@@ -52,8 +51,8 @@ PREVENTIVE_DEFAULTS: dict[str, float] = {
     "opportunity": 0.6087008,
 }
 #: the detection rule tuned on the current scenario, ``scas-tune --families detection
-#: --trials 24 --episodes 30 --out results/tuning_detection_v2`` (41 s; its age rule comes
-#: out at docs/value_v2/ladder.json's, digit for digit), chosen as above (v0's: 732 slots)
+#: --trials 24 --episodes 30`` (41 s; record docs/value_v2/tuning_detection.json, whose age
+#: rule is docs/value_v2/ladder.json's digit for digit), chosen as above (v0's: 732 slots)
 DETECTION_DEFAULTS: dict[str, float] = {"test_every": 20.18262}
 RANDOM_DEFAULTS: tuple[float, float, float, float] = (0.96, 0.02, 0.01, 0.01)
 

@@ -36,10 +36,10 @@ __all__ = [
 
 #: Defaults of the filter rule: chosen as :data:`policies.rules.classic.PREVENTIVE_DEFAULTS`,
 #: the point of the second tuning replicate on the current scenario (training seed 11,
-#: docs/value_v2/replicates.json; override on). Its test interval exceeds an episode (no
-#: scheduled test: the in-flight features decide) and its thresholds are a low RUL lead of
-#: 1.4 flights for the spring, 23 for the seals, and a 20-flight risk of 0.0076. Age
-#: backstop and test interval, then the override's thresholds.
+#: docs/value_v2/replicates.json; override on). Its test interval, 3747 slots, exceeds the
+#: default episode (no scheduled test in 2000 slots: the in-flight features decide); its
+#: thresholds are a low RUL lead of 1.4 flights for the spring, 23 for the seals, and a
+#: 20-flight risk of 0.0076. Age backstop and test interval, then the override's thresholds.
 RUL_RISK_AGE_DEFAULTS: dict[str, float] = {
     "spring_age": 2944.785,
     "seal_age": 2328.126,

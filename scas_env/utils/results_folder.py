@@ -45,6 +45,8 @@ from importlib import metadata
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from scas_env._version import __version__
 from scas_env.utils.atomic_file import sigterm_raises
 from scas_env.utils.shipped_files import file_sha256
@@ -98,7 +100,7 @@ def _strict(value: Any) -> Any:
         return {k: _strict(v) for k, v in value.items()}
     if isinstance(value, list | tuple):
         return [_strict(v) for v in value]
-    if hasattr(value, "tolist") and not isinstance(value, str):  # numpy scalars and arrays
+    if isinstance(value, np.generic | np.ndarray):  # numpy scalars and arrays
         return _strict(value.tolist())
     return value
 
