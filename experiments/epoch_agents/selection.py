@@ -42,6 +42,7 @@ from policies.agents.sb3_agents import DATA_DIR
 from policies.benchmark.run import PolicySpec, run_benchmark
 from policies.benchmark.stats import paired_comparison
 from scas_env.utils.atomic_file import write_text_atomic
+from scas_env.utils.results_folder import json_text
 from scas_env.utils.shipped_files import write_manifest
 
 VALIDATION_SEED = 101
@@ -654,7 +655,7 @@ def held_out_comparison(
     )
     out.mkdir(parents=True, exist_ok=True)
     doc = {"config": result.config, "summary": summary, "wall_s": result.wall_s}
-    write_text_atomic(out / "held_out.json", json.dumps(doc, indent=1, default=str))
+    write_text_atomic(out / "held_out.json", json_text(doc, indent=1, default=str))
     tmp = out / "held_out_rows.csv.tmp"
     with tmp.open("w", newline="") as fh:
         writer = csv.DictWriter(fh, fieldnames=list(result.rows[0]))
