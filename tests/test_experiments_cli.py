@@ -47,6 +47,7 @@ COMMANDS = (
     "renewal",
     "risk_recalibration",
     "rule_defaults",
+    "rule_defaults_mismatch",
     "sb3_speed",
     "sensing_sweep",
     "spring_cloud",

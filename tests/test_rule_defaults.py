@@ -74,3 +74,28 @@ def test_a_small_choice_takes_the_best_validation_mean(tmp_path: Path) -> None:
     assert json.loads((tmp_path / "rule_defaults.json").read_text()) == json.loads(
         json.dumps(record)
     )
+
+
+def test_the_mismatch_study_pairs_the_chosen_point_in_each_world(tmp_path: Path) -> None:
+    """Two held-out episodes per world through the command: every world and candidate is
+    recorded, the chosen one paired against the others (its difference the difference of
+    the means: the same episodes), the worlds' departures as given."""
+    from experiments import rule_defaults_mismatch as study
+
+    out = tmp_path / "mm"
+    assert study.main(["--episodes", "2", "--workers", "1", "--out", str(out)]) == 0
+    record = json.loads((out / "rule_defaults_mismatch.json").read_text())
+    assert set(record["worlds"]) == set(study.WORLDS)
+    for label, world in record["worlds"].items():
+        assert world["mismatch"] == study.WORLDS[label].to_dict()
+        rows = world["candidates"]
+        assert set(rows) == set(rule_defaults.candidates()["rul_risk"])
+        chosen = rows[study.CHOSEN]
+        for name, row in rows.items():
+            if name == study.CHOSEN:
+                assert "chosen_minus_this" not in row
+            else:
+                assert row["chosen_minus_this"]["mean"] == pytest.approx(
+                    chosen["reward_mean"] - row["reward_mean"]
+                )
+    assert (out / "manifest.json").exists()
