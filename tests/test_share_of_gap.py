@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import warnings
 
 import numpy as np
 import pytest
@@ -146,3 +147,25 @@ def test_summarize_reports_the_share_of_the_reward_gap() -> None:
         rows, ["agent", "naive"], ["naive"], metrics=("reward",), gap=("naive", "clairvoyant")
     )
     assert "share_of_gap" not in without and "gap" not in without
+
+
+def test_an_interval_a_resample_cannot_place_is_nan_and_quiet() -> None:
+    """Three episodes, the bound above the base in one only: the share is defined (a gap on
+    average), but resamples drawing only the other two have no gap (0/0 or x/0), so the
+    percentile interval would be infinite or NaN. It is NaN, without numpy's or scipy's
+    warnings; with a gap in every episode the interval stays finite and equals the
+    hand-written bootstrap."""
+    x, b, u = np.array([1.0, 2.0, 3.0]), np.zeros(3), np.array([0.0, 0.0, 6.0])
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        iv = share_of_gap(x, b, u)
+    assert iv.mean == pytest.approx(1.0) and iv.n == 3
+    assert math.isnan(iv.low) and math.isnan(iv.high)
+    # the hand bootstrap shows why: some resamples have no gap at all
+    idx = np.random.default_rng(BOOTSTRAP_SEED).integers(0, 3, (BOOTSTRAP_RESAMPLES, 3))
+    assert np.any((u[idx] - b[idx]).mean(axis=1) == 0.0)
+    u2 = np.array([1.0, 2.0, 6.0])
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        ok = share_of_gap(x, b, u2)
+    assert (ok.low, ok.high) == pytest.approx(_paired_percentile_bootstrap(x, b, u2, 0.95))

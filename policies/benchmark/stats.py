@@ -34,6 +34,7 @@ is a ratio of per-episode sums, as are the alpha-lambda hit rate and the coverag
 from __future__ import annotations
 
 import math
+import warnings
 from collections.abc import Mapping, Sequence
 from dataclasses import asdict, dataclass
 from typing import Any
@@ -333,7 +334,8 @@ def share_of_gap(
     ``mean(policy - base) / mean(bound - base)`` over paired episodes (the same seeds), with
     a paired percentile-bootstrap interval (``scipy.stats.bootstrap``, ``paired=True``,
     fixed seed): 0 is the base, 1 the bound. Episodes with a non-finite value are dropped
-    from all three."""
+    from all three. The interval is NaN (undefined) when a resample's bound gains nothing
+    over its base: too few episodes to place the gap."""
     _confidence(confidence)
     x, b, u = (np.asarray(v, dtype=np.float64) for v in (policy, base, bound))
     if not x.shape == b.shape == u.shape or x.ndim != 1:
@@ -346,12 +348,21 @@ def share_of_gap(
         return Interval(math.nan, math.nan, math.nan, n)
 
     def ratio(x: np.ndarray, b: np.ndarray, u: np.ndarray, axis: int = -1) -> np.ndarray:
-        return np.mean(x - b, axis=axis) / np.mean(u - b, axis=axis)
+        with np.errstate(divide="ignore", invalid="ignore"):  # a resample without a gap
+            return np.mean(x - b, axis=axis) / np.mean(u - b, axis=axis)
 
     share = float(ratio(x, b, u))
     if n < 2:
         return Interval(share, math.nan, math.nan, n)
-    low, high = _percentile_bootstrap((x, b, u), ratio, confidence, resamples, seed, paired=True)
+    with np.errstate(all="ignore"), warnings.catch_warnings():
+        warnings.simplefilter("ignore", stats.DegenerateDataWarning)
+        low, high = _percentile_bootstrap(
+            (x, b, u), ratio, confidence, resamples, seed, paired=True
+        )
+    if not (math.isfinite(low) and math.isfinite(high)):
+        # some resample's bound gains nothing over the base: its share is undefined, and so
+        # is the interval (too few episodes to place the gap)
+        return Interval(share, math.nan, math.nan, n)
     return Interval(share, low, high, n)
 
 
