@@ -4,7 +4,6 @@ for the terminal, and a results folder with ``stages.csv``, ``reliability.csv``,
 
 from __future__ import annotations
 
-import json
 import math
 from collections.abc import Mapping
 from pathlib import Path
@@ -13,7 +12,7 @@ import numpy as np
 
 from experiments.belief_common import INTERVAL, LIFE_COLUMNS, TARGETS, StudyResult
 from scas_env.core.setup import PARTS
-from scas_env.utils.results_folder import results_folder
+from scas_env.utils.results_folder import json_text, results_folder
 
 
 def format_stages(result: StudyResult, truth: str = "info", by: str = "stage") -> str:
@@ -100,11 +99,10 @@ def write_study(result: StudyResult, out: str | Path, *, overwrite: bool = False
         else:  # no life reached a stage: the header only
             (tmp / "lives.csv").write_text(",".join(LIFE_COLUMNS) + "\n")
         (tmp / "study.json").write_text(
-            json.dumps(
+            json_text(
                 {"config": result.config, "stages": stages, "ages": ages, "reliability": rel},
                 indent=1,
             )
-            + "\n"
         )
         _plot_coverage(result, tmp / "coverage.png")
         _plot_reliability(result, tmp / "reliability.png")

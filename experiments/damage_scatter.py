@@ -12,7 +12,6 @@ seeds) and the closed form of a flight as a sum of independent regime windows
 
 from __future__ import annotations
 
-import json
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
@@ -110,6 +109,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     from experiments.cli_common import add_params_arg, check_out_file, int_at_least, load_params
     from scas_env.cli_args import make_parser, nonneg_int
     from scas_env.utils.atomic_file import write_text_atomic
+    from scas_env.utils.results_folder import json_text
 
     parser = make_parser("python -m experiments.damage_scatter", __doc__)
     parser.add_argument("--flights", type=int_at_least(2), default=40, help="whole flights")
@@ -124,9 +124,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     check_out_file(parser, args.out, args.overwrite)
     params = load_params(parser, args)
     result = damage_scatter(params, n_flights=args.flights, n_windows=args.windows, seed=args.seed)
-    text = json.dumps(result, indent=1)
-    write_text_atomic(args.out, text + "\n")
-    print(text)
+    text = json_text(result, indent=1)
+    write_text_atomic(args.out, text)
+    print(text, end="")
     return 0
 
 

@@ -15,7 +15,6 @@ The frame time along an episode: :mod:`experiments.dashboard_speed`.
 
 from __future__ import annotations
 
-import json
 import os
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -27,6 +26,7 @@ import numpy as np
 
 from scas_env import ENV_ID
 from scas_env.dashboard import DashboardRenderer, frame_record_from_env
+from scas_env.utils.results_folder import json_text
 
 
 @dataclass(frozen=True, eq=False)
@@ -113,7 +113,7 @@ def save_gif(
         loop=0,
         optimize=True,
     )
-    tmp_json.write_text(json.dumps(episode.numbers, indent=1) + "\n")
+    tmp_json.write_text(json_text(episode.numbers, indent=1))
     os.replace(tmp_gif, gif)
     os.replace(tmp_json, numbers)
     return gif, numbers

@@ -16,7 +16,6 @@ against the true RUL) into a results folder with its manifest.
 from __future__ import annotations
 
 import csv
-import json
 import shlex
 import sys
 from collections.abc import Sequence
@@ -133,7 +132,7 @@ def _plot(summary: dict[str, Any], path: Path) -> None:
 def main(argv: Sequence[str] | None = None) -> int:
     """The command line (module docstring)."""
     from scas_env.cli_args import make_parser, nonneg_int
-    from scas_env.utils.results_folder import ResultsFolderError, results_folder
+    from scas_env.utils.results_folder import ResultsFolderError, json_text, results_folder
 
     parser = make_parser("python -m experiments.dataset_baselines", __doc__)
     parser.add_argument("--units", type=int, default=1000, help="units flown to failure")
@@ -162,7 +161,7 @@ def main(argv: Sequence[str] | None = None) -> int:
                         w.writerow([name, band, s["rows"], s["rmse"], s["mae"], s["bias"],
                                     s["within_alpha"]])  # fmt: skip
             public = {k: v for k, v in summary.items() if not k.startswith("_")}
-            (tmp / "summary.json").write_text(json.dumps(public, indent=1) + "\n")
+            (tmp / "summary.json").write_text(json_text(public, indent=1))
             _plot(summary, tmp / "rul.png")
     except (ResultsFolderError, ValueError) as exc:  # nothing is left in --out
         parser.error(str(exc))

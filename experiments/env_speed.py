@@ -49,6 +49,7 @@ from numba import njit
 import scas_env
 from scas_env.core.filters import learn_row, refresh_row, test_row, work_arrays
 from scas_env.utils.atomic_file import write_text_atomic
+from scas_env.utils.results_folder import json_text
 
 #: the trained policy's mix of actions (fly, test, replace spring, replace seal)
 MIX = (0.90, 0.09, 0.005, 0.005)
@@ -336,12 +337,12 @@ def main(argv: Sequence[str] | None = None) -> int:
         result = compare(args.scenario)
         print(format_comparison(result, args.scenario))
         if args.json is not None:
-            write_text_atomic(args.json, json.dumps(result, indent=1) + "\n")
+            write_text_atomic(args.json, json_text(result, indent=1))
         return 0
     rates = measure()
     print(format_rates(rates))
     if args.json is not None:
-        write_text_atomic(args.json, json.dumps(rates, indent=1) + "\n")
+        write_text_atomic(args.json, json_text(rates, indent=1))
     return 0
 
 

@@ -577,7 +577,7 @@ def write_results(
     overwrite: bool = False,
 ) -> Path:
     """rows.csv, summary.csv/.json, table.md and comparison.png in a results folder."""
-    from scas_env.utils.results_folder import results_folder
+    from scas_env.utils.results_folder import json_text, results_folder
 
     config = asdict(cfg)
     with results_folder(out, config=config, seeds={"root": cfg.seed}, overwrite=overwrite) as tmp:
@@ -587,7 +587,7 @@ def write_results(
             for r in summary
         ]
         _write_csv(tmp / "summary.csv", flat)
-        (tmp / "summary.json").write_text(json.dumps(list(summary), indent=1))
+        (tmp / "summary.json").write_text(json_text(list(summary), indent=1))
         (tmp / "table.md").write_text(format_table(summary) + "\n")
         plot_summary(summary, tmp / "comparison.png")
     return Path(out)

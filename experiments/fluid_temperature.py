@@ -205,7 +205,7 @@ def _plot(study: dict[str, Any], path: Path) -> None:
 
 def write_outputs(study: dict[str, Any], out: Path, *, overwrite: bool = False) -> list[Path]:
     """``points.csv``, ``study.json`` and ``value.png`` into the results folder ``out``."""
-    from scas_env.utils.results_folder import results_folder
+    from scas_env.utils.results_folder import json_text, results_folder
 
     seeds = {"root": study["config"]["seed"], "episodes": study["config"]["episodes"]}
     with results_folder(out, config=study["config"], seeds=seeds, overwrite=overwrite) as tmp:
@@ -214,7 +214,7 @@ def write_outputs(study: dict[str, Any], out: Path, *, overwrite: bool = False) 
         writer.writeheader()
         writer.writerows(study["rows"])
         (tmp / "points.csv").write_text(buf.getvalue())
-        (tmp / "study.json").write_text(json.dumps(study, indent=1) + "\n")
+        (tmp / "study.json").write_text(json_text(study, indent=1))
         _plot(study, tmp / "value.png")
     return [out / n for n in ("points.csv", "study.json", "value.png")]
 

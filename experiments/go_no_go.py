@@ -17,7 +17,6 @@ each figure.
 
 from __future__ import annotations
 
-import json
 from collections.abc import Sequence
 from pathlib import Path
 
@@ -148,7 +147,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     """The command line (module docstring): the table printed, ``--out`` a results folder
     with ``go_no_go.json`` and ``go_no_go.png``."""
     from scas_env.cli_args import check_out_dir, make_parser, nonneg_int, positive_int
-    from scas_env.utils.results_folder import results_folder
+    from scas_env.utils.results_folder import json_text, results_folder
 
     parser = make_parser("python -m experiments.go_no_go", __doc__)
     parser.add_argument("--units", type=positive_int, default=2000, help="tests per cell")
@@ -166,7 +165,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         config = {"units": args.units, "seed": args.seed}
         seeds = {"root": args.seed}
         with results_folder(args.out, config=config, seeds=seeds, overwrite=args.overwrite) as tmp:
-            (tmp / "go_no_go.json").write_text(json.dumps(rows, indent=1) + "\n")
+            (tmp / "go_no_go.json").write_text(json_text(rows, indent=1))
             plot_rates(rows, tmp / "go_no_go.png")
     return 0
 

@@ -18,7 +18,6 @@ episode and reward per episode. Command line::
 from __future__ import annotations
 
 import csv
-import json
 import math
 from collections.abc import Mapping, Sequence
 from pathlib import Path
@@ -109,7 +108,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         make_parser,
         nonneg_int,
     )
-    from scas_env.utils.results_folder import results_folder
+    from scas_env.utils.results_folder import json_text, results_folder
 
     parser = make_parser("python -m experiments.preflight_study", __doc__)
     parser.add_argument("--episodes", type=int_at_least(2), default=200, help="episodes per row")
@@ -124,7 +123,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     rows = preflight_availability(SCENARIOS, episodes=args.episodes, seed=args.seed)
     config = {"episodes": args.episodes, "seed": args.seed, "scenarios": SCENARIOS}
     with results_folder(out, config=config, seeds=args.seed, overwrite=args.overwrite) as tmp:
-        (tmp / "preflight.json").write_text(json.dumps(rows, indent=1) + "\n")
+        (tmp / "preflight.json").write_text(json_text(rows, indent=1))
         with open(tmp / "preflight.csv", "w", newline="") as f:
             writer = csv.DictWriter(f, fieldnames=list(rows[0]))
             writer.writeheader()

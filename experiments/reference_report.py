@@ -11,7 +11,6 @@ the minimum detectable difference (:func:`experiments.belief_comparison.paired_d
 
 from __future__ import annotations
 
-import json
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
@@ -22,7 +21,7 @@ from experiments.belief_calibration import RISK_BINS, _share, risk_bin
 from experiments.belief_common import TARGETS
 from experiments.belief_comparison import paired_difference
 from experiments.belief_output import write_csv
-from scas_env.utils.results_folder import results_folder
+from scas_env.utils.results_folder import json_text, results_folder
 
 #: the two estimators compared
 ESTIMATORS: tuple[str, ...] = ("pf", "ref")
@@ -168,7 +167,7 @@ def write_report(
         write_csv(tmp / names[1], list(table))
         if not risk:
             (tmp / "study.json").write_text(
-                json.dumps({"config": config, "stages": list(table)}, indent=1) + "\n"
+                json_text({"config": config, "stages": list(table)}, indent=1)
             )
             _plot(table, tmp / "coverage.png", part)
     return [Path(out) / n for n in names]

@@ -253,6 +253,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     from experiments.cli_common import check_out_file
     from scas_env.cli_args import existing_file, make_parser, nonneg_int, positive_int
     from scas_env.utils.atomic_file import write_text_atomic
+    from scas_env.utils.results_folder import json_text
 
     parser = make_parser("python -m experiments.renewal", __doc__)
     parser.add_argument("--lives", type=positive_int, default=1000, help="lives per part")
@@ -308,7 +309,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             )
     if args.out is not None:
         doc = {"args": {k: str(v) for k, v in vars(args).items()}, "rates": out}
-        write_text_atomic(args.out, json.dumps(doc, indent=1) + "\n")
+        write_text_atomic(args.out, json_text(doc, indent=1))
     return 0
 
 

@@ -26,7 +26,6 @@ reads), ``reliability.csv``, ``brier.csv``, ``summary.json`` and ``reliability.p
 
 from __future__ import annotations
 
-import json
 import math
 from collections.abc import Mapping, Sequence
 from pathlib import Path
@@ -53,7 +52,7 @@ from scas_env.core.scenario import Scenario
 from scas_env.core.setup import PARTS
 from scas_env.env import ScasMaintenanceEnv
 from scas_env.risk_recalibration import save_risk_maps
-from scas_env.utils.results_folder import results_folder
+from scas_env.utils.results_folder import json_text, results_folder
 
 #: bins with fewer records are left out of the worst-bin figure (their Wilson interval is
 #: wider than the +-5-point target)
@@ -221,7 +220,7 @@ def write(result: Mapping[str, Any], out: str | Path, config: Mapping[str, Any],
         write_csv(tmp / "reliability.csv", result["reliability"])
         write_csv(tmp / "brier.csv", result["brier"])
         (tmp / "summary.json").write_text(
-            json.dumps({"config": dict(config), "brier": result["brier"]}, indent=1) + "\n"
+            json_text({"config": dict(config), "brier": result["brier"]}, indent=1)
         )
         _plot(result["reliability"], tmp / "reliability.png")
     return [Path(out) / n for n in names]

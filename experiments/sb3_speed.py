@@ -27,7 +27,6 @@ from __future__ import annotations
 
 import csv
 import functools
-import json
 import statistics
 import time
 from collections.abc import Callable, Sequence
@@ -38,6 +37,7 @@ import gymnasium as gym
 from tqdm.auto import tqdm
 
 from scas_env import ENV_ID
+from scas_env.utils.results_folder import json_text
 
 #: PPO settings: SB3's own defaults (``PPO("MlpPolicy", env)``: n_steps 2048, batch 64, 10
 #: epochs, a 64-64 MLP) or this project's per-flight settings (:data:`PROJECT_PPO`)
@@ -296,7 +296,7 @@ def run_sb3_bench(
         "init": init,
     }
     (out / "bench_sb3.json").write_text(
-        json.dumps({"args": args, "summary": summary, "runs": rows}, indent=2)
+        json_text({"args": args, "summary": summary, "runs": rows}, indent=2)
     )
     with (out / "bench_sb3.csv").open("w", newline="") as fh:
         writer = csv.DictWriter(fh, fieldnames=list(rows[0]))

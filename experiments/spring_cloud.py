@@ -28,7 +28,6 @@ and z-scores of sd ~1. :func:`stage_summary` gives these per stage window. Comma
 
 from __future__ import annotations
 
-import json
 import math
 from collections.abc import Mapping, Sequence
 from pathlib import Path
@@ -175,6 +174,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     from experiments.cli_common import check_out_file
     from scas_env.cli_args import make_parser, nonneg_int, positive_int
     from scas_env.utils.atomic_file import write_text_atomic
+    from scas_env.utils.results_folder import json_text
 
     parser = make_parser("python -m experiments.spring_cloud", __doc__)
     parser.add_argument("--episodes", type=positive_int, default=40, help="episodes")
@@ -202,7 +202,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     print(format_summary(rows))
     if args.out is not None:
         config = {k: (str(v) if isinstance(v, Path) else v) for k, v in vars(args).items()}
-        write_text_atomic(args.out, json.dumps({"args": config, "stages": rows}, indent=1) + "\n")
+        write_text_atomic(args.out, json_text({"args": config, "stages": rows}, indent=1))
     return 0
 
 

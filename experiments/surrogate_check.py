@@ -16,7 +16,6 @@ Prints a Markdown table; ``--json FILE`` also writes the rows.
 
 from __future__ import annotations
 
-import json
 from collections.abc import Sequence
 from typing import Any
 
@@ -82,6 +81,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     from experiments.cli_common import check_out_file
     from scas_env.cli_args import make_parser, nonneg_int, positive_int
     from scas_env.utils.atomic_file import write_text_atomic
+    from scas_env.utils.results_folder import json_text
 
     parser = make_parser("python -m experiments.surrogate_check", __doc__)
     parser.add_argument("--units", type=positive_int, default=40, help="drawn units per point")
@@ -98,7 +98,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     rows = compare(args.units, args.runs, args.seed, progress=not args.no_progress)
     print(markdown(rows))
     if args.json is not None:
-        write_text_atomic(args.json, json.dumps(rows, indent=1))
+        write_text_atomic(args.json, json_text(rows, indent=1))
     return 0
 
 

@@ -11,7 +11,6 @@ residual agent (:mod:`policies.agents.delegation`).
 from __future__ import annotations
 
 import dataclasses
-import json
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
@@ -37,6 +36,7 @@ from policies.agents.training import (
     save_statistics,
 )
 from scas_env.decision_epochs import DELEGATE, _check_ks
+from scas_env.utils.results_folder import json_text
 
 __all__ = ["clone_rule", "delegation_demonstrations"]
 
@@ -150,6 +150,6 @@ def clone_rule(
         "delegate": None if delegate is None else delegate.to_json(),
         "history": rounds,
     }
-    (out / "clone.json").write_text(json.dumps(summary, indent=1))
+    (out / "clone.json").write_text(json_text(summary, indent=1))
     venv.close()
     return result

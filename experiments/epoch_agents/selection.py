@@ -457,7 +457,7 @@ def ship_best(
         "flights": sum(s["flights"] for s in scale.values()),
     }
     env.close()
-    write_text_atomic(out_dir / f"{name}.json", json.dumps(meta, indent=1) + "\n")
+    write_text_atomic(out_dir / f"{name}.json", json_text(meta, indent=1))
     _curves(rows, runs_root, out_dir / f"{name}_curves", runs)
     if out_dir.resolve() == DATA_DIR:
         update_manifest([f"{name}.zip", f"{name}_normalization.json", f"{name}.json"])

@@ -43,7 +43,7 @@ from gymnasium import spaces
 
 from scas_env.cli_args import check_out_dir
 from scas_env.multiagent import fleet_v1
-from scas_env.utils.results_folder import results_folder
+from scas_env.utils.results_folder import json_text, results_folder
 
 REWARD_SCALE, REWARD_CENTER = 1e-4, 2e4
 
@@ -204,7 +204,7 @@ def main(argv: list[str] | None = None) -> int:
     seeds = {"seed": args.seed}
     with results_folder(args.out, config=vars(args), seeds=seeds, overwrite=args.overwrite) as tmp:
         algo.save(str((tmp / "checkpoint").resolve()))
-        text = json.dumps(summary, indent=2, default=str) + "\n"
+        text = json_text(summary, indent=2, default=str)
         (tmp / "summary.json").write_text(text)  # the folder is renamed into place whole
     algo.stop()
     ray.shutdown()

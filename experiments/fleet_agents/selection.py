@@ -29,6 +29,7 @@ from typing import Any
 import numpy as np
 
 from policies.benchmark.stats import paired_difference
+from scas_env.utils.results_folder import json_text
 
 __all__ = [
     "FILTER_FAMILIES",
@@ -345,7 +346,9 @@ def ship(
             **dict(extra),
         }
     )
-    (out / f"{name}.json").write_text(json.dumps(meta, indent=2, sort_keys=True) + "\n")
+    # strict JSON (non-finite numbers -> null), keys sorted as before
+    strict = json.loads(json_text(meta))
+    (out / f"{name}.json").write_text(json.dumps(strict, indent=2, sort_keys=True) + "\n")
     per_fleet = len({n.split(".")[0] for n in meta["obs_names"] if n.startswith("aircraft_")})
     rows_per_fleet = per_fleet if meta.get("kind") == "shared" else 1
     curves(

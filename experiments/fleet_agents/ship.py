@@ -31,6 +31,7 @@ from experiments.fleet_agents.selection import (
     validate,
 )
 from scas_env.core.fleet.config import FleetConfig
+from scas_env.utils.results_folder import json_text
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -71,7 +72,7 @@ def main(argv: list[str] | None = None) -> int:
     print(json.dumps({k: v for k, v in chosen.items() if k != "checkpoints"}, indent=1))
     for lab, mean in chosen["checkpoints"].items():
         print(f"  {lab:40s} {mean:14,.0f}")
-    (args.run / "chosen.json").write_text(json.dumps(chosen, indent=2) + "\n")
+    (args.run / "chosen.json").write_text(json_text(chosen, indent=2))
     table = kpi_table(rows, [f"rule:{r}" for r in rules] + [f"{label}:0", chosen["label"]])
     (args.run / "validation_kpis.md").write_text(table + "\n")
     print(table)

@@ -35,6 +35,7 @@ from scas_env.cli_args import check_out_dir
 from scas_env.core.fleet.config import FleetConfig
 from scas_env.utils.atomic_file import write_text_atomic
 from scas_env.utils.parallel import single_thread
+from scas_env.utils.results_folder import json_text
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -132,7 +133,7 @@ def main(argv: list[str] | None = None) -> int:
     )
     total = time.perf_counter() - t0
     summary = {"command": _command(), "wall_s_total": total, "ppo": run}
-    write_text_atomic(args.out / "train.json", json.dumps(summary, indent=2) + "\n")
+    write_text_atomic(args.out / "train.json", json_text(summary, indent=2))
     print(f"{run['fleet_days']} fleet-days of PPO in {run['wall_s']:.0f} s; total {total:.0f} s")
     return 0
 

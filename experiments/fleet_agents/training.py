@@ -32,7 +32,6 @@ checkpoints are chosen on validation seeds (:mod:`experiments.fleet_agents.selec
 
 from __future__ import annotations
 
-import json
 import os
 import shutil
 import tempfile
@@ -55,7 +54,7 @@ from experiments.fleet_agents.shared_adapter import FleetAgentsVecEnv
 from policies.agents.fleet.plugins import write_agent_meta
 from policies.agents.sb3_agents import require_contrib
 from scas_env.utils.atomic_file import write_text_atomic
-from scas_env.utils.results_folder import check_destination
+from scas_env.utils.results_folder import check_destination, json_text
 
 __all__ = [
     "TRAIN_SEED",
@@ -371,7 +370,7 @@ def clone_rule(
         }
     )
     save_checkpoint(model, venv, out / "clone.zip", cfg, {"stage": "clone", "fleet_days": 0})
-    write_text_atomic(out / "clone_record.json", json.dumps(record, indent=2) + "\n")
+    write_text_atomic(out / "clone_record.json", json_text(record, indent=2))
     return record
 
 
@@ -459,7 +458,7 @@ def train(
         "max_wall_s": max_wall_s,
         "finished": False,
     }
-    write_text_atomic(out / "run.json", json.dumps(record, indent=2) + "\n")
+    write_text_atomic(out / "run.json", json_text(record, indent=2))
     if init is not None:
         init = Path(init)
         model = contrib.MaskablePPO.load(
@@ -495,7 +494,7 @@ def train(
             "episodes": int(days // int(venv.get_attr("config")[0].episode_days)),
         }
     )
-    write_text_atomic(out / "run.json", json.dumps(record, indent=2) + "\n")
+    write_text_atomic(out / "run.json", json_text(record, indent=2))
     venv.close()  # monitor.csv complete and closed
     return record
 

@@ -36,6 +36,7 @@ from numpy.typing import NDArray
 
 from prognostics.features import CANDIDATE_INFO
 from scas_env.actuator.params import ScasParams
+from scas_env.utils.results_folder import json_text
 
 __all__ = [
     "CONDITIONS",
@@ -204,7 +205,7 @@ class CampaignResult:
             "n_rows": self.n_rows,
             "csv_sha256": digest,
         }
-        json_path.write_text(json.dumps(sidecar, indent=1) + "\n")
+        json_path.write_text(json_text(sidecar, indent=1))
         return csv_path, json_path
 
     def _csv_bytes(self) -> bytes:

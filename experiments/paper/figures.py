@@ -11,7 +11,6 @@ headless runs and threads. Each ``plot_*`` function takes the data of
 from __future__ import annotations
 
 import argparse
-import json
 import logging
 import os
 import time
@@ -33,6 +32,7 @@ from experiments.paper.figure_data import (
     paper_figures,
 )
 from scas_env.actuator.physics.actuator import ActuatorRun
+from scas_env.utils.results_folder import json_text
 
 DPI = 120
 MM = 1e3  # m -> mm
@@ -294,7 +294,7 @@ def save_paper_figures(figs: PaperFigures, out_dir: str | os.PathLike[str]) -> l
         plot(getattr(figs, name), path)
         written.append(path)
     json_path = out / "figures.json"
-    json_path.write_text(json.dumps(figs.to_dict()))
+    json_path.write_text(json_text(figs.to_dict()))
     written.append(json_path)
     return written
 

@@ -22,7 +22,6 @@ paper's value and the target.
 from __future__ import annotations
 
 import argparse
-import json
 import math
 import sys
 from collections.abc import Sequence
@@ -314,6 +313,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     from experiments.cli_common import check_out_file, load_params
     from experiments.paper.campaign_table import load
     from scas_env.utils.atomic_file import write_text_atomic
+    from scas_env.utils.results_folder import json_text
 
     parser = build_parser()
     args = parser.parse_args(argv)
@@ -344,7 +344,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     )
     given = sys.argv[1:] if argv is None else list(argv)
     command = " ".join(["python -m experiments.paper.reproduction_detection", *given])
-    write_text_atomic(args.out, json.dumps({"command": command, **result}, indent=1) + "\n")
+    write_text_atomic(args.out, json_text({"command": command, **result}, indent=1))
     print(format_targets(result))
     return 0
 

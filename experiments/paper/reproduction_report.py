@@ -22,7 +22,6 @@ variants), and the numbers behind each figure as CSV (``fig8_<fault>.csv``,
 from __future__ import annotations
 
 import csv
-import json
 import math
 from pathlib import Path
 from typing import Any
@@ -37,6 +36,7 @@ from experiments.paper.reproduction_prognosis import INSTALLATION_EFFECT, VARIAN
 from prognostics.features import CANDIDATE_INFO
 from prognostics.selection import plot_accuracy_sensitivity
 from scas_env.actuator.surrogate import default_surrogate
+from scas_env.utils.results_folder import json_text
 
 __all__ = ["PAPER", "verdicts", "write_report"]
 
@@ -702,6 +702,6 @@ def write_report(
             written += [out / f"{stem}.png", out / f"{stem}.csv"]
     _ra_plot(rep, out / "ra_over_time.png")
     report = report_dict(rep, extra)
-    (out / "report.json").write_text(json.dumps(report, indent=1) + "\n")
+    (out / "report.json").write_text(json_text(report, indent=1))
     (out / "report.md").write_text(_markdown(report))
     return [*written, out / "ra_over_time.png", out / "report.json", out / "report.md"]
