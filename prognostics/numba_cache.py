@@ -32,6 +32,7 @@ from __future__ import annotations
 
 import hashlib
 import logging
+import os
 import sys
 from functools import cache
 from pathlib import Path
@@ -146,13 +147,20 @@ COMPILE_NOTICE = (
     "numba's cache)"
 )
 _NOTICE = {"listener": False, "shown": False}
+#: environment variable set once a process has shown the notice: the worker processes it
+#: starts afterwards (they inherit its environment) stay quiet, so a parallel run announces
+#: once, not once per worker
+NOTICE_SHOWN_VAR = "SCAS_COMPILE_NOTICE_SHOWN"
 
 
 def show_compile_notice(logger: logging.Logger) -> None:
-    """Log :data:`COMPILE_NOTICE` at WARNING, once per process."""
+    """Log :data:`COMPILE_NOTICE` at WARNING, once per process, and not at all in a process
+    started by one that showed it (:data:`NOTICE_SHOWN_VAR`)."""
     if not _NOTICE["shown"]:
         _NOTICE["shown"] = True
-        logger.warning(COMPILE_NOTICE)
+        if os.environ.get(NOTICE_SHOWN_VAR) != "1":
+            os.environ[NOTICE_SHOWN_VAR] = "1"
+            logger.warning(COMPILE_NOTICE)
 
 
 def announce_compilation(logger: logging.Logger) -> None:

@@ -376,6 +376,7 @@ def test_numba_compile_is_announced_once(
     installed when scas_env is imported, or the CLI's: the same one); the next does not."""
     cli_args.configure_logging(argparse.Namespace(verbose=False, quiet=False))
     monkeypatch.setitem(numba_cache._NOTICE, "shown", False)
+    monkeypatch.delenv(numba_cache.NOTICE_SHOWN_VAR, raising=False)
 
     @numba.njit
     def fresh(x: float) -> float:
@@ -392,6 +393,26 @@ def test_numba_compile_is_announced_once(
         fresh(2.0)  # already compiled: no event
     notices = [r for r in caplog.records if "compiling numba kernels" in r.getMessage()]
     assert len(first) == 1 and len(notices) == 1
+    # the processes it starts from now on (workers inherit the environment) stay quiet
+    assert os.environ[numba_cache.NOTICE_SHOWN_VAR] == "1"
+
+
+def test_a_worker_of_a_process_that_announced_stays_quiet(
+    caplog: pytest.LogCaptureFixture, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """With the variable its parent set, a process compiling for the first time logs no
+    notice (one notice per parallel run, not one per worker); without it, one."""
+    monkeypatch.setitem(numba_cache._NOTICE, "shown", False)
+    monkeypatch.setenv(numba_cache.NOTICE_SHOWN_VAR, "1")
+    log = logging.getLogger("scas_env.test_notice")
+    with caplog.at_level(logging.WARNING, logger="scas_env.test_notice"):
+        numba_cache.show_compile_notice(log)
+        assert not [r for r in caplog.records if "compiling numba" in r.getMessage()]
+        monkeypatch.setitem(numba_cache._NOTICE, "shown", False)
+        monkeypatch.delenv(numba_cache.NOTICE_SHOWN_VAR)
+        numba_cache.show_compile_notice(log)
+        numba_cache.show_compile_notice(log)
+    assert len([r for r in caplog.records if "compiling numba" in r.getMessage()]) == 1
 
 
 def test_uncached_kernels_are_detected(tmp_path: Path) -> None:
