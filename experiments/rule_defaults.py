@@ -90,7 +90,7 @@ def seeds_seen() -> list[int]:
     return sorted({0, TRAIN_SEED, HELD_OUT_SEED, *_replicates()[1]})
 
 
-def _specs(points: Mapping[str, Mapping[str, Mapping[str, Any]]]) -> list[PolicySpec]:
+def specs_of(points: Mapping[str, Mapping[str, Mapping[str, Any]]]) -> list[PolicySpec]:
     return [
         PolicySpec(rule, dict(params), label=f"{rule} | {label}")
         for rule, cands in points.items()
@@ -98,11 +98,16 @@ def _specs(points: Mapping[str, Mapping[str, Mapping[str, Any]]]) -> list[Policy
     ]
 
 
-def _rewards(rows: Sequence[Mapping[str, Any]]) -> dict[str, np.ndarray]:
+def rewards_by_label(rows: Sequence[Mapping[str, Any]]) -> dict[str, np.ndarray]:
     by: dict[str, dict[int, float]] = {}
     for row in rows:
         by.setdefault(row["policy"], {})[int(row["episode"])] = float(row["reward"])
     return {k: np.array([v[e] for e in sorted(v)]) for k, v in by.items()}
+
+
+def pair_text(d: Mapping[str, float]) -> str:
+    """A paired difference's record as ``+mean [low, high] (MDD m)``, USD per episode."""
+    return f"{d['mean']:+,.0f} [{d['low']:+,.0f}, {d['high']:+,.0f}] (MDD {d['mdd']:,.0f})"
 
 
 def choose(
@@ -115,12 +120,12 @@ def choose(
             "tunings' training seeds, the held-out seed, the benchmark's default seed)"
         )
     points = candidates()
-    specs = _specs(points)
-    val = _rewards(
+    specs = specs_of(points)
+    val = rewards_by_label(
         run_benchmark(specs, episodes=episodes, seed=validation_seed, n_workers=n_workers,
                       progress=progress).rows
     )  # fmt: skip
-    held = _rewards(
+    held = rewards_by_label(
         run_benchmark(specs, episodes=episodes, seed=HELD_OUT_SEED, n_workers=n_workers,
                       progress=progress).rows
     )  # fmt: skip
@@ -187,10 +192,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(f"{rule}: chosen {r['chosen']}")
         for c in r["candidates"]:
             d = c.get("chosen_minus_this_held_out")
-            vs = "" if d is None else (
-                f"; chosen - this, held out: {d['mean']:+,.0f} [{d['low']:+,.0f}, "
-                f"{d['high']:+,.0f}] (MDD {d['mdd']:,.0f})"
-            )  # fmt: skip
+            vs = "" if d is None else f"; chosen - this, held out: {pair_text(d)}"
             print(f"  {c['candidate']:12s} validation {c['validation_mean']:,.0f}, held out "
                   f"{c['held_out_mean']:,.0f}{vs}")  # fmt: skip
     return 0

@@ -40,7 +40,7 @@ CHOSEN = "v2 seed 11"
 def study(*, episodes: int, n_workers: int, progress: bool = True) -> dict[str, Any]:
     """The runs of the module docstring; returns their record."""
     points = {"rul_risk": rule_defaults.candidates()["rul_risk"]}
-    specs = rule_defaults._specs(points)
+    specs = rule_defaults.specs_of(points)
     chosen = f"rul_risk | {CHOSEN}"
     record: dict[str, Any] = {"episodes": episodes, "seed": HELD_OUT_SEED, "chosen": CHOSEN,
                               "worlds": {}}  # fmt: skip
@@ -48,7 +48,7 @@ def study(*, episodes: int, n_workers: int, progress: bool = True) -> dict[str, 
         result = run_benchmark(specs, episodes=episodes, seed=HELD_OUT_SEED,
                                n_workers=n_workers, env_kwargs={"mismatch": world},
                                progress=progress)  # fmt: skip
-        rewards = rule_defaults._rewards(result.rows)
+        rewards = rule_defaults.rewards_by_label(result.rows)
         failures: dict[str, list[float]] = {}
         for row in result.rows:
             failures.setdefault(row["policy"], []).append(float(row["failures_per_1000fh"]))
@@ -88,10 +88,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     for label, world in record["worlds"].items():
         for name, row in world["candidates"].items():
             d = row.get("chosen_minus_this")
-            vs = "" if d is None else (
-                f", chosen - this {d['mean']:+,.0f} [{d['low']:+,.0f}, {d['high']:+,.0f}] "
-                f"(MDD {d['mdd']:,.0f})"
-            )  # fmt: skip
+            vs = "" if d is None else f", chosen - this {rule_defaults.pair_text(d)}"
             print(f"{label}: {name:11s} {row['reward_mean']:,.0f} USD/episode, failures "
                   f"{row['failures_per_1000fh']:.4f} /1000 FH{vs}")  # fmt: skip
     return 0

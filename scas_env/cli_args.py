@@ -22,7 +22,7 @@ import logging
 import sys
 from collections.abc import Iterable, Sequence
 from pathlib import Path
-from typing import Any, NoReturn
+from typing import Any, NamedTuple, NoReturn
 
 from prognostics.numba_cache import (
     COMPILE_NOTICE,
@@ -41,6 +41,7 @@ __all__ = [
     "COMPILE_NOTICE",
     "WORLD_SURROGATE_KEY",
     "HelpFormatter",
+    "MismatchWorld",
     "Parser",
     "add_env_config_args",
     "add_logging_args",
@@ -52,8 +53,7 @@ __all__ = [
     "configure_logging",
     "existing_file",
     "load_env_config",
-    "load_mismatch",
-    "load_world_surrogate",
+    "load_world",
     "make_parser",
     "name_list",
     "nonneg_int",
@@ -61,7 +61,6 @@ __all__ = [
     "positive_float",
     "positive_int",
     "scenario_changes",
-    "world_surrogate_path",
 ]
 
 
@@ -216,7 +215,7 @@ def load_env_config(
     A ``[costs]`` table in the ``--scenario`` file sets the costs unless ``--costs`` is given.
     A table the command does not read is a usage error, never dropped silently: ``[params]``
     always, ``[fleet]`` unless ``fleet``, ``[mismatch]`` unless ``mismatch`` (the command reads
-    it with :func:`load_mismatch`). A bad file is a usage error naming the file, the table and
+    it with :func:`load_world`). A bad file is a usage error naming the file, the table and
     the field.
     """
     from scas_env.actuator.config import FILE_SECTIONS
@@ -255,62 +254,58 @@ def load_env_config(
 WORLD_SURROGATE_KEY = "world_surrogate"
 
 
-def load_mismatch(parser: argparse.ArgumentParser, args: argparse.Namespace) -> Mismatch | None:
-    """The ``[mismatch]`` table of ``--scenario`` (None without one): the world's departure
-    from the monitor's model (its multipliers; :func:`load_world_surrogate` reads its
-    ``world_surrogate`` file); a bad table is a usage error naming the file and the field."""
-    from scas_env.utils.config_files import read_mapping
+class MismatchWorld(NamedTuple):
+    """The ``[mismatch]`` table of ``--scenario``: the world's multipliers (None without a
+    table), the feature surrogate its ``world_surrogate = "FILE"`` names (None without one)
+    and that file's path (relative to the case file)."""
 
-    try:
-        if args.scenario is None or "mismatch" not in (data := read_mapping(args.scenario)):
-            return None
-        table = data["mismatch"]
-        if not isinstance(table, dict):
-            raise ValueError(f"{args.scenario}: [mismatch] must be a table, got {table!r}")
-        fields = {k: v for k, v in table.items() if k != WORLD_SURROGATE_KEY}
-        return Mismatch.from_dict(fields)
-    except (ValueError, FileNotFoundError) as exc:
-        parser.error(f"{args.scenario}: [mismatch]: {exc}")
+    mismatch: Mismatch | None
+    surrogate: Any
+    surrogate_file: Path | None
 
 
-def world_surrogate_path(parser: argparse.ArgumentParser, args: argparse.Namespace) -> Path | None:
-    """The file named by ``world_surrogate = "FILE"`` in the ``[mismatch]`` table of
-    ``--scenario`` (a path relative to that file), or None; a name that is not a non-empty
-    string is a usage error naming the key."""
+def load_world(parser: argparse.ArgumentParser, args: argparse.Namespace) -> MismatchWorld:
+    """The world's departure from the monitor's model, from the ``[mismatch]`` table of
+    ``--scenario`` (read once): its multipliers and the feature surrogate of its
+    ``world_surrogate`` file (``SurrogateModel.save``'s JSON, e.g. built at another fluid
+    temperature by ``python -m experiments.build.surrogate --world``). A bad table, a name
+    that is not a non-empty string, or a missing or unreadable file is a usage error naming
+    the file and the field."""
+    from scas_env.actuator.surrogate import SurrogateModel
     from scas_env.utils.config_files import read_mapping
 
     if args.scenario is None:
-        return None
+        return MismatchWorld(None, None, None)
     try:
-        table = read_mapping(args.scenario).get("mismatch")
+        data = read_mapping(args.scenario)
     except (ValueError, FileNotFoundError) as exc:
-        parser.error(str(exc))
-    if not isinstance(table, dict) or WORLD_SURROGATE_KEY not in table:
-        return None
+        parser.error(f"{args.scenario}: [mismatch]: {exc}")
+    if "mismatch" not in data:
+        return MismatchWorld(None, None, None)
+    table = data["mismatch"]
+    try:
+        if not isinstance(table, dict):
+            raise ValueError(f"{args.scenario}: [mismatch] must be a table, got {table!r}")
+        fields = {k: v for k, v in table.items() if k != WORLD_SURROGATE_KEY}
+        mismatch = Mismatch.from_dict(fields)
+    except ValueError as exc:
+        parser.error(f"{args.scenario}: [mismatch]: {exc}")
+    if WORLD_SURROGATE_KEY not in table:
+        return MismatchWorld(mismatch, None, None)
     name = table[WORLD_SURROGATE_KEY]
     if not isinstance(name, str) or not name:
         parser.error(
             f"{args.scenario}: [mismatch] {WORLD_SURROGATE_KEY} = {name!r} must be a file name"
         )
-    return Path(args.scenario).parent / name
-
-
-def load_world_surrogate(parser: argparse.ArgumentParser, args: argparse.Namespace) -> Any:
-    """The feature surrogate of :func:`world_surrogate_path` (``SurrogateModel.save``'s JSON,
-    e.g. built at another fluid temperature by ``python -m experiments.build.surrogate
-    --world``), or None. A missing or unreadable file is a usage error naming the key."""
-    from scas_env.actuator.surrogate import SurrogateModel
-
-    path = world_surrogate_path(parser, args)
-    if path is None:
-        return None
+    path = Path(args.scenario).parent / name
     try:
-        return SurrogateModel.load(path)
+        surrogate = SurrogateModel.load(path)
     except (ValueError, OSError, KeyError, TypeError) as exc:
         parser.error(
             f"{args.scenario}: [mismatch] {WORLD_SURROGATE_KEY} = {path.name!r}: cannot read "
             f"{path} as a feature surrogate ({exc})"
         )
+    return MismatchWorld(mismatch, surrogate, path)
 
 
 def agent_scenario(parser: argparse.ArgumentParser, args: argparse.Namespace) -> Scenario:

@@ -345,6 +345,8 @@ def test_json_text_writes_null_for_what_is_not_a_finite_number() -> None:
     assert text.endswith("\n")
     finite = {"x": [1, 2.5, "s"], "y": {"z": False}}
     assert json_text(finite, indent=2) == json.dumps(finite, indent=2) + "\n"
+    unsorted = {"b": 1.0, "a": {"d": 2, "c": float("nan")}}
+    assert json_text(unsorted, sort_keys=True) == '{"a": {"c": null, "d": 2}, "b": 1.0}\n'
 
     class Odd:
         pass

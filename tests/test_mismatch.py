@@ -467,14 +467,16 @@ def test_a_case_file_of_a_mismatch_alone_runs_the_default_scenario(tmp_path, cap
     """A file holding only ``[mismatch]`` reads as the default scenario in that world (as a
     fleet alone does); its bad value is the error, not a missing [scenario] table."""
     from policies.cli import benchmark as benchmark_cli
-    from scas_env.cli_args import load_env_config, load_mismatch
+    from scas_env.cli_args import load_env_config, load_world
 
     path = tmp_path / "world.toml"
     path.write_text("[mismatch]\ncrack_growth = 2.0\n")
     parser = benchmark_cli.build_parser()
     args = parser.parse_args(["--scenario", str(path)])
     scenario, _ = load_env_config(parser, args, fleet=True, mismatch=True)
-    assert scenario == Scenario() and load_mismatch(parser, args) == Mismatch(crack_growth=2.0)
+    assert scenario == Scenario() and load_world(parser, args).mismatch == Mismatch(
+        crack_growth=2.0
+    )
     path.write_text("[mismatch]\ncrack_growth = 0\n")
     with pytest.raises(SystemExit):
         benchmark_cli.main(["--scenario", str(path), "--out", str(tmp_path / "o")])

@@ -41,7 +41,9 @@ def test_the_defaults_are_the_chosen_candidates_of_the_committed_study() -> None
         assert {c["candidate"]: c["params"] for c in r["candidates"]} == built[rule]
 
 
-def test_the_choice_never_sees_the_training_held_out_or_benchmark_seeds() -> None:
+def test_the_choice_never_sees_the_training_held_out_or_benchmark_seeds(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     """Refused up front: the tunings' training seeds (the ladder's and each replicate's, read
     from the shipped record), the held-out seed, the benchmark's default seed."""
     replicates = json.loads((ROOT / "docs" / "value_v2" / "replicates.json").read_text())
@@ -50,8 +52,11 @@ def test_the_choice_never_sees_the_training_held_out_or_benchmark_seeds() -> Non
     for seed in sorted(training | {0, 2}):
         with pytest.raises(ValueError, match=f"validation_seed = {seed}"):
             rule_defaults.choose(episodes=2, validation_seed=seed, n_workers=1, progress=False)
-        with pytest.raises(SystemExit):
-            rule_defaults.main(["--validation-seed", str(seed), "--out", "/nonexistent/x"])
+        with pytest.raises(SystemExit) as done:
+            rule_defaults.main(["--validation-seed", str(seed), "--out", str(tmp_path / "o")])
+        assert done.value.code == 2
+        assert f"--validation-seed {seed}: not one of" in capsys.readouterr().err
+        assert not (tmp_path / "o").exists()
 
 
 def test_a_small_choice_takes_the_best_validation_mean(tmp_path: Path) -> None:

@@ -346,9 +346,7 @@ def ship(
             **dict(extra),
         }
     )
-    # strict JSON (non-finite numbers -> null), keys sorted as before
-    strict = json.loads(json_text(meta))
-    (out / f"{name}.json").write_text(json.dumps(strict, indent=2, sort_keys=True) + "\n")
+    (out / f"{name}.json").write_text(json_text(meta, indent=2, sort_keys=True))
     per_fleet = len({n.split(".")[0] for n in meta["obs_names"] if n.startswith("aircraft_")})
     rows_per_fleet = per_fleet if meta.get("kind") == "shared" else 1
     curves(

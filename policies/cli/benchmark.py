@@ -25,13 +25,11 @@ from scas_env.cli_args import (
     configure_logging,
     existing_file,
     load_env_config,
-    load_mismatch,
-    load_world_surrogate,
+    load_world,
     make_parser,
     name_list,
     nonneg_int,
     positive_int,
-    world_surrogate_path,
 )
 from scas_env.core.scenario import FIDELITIES, Scenario
 
@@ -159,9 +157,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     configure_logging(args)
     out = check_out_dir(parser, args.out, args.overwrite)
     scenario, costs = load_env_config(parser, args, fleet=True, mismatch=True)
-    mismatch = load_mismatch(parser, args)
-    world_surrogate = load_world_surrogate(parser, args)
-    world_file = world_surrogate_path(parser, args)
+    mismatch, world_surrogate, world_file = load_world(parser, args)
     if scenario.obs_mode != Scenario().obs_mode:
         parser.error(
             f"{args.scenario}: obs_mode = {scenario.obs_mode!r}: the benchmark gives each "

@@ -29,12 +29,10 @@ from scas_env.cli_args import (
     check_out_dir,
     configure_logging,
     load_env_config,
-    load_mismatch,
-    load_world_surrogate,
+    load_world,
     make_parser,
     name_list,
     positive_int,
-    world_surrogate_path,
 )
 from scas_env.core.costs import CostModel
 from scas_env.core.scenario import Scenario
@@ -110,9 +108,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     configure_logging(args)
     out = check_out_dir(parser, args.out, args.overwrite)
     scenario, costs = load_env_config(parser, args, fleet=True, mismatch=True)
-    mismatch = load_mismatch(parser, args)
-    world_surrogate = load_world_surrogate(parser, args)
-    world_file = world_surrogate_path(parser, args)
+    mismatch, world_surrogate, world_file = load_world(parser, args)
     fleet = fleet_config(parser, args)
     if fleet is not None and mismatch is not None:
         parser.error(f"{args.scenario}: [mismatch]: a fleet runs the monitor's model")

@@ -20,12 +20,10 @@ from scas_env.cli_args import (
     check_out_dir,
     configure_logging,
     load_env_config,
-    load_mismatch,
-    load_world_surrogate,
+    load_world,
     make_parser,
     name_list,
     positive_int,
-    world_surrogate_path,
 )
 from scas_env.core.scenario import Scenario
 
@@ -94,12 +92,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     configure_logging(args)
     out = check_out_dir(parser, args.out, args.overwrite)
     scenario, costs = load_env_config(parser, args, mismatch=True)
-    mismatch = load_mismatch(parser, args)
+    mismatch, world_surrogate, world_file = load_world(parser, args)
     if scenario.obs_mode != Scenario().obs_mode:
         parser.error(f"{args.scenario}: obs_mode is set per arm; leave it out of the file")
-    world_file = world_surrogate_path(parser, args)
     env_kwargs = env_keywords(
-        scenario, costs, ("obs_mode", "episode_slots"), mismatch, load_world_surrogate(parser, args)
+        scenario, costs, ("obs_mode", "episode_slots"), mismatch, world_surrogate
     )
 
     from policies.value.study import markdown_report, run_ladder, write_outputs

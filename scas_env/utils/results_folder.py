@@ -105,11 +105,13 @@ def _strict(value: Any) -> Any:
     return value
 
 
-def json_text(value: Any, *, indent: int | None = None, default: Any = _json_default) -> str:
+def json_text(
+    value: Any, *, indent: int | None = None, default: Any = _json_default, sort_keys: bool = False
+) -> str:
     """``value`` as strict JSON (RFC 8259), ending in a newline: a number that is not finite
     (NaN, an interval of one sample; infinity) is written ``null``, where ``json.dumps``
     would write ``NaN``, which strict parsers (JavaScript's, ``jq``) refuse. ``default``
-    serialises other objects, as ``json.dumps``'s.
+    serialises other objects and ``sort_keys`` orders mappings, as ``json.dumps``'s.
 
     >>> json_text({"mean": 1.5, "low": float("nan"), "n": [1, float("inf")]})
     '{"mean": 1.5, "low": null, "n": [1, null]}\\n'
@@ -118,7 +120,10 @@ def json_text(value: Any, *, indent: int | None = None, default: Any = _json_def
     def strict_default(obj: Any) -> Any:
         return _strict(default(obj))
 
-    return json.dumps(_strict(value), indent=indent, default=strict_default, allow_nan=False) + "\n"
+    text = json.dumps(
+        _strict(value), indent=indent, default=strict_default, allow_nan=False, sort_keys=sort_keys
+    )
+    return text + "\n"
 
 
 def _nearest_existing(path: Path) -> Path:
