@@ -179,7 +179,7 @@ def work_arrays(n: int, n_learn: int) -> tuple:
     )  # fmt: skip
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _resampled(n_eff: float, e: int, p: int, bank: tuple, work: tuple, model: FilterModel,
                handle: tuple) -> bool:  # fmt: skip
     """Resample filter p of row e if its weights degenerated (``ParticleFilter._after_update``);
@@ -196,7 +196,7 @@ def _resampled(n_eff: float, e: int, p: int, bank: tuple, work: tuple, model: Fi
     return k >= 0
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _predict(e: int, p: int, d: float, bank: tuple, pending: np.ndarray, status: np.ndarray,
              work: tuple, model: FilterModel, handle: tuple) -> None:  # fmt: skip
     """Filter p of row e predicted over ``d`` flights, taken off ``pending``; status 1 if a
@@ -217,7 +217,7 @@ def _predict(e: int, p: int, d: float, bank: tuple, pending: np.ndarray, status:
         bank[5][2][e, C_AGE] += d
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _survive(e: int, bank: tuple, status: np.ndarray, work: tuple, model: FilterModel,
              handle: tuple) -> None:  # fmt: skip
     """Both parts fly, so neither has reached its critical value: particles past it lose
@@ -232,7 +232,7 @@ def _survive(e: int, bank: tuple, status: np.ndarray, work: tuple, model: Filter
                 status[e] = 3
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _effect_update(e: int, p: int, k: int, y: float, m: float, moments: tuple,
                    st: np.ndarray, g_own: np.ndarray, g_other: np.ndarray, bank: tuple,
                    status: np.ndarray, work: tuple, model: FilterModel, handle: tuple,
@@ -274,7 +274,7 @@ def _effect_update(e: int, p: int, k: int, y: float, m: float, moments: tuple,
     return y - shift - cross
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _moments(e: int, bank: tuple, model: FilterModel, work: tuple) -> tuple:
     """(c_hat, c_var, w_hat, w_var): both filters' severities as fractions of critical."""
     bx, bw, sq = bank[0], bank[2], work[6]
@@ -357,7 +357,7 @@ def test_row(e: int, g1: float, g3: float, bank: tuple, pending: np.ndarray,
     return corrected
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def refresh_row(e: int, bank: tuple, tables: tuple, status: np.ndarray, work: tuple,
                 model: FilterModel) -> None:  # fmt: skip
     """Both parts' RUL tables of row e's clouds into row e of ``tables = (sorted, cum_w,

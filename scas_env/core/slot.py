@@ -71,7 +71,7 @@ def _quantile(ordered: np.ndarray, q: float) -> float:
     return a + diff * gamma
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def detect(e: int, p: int, value: float, det_buf: np.ndarray, det_n: np.ndarray,
            detected: np.ndarray, det: tuple) -> None:  # fmt: skip
     """Part p's section-5.1 detector of row e reads ``value``: the window of its last
@@ -88,7 +88,7 @@ def detect(e: int, p: int, value: float, det_buf: np.ndarray, det_n: np.ndarray,
     detected[e, p] = alarm or detected[e, p]
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def close_row(e: int, books: tuple, memory: tuple, out: tuple) -> None:
     """The end of row e's slot: downtime, slot and ages advance (the ages by the flights
     flown); the reward and the running cost and revenue take the slot's terms, summed in
@@ -115,7 +115,7 @@ def close_rows(rows: np.ndarray, books: tuple, memory: tuple, out: tuple) -> Non
         close_row(e, books, memory, out)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _tested(e: int, g1: float, g3: float, every_flight: bool, world: tuple, monitor: tuple,
             memory: tuple, books: tuple, handles: tuple, out: tuple, go_limits: np.ndarray,
             prices: tuple, filt: tuple, det: tuple, n_flight: int,
@@ -149,7 +149,7 @@ def _tested(e: int, g1: float, g3: float, every_flight: bool, world: tuple, moni
     return passed
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _grow(e: int, k: int, world: tuple, handles: tuple, wm: tuple, out: tuple) -> bool:
     """Row e's parts grow by one flight of mission type ``k`` (each by the next draw of its
     own stream); its standard-flight equivalent off each part's life (exact for the standard
@@ -185,7 +185,7 @@ def _grow(e: int, k: int, world: tuple, handles: tuple, wm: tuple, out: tuple) -
     return failed[e, 0] or failed[e, 1]
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _usage(e: int, k: int, bank: tuple, wm: tuple) -> tuple:
     """The standard flights one flight of mission type ``k`` counts as in row e's filters:
     the type's crack multiplier at the spring filter's mean depth, its wear multiplier."""
@@ -196,7 +196,7 @@ def _usage(e: int, k: int, bank: tuple, wm: tuple) -> tuple:
     return interp_scalar(depth, wm.damage[0], wm.type_crack_mult[k]), wm.type_wear_mult[k]
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _flown(e: int, feats: np.ndarray, broke: bool, k: int, interval: int, monitor: tuple,
            memory: tuple, out: tuple, prices: tuple, filt: tuple, learn_cols: np.ndarray,
            handles: tuple, work: tuple, wm: tuple) -> None:  # fmt: skip
