@@ -1,4 +1,4 @@
-"""Resample-move rejuvenation of the spring filter's static parameters (Gilks & Berzuini 2001).
+"""Resample-move rejuvenation of the filters' static parameters (Gilks & Berzuini 2001).
 
 With ``Scenario.rejuvenation = "resample_move"`` the spring filter samples the posterior of
 static parameters: the initial crack depth ``a0`` and the log growth multiplier
@@ -19,12 +19,30 @@ weighted cloud approximates it: reweighting, resampling and moving particles of 
 parameter is iterated batch importance sampling (Chopin 2002), the resample-move algorithm
 of Gilks & Berzuini (2001) for a static state.
 
-What a row keeps (``bank[5]``, :class:`scas_env.core.state.ActuatorState`): ``history``
-(per datum its age, value, runs, table, installation-effect slot, the other part's cell and
-fraction in it, extra variance), the number of data (``count``; -1 once the history is
-full: moves stop until the filter restarts, resampling falls back to the kernel jitter),
-``clock`` (the filter's age and survival age, flights), ``loglik`` (per particle, the sum of
-its likelihood terms, as the filter learnt them) and ``tally`` (proposals, acceptances).
+With ``Scenario.rejuvenation = "resample_move_both"`` the seal filter does the same for its
+one static parameter, the log wear multiplier ``lambda`` (new seals start unworn: no
+initial-wear parameter). Its process is the filter's linear Archard wear without scatter,
+``x(t) = D^-1(D(0) + theta t) = r theta t``, and its data are the I9 batch means and the
+tests' G3, so the same replay serves both parts (``D`` the spring's damage integral or the
+seal's linear one). The seal's installation effects do not start at N(0, 1): a new seal
+keeps the installation's beliefs (one Gaussian per feature, the same for every particle),
+and a new spring pair fitted during the seal's life resets them to N(0, 1). Both are belief
+rows of the seal's history (``H_TABLE`` = :data:`SET_EFFECT`, written by
+:func:`record_effect` from :func:`scas_env.core.parts.reset_filter`): the replay sets the
+slot's belief there, as the filter did, so an unmoved particle's replay is its ``loglik``.
+The seal's posterior is
+
+    pi(lambda) ~ p(lambda) 1[x(t_s) < w_crit] prod_j p(y_j | y_<j, lambda)
+
+with ``p(lambda) = N(0, s)``, ``s`` the filter's prior sd of the seal's multiplier.
+
+What a row keeps, per filter p (spring 0, seal 1; ``bank[5]``,
+:class:`scas_env.core.state.ActuatorState`): ``history`` (per datum its age, value, runs,
+table, installation-effect slot, the other part's cell and fraction in it, extra variance;
+or a belief row), the number of rows (``count``; -1 once the history is full: moves stop
+until the filter restarts, resampling falls back to the kernel jitter), ``clock`` (the
+filter's age and survival age, flights), ``loglik`` (per particle, the sum of its likelihood
+terms, as the filter learnt them) and ``tally`` (proposals, acceptances).
 
 After a resampling (systematic, no jitter) each particle takes ``steps`` random-walk
 Metropolis-Hastings steps in ``u = (D(x(t)), lambda)``: a Gaussian proposal with the
@@ -33,7 +51,10 @@ Gelman & Gilks 1997), accepted with probability ``min(1, pi(u') / pi(u))``. In t
 coordinates ``pi(u) = p(a0) g(a0) p(lambda) x likelihood`` (``g = 1 / D'``, the Jacobian of
 ``a0 -> D(x(t))``). The proposal's likelihood is the whole history replayed (its
 installation-effect beliefs with it); the current particle's is its ``loglik``. Each step
-draws two normals and a uniform from the row's filter stream, in particle order.
+draws two normals and a uniform from the row's filter stream, in particle order. The seal's
+move is 1-D, in ``lambda`` (no Jacobian: ``pi(lambda)`` as above): a Gaussian random walk of
+sd ``2.38`` times the weighted cloud's sd of ``lambda`` before resampling
+(:func:`proposal_sd`), one normal and a uniform per step and particle from the same stream.
 
 The replay is the move's cost (one pass over the history per proposal). :func:`history_loglik`
 states it for one proposal; :func:`move_particles` computes the same numbers, bit for bit,
