@@ -7,9 +7,10 @@ the filter's own accumulated log-likelihood and installation-effect beliefs for 
 particle, across a seal fitting (beliefs kept from the installation) and a later spring-pair
 fitting (beliefs back to N(0, 1)), and without that reset it is not; the batched replay is
 the reference bit for bit; the 1-D move keeps the prior (Kolmogorov-Smirnov; a mis-stated
-prior sd breaks it) and the full-history posterior computed by quadrature on a grid (scipy's
-interpolation of the surrogate, each feature's data jointly Gaussian per installation, its
-effect integrated out; a mis-stated noise breaks it); the single env and the native vector
+prior sd breaks it), the prior truncated by survival, and the full-history posterior
+computed by quadrature on a grid (scipy's interpolation of the surrogate, each feature's
+data jointly Gaussian per installation, its effect integrated out; a mis-stated noise
+breaks it); the single env and the native vector
 env agree bit for bit with the option on; the history's growth changes no number.
 """
 
@@ -21,7 +22,7 @@ import gymnasium as gym
 import numpy as np
 import pytest
 from scipy.interpolate import RegularGridInterpolator
-from scipy.stats import kstest, norm
+from scipy.stats import kstest, norm, truncnorm
 
 from experiments.belief_calibration import policy_action
 from prognostics.normals import NormalStream
@@ -217,6 +218,26 @@ def test_the_move_keeps_the_prior() -> None:
     assert p > 1e-3 and abs(ratio - 1.0) < 0.06
     p, ratio = results["wrong"]
     assert p < 1e-6 and ratio > 1.15
+
+
+def test_the_move_keeps_the_prior_truncated_by_survival() -> None:
+    """No data, the seal survived ``T`` flights with ``r exp(c) T`` its critical wear: the
+    target is N(0, s) truncated to lambda < c (c = s / 2), which the moves keep
+    (Kolmogorov-Smirnov against scipy's truncated normal; no particle above c)."""
+    env = ScasMaintenanceEnv(**BOTH, n_particles=N_PARTICLES)
+    env.reset(seed=0)
+    a, filt = env.batch.a, env.setup.filters
+    s = float(filt.move[8])
+    c = 0.5 * s
+    rate, critical = float(filt.rul_tables[SEAL][1][0]), float(filt.critical[SEAL])
+    t = critical / (rate * math.exp(c))
+    a["history_n"][0, SEAL] = 0
+    a["clock"][0, SEAL] = (t, t)
+    prior = truncnorm(-np.inf, c / s, scale=s)
+    lam = prior.rvs(size=N_PARTICLES, random_state=np.random.default_rng(6))
+    after = _moved(env, lam, seed=7)
+    assert after.max() < c
+    assert kstest(after, prior.cdf).pvalue > 1e-3
 
 
 class SealPosterior:
