@@ -278,8 +278,8 @@ class SealPosterior:
                     self.groups.append(current[k])
                 current[k][2].append(row)
         cg = grids[0]
-        self.crack = lambda r: cg[int(r[H_CELL])] + r[H_FRAC] * (
-            cg[int(r[H_CELL]) + 1] - cg[int(r[H_CELL])]
+        self.crack = lambda r: (
+            cg[int(r[H_CELL])] + r[H_FRAC] * (cg[int(r[H_CELL]) + 1] - cg[int(r[H_CELL])])
         )
 
     def loglik(self, lam: np.ndarray) -> np.ndarray:
@@ -336,7 +336,8 @@ def _posterior_check(env: ScasMaintenanceEnv, post: SealPosterior, filters=None)
     sd = float(np.sqrt(w @ (mid - mean) ** 2))
     quart = np.interp([0.25, 0.5, 0.75], cum, edges)
     p = kstest(after, lambda v: np.interp(v, edges, cum)).pvalue
-    return p, (after.mean() - mean) / sd, after.std() / sd, (np.quantile(after, [0.25, 0.5, 0.75]) - quart) / sd
+    dq = (np.quantile(after, [0.25, 0.5, 0.75]) - quart) / sd
+    return p, (after.mean() - mean) / sd, after.std() / sd, dq
 
 
 def test_the_move_keeps_the_full_history_posterior(history_env) -> None:

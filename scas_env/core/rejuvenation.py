@@ -566,6 +566,7 @@ def restart(e: int, bank: tuple, p: int = 0) -> None:
 
 __all__ = [
     "HISTORY_COLUMNS",
+    "SET_EFFECT",
     "history_loglik",
     "log_prior",
     "move_particles",
@@ -577,5 +578,4 @@ __all__ = [
     "replay_histories",
     "resample_move",
     "restart",
-    "SET_EFFECT",
 ]
