@@ -77,8 +77,8 @@ class Posterior:
         self.model = st.spring_process
         self.critical = float(st.filters.critical[0])
         self.noise = float(st.filters.noise_scale if noise_scale is None else noise_scale)
-        self.age, self.survived = (float(v) for v in a["clock"][0, [C_AGE, C_SURVIVED]])
-        rows = a["history"][0, : a["history_n"][0]].copy()
+        self.age, self.survived = (float(v) for v in a["clock"][0, 0, [C_AGE, C_SURVIVED]])
+        rows = a["history"][0, 0, : a["history_n"][0, 0]].copy()
         self.rows = rows
         n_learn = st.filters.learn_part.size
         # the learning features' tables, then the tests' (the history's table index)
@@ -167,7 +167,7 @@ def _set_cloud(
     ``filters``, default the env's); returns D(x)."""
     st, a, bank = env.setup, env.batch.a, env.batch.bank
     filters = filters or st.filters
-    age = float(a["clock"][0, C_AGE])
+    age = float(a["clock"][0, 0, C_AGE])
     d = st.spring_process.damage(a0) + np.exp(lam) * age
     a["x"][0, 0] = st.spring_process.inverse_damage(d)
     a["log_theta"][0, 0] = lam
@@ -175,7 +175,7 @@ def _set_cloud(
     a["log_w"][0, 0] = -math.log(lam.size)
     z = np.empty(a["aux"].shape[2])
     for i in range(lam.size):
-        a["loglik"][0, i] = history_loglik(d[i], lam[i], 0, bank, filters, z)
+        a["loglik"][0, 0, i] = history_loglik(d[i], lam[i], 0, bank, filters, z)
         a["aux"][0, 0, :, i] = z
     return d
 
@@ -188,11 +188,11 @@ def _moved(env: ScasMaintenanceEnv, d: np.ndarray, seed: int, filters=None) -> n
     x, lam = a["x"][0, 0], a["log_theta"][0, 0]
     factor = proposal_factor(x, lam, a["w"][0, 0], filt, np.empty(x.size))
     stream = NormalStream(np.random.default_rng(seed))
-    before = a["tally"][0].copy()
+    before = a["tally"][0, 0].copy()
     move_particles(0, bank, filt, factor, d, stream.handle)
-    tally = a["tally"][0] - before
+    tally = a["tally"][0, 0] - before
     assert tally[0] == SWEEPS * x.size and 0.1 < tally[1] / tally[0] < 0.9, tally
-    age = float(a["clock"][0, C_AGE])
+    age = float(a["clock"][0, 0, C_AGE])
     return st.spring_process.inverse_damage(st.spring_process.damage(x) - np.exp(lam) * age)
 
 
@@ -240,8 +240,8 @@ def test_the_batched_replay_is_the_reference_bit_for_bit(history_env) -> None:
     env = history_env
     a, bank, filt = env.batch.a, env.batch.bank, env.setup.filters
     cum = filt.rul_tables[0][2]
-    rows = a["history"][0, : a["history_n"][0]]
-    dt = a["clock"][0, C_AGE] - rows[:, H_AGE]
+    rows = a["history"][0, 0, : a["history_n"][0, 0]]
+    dt = a["clock"][0, 0, C_AGE] - rows[:, H_AGE]
     x, lam = a["x"][0, 0], a["log_theta"][0, 0]
     d = [env.setup.spring_process.damage(x)]
     lams = [lam]
@@ -287,7 +287,7 @@ def test_the_move_is_the_per_proposal_algorithm_bit_for_bit() -> None:
     for k in keys:
         a[k][...] = start[k]
     x, lt, aux = a["x"][0, 0], a["log_theta"][0, 0], a["aux"][0, 0]
-    loglik, tally = a["loglik"][0], a["tally"][0]
+    loglik, tally = a["loglik"][0, 0], a["tally"][0, 0]
     grid, rate, cum = filt.rul_tables[0][:3]
     rng = np.random.default_rng(8)
     z = np.empty(aux.shape[0])
@@ -309,7 +309,7 @@ def test_the_move_is_the_per_proposal_algorithm_bit_for_bit() -> None:
             ref_d[i], lt[i], loglik[i] = d_new, lam_new, ll_new
             x[i] = inverse_damage_scalar(grid, rate, cum, d_new)
             aux[:, i] = z
-    moved = tally - start["tally"][0]
+    moved = tally - start["tally"][0, 0]
     assert moved[0] == 3 * x.size and 0 < moved[1] < moved[0]
     for k in keys:
         bits = _bits if a[k].dtype == np.float64 else np.asarray
@@ -323,8 +323,8 @@ def test_the_move_keeps_the_prior() -> None:
     env = ScasMaintenanceEnv(**ON, n_particles=N_PARTICLES)
     env.reset(seed=0)
     a = env.batch.a
-    a["history_n"][0] = 0
-    a["clock"][0] = (500.0, 0.0)
+    a["history_n"][0, 0] = 0
+    a["clock"][0, 0] = (500.0, 0.0)
     post = Posterior(env)
     rng = np.random.default_rng(2)
     a0 = post.prior_a0.rvs(size=N_PARTICLES, random_state=rng)
@@ -357,7 +357,7 @@ def test_the_move_keeps_the_full_history_posterior(history_env) -> None:
 def test_off_by_default_and_the_fingerprint_unchanged() -> None:
     assert Scenario().rejuvenation == "none"
     off = ScasMaintenanceEnv()
-    assert off.batch.a["history"].shape[1] == 0
+    assert off.batch.a["history"].shape[2] == 0
     assert off.setup.filters.move[0] is False
     assert off.setup.spring_process.damage_noise_cv > 0.0
     on = ScasMaintenanceEnv(**ON)
@@ -391,7 +391,7 @@ def test_single_and_vector_env_agree_with_rejuvenation() -> None:
         assert r1 == rv[0]
         differs = differs or not np.array_equal(o1, o0)
     assert differs
-    tally = single.batch.a["tally"][0]
+    tally = single.batch.a["tally"][0, 0]
     assert tally[0] > 0 and 0 < tally[1] < tally[0]
     np.testing.assert_array_equal(single.batch.a["loglik"][0], vec.unwrapped.batch.a["loglik"][0])
     vec.close()
@@ -403,8 +403,8 @@ def test_history_growth_changes_no_number(monkeypatch) -> None:
     big = _env_with_history(200, seed=6)
     monkeypatch.setattr(state_module, "HISTORY_START", 4)
     small = _env_with_history(200, seed=6)
-    assert small.batch.a["history"].shape[1] < big.batch.a["history"].shape[1]
-    assert small.batch.a["history_n"][0] == big.batch.a["history_n"][0] > 4
+    assert small.batch.a["history"].shape[2] < big.batch.a["history"].shape[2]
+    assert small.batch.a["history_n"][0, 0] == big.batch.a["history_n"][0, 0] > 4
     for k in ("x", "log_theta", "w", "aux", "loglik", "tally"):
         np.testing.assert_array_equal(small.batch.a[k], big.batch.a[k], err_msg=k)
 
@@ -431,7 +431,7 @@ def _spring_history(slots: int, **fields: object) -> np.ndarray:
     env.reset(seed=9)
     for t in range(slots):
         env.step(policy_action("test10", t))
-    return env.batch.a["history"][0, : env.batch.a["history_n"][0]].copy()
+    return env.batch.a["history"][0, 0, : env.batch.a["history_n"][0, 0]].copy()
 
 
 def test_the_cross_variance_inflation_multiplies_the_other_parts_variance() -> None:

@@ -18,8 +18,9 @@ Rao-Blackwellised, :func:`prognostics.measurement.random_effect_update`).
   clouds.
 
 With ``FilterModel.move`` on (``Scenario.rejuvenation = "resample_move"``) the spring
-filter keeps its data and resamples by resample-move (:mod:`scas_env.core.rejuvenation`):
-``bank[5]`` holds its history, clock and per-particle log-likelihoods.
+filter keeps its data and resamples by resample-move (:mod:`scas_env.core.rejuvenation`);
+with ``"resample_move_both"`` the seal filter too: ``bank[5]`` holds, per part, its
+history, clock and per-particle log-likelihoods.
 
 The surrogate's tables are read along the part's own severity at the other part's filter
 estimate (bilinear, as the world draws features); the other part's uncertainty enters each
@@ -80,7 +81,8 @@ class FilterModel(NamedTuple):
     bandwidth h, kernel variance kappa, gaussian kernel, shrink); ``move``: the spring
     filter's resample-move (:mod:`scas_env.core.rejuvenation`): (on, Metropolis-Hastings
     steps per particle, the prior's initial crack depth mean, sd and upper bound (m), the
-    prior sd of log theta, the random-walk scale); ``cross_inflation``: the factor on the
+    prior sd of log theta, the random-walk scale), then the seal filter's: (on, the prior
+    sd of its log theta, its random-walk scale); ``cross_inflation``: the factor on the
     variance the other part's estimate adds to a feature's likelihood
     (``Scenario.cross_variance_inflation``).
     """
@@ -180,15 +182,23 @@ def work_arrays(n: int, n_learn: int) -> tuple:
 
 
 @njit(cache=True, inline="always")
+def _moves(p: int, model: FilterModel) -> bool:
+    """Whether filter p keeps a history and resamples by resample-move: the spring's with
+    ``Scenario.rejuvenation`` "resample_move" or "resample_move_both", the seal's with
+    "resample_move_both"."""
+    return model.move[0] if p == 0 else model.move[7]
+
+
+@njit(cache=True, inline="always")
 def _resampled(n_eff: float, e: int, p: int, bank: tuple, work: tuple, model: FilterModel,
                handle: tuple) -> bool:  # fmt: skip
     """Resample filter p of row e if its weights degenerated (``ParticleFilter._after_update``);
-    the spring's by resample-move if on and its history is whole. False: degenerate
-    weights."""
+    by resample-move if it moves (:func:`_moves`) and its history is whole. False:
+    degenerate weights."""
     bx, blt, bw, blw, baux = bank[0], bank[1], bank[2], bank[3], bank[4]
     thr_n, h, kappa, gaussian, shrink = model.resample
-    if p == 0 and model.move[0] and bank[5][1][e] >= 0:
-        return resample_move(n_eff, thr_n, e, bank, work, model, handle) >= 0
+    if _moves(p, model) and bank[5][1][e, p] >= 0:
+        return resample_move(n_eff, thr_n, e, bank, work, model, handle, p) >= 0
     k = resample_if_degenerate(
         n_eff, thr_n, bx[e, p], blt[e, p], bw[e, p], blw[e, p], baux[e, p], work[0], work[1],
         work[2], work[3], h, kappa, gaussian, shrink, handle,
@@ -213,8 +223,8 @@ def _predict(e: int, p: int, d: float, bank: tuple, pending: np.ndarray, status:
     if _first_out_of_range(bx[e, p], blt[e, p], MAX_ABS_SEVERITY, MAX_ABS_LOG_THETA) >= 0:
         status[e] = 1
     pending[e, p] -= d
-    if p == 0 and model.move[0]:
-        bank[5][2][e, C_AGE] += d
+    if _moves(p, model):
+        bank[5][2][e, p, C_AGE] += d
 
 
 @njit(cache=True, inline="always")
@@ -225,8 +235,8 @@ def _survive(e: int, bank: tuple, status: np.ndarray, work: tuple, model: Filter
     bx, bw, blw = bank[0], bank[2], bank[3]
     for p in range(2):
         if model.active[p] and status[e] == 0:
-            if p == 0 and model.move[0]:
-                bank[5][2][e, C_SURVIVED] = bank[5][2][e, C_AGE]
+            if _moves(p, model):
+                bank[5][2][e, p, C_SURVIVED] = bank[5][2][e, p, C_AGE]
             n_eff = _condition_below(bx[e, p], blw[e, p], bw[e, p], model.critical[p])
             if n_eff >= 0.0 and not _resampled(n_eff, e, p, bank, work, model, handle):
                 status[e] = 3
@@ -240,8 +250,8 @@ def _effect_update(e: int, p: int, k: int, y: float, m: float, moments: tuple,
     """The mean ``y`` of ``m`` runs of a feature whose installation effect is aux states
     ``k``, ``k + 1`` of filter p, into that filter; returns ``y`` corrected to a healthy new
     installation. Status 2 (non-finite likelihood) or 3. ``table``: the feature's index
-    among the learning features, or their number plus p for a test's (the spring's history
-    with ``model.move`` on)."""
+    among the learning features, or their number plus p for a test's (the filter's history
+    with it kept, :func:`_moves`)."""
     bx, bw, blw, baux = bank[0], bank[2], bank[3], bank[4]
     c_hat, c_var, w_hat, w_var = moments
     own, other, other_var = (c_hat, w_hat, w_var) if p == 0 else (w_hat, c_hat, c_var)
@@ -265,9 +275,9 @@ def _effect_update(e: int, p: int, k: int, y: float, m: float, moments: tuple,
         if not math.isfinite(log_lik[i]):
             status[e] = 2
             return y - shift - cross
-    if p == 0 and model.move[0]:
+    if _moves(p, model):
         j, tj = cell_of(g_other, other)
-        record_datum(e, table, k, y, m, j, tj, extra_var, log_lik, bank)
+        record_datum(e, p, table, k, y, m, j, tj, extra_var, log_lik, bank)
     n_eff = _add_log_likelihood(blw[e, p], bw[e, p], log_lik)
     if not _resampled(n_eff, e, p, bank, work, model, handle):
         status[e] = 3

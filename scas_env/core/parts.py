@@ -47,7 +47,7 @@ from scas_env.core.flight import (
     wear_after_flights,
     wear_flights_to_failure,
 )
-from scas_env.core.rejuvenation import restart
+from scas_env.core.rejuvenation import record_effect, restart
 from scas_env.core.setup import (
     EFFECT_FEATURES,
     FLIGHT_FEATURES,
@@ -368,7 +368,10 @@ def reset_filter(batch: ActuatorState, e: int, part: str) -> None:
     old one is learnt from first, then its filter restarts from the prior (a new spring pair
     is a new installation: every installation effect back to N(0, 1), and the spring
     filter's history for resample-move emptied; new seals keep the installation's,
-    collapsed to one Gaussian), its detector is cleared."""
+    collapsed to one Gaussian), its detector is cleared. With the seal filter's
+    resample-move (``Scenario.rejuvenation = "resample_move_both"``) a new seal's history
+    starts with those beliefs, and a new spring pair writes N(0, 1) beliefs into the
+    seal's history (:func:`scas_env.core.rejuvenation.record_effect`)."""
     st, a = batch.setup, batch.a
     learn_now(batch, e)
     rng = batch.rngs[e]["filter"]
@@ -384,6 +387,8 @@ def reset_filter(batch: ActuatorState, e: int, part: str) -> None:
         a["aux"][e, :, 0::2] = 0.0
         a["aux"][e, :, 1::2] = 1.0
         restart(e, batch.bank)
+        if st.filters.move[7]:  # the seal's installation effects, from here on
+            _record_seal_effects(batch, e)
     else:
         w = a["w"][e, 1]
         kept = [
@@ -394,10 +399,24 @@ def reset_filter(batch: ActuatorState, e: int, part: str) -> None:
         for j, (mean, var) in enumerate(kept):
             a["aux"][e, 1, 2 * j] = mean
             a["aux"][e, 1, 2 * j + 1] = var
+        if st.filters.move[7]:
+            restart(e, batch.bank, 1)
+            _record_seal_effects(batch, e)
     a["det_n"][e, p] = 0
     a["detected"][e, p] = False
     a["pending"][e, p] = 0.0
     a["stale"][e] = True
+
+
+def _record_seal_effects(batch: ActuatorState, e: int) -> None:
+    """Row ``e``'s seal filter's installation-effect beliefs (one Gaussian per feature, the
+    same for every particle) appended to its history as belief rows."""
+    n_slots = len(EFFECT_FEATURES[1])
+    batch.ensure_history(np.array([e], dtype=np.int64), n_slots)
+    a = batch.a
+    for j in range(n_slots):
+        mean, var = float(a["aux"][e, 1, 2 * j, 0]), float(a["aux"][e, 1, 2 * j + 1, 0])
+        record_effect(e, 1, 2 * j, mean, var, batch.bank)
 
 
 def _reset_cloud(batch: ActuatorState, e: int, p: int, x0, theta0: np.ndarray) -> None:

@@ -1,4 +1,4 @@
-"""Resample-move rejuvenation of the spring filter's static parameters (Gilks & Berzuini 2001).
+"""Resample-move rejuvenation of the filters' static parameters (Gilks & Berzuini 2001).
 
 With ``Scenario.rejuvenation = "resample_move"`` the spring filter samples the posterior of
 static parameters: the initial crack depth ``a0`` and the log growth multiplier
@@ -19,12 +19,30 @@ weighted cloud approximates it: reweighting, resampling and moving particles of 
 parameter is iterated batch importance sampling (Chopin 2002), the resample-move algorithm
 of Gilks & Berzuini (2001) for a static state.
 
-What a row keeps (``bank[5]``, :class:`scas_env.core.state.ActuatorState`): ``history``
-(per datum its age, value, runs, table, installation-effect slot, the other part's cell and
-fraction in it, extra variance), the number of data (``count``; -1 once the history is
-full: moves stop until the filter restarts, resampling falls back to the kernel jitter),
-``clock`` (the filter's age and survival age, flights), ``loglik`` (per particle, the sum of
-its likelihood terms, as the filter learnt them) and ``tally`` (proposals, acceptances).
+With ``Scenario.rejuvenation = "resample_move_both"`` the seal filter does the same for its
+one static parameter, the log wear multiplier ``lambda`` (new seals start unworn: no
+initial-wear parameter). Its process is the filter's linear Archard wear without scatter,
+``x(t) = D^-1(D(0) + theta t) = r theta t``, and its data are the I9 batch means and the
+tests' G3, so the same replay serves both parts (``D`` the spring's damage integral or the
+seal's linear one). The seal's installation effects do not start at N(0, 1): a new seal
+keeps the installation's beliefs (one Gaussian per feature, the same for every particle),
+and a new spring pair fitted during the seal's life resets them to N(0, 1). Both are belief
+rows of the seal's history (``H_TABLE`` = :data:`SET_EFFECT`, written by
+:func:`record_effect` from :func:`scas_env.core.parts.reset_filter`): the replay sets the
+slot's belief there, as the filter did, so an unmoved particle's replay is its ``loglik``.
+The seal's posterior is
+
+    pi(lambda) ~ p(lambda) 1[x(t_s) < w_crit] prod_j p(y_j | y_<j, lambda)
+
+with ``p(lambda) = N(0, s)``, ``s`` the filter's prior sd of the seal's multiplier.
+
+What a row keeps, per filter p (spring 0, seal 1; ``bank[5]``,
+:class:`scas_env.core.state.ActuatorState`): ``history`` (per datum its age, value, runs,
+table, installation-effect slot, the other part's cell and fraction in it, extra variance;
+or a belief row), the number of rows (``count``; -1 once the history is full: moves stop
+until the filter restarts, resampling falls back to the kernel jitter), ``clock`` (the
+filter's age and survival age, flights), ``loglik`` (per particle, the sum of its likelihood
+terms, as the filter learnt them) and ``tally`` (proposals, acceptances).
 
 After a resampling (systematic, no jitter) each particle takes ``steps`` random-walk
 Metropolis-Hastings steps in ``u = (D(x(t)), lambda)``: a Gaussian proposal with the
@@ -33,7 +51,10 @@ Gelman & Gilks 1997), accepted with probability ``min(1, pi(u') / pi(u))``. In t
 coordinates ``pi(u) = p(a0) g(a0) p(lambda) x likelihood`` (``g = 1 / D'``, the Jacobian of
 ``a0 -> D(x(t))``). The proposal's likelihood is the whole history replayed (its
 installation-effect beliefs with it); the current particle's is its ``loglik``. Each step
-draws two normals and a uniform from the row's filter stream, in particle order.
+draws two normals and a uniform from the row's filter stream, in particle order. The seal's
+move is 1-D, in ``lambda`` (no Jacobian: ``pi(lambda)`` as above): a Gaussian random walk of
+sd ``2.38`` times the weighted cloud's sd of ``lambda`` before resampling
+(:func:`proposal_sd`), one normal and a uniform per step and particle from the same stream.
 
 The replay is the move's cost (one pass over the history per proposal). :func:`history_loglik`
 states it for one proposal; :func:`move_particles` computes the same numbers, bit for bit,
@@ -67,30 +88,33 @@ HISTORY_COLUMNS = 8
 #: clock columns: the spring filter's age (flights predicted since it restarted) and the age
 #: of its latest survival conditioning
 C_AGE, C_SURVIVED = 0, 1
+#: ``H_TABLE`` of a belief row (:func:`record_effect`): no datum, the replay's belief about
+#: one installation effect set
+SET_EFFECT = -1
 _HALF_LOG_2PI = 0.5 * math.log(2.0 * math.pi)
 
 
 @njit(cache=True)
 def record_datum(
-    e: int, table: int, k: int, y: float, m: float, j: int, tj: float, extra_var: float,
-    log_lik: np.ndarray, bank: tuple,
+    e: int, p: int, table: int, k: int, y: float, m: float, j: int, tj: float,
+    extra_var: float, log_lik: np.ndarray, bank: tuple,
 ) -> None:  # fmt: skip
-    """A datum learnt by row e's spring filter: appended to its history (if there is room;
-    else the history is marked full), its likelihood terms added to every particle's
+    """A datum learnt by row e's filter p: appended to its history (if there is room; else
+    the history is marked full), its likelihood terms added to every particle's
     ``loglik``. ``table``: the learning feature's index, or the number of learning features
     plus the part for a test's feature; ``k``: its installation effect's slot in ``aux``;
     ``j``, ``tj``: the other part's cell and fraction in it."""
     history, count, clock, loglik = bank[5][0], bank[5][1], bank[5][2], bank[5][3]
     for i in range(log_lik.size):
-        loglik[e, i] += log_lik[i]
-    q = count[e]
+        loglik[e, p, i] += log_lik[i]
+    q = count[e, p]
     if q < 0:
         return
-    if q >= history.shape[1]:
-        count[e] = -1
+    if q >= history.shape[2]:
+        count[e, p] = -1
         return
-    row = history[e, q]
-    row[H_AGE] = clock[e, C_AGE]
+    row = history[e, p, q]
+    row[H_AGE] = clock[e, p, C_AGE]
     row[H_Y] = y
     row[H_RUNS] = m
     row[H_TABLE] = table
@@ -98,22 +122,56 @@ def record_datum(
     row[H_CELL] = j
     row[H_FRAC] = tj
     row[H_EXTRA] = extra_var
-    count[e] = q + 1
+    count[e, p] = q + 1
 
 
 @njit(cache=True)
-def log_prior(d: float, lam: float, e: int, bank: tuple, model: tuple) -> float:
-    """Log density (up to a constant) of the prior in ``u = (D(x(t)), lambda)`` at the
-    filter's age ``t``, with the survival indicator: -inf outside the support."""
-    a0_mean, a0_sd, a0_hi, lam_sd = model.move[2], model.move[3], model.move[4], model.move[5]
-    grid, rate, cum, cells, inv_cell = model.rul_tables[0]
+def record_effect(e: int, p: int, k: int, mean: float, var: float, bank: tuple) -> None:
+    """A belief row in row e's history of filter p: from here on the replay's belief about
+    the installation effect of slot ``k`` is N(``mean``, ``var``) (``H_TABLE`` =
+    :data:`SET_EFFECT`, the mean in ``H_Y``, the variance in ``H_RUNS``): the seal's
+    effects at its fitting, and N(0, 1) where a new spring pair (a new installation) is
+    fitted during its life. The history is marked full if there is no room."""
+    history, count, clock = bank[5][0], bank[5][1], bank[5][2]
+    q = count[e, p]
+    if q < 0:
+        return
+    if q >= history.shape[2]:
+        count[e, p] = -1
+        return
+    row = history[e, p, q]
+    row[:] = 0.0
+    row[H_AGE] = clock[e, p, C_AGE]
+    row[H_Y] = mean
+    row[H_RUNS] = var
+    row[H_TABLE] = SET_EFFECT
+    row[H_AUX] = k
+    count[e, p] = q + 1
+
+
+@njit(cache=True)
+def log_prior(d: float, lam: float, e: int, bank: tuple, model: tuple, p: int = 0) -> float:
+    """Log density (up to a constant) of filter p's prior, with the survival indicator
+    (-inf outside the support): the spring's in ``u = (D(x(t)), lambda)`` at the filter's
+    age ``t``; the seal's in ``lambda`` (``d = D(0) + theta t`` only for the survival)."""
     clock = bank[5][2]
     theta = math.exp(lam)
-    age = clock[e, C_AGE]
+    if p == 1:
+        grid1, rate1, cum1 = model.rul_tables[1][0], model.rul_tables[1][1], model.rul_tables[1][2]
+        worn = inverse_damage_scalar(
+            grid1, rate1, cum1, d - theta * (clock[e, 1, C_AGE] - clock[e, 1, C_SURVIVED])
+        )
+        if not worn < model.critical[1]:
+            return -np.inf
+        zs = lam / model.move[8]
+        return -0.5 * zs * zs
+    a0_mean, a0_sd, a0_hi, lam_sd = model.move[2], model.move[3], model.move[4], model.move[5]
+    grid, rate, cum, cells, inv_cell = model.rul_tables[0]
+    age = clock[e, 0, C_AGE]
     a0 = inverse_damage_scalar(grid, rate, cum, d - theta * age)
     if not (0.0 <= a0 <= a0_hi):
         return -np.inf
-    survived = inverse_damage_scalar(grid, rate, cum, d - theta * (age - clock[e, C_SURVIVED]))
+    survived = inverse_damage_scalar(grid, rate, cum, d - theta * (age - clock[e, 0, C_SURVIVED]))
     if not survived < model.critical[0]:
         return -np.inf
     za = (a0 - a0_mean) / a0_sd
@@ -124,25 +182,31 @@ def log_prior(d: float, lam: float, e: int, bank: tuple, model: tuple) -> float:
 
 @njit(cache=True)
 def history_loglik(d: float, lam: float, e: int, bank: tuple, model: tuple,
-                   z: np.ndarray) -> float:  # fmt: skip
-    """Sum of the likelihood terms of row e's spring history at ``u = (d, lam)``: each datum
-    at the crack ``D^-1(d - theta (t - t_j))``, the installation effects' beliefs ``z``
-    (mean, variance per slot, from N(0, 1)) conditioned datum by datum, as
+                   z: np.ndarray, p: int = 0) -> float:  # fmt: skip
+    """Sum of the likelihood terms of row e's history of filter p at ``u = (d, lam)``: each
+    datum at the severity ``D^-1(d - theta (t - t_j))`` (the spring's growth table, the
+    seal's linear wear), the installation effects' beliefs ``z`` (mean, variance per slot,
+    from N(0, 1), set by the history's belief rows) conditioned datum by datum, as
     :func:`scas_env.core.filters.effect_likelihood` and
     :func:`prognostics.measurement.random_effect_update` compute them."""
     history, count, clock = bank[5][0], bank[5][1], bank[5][2]
-    grid, rate, cum = model.rul_tables[0][0], model.rul_tables[0][1], model.rul_tables[0][2]
-    critical, noise_scale = model.critical[0], model.noise_scale
+    grid, rate, cum = model.rul_tables[p][0], model.rul_tables[p][1], model.rul_tables[p][2]
+    critical, noise_scale = model.critical[p], model.noise_scale
     n_learn = model.learn_part.size
     for k in range(0, z.size, 2):
         z[k] = 0.0
         z[k + 1] = 1.0
     theta = math.exp(lam)
-    age = clock[e, C_AGE]
+    age = clock[e, p, C_AGE]
     total = 0.0
-    for q in range(count[e]):
-        row = history[e, q]
+    for q in range(count[e, p]):
+        row = history[e, p, q]
         table = int(row[H_TABLE])
+        if table == SET_EFFECT:
+            k = int(row[H_AUX])
+            z[k] = row[H_Y]
+            z[k + 1] = row[H_RUNS]
+            continue
         if table < n_learn:
             st, own_grid = model.learn_stack[table], model.learn_own[table]
         else:
@@ -154,13 +218,13 @@ def history_loglik(d: float, lam: float, e: int, bank: tuple, model: tuple,
         a = bilinear_at(st, 1, i, ti, j, tj)
         run = bilinear_at(st, 2, i, ti, j, tj) * noise_scale
         k = int(row[H_AUX])
-        p = z[k + 1]
-        v = (run * run / row[H_RUNS] + row[H_EXTRA]) + a * a * p
+        pk = z[k + 1]
+        v = (run * run / row[H_RUNS] + row[H_EXTRA]) + a * a * pk
         r = row[H_Y] - mu - a * z[k]
         total += -0.5 * r * r / v - 0.5 * math.log(v) - _HALF_LOG_2PI
-        gain = p * a / v
+        gain = pk * a / v
         z[k] += gain * r
-        z[k + 1] = p - gain * a * p
+        z[k + 1] = pk - gain * a * pk
     return total
 
 
@@ -173,16 +237,16 @@ P_TABLE, P_CELL, P_AUX = range(3)
 
 
 @njit(cache=True)
-def prepare_history(e: int, bank: tuple, model: tuple) -> tuple:
-    """Row e's spring history as :func:`replay_histories` reads it, once for all the
+def prepare_history(e: int, bank: tuple, model: tuple, p: int = 0) -> tuple:
+    """Row e's history of filter p as :func:`replay_histories` reads it, once for all the
     proposals of a move: the per-datum columns (``P_*``), the filter's tables in one
     zero-padded array (learning features, then tests: the history's table index) with their
     own grids (padded) and sizes, and the growth table's segment slopes. Each value is the
     one :func:`history_loglik` computes per datum and proposal, by the same operation."""
     history, count, clock = bank[5][0], bank[5][1], bank[5][2]
-    grid, rate = model.rul_tables[0][0], model.rul_tables[0][1]
-    n = max(count[e], 0)
-    age = clock[e, C_AGE]
+    grid, rate = model.rul_tables[p][0], model.rul_tables[p][1]
+    n = max(count[e, p], 0)
+    age = clock[e, p, C_AGE]
     n_learn = model.learn_part.size
     n_tab = n_learn + len(model.ground_stack)
     ni, nj, ng = 0, 0, 0
@@ -205,15 +269,16 @@ def prepare_history(e: int, bank: tuple, model: tuple) -> tuple:
     cols = np.empty((n, 6))
     ints = np.empty((n, 3), dtype=np.int64)
     for q in range(n):
-        cols[q, P_DT] = age - history[e, q, H_AGE]
-        cols[q, P_Y] = history[e, q, H_Y]
-        cols[q, P_RUNS] = history[e, q, H_RUNS]
-        cols[q, P_EXTRA] = history[e, q, H_EXTRA]
-        cols[q, P_FRAC] = history[e, q, H_FRAC]
-        cols[q, P_FRAC_C] = 1 - history[e, q, H_FRAC]
-        ints[q, P_TABLE] = int(history[e, q, H_TABLE])
-        ints[q, P_CELL] = int(history[e, q, H_CELL])
-        ints[q, P_AUX] = int(history[e, q, H_AUX])
+        row = history[e, p, q]
+        cols[q, P_DT] = age - row[H_AGE]
+        cols[q, P_Y] = row[H_Y]
+        cols[q, P_RUNS] = row[H_RUNS]
+        cols[q, P_EXTRA] = row[H_EXTRA]
+        cols[q, P_FRAC] = row[H_FRAC]
+        cols[q, P_FRAC_C] = 1 - row[H_FRAC]
+        ints[q, P_TABLE] = int(row[H_TABLE])
+        ints[q, P_CELL] = int(row[H_CELL])
+        ints[q, P_AUX] = int(row[H_AUX])
     return cols, ints, stacks, owns, own_n, slopes
 
 
@@ -221,9 +286,9 @@ def prepare_history(e: int, bank: tuple, model: tuple) -> tuple:
 # depth, grid spacings, run counts and variances, all > 0; a slope of 0 takes the series)
 @njit(cache=True, error_model="numpy")
 def replay_histories(d: np.ndarray, lam: np.ndarray, m: int, prepared: tuple, model: tuple,
-                     z: np.ndarray, total: np.ndarray) -> None:  # fmt: skip
+                     z: np.ndarray, total: np.ndarray, p: int = 0) -> None:  # fmt: skip
     """:func:`history_loglik` at the ``m`` points ``(d[r], lam[r])`` of a
-    :func:`prepare_history`, bit for bit: ``total[r]`` its value, ``z[:, r]`` its
+    :func:`prepare_history` of filter p, bit for bit: ``total[r]`` its value, ``z[:, r]`` its
     installation-effect beliefs. Datum by datum for all the points (each point's terms
     summed in the history's order), each operation the reference's on the same values. The
     growth table's segment of a point's datum (:func:`inverse_damage_scalar`'s bisection)
@@ -231,8 +296,8 @@ def replay_histories(d: np.ndarray, lam: np.ndarray, m: int, prepared: tuple, mo
     learnt, so their damages ``d - theta (t - t_j)`` never decrease (one that did would be
     bisected)."""
     cols, ints, stacks, owns, own_n, slopes = prepared
-    grid, rate, cum = model.rul_tables[0][0], model.rul_tables[0][1], model.rul_tables[0][2]
-    critical, noise_scale = model.critical[0], model.noise_scale
+    grid, rate, cum = model.rul_tables[p][0], model.rul_tables[p][1], model.rul_tables[p][2]
+    critical, noise_scale = model.critical[p], model.noise_scale
     last = cum.size - 2
     theta, xs, zs, vs, rs = np.empty(m), np.empty(m), np.empty(m), np.empty(m), np.empty(m)
     mus, taus, runs = np.empty(m), np.empty(m), np.empty(m)
@@ -246,7 +311,13 @@ def replay_histories(d: np.ndarray, lam: np.ndarray, m: int, prepared: tuple, mo
             z[k, r] = 0.0
             z[k + 1, r] = 1.0
     for q in range(cols.shape[0]):
-        # the crack: inverse_damage_scalar(grid, rate, cum, d - theta * (t - t_j)); inside
+        if ints[q, P_TABLE] == SET_EFFECT:  # a belief row: every point's belief set
+            k = ints[q, P_AUX]
+            for r in range(m):
+                z[k, r] = cols[q, P_Y]
+                z[k + 1, r] = cols[q, P_RUNS]
+            continue
+        # the severity: inverse_damage_scalar(grid, rate, cum, d - theta * (t - t_j)); inside
         # the table, xs holds the damage into the segment until the expm1 below
         dt = cols[q, P_DT]
         for r in range(m):
@@ -343,46 +414,66 @@ def proposal_factor(x: np.ndarray, lam: np.ndarray, w: np.ndarray, model: tuple,
 
 
 @njit(cache=True)
-def _gather(e: int, bank: tuple, idx: np.ndarray, buf: np.ndarray) -> None:
-    """Row e's spring particles (state, log-likelihood, effects) copied from parents ``idx``,
-    weights uniform."""
+def proposal_sd(lam: np.ndarray, w: np.ndarray, model: tuple) -> float:
+    """The seal's random-walk proposal sd: the weighted cloud's sd of lambda times the
+    1-D scale."""
+    m = 0.0
+    for i in range(lam.size):
+        m += w[i] * lam[i]
+    s = 0.0
+    for i in range(lam.size):
+        dl = lam[i] - m
+        s += w[i] * dl * dl
+    return model.move[9] * math.sqrt(s)
+
+
+@njit(cache=True)
+def _gather(e: int, p: int, bank: tuple, idx: np.ndarray, buf: np.ndarray) -> None:
+    """Row e's particles of filter p (state, log-likelihood, effects) copied from parents
+    ``idx``, weights uniform."""
     bx, blt, bw, blw, baux = bank[0], bank[1], bank[2], bank[3], bank[4]
     loglik = bank[5][3]
     n = idx.size
-    for arr in (bx[e, 0], blt[e, 0], loglik[e]):
+    for arr in (bx[e, p], blt[e, p], loglik[e, p]):
         for i in range(n):
             buf[i] = arr[idx[i]]
         for i in range(n):
             arr[i] = buf[i]
     for k in range(baux.shape[2]):
         for i in range(n):
-            buf[i] = baux[e, 0, k, idx[i]]
+            buf[i] = baux[e, p, k, idx[i]]
         for i in range(n):
-            baux[e, 0, k, i] = buf[i]
+            baux[e, p, k, i] = buf[i]
     for i in range(n):
-        bw[e, 0, i] = 1.0 / n
-        blw[e, 0, i] = -math.log(n)
+        bw[e, p, i] = 1.0 / n
+        blw[e, p, i] = -math.log(n)
 
 
 @njit(cache=True)
 def move_particles(e: int, bank: tuple, model: tuple, factor: tuple, d: np.ndarray,
-                   handle: tuple) -> None:  # fmt: skip
-    """``model.move``'s steps of random-walk Metropolis-Hastings for every spring particle
-    of row e (module docstring); ``d`` holds each particle's ``D(x)``. A step draws every
-    particle's proposal (two normals, a uniform, in particle order), replays the history at
-    those inside the prior's support together (:func:`replay_histories`), then accepts or
-    rejects each in turn; a particle's log prior is kept while it stays."""
+                   handle: tuple, p: int = 0) -> None:  # fmt: skip
+    """``model.move``'s steps of random-walk Metropolis-Hastings for every particle of row
+    e's filter p (module docstring); ``d`` holds each particle's ``D(x)``. A step draws
+    every particle's proposal (the spring: two normals, the seal: one; then a uniform; in
+    particle order), replays the history at those inside the prior's support together
+    (:func:`replay_histories`), then accepts or rejects each in turn; a particle's log
+    prior is kept while it stays. ``factor``: the spring's Cholesky factor
+    (:func:`proposal_factor`), the seal's ``(sd, 0, 0)`` (:func:`proposal_sd`)."""
     bx, blt, baux = bank[0], bank[1], bank[4]
     loglik, tally = bank[5][3], bank[5][4]
-    grid, rate, cum = model.rul_tables[0][0], model.rul_tables[0][1], model.rul_tables[0][2]
+    grid, rate, cum = model.rul_tables[p][0], model.rul_tables[p][1], model.rul_tables[p][2]
     l11, l21, l22 = factor
     steps = model.move[1]
     n_aux = baux.shape[2]
     n = bx.shape[2]
-    prepared = prepare_history(e, bank, model)
+    age = bank[5][2][e, p, C_AGE]
+    d0 = 0.0  # the seal's D at wear 0 (new seals start unworn)
+    if p == 1:
+        d0 = damage_scalar(grid, rate, cum, model.rul_tables[1][3], model.rul_tables[1][4], 0.0)
+    prepared = prepare_history(e, bank, model, p)
     lp = np.empty(n)  # each particle's log prior
     for i in range(n):
-        lp[i] = log_prior(d[i], blt[e, 0, i], e, bank, model)
+        lp[i] = log_prior(d[i], blt[e, p, i], e, bank, model, p)
     u = np.empty(n)
     lp_new = np.empty(n)
     who = np.empty(n, dtype=np.int64)  # the particles of the proposals replayed, in order
@@ -393,39 +484,45 @@ def move_particles(e: int, bank: tuple, model: tuple, factor: tuple, d: np.ndarr
     for _ in range(steps):
         m = 0
         for i in range(n):
-            e1 = standard_normal(handle)
-            e2 = standard_normal(handle)
-            u[i] = random(handle)
-            d_i = d[i] + l11 * e1
-            lam_i = blt[e, 0, i] + (l21 * e1 + l22 * e2)
-            tally[e, 0] += 1
-            lp_new[i] = log_prior(d_i, lam_i, e, bank, model)
+            if p == 0:
+                e1 = standard_normal(handle)
+                e2 = standard_normal(handle)
+                u[i] = random(handle)
+                d_i = d[i] + l11 * e1
+                lam_i = blt[e, 0, i] + (l21 * e1 + l22 * e2)
+            else:
+                e1 = standard_normal(handle)
+                u[i] = random(handle)
+                lam_i = blt[e, p, i] + l11 * e1
+                d_i = d0 + math.exp(lam_i) * age
+            tally[e, p, 0] += 1
+            lp_new[i] = log_prior(d_i, lam_i, e, bank, model, p)
             if lp_new[i] == -np.inf:
                 continue
             who[m] = i
             d_new[m] = d_i
             lam_new[m] = lam_i
             m += 1
-        replay_histories(d_new, lam_new, m, prepared, model, z, ll_new)
+        replay_histories(d_new, lam_new, m, prepared, model, z, ll_new, p)
         for r in range(m):
             i = who[r]
-            log_ratio = (lp_new[i] + ll_new[r]) - (lp[i] + loglik[e, i])
+            log_ratio = (lp_new[i] + ll_new[r]) - (lp[i] + loglik[e, p, i])
             if not (math.log(u[i]) < log_ratio):
                 continue
-            tally[e, 1] += 1
+            tally[e, p, 1] += 1
             d[i] = d_new[r]
-            bx[e, 0, i] = inverse_damage_scalar(grid, rate, cum, d_new[r])
-            blt[e, 0, i] = lam_new[r]
+            bx[e, p, i] = inverse_damage_scalar(grid, rate, cum, d_new[r])
+            blt[e, p, i] = lam_new[r]
             lp[i] = lp_new[i]
-            loglik[e, i] = ll_new[r]
+            loglik[e, p, i] = ll_new[r]
             for k in range(n_aux):
-                baux[e, 0, k, i] = z[k, r]
+                baux[e, p, k, i] = z[k, r]
 
 
 @njit(cache=True)
 def resample_move(ess: float, threshold_n: float, e: int, bank: tuple, work: tuple,
-                  model: tuple, handle: tuple) -> int:  # fmt: skip
-    """Row e's spring filter after a weight update, as
+                  model: tuple, handle: tuple, p: int = 0) -> int:  # fmt: skip
+    """Row e's filter p after a weight update, as
     :func:`prognostics.particle_filter.resample_if_degenerate` (-1 non-finite ``ess``, 0
     nothing to do, 1 resampled) but with the move of the module docstring instead of the
     kernel jitter: the proposal fitted to the weighted cloud, systematic resampling (the
@@ -434,37 +531,50 @@ def resample_move(ess: float, threshold_n: float, e: int, bank: tuple, work: tup
         return -1
     if ess >= threshold_n:
         return 0
-    x, lam, w = bank[0][e, 0], bank[1][e, 0], bank[2][e, 0]
+    x, lam, w = bank[0][e, p], bank[1][e, p], bank[2][e, p]
     d = work[3]
-    factor = proposal_factor(x, lam, w, model, d)
+    if p == 0:
+        factor = proposal_factor(x, lam, w, model, d)
+    else:
+        factor = (proposal_sd(lam, w, model), 0.0, 0.0)
     _systematic_from_weights(w, work[0], random(handle), work[1])
-    _gather(e, bank, work[1], work[2])
+    _gather(e, p, bank, work[1], work[2])
     idx, buf = work[1], work[2]
-    for i in range(x.size):  # D(x) of the resampled particles: their parents'
-        buf[i] = d[idx[i]]
-    for i in range(x.size):
-        d[i] = buf[i]
-    move_particles(e, bank, model, factor, d, handle)
+    if p == 0:
+        for i in range(x.size):  # D(x) of the resampled particles: their parents'
+            buf[i] = d[idx[i]]
+        for i in range(x.size):
+            d[i] = buf[i]
+    else:  # the seal's D(x(t)) = D(0) + theta t, of its lambda
+        rt = model.rul_tables[1]
+        d0 = damage_scalar(rt[0], rt[1], rt[2], rt[3], rt[4], 0.0)
+        age = bank[5][2][e, 1, C_AGE]
+        for i in range(x.size):
+            d[i] = d0 + math.exp(lam[i]) * age
+    move_particles(e, bank, model, factor, d, handle, p)
     return 1
 
 
 @njit(cache=True)
-def restart(e: int, bank: tuple) -> None:
-    """Row e's spring filter restarts from its prior: no data, age 0, log-likelihoods 0."""
-    bank[5][1][e] = 0
-    bank[5][2][e, C_AGE] = 0.0
-    bank[5][2][e, C_SURVIVED] = 0.0
-    bank[5][3][e, :] = 0.0
+def restart(e: int, bank: tuple, p: int = 0) -> None:
+    """Row e's filter p restarts from its prior: no data, age 0, log-likelihoods 0."""
+    bank[5][1][e, p] = 0
+    bank[5][2][e, p, C_AGE] = 0.0
+    bank[5][2][e, p, C_SURVIVED] = 0.0
+    bank[5][3][e, p, :] = 0.0
 
 
 __all__ = [
     "HISTORY_COLUMNS",
+    "SET_EFFECT",
     "history_loglik",
     "log_prior",
     "move_particles",
     "prepare_history",
     "proposal_factor",
+    "proposal_sd",
     "record_datum",
+    "record_effect",
     "replay_histories",
     "resample_move",
     "restart",

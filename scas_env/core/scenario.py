@@ -22,7 +22,7 @@ FIDELITIES = ("surrogate", "physics")
 OBS_MODES = ("features+rul", "features", "state", "dict")
 INITIAL_HEALTH = ("new", "random", "in_service")
 PREFLIGHT = ("on_demand", "every_flight")
-REJUVENATION = ("none", "resample_move")
+REJUVENATION = ("none", "resample_move", "resample_move_both")
 
 
 @dataclass(frozen=True)
@@ -59,7 +59,15 @@ class Scenario(Validated):
         installation effects integrated out, survival), so the cloud stays a sample of the
         exact posterior of the filter's model (docs/beliefs.md). Needs a spring of known age
         (``initial_health`` ``"new"`` or ``"in_service"``) and ``spring_theta_walk`` = 0.
-        The seal filter is unchanged.
+        The seal filter is unchanged. ``"resample_move_both"``: the spring's as
+        ``"resample_move"`` and the seal filter's too: its process is the filter's linear
+        Archard wear without the whole-flight scatter (a new seal's wear is ``rate theta
+        t``), every datum it learns (I9 batch means, G3) is kept, with the installation
+        effects' beliefs at the seal's fitting and their reset to N(0, 1) where a new
+        spring pair is fitted during the seal's life, and after each resampling its log
+        theta takes ``rejuvenation_steps`` 1-D random-walk Metropolis-Hastings steps (sd
+        2.38 times the weighted cloud's) on the seal's full-history posterior. Needs
+        ``wear_active`` = 1 as well.
     """
 
     fidelity: str = "surrogate"
@@ -183,7 +191,8 @@ class Scenario(Validated):
         hi=100,
         integer=True,
         source="Metropolis-Hastings steps per particle after each resampling of the spring "
-        "filter, with rejuvenation = 'resample_move' (Gilks & Berzuini 2001; docs/beliefs.md)",
+        "filter (and the seal filter with 'resample_move_both'), with rejuvenation = "
+        "'resample_move' (Gilks & Berzuini 2001; docs/beliefs.md)",
     )
 
     def _check(self) -> None:
@@ -199,22 +208,28 @@ class Scenario(Validated):
                 raise ValueError(f"Scenario.{name} = {value!r} must be one of {allowed}")
         if not (self.crack_active or self.wear_active):
             raise ValueError("Scenario: at least one of crack_active, wear_active must be 1")
-        if self.rejuvenation == "resample_move":
+        if self.rejuvenation != "none":
+            r = self.rejuvenation
             if self.initial_health == "random":
                 raise ValueError(
-                    "Scenario.rejuvenation = 'resample_move' needs the spring's age known to "
+                    f"Scenario.rejuvenation = {r!r} needs the spring's age known to "
                     "the monitor (initial_health 'new' or 'in_service'), got initial_health = "
                     "'random'"
                 )
             if self.spring_theta_walk != 0.0:
                 raise ValueError(
-                    "Scenario.rejuvenation = 'resample_move' moves a static growth multiplier: "
+                    f"Scenario.rejuvenation = {r!r} moves a static growth multiplier: "
                     f"spring_theta_walk must be 0, got {self.spring_theta_walk}"
                 )
             if not self.crack_active:
                 raise ValueError(
-                    "Scenario.rejuvenation = 'resample_move' moves the spring crack's "
+                    f"Scenario.rejuvenation = {r!r} moves the spring crack's "
                     "parameters: crack_active must be 1, got crack_active = 0"
+                )
+            if r == "resample_move_both" and not self.wear_active:
+                raise ValueError(
+                    f"Scenario.rejuvenation = {r!r} moves the seal wear's "
+                    "parameter: wear_active must be 1, got wear_active = 0"
                 )
 
 

@@ -13,7 +13,8 @@ calibrated Paris growth table with the whole-flight damage scatter at the new-pa
 linear Archard wear with its scatter; growth multipliers static (their prior, no random
 walk unless ``Scenario.spring_theta_walk``; with ``Scenario.rejuvenation =
 "resample_move"`` the spring's process has no scatter and its static parameters are moved by
-Metropolis-Hastings after each resampling, :mod:`scas_env.core.rejuvenation`);
+Metropolis-Hastings after each resampling, :mod:`scas_env.core.rejuvenation`; with
+``"resample_move_both"`` the seal's too: no wear scatter, its log theta moved);
 ``filter_growth_bias`` and
 ``filter_noise_scale`` make the filters assume other growth or noise than the world has.
 Every measured feature's installation effect is a per-particle Gaussian state: G1 and I8 in
@@ -368,8 +369,10 @@ def _processes(
     bias = s.filter_growth_bias
     crack_cv_a0 = float(cal.crack_cv_at(params.spring.initial_crack_m, "whole_flight"))
     wear_cv = cal.flight_scatter("whole_flight")[1]
-    if s.rejuvenation == "resample_move":  # a static model: the path is the damage integral
+    if s.rejuvenation in MOVES:  # a static model: the path is the damage integral
         crack_cv_a0 = 0.0
+    if s.rejuvenation == "resample_move_both":  # the seal's too: linear wear, no scatter
+        wear_cv = 0.0
     spring = paris_crack_model(
         cal.crack_depth_m,
         bias * cal.crack_rate_m_per_flight,
@@ -436,18 +439,28 @@ def _filter_model(
 _RW_SCALE = 2.38 / 2**0.5
 
 
+#: the random-walk scale of the seal's 1-D move (its log theta), d = 1
+_RW_SCALE_1D = 2.38
+#: the values of ``Scenario.rejuvenation`` that move the spring filter's parameters
+MOVES = ("resample_move", "resample_move_both")
+
+
 def _move_model(params: ScasParams, s: Scenario, cal: Calibration) -> tuple:
     """:attr:`FilterModel.move`: (on, steps, prior mean, sd and upper bound of the initial
-    crack depth (m), prior sd of log theta, random-walk scale)."""
+    crack depth (m), prior sd of log theta, random-walk scale) of the spring filter, then
+    (on, prior sd of log theta, random-walk scale) of the seal filter."""
     unc = params.uncertainty
     return (
-        s.rejuvenation == "resample_move",
+        s.rejuvenation in MOVES,
         int(s.rejuvenation_steps),
         float(params.spring.initial_crack_m),
         float(unc.initial_crack_sigma_m),
         float(cal.spring_failure_depth_m),
         lognormal_sigma(params, "spring"),
         _RW_SCALE,
+        s.rejuvenation == "resample_move_both",
+        lognormal_sigma(params, "seal"),
+        _RW_SCALE_1D,
     )
 
 

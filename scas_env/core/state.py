@@ -34,8 +34,8 @@ from scas_env.core.setup import (
     Setup,
 )
 
-#: data a row's spring history holds at first with ``Scenario.rejuvenation = "resample_move"``
-#: (it doubles when a slot could fill it: :meth:`ActuatorState.ensure_history`)
+#: data each of a row's histories holds at first with ``Scenario.rejuvenation`` on (it
+#: doubles when a slot could fill it: :meth:`ActuatorState.ensure_history`)
 HISTORY_START = 512
 
 #: handle slots of a row's streams drawn from inside kernels
@@ -79,8 +79,9 @@ class ActuatorState:
         #: the next parts' lives are computed at each fitting (observation modes that show
         #: them: "state" and "dict")
         self.look_ahead = setup.scenario.obs_mode in ("state", "dict")
-        #: whether the spring filter keeps its history (resample-move rejuvenation)
-        self.keeps_history = setup.scenario.rejuvenation == "resample_move"
+        #: whether the spring filter (and with "resample_move_both" the seal filter) keeps
+        #: its history (resample-move rejuvenation)
+        self.keeps_history = setup.scenario.rejuvenation != "none"
         sur = setup.surrogate
         self.healthy_features = np.array(
             [float(sur.mean[sur.index(f), 0, 0]) for f in (*FLIGHT_FEATURES, *GROUND_FEATURES)]
@@ -94,7 +95,7 @@ class ActuatorState:
         p = setup.n_particles
         n_aux = 2 * max(len(f) for f in EFFECT_FEATURES)
         n_feat = len(FLIGHT_FEATURES) + len(GROUND_FEATURES)
-        cap = HISTORY_START if setup.scenario.rejuvenation == "resample_move" else 0
+        cap = HISTORY_START if setup.scenario.rejuvenation != "none" else 0
         return {
             # the world: m, m, m (the spring's failure depth), -, -, standard normals of the
             # installation effects, standard flights each part will still fly (the failing
@@ -131,16 +132,17 @@ class ActuatorState:
             "det_buf": np.zeros((n, 2, int(setup.scenario.detection_window))),
             "det_n": np.zeros((n, 2), dtype=i8),
             "detected": np.zeros((n, 2), dtype=b),
-            # the spring filter's resample-move (scas_env.core.rejuvenation; empty unless
-            # Scenario.rejuvenation says so): the data it learnt (age in flights, value, runs,
-            # table, effect slot, the other part's cell and fraction, extra variance), how
-            # many (-1: the history overflowed), its age and survival age (flights), each
-            # particle's log-likelihood, proposals and acceptances of its moves
-            "history": np.zeros((n, cap, HISTORY_COLUMNS)),
-            "history_n": np.zeros(n, dtype=i8),
-            "clock": np.zeros((n, 2)),
-            "loglik": np.zeros((n, p)),
-            "tally": np.zeros((n, 2), dtype=i8),
+            # per filter (spring 0, seal 1), its resample-move (scas_env.core.rejuvenation;
+            # empty unless Scenario.rejuvenation says so): the data it learnt (age in
+            # flights, value, runs, table, effect slot, the other part's cell and fraction,
+            # extra variance) and its belief rows, how many (-1: the history overflowed),
+            # its age and survival age (flights), each particle's log-likelihood, proposals
+            # and acceptances of its moves
+            "history": np.zeros((n, 2, cap, HISTORY_COLUMNS)),
+            "history_n": np.zeros((n, 2), dtype=i8),
+            "clock": np.zeros((n, 2, 2)),
+            "loglik": np.zeros((n, 2, p)),
+            "tally": np.zeros((n, 2, 2), dtype=i8),
             # the memory of the latest features (SI; flight features, then G1, G3), slots
             # since the last test, whether it failed go/no-go
             "last": np.zeros((n, n_feat)),
@@ -224,19 +226,19 @@ class ActuatorState:
         )  # fmt: skip
 
     def ensure_history(self, rows: np.ndarray, data: int) -> None:
-        """Room for ``data`` more data in the spring histories of ``rows`` (a slot's most):
-        the history doubles (the kernels' views made again) if a row could fill it."""
+        """Room for ``data`` more data in the histories of ``rows`` (a slot's most): the
+        histories double (the kernels' views made again) if a row could fill one."""
         if not self.keeps_history or not rows.size:
             return
         a = self.a
         need = int(a["history_n"][rows].max()) + data
-        cap = a["history"].shape[1]
+        cap = a["history"].shape[2]
         if need <= cap:
             return
         while cap < need:
             cap *= 2
-        grown = np.zeros((self.n, cap, HISTORY_COLUMNS))
-        grown[:, : a["history"].shape[1]] = a["history"]
+        grown = np.zeros((self.n, 2, cap, HISTORY_COLUMNS))
+        grown[:, :, : a["history"].shape[2]] = a["history"]
         a["history"] = grown
         self._bind()
 
