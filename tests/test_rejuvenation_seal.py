@@ -417,3 +417,39 @@ def test_the_seal_process_is_static_and_the_spring_only_move_unchanged() -> None
 def test_bad_options_are_refused(fields: dict, match: str) -> None:
     with pytest.raises(ValueError, match=match):
         Scenario(**fields)
+
+
+def _histories(slots: int, **fields: object) -> tuple[np.ndarray, np.ndarray]:
+    """Row 0's spring and seal histories after ``slots`` slots of ``test10`` (seed 9)."""
+    env = ScasMaintenanceEnv(**BOTH, n_particles=50, **fields)
+    env.reset(seed=9)
+    for t in range(slots):
+        env.step(policy_action("test10", t))
+    a = env.batch.a
+    return tuple(a["history"][0, p, : a["history_n"][0, p]].copy() for p in range(2))
+
+
+def test_the_seals_own_inflation_multiplies_only_its_filters_cross_variance() -> None:
+    """``seal_cross_variance_inflation`` K: up to the first seal datum whose spring estimate
+    has a variance, both filters learn what they learn without it; that datum's variance
+    term is K times the default's (the rest of it the same); the spring's data learnt before
+    the seal's cloud differs are the default's. 0 is the shared factor, bit for bit; (0, 1)
+    is refused."""
+    spring0, seal0 = _histories(80)
+    spring1, seal1 = _histories(80, seal_cross_variance_inflation=50.0)
+    data = seal0[:, H_TABLE] >= 0
+    q = int(np.flatnonzero(data & (seal0[:, H_EXTRA] > 0.0))[0])
+    np.testing.assert_array_equal(seal0[:q], seal1[:q])
+    assert seal1[q, H_EXTRA] == pytest.approx(50.0 * seal0[q, H_EXTRA], rel=1e-14, abs=0.0)
+    keep = [c for c in range(seal0.shape[1]) if c != H_EXTRA]
+    np.testing.assert_array_equal(seal0[q, keep], seal1[q, keep])
+    age = seal0[q, H_AGE]  # the spring's data up to that update: its factor is still 1
+    same = int(np.searchsorted(spring0[:, H_AGE], age, side="right"))
+    assert same > 0
+    np.testing.assert_array_equal(spring0[:same], spring1[:same])
+    both = _histories(80, cross_variance_inflation=50.0)
+    shared = _histories(80, cross_variance_inflation=50.0, seal_cross_variance_inflation=50.0)
+    for p in range(2):
+        np.testing.assert_array_equal(both[p], shared[p])
+    with pytest.raises(ValueError, match=r"seal_cross_variance_inflation = 0\.5"):
+        Scenario(seal_cross_variance_inflation=0.5)

@@ -83,8 +83,8 @@ class FilterModel(NamedTuple):
     steps per particle, the prior's initial crack depth mean, sd and upper bound (m), the
     prior sd of log theta, the random-walk scale), then the seal filter's: (on, the prior
     sd of its log theta, its random-walk scale); ``cross_inflation``: the factor on the
-    variance the other part's estimate adds to a feature's likelihood
-    (``Scenario.cross_variance_inflation``).
+    variance the other part's estimate adds to a feature's likelihood, per
+    filter (``Scenario.cross_variance_inflation``, ``seal_cross_variance_inflation``).
     """
 
     process: tuple
@@ -105,7 +105,7 @@ class FilterModel(NamedTuple):
     ground_own: tuple
     ground_other: tuple
     move: tuple
-    cross_inflation: float
+    cross_inflation: tuple
 
 
 @njit(cache=True)
@@ -266,7 +266,7 @@ def _effect_update(e: int, p: int, k: int, y: float, m: float, moments: tuple,
     cross = effect_at(st, g_own, g_other, own, other, 0.0) - effect_at(
         st, g_own, g_other, own, 0.0, 0.0
     )
-    extra_var = slope * slope * other_var * model.cross_inflation
+    extra_var = slope * slope * other_var * model.cross_inflation[p]
     shift = effect_likelihood(
         y, m, bx[e, p], bw[e, p], model.critical[p], st, g_own, g_other, other,
         model.noise_scale, extra_var, z_mean, z_var, log_lik, work,

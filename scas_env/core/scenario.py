@@ -184,6 +184,16 @@ class Scenario(Validated):
         "to datum; (1 + rho) / (1 - rho) for an error correlated rho between consecutive data "
         "(docs/beliefs.md)",
     )
+    seal_cross_variance_inflation: float = param(
+        0.0,
+        "-",
+        lo=0.0,
+        hi=1000.0,
+        source="the seal filter's own cross_variance_inflation (the factor on the variance the "
+        "spring's estimate adds to I9's and G3's likelihoods), 1-1000; 0: the same as "
+        "cross_variance_inflation. With a test before every flight the spring's data want "
+        "the factor of one-flight spacing and the seal's want 1 (docs/beliefs.md)",
+    )
     rejuvenation_steps: float = param(
         1,
         "MH steps",
@@ -206,13 +216,19 @@ class Scenario(Validated):
             value = getattr(self, name)
             if value not in allowed:
                 raise ValueError(f"Scenario.{name} = {value!r} must be one of {allowed}")
+        if 0.0 < self.seal_cross_variance_inflation < 1.0:
+            raise ValueError(
+                "Scenario.seal_cross_variance_inflation = "
+                f"{self.seal_cross_variance_inflation!r} must be 0 (the same as "
+                "cross_variance_inflation) or in [1, 1000]"
+            )
         if not (self.crack_active or self.wear_active):
             raise ValueError("Scenario: at least one of crack_active, wear_active must be 1")
         if self.rejuvenation != "none":
             r = self.rejuvenation
             if self.initial_health == "random":
                 raise ValueError(
-                    f"Scenario.rejuvenation = {r!r} needs the spring's age known to "
+                    f"Scenario.rejuvenation = {r!r} needs each part's age known to "
                     "the monitor (initial_health 'new' or 'in_service'), got initial_health = "
                     "'random'"
                 )

@@ -430,7 +430,10 @@ def _filter_model(
         ground_own=tuple(tables[f][1] for f in GROUND_FEATURES),
         ground_other=tuple(tables[f][2] for f in GROUND_FEATURES),
         move=_move_model(params, s, cal),
-        cross_inflation=float(s.cross_variance_inflation),
+        cross_inflation=(
+            float(s.cross_variance_inflation),
+            float(s.seal_cross_variance_inflation or s.cross_variance_inflation),
+        ),
     )
 
 
