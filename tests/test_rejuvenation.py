@@ -19,7 +19,6 @@ import json
 import math
 from pathlib import Path
 
-import gymnasium as gym
 import numpy as np
 import pytest
 from scipy.interpolate import RegularGridInterpolator
@@ -29,7 +28,6 @@ from experiments.belief_calibration import policy_action
 from experiments.fingerprint import episodes_digest
 from prognostics.degradation_models import inverse_damage_scalar
 from prognostics.normals import NormalStream
-from scas_env import ENV_ID
 from scas_env.core import state as state_module
 from scas_env.core.rejuvenation import (
     C_AGE,
@@ -366,35 +364,6 @@ def test_off_by_default_and_the_fingerprint_unchanged() -> None:
     committed = json.loads((ROOT / "experiments" / "fingerprint.json").read_text())
     digest = episodes_digest(seeds=(4,), preflight="every_flight", rejuvenation="none")
     assert digest == committed["every_flight"]
-
-
-def test_single_and_vector_env_agree_with_rejuvenation() -> None:
-    """One actuator of the native vector env runs the single env's episode bit for bit with
-    the option on (tests, learning, resample-moves, a replacement), and differs from the
-    episode without it."""
-    kw = {"episode_slots": 400, "n_particles": 50}
-    slots = kw["episode_slots"]
-    single = ScasMaintenanceEnv(**ON, **kw)
-    plain = ScasMaintenanceEnv(**kw)
-    vec = gym.make_vec(ENV_ID, num_envs=2, vectorization_mode="vector_entry_point", **ON, **kw)
-    o1, _ = single.reset(seed=5)
-    plain.reset(seed=5)
-    ov, _ = vec.reset(seed=[5, 4])
-    np.testing.assert_array_equal(o1, ov[0])
-    differs = False
-    for t in range(slots - 1):
-        action = 2 if t == 250 else policy_action("test10", t)
-        o1, r1, *_ = single.step(action)
-        o0, *_ = plain.step(action)
-        ov, rv, *_ = vec.step(np.array([action, 0]))
-        np.testing.assert_array_equal(o1, ov[0])
-        assert r1 == rv[0]
-        differs = differs or not np.array_equal(o1, o0)
-    assert differs
-    tally = single.batch.a["tally"][0, 0]
-    assert tally[0] > 0 and 0 < tally[1] < tally[0]
-    np.testing.assert_array_equal(single.batch.a["loglik"][0], vec.unwrapped.batch.a["loglik"][0])
-    vec.close()
 
 
 def test_history_growth_changes_no_number(monkeypatch) -> None:

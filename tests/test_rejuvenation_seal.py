@@ -356,30 +356,36 @@ def test_the_move_keeps_the_full_history_posterior(history_env) -> None:
     assert p < 1e-6
 
 
-def test_single_and_vector_env_agree_with_both_moves() -> None:
+@pytest.mark.parametrize(
+    ("option", "without", "part"),
+    [("resample_move", "none", 0), ("resample_move_both", "resample_move", SEAL)],
+)
+def test_single_and_vector_env_agree_with_the_moves(option: str, without: str, part: int) -> None:
     """One actuator of the native vector env runs the single env's episode bit for bit with
-    both filters moved (tests, learning, resample-moves, a spring and a seal replacement),
-    which differs from the spring-only move's."""
+    the option on (tests, learning, resample-moves of ``part``, a spring and a seal
+    replacement), which differs from the episode ``without`` it."""
     kw = {"episode_slots": 800, "n_particles": 50}
     slots = kw["episode_slots"]
-    single = ScasMaintenanceEnv(**BOTH, **kw)
-    spring_only = ScasMaintenanceEnv(rejuvenation="resample_move", **kw)
-    vec = gym.make_vec(ENV_ID, num_envs=2, vectorization_mode="vector_entry_point", **BOTH, **kw)
+    single = ScasMaintenanceEnv(rejuvenation=option, **kw)
+    other = ScasMaintenanceEnv(rejuvenation=without, **kw)
+    vec = gym.make_vec(
+        ENV_ID, num_envs=2, vectorization_mode="vector_entry_point", rejuvenation=option, **kw
+    )
     o1, _ = single.reset(seed=5)
-    spring_only.reset(seed=5)
+    other.reset(seed=5)
     ov, _ = vec.reset(seed=[5, 4])
     np.testing.assert_array_equal(o1, ov[0])
     differs = False
     for t in range(slots - 1):
         action = {120: 3, 500: 2}.get(t, policy_action("test10", t))
         o1, r1, *_ = single.step(action)
-        o0, *_ = spring_only.step(action)
+        o0, *_ = other.step(action)
         ov, rv, *_ = vec.step(np.array([action, 0]))
         np.testing.assert_array_equal(o1, ov[0])
         assert r1 == rv[0]
         differs = differs or not np.array_equal(o1, o0)
     assert differs
-    tally = single.batch.a["tally"][0, SEAL]
+    tally = single.batch.a["tally"][0, part]
     assert tally[0] > 0 and 0 < tally[1] < tally[0]
     for k in ("x", "log_theta", "aux", "loglik", "tally", "history_n"):
         np.testing.assert_array_equal(single.batch.a[k][0], vec.unwrapped.batch.a[k][0], err_msg=k)

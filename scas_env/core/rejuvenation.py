@@ -94,6 +94,21 @@ SET_EFFECT = -1
 _HALF_LOG_2PI = 0.5 * math.log(2.0 * math.pi)
 
 
+@njit(cache=True, inline="always")
+def _next_row(e: int, p: int, bank: tuple) -> int:
+    """The index of the row appended to row e's history of filter p (counted), or -1: the
+    history is full (marked so) or was."""
+    history, count = bank[5][0], bank[5][1]
+    q = count[e, p]
+    if q < 0:
+        return -1
+    if q >= history.shape[2]:
+        count[e, p] = -1
+        return -1
+    count[e, p] = q + 1
+    return q
+
+
 @njit(cache=True)
 def record_datum(
     e: int, p: int, table: int, k: int, y: float, m: float, j: int, tj: float,
@@ -104,14 +119,11 @@ def record_datum(
     ``loglik``. ``table``: the learning feature's index, or the number of learning features
     plus the part for a test's feature; ``k``: its installation effect's slot in ``aux``;
     ``j``, ``tj``: the other part's cell and fraction in it."""
-    history, count, clock, loglik = bank[5][0], bank[5][1], bank[5][2], bank[5][3]
+    history, clock, loglik = bank[5][0], bank[5][2], bank[5][3]
     for i in range(log_lik.size):
         loglik[e, p, i] += log_lik[i]
-    q = count[e, p]
+    q = _next_row(e, p, bank)
     if q < 0:
-        return
-    if q >= history.shape[2]:
-        count[e, p] = -1
         return
     row = history[e, p, q]
     row[H_AGE] = clock[e, p, C_AGE]
@@ -122,7 +134,6 @@ def record_datum(
     row[H_CELL] = j
     row[H_FRAC] = tj
     row[H_EXTRA] = extra_var
-    count[e, p] = q + 1
 
 
 @njit(cache=True)
@@ -132,12 +143,9 @@ def record_effect(e: int, p: int, k: int, mean: float, var: float, bank: tuple) 
     :data:`SET_EFFECT`, the mean in ``H_Y``, the variance in ``H_RUNS``): the seal's
     effects at its fitting, and N(0, 1) where a new spring pair (a new installation) is
     fitted during its life. The history is marked full if there is no room."""
-    history, count, clock = bank[5][0], bank[5][1], bank[5][2]
-    q = count[e, p]
+    history, clock = bank[5][0], bank[5][2]
+    q = _next_row(e, p, bank)
     if q < 0:
-        return
-    if q >= history.shape[2]:
-        count[e, p] = -1
         return
     row = history[e, p, q]
     row[:] = 0.0
@@ -146,7 +154,6 @@ def record_effect(e: int, p: int, k: int, mean: float, var: float, bank: tuple) 
     row[H_RUNS] = var
     row[H_TABLE] = SET_EFFECT
     row[H_AUX] = k
-    count[e, p] = q + 1
 
 
 @njit(cache=True)
