@@ -206,6 +206,16 @@ PARTS: dict[str, Callable[[], str]] = {
         seeds=(7,), filter_noise_scale=1.3, filter_growth_bias=0.9, n_particles=100
     ),
     "walk": lambda: episodes_digest(seeds=(8,), spring_theta_walk=0.007),
+    "resample_move": lambda: episodes_digest(
+        seeds=(4,), preflight="every_flight", rejuvenation="resample_move"
+    ),
+    "resample_move_both": lambda: episodes_digest(
+        seeds=(4,),
+        preflight="every_flight",
+        rejuvenation="resample_move_both",
+        cross_variance_inflation=500,
+        seal_cross_variance_inflation=1,
+    ),
     "physics": lambda: episodes_digest(seeds=(4,), steps=40, fidelity="physics"),
     "vector": vector_digest,
     "vector every_flight": lambda: vector_digest(num_envs=4, preflight="every_flight"),

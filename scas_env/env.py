@@ -224,8 +224,9 @@ class ScasMaintenanceEnv(gym.Env):
     ``rejuvenation="resample_move"`` and ``cross_variance_inflation=50`` bring the spring's
     RUL intervals to exact Bayes on the same data; with a test before every flight,
     ``rejuvenation="resample_move_both"``, ``cross_variance_inflation=500`` and
-    ``seal_cross_variance_inflation=1`` cover both parts' (0.85-0.91 per life stage; their
-    risk output is then less reliable than with the factor 50).
+    ``seal_cross_variance_inflation=1`` cover both parts' (0.85-0.91 per life stage), at a
+    cost: the risk output is less reliable than with the factor 50 and the seal's low
+    quantile is undercut 11.5 % early in its life (docs/findings.md#beliefs).
 
     ## Vectorised
 

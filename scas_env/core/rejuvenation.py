@@ -85,8 +85,8 @@ from scas_env.core.table_cells import bilinear_at, cell_of
 #: columns of a row's history
 H_AGE, H_Y, H_RUNS, H_TABLE, H_AUX, H_CELL, H_FRAC, H_EXTRA = range(8)
 HISTORY_COLUMNS = 8
-#: clock columns: the spring filter's age (flights predicted since it restarted) and the age
-#: of its latest survival conditioning
+#: clock columns, per filter: its age (flights predicted since it restarted) and the age of
+#: its latest survival conditioning
 C_AGE, C_SURVIVED = 0, 1
 #: ``H_TABLE`` of a belief row (:func:`record_effect`): no datum, the replay's belief about
 #: one installation effect set
@@ -456,6 +456,13 @@ def _gather(e: int, p: int, bank: tuple, idx: np.ndarray, buf: np.ndarray) -> No
         blw[e, p, i] = -math.log(n)
 
 
+@njit(cache=True, inline="always")
+def _unworn_damage(model: tuple) -> float:
+    """The seal's ``D`` at wear 0 (new seals start unworn)."""
+    rt = model.rul_tables[1]
+    return damage_scalar(rt[0], rt[1], rt[2], rt[3], rt[4], 0.0)
+
+
 @njit(cache=True)
 def move_particles(e: int, bank: tuple, model: tuple, factor: tuple, d: np.ndarray,
                    handle: tuple, p: int = 0) -> None:  # fmt: skip
@@ -474,9 +481,7 @@ def move_particles(e: int, bank: tuple, model: tuple, factor: tuple, d: np.ndarr
     n_aux = baux.shape[2]
     n = bx.shape[2]
     age = bank[5][2][e, p, C_AGE]
-    d0 = 0.0  # the seal's D at wear 0 (new seals start unworn)
-    if p == 1:
-        d0 = damage_scalar(grid, rate, cum, model.rul_tables[1][3], model.rul_tables[1][4], 0.0)
+    d0 = _unworn_damage(model) if p == 1 else 0.0
     prepared = prepare_history(e, bank, model, p)
     lp = np.empty(n)  # each particle's log prior
     for i in range(n):
@@ -553,8 +558,7 @@ def resample_move(ess: float, threshold_n: float, e: int, bank: tuple, work: tup
         for i in range(x.size):
             d[i] = buf[i]
     else:  # the seal's D(x(t)) = D(0) + theta t, of its lambda
-        rt = model.rul_tables[1]
-        d0 = damage_scalar(rt[0], rt[1], rt[2], rt[3], rt[4], 0.0)
+        d0 = _unworn_damage(model)
         age = bank[5][2][e, 1, C_AGE]
         for i in range(x.size):
             d[i] = d0 + math.exp(lam[i]) * age

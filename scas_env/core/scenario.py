@@ -47,8 +47,9 @@ class Scenario(Validated):
     preflight : ``"on_demand"`` (the test runs when action 1 asks for it and costs
         ``test_usd``) or ``"every_flight"`` (the paper's concept: the test runs at every
         power-up, before every flight, at no cost; action 1 then equals action 0).
-    rejuvenation : how the spring filter keeps its hold on its static parameters (initial
-        crack depth, log growth multiplier) when it resamples. ``"none"`` (the default): the
+    rejuvenation : how the filters keep their hold on their static parameters (the spring's
+        initial crack depth and log growth multiplier; the seal's log wear multiplier) when
+        they resample. ``"none"`` (the default): the
         regularised particle filter's kernel jitter (Liu & West 2001 shrinkage).
         ``"resample_move"``: resample-move (Gilks & Berzuini 2001): the spring filter's
         process is the noise-free damage integral of its growth table (the whole-flight
@@ -180,7 +181,8 @@ class Scenario(Validated):
         lo=1.0,
         hi=1000.0,
         source="factor on the variance the other part's estimate adds to each feature's "
-        "likelihood in the monitor's filters; 1: that estimate's error independent from datum "
+        "likelihood in the monitor's filters (the seal's: seal_cross_variance_inflation "
+        "unless 0); 1: that estimate's error independent from datum "
         "to datum; (1 + rho) / (1 - rho) for an error correlated rho between consecutive data "
         "(docs/beliefs.md)",
     )
@@ -191,8 +193,7 @@ class Scenario(Validated):
         hi=1000.0,
         source="the seal filter's own cross_variance_inflation (the factor on the variance the "
         "spring's estimate adds to I9's and G3's likelihoods), 1-1000; 0: the same as "
-        "cross_variance_inflation. With a test before every flight the spring's data want "
-        "the factor of one-flight spacing and the seal's want 1 (docs/beliefs.md)",
+        "cross_variance_inflation (docs/beliefs.md)",
     )
     rejuvenation_steps: float = param(
         1,
@@ -200,9 +201,9 @@ class Scenario(Validated):
         lo=1,
         hi=100,
         integer=True,
-        source="Metropolis-Hastings steps per particle after each resampling of the spring "
-        "filter (and the seal filter with 'resample_move_both'), with rejuvenation = "
-        "'resample_move' (Gilks & Berzuini 2001; docs/beliefs.md)",
+        source="Metropolis-Hastings steps per particle after each resampling of a moved "
+        "filter: the spring's with rejuvenation 'resample_move', both with "
+        "'resample_move_both' (Gilks & Berzuini 2001; docs/beliefs.md)",
     )
 
     def _check(self) -> None:
