@@ -144,6 +144,29 @@ def test_the_replay_is_the_filters_log_likelihood(history_env) -> None:
         assert np.max(np.abs(wrong - a["loglik"][0, SEAL])) > 0.1
 
 
+def test_the_replay_is_the_filters_log_likelihood_in_service() -> None:
+    """Parts in service at the start (their ages known, the filters predicted and conditioned
+    on survival from the new-part prior): the seal's replay still equals the filter's own
+    log-likelihood and beliefs, its wear ``r theta t``."""
+    env = ScasMaintenanceEnv(**BOTH, n_particles=200, initial_health="in_service")
+    env.reset(seed=5)
+    for t in range(300):
+        env.step(policy_action("test10", t))
+    a = env.batch.a
+    rows = _rows(env)
+    first = rows[np.flatnonzero(rows[:, H_TABLE] != SET_EFFECT)[0]]
+    assert first[H_AGE] > 300  # the seal flew before the episode: its first datum is that old
+    tally = a["tally"][0, SEAL]
+    assert tally[0] > 0 and 0 < tally[1] < tally[0]
+    lam = a["log_theta"][0, SEAL]
+    ll, zz = _replay(env, lam)
+    np.testing.assert_allclose(ll, a["loglik"][0, SEAL], rtol=1e-10, atol=1e-9)
+    np.testing.assert_allclose(zz, a["aux"][0, SEAL], rtol=1e-10, atol=1e-12)
+    rate = float(env.setup.filters.rul_tables[SEAL][1][0])
+    age = float(a["clock"][0, SEAL, C_AGE])
+    np.testing.assert_allclose(a["x"][0, SEAL], rate * np.exp(lam) * age, rtol=1e-12)
+
+
 def _bits(v: np.ndarray) -> np.ndarray:
     return np.ascontiguousarray(v, dtype=np.float64).view(np.int64)
 
