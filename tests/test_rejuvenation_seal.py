@@ -88,6 +88,23 @@ def _replay(env: ScasMaintenanceEnv, lam: np.ndarray, filters=None) -> tuple:
     return ll, zz
 
 
+def _assert_the_replay_is_the_filters(env: ScasMaintenanceEnv) -> np.ndarray:
+    """Moves were made, and every seal particle's log-likelihood and installation-effect
+    beliefs are its history's replay at its lambda, its wear ``r theta t``; returns the
+    lambdas."""
+    a = env.batch.a
+    tally = a["tally"][0, SEAL]
+    assert tally[0] > 0 and 0 < tally[1] < tally[0]
+    lam = a["log_theta"][0, SEAL]
+    ll, zz = _replay(env, lam)
+    np.testing.assert_allclose(ll, a["loglik"][0, SEAL], rtol=1e-10, atol=1e-9)
+    np.testing.assert_allclose(zz, a["aux"][0, SEAL], rtol=1e-10, atol=1e-12)
+    rate = float(env.setup.filters.rul_tables[SEAL][1][0])
+    age = float(a["clock"][0, SEAL, C_AGE])
+    np.testing.assert_allclose(a["x"][0, SEAL], rate * np.exp(lam) * age, rtol=1e-12)
+    return lam
+
+
 @pytest.fixture(scope="module")
 def history_env() -> ScasMaintenanceEnv:
     return _episode(N_PARTICLES)
@@ -120,16 +137,7 @@ def test_the_replay_is_the_filters_log_likelihood(history_env) -> None:
     fitting's belief rows, or with the seal starting from N(0, 1), they are not."""
     env = history_env
     a = env.batch.a
-    tally = a["tally"][0, SEAL]
-    assert tally[0] > 0 and 0 < tally[1] < tally[0]
-    lam = a["log_theta"][0, SEAL]
-    ll, zz = _replay(env, lam)
-    np.testing.assert_allclose(ll, a["loglik"][0, SEAL], rtol=1e-10, atol=1e-9)
-    np.testing.assert_allclose(zz, a["aux"][0, SEAL], rtol=1e-10, atol=1e-12)
-    # the wear the filter predicted is r theta t
-    rate = float(env.setup.filters.rul_tables[SEAL][1][0])
-    age = float(a["clock"][0, SEAL, C_AGE])
-    np.testing.assert_allclose(a["x"][0, SEAL], rate * np.exp(lam) * age, rtol=1e-12)
+    lam = _assert_the_replay_is_the_filters(env)
     rows = _rows(env)
     belief = np.flatnonzero(rows[:, H_TABLE] == SET_EFFECT)
     history, n = a["history"], a["history_n"]
@@ -152,19 +160,10 @@ def test_the_replay_is_the_filters_log_likelihood_in_service() -> None:
     env.reset(seed=5)
     for t in range(300):
         env.step(policy_action("test10", t))
-    a = env.batch.a
     rows = _rows(env)
     first = rows[np.flatnonzero(rows[:, H_TABLE] != SET_EFFECT)[0]]
     assert first[H_AGE] > 300  # the seal flew before the episode: its first datum is that old
-    tally = a["tally"][0, SEAL]
-    assert tally[0] > 0 and 0 < tally[1] < tally[0]
-    lam = a["log_theta"][0, SEAL]
-    ll, zz = _replay(env, lam)
-    np.testing.assert_allclose(ll, a["loglik"][0, SEAL], rtol=1e-10, atol=1e-9)
-    np.testing.assert_allclose(zz, a["aux"][0, SEAL], rtol=1e-10, atol=1e-12)
-    rate = float(env.setup.filters.rul_tables[SEAL][1][0])
-    age = float(a["clock"][0, SEAL, C_AGE])
-    np.testing.assert_allclose(a["x"][0, SEAL], rate * np.exp(lam) * age, rtol=1e-12)
+    _assert_the_replay_is_the_filters(env)
 
 
 def _bits(v: np.ndarray) -> np.ndarray:
