@@ -182,7 +182,9 @@ def _moved(env: ScasMaintenanceEnv, d: np.ndarray, seed: int, filters=None) -> n
     """``SWEEPS`` Metropolis-Hastings steps of every particle of row 0 (proposal from the
     cloud, draws from a stream of ``seed``); returns the particles' a0."""
     st, a, bank = env.setup, env.batch.a, env.batch.bank
-    filt = (filters or st.filters)._replace(move=(True, SWEEPS, *st.filters.move[2:]))
+    filt = (filters or st.filters)._replace(
+        move=st.filters.move._replace(spring=True, steps=SWEEPS)
+    )
     x, lam = a["x"][0, 0], a["log_theta"][0, 0]
     factor = proposal_factor(x, lam, a["w"][0, 0], filt, np.empty(x.size))
     stream = NormalStream(np.random.default_rng(seed))
@@ -272,7 +274,7 @@ def test_the_move_is_the_per_proposal_algorithm_bit_for_bit() -> None:
     computed afresh at every step), leaves them with the same draws."""
     env = _env_with_history(150, n_particles=60)
     a, bank, st = env.batch.a, env.batch.bank, env.setup
-    filt = st.filters._replace(move=(True, 3, *st.filters.move[2:]))
+    filt = st.filters._replace(move=st.filters.move._replace(spring=True, steps=3))
     keys = ("x", "log_theta", "aux", "loglik", "tally")
     start = {k: a[k].copy() for k in keys}
     x0 = a["x"][0, 0]
@@ -356,7 +358,7 @@ def test_off_by_default_and_the_fingerprint_unchanged() -> None:
     assert Scenario().rejuvenation == "none"
     off = ScasMaintenanceEnv()
     assert off.batch.a["history"].shape[2] == 0
-    assert off.setup.filters.move[0] is False
+    assert off.setup.filters.move.spring is False
     assert off.setup.spring_process.damage_noise_cv > 0.0
     on = ScasMaintenanceEnv(**ON)
     assert on.setup.spring_process.damage_noise_cv == 0.0

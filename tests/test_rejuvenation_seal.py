@@ -208,7 +208,7 @@ def _moved(env: ScasMaintenanceEnv, lam: np.ndarray, seed: int, filters=None) ->
     (proposal sd from the cloud, draws from a stream of ``seed``); returns lambda after."""
     st, a, bank = env.setup, env.batch.a, env.batch.bank
     filt = filters or st.filters
-    filt = filt._replace(move=(*filt.move[:1], SWEEPS, *filt.move[2:]))
+    filt = filt._replace(move=filt.move._replace(steps=SWEEPS))
     d = _set_cloud(env, lam, filt)
     sd = proposal_sd(a["log_theta"][0, SEAL], a["w"][0, SEAL], filt)
     stream = NormalStream(np.random.default_rng(seed))
@@ -226,13 +226,11 @@ def test_the_move_keeps_the_prior() -> None:
     env = ScasMaintenanceEnv(**BOTH, n_particles=N_PARTICLES)
     env.reset(seed=0)
     a = env.batch.a
-    s = float(env.setup.filters.move[8])
+    s = float(env.setup.filters.move.seal_lam_sd)
     assert s == env.setup.params.uncertainty.wear_rate_log_sigma
     results = {}
-    for label, filt in (("right", None),
-                        ("wrong", env.setup.filters._replace(
-                            move=(*env.setup.filters.move[:8], 1.5 * s,
-                                  *env.setup.filters.move[9:])))):  # fmt: skip
+    wide = env.setup.filters.move._replace(seal_lam_sd=1.5 * s)
+    for label, filt in (("right", None), ("wrong", env.setup.filters._replace(move=wide))):
         a["history_n"][0, SEAL] = 0
         a["clock"][0, SEAL] = (500.0, 0.0)
         lam = np.random.default_rng(2).normal(0.0, s, N_PARTICLES)
@@ -251,7 +249,7 @@ def test_the_move_keeps_the_prior_truncated_by_survival() -> None:
     env = ScasMaintenanceEnv(**BOTH, n_particles=N_PARTICLES)
     env.reset(seed=0)
     a, filt = env.batch.a, env.setup.filters
-    s = float(filt.move[8])
+    s = float(filt.move.seal_lam_sd)
     c = 0.5 * s
     rate, critical = float(filt.rul_tables[SEAL][1][0]), float(filt.critical[SEAL])
     t = critical / (rate * math.exp(c))
@@ -431,8 +429,8 @@ def test_the_seal_process_is_static_and_the_spring_only_move_unchanged() -> None
     spring = ScasMaintenanceEnv(rejuvenation="resample_move")
     assert both.setup.seal_process.damage_noise_cv == 0.0
     assert spring.setup.seal_process.damage_noise_cv > 0.0
-    assert both.setup.filters.move[7] is True and spring.setup.filters.move[7] is False
-    assert both.setup.filters.move[:7] == spring.setup.filters.move[:7]
+    assert both.setup.filters.move.seal is True and spring.setup.filters.move.seal is False
+    assert both.setup.filters.move._replace(seal=False) == spring.setup.filters.move
 
 
 @pytest.mark.parametrize(
@@ -492,8 +490,7 @@ def test_the_move_is_the_per_proposal_algorithm_bit_for_bit() -> None:
     particle's log prior computed afresh) leaves them with the same draws."""
     env = _episode(60, slots=150)
     a, bank, st = env.batch.a, env.batch.bank, env.setup
-    m = st.filters.move
-    filt = st.filters._replace(move=(m[0], 3, *m[2:]))
+    filt = st.filters._replace(move=st.filters.move._replace(steps=3))
     keys = ("x", "log_theta", "aux", "loglik", "tally")
     start = {k: a[k].copy() for k in keys}
     grid, rate, cum, cells, inv_cell = filt.rul_tables[SEAL][:5]

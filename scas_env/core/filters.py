@@ -49,7 +49,13 @@ from prognostics.particle_filter import (
     resample_if_degenerate,
 )
 from prognostics.rul_ageing import _build, _build_from_cloud
-from scas_env.core.rejuvenation import C_AGE, C_SURVIVED, record_datum, resample_move
+from scas_env.core.rejuvenation import (
+    C_AGE,
+    C_SURVIVED,
+    MoveModel,
+    record_datum,
+    resample_move,
+)
 from scas_env.core.table_cells import bilinear_at, cell_of
 
 #: Step (fraction of critical) of the central differences of the surrogate's mean curves.
@@ -78,12 +84,9 @@ class FilterModel(NamedTuple):
     ``learn_stack``, ``learn_own``, ``learn_other``: its surrogate (mean, unit std, run std)
     tables with the own part's severity on axis 1 and their grids (fractions);
     ``ground_*``: the same for G1 (spring) and G3 (seal); ``resample``: (threshold N_eff,
-    bandwidth h, kernel variance kappa, gaussian kernel, shrink); ``move``: the spring
-    filter's resample-move (:mod:`scas_env.core.rejuvenation`): (on, Metropolis-Hastings
-    steps per particle, the prior's initial crack depth mean, sd and upper bound (m), the
-    prior sd of log theta, the random-walk scale), then the seal filter's: (on, the prior
-    sd of its log theta, its random-walk scale); ``cross_inflation``: the factor on the
-    variance the other part's estimate adds to a feature's likelihood, per
+    bandwidth h, kernel variance kappa, gaussian kernel, shrink); ``move``: the filters'
+    resample-move (:class:`scas_env.core.rejuvenation.MoveModel`); ``cross_inflation``: the
+    factor on the variance the other part's estimate adds to a feature's likelihood, per
     filter (``Scenario.cross_variance_inflation``, ``seal_cross_variance_inflation``).
     """
 
@@ -104,7 +107,7 @@ class FilterModel(NamedTuple):
     ground_stack: tuple
     ground_own: tuple
     ground_other: tuple
-    move: tuple
+    move: MoveModel
     cross_inflation: tuple
 
 
@@ -186,7 +189,7 @@ def _moves(p: int, model: FilterModel) -> bool:
     """Whether filter p keeps a history and resamples by resample-move: the spring's with
     ``Scenario.rejuvenation`` "resample_move" or "resample_move_both", the seal's with
     "resample_move_both"."""
-    return model.move[0] if p == 0 else model.move[7]
+    return model.move.spring if p == 0 else model.move.seal
 
 
 @njit(cache=True, inline="always")

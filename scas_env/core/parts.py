@@ -387,7 +387,7 @@ def reset_filter(batch: ActuatorState, e: int, part: str) -> None:
         a["aux"][e, :, 0::2] = 0.0
         a["aux"][e, :, 1::2] = 1.0
         restart(e, batch.bank)
-        if st.filters.move[7]:  # the seal's installation effects, from here on
+        if st.filters.move.seal:  # the seal's installation effects, from here on
             _record_seal_effects(batch, e)
     else:
         w = a["w"][e, 1]
@@ -399,7 +399,7 @@ def reset_filter(batch: ActuatorState, e: int, part: str) -> None:
         for j, (mean, var) in enumerate(kept):
             a["aux"][e, 1, 2 * j] = mean
             a["aux"][e, 1, 2 * j + 1] = var
-        if st.filters.move[7]:
+        if st.filters.move.seal:
             restart(e, batch.bank, 1)
             _record_seal_effects(batch, e)
     a["det_n"][e, p] = 0

@@ -67,6 +67,7 @@ each proposal's terms summed in the history's order as before.
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 from numba import njit
@@ -88,6 +89,27 @@ HISTORY_COLUMNS = 8
 #: clock columns, per filter: its age (flights predicted since it restarted) and the age of
 #: its latest survival conditioning
 C_AGE, C_SURVIVED = 0, 1
+
+
+class MoveModel(NamedTuple):
+    """``FilterModel.move``: which filters move and the constants of their moves."""
+
+    #: whether the spring filter's parameters are moved; Metropolis-Hastings steps per particle
+    spring: bool
+    steps: int
+    #: the spring prior's initial crack depth: mean, sd, upper bound (m); its log theta's sd
+    a0_mean: float
+    a0_sd: float
+    a0_hi: float
+    spring_lam_sd: float
+    #: the spring's 2-D random-walk scale (2.38 / sqrt 2)
+    spring_scale: float
+    #: whether the seal filter's log theta is moved; its prior sd; its 1-D scale (2.38)
+    seal: bool
+    seal_lam_sd: float
+    seal_scale: float
+
+
 #: ``H_TABLE`` of a belief row (:func:`record_effect`): no datum, the replay's belief about
 #: one installation effect set
 SET_EFFECT = -1
@@ -170,9 +192,10 @@ def log_prior(d: float, lam: float, e: int, bank: tuple, model: tuple, p: int = 
         )
         if not worn < model.critical[1]:
             return -np.inf
-        zs = lam / model.move[8]
+        zs = lam / model.move.seal_lam_sd
         return -0.5 * zs * zs
-    a0_mean, a0_sd, a0_hi, lam_sd = model.move[2], model.move[3], model.move[4], model.move[5]
+    mv = model.move
+    a0_mean, a0_sd, a0_hi, lam_sd = mv.a0_mean, mv.a0_sd, mv.a0_hi, mv.spring_lam_sd
     grid, rate, cum, cells, inv_cell = model.rul_tables[0]
     age = clock[e, 0, C_AGE]
     a0 = inverse_damage_scalar(grid, rate, cum, d - theta * age)
@@ -398,7 +421,7 @@ def proposal_factor(x: np.ndarray, lam: np.ndarray, w: np.ndarray, model: tuple,
     weighted cloud's covariance of ``(D(x), lambda)`` times the squared scale; ``d``
     receives ``D(x)`` (scratch of N)."""
     grid, rate, cum, cells, inv_cell = model.rul_tables[0]
-    scale = model.move[6]
+    scale = model.move.spring_scale
     m1 = 0.0
     m2 = 0.0
     for i in range(x.size):
@@ -431,7 +454,7 @@ def proposal_sd(lam: np.ndarray, w: np.ndarray, model: tuple) -> float:
     for i in range(lam.size):
         dl = lam[i] - m
         s += w[i] * dl * dl
-    return model.move[9] * math.sqrt(s)
+    return model.move.seal_scale * math.sqrt(s)
 
 
 @njit(cache=True)
@@ -477,7 +500,7 @@ def move_particles(e: int, bank: tuple, model: tuple, factor: tuple, d: np.ndarr
     loglik, tally = bank[5][3], bank[5][4]
     grid, rate, cum = model.rul_tables[p][0], model.rul_tables[p][1], model.rul_tables[p][2]
     l11, l21, l22 = factor
-    steps = model.move[1]
+    steps = model.move.steps
     n_aux = baux.shape[2]
     n = bx.shape[2]
     age = bank[5][2][e, p, C_AGE]
@@ -578,6 +601,7 @@ def restart(e: int, bank: tuple, p: int = 0) -> None:
 __all__ = [
     "HISTORY_COLUMNS",
     "SET_EFFECT",
+    "MoveModel",
     "history_loglik",
     "log_prior",
     "move_particles",

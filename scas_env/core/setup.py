@@ -50,6 +50,7 @@ from scas_env.core.acceptance import AirworthinessLimits
 from scas_env.core.costs import CostModel
 from scas_env.core.filters import FilterModel
 from scas_env.core.mismatch import SENSING_FIELDS, Mismatch
+from scas_env.core.rejuvenation import MoveModel
 from scas_env.core.scenario import Scenario
 
 #: the two replaceable parts, in column order of every (n, 2) array
@@ -448,22 +449,20 @@ _RW_SCALE_1D = 2.38
 MOVES = ("resample_move", "resample_move_both")
 
 
-def _move_model(params: ScasParams, s: Scenario, cal: Calibration) -> tuple:
-    """:attr:`FilterModel.move`: (on, steps, prior mean, sd and upper bound of the initial
-    crack depth (m), prior sd of log theta, random-walk scale) of the spring filter, then
-    (on, prior sd of log theta, random-walk scale) of the seal filter."""
+def _move_model(params: ScasParams, s: Scenario, cal: Calibration) -> MoveModel:
+    """:attr:`FilterModel.move` (:class:`~scas_env.core.rejuvenation.MoveModel`)."""
     unc = params.uncertainty
-    return (
-        s.rejuvenation in MOVES,
-        int(s.rejuvenation_steps),
-        float(params.spring.initial_crack_m),
-        float(unc.initial_crack_sigma_m),
-        float(cal.spring_failure_depth_m),
-        lognormal_sigma(params, "spring"),
-        _RW_SCALE,
-        s.rejuvenation == "resample_move_both",
-        lognormal_sigma(params, "seal"),
-        _RW_SCALE_1D,
+    return MoveModel(
+        spring=s.rejuvenation in MOVES,
+        steps=int(s.rejuvenation_steps),
+        a0_mean=float(params.spring.initial_crack_m),
+        a0_sd=float(unc.initial_crack_sigma_m),
+        a0_hi=float(cal.spring_failure_depth_m),
+        spring_lam_sd=lognormal_sigma(params, "spring"),
+        spring_scale=_RW_SCALE,
+        seal=s.rejuvenation == "resample_move_both",
+        seal_lam_sd=lognormal_sigma(params, "seal"),
+        seal_scale=_RW_SCALE_1D,
     )
 
 
