@@ -26,7 +26,6 @@ from scipy.stats import kstest, multivariate_normal, norm, truncnorm
 
 from experiments.belief_calibration import policy_action
 from experiments.fingerprint import episodes_digest
-from prognostics.degradation_models import inverse_damage_scalar
 from prognostics.normals import NormalStream
 from scas_env.core import state as state_module
 from scas_env.core.rejuvenation import (
@@ -40,7 +39,6 @@ from scas_env.core.rejuvenation import (
     H_TABLE,
     H_Y,
     history_loglik,
-    log_prior,
     move_particles,
     prepare_history,
     proposal_factor,
@@ -48,6 +46,7 @@ from scas_env.core.rejuvenation import (
 )
 from scas_env.core.scenario import Scenario
 from scas_env.env import ScasMaintenanceEnv
+from tests.rejuvenation_reference import assert_the_move_is_per_proposal
 
 ROOT = Path(__file__).resolve().parents[1]
 ON = {"rejuvenation": "resample_move"}
@@ -268,53 +267,20 @@ def test_the_batched_replay_is_the_reference_bit_for_bit(history_env) -> None:
 
 
 def test_the_move_is_the_per_proposal_algorithm_bit_for_bit() -> None:
-    """Three steps of :func:`move_particles` leave the cloud, its log-likelihoods, beliefs
-    and tally bit for bit where the algorithm of the module docstring, written out per
-    proposal (each proposal's history replayed alone, the current particle's log prior
-    computed afresh at every step), leaves them with the same draws."""
+    """Three steps of :func:`move_particles` are the algorithm of the module docstring
+    written out per proposal (two normals and a uniform per particle), bit for bit."""
     env = _env_with_history(150, n_particles=60)
-    a, bank, st = env.batch.a, env.batch.bank, env.setup
+    a, st = env.batch.a, env.setup
     filt = st.filters._replace(move=st.filters.move._replace(spring=True, steps=3))
-    keys = ("x", "log_theta", "aux", "loglik", "tally")
-    start = {k: a[k].copy() for k in keys}
     x0 = a["x"][0, 0]
-    d0 = st.spring_process.damage(x0)
     factor = proposal_factor(x0, a["log_theta"][0, 0], a["w"][0, 0], filt, np.empty(x0.size))
-    d = d0.copy()
-    stream = NormalStream(np.random.default_rng(8))  # alive while the kernel draws
-    move_particles(0, bank, filt, factor, d, stream.handle)
-    kernel = {k: a[k].copy() for k in keys}
-    for k in keys:
-        a[k][...] = start[k]
-    x, lt, aux = a["x"][0, 0], a["log_theta"][0, 0], a["aux"][0, 0]
-    loglik, tally = a["loglik"][0, 0], a["tally"][0, 0]
-    grid, rate, cum = filt.rul_tables[0][:3]
-    rng = np.random.default_rng(8)
-    z = np.empty(aux.shape[0])
-    ref_d = d0.copy()
-    for _ in range(3):
-        for i in range(x.size):
-            e1, e2, u = rng.standard_normal(), rng.standard_normal(), rng.random()
-            d_new = ref_d[i] + factor[0] * e1
-            lam_new = lt[i] + (factor[1] * e1 + factor[2] * e2)
-            tally[0] += 1
-            lp_new = log_prior(d_new, lam_new, 0, bank, filt)
-            if lp_new == -np.inf:
-                continue
-            ll_new = history_loglik(d_new, lam_new, 0, bank, filt, z)
-            lp_now = log_prior(ref_d[i], lt[i], 0, bank, filt)
-            if not (math.log(u) < (lp_new + ll_new) - (lp_now + loglik[i])):
-                continue
-            tally[1] += 1
-            ref_d[i], lt[i], loglik[i] = d_new, lam_new, ll_new
-            x[i] = inverse_damage_scalar(grid, rate, cum, d_new)
-            aux[:, i] = z
-    moved = tally - start["tally"][0, 0]
-    assert moved[0] == 3 * x.size and 0 < moved[1] < moved[0]
-    for k in keys:
-        bits = _bits if a[k].dtype == np.float64 else np.asarray
-        np.testing.assert_array_equal(bits(a[k]), bits(kernel[k]), err_msg=k)
-    np.testing.assert_array_equal(_bits(d), _bits(ref_d))
+
+    def propose(rng: np.random.Generator, d: float, lam: float) -> tuple[float, float, float]:
+        e1, e2, u = rng.standard_normal(), rng.standard_normal(), rng.random()
+        return d + factor[0] * e1, lam + (factor[1] * e1 + factor[2] * e2), u
+
+    d0 = st.spring_process.damage(x0)
+    assert_the_move_is_per_proposal(env, filt, 0, d0, factor, propose)
 
 
 def test_the_move_keeps_the_prior() -> None:

@@ -25,7 +25,7 @@ from scipy.interpolate import RegularGridInterpolator
 from scipy.stats import kstest, norm, truncnorm
 
 from experiments.belief_calibration import policy_action
-from prognostics.degradation_models import damage_scalar, inverse_damage_scalar
+from prognostics.degradation_models import damage_scalar
 from prognostics.normals import NormalStream
 from scas_env import ENV_ID
 from scas_env.core import state as state_module
@@ -42,7 +42,6 @@ from scas_env.core.rejuvenation import (
     H_Y,
     SET_EFFECT,
     history_loglik,
-    log_prior,
     move_particles,
     prepare_history,
     proposal_sd,
@@ -50,6 +49,7 @@ from scas_env.core.rejuvenation import (
 )
 from scas_env.core.scenario import Scenario
 from scas_env.env import ScasMaintenanceEnv
+from tests.rejuvenation_reference import assert_the_move_is_per_proposal
 
 BOTH = {"rejuvenation": "resample_move_both"}
 SEAL = 1
@@ -484,52 +484,20 @@ def test_the_seals_own_inflation_multiplies_only_its_filters_cross_variance() ->
 
 
 def test_the_move_is_the_per_proposal_algorithm_bit_for_bit() -> None:
-    """Three steps of :func:`move_particles` for the seal leave its cloud, log-likelihoods,
-    beliefs and tally bit for bit where the 1-D algorithm written out per proposal (one
-    normal and a uniform per particle, each proposal's history replayed alone, the current
-    particle's log prior computed afresh) leaves them with the same draws."""
+    """Three steps of :func:`move_particles` for the seal are the 1-D algorithm written out
+    per proposal (one normal and a uniform per particle), bit for bit."""
     env = _episode(60, slots=150)
-    a, bank, st = env.batch.a, env.batch.bank, env.setup
+    a, st = env.batch.a, env.setup
     filt = st.filters._replace(move=st.filters.move._replace(steps=3))
-    keys = ("x", "log_theta", "aux", "loglik", "tally")
-    start = {k: a[k].copy() for k in keys}
     grid, rate, cum, cells, inv_cell = filt.rul_tables[SEAL][:5]
     d_unworn = damage_scalar(grid, rate, cum, cells, inv_cell, 0.0)
     age = float(a["clock"][0, SEAL, C_AGE])
-    lt0 = a["log_theta"][0, SEAL].copy()
-    d0 = d_unworn + np.exp(lt0) * age
-    sd = proposal_sd(lt0, a["w"][0, SEAL], filt)
-    d = d0.copy()
-    stream = NormalStream(np.random.default_rng(8))  # alive while the kernel draws
-    move_particles(0, bank, filt, (sd, 0.0, 0.0), d, stream.handle, SEAL)
-    kernel = {k: a[k].copy() for k in keys}
-    for k in keys:
-        a[k][...] = start[k]
-    x, lt, aux = a["x"][0, SEAL], a["log_theta"][0, SEAL], a["aux"][0, SEAL]
-    loglik, tally = a["loglik"][0, SEAL], a["tally"][0, SEAL]
-    rng = np.random.default_rng(8)
-    z = np.empty(aux.shape[0])
-    ref_d = d0.copy()
-    for _ in range(3):
-        for i in range(x.size):
-            e1, u = rng.standard_normal(), rng.random()
-            lam_new = lt[i] + sd * e1
-            d_new = d_unworn + math.exp(lam_new) * age
-            tally[0] += 1
-            lp_new = log_prior(d_new, lam_new, 0, bank, filt, SEAL)
-            if lp_new == -np.inf:
-                continue
-            ll_new = history_loglik(d_new, lam_new, 0, bank, filt, z, SEAL)
-            lp_now = log_prior(ref_d[i], lt[i], 0, bank, filt, SEAL)
-            if not (math.log(u) < (lp_new + ll_new) - (lp_now + loglik[i])):
-                continue
-            tally[1] += 1
-            ref_d[i], lt[i], loglik[i] = d_new, lam_new, ll_new
-            x[i] = inverse_damage_scalar(grid, rate, cum, d_new)
-            aux[:, i] = z
-    moved = tally - start["tally"][0, SEAL]
-    assert moved[0] == 3 * x.size and 0 < moved[1] < moved[0]
-    for k in keys:
-        bits = _bits if a[k].dtype == np.float64 else np.asarray
-        np.testing.assert_array_equal(bits(a[k]), bits(kernel[k]), err_msg=k)
-    np.testing.assert_array_equal(_bits(d), _bits(ref_d))
+    sd = proposal_sd(a["log_theta"][0, SEAL], a["w"][0, SEAL], filt)
+
+    def propose(rng: np.random.Generator, d: float, lam: float) -> tuple[float, float, float]:
+        e1, u = rng.standard_normal(), rng.random()
+        lam_new = lam + sd * e1
+        return d_unworn + math.exp(lam_new) * age, lam_new, u
+
+    d0 = d_unworn + np.exp(a["log_theta"][0, SEAL]) * age
+    assert_the_move_is_per_proposal(env, filt, SEAL, d0, (sd, 0.0, 0.0), propose)
