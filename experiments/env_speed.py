@@ -9,14 +9,15 @@
   trained policy's mix (90 % fly, 9 % test, 1 % replace: the shipped agent's actions on
   v2) and flying only, beside CartPole's own native vector env at 64;
 * **the filter arithmetic's ceiling** under that mix: the env-steps per second the vector env
-  would reach if only the particle-filter updates cost time. The updates of the mix are
-  counted (tests; learning updates, one per ``flight_update_flights`` flights) and each
-  kind is timed alone on the same batch (a jitted loop of the kernels, the cloud's RUL
-  tables rebuilt as the env does); ceiling = env-steps / (tests x t_test + learns x t_learn);
-  and what a step costs besides them when flying alone (the flight's degradation and
-  feature draws, the observation, the info: the flying step's time less its learning
-  updates), so the share of the ceiling a mix that also flies can reach at most:
-  t_filters / (t_filters + t_flight);
+  would reach if only the particle-filter updates cost time. The updates are counted in an
+  untimed replay of the same actions (:func:`count_updates`: test updates; learning
+  updates, a full batch of ``flight_update_flights`` flights or the part batch a test or a
+  fitting learns first; RUL-table rebuilds, one per row whose clouds changed) and each kind
+  is timed alone on the same batch (jitted loops of the kernels); ceiling = env-steps /
+  (tests x t_test + learns x t_learn + rebuilds x t_rebuild); and what a step costs besides
+  them when flying alone (the flight's degradation and feature draws, the observation, the
+  info: the flying step's time less its updates), so the share of the ceiling a mix that
+  also flies can reach at most: t_filters / (t_filters + t_flight);
 * **the fleet** (``ScasFleet-v0``, 8 aircraft x 3 actuators, the naive rule at its defaults):
   actuator-flights per second and seconds per 365-day episode, beside the vector env's
   actuator-steps per second (the issue's target: the fleet flies at least half as many
@@ -107,37 +108,27 @@ def vector_rates(num_envs: int = 64, steps: int = 600, **fields: Any) -> dict[st
     CartPole's native vector env, and the filter updates of the mix (counts and the
     ceiling, module docstring); ``fields``: Scenario fields over the defaults."""
     rng = np.random.default_rng(0)
-    mix = rng.choice(4, size=(steps * 4, num_envs), p=MIX)
-    venv = gym.make_vec(
-        scas_env.ENV_ID, num_envs=num_envs, vectorization_mode="vector_entry_point", **fields
-    )
-    venv.reset(seed=0)
-    for t in range(100):
-        venv.step(mix[t])
-    start = {"k": 100}
+    mix = rng.choice(4, size=(100 + steps * 3, num_envs), p=MIX)
+    fly = np.zeros_like(mix)
 
-    def run(actions: np.ndarray) -> float:
-        def go() -> None:
-            for a in actions:
-                venv.step(a)
+    def make() -> Any:
+        return gym.make_vec(scas_env.ENV_ID, num_envs=num_envs,
+                            vectorization_mode="vector_entry_point", **fields)  # fmt: skip
 
-        return num_envs * len(actions) / _cpu(go)
+    def rate(actions: np.ndarray) -> float:
+        """The best of three runs of ``actions[100:]`` in thirds after ``actions[:100]``."""
+        venv = make()
+        venv.reset(seed=0)
+        for a in actions[:100]:
+            venv.step(a)
 
-    def run_mix() -> float:
-        k = start["k"]
-        start["k"] += steps
-        return run(mix[k : k + steps])
+        def go(part: np.ndarray) -> float:
+            return num_envs * len(part) / _cpu(lambda: [venv.step(a) for a in part])
 
-    a = venv.unwrapped.a if hasattr(venv, "unwrapped") else venv.a
-    tests0, flown0 = int(a["tests"].sum()), int(a["flown"].sum())
-    slots0 = int(a["slot"].sum())
-    mix_rate = max(run_mix() for _ in range(3))
-    tests = int(a["tests"].sum()) - tests0
-    flights = int(a["flown"].sum()) - flown0
-    slots = int(a["slot"].sum()) - slots0
-    flown1, slots1 = int(a["flown"].sum()), int(a["slot"].sum())
-    fly_rate = max(run(np.zeros((steps, num_envs), dtype=np.int64)) for _ in range(3))
-    fly_learns = (int(a["flown"].sum()) - flown1) / (int(a["slot"].sum()) - slots1)
+        return max(go(part) for part in np.array_split(actions[100:], 3))
+
+    mix_rate, fly_rate = rate(mix), rate(fly)
+    n_mix, n_fly = count_updates(make(), mix), count_updates(make(), fly)
     cart = gym.make_vec("CartPole-v1", num_envs=num_envs, vectorization_mode="vector_entry_point")
     cart.reset(seed=0)
     zeros = np.zeros(num_envs, dtype=np.int64)
@@ -145,20 +136,23 @@ def vector_rates(num_envs: int = 64, steps: int = 600, **fields: Any) -> dict[st
     def cart_rate() -> float:
         return num_envs * steps / _cpu(lambda: [cart.step(zeros) for _ in range(steps)])
 
-    interval = int(venv.unwrapped.setup.scenario.flight_update_flights)
-    learns = flights / interval
-    t_test, t_learn = update_costs(venv.unwrapped)
-    ceiling = slots / (tests * t_test + learns * t_learn)
-    # flying alone, less its learning updates: the flight, observation and info of a step
-    fly_other = 1.0 / fly_rate - fly_learns / interval * t_learn
+    costs = update_costs(make())
+
+    def filter_time(n: dict[str, float]) -> float:
+        return sum(n[k] * costs[k] for k in costs)
+
+    ceiling = 1.0 / filter_time(n_mix)
+    fly_other = 1.0 / fly_rate - filter_time(n_fly)  # the flight, observation and info
     return {
         "mix_steps_per_s": mix_rate,
         "fly_steps_per_s": fly_rate,
         "cartpole_vector_steps_per_s": max(cart_rate() for _ in range(3)),
-        "tests_per_step": tests / slots,
-        "learns_per_step": learns / slots,
-        "test_update_us": t_test * 1e6,
-        "learn_update_us": t_learn * 1e6,
+        "tests_per_step": n_mix["test"],
+        "learns_per_step": n_mix["learn"],
+        "rebuilds_per_step": n_mix["rebuild"],
+        "test_update_us": costs["test"] * 1e6,
+        "learn_update_us": costs["learn"] * 1e6,
+        "rebuild_us": costs["rebuild"] * 1e6,
         "filter_ceiling_steps_per_s": ceiling,
         "share_of_ceiling": mix_rate / ceiling,
         "fly_other_us": fly_other * 1e6,
@@ -166,9 +160,53 @@ def vector_rates(num_envs: int = 64, steps: int = 600, **fields: Any) -> dict[st
     }
 
 
+def count_updates(venv: Any, actions: np.ndarray) -> dict[str, float]:
+    """Filter updates per env-step of ``actions[100:]`` after ``actions[:100]`` in ``venv``
+    from ``reset(seed=0)``, read off each row's state around each step (the env is
+    deterministic: the timed runs made the same): a test update per test; a learning update
+    for the batch under way before a test or a fitting (a replacement or a failure) and for
+    each full batch; a RUL-table rebuild per row flagged stale when the observation is made.
+    Each row's batch count is followed through the step and must land on the env's (an
+    ``AssertionError`` otherwise: the rules above missed an update)."""
+    env = venv.unwrapped
+    a, interval = env.a, int(env.setup.scenario.flight_update_flights)
+    env.reset(seed=0)
+    total = {"test": 0, "learn": 0, "rebuild": 0}
+    for t, act in enumerate(actions):
+        counted = t >= 100
+        moving = ~env._autoreset
+        before = {k: a[k].copy() for k in ("flight_count", "tests", "flown", "failures")}
+        env.step_active(act, None, outputs=False)
+        if counted:
+            total["rebuild"] += int(a["stale"].sum())
+        env.observe()
+        tested = (a["tests"] - before["tests"])[moving]
+        flew = (a["flown"] - before["flown"])[moving]
+        failed = (a["failures"] - before["failures"]).sum(axis=1)[moving] > 0
+        refit = (act[moving] >= 2) | failed
+        count = before["flight_count"][moving].copy()
+        learns = np.zeros(count.size, dtype=np.int64)
+        first = (tested > 0) & (count > 0)  # a test learns the batch under way first
+        learns += first
+        count[tested > 0] = 0
+        count += flew
+        full = count >= interval
+        learns += full
+        count[full] = 0
+        fitting = refit & (count > 0)  # a fitting learns it too
+        learns += fitting
+        count[refit] = 0
+        assert np.array_equal(count, a["flight_count"][moving]), "an update was missed"
+        if counted:
+            total["test"] += int(tested.sum())
+            total["learn"] += int(learns.sum())
+    steps = (len(actions) - 100) * env.num_envs
+    return {k: v / steps for k, v in total.items()}
+
+
 @njit(cache=True)
-def _time_learn(rows, bank, pending, flight_sum, flight_count, usage, status, tables,
-                filt, handles, interval, means):  # fmt: skip
+def _time_learn(rows, bank, pending, flight_sum, flight_count, usage, status, filt, handles,
+                interval, means):  # fmt: skip
     work = work_arrays(bank[0].shape[2], flight_sum.shape[1])
     for e in rows:
         flight_count[e] = interval
@@ -180,12 +218,11 @@ def _time_learn(rows, bank, pending, flight_sum, flight_count, usage, status, ta
             flight_sum[e, j] = means[e, j] * interval
         h = (handles[e, 0], handles[e, 1], handles[e, 2])
         learn_row(e, bank, pending, flight_sum, flight_count, usage, status, work, filt, h)
-        refresh_row(e, bank, tables, status, work, filt)
 
 
 @njit(cache=True)
-def _time_test(rows, bank, pending, flight_sum, flight_count, usage, status, tables, filt,
-               handles, ground):  # fmt: skip
+def _time_test(rows, bank, pending, flight_sum, flight_count, usage, status, filt, handles,
+               ground):  # fmt: skip
     work = work_arrays(bank[0].shape[2], flight_sum.shape[1])
     for e in rows:
         flight_count[e] = 0
@@ -194,30 +231,44 @@ def _time_test(rows, bank, pending, flight_sum, flight_count, usage, status, tab
         h = (handles[e, 0], handles[e, 1], handles[e, 2])
         test_row(e, ground[e, 0], ground[e, 1], bank, pending, flight_sum, flight_count, usage,
                  status, work, filt, h)  # fmt: skip
+
+
+@njit(cache=True)
+def _time_rebuild(rows, bank, tables, status, filt):  # fmt: skip
+    work = work_arrays(bank[0].shape[2], filt.learn_part.size)
+    for e in rows:
         refresh_row(e, bank, tables, status, work, filt)
 
 
-def update_costs(venv: Any, repeats: int = 20) -> tuple[float, float]:
-    """CPU seconds of one test update and one learning update (each with the RUL tables'
-    rebuild) on a copy of the vector env's batch, averaged over its rows."""
-    import copy
-
-    batch = copy.deepcopy(venv.batch)
+def update_costs(venv: Any, repeats: int = 20) -> dict[str, float]:
+    """CPU seconds of one test update, one learning update and one RUL-table rebuild (both
+    parts), each alone on the batch of ``venv`` after 100 flying slots, averaged over its
+    rows."""
+    env = venv.unwrapped
+    env.reset(seed=0)
+    for _ in range(100):
+        env.step(np.zeros(env.num_envs, dtype=np.int64))
+    batch = env.batch
     a, st = batch.a, batch.setup
     rows = np.arange(batch.n, dtype=np.int64)
     last = a["last"]
     means = last[:, st.learn_cols].copy()
     ground = last[:, len(st.world.flight_idx) :].copy()
     args = (rows, batch.bank, a["pending"], a["flight_sum"], a["flight_count"],
-            a["batch_usage"], a["status"], batch.tables, st.filters, a["h_filter"])  # fmt: skip
+            a["batch_usage"], a["status"], st.filters, a["h_filter"])  # fmt: skip
     interval = int(st.scenario.flight_update_flights)
-    _time_learn(*args, interval, means)
-    _time_test(*args, ground)
-    t_learn = _best(lambda: _cpu(lambda: [_time_learn(*args, interval, means)
-                                          for _ in range(repeats)]))  # fmt: skip
-    t_test = _best(lambda: _cpu(lambda: [_time_test(*args, ground) for _ in range(repeats)]))
-    n = rows.size * repeats
-    return t_test / n, t_learn / n
+    rebuild = (rows, batch.bank, batch.tables, a["status"], st.filters)
+    kinds = {
+        "test": lambda: _time_test(*args, ground),
+        "learn": lambda: _time_learn(*args, interval, means),
+        "rebuild": lambda: _time_rebuild(*rebuild),
+    }
+    out = {}
+    for name, fn in kinds.items():
+        fn()
+        out[name] = _best(lambda fn=fn: _cpu(lambda: [fn() for _ in range(repeats)]))
+        out[name] /= rows.size * repeats
+    return out
 
 
 def fleet_rates(episodes: int = 2) -> dict[str, float]:
@@ -304,13 +355,14 @@ def format_rates(r: dict[str, float]) -> str:
             f"vector env 64, mix 90/9/1:    {r['mix_steps_per_s']:10,.0f} env-steps/s "
             f"(CartPole vector {r['cartpole_vector_steps_per_s']:,.0f})",
             f"vector env 64, flying:        {r['fly_steps_per_s']:10,.0f} env-steps/s",
-            f"filter updates of the mix:    {r['tests_per_step']:.3f} tests and "
-            f"{r['learns_per_step']:.3f} learning updates per step; "
-            f"{r['test_update_us']:.1f} and {r['learn_update_us']:.1f} us each",
+            f"filter updates of the mix:    {r['tests_per_step']:.3f} tests, "
+            f"{r['learns_per_step']:.3f} learning updates and {r['rebuilds_per_step']:.3f} RUL "
+            f"rebuilds per step; {r['test_update_us']:.1f}, {r['learn_update_us']:.1f} and "
+            f"{r['rebuild_us']:.1f} us each",
             f"filter arithmetic ceiling:    {r['filter_ceiling_steps_per_s']:10,.0f} env-steps/s "
             f"(the mix reaches {100 * r['share_of_ceiling']:.0f} %)",
             f"a step's flight, obs and info: {r['fly_other_us']:8.1f} us (flying alone, less "
-            f"its learning updates): with them the mix could reach at most "
+            f"its updates): with them the mix could reach at most "
             f"{100 * r['share_cap_with_flight']:.0f} % of the ceiling",
             f"fleet (8 x 3, naive rule):    {r['fleet_actuator_flights_per_s']:10,.0f} "
             f"actuator-flights/s ({100 * r['fleet_share_of_vector']:.0f} % of the vector env's "

@@ -36,6 +36,44 @@ from prognostics.rul import RulPredictor
 
 
 @njit(cache=True)
+def sorting_order(r: np.ndarray) -> np.ndarray:
+    """Indices that sort ``r`` (finite, >= 0) ascending, equal values in index order (as
+    ``np.argsort(r, kind="stable")``): an LSD radix sort of the float64 bit patterns, which
+    order like the values when the sign bit is clear (-0.0 sorts as 0.0), by 8-bit digits,
+    a digit every value shares skipped. Free of data-dependent branches, ~2.5x faster than a
+    quicksort on a particle cloud's 200 values (``python -m experiments.env_speed``). Where
+    values differ any sort gives this order, so a table built on it is bit for bit the
+    quicksort's unless equal RULs carry unequal weights (summed in another order)."""
+    n = r.size
+    order = np.arange(n)
+    spare = np.empty(n, dtype=np.intp)
+    values = np.empty(n)
+    for i in range(n):
+        values[i] = r[i] + 0.0  # -0.0 + 0.0 is +0.0
+    keys = values.view(np.uint64)
+    spare_keys = np.empty(n, dtype=np.uint64)
+    count = np.empty(257, dtype=np.intp)
+    mask = np.uint64(255)
+    for digit in range(8):
+        shift = np.uint64(8 * digit)
+        count[:] = 0
+        for i in range(n):
+            count[((keys[i] >> shift) & mask) + 1] += 1
+        if n == 0 or count[((keys[0] >> shift) & mask) + 1] == n:
+            continue
+        for d in range(256):
+            count[d + 1] += count[d]
+        for i in range(n):
+            d = (keys[i] >> shift) & mask
+            spare_keys[count[d]] = keys[i]
+            spare[count[d]] = order[i]
+            count[d] += 1
+        keys, spare_keys = spare_keys, keys
+        order, spare = spare, order
+    return order
+
+
+@njit(cache=True)
 def _build(
     r: np.ndarray,
     w: np.ndarray,
@@ -60,7 +98,7 @@ def _build(
         total += w[i]
     if not total > 0.0:
         return 1, 0.0
-    order = np.argsort(r)
+    order = sorting_order(r)
     cum_w[0] = 0.0
     for j in range(n):
         k = order[j]

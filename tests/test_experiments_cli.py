@@ -13,6 +13,7 @@ import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -171,6 +172,23 @@ def test_env_speed_keeps_an_existing_json(tmp_path, capsys) -> None:
     with pytest.raises(SystemExit):
         env_speed.main(["--json", str(kept)])
     assert "pass --overwrite" in capsys.readouterr().err and kept.read_text() == "{}"
+
+
+def test_env_speed_counts_the_filter_updates_of_a_scripted_slot_sequence() -> None:
+    """The ceiling's update counts, against a sequence counted by hand: after 100 flights
+    (10 full batches), 5 flights, a test (the 5 learnt first, then the test; it flies one),
+    10 flights (a full batch at the 9th), a new spring (the 1 flight under way learnt
+    first), 3 slots: per actuator 1 test, 3 learning updates, 3 rebuilds in 20 slots."""
+    import gymnasium as gym
+
+    import scas_env
+    from experiments import env_speed
+
+    script = [0] * 100 + [0] * 5 + [1] + [0] * 10 + [2] + [0] * 3
+    actions = np.repeat(np.array(script)[:, None], 3, axis=1)
+    venv = gym.make_vec(scas_env.ENV_ID, num_envs=3, vectorization_mode="vector_entry_point")
+    counts = env_speed.count_updates(venv, actions)
+    assert counts == {"test": 1 / 20, "learn": 3 / 20, "rebuild": 3 / 20}
 
 
 def test_risk_recalibration_command(tmp_path, capsys) -> None:

@@ -4,10 +4,12 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from prognostics.degradation_models import paris_crack_model
 from prognostics.rul import RulPredictor, weighted_quantile
-from prognostics.rul_ageing import AgeingRul
+from prognostics.rul_ageing import AgeingRul, _build, sorting_order
 
 
 def _sample(seed: int = 0, n: int = 600) -> tuple[np.ndarray, np.ndarray]:
@@ -96,3 +98,54 @@ def test_bad_inputs_raise() -> None:
         AgeingRul(np.ones(2), np.ones(3), low_quantile=0.1)
     with pytest.raises(ValueError, match="horizon"):
         AgeingRul(np.ones(2), np.ones(2), low_quantile=0.1).prob_failure(0.0, -1.0)
+
+
+_RUL_VALUES = st.one_of(
+    st.just(0.0), st.just(-0.0), st.just(1e300), st.floats(0.0, 1e6, allow_subnormal=True)
+)
+
+
+@settings(max_examples=300, deadline=None)
+@given(st.lists(_RUL_VALUES, min_size=1, max_size=600))
+def test_the_radix_order_is_numpys_stable_argsort(values: list[float]) -> None:
+    r = np.array(values)
+    assert sorting_order(r).tolist() == np.argsort(r, kind="stable").tolist()
+
+
+def _tables_by_quicksort(r: np.ndarray, w: np.ndarray, level: float) -> tuple:
+    """What ``_build`` gave on ``np.argsort``'s quicksort order: the same loops, in Python."""
+    order = np.argsort(r)
+    total = 0.0  # summed in order, as _build
+    for v in w:
+        total += v
+    n = r.size
+    sorted_r, cum, sw, swr = r[order], np.zeros(n + 1), np.zeros(n + 1), np.zeros(n + 1)
+    for j in range(n):
+        cum[j + 1] = cum[j] + w[order[j]] / total
+    for j in range(n - 1, -1, -1):
+        wk = w[order[j]] / total
+        sw[j] = sw[j + 1] + wk
+        swr[j] = swr[j + 1] + wk * sorted_r[j]
+    q = next((sorted_r[j] for j in range(n) if cum[j + 1] >= level), sorted_r[-1])
+    return sorted_r, cum, sw, swr, q
+
+
+@pytest.mark.parametrize("ties", [False, True])
+def test_the_tables_are_the_quicksorts_bit_for_bit(ties: bool) -> None:
+    """Equal RULs with equal weights (resampled copies of a particle) or no ties: the
+    tables are those of a quicksort-ordered build, bit for bit (the order of equal
+    values cannot change a sum when their weights are equal too)."""
+    rng = np.random.default_rng(11)
+    r, w = _sample(seed=11, n=400)  # 25 zeros, weights random
+    w[:25] = 0.0  # past the threshold: conditioned away
+    if ties:  # 80 copies of 20 particles, each copy with its particle's RUL and weight
+        r[100:180], w[100:180] = np.repeat(r[200:220], 4), np.repeat(w[200:220], 4)
+    rng.shuffle(idx := np.arange(r.size))
+    r, w = r[idx], w[idx]
+    n = r.size
+    out = [np.empty(n), np.empty(n + 1), np.empty(n + 1), np.empty(n + 1)]
+    status, q = _build(r, w, 0.05, *out)
+    assert status == 0
+    expected = _tables_by_quicksort(r, w, 0.05)
+    for got, want in zip([*out, q], expected, strict=True):
+        np.testing.assert_array_equal(got, want)
