@@ -533,7 +533,7 @@ def measurement_from_curve(
     )
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def random_effect_update(
     y: float,
     mean: np.ndarray,

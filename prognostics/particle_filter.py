@@ -196,7 +196,7 @@ def _step_kernel(
     )  # fmt: skip
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _add_log_likelihood(log_w: np.ndarray, w: np.ndarray, ll: np.ndarray) -> float:
     """``log w += ll`` then normalise; returns N_eff."""
     peak = -np.inf
@@ -206,7 +206,7 @@ def _add_log_likelihood(log_w: np.ndarray, w: np.ndarray, ll: np.ndarray) -> flo
     return _normalise(log_w, w, peak)
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _condition_below(x: np.ndarray, log_w: np.ndarray, w: np.ndarray, threshold: float) -> float:
     """Zero the weights of particles with ``x >= threshold`` and renormalise; returns N_eff,
     or -1 (nothing changed) when no particle lies below or none lies at or past it."""
@@ -225,7 +225,7 @@ def _condition_below(x: np.ndarray, log_w: np.ndarray, w: np.ndarray, threshold:
     return _normalise(log_w, w, peak)
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _systematic_from_weights(w: np.ndarray, cumsum: np.ndarray, u: float, idx: np.ndarray) -> None:
     """Normalised cumulative weights into ``cumsum``, then systematic indices into ``idx``."""
     acc = 0.0
@@ -295,7 +295,7 @@ def _gather_regularise(
         log_w[i] = -math.log(n)
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def resample_if_degenerate(
     ess: float,
     threshold_n: float,

@@ -73,7 +73,7 @@ def sorting_order(r: np.ndarray) -> np.ndarray:
     return order
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _build(
     r: np.ndarray,
     w: np.ndarray,
@@ -118,7 +118,7 @@ def _build(
     return 0, quantile
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _build_from_cloud(
     grid: np.ndarray,
     rate: np.ndarray,
@@ -144,7 +144,7 @@ def _build_from_cloud(
     return _build(r, w, level, sorted_r, cum_w, suffix_w, suffix_wr)
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def ageing_summary(
     r: np.ndarray,
     cum_w: np.ndarray,

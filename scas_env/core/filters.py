@@ -111,7 +111,7 @@ class FilterModel(NamedTuple):
     cross_inflation: tuple
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def effect_at(
     stack: np.ndarray, own_grid: np.ndarray, other_grid: np.ndarray, own: float, other: float,
     z: float,
@@ -122,7 +122,7 @@ def effect_at(
     return bilinear_at(stack, 0, i, ti, j, tj) + bilinear_at(stack, 1, i, ti, j, tj) * z
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def effect_likelihood(
     y: float,
     m: float,
@@ -160,7 +160,7 @@ def effect_likelihood(
     return shift
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def fraction_moments(x: np.ndarray, w: np.ndarray, critical: float, sq: np.ndarray) -> tuple:
     """Weighted mean (clipped to [0, 1]) and variance of a severity as a fraction of
     ``critical`` (``sq``: scratch of N). ``np.dot`` as numpy's ``@`` (the same BLAS sum)."""
@@ -296,7 +296,7 @@ def _moments(e: int, bank: tuple, model: FilterModel, work: tuple) -> tuple:
     return c_hat, c_var, w_hat, w_var
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def learn_row(e: int, bank: tuple, pending: np.ndarray, flight_sum: np.ndarray,
               flight_count: np.ndarray, batch_usage: np.ndarray, status: np.ndarray,
               work: tuple, model: FilterModel, handle: tuple) -> None:  # fmt: skip
@@ -334,7 +334,7 @@ def learn_row(e: int, bank: tuple, pending: np.ndarray, flight_sum: np.ndarray,
         )  # fmt: skip
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def test_row(e: int, g1: float, g3: float, bank: tuple, pending: np.ndarray,
              flight_sum: np.ndarray, flight_count: np.ndarray, batch_usage: np.ndarray,
              status: np.ndarray, work: tuple, model: FilterModel,
@@ -397,7 +397,7 @@ def refresh_row(e: int, bank: tuple, tables: tuple, status: np.ndarray, work: tu
             status[e] = 3 + code
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def refresh_rows(rows: np.ndarray, stale: np.ndarray, bank: tuple, tables: tuple,
                  status: np.ndarray, model: FilterModel) -> None:  # fmt: skip
     """:func:`refresh_row` for each row of ``rows`` whose ``stale`` flag is set (cleared)."""

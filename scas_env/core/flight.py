@@ -84,7 +84,7 @@ def interp_scalar(x: float, xp: np.ndarray, fp: np.ndarray) -> float:
     return out
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def features_at(
     crack_fraction: float,
     wear_fraction: float,
@@ -146,7 +146,7 @@ def wear_after_flight(
     return wear + rate_m * lognormal_factor(wear_cv, z) * severity
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def crack_flights_to_failure(
     crack_m: float,
     fail_depth_m: float,
@@ -177,7 +177,7 @@ def crack_flights_to_failure(
     return np.inf
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def wear_flights_to_failure(
     wear_m: float, rate_m: float, wear_cv: float, critical_m: float, handle: tuple, max_flights: int
 ) -> float:
@@ -191,7 +191,7 @@ def wear_flights_to_failure(
     return np.inf
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def crack_after_flights(
     crack_m: float,
     theta: float,
@@ -217,7 +217,7 @@ def crack_after_flights(
     return crack
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def wear_after_flights(
     wear_m: float, rate_m: float, wear_cv: float, handle: tuple, flights: int
 ) -> float:
@@ -228,7 +228,7 @@ def wear_after_flights(
     return wear
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def expected_rul(
     crack_m: np.ndarray,
     wear_m: np.ndarray,

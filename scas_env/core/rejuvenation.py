@@ -131,7 +131,7 @@ def _next_row(e: int, p: int, bank: tuple) -> int:
     return q
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def record_datum(
     e: int, p: int, table: int, k: int, y: float, m: float, j: int, tj: float,
     extra_var: float, log_lik: np.ndarray, bank: tuple,
@@ -178,7 +178,7 @@ def record_effect(e: int, p: int, k: int, mean: float, var: float, bank: tuple) 
     row[H_AUX] = k
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def log_prior(d: float, lam: float, e: int, bank: tuple, model: tuple, p: int = 0) -> float:
     """Log density (up to a constant) of filter p's prior, with the survival indicator
     (-inf outside the support): the spring's in ``u = (D(x(t)), lambda)`` at the filter's
@@ -210,7 +210,7 @@ def log_prior(d: float, lam: float, e: int, bank: tuple, model: tuple, p: int = 
     return -0.5 * za * za + math.log(g) - 0.5 * zl * zl
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def history_loglik(d: float, lam: float, e: int, bank: tuple, model: tuple,
                    z: np.ndarray, p: int = 0) -> float:  # fmt: skip
     """Sum of the likelihood terms of row e's history of filter p at ``u = (d, lam)``: each
@@ -266,7 +266,7 @@ P_DT, P_Y, P_RUNS, P_EXTRA, P_FRAC, P_FRAC_C = range(6)
 P_TABLE, P_CELL, P_AUX = range(3)
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def prepare_history(e: int, bank: tuple, model: tuple, p: int = 0) -> tuple:
     """Row e's history of filter p as :func:`replay_histories` reads it, once for all the
     proposals of a move: the per-datum columns (``P_*``), the filter's tables in one
@@ -414,7 +414,7 @@ def replay_histories(d: np.ndarray, lam: np.ndarray, m: int, prepared: tuple, mo
             total[r] += -0.5 * res * res / v - 0.5 * math.log(v) - _HALF_LOG_2PI
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def proposal_factor(x: np.ndarray, lam: np.ndarray, w: np.ndarray, model: tuple,
                     d: np.ndarray) -> tuple[float, float, float]:  # fmt: skip
     """Cholesky factor ``(l11, l21, l22)`` of the random-walk proposal's covariance: the
@@ -443,7 +443,7 @@ def proposal_factor(x: np.ndarray, lam: np.ndarray, w: np.ndarray, model: tuple,
     return scale * l11, scale * l21, scale * l22
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def proposal_sd(lam: np.ndarray, w: np.ndarray, model: tuple) -> float:
     """The seal's random-walk proposal sd: the weighted cloud's sd of lambda times the
     1-D scale."""
@@ -486,7 +486,7 @@ def _unworn_damage(model: tuple) -> float:
     return damage_scalar(rt[0], rt[1], rt[2], rt[3], rt[4], 0.0)
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def move_particles(e: int, bank: tuple, model: tuple, factor: tuple, d: np.ndarray,
                    handle: tuple, p: int = 0) -> None:  # fmt: skip
     """``model.move``'s steps of random-walk Metropolis-Hastings for every particle of row
@@ -554,7 +554,7 @@ def move_particles(e: int, bank: tuple, model: tuple, factor: tuple, d: np.ndarr
                 baux[e, p, k, i] = z[k, r]
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def resample_move(ess: float, threshold_n: float, e: int, bank: tuple, work: tuple,
                   model: tuple, handle: tuple, p: int = 0) -> int:  # fmt: skip
     """Row e's filter p after a weight update, as

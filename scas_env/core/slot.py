@@ -55,7 +55,7 @@ def _handle(h: np.ndarray, e: int) -> tuple:
     return (h[e, 0], h[e, 1], h[e, 2])
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _quantile(ordered: np.ndarray, q: float) -> float:
     """``np.quantile(values, q, method="linear")`` of sorted values, numpy's arithmetic
     (:func:`prognostics.detection._linear_quantile`)."""
@@ -108,7 +108,7 @@ def close_row(e: int, books: tuple, memory: tuple, out: tuple) -> None:
     revenue[e] += t[0]
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def close_rows(rows: np.ndarray, books: tuple, memory: tuple, out: tuple) -> None:
     """:func:`close_row` for each row of ``rows``."""
     for e in rows:
@@ -233,7 +233,7 @@ def _flown(e: int, feats: np.ndarray, broke: bool, k: int, interval: int, monito
             stale[e] = True
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def slot_rows(
     rows: np.ndarray,
     plan: tuple,
@@ -334,7 +334,7 @@ def slot_rows(
             close_row(e, books, memory, out)
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def test_measured(
     e: int, g1: float, g3: float, every_flight: bool, world: tuple, monitor: tuple,
     memory: tuple, books: tuple, handles: tuple, out: tuple, go_limits: np.ndarray,
@@ -347,7 +347,7 @@ def test_measured(
                    go_limits, prices, filt, det, n_flight, work)  # fmt: skip
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def fly_measured(
     e: int, feats: np.ndarray, k: int, interval: int, world: tuple, monitor: tuple,
     memory: tuple, handles: tuple, out: tuple, prices: tuple, wm: tuple, filt: tuple,

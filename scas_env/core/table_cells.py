@@ -12,7 +12,7 @@ import numpy as np
 from numba import njit
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def cell_of(grid: np.ndarray, v: float) -> tuple[int, float]:
     """Cell j of ``grid`` holding ``v`` (clamped to [grid[0], grid[-1]]) and its fraction in
     it, as the surrogate's bilinear tables (``bisect_right - 1``, the last cell at the end)."""
@@ -23,7 +23,7 @@ def cell_of(grid: np.ndarray, v: float) -> tuple[int, float]:
     return j, (v - grid[j]) / (grid[j + 1] - grid[j])
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def bilinear_at(stack: np.ndarray, q: int, i: int, ti: float, j: int, tj: float) -> float:
     """Table ``stack[q]`` at (i + ti, j + tj)."""
     return (
