@@ -157,9 +157,11 @@ def test_kernel_matches_solve_ivp_reference_on_step() -> None:
     cmd = _step(0.01, 80, 1e-3)
     run = simulate(c, cmd, rng=None, noise=False)
     x_ref, work_ref = _reference_run(c, cmd)
-    assert np.max(np.abs(run.position_m - x_ref)) < 1e-6
-    assert np.max(np.abs(run.position_m - x_ref)) < 0.05 * np.max(np.abs(x_ref))
-    assert run.friction_work_j == pytest.approx(work_ref, rel=1e-3)
+    # the kernel's fixed-step integrator against scipy's adaptive DOP853: they differ by
+    # 1.8e-8 m and 6.5e-6 in friction work (relative) here; a 20 % error in the leakage
+    # moves the position by about 1e-6 m
+    assert np.max(np.abs(run.position_m - x_ref)) < 1e-7
+    assert run.friction_work_j == pytest.approx(work_ref, rel=5e-5)
     assert np.max(x_ref) > 0.9e-3  # the step was really followed
 
 

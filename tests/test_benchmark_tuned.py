@@ -14,6 +14,7 @@ import pytest
 from policies.benchmark.run import PolicySpec, run_benchmark
 from policies.cli.benchmark import main as benchmark_main
 from policies.value.tuning import TuningResult, write_tuning_outputs
+from scas_env.core.fleet.config import FleetConfig
 
 #: a filter rule far from its defaults (it tests every 7 slots) and an age rule
 FILTER = {"spring_age": 800.0, "seal_age": 900.0, "opportunity": 0.3, "risk_threshold": 0.05,
@@ -66,9 +67,19 @@ def test_a_tuned_fleet_rule_runs_on_the_fleet(tmp_path: Path) -> None:
     argv = ["--scenario", str(fleet), "--policies", "fleet_naive", "--tuned", str(path),
             "--episodes", "2", "--workers", "1", "--quiet", "--out", str(out)]  # fmt: skip
     assert benchmark_main(argv) == 0
-    assert set(_rewards(out / "results.csv")) == {"fleet_naive", "fleet_naive tuned"}
+    got = _rewards(out / "results.csv")
+    assert set(got) == {"fleet_naive", "fleet_naive tuned"}
     summary = json.loads((out / "summary.json").read_text())
     assert summary["policies"]["fleet_naive tuned"]["reward"]["n"] == 2
+    # each row equals the rule at those parameters run directly on the same fleets, and
+    # differs from the rule at its defaults (it tests every 50 days, not every 844)
+    direct = run_benchmark(
+        [PolicySpec("fleet_naive", naive, label="t")],
+        episodes=2,
+        env_kwargs={"fleet": FleetConfig.load(fleet)},
+    )
+    assert got["fleet_naive tuned"] == [r["reward"] for r in direct.rows]
+    assert got["fleet_naive tuned"] != got["fleet_naive"]
 
 
 @pytest.mark.parametrize(

@@ -21,15 +21,19 @@ def _ar1(rho: float, n: int, rng: np.random.Generator) -> np.ndarray:
 
 
 def test_lag_correlation_recovers_an_ar1_process() -> None:
-    """On AR(1) lives of lag-one correlation 0.9 the lag-k correlation is 0.9^k within five
-    of its large-sample standard errors ((1 - r^2) / sqrt(pairs))."""
+    """On AR(1) lives of lag-one correlation phi = 0.9 the lag-k correlation is phi^k within
+    five of its large-sample standard errors (Bartlett's formula for an AR(1): variance
+    ((1 + phi^2)(1 - phi^2k) / (1 - phi^2) - 2k phi^2k) / pairs; 0.008 at lag 5, so a
+    correlation read one lag off, 0.066 away there, fails)."""
     rng = np.random.default_rng(3)
-    lives = [_ar1(0.9, 5000, rng) for _ in range(8)]
+    phi = 0.9
+    lives = [_ar1(phi, 5000, rng) for _ in range(8)]
     for lag in (1, 5, 10):
         r, pairs = lag_correlation(lives, lag)
-        expected = 0.9**lag
         assert pairs == 8 * (5000 - lag)
-        assert abs(r - expected) < 5 * (1 - expected**2) / np.sqrt(pairs / 20)
+        p2k = phi ** (2 * lag)
+        variance = ((1 + phi**2) * (1 - p2k) / (1 - phi**2) - 2 * lag * p2k) / pairs
+        assert abs(r - phi**lag) < 5 * np.sqrt(variance)
 
 
 def test_no_pair_crosses_a_life() -> None:

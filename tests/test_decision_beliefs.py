@@ -20,7 +20,6 @@ from policies.benchmark.runner import (
 from policies.benchmark.stats import (
     cluster_ratio_bootstrap,
     prognostics_block,
-    summarize,
 )
 from scas_env.core.setup import PARTS, REWARD_TERMS
 
@@ -193,8 +192,16 @@ def test_benchmark_summary_and_markdown_carry_the_beliefs() -> None:
     s = res.summary
     assert set(s["prognostics"]) == {"rul_risk"}  # the age rule reads no beliefs
     assert all(r["prog_test_spring_n"] == 0 for r in res.rows if r["policy"] == "preventive")
+    # the block is the filter rule's own rows' (not the age rule's, not both)
+    mine = [r for r in res.rows if r["policy"] == "rul_risk"]
+    block = s["prognostics"]["rul_risk"]
+    assert block == prognostics_block(mine)
+    n = sum(r[c] for r in mine for c in decision_columns() if c.endswith("_n"))
+    covered = sum(r[c] for r in mine for c in decision_columns() if c.endswith("covered"))
+    assert n > 0 and block["n"] == n and block["coverage"]["mean"] == covered / n
+    # and the Markdown table shows those numbers in the filter rule's row
     text = markdown_summary(res)
     assert all(c in text for c in BELIEF_COLUMNS)
-    again = summarize(res.rows, ["preventive", "rul_risk"], ["preventive", "rul_risk"])
-    assert again["prognostics"] == s["prognostics"]
+    row = next(line for line in text.splitlines() if line.startswith("| rul_risk |"))
+    assert f"| {n} | " in row and f"{covered / n:.3f}" in row
     assert isinstance(res, BenchmarkResult)

@@ -10,6 +10,7 @@ import warnings
 import gymnasium as gym
 import numpy as np
 import pytest
+import scipy.stats
 from gymnasium.error import DeprecatedEnv
 from gymnasium.utils.env_checker import check_env as gym_check_env
 from stable_baselines3.common.env_checker import check_env as sb3_check_env
@@ -493,13 +494,19 @@ def test_replacement_renews_the_part_and_its_filter() -> None:
     crack_before = a["crack"][0]
     env.step(2)
     assert a["crack"][0] < crack_before and env.part_age["spring"] == 0
-    mean = a["x"][0, 0] @ a["w"][0, 0]
-    assert mean == pytest.approx(env.params.spring.initial_crack_m, rel=0.2)
+    # the new spring's filter restarts from its prior: N(a0, sd) truncated to [0, failure
+    # depth], equal weights; its mean within 4 standard errors of the prior's (scipy)
+    x, w = a["x"][0, 0], a["w"][0, 0]
+    np.testing.assert_array_equal(w, 1.0 / x.size)
+    a0, sd = env.params.spring.initial_crack_m, env.params.uncertainty.initial_crack_sigma_m
+    prior = scipy.stats.truncnorm(-a0 / sd, (cal.spring_failure_depth_m - a0) / sd, a0, sd)
+    assert x @ w == pytest.approx(prior.mean(), abs=4 * prior.std() / np.sqrt(x.size))
 
 
 def test_filter_tracks_seal_wear_under_regular_tests() -> None:
     """Testing every 5 flights, after the first 300 flights of a seal set: the seal
-    filter's mean follows the true wear (units 0-3; median error a few % of critical)."""
+    filter's mean follows the true wear (units 0-3; median error a few % of critical:
+    1-3 % measured, under 4 % at every unit required)."""
     medians = []
     for seed in range(4):
         env = ScasMaintenanceEnv()
@@ -513,9 +520,9 @@ def test_filter_tracks_seal_wear_under_regular_tests() -> None:
                 est.append(float(a["x"][0, 1] @ a["w"][0, 1]))
         truth, est = np.array(truth), np.array(est)
         assert truth.size > 100
-        assert np.corrcoef(truth, est)[0, 1] > 0.95
+        assert np.corrcoef(truth, est)[0, 1] > 0.97
         medians.append(np.median(np.abs(est - truth)) / crit)
-    assert np.mean(medians) < 0.1
+    assert max(medians) < 0.04, medians
 
 
 def test_failed_go_no_go_grounds_the_slot_and_shows_in_the_observation() -> None:

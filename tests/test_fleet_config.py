@@ -252,10 +252,14 @@ def test_the_two_examples_are_the_operators_they_claim() -> None:
     assert offshore.demand.flight_hours_per_aircraft_year == 1500.0  # Bristow S-92
     assert offshore.mission_availability_target == 0.94
     assert "offshore_gusts" in offshore.mission_types
-    assert 0.85 < offshore.base_missions_per_day / offshore.aircraft < 1.0
+    # a mission a day per aircraft, less: 1500 FH a year in missions of 3 flights of 1.5 h
+    per_aircraft = offshore.base_missions_per_day / offshore.aircraft
+    assert per_aircraft == pytest.approx(1500.0 / (3 * 1.5) / 365.0, rel=1e-12)
     assert military.demand.flight_hours_per_aircraft_year == 200.0  # CBO FY2023
     assert military.mission_availability_target == 0.68
     assert military.mission_types[0] == "training"
+    per_aircraft = military.base_missions_per_day / military.aircraft
+    assert per_aircraft == pytest.approx(200.0 / (2 * 1.5) / 365.0, rel=1e-12)
 
 
 @pytest.mark.parametrize("path", FLEET_EXAMPLES, ids=lambda p: p.name)

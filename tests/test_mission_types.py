@@ -129,9 +129,15 @@ def test_shipped_table_is_current_and_standard_is_one_by_definition() -> None:
 
 
 def test_every_other_type_is_more_damaging_than_the_standard_mix() -> None:
+    """Each type wears the seals more, and grows the crack more at every depth where its
+    loads count: training and utility (more 2 mm manoeuvres) everywhere, offshore gusts
+    (0.6 mm) from ~65 um, below which it equals the standard mix (the test after this one);
+    each more by over two of its standard errors."""
     for name in ("training", "utility", "offshore_gusts"):
         row = TABLE.types[name]
-        assert np.all(row.crack_multiplier > 1.0 - 4 * row.crack_multiplier_se), name
+        counts = TABLE.depth_m >= (65e-6 if name == "offshore_gusts" else 0.0)
+        m, se = row.crack_multiplier[counts], row.crack_multiplier_se[counts]
+        assert np.all(m > 1.0 + 2 * se), (name, TABLE.depth_m[counts][m <= 1.0 + 2 * se])
         assert row.wear_multiplier > 1.0 + 4 * row.wear_multiplier_se, name
 
 

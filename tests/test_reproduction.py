@@ -110,10 +110,12 @@ def test_installation_measurement_model_removes_the_healthy_unit_spread() -> Non
 
 def test_healthy_residuals_remove_unit_levels() -> None:
     rng = np.random.default_rng(2)
-    series = 10.0 * rng.standard_normal((40, 1)) + 0.5 * rng.standard_normal((40, 6))
-    r = healthy_residuals(series)
-    assert r.size == 240 and abs(r.mean()) < 1e-12
-    assert np.sqrt(np.mean(r**2)) == pytest.approx(0.5, rel=0.1)  # run spread, not 10
+    level, run = 10.0 * rng.standard_normal((40, 1)), 0.5 * rng.standard_normal((40, 6))
+    r = healthy_residuals(level + run)
+    # each unit's level cancels: what is left is its runs about their own mean, scaled by
+    # sqrt(m / (m - 1)) = sqrt(6 / 5) so that E r^2 is the run variance
+    expected = (run - run.mean(axis=1, keepdims=True)) * np.sqrt(6 / 5)
+    np.testing.assert_allclose(r, expected.ravel(), rtol=0, atol=1e-12)
     with pytest.raises(ValueError, match="series"):
         healthy_residuals(np.ones((3, 1)))
 

@@ -9,8 +9,10 @@ from pathlib import Path
 import pytest
 
 from experiments import rule_defaults
+from policies.benchmark.run import PolicySpec, run_benchmark
 from policies.rules.classic import DETECTION_DEFAULTS, PREVENTIVE_DEFAULTS
 from policies.rules.prognostic import RUL_RISK_AGE_DEFAULTS, RUL_RISK_DEFAULTS
+from policies.value.tuning import HELD_OUT_SEED
 
 ROOT = Path(__file__).resolve().parents[1]
 RECORD = ROOT / "docs" / "value_v2" / "rule_defaults.json"
@@ -73,6 +75,16 @@ def test_a_small_choice_takes_the_best_validation_mean(tmp_path: Path) -> None:
             else:
                 diff = c["chosen_minus_this_held_out"]
                 assert diff["mean"] == pytest.approx(chosen["held_out_mean"] - c["held_out_mean"])
+    # the means are the candidates' own rewards on the validation and held-out episodes
+    # (run here without the study; a study that swapped the two seed sets fails)
+    specs = [PolicySpec(rule, c["params"], label=f"{rule}:{c['candidate']}")
+             for rule, r in record["rules"].items() for c in r["candidates"]]  # fmt: skip
+    for key, seed in (("validation_mean", 5), ("held_out_mean", HELD_OUT_SEED)):
+        rows = run_benchmark(specs, episodes=2, seed=seed).rows
+        for rule, r in record["rules"].items():
+            for c in r["candidates"]:
+                mine = [x["reward"] for x in rows if x["policy"] == f"{rule}:{c['candidate']}"]
+                assert c[key] == pytest.approx(sum(mine) / 2, rel=1e-12), (key, rule, c)
     rule_defaults.write(record, tmp_path)
     rows = (tmp_path / "rule_defaults.csv").read_text().splitlines()
     assert len(rows) == 1 + sum(len(r["candidates"]) for r in record["rules"].values())

@@ -119,9 +119,22 @@ def test_random_effects_recovers_known_components() -> None:
         + sigma * rng.standard_normal((units, runs, 1))
     )
     mean, tau_hat, sigma_hat = random_effects(values)
-    assert mean[0] == pytest.approx(10.0, abs=4 * tau / np.sqrt(units))
+    # the ANOVA's sums of squares written out (within units, then between their means)
+    y = values[:, :, 0]
+    unit_mean = [sum(row) / runs for row in y.tolist()]
+    grand = sum(unit_mean) / units
+    ss_w = sum((v - m) ** 2 for row, m in zip(y.tolist(), unit_mean, strict=True) for v in row)
+    ms_w = ss_w / (units * (runs - 1))
+    ms_b = runs * sum((m - grand) ** 2 for m in unit_mean) / (units - 1)
+    assert mean[0] == pytest.approx(grand, rel=1e-12)
+    assert sigma_hat[0] == pytest.approx(np.sqrt(ms_w), rel=1e-12)
+    assert tau_hat[0] == pytest.approx(np.sqrt((ms_b - ms_w) / runs), rel=1e-12)
+    # and they recover the components drawn (400 units: tau's sampling sd about 3.5 %)
     assert tau_hat[0] == pytest.approx(tau, rel=0.1)
     assert sigma_hat[0] == pytest.approx(sigma, rel=0.05)
+    # units with equal means: the between-unit variance estimate is negative, taken as 0
+    same = np.array([rng.permutation([1.0, 2.0, 4.0]) for _ in range(5)])[:, :, None]
+    assert random_effects(same)[1][0] == 0.0
 
 
 def test_sampling_fast_path_equals_interpolation_and_bad_inputs_raise() -> None:
