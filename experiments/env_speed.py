@@ -48,6 +48,7 @@ import numpy as np
 from numba import njit
 
 import scas_env
+from scas_env.core import parts
 from scas_env.core.filters import learn_row, refresh_row, test_row, work_arrays
 from scas_env.utils.atomic_file import write_text_atomic
 from scas_env.utils.results_folder import json_text
@@ -157,6 +158,8 @@ def vector_rates(num_envs: int = 64, steps: int = 600, **fields: Any) -> dict[st
         "share_of_ceiling": mix_rate / ceiling,
         "fly_other_us": fly_other * 1e6,
         "share_cap_with_flight": (1.0 / ceiling) / (1.0 / ceiling + fly_other),
+        "fitting_us": n_mix["fitting_s"] / n_mix["fitting"] * 1e6,
+        "fitting_us_per_step": n_mix["fitting_s"] * 1e6,
     }
 
 
@@ -167,13 +170,37 @@ def count_updates(venv: Any, actions: np.ndarray) -> dict[str, float]:
     for the batch under way before a test or a fitting (a replacement or a failure) and for
     each full batch; a RUL-table rebuild per row flagged stale when the observation is made.
     Each row's batch count is followed through the step and must land on the env's (an
-    ``AssertionError`` otherwise: the rules above missed an update)."""
+    ``AssertionError`` otherwise: the rules above missed an update). Each part fitting
+    (``scas_env.core.parts.replace_part``, a replacement or a failed part's) is counted and
+    its CPU seconds summed: ``fitting`` and ``fitting_s`` per env-step."""
     env = venv.unwrapped
-    a, interval = env.a, int(env.setup.scenario.flight_update_flights)
+    interval = int(env.setup.scenario.flight_update_flights)
     env.reset(seed=0)
-    total = {"test": 0, "learn": 0, "rebuild": 0}
+    total = {"test": 0, "learn": 0, "rebuild": 0, "fitting": 0, "fitting_s": 0.0}
+    fit = parts.replace_part
+
+    def timed_fit(*args: Any, **kwargs: Any) -> None:  # each fitting counted, CPU-timed
+        t0 = time.process_time()
+        fit(*args, **kwargs)
+        total["fitting"] += 1
+        total["fitting_s"] += time.process_time() - t0
+
+    parts.replace_part = timed_fit
+    try:
+        _replay(env, actions, interval, total)
+    finally:
+        parts.replace_part = fit
+    steps = (len(actions) - 100) * env.num_envs
+    return {k: v / steps for k, v in total.items()}
+
+
+def _replay(env: Any, actions: np.ndarray, interval: int, total: dict[str, Any]) -> None:
+    """:func:`count_updates`' replay (the fittings of the first 100 steps not counted)."""
+    a = env.a
     for t, act in enumerate(actions):
         counted = t >= 100
+        if t == 100:
+            total["fitting"], total["fitting_s"] = 0, 0.0
         moving = ~env._autoreset
         before = {k: a[k].copy() for k in ("flight_count", "tests", "flown", "failures")}
         env.step_active(act, None, outputs=False)
@@ -200,8 +227,6 @@ def count_updates(venv: Any, actions: np.ndarray) -> dict[str, float]:
         if counted:
             total["test"] += int(tested.sum())
             total["learn"] += int(learns.sum())
-    steps = (len(actions) - 100) * env.num_envs
-    return {k: v / steps for k, v in total.items()}
 
 
 @njit(cache=True)
@@ -364,6 +389,8 @@ def format_rates(r: dict[str, float]) -> str:
             f"a step's flight, obs and info: {r['fly_other_us']:8.1f} us (flying alone, less "
             f"its updates): with them the mix could reach at most "
             f"{100 * r['share_cap_with_flight']:.0f} % of the ceiling",
+            f"fitting a part in the mix:     {r['fitting_us']:8.1f} us each (its learning update "
+            f"included), {r['fitting_us_per_step']:.2f} us per env-step",
             f"fleet (8 x 3, naive rule):    {r['fleet_actuator_flights_per_s']:10,.0f} "
             f"actuator-flights/s ({100 * r['fleet_share_of_vector']:.0f} % of the vector env's "
             f"actuator-steps/s), {r['fleet_episode_s']:.2f} s per 365-day episode",

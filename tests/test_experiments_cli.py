@@ -178,7 +178,8 @@ def test_env_speed_counts_the_filter_updates_of_a_scripted_slot_sequence() -> No
     """The ceiling's update counts, against a sequence counted by hand: after 100 flights
     (10 full batches), 5 flights, a test (the 5 learnt first, then the test; it flies one),
     10 flights (a full batch at the 9th), a new spring (the 1 flight under way learnt
-    first), 3 slots: per actuator 1 test, 3 learning updates, 3 rebuilds in 20 slots."""
+    first), 3 slots: per actuator 1 test, 3 learning updates, 3 rebuilds, 1 fitting in 20
+    slots."""
     import gymnasium as gym
 
     import scas_env
@@ -188,7 +189,9 @@ def test_env_speed_counts_the_filter_updates_of_a_scripted_slot_sequence() -> No
     actions = np.repeat(np.array(script)[:, None], 3, axis=1)
     venv = gym.make_vec(scas_env.ENV_ID, num_envs=3, vectorization_mode="vector_entry_point")
     counts = env_speed.count_updates(venv, actions)
-    assert counts == {"test": 1 / 20, "learn": 3 / 20, "rebuild": 3 / 20}
+    assert {k: counts[k] for k in ("test", "learn", "rebuild", "fitting")} == {
+        "test": 1 / 20, "learn": 3 / 20, "rebuild": 3 / 20, "fitting": 1 / 20}  # fmt: skip
+    assert counts["fitting_s"] > 0.0
 
 
 def test_risk_recalibration_command(tmp_path, capsys) -> None:
