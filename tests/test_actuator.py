@@ -1,8 +1,9 @@
 """SCAS actuator model: reference integrator, static closed forms, leakage, determinism, inputs.
 
-The reference model below (``_rhs``, ``_flows``, ``_static_solution``) is written again
-from the equations of the ``scas_env.actuator.physics.actuator`` docstring, independently of the
-numba kernel; only the fluid bulk-modulus function is shared (tested in test_fluid).
+The reference model (``_rhs`` below; the flows and the static solution in
+``tests/actuator_reference.py``) is written again from the equations of the
+``scas_env.actuator.physics.actuator`` docstring, independently of the numba kernel; only the
+fluid bulk-modulus function is shared (tested in test_fluid).
 """
 
 from __future__ import annotations
@@ -13,7 +14,6 @@ import math
 import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
-from scipy.optimize import brentq
 
 from experiments.physics_batch import simulate_batch
 from scas_env.actuator.params import ActuatorParams, ScasParams, SensorParams
@@ -23,6 +23,7 @@ from scas_env.actuator.physics.actuator import (
     initial_state,
     simulate,
 )
+from tests.actuator_reference import flows, static_solution
 from tests.fluid_reference import effective_bulk_modulus
 
 # Step and friction regularisation recommended for the compiled RK4 (see bench_integrator).
@@ -38,33 +39,9 @@ def _cfg(**kwargs: object) -> ActuatorConfig:
 
 
 # --- independent reference model ----------------------------------------------------------
-def _orifice(dp: float, p_t: float) -> float:
-    if abs(dp) >= p_t:
-        return math.copysign(math.sqrt(abs(dp)), dp)
-    r = dp / p_t
-    return math.sqrt(p_t) * r * (5.0 - r * r) / 4.0
-
-
-def _flows(c: ActuatorConfig, s: float, pa: float, pb: float) -> tuple[float, float, float]:
-    """(into A, into B, leak A->B) in m^3/s."""
-    so = min(1.0, max(-1.0, s))
-    ps, pr, pt, cv = c.supply_pressure_pa, c.return_pressure_pa, c.laminar_transition_pa, 0.0
-    cv = c.land_coeff_m3_s_sqrtpa
-    supply_a = cv * max(so, 0.0) * _orifice(ps - pa, pt)
-    a_return = cv * max(-so, 0.0) * _orifice(pa - pr, pt)
-    supply_b = cv * max(-so, 0.0) * _orifice(ps - pb, pt)
-    b_return = cv * max(so, 0.0) * _orifice(pb - pr, pt)
-    kc = c.valve_leakage_m3_s_pa
-    qa = supply_a - a_return + kc * ((ps - pa) - (pa - pr)) / 2.0
-    qb = supply_b - b_return + kc * ((ps - pb) - (pb - pr)) / 2.0
-    dp = pa - pb
-    ql = c.leakage_k1_m3_s_pa * dp + c.leakage_k2_m3_s_sqrtpa * _orifice(dp, pt)
-    return qa, qb, ql
-
-
 def _rhs(c: ActuatorConfig, y: np.ndarray, i_norm: float) -> list[float]:
     x, v, pa, pb, s, sd, _ = y
-    qa, qb, ql = _flows(c, s, pa, pb)
+    qa, qb, ql = flows(c, s, pa, pb)
     e_l = c.bulk_modulus_40c_pa * (1 - c.bulk_modulus_temp_coeff_per_k * (c.temperature_c - 40))
     beta = effective_bulk_modulus(np.array([pa, pb]), e_l, c.air_fraction, c.polytropic_index)
     area, v0 = c.area_m2, c.dead_volume_m3
@@ -120,33 +97,6 @@ def _reference_run(c: ActuatorConfig, cmd: np.ndarray) -> tuple[np.ndarray, floa
     return xs, float(y[6])
 
 
-def _static_solution(c: ActuatorConfig, x_cmd: float) -> tuple[float, float]:
-    """Steady state of the P loop (K_i = 0), noise off: (x, recorded current).
-
-    Unknown x: current i = K_p (x_cmd - x), spool s = (i + i_null)/i_R, load pressure
-    dp = F_s(x)/A; chamber A continuity fixes p_A; chamber B continuity is the residual.
-    """
-
-    def p_a_of(x: float) -> tuple[float, float, float]:
-        i = c.kp_a_per_m * (x_cmd - x)
-        s = (i + c.null_bias_a) / c.rated_current_a
-        dp = c.spring_force_n(x) / c.area_m2
-
-        def res_a(pa: float) -> float:
-            qa, _, ql = _flows(c, s, pa, pa - dp)
-            return qa - ql
-
-        return brentq(res_a, 0.0, 3e7, xtol=1e-8), s, dp
-
-    def res_b(x: float) -> float:
-        pa, s, dp = p_a_of(x)
-        _, qb, ql = _flows(c, s, pa, pa - dp)
-        return qb + ql
-
-    x = brentq(res_b, x_cmd - 2e-4, x_cmd + 2e-4, xtol=1e-16)
-    return x, c.kp_a_per_m * (x_cmd - x)
-
-
 def _step(t0: float, n: int, level: float) -> np.ndarray:
     return np.where(np.arange(n) / FS >= t0, level, 0.0)
 
@@ -191,7 +141,7 @@ def test_unequal_springs_bias_and_null_current(ratio: float) -> None:
     dp = run.pressure_a_pa[-1] - run.pressure_b_pa[-1]
     # A dp = (k1 d1 - k2 d2) + (k1 + k2) x
     assert c.area_m2 * dp == pytest.approx(c.spring_force_n(x_end), rel=0.01)
-    x_ss, i_ss = _static_solution(c, 0.0)
+    x_ss, i_ss = static_solution(c, 0.0)
     i_mean = float(np.mean(run.current_a[-200:]))
     assert i_mean == pytest.approx(i_ss, rel=1e-4)
     assert x_end == pytest.approx(x_ss, rel=1e-4)
@@ -218,7 +168,7 @@ def test_null_current_grows_with_spring_asymmetry() -> None:
 def test_null_bias_current_is_cancelled_by_the_loop() -> None:
     c = _cfg(null_bias_a=0.1e-3)
     run = simulate(c, np.zeros(600), rng=None, noise=False)
-    x_ss, i_ss = _static_solution(c, 0.0)
+    x_ss, i_ss = static_solution(c, 0.0)
     # the loop cancels the bias up to the current the spring load at the offset x_ss needs
     # through the valve's flow-pressure coefficient (a few % with K_c = 1e-12)
     assert i_ss == pytest.approx(-0.1e-3, rel=0.03)
@@ -231,7 +181,7 @@ def test_step_settles_within_closed_form_error() -> None:
     c = _cfg()
     cmd = _step(0.05, 700, 1e-3)
     run = simulate(c, cmd, rng=None, noise=False)
-    x_ss, _ = _static_solution(c, 1e-3)
+    x_ss, _ = static_solution(c, 1e-3)
     e_ss = 1e-3 - x_ss
     assert 1e-7 < e_ss < 3e-5  # P loop with a spring load: small positive error
     assert 1e-3 - run.position_m[-1] == pytest.approx(e_ss, rel=1e-3)

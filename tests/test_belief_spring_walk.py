@@ -23,6 +23,7 @@ from prognostics.normals import NormalStream
 from scas_env import ENV_ID
 from scas_env.core.scenario import Scenario
 from scas_env.env import ScasMaintenanceEnv
+from tests import core_reference as ref
 
 WALK = 0.003
 
@@ -124,7 +125,24 @@ def test_cloud_records_follow_the_world() -> None:
     assert first["age"] == 5
     assert first["stage"] == 5 / (5 + a["life"][0, 0])
     below = a["log_theta"][0, 0] < math.log(a["theta"][0])
-    assert first["pit_theta"] == pytest.approx(float(a["w"][0, 0][below].sum()), abs=1e-15)
+    w = a["w"][0, 0]
+    assert first["pit_theta"] == pytest.approx(float(w[below].sum()), abs=1e-15)
+    # its PITs of depth and RUL, recomputed particle by particle with the reference damage
+    # integral: each particle aged noise-free by the flights pending, its RUL the damage left
+    # to the failure depth over its multiplier (one particle's weight of slack: a particle
+    # on the truth may fall either side by rounding)
+    model, fail = env.setup.spring_process, float(env.setup.calibration.spring_failure_depth_m)
+    grid, rate, k = model.grid, model.rate, float(a["pending"][0, 0])
+    theta = np.exp(a["log_theta"][0, 0])
+    start = [ref.damage_integral(grid, rate, max(x, grid[0])) for x in a["x"][0, 0]]
+    aged = [ref.inverse_damage(grid, rate, d + th * k) for d, th in zip(start, theta, strict=True)]
+    d_fail = ref.damage_integral(grid, rate, fail)
+    rul = [max(d_fail - ref.damage_integral(grid, rate, x), 0.0) / th
+           for x, th in zip(aged, theta, strict=True)]  # fmt: skip
+    pit_x = float(w[np.array(aged) < a["crack"][0]].sum())
+    pit_rul = float(w[np.array(rul) < a["life"][0, 0]].sum())
+    assert first["pit_x"] == pytest.approx(pit_x, abs=w.max())
+    assert first["pit_rul"] == pytest.approx(pit_rul, abs=w.max())
     # the summary's shares are plain counts over the window's records
     rows = stage_summary(recs, [(0.0, 1.0)])
     below_rul = np.mean([r["pit_rul"] < 0.05 for r in recs])

@@ -26,9 +26,10 @@ from scas_env.actuator.flight_damage import (
     growth_model,
     load_spectrum_from_physics,
 )
-from scas_env.actuator.health import HealthState
+from scas_env.actuator.health import HealthState, actuator_config
 from scas_env.actuator.params import ScasParams
 from scas_env.actuator.uncertainty import nominal_unit
+from tests.actuator_reference import static_solution
 from tests.crack_growth_reference import block_growth_rate_m, crack_history
 
 P = ScasParams()
@@ -162,6 +163,11 @@ def test_fig7a_null_bias_grows_and_keeps_its_sign(figs) -> None:
     assert np.all(np.sign(bias) == np.sign(bias[-1]))
     # the weaker cracked spring 0 is compressed for x > 0: negative bias (actuator doctest)
     assert bias[-1] < -1e-6
+    # each value is the loop's steady state at a zero command, solved independently of the
+    # integrator (the flows' continuity in both chambers, tests/actuator_reference.py)
+    for depth, got in zip(d.depth_m, d.null_bias_a, strict=True):
+        config = actuator_config(P, health=HealthState(crack_depth_m=float(depth)))
+        assert got == pytest.approx(static_solution(config, 0.0)[1], rel=1e-6, abs=1e-12)
     assert d.current_a.shape == (5, d.t_s.size)
 
 

@@ -94,6 +94,9 @@ def test_stochastic_lead_times_draw_from_the_generator() -> None:
         pool.reset()
         pool.order(SPRING_KIT, 1, rng=rng)
         leads.append(int(np.argmax(pool.pipeline[0, SPRING_KIT])) + 1)
+    # L + U, U a whole number uniform on [-2, 2]: numpy's draws of it, one per order
+    draws = np.random.default_rng(0)
+    assert leads == [4 + int(draws.integers(-2, 3)) for _ in range(300)]
     assert set(leads) == {2, 3, 4, 5, 6}
     again = SparesPool(spec)
     rng2 = np.random.default_rng(0)
