@@ -16,8 +16,9 @@
   is timed alone on the same batch (jitted loops of the kernels); ceiling = env-steps /
   (tests x t_test + learns x t_learn + rebuilds x t_rebuild); and what a step costs besides
   them when flying alone (the flight's degradation and feature draws, the observation, the
-  info: the flying step's time less its updates), so the share of the ceiling a mix that
-  also flies can reach at most: t_filters / (t_filters + t_flight);
+  info: the flying step's time less its updates and its failed parts' fitting), so the share
+  of the ceiling a mix that also flies can reach at most: t_filters / (t_filters + t_flight);
+  and fitting a part inside the mix (CPU time per fitting, per env-step);
 * **the fleet** (``ScasFleet-v0``, 8 aircraft x 3 actuators, the naive rule at its defaults):
   actuator-flights per second and seconds per 365-day episode, beside the vector env's
   actuator-steps per second (the issue's target: the fleet flies at least half as many
@@ -142,8 +143,12 @@ def vector_rates(num_envs: int = 64, steps: int = 600, **fields: Any) -> dict[st
     def filter_time(n: dict[str, float]) -> float:
         return sum(n[k] * costs[k] for k in costs)
 
+    def fitting_time(n: dict[str, float]) -> float:  # less its learning updates (counted)
+        return n["fitting_s"] - n["fitting_learn"] * costs["learn"]
+
     ceiling = 1.0 / filter_time(n_mix)
-    fly_other = 1.0 / fly_rate - filter_time(n_fly)  # the flight, observation and info
+    # the flight, observation and info: flying less its updates and its failed parts' fitting
+    fly_other = 1.0 / fly_rate - filter_time(n_fly) - fitting_time(n_fly)
     return {
         "mix_steps_per_s": mix_rate,
         "fly_steps_per_s": fly_rate,
@@ -160,6 +165,7 @@ def vector_rates(num_envs: int = 64, steps: int = 600, **fields: Any) -> dict[st
         "share_cap_with_flight": (1.0 / ceiling) / (1.0 / ceiling + fly_other),
         "fitting_us": n_mix["fitting_s"] / n_mix["fitting"] * 1e6,
         "fitting_us_per_step": n_mix["fitting_s"] * 1e6,
+        "fitting_net_us_per_step": fitting_time(n_mix) * 1e6,
     }
 
 
@@ -170,13 +176,17 @@ def count_updates(venv: Any, actions: np.ndarray) -> dict[str, float]:
     for the batch under way before a test or a fitting (a replacement or a failure) and for
     each full batch; a RUL-table rebuild per row flagged stale when the observation is made.
     Each row's batch count is followed through the step and must land on the env's (an
-    ``AssertionError`` otherwise: the rules above missed an update). Each part fitting
-    (``scas_env.core.parts.replace_part``, a replacement or a failed part's) is counted and
-    its CPU seconds summed: ``fitting`` and ``fitting_s`` per env-step."""
+    ``AssertionError`` otherwise: the rules above missed an update); the rules assume one
+    flight per slot (the single actuator's env), and leave out the prediction a reset makes
+    for parts of unknown age (``Scenario.initial_health`` "random" or "in_service"). Each
+    part fitting (``scas_env.core.parts.replace_part``, a replacement or a failed part's) is
+    counted and its CPU seconds summed: ``fitting``, ``fitting_s`` and ``fitting_learn`` (the
+    learning updates fittings made, also in ``learn``) per env-step."""
     env = venv.unwrapped
     interval = int(env.setup.scenario.flight_update_flights)
     env.reset(seed=0)
-    total = {"test": 0, "learn": 0, "rebuild": 0, "fitting": 0, "fitting_s": 0.0}
+    total = {"test": 0, "learn": 0, "rebuild": 0, "fitting": 0, "fitting_s": 0.0,
+             "fitting_learn": 0}  # fmt: skip
     fit = parts.replace_part
 
     def timed_fit(*args: Any, **kwargs: Any) -> None:  # each fitting counted, CPU-timed
@@ -227,6 +237,7 @@ def _replay(env: Any, actions: np.ndarray, interval: int, total: dict[str, Any])
         if counted:
             total["test"] += int(tested.sum())
             total["learn"] += int(learns.sum())
+            total["fitting_learn"] += int(fitting.sum())
 
 
 @njit(cache=True)
@@ -390,7 +401,8 @@ def format_rates(r: dict[str, float]) -> str:
             f"its updates): with them the mix could reach at most "
             f"{100 * r['share_cap_with_flight']:.0f} % of the ceiling",
             f"fitting a part in the mix:     {r['fitting_us']:8.1f} us each (its learning update "
-            f"included), {r['fitting_us_per_step']:.2f} us per env-step",
+            f"included), {r['fitting_us_per_step']:.2f} us per env-step, "
+            f"{r['fitting_net_us_per_step']:.2f} without its learning updates",
             f"fleet (8 x 3, naive rule):    {r['fleet_actuator_flights_per_s']:10,.0f} "
             f"actuator-flights/s ({100 * r['fleet_share_of_vector']:.0f} % of the vector env's "
             f"actuator-steps/s), {r['fleet_episode_s']:.2f} s per 365-day episode",

@@ -68,7 +68,7 @@ def _interval(knots: np.ndarray, x: float) -> int:
     return lo
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _locate(grid: np.ndarray, cells: np.ndarray, inv_cell: float, x: float) -> int:
     """Segment k of ``grid`` holding x (grid[0] < x < grid[-1]) in O(1).
 
@@ -85,7 +85,7 @@ def _locate(grid: np.ndarray, cells: np.ndarray, inv_cell: float, x: float) -> i
     return k
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def rate_at_scalar(
     grid: np.ndarray, rate: np.ndarray, cells: np.ndarray, inv_cell: float, x: float
 ) -> float:
@@ -99,7 +99,7 @@ def rate_at_scalar(
     return rate[k] + (rate[k + 1] - rate[k]) * (xc - grid[k]) / (grid[k + 1] - grid[k])
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _segment_integral(g0: float, slope: float, t: float) -> float:
     """int_0^t dz / (g0 + slope z) = log(1 + slope t / g0) / slope.
 
@@ -112,7 +112,7 @@ def _segment_integral(g0: float, slope: float, t: float) -> float:
     return math.log(1.0 + z) / slope
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _segment_inverse(g0: float, slope: float, d: float) -> float:
     """t with int_0^t dz / (g0 + slope z) = d, i.e. g0 expm1(slope d) / slope."""
     z = slope * d
@@ -140,7 +140,7 @@ def damage_scalar(
     return cum[k] + _segment_integral(rate[k], slope, x - grid[k])
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def inverse_damage_scalar(grid: np.ndarray, rate: np.ndarray, cum: np.ndarray, d: float) -> float:
     """x with I(x) = d (inverse of :func:`damage_scalar`)."""
     if d <= 0.0:
@@ -152,7 +152,7 @@ def inverse_damage_scalar(grid: np.ndarray, rate: np.ndarray, cum: np.ndarray, d
     return grid[k] + _segment_inverse(rate[k], slope, d - cum[k])
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def damage_array(
     grid: np.ndarray,
     rate: np.ndarray,
@@ -167,7 +167,7 @@ def damage_array(
         out[i] = damage_scalar(grid, rate, cum, cells, inv_cell, x[i])
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _inverse_damage_array(
     grid: np.ndarray, rate: np.ndarray, cum: np.ndarray, d: np.ndarray, out: np.ndarray
 ) -> None:

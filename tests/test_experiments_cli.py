@@ -174,6 +174,19 @@ def test_env_speed_keeps_an_existing_json(tmp_path, capsys) -> None:
     assert "pass --overwrite" in capsys.readouterr().err and kept.read_text() == "{}"
 
 
+@pytest.mark.slow  # compiles its kernels: about a minute
+def test_rebuild_speed_runs(capsys) -> None:
+    """The rebuild bench behind findings.md's sort and division figures runs and prints
+    each figure (no timing asserted)."""
+    from experiments import rebuild_speed
+
+    assert rebuild_speed.main(["--repeats", "1"]) == 0
+    names = [line.split()[0] for line in capsys.readouterr().out.splitlines()]
+    assert names == ["quicksort_us", "quicksort_same_array_us", "radix_us",
+                     "damage_spring_python_us", "damage_spring_numpy_us",
+                     "damage_seal_python_us", "damage_seal_numpy_us"]  # fmt: skip
+
+
 def test_env_speed_counts_the_filter_updates_of_a_scripted_slot_sequence() -> None:
     """The ceiling's update counts, against a sequence counted by hand: after 100 flights
     (10 full batches), 5 flights, a test (the 5 learnt first, then the test; it flies one),
@@ -189,9 +202,27 @@ def test_env_speed_counts_the_filter_updates_of_a_scripted_slot_sequence() -> No
     actions = np.repeat(np.array(script)[:, None], 3, axis=1)
     venv = gym.make_vec(scas_env.ENV_ID, num_envs=3, vectorization_mode="vector_entry_point")
     counts = env_speed.count_updates(venv, actions)
-    assert {k: counts[k] for k in ("test", "learn", "rebuild", "fitting")} == {
-        "test": 1 / 20, "learn": 3 / 20, "rebuild": 3 / 20, "fitting": 1 / 20}  # fmt: skip
+    assert {k: counts[k] for k in ("test", "learn", "rebuild", "fitting", "fitting_learn")} == {
+        "test": 1 / 20, "learn": 3 / 20, "rebuild": 3 / 20, "fitting": 1 / 20,
+        "fitting_learn": 1 / 20}  # fmt: skip
     assert counts["fitting_s"] > 0.0
+
+
+def test_env_speed_counts_through_failures_and_autoresets() -> None:
+    """Parts part-way through life in 60-slot episodes, flown and tested at random: the
+    counting rules follow every row's batch count through failed flights (their parts
+    fitted) and autoresets (``count_updates`` asserts it at every step)."""
+    import gymnasium as gym
+
+    import scas_env
+    from experiments import env_speed
+
+    actions = np.random.default_rng(1).choice(2, size=(400, 8), p=(0.8, 0.2))
+    venv = gym.make_vec(scas_env.ENV_ID, num_envs=8, vectorization_mode="vector_entry_point",
+                        initial_health="random", episode_slots=60)  # fmt: skip
+    counts = env_speed.count_updates(venv, actions)
+    assert counts["fitting"] > 0.0  # nothing was replaced by hand: failed parts
+    assert counts["learn"] >= counts["fitting_learn"] > 0.0
 
 
 def test_risk_recalibration_command(tmp_path, capsys) -> None:
