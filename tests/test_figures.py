@@ -174,7 +174,26 @@ def test_fig7a_null_bias_grows_and_keeps_its_sign(figs) -> None:
 def test_fig7b_gain_falls_with_wear(figs) -> None:
     d = figs.fig7b
     assert np.all(np.diff(d.gain) < 0.0)
-    assert 0.9 < d.gain[0] < 1.0
+    # where the worn seals leak laminarly only (no orifice term), the first-order loop with
+    # a leakage pole, |G| = K_v / |j w + K_v + (K_c / 2 + k_1) k_s / A^2| (ref section 1.2),
+    # gives the simulated gain to within its neglected valve and fluid dynamics (0.1-0.3 %)
+    checked = 0
+    for wear, gain in zip(d.wear_m, d.gain, strict=True):
+        c = actuator_config(P, health=HealthState(seal_wear_m=float(wear)))
+        if c.leakage_k2_m3_s_sqrtpa > 0.0:
+            continue
+        k_v = (c.kp_a_per_m * c.land_coeff_m3_s_sqrtpa
+               * np.sqrt((c.supply_pressure_pa - c.return_pressure_pa) / 2)
+               / (c.rated_current_a * c.area_m2))  # fmt: skip
+        leak = (
+            (c.valve_leakage_m3_s_pa / 2 + c.leakage_k1_m3_s_pa)
+            * (c.spring_rate_1_n_m + c.spring_rate_2_n_m)
+            / c.area_m2**2
+        )
+        w = 2 * np.pi * d.gain_frequency_hz
+        assert gain == pytest.approx(k_v / abs(1j * w + k_v + leak), rel=5e-3), wear
+        checked += 1
+    assert checked >= 2
     # held position at the 2 mm plateau falls with wear (less static gain)
     plateau = d.command_m == d.command_m.max()
     held = d.position_m[:, plateau][:, -1]
