@@ -1,6 +1,6 @@
 """Speed of the envs, each figure beside a reference measured in the same run (``make bench``).
 
-    python -m experiments.env_speed                 # every figure, ~2 min
+    python -m experiments.env_speed                 # every figure, ~20 s
     python -m experiments.env_speed --json out.json
 
 * **single env** (``ScasMaintenance-v2``, ``gym.make``): microseconds per step, flying only and
