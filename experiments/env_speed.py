@@ -39,6 +39,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import time
 from collections.abc import Callable, Sequence
 from pathlib import Path
@@ -163,7 +164,7 @@ def vector_rates(num_envs: int = 64, steps: int = 600, **fields: Any) -> dict[st
         "share_of_ceiling": mix_rate / ceiling,
         "fly_other_us": fly_other * 1e6,
         "share_cap_with_flight": (1.0 / ceiling) / (1.0 / ceiling + fly_other),
-        "fitting_us": n_mix["fitting_s"] / n_mix["fitting"] * 1e6,
+        "fitting_us": n_mix["fitting_s"] / n_mix["fitting"] * 1e6 if n_mix["fitting"] else math.nan,
         "fitting_us_per_step": n_mix["fitting_s"] * 1e6,
         "fitting_net_us_per_step": fitting_time(n_mix) * 1e6,
     }
