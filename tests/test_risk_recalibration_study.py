@@ -17,6 +17,7 @@ def test_episode_intervals_cover_where_record_intervals_do_not() -> None:
     rng = np.random.default_rng(11)
     covered = covered_binomial = 0
     runs = 60
+    widths = []
     for _ in range(runs):
         episodes = 40
         effect = rng.beta(0.5, 0.5, size=episodes) * 0.6  # mean 0.3, shared in an episode
@@ -26,10 +27,19 @@ def test_episode_intervals_cover_where_record_intervals_do_not() -> None:
         risk = np.full(episode.size, 0.25)  # one bin
         ci = episode_intervals(risk, hit, episode, rng, resamples=999)[4]  # bin 0.2-0.35
         covered += ci["episode_ci_low"] <= 0.3 <= ci["episode_ci_high"]
+        widths.append(ci["episode_ci_high"] - ci["episode_ci_low"])
         b = binomtest(int(hit.sum()), hit.size).proportion_ci(0.95, method="wilson")
         covered_binomial += b.low <= 0.3 <= b.high
     assert covered >= 0.8 * runs  # nominal 0.95; 40 clusters: about 0.9
     assert covered_binomial < 0.7 * runs  # about 0.45 at this design effect
+    # and it is as wide as the clustered design makes the estimate uncertain: the ratio
+    # estimator's delta-method variance Var(h - p n) / (K E[n]^2) with h | e, n ~ Bin(n, e),
+    # e = 0.6 Beta(1/2, 1/2) (variance 0.36 / 8), n uniform on 20..59
+    var_e, mean_e = 0.36 / 8, 0.3
+    e_n, e_n2 = 39.5, (40**2 - 1) / 12 + 39.5**2
+    var_h = e_n2 * var_e + e_n * (mean_e - (var_e + mean_e**2))
+    width = 2 * 1.96 * np.sqrt(var_h / (40 * e_n**2))
+    assert np.mean(widths) == pytest.approx(width, rel=0.1)
 
 
 def test_off_target() -> None:
