@@ -40,6 +40,7 @@ from numba import njit
 
 from prognostics.degradation_models import predict_particles
 from prognostics.measurement import random_effect_update
+from prognostics.normals import standard_normal
 from prognostics.particle_filter import (
     MAX_ABS_LOG_THETA,
     MAX_ABS_SEVERITY,
@@ -87,7 +88,11 @@ class FilterModel(NamedTuple):
     bandwidth h, kernel variance kappa, gaussian kernel, shrink); ``move``: the filters'
     resample-move (:class:`scas_env.core.rejuvenation.MoveModel`); ``cross_inflation``: the
     factor on the variance the other part's estimate adds to a feature's likelihood, per
-    filter (``Scenario.cross_variance_inflation``, ``seal_cross_variance_inflation``).
+    filter (``Scenario.cross_variance_inflation``, ``seal_cross_variance_inflation``);
+    ``persistence``: ``(rho, row)``, the seal filter's persistent cross-fault error
+    (``Scenario.seal_cross_persistence``; row -1: off): each seal particle carries in
+    ``aux[row]`` a standard-normal offset of the spring estimate, AR(1) with ``rho`` per
+    flight, and reads its features at its own spring value instead of adding a variance.
     """
 
     process: tuple
@@ -109,6 +114,7 @@ class FilterModel(NamedTuple):
     ground_other: tuple
     move: MoveModel
     cross_inflation: tuple
+    persistence: tuple
 
 
 @njit(cache=True, error_model="numpy")
@@ -155,6 +161,40 @@ def effect_likelihood(
         tau[p] = bilinear_at(stack, 1, i, ti, j, tj)
         run = bilinear_at(stack, 2, i, ti, j, tj) * noise_scale
         var[p] = run * run / m + extra_var
+        shift += w[p] * tau[p] * z_mean[p]
+    random_effect_update(y, mu, tau, var, z_mean, z_var, log_lik)
+    return shift
+
+
+@njit(cache=True, error_model="numpy")
+def effect_likelihood_each(
+    y: float,
+    m: float,
+    x: np.ndarray,
+    w: np.ndarray,
+    critical: float,
+    stack: np.ndarray,
+    own_grid: np.ndarray,
+    other_grid: np.ndarray,
+    others: np.ndarray,
+    noise_scale: float,
+    z_mean: np.ndarray,
+    z_var: np.ndarray,
+    log_lik: np.ndarray,
+    work: tuple,
+) -> float:
+    """:func:`effect_likelihood` with the other part at its own value per particle
+    (``others``, fractions) and no extra variance."""
+    n = x.size
+    mu, tau, var = work[10], work[11], work[12]
+    shift = 0.0
+    for p in range(n):
+        i, ti = cell_of(own_grid, min(max(x[p] / critical, 0.0), 1.0))
+        j, tj = cell_of(other_grid, others[p])
+        mu[p] = bilinear_at(stack, 0, i, ti, j, tj)
+        tau[p] = bilinear_at(stack, 1, i, ti, j, tj)
+        run = bilinear_at(stack, 2, i, ti, j, tj) * noise_scale
+        var[p] = run * run / m
         shift += w[p] * tau[p] * z_mean[p]
     random_effect_update(y, mu, tau, var, z_mean, z_var, log_lik)
     return shift
@@ -225,6 +265,13 @@ def _predict(e: int, p: int, d: float, bank: tuple, pending: np.ndarray, status:
         predict_particles(bx[e, 1], blt[e, 1], d, handle, work[4], *model.process[1])
     if _first_out_of_range(bx[e, p], blt[e, p], MAX_ABS_SEVERITY, MAX_ABS_LOG_THETA) >= 0:
         status[e] = 1
+    rho, row = model.persistence
+    if p == 1 and row >= 0:  # the spring estimate's error seen by each seal particle
+        keep = rho**d
+        fresh = math.sqrt(max(1.0 - keep * keep, 0.0))
+        u = bank[4][e, 1, row]
+        for i in range(u.size):
+            u[i] = keep * u[i] + fresh * standard_normal(handle)
     pending[e, p] -= d
     if _moves(p, model):
         bank[5][2][e, p, C_AGE] += d
@@ -270,10 +317,20 @@ def _effect_update(e: int, p: int, k: int, y: float, m: float, moments: tuple,
         st, g_own, g_other, own, 0.0, 0.0
     )
     extra_var = slope * slope * other_var * model.cross_inflation[p]
-    shift = effect_likelihood(
-        y, m, bx[e, p], bw[e, p], model.critical[p], st, g_own, g_other, other,
-        model.noise_scale, extra_var, z_mean, z_var, log_lik, work,
-    )  # fmt: skip
+    row = model.persistence[1]
+    if p == 1 and row >= 0:
+        u, others, sd = baux[e, 1, row], work[3], math.sqrt(max(other_var, 0.0))
+        for i in range(u.size):
+            others[i] = min(max(other + sd * u[i], 0.0), 1.0)
+        shift = effect_likelihood_each(
+            y, m, bx[e, p], bw[e, p], model.critical[p], st, g_own, g_other, others,
+            model.noise_scale, z_mean, z_var, log_lik, work,
+        )  # fmt: skip
+    else:
+        shift = effect_likelihood(
+            y, m, bx[e, p], bw[e, p], model.critical[p], st, g_own, g_other, other,
+            model.noise_scale, extra_var, z_mean, z_var, log_lik, work,
+        )  # fmt: skip
     for i in range(log_lik.size):
         if not math.isfinite(log_lik[i]):
             status[e] = 2

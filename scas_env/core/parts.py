@@ -389,6 +389,7 @@ def reset_filter(batch: ActuatorState, e: int, part: str) -> None:
         restart(e, batch.bank)
         if st.filters.move.seal:  # the seal's installation effects, from here on
             _record_seal_effects(batch, e)
+        _new_spring_errors(batch, e, rng)
     else:
         w = a["w"][e, 1]
         kept = [
@@ -402,10 +403,20 @@ def reset_filter(batch: ActuatorState, e: int, part: str) -> None:
         if st.filters.move.seal:
             restart(e, batch.bank, 1)
             _record_seal_effects(batch, e)
+        _new_spring_errors(batch, e, rng)
     a["det_n"][e, p] = 0
     a["detected"][e, p] = False
     a["pending"][e, p] = 0.0
     a["stale"][e] = True
+
+
+def _new_spring_errors(batch: ActuatorState, e: int, rng: np.random.Generator) -> None:
+    """With ``Scenario.seal_cross_persistence``: each seal particle's offset of the spring
+    estimate drawn anew, N(0, 1) (a new spring pair or a new seal set)."""
+    row = batch.setup.filters.persistence[1]
+    if row >= 0:
+        with rng.bit_generator.lock:
+            fill_standard_normal(handle_of(rng), batch.a["aux"][e, 1, row])
 
 
 def _record_seal_effects(batch: ActuatorState, e: int) -> None:

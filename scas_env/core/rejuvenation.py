@@ -501,7 +501,7 @@ def move_particles(e: int, bank: tuple, model: tuple, factor: tuple, d: np.ndarr
     grid, rate, cum = model.rul_tables[p][0], model.rul_tables[p][1], model.rul_tables[p][2]
     l11, l21, l22 = factor
     steps = model.move.steps
-    n_aux = baux.shape[2]
+    n_aux = baux.shape[2] - baux.shape[2] % 2  # the effects' rows (not a persistence row)
     n = bx.shape[2]
     age = bank[5][2][e, p, C_AGE]
     d0 = _unworn_damage(model) if p == 1 else 0.0

@@ -195,6 +195,15 @@ class Scenario(Validated):
         "spring's estimate adds to I9's and G3's likelihoods), 1-1000; 0: the same as "
         "cross_variance_inflation (docs/beliefs.md)",
     )
+    seal_cross_persistence: float = param(
+        0.0,
+        "-",
+        lo=0.0,
+        hi=0.9999,
+        source="per-flight AR(1) correlation of the spring estimate's error as the seal filter "
+        "carries it: each seal particle reads G3 and I9 at its own spring value, the estimate "
+        "plus that error (its variance not added); 0: off (the variance factor)",
+    )
     rejuvenation_steps: float = param(
         1,
         "MH steps",
@@ -222,6 +231,11 @@ class Scenario(Validated):
                 "Scenario.seal_cross_variance_inflation = "
                 f"{self.seal_cross_variance_inflation!r} must be 0 (the same as "
                 "cross_variance_inflation) or in [1, 1000]"
+            )
+        if self.seal_cross_persistence > 0 and self.rejuvenation == "resample_move_both":
+            raise ValueError(
+                f"Scenario.seal_cross_persistence = {self.seal_cross_persistence!r} needs the "
+                "seal filter without resample-move (rejuvenation 'none' or 'resample_move')"
             )
         if not (self.crack_active or self.wear_active):
             raise ValueError("Scenario: at least one of crack_active, wear_active must be 1")

@@ -435,7 +435,14 @@ def _filter_model(
             float(s.cross_variance_inflation),
             float(s.seal_cross_variance_inflation or s.cross_variance_inflation),
         ),
+        persistence=(float(s.seal_cross_persistence), persistence_row(s)),
     )
+
+
+def persistence_row(s: Scenario) -> int:
+    """The aux row of the seal particles' spring-error offsets (after the installation
+    effects' rows), -1 when ``Scenario.seal_cross_persistence`` is 0."""
+    return 2 * max(len(f) for f in EFFECT_FEATURES) if s.seal_cross_persistence > 0 else -1
 
 
 #: random-walk scale over the posterior's sd in d dimensions (Roberts, Gelman & Gilks 1997:

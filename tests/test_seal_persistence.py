@@ -1,0 +1,111 @@
+"""``Scenario(seal_cross_persistence=rho)``: each seal particle carries the spring estimate's
+error as a standard-normal offset, AR(1) with ``rho`` per flight, and reads its features at
+its own spring value (docs/beliefs.md, cross-fault errors)."""
+
+from __future__ import annotations
+
+import gymnasium as gym
+import numpy as np
+import pytest
+
+from experiments.belief_calibration import policy_action
+from scas_env import ENV_ID
+from scas_env.core.filters import (
+    effect_likelihood,
+    effect_likelihood_each,
+    predict_filter,
+    work_arrays,
+)
+from scas_env.core.scenario import Scenario
+from scas_env.env import ScasMaintenanceEnv
+
+RHO = 0.99
+
+
+def _env(**kw: object) -> ScasMaintenanceEnv:
+    env = ScasMaintenanceEnv(seal_cross_persistence=RHO, n_particles=200, **kw)
+    env.reset(seed=3)
+    for t in range(40):
+        env.step(policy_action("test10", t))
+    return env
+
+
+def test_a_prediction_moves_the_offsets_as_an_ar1_of_the_flights() -> None:
+    """Over d flights each offset becomes rho^d u + sqrt(1 - rho^2d) z, z the filter
+    stream's next normals: the residuals, rescaled, are a contiguous run of the normals a
+    copy of the stream draws (after the process's own), to rounding."""
+    env = _env()
+    a, batch = env.batch.a, env.batch
+    row = batch.setup.filters.persistence[1]
+    u0 = a["aux"][0, 1, row].copy()
+    rng = batch.rngs[0]["filter"]
+    twin = np.random.Generator(type(rng.bit_generator)())
+    twin.bit_generator.state = rng.bit_generator.state
+    d = 7.0
+    a["pending"][0, 1] = d
+    work = work_arrays(u0.size, len(batch.setup.learn_cols))
+    handle = tuple(int(h) for h in a["h_filter"][0])
+    predict_filter(0, 1, d, batch.bank, a["pending"], a["status"], work, batch.setup.filters,
+                   handle)  # fmt: skip
+    keep = RHO**d
+    z = (a["aux"][0, 1, row] - keep * u0) / np.sqrt(1.0 - keep * keep)
+    drawn = twin.standard_normal(4 * u0.size)
+    starts = [k for k in range(3 * u0.size + 1) if np.allclose(drawn[k : k + u0.size], z)]
+    assert len(starts) == 1, "the offsets are not the AR(1) step of the stream's normals"
+    # and the wrong persistence is caught: rho (one flight) in place of rho^d
+    z_wrong = (a["aux"][0, 1, row] - RHO * u0) / np.sqrt(1.0 - RHO * RHO)
+    assert not any(np.allclose(drawn[k : k + u0.size], z_wrong) for k in range(3 * u0.size))
+
+
+def test_at_one_spring_value_it_is_the_likelihood_without_extra_variance() -> None:
+    """Every particle at the same spring value: the per-particle likelihood is the shared
+    one's with no added variance, bit for bit (weights, effect beliefs, shift)."""
+    rng = np.random.default_rng(0)
+    n = 64
+    grid = np.linspace(0.0, 1.0, 5)
+    stack = rng.random((3, 5, 5)) + 0.5
+    x, w = rng.random(n) * 1e-5, rng.dirichlet(np.ones(n))
+    args = (0.9, 3.0, x, w, 2e-5, stack, grid, grid)
+    outs = []
+    for each in (False, True):
+        zm, zv, ll = np.zeros(n), np.ones(n), np.zeros(n)
+        work = work_arrays(n, 2)
+        if each:
+            shift = effect_likelihood_each(*args, np.full(n, 0.37), 1.0, zm, zv, ll, work)
+        else:
+            shift = effect_likelihood(*args, 0.37, 1.0, 0.0, zm, zv, ll, work)
+        outs.append((shift, zm, zv, ll))
+    assert outs[0][0] == outs[1][0]
+    for k in (1, 2, 3):
+        np.testing.assert_array_equal(outs[0][k], outs[1][k])
+
+
+def test_single_and_vector_env_agree_and_the_option_changes_the_episode() -> None:
+    kw = {"episode_slots": 600, "n_particles": 50, "preflight": "every_flight"}
+    single = ScasMaintenanceEnv(seal_cross_persistence=RHO, **kw)
+    off = ScasMaintenanceEnv(**kw)
+    vec = gym.make_vec(ENV_ID, num_envs=2, vectorization_mode="vector_entry_point",
+                       seal_cross_persistence=RHO, **kw)  # fmt: skip
+    o1, _ = single.reset(seed=5)
+    off.reset(seed=5)
+    ov, _ = vec.reset(seed=[5, 4])
+    differs = False
+    for t in range(kw["episode_slots"] - 1):
+        action = {150: 3, 400: 2}.get(t, 0)
+        o1, r1, *_ = single.step(action)
+        o0, *_ = off.step(action)
+        ov, rv, *_ = vec.step(np.array([action, 0]))
+        np.testing.assert_array_equal(o1, ov[0])
+        assert r1 == rv[0]
+        differs = differs or not np.array_equal(o1, o0)
+    assert differs
+    np.testing.assert_array_equal(single.batch.a["aux"][0], vec.unwrapped.batch.a["aux"][0])
+    vec.close()
+
+
+def test_refused_with_the_seals_move_and_out_of_range() -> None:
+    with pytest.raises(ValueError, match="seal_cross_persistence"):
+        Scenario(seal_cross_persistence=0.99, rejuvenation="resample_move_both")
+    for bad in (-0.1, 1.0):
+        with pytest.raises(ValueError, match="seal_cross_persistence"):
+            Scenario(seal_cross_persistence=bad)
