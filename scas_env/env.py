@@ -223,10 +223,10 @@ class ScasMaintenanceEnv(gym.Env):
     Estimator options of the monitor (off by default; docs/beliefs.md):
     ``rejuvenation="resample_move"`` and ``cross_variance_inflation=50`` bring the spring's
     RUL intervals to exact Bayes on the same data; with a test before every flight,
-    ``rejuvenation="resample_move_both"``, ``cross_variance_inflation=500`` and
-    ``seal_cross_variance_inflation=1`` cover both parts' (0.85-0.91 per life stage), at a
-    cost: the risk output is less reliable than with the factor 50 and the seal's low
-    quantile is undercut 11.5 % early in its life (docs/findings.md#beliefs).
+    ``rejuvenation="resample_move"``, ``cross_variance_inflation=500`` and
+    ``seal_cross_persistence=0.9954`` (the seal filter carries the spring estimate's error as
+    a persistent per-particle offset) cover both parts' (0.88-0.91 per life stage); the
+    seal's low quantile is still undercut 8.4 % early in its life (docs/findings.md#beliefs).
 
     ## Vectorised
 
