@@ -140,6 +140,7 @@ def test_the_wrapped_env_pickles_mid_episode() -> None:
         "risk_maps_options_default",
         "risk_maps_options_paper",
         "risk_maps_both_moves_paper",
+        "risk_maps_persistent_paper",
     ],
 )
 def test_the_documented_maps_load_and_fit_their_scenario(name: str) -> None:
