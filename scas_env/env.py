@@ -187,7 +187,8 @@ class ScasMaintenanceEnv(gym.Env):
     ``wasted_life_count`` (running over the episode's preventive replacements);
     ``reward_terms``; ``features`` (raw latest features, SI units); ``true_state`` (crack
     depth and wear in m and as fractions of critical, each part's remaining life in flights,
-    the failing one included).
+    the failing one included; inf for a part that never fails: a crack fitted below the
+    dormant depth, a fault switched off).
 
     ## Starting State
 
