@@ -11,6 +11,8 @@ import pytest
 from experiments.belief_calibration import policy_action
 from scas_env import ENV_ID
 from scas_env.core.filters import (
+    _effect_update,
+    _moments,
     effect_likelihood,
     effect_likelihood_each,
     predict_filter,
@@ -80,8 +82,49 @@ def test_at_one_spring_value_it_is_the_likelihood_without_extra_variance() -> No
         np.testing.assert_array_equal(outs[0][k], outs[1][k])
 
 
+def test_the_seal_reads_each_particle_at_the_estimate_plus_its_offset() -> None:
+    """A G3 datum into the seal filter with every offset at c: its log-likelihoods are the
+    shared-value likelihood's at the spring estimate + c x its sd (no added variance), bit
+    for bit; a sign or scale error in the offset fails."""
+    env = _env()
+    batch, a = env.batch, env.batch.a
+    model, bank = batch.setup.filters, batch.bank
+    row = model.persistence[1]
+    n = a["x"].shape[2]
+    a["aux"][0, 1, row] = 0.7
+    work = work_arrays(n, len(batch.setup.learn_cols))
+    moments = _moments(0, bank, model, work)
+    c_hat, c_var = moments[0], moments[1]
+    k, g3 = int(model.ground_aux[1]), float(a["last"][0, -1])
+    z0 = (a["aux"][0, 1, k].copy(), a["aux"][0, 1, k + 1].copy())  # the beliefs before
+    x, w = a["x"][0, 1].copy(), a["w"][0, 1].copy()
+    handle = tuple(int(h) for h in a["h_filter"][0])
+    _effect_update(0, 1, k, g3, 1.0, moments, model.ground_stack[1], model.ground_own[1],
+                   model.ground_other[1], bank, a["status"], work, model, handle,
+                   model.learn_part.size + 1)  # fmt: skip
+    got = work[5].copy()
+    ref_work, ll = work_arrays(n, len(batch.setup.learn_cols)), np.empty(n)
+    spring = min(max(c_hat + np.sqrt(c_var) * 0.7, 0.0), 1.0)
+    effect_likelihood(g3, 1.0, x, w, model.critical[1], model.ground_stack[1],
+                      model.ground_own[1], model.ground_other[1], spring, model.noise_scale,
+                      0.0, z0[0].copy(), z0[1].copy(), ll, ref_work)  # fmt: skip
+    np.testing.assert_array_equal(got, ll)
+    for wrong in (c_hat - np.sqrt(c_var) * 0.7, c_hat + 3 * np.sqrt(c_var) * 0.7):
+        ll_wrong = np.empty(n)
+        effect_likelihood(g3, 1.0, x, w, model.critical[1], model.ground_stack[1],
+                          model.ground_own[1], model.ground_other[1], min(max(wrong, 0.0), 1.0),
+                          model.noise_scale, 0.0, z0[0].copy(), z0[1].copy(), ll_wrong,
+                          ref_work)  # fmt: skip
+        assert not np.array_equal(got, ll_wrong)
+
+
 def test_single_and_vector_env_agree_and_the_option_changes_the_episode() -> None:
-    kw = {"episode_slots": 600, "n_particles": 50, "preflight": "every_flight"}
+    kw = {
+        "episode_slots": 600,
+        "n_particles": 50,
+        "preflight": "every_flight",
+        "rejuvenation": "resample_move",
+    }  # with the spring's move, as documented
     single = ScasMaintenanceEnv(seal_cross_persistence=RHO, **kw)
     off = ScasMaintenanceEnv(**kw)
     vec = gym.make_vec(ENV_ID, num_envs=2, vectorization_mode="vector_entry_point",
@@ -90,9 +133,13 @@ def test_single_and_vector_env_agree_and_the_option_changes_the_episode() -> Non
     off.reset(seed=5)
     ov, _ = vec.reset(seed=[5, 4])
     differs = False
+    row = single.batch.setup.filters.persistence[1]
     for t in range(kw["episode_slots"] - 1):
         action = {150: 3, 400: 2}.get(t, 0)
+        before = single.batch.a["aux"][0, 1, row].copy()
         o1, r1, *_ = single.step(action)
+        if action:  # a new seal set or spring pair: every offset drawn anew
+            assert not np.any(single.batch.a["aux"][0, 1, row] == before)
         o0, *_ = off.step(action)
         ov, rv, *_ = vec.step(np.array([action, 0]))
         np.testing.assert_array_equal(o1, ov[0])

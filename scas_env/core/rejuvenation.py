@@ -501,7 +501,8 @@ def move_particles(e: int, bank: tuple, model: tuple, factor: tuple, d: np.ndarr
     grid, rate, cum = model.rul_tables[p][0], model.rul_tables[p][1], model.rul_tables[p][2]
     l11, l21, l22 = factor
     steps = model.move.steps
-    n_aux = baux.shape[2] - baux.shape[2] % 2  # the effects' rows (not a persistence row)
+    row = model.persistence[1]  # the seal's spring-error offsets (if any) are not moved
+    n_aux = row if row >= 0 else baux.shape[2]
     n = bx.shape[2]
     age = bank[5][2][e, p, C_AGE]
     d0 = _unworn_damage(model) if p == 1 else 0.0

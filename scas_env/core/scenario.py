@@ -202,7 +202,8 @@ class Scenario(Validated):
         hi=0.9999,
         source="per-flight AR(1) correlation of the spring estimate's error as the seal filter "
         "carries it: each seal particle reads G3 and I9 at its own spring value, the estimate "
-        "plus that error (its variance not added); 0: off (the variance factor)",
+        "plus that error (its variance not added, seal_cross_variance_inflation unused); 0: "
+        "off (the variance factor)",
     )
     rejuvenation_steps: float = param(
         1,
