@@ -14,7 +14,6 @@ from scas_env.core.filters import (
     _effect_update,
     _moments,
     effect_likelihood,
-    effect_likelihood_each,
     predict_filter,
     work_arrays,
 )
@@ -60,26 +59,24 @@ def test_a_prediction_moves_the_offsets_as_an_ar1_of_the_flights() -> None:
 
 
 def test_at_one_spring_value_it_is_the_likelihood_without_extra_variance() -> None:
-    """Every particle at the same spring value: the per-particle likelihood is the shared
-    one's with no added variance, bit for bit (weights, effect beliefs, shift)."""
+    """Every particle at its own spring value, all equal: the shared value's likelihood
+    with no added variance, bit for bit (effect beliefs, log-likelihoods, shift); at
+    different values, not."""
     rng = np.random.default_rng(0)
     n = 64
     grid = np.linspace(0.0, 1.0, 5)
     stack = rng.random((3, 5, 5)) + 0.5
     x, w = rng.random(n) * 1e-5, rng.dirichlet(np.ones(n))
-    args = (0.9, 3.0, x, w, 2e-5, stack, grid, grid)
+    args = (0.9, 3.0, x, w, 2e-5, stack, grid, grid, 0.37, 1.0, 0.0)
     outs = []
-    for each in (False, True):
+    for others in (np.empty(0), np.full(n, 0.37), np.linspace(0.0, 1.0, n)):
         zm, zv, ll = np.zeros(n), np.ones(n), np.zeros(n)
-        work = work_arrays(n, 2)
-        if each:
-            shift = effect_likelihood_each(*args, np.full(n, 0.37), 1.0, zm, zv, ll, work)
-        else:
-            shift = effect_likelihood(*args, 0.37, 1.0, 0.0, zm, zv, ll, work)
+        shift = effect_likelihood(*args, zm, zv, ll, work_arrays(n, 2), others)
         outs.append((shift, zm, zv, ll))
     assert outs[0][0] == outs[1][0]
     for k in (1, 2, 3):
         np.testing.assert_array_equal(outs[0][k], outs[1][k])
+    assert not np.array_equal(outs[0][3], outs[2][3])
 
 
 def test_the_seal_reads_each_particle_at_the_estimate_plus_its_offset() -> None:
@@ -107,14 +104,14 @@ def test_the_seal_reads_each_particle_at_the_estimate_plus_its_offset() -> None:
     spring = min(max(c_hat + np.sqrt(c_var) * 0.7, 0.0), 1.0)
     effect_likelihood(g3, 1.0, x, w, model.critical[1], model.ground_stack[1],
                       model.ground_own[1], model.ground_other[1], spring, model.noise_scale,
-                      0.0, z0[0].copy(), z0[1].copy(), ll, ref_work)  # fmt: skip
+                      0.0, z0[0].copy(), z0[1].copy(), ll, ref_work, np.empty(0))  # fmt: skip
     np.testing.assert_array_equal(got, ll)
     for wrong in (c_hat - np.sqrt(c_var) * 0.7, c_hat + 3 * np.sqrt(c_var) * 0.7):
         ll_wrong = np.empty(n)
         effect_likelihood(g3, 1.0, x, w, model.critical[1], model.ground_stack[1],
                           model.ground_own[1], model.ground_other[1], min(max(wrong, 0.0), 1.0),
                           model.noise_scale, 0.0, z0[0].copy(), z0[1].copy(), ll_wrong,
-                          ref_work)  # fmt: skip
+                          ref_work, np.empty(0))  # fmt: skip
         assert not np.array_equal(got, ll_wrong)
 
 

@@ -145,56 +145,25 @@ def effect_likelihood(
     z_var: np.ndarray,
     log_lik: np.ndarray,
     work: tuple,
+    others: np.ndarray,
 ) -> float:
     """Per particle: ``mu``, ``tau``, ``sigma`` of the tables at its own severity
-    (``x / critical`` clipped to [0, 1]) and the other part at ``other``; predictive density
-    of ``y`` (the mean of ``m`` runs, extra variance ``extra_var``) into ``log_lik`` and the
-    effect conditioned on it. Returns the weighted mean effect ``sum w_i tau_i m_i`` before
-    conditioning."""
+    (``x / critical`` clipped to [0, 1]) and the other part at ``other`` (or, if ``others``
+    is not empty, at its own ``others[p]``); predictive density of ``y`` (the mean of ``m``
+    runs, extra variance ``extra_var``) into ``log_lik`` and the effect conditioned on it.
+    Returns the weighted mean effect ``sum w_i tau_i m_i`` before conditioning."""
     n = x.size
     j, tj = cell_of(other_grid, other)
     mu, tau, var = work[10], work[11], work[12]
     shift = 0.0
     for p in range(n):
         i, ti = cell_of(own_grid, min(max(x[p] / critical, 0.0), 1.0))
+        if others.size:
+            j, tj = cell_of(other_grid, others[p])
         mu[p] = bilinear_at(stack, 0, i, ti, j, tj)
         tau[p] = bilinear_at(stack, 1, i, ti, j, tj)
         run = bilinear_at(stack, 2, i, ti, j, tj) * noise_scale
         var[p] = run * run / m + extra_var
-        shift += w[p] * tau[p] * z_mean[p]
-    random_effect_update(y, mu, tau, var, z_mean, z_var, log_lik)
-    return shift
-
-
-@njit(cache=True, error_model="numpy")
-def effect_likelihood_each(
-    y: float,
-    m: float,
-    x: np.ndarray,
-    w: np.ndarray,
-    critical: float,
-    stack: np.ndarray,
-    own_grid: np.ndarray,
-    other_grid: np.ndarray,
-    others: np.ndarray,
-    noise_scale: float,
-    z_mean: np.ndarray,
-    z_var: np.ndarray,
-    log_lik: np.ndarray,
-    work: tuple,
-) -> float:
-    """:func:`effect_likelihood` with the other part at its own value per particle
-    (``others``, fractions) and no extra variance."""
-    n = x.size
-    mu, tau, var = work[10], work[11], work[12]
-    shift = 0.0
-    for p in range(n):
-        i, ti = cell_of(own_grid, min(max(x[p] / critical, 0.0), 1.0))
-        j, tj = cell_of(other_grid, others[p])
-        mu[p] = bilinear_at(stack, 0, i, ti, j, tj)
-        tau[p] = bilinear_at(stack, 1, i, ti, j, tj)
-        run = bilinear_at(stack, 2, i, ti, j, tj) * noise_scale
-        var[p] = run * run / m
         shift += w[p] * tau[p] * z_mean[p]
     random_effect_update(y, mu, tau, var, z_mean, z_var, log_lik)
     return shift
@@ -215,8 +184,9 @@ def fraction_moments(x: np.ndarray, w: np.ndarray, critical: float, sq: np.ndarr
 @njit(cache=True)
 def work_arrays(n: int, n_learn: int) -> tuple:
     """Scratch of the filter kernels for N particles: cumsum, indices, two buffers, the
-    process scratch, log-likelihoods, squares, batch means, (unused), and the per-particle
-    mu, tau, variance of a likelihood."""
+    process scratch, log-likelihoods, squares, batch means, an empty array (no per-particle
+    other value: :func:`effect_likelihood`), (unused), and the per-particle mu, tau,
+    variance of a likelihood."""
     return (
         np.empty(n), np.empty(n, dtype=np.intp), np.empty(n), np.empty(n), np.zeros((10, n)),
         np.empty(n), np.empty(n), np.empty(max(n_learn, 1)), np.empty(0), np.empty(0),
@@ -317,20 +287,17 @@ def _effect_update(e: int, p: int, k: int, y: float, m: float, moments: tuple,
         st, g_own, g_other, own, 0.0, 0.0
     )
     extra_var = slope * slope * other_var * model.cross_inflation[p]
+    others = work[8]  # empty: every particle at the other's estimate
     row = model.persistence[1]
-    if p == 1 and row >= 0:
+    if p == 1 and row >= 0:  # each seal particle at its own spring value, no extra variance
         u, others, sd = baux[e, 1, row], work[3], math.sqrt(max(other_var, 0.0))
         for i in range(u.size):
             others[i] = min(max(other + sd * u[i], 0.0), 1.0)
-        shift = effect_likelihood_each(
-            y, m, bx[e, p], bw[e, p], model.critical[p], st, g_own, g_other, others,
-            model.noise_scale, z_mean, z_var, log_lik, work,
-        )  # fmt: skip
-    else:
-        shift = effect_likelihood(
-            y, m, bx[e, p], bw[e, p], model.critical[p], st, g_own, g_other, other,
-            model.noise_scale, extra_var, z_mean, z_var, log_lik, work,
-        )  # fmt: skip
+        extra_var = 0.0
+    shift = effect_likelihood(
+        y, m, bx[e, p], bw[e, p], model.critical[p], st, g_own, g_other, other,
+        model.noise_scale, extra_var, z_mean, z_var, log_lik, work, others,
+    )  # fmt: skip
     for i in range(log_lik.size):
         if not math.isfinite(log_lik[i]):
             status[e] = 2
