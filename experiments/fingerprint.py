@@ -216,6 +216,13 @@ PARTS: dict[str, Callable[[], str]] = {
         cross_variance_inflation=500,
         seal_cross_variance_inflation=1,
     ),
+    "seal persistence": lambda: episodes_digest(
+        seeds=(4,),
+        preflight="every_flight",
+        rejuvenation="resample_move",
+        cross_variance_inflation=500,
+        seal_cross_persistence=0.9954,
+    ),
     "physics": lambda: episodes_digest(seeds=(4,), steps=40, fidelity="physics"),
     "vector": vector_digest,
     "vector every_flight": lambda: vector_digest(num_envs=4, preflight="every_flight"),

@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from experiments.belief_calibration import policy_action
+from prognostics.resampling import systematic_resample
 from scas_env import ENV_ID
 from scas_env.core.filters import (
     _effect_update,
@@ -17,8 +18,9 @@ from scas_env.core.filters import (
     predict_filter,
     work_arrays,
 )
+from scas_env.core.parts import learn_now, reset_filter
 from scas_env.core.scenario import Scenario
-from scas_env.env import ScasMaintenanceEnv
+from scas_env.env import REPLACE_SPRING, ScasMaintenanceEnv
 
 RHO = 0.99
 
@@ -135,8 +137,8 @@ def test_single_and_vector_env_agree_and_the_option_changes_the_episode() -> Non
         action = {150: 3, 400: 2}.get(t, 0)
         before = single.batch.a["aux"][0, 1, row].copy()
         o1, r1, *_ = single.step(action)
-        if action:  # a new seal set or spring pair: every offset drawn anew
-            assert not np.any(single.batch.a["aux"][0, 1, row] == before)
+        if action == REPLACE_SPRING:  # a new spring pair: every offset drawn anew
+            assert not np.any(np.isin(single.batch.a["aux"][0, 1, row], before))
         o0, *_ = off.step(action)
         ov, rv, *_ = vec.step(np.array([action, 0]))
         np.testing.assert_array_equal(o1, ov[0])
@@ -153,3 +155,24 @@ def test_refused_with_the_seals_move_and_out_of_range() -> None:
     for bad in (-0.1, 1.0):
         with pytest.raises(ValueError, match="seal_cross_persistence"):
             Scenario(seal_cross_persistence=bad)
+
+
+def test_a_new_seal_set_keeps_what_the_old_seals_said_about_the_spring_estimate() -> None:
+    """The spring and its estimate stay when the seals are changed: the new seal particles'
+    offsets are the old ones resampled by the old seal weights (systematic, one uniform of
+    the filter stream), not fresh draws; a new spring pair draws them anew."""
+    env = _env()
+    batch, a = env.batch, env.batch.a
+    row = batch.setup.filters.persistence[1]
+    learn_now(batch, 0)  # the flights' batch learnt first, as reset_filter does
+    u, w = a["aux"][0, 1, row].copy(), a["w"][0, 1].copy()
+    assert np.ptp(w) > 0.0  # unequal weights: a resampling shows
+    rng = batch.rngs[0]["filter"]
+    twin = np.random.Generator(type(rng.bit_generator)())
+    twin.bit_generator.state = rng.bit_generator.state
+    reset_filter(batch, 0, "seal")
+    expected = u[systematic_resample(w, twin)]
+    np.testing.assert_array_equal(a["aux"][0, 1, row], expected)
+    assert not np.array_equal(expected, u)
+    reset_filter(batch, 0, "spring")
+    assert not np.any(np.isin(a["aux"][0, 1, row], expected))

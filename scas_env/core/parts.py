@@ -25,6 +25,7 @@ from dataclasses import replace
 import numpy as np
 
 from prognostics.normals import Handle, fill_standard_normal, handle_of
+from prognostics.resampling import systematic_resample
 from scas_env.actuator.health import CRACKED_SPRING, HealthState, actuator_config
 from scas_env.actuator.physics.spring import failure_depth_from_params
 from scas_env.actuator.sensing import draw_window, flight_window, ground_test
@@ -396,6 +397,7 @@ def reset_filter(batch: ActuatorState, e: int, part: str) -> None:
             _mixture_moments(w, a["aux"][e, 1, k], a["aux"][e, 1, k + 1])
             for k in range(0, 2 * len(EFFECT_FEATURES[1]), 2)
         ]
+        errors = _spring_errors_kept(batch, e, rng)
         _reset_cloud(batch, e, p, 0.0, _lognormal(rng, lognormal_sigma(st.params, part), n))
         for j, (mean, var) in enumerate(kept):
             a["aux"][e, 1, 2 * j] = mean
@@ -403,7 +405,8 @@ def reset_filter(batch: ActuatorState, e: int, part: str) -> None:
         if st.filters.move.seal:
             restart(e, batch.bank, 1)
             _record_seal_effects(batch, e)
-        _new_spring_errors(batch, e, rng)
+        if errors is not None:
+            a["aux"][e, 1, st.filters.persistence[1]] = errors
     a["det_n"][e, p] = 0
     a["detected"][e, p] = False
     a["pending"][e, p] = 0.0
@@ -412,11 +415,24 @@ def reset_filter(batch: ActuatorState, e: int, part: str) -> None:
 
 def _new_spring_errors(batch: ActuatorState, e: int, rng: np.random.Generator) -> None:
     """With ``Scenario.seal_cross_persistence``: each seal particle's offset of the spring
-    estimate drawn anew, N(0, 1) (a new spring pair or a new seal set)."""
+    estimate drawn anew, N(0, 1): a new spring pair's estimate has an error of its own."""
     row = batch.setup.filters.persistence[1]
     if row >= 0:
         with rng.bit_generator.lock:
             fill_standard_normal(handle_of(rng), batch.a["aux"][e, 1, row])
+
+
+def _spring_errors_kept(
+    batch: ActuatorState, e: int, rng: np.random.Generator
+) -> np.ndarray | None:
+    """With ``Scenario.seal_cross_persistence``, before a new seal set: the offsets of the
+    spring estimate resampled by the old seal filter's weights (systematic), or None. The
+    spring and its estimate stay, so what the old seals' data said about the estimate's
+    error carries over; the new seals' states are independent of it (their prior)."""
+    row = batch.setup.filters.persistence[1]
+    if row < 0:
+        return None
+    return batch.a["aux"][e, 1, row][systematic_resample(batch.a["w"][e, 1], rng)]
 
 
 def _record_seal_effects(batch: ActuatorState, e: int) -> None:
