@@ -50,6 +50,7 @@ CSV/JSON and two PNGs into a results folder
     python -m experiments.belief_calibration --episodes 200 --seed 1000 --out results/cal
     python -m experiments.belief_calibration --scenario '{"spring_theta_walk": 0.007}'
     python -m experiments.belief_calibration --compare results/a results/b  # paired
+    python -m experiments.belief_calibration --by-life results/a  # first lives, later ones
 """
 
 from __future__ import annotations
@@ -535,12 +536,28 @@ def main(argv: Sequence[str] | None = None) -> int:
         help="no run: compare two results folders of the same seeds, life by life (paired "
         "differences B - A with cluster-bootstrap 95%% intervals over episodes)",
     )
+    parser.add_argument(
+        "--by-life",
+        metavar="A",
+        default=None,
+        help="no run: split a results folder's shares between first lives (the parts fitted "
+        "at the episode's start) and later ones, with Wilson 95%% intervals",
+    )
     add_study_options(
         parser,
         scenario_help="Scenario fields as JSON over the defaults, e.g. "
         "'{\"spring_theta_walk\": 0.007}'",
     )
     args = parser.parse_args(argv)
+    if args.by_life is not None:
+        from experiments.belief_comparison import by_life, format_by_life, read_lives
+
+        try:
+            lives = read_lives(args.by_life)
+        except FileNotFoundError as exc:
+            parser.error(str(exc))
+        print(format_by_life(by_life(lives)))
+        return 0
     if args.compare is not None:
         from experiments.belief_comparison import compare_runs, format_comparison, read_lives
 

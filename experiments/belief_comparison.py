@@ -13,7 +13,10 @@ the low quantile, 0/1 in each run. Per (policy, part, stage), and pooled over th
 * the minimum detectable difference at 5 % two-sided and 80 % power,
   ``(z_0.975 + z_0.8) x`` the bootstrap standard error.
 
-``python -m experiments.belief_calibration --compare A B`` reads the runs' ``lives.csv``.
+``python -m experiments.belief_calibration --compare A B`` reads the runs' ``lives.csv``;
+``--by-life A`` splits one run's shares between the first lives (life 0: the parts fitted at
+the episode's start, both new together) and the later ones (:func:`by_life`), each with
+its Wilson 95 % interval (a first life is one per episode, so independent).
 """
 
 from __future__ import annotations
@@ -24,7 +27,7 @@ from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
-from scipy.stats import bootstrap, norm
+from scipy.stats import binomtest, bootstrap, norm
 
 #: metrics compared (columns of ``lives.csv``, 0/1 per life)
 METRICS: tuple[str, ...] = ("covered", "undercut")
@@ -112,6 +115,37 @@ def compare_runs(
     return rows
 
 
+def by_life(lives: dict[Key, dict[str, float]]) -> list[dict[str, float | str]]:
+    """Per (policy, part, stage, metric): the share over first lives (life 0) and over later
+    ones, each with its count and Wilson 95 % interval (``scipy.stats.binomtest``)."""
+    groups: dict[tuple[str, str, str, str, str], list[float]] = defaultdict(list)
+    for k, values in lives.items():
+        which = "first" if k[5] == 0 else "later"
+        for m in METRICS:
+            groups[(k[0], k[1], f"{k[3]:g}", m, which)].append(values[m])
+    rows: list[dict[str, float | str]] = []
+    for (policy, part, stage, m, which), v in sorted(groups.items()):
+        hits = round(sum(v))
+        ci = binomtest(hits, len(v)).proportion_ci(method="wilson")
+        rows.append({"policy": policy, "part": part, "stage": stage, "metric": m,
+                     "lives": which, "n": len(v), "share": hits / len(v),
+                     "ci_low": ci.low, "ci_high": ci.high})  # fmt: skip
+    return rows
+
+
+def format_by_life(rows: Sequence[dict[str, float | str]]) -> str:
+    """A text table of :func:`by_life`."""
+    lines = [f"{'policy':7s} {'part':6s} {'metric':8s} {'stage':>5s} {'lives':6s} {'n':>5s} "
+             f"{'share [95% CI]':>22s}"]  # fmt: skip
+    for r in rows:
+        lines.append(
+            f"{r['policy']:7s} {r['part']:6s} {r['metric']:8s} {r['stage']:>5s} "
+            f"{r['lives']:6s} {int(r['n']):5d} {float(r['share']):6.3f} "
+            f"[{float(r['ci_low']):.3f}, {float(r['ci_high']):.3f}]"
+        )
+    return "\n".join(lines)
+
+
 def format_comparison(rows: Sequence[dict[str, float | str]]) -> str:
     """A text table of :func:`compare_runs`."""
     lines = [
@@ -128,4 +162,12 @@ def format_comparison(rows: Sequence[dict[str, float | str]]) -> str:
     return "\n".join(lines)
 
 
-__all__ = ["METRICS", "compare_runs", "format_comparison", "paired_difference", "read_lives"]
+__all__ = [
+    "METRICS",
+    "by_life",
+    "compare_runs",
+    "format_by_life",
+    "format_comparison",
+    "paired_difference",
+    "read_lives",
+]

@@ -149,3 +149,25 @@ def test_compare_runs_pairs_lives_and_pools_stages(tmp_path) -> None:
     assert got[("0.2", "undercut")]["diff"] == 1.0
     with pytest.raises(FileNotFoundError, match=r"lives\.csv"):
         read_lives(tmp_path)
+
+
+def test_by_life_splits_first_lives_from_later_ones(tmp_path) -> None:
+    """Life 0 against the rest, per stage and metric: hand-counted shares, Wilson intervals
+    from the closed form (z = 1.96), one row per metric and group."""
+    from experiments.belief_comparison import by_life, read_lives
+
+    header = "preset,policy,part,stage,episode,life,covered,undercut,log_ratio\n"
+    rows = [f"paper,test10,seal,0.2,{e},0,1,{int(e < 3)},0.1\n" for e in range(10)]
+    rows += [f"paper,test10,seal,0.2,{e},1,{int(e != 1)},0,0.1\n" for e in range(4)]
+    (tmp_path / "lives.csv").write_text(header + "".join(rows))
+    out = {(r["metric"], r["lives"]): r for r in by_life(read_lives(tmp_path))}
+    first, later = out[("undercut", "first")], out[("undercut", "later")]
+    assert (first["n"], first["share"], later["n"], later["share"]) == (10, 0.3, 4, 0.0)
+    assert out[("covered", "later")]["share"] == 0.75
+    z, n, p = 1.959963984540054, 10, 0.3  # Wilson score interval, closed form
+    centre, half = (p + z * z / (2 * n)), z * np.sqrt(p * (1 - p) / n + z * z / (4 * n * n))
+    assert first["ci_low"] == pytest.approx((centre - half) / (1 + z * z / n), rel=1e-9)
+    assert first["ci_high"] == pytest.approx((centre + half) / (1 + z * z / n), rel=1e-9)
+    assert sorted(out) == sorted(
+        (m, w) for m in ("covered", "undercut") for w in ("first", "later")
+    )
