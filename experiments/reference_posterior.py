@@ -496,12 +496,29 @@ def main(argv: Sequence[str] | None = None) -> int:
         help="with --risk-min: also the filter's risk through the spring's map of FILE "
         "(experiments.risk_recalibration; estimator 'map')",
     )
+    parser.add_argument(
+        "--by-life",
+        metavar="DIR",
+        default=None,
+        help="no run: a stage study's results folder, its table for first lives (the parts "
+        "fitted at the episode's start) and later ones",
+    )
     add_study_options(
         parser,
         scenario_help="Scenario fields as JSON over the defaults, e.g. "
         '\'{"spring_theta_walk": 0.007}\' or \'{"preflight": "every_flight"}\'',
     )
     args = parser.parse_args(argv)
+    if args.by_life is not None:
+        from experiments.reference_report import format_table, read_lives, split_by_life
+        from experiments.reference_report import stage_table as table_of
+
+        try:
+            lives = read_lives(args.by_life)
+        except FileNotFoundError as exc:
+            parser.error(str(exc))
+        print(format_table(table_of(split_by_life(lives), np.random.default_rng(args.seed))))
+        return 0
     part_map = None
     other = "seal" if args.part == "spring" else "spring"
     try:

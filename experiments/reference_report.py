@@ -7,10 +7,13 @@ same lives: coverage of the 90 % interval, undercut of the low quantile (each wi
 output against the truth's failure within the horizon; then the paired difference
 ``ref - pf`` of coverage and undercut with its cluster-bootstrap interval over episodes and
 the minimum detectable difference (:func:`experiments.belief_comparison.paired_difference`).
+:func:`split_by_life` gives the same table for first lives (life 0: the parts fitted at the
+episode's start) and later ones (``--by-life DIR``).
 """
 
 from __future__ import annotations
 
+import csv
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
@@ -107,6 +110,27 @@ def reliability_table(
     return out
 
 
+def read_lives(folder: str | Path) -> list[dict[str, Any]]:
+    """A stage study's ``lives.csv``, typed (policy a string, seed and life integers, the
+    rest floats); ``FileNotFoundError`` naming the file if the folder has none."""
+    path = Path(folder) / "lives.csv"
+    if not path.is_file():
+        raise FileNotFoundError(f"{path}: no per-life rows (a stage study's --out writes them)")
+    with path.open(newline="") as fh:
+        return [
+            {k: v if k == "policy" else int(v) if k in ("seed", "life") else float(v)
+             for k, v in r.items()}
+            for r in csv.DictReader(fh)
+        ]  # fmt: skip
+
+
+def split_by_life(rows: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
+    """``rows`` with each policy split in two, ``"<policy> first"`` (life 0) and ``"<policy>
+    later"``, for :func:`stage_table`."""
+    return [{**r, "policy": f"{r['policy']} {'first' if r['life'] == 0 else 'later'}"}
+            for r in rows]  # fmt: skip
+
+
 def format_reliability(table: Sequence[dict[str, float | str]]) -> str:
     """The reliability table as text: per bin, records, predicted and observed [95 % CI]
     of both estimators."""
@@ -125,13 +149,13 @@ def format_reliability(table: Sequence[dict[str, float | str]]) -> str:
 def format_table(table: Sequence[dict[str, float | str]]) -> str:
     """The stage table as text."""
     lines = [
-        f"{'policy':7s} {'stage':>5s} {'lives':>5s}  {'coverage pf / ref':>17s}  "
+        f"{'policy':12s} {'stage':>5s} {'lives':>5s}  {'coverage pf / ref':>17s}  "
         f"{'undercut pf / ref':>17s}  {'sd log pf / ref':>15s}  {'Brier pf / ref':>15s}  "
         f"{'coverage ref-pf [95% CI]':>26s}  {'min ESS':>7s}"
     ]
     for r in table:
         lines.append(
-            f"{r['policy']:7s} {r['stage']:>5s} {int(r['lives']):5d}  "
+            f"{r['policy']:12s} {r['stage']:>5s} {int(r['lives']):5d}  "
             f"{r['pf_coverage']:7.3f} / {r['ref_coverage']:6.3f}  "
             f"{r['pf_undercut']:7.3f} / {r['ref_undercut']:6.3f}  "
             f"{r['pf_sd_log']:6.3f} / {r['ref_sd_log']:6.3f}  "

@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from experiments.reference_report import format_table, stage_table
+from experiments.reference_report import format_table, read_lives, split_by_life, stage_table
 
 
 def _row(seed: int, stage: float, truth: float, shift: float, risk: float) -> dict:
@@ -72,3 +72,26 @@ def test_reliability_table_bins_each_estimator_by_its_own_risk() -> None:
     assert got["ref", 0.1]["records"] == 1 and got["ref", 0.1]["observed"] == 0.0
     assert got["ref", 0.0]["records"] == 1 and got["ref", 0.0]["observed"] == 0.0
     assert "0.50-0.70" in format_reliability(table)
+
+
+def test_by_life_reads_a_lives_csv_and_splits_first_lives_from_later(tmp_path) -> None:
+    """The rows written as CSV and read back typed; life 0 and the rest in two groups whose
+    stage rows count them as a direct count does."""
+    import csv
+
+    rows = [_row(1, 0.2, 50.0, 20.0, 0.0), _row(2, 0.2, 50.0, 0.0, 0.0)]
+    rows += [{**_row(seed, 0.2, 40.0, 0.0, 0.0), "life": 1} for seed in (1, 2, 3)]
+    with (tmp_path / "lives.csv").open("w", newline="") as fh:
+        writer = csv.DictWriter(fh, fieldnames=list(rows[0]))
+        writer.writeheader()
+        writer.writerows(rows)
+    back = read_lives(tmp_path)
+    assert back == rows  # the same values and types (seed, life int; policy str)
+    table = {(r["policy"], r["stage"]): r
+             for r in stage_table(split_by_life(back), np.random.default_rng(0))}  # fmt: skip
+    first, later = table[("test10 first", "0.2")], table[("test10 later", "0.2")]
+    assert (first["lives"], later["lives"]) == (2, 3)
+    assert (first["pf_undercut"], later["pf_undercut"]) == (0.5, 0.0)
+    assert "test10 first" in format_table(list(table.values()))
+    with pytest.raises(FileNotFoundError, match=r"lives\.csv"):
+        read_lives(tmp_path / "none")
