@@ -372,7 +372,9 @@ def reset_filter(batch: ActuatorState, e: int, part: str) -> None:
     collapsed to one Gaussian), its detector is cleared. With the seal filter's
     resample-move (``Scenario.rejuvenation = "resample_move_both"``) a new seal's history
     starts with those beliefs, and a new spring pair writes N(0, 1) beliefs into the
-    seal's history (:func:`scas_env.core.rejuvenation.record_effect`)."""
+    seal's history (:func:`scas_env.core.rejuvenation.record_effect`). The seal particles'
+    offsets of the spring estimate (``Scenario.seal_cross_persistence``) are drawn anew
+    with a new spring pair and carried over to new seals."""
     st, a = batch.setup, batch.a
     learn_now(batch, e)
     rng = batch.rngs[e]["filter"]
