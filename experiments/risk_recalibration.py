@@ -21,7 +21,9 @@ score of both with their paired difference (mapped - raw: per episode the mean o
 records, a t interval over episodes, the records of one episode being dependent).
 
 Writes ``risk_maps_<preset>.json`` (what :func:`scas_env.risk_recalibration.load_risk_maps`
-reads), ``reliability.csv``, ``brier.csv``, ``summary.json`` and ``reliability.png``.
+reads), ``reliability.csv``, ``brier.csv``, ``episodes.csv`` (each held-out episode's Brier
+scores), ``summary.json`` and ``reliability.png``; ``--compare A B`` pairs two such folders'
+Brier scores episode by episode.
 """
 
 from __future__ import annotations
@@ -125,7 +127,7 @@ def score(
         for kind, t in (("raw", table), ("mapped", mapped))
     }
     diff = paired_difference(per_ep["mapped"], per_ep["raw"])
-    brier = {
+    brier: dict[str, Any] = {
         "records": int(y.size),
         "episodes": int(episodes.size),
         "brier_raw": brier_score(table["risk"], y),
@@ -135,6 +137,10 @@ def score(
         "diff_high": diff.high,
         "diff_mdd": diff.mdd,
         **worst,
+        "per_episode": [
+            {"episode": int(ep), "brier_raw": float(r), "brier_mapped": float(m)}
+            for ep, r, m in zip(episodes, per_ep["raw"], per_ep["mapped"], strict=True)
+        ],
     }
     return rows, brier
 
@@ -168,7 +174,7 @@ def run(
         raise ValueError(f"training seeds {train} and held-out seeds {held} overlap")
     total = len(presets) * len(policies) * (train_episodes + episodes)
     bar = tqdm(total=total, desc="recalibration episodes", disable=not progress)
-    out: dict[str, Any] = {"presets": {}, "reliability": [], "brier": []}
+    out: dict[str, Any] = {"presets": {}, "reliability": [], "brier": [], "episodes": []}
     rng = np.random.default_rng(seed)  # the bootstrap's resampling only
     for preset in presets:
         sc = scenarios[preset]
@@ -181,6 +187,7 @@ def run(
                 rows, brier = score(tables[part], maps[part], horizon, rng)
                 key = {"preset": preset, "policy": pol, "part": part}
                 out["reliability"] += [{**key, **r} for r in rows]
+                out["episodes"] += [{**key, **r} for r in brier.pop("per_episode")]
                 out["brier"].append({**key, **brier})
     bar.close()
     return out
@@ -205,12 +212,60 @@ def format_brier(rows: Sequence[Mapping[str, Any]]) -> str:
     return "\n".join(lines)
 
 
+def compare(a: str | Path, b: str | Path) -> list[dict[str, Any]]:
+    """Two runs of the same held-out seeds, episode by episode (``episodes.csv``): per preset,
+    policy and part, the raw and the mapped Brier score's difference B - A with its t
+    interval over the paired episodes and minimum detectable difference
+    (:func:`policies.benchmark.stats.paired_difference`)."""
+    import csv
+
+    runs = []
+    for folder in (a, b):
+        path = Path(folder) / "episodes.csv"
+        if not path.is_file():
+            raise FileNotFoundError(f"{path}: no per-episode Brier scores (re-run with --out)")
+        with path.open(newline="") as fh:
+            runs.append({(r["preset"], r["policy"], r["part"], int(r["episode"])): r
+                         for r in csv.DictReader(fh)})  # fmt: skip
+    common = sorted(set(runs[0]) & set(runs[1]))
+    if not common:
+        raise ValueError(f"{a} and {b} share no (preset, policy, part, episode)")
+    out = []
+    for group in sorted({k[:3] for k in common}):
+        keys = [k for k in common if k[:3] == group]
+        row: dict[str, Any] = dict(zip(("preset", "policy", "part"), group, strict=True))
+        row["episodes"] = len(keys)
+        for kind in ("raw", "mapped"):
+            va, vb = (np.array([float(r[k][f"brier_{kind}"]) for k in keys]) for r in runs)
+            d = paired_difference(vb, va)
+            row |= {f"{kind}_a": float(va.mean()), f"{kind}_b": float(vb.mean()),
+                    f"{kind}_diff": d.mean, f"{kind}_low": d.low, f"{kind}_high": d.high,
+                    f"{kind}_mdd": d.mdd}  # fmt: skip
+        out.append(row)
+    return out
+
+
+def format_compare(rows: Sequence[Mapping[str, Any]]) -> str:
+    """A text table of :func:`compare`."""
+    lines = [f"{'preset':7s} {'policy':7s} {'part':6s} {'episodes':>8s}  "
+             f"{'kind':6s} {'A':>9s} {'B':>9s} {'B - A [95% CI]':>32s} {'MDD':>9s}"]  # fmt: skip
+    for r in rows:
+        for kind in ("raw", "mapped"):
+            lines.append(
+                f"{r['preset']:7s} {r['policy']:7s} {r['part']:6s} {r['episodes']:8d}  "
+                f"{kind:6s} {r[f'{kind}_a']:9.6f} {r[f'{kind}_b']:9.6f} "
+                f"{r[f'{kind}_diff']:+.6f} [{r[f'{kind}_low']:+.6f}, {r[f'{kind}_high']:+.6f}] "
+                f"{r[f'{kind}_mdd']:9.6f}"
+            )
+    return "\n".join(lines)
+
+
 def write(result: Mapping[str, Any], out: str | Path, config: Mapping[str, Any],
           command: str, *, overwrite: bool = False) -> list[Path]:  # fmt: skip
     """The results folder (module docstring), written atomically."""
     from scas_env.actuator.params import ScasParams
 
-    names = ["reliability.csv", "brier.csv", "summary.json", "reliability.png"]
+    names = ["reliability.csv", "brier.csv", "episodes.csv", "summary.json", "reliability.png"]
     seeds = {k: config[k] for k in ("train_seed", "train_episodes", "seed", "episodes")}
     with results_folder(out, config=config, seeds=seeds, overwrite=overwrite) as tmp:
         for preset, v in result["presets"].items():
@@ -219,6 +274,7 @@ def write(result: Mapping[str, Any], out: str | Path, config: Mapping[str, Any],
             names.append(f"risk_maps_{preset}.json")
         write_csv(tmp / "reliability.csv", result["reliability"])
         write_csv(tmp / "brier.csv", result["brier"])
+        write_csv(tmp / "episodes.csv", result["episodes"])
         (tmp / "summary.json").write_text(
             json_text({"config": dict(config), "brier": result["brier"]}, indent=1)
         )
@@ -276,12 +332,26 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser.add_argument("--seed", type=nonneg_int, default=1000, help="first held-out seed")
     parser.add_argument("--presets", nargs="+", default=list(PRESETS), choices=list(PRESETS))
     parser.add_argument("--policies", nargs="+", default=list(POLICIES), choices=POLICIES)
+    parser.add_argument(
+        "--compare",
+        nargs=2,
+        metavar=("A", "B"),
+        default=None,
+        help="no run: the Brier scores of two results folders of the same held-out seeds, "
+        "episode by episode (B - A, t intervals over episodes)",
+    )
     add_study_options(
         parser,
         scenario_help="Scenario fields as JSON over each preset's, e.g. "
         '\'{"cross_variance_inflation": 50, "rejuvenation": "resample_move"}\'',
     )
     args = parser.parse_args(argv)
+    if args.compare is not None:
+        try:
+            print(format_compare(compare(*args.compare)))
+        except (FileNotFoundError, ValueError) as exc:
+            parser.error(str(exc))
+        return 0
     if args.out is not None:
         check_out_dir(parser, args.out, args.overwrite)
     config = {
@@ -314,7 +384,18 @@ def main(argv: Sequence[str] | None = None) -> int:
     return 0
 
 
-__all__ = ["MIN_RECORDS", "collect", "fit_maps", "format_brier", "main", "run", "score", "write"]
+__all__ = [
+    "MIN_RECORDS",
+    "collect",
+    "compare",
+    "fit_maps",
+    "format_brier",
+    "format_compare",
+    "main",
+    "run",
+    "score",
+    "write",
+]
 
 
 if __name__ == "__main__":

@@ -79,3 +79,31 @@ def test_score_pairs_each_episodes_brier_score() -> None:
     assert brier["diff_mean"] == pytest.approx(want.mean, rel=1e-12)
     assert (brier["diff_low"], brier["diff_high"]) == pytest.approx((want.low, want.high))
     assert brier["brier_raw"] == pytest.approx(brier_score(risk, y), rel=1e-14)
+    per_ep = brier["per_episode"]  # what episodes.csv holds, one row an episode
+    assert [r["episode"] for r in per_ep] == list(eps)
+    np.testing.assert_allclose([r["brier_raw"] for r in per_ep], raw, rtol=1e-12)
+    np.testing.assert_allclose([r["brier_mapped"] for r in per_ep], mapped, rtol=1e-12)
+
+
+def test_compare_pairs_two_runs_episode_by_episode(tmp_path) -> None:
+    """B - A over the episodes both runs hold, against scipy's paired t interval."""
+    from scipy.stats import ttest_rel
+
+    from experiments.risk_recalibration import compare
+
+    rng = np.random.default_rng(2)
+    a, b = rng.random(30) * 1e-3, rng.random(30) * 1e-3
+    for name, values, extra in (("a", a, 30), ("b", b, 29)):  # run b lacks the last episode
+        (tmp_path / name).mkdir()
+        lines = ["preset,policy,part,episode,brier_raw,brier_mapped"]
+        lines += [f"paper,test10,seal,{1000 + e},{float(values[e])!r},{float(values[e]) / 2!r}"
+                  for e in range(extra)]  # fmt: skip
+        (tmp_path / name / "episodes.csv").write_text("\n".join(lines) + "\n")
+    (row,) = compare(tmp_path / "a", tmp_path / "b")
+    want = ttest_rel(b[:29], a[:29]).confidence_interval(0.95)
+    assert row["episodes"] == 29
+    assert row["raw_diff"] == pytest.approx(np.mean(b[:29] - a[:29]), rel=1e-12)
+    assert (row["raw_low"], row["raw_high"]) == pytest.approx((want.low, want.high), rel=1e-9)
+    assert row["mapped_diff"] == pytest.approx(row["raw_diff"] / 2, rel=1e-12)
+    with pytest.raises(FileNotFoundError, match=r"episodes\.csv"):
+        compare(tmp_path, tmp_path / "a")

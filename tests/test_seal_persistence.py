@@ -18,7 +18,7 @@ from scas_env.core.filters import (
     predict_filter,
     work_arrays,
 )
-from scas_env.core.parts import learn_now, reset_filter
+from scas_env.core.parts import learn_now, replace_part, reset_filter
 from scas_env.core.scenario import Scenario
 from scas_env.env import REPLACE_SPRING, ScasMaintenanceEnv
 
@@ -33,6 +33,13 @@ def _env(**kw: object) -> ScasMaintenanceEnv:
     return env
 
 
+def _twin(rng: np.random.Generator) -> np.random.Generator:
+    """A generator at ``rng``'s state (draws what ``rng`` will draw next)."""
+    twin = np.random.Generator(type(rng.bit_generator)())
+    twin.bit_generator.state = rng.bit_generator.state
+    return twin
+
+
 def test_a_prediction_moves_the_offsets_as_an_ar1_of_the_flights() -> None:
     """Over d flights each offset becomes rho^d u + sqrt(1 - rho^2d) z, z the filter
     stream's next normals: the residuals, rescaled, are a contiguous run of the normals a
@@ -42,8 +49,7 @@ def test_a_prediction_moves_the_offsets_as_an_ar1_of_the_flights() -> None:
     row = batch.setup.filters.persistence[1]
     u0 = a["aux"][0, 1, row].copy()
     rng = batch.rngs[0]["filter"]
-    twin = np.random.Generator(type(rng.bit_generator)())
-    twin.bit_generator.state = rng.bit_generator.state
+    twin = _twin(rng)
     d = 7.0
     a["pending"][0, 1] = d
     work = work_arrays(u0.size, len(batch.setup.learn_cols))
@@ -160,19 +166,34 @@ def test_refused_with_the_seals_move_and_out_of_range() -> None:
 def test_a_new_seal_set_keeps_what_the_old_seals_said_about_the_spring_estimate() -> None:
     """The spring and its estimate stay when the seals are changed: the new seal particles'
     offsets are the old ones resampled by the old seal weights (systematic, one uniform of
-    the filter stream), not fresh draws; a new spring pair draws them anew."""
+    the filter stream), then the AR(1) over the seal filter's pending flights (the stream's
+    next normals), not fresh draws."""
     env = _env()
     batch, a = env.batch, env.batch.a
     row = batch.setup.filters.persistence[1]
     learn_now(batch, 0)  # the flights' batch learnt first, as reset_filter does
+    a["pending"][0, 1] = 7.0
     u, w = a["aux"][0, 1, row].copy(), a["w"][0, 1].copy()
-    assert np.ptp(w) > 0.0  # unequal weights: a resampling shows
-    rng = batch.rngs[0]["filter"]
-    twin = np.random.Generator(type(rng.bit_generator)())
-    twin.bit_generator.state = rng.bit_generator.state
+    assert a["part_age"][0, 0] > 0 and np.ptp(w) > 0.0  # a resampling shows
+    twin = _twin(batch.rngs[0]["filter"])
     reset_filter(batch, 0, "seal")
-    expected = u[systematic_resample(w, twin)]
-    np.testing.assert_array_equal(a["aux"][0, 1, row], expected)
-    assert not np.array_equal(expected, u)
-    reset_filter(batch, 0, "spring")
-    assert not np.any(np.isin(a["aux"][0, 1, row], expected))
+    resampled = u[systematic_resample(w, twin)]
+    keep = RHO**7
+    expected = keep * resampled + np.sqrt(1.0 - keep * keep) * twin.standard_normal(u.size)
+    np.testing.assert_allclose(a["aux"][0, 1, row], expected, rtol=0, atol=1e-15)
+    assert not np.allclose(resampled, u)
+
+
+def test_a_new_spring_pair_draws_them_anew_and_new_seals_with_it_keep_those() -> None:
+    """A spring pair fitted (here with the seals in the same event, as a double replacement
+    does) draws every offset anew; seals fitted before the spring has flown leave them: the
+    old seals' weights say nothing about the new spring's error."""
+    env = _env()
+    batch, a = env.batch, env.batch.a
+    row = batch.setup.filters.persistence[1]
+    before = a["aux"][0, 1, row].copy()
+    replace_part(batch, 0, "spring", failed=False)
+    fresh = a["aux"][0, 1, row].copy()
+    assert not np.any(np.isin(fresh, before))
+    replace_part(batch, 0, "seal", failed=False)
+    np.testing.assert_array_equal(a["aux"][0, 1, row], fresh)

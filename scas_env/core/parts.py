@@ -374,7 +374,7 @@ def reset_filter(batch: ActuatorState, e: int, part: str) -> None:
     starts with those beliefs, and a new spring pair writes N(0, 1) beliefs into the
     seal's history (:func:`scas_env.core.rejuvenation.record_effect`). The seal particles'
     offsets of the spring estimate (``Scenario.seal_cross_persistence``) are drawn anew
-    with a new spring pair and carried over to new seals."""
+    with a new spring pair and carried over to new seals (:func:`_spring_errors_kept`)."""
     st, a = batch.setup, batch.a
     learn_now(batch, e)
     rng = batch.rngs[e]["filter"]
@@ -428,13 +428,26 @@ def _spring_errors_kept(
     batch: ActuatorState, e: int, rng: np.random.Generator
 ) -> np.ndarray | None:
     """With ``Scenario.seal_cross_persistence``, before a new seal set: the offsets of the
-    spring estimate resampled by the old seal filter's weights (systematic), or None. The
+    spring estimate resampled by the old seal filter's weights (systematic), then taken
+    through the AR(1) over the flights the seal filter had pending (the new cloud drops
+    them); None (the offsets stay as they are) without the option or while the spring pair
+    has not flown since its fitting (its offsets are the prior draws of that fitting, which
+    the old seals' weights say nothing about: a fitting of both, an episode's start). The
     spring and its estimate stay, so what the old seals' data said about the estimate's
     error carries over; the new seals' states are independent of it (their prior)."""
-    row = batch.setup.filters.persistence[1]
-    if row < 0:
+    a = batch.a
+    rho, row = batch.setup.filters.persistence
+    if row < 0 or a["part_age"][e, 0] == 0:
         return None
-    return batch.a["aux"][e, 1, row][systematic_resample(batch.a["w"][e, 1], rng)]
+    kept = a["aux"][e, 1, row][systematic_resample(a["w"][e, 1], rng)]
+    d = float(a["pending"][e, 1])
+    if d > 0.0:
+        keep = rho**d
+        z = np.empty(kept.size)
+        with rng.bit_generator.lock:
+            fill_standard_normal(handle_of(rng), z)
+        kept = keep * kept + math.sqrt(max(1.0 - keep * keep, 0.0)) * z
+    return kept
 
 
 def _record_seal_effects(batch: ActuatorState, e: int) -> None:
