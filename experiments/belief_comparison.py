@@ -15,8 +15,9 @@ the low quantile, 0/1 in each run. Per (policy, part, stage), and pooled over th
 
 ``python -m experiments.belief_calibration --compare A B`` reads the runs' ``lives.csv``;
 ``--by-life A`` splits one run's shares between the first lives (life 0: the parts fitted at
-the episode's start, both new together) and the later ones (:func:`by_life`), each with
-its Wilson 95 % interval (a first life is one per episode, so independent).
+the episode's start; both new unless ``initial_health`` says otherwise) and the later ones
+(:func:`by_life`), each with its Wilson 95 % interval (a first life is one per episode and
+preset, so independent; later ones of one episode are not).
 """
 
 from __future__ import annotations
@@ -27,7 +28,7 @@ from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
-from scipy.stats import binomtest, bootstrap, norm
+from scipy.stats import bootstrap, norm
 
 #: metrics compared (columns of ``lives.csv``, 0/1 per life)
 METRICS: tuple[str, ...] = ("covered", "undercut")
@@ -116,30 +117,33 @@ def compare_runs(
 
 
 def by_life(lives: dict[Key, dict[str, float]]) -> list[dict[str, float | str]]:
-    """Per (policy, part, stage, metric): the share over first lives (life 0) and over later
-    ones, each with its count and Wilson 95 % interval (``scipy.stats.binomtest``)."""
-    groups: dict[tuple[str, str, str, str, str], list[float]] = defaultdict(list)
+    """Per (preset, policy, part, stage, metric): the share over first lives (life 0) and
+    over later ones, each with its count and Wilson 95 % interval
+    (:func:`experiments.belief_calibration._share`; later lives of one episode are not
+    independent, so theirs is optimistic)."""
+    from experiments.belief_calibration import _share
+
+    groups: dict[tuple[str, ...], list[float]] = defaultdict(list)
     for k, values in lives.items():
         which = "first" if k[5] == 0 else "later"
         for m in METRICS:
-            groups[(k[0], k[1], f"{k[3]:g}", m, which)].append(values[m])
+            groups[(k[2], k[0], k[1], f"{k[3]:g}", m, which)].append(values[m])
     rows: list[dict[str, float | str]] = []
-    for (policy, part, stage, m, which), v in sorted(groups.items()):
-        hits = round(sum(v))
-        ci = binomtest(hits, len(v)).proportion_ci(method="wilson")
-        rows.append({"policy": policy, "part": part, "stage": stage, "metric": m,
-                     "lives": which, "n": len(v), "share": hits / len(v),
-                     "ci_low": ci.low, "ci_high": ci.high})  # fmt: skip
+    for (preset, policy, part, stage, m, which), v in sorted(groups.items()):
+        share, low, high, n = _share(np.array(v))
+        rows.append({"preset": preset, "policy": policy, "part": part, "stage": stage,
+                     "metric": m, "lives": which, "n": n, "share": share, "ci_low": low,
+                     "ci_high": high})  # fmt: skip
     return rows
 
 
 def format_by_life(rows: Sequence[dict[str, float | str]]) -> str:
     """A text table of :func:`by_life`."""
-    lines = [f"{'policy':7s} {'part':6s} {'metric':8s} {'stage':>5s} {'lives':6s} {'n':>5s} "
-             f"{'share [95% CI]':>22s}"]  # fmt: skip
+    lines = [f"{'preset':7s} {'policy':7s} {'part':6s} {'metric':8s} {'stage':>5s} {'lives':6s} "
+             f"{'n':>5s} {'share [95% CI]':>22s}"]  # fmt: skip
     for r in rows:
         lines.append(
-            f"{r['policy']:7s} {r['part']:6s} {r['metric']:8s} {r['stage']:>5s} "
+            f"{r['preset']:7s} {r['policy']:7s} {r['part']:6s} {r['metric']:8s} {r['stage']:>5s} "
             f"{r['lives']:6s} {int(r['n']):5d} {float(r['share']):6.3f} "
             f"[{float(r['ci_low']):.3f}, {float(r['ci_high']):.3f}]"
         )

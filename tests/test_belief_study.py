@@ -158,9 +158,12 @@ def test_by_life_splits_first_lives_from_later_ones(tmp_path) -> None:
 
     header = "preset,policy,part,stage,episode,life,covered,undercut,log_ratio\n"
     rows = [f"paper,test10,seal,0.2,{e},0,1,{int(e < 3)},0.1\n" for e in range(10)]
-    rows += [f"paper,test10,seal,0.2,{e},1,{int(e != 1)},0,0.1\n" for e in range(4)]
+    rows += [f"paper,test10,seal,0.2,{e},{1 + e % 2},{int(e != 1)},0,0.1\n" for e in range(4)]
+    rows += ["default,test10,seal,0.2,0,0,0,0,0.1\n"]  # another preset: its own rows
     (tmp_path / "lives.csv").write_text(header + "".join(rows))
-    out = {(r["metric"], r["lives"]): r for r in by_life(read_lives(tmp_path))}
+    got = by_life(read_lives(tmp_path))
+    assert [(r["n"], r["share"]) for r in got if r["preset"] == "default"] == [(1, 0.0)] * 2
+    out = {(r["metric"], r["lives"]): r for r in got if r["preset"] == "paper"}
     first, later = out[("undercut", "first")], out[("undercut", "later")]
     assert (first["n"], first["share"], later["n"], later["share"]) == (10, 0.3, 4, 0.0)
     assert out[("covered", "later")]["share"] == 0.75

@@ -86,7 +86,8 @@ def test_by_life_reads_a_lives_csv_and_splits_first_lives_from_later(tmp_path) -
         writer.writeheader()
         writer.writerows(rows)
     back = read_lives(tmp_path)
-    assert back == rows  # the same values and types (seed, life int; policy str)
+    assert back == rows  # the same values
+    assert {type(back[0][k]) for k in ("seed", "life")} == {int} and type(back[0]["age"]) is float
     table = {(r["policy"], r["stage"]): r
              for r in stage_table(split_by_life(back), np.random.default_rng(0))}  # fmt: skip
     first, later = table[("test10 first", "0.2")], table[("test10 later", "0.2")]
