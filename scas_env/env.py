@@ -226,8 +226,8 @@ class ScasMaintenanceEnv(gym.Env):
     RUL intervals to exact Bayes on the same data; with a test before every flight,
     ``rejuvenation="resample_move"``, ``cross_variance_inflation=500`` and
     ``seal_cross_persistence=0.9954`` (the seal filter carries the spring estimate's error as
-    a persistent per-particle offset) cover both parts' (0.87-0.91 per life stage); the
-    seal's low quantile is still undercut 8.9 % early in its life (docs/findings.md#beliefs).
+    a persistent per-particle offset) cover both parts' (0.88-0.90 per life stage); the
+    seal's low quantile is still undercut 8.4 % early in its life (docs/findings.md#beliefs).
 
     ## Vectorised
 
