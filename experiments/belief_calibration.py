@@ -61,10 +61,15 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
-from scipy.stats import binomtest
 from tqdm.auto import tqdm
 
-from experiments.belief_common import INTERVAL, TARGETS, StudyResult, add_study_options
+from experiments.belief_common import (
+    INTERVAL,
+    TARGETS,
+    StudyResult,
+    add_study_options,
+    wilson_share,
+)
 from prognostics.rul_ageing import AgeingRul
 from scas_env.core.batch import ActuatorBatch
 from scas_env.core.scenario import Scenario
@@ -214,15 +219,6 @@ def trace_table(traces: Sequence[PartTrace]) -> dict[str, np.ndarray]:
     return out
 
 
-def _share(hits: np.ndarray) -> tuple[float, float, float, int]:
-    n = int(hits.size)
-    if n == 0:
-        return math.nan, math.nan, math.nan, 0
-    k = int(hits.sum())
-    ci = binomtest(k, n).proportion_ci(0.95, method="wilson")
-    return k / n, float(ci.low), float(ci.high), n
-
-
 def stage_rows(
     table: dict[str, np.ndarray], stages: Sequence[float], low_level: float
 ) -> list[dict[str, float | str]]:
@@ -257,8 +253,8 @@ def _belief_rows(
         t = table["true_info" if truth == "info" else "realised"][first]
         keep = np.isfinite(t) & (t > 0.0)
         idx, t = first[keep], t[keep]
-        cover = _share((table["q_lo"][idx] <= t) & (t <= table["q_hi"][idx]))
-        under = _share(t < table["low"][idx])
+        cover = wilson_share((table["q_lo"][idx] <= t) & (t <= table["q_hi"][idx]))
+        under = wilson_share(t < table["low"][idx])
         with np.errstate(divide="ignore"):  # a zero predicted mean: dropped below
             ratio = np.log(table["mean"][idx] / t) if t.size else np.empty(0)
         ratio = ratio[np.isfinite(ratio)]
@@ -361,7 +357,7 @@ def reliability_rows(
     rows = []
     for b in range(edges.size - 1):
         sel = which == b
-        share, lo, hi, n = _share(hit[sel])
+        share, lo, hi, n = wilson_share(hit[sel])
         rows.append(
             {
                 "truth": truth,

@@ -1,14 +1,19 @@
 """What the belief study's modules share (:mod:`experiments.belief_calibration` runs it,
 :mod:`experiments.belief_output` writes it): the nominal interval, the targets, the per-life
-columns, the result type, and the command-line options every belief study takes."""
+columns, the result type, a share with its Wilson interval, and the command-line options
+every belief study takes."""
 
 from __future__ import annotations
 
 import argparse
 import json
+import math
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
+
+import numpy as np
+from scipy.stats import binomtest
 
 #: nominal central interval of the RUL distribution
 INTERVAL: tuple[float, float] = (0.05, 0.95)
@@ -37,7 +42,18 @@ class StudyResult:
     ages: dict[tuple[str, str, str], list[dict[str, float | str]]] = field(default_factory=dict)
 
 
-__all__ = ["INTERVAL", "LIFE_COLUMNS", "TARGETS", "StudyResult"]
+def wilson_share(hits: np.ndarray) -> tuple[float, float, float, int]:
+    """Share of the 0/1 (or boolean) ``hits``, its Wilson 95 % interval
+    (``scipy.stats.binomtest``) and the count; NaNs and 0 for none."""
+    n = int(hits.size)
+    if n == 0:
+        return math.nan, math.nan, math.nan, 0
+    k = int(hits.sum())
+    ci = binomtest(k, n).proportion_ci(0.95, method="wilson")
+    return k / n, float(ci.low), float(ci.high), n
+
+
+__all__ = ["INTERVAL", "LIFE_COLUMNS", "TARGETS", "StudyResult", "wilson_share"]
 
 
 def add_study_options(

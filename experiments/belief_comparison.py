@@ -30,6 +30,8 @@ from pathlib import Path
 import numpy as np
 from scipy.stats import bootstrap, norm
 
+from experiments.belief_common import wilson_share
+
 #: metrics compared (columns of ``lives.csv``, 0/1 per life)
 METRICS: tuple[str, ...] = ("covered", "undercut")
 #: minimum detectable difference factor: z_{0.975} + z_{0.80}
@@ -119,10 +121,8 @@ def compare_runs(
 def by_life(lives: dict[Key, dict[str, float]]) -> list[dict[str, float | str]]:
     """Per (preset, policy, part, stage, metric): the share over first lives (life 0) and
     over later ones, each with its count and Wilson 95 % interval
-    (:func:`experiments.belief_calibration._share`; later lives of one episode are not
+    (:func:`experiments.belief_common.wilson_share`; later lives of one episode are not
     independent, so theirs is optimistic)."""
-    from experiments.belief_calibration import _share
-
     groups: dict[tuple[str, ...], list[float]] = defaultdict(list)
     for k, values in lives.items():
         which = "first" if k[5] == 0 else "later"
@@ -130,7 +130,7 @@ def by_life(lives: dict[Key, dict[str, float]]) -> list[dict[str, float | str]]:
             groups[(k[2], k[0], k[1], f"{k[3]:g}", m, which)].append(values[m])
     rows: list[dict[str, float | str]] = []
     for (preset, policy, part, stage, m, which), v in sorted(groups.items()):
-        share, low, high, n = _share(np.array(v))
+        share, low, high, n = wilson_share(np.array(v))
         rows.append({"preset": preset, "policy": policy, "part": part, "stage": stage,
                      "metric": m, "lives": which, "n": n, "share": share, "ci_low": low,
                      "ci_high": high})  # fmt: skip

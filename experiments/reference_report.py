@@ -20,8 +20,8 @@ from typing import Any
 
 import numpy as np
 
-from experiments.belief_calibration import RISK_BINS, _share, risk_bin
-from experiments.belief_common import TARGETS
+from experiments.belief_calibration import RISK_BINS, risk_bin
+from experiments.belief_common import TARGETS, wilson_share
 from experiments.belief_comparison import paired_difference
 from experiments.belief_output import write_csv
 from scas_env.utils.results_folder import json_text, results_folder
@@ -61,7 +61,7 @@ def stage_table(
         hits = {est: _hits(group, est) for est in ESTIMATORS}
         for est, h in hits.items():
             for metric in ("covered", "undercut"):
-                share, lo, hi, _ = _share(h[metric])
+                share, lo, hi, _ = wilson_share(h[metric])
                 name = "coverage" if metric == "covered" else "undercut"
                 row[f"{est}_{name}"], row[f"{est}_{name}_ci_low"] = share, lo
                 row[f"{est}_{name}_ci_high"] = hi
@@ -98,7 +98,7 @@ def reliability_table(
             which = risk_bin(risk, edges)
             for b in range(edges.size - 1):
                 sel = which == b
-                share, lo, hi, n = _share(failed[sel])
+                share, lo, hi, n = wilson_share(failed[sel])
                 out.append(
                     {
                         "policy": policy, "estimator": est, "bin_low": float(edges[b]),
