@@ -3,7 +3,8 @@
 Two runs of :func:`experiments.belief_calibration.run_study` with the same seeds fly the
 same part lives (per-part degradation draws; the study's policies do not read the filters),
 so each life's record at a stage is paired: coverage of the 90 % interval and undercut of
-the low quantile, 0/1 in each run. Per (policy, part, stage), and pooled over the stages:
+the low quantile, 0/1 in each run. Per (preset, policy, part, stage), and pooled over the
+stages:
 
 * shares in run A and run B, and their difference B - A;
 * its 95 % interval by a cluster bootstrap over episodes (the unit drawn independently;
@@ -96,25 +97,26 @@ def compare_runs(
     rng: np.random.Generator,
     stages: Sequence[float] | None = None,
 ) -> list[dict[str, float | str]]:
-    """Per (policy, part, stage) and pooled over ``stages`` (all of A's if None): the paired
-    comparison of each metric over the lives present in both runs."""
+    """Per (preset, policy, part, stage) and pooled over ``stages`` (all of A's if None):
+    the paired comparison of each metric over the lives present in both runs."""
     common = sorted(set(a) & set(b))
     if not common:
         raise ValueError("the two runs share no (policy, part, stage, episode, life) record")
-    groups: dict[tuple[str, str, str], list[Key]] = defaultdict(list)
+    groups: dict[tuple[str, str, str, str], list[Key]] = defaultdict(list)
     for k in common:
         if stages is None or k[3] in stages:
-            groups[(k[0], k[1], f"{k[3]:g}")].append(k)
-            groups[(k[0], k[1], "all")].append(k)
+            groups[(k[2], k[0], k[1], f"{k[3]:g}")].append(k)
+            groups[(k[2], k[0], k[1], "all")].append(k)
     rows: list[dict[str, float | str]] = []
-    for (policy, part, stage), keys in groups.items():
+    for (preset, policy, part, stage), keys in groups.items():
         episode = np.array([k[4] for k in keys])
         for m in METRICS:
             va = np.array([a[k][m] for k in keys])
             vb = np.array([b[k][m] for k in keys])
             row = paired_difference(va, vb, episode, rng)
-            rows.append({"policy": policy, "part": part, "stage": stage, "metric": m, **row})
-    rows.sort(key=lambda r: (r["policy"], r["part"], r["metric"], str(r["stage"])))
+            rows.append({"preset": preset, "policy": policy, "part": part, "stage": stage,
+                         "metric": m, **row})  # fmt: skip
+    rows.sort(key=lambda r: (r["preset"], r["policy"], r["part"], r["metric"], str(r["stage"])))
     return rows
 
 
@@ -153,12 +155,12 @@ def format_by_life(rows: Sequence[dict[str, float | str]]) -> str:
 def format_comparison(rows: Sequence[dict[str, float | str]]) -> str:
     """A text table of :func:`compare_runs`."""
     lines = [
-        f"{'policy':7s} {'part':6s} {'metric':8s} {'stage':>5s} {'lives':>5s} {'A':>6s} "
-        f"{'B':>6s} {'B - A [95% CI]':>26s} {'MDD':>6s}"
+        f"{'preset':7s} {'policy':7s} {'part':6s} {'metric':8s} {'stage':>5s} {'lives':>5s} "
+        f"{'A':>6s} {'B':>6s} {'B - A [95% CI]':>26s} {'MDD':>6s}"
     ]
     for r in rows:
         lines.append(
-            f"{r['policy']:7s} {r['part']:6s} {r['metric']:8s} {r['stage']:>5s} "
+            f"{r['preset']:7s} {r['policy']:7s} {r['part']:6s} {r['metric']:8s} {r['stage']:>5s} "
             f"{int(r['lives']):5d} {float(r['share_a']):6.3f} {float(r['share_b']):6.3f} "
             f"{float(r['diff']):+7.3f} [{float(r['ci_low']):+.3f}, {float(r['ci_high']):+.3f}] "
             f"{float(r['mdd']):6.3f}"

@@ -138,12 +138,16 @@ def test_compare_runs_pairs_lives_and_pools_stages(tmp_path) -> None:
     rows_a = [f"default,never,spring,{s},{e},0,1,0,0.1\n" for s in (0.2, 0.8) for e in range(4)]
     rows_b = [f"default,never,spring,{s},{e},0,{int(e > 0 or s < 0.5)},1,0.1\n"
               for s in (0.2, 0.8) for e in range(3)]  # fmt: skip
+    rows_a += [f"paper,never,spring,0.2,{e},0,0,0,0.1\n" for e in range(3)]  # another preset
+    rows_b += [f"paper,never,spring,0.2,{e},0,1,0,0.1\n" for e in range(3)]
     for name, rows in (("a", rows_a), ("b", rows_b)):
         (tmp_path / name).mkdir()
         (tmp_path / name / "lives.csv").write_text(header + "".join(rows))
     out = compare_runs(read_lives(tmp_path / "a"), read_lives(tmp_path / "b"),
                        np.random.default_rng(0))  # fmt: skip
-    got = {(r["stage"], r["metric"]): r for r in out}
+    paper = {(r["stage"], r["metric"]): r for r in out if r["preset"] == "paper"}
+    assert paper[("all", "covered")]["lives"] == 3 and paper[("all", "covered")]["diff"] == 1.0
+    got = {(r["stage"], r["metric"]): r for r in out if r["preset"] == "default"}
     assert got[("all", "covered")]["lives"] == 6  # episode 3 is only in run A
     assert got[("0.8", "covered")]["diff"] == pytest.approx(-1 / 3)
     assert got[("0.2", "undercut")]["diff"] == 1.0
