@@ -237,12 +237,16 @@ def test_risk_recalibration_command(tmp_path, capsys) -> None:
     assert risk_recalibration.main([*args, "--out", str(out)]) == 0
     assert "Brier raw" in capsys.readouterr().out
     names = {p.name for p in out.iterdir()}
-    assert {"reliability.csv", "brier.csv", "summary.json", "reliability.png"} <= names
+    assert {"reliability.csv", "brier.csv", "episodes.csv", "summary.json"} <= names
     maps, scenario, _ = load_risk_maps(out / "risk_maps_default.json")
     assert set(maps) == {"spring", "seal"} and maps["seal"].records > 0
     assert scenario.episode_slots == 1500
     with pytest.raises(SystemExit):
         risk_recalibration.main([*args, "--seed", "0"])
+    assert risk_recalibration.main(["--compare", str(out), str(out)]) == 0  # with itself
+    assert "+0.000000 [+0.000000, +0.000000]" in capsys.readouterr().out
+    with pytest.raises(SystemExit):  # no episodes.csv: a usage error naming the file
+        risk_recalibration.main(["--compare", str(tmp_path), str(out)])
 
 
 def test_reference_posterior_with_a_risk_map(tmp_path, capsys) -> None:
