@@ -12,7 +12,6 @@ from __future__ import annotations
 
 import math
 
-import gymnasium as gym
 import numpy as np
 import pytest
 from scipy.stats import chi2
@@ -20,10 +19,10 @@ from scipy.stats import chi2
 from experiments.belief_calibration import policy_action, run_study
 from prognostics.degradation_models import predict_particles
 from prognostics.normals import NormalStream
-from scas_env import ENV_ID
 from scas_env.core.scenario import Scenario
 from scas_env.env import ScasMaintenanceEnv
 from tests import core_reference as ref
+from tests.option_lockstep import run_option_lockstep
 
 WALK = 0.003
 
@@ -70,27 +69,10 @@ def test_the_walk_spreads_log_theta_as_sigma_sqrt_flights() -> None:
 def test_single_and_vector_env_agree_with_the_walk() -> None:
     """The walk flows through the batch's kernels: one actuator of the native vector env
     runs the single env's episode bit for bit; without the walk the episode differs."""
-    slots = 400
-    single = ScasMaintenanceEnv(spring_theta_walk=WALK, episode_slots=slots)
-    plain = ScasMaintenanceEnv(episode_slots=slots)
-    vec = gym.make_vec(
-        ENV_ID, num_envs=1, vectorization_mode="vector_entry_point",
-        spring_theta_walk=WALK, episode_slots=slots,
+    _, vec = run_option_lockstep(
+        {"spring_theta_walk": WALK}, {}, {"episode_slots": 400},
+        lambda t: policy_action("test10", t), seeds=(4,),
     )  # fmt: skip
-    o1, _ = single.reset(seed=4)
-    o0, _ = plain.reset(seed=4)
-    ov, _ = vec.reset(seed=4)
-    np.testing.assert_array_equal(o1, ov[0])
-    differs = False
-    for t in range(slots - 1):
-        action = policy_action("test10", t)
-        o1, r1, *_ = single.step(action)
-        o0, *_ = plain.step(action)
-        ov, rv, *_ = vec.step(np.array([action]))
-        np.testing.assert_array_equal(o1, ov[0])
-        assert r1 == rv[0]
-        differs = differs or not np.array_equal(o1, o0)
-    assert differs
     vec.close()
 
 

@@ -18,7 +18,6 @@ from __future__ import annotations
 
 import math
 
-import gymnasium as gym
 import numpy as np
 import pytest
 from scipy.interpolate import RegularGridInterpolator
@@ -27,7 +26,6 @@ from scipy.stats import kstest, norm, truncnorm
 from experiments.belief_calibration import policy_action
 from prognostics.degradation_models import damage_scalar
 from prognostics.normals import NormalStream
-from scas_env import ENV_ID
 from scas_env.core import state as state_module
 from scas_env.core.rejuvenation import (
     C_AGE,
@@ -49,6 +47,7 @@ from scas_env.core.rejuvenation import (
 )
 from scas_env.core.scenario import Scenario
 from scas_env.env import ScasMaintenanceEnv
+from tests.option_lockstep import run_option_lockstep
 from tests.rejuvenation_reference import assert_the_move_is_per_proposal
 
 BOTH = {"rejuvenation": "resample_move_both"}
@@ -387,26 +386,10 @@ def test_single_and_vector_env_agree_with_the_moves(option: str, without: str, p
     the option on (tests, learning, resample-moves of ``part``, a spring and a seal
     replacement), which differs from the episode ``without`` it."""
     kw = {"episode_slots": 800, "n_particles": 50}
-    slots = kw["episode_slots"]
-    single = ScasMaintenanceEnv(rejuvenation=option, **kw)
-    other = ScasMaintenanceEnv(rejuvenation=without, **kw)
-    vec = gym.make_vec(
-        ENV_ID, num_envs=2, vectorization_mode="vector_entry_point", rejuvenation=option, **kw
-    )
-    o1, _ = single.reset(seed=5)
-    other.reset(seed=5)
-    ov, _ = vec.reset(seed=[5, 4])
-    np.testing.assert_array_equal(o1, ov[0])
-    differs = False
-    for t in range(slots - 1):
-        action = {120: 3, 500: 2}.get(t, policy_action("test10", t))
-        o1, r1, *_ = single.step(action)
-        o0, *_ = other.step(action)
-        ov, rv, *_ = vec.step(np.array([action, 0]))
-        np.testing.assert_array_equal(o1, ov[0])
-        assert r1 == rv[0]
-        differs = differs or not np.array_equal(o1, o0)
-    assert differs
+    single, vec = run_option_lockstep(
+        {"rejuvenation": option}, {"rejuvenation": without}, kw,
+        lambda t: {120: 3, 500: 2}.get(t, policy_action("test10", t)),
+    )  # fmt: skip
     tally = single.batch.a["tally"][0, part]
     assert tally[0] > 0 and 0 < tally[1] < tally[0]
     for k in ("x", "log_theta", "aux", "loglik", "tally", "history_n"):

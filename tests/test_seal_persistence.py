@@ -4,13 +4,11 @@ its own spring value (docs/beliefs.md, cross-fault errors)."""
 
 from __future__ import annotations
 
-import gymnasium as gym
 import numpy as np
 import pytest
 
 from experiments.belief_calibration import policy_action
 from prognostics.resampling import systematic_resample
-from scas_env import ENV_ID
 from scas_env.core.filters import (
     _effect_update,
     _moments,
@@ -20,7 +18,8 @@ from scas_env.core.filters import (
 )
 from scas_env.core.parts import learn_now, replace_part, reset_filter
 from scas_env.core.scenario import Scenario
-from scas_env.env import REPLACE_SPRING, ScasMaintenanceEnv
+from scas_env.env import ScasMaintenanceEnv
+from tests.option_lockstep import run_option_lockstep
 
 RHO = 0.99
 
@@ -124,33 +123,12 @@ def test_the_seal_reads_each_particle_at_the_estimate_plus_its_offset() -> None:
 
 
 def test_single_and_vector_env_agree_and_the_option_changes_the_episode() -> None:
-    kw = {
-        "episode_slots": 600,
-        "n_particles": 50,
-        "preflight": "every_flight",
-        "rejuvenation": "resample_move",
-    }  # with the spring's move, as documented
-    single = ScasMaintenanceEnv(seal_cross_persistence=RHO, **kw)
-    off = ScasMaintenanceEnv(**kw)
-    vec = gym.make_vec(ENV_ID, num_envs=2, vectorization_mode="vector_entry_point",
-                       seal_cross_persistence=RHO, **kw)  # fmt: skip
-    o1, _ = single.reset(seed=5)
-    off.reset(seed=5)
-    ov, _ = vec.reset(seed=[5, 4])
-    differs = False
-    row = single.batch.setup.filters.persistence[1]
-    for t in range(kw["episode_slots"] - 1):
-        action = {150: 3, 400: 2}.get(t, 0)
-        before = single.batch.a["aux"][0, 1, row].copy()
-        o1, r1, *_ = single.step(action)
-        if action == REPLACE_SPRING:  # a new spring pair: every offset drawn anew
-            assert not np.any(np.isin(single.batch.a["aux"][0, 1, row], before))
-        o0, *_ = off.step(action)
-        ov, rv, *_ = vec.step(np.array([action, 0]))
-        np.testing.assert_array_equal(o1, ov[0])
-        assert r1 == rv[0]
-        differs = differs or not np.array_equal(o1, o0)
-    assert differs
+    """With the spring's move, as documented; a seal set at slot 150, a spring pair at 400."""
+    kw = {"episode_slots": 600, "n_particles": 50, "preflight": "every_flight",
+          "rejuvenation": "resample_move"}  # fmt: skip
+    single, vec = run_option_lockstep(
+        {"seal_cross_persistence": RHO}, {}, kw, lambda t: {150: 3, 400: 2}.get(t, 0)
+    )
     np.testing.assert_array_equal(single.batch.a["aux"][0], vec.unwrapped.batch.a["aux"][0])
     vec.close()
 

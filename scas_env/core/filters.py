@@ -194,6 +194,17 @@ def work_arrays(n: int, n_learn: int) -> tuple:
     )  # fmt: skip
 
 
+@njit(cache=True, error_model="numpy")
+def age_offsets(u: np.ndarray, rho: float, d: float, handle: tuple) -> None:
+    """Standard-normal offsets ``u`` (``FilterModel.persistence``) carried over ``d`` flights
+    of an AR(1) with ``rho`` per flight, in place: ``rho^d u + sqrt(1 - rho^2d) z``, z the
+    stream's next normals, one per offset in order."""
+    keep = rho**d
+    fresh = math.sqrt(max(1.0 - keep * keep, 0.0))
+    for i in range(u.size):
+        u[i] = keep * u[i] + fresh * standard_normal(handle)
+
+
 @njit(cache=True, inline="always")
 def _moves(p: int, model: FilterModel) -> bool:
     """Whether filter p keeps a history and resamples by resample-move: the spring's with
@@ -237,11 +248,7 @@ def _predict(e: int, p: int, d: float, bank: tuple, pending: np.ndarray, status:
         status[e] = 1
     rho, row = model.persistence
     if p == 1 and row >= 0:  # the spring estimate's error seen by each seal particle
-        keep = rho**d
-        fresh = math.sqrt(max(1.0 - keep * keep, 0.0))
-        u = bank[4][e, 1, row]
-        for i in range(u.size):
-            u[i] = keep * u[i] + fresh * standard_normal(handle)
+        age_offsets(bank[4][e, 1, row], rho, d, handle)
     pending[e, p] -= d
     if _moves(p, model):
         bank[5][2][e, p, C_AGE] += d
@@ -441,6 +448,7 @@ __all__ = [
     "SLOPE_STEP",
     "STATUS_MESSAGES",
     "FilterModel",
+    "age_offsets",
     "bilinear_at",
     "cell_of",
     "effect_at",

@@ -37,6 +37,7 @@ from scas_env.actuator.uncertainty import (
 )
 from scas_env.core.filters import (
     STATUS_MESSAGES,
+    age_offsets,
     learn_row,
     predict_filter,
     survive_filters,
@@ -442,11 +443,8 @@ def _spring_errors_kept(
     kept = a["aux"][e, 1, row][systematic_resample(a["w"][e, 1], rng)]
     d = float(a["pending"][e, 1])
     if d > 0.0:
-        keep = rho**d
-        z = np.empty(kept.size)
         with rng.bit_generator.lock:
-            fill_standard_normal(handle_of(rng), z)
-        kept = keep * kept + math.sqrt(max(1.0 - keep * keep, 0.0)) * z
+            age_offsets(kept, rho, d, handle_of(rng))
     return kept
 
 

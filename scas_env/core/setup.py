@@ -65,6 +65,8 @@ GROUND_FEATURES = ("G1", "G3")
 LEARNING_FEATURES = {"I8": "spring", "I9": "seal"}
 #: each filter's features with installation effects as states, in ``aux`` order
 EFFECT_FEATURES = (("G1", "I8"), ("G3", "I9"))
+#: aux rows of the installation effects (a mean and a variance per feature of a filter)
+EFFECT_ROWS = 2 * max(len(f) for f in EFFECT_FEATURES)
 #: parts of each kind whose lives the clairvoyant view holds ahead of the fitted one
 UPCOMING_PARTS = 3
 #: flights after which a life counts as infinite (far beyond any episode)
@@ -442,7 +444,7 @@ def _filter_model(
 def persistence_row(s: Scenario) -> int:
     """The aux row of the seal particles' spring-error offsets (after the installation
     effects' rows), -1 when ``Scenario.seal_cross_persistence`` is 0."""
-    return 2 * max(len(f) for f in EFFECT_FEATURES) if s.seal_cross_persistence > 0 else -1
+    return EFFECT_ROWS if s.seal_cross_persistence > 0 else -1
 
 
 #: random-walk scale over the posterior's sd in d dimensions (Roberts, Gelman & Gilks 1997:
@@ -502,6 +504,7 @@ def lognormal_sigma(params: ScasParams, part: str) -> float:
 
 __all__ = [
     "EFFECT_FEATURES",
+    "EFFECT_ROWS",
     "FLIGHT_FEATURES",
     "GROUND_FEATURES",
     "KERNEL_TABLES",
