@@ -269,6 +269,34 @@ class EffectPrior:
         return int(self.log_pi.size)
 
 
+#: the proposal of a refinement (:func:`t_proposal`): t degrees of freedom, the inflation of
+#: the posterior's scale, and its sd floor (prior sds) where the fitted covariance is singular
+T_DOF, T_INFLATE, T_FLOOR = 4.0, 1.5, 0.1
+
+
+def t_proposal(
+    x: np.ndarray, w: np.ndarray, rng: np.random.Generator, log2_points: int
+) -> tuple[np.ndarray, np.ndarray]:
+    """``2^log2_points`` scrambled Sobol points of a multivariate t (4 degrees of freedom,
+    scale 1.5 x the covariance of the points ``x`` (n, d) under weights ``w``) and its log
+    density at them: the proposal of :meth:`ReferencePosterior.refine`. Where the weighted
+    covariance is singular (the weight on one point or a line) it is widened by a tenth of
+    the prior's sd (``x`` in prior sds) in each coordinate: any proposal covering the
+    posterior is exact after the importance weights, this one only finds it."""
+    d = x.shape[1]
+    mean = w @ x
+    cov = np.atleast_2d(np.cov(x.T, aweights=w, bias=True)) * T_INFLATE**2
+    try:
+        proposal = multivariate_t(loc=mean, shape=cov, df=T_DOF)
+    except np.linalg.LinAlgError:
+        cov = cov + T_FLOOR**2 * np.eye(d)
+        proposal = multivariate_t(loc=mean, shape=cov, df=T_DOF)
+    u = qmc.Sobol(d=d + 1, scramble=True, seed=rng).random_base2(log2_points)
+    radius = np.sqrt(chi2.ppf(u[:, d], T_DOF) / T_DOF)
+    pts = mean + (norm.ppf(u[:, :d]) @ np.linalg.cholesky(cov).T) / radius[:, None]
+    return pts, np.reshape(proposal.logpdf(pts), -1)
+
+
 class ReferencePosterior:
     """A part's exact posterior as a weighted point set, fed event by event.
 
@@ -280,11 +308,6 @@ class ReferencePosterior:
     fitted to the current posterior and replays every event so far: importance sampling with
     the weights ``prior / proposal x likelihood``, exact as the set grows.
     """
-
-    #: proposal of :meth:`refine`: t degrees of freedom and scale inflation
-    T_DOF, INFLATE = 4.0, 1.5
-    #: the proposal's sd floor (prior sds) when the fitted covariance is singular
-    FLOOR = 0.1
 
     def __init__(
         self,
@@ -406,26 +429,13 @@ class ReferencePosterior:
             scale = np.array([m.log_theta_sd])
             x = self.log_theta[:, None] / scale
         d = scale.size
-        mean = w @ x
-        cov = np.atleast_2d(np.cov(x.T, aweights=w, bias=True)) * self.INFLATE**2
-        try:
-            proposal = multivariate_t(loc=mean, shape=cov, df=self.T_DOF)
-        except np.linalg.LinAlgError:
-            # the weight sits on one point (or a line), a covariance scipy calls singular:
-            # widen the proposal by a tenth of the prior's sd in each coordinate; any
-            # proposal covering the posterior is exact after the importance weights, this
-            # one only finds it
-            cov = cov + self.FLOOR**2 * np.eye(d)
-            proposal = multivariate_t(loc=mean, shape=cov, df=self.T_DOF)
-        u = qmc.Sobol(d=d + 1, scramble=True, seed=self.rng).random_base2(self.log2_points)
-        radius = np.sqrt(chi2.ppf(u[:, d], self.T_DOF) / self.T_DOF)
-        pts = mean + (norm.ppf(u[:, :d]) @ np.linalg.cholesky(cov).T) / radius[:, None]
+        pts, log_q = t_proposal(x, w, self.rng, self.log2_points)
         if d == 2:
             x0, log_theta = m.x0_mean_m + scale[0] * pts[:, 0], scale[1] * pts[:, 1]
         else:
             x0, log_theta = np.full(pts.shape[0], m.x0_mean_m), scale[0] * pts[:, 0]
         # the proposal's density in (x0, log theta) is this one's over a constant Jacobian
-        log_w = m.log_prior(x0, log_theta) - np.reshape(proposal.logpdf(pts), -1)
+        log_w = m.log_prior(x0, log_theta) - log_q
         keep = np.isfinite(log_w)
         self._use(x0[keep], log_theta[keep], log_w[keep])
         for event in self.history:
@@ -446,4 +456,5 @@ __all__ = [
     "RulBelief",
     "check_points",
     "event_update",
+    "t_proposal",
 ]

@@ -289,17 +289,17 @@ def _stage_ages(table: dict[str, np.ndarray], life: int, stages: Sequence[float]
     return out
 
 
-def _refined_belief(
-    ref: ReferencePosterior, age: float, low_q: float, horizon: float, min_ess: float
+def refined_belief(
+    ref: Any, age: float, low_q: float, horizon: float, min_ess: float, **kwargs: Any
 ) -> Any:
-    """The belief at ``age``, the posterior refined (at most :data:`MAX_REFINEMENTS`
-    times) until its effective sample size reaches ``min_ess``."""
-    b = ref.belief(age, low_q, horizon)
+    """``ref.belief(age, low_q, horizon, **kwargs)``, the posterior ``ref`` refined (at most
+    :data:`MAX_REFINEMENTS` times) until its effective sample size reaches ``min_ess``."""
+    b = ref.belief(age, low_q, horizon, **kwargs)
     for _ in range(MAX_REFINEMENTS):
         if b.ess >= min_ess:
             break
         ref.refine(age)
-        b = ref.belief(age, low_q, horizon)
+        b = ref.belief(age, low_q, horizon, **kwargs)
     return b
 
 
@@ -356,7 +356,7 @@ def reference_lives(
                 e = todo.pop(0)
                 sl = slice(events.start[e], events.stop[e])
                 ref.update(events.kind[e], events.y[e], ages[sl], other[sl])
-            b = _refined_belief(ref, float(age), low_q, horizon, min_ess)
+            b = refined_belief(ref, float(age), low_q, horizon, min_ess)
             rows.append(
                 {
                     "policy": policy, "seed": seed, "life": life, "stage": stage,
@@ -374,7 +374,7 @@ def reference_lives(
                 sl = slice(events.start[e], events.stop[e])
                 ref.update(events.kind[e], events.y[e], ages[sl], other[sl])
             survived = float(events.survived[life])
-            _refined_belief(ref, survived, low_q, horizon, min_ess)
+            refined_belief(ref, survived, low_q, horizon, min_ess)
             effects = ref.carried_effects(survived, carry_components)
     return rows
 
@@ -643,6 +643,7 @@ __all__ = [
     "RecordingEnv",
     "main",
     "reference_lives",
+    "refined_belief",
     "run_reference_study",
 ]
 

@@ -14,7 +14,7 @@ episode's start) and later ones (``--by-life DIR``).
 from __future__ import annotations
 
 import csv
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -111,14 +111,15 @@ def reliability_table(
 
 
 def read_lives(folder: str | Path) -> list[dict[str, Any]]:
-    """A stage study's ``lives.csv``, typed (policy a string, seed and life integers, the
-    rest floats); ``FileNotFoundError`` naming the file if the folder has none."""
+    """A stage study's ``lives.csv``, typed (policy and part strings, seed and life
+    integers, the rest floats); ``FileNotFoundError`` naming the file if the folder has
+    none."""
     path = Path(folder) / "lives.csv"
     if not path.is_file():
         raise FileNotFoundError(f"{path}: no per-life rows (a stage study's --out writes them)")
     with path.open(newline="") as fh:
         return [
-            {k: v if k == "policy" else int(v) if k in ("seed", "life") else float(v)
+            {k: v if k in ("policy", "part") else int(v) if k in ("seed", "life") else float(v)
              for k, v in r.items()}
             for r in csv.DictReader(fh)
         ]  # fmt: skip
@@ -174,11 +175,12 @@ def write_report(
     *,
     overwrite: bool = False,
     part: str = "spring",
+    plot: Callable[[Sequence[dict[str, float | str]], Path, str], None] | None = None,
 ) -> list[Path]:
     """Into the results folder ``out`` (written atomically), for a :func:`stage_table`:
     ``lives.csv`` (per life and stage), ``stages.csv``, ``study.json`` and ``coverage.png``
-    (titled with ``part``); for a :func:`reliability_table`: ``records.csv`` and
-    ``reliability.csv``."""
+    (titled with ``part``; drawn by ``plot(table, path, part)`` if given); for a
+    :func:`reliability_table`: ``records.csv`` and ``reliability.csv``."""
     risk = bool(table) and "estimator" in table[0]
     names = (
         ["records.csv", "reliability.csv"]
@@ -193,7 +195,7 @@ def write_report(
             (tmp / "study.json").write_text(
                 json_text({"config": config, "stages": list(table)}, indent=1)
             )
-            _plot(table, tmp / "coverage.png", part)
+            (plot or _plot)(table, tmp / "coverage.png", part)
     return [Path(out) / n for n in names]
 
 
