@@ -46,27 +46,36 @@ from experiments.belief_calibration import (
     run_episode,
     trace_table,
 )
-from experiments.belief_common import INTERVAL, add_study_options
+from experiments.belief_common import add_study_options
 from experiments.reference_model import (
     BATCH,
+    DEFAULT_LOG2_POINTS,
     DEFAULT_MIN_ESS,
     TEST,
     PartModel,
     ReferencePosterior,
     RulBelief,
     check_points,
+    rul_belief,
     t_proposal,
 )
-from experiments.reference_posterior import RecordingEnv, _stage_ages, refined_belief
+from experiments.reference_posterior import (
+    RecordingEnv,
+    belief_columns,
+    record_columns,
+    refined_belief,
+    stage_records,
+)
 from prognostics.degradation_models import inverse_damage_scalar
 from prognostics.measurement import random_effect_update
-from prognostics.rul import weighted_quantile
 from scas_env.core.filters import bilinear_at, cell_of
 from scas_env.core.scenario import Scenario
 from scas_env.core.setup import PARTS
 
-#: default number of joint Sobol points (2^16: three dimensions)
-DEFAULT_JOINT_LOG2_POINTS = 16
+#: default number of joint Sobol points (2^15: three dimensions)
+DEFAULT_JOINT_LOG2_POINTS = 15
+#: Sobol points of the reference knowing the other part (the one-part study's default)
+KNOWN_LOG2_POINTS = DEFAULT_LOG2_POINTS
 
 
 @njit(cache=True, error_model="numpy")
@@ -201,15 +210,12 @@ class JointPosterior:
 
     def belief(self, age: float, low_quantile: float, horizon: float, part: str) -> RulBelief:
         """``part``'s RUL distribution after ``age`` flights survived by both."""
-        w = self.weights(age)
-        rul = np.maximum(self.lives[part] - age, 0.0)
-        levels = np.array([INTERVAL[0], INTERVAL[1], low_quantile])
-        q_lo, q_hi, low = (float(q) for q in weighted_quantile(rul, w, levels))
-        risk = float(w[rul <= horizon].sum())
-        return RulBelief(float(w @ rul), q_lo, q_hi, low, risk, float(1.0 / (w @ w)))
+        return rul_belief(self.weights(age), self.lives[part], age, low_quantile, horizon)
 
     def _log_prior(self, x0: np.ndarray, log_c: np.ndarray, log_w: np.ndarray) -> np.ndarray:
-        return self.spring.log_prior(x0, log_c) + self.seal.log_prior(x0, log_w)
+        """The joint prior's log density (the seal's ``x0`` is a point: its law is log
+        theta's alone, :meth:`PartModel.log_prior` ignores the x0 given)."""
+        return self.spring.log_prior(x0, log_c) + self.seal.log_prior(log_w, log_w)
 
     def refine(self, age: float) -> None:
         """A new point set from a t proposal fitted to the posterior at ``age`` (standardised
@@ -229,12 +235,13 @@ class JointPosterior:
 
 def first_life_events(
     env: RecordingEnv,
-) -> tuple[list[tuple[int, float, float, int, tuple[int, int]]], float]:
+) -> tuple[list[tuple[int, float, float, int, tuple[int, int], np.ndarray]], float]:
     """Both parts' paired events of their first lives, in order, as ``(kind, y_spring,
-    y_seal, known_after, (spring's event index, seal's))``, and the age at which the first
-    of the two first lives ended (``inf``: neither did). The recorder adds a test's and a
-    batch's data of both parts together; a pair that does not match (kind, age learnt,
-    runs' ages) raises."""
+    y_seal, known_after, (spring's event index, seal's), runs' ages)``, and the age at which
+    the first of the two first lives ended (``inf``: neither did). The recorder adds a
+    test's and a batch's data of both parts together; a pair that does not match (kind, age
+    learnt, runs' ages) raises. (``known_after`` is a part's age, which restarts in its next
+    life: only life 0's events are taken.)"""
     ev = {p: env.part_events[p] for p in PARTS}
     ends = [float(ev[p].survived[0]) if ev[p].survived else math.inf for p in PARTS]
     end = min(ends)
@@ -250,8 +257,31 @@ def first_life_events(
         a_s, a_w = s.ages[s.start[i] : s.stop[i]], w.ages[w.start[j] : w.stop[j]]
         if (s.kind[i], s.known_after[i], a_s) != (w.kind[j], w.known_after[j], a_w):
             raise RuntimeError(f"events {i} / {j} of the spring and seal do not pair up")
-        out.append((s.kind[i], s.y[i], w.y[j], s.known_after[i], (i, j)))
+        out.append((s.kind[i], s.y[i], w.y[j], s.known_after[i], (i, j), np.asarray(a_s)))
     return out, end
+
+
+def check_joint_env(env: RecordingEnv) -> None:
+    """Refuse an env whose first lives are not what the joint reference assumes: both
+    parts new at the episode's start (``initial_health="new"``: one age for both, the
+    effects' prior), both faults growing, the other part read at its true severity (the
+    ``known`` columns)."""
+    sc = env.scenario
+    if sc.initial_health != "new":
+        raise ValueError(
+            f"initial_health = {sc.initial_health!r}: the joint reference needs new parts "
+            "at the episode's start ('new')"
+        )
+    if not (sc.crack_active and sc.wear_active):
+        raise ValueError(
+            f"crack_active = {sc.crack_active!r}, wear_active = {sc.wear_active!r}: the "
+            "joint reference needs both faults (1, 1)"
+        )
+    if (env.seal_view, env.spring_view) != ("true", "true"):
+        raise ValueError(
+            f"seal_view = {env.seal_view!r}, spring_view = {env.spring_view!r}: the known "
+            "reference reads the other part's true severity ('true', 'true')"
+        )
 
 
 def joint_lives(
@@ -261,7 +291,7 @@ def joint_lives(
     rng: np.random.Generator,
     *,
     log2_points: int = DEFAULT_JOINT_LOG2_POINTS,
-    known_log2_points: int = 14,
+    known_log2_points: int = KNOWN_LOG2_POINTS,
     stages: Sequence[float] = STAGES,
     min_ess: float = DEFAULT_MIN_ESS,
 ) -> list[dict[str, Any]]:
@@ -270,13 +300,14 @@ def joint_lives(
     ``stage``, ``age``), the ``truth`` (info RUL), the filter's belief (``pf_*``), the joint
     reference's (``ref_*``, ``ref_ess``) and that of the reference knowing the other part's
     true severity (``known_*``, on its own part's data)."""
+    check_joint_env(env)
     traces = run_episode(env, policy, seed)
     events, end = first_life_events(env)
     tables = {p: trace_table([traces[p]]) for p in PARTS}
     picks = sorted(
         (float(tables[p]["age"][r]), p, s, r)
         for p in PARTS
-        for s, r in _stage_ages(tables[p], 0, stages).items()
+        for s, r in stage_records(tables[p], 0, stages).items()
         if tables[p]["age"][r] < end
     )
     if not picks:
@@ -291,25 +322,18 @@ def joint_lives(
     rows = []
     for age, part, stage, r in picks:
         while todo and todo[0][3] < age:
-            kind, y_s, y_w, _, index = todo.pop(0)
+            kind, y_s, y_w, _, index, ages = todo.pop(0)
             for p, y, e in zip(PARTS, (y_s, y_w), index, strict=True):
                 sl = slice(ev[p].start[e], ev[p].stop[e])
                 known[p].update(kind, y, np.asarray(ev[p].ages[sl]), np.asarray(ev[p].other[sl]))
-            joint.update(kind, y_s, y_w, np.asarray(ev["spring"].ages[sl]))
+            joint.update(kind, y_s, y_w, ages)
         b = refined_belief(joint, age, low_q, horizon, min_ess, part=part)
         k = refined_belief(known[part], age, low_q, horizon, min_ess)
-        t = tables[part]
         rows.append(
             {
                 "part": part, "policy": policy, "seed": seed, "life": 0, "stage": stage,
-                "age": age, "truth": float(t["true_info"][r]), "horizon": horizon,
-                "pf_mean": float(t["mean"][r]), "pf_q_lo": float(t["q_lo"][r]),
-                "pf_q_hi": float(t["q_hi"][r]), "pf_low": float(t["low"][r]),
-                "pf_risk": float(t["risk"][r]),
-                "ref_mean": b.mean, "ref_q_lo": b.q_lo, "ref_q_hi": b.q_hi, "ref_low": b.low,
-                "ref_risk": b.risk, "ref_ess": b.ess,
-                "known_mean": k.mean, "known_q_lo": k.q_lo, "known_q_hi": k.q_hi,
-                "known_low": k.low, "known_risk": k.risk, "known_ess": k.ess,
+                "age": age, **record_columns(tables[part], r, horizon),
+                **belief_columns("ref", b), **belief_columns("known", k),
             }
         )  # fmt: skip
     return rows
@@ -333,6 +357,7 @@ def run_joint_study(
     if not stages or any(not 0.0 < s < 1.0 for s in stages):
         raise ValueError(f"stages = {list(stages)!r} must be fractions of life in (0, 1)")
     env = RecordingEnv(scenario=Scenario.from_dict(dict(scenario_fields or {})))
+    check_joint_env(env)
     children = np.random.SeedSequence(seed).spawn(len(policies) * episodes)
     rows: list[dict[str, Any]] = []
     bar = tqdm(total=len(policies) * episodes, desc="joint reference", disable=not progress)
@@ -429,7 +454,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         check_points(args.log2_points, args.min_ess)
         if any(not 0.0 < s < 1.0 for s in args.stages):
             raise ValueError(f"--stages {args.stages} must be fractions of life in (0, 1)")
-        Scenario.from_dict(dict(args.scenario))
+        check_joint_env(RecordingEnv(scenario=Scenario.from_dict(dict(args.scenario))))
     except (TypeError, ValueError) as exc:
         parser.error(str(exc))
     if args.out is not None:
@@ -448,6 +473,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             "episodes": args.episodes, "seed": args.seed, "policies": args.policies,
             "scenario_fields": args.scenario, "stages": args.stages,
             "log2_points": args.log2_points, "min_ess": args.min_ess,
+            "known_log2_points": KNOWN_LOG2_POINTS,
         }  # fmt: skip
         for path in write_report(rows, table, config, args.out, overwrite=args.overwrite,
                                  part="both parts", plot=plot_joint):  # fmt: skip

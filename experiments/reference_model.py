@@ -239,6 +239,19 @@ class RulBelief:
     ess: float = math.nan
 
 
+def rul_belief(
+    w: np.ndarray, life: np.ndarray, age: float, low_quantile: float, horizon: float
+) -> RulBelief:
+    """The belief of points of normalised weights ``w`` and lives ``life`` (flights) after
+    ``age`` flights: RUL ``max(life - age, 0)``'s mean, quantiles and risk within
+    ``horizon``, and the effective sample size ``1 / sum w^2``."""
+    rul = np.maximum(life - age, 0.0)
+    levels = np.array([INTERVAL[0], INTERVAL[1], low_quantile])
+    q_lo, q_hi, low = (float(q) for q in weighted_quantile(rul, w, levels))
+    risk = float(w[rul <= horizon].sum())
+    return RulBelief(float(w @ rul), q_lo, q_hi, low, risk, float(1.0 / (w @ w)))
+
+
 @dataclass(frozen=True)
 class EffectPrior:
     """The prior of a part's two installation effects (:data:`BATCH`'s feature and
@@ -371,12 +384,7 @@ class ReferencePosterior:
 
     def belief(self, age: float, low_quantile: float, horizon: float) -> RulBelief:
         """The RUL distribution after ``age`` flights survived."""
-        w = self.weights(age)
-        rul = np.maximum(self.life - age, 0.0)
-        levels = np.array([INTERVAL[0], INTERVAL[1], low_quantile])
-        q_lo, q_hi, low = (float(q) for q in weighted_quantile(rul, w, levels))
-        risk = float(w[rul <= horizon].sum())
-        return RulBelief(float(w @ rul), q_lo, q_hi, low, risk, float(1.0 / (w @ w)))
+        return rul_belief(self.weights(age), self.life, age, low_quantile, horizon)
 
     def carried_effects(self, age: float, components: int | None) -> EffectPrior:
         """The installation effects' posterior after ``age`` flights survived, as the prior
@@ -456,5 +464,6 @@ __all__ = [
     "RulBelief",
     "check_points",
     "event_update",
+    "rul_belief",
     "t_proposal",
 ]

@@ -277,7 +277,24 @@ class RecordingEnv(ScasMaintenanceEnv):
             )
 
 
-def _stage_ages(table: dict[str, np.ndarray], life: int, stages: Sequence[float]) -> dict:
+def record_columns(table: dict[str, np.ndarray], r: int, horizon: float) -> dict[str, float]:
+    """A study row's record columns of row ``r`` of a belief trace table: the ``truth``
+    (info RUL), the risk ``horizon`` and the filter's belief (``pf_mean``, ``pf_q_lo``,
+    ``pf_q_hi``, ``pf_low``, ``pf_risk``)."""
+    return {
+        "truth": float(table["true_info"][r]), "horizon": horizon,
+        **{f"pf_{k}": float(table[k][r]) for k in ("mean", "q_lo", "q_hi", "low", "risk")},
+    }  # fmt: skip
+
+
+def belief_columns(prefix: str, b: Any) -> dict[str, float]:
+    """A reference's belief ``b`` (:class:`~experiments.reference_model.RulBelief`) as a
+    study row's columns ``<prefix>_mean`` ... ``<prefix>_ess``."""
+    names = ("mean", "q_lo", "q_hi", "low", "risk", "ess")
+    return {f"{prefix}_{k}": float(getattr(b, k)) for k in names}
+
+
+def stage_records(table: dict[str, np.ndarray], life: int, stages: Sequence[float]) -> dict:
     """Per stage, the row of ``table`` of the first record of ``life`` at or past that stage
     (as :func:`experiments.belief_calibration.stage_rows` picks it)."""
     rows = np.flatnonzero(table["life"] == life)
@@ -339,7 +356,7 @@ def reference_lives(
     effects: EffectPrior | None = None  # the installation's effects at this life's start
     for life in range(lives):
         if risk_min is None:
-            picks = _stage_ages(table, life, stages)
+            picks = stage_records(table, life, stages)
         else:
             mine = np.flatnonzero((table["life"] == life) & (table["risk"] >= risk_min))
             picks = {float(table["stage"][r]): int(r) for r in mine}
@@ -360,13 +377,8 @@ def reference_lives(
             rows.append(
                 {
                     "policy": policy, "seed": seed, "life": life, "stage": stage,
-                    "age": float(age), "truth": float(table["true_info"][r]),
-                    "horizon": horizon,
-                    "pf_mean": float(table["mean"][r]), "pf_q_lo": float(table["q_lo"][r]),
-                    "pf_q_hi": float(table["q_hi"][r]), "pf_low": float(table["low"][r]),
-                    "pf_risk": float(table["risk"][r]),
-                    "ref_mean": b.mean, "ref_q_lo": b.q_lo, "ref_q_hi": b.q_hi,
-                    "ref_low": b.low, "ref_risk": b.risk, "ref_ess": b.ess,
+                    "age": float(age), **record_columns(table, r, horizon),
+                    **belief_columns("ref", b),
                 }
             )  # fmt: skip
         if carry:  # the next life (same installation) starts from this one's effects
@@ -641,10 +653,13 @@ __all__ = [
     "SEAL_VIEWS",
     "PartEvents",
     "RecordingEnv",
+    "belief_columns",
     "main",
+    "record_columns",
     "reference_lives",
     "refined_belief",
     "run_reference_study",
+    "stage_records",
 ]
 
 

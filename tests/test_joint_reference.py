@@ -103,6 +103,31 @@ def test_refining_keeps_the_posterior(models) -> None:
         assert after[p].ess > before[p].ess  # the proposal sits on the posterior
 
 
+def test_refining_the_prior_gives_the_prior(models) -> None:
+    """With no data, the refined points weighted by prior / proposal carry the joint prior:
+    each parameter's weighted mean and sd are its prior's (the seal's log theta N(0, s^2),
+    the spring's log theta N(0, s^2)) within Monte Carlo error, so both parts' prior
+    densities enter the importance weights."""
+    joint = JointPosterior(models["spring"], models["seal"], np.random.default_rng(2), 13)
+    joint.refine(0.0)
+    w = joint.weights(0.0)
+    for values, sd in ((joint.log_w_theta, models["seal"].log_theta_sd),
+                       (joint.log_c, models["spring"].log_theta_sd)):  # fmt: skip
+        mean = float(w @ values)
+        spread = math.sqrt(float(w @ (values - mean) ** 2))
+        assert abs(mean) < 0.03 * sd
+        assert spread == pytest.approx(sd, rel=0.03)
+
+
+def test_weights_count_only_points_where_both_parts_survive(models) -> None:
+    joint = JointPosterior(models["spring"], models["seal"], np.random.default_rng(4), 10)
+    age = float(np.median(np.minimum(joint.lives["spring"], joint.lives["seal"])))
+    w = joint.weights(age)
+    dead = (joint.lives["spring"] <= age) | (joint.lives["seal"] <= age)
+    assert dead.any() and (joint.lives["spring"][~dead] > age).all()
+    assert (w[dead] == 0.0).all() and (w[~dead] > 0.0).all()
+
+
 def test_the_first_lives_events_pair_up_and_end_at_the_first_replacement() -> None:
     env = RecordingEnv(episode_slots=2500)
     rows = joint_lives(env, "test10", 3, np.random.default_rng(0), log2_points=8, min_ess=20.0)
@@ -110,13 +135,32 @@ def test_the_first_lives_events_pair_up_and_end_at_the_first_replacement() -> No
     ev = env.part_events
     firsts = [float(ev[p].survived[0]) for p in PARTS if ev[p].survived]
     assert firsts and end == min(firsts)  # a part failed in the episode
-    assert all(e[3] < end for e in events) and len(events) > 20
-    assert {e[0] for e in events} == {BATCH, TEST}
+    assert {e[0] for e in events} == {BATCH, TEST} and len(events) > 20
+    # every event of the first lives learnt before the first replacement is taken (a
+    # part's age, ``known_after``, restarts in its next life)
+    sp = ev["spring"]
+    before = [i for i, k in enumerate(sp.known_after) if k < end and sp.life[i] == 0]
+    assert [e[4][0] for e in events] == before and len(before) < len(sp.kind)
     assert rows and all(r["age"] < end and r["life"] == 0 for r in rows)
+    assert {r["part"] for r in rows} == set(PARTS)
     # a recorder whose two parts' events no longer match is refused
     ev["seal"].known_after[0] += 1
     with pytest.raises(RuntimeError, match="do not pair up"):
         first_life_events(env)
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "match"),
+    [
+        ({"initial_health": "in_service"}, "needs new parts"),
+        ({"wear_active": 0}, "needs both faults"),
+        ({"seal_view": "filter"}, "true severity"),
+    ],
+)
+def test_envs_whose_first_lives_differ_are_refused(kwargs, match) -> None:
+    env = RecordingEnv(episode_slots=50, **kwargs)
+    with pytest.raises(ValueError, match=match):
+        joint_lives(env, "test10", 0, np.random.default_rng(0), log2_points=6)
 
 
 def test_bad_events_are_refused(models) -> None:
