@@ -12,7 +12,10 @@ stages:
   ``sum(d_e) / sum(n_e)``, with ``d_e`` the episode's summed per-life differences and ``n_e``
   its paired lives;
 * the minimum detectable difference at 5 % two-sided and 80 % power,
-  ``(z_0.975 + z_0.8) x`` the bootstrap standard error.
+  ``(z_0.975 + z_0.8) x`` the bootstrap standard error;
+* the same for the sd of log(predicted mean / true RUL) (``sd_log``; its ``share_a``,
+  ``share_b`` the two runs' sds), over the lives finite in both runs, by the same cluster
+  bootstrap of each episode's count, sums and sums of squares.
 
 ``python -m experiments.belief_calibration --compare A B`` reads the runs' ``lives.csv``;
 ``--by-life A`` splits one run's shares between the first lives (life 0: the parts fitted at
@@ -52,7 +55,7 @@ def read_lives(folder: str | Path) -> dict[Key, dict[str, float]]:
         for r in csv.DictReader(fh):
             key = (r["policy"], r["part"], r["preset"], float(r["stage"]), int(r["episode"]),
                    int(r["life"]))  # fmt: skip
-            out[key] = {m: float(r[m]) for m in METRICS}
+            out[key] = {m: float(r[m]) for m in (*METRICS, "log_ratio")}
     return out
 
 
@@ -91,6 +94,44 @@ def paired_difference(
     }
 
 
+def paired_sd_difference(
+    a: np.ndarray, b: np.ndarray, episode: np.ndarray, rng: np.random.Generator,
+    n_resamples: int = 4000,
+) -> dict[str, float]:  # fmt: skip
+    """Sds (``ddof=1``) of the paired values ``a`` and ``b`` (log ratios, one entry per
+    life; pairs not finite in both are dropped), ``sd(b) - sd(a)``, its 95 % interval by a
+    cluster bootstrap over ``episode`` (each episode's count, sums and sums of squares
+    resampled together) and the minimum detectable difference."""
+    if not (a.shape == b.shape == episode.shape and a.ndim == 1):
+        raise ValueError(f"a, b, episode must be equal 1-D arrays, got {a.shape}")
+    ok = np.isfinite(a) & np.isfinite(b)
+    a, b, episode = a[ok], b[ok], episode[ok]
+    if a.size < 2:
+        raise ValueError(f"{a.size} paired finite values: an sd needs 2 or more")
+    eps, inv = np.unique(episode, return_inverse=True)
+    sums = [np.bincount(inv, weights=w, minlength=eps.size) for w in (np.ones_like(a), a,
+            a * a, b, b * b)]  # fmt: skip
+
+    def diff_of(n, sa, saa, sb, sbb, axis=-1):
+        n, sa, saa, sb, sbb = (v.sum(axis=axis) for v in (n, sa, saa, sb, sbb))
+        var_a = (saa - sa * sa / n) / (n - 1.0)
+        var_b = (sbb - sb * sb / n) / (n - 1.0)
+        return np.sqrt(np.maximum(var_b, 0.0)) - np.sqrt(np.maximum(var_a, 0.0))
+
+    sd_a, sd_b = float(np.std(a, ddof=1)), float(np.std(b, ddof=1))
+    low = high = sd_b - sd_a
+    se = 0.0
+    if eps.size >= 2 and not np.array_equal(a, b):
+        res = bootstrap(tuple(sums), diff_of, paired=True, vectorized=True,
+                        n_resamples=n_resamples, method="percentile", rng=rng)  # fmt: skip
+        low, high = float(res.confidence_interval.low), float(res.confidence_interval.high)
+        se = float(res.standard_error)
+    return {
+        "lives": int(a.size), "episodes": int(eps.size), "share_a": sd_a, "share_b": sd_b,
+        "diff": sd_b - sd_a, "ci_low": low, "ci_high": high, "mdd": MDD_FACTOR * se,
+    }  # fmt: skip
+
+
 def compare_runs(
     a: dict[Key, dict[str, float]],
     b: dict[Key, dict[str, float]],
@@ -98,7 +139,8 @@ def compare_runs(
     stages: Sequence[float] | None = None,
 ) -> list[dict[str, float | str]]:
     """Per (preset, policy, part, stage) and pooled over ``stages`` (all of A's if None):
-    the paired comparison of each metric over the lives present in both runs."""
+    the paired comparison of each metric over the lives present in both runs, and of the sd
+    of the log ratio (``sd_log``)."""
     common = sorted(set(a) & set(b))
     if not common:
         raise ValueError("the two runs share no (policy, part, stage, episode, life) record")
@@ -116,6 +158,12 @@ def compare_runs(
             row = paired_difference(va, vb, episode, rng)
             rows.append({"preset": preset, "policy": policy, "part": part, "stage": stage,
                          "metric": m, **row})  # fmt: skip
+        la = np.array([a[k]["log_ratio"] for k in keys])
+        lb = np.array([b[k]["log_ratio"] for k in keys])
+        if (np.isfinite(la) & np.isfinite(lb)).sum() >= 2:
+            row = paired_sd_difference(la, lb, episode, rng)
+            rows.append({"preset": preset, "policy": policy, "part": part, "stage": stage,
+                         "metric": "sd_log", **row})  # fmt: skip
     rows.sort(key=lambda r: (r["preset"], r["policy"], r["part"], r["metric"], str(r["stage"])))
     return rows
 
@@ -175,5 +223,6 @@ __all__ = [
     "format_by_life",
     "format_comparison",
     "paired_difference",
+    "paired_sd_difference",
     "read_lives",
 ]

@@ -131,6 +131,37 @@ def test_paired_difference_against_a_direct_cluster_bootstrap() -> None:
         paired_difference(a, b[:-1], episode, rng)
 
 
+def test_paired_sd_difference_against_a_direct_cluster_bootstrap() -> None:
+    """The difference is that of numpy's sds; its interval matches a hand-written
+    percentile bootstrap over episodes (each episode's lives drawn whole) within Monte
+    Carlo error; pairs not finite in both runs are dropped; a run paired with itself gives
+    zeros."""
+    from experiments.belief_comparison import MDD_FACTOR, paired_sd_difference
+
+    rng = np.random.default_rng(4)
+    episode = np.repeat(np.arange(200), 3)
+    a = rng.normal(0.0, 0.15, 600)
+    b = 1.2 * a + rng.normal(0.0, 0.05, 600)  # wider by about a quarter, correlated
+    out = paired_sd_difference(a, b, episode, np.random.default_rng(1))
+    assert out["diff"] == pytest.approx(np.std(b, ddof=1) - np.std(a, ddof=1), rel=1e-12)
+    boot = np.random.default_rng(2).integers(0, 200, (4000, 200))
+    lives = (boot[:, :, None] * 3 + np.arange(3)).reshape(4000, -1)
+    stats = np.std(b[lives], axis=1, ddof=1) - np.std(a[lives], axis=1, ddof=1)
+    lo, hi = np.quantile(stats, [0.025, 0.975])
+    assert out["ci_low"] == pytest.approx(lo, abs=0.002)
+    assert out["ci_high"] == pytest.approx(hi, abs=0.002)
+    assert out["mdd"] == pytest.approx(MDD_FACTOR * stats.std(ddof=1), rel=0.08)
+    b_gap = b.copy()
+    b_gap[:3] = -np.inf  # a record whose prediction was 0
+    gap = paired_sd_difference(a, b_gap, episode, np.random.default_rng(1))
+    assert gap["lives"] == 597
+    assert gap["diff"] == pytest.approx(np.std(b[3:], ddof=1) - np.std(a[3:], ddof=1))
+    same = paired_sd_difference(a, a, episode, np.random.default_rng(1))
+    assert (same["diff"], same["ci_low"], same["ci_high"], same["mdd"]) == (0.0, 0.0, 0.0, 0.0)
+    with pytest.raises(ValueError, match="an sd needs 2"):
+        paired_sd_difference(a[:1], b[:1], episode[:1], rng)
+
+
 def test_compare_runs_pairs_lives_and_pools_stages(tmp_path) -> None:
     from experiments.belief_comparison import compare_runs, read_lives
 
