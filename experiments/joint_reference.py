@@ -498,24 +498,16 @@ def plot_joint(table: Sequence[Mapping[str, Any]], path: Path, title: str = "") 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from experiments.belief_common import TARGETS
+    from experiments.reference_report import draw_stage_metric, shade_targets
 
     groups = sorted({str(r["policy"]) for r in table if not str(r["policy"]).endswith(" known")})
     fig, axes = plt.subplots(len(groups), 2, figsize=(10, 3.2 * len(groups)), squeeze=False)
     for row, group in zip(axes, groups, strict=True):
         for label, suffix, est, style in _CURVES:
             rs = [r for r in table if r["policy"] == group + suffix and r["stage"] != "all"]
-            stage = np.array([float(r["stage"]) for r in rs])
             for ax, name in zip(row, ("coverage", "undercut"), strict=True):
-                v = np.array([float(r[f"{est}_{name}"]) for r in rs])
-                err = [v - [float(r[f"{est}_{name}_ci_low"]) for r in rs],
-                       np.array([float(r[f"{est}_{name}_ci_high"]) for r in rs]) - v]  # fmt: skip
-                ax.errorbar(stage, v, yerr=err, fmt=style, capsize=3, label=label)
-        row[0].axhspan(*TARGETS["coverage"], color="0.9")
-        tol = TARGETS["undercut_tolerance"]
-        row[1].axhspan(0.05 - tol, 0.05 + tol, color="0.9")
-        row[0].set_title(f"{group}: coverage of the 90 % RUL interval", fontsize=10)
-        row[1].set_title(f"{group}: undercut of the 5 % quantile", fontsize=10)
+                draw_stage_metric(ax, rs, est, name, style, label)
+        shade_targets(row[0], row[1], group)
     for ax in axes[-1]:
         ax.set_xlabel("fraction of true life (first lives)")
     axes[0, 1].legend(fontsize=8)

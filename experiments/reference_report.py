@@ -199,6 +199,27 @@ def write_report(
     return [Path(out) / n for n in names]
 
 
+def draw_stage_metric(
+    ax: Any, rows: Sequence[dict[str, Any]], est: str, metric: str, style: str, label: str
+) -> None:
+    """``est``'s ``metric`` (``coverage``, ``undercut``) of stage-table ``rows`` against
+    their stage, with its 95 % interval."""
+    stage = np.array([float(r["stage"]) for r in rows])
+    v = np.array([float(r[f"{est}_{metric}"]) for r in rows])
+    lo = v - np.array([float(r[f"{est}_{metric}_ci_low"]) for r in rows])
+    hi = np.array([float(r[f"{est}_{metric}_ci_high"]) for r in rows]) - v
+    ax.errorbar(stage, v, yerr=[lo, hi], fmt=style, capsize=3, label=label)
+
+
+def shade_targets(coverage_ax: Any, undercut_ax: Any, title: str) -> None:
+    """The coverage and undercut targets shaded on their axes, titled ``title: ...``."""
+    coverage_ax.axhspan(*TARGETS["coverage"], color="0.9")
+    coverage_ax.set_title(f"{title}: coverage of the 90 % RUL interval", fontsize=10)
+    tol = TARGETS["undercut_tolerance"]
+    undercut_ax.axhspan(0.05 - tol, 0.05 + tol, color="0.9")
+    undercut_ax.set_title(f"{title}: undercut of the 5 % quantile", fontsize=10)
+
+
 def _plot(table: Sequence[dict[str, float | str]], path: Path, part: str = "spring") -> None:
     import matplotlib
 
@@ -209,18 +230,10 @@ def _plot(table: Sequence[dict[str, float | str]], path: Path, part: str = "spri
     fig, axes = plt.subplots(1, 2, figsize=(10, 4))
     for policy in policies:
         rs = [r for r in table if r["policy"] == policy and r["stage"] != "all"]
-        s = np.array([float(r["stage"]) for r in rs])
         for est, style in (("pf", "o-"), ("ref", "s--")):
             for ax, name in zip(axes, ("coverage", "undercut"), strict=True):
-                v = np.array([float(r[f"{est}_{name}"]) for r in rs])
-                lo = v - np.array([float(r[f"{est}_{name}_ci_low"]) for r in rs])
-                hi = np.array([float(r[f"{est}_{name}_ci_high"]) for r in rs]) - v
-                ax.errorbar(s, v, yerr=[lo, hi], fmt=style, capsize=3, label=f"{policy} {est}")
-    axes[0].axhspan(*TARGETS["coverage"], color="0.9")
-    axes[0].set_title(f"{part}: coverage of the 90 % RUL interval")
-    tol = TARGETS["undercut_tolerance"]
-    axes[1].axhspan(0.05 - tol, 0.05 + tol, color="0.9")
-    axes[1].set_title(f"{part}: undercut of the 5 % quantile")
+                draw_stage_metric(ax, rs, est, name, style, f"{policy} {est}")
+    shade_targets(axes[0], axes[1], part)
     for ax in axes:
         ax.set_xlabel("fraction of true life")
     axes[1].legend(fontsize=8)
@@ -231,9 +244,11 @@ def _plot(table: Sequence[dict[str, float | str]], path: Path, part: str = "spri
 
 __all__ = [
     "ESTIMATORS",
+    "draw_stage_metric",
     "format_reliability",
     "format_table",
     "reliability_table",
+    "shade_targets",
     "stage_table",
     "write_report",
 ]
