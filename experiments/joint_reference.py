@@ -168,6 +168,7 @@ class JointPosterior:
     def _use(self, x0: np.ndarray, log_c: np.ndarray, log_w: np.ndarray, lw: np.ndarray) -> None:
         n = x0.size
         self.x0, self.log_c, self.log_w_theta = x0, log_c, log_w
+        self._theta = (np.exp(log_c), np.exp(log_w))
         self.d0_c, life_c = self.spring.lives(x0, log_c)
         x0_w = np.full(n, self.seal.x0_mean_m)
         self.d0_w, life_w = self.seal.lives(x0_w, log_w)
@@ -191,8 +192,8 @@ class JointPosterior:
     def _apply(self, kind: int, y_spring: float, y_seal: float, ages: np.ndarray) -> None:
         gc, gw = self.spring.growth, self.seal.growth
         joint_update(
-            y_spring, y_seal, ages, self.d0_c, np.exp(self.log_c), self.d0_w,
-            np.exp(self.log_w_theta), (gc.grid, gc.rate, gc.cumulative),
+            y_spring, y_seal, ages, self.d0_c, self._theta[0], self.d0_w, self._theta[1],
+            (gc.grid, gc.rate, gc.cumulative),
             (gw.grid, gw.rate, gw.cumulative), self.spring.critical_m, self.seal.critical_m,
             self.spring.stacks[kind], self.seal.stacks[kind], self.spring.own_grid,
             self.seal.own_grid, self.z[kind][0], self.z[kind][1], self.log_weight,
