@@ -263,16 +263,11 @@ def first_life_events(
 
 
 def check_joint_env(env: RecordingEnv) -> None:
-    """Refuse an env whose first lives are not what the joint reference assumes: both
-    parts new at the episode's start (``initial_health="new"``: one age for both, the
-    effects' prior), both faults growing, the other part read at its true severity (the
+    """Refuse an env whose first lives are not what the joint reference assumes (beside
+    :class:`RecordingEnv`'s new parts at the episode's start: one age for both, the
+    effects' prior): both faults growing, the other part read at its true severity (the
     ``known`` columns)."""
-    sc = env.scenario
-    if sc.initial_health != "new":
-        raise ValueError(
-            f"initial_health = {sc.initial_health!r}: the joint reference needs new parts "
-            "at the episode's start ('new')"
-        )
+    sc = env.scenario  # new parts at the episode's start: RecordingEnv's own check
     if not (sc.crack_active and sc.wear_active):
         raise ValueError(
             f"crack_active = {sc.crack_active!r}, wear_active = {sc.wear_active!r}: the "

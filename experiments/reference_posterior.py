@@ -187,6 +187,11 @@ class RecordingEnv(ScasMaintenanceEnv):
                 f"fidelity = {self.scenario.fidelity!r}: the reference posterior needs the "
                 "surrogate world ('surrogate')"
             )
+        if self.scenario.initial_health != "new":
+            raise ValueError(
+                f"initial_health = {self.scenario.initial_health!r}: the reference posterior "
+                "needs new parts at the episode's start ('new'; its priors are a new part's)"
+            )
         learning = list(LEARNING_FEATURES)
         #: per part, its in-flight feature's column in the learning batch's sums and in
         #: ``a["last"]``, and its test feature's column there

@@ -152,7 +152,6 @@ def test_the_first_lives_events_pair_up_and_end_at_the_first_replacement() -> No
 @pytest.mark.parametrize(
     ("kwargs", "match"),
     [
-        ({"initial_health": "in_service"}, "needs new parts"),
         ({"wear_active": 0}, "needs both faults"),
         ({"seal_view": "filter"}, "true severity"),
     ],

@@ -206,6 +206,8 @@ def test_bad_arguments_are_refused(model) -> None:
         ReferencePosterior(model, np.random.default_rng(0), 3)
     with pytest.raises(ValueError, match="surrogate"):
         RecordingEnv(fidelity="physics")
+    with pytest.raises(ValueError, match=r"initial_health = 'in_service'.*needs new parts"):
+        RecordingEnv(initial_health="in_service")
     for bad, match in (
         ({"log2_points": 30}, "log2_points = 30"),
         ({"min_ess": 5000.0, "log2_points": 12}, "min_ess = 5000.0"),
