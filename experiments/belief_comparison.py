@@ -30,6 +30,7 @@ import csv
 from collections import defaultdict
 from collections.abc import Sequence
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 from scipy.stats import bootstrap, norm
@@ -59,6 +60,19 @@ def read_lives(folder: str | Path) -> dict[Key, dict[str, float]]:
     return out
 
 
+def _cluster_interval(
+    per_episode: tuple[np.ndarray, ...], statistic: Any, rng: np.random.Generator,
+    n_resamples: int,
+) -> tuple[float, float, float]:  # fmt: skip
+    """The 95 % percentile interval and standard error of ``statistic`` over episodes
+    resampled whole (``per_episode``: one array of sums per quantity, an entry per episode;
+    ``scipy.stats.bootstrap``, paired, vectorised)."""
+    res = bootstrap(per_episode, statistic, paired=True, vectorized=True,
+                    n_resamples=n_resamples, method="percentile", rng=rng)  # fmt: skip
+    ci = res.confidence_interval
+    return float(ci.low), float(ci.high), float(res.standard_error)
+
+
 def paired_difference(
     a: np.ndarray, b: np.ndarray, episode: np.ndarray, rng: np.random.Generator,
     n_resamples: int = 4000,
@@ -76,12 +90,10 @@ def paired_difference(
         low = high = diff
         se = 0.0
     else:
-        res = bootstrap(
-            (d, n), lambda dd, nn, axis=-1: dd.sum(axis=axis) / nn.sum(axis=axis),
-            paired=True, vectorized=True, n_resamples=n_resamples, method="percentile", rng=rng,
+        low, high, se = _cluster_interval(
+            (d, n), lambda dd, nn, axis=-1: dd.sum(axis=axis) / nn.sum(axis=axis), rng,
+            n_resamples,
         )  # fmt: skip
-        low, high = float(res.confidence_interval.low), float(res.confidence_interval.high)
-        se = float(res.standard_error)
     return {
         "lives": int(a.size),
         "episodes": int(eps.size),
@@ -122,10 +134,7 @@ def paired_sd_difference(
     low = high = sd_b - sd_a
     se = 0.0
     if eps.size >= 2 and not np.array_equal(a, b):
-        res = bootstrap(tuple(sums), diff_of, paired=True, vectorized=True,
-                        n_resamples=n_resamples, method="percentile", rng=rng)  # fmt: skip
-        low, high = float(res.confidence_interval.low), float(res.confidence_interval.high)
-        se = float(res.standard_error)
+        low, high, se = _cluster_interval(tuple(sums), diff_of, rng, n_resamples)
     return {
         "lives": int(a.size), "episodes": int(eps.size), "share_a": sd_a, "share_b": sd_b,
         "diff": sd_b - sd_a, "ci_low": low, "ci_high": high, "mdd": MDD_FACTOR * se,
