@@ -37,7 +37,6 @@ from typing import Any
 import numpy as np
 from numba import njit
 from scipy.stats import qmc
-from tqdm.auto import tqdm
 
 from experiments.belief_calibration import (
     POLICIES,
@@ -62,6 +61,7 @@ from experiments.reference_model import (
 from experiments.reference_posterior import (
     RecordingEnv,
     belief_columns,
+    episode_streams,
     record_columns,
     refined_belief,
     stage_records,
@@ -354,18 +354,14 @@ def run_joint_study(
         raise ValueError(f"stages = {list(stages)!r} must be fractions of life in (0, 1)")
     env = RecordingEnv(scenario=Scenario.from_dict(dict(scenario_fields or {})))
     check_joint_env(env)
-    children = np.random.SeedSequence(seed).spawn(len(policies) * episodes)
     rows: list[dict[str, Any]] = []
-    bar = tqdm(total=len(policies) * episodes, desc="joint reference", disable=not progress)
-    for i, policy in enumerate(policies):
-        for e in range(episodes):
-            rng = np.random.default_rng(children[i * episodes + e])
-            rows += joint_lives(
-                env, policy, seed + e, rng, log2_points=log2_points, stages=stages,
-                min_ess=min_ess,
-            )  # fmt: skip
-            bar.update()
-    bar.close()
+    for policy, episode_seed, rng in episode_streams(
+        policies, episodes, seed, "joint reference", progress
+    ):
+        rows += joint_lives(
+            env, policy, episode_seed, rng, log2_points=log2_points, stages=stages,
+            min_ess=min_ess,
+        )  # fmt: skip
     return rows
 
 

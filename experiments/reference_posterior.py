@@ -67,7 +67,7 @@ Command line (docs/findings.md, "The beliefs' research tools")::
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -396,6 +396,19 @@ def reference_lives(
     return rows
 
 
+def episode_streams(
+    policies: Sequence[str], episodes: int, seed: int, desc: str, progress: bool
+) -> Iterator[tuple[str, int, np.random.Generator]]:
+    """Per policy and episode, ``(policy, seed + e, rng)`` with ``rng`` drawing from the
+    ``SeedSequence(seed)`` child of that (policy, episode), a tqdm bar counting them."""
+    children = np.random.SeedSequence(seed).spawn(len(policies) * episodes)
+    with tqdm(total=len(policies) * episodes, desc=desc, disable=not progress) as bar:
+        for i, policy in enumerate(policies):
+            for e in range(episodes):
+                yield policy, seed + e, np.random.default_rng(children[i * episodes + e])
+                bar.update()
+
+
 def run_reference_study(
     *,
     episodes: int,
@@ -429,26 +442,22 @@ def run_reference_study(
         spring_view=spring_view,
         scenario=Scenario.from_dict(dict(scenario_fields or {})),
     )
-    children = np.random.SeedSequence(seed).spawn(len(policies) * episodes)
     rows: list[dict[str, float]] = []
-    bar = tqdm(total=len(policies) * episodes, desc="reference episodes", disable=not progress)
-    for i, policy in enumerate(policies):
-        for e in range(episodes):
-            rng = np.random.default_rng(children[i * episodes + e])
-            rows += reference_lives(
-                env,
-                policy,
-                seed + e,
-                rng,
-                part=part,
-                log2_points=log2_points,
-                stages=stages,
-                min_ess=min_ess,
-                risk_min=risk_min,
-                carry_components=carry_components,
-            )
-            bar.update()
-    bar.close()
+    for policy, episode_seed, rng in episode_streams(
+        policies, episodes, seed, "reference episodes", progress
+    ):
+        rows += reference_lives(
+            env,
+            policy,
+            episode_seed,
+            rng,
+            part=part,
+            log2_points=log2_points,
+            stages=stages,
+            min_ess=min_ess,
+            risk_min=risk_min,
+            carry_components=carry_components,
+        )
     return rows
 
 
@@ -659,6 +668,7 @@ __all__ = [
     "PartEvents",
     "RecordingEnv",
     "belief_columns",
+    "episode_streams",
     "main",
     "record_columns",
     "reference_lives",
