@@ -74,10 +74,11 @@ def episodes_digest(
     seeds: Sequence[int] = (0, 1, 2),
     slots: int = 2000,
     steps: int | None = None,
+    action_p: Sequence[float] = ACTION_P,
     **fields: Any,
 ) -> str:
-    """Single-env episodes under seeded random actions (``steps`` per episode, default all
-    ``slots``)."""
+    """Single-env episodes under seeded random actions drawn with ``action_p`` (``steps``
+    per episode, default all ``slots``)."""
     h = hashlib.sha256()
     for s in seeds:
         env = gym.make(ENV_ID, obs_mode=obs_mode, episode_slots=slots, **fields)
@@ -86,7 +87,7 @@ def episodes_digest(
         feed(h, obs)
         feed(h, dict(info))
         for _ in range(steps or slots):
-            obs, r, te, tr, info = env.step(int(rng.choice(4, p=ACTION_P)))
+            obs, r, te, tr, info = env.step(int(rng.choice(4, p=action_p)))
             feed(h, obs)
             feed(h, float(r))
             feed(h, (te, tr))
@@ -209,15 +210,28 @@ PARTS: dict[str, Callable[[], str]] = {
     "resample_move": lambda: episodes_digest(
         seeds=(4,), preflight="every_flight", rejuvenation="resample_move"
     ),
-    "resample_move_both": lambda: episodes_digest(
+    "resample_move_both": lambda: episodes_digest(  # flights only: long lives, moves made
         seeds=(4,),
+        slots=1500,
+        action_p=(1.0, 0.0, 0.0, 0.0),
         preflight="every_flight",
         rejuvenation="resample_move_both",
         cross_variance_inflation=500,
         seal_cross_variance_inflation=1,
     ),
-    "seal persistence": lambda: episodes_digest(
+    "resample_move_joint": lambda: episodes_digest(  # flights only: long lives, moves made
         seeds=(4,),
+        slots=1500,
+        action_p=(1.0, 0.0, 0.0, 0.0),
+        preflight="every_flight",
+        rejuvenation="resample_move_joint",
+        cross_variance_inflation=500,
+        seal_cross_variance_inflation=1,
+    ),
+    "seal persistence": lambda: episodes_digest(  # flights only, as above
+        seeds=(4,),
+        slots=1500,
+        action_p=(1.0, 0.0, 0.0, 0.0),
         preflight="every_flight",
         rejuvenation="resample_move",
         cross_variance_inflation=500,
