@@ -219,15 +219,6 @@ PARTS: dict[str, Callable[[], str]] = {
         cross_variance_inflation=500,
         seal_cross_variance_inflation=1,
     ),
-    "resample_move_joint": lambda: episodes_digest(  # flights only: long lives, moves made
-        seeds=(4,),
-        slots=1500,
-        action_p=(1.0, 0.0, 0.0, 0.0),
-        preflight="every_flight",
-        rejuvenation="resample_move_joint",
-        cross_variance_inflation=500,
-        seal_cross_variance_inflation=1,
-    ),
     "seal persistence": lambda: episodes_digest(  # flights only, as above
         seeds=(4,),
         slots=1500,

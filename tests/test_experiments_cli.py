@@ -51,6 +51,7 @@ COMMANDS = (
     "rule_defaults",
     "rule_defaults_mismatch",
     "sb3_speed",
+    "seal_cross_view",
     "sensing_sweep",
     "spring_cloud",
     "surrogate_check",

@@ -19,8 +19,8 @@ Rao-Blackwellised, :func:`prognostics.measurement.random_effect_update`).
 
 With ``FilterModel.move`` on (``Scenario.rejuvenation = "resample_move"``) the spring
 filter keeps its data and resamples by resample-move (:mod:`scas_env.core.rejuvenation`);
-with ``"resample_move_both"`` or ``"resample_move_joint"`` the seal filter too:
-``bank[5]`` holds, per part, its history, clock and per-particle log-likelihoods.
+with ``"resample_move_both"`` the seal filter too: ``bank[5]`` holds, per part, its
+history, clock and per-particle log-likelihoods.
 
 The surrogate's tables are read along the part's own severity at the other part's filter
 estimate (bilinear, as the world draws features); the other part's uncertainty enters each
@@ -208,8 +208,8 @@ def age_offsets(u: np.ndarray, rho: float, d: float, handle: tuple) -> None:
 @njit(cache=True, inline="always")
 def _moves(p: int, model: FilterModel) -> bool:
     """Whether filter p keeps a history and resamples by resample-move: the spring's with
-    ``Scenario.rejuvenation`` other than "none", the seal's with "resample_move_both" or
-    "resample_move_joint"."""
+    ``Scenario.rejuvenation`` "resample_move" or "resample_move_both", the seal's with
+    "resample_move_both"."""
     return model.move.spring if p == 0 else model.move.seal
 
 

@@ -371,10 +371,10 @@ def reset_filter(batch: ActuatorState, e: int, part: str) -> None:
     is a new installation: every installation effect back to N(0, 1), and the spring
     filter's history for resample-move emptied; new seals keep the installation's,
     collapsed to one Gaussian), its detector is cleared. With the seal filter's
-    resample-move (``Scenario.rejuvenation`` "resample_move_both" or "_joint") a new
-    seal's history starts with those beliefs, and a new spring pair writes N(0, 1) beliefs
-    into the seal's history (:func:`scas_env.core.rejuvenation.record_effect`). The seal
-    particles' offsets of the spring estimate (``Scenario.seal_cross_persistence``) are drawn anew
+    resample-move (``Scenario.rejuvenation = "resample_move_both"``) a new seal's history
+    starts with those beliefs, and a new spring pair writes N(0, 1) beliefs into the
+    seal's history (:func:`scas_env.core.rejuvenation.record_effect`). The seal particles'
+    offsets of the spring estimate (``Scenario.seal_cross_persistence``) are drawn anew
     with a new spring pair and carried over to new seals (:func:`_spring_errors_kept`)."""
     st, a = batch.setup, batch.a
     learn_now(batch, e)

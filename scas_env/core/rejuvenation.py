@@ -38,12 +38,11 @@ with ``p(lambda) = N(0, s)``, ``s`` the filter's prior sd of the seal's multipli
 
 What a row keeps, per filter p (spring 0, seal 1; ``bank[5]``,
 :class:`scas_env.core.state.ActuatorState`): ``history`` (per datum its age, value, runs,
-table, installation-effect slot, the other part's cell and fraction in it, extra variance,
-the other filter's age; or a belief row), the number of rows (``count``; -1 once the
-history is full: moves stop until the filter restarts, resampling falls back to the kernel
-jitter), ``clock`` (the filter's age and survival age, flights), ``loglik`` (per particle,
-the sum of its likelihood terms, as the filter learnt them) and ``tally`` (proposals,
-acceptances).
+table, installation-effect slot, the other part's cell and fraction in it, extra variance;
+or a belief row), the number of rows (``count``; -1 once the history is full: moves stop
+until the filter restarts, resampling falls back to the kernel jitter), ``clock`` (the
+filter's age and survival age, flights), ``loglik`` (per particle, the sum of its likelihood
+terms, as the filter learnt them) and ``tally`` (proposals, acceptances).
 
 After a resampling (systematic, no jitter) each particle takes ``steps`` random-walk
 Metropolis-Hastings steps in ``u = (D(x(t)), lambda)``: a Gaussian proposal with the
@@ -81,12 +80,12 @@ from prognostics.degradation_models import (
     rate_at_scalar,
 )
 from prognostics.normals import random, standard_normal
-from prognostics.particle_filter import _add_log_likelihood, _systematic_from_weights
+from prognostics.particle_filter import _systematic_from_weights
 from scas_env.core.table_cells import bilinear_at, cell_of
 
-#: columns of a row's history (``H_OTHER_AGE``: the other filter's age at the datum)
-H_AGE, H_Y, H_RUNS, H_TABLE, H_AUX, H_CELL, H_FRAC, H_EXTRA, H_OTHER_AGE = range(9)
-HISTORY_COLUMNS = 9
+#: columns of a row's history
+H_AGE, H_Y, H_RUNS, H_TABLE, H_AUX, H_CELL, H_FRAC, H_EXTRA = range(8)
+HISTORY_COLUMNS = 8
 #: clock columns, per filter: its age (flights predicted since it restarted) and the age of
 #: its latest survival conditioning
 C_AGE, C_SURVIVED = 0, 1
@@ -109,8 +108,6 @@ class MoveModel(NamedTuple):
     seal: bool
     seal_lam_sd: float
     seal_scale: float
-    #: whether the seal's likelihood is averaged over the spring's paths (:func:`spring_paths`)
-    seal_joint: bool
 
 
 #: ``H_TABLE`` of a belief row (:func:`record_effect`): no datum, the replay's belief about
@@ -159,7 +156,6 @@ def record_datum(
     row[H_CELL] = j
     row[H_FRAC] = tj
     row[H_EXTRA] = extra_var
-    row[H_OTHER_AGE] = clock[e, 1 - p, C_AGE]
 
 
 @njit(cache=True)
@@ -511,11 +507,6 @@ def move_particles(e: int, bank: tuple, model: tuple, factor: tuple, d: np.ndarr
     age = bank[5][2][e, p, C_AGE]
     d0 = _unworn_damage(model) if p == 1 else 0.0
     prepared = prepare_history(e, bank, model, p)
-    joint = p == 1 and model.move.seal_joint
-    if joint:  # the seal's target averaged over the spring's paths
-        paths = spring_paths(e, bank, model, prepared)
-    else:
-        paths = (np.empty((0, 0, 6)), np.empty((0, 0, 3), dtype=np.int64))
     lp = np.empty(n)  # each particle's log prior
     for i in range(n):
         lp[i] = log_prior(d[i], blt[e, p, i], e, bank, model, p)
@@ -548,10 +539,7 @@ def move_particles(e: int, bank: tuple, model: tuple, factor: tuple, d: np.ndarr
             d_new[m] = d_i
             lam_new[m] = lam_i
             m += 1
-        if joint:
-            replay_mixture(d_new, lam_new, m, prepared, paths, model, z, ll_new)
-        else:
-            replay_histories(d_new, lam_new, m, prepared, model, z, ll_new, p)
+        replay_histories(d_new, lam_new, m, prepared, model, z, ll_new, p)
         for r in range(m):
             i = who[r]
             log_ratio = (lp_new[i] + ll_new[r]) - (lp[i] + loglik[e, p, i])
@@ -567,139 +555,6 @@ def move_particles(e: int, bank: tuple, model: tuple, factor: tuple, d: np.ndarr
                 baux[e, p, k, i] = z[k, r]
 
 
-#: spring paths the seal's likelihood is averaged over (``"resample_move_joint"``): enough
-#: that the mixture's quantiles of the crack are the spring cloud's to 1/32 of probability
-SPRING_PATHS = 16
-
-
-@njit(cache=True, error_model="numpy")
-def current_spring_start(e: int, bank: tuple) -> int:
-    """The first row of row e's seal history learnt with the current spring pair: after the
-    last belief row that follows a datum (a spring pair fitted during the seal's life,
-    :func:`record_effect`), else 0."""
-    history, count = bank[5][0], bank[5][1]
-    start, seen = 0, False
-    for q in range(max(count[e, 1], 0)):
-        if history[e, 1, q, H_TABLE] != SET_EFFECT:
-            seen = True
-        elif seen:
-            start = q + 1
-    return start
-
-
-@njit(cache=True, error_model="numpy")
-def spring_paths(e: int, bank: tuple, model: tuple, prepared: tuple) -> tuple:
-    """The seal history of a :func:`prepare_history` read along :data:`SPRING_PATHS` paths
-    of the spring (``Scenario.rejuvenation = "resample_move_joint"``): the spring particles
-    at the systematic positions ``(k + 1/2) / K`` of its weights (no draw), each particle's
-    noise-free crack back at every datum of the current spring pair,
-    ``D^-1(D(x_i) - theta_i s)`` (``s``: the spring filter's flights since then, its age now
-    less ``H_OTHER_AGE``), as a fraction of critical (clipped to [0, 1]) in the datum's other
-    cell and fraction, and no extra variance (the paths carry the spring's uncertainty).
-    Data of an earlier spring pair keep what was recorded. Returns per-path columns and
-    integers, ``(K, n, 6)`` and ``(K, n, 3)``."""
-    cols, ints = prepared[0], prepared[1]
-    history, clock = bank[5][0], bank[5][2]
-    x, lam, w = bank[0][e, 0], bank[1][e, 0], bank[2][e, 0]
-    grid, rate, cum, cells, inv_cell = model.rul_tables[0]
-    critical = model.critical[0]
-    n_learn = model.learn_part.size
-    spring_age = clock[e, 0, C_AGE]
-    k_paths = SPRING_PATHS
-    cumsum = np.empty(x.size)
-    idx = np.empty(k_paths, dtype=np.int64)
-    _systematic_from_weights(w, cumsum, 0.5, idx)
-    cols_k = np.empty((k_paths, cols.shape[0], cols.shape[1]))
-    ints_k = np.empty((k_paths, ints.shape[0], ints.shape[1]), dtype=np.int64)
-    start = current_spring_start(e, bank)
-    for k in range(k_paths):
-        cols_k[k] = cols
-        ints_k[k] = ints
-        i = idx[k]
-        d_now = damage_scalar(grid, rate, cum, cells, inv_cell, x[i])
-        theta = math.exp(lam[i])
-        for q in range(start, cols.shape[0]):
-            table = ints[q, P_TABLE]
-            if table == SET_EFFECT:
-                continue
-            s = spring_age - history[e, 1, q, H_OTHER_AGE]
-            crack = inverse_damage_scalar(grid, rate, cum, d_now - theta * s)
-            other = min(max(crack / critical, 0.0), 1.0)
-            g_other = (
-                model.learn_other[table] if table < n_learn else model.ground_other[table - n_learn]
-            )
-            j, tj = cell_of(g_other, other)
-            ints_k[k, q, P_CELL] = j
-            cols_k[k, q, P_FRAC] = tj
-            cols_k[k, q, P_FRAC_C] = 1 - tj
-            cols_k[k, q, P_EXTRA] = 0.0
-    return cols_k, ints_k
-
-
-@njit(cache=True, error_model="numpy")
-def replay_mixture(d: np.ndarray, lam: np.ndarray, m: int, prepared: tuple, paths: tuple,
-                   model: tuple, z: np.ndarray, total: np.ndarray) -> None:  # fmt: skip
-    """The seal's log-likelihood at the ``m`` points ``(d[r], lam[r])`` averaged over the
-    spring paths of :func:`spring_paths`: ``total[r] = log mean_k exp(l_k[r])``, ``l_k`` the
-    history's replay along path k (:func:`replay_histories`); ``z[:, r]`` the installation
-    effects' beliefs collapsed over the paths (each path's Gaussian weighted by its share
-    ``exp(l_k) / sum exp(l_k)``, moments matched)."""
-    cols_k, ints_k = paths
-    k_paths = cols_k.shape[0]
-    lk = np.empty((k_paths, m))
-    zk = np.empty((k_paths, z.shape[0], m))
-    for k in range(k_paths):
-        path = (cols_k[k], ints_k[k], prepared[2], prepared[3], prepared[4], prepared[5])
-        replay_histories(d, lam, m, path, model, zk[k], lk[k], 1)
-    log_k = math.log(k_paths)
-    share = np.empty(k_paths)
-    for r in range(m):
-        peak = -np.inf
-        for k in range(k_paths):
-            peak = max(peak, lk[k, r])
-        acc = 0.0
-        for k in range(k_paths):
-            share[k] = math.exp(lk[k, r] - peak)
-            acc += share[k]
-        total[r] = peak + math.log(acc) - log_k
-        for k in range(k_paths):
-            share[k] /= acc
-        for c in range(0, z.shape[0], 2):
-            mean, second = 0.0, 0.0
-            for k in range(k_paths):
-                zm, zv = zk[k, c, r], zk[k, c + 1, r]
-                mean += share[k] * zm
-                second += share[k] * (zv + zm * zm)
-            z[c, r] = mean
-            z[c + 1, r] = max(second - mean * mean, 0.0)
-
-
-@njit(cache=True, error_model="numpy")
-def reweight_joint(e: int, bank: tuple, model: tuple, work: tuple, prepared: tuple,
-                   paths: tuple) -> None:  # fmt: skip
-    """Before a resampling of row e's seal filter under ``"resample_move_joint"``: each
-    particle's log weight moved by its log-likelihood's change to :func:`replay_mixture`'s
-    (the target changed since its last move: more data, the spring cloud learnt more), its
-    ``loglik`` and installation-effect beliefs the mixture's; weights normalised."""
-    lam, lw, w, aux = bank[1][e, 1], bank[3][e, 1], bank[2][e, 1], bank[4][e, 1]
-    loglik = bank[5][3]
-    n = lam.size
-    d = work[3]
-    d0 = _unworn_damage(model)
-    age = bank[5][2][e, 1, C_AGE]
-    for i in range(n):
-        d[i] = d0 + math.exp(lam[i]) * age
-    z = np.empty((aux.shape[0], n))
-    ll = np.empty(n)
-    replay_mixture(d, lam, n, prepared, paths, model, z, ll)
-    for i in range(n):
-        d[i] = ll[i] - loglik[e, 1, i]
-        loglik[e, 1, i] = ll[i]
-        for k in range(aux.shape[0]):
-            aux[k, i] = z[k, i]
-    _add_log_likelihood(lw, w, d)
-
-
 @njit(cache=True, error_model="numpy")
 def resample_move(ess: float, threshold_n: float, e: int, bank: tuple, work: tuple,
                   model: tuple, handle: tuple, p: int = 0) -> int:  # fmt: skip
@@ -712,11 +567,6 @@ def resample_move(ess: float, threshold_n: float, e: int, bank: tuple, work: tup
         return -1
     if ess >= threshold_n:
         return 0
-    joint = p == 1 and model.move.seal_joint
-    if joint:  # the seal's target averaged over the spring's paths (spring_paths)
-        prepared = prepare_history(e, bank, model, 1)
-        paths = spring_paths(e, bank, model, prepared)
-        reweight_joint(e, bank, model, work, prepared, paths)
     x, lam, w = bank[0][e, p], bank[1][e, p], bank[2][e, p]
     d = work[3]
     if p == 0:
@@ -753,7 +603,6 @@ __all__ = [
     "HISTORY_COLUMNS",
     "SET_EFFECT",
     "MoveModel",
-    "current_spring_start",
     "history_loglik",
     "log_prior",
     "move_particles",
@@ -763,9 +612,6 @@ __all__ = [
     "record_datum",
     "record_effect",
     "replay_histories",
-    "replay_mixture",
     "resample_move",
     "restart",
-    "reweight_joint",
-    "spring_paths",
 ]

@@ -22,7 +22,7 @@ FIDELITIES = ("surrogate", "physics")
 OBS_MODES = ("features+rul", "features", "state", "dict")
 INITIAL_HEALTH = ("new", "random", "in_service")
 PREFLIGHT = ("on_demand", "every_flight")
-REJUVENATION = ("none", "resample_move", "resample_move_both", "resample_move_joint")
+REJUVENATION = ("none", "resample_move", "resample_move_both")
 
 
 @dataclass(frozen=True)
@@ -68,14 +68,7 @@ class Scenario(Validated):
         spring pair is fitted during the seal's life, and after each resampling its log
         theta takes ``rejuvenation_steps`` 1-D random-walk Metropolis-Hastings steps (sd
         2.38 times the weighted cloud's) on the seal's full-history posterior. Needs
-        ``wear_active`` = 1 as well. ``"resample_move_joint"``: as
-        ``"resample_move_both"``, but the seal's moves target its posterior with the
-        spring's uncertainty integrated out: the history's likelihood averaged over 16
-        paths of the spring (spring particles at fixed systematic positions of its weights,
-        each particle's noise-free crack back at every datum) instead of read at the
-        spring's estimate of the time plus a variance; before each resampling the seal's
-        particles are reweighted to that target
-        (:func:`scas_env.core.rejuvenation.spring_paths`).
+        ``wear_active`` = 1 as well.
     """
 
     fidelity: str = "surrogate"
@@ -220,8 +213,7 @@ class Scenario(Validated):
         integer=True,
         source="Metropolis-Hastings steps per particle after each resampling of a moved "
         "filter: the spring's with rejuvenation 'resample_move', both with "
-        "'resample_move_both' or 'resample_move_joint' (Gilks & Berzuini 2001; "
-        "docs/beliefs.md)",
+        "'resample_move_both' (Gilks & Berzuini 2001; docs/beliefs.md)",
     )
 
     def _check(self) -> None:
@@ -241,7 +233,7 @@ class Scenario(Validated):
                 f"{self.seal_cross_variance_inflation!r} must be 0 (the same as "
                 "cross_variance_inflation) or in [1, 1000]"
             )
-        if self.seal_cross_persistence > 0 and self.rejuvenation in REJUVENATION[2:]:
+        if self.seal_cross_persistence > 0 and self.rejuvenation == "resample_move_both":
             raise ValueError(
                 f"Scenario.seal_cross_persistence = {self.seal_cross_persistence!r} needs the "
                 "seal filter without resample-move (rejuvenation 'none' or 'resample_move')"
@@ -266,7 +258,7 @@ class Scenario(Validated):
                     f"Scenario.rejuvenation = {r!r} moves the spring crack's "
                     "parameters: crack_active must be 1, got crack_active = 0"
                 )
-            if r in REJUVENATION[2:] and not self.wear_active:
+            if r == "resample_move_both" and not self.wear_active:
                 raise ValueError(
                     f"Scenario.rejuvenation = {r!r} moves the seal wear's "
                     "parameter: wear_active must be 1, got wear_active = 0"

@@ -374,7 +374,7 @@ def _processes(
     wear_cv = cal.flight_scatter("whole_flight")[1]
     if s.rejuvenation in MOVES:  # a static model: the path is the damage integral
         crack_cv_a0 = 0.0
-    if s.rejuvenation in MOVES[1:]:  # the seal's too: linear wear, no scatter
+    if s.rejuvenation == "resample_move_both":  # the seal's too: linear wear, no scatter
         wear_cv = 0.0
     spring = paris_crack_model(
         cal.crack_depth_m,
@@ -455,7 +455,7 @@ _RW_SCALE = 2.38 / 2**0.5
 #: the random-walk scale of the seal's 1-D move (its log theta), d = 1
 _RW_SCALE_1D = 2.38
 #: the values of ``Scenario.rejuvenation`` that move the spring filter's parameters
-MOVES = ("resample_move", "resample_move_both", "resample_move_joint")
+MOVES = ("resample_move", "resample_move_both")
 
 
 def _move_model(params: ScasParams, s: Scenario, cal: Calibration) -> MoveModel:
@@ -469,10 +469,9 @@ def _move_model(params: ScasParams, s: Scenario, cal: Calibration) -> MoveModel:
         a0_hi=float(cal.spring_failure_depth_m),
         spring_lam_sd=lognormal_sigma(params, "spring"),
         spring_scale=_RW_SCALE,
-        seal=s.rejuvenation in MOVES[1:],
+        seal=s.rejuvenation == "resample_move_both",
         seal_lam_sd=lognormal_sigma(params, "seal"),
         seal_scale=_RW_SCALE_1D,
-        seal_joint=s.rejuvenation == "resample_move_joint",
     )
 
 

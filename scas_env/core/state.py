@@ -135,9 +135,9 @@ class ActuatorState:
             # per filter (spring 0, seal 1), its resample-move (scas_env.core.rejuvenation;
             # empty unless Scenario.rejuvenation says so): the data it learnt (age in
             # flights, value, runs, table, effect slot, the other part's cell and fraction,
-            # extra variance, the other filter's age) and its belief rows, how many (-1:
-            # the history overflowed), its age and survival age (flights), each particle's
-            # log-likelihood, proposals and acceptances of its moves
+            # extra variance) and its belief rows, how many (-1: the history overflowed),
+            # its age and survival age (flights), each particle's log-likelihood, proposals
+            # and acceptances of its moves
             "history": np.zeros((n, 2, cap, HISTORY_COLUMNS)),
             "history_n": np.zeros((n, 2), dtype=i8),
             "clock": np.zeros((n, 2, 2)),
