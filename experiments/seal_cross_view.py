@@ -1,17 +1,21 @@
 """How the seal filter's target depends on how it reads the spring (docs/findings.md,
 "Beliefs"): the posterior of the seal's log wear multiplier on a grid, its history read at
 the spring filter's means as it recorded them, along a subset of the spring's particles
-(systematic positions of the weights, no draw) or along all of them (weighted); and how
-strongly each test feature depends on the other part in the filters' tables.
+(systematic positions of the weights, no draw), along all of them (weighted), and along all
+of them with the spring filter's own data (I8 batch means, G1 tests) read for the seal too;
+and how strongly each test feature depends on the other part in the filters' tables.
 
-Each spring particle's path is its noise-free crack back at every datum of the seal's
-history, ``D^-1(D(x_i) - theta_i s)`` (``s`` flights since the datum; first lives, both
-parts fitted at the start, so the two filters' ages agree); a path's likelihood is the
-seal's full-history replay (:func:`scas_env.core.rejuvenation.replay_histories`), no
-extra variance, and the mixture the paths' likelihoods averaged with their weights.
-Command line::
+Each spring particle's path is its noise-free crack back at every datum,
+``D^-1(D(x_i) - theta_i s)`` (``s`` flights since the datum; first lives, both parts fitted
+at the start, so the two filters' ages agree); a path's likelihood is the full-history
+replay (:func:`scas_env.core.rejuvenation.replay_histories`) with no extra variance, the
+spring's features read from their tables transposed (the seal's wear on the own axis), each
+with its own installation effect; the mixture averages the paths' likelihoods with their
+weights. Per reading, over the lives: the share whose true log wear multiplier lies in the
+central 90 % interval, and the truth's z-scores (an exact posterior of a model the world
+follows: 0.90, mean 0, sd 1). Command line::
 
-    python -m experiments.seal_cross_view --seeds 1000 1001 1002 1003 1004 1005 --flights 170
+    python -m experiments.seal_cross_view --seeds $(seq 1000 1199) --flights 170
 """
 
 from __future__ import annotations
@@ -26,6 +30,7 @@ from prognostics.degradation_models import damage_scalar, inverse_damage_scalar
 from scas_env.cli_args import nonneg_int, positive_int
 from scas_env.core.rejuvenation import (
     C_AGE,
+    P_AUX,
     P_CELL,
     P_DT,
     P_EXTRA,
@@ -72,14 +77,15 @@ def spring_paths(env: ScasMaintenanceEnv, particles: np.ndarray) -> tuple:
     return prepared, cols_k, ints_k
 
 
-def seal_posterior(env: ScasMaintenanceEnv, prepared: tuple, cols_k: np.ndarray,
-                   ints_k: np.ndarray, weights: np.ndarray) -> tuple[float, float]:  # fmt: skip
-    """Mean and sd of the seal's log wear multiplier on :data:`LAM_GRID`: its prior times
+def seal_density(env: ScasMaintenanceEnv, prepared: tuple, cols_k: np.ndarray,
+                 ints_k: np.ndarray, weights: np.ndarray) -> np.ndarray:  # fmt: skip
+    """Probabilities on :data:`LAM_GRID` of the seal's log wear multiplier: its prior times
     the paths' likelihoods averaged with ``weights``."""
     a, f = env.batch.a, env.setup.filters
     age = float(a["clock"][0, 1, C_AGE])
     d = np.exp(LAM_GRID) * age  # new seals start unworn: D(0) = 0
-    z = np.empty((a["aux"].shape[2], LAM_GRID.size))
+    slots = max(a["aux"].shape[2], int(ints_k[..., P_AUX].max()) + 2)
+    z = np.empty((slots, LAM_GRID.size))
     ll = np.empty((len(cols_k), LAM_GRID.size))
     for k in range(len(cols_k)):
         path = (cols_k[k], ints_k[k], *prepared[2:])
@@ -88,32 +94,105 @@ def seal_posterior(env: ScasMaintenanceEnv, prepared: tuple, cols_k: np.ndarray,
     log_post = peak + np.log(weights @ np.exp(ll - peak))
     log_post -= 0.5 * (LAM_GRID / f.move.seal_lam_sd) ** 2
     p = np.exp(log_post - log_post.max())
-    p /= p.sum()
+    return p / p.sum()
+
+
+def seal_posterior(env: ScasMaintenanceEnv, prepared: tuple, cols_k: np.ndarray,
+                   ints_k: np.ndarray, weights: np.ndarray) -> tuple[float, float]:  # fmt: skip
+    """Mean and sd of :func:`seal_density`."""
+    p = seal_density(env, prepared, cols_k, ints_k, weights)
     mean = float(p @ LAM_GRID)
     return mean, float(math.sqrt(p @ (LAM_GRID - mean) ** 2))
 
 
-def readings(seed: int, flights: int, paths: int = 16) -> dict[str, tuple[float, float]]:
-    """The seal's posterior (mean, sd) after ``flights`` flights of episode ``seed``, its
-    history read at the recorded means, along ``paths`` spring particles and along all;
-    ``"truth"``: the world's log wear multiplier (sd 0)."""
+def with_spring_features(env: ScasMaintenanceEnv, prepared: tuple, cols_k: np.ndarray,
+                         ints_k: np.ndarray, particles: np.ndarray) -> tuple:  # fmt: skip
+    """The seal's history along each spring particle with the spring filter's own data
+    (its I8 batch means and G1 tests) appended, read with the seal as the own part (the
+    features' tables transposed) and the crack along the particle's path, each feature
+    with an installation effect of its own (N(0, 1) at the start: first lives)."""
+    a, bank, f = env.batch.a, env.batch.bank, env.setup.filters
+    spring = prepare_history(0, bank, f, 0)
+    s_cols, s_ints = spring[0], spring[1]
+    n_learn, stacks, owns, own_n, slopes = f.learn_part.size, *prepared[2:]
+    n_tab = stacks.shape[0]
+    extra = {0: (f.learn_stack[0], f.learn_own[0], f.learn_other[0]),
+             n_learn: (f.ground_stack[0], f.ground_own[0], f.ground_other[0])}  # fmt: skip
+    new_stacks, new_owns = [stacks], [owns]
+    crack_grid = {}
+    for t, (table, (st, own, other)) in enumerate(extra.items()):
+        padded = np.zeros((1, *stacks.shape[1:]))
+        padded[0, :, : st.shape[2], : st.shape[1]] = st.transpose(0, 2, 1)
+        new_stacks.append(padded)
+        grid = np.zeros((1, owns.shape[1]))
+        grid[0, : other.size] = other
+        new_owns.append(grid)
+        own_n = np.append(own_n, other.size)
+        crack_grid[table] = (n_tab + t, own)
+    prepared2 = (None, None, np.concatenate(new_stacks), np.concatenate(new_owns), own_n, slopes)
+    slot0 = max(a["aux"].shape[2], int(ints_k[..., P_AUX].max()) + 2)
+    keep = [q for q in range(s_cols.shape[0]) if s_ints[q, P_TABLE] in crack_grid]
+    grid, rate, cum, cells, inv_cell = f.rul_tables[0]
+    add_cols = np.repeat(s_cols[keep][None], particles.size, axis=0)
+    add_ints = np.repeat(s_ints[keep][None], particles.size, axis=0)
+    for k, i in enumerate(particles):
+        d_now = damage_scalar(grid, rate, cum, cells, inv_cell, a["x"][0, 0, i])
+        theta = math.exp(a["log_theta"][0, 0, i])
+        for r, q in enumerate(keep):
+            table, own = crack_grid[s_ints[q, P_TABLE]]
+            crack = inverse_damage_scalar(grid, rate, cum, d_now - theta * s_cols[q, P_DT])
+            j, tj = cell_of(own, min(max(crack / f.critical[0], 0.0), 1.0))
+            add_ints[k, r, P_TABLE] = table
+            add_ints[k, r, P_CELL] = j
+            add_ints[k, r, P_AUX] = slot0 + (0 if s_ints[q, P_TABLE] == 0 else 2)
+            add_cols[k, r, P_FRAC], add_cols[k, r, P_FRAC_C], add_cols[k, r, P_EXTRA] = (
+                tj, 1 - tj, 0.0)  # fmt: skip
+    return (
+        prepared2,
+        np.concatenate([cols_k, add_cols], axis=1),
+        np.concatenate([ints_k, add_ints], axis=1),
+    )
+
+
+def readings(seed: int, flights: int, paths: int = 16) -> dict[str, np.ndarray] | None:
+    """The seal's posterior on :data:`LAM_GRID` after ``flights`` flights of episode
+    ``seed`` (``None`` if a part was replaced: not a first life), its history read at the
+    recorded means, along ``paths`` spring particles, along all, and along all with the
+    spring's own data (:func:`with_spring_features`)."""
     env = ScasMaintenanceEnv(**SCENARIO)
     env.reset(seed=seed)
     for _ in range(flights):
         env.step(0)
+    clock = env.batch.a["clock"][0, :, C_AGE]
+    if clock[0] != clock[1] or clock[0] < flights - 1:
+        return None
     w = env.batch.a["w"][0, 0]
-    prepared, cols_all, ints_all = spring_paths(env, np.arange(w.size))
+    every = np.arange(w.size)
+    prepared, cols_all, ints_all = spring_paths(env, every)
     cum = np.cumsum(w) / w.sum()
     sub = np.minimum(np.searchsorted(cum, (np.arange(paths) + 0.5) / paths, side="right"),
                      w.size - 1)  # fmt: skip
+    weights = w / w.sum()
     return {
-        "recorded": seal_posterior(env, prepared, prepared[0][None], prepared[1][None], np.ones(1)),
-        f"{paths} paths": seal_posterior(
+        "recorded": seal_density(env, prepared, prepared[0][None], prepared[1][None], np.ones(1)),
+        f"{paths} paths": seal_density(
             env, prepared, cols_all[sub], ints_all[sub], np.full(paths, 1.0 / paths)
         ),
-        "all particles": seal_posterior(env, prepared, cols_all, ints_all, w / w.sum()),
-        "truth": (math.log(float(env.batch.a["wmult"][0])), 0.0),
+        "all particles": seal_density(env, prepared, cols_all, ints_all, weights),
+        "all + I8, G1": seal_density(
+            env, *with_spring_features(env, prepared, cols_all, ints_all, every), weights
+        ),
+        "truth": np.array([math.log(float(env.batch.a["wmult"][0]))]),
     }
+
+
+def summary(p: np.ndarray, truth: float) -> dict[str, float]:
+    """Mean, sd, the truth's z-score and whether it lies in the central 90 % interval."""
+    mean = float(p @ LAM_GRID)
+    sd = float(math.sqrt(p @ (LAM_GRID - mean) ** 2))
+    cdf = np.cumsum(p)
+    lo, hi = LAM_GRID[np.searchsorted(cdf, 0.05)], LAM_GRID[np.searchsorted(cdf, 0.95)]
+    return {"mean": mean, "sd": sd, "z": (truth - mean) / sd, "covered": float(lo <= truth <= hi)}
 
 
 def table_sensitivity(env: ScasMaintenanceEnv) -> dict[str, tuple[float, float]]:
@@ -137,11 +216,25 @@ def main(argv: Sequence[str] | None = None) -> int:
     args = parser.parse_args(argv)
     for name, (own, other) in table_sensitivity(ScasMaintenanceEnv(**SCENARIO)).items():
         print(f"{name}: {own:+.1f} run sd across its own part, {other:+.1f} across the other")
-    heads = ("recorded", f"{args.paths} paths", "all", "truth")
-    print("seed   " + "   ".join(f"{k:>22s}" for k in heads))
+    rows: dict[str, list[dict[str, float]]] = {}
     for seed in args.seeds:
-        cells = readings(seed, args.flights, args.paths).values()
-        print(f"{seed:<6d} " + "   ".join(f"{m:+.3f} (sd {s:.3f})".rjust(22) for m, s in cells))
+        got = readings(seed, args.flights, args.paths)
+        if got is None:
+            print(f"{seed}: a part was replaced before {args.flights} flights, skipped")
+            continue
+        truth = float(got.pop("truth")[0])
+        cells = {k: summary(p, truth) for k, p in got.items()}
+        for k, c in cells.items():
+            rows.setdefault(k, []).append(c)
+        if len(args.seeds) <= 12:
+            line = "   ".join(f"{k} {c['mean']:+.3f} (sd {c['sd']:.3f})" for k, c in cells.items())
+            print(f"{seed}: truth {truth:+.3f}; {line}")
+    for k, rs in rows.items():
+        z = np.array([r["z"] for r in rs])
+        cov = np.mean([r["covered"] for r in rs])
+        print(f"{k:>14s}: {len(rs)} lives, 90 % interval covers {cov:.3f}, z mean {z.mean():+.3f} "
+              f"sd {z.std(ddof=1) if z.size > 1 else math.nan:.3f}, mean sd "
+              f"{np.mean([r['sd'] for r in rs]):.3f}")  # fmt: skip
     return 0
 
 
