@@ -106,18 +106,22 @@ def seal_posterior(env: ScasMaintenanceEnv, prepared: tuple, cols_k: np.ndarray,
 
 
 def with_spring_features(env: ScasMaintenanceEnv, prepared: tuple, cols_k: np.ndarray,
-                         ints_k: np.ndarray, particles: np.ndarray) -> tuple:  # fmt: skip
-    """The seal's history along each spring particle with the spring filter's own data
-    (its I8 batch means and G1 tests) appended, read with the seal as the own part (the
-    features' tables transposed) and the crack along the particle's path, each feature
-    with an installation effect of its own (N(0, 1) at the start: first lives)."""
+                         ints_k: np.ndarray, particles: np.ndarray,
+                         features: Sequence[str] = ("I8", "G1")) -> tuple:  # fmt: skip
+    """The seal's history along each spring particle with the spring filter's own data of
+    ``features`` (its I8 batch means, its G1 tests) appended, read with the seal as the own
+    part (the features' tables transposed) and the crack along the particle's path, each
+    feature with an installation effect of its own (N(0, 1) at the start: first lives)."""
     a, bank, f = env.batch.a, env.batch.bank, env.setup.filters
+    assert f.learn_part[0] == 0 and f.learn_part[1] == 1  # I8 the spring's, I9 the seal's
     spring = prepare_history(0, bank, f, 0)
     s_cols, s_ints = spring[0], spring[1]
+    assert s_cols.shape[0] > 0, "the spring's history is empty or overflowed"
     n_learn, stacks, owns, own_n, slopes = f.learn_part.size, *prepared[2:]
     n_tab = stacks.shape[0]
-    extra = {0: (f.learn_stack[0], f.learn_own[0], f.learn_other[0]),
-             n_learn: (f.ground_stack[0], f.ground_own[0], f.ground_other[0])}  # fmt: skip
+    tables = {"I8": (0, (f.learn_stack[0], f.learn_own[0], f.learn_other[0])),
+              "G1": (n_learn, (f.ground_stack[0], f.ground_own[0], f.ground_other[0]))}  # fmt: skip
+    extra = dict(tables[name] for name in features)
     new_stacks, new_owns = [stacks], [owns]
     crack_grid = {}
     for t, (table, (st, own, other)) in enumerate(extra.items()):
@@ -144,7 +148,7 @@ def with_spring_features(env: ScasMaintenanceEnv, prepared: tuple, cols_k: np.nd
             j, tj = cell_of(own, min(max(crack / f.critical[0], 0.0), 1.0))
             add_ints[k, r, P_TABLE] = table
             add_ints[k, r, P_CELL] = j
-            add_ints[k, r, P_AUX] = slot0 + (0 if s_ints[q, P_TABLE] == 0 else 2)
+            add_ints[k, r, P_AUX] = slot0 + 2 * (table - n_tab)
             add_cols[k, r, P_FRAC], add_cols[k, r, P_FRAC_C], add_cols[k, r, P_EXTRA] = (
                 tj, 1 - tj, 0.0)  # fmt: skip
     return (
@@ -156,9 +160,11 @@ def with_spring_features(env: ScasMaintenanceEnv, prepared: tuple, cols_k: np.nd
 
 def readings(seed: int, flights: int, paths: int = 16) -> dict[str, np.ndarray] | None:
     """The seal's posterior on :data:`LAM_GRID` after ``flights`` flights of episode
-    ``seed`` (``None`` if a part was replaced: not a first life), its history read at the
-    recorded means, along ``paths`` spring particles, along all, and along all with the
-    spring's own data (:func:`with_spring_features`)."""
+    ``seed`` (``None`` if not a first life: a part replaced, or not all flights flown), its
+    history read at the recorded means, along ``paths`` spring particles, along all, and
+    along all with the spring's own data (:func:`with_spring_features`: I8 and G1, G1,
+    I8), the paths then weighted by the spring's prior (its weights over the exponential
+    of its own log-likelihood) so that those data count once."""
     env = ScasMaintenanceEnv(**SCENARIO)
     env.reset(seed=seed)
     for _ in range(flights):
@@ -173,36 +179,50 @@ def readings(seed: int, flights: int, paths: int = 16) -> dict[str, np.ndarray] 
     sub = np.minimum(np.searchsorted(cum, (np.arange(paths) + 0.5) / paths, side="right"),
                      w.size - 1)  # fmt: skip
     weights = w / w.sum()
-    return {
+    # the spring cloud already holds its own data (at the seal's recorded means): where they
+    # are read for the seal as well, each path is weighted by w / exp(loglik) (the prior),
+    # so that they count once
+    with np.errstate(divide="ignore"):  # a particle past its critical value: weight 0
+        log_prior_w = np.log(weights) - env.batch.a["loglik"][0, 0]
+    prior_w = np.exp(log_prior_w - log_prior_w.max())
+    prior_w /= prior_w.sum()
+    out = {
         "recorded": seal_density(env, prepared, prepared[0][None], prepared[1][None], np.ones(1)),
         f"{paths} paths": seal_density(
             env, prepared, cols_all[sub], ints_all[sub], np.full(paths, 1.0 / paths)
         ),
         "all particles": seal_density(env, prepared, cols_all, ints_all, weights),
-        "all + I8, G1": seal_density(
-            env, *with_spring_features(env, prepared, cols_all, ints_all, every), weights
-        ),
-        "truth": np.array([math.log(float(env.batch.a["wmult"][0]))]),
     }
+    for name, features in (("+ I8, G1", ("I8", "G1")), ("+ G1", ("G1",)), ("+ I8", ("I8",))):
+        joint = with_spring_features(env, prepared, cols_all, ints_all, every, features)
+        out[name] = seal_density(env, *joint, prior_w)
+    out["truth"] = np.array([math.log(float(env.batch.a["wmult"][0]))])
+    return out
 
 
 def summary(p: np.ndarray, truth: float) -> dict[str, float]:
     """Mean, sd, the truth's z-score and whether it lies in the central 90 % interval."""
     mean = float(p @ LAM_GRID)
     sd = float(math.sqrt(p @ (LAM_GRID - mean) ** 2))
-    cdf = np.cumsum(p)
-    lo, hi = LAM_GRID[np.searchsorted(cdf, 0.05)], LAM_GRID[np.searchsorted(cdf, 0.95)]
+    cdf = np.cumsum(p) - 0.5 * p  # each grid point's mass centred on it
+    lo, hi = np.interp([0.05, 0.95], cdf, LAM_GRID)
     return {"mean": mean, "sd": sd, "z": (truth - mean) / sd, "covered": float(lo <= truth <= hi)}
 
 
-def table_sensitivity(env: ScasMaintenanceEnv) -> dict[str, tuple[float, float]]:
-    """Per test feature (G1, G3): its mean's change across the own part's range and across
-    the other part's (at the other / own new), in run sds of a new installation."""
+def table_sensitivity(
+    env: ScasMaintenanceEnv, span: float = 0.25
+) -> dict[str, tuple[float, float]]:
+    """Per test feature (G1, G3): its mean's change over the first ``span`` of the own
+    part's range and over the first ``span`` of the other part's (the other / own new;
+    bilinear in the filters' tables), in run sds of a new installation."""
     f = env.setup.filters
     out = {}
-    for name, st in zip(("G1", "G3"), f.ground_stack, strict=True):
-        mu, run = st[0], st[2][0, 0]
-        out[name] = ((mu[-1, 0] - mu[0, 0]) / run, (mu[0, -1] - mu[0, 0]) / run)
+    for name, st, own, other in zip(("G1", "G3"), f.ground_stack, f.ground_own, f.ground_other,
+                                    strict=True):  # fmt: skip
+        run = st[2][0, 0]
+        at_own = np.interp(span, own, st[0][:, 0])
+        at_other = np.interp(span, other, st[0][0, :])
+        out[name] = ((at_own - st[0][0, 0]) / run, (at_other - st[0][0, 0]) / run)
     return out
 
 
@@ -215,12 +235,13 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser.add_argument("--paths", type=positive_int, default=16, help="spring paths")
     args = parser.parse_args(argv)
     for name, (own, other) in table_sensitivity(ScasMaintenanceEnv(**SCENARIO)).items():
-        print(f"{name}: {own:+.1f} run sd across its own part, {other:+.1f} across the other")
+        print(f"{name}: {own:+.2f} run sd over the first quarter of its own part's range, "
+              f"{other:+.2f} over the other's")  # fmt: skip
     rows: dict[str, list[dict[str, float]]] = {}
     for seed in args.seeds:
         got = readings(seed, args.flights, args.paths)
         if got is None:
-            print(f"{seed}: a part was replaced before {args.flights} flights, skipped")
+            print(f"{seed}: not a first life at {args.flights} flights, skipped")
             continue
         truth = float(got.pop("truth")[0])
         cells = {k: summary(p, truth) for k, p in got.items()}
