@@ -194,6 +194,14 @@ def benchmark_digest(episodes: int = 4, slots: int = 400, seed: int = 11) -> str
     return h.hexdigest()
 
 
+#: the paper preset's seal options (a test before every flight)
+_BOTH_MOVES = {"preflight": "every_flight", "rejuvenation": "resample_move_both",
+               "cross_variance_inflation": 500, "seal_cross_variance_inflation": 1}  # fmt: skip
+_SEAL_PERSISTENCE = {"preflight": "every_flight", "rejuvenation": "resample_move",
+                     "cross_variance_inflation": 500, "seal_cross_persistence": 0.9954}  # fmt: skip
+#: 1500 slots of flights only: lives long enough for the filters' moves
+_FLY_ONLY = {"slots": 1500, "action_p": (1.0, 0.0, 0.0, 0.0)}
+
 #: part name -> function of no arguments returning its digest
 PARTS: dict[str, Callable[[], str]] = {
     "features+rul": lambda: episodes_digest("features+rul"),
@@ -210,38 +218,11 @@ PARTS: dict[str, Callable[[], str]] = {
     "resample_move": lambda: episodes_digest(
         seeds=(4,), preflight="every_flight", rejuvenation="resample_move"
     ),
-    "resample_move_both": lambda: episodes_digest(  # flights only: long lives, moves made
-        seeds=(4,),
-        slots=1500,
-        action_p=(1.0, 0.0, 0.0, 0.0),
-        preflight="every_flight",
-        rejuvenation="resample_move_both",
-        cross_variance_inflation=500,
-        seal_cross_variance_inflation=1,
-    ),
-    "seal persistence": lambda: episodes_digest(  # flights only, as above
-        seeds=(4,),
-        slots=1500,
-        action_p=(1.0, 0.0, 0.0, 0.0),
-        preflight="every_flight",
-        rejuvenation="resample_move",
-        cross_variance_inflation=500,
-        seal_cross_persistence=0.9954,
-    ),
-    "resample_move_both maintained": lambda: episodes_digest(  # random actions
-        seeds=(4,),
-        preflight="every_flight",
-        rejuvenation="resample_move_both",
-        cross_variance_inflation=500,
-        seal_cross_variance_inflation=1,
-    ),
-    "seal persistence maintained": lambda: episodes_digest(
-        seeds=(4,),
-        preflight="every_flight",
-        rejuvenation="resample_move",
-        cross_variance_inflation=500,
-        seal_cross_persistence=0.9954,
-    ),
+    # the seal options, flying long lives (moves made) and under random actions
+    "resample_move_both": lambda: episodes_digest(seeds=(4,), **_FLY_ONLY, **_BOTH_MOVES),
+    "seal persistence": lambda: episodes_digest(seeds=(4,), **_FLY_ONLY, **_SEAL_PERSISTENCE),
+    "resample_move_both maintained": lambda: episodes_digest(seeds=(4,), **_BOTH_MOVES),
+    "seal persistence maintained": lambda: episodes_digest(seeds=(4,), **_SEAL_PERSISTENCE),
     "physics": lambda: episodes_digest(seeds=(4,), steps=40, fidelity="physics"),
     "vector": vector_digest,
     "vector every_flight": lambda: vector_digest(num_envs=4, preflight="every_flight"),
