@@ -158,13 +158,36 @@ def with_spring_features(env: ScasMaintenanceEnv, prepared: tuple, cols_k: np.nd
     )
 
 
+def without_own_terms(env: ScasMaintenanceEnv, features: Sequence[str]) -> np.ndarray:
+    """The spring particles' weights with the likelihood terms of ``features`` (as the
+    spring filter learnt them: its replay of those rows alone) divided out, normalised: the
+    cloud already holds those data, so where they are read for the seal too they count
+    once. Both features: the weights over the exponential of the particles' ``loglik``."""
+    a, bank, f = env.batch.a, env.batch.bank, env.setup.filters
+    spring = prepare_history(0, bank, f, 0)
+    n_learn = f.learn_part.size
+    tables = {"I8": 0, "G1": n_learn}
+    rows = np.isin(spring[1][:, P_TABLE], [tables[n] for n in features] + [SET_EFFECT])
+    x, lam, w = a["x"][0, 0], a["log_theta"][0, 0], a["w"][0, 0]
+    grid, rate, cum, cells, inv_cell = f.rul_tables[0]
+    d = np.array([damage_scalar(grid, rate, cum, cells, inv_cell, v) for v in x])
+    z = np.empty((a["aux"].shape[2], x.size))
+    terms = np.empty(x.size)
+    replay_histories(d, lam, x.size, (spring[0][rows], spring[1][rows], *spring[2:]), f, z,
+                     terms, 0)  # fmt: skip
+    with np.errstate(divide="ignore"):  # a particle past its critical value: weight 0
+        log_w = np.log(w / w.sum()) - terms
+    out = np.exp(log_w - log_w.max())
+    return out / out.sum()
+
+
 def readings(seed: int, flights: int, paths: int = 16) -> dict[str, np.ndarray] | None:
     """The seal's posterior on :data:`LAM_GRID` after ``flights`` flights of episode
     ``seed`` (``None`` if not a first life: a part replaced, or not all flights flown), its
     history read at the recorded means, along ``paths`` spring particles, along all, and
     along all with the spring's own data (:func:`with_spring_features`: I8 and G1, G1,
-    I8), the paths then weighted by the spring's prior (its weights over the exponential
-    of its own log-likelihood) so that those data count once."""
+    I8), the paths then weighted by :func:`without_own_terms` so that those data count
+    once."""
     env = ScasMaintenanceEnv(**SCENARIO)
     env.reset(seed=seed)
     for _ in range(flights):
@@ -179,13 +202,6 @@ def readings(seed: int, flights: int, paths: int = 16) -> dict[str, np.ndarray] 
     sub = np.minimum(np.searchsorted(cum, (np.arange(paths) + 0.5) / paths, side="right"),
                      w.size - 1)  # fmt: skip
     weights = w / w.sum()
-    # the spring cloud already holds its own data (at the seal's recorded means): where they
-    # are read for the seal as well, each path is weighted by w / exp(loglik) (the prior),
-    # so that they count once
-    with np.errstate(divide="ignore"):  # a particle past its critical value: weight 0
-        log_prior_w = np.log(weights) - env.batch.a["loglik"][0, 0]
-    prior_w = np.exp(log_prior_w - log_prior_w.max())
-    prior_w /= prior_w.sum()
     out = {
         "recorded": seal_density(env, prepared, prepared[0][None], prepared[1][None], np.ones(1)),
         f"{paths} paths": seal_density(
@@ -195,7 +211,7 @@ def readings(seed: int, flights: int, paths: int = 16) -> dict[str, np.ndarray] 
     }
     for name, features in (("+ I8, G1", ("I8", "G1")), ("+ G1", ("G1",)), ("+ I8", ("I8",))):
         joint = with_spring_features(env, prepared, cols_all, ints_all, every, features)
-        out[name] = seal_density(env, *joint, prior_w)
+        out[name] = seal_density(env, *joint, without_own_terms(env, features))
     out["truth"] = np.array([math.log(float(env.batch.a["wmult"][0]))])
     return out
 

@@ -25,6 +25,7 @@ from experiments.seal_cross_view import (
     spring_paths,
     summary,
     with_spring_features,
+    without_own_terms,
 )
 from scas_env.core.rejuvenation import (
     C_AGE,
@@ -131,9 +132,10 @@ def test_the_summary_of_a_gaussian_on_the_grid() -> None:
     assert out["mean"] == pytest.approx(0.1, abs=1e-9)
     assert out["sd"] == pytest.approx(0.2, rel=1e-3)
     assert out["z"] == pytest.approx(1.6, rel=1e-3) and out["covered"] == 1.0
-    assert summary(p, 0.1 + 1.7 * 0.2)["covered"] == 0.0
-    assert summary(p, 0.1 - 1.6 * 0.2)["covered"] == 1.0
-    assert summary(p, 0.1 - 1.7 * 0.2)["covered"] == 0.0
+    edge = norm.ppf(0.95)  # the interval's ends, interpolated between grid points
+    for sign in (1.0, -1.0):
+        assert summary(p, 0.1 + sign * (edge - 0.003) * 0.2)["covered"] == 1.0
+        assert summary(p, 0.1 + sign * (edge + 0.003) * 0.2)["covered"] == 0.0
 
 
 def test_the_spring_features_read_the_untransposed_tables(env) -> None:
@@ -181,3 +183,22 @@ def test_the_spring_features_read_the_untransposed_tables(env) -> None:
         effects[table] = [zm + gain * r, zv - gain * tau * zv]
     assert total != 0.0
     assert full[0] - base[0] == pytest.approx(total, rel=1e-9, abs=1e-7)
+
+
+def test_the_spring_terms_divided_out_are_its_own_log_likelihood(env) -> None:
+    """Dividing out both features' terms is dividing the weights by the exponential of the
+    filter's ``loglik``; the terms of G1 alone and of I8 alone add up to it."""
+    a = env.batch.a
+    w, loglik = a["w"][0, 0], a["loglik"][0, 0]
+    alive = w > 0  # a particle past its critical value keeps weight 0 in every reading
+    log_w = np.log(w[alive] / w.sum())
+    both = without_own_terms(env, ("I8", "G1"))
+    assert np.all(both[~alive] == 0.0)
+    expected = np.exp(log_w - loglik[alive] - (log_w - loglik[alive]).max())
+    np.testing.assert_allclose(both[alive], expected / expected.sum(), rtol=1e-10)
+    t_g1 = log_w - np.log(without_own_terms(env, ("G1",))[alive])
+    t_i8 = log_w - np.log(without_own_terms(env, ("I8",))[alive])
+    loglik = loglik[alive]
+    split = t_g1 + t_i8 - loglik  # equal up to the normalising constants
+    assert np.ptp(split) < 1e-8 * np.abs(loglik).max()
+    assert np.ptp(t_g1) > 1e-3 and np.ptp(t_i8) > 1e-3  # each feature moves the weights
