@@ -13,7 +13,8 @@ spring's features read from their tables transposed (the seal's wear on the own 
 with its own installation effect; the mixture averages the paths' likelihoods with their
 weights. Per reading, over the lives: the share whose true log wear multiplier lies in the
 central 90 % interval, and the truth's z-scores (an exact posterior of a model the world
-follows: 0.90, mean 0, sd 1). Command line::
+follows: 0.90, mean 0, sd 1). ``--preset default``: default sensing, a test every 10th
+slot (:data:`PRESETS`). Command line::
 
     python -m experiments.seal_cross_view --seeds $(seq 1000 1199) --flights 170
 """
@@ -26,6 +27,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from experiments.belief_calibration import policy_action
 from prognostics.degradation_models import damage_scalar, inverse_damage_scalar
 from scas_env.cli_args import nonneg_int, positive_int
 from scas_env.core.rejuvenation import (
@@ -47,6 +49,12 @@ from scas_env.env import ScasMaintenanceEnv
 #: the paper preset's seal setting whose history is read (both moves, factors 500 / 1)
 SCENARIO = {"preflight": "every_flight", "rejuvenation": "resample_move_both",
             "cross_variance_inflation": 500.0, "seal_cross_variance_inflation": 1.0}  # fmt: skip
+#: per preset: the scenario and the policy flown (a test before every flight, at no cost;
+#: default sensing: a test every 10th slot)
+PRESETS = {"paper": (SCENARIO, "fly"),
+           "default": ({"rejuvenation": "resample_move_both"}, "test10")}  # fmt: skip
+#: flights a filter may lag behind (a batch of in-flight features not yet learnt)
+PENDING_MAX = 10
 #: grid of the seal's log wear multiplier
 LAM_GRID = np.linspace(-1.5, 1.5, 301)
 
@@ -181,19 +189,21 @@ def without_own_terms(env: ScasMaintenanceEnv, features: Sequence[str]) -> np.nd
     return out / out.sum()
 
 
-def readings(seed: int, flights: int, paths: int = 16) -> dict[str, np.ndarray] | None:
+def readings(seed: int, flights: int, paths: int = 16,
+             preset: str = "paper") -> dict[str, np.ndarray] | None:  # fmt: skip
     """The seal's posterior on :data:`LAM_GRID` after ``flights`` flights of episode
     ``seed`` (``None`` if not a first life: a part replaced, or not all flights flown), its
     history read at the recorded means, along ``paths`` spring particles, along all, and
     along all with the spring's own data (:func:`with_spring_features`: I8 and G1, G1,
     I8), the paths then weighted by :func:`without_own_terms` so that those data count
-    once."""
-    env = ScasMaintenanceEnv(**SCENARIO)
+    once. ``preset``: a key of :data:`PRESETS`."""
+    scenario, policy = PRESETS[preset]
+    env = ScasMaintenanceEnv(**scenario)
     env.reset(seed=seed)
-    for _ in range(flights):
-        env.step(0)
-    clock = env.batch.a["clock"][0, :, C_AGE]
-    if clock[0] != clock[1] or clock[0] < flights - 1:
+    for t in range(flights):
+        env.step(0 if policy == "fly" else policy_action(policy, t))
+    clock = env.batch.a["clock"][0, :, C_AGE]  # both restart with their parts
+    if clock[0] != clock[1] or clock[0] < flights - 2 * PENDING_MAX:
         return None
     w = env.batch.a["w"][0, 0]
     every = np.arange(w.size)
@@ -249,13 +259,15 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser.add_argument("--seeds", type=nonneg_int, nargs="+", default=[1000, 1001])
     parser.add_argument("--flights", type=positive_int, default=170, help="flights flown")
     parser.add_argument("--paths", type=positive_int, default=16, help="spring paths")
+    parser.add_argument("--preset", choices=tuple(PRESETS), default="paper")
     args = parser.parse_args(argv)
-    for name, (own, other) in table_sensitivity(ScasMaintenanceEnv(**SCENARIO)).items():
+    scenario = PRESETS[args.preset][0]
+    for name, (own, other) in table_sensitivity(ScasMaintenanceEnv(**scenario)).items():
         print(f"{name}: {own:+.2f} run sd over the first quarter of its own part's range, "
               f"{other:+.2f} over the other's")  # fmt: skip
     rows: dict[str, list[dict[str, float]]] = {}
     for seed in args.seeds:
-        got = readings(seed, args.flights, args.paths)
+        got = readings(seed, args.flights, args.paths, args.preset)
         if got is None:
             print(f"{seed}: not a first life at {args.flights} flights, skipped")
             continue
