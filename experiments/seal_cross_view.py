@@ -59,29 +59,50 @@ PENDING_MAX = 10
 LAM_GRID = np.linspace(-1.5, 1.5, 301)
 
 
+def spring_tables(f: tuple) -> dict[str, tuple[int, tuple]]:
+    """The spring filter's own features: name -> (history table index, (stack, own grid,
+    other grid))."""
+    assert f.learn_part[0] == 0 and f.learn_part[1] == 1  # I8 the spring's, I9 the seal's
+    n_learn = f.learn_part.size
+    return {"I8": (0, (f.learn_stack[0], f.learn_own[0], f.learn_other[0])),
+            "G1": (n_learn, (f.ground_stack[0], f.ground_own[0], f.ground_other[0]))}  # fmt: skip
+
+
+def crack_back(env: ScasMaintenanceEnv, particle: int, flights: np.ndarray) -> np.ndarray:
+    """The spring ``particle``'s noise-free crack ``flights`` back, as fractions of critical
+    (clipped to [0, 1]): ``D^-1(D(x_i) - theta_i s)``."""
+    a, f = env.batch.a, env.setup.filters
+    grid, rate, cum, cells, inv_cell = f.rul_tables[0]
+    d_now = damage_scalar(grid, rate, cum, cells, inv_cell, a["x"][0, 0, particle])
+    theta = math.exp(a["log_theta"][0, 0, particle])
+    crack = [inverse_damage_scalar(grid, rate, cum, d_now - theta * s) for s in flights]
+    return np.clip(np.array(crack) / f.critical[0], 0.0, 1.0)
+
+
+def _read_along(cols: np.ndarray, ints: np.ndarray, rows: np.ndarray, grids: list,
+                fractions: np.ndarray) -> None:  # fmt: skip
+    """Rows ``rows`` of one path's columns read at the crack ``fractions`` (cell and
+    fraction in each row's crack grid ``grids``), no extra variance; in place."""
+    for q, g, v in zip(rows, grids, fractions, strict=True):
+        j, tj = cell_of(g, v)
+        ints[q, P_CELL] = j
+        cols[q, P_FRAC], cols[q, P_FRAC_C], cols[q, P_EXTRA] = tj, 1 - tj, 0.0
+
+
 def spring_paths(env: ScasMaintenanceEnv, particles: np.ndarray) -> tuple:
     """The seal's prepared history (row 0) and its columns read along each of the spring's
     ``particles``: ``(prepared, cols (K, n, 6), ints (K, n, 3))``."""
-    a, bank, f = env.batch.a, env.batch.bank, env.setup.filters
-    prepared = prepare_history(0, bank, f, 1)
+    f = env.setup.filters
+    prepared = prepare_history(0, env.batch.bank, f, 1)
     cols, ints = prepared[0], prepared[1]
-    grid, rate, cum, cells, inv_cell = f.rul_tables[0]
     n_learn = f.learn_part.size
+    rows = np.flatnonzero(ints[:, P_TABLE] != SET_EFFECT)
+    grids = [f.learn_other[t] if t < n_learn else f.ground_other[t - n_learn]
+             for t in ints[rows, P_TABLE]]  # fmt: skip
     cols_k = np.repeat(cols[None], particles.size, axis=0)
     ints_k = np.repeat(ints[None], particles.size, axis=0)
     for k, i in enumerate(particles):
-        d_now = damage_scalar(grid, rate, cum, cells, inv_cell, a["x"][0, 0, i])
-        theta = math.exp(a["log_theta"][0, 0, i])
-        for q in range(cols.shape[0]):
-            table = ints[q, P_TABLE]
-            if table == SET_EFFECT:
-                continue
-            crack = inverse_damage_scalar(grid, rate, cum, d_now - theta * cols[q, P_DT])
-            other = min(max(crack / f.critical[0], 0.0), 1.0)
-            g = f.learn_other[table] if table < n_learn else f.ground_other[table - n_learn]
-            j, tj = cell_of(g, other)
-            ints_k[k, q, P_CELL] = j
-            cols_k[k, q, P_FRAC], cols_k[k, q, P_FRAC_C], cols_k[k, q, P_EXTRA] = tj, 1 - tj, 0.0
+        _read_along(cols_k[k], ints_k[k], rows, grids, crack_back(env, i, cols[rows, P_DT]))
     return prepared, cols_k, ints_k
 
 
@@ -105,34 +126,24 @@ def seal_density(env: ScasMaintenanceEnv, prepared: tuple, cols_k: np.ndarray,
     return p / p.sum()
 
 
-def seal_posterior(env: ScasMaintenanceEnv, prepared: tuple, cols_k: np.ndarray,
-                   ints_k: np.ndarray, weights: np.ndarray) -> tuple[float, float]:  # fmt: skip
-    """Mean and sd of :func:`seal_density`."""
-    p = seal_density(env, prepared, cols_k, ints_k, weights)
-    mean = float(p @ LAM_GRID)
-    return mean, float(math.sqrt(p @ (LAM_GRID - mean) ** 2))
-
-
 def with_spring_features(env: ScasMaintenanceEnv, prepared: tuple, cols_k: np.ndarray,
-                         ints_k: np.ndarray, particles: np.ndarray,
+                         ints_k: np.ndarray, particles: np.ndarray, spring: tuple,
                          features: Sequence[str] = ("I8", "G1")) -> tuple:  # fmt: skip
     """The seal's history along each spring particle with the spring filter's own data of
-    ``features`` (its I8 batch means, its G1 tests) appended, read with the seal as the own
-    part (the features' tables transposed) and the crack along the particle's path, each
-    feature with an installation effect of its own (N(0, 1) at the start: first lives)."""
-    a, bank, f = env.batch.a, env.batch.bank, env.setup.filters
-    assert f.learn_part[0] == 0 and f.learn_part[1] == 1  # I8 the spring's, I9 the seal's
-    spring = prepare_history(0, bank, f, 0)
+    ``features`` (its I8 batch means, its G1 tests; ``spring``: its prepared history)
+    appended, read with the seal as the own part (the features' tables transposed) and the
+    crack along the particle's path, each feature with an installation effect of its own
+    (N(0, 1) at the start: first lives)."""
+    a = env.batch.a
     s_cols, s_ints = spring[0], spring[1]
     assert s_cols.shape[0] > 0, "the spring's history is empty or overflowed"
-    n_learn, stacks, owns, own_n, slopes = f.learn_part.size, *prepared[2:]
+    stacks, owns, own_n, slopes = prepared[2:]
     n_tab = stacks.shape[0]
-    tables = {"I8": (0, (f.learn_stack[0], f.learn_own[0], f.learn_other[0])),
-              "G1": (n_learn, (f.ground_stack[0], f.ground_own[0], f.ground_other[0]))}  # fmt: skip
-    extra = dict(tables[name] for name in features)
+    tables = spring_tables(env.setup.filters)
     new_stacks, new_owns = [stacks], [owns]
     crack_grid = {}
-    for t, (table, (st, own, other)) in enumerate(extra.items()):
+    for t, name in enumerate(features):
+        table, (st, own, other) = tables[name]
         padded = np.zeros((1, *stacks.shape[1:]))
         padded[0, :, : st.shape[2], : st.shape[1]] = st.transpose(0, 2, 1)
         new_stacks.append(padded)
@@ -143,22 +154,16 @@ def with_spring_features(env: ScasMaintenanceEnv, prepared: tuple, cols_k: np.nd
         crack_grid[table] = (n_tab + t, own)
     prepared2 = (None, None, np.concatenate(new_stacks), np.concatenate(new_owns), own_n, slopes)
     slot0 = max(a["aux"].shape[2], int(ints_k[..., P_AUX].max()) + 2)
-    keep = [q for q in range(s_cols.shape[0]) if s_ints[q, P_TABLE] in crack_grid]
-    grid, rate, cum, cells, inv_cell = f.rul_tables[0]
+    keep = np.flatnonzero(np.isin(s_ints[:, P_TABLE], list(crack_grid)))
     add_cols = np.repeat(s_cols[keep][None], particles.size, axis=0)
     add_ints = np.repeat(s_ints[keep][None], particles.size, axis=0)
+    read_as = np.array([crack_grid[t][0] for t in s_ints[keep, P_TABLE]], dtype=np.int64)
+    add_ints[:, :, P_TABLE] = read_as
+    add_ints[:, :, P_AUX] = slot0 + 2 * (read_as - n_tab)
+    grids = [crack_grid[t][1] for t in s_ints[keep, P_TABLE]]
+    rows = np.arange(keep.size)
     for k, i in enumerate(particles):
-        d_now = damage_scalar(grid, rate, cum, cells, inv_cell, a["x"][0, 0, i])
-        theta = math.exp(a["log_theta"][0, 0, i])
-        for r, q in enumerate(keep):
-            table, own = crack_grid[s_ints[q, P_TABLE]]
-            crack = inverse_damage_scalar(grid, rate, cum, d_now - theta * s_cols[q, P_DT])
-            j, tj = cell_of(own, min(max(crack / f.critical[0], 0.0), 1.0))
-            add_ints[k, r, P_TABLE] = table
-            add_ints[k, r, P_CELL] = j
-            add_ints[k, r, P_AUX] = slot0 + 2 * (table - n_tab)
-            add_cols[k, r, P_FRAC], add_cols[k, r, P_FRAC_C], add_cols[k, r, P_EXTRA] = (
-                tj, 1 - tj, 0.0)  # fmt: skip
+        _read_along(add_cols[k], add_ints[k], rows, grids, crack_back(env, i, s_cols[keep, P_DT]))
     return (
         prepared2,
         np.concatenate([cols_k, add_cols], axis=1),
@@ -166,16 +171,16 @@ def with_spring_features(env: ScasMaintenanceEnv, prepared: tuple, cols_k: np.nd
     )
 
 
-def without_own_terms(env: ScasMaintenanceEnv, features: Sequence[str]) -> np.ndarray:
+def without_own_terms(env: ScasMaintenanceEnv, spring: tuple,
+                      features: Sequence[str]) -> np.ndarray:  # fmt: skip
     """The spring particles' weights with the likelihood terms of ``features`` (as the
     spring filter learnt them: its replay of those rows alone) divided out, normalised: the
     cloud already holds those data, so where they are read for the seal too they count
-    once. Both features: the weights over the exponential of the particles' ``loglik``."""
-    a, bank, f = env.batch.a, env.batch.bank, env.setup.filters
-    spring = prepare_history(0, bank, f, 0)
-    n_learn = f.learn_part.size
-    tables = {"I8": 0, "G1": n_learn}
-    rows = np.isin(spring[1][:, P_TABLE], [tables[n] for n in features] + [SET_EFFECT])
+    once (``spring``: its prepared history). Both features: the weights over the
+    exponential of the particles' ``loglik``."""
+    a, f = env.batch.a, env.setup.filters
+    tables = spring_tables(f)
+    rows = np.isin(spring[1][:, P_TABLE], [tables[n][0] for n in features] + [SET_EFFECT])
     x, lam, w = a["x"][0, 0], a["log_theta"][0, 0], a["w"][0, 0]
     grid, rate, cum, cells, inv_cell = f.rul_tables[0]
     d = np.array([damage_scalar(grid, rate, cum, cells, inv_cell, v) for v in x])
@@ -219,9 +224,10 @@ def readings(seed: int, flights: int, paths: int = 16,
         ),
         "all particles": seal_density(env, prepared, cols_all, ints_all, weights),
     }
+    spring = prepare_history(0, env.batch.bank, env.setup.filters, 0)
     for name, features in (("+ I8, G1", ("I8", "G1")), ("+ G1", ("G1",)), ("+ I8", ("I8",))):
-        joint = with_spring_features(env, prepared, cols_all, ints_all, every, features)
-        out[name] = seal_density(env, *joint, without_own_terms(env, features))
+        joint = with_spring_features(env, prepared, cols_all, ints_all, every, spring, features)
+        out[name] = seal_density(env, *joint, without_own_terms(env, spring, features))
     out["truth"] = np.array([math.log(float(env.batch.a["wmult"][0]))])
     return out
 
