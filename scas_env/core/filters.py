@@ -12,8 +12,8 @@ Rao-Blackwellised, :func:`prognostics.measurement.random_effect_update`).
   mean, resampled where the weights degenerated; the batch is emptied.
 * :func:`test_row`: a pre-flight test's G1 (spring) and G3 (seal): the batch under way learnt
   from first, both filters predicted over the flights pending, conditioned on survival and
-  weighted; returns both features corrected to a healthy new installation (what the
-  detectors read).
+  weighted (with ``Scenario.seal_reads_g1`` the seal filter weighted by G1 too); returns
+  both features corrected to a healthy new installation (what the detectors read).
 * :func:`refresh_row`: both parts' RUL tables (:mod:`prognostics.rul_ageing`) of a row's
   clouds.
 
@@ -93,6 +93,9 @@ class FilterModel(NamedTuple):
     (``Scenario.seal_cross_persistence``; row -1: off): each seal particle carries in
     ``aux[row]`` a standard-normal offset of the spring estimate, AR(1) with ``rho`` per
     flight, and reads its features at its own spring value instead of adding a variance.
+    ``seal_g1``: ``(row, stack, own, other)``, G1 read by the seal filter too
+    (``Scenario.seal_reads_g1``; row -1: off): its effect's belief in the seal's ``aux[row]``
+    and ``aux[row + 1]``, its tables with the seal's wear on axis 1.
     """
 
     process: tuple
@@ -115,6 +118,7 @@ class FilterModel(NamedTuple):
     move: MoveModel
     cross_inflation: tuple
     persistence: tuple
+    seal_g1: tuple
 
 
 @njit(cache=True, error_model="numpy")
@@ -396,6 +400,12 @@ def test_row(e: int, g1: float, g3: float, bank: tuple, pending: np.ndarray,
                 e, 1, model.ground_aux[1], g3, 1.0, moments, model.ground_stack[1],
                 model.ground_own[1], model.ground_other[1], bank, status, work, model, handle,
                 model.learn_part.size + 1,
+            )  # fmt: skip
+        row = model.seal_g1[0]
+        if row >= 0 and status[e] == 0:  # G1 into the seal filter, at the same moments
+            _effect_update(
+                e, 1, row, g1, 1.0, moments, model.seal_g1[1], model.seal_g1[2],
+                model.seal_g1[3], bank, status, work, model, handle, model.learn_part.size + 2,
             )  # fmt: skip
         corrected = (c0, c1)
     return corrected

@@ -57,6 +57,7 @@ from scas_env.core.setup import (
     MAX_LIFE_FLIGHTS,
     PARTS,
     UPCOMING_PARTS,
+    effect_rows,
     lognormal_sigma,
 )
 from scas_env.core.state import ActuatorState, PhysicsRow
@@ -396,9 +397,9 @@ def reset_filter(batch: ActuatorState, e: int, part: str) -> None:
         _new_spring_errors(batch, e, rng)
     else:
         w = a["w"][e, 1]
-        kept = [
+        kept = [  # with Scenario.seal_reads_g1, G1's effect too
             _mixture_moments(w, a["aux"][e, 1, k], a["aux"][e, 1, k + 1])
-            for k in range(0, 2 * len(EFFECT_FEATURES[1]), 2)
+            for k in range(0, effect_rows(st.scenario), 2)
         ]
         errors = _spring_errors_kept(batch, e, rng)
         _reset_cloud(batch, e, p, 0.0, _lognormal(rng, lognormal_sigma(st.params, part), n))

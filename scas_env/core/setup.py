@@ -438,13 +438,21 @@ def _filter_model(
             float(s.seal_cross_variance_inflation or s.cross_variance_inflation),
         ),
         persistence=(float(s.seal_cross_persistence), persistence_row(s)),
+        seal_g1=(EFFECT_ROWS if s.seal_reads_g1 else -1, *effect_tables(sur, "G1", "seal")),
     )
+
+
+def effect_rows(s: Scenario) -> int:
+    """A filter's aux rows of installation effects (a mean and a variance per feature):
+    :data:`EFFECT_ROWS`, and with ``Scenario.seal_reads_g1`` two more, the seal's belief of
+    G1's effect (unused in the spring filter)."""
+    return EFFECT_ROWS + 2 * int(s.seal_reads_g1)
 
 
 def persistence_row(s: Scenario) -> int:
     """The aux row of the seal particles' spring-error offsets (after the installation
     effects' rows), -1 when ``Scenario.seal_cross_persistence`` is 0."""
-    return EFFECT_ROWS if s.seal_cross_persistence > 0 else -1
+    return effect_rows(s) if s.seal_cross_persistence > 0 else -1
 
 
 #: random-walk scale over the posterior's sd in d dimensions (Roberts, Gelman & Gilks 1997:
@@ -516,6 +524,7 @@ __all__ = [
     "DetectorModel",
     "Setup",
     "WorldModel",
+    "effect_rows",
     "effect_tables",
     "lognormal_sigma",
     "read_only",
