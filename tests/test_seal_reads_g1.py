@@ -13,9 +13,16 @@ from experiments.belief_calibration import policy_action
 from scas_env.core import filters
 from scas_env.core.filters import _effect_update, _moments, work_arrays
 from scas_env.core.parts import learn_now, replace_part
+from scas_env.core.rejuvenation import H_AUX, H_RUNS, H_TABLE, H_Y, SET_EFFECT
 from scas_env.core.scenario import Scenario
 from scas_env.env import ScasMaintenanceEnv
 from tests.option_lockstep import run_option_lockstep
+from tests.test_rejuvenation_seal import (
+    _assert_the_replay_is_the_filters,
+    _episode,
+    _replay,
+    _rows,
+)
 
 #: the configuration it is measured in (paper preset): the spring's move and factor 500, the
 #: seal's spring error carried as offsets
@@ -43,6 +50,14 @@ def _ready(env: ScasMaintenanceEnv) -> tuple:
     return batch, a, batch.setup.filters, handle, work
 
 
+def _g1_into_seal(g1: float, moments: tuple, batch, model, handle: tuple, work: tuple) -> None:
+    """G1 into row 0's seal filter as the kernel's test does it."""
+    a = batch.a
+    _effect_update(0, 1, int(model.ground_aux[2]), g1, 1.0, moments, model.ground_stack[2],
+                   model.ground_own[2], model.ground_other[2], batch.bank, a["status"], work,
+                   model, handle, model.learn_part.size + 2)  # fmt: skip
+
+
 def test_a_g1_datum_into_the_seal_is_its_density_on_the_surrogates_tables() -> None:
     """Each seal particle's log-likelihood of G1 is the normal density of the surrogate's G1
     at (the spring's estimate, the particle's wear), interpolated by scipy on the tables as
@@ -51,14 +66,13 @@ def test_a_g1_datum_into_the_seal_is_its_density_on_the_surrogates_tables() -> N
     Read on the untransposed tables (wear taken for crack), it is not."""
     env = _env()
     batch, a, model, handle, work = _ready(env)
-    row = int(model.seal_g1[0])
+    row = int(model.ground_aux[2])
     a["aux"][0, 1, model.persistence[1]] = 0.0
     moments = _moments(0, batch.bank, model, work)
     z_mean, z_var = a["aux"][0, 1, row].copy(), a["aux"][0, 1, row + 1].copy()
     x = a["x"][0, 1].copy()
     g1 = float(a["last"][0, -2])
-    _effect_update(0, 1, row, g1, 1.0, moments, *model.seal_g1[1:], batch.bank, a["status"],
-                   work, model, handle, model.learn_part.size + 2)  # fmt: skip
+    _g1_into_seal(g1, moments, batch, model, handle, work)
     got = work[5].copy()
 
     sur = batch.setup.surrogate
@@ -86,7 +100,7 @@ def test_a_test_is_the_two_readings_then_g1_into_the_seal_at_the_same_moments() 
         env = _env()
         batch, a, model, handle, work = _ready(env)
         g1, g3 = float(a["last"][0, -2]), float(a["last"][0, -1])
-        off = model._replace(seal_g1=(-1, *model.seal_g1[1:]))
+        off = model._replace(ground_aux=np.array([*model.ground_aux[:2], -1]))
         moments = _moments(0, batch.bank, model, work)
         args = (a["pending"], a["flight_sum"], a["flight_count"], a["batch_usage"], a["status"],
                 work, model if not manual else off, handle)  # fmt: skip
@@ -94,9 +108,7 @@ def test_a_test_is_the_two_readings_then_g1_into_the_seal_at_the_same_moments() 
         if manual:
             if manual == "after":
                 moments = _moments(0, batch.bank, model, work)
-            _effect_update(0, 1, int(model.seal_g1[0]), g1, 1.0, moments, *model.seal_g1[1:],
-                           batch.bank, a["status"], work, model, handle,
-                           model.learn_part.size + 2)  # fmt: skip
+            _g1_into_seal(g1, moments, batch, model, handle, work)
         assert a["status"][0] == 0
         stream = batch.rngs[0]["filter"].random(4)  # where the filter stream stands
         outs.append([arr[0].copy() for arr in batch.bank[:5]] + [stream])
@@ -111,7 +123,7 @@ def test_g1s_effect_is_kept_with_new_seals_and_reset_with_a_new_spring_pair() ->
     variance); a new spring pair is a new installation (N(0, 1))."""
     env = _env()
     a = env.batch.a
-    row = int(env.batch.setup.filters.seal_g1[0])
+    row = int(env.batch.setup.filters.ground_aux[2])
     replace_part(env.batch, 0, "seal", failed=False)  # learns the pending batch first
     twin = _env()  # the same episode: its seal filter as replace_part finds it
     learn_now(twin.batch, 0)
@@ -127,9 +139,13 @@ def test_g1s_effect_is_kept_with_new_seals_and_reset_with_a_new_spring_pair() ->
     np.testing.assert_array_equal(a["aux"][0, 1, row + 1], 1.0)
 
 
-def test_single_and_vector_env_agree_and_the_option_changes_the_episode() -> None:
-    """In the configuration it is measured in; a seal set at slot 150, a spring pair at 400."""
-    kw = {**MEASURED, "episode_slots": 600, "n_particles": 50}
+@pytest.mark.parametrize(
+    "config", [MEASURED, {"preflight": "every_flight", "rejuvenation": "resample_move_both"}]
+)
+def test_single_and_vector_env_agree_and_the_option_changes_the_episode(config: dict) -> None:
+    """With the seal's offsets or with its move; a seal set at slot 150, a spring pair at
+    400."""
+    kw = {**config, "episode_slots": 600, "n_particles": 50}
     single, vec = run_option_lockstep(
         {"seal_reads_g1": 1}, {}, kw, lambda t: {150: 3, 400: 2}.get(t, 0)
     )
@@ -137,9 +153,30 @@ def test_single_and_vector_env_agree_and_the_option_changes_the_episode() -> Non
     vec.close()
 
 
-def test_refused_with_the_seals_move_and_out_of_range() -> None:
-    with pytest.raises(ValueError, match="seal_reads_g1"):
-        Scenario(seal_reads_g1=1, rejuvenation="resample_move_both")
+def test_with_the_seals_move_its_history_keeps_g1_and_replays_the_filter() -> None:
+    """With ``rejuvenation="resample_move_both"`` the seal's history holds G1 data (table: the
+    learning features' count + 2) and a belief row of G1's effect at the seal's fitting and
+    at the spring pair's (N(0, 1)); every seal particle's log-likelihood and effect beliefs
+    are its history's replay (moves made). Without G1's data in the replay they are not."""
+    env = _episode(200, seal_reads_g1=1)
+    rows = _rows(env)
+    n_learn = env.setup.filters.learn_part.size
+    data = rows[rows[:, H_TABLE] != SET_EFFECT]
+    assert set(data[:, H_TABLE]) == {1.0, float(n_learn + 1), float(n_learn + 2)}
+    belief = rows[rows[:, H_TABLE] == SET_EFFECT]
+    np.testing.assert_array_equal(np.sort(belief[:3, H_AUX]), [0.0, 2.0, 4.0])
+    np.testing.assert_array_equal(belief[3:, [H_Y, H_RUNS]], [[0.0, 1.0]] * 3)
+    lam = _assert_the_replay_is_the_filters(env)
+    a = env.batch.a
+    history, n = a["history"], a["history_n"]
+    kept = rows[rows[:, H_TABLE] != n_learn + 2]
+    history[0, 1, : kept.shape[0]] = kept
+    n[0, 1] = kept.shape[0]
+    wrong, _ = _replay(env, lam)
+    assert np.max(np.abs(wrong - a["loglik"][0, 1])) > 0.1
+
+
+def test_out_of_range_is_refused() -> None:
     for bad in (-1, 2, 0.5):
         with pytest.raises(ValueError, match="seal_reads_g1"):
             Scenario(seal_reads_g1=bad)

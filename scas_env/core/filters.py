@@ -84,7 +84,8 @@ class FilterModel(NamedTuple):
     feature, its filter and the index of its effect's mean in that filter's ``aux``;
     ``learn_stack``, ``learn_own``, ``learn_other``: its surrogate (mean, unit std, run std)
     tables with the own part's severity on axis 1 and their grids (fractions);
-    ``ground_*``: the same for G1 (spring) and G3 (seal); ``resample``: (threshold N_eff,
+    ``ground_*``: the same for G1 (spring), G3 (seal) and G1 read by the seal
+    (``Scenario.seal_reads_g1``; its ``ground_aux`` -1: off); ``resample``: (threshold N_eff,
     bandwidth h, kernel variance kappa, gaussian kernel, shrink); ``move``: the filters'
     resample-move (:class:`scas_env.core.rejuvenation.MoveModel`); ``cross_inflation``: the
     factor on the variance the other part's estimate adds to a feature's likelihood, per
@@ -93,9 +94,6 @@ class FilterModel(NamedTuple):
     (``Scenario.seal_cross_persistence``; row -1: off): each seal particle carries in
     ``aux[row]`` a standard-normal offset of the spring estimate, AR(1) with ``rho`` per
     flight, and reads its features at its own spring value instead of adding a variance.
-    ``seal_g1``: ``(row, stack, own, other)``, G1 read by the seal filter too
-    (``Scenario.seal_reads_g1``; row -1: off): its effect's belief in the seal's ``aux[row]``
-    and ``aux[row + 1]``, its tables with the seal's wear on axis 1.
     """
 
     process: tuple
@@ -118,7 +116,6 @@ class FilterModel(NamedTuple):
     move: MoveModel
     cross_inflation: tuple
     persistence: tuple
-    seal_g1: tuple
 
 
 @njit(cache=True, error_model="numpy")
@@ -401,11 +398,11 @@ def test_row(e: int, g1: float, g3: float, bank: tuple, pending: np.ndarray,
                 model.ground_own[1], model.ground_other[1], bank, status, work, model, handle,
                 model.learn_part.size + 1,
             )  # fmt: skip
-        row = model.seal_g1[0]
-        if row >= 0 and status[e] == 0:  # G1 into the seal filter, at the same moments
+        if model.ground_aux[2] >= 0 and status[e] == 0:  # G1 into the seal, the same moments
             _effect_update(
-                e, 1, row, g1, 1.0, moments, model.seal_g1[1], model.seal_g1[2],
-                model.seal_g1[3], bank, status, work, model, handle, model.learn_part.size + 2,
+                e, 1, model.ground_aux[2], g1, 1.0, moments, model.ground_stack[2],
+                model.ground_own[2], model.ground_other[2], bank, status, work, model, handle,
+                model.learn_part.size + 2,
             )  # fmt: skip
         corrected = (c0, c1)
     return corrected

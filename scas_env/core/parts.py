@@ -51,7 +51,6 @@ from scas_env.core.flight import (
 )
 from scas_env.core.rejuvenation import record_effect, restart
 from scas_env.core.setup import (
-    EFFECT_FEATURES,
     FLIGHT_FEATURES,
     GROUND_FEATURES,
     MAX_LIFE_FLIGHTS,
@@ -452,7 +451,7 @@ def _spring_errors_kept(
 def _record_seal_effects(batch: ActuatorState, e: int) -> None:
     """Row ``e``'s seal filter's installation-effect beliefs (one Gaussian per feature, the
     same for every particle) appended to its history as belief rows."""
-    n_slots = len(EFFECT_FEATURES[1])
+    n_slots = effect_rows(batch.setup.scenario) // 2  # with Scenario.seal_reads_g1, G1's
     batch.ensure_history(np.array([e], dtype=np.int64), n_slots)
     a = batch.a
     for j in range(n_slots):

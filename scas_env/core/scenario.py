@@ -249,12 +249,6 @@ class Scenario(Validated):
                 f"Scenario.seal_cross_persistence = {self.seal_cross_persistence!r} needs the "
                 "seal filter without resample-move (rejuvenation 'none' or 'resample_move')"
             )
-        if self.seal_reads_g1 and self.rejuvenation == "resample_move_both":
-            raise ValueError(
-                f"Scenario.seal_reads_g1 = {self.seal_reads_g1!r} needs the seal filter "
-                "without resample-move (rejuvenation 'none' or 'resample_move'): its "
-                "history does not keep a G1 datum"
-            )
         if not (self.crack_active or self.wear_active):
             raise ValueError("Scenario: at least one of crack_active, wear_active must be 1")
         if self.rejuvenation != "none":

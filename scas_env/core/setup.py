@@ -404,6 +404,7 @@ def _filter_model(
     }
     learn = tuple(LEARNING_FEATURES)
     n = int(s.n_particles)
+    seal_g1 = effect_tables(sur, "G1", "seal")  # Scenario.seal_reads_g1
 
     def aux_of(f: str) -> int:  # the effect's mean in its filter's aux (the variance next)
         part = 0 if f in EFFECT_FEATURES[0] else 1
@@ -428,17 +429,19 @@ def _filter_model(
         learn_other=tuple(tables[f][2] for f in learn),
         noise_scale=float(s.filter_noise_scale),
         resample=(0.5 * n, regularisation_bandwidth(n, "epanechnikov"), _KAPPA, False, True),
-        ground_aux=np.array([aux_of(f) for f in GROUND_FEATURES], dtype=np.int64),
-        ground_stack=tuple(tables[f][0] for f in GROUND_FEATURES),
-        ground_own=tuple(tables[f][1] for f in GROUND_FEATURES),
-        ground_other=tuple(tables[f][2] for f in GROUND_FEATURES),
+        ground_aux=np.array(
+            [*(aux_of(f) for f in GROUND_FEATURES), EFFECT_ROWS if s.seal_reads_g1 else -1],
+            dtype=np.int64,
+        ),
+        ground_stack=(*(tables[f][0] for f in GROUND_FEATURES), seal_g1[0]),
+        ground_own=(*(tables[f][1] for f in GROUND_FEATURES), seal_g1[1]),
+        ground_other=(*(tables[f][2] for f in GROUND_FEATURES), seal_g1[2]),
         move=_move_model(params, s, cal),
         cross_inflation=(
             float(s.cross_variance_inflation),
             float(s.seal_cross_variance_inflation or s.cross_variance_inflation),
         ),
         persistence=(float(s.seal_cross_persistence), persistence_row(s)),
-        seal_g1=(EFFECT_ROWS if s.seal_reads_g1 else -1, *effect_tables(sur, "G1", "seal")),
     )
 
 
