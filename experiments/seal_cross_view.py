@@ -2,8 +2,9 @@
 "Beliefs"): the posterior of the seal's log wear multiplier on a grid, its history read at
 the spring filter's means as it recorded them, along a subset of the spring's particles
 (systematic positions of the weights, no draw), along all of them (weighted), and along all
-of them with the spring filter's own data (I8 batch means, G1 tests) read for the seal too;
-and how strongly each test feature depends on the other part in the filters' tables.
+of them with the spring filter's own data (I8 batch means, G1 tests) read for the seal too
+(G1 also with the spring's weights as they are: counted twice); and how strongly each test
+feature depends on the other part in the filters' tables.
 
 Each spring particle's path is its noise-free crack back at every datum,
 ``D^-1(D(x_i) - theta_i s)`` (``s`` flights since the datum; first lives, both parts fitted
@@ -201,7 +202,8 @@ def readings(seed: int, flights: int, paths: int = 16,
     history read at the recorded means, along ``paths`` spring particles, along all, and
     along all with the spring's own data (:func:`with_spring_features`: I8 and G1, G1,
     I8), the paths then weighted by :func:`without_own_terms` so that those data count
-    once. ``preset``: a key of :data:`PRESETS`."""
+    once, and with G1 along the spring's weights as they are ("+ G1 twice").
+    ``preset``: a key of :data:`PRESETS`."""
     scenario, policy = PRESETS[preset]
     env = ScasMaintenanceEnv(**scenario)
     env.reset(seed=seed)
@@ -228,6 +230,8 @@ def readings(seed: int, flights: int, paths: int = 16,
     for name, features in (("+ I8, G1", ("I8", "G1")), ("+ G1", ("G1",)), ("+ I8", ("I8",))):
         joint = with_spring_features(env, prepared, cols_all, ints_all, every, spring, features)
         out[name] = seal_density(env, *joint, without_own_terms(env, spring, features))
+        if features == ("G1",):  # the cloud's weights as they are: G1 counted twice
+            out["+ G1 twice"] = seal_density(env, *joint, weights)
     out["truth"] = np.array([math.log(float(env.batch.a["wmult"][0]))])
     return out
 

@@ -90,10 +90,8 @@ class ActuatorBatch(ActuatorState):
             a["wasted_now"][rows[0]] = 0.0
         else:
             a["wasted_now"][rows] = 0.0
-        if self.keeps_history:  # a test (2 data, 3 with seal_reads_g1), one per flight, a
-            # replacement's batch
-            extra = int(st.scenario.seal_reads_g1)
-            self.ensure_history(rows, 3 + extra + int(a["flights"][rows].max(initial=0)))
+        if self.keeps_history:  # a test (2 data), one per flight, a replacement's batch
+            self.ensure_history(rows, 3 + int(a["flights"][rows].max(initial=0)))
         plan = (actions, a["flights"], a["group"], a["mtype"], a["flight_value"])
         if st.physics:
             self._physics_slot(rows, plan)

@@ -12,8 +12,8 @@ Rao-Blackwellised, :func:`prognostics.measurement.random_effect_update`).
   mean, resampled where the weights degenerated; the batch is emptied.
 * :func:`test_row`: a pre-flight test's G1 (spring) and G3 (seal): the batch under way learnt
   from first, both filters predicted over the flights pending, conditioned on survival and
-  weighted (with ``Scenario.seal_reads_g1`` the seal filter weighted by G1 too); returns
-  both features corrected to a healthy new installation (what the detectors read).
+  weighted; returns both features corrected to a healthy new installation (what the
+  detectors read).
 * :func:`refresh_row`: both parts' RUL tables (:mod:`prognostics.rul_ageing`) of a row's
   clouds.
 
@@ -84,8 +84,7 @@ class FilterModel(NamedTuple):
     feature, its filter and the index of its effect's mean in that filter's ``aux``;
     ``learn_stack``, ``learn_own``, ``learn_other``: its surrogate (mean, unit std, run std)
     tables with the own part's severity on axis 1 and their grids (fractions);
-    ``ground_*``: the same for G1 (spring), G3 (seal) and G1 read by the seal
-    (``Scenario.seal_reads_g1``; its ``ground_aux`` -1: off); ``resample``: (threshold N_eff,
+    ``ground_*``: the same for G1 (spring) and G3 (seal); ``resample``: (threshold N_eff,
     bandwidth h, kernel variance kappa, gaussian kernel, shrink); ``move``: the filters'
     resample-move (:class:`scas_env.core.rejuvenation.MoveModel`); ``cross_inflation``: the
     factor on the variance the other part's estimate adds to a feature's likelihood, per
@@ -397,12 +396,6 @@ def test_row(e: int, g1: float, g3: float, bank: tuple, pending: np.ndarray,
                 e, 1, model.ground_aux[1], g3, 1.0, moments, model.ground_stack[1],
                 model.ground_own[1], model.ground_other[1], bank, status, work, model, handle,
                 model.learn_part.size + 1,
-            )  # fmt: skip
-        if model.ground_aux[2] >= 0 and status[e] == 0:  # G1 into the seal, the same moments
-            _effect_update(
-                e, 1, model.ground_aux[2], g1, 1.0, moments, model.ground_stack[2],
-                model.ground_own[2], model.ground_other[2], bank, status, work, model, handle,
-                model.learn_part.size + 2,
             )  # fmt: skip
         corrected = (c0, c1)
     return corrected

@@ -51,12 +51,12 @@ from scas_env.core.flight import (
 )
 from scas_env.core.rejuvenation import record_effect, restart
 from scas_env.core.setup import (
+    EFFECT_FEATURES,
     FLIGHT_FEATURES,
     GROUND_FEATURES,
     MAX_LIFE_FLIGHTS,
     PARTS,
     UPCOMING_PARTS,
-    effect_rows,
     lognormal_sigma,
 )
 from scas_env.core.state import ActuatorState, PhysicsRow
@@ -396,9 +396,9 @@ def reset_filter(batch: ActuatorState, e: int, part: str) -> None:
         _new_spring_errors(batch, e, rng)
     else:
         w = a["w"][e, 1]
-        kept = [  # with Scenario.seal_reads_g1, G1's effect too
+        kept = [
             _mixture_moments(w, a["aux"][e, 1, k], a["aux"][e, 1, k + 1])
-            for k in range(0, effect_rows(st.scenario), 2)
+            for k in range(0, 2 * len(EFFECT_FEATURES[1]), 2)
         ]
         errors = _spring_errors_kept(batch, e, rng)
         _reset_cloud(batch, e, p, 0.0, _lognormal(rng, lognormal_sigma(st.params, part), n))
@@ -451,7 +451,7 @@ def _spring_errors_kept(
 def _record_seal_effects(batch: ActuatorState, e: int) -> None:
     """Row ``e``'s seal filter's installation-effect beliefs (one Gaussian per feature, the
     same for every particle) appended to its history as belief rows."""
-    n_slots = effect_rows(batch.setup.scenario) // 2  # with Scenario.seal_reads_g1, G1's
+    n_slots = len(EFFECT_FEATURES[1])
     batch.ensure_history(np.array([e], dtype=np.int64), n_slots)
     a = batch.a
     for j in range(n_slots):

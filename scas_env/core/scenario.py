@@ -205,17 +205,6 @@ class Scenario(Validated):
         "plus that error (its variance not added, seal_cross_variance_inflation unused); 0: "
         "off (the variance factor)",
     )
-    seal_reads_g1: float = param(
-        0,
-        "bool",
-        lo=0,
-        hi=1,
-        integer=True,
-        source="the seal filter learns from the pre-flight test's G1 too (the spring's test "
-        "feature, whose mean moves with the seal's wear): read along the seal particle's wear "
-        "at the spring's estimate as the seal reads G3, with a belief of G1's installation "
-        "effect of its own (docs/beliefs.md); 0: G1 feeds the spring filter only",
-    )
     rejuvenation_steps: float = param(
         1,
         "MH steps",

@@ -404,7 +404,6 @@ def _filter_model(
     }
     learn = tuple(LEARNING_FEATURES)
     n = int(s.n_particles)
-    seal_g1 = effect_tables(sur, "G1", "seal")  # Scenario.seal_reads_g1
 
     def aux_of(f: str) -> int:  # the effect's mean in its filter's aux (the variance next)
         part = 0 if f in EFFECT_FEATURES[0] else 1
@@ -429,13 +428,10 @@ def _filter_model(
         learn_other=tuple(tables[f][2] for f in learn),
         noise_scale=float(s.filter_noise_scale),
         resample=(0.5 * n, regularisation_bandwidth(n, "epanechnikov"), _KAPPA, False, True),
-        ground_aux=np.array(
-            [*(aux_of(f) for f in GROUND_FEATURES), EFFECT_ROWS if s.seal_reads_g1 else -1],
-            dtype=np.int64,
-        ),
-        ground_stack=(*(tables[f][0] for f in GROUND_FEATURES), seal_g1[0]),
-        ground_own=(*(tables[f][1] for f in GROUND_FEATURES), seal_g1[1]),
-        ground_other=(*(tables[f][2] for f in GROUND_FEATURES), seal_g1[2]),
+        ground_aux=np.array([aux_of(f) for f in GROUND_FEATURES], dtype=np.int64),
+        ground_stack=tuple(tables[f][0] for f in GROUND_FEATURES),
+        ground_own=tuple(tables[f][1] for f in GROUND_FEATURES),
+        ground_other=tuple(tables[f][2] for f in GROUND_FEATURES),
         move=_move_model(params, s, cal),
         cross_inflation=(
             float(s.cross_variance_inflation),
@@ -445,17 +441,10 @@ def _filter_model(
     )
 
 
-def effect_rows(s: Scenario) -> int:
-    """A filter's aux rows of installation effects (a mean and a variance per feature):
-    :data:`EFFECT_ROWS`, and with ``Scenario.seal_reads_g1`` two more, the seal's belief of
-    G1's effect (unused in the spring filter)."""
-    return EFFECT_ROWS + 2 * int(s.seal_reads_g1)
-
-
 def persistence_row(s: Scenario) -> int:
     """The aux row of the seal particles' spring-error offsets (after the installation
     effects' rows), -1 when ``Scenario.seal_cross_persistence`` is 0."""
-    return effect_rows(s) if s.seal_cross_persistence > 0 else -1
+    return EFFECT_ROWS if s.seal_cross_persistence > 0 else -1
 
 
 #: random-walk scale over the posterior's sd in d dimensions (Roberts, Gelman & Gilks 1997:
@@ -527,7 +516,6 @@ __all__ = [
     "DetectorModel",
     "Setup",
     "WorldModel",
-    "effect_rows",
     "effect_tables",
     "lognormal_sigma",
     "read_only",

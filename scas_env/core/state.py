@@ -26,12 +26,12 @@ import numpy as np
 from prognostics.normals import handle_of
 from scas_env.core.rejuvenation import HISTORY_COLUMNS
 from scas_env.core.setup import (
+    EFFECT_ROWS,
     FLIGHT_FEATURES,
     GROUND_FEATURES,
     LEARNING_FEATURES,
     UPCOMING_PARTS,
     Setup,
-    effect_rows,
 )
 
 #: data each of a row's histories holds at first with ``Scenario.rejuvenation`` on (it
@@ -93,7 +93,7 @@ class ActuatorState:
     def _columns(setup: Setup, n: int) -> dict[str, np.ndarray]:
         i8, b = np.int64, np.bool_
         p = setup.n_particles
-        n_aux = effect_rows(setup.scenario) + (setup.filters.persistence[1] >= 0)
+        n_aux = EFFECT_ROWS + (setup.filters.persistence[1] >= 0)
         n_feat = len(FLIGHT_FEATURES) + len(GROUND_FEATURES)
         cap = HISTORY_START if setup.scenario.rejuvenation != "none" else 0
         return {
