@@ -296,16 +296,7 @@ def joint_lives(
     ``stage``, ``age``), the ``truth`` (info RUL), the filter's belief (``pf_*``), the joint
     reference's (``ref_*``, ``ref_ess``) and that of the reference knowing the other part's
     true severity (``known_*``, on its own part's data)."""
-    check_joint_env(env)
-    traces = run_episode(env, policy, seed)
-    events, end = first_life_events(env)
-    tables = {p: trace_table([traces[p]]) for p in PARTS}
-    picks = sorted(
-        (float(tables[p]["age"][r]), p, s, r)
-        for p in PARTS
-        for s, r in stage_records(tables[p], 0, stages).items()
-        if tables[p]["age"][r] < end
-    )
+    picks, tables, events = first_life_records(env, policy, seed, stages)
     if not picks:
         return []
     sc = env.scenario
@@ -327,12 +318,59 @@ def joint_lives(
         k = refined_belief(known[part], age, low_q, horizon, min_ess)
         rows.append(
             {
-                "part": part, "policy": policy, "seed": seed, "life": 0, "stage": stage,
-                "age": age, **record_columns(tables[part], r, horizon),
+                **record_row(tables[part], r, part, policy, seed, stage, horizon),
                 **belief_columns("ref", b), **belief_columns("known", k),
             }
         )  # fmt: skip
     return rows
+
+
+def first_life_records(
+    env: RecordingEnv, policy: str, seed: int, stages: Sequence[float]
+) -> tuple[list[tuple[float, str, float, int]], dict[str, dict[str, np.ndarray]], list]:
+    """One episode of ``policy`` (seed ``seed``) in ``env``: the records of each part's
+    first life at ``stages`` taken while both parts are in their first lives, in order of
+    age, as ``(age, part, stage, row of its table)``; both parts' belief tables
+    (:func:`~experiments.belief_calibration.trace_table`); the paired events
+    (:func:`first_life_events`)."""
+    check_joint_env(env)
+    traces = run_episode(env, policy, seed)
+    events, end = first_life_events(env)
+    tables = {p: trace_table([traces[p]]) for p in PARTS}
+    picks = sorted(
+        (float(tables[p]["age"][r]), p, s, r)
+        for p in PARTS
+        for s, r in stage_records(tables[p], 0, stages).items()
+        if tables[p]["age"][r] < end
+    )
+    return picks, tables, events
+
+
+def record_row(
+    table: dict[str, np.ndarray], r: int, part: str, policy: str, seed: int, stage: float,
+    horizon: float,
+) -> dict[str, Any]:  # fmt: skip
+    """A first-life study row's record: ``part``, ``policy``, ``seed``, ``life`` 0,
+    ``stage``, ``age`` and :func:`~experiments.reference_posterior.record_columns`."""
+    return {"part": part, "policy": policy, "seed": seed, "life": 0, "stage": stage,
+            "age": float(table["age"][r]), **record_columns(table, r, horizon)}  # fmt: skip
+
+
+def first_life_env(
+    episodes: int,
+    seed: int,
+    policies: Sequence[str],
+    scenario_fields: Mapping[str, Any] | None,
+    stages: Sequence[float],
+) -> RecordingEnv:
+    """The recording env of a first-life study of ``scenario_fields``, the study's
+    arguments checked (ValueError naming the value)."""
+    check_episodes(episodes, seed, policies)
+    if not stages or any(not 0.0 < s < 1.0 for s in stages):
+        raise ValueError(f"stages = {list(stages)!r} must be fractions of life in (0, 1)")
+    env = RecordingEnv(scenario=Scenario.from_dict(dict(scenario_fields or {})))
+    check_joint_env(env)
+    return env
 
 
 def run_joint_study(
@@ -348,12 +386,8 @@ def run_joint_study(
 ) -> list[dict[str, Any]]:
     """Rows of :func:`joint_lives` over seeds ``seed .. seed + episodes - 1`` per policy;
     the Sobol scrambling draws from ``SeedSequence(seed)``'s children."""
-    check_episodes(episodes, seed, policies)
     check_points(log2_points, min_ess)
-    if not stages or any(not 0.0 < s < 1.0 for s in stages):
-        raise ValueError(f"stages = {list(stages)!r} must be fractions of life in (0, 1)")
-    env = RecordingEnv(scenario=Scenario.from_dict(dict(scenario_fields or {})))
-    check_joint_env(env)
+    env = first_life_env(episodes, seed, policies, scenario_fields, stages)
     rows: list[dict[str, Any]] = []
     for policy, episode_seed, rng in episode_streams(
         policies, episodes, seed, "joint reference", progress

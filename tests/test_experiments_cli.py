@@ -36,6 +36,7 @@ COMMANDS = (
     "fleet_figures",
     "go_no_go",
     "integrator_speed",
+    "joint_filter",
     "joint_reference",
     "paper.campaign",
     "paper.demo",
