@@ -57,6 +57,7 @@ from experiments.reference_posterior import (
     episode_streams,
 )
 from prognostics.resampling import systematic_resample
+from scas_env.core.setup import PARTS
 
 #: particles and Metropolis-Hastings steps per resampling by default
 DEFAULT_PARTICLES, DEFAULT_STEPS = 500, 2
@@ -79,6 +80,8 @@ class JointParticleFilter(JointPosterior):
     ) -> None:
         if n_particles < 2 or steps < 1:
             raise ValueError(f"n_particles = {n_particles}, steps = {steps}: need >= 2 and >= 1")
+        if (spring.part, seal.part) != PARTS or (spring.dims, seal.dims) != (2, 1):
+            raise ValueError("JointParticleFilter needs the spring's model and then the seal's")
         self.spring, self.seal, self.rng, self.steps = spring, seal, rng, steps
         self.history: list[tuple[int, float, float, np.ndarray]] = []
         u = rng.random((n_particles, 3))
@@ -99,6 +102,15 @@ class JointParticleFilter(JointPosterior):
         w = self.weights(age)
         if 1.0 / np.sum(w * w) < 0.5 * w.size:
             self.resample_move(age, w)
+
+    def refine(self, age: float) -> None:
+        """Not for a filter: its particles move by :meth:`resample_move`."""
+        raise NotImplementedError("a JointParticleFilter moves by resample_move, not refine")
+
+    @property
+    def acceptance(self) -> float:
+        """Share of the moves' proposals accepted so far (NaN before the first move)."""
+        return self.tally[1] / self.tally[0] if self.tally[0] else math.nan
 
     def _coords(self) -> np.ndarray:
         return np.column_stack([self.x0, self.log_c, self.log_w_theta])
@@ -164,7 +176,8 @@ def filter_lives(
     """One episode: per part and stage of its first life recorded while both parts are in
     their first lives (the records of :func:`experiments.joint_reference.joint_lives`), a
     row with the record, the truth, the environment filter's belief (``pf_*``) and the joint
-    particle filter's (``ibis_*``; ``ibis_accept``: its moves' acceptance rate so far)."""
+    particle filter's (``ibis_*``; ``ibis_accept``: its moves' acceptance rate so far, NaN
+    before the first move)."""
     picks, tables, events = first_life_records(env, policy, seed, stages)
     if not picks:
         return []
@@ -185,7 +198,7 @@ def filter_lives(
             {
                 **record_row(tables[part], r, part, policy, seed, stage, horizon),
                 **belief_columns("ibis", b),
-                "ibis_accept": jpf.tally[1] / max(jpf.tally[0], 1),
+                "ibis_accept": jpf.acceptance,
             }
         )  # fmt: skip
     return rows
@@ -219,7 +232,8 @@ def paired_rows(
 ) -> list[dict[str, Any]]:
     """The joint filter's rows joined to a joint reference run's on (part, policy, seed,
     stage), the record's age checked: ``pf_*`` the joint filter, ``ref_*`` exact Bayes,
-    ``policy`` read as ``"<part> <policy>"`` (for :func:`stage_table`)."""
+    ``env_*`` the environment's filters, ``policy`` read as ``"<part> <policy>"`` (for
+    :func:`stage_table`)."""
     ref = {(r["part"], r["policy"], int(r["seed"]), float(r["stage"])): r for r in joint}
     out = []
     for r in mine:
@@ -231,6 +245,7 @@ def paired_rows(
             raise ValueError(f"record {key}: age or truth differ from the joint reference's")
         row = {k: v for k, v in j.items() if not k.startswith(("pf_", "known_"))}
         row.update({"pf_" + k[5:]: v for k, v in r.items() if k.startswith("ibis_")})
+        row.update({"env_" + k[3:]: v for k, v in r.items() if k.startswith("pf_")})
         row["policy"] = f"{r['part']} {r['policy']}"
         out.append(row)
     return out
@@ -251,6 +266,35 @@ def against_filter(mine: Sequence[Mapping[str, Any]]) -> list[dict[str, Any]]:
     return out
 
 
+def plot_filters(table: Sequence[Mapping[str, Any]], path: Any, title: str = "") -> None:
+    """Coverage and undercut per stage, per part: the environment's filters, the joint
+    filter and exact Bayes over both parts, with their 95 % intervals, the targets shaded."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from experiments.reference_report import draw_stage_metric, shade_targets
+
+    suffix = " vs environment"
+    groups = sorted({str(r["policy"]) for r in table if not str(r["policy"]).endswith(suffix)})
+    fig, axes = plt.subplots(len(groups), 2, figsize=(10, 3.2 * len(groups)), squeeze=False)
+    for row, group in zip(axes, groups, strict=True):
+        for label, end, est, style in (("environment's filters", suffix, "ref", "s-"),
+                                       ("joint filter", "", "pf", "o-"),
+                                       ("exact Bayes, both parts", "", "ref", "^--")):  # fmt: skip
+            rs = [r for r in table if r["policy"] == group + end and r["stage"] != "all"]
+            for ax, name in zip(row, ("coverage", "undercut"), strict=True):
+                draw_stage_metric(ax, rs, est, name, style, label)
+        shade_targets(row[0], row[1], f"{group} ({title})" if title else group)
+    for ax in axes[-1]:
+        ax.set_xlabel("fraction of true life (first lives)")
+    axes[0, 1].legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """The command line (module docstring)."""
     from experiments.belief_common import add_study_options
@@ -269,6 +313,8 @@ def main(argv: Sequence[str] | None = None) -> int:
                         help="joint_reference results on the same seeds and scenario")  # fmt: skip
     add_study_options(parser, scenario_help="Scenario fields as JSON over the defaults")
     args = parser.parse_args(argv)
+    if args.out is not None and args.pair is None:
+        parser.error("--out writes the tables against exact Bayes: it needs --pair")
     if args.out is not None:
         check_out_dir(parser, args.out, args.overwrite)
     try:
@@ -280,22 +326,24 @@ def main(argv: Sequence[str] | None = None) -> int:
         )  # fmt: skip
     except (FileNotFoundError, TypeError, ValueError) as exc:
         parser.error(str(exc))
-    accept = np.mean([r["ibis_accept"] for r in rows]) if rows else float("nan")
+    accept = np.nanmean([r["ibis_accept"] for r in rows]) if rows else math.nan
     print(f"{len(rows)} records; mean acceptance of the moves {accept:.3f}")
+    versus_filter = stage_table(against_filter(rows), np.random.default_rng(args.seed))
     print("the joint filter (pf) against the environment's filters (ref):")
-    print(format_table(stage_table(against_filter(rows), np.random.default_rng(args.seed))))
+    print(format_table(versus_filter))
     if joint is None:
         return 0
     print("the joint filter (pf) against exact Bayes over both parts (ref):")
     paired = paired_rows(rows, joint)
     table = stage_table(paired, np.random.default_rng(args.seed))
     print(format_table(table))
+    table += [{**r, "policy": f"{r['policy']} vs environment"} for r in versus_filter]
     if args.out is not None:
         config = {"episodes": args.episodes, "seed": args.seed, "particles": args.particles,
                   "steps": args.steps, "scenario": dict(args.scenario),
                   "paired_with": [str(f) for f in args.pair]}  # fmt: skip
         for path in write_report(paired, table, config, args.out, overwrite=args.overwrite,
-                                 part="both parts, joint filter"):  # fmt: skip
+                                 part="joint filter", plot=plot_filters):  # fmt: skip
             print(path)
     return 0
 
