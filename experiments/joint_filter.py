@@ -348,5 +348,18 @@ def main(argv: Sequence[str] | None = None) -> int:
     return 0
 
 
+__all__ = [
+    "DEFAULT_PARTICLES",
+    "DEFAULT_STEPS",
+    "JointParticleFilter",
+    "against_filter",
+    "filter_lives",
+    "main",
+    "paired_rows",
+    "plot_filters",
+    "run_filter_study",
+]
+
+
 if __name__ == "__main__":
     raise SystemExit(main())

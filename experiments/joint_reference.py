@@ -544,11 +544,14 @@ def plot_joint(table: Sequence[Mapping[str, Any]], path: Path, title: str = "") 
 
 __all__ = [
     "JointPosterior",
+    "first_life_env",
     "first_life_events",
+    "first_life_records",
     "joint_lives",
     "joint_tables",
     "main",
     "plot_joint",
+    "record_row",
     "run_joint_study",
 ]
 
