@@ -39,6 +39,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping, Sequence
+from functools import partial
 from typing import Any
 
 import numpy as np
@@ -48,6 +49,7 @@ from experiments.joint_reference import (
     JointPosterior,
     first_life_env,
     first_life_records,
+    plot_joint,
     record_row,
 )
 from experiments.reference_model import PartModel
@@ -266,33 +268,12 @@ def against_filter(mine: Sequence[Mapping[str, Any]]) -> list[dict[str, Any]]:
     return out
 
 
-def plot_filters(table: Sequence[Mapping[str, Any]], path: Any, title: str = "") -> None:
-    """Coverage and undercut per stage, per part: the environment's filters, the joint
-    filter and exact Bayes over both parts, with their 95 % intervals, the targets shaded."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    from experiments.reference_report import draw_stage_metric, shade_targets
-
-    suffix = " vs environment"
-    groups = sorted({str(r["policy"]) for r in table if not str(r["policy"]).endswith(suffix)})
-    fig, axes = plt.subplots(len(groups), 2, figsize=(10, 3.2 * len(groups)), squeeze=False)
-    for row, group in zip(axes, groups, strict=True):
-        for label, end, est, style in (("environment's filters", suffix, "ref", "s-"),
-                                       ("joint filter", "", "pf", "o-"),
-                                       ("exact Bayes, both parts", "", "ref", "^--")):  # fmt: skip
-            rs = [r for r in table if r["policy"] == group + end and r["stage"] != "all"]
-            for ax, name in zip(row, ("coverage", "undercut"), strict=True):
-                draw_stage_metric(ax, rs, est, name, style, label)
-        shade_targets(row[0], row[1], f"{group} ({title})" if title else group)
-    for ax in axes[-1]:
-        ax.set_xlabel("fraction of true life (first lives)")
-    axes[0, 1].legend(fontsize=8)
-    fig.tight_layout()
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
+#: the curves of the study's plot (:func:`experiments.joint_reference.plot_joint`)
+FILTER_CURVES = (
+    ("environment's filters", " vs environment", "ref", "s-"),
+    ("joint filter", "", "pf", "o-"),
+    ("exact Bayes, both parts", "", "ref", "^--"),
+)
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -337,13 +318,14 @@ def main(argv: Sequence[str] | None = None) -> int:
     paired = paired_rows(rows, joint)
     table = stage_table(paired, np.random.default_rng(args.seed))
     print(format_table(table))
-    table += [{**r, "policy": f"{r['policy']} vs environment"} for r in versus_filter]
+    table += [{**r, "policy": f"{r['policy']}{FILTER_CURVES[0][1]}"} for r in versus_filter]
     if args.out is not None:
         config = {"episodes": args.episodes, "seed": args.seed, "particles": args.particles,
                   "steps": args.steps, "scenario": dict(args.scenario),
                   "paired_with": [str(f) for f in args.pair]}  # fmt: skip
         for path in write_report(paired, table, config, args.out, overwrite=args.overwrite,
-                                 part="joint filter", plot=plot_filters):  # fmt: skip
+                                 part="joint filter",
+                                 plot=partial(plot_joint, curves=FILTER_CURVES)):  # fmt: skip
             print(path)
     return 0
 
@@ -351,12 +333,12 @@ def main(argv: Sequence[str] | None = None) -> int:
 __all__ = [
     "DEFAULT_PARTICLES",
     "DEFAULT_STEPS",
+    "FILTER_CURVES",
     "JointParticleFilter",
     "against_filter",
     "filter_lives",
     "main",
     "paired_rows",
-    "plot_filters",
     "run_filter_study",
 ]
 

@@ -515,10 +515,16 @@ _CURVES = (
 )
 
 
-def plot_joint(table: Sequence[Mapping[str, Any]], path: Path, title: str = "") -> None:
+def plot_joint(
+    table: Sequence[Mapping[str, Any]],
+    path: Path,
+    title: str = "",
+    curves: Sequence[tuple[str, str, str, str]] = _CURVES,
+) -> None:
     """Coverage and undercut per stage of :func:`joint_tables`' table, per part and policy:
-    the filter, the reference knowing the other part and the joint one, with their 95 %
-    intervals and the targets shaded."""
+    each of ``curves`` (label, the rows' policy suffix, the estimator's columns, style;
+    default: the filter, the reference knowing the other part and the joint one) with its
+    95 % interval, the targets shaded."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -526,10 +532,11 @@ def plot_joint(table: Sequence[Mapping[str, Any]], path: Path, title: str = "") 
 
     from experiments.reference_report import draw_stage_metric, shade_targets
 
-    groups = sorted({str(r["policy"]) for r in table if not str(r["policy"]).endswith(" known")})
+    suffixes = tuple(c[1] for c in curves if c[1])
+    groups = sorted({str(r["policy"]) for r in table if not str(r["policy"]).endswith(suffixes)})
     fig, axes = plt.subplots(len(groups), 2, figsize=(10, 3.2 * len(groups)), squeeze=False)
     for row, group in zip(axes, groups, strict=True):
-        for label, suffix, est, style in _CURVES:
+        for label, suffix, est, style in curves:
             rs = [r for r in table if r["policy"] == group + suffix and r["stage"] != "all"]
             for ax, name in zip(row, ("coverage", "undercut"), strict=True):
                 draw_stage_metric(ax, rs, est, name, style, label)
