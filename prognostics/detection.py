@@ -16,9 +16,11 @@ Hyndman-Fan type 7: the q-quantile of n sorted values v_0..v_{n-1} is
 v_j + g (v_{j+1} - v_j), j + g = q (n - 1)), for the baseline and for the window alike.
 
 For i.i.d. healthy values the false-alarm probability per test of the default rule is
-tiny: the window's 5th percentile exceeds the baseline P95 only when about 19 of the
-20 values do (probability ~ 20 * 0.05^19). Detection therefore needs a sustained shift of
-most of the window past the baseline tail, which gives the detection delay on a ramp.
+tiny: the window's 5th percentile (``v_(0) + 0.95 (v_(1) - v_(0))``) exceeds the baseline
+P95 only when all 20 values do, or 19 do and the 20th lies just below: 3.7e-25 for Gaussian
+values and the baseline's P95 known exactly (by quadrature); in practice the error of the
+estimated P95 dominates it. Detection therefore needs a sustained shift of the whole window
+past the baseline tail, which gives the detection delay on a ramp.
 
 >>> det = PercentileDetector(DetectorConfig(window=3, fraction=0.5)).fit(np.arange(101.0))
 >>> det.thresholds.upper

@@ -422,7 +422,11 @@ def evaluate_predictions(
     al: dict[float, bool] = {}
     unscored: list[float] = []
     for lam in lams:
-        i = int(np.searchsorted(t, t[0] + lam * (eol - t[0]), side="left"))
+        # t_lambda a few ulps early: a prediction made at t_lambda (t = 3.15) is not passed
+        # over for its rounding (t_lambda = 3.1500000000000004)
+        t_lam = t[0] + lam * (eol - t[0])
+        slack = 4.0 * np.finfo(np.float64).eps * max(abs(t_lam), abs(eol))
+        i = int(np.searchsorted(t, t_lam - slack, side="left"))
         if i < t.size:
             al[float(lam)] = alpha_lambda_distribution(true_rul[i], samples[i], ws[i], alpha, beta)
         else:
@@ -532,7 +536,14 @@ def fit_risk_map(predicted: Any, outcome: Any) -> RiskMap:
     w = counts.astype(np.float64)
     fit = isotonic_regression(np.bincount(inverse, weights=y) / w, weights=w, increasing=True)
     starts = fit.blocks[:-1]
-    knots_x = np.add.reduceat(values * w, starts) / np.add.reduceat(w, starts)
+    knots_x = []
+    for a, b in zip(fit.blocks[:-1], fit.blocks[1:], strict=True):
+        # the block's weighted mean prediction as its first value plus the mean offset, kept
+        # in the block's range: (v w) / w can round past v (0.1 * 3 / 3 > 0.1) onto the next
+        # block's value, and the knots would not increase
+        v = values[a:b]
+        mean = float(v[0] + np.dot(w[a:b], v - v[0]) / w[a:b].sum())
+        knots_x.append(min(max(mean, float(v[0])), float(v[-1])))
     knots_y = np.clip(fit.x[starts], 0.0, 1.0)  # a mean of 0/1 shares, in [0, 1] up to rounding
     return RiskMap(tuple(knots_x), tuple(knots_y), int(p.size))
 

@@ -662,8 +662,11 @@ class ParticleFilter:
         return self._after_update()
 
     def _after_update(self) -> bool:
-        if not math.isfinite(self._ess):
-            raise FloatingPointError("particle weights degenerated (non-finite likelihoods)")
+        if not math.isfinite(self._ess):  # the weights are NaN now: unusable until a reset
+            self._ready = False
+            raise FloatingPointError(
+                "particle weights degenerated (non-finite likelihoods); call reset(x0, theta0)"
+            )
         if self._ess >= self.resample_threshold * self.n_particles:
             return False
         self._resample()

@@ -173,14 +173,18 @@ def _weighted_summary(
     for i in range(r.size):
         var += w[i] * (r[i] - mean) ** 2
     order = np.argsort(r)
-    cdf = 0.0
+    # a level counts as reached within the round-off of the running sum (n ulps of the
+    # total): an exact tie (equal weights, level * n whole) takes its own sample, as numpy's
+    # inverted CDF does, not the next one
+    slack = 2.0 * r.size * np.finfo(np.float64).eps * total
+    cum = 0.0
     j = 0
     for k in order:
-        cdf += w[k] / total
-        while j < levels.size and cdf >= levels[j]:
+        cum += w[k]
+        while j < levels.size and cum >= levels[j] * total - slack:
             quantiles[j] = r[k]
             j += 1
-    for jj in range(j, levels.size):  # round-off left the CDF just below a level near 1
+    for jj in range(j, levels.size):  # unreachable: the full sum meets every level <= 1
         quantiles[jj] = r[order[-1]]
     return 0, mean, math.sqrt(var / total), risk / total
 
@@ -196,8 +200,8 @@ def _summary_or_raise(
     """The kernel's quantiles, mean, std and risk, or ``ValueError``; ``moments=False``: the
     mean and std are not used (quantiles only), so their overflow is no error."""
     ra = np.ascontiguousarray(check.array(name, r, ndim=1, min_size=1))
-    check.weights("weights", w, ra.shape, like=name)  # checked; the kernel reads them as given
-    wa = np.ascontiguousarray(w, dtype=np.float64)
+    # checked, and rescaled if their sum overflows
+    wa = np.ascontiguousarray(check.weights("weights", w, ra.shape, like=name), dtype=np.float64)
     out = np.empty(levels.size)
     status, mean, std, risk = _weighted_summary(ra, wa, levels, horizon, out)
     if status == 1:

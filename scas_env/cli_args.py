@@ -18,9 +18,10 @@ argparse.ArgumentTypeError: '0' is not an integer >= 1
 from __future__ import annotations
 
 import argparse
+import functools
 import logging
 import sys
-from collections.abc import Iterable, Sequence
+from collections.abc import Callable, Iterable, Sequence
 from pathlib import Path
 from typing import Any, NamedTuple, NoReturn
 
@@ -52,6 +53,7 @@ __all__ = [
     "config_file",
     "configure_logging",
     "existing_file",
+    "keeps_results",
     "load_env_config",
     "load_world",
     "make_parser",
@@ -339,6 +341,24 @@ def check_out_dir(parser: argparse.ArgumentParser, path: str | Path, overwrite: 
     except ResultsFolderError as exc:
         parser.error(str(exc))
     return Path(path)
+
+
+def keeps_results(main: Callable[..., int]) -> Callable[..., int]:
+    """A command's ``main`` whose results were finished but kept beside a destination that
+    filled up while it ran (:class:`~scas_env.utils.results_folder.ResultsKeptElsewhereError`)
+    ends with its message on stderr and exit status 1, not a traceback."""
+
+    @functools.wraps(main)
+    def wrapped(argv: Sequence[str] | None = None) -> int:
+        from scas_env.utils.results_folder import ResultsKeptElsewhereError
+
+        try:
+            return main(argv)
+        except ResultsKeptElsewhereError as exc:
+            print(f"error: {exc}", file=sys.stderr)
+            return 1
+
+    return wrapped
 
 
 # --- logging and the numba notice -------------------------------------------------------

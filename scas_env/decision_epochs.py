@@ -173,7 +173,10 @@ def delegate_actions(delegate: Any, obs: np.ndarray) -> np.ndarray:
 
 
 def _check_ks(ks: Sequence[int]) -> tuple[int, ...]:
-    out = tuple(ks)
+    try:
+        out = tuple(ks)
+    except TypeError:  # not a sequence: the message below names it
+        out = ()
     if (
         not out
         or any(

@@ -190,6 +190,8 @@ class DecisionEpochsVectorEnv(VectorEnv):
 
     def action_masks(self) -> np.ndarray:
         """Valid actions of every actuator now (bool, ``(N, n_maintenance * len(ks))``)."""
+        if not self.inner._started:
+            raise RuntimeError("call reset() before action_masks()")
         a = self.inner.a
         m = maintenance_mask(a["downtime"], a["part_age"][:, 0], a["part_age"][:, 1])
         if self.delegate is not None:

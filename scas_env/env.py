@@ -161,7 +161,9 @@ class ScasMaintenanceEnv(gym.Env):
     Between updates the RUL entries are those of the last update aged by the flights flown
     since. Feature values before the first flight or test are the healthy surrogate means.
     RUL entries saturate at ``rul_cap_flights``; feature entries at their bounds (the raw
-    values are in ``info["features"]``). ``"features"``: entries 0-8 and 15-19 (no filter).
+    values are in ``info["features"]``); ages at ``episode_slots`` (an ``"in_service"``
+    part older than that at reset reads as the bound until it is replaced). ``"features"``:
+    entries 0-8 and 15-19 (no filter).
     ``"state"``: the truth (an oracle's view): crack fraction of critical, wear fraction,
     each part's remaining life, spring age, seal age, downtime, then the whole lives of the
     next three springs and seals the episode will fit. ``"dict"``: a ``Dict`` of all groups.
@@ -364,11 +366,17 @@ class ScasMaintenanceEnv(gym.Env):
                 f"the episode was truncated at slot {self.slot} (episode_slots = "
                 f"{self.setup.scenario.episode_slots}): call reset() before step()"
             )
-        if not (type(action) in _PLAIN_INTS and 0 <= action < 4) and not (
-            isinstance(action, np.integer | np.ndarray)
-            and np.ndim(action) == 0
-            and np.asarray(action).dtype.kind in "iu"  # not timedelta64 (a numpy integer)
-            and 0 <= action < 4
+        if (
+            not (type(action) in _PLAIN_INTS and 0 <= action < 4)
+            and not (
+                isinstance(action, np.integer | np.ndarray)
+                and np.ndim(action) == 0
+                and np.asarray(action).dtype.kind in "iu"  # not timedelta64 (a numpy integer)
+                and 0 <= action < 4
+            )
+            and not (  # an int subclass (IntEnum), as Discrete.contains accepts; not a bool
+                isinstance(action, int) and not isinstance(action, bool) and 0 <= action < 4
+            )
         ):
             raise ValueError(f"action = {action!r} is not in Discrete(4): {ACTION_NAMES}")
         self._action[0] = action

@@ -73,7 +73,7 @@ def make_fleet_setup(
             f"by the env's obs_mode= keyword (one of 'features+rul', 'state', 'dict'; given "
             f"{obs_mode!r}); leave scenario.obs_mode at its default"
         )
-    # the observation's bounds of ages and test age: the episode's flights
+    # the observation's bounds of ages and test age: at least the episode's flights
     slots = int(config.episode_days) * int(config.flights_per_mission)
     base = base.replace(
         episode_slots=max(int(base.episode_slots), slots),
@@ -151,7 +151,9 @@ class ScasFleetEnv(gym.Env):
 
     ``Box`` (float32, documented bounds; ``env.unwrapped.obs_names`` names every entry and
     ``obs_units`` gives its unit: an actuator's slots are the fleet's days; the upper bounds
-    of part ages and test age are the episode's flights, a bound on its days too), the
+    of part ages and test age are ``max(scenario.episode_slots, the episode's flights)``, a
+    bound on its days too; a part fitted before the episode and older than that reads as the
+    bound until it is replaced), the
     groups of :mod:`scas_env.core.fleet.view`: per actuator the single env's 20 entries
     (latest features I2, I6, I7, I8, I9, G1, G3; test age; no-go; RUL mean, low quantile and
     risk of spring and seals; detector flags; part ages; downtime), per aircraft its status
@@ -347,7 +349,7 @@ def check_fleet_action(
         raise ValueError(f"{name} = {action!r} is not an array; it must be {allowed}") from None
     if arr.shape != space.shape:
         raise ValueError(f"{name} has shape {arr.shape} ({action!r}); it must be {allowed}")
-    if not np.issubdtype(arr.dtype, np.integer):
+    if arr.dtype.kind not in "iu":  # not timedelta64, which numpy counts as an integer
         raise ValueError(f"{name} has dtype {arr.dtype} ({action!r}); it must be {allowed}")
     bad = np.flatnonzero((arr < 0) | (arr >= space.nvec))
     if bad.size:

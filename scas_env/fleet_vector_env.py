@@ -102,7 +102,13 @@ class ScasFleetVectorEnv(VectorEnv):
         if not self._started:
             raise RuntimeError("call reset() before step()")
         n = self.num_envs
-        arr = np.asarray(actions)
+        try:
+            arr = np.asarray(actions)
+        except ValueError:  # ragged rows
+            raise ValueError(
+                f"actions must be {n} rows of {self.single_action_space.shape[0]} integers "
+                "(one per fleet); its rows differ in length"
+            ) from None
         if arr.shape[:1] != (n,):
             raise ValueError(f"actions must have {n} rows (one per fleet), got {arr.shape}")
         for b in range(n):

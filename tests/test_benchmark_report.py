@@ -116,14 +116,15 @@ def interval_cell(iv: Mapping[str, float], decimals: int) -> str:
 
 def paired_cell(iv: Mapping[str, float], decimals: int) -> str:
     """A paired-difference cell: ``mean ± half-width (MDD m)``, the half-width that of
-    ``[low, high]``; the mean alone without an interval; ``-`` without a mean."""
+    ``[low, high]``, ``n/a`` for an MDD the differences cannot estimate (no spread); the
+    mean and ``(no interval, n = 1)`` for one pair; ``-`` without a mean."""
     if math.isnan(iv["mean"]):
         return "-"
     if math.isnan(iv["low"]):
-        return _num(iv["mean"], decimals)
+        return f"{_num(iv['mean'], decimals)} (no interval, n = {iv['n']})"
     half = 0.5 * (iv["high"] - iv["low"])
-    mean, mdd = _num(iv["mean"], decimals), _num(iv["mdd"], decimals)
-    return f"{mean} ± {_num(half, decimals)} (MDD {mdd})"
+    mdd = "n/a" if math.isnan(iv["mdd"]) else _num(iv["mdd"], decimals)
+    return f"{_num(iv['mean'], decimals)} ± {_num(half, decimals)} (MDD {mdd})"
 
 
 def expected_tables(
@@ -354,3 +355,19 @@ def test_fleet_rows_count_the_stock_outs_a_single_fleet_reports() -> None:
             done = terminated or truncated
         assert row["stock_outs"] == sum(info["stock_outs"].values())
     assert any(row["stock_outs"] > 0 for row in result.rows)  # the kits run out
+
+
+def test_one_pair_shows_no_interval_and_no_spread_no_mdd() -> None:
+    """One episode: a paired mean without its interval says so (it was a bare number under
+    a header promising intervals). No failure under either policy: the paired differences
+    have no spread, and the MDD is not estimable (it read 0, 'resolves anything')."""
+    one = run_benchmark(["preventive", "rul_risk"], episodes=1, slots=40, n_workers=1,
+                        progress=False)  # fmt: skip
+    paired = one.summary["paired_vs_reference"]["preventive"]["reward"]
+    assert paired["n"] == 1 and math.isnan(paired["low"])
+    assert f"{paired['mean']:,.0f} (no interval, n = 1)" in format_table(one.summary)
+    two = run_benchmark(["preventive", "rul_risk"], episodes=2, slots=40, n_workers=1,
+                        progress=False)  # fmt: skip
+    failures = two.summary["paired_vs_reference"]["preventive"]["failures_per_1000fh"]
+    assert failures["low"] == failures["high"] == 0.0 and math.isnan(failures["mdd"])
+    assert "(MDD n/a)" in format_table(two.summary)

@@ -740,6 +740,11 @@ def test_the_default_fleet_list_leaves_out_agents_that_do_not_fit(
             [*argv, "--policies", "fleet_naive,fleet_ppo", "--out", str(tmp_path / "b2")]
         )
     assert "error: policy 'fleet_ppo' cannot run on this scenario" in capsys.readouterr().err
+    with pytest.raises(SystemExit):  # a single actuator's rule: named, with the fleets' own
+        benchmark_cli.main([*argv, "--policies", "corrective", "--out", str(tmp_path / "b3")])
+    assert "policy 'corrective' cannot run on fleets (their policies: fleet_corrective" in (
+        capsys.readouterr().err
+    )
 
 
 def test_tune_and_value_fly_the_scenario_file_s_episode_length(tmp_path: Path) -> None:

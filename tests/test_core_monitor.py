@@ -21,7 +21,6 @@ from prognostics.degradation_models import linear_wear_model
 from prognostics.detection import DetectorConfig, PercentileDetector
 from prognostics.measurement import measurement_from_curve
 from prognostics.particle_filter import ParticleFilter, resample_if_degenerate
-from prognostics.rul import weighted_quantile
 from prognostics.rul_ageing import AgeingRul
 from scas_env.actuator.uncertainty import truncated_normal
 from scas_env.core.setup import FLIGHT_FEATURES, GROUND_FEATURES, lognormal_sigma
@@ -246,6 +245,17 @@ def _cloud_rul(env: ScasMaintenanceEnv, p: int) -> tuple[np.ndarray, np.ndarray]
     return np.maximum(cal.seal_critical_wear_m - x, 0.0) / (rate * theta), w
 
 
+def _table_quantile(r: np.ndarray, w: np.ndarray, level: float) -> float:
+    """The RUL tables' quantile convention (:mod:`prognostics.rul_ageing`): the first sorted
+    value whose prefix sum of ``w / sum(w)``, accumulated in order (numpy's cumsum), reaches
+    ``level``; at an exact tie round-off can take the next value, where
+    :func:`~prognostics.rul.weighted_quantile` takes the tied one."""
+    order = np.argsort(r, kind="stable")
+    cum = np.cumsum(w[order] / np.cumsum(w)[-1])  # the total, too, summed in order
+    reached = np.flatnonzero(cum >= level)
+    return float(r[order[reached[0] if reached.size else r.size - 1]])
+
+
 def test_rul_entries_are_the_clouds_rul_aged_by_the_flights_since() -> None:
     """``*_rul_mean``, ``*_rul_low`` and ``*_risk`` of the observation, at every slot:
     E[max(R - k, 0)], the weighted ``rul_quantile`` of R minus k, and P(R <= horizon + k)
@@ -264,7 +274,7 @@ def test_rul_entries_are_the_clouds_rul_aged_by_the_flights_since() -> None:
             r, w = _cloud_rul(env, p)
             k = float(a["pending"][0, p])
             mean = float(np.sum(w * np.maximum(r - k, 0.0)))
-            low = max(float(weighted_quantile(r, w, s.rul_quantile)) - k, 0.0)
+            low = max(_table_quantile(r, w, s.rul_quantile) - k, 0.0)
             risk = float(np.sum(w[r <= s.risk_horizon_flights + k]))
             got = [float(obs[names.index(f"{part}_{q}")]) for q in ("rul_mean", "rul_low", "risk")]
             cap = s.rul_cap_flights

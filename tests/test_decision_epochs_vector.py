@@ -274,6 +274,8 @@ def test_a_cut_before_the_horizon_stays_a_truncation() -> None:
 
 def test_vector_bad_actions_raise() -> None:
     venv = DecisionEpochsVectorEnv(2, episode_slots=10)
+    with pytest.raises(RuntimeError, match=r"call reset\(\) before action_masks"):
+        venv.action_masks()  # it returned masks of the unset state
     venv.reset(seed=0)
     for bad in ([0, 20], [0], [0.5, 1.0], [-1, 0], [True, False],
                 np.array([1, 2], dtype="m8")):  # fmt: skip
@@ -353,7 +355,7 @@ def test_the_sb3_adapter_reads_same_step_autoreset_as_enum_or_value(mode) -> Non
         assert infos[e]["terminal_observation"][-1] == 0.0 and obs[e][-1] == 40.0
 
 
-@pytest.mark.parametrize("ks", [(2**63,), (0,), (5, 5), (True,)])
+@pytest.mark.parametrize("ks", [(2**63,), (0,), (5, 5), (True,), 5, None])
 def test_bad_epoch_lengths_are_refused_alike_by_single_and_vector_envs(ks) -> None:
     """A k beyond any episode overflowed in the vector env and passed the single one."""
     from scas_env.decision_epochs import make_decision_epoch_env

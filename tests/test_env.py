@@ -4,6 +4,7 @@ determinism and copies, bad inputs, the reward's accounting and the episode's me
 from __future__ import annotations
 
 import copy
+import enum
 import pickle
 import warnings
 
@@ -230,10 +231,17 @@ def test_bad_actions_raise(action) -> None:
     assert env.slot == 0  # nothing happened
 
 
+class _Action(enum.IntEnum):
+    FLY, TEST = 0, 1
+
+
 @pytest.mark.parametrize(
-    "action", [1, np.int64(1), np.int32(1), np.uint8(1), np.uint64(1), np.array(1)], ids=repr
+    "action",
+    [1, np.int64(1), np.int32(1), np.uint8(1), np.uint64(1), np.array(1), _Action.TEST],
+    ids=repr,
 )
 def test_integer_actions_of_any_kind_are_accepted(action) -> None:
+    """Also an ``IntEnum`` member, which ``Discrete(4).contains`` accepts."""
     env = ScasMaintenanceEnv()
     env.reset(seed=0)
     *_, info = env.step(action)

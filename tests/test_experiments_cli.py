@@ -46,6 +46,7 @@ COMMANDS = (
     "paper.reproduction_presets",
     "preflight_study",
     "prognostics_speed",
+    "quantile_ties",
     "reference_posterior",
     "renewal",
     "risk_recalibration",

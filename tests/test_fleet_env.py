@@ -429,6 +429,7 @@ def test_a_failed_test_does_not_take_a_mission_from_a_free_aircraft() -> None:
         (np.r_[np.zeros(31, dtype=np.int64), -1], r"action\[31\] = -1"),
         ("fly", r"shape \(\)"),
         (None, r"must be 32 integers"),
+        (np.zeros(32, dtype="m8[D]"), r"dtype timedelta64"),  # a numpy "integer" too
     ],
 )
 def test_bad_actions_are_refused_before_any_work(action: Any, match: str) -> None:
@@ -450,11 +451,16 @@ def test_bad_vector_and_agent_actions_are_refused() -> None:
     bad[1, 4] = 9
     with pytest.raises(ValueError, match=r"actions\[1\]\[4\] = 9 \(aircraft 1's actuator 0"):
         venv.step(bad)
+    with pytest.raises(ValueError, match=r"2 rows of 12 integers .* differ in length"):
+        venv.step([[0] * 12, [0] * 11])
     assert (venv.fleet.day == 0).all()
     pytest.importorskip("pettingzoo")
     from scas_env.multiagent import fleet_v1
 
     env = fleet_v1.parallel_env(fleet=SMALL)
+    for call in (env.state, lambda: env.step({})):
+        with pytest.raises(RuntimeError, match=r"call reset\(\) before"):
+            call()
     env.reset(seed=0)
     good = {a: np.zeros(3, dtype=np.int64) for a in env.agents}
     for agent, value, match in (
@@ -462,6 +468,7 @@ def test_bad_vector_and_agent_actions_are_refused() -> None:
         ("aircraft_1", np.array([1.0, 0.0, 0.0]), r"actions\['aircraft_1'\] has dtype float64"),
         ("aircraft_2", np.array([0, 0, 5]), r"actions\['aircraft_2'\]\[2\] = 5"),
         ("aircraft_3", [0, True, 0], r"actions\['aircraft_3'\] .*boolean"),
+        ("aircraft_0", np.zeros(3, dtype="m8"), r"actions\['aircraft_0'\] has dtype timedelta"),
     ):
         with pytest.raises(ValueError, match=match):
             env.step({**good, agent: value})

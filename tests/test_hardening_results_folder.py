@@ -15,6 +15,7 @@ import pytest
 from scas_env.utils.results_folder import (
     MANIFEST,
     ResultsFolderError,
+    ResultsKeptElsewhereError,
     check_destination,
     json_text,
     library_versions,
@@ -356,3 +357,65 @@ def test_json_text_writes_null_for_what_is_not_a_finite_number() -> None:
         json_text({"o": Odd()})
     # a numpy type (a class with a ``tolist`` attribute) goes to ``default``, as json.dumps'
     assert json.loads(json_text({"t": np.float32}, default=repr)) == {"t": repr(np.float32)}
+
+
+def test_results_finished_after_the_folder_filled_up_are_kept_beside_it(tmp_path: Path) -> None:
+    """Checked empty at the start, filled by another writer during the run: the other
+    writer's file stays alone there, the results are complete at a timestamped sibling."""
+    dest = tmp_path / "run"
+    with (
+        pytest.raises(ResultsKeptElsewhereError, match="complete at") as caught,
+        results_folder(dest, config={}, seeds=1) as tmp,
+    ):
+        (tmp / "rows.csv").write_text("a\n1\n")
+        dest.mkdir()
+        (dest / "notes.txt").write_text("theirs")
+    assert sorted(p.name for p in dest.iterdir()) == ["notes.txt"]
+    kept = caught.value.kept
+    assert kept.parent == tmp_path and kept.name.startswith("run-")
+    assert verify_results_folder(kept) == ["rows.csv"]
+    assert _siblings(dest) == sorted(["run", kept.name])  # no partial folder left
+
+
+@pytest.mark.parametrize("old_mode", [None, 0o750])
+def test_a_results_folder_is_readable_as_files_are_or_keeps_the_old_mode(
+    tmp_path: Path, old_mode: int | None
+) -> None:
+    """mkdtemp's folder is private (0700); renamed into place it made results unreadable
+    to others, and --overwrite made a shared folder private."""
+    dest = tmp_path / "run"
+    if old_mode is not None:
+        dest.mkdir()
+        (dest / "old.txt").write_text("old")
+        dest.chmod(old_mode)
+    with results_folder(dest, config={}, seeds=1, overwrite=old_mode is not None) as tmp:
+        (tmp / "rows.csv").write_text("a\n1\n")
+    assert dest.stat().st_mode & 0o777 == (0o755 if old_mode is None else old_mode)
+
+
+@pytest.mark.parametrize(
+    ("command", "target"),
+    [
+        ("benchmark", "policies.benchmark.report.write_outputs"),
+        ("tune", "policies.value.tuning.tune_families"),
+        ("value", "policies.value.study.run_ladder"),
+    ],
+)
+def test_results_kept_elsewhere_end_a_command_with_the_message_and_status_1(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys, command: str, target: str
+) -> None:
+    import importlib
+
+    kept = tmp_path / "run-20261128T000000Z"
+
+    def filled(*args: Any, **kwargs: Any) -> Any:
+        raise ResultsKeptElsewhereError(tmp_path / "run", kept)
+
+    module, name = target.rsplit(".", 1)
+    monkeypatch.setattr(importlib.import_module(module), name, filled)
+    main = importlib.import_module(f"policies.cli.{command}").main
+    argv = ["--episodes", "2", "--slots", "20", "--policies", "corrective", "--workers", "1"]
+    argv = argv if command == "benchmark" else ["--quick"]
+    assert main([*argv, "--out", str(tmp_path / "run"), "-q"]) == 1
+    err = capsys.readouterr().err
+    assert f"complete at {kept}" in err and "Traceback" not in err

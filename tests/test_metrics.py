@@ -98,6 +98,25 @@ def test_evaluate_predictions_by_hand() -> None:
     assert m.convergence == pytest.approx(convergence(times, errors))
 
 
+@pytest.mark.parametrize("dt", [0.1, 0.15, 0.2, 0.3, 1.0 / 3.0, 0.7, 2.2])
+def test_alpha_lambda_scores_the_prediction_made_at_t_lambda_despite_its_rounding(
+    dt: float,
+) -> None:
+    """Evenly spaced predictions, the last lambda's prediction exact and the next one far
+    off: the prediction at t_lambda = t_P + lambda (EoL - t_P) decides (Saxena 2010), also
+    where the float t_lambda lands an ulp past it (dt = 0.15: 3.1500000000000004 > t[21])."""
+    n = 28
+    times = np.arange(n) * dt
+    eol = n * dt
+    for lam in (0.25, 0.5, 0.75):
+        k = round(lam * n)  # the prediction at t_lambda: t[k] = lam * eol up to rounding
+        preds = [np.array([eol - t]) for t in times]
+        if k + 1 < n:
+            preds[k + 1] = np.array([1e6])
+        m = evaluate_predictions(times, preds, None, eol, lambdas=(lam,))
+        assert m.alpha_lambda == {lam: True}, (dt, lam, times[k], lam * eol)
+
+
 def test_bad_inputs_raise() -> None:
     with pytest.raises(ValueError, match="true_rul"):
         relative_accuracy(0.0, np.array([1.0]))

@@ -190,6 +190,21 @@ def test_an_overflowing_step_raises_and_requires_a_reset(usage: float) -> None:
     assert all(math.isfinite(v) for v in (est.x_mean, est.x_std, est.theta_mean, est.theta_std))
 
 
+@pytest.mark.parametrize("method", ["update", "step"])
+def test_a_measurement_no_particle_can_explain_requires_a_reset(method: str) -> None:
+    """y = 1e160 overflows every squared residual: the weights become NaN. The filter used
+    to stay ready, its estimate() NaN without an error."""
+    pf = _linear_gaussian_pf(50, 0)
+    call = pf.update if method == "update" else lambda y: pf.step(1.0, y)
+    with pytest.raises(FloatingPointError, match=r"degenerated.*call reset"):
+        call(1e160)
+    with pytest.raises(RuntimeError, match="call reset"):
+        pf.estimate()
+    pf.reset(0.0, 1.0)
+    call(0.5)
+    assert math.isfinite(pf.estimate().x_mean)
+
+
 def test_an_unrepresentable_initial_cloud_is_refused() -> None:
     pf = _linear_gaussian_pf(50, 0)
     with pytest.raises(FloatingPointError, match=r"reset\(x0, theta0\) put particle 0"):

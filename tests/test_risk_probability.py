@@ -48,6 +48,14 @@ def test_fit_equals_pool_adjacent_violators(seed: int) -> None:
     assert m.records == p.size
 
 
+def test_a_block_of_one_prediction_keeps_that_prediction_as_its_knot() -> None:
+    """0.1 three times then the next float up: the knots are exactly those two values; the
+    pooled mean (0.1 * 3) / 3 rounded onto the next one and the map was refused."""
+    up = float(np.nextafter(0.1, 1.0))
+    m = fit_risk_map(np.array([0.1, 0.1, 0.1, up]), np.array([0.0, 0.0, 0.0, 1.0]))
+    assert m.predicted == (0.1, up) and m.calibrated == (0.0, 1.0)
+
+
 def test_recovers_a_known_miscalibration_on_fresh_records() -> None:
     """Events happen with probability p**2 where p is predicted: the raw prediction is up to
     0.25 off at p = 0.5; the fitted map is p**2 within sampling error, and on fresh records

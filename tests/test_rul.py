@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from fractions import Fraction
+
 import numpy as np
 import pytest
 from scipy.integrate import quad
@@ -115,6 +117,54 @@ def test_weighted_quantile_matches_numpy_inverted_cdf() -> None:
         weighted_quantile(vals, counts.astype(float), q),
         np.quantile(np.repeat(vals, counts), q, method="inverted_cdf"),
     )
+
+
+@pytest.mark.parametrize("scale", ["ones", "one_over_n"])
+def test_weighted_quantile_takes_exact_ties_as_numpy_inverted_cdf(scale: str) -> None:
+    """Equal weights (1, or 1/n as a resampled cloud has), every sample count n <= 250, nine
+    levels: where n q is whole the CDF reaches the level exactly at a sample, and the
+    quantile is that sample, not the next."""
+    q = np.array([0.01, 0.05, 0.1, 0.2, 0.25, 0.5, 0.75, 0.9, 0.95])
+    for n in range(1, 251):
+        v = np.arange(n, dtype=float)
+        w = np.ones(n) if scale == "ones" else np.full(n, 1.0 / n)
+        got = weighted_quantile(v, w, q)
+        np.testing.assert_array_equal(
+            got, np.quantile(v, q, method="inverted_cdf"), err_msg=f"n={n}"
+        )
+
+
+def test_weighted_quantile_against_exact_rational_arithmetic() -> None:
+    """Small integer weights (zeros included) and dyadic levels: the smallest v whose
+    weight at or below reaches q of the total, in Fractions (no rounding anywhere)."""
+    rng = np.random.default_rng(5)
+    levels = [0.125, 0.25, 0.375, 0.5, 0.625, 0.75, 0.875, 1.0]
+    for _ in range(400):
+        n = int(rng.integers(1, 12))
+        v = rng.integers(0, 6, n).astype(float)
+        w = rng.integers(0, 4, n).astype(float)
+        if w.sum() == 0:
+            continue
+        scale = float(rng.choice([1.0, 0.1, 1.0 / 3.0, 1e-7]))
+        order = np.argsort(v, kind="stable")
+        total = sum(Fraction(int(x)) for x in w)
+        want = []
+        for lv in levels:
+            cum = Fraction(0)
+            for k in order:
+                cum += int(w[k])
+                if cum >= Fraction(lv) * total:
+                    want.append(v[k])
+                    break
+        got = weighted_quantile(v, w * scale, np.array(levels))
+        np.testing.assert_array_equal(got, want, err_msg=f"v={v}, w={w}, scale={scale}")
+
+
+def test_weighted_quantile_of_weights_whose_sum_overflows() -> None:
+    """They are the same normalised weights as [1, 1, 1]: the quantiles once all fell to
+    the largest value (every w / inf = 0) without an error."""
+    v, q = np.array([1.0, 2.0, 3.0]), np.array([0.05, 0.5, 1.0])
+    np.testing.assert_array_equal(weighted_quantile(v, np.full(3, 1e308), q), [1.0, 2.0, 3.0])
 
 
 def test_summary_values_by_hand() -> None:

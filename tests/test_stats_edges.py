@@ -11,7 +11,7 @@ import pytest
 from scipy import integrate, stats
 from scipy.stats import CensoredData, ecdf
 
-from policies.benchmark.stats import minimum_detectable_difference
+from policies.benchmark.stats import minimum_detectable_difference, paired_difference
 from policies.benchmark.survival import delayed_entry_km, kaplan_meier
 from prognostics.metrics import convergence, evaluate_predictions
 
@@ -56,6 +56,15 @@ def test_mdd_at_two_pairs_by_simulation() -> None:
     d = np.random.default_rng(20240601).normal(mdd, 1.0, size=(200_000, 2))
     p = stats.ttest_1samp(d, 0.0, axis=1).pvalue
     assert float(np.mean(p < 0.05)) == pytest.approx(0.80, abs=0.01)
+
+
+def test_mdd_is_not_estimable_without_spread_or_a_second_pair() -> None:
+    """sd 0 (identical outcomes on every seed, e.g. no failures under either policy) says
+    nothing of the smallest difference the sample resolves: NaN, not 0."""
+    assert math.isnan(minimum_detectable_difference(0.0, 40))
+    assert math.isnan(minimum_detectable_difference(1.0, 1))
+    assert math.isnan(paired_difference([0.0] * 5, [0.0] * 5).mdd)
+    assert paired_difference([1.0, 2.0, 4.0], [0.0, 0.0, 0.0]).mdd > 0.0
 
 
 def test_mdd_refuses_a_power_not_above_alpha() -> None:

@@ -110,23 +110,26 @@ def _belief_cells(block: Mapping[str, Any] | None) -> list[str]:
     ]
 
 
-def _cell(iv: Mapping[str, float], fmt: str) -> str:
+def _cell(iv: Mapping[str, float], fmt: str, paired: bool = False) -> str:
     """``mean [low, high]`` (intervals need not be symmetric: exact Poisson, bootstrap), or
-    ``mean ± half (MDD m)`` for a paired difference."""
+    ``mean ± half (MDD m)`` for a paired difference: ``MDD n/a`` where the differences show
+    no spread, ``no interval (n = 1)`` for one pair."""
     if math.isnan(iv["mean"]):
         return "-"
+    mean = fmt.format(iv["mean"])
     if math.isnan(iv["low"]):
-        return fmt.format(iv["mean"])
-    mdd = iv.get("mdd", math.nan)
-    if mdd is not None and not math.isnan(mdd):
-        half = 0.5 * (iv["high"] - iv["low"])
-        return f"{fmt.format(iv['mean'])} ± {fmt.format(half)} (MDD {fmt.format(mdd)})"
-    return f"{fmt.format(iv['mean'])} [{fmt.format(iv['low'])}, {fmt.format(iv['high'])}]"
+        return f"{mean} (no interval, n = {iv['n']})" if paired else mean
+    if paired:
+        half, mdd = 0.5 * (iv["high"] - iv["low"]), iv["mdd"]
+        shown = "n/a" if mdd is None or math.isnan(mdd) else fmt.format(mdd)
+        return f"{mean} ± {fmt.format(half)} (MDD {shown})"
+    return f"{mean} [{fmt.format(iv['low'])}, {fmt.format(iv['high'])}]"
 
 
 def _rows(summary: Mapping[str, Any], key: str) -> list[list[str]]:
+    paired = key == "paired_vs_reference"
     return [
-        [policy] + [_cell(d[m], COLUMNS[m][1]) for m in _metrics(summary)]
+        [policy] + [_cell(d[m], COLUMNS[m][1], paired) for m in _metrics(summary)]
         for policy, d in summary[key].items()
     ]
 

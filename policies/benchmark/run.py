@@ -199,15 +199,18 @@ def check_specs(
     names: dict[str, tuple[str, ...]] = {}
     for spec in specs:
         mode = spec.build_mode()
-        if mode not in names:
-            env = gym.make(env_id_of(env_kwargs), disable_env_checker=True, obs_mode=mode,
-                           **env_kwargs)  # fmt: skip
-            names[mode] = tuple(env.unwrapped.obs_names)
-            env.close()
         try:
+            if mode not in names:
+                env = gym.make(env_id_of(env_kwargs), disable_env_checker=True, obs_mode=mode,
+                               **env_kwargs)  # fmt: skip
+                names[mode] = tuple(env.unwrapped.obs_names)
+                env.close()
             policy = make_policy(spec.name, names[mode], **policy_params(spec, env_kwargs))
         except (ValueError, TypeError) as exc:  # TypeError: parameters the policy lacks
-            raise ValueError(f"policy {spec.key!r} cannot run on this scenario: {exc}") from exc
+            where = "this scenario"
+            if is_fleet(env_kwargs) and spec.key not in DEFAULT_FLEET_POLICIES:
+                where = f"fleets (their policies: {', '.join(DEFAULT_FLEET_POLICIES)})"
+            raise ValueError(f"policy {spec.key!r} cannot run on {where}: {exc}") from exc
         params = policy.params() if callable(getattr(policy, "params", None)) else {}
         built[spec.key] = {str(k): json_param(v) for k, v in dict(params).items()}
     return built

@@ -181,20 +181,20 @@ def minimum_detectable_difference(
     Solved exactly on the noncentral t distribution: the noncentrality ``delta`` with
     ``P(|T'| > t_{1-alpha/2, n-1}) = power`` for ``T' ~ nct(n-1, delta)``; MDD =
     ``delta sd / sqrt(n)`` (for large ``n`` about ``(z_{1-alpha/2} + z_power) sd / sqrt(n)``,
-    2.80 sd / sqrt(n) at the defaults; 11.55 sd at ``n = 2``). NaN if ``n < 2`` or ``sd`` is
-    not finite. The lower tail ``P(T' < -t)`` is taken as ``P(nct(n-1, -delta) > t)``: scipy's
-    ``nct.cdf`` returns NaN there once ``delta`` exceeds about 8, which is where the root lies
-    for ``n = 2``. Raises ``ValueError`` unless ``0 < alpha < power < 1`` (a two-sided test
+    2.80 sd / sqrt(n) at the defaults; 11.55 sd at ``n = 2``). NaN if ``n < 2``, ``sd`` is
+    not finite or ``sd == 0`` (no spread observed, e.g. no failure under either policy: the
+    sample does not estimate what it resolves, and 0 would claim it resolves anything). The
+    lower tail ``P(T' < -t)`` is taken as ``P(nct(n-1, -delta) > t)``: scipy's ``nct.cdf``
+    returns NaN there once ``delta`` exceeds about 8, which is where the root lies for
+    ``n = 2``. Raises ``ValueError`` unless ``0 < alpha < power < 1`` (a two-sided test
     rejects with probability ``alpha`` already at ``delta = 0``).
     """
     if not 0.0 < alpha < 1.0 or not 0.0 < power < 1.0:
         raise ValueError(f"alpha = {alpha!r} and power = {power!r} must be in (0, 1)")
     if power <= alpha:
         raise ValueError(f"power = {power!r} must exceed alpha = {alpha!r}")
-    if n < 2 or not math.isfinite(sd):
+    if n < 2 or not math.isfinite(sd) or sd == 0.0:
         return math.nan
-    if sd == 0.0:
-        return 0.0
     df = n - 1
     crit = float(student_t.ppf(1.0 - alpha / 2.0, df))
 

@@ -24,6 +24,7 @@ from scas_env.cli_args import (
     check_out_dir,
     configure_logging,
     existing_file,
+    keeps_results,
     load_env_config,
     load_world,
     make_parser,
@@ -150,6 +151,7 @@ def build_parser() -> Any:
     return parser
 
 
+@keeps_results
 def main(argv: Sequence[str] | None = None) -> int:
     """``scas-benchmark``: :func:`policies.benchmark.run_benchmark`, then its writer."""
     parser = build_parser()

@@ -28,6 +28,7 @@ from scas_env.cli_args import (
     announce_uncached_kernels,
     check_out_dir,
     configure_logging,
+    keeps_results,
     load_env_config,
     load_world,
     make_parser,
@@ -101,6 +102,7 @@ def build_parser() -> Any:
     return parser
 
 
+@keeps_results
 def main(argv: Sequence[str] | None = None) -> int:
     """``scas-tune``: :func:`policies.value.tuning.tune_families` and its writer."""
     parser = build_parser()

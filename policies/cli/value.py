@@ -19,6 +19,7 @@ from scas_env.cli_args import (
     announce_uncached_kernels,
     check_out_dir,
     configure_logging,
+    keeps_results,
     load_env_config,
     load_world,
     make_parser,
@@ -85,6 +86,7 @@ def build_parser() -> Any:
     return parser
 
 
+@keeps_results
 def main(argv: Sequence[str] | None = None) -> int:
     """``scas-value``: :func:`policies.value.study.run_ladder` and its writer."""
     parser = build_parser()

@@ -67,6 +67,7 @@ class FleetParallelEnv(ParallelEnv):
         n = int(self.fleet_env.config.aircraft)
         self.possible_agents = [f"aircraft_{i}" for i in range(n)]
         self.agents: list[str] = []
+        self._started = False
         self.render_mode = kwargs.get("render_mode")
         per = self.fleet_env.action_space.nvec[: self.fleet_env.action_space.shape[0] // n]
         self._action_space = spaces.MultiDiscrete(per)
@@ -84,6 +85,8 @@ class FleetParallelEnv(ParallelEnv):
         """The global state for centralised training (MAPPO, QMIX): the fleet env's whole
         observation (every aircraft's actuators and status, the shared groups), in
         :attr:`state_space`."""
+        if not self._started:
+            raise RuntimeError("call reset() before state()")
         return self.fleet_env.view.observe(0)
 
     def _split(self, info: dict[str, Any]) -> tuple[dict[str, np.ndarray], dict[str, dict]]:
@@ -112,9 +115,12 @@ class FleetParallelEnv(ParallelEnv):
         # {"options": 1}); this env has none, so any given are not read
         _, info = self.fleet_env.reset(seed=seed)
         self.agents = list(self.possible_agents)
+        self._started = True
         return self._split(info)
 
     def step(self, actions: dict[str, Any]) -> tuple[dict, dict, dict, dict, dict]:
+        if not self._started:
+            raise RuntimeError("call reset() before step()")
         if not self.agents:
             raise RuntimeError("the episode has ended (no agents left): call reset()")
         missing = sorted(set(self.agents) - set(actions))

@@ -7,6 +7,9 @@ and size of every file written) and renames the folder into place in one step. O
 exception, ``KeyboardInterrupt`` included, and on SIGTERM (turned into an exception for the
 block: :func:`partial_folder`), the temporary folder is deleted and the destination is
 untouched: a reader sees the old complete folder or the new complete one, never a mix.
+If something else fills the destination while the block runs, the finished results go to
+a timestamped sibling instead (:class:`ResultsKeptElsewhereError` says where). The folder
+has the replaced folder's permissions, else ``rwxr-xr-x``.
 
 The destination is a folder: a name ending in a file suffix (``run.json``) is refused. An
 existing empty folder is filled; a non-empty one is refused unless ``overwrite=True``; then
@@ -71,6 +74,18 @@ class ResultsFolderError(ValueError):
 
 class ResultsFolderExistsError(ResultsFolderError, FileExistsError):
     """The destination exists and is not empty, and overwriting was not asked for."""
+
+
+class ResultsKeptElsewhereError(ResultsFolderExistsError):
+    """The destination was empty when checked but filled by someone else while the block
+    ran: the finished results were kept at :attr:`kept` (a timestamped sibling) instead."""
+
+    def __init__(self, dest: Path, kept: Path) -> None:
+        super().__init__(
+            f"{dest} was filled by something else while the results were made; they are "
+            f"complete at {kept} instead (nothing of {dest} was touched)"
+        )
+        self.dest, self.kept = dest, kept
 
 
 #: Suffixes of files, not folders: ``--out results/tuning.json`` would make a folder named
@@ -277,7 +292,12 @@ def results_folder(
     with partial_folder(dest) as tmp:
         yield tmp
         _write_manifest(tmp, config_text, seeds_text)
-        move_into_place(tmp, dest, overwrite)
+        try:
+            move_into_place(tmp, dest, overwrite)
+        except ResultsFolderExistsError:  # filled meanwhile: keep the work beside it
+            kept = timestamped(dest)
+            move_into_place(tmp, kept, False)
+            raise ResultsKeptElsewhereError(dest, kept) from None
 
 
 @contextmanager
@@ -289,7 +309,8 @@ def partial_folder(dest: str | Path) -> Iterator[Path]:
     dest = Path(dest)
     with sigterm_raises():
         tmp = Path(tempfile.mkdtemp(prefix=f".{dest.name}.partial-", dir=dest.parent))
-        try:
+        try:  # mkdtemp makes it private: the old folder's mode, else rwxr-xr-x (as files)
+            tmp.chmod(dest.stat().st_mode & 0o777 if dest.is_dir() else 0o755)
             yield tmp
         finally:
             shutil.rmtree(tmp, ignore_errors=True)  # nothing left there after the rename
