@@ -289,6 +289,18 @@ def test_a_parameter_group_in_another_group_s_place_is_refused() -> None:
         ScasParams().replace(spring=FluidParams())
 
 
+def test_parameters_the_simulator_cannot_run_are_refused_at_construction() -> None:
+    """Accepted before, then failing deep in a run: a test step beyond the stroke
+    (``ground_test``: "beyond the stroke") and a valve without leakage (no hydraulic
+    equilibrium at rest, "holds the load 0.0 N")."""
+    from scas_env.actuator.params import MissionParams, ServovalveParams
+
+    with pytest.raises(ValueError, match=r"test_step_m = 0\.008 m must be <= .*half_stroke_m"):
+        ScasParams(mission=MissionParams(test_step_m=0.008))
+    with pytest.raises(ValueError, match=r"leakage_coeff_m3_s_pa = 0\.0"):
+        ServovalveParams(leakage_coeff_m3_s_pa=0.0)
+
+
 def test_save_keeps_a_file_s_mode_and_writes_through_a_symlink(tmp_path) -> None:
     """An overwritten file keeps its permissions (it became 0600, ``mkstemp``'s) and a
     symbolic link keeps pointing at the file that now holds the new values."""

@@ -98,3 +98,29 @@ def test_bad_health_raises() -> None:
         HealthState(seal_wear_m=float("nan"))
     with pytest.raises(ValueError, match="wire"):
         actuator_config(P, health=HealthState(crack_depth_m=3e-3))
+
+
+@pytest.mark.parametrize(
+    ("group", "changes"),
+    [
+        ("servovalve", {"natural_frequency_rad_s": 1e4, "damping_ratio": 1.5}),  # 2.6e4 rad/s
+        ("servovalve", {"natural_frequency_rad_s": 2e3, "damping_ratio": 5.0}),  # 2.0e4 rad/s
+        ("actuator", {"end_stop_stiffness_n_m": 1e9}),  # stop contact sqrt(k/m) 3.2e4 rad/s
+    ],
+)
+def test_the_spool_and_stop_modes_get_their_substeps(group: str, changes: dict) -> None:
+    """These fast modes were outside the stability bound: one substep, then a blow-up. The
+    bound now holds each mode's closed-form eigenvalue (the spool's second-order roots, the
+    stop's spring-mass-damper roots) and the run is stable (a 5 mm command against an
+    800 N link load drives the rod onto its stop)."""
+    p = P.replace(**{group: getattr(P, group).replace(**changes)})
+    cfg = actuator_config(p)
+    w, z = cfg.valve_natural_frequency_rad_s, cfg.valve_damping_ratio
+    spool = np.abs(np.roots([1.0, 2.0 * z * w, w * w])).max()
+    stop = np.abs(np.roots([cfg.moving_mass_kg, cfg.end_stop_damping_n_s_m,
+                            cfg.end_stop_stiffness_n_m])).max()  # fmt: skip
+    assert max(spool, stop) * cfg.dt_s / cfg.substeps <= 2.78
+    cmd = np.zeros(600)
+    cmd[50:] = 5e-3
+    run = simulate(cfg, cmd, rng=None, noise=False, link_force_n=np.full(600, -800.0))
+    assert np.isfinite(run.position_m).all()

@@ -94,8 +94,9 @@ class ServovalveParams(Validated):
         "m^3/(s Pa)",
         lo=0.0,
         hi=1e-9,
-        source="valve flow-pressure coefficient K_c of a wide-null SCAS valve (pressure gain "
-        "K_q/K_c = 2.9e9 Pa/A) [B]; sets how much null-bias current a spring bias force needs: "
+        lo_open=True,  # 0: no hydraulic equilibrium holds the rod at rest (the start fails)
+        source="valve flow-pressure coefficient K_c of a wide-null SCAS valve (the loop's "
+        "pressure gain K_q / (K_c/2 + K_i1) = 5.5e9 Pa/A: K_c enters each chamber) [B]; sets how much null-bias current a spring bias force needs: "
         "11 uA at the critical crack (1.4 uA with 1e-13, ref §9), see docs/physics.md",
     )
     laminar_transition_pa: float = param(
@@ -221,8 +222,8 @@ class SpringParams(Validated):
         hi=1e-6,
         lo_open=True,
         source="Barsom martensitic C/20 for mode III, ref §2.2 [B], not fitted; with Walker "
-        "(R 0.56 on the damaging cycles) a 100 um flaw fails in 1,051 flights (1,576 FH), "
-        "without it 3,290 (the reference's ~4,700 FH); lives: docs/physics.md",
+        "(R 0.56 on the damaging cycles) a 100 um flaw fails in 1,061 flights (1,592 FH), "
+        "without it 3,225 (4,837 FH; the reference's ~4,700 FH); lives: docs/physics.md",
     )
     paris_m: float = param(2.25, "-", lo=1.0, hi=6.0, source="ref §2.2 [B]")
     delta_k_threshold_mpa_sqrt_m: float = param(
@@ -478,6 +479,12 @@ class ScasParams(Validated):
             expected = GROUP_TYPES[name]
             if not isinstance(value, expected):
                 raise ValueError(f"ScasParams.{name} must be a {expected.__name__}, got {value!r}")
+        if self.mission.test_step_m > self.actuator.half_stroke_m:
+            raise ValueError(
+                f"MissionParams.test_step_m = {self.mission.test_step_m} m must be <= "
+                f"ActuatorParams.half_stroke_m = {self.actuator.half_stroke_m} m (the "
+                "pre-flight test commands +-test_step_m)"
+            )
         stroke_force = self.spring.rate_n_per_m * self.actuator.end_stop_m
         if stroke_force >= self.spring.preload_n:
             raise ValueError(

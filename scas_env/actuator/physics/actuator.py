@@ -64,9 +64,10 @@ transient; with ``K_i > 0`` the integrator state is set to supply that spool cur
 
 Explicit RK4 is stable only for ``|lambda| dt < ~2.78``; :class:`ActuatorConfig` checks
 bounds of the stiffest modes (friction regularisation ``(F_c/v_s + b)/m``, hydraulic
-natural frequency, leakage/valve conductances) and raises ``ValueError`` when ``dt`` is too
-large. The chamber-near-supply laminar-orifice mode (stall at a stop) is not covered; the
-kernel reports non-finite states instead (``FloatingPointError``).
+natural frequency, leakage/valve conductances, the servovalve spool, the end-stop contact)
+and raises ``ValueError`` when ``dt`` is too large. The chamber-near-supply laminar-orifice
+mode (stall at a stop) is not covered; the kernel reports non-finite states instead
+(``FloatingPointError``).
 
 >>> cfg = ActuatorConfig.from_params(ScasParams(), spring_rates_n_m=(15e3, 16.94e3))
 >>> run = simulate(cfg, np.zeros(500), rng=None, noise=False)
@@ -357,7 +358,10 @@ class ActuatorConfig:
         Max of: friction regularisation ``(F_c/v_s + b)/m``; hydraulic natural frequency
         ``sqrt(E_l A^2 (1/V_min + 1/V_max)/m)`` (``beta <= E_l``); leakage/valve conductance
         ``E_l ((K_i1 + 1.25 K_i2/sqrt(p_t)) (1/V_min + 1/V_max) + K_c/V_min)``, with
-        ``V_min = V_0`` and ``V_max = V_0 + 2 A h`` (piston at a stroke end).
+        ``V_min = V_0`` and ``V_max = V_0 + 2 A h`` (piston at a stroke end); the spool's
+        second-order mode, ``w_v`` (``zeta < 1``) or ``w_v (zeta + sqrt(zeta^2 - 1))``; the
+        end-stop contact ``max(sqrt(k_stop/m), c_stop/m)`` (the roots of ``m s^2 + c s + k``
+        lie within it). At the defaults the friction mode is the largest.
         """
         e_l = max(self.liquid_bulk_modulus_pa, 0.0)
         v_min = self.dead_volume_m3
@@ -370,7 +374,11 @@ class ActuatorConfig:
             self.laminar_transition_pa
         )
         conductance = e_l * (k_lin * v_sum_inv + self.valve_leakage_m3_s_pa / v_min)
-        return max(friction, hydraulic, conductance)
+        w, zeta = self.valve_natural_frequency_rad_s, self.valve_damping_ratio
+        spool = w * (zeta + math.sqrt(zeta * zeta - 1.0)) if zeta >= 1.0 else w
+        m = self.moving_mass_kg
+        stop = max(math.sqrt(self.end_stop_stiffness_n_m / m), self.end_stop_damping_n_s_m / m)
+        return max(friction, hydraulic, conductance, spool, stop)
 
     def to_array(self) -> NDArray[np.float64]:
         """Flat float64 parameter vector in the layout of :mod:`actuator_kernels` (``I_*``)."""
