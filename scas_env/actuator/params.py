@@ -96,7 +96,8 @@ class ServovalveParams(Validated):
         hi=1e-9,
         lo_open=True,  # 0: no hydraulic equilibrium holds the rod at rest (the start fails)
         source="valve flow-pressure coefficient K_c of a wide-null SCAS valve (the loop's "
-        "pressure gain K_q / (K_c/2 + K_i1) = 5.5e9 Pa/A: K_c enters each chamber) [B]; sets how much null-bias current a spring bias force needs: "
+        "pressure gain K_q / (K_c/2 + K_i1) = 5.5e9 Pa/A: K_c enters each chamber) [B]; sets "
+        "how much null-bias current a spring bias force needs: "
         "11 uA at the critical crack (1.4 uA with 1e-13, ref §9), see docs/physics.md",
     )
     laminar_transition_pa: float = param(
