@@ -194,6 +194,9 @@ def test_delegate_specs_are_checked_and_round_trip() -> None:
         DelegateSpec("no_such_rule")
     with pytest.raises(ValueError, match=r"params\['test_every'\] = nan"):
         DelegateSpec("rul_risk", {"test_every": float("nan")})
+    for stateful in ("oracle", "noisy_oracle"):  # a slot counter, per-part draws
+        with pytest.raises(ValueError, match=f"'{stateful}' is of family 'bound'"):
+            DelegateSpec(stateful)
     with pytest.raises(ValueError, match="needs 'policy'"):
         DelegateSpec.from_json({"policy": "rul_risk", "extra": 1})
 

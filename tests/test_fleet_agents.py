@@ -134,6 +134,9 @@ def test_shipped_agents_load_and_act_on_the_default_fleet(path: Path) -> None:
     small = gym.make("scas_env/ScasFleet-v0", disable_env_checker=True, aircraft=4)
     with pytest.raises(ValueError, match="another fleet configuration"):
         load_fleet_agent(path, small.unwrapped.obs_names)
+    swapped = (names[1], names[0], *names[2:])  # it said "first differences: []"
+    with pytest.raises(ValueError, match=rf"another order: entry 0 is {names[1]!r}, trained on"):
+        load_fleet_agent(path, swapped)
     name = "fleet_ppo"
     assert PLUGINS[name].module == "policies.agents.fleet.plugins"
     built = make_policy(name, names)

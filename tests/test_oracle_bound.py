@@ -123,3 +123,53 @@ def test_clairvoyant_oracle_bounds_every_policy_in_every_episode():
         assert np.all(reward[p] <= reward["oracle"]), p
         d = paired_difference(reward["oracle"], reward[p])
         assert d.low > 0.0, p  # the oracle is better on average, significantly
+
+
+def _grounded_slots(down: tuple[int, int], order: tuple[int, int]) -> int:
+    """Slots without a flight in the env from replacing the parts ``order`` (action 2 the
+    spring, 3 the seals) on two consecutive slots until it flies again."""
+    import gymnasium as gym
+
+    import scas_env  # noqa: F401
+    from scas_env.core.costs import CostModel
+
+    cm = CostModel(spring_downtime_slots=down[0], seal_downtime_slots=down[1])
+    env = gym.make("scas_env/ScasMaintenance-v2", episode_slots=60, cost_model=cm)
+    env.reset(seed=0)
+    for _ in range(5):
+        env.step(0)
+    flights = env.unwrapped.batch.a["flown"][0]
+    for slots, action in enumerate((*order, *[0] * 10)):
+        _, _, _, _, info = env.step(action)
+        if info["flights"] > flights:
+            return slots
+    raise AssertionError("never flew again")
+
+
+@pytest.mark.parametrize("down", [(0, 1), (1, 0), (0, 0), (1, 1), (2, 0), (0, 3), (2, 3)])
+def test_a_pair_is_priced_as_the_env_grounds_it_in_its_best_order(down) -> None:
+    """The oracle fits the longer downtime first; the slots the dynamic program charges for
+    the pair are the env's, and the other order grounds the row no shorter. (It charged
+    1 + max(down) in a fixed seals-first order: one slot short where the downtimes are
+    equal, two where the spring's is the longer.)"""
+    from policies.rules.oracle import _first_of_pair, _pair_slots
+
+    first = _first_of_pair(down)
+    order = (2 + first, 3 - first)
+    assert _grounded_slots(down, order) == _pair_slots(down)
+    assert _grounded_slots(down, order[::-1]) >= _pair_slots(down)
+
+
+def test_the_oracle_fits_the_spring_first_when_its_downtime_is_longer() -> None:
+    from policies.rules.oracle import OraclePolicy
+    from scas_env.core.costs import CostModel
+
+    names = ("crack_fraction", "wear_fraction", "spring_rul_true", "seal_rul_true",
+             "spring_age", "seal_age", "downtime")  # fmt: skip
+    cm = CostModel(spring_downtime_slots=1, seal_downtime_slots=0)
+    oracle = OraclePolicy(names, cost_model=cm, episode_slots=2000)
+    oracle.reset()
+    first, _ = oracle.predict(np.array([0.99, 0.99, 1.0, 1.0, 800.0, 800.0, 0.0]))
+    second, _ = oracle.predict(np.array([0.0, 0.99, 5000.0, 1.0, 0.0, 800.0, 1.0]))
+    assert (int(first), int(second)) == (2, 3)
+    assert not oracle.pending.any()

@@ -154,6 +154,25 @@ def test_noisy_oracle_draws_one_factor_per_part_fitted():
         assert q.predict(obs(STATE, spring_age=10.0, seal_age=12.0)[None])[0][0] == want
 
 
+def test_noisy_oracle_draws_new_factors_at_an_episode_start_once():
+    """An env that resets itself (SB3's vector envs): a new episode's parts in service need
+    not be younger than the last episode's, so the age test alone kept the old episode's
+    z. At ``episode_start`` both parts draw once (the next two normals), not again for
+    their ages falling."""
+    inf = math.inf
+    p = NoisyOraclePolicy(STATE, sigma=0.3, spring_age=inf, seal_age=inf)
+    p.reset(seed=[5])
+    z0 = np.random.default_rng(5).standard_normal(5)
+    p.predict(obs(STATE, spring_age=20.0, seal_age=20.0)[None], episode_start=np.array([True]))
+    assert np.array_equal(p.z[0], z0[:2])
+    p.predict(obs(STATE, spring_age=20.0, seal_age=20.0)[None], episode_start=np.array([True]))
+    assert np.array_equal(p.z[0], z0[2:4])  # in service as old as before: new parts still
+    p.predict(obs(STATE, spring_age=3.0, seal_age=9.0)[None], episode_start=np.array([True]))
+    assert np.array_equal(p.z[0], [z0[4], np.random.default_rng(5).standard_normal(6)[5]])
+    p.predict(obs(STATE, spring_age=4.0, seal_age=10.0)[None], episode_start=np.array([False]))
+    assert np.array_equal(p.z[0], [z0[4], np.random.default_rng(5).standard_normal(6)[5]])
+
+
 def test_noisy_oracle_seeds_an_unseeded_batch_by_row_and_runs_under_evaluate_policy():
     """A batch never seeded by row (SB3's evaluate_policy over n envs) draws row r from child
     r of SeedSequence(seed).spawn(n); a single row keeps default_rng(seed); an explicit

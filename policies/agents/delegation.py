@@ -22,7 +22,7 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
-from policies.base import make_policy, policy_obs_mode
+from policies.base import make_policy, policy_family, policy_obs_mode
 
 __all__ = ["DelegateSpec", "flight_obs_names"]
 
@@ -31,7 +31,9 @@ __all__ = ["DelegateSpec", "flight_obs_names"]
 class DelegateSpec:
     """A stateless registered policy (``policy``: its name, ``params``: its keywords) that a
     decision-epoch agent may hand ``k`` slots to. Refuses unknown policies and policies
-    that are not rules on the flat observation."""
+    that are not rules (family ``"rule"``: the oracles keep per-episode state a delegate,
+    called on changing rows without ``episode_start``, would corrupt) on the flat
+    observation."""
 
     policy: str
     params: Mapping[str, Any] = field(default_factory=dict)
@@ -40,6 +42,12 @@ class DelegateSpec:
         if not isinstance(self.policy, str):
             raise ValueError(f"policy = {self.policy!r} must be a registered policy name")
         mode = policy_obs_mode(self.policy)  # raises for an unknown name
+        if policy_family(self.policy) != "rule":
+            raise ValueError(
+                f"policy = {self.policy!r} is of family {policy_family(self.policy)!r}; a "
+                "delegate must be a rule (stateless: it is called on changing rows without "
+                "episode_start)"
+            )
         if mode not in ("features+rul", "features", "state"):
             raise ValueError(f"policy = {self.policy!r} acts on {mode!r}, not a flat observation")
         for key, value in dict(self.params).items():

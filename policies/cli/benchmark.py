@@ -144,7 +144,8 @@ def build_parser() -> Any:
     parser.add_argument(
         "--ray-address",
         default=None,
-        help="run on Ray: auto, local or ray://host:port (default: $RAY_ADDRESS, else local)",
+        help="run on Ray: auto, local or ray://host:port (default: $RAY_ADDRESS, else local "
+        "worker processes, no Ray)",
     )
     add_env_config_args(parser)
     add_logging_args(parser)

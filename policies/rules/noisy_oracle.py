@@ -10,11 +10,12 @@ its lead (``spring_lead`` / ``seal_lead``, flights; divided by ``scale`` while g
 value (a control of the study).
 
 The policy keeps one generator and one ``z`` per row (episode); it recognises a new part by
-its age falling (a replacement or failure resets it to 0). ``reset(seed=...)`` re-seeds:
-a sequence of seeds gives one generator per row, each drawing what a single episode with
-that seed draws, so batched and single episodes agree (tested). A batch of ``n`` rows never
-seeded by row (SB3's ``evaluate_policy`` over ``n`` envs) draws row ``r`` from child ``r``
-of ``SeedSequence(seed).spawn(n)``.
+its age falling (a replacement or failure resets it to 0), and new parts at a row's
+``episode_start`` (an env that resets itself: parts in service need not start younger).
+``reset(seed=...)`` re-seeds: a sequence of seeds gives one generator per row, each
+drawing what a single episode with that seed draws, so batched and single episodes agree
+(tested). A batch of ``n`` rows never seeded by row (SB3's ``evaluate_policy`` over ``n``
+envs) draws row ``r`` from child ``r`` of ``SeedSequence(seed).spawn(n)``.
 
 >>> names = ("crack_fraction", "wear_fraction", "spring_rul_true", "seal_rul_true",
 ...          "spring_age", "seal_age", "downtime")
@@ -83,6 +84,23 @@ class NoisyOraclePolicy(NestedRule):
             if len(seeds) == 1:
                 self.base_seed = int(seeds[0])
         self.z, self.last_age = None, None
+
+    def predict(
+        self,
+        observation: Any,
+        state: Any = None,
+        episode_start: Any = None,
+        deterministic: bool = True,
+    ) -> tuple[int | IntArray, Any]:
+        """As :meth:`Policy.predict`; rows with ``episode_start`` set draw their parts' ``z``
+        anew (once: their ages are not compared with the last episode's)."""
+        if episode_start is not None and self.z is not None:
+            start = np.atleast_1d(np.asarray(episode_start, dtype=bool))
+            if start.shape == (self.z.shape[0],) and start.any():
+                for k in range(2):
+                    self._draw(start, k)
+                self.last_age[start] = -np.inf
+        return super().predict(observation, state, episode_start, deterministic)
 
     def _draw(self, rows: np.ndarray, part: int) -> None:
         for r in np.flatnonzero(rows):

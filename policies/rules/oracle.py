@@ -10,7 +10,8 @@ life to within about 1 %, ``docs/value.md``). It counts the slots of the episode
   CV about 0.08), unless it outlives the episode (true RUL above the slots left): at the
   end of the horizon nothing is replaced that would not fail within it.
 * When a part is due, the other part may be replaced in the same grounded period
-  (opportunistic grouping: seals first, then the spring in the seals' downtime slot): the
+  (opportunistic grouping: the part with the longer downtime first, the seals on a tie, then
+  the other in the next slot, within that downtime when it lasts): the
   dynamic program :func:`plan_cost` compares the expected cost to the end of the episode
   of both choices, with the known remaining lives of the fitted parts and the life
   distribution of the parts fitted later (quartile midpoints :data:`LIFE_QUANTILES`: the
@@ -50,7 +51,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from policies.base import FLY, REPLACE_SEAL, REPLACE_SPRING, IntArray, Policy, register
+from policies.base import FLY, REPLACE_SPRING, IntArray, Policy, register
 from scas_env.core.costs import CostModel
 
 __all__ = ["LIFE_QUANTILES", "ORACLE_DEFAULTS", "OraclePolicy", "plan_cost", "plan_cost_known"]
@@ -81,7 +82,7 @@ def plan_cost(
     ``lives``: per part, equally likely lives (flights) of a part fitted later (quantiles
     of the life distribution): the expectation over them replaces the unknown future. At
     each forced replacement the program compares replacing that part alone with replacing
-    both (seals first, the spring in their downtime). ``step``: the slots left after each
+    both (:func:`_pair_slots` slots on the ground). ``step``: the slots left after each
     replacement are rounded to a multiple of it (1: exact; the oracle uses
     :data:`HORIZON_STEP` so that few distinct states need caching).
 
@@ -116,6 +117,22 @@ def _next_forced(
     return slots_left - k, (spring_left - k, seal_left - k), a
 
 
+def _first_of_pair(down: tuple[int, int]) -> int:
+    """The part (0 spring, 1 seals) a pair's replacement fits first: the one with the longer
+    downtime, so that the other is fitted in it; the seals on a tie."""
+    return 0 if down[0] > down[1] else 1
+
+
+def _pair_slots(down: tuple[int, int]) -> int:
+    """Slots without a flight when both parts are fitted, the longer downtime first and the
+    other the next slot: ``1 + max(d_long, 1 + d_short)`` (the env grounds a row ``1 + d``
+    slots after a replacement, a later one extending it); ``1 + max(down)`` when the
+    downtimes differ by at least one slot (the defaults: 2), one slot more when they are
+    equal."""
+    short, long_ = sorted(int(d) for d in down)
+    return 1 + max(long_, 1 + short)
+
+
 def _option_cost(
     h: int,
     left: tuple[int, int],
@@ -129,7 +146,7 @@ def _option_cost(
     slots before the end, then following :func:`plan_cost`."""
     value, price, down = costs[0], costs[1:3], costs[3:5]
     if both:
-        slots = 1 + max(down)
+        slots = _pair_slots(down)
         rest = _round(h - slots, step)
         tail = sum(
             plan_cost(rest, ls, lw, costs, lives, step) for ls in lives[0] for lw in lives[1]
@@ -189,7 +206,7 @@ def _option_cost_known(
     if any(not upcoming[p] for p in kinds):
         return _option_cost(h, left, a, both, costs, lives, 1)
     value, price, down = costs[0], costs[1:3], costs[3:5]
-    slots = 1 + (max(down) if both else down[a])
+    slots = _pair_slots(down) if both else 1 + down[a]
     new, rest = list(left), [upcoming[0], upcoming[1]]
     for p in kinds:
         new[p], rest[p] = upcoming[p][0], upcoming[p][1:]
@@ -334,7 +351,7 @@ class OraclePolicy(Policy):
         due = (age > 0) & (rul <= self.margin) & (rul <= h_all[:, None])
         actions = np.full(n, FLY, dtype=np.int64)
         for r in np.flatnonzero(due.any(axis=1) | (down & self.pending.any(axis=1))):
-            if down[r] and self.pending[r].any():
+            if self.pending[r].any():  # the pair's second part, the slot after the first
                 k = int(np.flatnonzero(self.pending[r])[0])
                 self.pending[r, k] = False
                 if age[r, k] > 0:
@@ -352,9 +369,10 @@ class OraclePolicy(Policy):
                         for names in self.upcoming_names
                     )
                 both = (age[r] > 0).all() and self._decide(int(h_all[r]), rul[r], upcoming)
-            if both:  # seals first; the spring in their downtime slot
-                actions[r] = REPLACE_SEAL
-                self.pending[r, 0] = True
+            if both:  # the longer downtime first (the seals on a tie), the other next slot
+                first = _first_of_pair(self.costs[3:5])
+                actions[r] = REPLACE_SPRING + first
+                self.pending[r, 1 - first] = True
             else:
                 actions[r] = REPLACE_SPRING + int(np.flatnonzero(due[r])[0])
         self.slot += 1

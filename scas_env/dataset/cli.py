@@ -83,6 +83,7 @@ def export_dataset_main(argv: Sequence[str] | None = None) -> int:
             n_workers=args.workers,
             formats=formats,
             overwrite=args.overwrite,
+            progress=not args.quiet,
         )
     except (ValueError, FileExistsError, ModuleNotFoundError) as err:
         parser.error(str(err))

@@ -106,14 +106,16 @@ FLIGHT_COLUMNS: tuple[Column, ...] = (
         "spring_rul_flights",
         "float64",
         "flights",
-        "TRUE spring RUL: expected flights to the critical depth at the unit's own growth "
-        "constants (the env's oracle; inf if the crack is dormant or off)",
+        "TRUE spring RUL: the flights the spring pair still flies, the failing one included, "
+        "at its own future growth draws (exact, fixed when fitted: the env's oracle; inf if "
+        "the crack is dormant or off)",
     ),
     Column(
         "seal_rul_flights",
         "float64",
         "flights",
-        "TRUE seal RUL: expected flights to the critical wear (the env's oracle)",
+        "TRUE seal RUL: the flights the seals still fly, the failing one included (exact, "
+        "as spring_rul_flights)",
     ),
     Column(
         "rul_flights",

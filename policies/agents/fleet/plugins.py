@@ -225,11 +225,18 @@ def load_fleet_agent(
     if kind not in KINDS:
         raise ValueError(f"kind = {kind!r} must be one of {KINDS}")
     trained = tuple(meta.get("obs_names", ()))
-    if trained and tuple(obs_names) != trained:
-        diff = sorted(set(trained) ^ set(obs_names))[:4]
+    names = tuple(obs_names)
+    if trained and names != trained:
+        diff = sorted(set(trained) ^ set(names))[:4]
+        if diff:
+            what = f"first differences: {diff}"
+        else:  # the same names in another order
+            k = next(i for i, (x, y) in enumerate(zip(trained, names, strict=False)) if x != y)
+            what = f"the same names in another order: entry {k} is {names[k]!r}, trained on "
+            what += f"{trained[k]!r}"
         raise ValueError(
             f"{path}: trained on a fleet observation of {len(trained)} entries, this env gives "
-            f"{len(tuple(obs_names))} (first differences: {diff}): another fleet configuration"
+            f"{len(names)} ({what}): another fleet configuration"
         )
     recorded = meta.get("weights_sha256")
     if recorded is not None and recorded != weights_sha256(path):
