@@ -205,7 +205,9 @@ class ScasMaintenanceEnv(gym.Env):
     Truncation after ``episode_slots`` flight slots (default 2000, about 1.7 mean part lives).
     There is no termination: a failure is an event with its cost, not the end.
     ``spec.max_episode_steps`` is None (the env truncates itself): read
-    ``scenario.episode_slots``.
+    ``scenario.episode_slots``. A step that raises (a particle-filter update failing, e.g.
+    a particle beyond the representable range) leaves the state undefined: the next step
+    asks for ``reset()``.
 
     ## Arguments
 
@@ -249,7 +251,9 @@ class ScasMaintenanceEnv(gym.Env):
     * v2: the current version (in-flight features I8 and I9 that see the faults and feed
       the filters, the pre-flight test as an airworthiness limit, each part's life fixed at
       fitting, the whole-flight growth scatter; both fidelities). Unreleased fix: a fault
-      switched off (``crack_active`` or ``wear_active`` 0) is known to the monitor.
+      switched off (``crack_active`` or ``wear_active`` 0) is known to the monitor. Known
+      defects kept bit for bit until the next version (the low quantile at exact ties, a
+      cloud wholly past critical): docs/findings.md, "Known defects".
     * v0 and v1 are retired (CHANGELOG.md).
 
     ## Example
@@ -380,9 +384,13 @@ class ScasMaintenanceEnv(gym.Env):
         ):
             raise ValueError(f"action = {action!r} is not in Discrete(4): {ACTION_NAMES}")
         self._action[0] = action
-        self.batch.slot(self._row, self._action)
-        truncated = bool(a["slot"][0] >= self.setup.scenario.episode_slots)
-        obs, info = self._outputs()
+        try:  # reset_needed_on_error inline (a hot path: no context manager)
+            self.batch.slot(self._row, self._action)
+            truncated = bool(a["slot"][0] >= self.setup.scenario.episode_slots)
+            obs, info = self._outputs()
+        except BaseException:
+            self._started = False
+            raise
         if self._renderer is not None:
             self._renderer.observe(self)
             if self.render_mode == "human":

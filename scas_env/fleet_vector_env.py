@@ -27,6 +27,7 @@ from gymnasium.utils import seeding
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
+from scas_env.core.batch import reset_needed_on_error
 from scas_env.core.fleet.batch import FleetBatch
 from scas_env.core.fleet.view import FleetView
 from scas_env.fleet_env import check_fleet_action, fleet_action_space, make_fleet_setup
@@ -115,6 +116,10 @@ class ScasFleetVectorEnv(VectorEnv):
             self._actions[b] = check_fleet_action(
                 arr[b], self.single_action_space, self.config, name=f"actions[{b}]"
             )
+        with reset_needed_on_error(self):
+            return self._step(n)
+
+    def _step(self, n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, dict]:
         resetting = self._autoreset.copy()
         active = np.flatnonzero(~resetting)
         rewards = np.zeros(n)

@@ -27,7 +27,7 @@ from gymnasium.utils import seeding
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
-from scas_env.core.batch import ActuatorBatch
+from scas_env.core.batch import ActuatorBatch, reset_needed_on_error
 from scas_env.core.info import build_info
 from scas_env.core.observation import ObservationLayout
 from scas_env.env import ACTION_NAMES, make_setup
@@ -158,6 +158,13 @@ class ScasMaintenanceVectorEnv(VectorEnv):
             active = np.ones(n, dtype=np.bool_)
         elif not (isinstance(active, np.ndarray) and active.shape == (n,) and active.dtype == bool):
             raise ValueError(f"active must be a bool array of shape ({n},), got {active!r}")
+        with reset_needed_on_error(self):
+            return self._step_rows(act, active, outputs)
+
+    def _step_rows(
+        self, act: np.ndarray, active: np.ndarray, outputs: bool
+    ) -> tuple[Any, np.ndarray, np.ndarray, np.ndarray, dict | None]:
+        n = self.num_envs
         a = self.a
         a["terms"].fill(0.0)
         a["wasted_now"].fill(0.0)

@@ -602,3 +602,25 @@ def test_physics_episode_flies_tests_and_renews_parts() -> None:
         assert env.observation_space.contains(obs) and np.isfinite(r)
     assert info["tests"] == 1 and info["replacements"] == {"spring": 1, "seal": 1}
     assert info["flights"] >= 3 and np.all(np.isfinite(list(info["features"].values())))
+
+
+def test_a_failed_filter_update_ends_the_episode_until_reset() -> None:
+    """A particle pushed out of range makes the next learning update fail. That step had
+    grown the world without booking the slot; the env then went on from that state (and a
+    vector env dropped the other rows' replacements). Now the next step asks for reset()."""
+    from scas_env.vector_env import ScasMaintenanceVectorEnv
+
+    env = ScasMaintenanceEnv(n_particles=100)
+    venv = ScasMaintenanceVectorEnv(2, n_particles=100)
+    for face, step in ((env, lambda: env.step(0)), (venv, lambda: venv.step(np.array([0, 3])))):
+        face.reset(seed=1)
+        for _ in range(5):
+            step()
+        face.batch.a["x"][0, 0, 3] = 1e200
+        with pytest.raises(FloatingPointError, match=r"call reset\(\)"):
+            for _ in range(20):  # the next learning update (a batch of 10 flights)
+                step()
+        with pytest.raises(RuntimeError, match=r"call reset\(\) before step\(\)"):
+            step()
+        face.reset(seed=1)
+        step()

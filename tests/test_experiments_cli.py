@@ -23,6 +23,7 @@ COMMANDS = (
     "build.calibration",
     "build.mission_types",
     "build.surrogate",
+    "cloud_past_critical",
     "cross_error",
     "damage_scatter",
     "dashboard_animation",

@@ -578,3 +578,25 @@ def test_a_fleet_flight_longer_than_the_actuator_s_is_refused() -> None:
     demand = DemandModel(flight_hours_per_flight=3.0, mission_mix=(0.5, 0.3, 0.2))
     with pytest.raises(ValueError, match=r"flight_hours_per_flight = 3.0 h must equal .* 1.5 h"):
         gym.make("scas_env/ScasFleet-v0", fleet=FleetConfig(demand=demand))
+
+
+def test_a_failed_filter_update_ends_the_fleet_episode_until_reset() -> None:
+    """As the single env: the failing day is not booked, so the next step asks for reset()
+    (single fleet and fleet vector env; every aircraft asks for missions)."""
+    env = ScasFleetEnv(fleet=SMALL)
+    venv = ScasFleetVectorEnv(2, fleet=SMALL)
+    nvec = env.action_space.nvec
+    fly = np.where(np.arange(nvec.size) % (1 + SMALL.actuators_per_aircraft) == 0, 1, 0)
+    for face, step in (
+        (env, lambda: env.step(fly)),
+        (venv, lambda: venv.step(np.stack([fly, fly]))),
+    ):
+        face.reset(seed=1)
+        face.fleet.actuators.a["x"][:, 0, 3] = 1e200  # every actuator's spring cloud
+        with pytest.raises(FloatingPointError, match=r"call reset\(\)"):
+            for _ in range(SMALL.episode_days):
+                step()
+        with pytest.raises(RuntimeError, match=r"call reset\(\) before step\(\)"):
+            step()
+        face.reset(seed=1)
+        step()

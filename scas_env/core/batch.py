@@ -12,7 +12,8 @@ otherwise); the rare events (a reset, a part fitted) are Python over the same ar
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from typing import Any
 
 import numpy as np
@@ -56,6 +57,19 @@ def plain_rows(x: np.ndarray) -> bool:
         and x.flags.c_contiguous
         and x.flags.writeable
     )
+
+
+@contextmanager
+def reset_needed_on_error(face: Any) -> Iterator[None]:
+    """Run one step of ``face`` (an env over a batch, with a ``_started`` flag). A step that
+    raises (a filter update failing part-way: the world grown, the slot not booked, other
+    rows' events left) leaves the batch undefined: ``face._started`` is cleared, so its next
+    step asks for ``reset()`` instead of going on."""
+    try:
+        yield
+    except BaseException:
+        face._started = False
+        raise
 
 
 class ActuatorBatch(ActuatorState):
@@ -244,4 +258,4 @@ class ActuatorBatch(ActuatorState):
         return out
 
 
-__all__ = ["REPLACED", "ActuatorBatch", "compiled_for", "plain_rows"]
+__all__ = ["REPLACED", "ActuatorBatch", "compiled_for", "plain_rows", "reset_needed_on_error"]

@@ -527,7 +527,7 @@ def raise_status(code: int) -> None:
     """Raise what a filter kernel's non-zero row status means; nothing for 0."""
     if code:
         error, message = STATUS_MESSAGES[code]
-        raise error(f"a particle-filter update failed: {message}")
+        raise error(f"a particle-filter update failed: {message}; call reset()")
 
 
 def _physics_config(batch: ActuatorState, e: int, rng: np.random.Generator, healthy: bool):
