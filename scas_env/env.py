@@ -163,7 +163,7 @@ class ScasMaintenanceEnv(gym.Env):
     RUL entries saturate at ``rul_cap_flights``; feature entries at their bounds (the raw
     values are in ``info["features"]``); ages at ``episode_slots`` (an ``"in_service"``
     part older than that at reset reads as the bound until it is replaced). ``"features"``:
-    entries 0-8 and 15-19 (no filter).
+    entries 0-8 and 15-19 (no filter entries).
     ``"state"``: the truth (an oracle's view): crack fraction of critical, wear fraction,
     each part's remaining life, spring age, seal age, downtime, then the whole lives of the
     next three springs and seals the episode will fit. ``"dict"``: a ``Dict`` of all groups.

@@ -67,7 +67,7 @@ NEVER_FLIGHTS = 1e300
 #: what a row's non-zero status means (the exception raised for it)
 STATUS_MESSAGES = {
     1: (FloatingPointError, "a filter prediction put a particle outside the representable range"),
-    2: (ValueError, "a learning feature gave a non-finite log-likelihood"),
+    2: (ValueError, "a feature (in flight or tested) gave a non-finite log-likelihood"),
     3: (FloatingPointError, "particle weights degenerated (non-finite likelihoods)"),
     4: (ValueError, "weights must be finite, >= 0, with a positive sum"),
     5: (ValueError, "RUL values must be finite and >= 0"),

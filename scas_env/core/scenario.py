@@ -35,9 +35,9 @@ class Scenario(Validated):
         campaigns; microseconds per step) or ``"physics"`` (the actuator is simulated for
         every pre-flight test and flight window). Both grow the parts with the same
         calibrated whole-flight growth and each part's own growth draws.
-    obs_mode : ``"features+rul"``, ``"features"`` (no particle filter), ``"state"`` (true
-        severities and lives: the oracle's view) or ``"dict"`` (every quantity, for
-        inspection).
+    obs_mode : ``"features+rul"``, ``"features"`` (no filter entries; the filters still
+        correct the alarms' readings), ``"state"`` (true severities and lives: the oracle's
+        view) or ``"dict"`` (every quantity, for inspection).
     initial_health : ``"new"`` (new parts at reset), ``"random"`` (each part starts at a
         uniformly drawn fraction of its life, its age unknown to the monitor) or
         ``"in_service"`` (each part has flown a uniformly drawn fraction of its own life,
