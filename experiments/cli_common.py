@@ -14,9 +14,22 @@ from pathlib import Path
 from typing import Any
 
 from scas_env.actuator.params import ScasParams
-from scas_env.cli_args import _integer_at_least, config_file
+from scas_env.cli_args import (
+    _integer_at_least,
+    config_file,
+    make_parser,
+    nonneg_int,
+    positive_int,
+)
 
-__all__ = ["add_params_arg", "check_out_file", "check_out_stem", "int_at_least", "load_params"]
+__all__ = [
+    "add_params_arg",
+    "check_out_file",
+    "check_out_stem",
+    "int_at_least",
+    "load_params",
+    "vector_steps_parser",
+]
 
 
 def int_at_least(lo: int) -> Any:
@@ -90,3 +103,13 @@ def check_out_stem(
     for suffix in suffixes:
         check_out_file(parser, stem.with_suffix(suffix), overwrite)
     return stem
+
+
+def vector_steps_parser(prog: str, doc: str | None, *, steps: int, seed: int) -> Any:
+    """The parser of a count over the native vector env's steps: ``--steps``, ``--seed``
+    (the envs' and the actions'), ``--no-progress``."""
+    parser = make_parser(prog, doc)
+    parser.add_argument("--steps", type=positive_int, default=steps, help="vector steps")
+    parser.add_argument("--seed", type=nonneg_int, default=seed, help="env and action seed")
+    parser.add_argument("--no-progress", action="store_true", help="no progress bar")
+    return parser

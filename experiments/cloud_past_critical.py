@@ -11,7 +11,6 @@ the default models and with the world's growth scaled (``Mismatch``)::
 
 from __future__ import annotations
 
-import argparse
 from collections.abc import Sequence
 
 import gymnasium as gym
@@ -19,7 +18,7 @@ import numpy as np
 from tqdm import tqdm
 
 import scas_env
-from scas_env.cli_args import positive_int
+from experiments.cli_common import vector_steps_parser
 from scas_env.core.mismatch import Mismatch
 
 #: world growth scales counted besides the default models
@@ -51,12 +50,9 @@ def count_past_critical(
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(
-        prog="python -m experiments.cloud_past_critical", description=__doc__.split("\n\n")[0]
+    parser = vector_steps_parser(
+        "python -m experiments.cloud_past_critical", __doc__, steps=2000, seed=1000
     )
-    parser.add_argument("--steps", type=positive_int, default=2000, help="vector steps")
-    parser.add_argument("--seed", type=int, default=1000, help="env seed (held out: >= 1000)")
-    parser.add_argument("--no-progress", action="store_true", help="no progress bar")
     args = parser.parse_args(argv)
     for growth in (1.0, *GROWTH_SCALES):
         out = count_past_critical(args.steps, args.seed, growth, progress=not args.no_progress)

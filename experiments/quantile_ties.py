@@ -14,7 +14,6 @@ sorted RULs and weights, and by how many particles::
 
 from __future__ import annotations
 
-import argparse
 from collections.abc import Sequence
 
 import gymnasium as gym
@@ -22,8 +21,8 @@ import numpy as np
 from tqdm import tqdm
 
 import scas_env
+from experiments.cli_common import vector_steps_parser
 from prognostics.rul import weighted_quantile
-from scas_env.cli_args import positive_int
 
 #: the trained policy's mix of actions: fly, test, replace the spring, replace the seals
 MIX = (0.90, 0.09, 0.005, 0.005)
@@ -56,12 +55,7 @@ def count_ties(
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(
-        prog="python -m experiments.quantile_ties", description=__doc__.split("\n\n")[0]
-    )
-    parser.add_argument("--steps", type=positive_int, default=3000, help="vector steps")
-    parser.add_argument("--seed", type=int, default=0, help="env seed and the actions' seed")
-    parser.add_argument("--no-progress", action="store_true", help="no progress bar")
+    parser = vector_steps_parser("python -m experiments.quantile_ties", __doc__, steps=3000, seed=0)
     args = parser.parse_args(argv)
     out = count_ties(args.steps, args.seed, progress=not args.no_progress)
     print(
