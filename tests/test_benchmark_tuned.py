@@ -110,6 +110,19 @@ def test_files_the_benchmark_cannot_run_are_usage_errors(
     assert not (tmp_path / "b").exists()
 
 
+def test_the_training_seed_recorded_beside_a_tuning_is_refused_too(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A tuning replicate with another root seed (its manifest's ``train_seed``, 11): scoring
+    it on seed 11 is scoring it on its training episodes (the check knew only seed 1)."""
+    (tmp_path / "tuning.json").write_text('{"filter": {"best_params": {}}}')
+    (tmp_path / "manifest.json").write_text('{"seeds": {"train_seed": 11, "sampler_seed": 7}}')
+    argv = ["--tuned", str(tmp_path / "tuning.json"), "--episodes", "1", "--out"]
+    with pytest.raises(SystemExit):
+        benchmark_main([*argv, str(tmp_path / "b"), "--seed", "11"])
+    assert "the tuning's training episodes" in capsys.readouterr().err
+
+
 def test_the_shipped_ladder_s_rules_run_at_its_tuned_points(tmp_path: Path) -> None:
     """``--tuned docs/value_v2/ladder.json`` (scas-value's file): each family at the ladder's
     tuned parameters (the noisy oracles with their sigma), row for row as run directly."""

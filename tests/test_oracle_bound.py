@@ -173,3 +173,20 @@ def test_the_oracle_fits_the_spring_first_when_its_downtime_is_longer() -> None:
     second, _ = oracle.predict(np.array([0.0, 0.99, 5000.0, 1.0, 0.0, 800.0, 1.0]))
     assert (int(first), int(second)) == (2, 3)
     assert not oracle.pending.any()
+
+
+def test_one_episode_start_flag_restarts_every_row_of_a_batch() -> None:
+    """SB3 passes a flag per env; a single ``True`` for a batch was ignored (the shapes
+    differ), so the slot counters ran on into the next episodes."""
+    from policies.rules.oracle import OraclePolicy
+
+    names = ("crack_fraction", "wear_fraction", "spring_rul_true", "seal_rul_true",
+             "spring_age", "seal_age", "downtime")  # fmt: skip
+    oracle = OraclePolicy(names, episode_slots=2000)
+    oracle.reset()
+    batch = np.tile([0.1, 0.1, 900.0, 900.0, 5.0, 5.0, 0.0], (3, 1))
+    for _ in range(4):
+        oracle.predict(batch)
+    assert oracle.slot.tolist() == [4, 4, 4]
+    oracle.predict(batch, episode_start=True)
+    assert oracle.slot.tolist() == [1, 1, 1]

@@ -218,9 +218,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     for target in args.policy:
         specs.append(PolicySpec("factory", {"target": target}, label=target, module=module))
     if args.tuned is not None:
-        from policies.value.tuning import TRAIN_SEED
-
-        if args.seed == TRAIN_SEED:  # scas-tune's episodes (one actuator and fleets)
+        if args.seed == _recorded_train_seed(args.tuned):  # the tuning's episodes
             parser.error(
                 f"--seed {args.seed} with --tuned: the tuning's training episodes; score tuned "
                 "rules on held-out seeds (e.g. --seed 2, the documented held-out root)"
@@ -300,6 +298,21 @@ def _fitting_agents(specs: list[Any], *, slots: int, env_kwargs: dict[str, Any])
                 continue
         kept.append(spec)
     return kept
+
+
+def _recorded_train_seed(path: Path) -> int:
+    """The training seed of the tuning behind ``--tuned FILE``: its folder's manifest
+    (``seeds`` of scas-tune, else ``config``), else scas-tune's default root seed."""
+    import json
+
+    from policies.value.tuning import TRAIN_SEED
+
+    try:
+        manifest = json.loads((Path(path).parent / "manifest.json").read_text())
+        seeds, config = manifest.get("seeds") or {}, manifest.get("config") or {}
+        return int(seeds.get("train_seed", config.get("train_seed", TRAIN_SEED)))
+    except (OSError, ValueError, TypeError, AttributeError):
+        return TRAIN_SEED
 
 
 def _tuned_specs(parser: Any, path: Path, *, fleet: bool) -> list[Any]:

@@ -96,6 +96,8 @@ class NoisyOraclePolicy(NestedRule):
         anew (once: their ages are not compared with the last episode's)."""
         if episode_start is not None and self.z is not None:
             start = np.atleast_1d(np.asarray(episode_start, dtype=bool))
+            if start.size == 1:  # one flag for the whole batch
+                start = np.full(self.z.shape[0], bool(start[0]))
             if start.shape == (self.z.shape[0],) and start.any():
                 for k in range(2):
                     self._draw(start, k)

@@ -306,6 +306,8 @@ class OraclePolicy(Policy):
         """As :meth:`Policy.predict`; rows with ``episode_start`` set start over."""
         if episode_start is not None and self.slot is not None:
             start = np.atleast_1d(np.asarray(episode_start, dtype=bool))
+            if start.size == 1:  # one flag for the whole batch
+                start = np.full(self.slot.shape, bool(start[0]))
             if start.shape == self.slot.shape:
                 self.slot[start] = 0
                 self.pending[start] = False
