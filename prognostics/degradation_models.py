@@ -29,7 +29,7 @@ Because ``g`` is piecewise linear, ``I`` is exact per segment:
 ``int_{x_k}^{x} dt / g = log1p(s (x - x_k) / g_k) / s`` with slope ``s``. The step-by-step
 Euler simulation (:meth:`TabulatedRateModel.simulate_steps_to_threshold`, the reference)
 needs about ``1/2 ln(g(H) / g(x))`` more steps than the integral for a growing ``g``
-(each Euler step under-shoots by ``1/2 theta g' u^2 g``), i.e. less than one step when the
+(each Euler step under-shoots by ``1/2 theta^2 g' u^2 g``), i.e. less than one step when the
 rate grows less than e^2 = 7.4 times on the way.
 
     >>> m = linear_wear_model(2.0e-9)

@@ -131,6 +131,9 @@ def run_prognosis(
     check.instance("hazard", hazard, HazardZone)
     check.integer("start_index", start_index, ge=0, le=u.size - 1)
     pf = ParticleFilter(process, measurement, n_particles, rng)
+    # the hazard's draws (a Gaussian zone) from a child stream: the filter's own draws do
+    # not depend on when the predictions start
+    hazard_rng = rng.spawn(1)[0]
     pf.reset(x0, theta0)
     n = u.size
     out = {k: np.full(n, math.nan) for k in ("x_mean", "x_std", "theta_mean")}
@@ -147,7 +150,7 @@ def run_prognosis(
         )
         if j < start_index:
             continue
-        rul = predict_rul(pf.x.copy(), pf.theta, process, hazard, 1.0, rng)
+        rul = predict_rul(pf.x.copy(), pf.theta, process, hazard, 1.0, hazard_rng)
         w = pf.weights.copy()
         summary = summarize_rul(rul, w, horizon_steps=0.0)
         ruls["mean"][j], ruls["median"][j] = summary.mean, summary.median

@@ -138,7 +138,8 @@ class GaussianRul:
         check.real("threshold", threshold)
         m, p = check_gaussian_state(mean, cov)
         self.model = model
-        self.d_threshold = float(model.damage(np.array([float(threshold)]))[0])
+        self.threshold = float(threshold)
+        self.d_threshold = float(model.damage(np.array([self.threshold]))[0])
         self.m_x, self.m_l = float(m[0]), float(m[1])
         self.s_x = math.sqrt(p[0, 0])
         self.s_l = math.sqrt(p[1, 1])
@@ -158,7 +159,6 @@ class GaussianRul:
         self._l_nodes = self.m_l + self.s_l * nl[0]
         self._l_w = nl[1]
         self._m_x_l = self.m_x + self._b_xl * (self._l_nodes - self.m_l)
-        self._rate_at_mean = float(model.rate_at(np.array([self.m_x]))[0])
 
     # ------------------------------------------------------------------ distribution
     def _cdf_over_l(self, t: float) -> float:
@@ -182,12 +182,18 @@ class GaussianRul:
     def cdf(self, t: float) -> float:
         """``P(RUL <= t)`` for ``t >= 0`` usage units."""
         t = check.real("t", t, ge=0.0)
-        if t == 0.0 or self.s_x == 0.0:  # already failed; or exact: one node of x
+        if t == 0.0:  # already failed: P(x >= H), exact (I increasing)
+            if self.s_x == 0.0:
+                return float(self.m_x >= self.threshold)
+            return float(ndtr((self.m_x - self.threshold) / self.s_x))
+        if self.s_x == 0.0:  # exact: one node of x
             return self._cdf_over_x(t)
         if self.s_l == 0.0:  # exact: one node of l
             return self._cdf_over_l(t)
-        # spread of the failure severity I^{-1}(I(H) - theta t) due to l, in x units
-        spread_l = self._rate_at_mean * math.exp(self.m_l) * t * self.s_l
+        # spread of the failure severity x_c(l) = I^{-1}(I(H) - e^l t) due to l, in x units,
+        # at the failure severity of the mean l: |dx_c/dl| = g(x_c) e^l t
+        x_c = self.model.inverse_damage(np.array([self.d_threshold - math.exp(self.m_l) * t]))
+        spread_l = float(self.model.rate_at(x_c)[0]) * math.exp(self.m_l) * t * self.s_l
         if self._s_x_l >= _SPREAD_RATIO * spread_l:
             return self._cdf_over_l(t)
         return self._cdf_over_x(t)

@@ -272,3 +272,22 @@ def test_weighted_quantile_needs_no_moments() -> None:
     """Weights whose variance sum overflows still have quantiles (inverted CDF)."""
     values, weights = np.array([0.0, 1e6]), np.array([1e300, 1e300])
     assert weighted_quantile(values, weights, np.array([0.5, 0.75])).tolist() == [0.0, 1e6]
+
+
+def test_the_filter_of_a_prognosis_run_does_not_depend_on_when_predictions_start() -> None:
+    """A Gaussian hazard zone draws thresholds for each prediction; those draws came from the
+    filter's own Generator, so the filtered path changed with ``start_index``. They come
+    from a child stream: the path is the same, bit for bit."""
+    from prognostics.measurement import MeasurementModel
+    from prognostics.prognosis_run import run_prognosis
+
+    meas = MeasurementModel("poly", [0.0], [0.05], coef=[0.0, 1.0])
+    paths = [
+        run_prognosis(
+            linear_wear_model(1.0, process_noise_std=0.1), meas, np.ones(8), np.arange(1.0, 9.0),
+            HazardZone(10.0, 0.5), n_particles=500, rng=np.random.default_rng(0), x0=0.0,
+            theta0=lambda r, n: np.exp(0.2 * r.standard_normal(n)), start_index=start,
+        ).x_mean
+        for start in (0, 4)
+    ]  # fmt: skip
+    np.testing.assert_array_equal(paths[0], paths[1])

@@ -198,3 +198,47 @@ def test_gaussian_rul_rejects_bad_states() -> None:
         GaussianRul(model, 1.0, [0.0], np.eye(2))
     with pytest.raises(ValueError, match=r"q = 1\.0"):
         GaussianRul(model, 1.0, [0.0, 0.0], np.eye(2)).quantile(1.0)
+
+
+@pytest.mark.parametrize("m_x", [9.0, 9.5, 9.9, 10.3])
+def test_the_probability_of_having_failed_is_exact_and_the_cdf_rises(m_x: float) -> None:
+    """``cdf(0)`` = P(x >= H) = Phi((m_x - H) / s_x); it was a Gauss-Hermite sum of a step
+    (0.119 against 0.159 at m_x = 9) and could exceed cdf(1e-9)."""
+    model = linear_wear_model(1.0)
+    rul = GaussianRul(model, 10.0, [m_x, 0.0], np.diag([1.0, 0.04]))
+    exact = float(norm.sf(10.0, m_x, 1.0))
+    assert rul.cdf(0.0) == pytest.approx(exact, rel=1e-12)
+    assert rul.cdf(0.0) <= rul.cdf(1e-9) + 1e-12
+
+
+def test_the_cdf_after_a_long_prediction_matches_quadrature_over_log_theta() -> None:
+    """A UKF state after predicting 60 steps of a Paris crack (log theta correlated 0.85
+    with x): the failure severity I^-1(I(H) - e^l t) lies far from the mean x, where the
+    growth rate is ten times the mean's; the outer coordinate chosen at the mean's rate was
+    the wrong one (0.94697 against 0.94997 at t = 772)."""
+    from scipy.integrate import quad
+
+    grid = np.linspace(1e-3, 2e-2, 50)
+    proc = paris_crack_model(grid, 1e-5 * (grid / 1e-3) ** 1.5, scheme="exact")
+    f = UnscentedFilter(proc, MeasurementModel("poly", [0.0], [1e-4], coef=[0.0, 1.0]))
+    f.reset(2e-3, 2e-5, 0.0, 0.3)
+    f.predict(60.0)
+    m, p = f.mean, f.cov
+    h = 1e-2
+    rul = GaussianRul(proc, h, m, p)
+    d_h = float(proc.damage(np.array([h]))[0])
+    s_l = math.sqrt(p[1, 1])
+    b = p[0, 1] / p[1, 1]
+    s_x_l = math.sqrt(p[0, 0] - p[0, 1] * b)
+
+    def by_quadrature(t: float) -> float:
+        def integrand(log_theta: float) -> float:
+            x_c = float(proc.inverse_damage(np.array([d_h - math.exp(log_theta) * t]))[0])
+            mean_x = m[0] + b * (log_theta - m[1])
+            return norm.pdf(log_theta, m[1], s_l) * norm.cdf((mean_x - x_c) / s_x_l)
+
+        lo, hi = m[1] - 12 * s_l, m[1] + 12 * s_l
+        return quad(integrand, lo, hi, limit=500, epsabs=1e-13)[0]
+
+    for t in (5.0, 400.0, 772.0, 816.5):
+        assert rul.cdf(t) == pytest.approx(by_quadrature(t), abs=2e-4), t
