@@ -384,8 +384,9 @@ def episode_intervals(
 ) -> list[dict[str, float]]:
     """Per reliability bin, the 95 % interval of the observed frequency with the episodes
     resampled (percentile bootstrap, :func:`scipy.stats.bootstrap`): the records of one life
-    are dependent, so the Wilson interval over records is too narrow. NaN for a bin with
-    records from fewer than two episodes."""
+    are dependent, so the Wilson interval over records is too narrow. Only the episodes with
+    records in a bin are resampled for it (the interval lies between their frequencies); NaN
+    for a bin with records from fewer than two episodes."""
     edges = np.asarray(bins)
     return _episode_intervals(risk_bin(risk, edges), hit, episode, rng, edges.size - 1, resamples)
 
@@ -412,12 +413,19 @@ def _episode_intervals(
         sel = which == b
         n = np.bincount(ep_index[sel], minlength=episodes.size).astype(np.float64)
         k = np.bincount(ep_index[sel], weights=hit[sel], minlength=episodes.size)
-        if np.count_nonzero(n) < 2:
+        # the episodes with records in the bin: a resample of empty ones has no frequency
+        # (it once counted as 0 and pulled a sparse bin's lower bound to 0)
+        k, n = k[n > 0], n[n > 0]
+        if n.size < 2:
             out.append({"episode_ci_low": math.nan, "episode_ci_high": math.nan})
+            continue
+        if np.all(k * n[0] == k[0] * n):  # the same frequency in every episode
+            freq = float(k[0] / n[0])
+            out.append({"episode_ci_low": freq, "episode_ci_high": freq})
             continue
         res = bootstrap(
             (k, n),
-            lambda k_, n_, axis=-1: k_.sum(axis) / np.maximum(n_.sum(axis), 1.0),
+            lambda k_, n_, axis=-1: k_.sum(axis) / n_.sum(axis),
             paired=True,
             vectorized=True,
             n_resamples=resamples,
@@ -555,14 +563,23 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(format_by_life(by_life(lives)))
         return 0
     if args.compare is not None:
-        from experiments.belief_comparison import compare_runs, format_comparison, read_lives
+        from experiments.belief_comparison import (
+            check_same_episodes,
+            compare_runs,
+            format_comparison,
+            read_lives,
+        )
 
         try:
+            check_same_episodes(args.compare)
             a, b = (read_lives(folder) for folder in args.compare)
-        except FileNotFoundError as exc:
+        except (FileNotFoundError, ValueError) as exc:
             parser.error(str(exc))
         rows = compare_runs(a, b, np.random.default_rng(args.seed))
         print(f"paired: A = {args.compare[0]}, B = {args.compare[1]} (info truth)")
+        only_a, only_b = len(set(a) - set(b)), len(set(b) - set(a))
+        if only_a or only_b:  # lives one run recorded at a stage and the other did not
+            print(f"left out, unpaired: {only_a} records of A only, {only_b} of B only")
         print(format_comparison(rows))
         return 0
     if args.out is not None:

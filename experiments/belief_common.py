@@ -8,6 +8,7 @@ from __future__ import annotations
 import argparse
 import json
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -53,7 +54,34 @@ def wilson_share(hits: np.ndarray) -> tuple[float, float, float, int]:
     return k / n, float(ci.low), float(ci.high), n
 
 
-__all__ = ["INTERVAL", "LIFE_COLUMNS", "TARGETS", "StudyResult", "wilson_share"]
+def check_same_settings(
+    folders: Sequence[str | Path], keys: Sequence[str], name: str = "manifest.json"
+) -> None:
+    """Refuse results folders whose recorded ``config`` (in their ``name`` file) differ in
+    ``keys``: paired by episode index, their records would pair other episodes.
+    ``FileNotFoundError`` without the file, ``ValueError`` naming the settings."""
+    seen = []
+    for folder in folders:
+        path = Path(folder) / name
+        try:
+            config = json.loads(path.read_text())["config"]
+        except (OSError, ValueError, KeyError, TypeError) as exc:
+            raise FileNotFoundError(f"{path}: no recorded configuration ({exc})") from None
+        seen.append(tuple(config.get(k) for k in keys))
+    if len(set(seen)) > 1:
+        raise ValueError(
+            f"the runs differ in {tuple(keys)}: {seen}; a paired comparison needs the same episodes"
+        )
+
+
+__all__ = [
+    "INTERVAL",
+    "LIFE_COLUMNS",
+    "TARGETS",
+    "StudyResult",
+    "check_same_settings",
+    "wilson_share",
+]
 
 
 def add_study_options(

@@ -27,6 +27,7 @@ preset, so independent; later ones of one episode are not).
 from __future__ import annotations
 
 import csv
+import math
 from collections import defaultdict
 from collections.abc import Sequence
 from pathlib import Path
@@ -35,7 +36,7 @@ from typing import Any
 import numpy as np
 from scipy.stats import bootstrap, norm
 
-from experiments.belief_common import wilson_share
+from experiments.belief_common import check_same_settings, wilson_share
 
 #: metrics compared (columns of ``lives.csv``, 0/1 per life)
 METRICS: tuple[str, ...] = ("covered", "undercut")
@@ -58,6 +59,12 @@ def read_lives(folder: str | Path) -> dict[Key, dict[str, float]]:
                    int(r["life"]))  # fmt: skip
             out[key] = {m: float(r[m]) for m in (*METRICS, "log_ratio")}
     return out
+
+
+def check_same_episodes(folders: Sequence[str | Path]) -> None:
+    """Refuse two belief studies of other seeds (their ``study.json``): pairing by episode
+    index would pair other lives (runs of one seed share their first episodes)."""
+    check_same_settings(folders, ("seed",), name="study.json")
 
 
 def _cluster_interval(
@@ -102,7 +109,7 @@ def paired_difference(
         "diff": diff,
         "ci_low": low,
         "ci_high": high,
-        "mdd": MDD_FACTOR * se,
+        "mdd": MDD_FACTOR * se if se > 0.0 else math.nan,  # no spread: not estimable
     }
 
 
@@ -137,7 +144,8 @@ def paired_sd_difference(
         low, high, se = _cluster_interval(tuple(sums), diff_of, rng, n_resamples)
     return {
         "lives": int(a.size), "episodes": int(eps.size), "share_a": sd_a, "share_b": sd_b,
-        "diff": sd_b - sd_a, "ci_low": low, "ci_high": high, "mdd": MDD_FACTOR * se,
+        "diff": sd_b - sd_a, "ci_low": low, "ci_high": high,
+        "mdd": MDD_FACTOR * se if se > 0.0 else math.nan,  # no spread: not estimable
     }  # fmt: skip
 
 

@@ -250,6 +250,11 @@ def paired_rows(
         row.update({"env_" + k[3:]: v for k, v in r.items() if k.startswith("pf_")})
         row["policy"] = f"{r['part']} {r['policy']}"
         out.append(row)
+    if mine and not out:
+        raise ValueError(
+            "no record of the joint filter's run is in the joint reference's (another seed, "
+            "stage or scenario?)"
+        )
     return out
 
 

@@ -46,7 +46,7 @@ from experiments.belief_calibration import (
     run_episode,
     trace_table,
 )
-from experiments.belief_common import add_study_options
+from experiments.belief_common import add_study_options, check_same_settings
 from experiments.belief_output import write_csv
 from policies.benchmark.stats import paired_difference
 from prognostics.metrics import RiskMap, brier_score, fit_risk_map
@@ -227,6 +227,7 @@ def compare(a: str | Path, b: str | Path) -> list[dict[str, Any]]:
         with path.open(newline="") as fh:
             runs.append({(r["preset"], r["policy"], r["part"], int(r["episode"])): r
                          for r in csv.DictReader(fh)})  # fmt: skip
+    check_same_settings((a, b), ("seed",))  # episode index k: seed + k in both
     common = sorted(set(runs[0]) & set(runs[1]))
     if not common:
         raise ValueError(f"{a} and {b} share no (preset, policy, part, episode)")

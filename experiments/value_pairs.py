@@ -18,6 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
+from experiments.belief_common import check_same_settings
 from policies.benchmark.stats import Interval, paired_difference
 
 
@@ -36,6 +37,7 @@ def arm_rewards(folder: Path) -> dict[str, dict[int, float]]:
 def paired_arms(a: Path, b: Path) -> dict[str, Interval]:
     """Per arm in both runs: B - A, paired by episode (the episode sets must be equal)."""
     ra, rb = arm_rewards(a), arm_rewards(b)
+    check_same_settings((a, b), ("held_out_seed", "slots"))
     out = {}
     for arm in [k for k in ra if k in rb]:
         if set(ra[arm]) != set(rb[arm]):
@@ -55,7 +57,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser.add_argument("a", type=Path, help="scas-value --out folder of run A")
     parser.add_argument("b", type=Path, help="scas-value --out folder of run B")
     args = parser.parse_args(argv)
-    for arm, iv in paired_arms(args.a, args.b).items():
+    try:
+        pairs = paired_arms(args.a, args.b)
+    except (FileNotFoundError, ValueError) as exc:
+        parser.error(str(exc))
+    for arm, iv in pairs.items():
         print(f"{arm:>24}  B - A {iv.mean:+12,.0f} [{iv.low:+,.0f}, {iv.high:+,.0f}]  "
               f"MDD {iv.mdd:,.0f}  n={iv.n}")  # fmt: skip
     return 0

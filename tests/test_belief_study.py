@@ -126,7 +126,8 @@ def test_paired_difference_against_a_direct_cluster_bootstrap() -> None:
     assert out["ci_high"] == pytest.approx(hi, abs=0.006)
     assert out["mdd"] == pytest.approx(MDD_FACTOR * stats.std(ddof=1), rel=0.08)
     same = paired_difference(a, a, episode, np.random.default_rng(1))
-    assert (same["diff"], same["ci_low"], same["ci_high"], same["mdd"]) == (0.0, 0.0, 0.0, 0.0)
+    assert (same["diff"], same["ci_low"], same["ci_high"]) == (0.0, 0.0, 0.0)
+    assert math.isnan(same["mdd"])  # no spread: the MDD is not estimable (0 claimed any)
     with pytest.raises(ValueError, match="equal non-empty"):
         paired_difference(a, b[:-1], episode, rng)
 
@@ -157,7 +158,8 @@ def test_paired_sd_difference_against_a_direct_cluster_bootstrap() -> None:
     assert gap["lives"] == 597
     assert gap["diff"] == pytest.approx(np.std(b[3:], ddof=1) - np.std(a[3:], ddof=1))
     same = paired_sd_difference(a, a, episode, np.random.default_rng(1))
-    assert (same["diff"], same["ci_low"], same["ci_high"], same["mdd"]) == (0.0, 0.0, 0.0, 0.0)
+    assert (same["diff"], same["ci_low"], same["ci_high"]) == (0.0, 0.0, 0.0)
+    assert math.isnan(same["mdd"])  # no spread: the MDD is not estimable (0 claimed any)
     with pytest.raises(ValueError, match="an sd needs 2"):
         paired_sd_difference(a[:1], b[:1], episode[:1], rng)
 
@@ -209,3 +211,20 @@ def test_by_life_splits_first_lives_from_later_ones(tmp_path) -> None:
     assert sorted(out) == sorted(
         (m, w) for m in ("covered", "undercut") for w in ("first", "later")
     )
+
+
+def test_compare_refuses_runs_of_other_episodes(tmp_path, capsys) -> None:
+    """Lives are paired by episode index: two runs of other seeds would pair other lives
+    (it printed paired intervals, rc 0)."""
+    import json
+
+    from experiments.belief_calibration import main
+
+    for name, seed in (("a", 1000), ("b", 2000)):
+        (tmp_path / name).mkdir()
+        config = {"config": {"seed": seed, "episodes": 2}}
+        (tmp_path / name / "study.json").write_text(json.dumps(config))
+    with pytest.raises(SystemExit) as done:
+        main(["--compare", str(tmp_path / "a"), str(tmp_path / "b")])
+    assert done.value.code == 2
+    assert "differ in ('seed',): [(1000,), (2000,)]" in capsys.readouterr().err

@@ -116,6 +116,8 @@ def test_pairing_joins_the_same_records_and_refuses_others() -> None:
     assert row["policy"] == "seal test10"
     with pytest.raises(ValueError, match="differ"):
         paired_rows(mine, [{**joint[0], "age": 215.0}])
+    with pytest.raises(ValueError, match="no record of the joint filter's run"):
+        paired_rows(mine, [{**joint[0], "seed": 1001}])  # it returned [] (and --out crashed)
 
 
 def test_against_the_filter_puts_the_environments_beliefs_in_the_ref_columns() -> None:

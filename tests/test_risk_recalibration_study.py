@@ -99,6 +99,7 @@ def test_compare_pairs_two_runs_episode_by_episode(tmp_path) -> None:
         lines += [f"paper,test10,seal,{1000 + e},{float(values[e])!r},{float(values[e]) / 2!r}"
                   for e in range(extra)]  # fmt: skip
         (tmp_path / name / "episodes.csv").write_text("\n".join(lines) + "\n")
+        (tmp_path / name / "manifest.json").write_text('{"config": {"seed": 1000}}')
     (row,) = compare(tmp_path / "a", tmp_path / "b")
     want = ttest_rel(b[:29], a[:29]).confidence_interval(0.95)
     assert row["episodes"] == 29
@@ -107,3 +108,23 @@ def test_compare_pairs_two_runs_episode_by_episode(tmp_path) -> None:
     assert row["mapped_diff"] == pytest.approx(row["raw_diff"] / 2, rel=1e-12)
     with pytest.raises(FileNotFoundError, match=r"episodes\.csv"):
         compare(tmp_path, tmp_path / "a")
+    # a run of other seeds: episode k is another episode (it was paired all the same)
+    (tmp_path / "b" / "manifest.json").write_text('{"config": {"seed": 5000}}')
+    with pytest.raises(ValueError, match=r"differ in \('seed',\): \[\(1000,\), \(5000,\)\]"):
+        compare(tmp_path / "a", tmp_path / "b")
+
+
+def test_a_sparse_bin_s_interval_lies_between_its_episodes_frequencies() -> None:
+    """100 episodes, one bin holding records of 3 of them (frequencies 0.8, 0.9, 1.0): a
+    percentile bootstrap of the ratio lies within those frequencies. Resampling all 100
+    episodes scored the resamples without a record as 0 and put the lower bound at 0."""
+    episode = np.repeat(np.arange(100), 20)
+    risk = np.full(episode.size, 0.05)  # bin 0: the other episodes
+    hit = np.zeros(episode.size)
+    for ep, hits in ((10, 4), (50, 9), (90, 5)):  # 5, 10, 5 records in bin 0.5-0.7
+        rows = np.flatnonzero(episode == ep)[: {10: 5, 50: 10, 90: 5}[ep]]
+        risk[rows] = 0.6
+        hit[rows[:hits]] = 1.0
+    bins = episode_intervals(risk, hit, episode, np.random.default_rng(0), resamples=999)
+    ci = bins[6]  # 0.5-0.7
+    assert 0.8 <= ci["episode_ci_low"] <= ci["episode_ci_high"] <= 1.0

@@ -13,8 +13,9 @@ from scipy import stats
 from experiments.value_pairs import main, paired_arms
 
 
-def _ladder(folder: Path, rewards: dict[str, np.ndarray]) -> Path:
+def _ladder(folder: Path, rewards: dict[str, np.ndarray], slots: int = 2000) -> Path:
     folder.mkdir()
+    (folder / "manifest.json").write_text(f'{{"config": {{"held_out_seed": 2, "slots": {slots}}}}}')
     with (folder / "ladder.csv").open("w", newline="") as f:
         w = csv.DictWriter(f, fieldnames=["arm", "episode", "reward"])
         w.writeheader()
@@ -50,3 +51,6 @@ def test_unpaired_or_missing_runs_are_refused(tmp_path: Path) -> None:
         paired_arms(a, b)
     with pytest.raises(FileNotFoundError, match=r"no ladder\.csv"):
         paired_arms(a, tmp_path / "nothing")
+    short = _ladder(tmp_path / "short", {"filter": np.arange(5.0)}, slots=500)
+    with pytest.raises(ValueError, match=r"differ in \('held_out_seed', 'slots'\)"):
+        paired_arms(a, short)  # the same episode seeds, flown 500 slots: not a pair
