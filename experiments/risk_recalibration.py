@@ -132,6 +132,9 @@ def score(
         "episodes": int(episodes.size),
         "brier_raw": brier_score(table["risk"], y),
         "brier_mapped": brier_score(mapped["risk"], y),
+        # the paired difference is over episodes' own scores: their means beside it
+        "brier_raw_episodes": float(per_ep["raw"].mean()),
+        "brier_mapped_episodes": float(per_ep["mapped"].mean()),
         "diff_mean": diff.mean,
         "diff_low": diff.low,
         "diff_high": diff.high,
@@ -195,8 +198,8 @@ def run(
 
 def format_brier(rows: Sequence[Mapping[str, Any]]) -> str:
     """A text table: per preset, policy and part, the worst bin before and after, the bins
-    off the +-5-point band (episode intervals, info truth), the Brier scores and their
-    paired difference."""
+    off the +-5-point band (episode intervals, info truth), the Brier scores (means of the
+    episodes' own, as their paired difference) and that difference."""
     lines = [
         f"{'preset':7s} {'policy':7s} {'part':6s} {'worst raw/mapped':>17s} {'off target':>10s} "
         f"{'Brier raw':>10s} {'mapped':>8s} {'mapped - raw [95% CI]':>31s}"
@@ -206,7 +209,7 @@ def format_brier(rows: Sequence[Mapping[str, Any]]) -> str:
             f"{r['preset']:7s} {r['policy']:7s} {r['part']:6s} "
             f"{r['worst_raw_info']:8.3f} / {r['worst_mapped_info']:.3f} "
             f"{r['off_target_raw_info']:5d} / {r['off_target_mapped_info']:<2d} "
-            f"{r['brier_raw']:10.5f} {r['brier_mapped']:8.5f} "
+            f"{r['brier_raw_episodes']:10.5f} {r['brier_mapped_episodes']:8.5f} "
             f"{r['diff_mean']:+.6f} [{r['diff_low']:+.6f}, {r['diff_high']:+.6f}]"
         )
     return "\n".join(lines)

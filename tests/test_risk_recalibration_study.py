@@ -79,6 +79,12 @@ def test_score_pairs_each_episodes_brier_score() -> None:
     assert brier["diff_mean"] == pytest.approx(want.mean, rel=1e-12)
     assert (brier["diff_low"], brier["diff_high"]) == pytest.approx((want.low, want.high))
     assert brier["brier_raw"] == pytest.approx(brier_score(risk, y), rel=1e-14)
+    # the scores the difference belongs to (episodes of unequal lengths: the record means
+    # differ from them, and the table printed those beside it)
+    assert brier["brier_raw_episodes"] == pytest.approx(np.mean(raw), rel=1e-12)
+    assert brier["brier_mapped_episodes"] - brier["brier_raw_episodes"] == pytest.approx(
+        brier["diff_mean"], rel=1e-9
+    )
     per_ep = brier["per_episode"]  # what episodes.csv holds, one row an episode
     assert [r["episode"] for r in per_ep] == list(eps)
     np.testing.assert_allclose([r["brier_raw"] for r in per_ep], raw, rtol=1e-12)
