@@ -14,6 +14,7 @@ episode's start) and later ones (``--by-life DIR``).
 from __future__ import annotations
 
 import csv
+import math
 from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
@@ -24,6 +25,7 @@ from experiments.belief_calibration import RISK_BINS, risk_bin
 from experiments.belief_common import TARGETS, wilson_share
 from experiments.belief_comparison import paired_difference
 from experiments.belief_output import write_csv
+from policies.benchmark.stats import cluster_ratio_bootstrap
 from scas_env.utils.results_folder import json_text, results_folder
 
 #: the two estimators compared
@@ -59,9 +61,14 @@ def stage_table(
     for (policy, stage), group in groups.items():
         row: dict[str, float | str] = {"policy": policy, "stage": stage, "lives": len(group)}
         hits = {est: _hits(group, est) for est in ESTIMATORS}
+        episode = np.array([r["seed"] for r in group])
         for est, h in hits.items():
             for metric in ("covered", "undercut"):
-                share, lo, hi, _ = wilson_share(h[metric])
+                # a life counts once per stage in "all": its records are not independent
+                share, lo, hi = (
+                    wilson_share(h[metric])[:3] if stage != "all"
+                    else _episode_share(h[metric], episode)
+                )  # fmt: skip
                 name = "coverage" if metric == "covered" else "undercut"
                 row[f"{est}_{name}"], row[f"{est}_{name}_ci_low"] = share, lo
                 row[f"{est}_{name}_ci_high"] = hi
@@ -69,7 +76,6 @@ def stage_table(
             row[f"{est}_sd_log"] = float(np.std(finite, ddof=1)) if finite.size > 1 else np.nan
             row[f"{est}_mean_log"] = float(np.mean(finite)) if finite.size else np.nan
             row[f"{est}_brier"] = float(np.mean(h["brier"]))
-        episode = np.array([r["seed"] for r in group])
         for metric in ("covered", "undercut"):
             d = paired_difference(hits["pf"][metric], hits["ref"][metric], episode, rng)
             for k in ("diff", "ci_low", "ci_high", "mdd"):
@@ -80,13 +86,24 @@ def stage_table(
     return out
 
 
+def _episode_share(hits: np.ndarray, episode: np.ndarray) -> tuple[float, float, float]:
+    """The share of ``hits`` and its 95 % interval with the episodes resampled whole
+    (:func:`policies.benchmark.stats.cluster_ratio_bootstrap`)."""
+    eps, inv = np.unique(episode, return_inverse=True)
+    iv = cluster_ratio_bootstrap(
+        np.bincount(inv, weights=hits, minlength=eps.size), np.bincount(inv, minlength=eps.size)
+    )
+    return iv.mean, iv.low, iv.high
+
+
 def reliability_table(
     rows: Sequence[dict[str, Any]], bins: Sequence[float] = RISK_BINS
 ) -> list[dict[str, float | str]]:
     """Per policy, estimator (``pf``, ``ref``; ``map``: the filter's risk mapped, where the
     rows hold ``map_risk``) and bin of its own predicted risk: records,
     mean prediction and the observed frequency of a failure within the horizon (info RUL
-    <= ``horizon``) with its Wilson 95 % interval. Meant for rows chosen on the data
+    <= ``horizon``) with its 95 % interval, episodes resampled whole (a life's records are
+    dependent). Meant for rows chosen on the data
     (``reference_lives(risk_min=...)``), where an exact posterior is calibrated."""
     edges = np.asarray(bins, dtype=float)
     out: list[dict[str, float | str]] = []
@@ -96,9 +113,11 @@ def reliability_table(
         for est in (*ESTIMATORS, "map") if "map_risk" in mine[0] else ESTIMATORS:
             risk = np.array([r[f"{est}_risk"] for r in mine])
             which = risk_bin(risk, edges)
+            episode = np.array([r["seed"] for r in mine])
             for b in range(edges.size - 1):
                 sel = which == b
-                share, lo, hi, n = wilson_share(failed[sel])
+                n = int(sel.sum())
+                share, lo, hi = _episode_share(failed[sel], episode[sel]) if n else (math.nan,) * 3
                 out.append(
                     {
                         "policy": policy, "estimator": est, "bin_low": float(edges[b]),

@@ -51,13 +51,14 @@ def test_stage_table_counts_both_estimators_and_pairs_them() -> None:
 
 def test_reliability_table_bins_each_estimator_by_its_own_risk() -> None:
     """Records binned by each estimator's predicted risk against failures within the
-    horizon (truth <= 20), counted by hand; the Wilson interval is scipy's."""
-    from scipy.stats import binomtest
-
+    horizon (truth <= 20), counted by hand; the interval resamples episodes: two episodes of
+    one record each, a failure and not, give resampled shares 0, 1/2, 1 with probabilities
+    1/4, 1/2, 1/4, so the 95 % percentile interval is [0, 1] (a record-level Wilson interval
+    over dependent records was too narrow)."""
     from experiments.reference_report import format_reliability, reliability_table
 
-    rows = [_row(1, 0.9, truth, 0.0, risk) for truth, risk in
-            ((10.0, 0.6), (30.0, 0.6), (5.0, 0.8), (50.0, 0.05))]  # fmt: skip
+    rows = [_row(seed, 0.9, truth, 0.0, risk) for seed, (truth, risk) in
+            enumerate(((10.0, 0.6), (30.0, 0.6), (5.0, 0.8), (50.0, 0.05)), 1)]  # fmt: skip
     for r, ref in zip(rows, (0.95, 0.2, 0.95, 0.0), strict=True):
         r["ref_risk"] = ref
     table = reliability_table(rows, bins=(0.0, 0.1, 0.5, 0.7, 1.0))
@@ -65,8 +66,7 @@ def test_reliability_table_bins_each_estimator_by_its_own_risk() -> None:
     pf = got["pf", 0.5]  # risks 0.6, 0.6: one failed within 20
     assert pf["records"] == 2 and pf["predicted"] == pytest.approx(0.6)
     assert pf["observed"] == 0.5
-    ci = binomtest(1, 2).proportion_ci(method="wilson")
-    assert (pf["observed_ci_low"], pf["observed_ci_high"]) == pytest.approx((ci.low, ci.high))
+    assert (pf["observed_ci_low"], pf["observed_ci_high"]) == (0.0, 1.0)
     assert got["pf", 0.7]["records"] == 1 and got["pf", 0.7]["observed"] == 1.0
     assert got["ref", 0.7]["records"] == 2 and got["ref", 0.7]["observed"] == 1.0
     assert got["ref", 0.1]["records"] == 1 and got["ref", 0.1]["observed"] == 0.0
@@ -96,3 +96,18 @@ def test_by_life_reads_a_lives_csv_and_splits_first_lives_from_later(tmp_path) -
     assert "test10 first" in format_table(list(table.values()))
     with pytest.raises(FileNotFoundError, match=r"lives\.csv"):
         read_lives(tmp_path / "none")
+
+
+def test_the_pooled_row_resamples_episodes_not_records() -> None:
+    """A life counts once per stage in the "all" row: two episodes, one covered at all seven
+    stages and one at none, pool to 0.5 with the interval of two clusters, [0, 1] (Wilson
+    over the 14 records said [0.27, 0.73])."""
+    from experiments.reference_report import stage_table
+
+    stages = (0.2, 0.3, 0.4, 0.5, 0.6, 0.8, 0.9)
+    rows = [_row(seed, s, 50.0, shift, 0.0) for seed, shift in ((1, 0.0), (2, 30.0))
+            for s in stages]  # fmt: skip
+    table = {r["stage"]: r for r in stage_table(rows, np.random.default_rng(0))}
+    pooled = table["all"]
+    assert pooled["pf_coverage"] == 0.5
+    assert (pooled["pf_coverage_ci_low"], pooled["pf_coverage_ci_high"]) == (0.0, 1.0)
