@@ -327,11 +327,13 @@ class UnscentedFilter:
         from filterpy.kalman import MerweScaledSigmaPoints, UnscentedKalmanFilter
 
         points = MerweScaledSigmaPoints(_DIM, alpha, beta, kappa, sqrt_method=psd_sqrt_2x2)
-        if np.any(points.Wm < 0.0):
+        if np.any(points.Wm < 0.0) or np.any(points.Wc < 0.0):
+            worst = float(min(points.Wm.min(), points.Wc.min()))
             raise ValueError(
-                f"alpha = {alpha}, kappa = {kappa} give a negative sigma-point weight "
-                f"{float(points.Wm.min())}: the expected measurement variance could be < 0; "
-                "use alpha^2 (2 + kappa) >= 2"
+                f"alpha = {alpha}, beta = {beta}, kappa = {kappa} give a negative sigma-point "
+                f"weight {worst}: the expected measurement variance or the covariance could "
+                "be < 0; the mean weights need alpha^2 (2 + kappa) >= 2, the first covariance "
+                "weight W_m0 + 1 - alpha^2 + beta >= 0 (e.g. alpha 1, beta 0, kappa 1)"
             )
         self.process = process
         self.measurement = measurement
