@@ -419,10 +419,8 @@ def _baseline(name: str, values: ArrayLike, ref_name: str, ref: FloatArray) -> F
     """Healthy baseline record: shape equal to the signal's or (N,) (broadcast over batch)."""
     base = _signal(name, values)
     if base.shape != ref.shape and base.shape != ref.shape[-1:]:
-        raise ValueError(
-            f"{name} has shape {base.shape}, must equal {ref_name} shape {ref.shape} or "
-            f"({ref.shape[-1]},)"
-        )
+        allowed = f"{ref.shape}" if ref.ndim == 1 else f"{ref.shape} or ({ref.shape[-1]},)"
+        raise ValueError(f"{name} has shape {base.shape}, must equal {ref_name}'s {allowed}")
     return base
 
 

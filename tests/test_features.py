@@ -337,3 +337,13 @@ def test_bad_inputs_raise_value_error():
         F.g3_current_per_displacement(x, x, [[0, 500]], [1e-3], settle_fraction=1.0)
     with pytest.raises(ValueError, match="step_times_s"):
         F.step_windows(t, [0.5, 0.2])
+
+
+def test_a_baseline_of_another_length_names_the_allowed_shapes() -> None:
+    """A 1-D signal allows one baseline shape (it printed "(100,) or (100,)")."""
+    from prognostics.features import i8_dc_current_offset
+
+    with pytest.raises(ValueError, match=r"^i_h has shape \(99,\), must equal i's \(100,\)$"):
+        i8_dc_current_offset(np.zeros(100), np.zeros(99))
+    with pytest.raises(ValueError, match=r"must equal i's \(3, 100\) or \(100,\)$"):
+        i8_dc_current_offset(np.zeros((3, 100)), np.zeros(99))
