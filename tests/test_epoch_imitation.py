@@ -307,6 +307,9 @@ def test_training_starts_from_the_clone(tmp_path, recorded: RuleEpisodes) -> Non
         train_epochs(hp, tmp_path / "z", freeze_normalization=True, **SCENARIO)
     with pytest.raises(ValueError, match="is not a folder"):
         train_epochs(hp, tmp_path / "x", init=tmp_path / "missing", **SCENARIO)
+    with pytest.raises(ValueError, match="with normalize = false"):  # crashed late, folder used
+        train_epochs({**hp, "normalize": False}, tmp_path / "w", init=tmp_path / "bc", **SCENARIO)
+    assert not (tmp_path / "w").exists()
     with pytest.raises(ValueError, match="lin_<number>"):
         train_epochs({**hp, "learning_rate": "lin_x"}, tmp_path / "y", **SCENARIO)
 

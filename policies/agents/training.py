@@ -1,7 +1,9 @@
 """Training of SB3 agents on decision epochs (:class:`scas_env.decision_epochs.DecisionEpochs`).
 
 One run (:func:`train_epochs`): ``n_envs`` decision-epoch envs (``DummyVecEnv``, each in a
-``Monitor``, seeded ``seed * 1000 + rank`` at the first reset) under ``VecNormalize``
+``Monitor``; seeded ``seed + rank`` at the first reset: SB3's model seeding re-seeds the
+vector env with the run's ``seed``, so runs of seeds ``s`` and ``s + 1`` share all but one
+actuator's episode streams) under ``VecNormalize``
 (observations standardised, rewards scaled by the running std of the discounted return with
 the algorithm's ``gamma``), trained for ``total_timesteps`` *decisions* or until ``max_wall_s``
 seconds of wall time, whichever comes first. A checkpoint (model zip + VecNormalize
@@ -283,6 +285,8 @@ def prepared_run(
     gamma = float(hp.get("gamma", 0.99))
     if normalize:
         venv = VecNormalize(venv, norm_obs=True, norm_reward=True, gamma=gamma)
+    # the model's seed re-seeds the vector env (SB3's set_random_seed): the first reset uses
+    # seed + rank, not the seed * 1000 above (kept: the shipped agents' runs were made so)
     model = classes[algo](policy, venv, seed=seed, device="cpu", verbose=0, **hp)
     return model, venv, n_envs, normalize, hp
 
@@ -390,6 +394,11 @@ def check_training(
         raise ValueError(f"init = {str(init)!r} is not a folder")
     if init is not None:
         _init_files(Path(init))
+        if not bool(dict(hyperparams).get("normalize", True)):
+            raise ValueError(
+                f"init = {str(init)!r} with normalize = false: the warm start's network reads "
+                "normalised observations (its statistics need a VecNormalize)"
+            )
     mix = dict(hyperparams).get(REFERENCE_KEY)
     if mix is not None and init is None:
         raise ValueError(f"{REFERENCE_KEY} = {mix!r} needs init (the reference policy)")
