@@ -237,6 +237,12 @@ def test_same_seed_same_files_and_loader_round_trip(tmp_path: Path) -> None:
                 np.testing.assert_array_equal(got[key], value, err_msg=f"{name}.{key}")
     assert from_parquet.card["counts"]["flights_rows"] == len(flights["unit"])
     assert from_csv.flights.schema.equals(to_table("flights", flights).schema)
+    # the same nulls: CSV's "nan" was read as a null (I2's mean a number from CSV, NaN from
+    # Parquet), which to_numpy hides
+    for name in ("flights", "units"):
+        for column in getattr(from_parquet, name).schema.names:
+            want = getattr(from_parquet, name).column(column).null_count
+            assert getattr(from_csv, name).column(column).null_count == want, (name, column)
     assert not [p for p in tmp_path.iterdir() if p.name.startswith(".")]  # no temp left
 
 
@@ -349,3 +355,24 @@ def test_docs_list_every_column() -> None:
         ]  # fmt: skip
         assert hits, f"{c.name} has no row in docs/dataset.md"
         assert any(f"| {c.dtype} |" in r for r in hits), (c.name, c.dtype, hits)
+
+
+def test_a_dataset_finished_after_its_folder_filled_up_is_kept_beside_it(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """As every results folder: checked empty, filled by another writer during the run, the
+    finished dataset goes to a timestamped sibling (it was deleted)."""
+    from scas_env.dataset import files
+    from scas_env.utils.results_folder import ResultsKeptElsewhereError
+
+    out = tmp_path / "data"
+    from scas_env.dataset import run_to_failure
+
+    for module in (files, run_to_failure):  # the checks before the run pass: the race
+        monkeypatch.setattr(module, "check_output", lambda path, overwrite: Path(path))
+    out.mkdir()
+    (out / "theirs.txt").write_text("theirs")
+    with pytest.raises(ResultsKeptElsewhereError) as caught:
+        export_run_to_failure(1, out=out, seed=2, formats=("csv",), progress=False)
+    assert sorted(p.name for p in out.iterdir()) == ["theirs.txt"]
+    assert (caught.value.kept / "datacard.json").is_file()

@@ -313,3 +313,15 @@ def test_the_benchmark_runs_a_fleet_file_with_its_three_tables(tmp_path: Path) -
     assert FleetConfig.from_dict(config["fleet"]) == FleetConfig.load(path)
     assert CostModel.from_dict(config["costs"]) == CostModel.load(path)
     assert Scenario.from_dict(config["scenario"]).initial_health == "in_service"
+
+
+@pytest.mark.parametrize(
+    "table", ["[fleet.demand]\n", "[fleet.demand]\nflight_hours_per_flight = 1.5\n"]
+)
+def test_a_partial_nested_table_keeps_the_parent_s_defaults(tmp_path, table: str) -> None:
+    """Fields left out keep their defaults (docs/configs.md): a [fleet.demand] table giving
+    only the default flight length (or nothing) is the default fleet. It started from
+    DemandModel()'s one-type mix and was refused against the fleet's three types."""
+    path = tmp_path / "f.toml"
+    path.write_text("[fleet]\naircraft = 8\n" + table)
+    assert FleetConfig.load(path) == FleetConfig()

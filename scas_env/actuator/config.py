@@ -175,8 +175,11 @@ class Validated:
         """Cross-field checks; subclasses override and raise ``ValueError``."""
 
     @classmethod
-    def from_dict(cls: type[T], data: dict[str, Any]) -> T:
-        """Build from a (possibly nested) dict; unknown keys raise ``ValueError``."""
+    def from_dict(cls: type[T], data: dict[str, Any], *, base: T | None = None) -> T:
+        """Build from a (possibly nested) dict; unknown keys raise ``ValueError``. ``base``:
+        the object whose values the fields left out keep (a nested table's: its parent's
+        default for that field, e.g. ``FleetConfig.demand``'s three-type mix), else this
+        class's defaults."""
         if not isinstance(data, dict):
             raise ValueError(f"{cls.__name__}: expected a dict, got {type(data).__name__}")
         names = {f.name: f for f in fields(cls)}
@@ -187,9 +190,11 @@ class Validated:
         for key, value in data.items():
             ftype = _nested_type(cls, key)
             if ftype is not None and isinstance(value, dict):
-                kwargs[key] = ftype.from_dict(value)
+                kwargs[key] = ftype.from_dict(value, base=_field_default(names[key]))
             else:
                 kwargs[key] = value
+        if isinstance(base, cls):  # fields left out keep the parent's default for this table
+            return base.replace(**kwargs)
         return cls(**kwargs)
 
     def replace(self: T, **changes: Any) -> T:
@@ -321,6 +326,13 @@ def _section_of(cls: type) -> str | None:
             if klass.__name__ == name:
                 return table
     return None
+
+
+def _field_default(f: dataclasses.Field) -> Any:
+    """A field's default (its factory's product); None without one."""
+    if f.default_factory is not dataclasses.MISSING:
+        return f.default_factory()
+    return None if f.default is dataclasses.MISSING else f.default
 
 
 def _nested_type(cls: type, key: str) -> type[Validated] | None:

@@ -16,10 +16,12 @@ from scas_env.cli_args import (
     add_logging_args,
     check_out_dir,
     configure_logging,
+    keeps_results,
     make_parser,
     nonneg_int,
     positive_int,
 )
+from scas_env.utils.results_folder import ResultsKeptElsewhereError
 
 __all__ = ["PARSERS", "export_dataset_main", "export_dataset_parser"]
 
@@ -61,6 +63,7 @@ def export_dataset_parser() -> argparse.ArgumentParser:
     return parser
 
 
+@keeps_results
 def export_dataset_main(argv: Sequence[str] | None = None) -> int:
     """``scas-export-dataset``: export a run-to-failure dataset."""
     from scas_env.dataset.run_to_failure import export_run_to_failure
@@ -85,6 +88,8 @@ def export_dataset_main(argv: Sequence[str] | None = None) -> int:
             overwrite=args.overwrite,
             progress=not args.quiet,
         )
+    except ResultsKeptElsewhereError:
+        raise  # not a usage error: the dataset is complete elsewhere (keeps_results)
     except (ValueError, FileExistsError, ModuleNotFoundError) as err:
         parser.error(str(err))
     print(f"{result.n_units} units, {result.n_rows} rows in {result.wall_s:.1f} s")

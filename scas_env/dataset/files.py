@@ -24,7 +24,14 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from scas_env.utils.results_folder import check_destination, move_into_place, partial_folder
+from scas_env.utils.results_folder import (
+    ResultsFolderExistsError,
+    ResultsKeptElsewhereError,
+    check_destination,
+    move_into_place,
+    partial_folder,
+    timestamped,
+)
 
 if TYPE_CHECKING:
     import pyarrow as pa
@@ -297,7 +304,12 @@ def write_dataset(
         (tmp / "datacard.json").write_text(json.dumps(card, indent=2, sort_keys=True) + "\n")
         (tmp / "datacard.md").write_text(data_card_markdown(card))
         names["datacard.json"] = names["datacard.md"] = ""
-        move_into_place(tmp, path, overwrite)
+        try:
+            move_into_place(tmp, path, overwrite)
+        except ResultsFolderExistsError:  # filled meanwhile: keep the dataset beside it
+            kept = timestamped(path)
+            move_into_place(tmp, kept, False)
+            raise ResultsKeptElsewhereError(path, kept) from None
     return {key: path / key for key in names}
 
 
@@ -374,9 +386,10 @@ def load_run_to_failure(
         if file_format == "parquet":
             table = pq.read_table(file, schema=schema)
         else:
-            options = pacsv.ConvertOptions(
-                column_types=schema, strings_can_be_null=False, include_columns=schema.names
-            )
+            options = pacsv.ConvertOptions(  # "nan" a float, not a null: as in Parquet
+                column_types=schema, strings_can_be_null=False, include_columns=schema.names,
+                null_values=[],
+            )  # fmt: skip
             table = pacsv.read_csv(file, convert_options=options).cast(schema)
         tables[name] = table
     counts = card["counts"]
