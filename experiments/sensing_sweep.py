@@ -41,6 +41,7 @@ import argparse
 import hashlib
 import json
 import logging
+import math
 import os
 import shlex
 import sys
@@ -337,7 +338,8 @@ def summarize_sweep(
                 if d[r].size != d[0].size:
                     raise ValueError(f"replicates 0 and {r} of {level!r} ran different episodes")
                 c = paired_comparison(d[r], d[0], confidence)
-                mdd = max(v["mdd"] for v in values if v["level"] == level and v["arm"] == arm)
+                mdds = [v["mdd"] for v in values if v["level"] == level and v["arm"] == arm]
+                mdd = float(np.nanmax(mdds)) if not np.all(np.isnan(mdds)) else math.nan
                 spread.append({"replicate": r, "level": level, "arm": arm, **c, "value_mdd": mdd})
     vs_base: list[dict[str, Any]] = []
     for r in replicates:

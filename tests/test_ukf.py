@@ -128,7 +128,9 @@ def test_ukf_nan_is_no_measurement_and_bad_input_raises() -> None:
         ukf.reset(x_mean=0.0, x_std=-0.1, log_theta_mean=0.0, log_theta_std=0.2)
     with pytest.raises(ValueError, match="negative sigma-point weight"):
         UnscentedFilter(linear_wear_model(1.0), mm, alpha=1e-3)
-    with pytest.raises(ValueError, match=r"weight -2\.1666"):  # W_c0 = 1/24 + 1 - 4 + 0
+    with pytest.raises(
+        ValueError, match=r"weight -2\.1666"
+    ):  # W_c0 = W_m0 + 1 - alpha^2 + beta = 5/6 + 1 - 4 + 0
         UnscentedFilter(linear_wear_model(1.0), mm, alpha=2.0, beta=0.0, kappa=1.0)
     with pytest.raises(ValueError, match=r"p = covariance .* negative"):
         psd_sqrt_2x2(np.array([[-1.0, 0.0], [0.0, 1.0]]))

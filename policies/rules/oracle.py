@@ -349,10 +349,9 @@ class OraclePolicy(Policy):
         h_all = self.episode_slots - self.slot
         rul = np.stack([self.column(obs, "spring_rul_true"), self.column(obs, "seal_rul_true")], 1)
         age = np.stack([self.column(obs, "spring_age"), self.column(obs, "seal_age")], 1)
-        down = self.column(obs, "downtime") > 0
         due = (age > 0) & (rul <= self.margin) & (rul <= h_all[:, None])
         actions = np.full(n, FLY, dtype=np.int64)
-        for r in np.flatnonzero(due.any(axis=1) | (down & self.pending.any(axis=1))):
+        for r in np.flatnonzero(due.any(axis=1) | self.pending.any(axis=1)):
             if self.pending[r].any():  # the pair's second part, the slot after the first
                 k = int(np.flatnonzero(self.pending[r])[0])
                 self.pending[r, k] = False

@@ -24,14 +24,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from scas_env.utils.results_folder import (
-    ResultsFolderExistsError,
-    ResultsKeptElsewhereError,
-    check_destination,
-    move_into_place,
-    partial_folder,
-    timestamped,
-)
+from scas_env.utils.results_folder import check_destination, move_or_keep, partial_folder
 
 if TYPE_CHECKING:
     import pyarrow as pa
@@ -304,12 +297,7 @@ def write_dataset(
         (tmp / "datacard.json").write_text(json.dumps(card, indent=2, sort_keys=True) + "\n")
         (tmp / "datacard.md").write_text(data_card_markdown(card))
         names["datacard.json"] = names["datacard.md"] = ""
-        try:
-            move_into_place(tmp, path, overwrite)
-        except ResultsFolderExistsError:  # filled meanwhile: keep the dataset beside it
-            kept = timestamped(path)
-            move_into_place(tmp, kept, False)
-            raise ResultsKeptElsewhereError(path, kept) from None
+        move_or_keep(tmp, path, overwrite)  # filled meanwhile: kept beside it
     return {key: path / key for key in names}
 
 

@@ -292,12 +292,7 @@ def results_folder(
     with partial_folder(dest) as tmp:
         yield tmp
         _write_manifest(tmp, config_text, seeds_text)
-        try:
-            move_into_place(tmp, dest, overwrite)
-        except ResultsFolderExistsError:  # filled meanwhile: keep the work beside it
-            kept = timestamped(dest)
-            move_into_place(tmp, kept, False)
-            raise ResultsKeptElsewhereError(dest, kept) from None
+        move_or_keep(tmp, dest, overwrite)
 
 
 @contextmanager
@@ -341,6 +336,22 @@ def move_into_place(tmp: Path, dest: Path, overwrite: bool) -> None:
         shutil.rmtree(old, ignore_errors=True)
     finally:  # interrupted (Ctrl-C, SIGTERM) while deleting the old folder: finish it
         shutil.rmtree(old, ignore_errors=True)
+
+
+def move_or_keep(tmp: Path, dest: Path, overwrite: bool) -> None:
+    """:func:`move_into_place`; if ``dest`` was filled by another writer meanwhile, the
+    finished folder goes to a fresh timestamped sibling instead (``-2``, ``-3``, ... on a
+    clash) and :class:`ResultsKeptElsewhereError` says where."""
+    try:
+        move_into_place(tmp, dest, overwrite)
+    except ResultsFolderExistsError:
+        stamp = timestamped(dest)
+        kept, k = stamp, 1
+        while kept.exists() or kept.is_symlink():
+            k += 1
+            kept = stamp.with_name(f"{stamp.name}-{k}")
+        move_into_place(tmp, kept, False)
+        raise ResultsKeptElsewhereError(dest, kept) from None
 
 
 def verify_results_folder(path: str | Path) -> list[str]:
