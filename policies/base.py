@@ -41,11 +41,23 @@ __all__ = [
     "REPLACE_SPRING",
     "TEST_AND_FLY",
     "Policy",
+    "episode_starts",
     "make_policy",
     "policy_family",
     "policy_obs_mode",
     "register_policy",
 ]
+
+
+def episode_starts(episode_start: Any, rows: int) -> np.ndarray | None:
+    """SB3's ``episode_start`` as one bool per row of a batch of ``rows`` (a single flag
+    for every row); None if not given or of another length."""
+    if episode_start is None:
+        return None
+    start = np.atleast_1d(np.asarray(episode_start, dtype=bool))
+    if start.size == 1:
+        return np.full(rows, bool(start[0]))
+    return start if start.shape == (rows,) else None
 
 
 class Policy(ABC):

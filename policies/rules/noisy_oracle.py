@@ -34,7 +34,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from policies.base import IntArray, register
+from policies.base import IntArray, episode_starts, register
 from policies.rules.nested import NestedRule
 
 __all__ = ["NoisyOraclePolicy"]
@@ -94,14 +94,11 @@ class NoisyOraclePolicy(NestedRule):
     ) -> tuple[int | IntArray, Any]:
         """As :meth:`Policy.predict`; rows with ``episode_start`` set draw their parts' ``z``
         anew (once: their ages are not compared with the last episode's)."""
-        if episode_start is not None and self.z is not None:
-            start = np.atleast_1d(np.asarray(episode_start, dtype=bool))
-            if start.size == 1:  # one flag for the whole batch
-                start = np.full(self.z.shape[0], bool(start[0]))
-            if start.shape == (self.z.shape[0],) and start.any():
-                for k in range(2):
-                    self._draw(start, k)
-                self.last_age[start] = -np.inf
+        start = None if self.z is None else episode_starts(episode_start, self.z.shape[0])
+        if start is not None and start.any():
+            for k in range(2):
+                self._draw(start, k)
+            self.last_age[start] = -np.inf
         return super().predict(observation, state, episode_start, deterministic)
 
     def _draw(self, rows: np.ndarray, part: int) -> None:

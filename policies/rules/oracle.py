@@ -51,7 +51,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from policies.base import FLY, REPLACE_SPRING, IntArray, Policy, register
+from policies.base import FLY, REPLACE_SPRING, IntArray, Policy, episode_starts, register
 from scas_env.core.costs import CostModel
 
 __all__ = ["LIFE_QUANTILES", "ORACLE_DEFAULTS", "OraclePolicy", "plan_cost", "plan_cost_known"]
@@ -304,13 +304,10 @@ class OraclePolicy(Policy):
         deterministic: bool = True,
     ) -> tuple[int | IntArray, Any]:
         """As :meth:`Policy.predict`; rows with ``episode_start`` set start over."""
-        if episode_start is not None and self.slot is not None:
-            start = np.atleast_1d(np.asarray(episode_start, dtype=bool))
-            if start.size == 1:  # one flag for the whole batch
-                start = np.full(self.slot.shape, bool(start[0]))
-            if start.shape == self.slot.shape:
-                self.slot[start] = 0
-                self.pending[start] = False
+        start = None if self.slot is None else episode_starts(episode_start, self.slot.size)
+        if start is not None:
+            self.slot[start] = 0
+            self.pending[start] = False
         return super().predict(observation, state, episode_start, deterministic)
 
     def _decide(self, h: int, rul: np.ndarray, upcoming: Any = None) -> bool:
