@@ -563,15 +563,12 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(format_by_life(by_life(lives)))
         return 0
     if args.compare is not None:
-        from experiments.belief_comparison import (
-            check_same_episodes,
-            compare_runs,
-            format_comparison,
-            read_lives,
-        )
+        from experiments.belief_common import check_same_settings
+        from experiments.belief_comparison import compare_runs, format_comparison, read_lives
 
         try:
-            check_same_episodes(args.compare)
+            # lives pair by episode index: runs of other seeds would pair other lives
+            check_same_settings(args.compare, ("seed",), name="study.json")
             a, b = (read_lives(folder) for folder in args.compare)
         except (FileNotFoundError, ValueError) as exc:
             parser.error(str(exc))

@@ -36,7 +36,7 @@ from typing import Any
 import numpy as np
 from scipy.stats import bootstrap, norm
 
-from experiments.belief_common import check_same_settings, wilson_share
+from experiments.belief_common import wilson_share
 
 #: metrics compared (columns of ``lives.csv``, 0/1 per life)
 METRICS: tuple[str, ...] = ("covered", "undercut")
@@ -59,12 +59,6 @@ def read_lives(folder: str | Path) -> dict[Key, dict[str, float]]:
                    int(r["life"]))  # fmt: skip
             out[key] = {m: float(r[m]) for m in (*METRICS, "log_ratio")}
     return out
-
-
-def check_same_episodes(folders: Sequence[str | Path]) -> None:
-    """Refuse two belief studies of other seeds (their ``study.json``): pairing by episode
-    index would pair other lives (runs of one seed share their first episodes)."""
-    check_same_settings(folders, ("seed",), name="study.json")
 
 
 def _cluster_interval(
