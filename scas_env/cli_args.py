@@ -284,7 +284,7 @@ def load_world(parser: argparse.ArgumentParser, args: argparse.Namespace) -> Mis
         parser.error(f"{args.scenario}: [mismatch]: {exc}")
     if "mismatch" not in data:
         return MismatchWorld(None, None, None)
-    table = data["mismatch"]
+    table = data["mismatch"] or {}  # an empty table reads as {}, as Mismatch.load does
     try:
         if not isinstance(table, dict):
             raise ValueError(f"{args.scenario}: [mismatch] must be a table, got {table!r}")

@@ -132,7 +132,19 @@ def _cases(tmp: Path) -> list[tuple[str, list[str], str]]:
     case = tmp / "case.toml"  # a whole case file given as --costs: its [mismatch] unread
     case.write_text("[costs]\ntest_usd = 7.0\n[mismatch]\ncrack_growth = 2.0\n")
     (tmp / "c.csv").write_text("")
+    clash = tmp / "clash.toml"  # each setting valid, the pair not: refused before tuning
+    clash.write_text('[scenario]\nfidelity = "physics"\n[mismatch]\nsensing_noise = 2.0\n')
+    fleet_costs = tmp / "fleet_costs.toml"
+    fleet_costs.write_text("[costs]\nflight_value_usd = 1000\n[fleet]\naircraft = 2\n")
     return [
+        ("scas-value", ["--scenario", str(clash), "--out", str(tmp / "o")], "clash.toml: Mismatch"),
+        ("scas-tune", ["--scenario", str(clash), "--out", str(tmp / "o")], "clash.toml: Mismatch"),
+        (
+            "scas-tune",
+            ["--scenario", str(fleet_costs), "--out", str(tmp / "o")],
+            "fleet_costs.toml: cost_model.flight_value_usd = 1000.0 is not read by the fleet",
+        ),
+
         ("scas-benchmark", ["--episodes", "0"], "--episodes: '0' is not an integer >= 1"),
         ("scas-benchmark", ["--seed", "-1"], "--seed: '-1' is not an integer >= 0"),
         ("scas-benchmark", ["--workers", "0"], "--workers: '0' is not an integer >= 1"),
@@ -236,6 +248,22 @@ def test_bad_values_are_usage_errors(
         assert "error:" in err and message in " ".join(err.split()), (command, argv, err)
         assert sorted(p.name for p in busy_dir.iterdir()) == ["old.csv"]
         assert not (tmp_path / "o").exists()
+
+
+def test_an_empty_scenario_table_of_a_fleet_file_is_the_fleet_s_defaults(tmp_path: Path) -> None:
+    """YAML ``scenario:`` with nothing under it (or JSON null) reads as an empty table, as
+    ``Scenario.load`` reads it; a table that is not a mapping is a usage error."""
+    from scas_env.fleet_env import FLEET_SCENARIO
+
+    parser = argparse.ArgumentParser(prog="t")
+    null = tmp_path / "null.yaml"
+    null.write_text("scenario:\nfleet:\n  aircraft: 2\n")
+    scenario = run_config.fleet_scenario(parser, argparse.Namespace(scenario=null))
+    assert scenario == Scenario.from_dict(dict(FLEET_SCENARIO))
+    listed = tmp_path / "list.json"
+    listed.write_text('{"scenario": [1], "fleet": {"aircraft": 2}}')
+    with pytest.raises(SystemExit):
+        run_config.fleet_scenario(parser, argparse.Namespace(scenario=listed))
 
 
 def test_no_script_duplicates_a_command() -> None:

@@ -19,6 +19,7 @@ from scas_env.core.scenario import Scenario
 
 __all__ = [
     "add_size_args",
+    "check_env_builds",
     "config_record",
     "env_keywords",
     "fleet_config",
@@ -44,6 +45,19 @@ def env_keywords(
     if world_surrogate is not None:
         kwargs["world_surrogate"] = world_surrogate
     return kwargs
+
+
+def check_env_builds(parser: Any, env_id: str, env_kwargs: dict[str, Any], where: Any) -> None:
+    """Build (and close) ``env_id`` with ``env_kwargs`` before any work, so that settings
+    valid one by one but in conflict (say a ``[mismatch]`` of the sensing on the physics
+    fidelity) are a usage error naming ``where`` (the ``--scenario`` file), not a traceback
+    from inside the first worker."""
+    import gymnasium as gym
+
+    try:
+        gym.make(env_id, **env_kwargs).close()
+    except ValueError as exc:
+        parser.error(f"{where or 'the defaults'}: {exc}")
 
 
 def config_record(
@@ -135,7 +149,9 @@ def fleet_scenario(parser: Any, args: Any) -> Scenario:
 
     data = read_mapping(args.scenario) if args.scenario else {}
     tables = any(k in FILE_SECTIONS for k in data)  # a case file, else one group's fields
-    table = data.get("scenario", {}) if tables else data
+    table = (data.get("scenario") or {}) if tables else data  # an empty table reads as {}
+    if not isinstance(table, dict):
+        parser.error(f"{args.scenario}: [scenario] must be a table, got {table!r}")
     try:
         scenario = Scenario.from_dict({**FLEET_SCENARIO, **table})
     except ValueError as exc:

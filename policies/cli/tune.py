@@ -16,6 +16,7 @@ from typing import Any
 
 from policies.cli.run_config import (
     add_size_args,
+    check_env_builds,
     config_record,
     env_keywords,
     fleet_config,
@@ -35,6 +36,7 @@ from scas_env.cli_args import (
     name_list,
     positive_int,
 )
+from scas_env import ENV_ID, ENV_ID_FLEET
 from scas_env.core.costs import CostModel
 from scas_env.core.scenario import Scenario
 
@@ -122,6 +124,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         scenario, costs, ("obs_mode", "episode_slots"), mismatch, world_surrogate
     )
 
+    check_env_builds(parser, ENV_ID, env_kwargs, args.scenario)
+
     from policies.value.tuning import FAMILIES, tune_families
 
     families = list(FAMILIES) if args.families is None else args.families
@@ -170,6 +174,10 @@ def _tune_fleet(
     if single:
         parser.error(f"--families {single}: not fleet families ({','.join(FLEET_FAMILIES)})")
     scenario = fleet_scenario(parser, args)
+    check_env_builds(
+        parser, ENV_ID_FLEET, {"fleet": fleet, "scenario": scenario, "cost_model": costs},
+        args.scenario,
+    )
     announce_uncached_kernels()
     size = resolve_sizes(args, FLEET_TUNE_SIZES, scenario, parser)
     results = tune_fleet_families(

@@ -12,7 +12,13 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-from policies.cli.run_config import add_size_args, config_record, env_keywords, resolve_sizes
+from policies.cli.run_config import (
+    add_size_args,
+    check_env_builds,
+    config_record,
+    env_keywords,
+    resolve_sizes,
+)
 from scas_env.cli_args import (
     add_env_config_args,
     add_logging_args,
@@ -26,6 +32,7 @@ from scas_env.cli_args import (
     name_list,
     positive_int,
 )
+from scas_env import ENV_ID
 from scas_env.core.scenario import Scenario
 
 log = logging.getLogger(__name__)
@@ -100,6 +107,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     env_kwargs = env_keywords(
         scenario, costs, ("obs_mode", "episode_slots"), mismatch, world_surrogate
     )
+
+    check_env_builds(parser, ENV_ID, env_kwargs, args.scenario)
 
     from policies.value.study import markdown_report, run_ladder, write_outputs
 
