@@ -180,6 +180,43 @@ def test_aware_rule_defers_a_non_urgent_replacement_until_an_aircraft_is_spare(
     assert decide(opp, fleet_obs(names, parts=mild, demand=(2, 1)))[0].tolist() == [0, 1, 0]
 
 
+def test_aware_rule_releases_only_the_spare_aircraft_riskiest_first(
+    names: tuple[str, ...],
+) -> None:
+    """The deferral's slack counts the free aircraft the urgent ones leave: with one
+    aircraft going to the hangar for an urgent spring, and two due-not-urgent ones among
+    the other two free aircraft, one mission asked leaves one aircraft to spare, so only
+    the riskier of the two deferred aircraft goes (the other flies the mission); with
+    nothing asked both go."""
+    urgency = 2.0
+    rule = FleetRule("fleet_aware", names, urgency=urgency)
+    r = rule.values["risk_threshold"]
+    parts = {
+        (0, 0): {"spring_risk": urgency * r},  # urgent
+        (1, 0): {"spring_risk": 1.2 * r},  # due, not urgent
+        (2, 1): {"seal_risk": 1.6 * r},  # due, not urgent, riskier
+    }
+    act = decide(rule, fleet_obs(names, parts=parts, demand=(1, 0)))
+    assert act[0].tolist() == [0, 1, 0]
+    assert act[2].tolist() == [0, 0, 2]
+    assert act[1].tolist() == [fly(TYPES[0]), 0, 0]
+    both = decide(rule, fleet_obs(names, parts=parts, demand=(0, 0)))
+    assert both.tolist() == [[0, 1, 0], [0, 1, 0], [0, 0, 2]]
+
+
+@pytest.mark.parametrize("family", ["fleet_naive", "fleet_age", "fleet_aware"])
+def test_an_aircraft_with_jobs_queued_stays_on_the_ground(
+    names: tuple[str, ...], family: str
+) -> None:
+    """docs/fleet.md: an aircraft with due parts "waits on the ground while their jobs wait
+    for a spare or the crew". Its jobs queued (the part no longer due at scale 1, as after a
+    grouped request), it asks for no mission: asked to fly, it would be pulled into the
+    hangar the morning the job starts, and the mission lost. The next free aircraft flies."""
+    rule = FleetRule(family, names)
+    act = decide(rule, fleet_obs(names, aircraft={0: {"jobs_queued": 1.0}}, demand=(1, 0)))
+    assert act[:, 0].tolist() == [0, fly(TYPES[0]), 0]
+
+
 def test_urgency_one_defers_nothing(names: tuple[str, ...]) -> None:
     """fleet_tuning's start, urgency 1: every due part is urgent, so the least urgent one, a
     spring with risk exactly r, is replaced even with no aircraft spare (the rule's
@@ -335,3 +372,15 @@ def test_age_rule_thresholds_and_no_filters(names: tuple[str, ...], part: str, c
     assert decide(corrective, fleet_obs(names, parts=worn, demand=(1, 0)))[0].tolist() == [
         fly(TYPES[0]), 0, 0,
     ]  # fmt: skip
+
+
+def test_rules_refuse_an_observation_of_another_layout(names: tuple[str, ...]) -> None:
+    """An observation longer or shorter than the names is refused with the shapes named,
+    by the random reference as by the rules (not read entry by entry into an action)."""
+    from policies.rules.fleet import FleetRandom
+
+    obs = fleet_obs(names)
+    for policy in (FleetRandom(names), FleetRule("fleet_naive", names)):
+        for bad in (np.concatenate([obs, np.zeros(7)]), obs[:-3]):
+            with pytest.raises(ValueError, match=rf"expected \(B, {len(names)}\)"):
+                policy.predict(bad)

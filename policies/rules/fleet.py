@@ -237,11 +237,13 @@ class FleetRule:
         ones = np.ones((b, lay.n, 1))
         due = self._due(obs, ones)
         needs = (due["spring"] | due["seal"]).any(axis=2)
-        in_hangar = obs[:, self._broken] > 0
+        # on the ground: broken, or jobs of its own queued for a spare or the crew (asked to
+        # fly meanwhile, it would be pulled into the hangar when the job starts)
+        in_hangar = (obs[:, self._broken] > 0) | (obs[:, self._jobs] > 0)
         free = obs[:, self._free] > 0.5
         demand = obs[:, self._demand].astype(np.int64)
         if self.aware:
-            needs = self._defer(obs, due, needs, free, demand)
+            needs = self._defer(obs, due, needs, free & ~in_hangar, demand)
         hangar = needs | in_hangar
         if self.groups and "opportunity" in self.values:
             relaxed = self._due(
@@ -289,7 +291,9 @@ class FleetRule:
         self, obs: np.ndarray, due: dict[str, np.ndarray], needs: np.ndarray, free: np.ndarray,
         demand: np.ndarray,
     ) -> np.ndarray:  # fmt: skip
-        """Non-urgent replacements wait for a day with a free aircraft to spare."""
+        """Non-urgent replacements wait for a day with a free aircraft to spare: of the
+        ``free`` aircraft (not on the ground) that the urgent ones leave, those beyond
+        tomorrow's demand may go, riskiest first."""
         v = self.values
         u = v["urgency"]
         urgent = np.zeros(needs.shape, dtype=bool)
@@ -299,8 +303,15 @@ class FleetRule:
             old = obs[:, self._age[p]] >= v[f"{p}_age"]
             urgent |= (due[p] & (hot | short | old)).any(axis=2)
         failed = (obs[:, self._no_go] > 0.5).any(axis=2)
-        slack = free.sum(axis=1) - demand.sum(axis=1)
-        return needs & (urgent | failed | (slack[:, None] > 0))
+        must = needs & (urgent | failed)
+        deferred = needs & ~must
+        slack = (free & ~must).sum(axis=1) - demand.sum(axis=1)
+        go = must.copy()
+        for b in np.flatnonzero((slack > 0) & deferred.any(axis=1)):
+            waiting = np.flatnonzero(deferred[b])
+            riskiest = waiting[np.argsort(-self._health(obs[b])[waiting], kind="stable")]
+            go[b, riskiest[: slack[b]]] = True
+        return go
 
 
 def _type_severity(types: Sequence[str]) -> list[float]:
@@ -355,6 +366,10 @@ class FleetRandom:
         deterministic: bool = True,
     ) -> tuple[np.ndarray, Any]:  # fmt: skip
         obs = np.atleast_2d(np.asarray(observation, dtype=np.float64))
+        if obs.ndim != 2 or obs.shape[1] != len(self.obs_names):
+            raise ValueError(
+                f"observation has shape {obs.shape}; expected (B, {len(self.obs_names)})"
+            )
         lay = self.layout
         out = np.zeros((obs.shape[0], lay.n, 1 + lay.a), dtype=np.int64)
         for b in range(obs.shape[0]):
