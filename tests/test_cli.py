@@ -144,7 +144,6 @@ def _cases(tmp: Path) -> list[tuple[str, list[str], str]]:
             ["--scenario", str(fleet_costs), "--out", str(tmp / "o")],
             "fleet_costs.toml: cost_model.flight_value_usd = 1000.0 is not read by the fleet",
         ),
-
         ("scas-benchmark", ["--episodes", "0"], "--episodes: '0' is not an integer >= 1"),
         ("scas-benchmark", ["--seed", "-1"], "--seed: '-1' is not an integer >= 0"),
         ("scas-benchmark", ["--workers", "0"], "--workers: '0' is not an integer >= 1"),

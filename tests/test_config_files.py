@@ -320,3 +320,25 @@ def test_save_keeps_a_file_s_mode_and_writes_through_a_symlink(tmp_path) -> None
 def test_a_boolean_in_a_list_of_numbers_is_named_as_one() -> None:
     with pytest.raises(ValueError, match=r"mission_value_usd\[0\] = True \(a boolean, not a"):
         FleetConfig(mission_value_usd=(True, 1.0, 1.0))
+
+
+def test_the_filter_noise_scale_floor_is_one_the_filters_run_at() -> None:
+    """Below 0.01 the assumed noise is refused naming the range (far below it, 1e-300, the
+    filters' likelihoods underflowed and an episode stopped mid-way); at the floor, with a
+    test every fifth slot on parts in service, whole episodes run."""
+    import gymnasium as gym
+
+    import scas_env
+
+    allowed = r"noise_scale = 0.005 - is outside the allowed range \[0.01, 100\]"
+    with pytest.raises(ValueError, match=allowed):
+        Scenario(filter_noise_scale=0.005)
+    for seed in range(3):
+        env = gym.make(scas_env.ENV_ID, filter_noise_scale=0.01, episode_slots=600,
+                       initial_health="in_service")  # fmt: skip
+        env.reset(seed=seed)
+        for k in range(600):
+            *_, terminated, truncated, _ = env.step(1 if k % 5 == 0 else 0)
+            if terminated or truncated:
+                break
+        assert truncated and k == 599

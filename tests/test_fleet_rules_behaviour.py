@@ -384,3 +384,23 @@ def test_rules_refuse_an_observation_of_another_layout(names: tuple[str, ...]) -
         for bad in (np.concatenate([obs, np.zeros(7)]), obs[:-3]):
             with pytest.raises(ValueError, match=rf"expected \(B, {len(names)}\)"):
                 policy.predict(bad)
+
+
+def test_fleet_random_refuses_a_seed_count_that_is_not_the_batch_s(
+    names: tuple[str, ...],
+) -> None:
+    """Seeds per row, or one stream for the batch; 2 seeds for 3 rows would have row 2
+    continue row 0's stream, so it is refused naming both counts."""
+    from policies.rules.fleet import FleetRandom
+
+    obs = np.stack([fleet_obs(names, demand=(1, 1))] * 3)
+    policy = FleetRandom(names)
+    policy.reset(seed=[10, 20])
+    with pytest.raises(ValueError, match="3 observations for 2 seeded rows"):
+        policy.predict(obs)
+    policy.reset(seed=[10, 20, 30])
+    seeded = policy.predict(obs)[0]
+    for b, seed in enumerate((10, 20, 30)):  # each row its own seed's stream
+        alone = FleetRandom(names)
+        alone.reset(seed=seed)
+        assert np.array_equal(alone.predict(obs[b])[0], seeded[b])

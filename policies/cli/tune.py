@@ -23,6 +23,7 @@ from policies.cli.run_config import (
     fleet_scenario,
     resolve_sizes,
 )
+from scas_env import ENV_ID, ENV_ID_FLEET
 from scas_env.cli_args import (
     add_env_config_args,
     add_logging_args,
@@ -36,7 +37,6 @@ from scas_env.cli_args import (
     name_list,
     positive_int,
 )
-from scas_env import ENV_ID, ENV_ID_FLEET
 from scas_env.core.costs import CostModel
 from scas_env.core.scenario import Scenario
 
@@ -175,7 +175,9 @@ def _tune_fleet(
         parser.error(f"--families {single}: not fleet families ({','.join(FLEET_FAMILIES)})")
     scenario = fleet_scenario(parser, args)
     check_env_builds(
-        parser, ENV_ID_FLEET, {"fleet": fleet, "scenario": scenario, "cost_model": costs},
+        parser,
+        ENV_ID_FLEET,
+        {"fleet": fleet, "scenario": scenario, "cost_model": costs},
         args.scenario,
     )
     announce_uncached_kernels()

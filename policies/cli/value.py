@@ -19,6 +19,7 @@ from policies.cli.run_config import (
     env_keywords,
     resolve_sizes,
 )
+from scas_env import ENV_ID
 from scas_env.cli_args import (
     add_env_config_args,
     add_logging_args,
@@ -32,7 +33,6 @@ from scas_env.cli_args import (
     name_list,
     positive_int,
 )
-from scas_env import ENV_ID
 from scas_env.core.scenario import Scenario
 
 log = logging.getLogger(__name__)

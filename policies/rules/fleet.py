@@ -332,7 +332,8 @@ class FleetRandom:
     ``p_fly`` for one of the types asked tomorrow (uniform among them; none asked: it stands
     by), tests with ``p_test`` (always when a failed test holds it); each flown part is
     replaced with probability ``p_replace`` a day: every choice one the env's mask allows.
-    One generator per episode (``reset(seed=...)``; ``reset()`` keeps the current ones)."""
+    One generator per episode (``reset(seed=...)``, a seed per row of the batch, or one seed
+    whose stream serves every row in turn; ``reset()`` keeps the current ones)."""
 
     name = "fleet_random"
 
@@ -369,6 +370,11 @@ class FleetRandom:
         if obs.ndim != 2 or obs.shape[1] != len(self.obs_names):
             raise ValueError(
                 f"observation has shape {obs.shape}; expected (B, {len(self.obs_names)})"
+            )
+        if len(self._rngs) not in (1, obs.shape[0]):
+            raise ValueError(
+                f"{obs.shape[0]} observations for {len(self._rngs)} seeded rows: reset(seed=...) "
+                "with one seed per row (or one seed, one stream for the whole batch)"
             )
         lay = self.layout
         out = np.zeros((obs.shape[0], lay.n, 1 + lay.a), dtype=np.int64)

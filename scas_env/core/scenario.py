@@ -118,10 +118,10 @@ class Scenario(Validated):
     filter_noise_scale: float = param(
         1.0,
         "-",
-        lo=0.0,
-        lo_open=True,
+        lo=0.01,
         hi=100.0,
-        source="multiplies the measurement noise the filters assume (filter-quality studies)",
+        source="multiplies the measurement noise the filters assume (filter-quality studies; "
+        "far below 0.01 the filters' likelihoods underflow and an episode stops mid-way)",
     )
     filter_growth_bias: float = param(
         1.0,
