@@ -10,7 +10,7 @@ from gymnasium import spaces
 
 from scas_env.actuator.calibration import Calibration, env_calibration
 from scas_env.actuator.params import ScasParams
-from scas_env.actuator.surrogate import SurrogateModel, default_surrogate
+from scas_env.actuator.surrogate import SurrogateModel, shipped_surrogate_for
 from scas_env.core.batch import ActuatorBatch
 from scas_env.core.costs import CostModel
 from scas_env.core.info import StepInfo, build_info
@@ -81,7 +81,7 @@ def make_setup(
         scenario=scenario,
         costs=cost_model if cost_model is not None else CostModel(),
         calibration=calibration if calibration is not None else env_calibration(params),
-        surrogate=surrogate if surrogate is not None else default_surrogate(),
+        surrogate=surrogate if surrogate is not None else shipped_surrogate_for(params),
         mismatch=mismatch if mismatch is not None else Mismatch(),
         world_surrogate=world_surrogate,
     )

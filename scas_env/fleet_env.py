@@ -11,7 +11,7 @@ from gymnasium import spaces
 
 from scas_env.actuator.calibration import Calibration, env_calibration
 from scas_env.actuator.params import ScasParams
-from scas_env.actuator.surrogate import SurrogateModel, default_surrogate
+from scas_env.actuator.surrogate import SurrogateModel, shipped_surrogate_for
 from scas_env.core.batch import reset_needed_on_error
 from scas_env.core.costs import CostModel
 from scas_env.core.fleet.batch import MAINTENANCE_CHOICES, FleetBatch
@@ -94,7 +94,7 @@ def make_fleet_setup(
         scenario=base,
         costs=cost_model if cost_model is not None else CostModel(),
         calibration=calibration if calibration is not None else env_calibration(params),
-        surrogate=surrogate if surrogate is not None else default_surrogate(),
+        surrogate=surrogate if surrogate is not None else shipped_surrogate_for(params),
         mission_types=types,
     )
     return config, setup
@@ -186,8 +186,8 @@ class ScasFleetEnv(gym.Env):
 
     ## Rendering
 
-    ``"ansi"``: a text table of the day (aircraft, jobs, spares); ``"rgb_array"``: the
-    fleet's day drawn (:mod:`scas_env.fleet_dashboard`).
+    ``"ansi"``: one line of the day's KPIs (missions flown of those asked, failures, jobs
+    waiting, cost); ``"rgb_array"``: the fleet's day drawn (:mod:`scas_env.fleet_dashboard`).
 
     ## Starting State
 
@@ -208,8 +208,9 @@ class ScasFleetEnv(gym.Env):
     ``gym.make("scas_env/ScasFleet-v0", **kwargs)``, every keyword optional:
 
     * ``fleet``: a :class:`~scas_env.core.fleet.config.FleetConfig`, or its fields as
-      keywords (``episode_days=30``; not both); files:
-      ``FleetConfig.load("examples/fleet_offshore.toml")``;
+      keywords (``episode_days=30``; not both); a case file's ``[fleet]`` table:
+      ``FleetConfig.load("examples/fleet_offshore.toml")`` (its ``[scenario]`` and
+      ``[costs]`` tables: ``Scenario.load`` and ``CostModel.load`` of the same file);
     * ``scenario``: the actuators' :class:`~scas_env.core.scenario.Scenario` (default
       ``initial_health="in_service"``); its ``obs_mode`` stays at its default (the view is
       the keyword below), ``episode_slots`` is raised to the episode's flights;
@@ -219,8 +220,8 @@ class ScasFleetEnv(gym.Env):
     * ``params``, ``calibration``, ``surrogate``: the actuator model, its failure thresholds
       and its feature surrogate (defaults: the shipped ones);
     * ``obs_mode``: ``"features+rul"`` (default), ``"state"`` or ``"dict"`` (above);
-    * ``render_mode``: ``None``, ``"ansi"`` (a text table) or ``"rgb_array"`` (the fleet's
-      day drawn).
+    * ``render_mode``: ``None``, ``"ansi"`` (a line of the day's KPIs) or ``"rgb_array"``
+      (the fleet's day drawn).
 
     The fleet's world is the monitor's model: it takes no ``mismatch`` (single env only).
 

@@ -112,9 +112,10 @@ class ScasFleetVectorEnv(VectorEnv):
             ) from None
         if arr.shape[:1] != (n,):
             raise ValueError(f"actions must have {n} rows (one per fleet), got {arr.shape}")
+        rows = actions if isinstance(actions, list | tuple) else arr  # a row's own booleans
         for b in range(n):
             self._actions[b] = check_fleet_action(
-                arr[b], self.single_action_space, self.config, name=f"actions[{b}]"
+                rows[b], self.single_action_space, self.config, name=f"actions[{b}]"
             )
         with reset_needed_on_error(self):
             return self._step(n)

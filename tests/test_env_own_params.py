@@ -65,3 +65,28 @@ def test_an_env_on_other_params_builds_a_whole_flight_calibration(
     for _ in range(50):
         obs, _, _, truncated, _ = env.step(0)
     assert truncated and np.all(np.isfinite(obs))
+
+
+def test_an_env_on_other_sensing_needs_a_surrogate_of_its_own() -> None:
+    """The shipped feature surrogate is the default params': an env on params whose
+    features differ (the paper's sensing preset: noise, test steps, spring tolerances) is
+    refused naming those fields, before any calibration is built, unless a surrogate is
+    given; degradation constants alone (Paris C, the seals' wear rate) keep the shipped
+    tables (the test above)."""
+    from scas_env.actuator.presets import preset_params
+    from scas_env.actuator.surrogate import DEGRADATION_ONLY, default_surrogate
+
+    paper = preset_params("paper")
+    with pytest.raises(ValueError, match=r"sensors\.current_noise_a.*mission\.test_step_m") as e:
+        gym.make(scas_env.ENV_ID, params=paper)
+    assert "uncertainty.wire_diameter_sigma_m" in str(e.value)
+    assert "surrogate=default_surrogate()" in str(e.value)
+    with pytest.raises(ValueError, match=r"\['seal\.friction_coefficient'\]"):
+        gym.make("scas_env/ScasFleet-v0", params=ScasParams().replace(
+            seal=ScasParams().seal.replace(friction_coefficient=0.2)))  # fmt: skip
+    env = gym.make(scas_env.ENV_ID, params=paper, surrogate=default_surrogate(),
+                   calibration=cal_module.default_calibration())  # fmt: skip
+    assert env.unwrapped.setup.surrogate is default_surrogate()
+    # every exempt field is a field, so a renamed one cannot silently widen the exemption
+    fields = ScasParams().to_dict()
+    assert all(n in fields[g] for g, names in DEGRADATION_ONLY.items() for n in names)

@@ -453,6 +453,8 @@ def test_bad_vector_and_agent_actions_are_refused() -> None:
         venv.step(bad)
     with pytest.raises(ValueError, match=r"2 rows of 12 integers .* differ in length"):
         venv.step([[0] * 12, [0] * 11])
+    with pytest.raises(ValueError, match=r"actions\[0\] = \[True, .*holds a boolean"):
+        venv.step([[True] + [0] * 11, [0] * 12])  # as the single env refuses the row
     assert (venv.fleet.day == 0).all()
     pytest.importorskip("pettingzoo")
     from scas_env.multiagent import fleet_v1

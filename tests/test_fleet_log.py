@@ -254,3 +254,38 @@ def test_the_fleet_benchmark_writes_every_removal_and_scores_the_beliefs(tmp_pat
     assert paths["survival"].stat().st_size > 0
     summary = json.loads(paths["summary_json"].read_text())
     assert summary["prognostics"]["fleet_naive"]["n"] > 0
+
+
+def test_a_kit_done_on_an_actuator_awaiting_its_pool_unit_closes_no_second_life() -> None:
+    """A background removal closes the lives of both parts of the removed actuator; the
+    actuator stays fitted until a pool unit comes (none here), and a kit job the mask still
+    allows is done on it meanwhile: that job closes no second life (a phantom removal of
+    age 0 with the first one's truth), and every removal record is of a part that flew."""
+    from scas_env.fleet_env import ScasFleetEnv
+
+    cfg = FleetConfig.from_dict(
+        {"episode_days": 20, "mtbur_fh": 100.0, "crew_jobs_per_day": 10,
+         "spares": {"actuator_pool": 0}}
+    )  # fmt: skip
+    env = ScasFleetEnv(fleet=cfg)
+    env.reset(seed=0)
+    fleet = env.fleet
+    n, a, k = cfg.aircraft, cfg.actuators_per_aircraft, len(cfg.mission_types)
+    kits = 0
+    for _ in range(cfg.episode_days):
+        mask = env.action_masks().reshape(n, -1)
+        act = np.zeros((n, 1 + a), dtype=np.int64)
+        for i in range(n):
+            fly = np.flatnonzero(mask[i, 1 : 1 + k])
+            act[i, 0] = 1 + fly[0] if fly.size else 0
+            for j in range(a):
+                if fleet.removed[0, i, j] and mask[i, 1 + 2 * k + 4 * j + 1]:
+                    act[i, 1 + j] = 1
+                    kits += 1
+        env.step(act.ravel())
+    assert kits > 0  # the path is exercised
+    removals = [r for r in fleet.log.records[0] if r["kind"] not in ("test",)]
+    assert any(r["kind"] == "background" for r in removals)
+    assert all(r["age_flights"] > 0 for r in removals), [
+        r for r in removals if r["age_flights"] <= 0
+    ]

@@ -263,8 +263,8 @@ def test_filter_rules_group_near_thresholds_in_the_hangar_and_the_naive_rule_doe
     """docs/fleet.md: the opportunistic and aware rules replace, on an aircraft in the
     hangar, parts within ``opportunity`` of their thresholds (risk >= (1 - o) r, low RUL
     quantile * (1 - o) <= L); the naive rule has no grouping. The aware rule at its tuned
-    values, the opportunistic rule at the aware rule's tuned opportunity (its own tunes to
-    0: no grouping, the naive rule exactly); one aircraft spare so nothing is deferred."""
+    values, the opportunistic rule at the aware rule's tuned opportunity (at opportunity 0:
+    no grouping, the naive rule exactly); one aircraft spare so nothing is deferred."""
     v = FLEET_TUNED["fleet_aware"]
     o, r, lead = v["opportunity"], v["risk_threshold"], v["seal_lead"]
     near_risk = 0.5 * ((1 - o) * r + r)  # below r: not due alone
@@ -288,8 +288,8 @@ def test_filter_rules_group_near_thresholds_in_the_hangar_and_the_naive_rule_doe
         assert act[1, 0] == fly(TYPES[0]), rule.name
     naive = decide(FleetRule("fleet_naive", names, **same), obs)
     assert naive[:, 1:].tolist() == [[1, 0], [0, 0], [0, 0]]
-    tuned_opp = decide(FleetRule("fleet_opportunistic", names, **same), obs)
-    assert tuned_opp.tolist() == naive.tolist()  # its tuned opportunity 0: no grouping
+    no_grouping = decide(FleetRule("fleet_opportunistic", names, **same, opportunity=0.0), obs)
+    assert no_grouping.tolist() == naive.tolist()  # opportunity 0: the naive rule exactly
 
 
 @pytest.mark.parametrize("part, code", [("spring", 1), ("seal", 2)])

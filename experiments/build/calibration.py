@@ -89,7 +89,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         params, seed=args.seed, n_windows=args.windows, whole_flights=args.whole_flights
     )
     args.out.parent.mkdir(parents=True, exist_ok=True)
-    cal.save(args.out)
+    cal.save(args.out, overwrite=args.overwrite)  # checked before the build
     lives = sample_lives(params, cal, np.random.default_rng(args.seed), args.lives)
     log.info(f"wrote {args.out}")
     print(

@@ -372,7 +372,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     check_out_file(parser, args.out, args.overwrite)
     params = load_params(parser, args)
     table = build_mission_types(params, seed=args.seed, n_flights=args.flights)
-    table.save(args.out)
+    table.save(args.out, overwrite=args.overwrite)  # checked before the build
     print(json.dumps(summary_rows(table), indent=1))
     print(f"wrote {args.out}")
     return 0

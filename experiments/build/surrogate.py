@@ -301,7 +301,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         axes=ScasParams() if args.world else None,
     )
     args.out.parent.mkdir(parents=True, exist_ok=True)
-    model.save(args.out)
+    model.save(args.out, overwrite=args.overwrite)  # checked before the build
     for k, f in enumerate(model.features):
         print(
             f"{f}: mean healthy {model.mean[k, 0, 0]:.4g}, crack {model.mean[k, -1, 0]:.4g}, "

@@ -49,7 +49,7 @@ from scas_env.actuator.missions import flight_profile, link_force_n
 from scas_env.actuator.params import ScasParams
 from scas_env.actuator.physics.actuator import simulate
 from scas_env.actuator.uncertainty import draw_units, nominal_unit
-from scas_env.utils.atomic_file import write_text_atomic
+from scas_env.utils.atomic_file import refuse_existing, write_text_atomic
 from scas_env.utils.shipped_files import shipped_path, verify_shipped_file
 from scas_env.utils.table_checks import (
     finite_array,
@@ -241,7 +241,10 @@ class Calibration:
                 out[key] = value.tolist()
         return out
 
-    def save(self, path: str | Path) -> None:
+    def save(self, path: str | Path, *, overwrite: bool = False) -> None:
+        """Write the table as JSON, atomically; an existing file raises ``FileExistsError``
+        unless ``overwrite``."""
+        refuse_existing(path, overwrite)
         write_text_atomic(path, json.dumps(self.to_dict(), indent=1) + "\n")
 
     @classmethod

@@ -40,7 +40,7 @@ import numpy.typing as npt
 from scas_env.actuator.calibration import Calibration, params_digest
 from scas_env.actuator.mission_types import MISSION_TYPES, N_REGIMES
 from scas_env.actuator.params import ScasParams
-from scas_env.utils.atomic_file import write_text_atomic
+from scas_env.utils.atomic_file import refuse_existing, write_text_atomic
 from scas_env.utils.shipped_files import shipped_path, verify_shipped_file
 from scas_env.utils.table_checks import (
     finite_array,
@@ -265,7 +265,10 @@ class MissionDamageTable:
             "types": {name: self.types[name].to_dict() for name in self.names},
         }
 
-    def save(self, path: str | Path) -> None:
+    def save(self, path: str | Path, *, overwrite: bool = False) -> None:
+        """Write the table as JSON, atomically; an existing file raises ``FileExistsError``
+        unless ``overwrite``."""
+        refuse_existing(path, overwrite)
         write_text_atomic(path, json.dumps(self.to_dict(), indent=1) + "\n")
 
     @classmethod

@@ -35,11 +35,12 @@ from collections.abc import Sequence
 from dataclasses import asdict, dataclass, field, replace
 from functools import lru_cache
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import numpy.typing as npt
 
-from scas_env.utils.atomic_file import write_text_atomic
+from scas_env.utils.atomic_file import refuse_existing, write_text_atomic
 from scas_env.utils.shipped_files import shipped_path, verify_shipped_file
 from scas_env.utils.table_checks import finite_array, load_json_table, whole_number
 
@@ -309,7 +310,10 @@ class SurrogateModel:
         out["features"] = list(self.features)
         return out
 
-    def save(self, path: str | Path) -> None:
+    def save(self, path: str | Path, *, overwrite: bool = False) -> None:
+        """Write the table as JSON, atomically; an existing file raises ``FileExistsError``
+        unless ``overwrite``."""
+        refuse_existing(path, overwrite)
         write_text_atomic(path, json.dumps(self.to_dict()) + "\n")
 
     @classmethod
@@ -324,3 +328,40 @@ class SurrogateModel:
 def default_surrogate() -> SurrogateModel:
     """The shipped surrogate of the default :class:`~scas_env.actuator.params.ScasParams`."""
     return SurrogateModel.load(shipped_path(DATA_FILE))
+
+
+#: ScasParams fields the features do not depend on (the surrogate tabulates them on the
+#: crack and wear fractions): the growth and wear constants, their unit scatter, the flaw
+#: a part starts from and a flight's length
+DEGRADATION_ONLY: dict[str, tuple[str, ...]] = {
+    "spring": (
+        "paris_c", "paris_m", "delta_k_threshold_mpa_sqrt_m", "walker_gamma", "initial_crack_m",
+    ),
+    "seal": ("wear_rate_m3_n_m",),
+    "uncertainty": ("paris_c_log_sigma", "wear_rate_log_sigma", "initial_crack_sigma_m"),
+    "mission": ("flight_duration_s",),
+}  # fmt: skip
+
+
+def shipped_surrogate_for(params: Any) -> SurrogateModel:
+    """The shipped surrogate, for ``params`` (a ``ScasParams``) that differ from the defaults
+    in :data:`DEGRADATION_ONLY` fields at most; otherwise a ``ValueError`` naming the fields
+    the features depend on (the sensing, the design, the fluid...), since the shipped
+    tables would give the default's features, detector thresholds and go/no-go limits."""
+    from scas_env.actuator.params import ScasParams
+
+    ours, default = params.to_dict(), ScasParams().to_dict()
+    changed = [
+        f"{group}.{name}"
+        for group, fields in ours.items()
+        for name, value in fields.items()
+        if value != default[group][name] and name not in DEGRADATION_ONLY.get(group, ())
+    ]
+    if changed:
+        raise ValueError(
+            f"params differ from the defaults in {changed}, which the features depend on; the "
+            "shipped feature surrogate is the default params'. Pass surrogate= a SurrogateModel "
+            "built for these params (python -m experiments.build.surrogate --params FILE), or "
+            "surrogate=default_surrogate() to keep the default's features knowingly"
+        )
+    return default_surrogate()

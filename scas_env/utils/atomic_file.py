@@ -99,3 +99,9 @@ def write_bytes_atomic(path: str | Path, data: bytes) -> None:
 def write_text_atomic(path: str | Path, text: str) -> None:
     """:func:`write_bytes_atomic` of UTF-8 text."""
     write_bytes_atomic(path, text.encode("utf-8"))
+
+
+def refuse_existing(path: str | Path, overwrite: bool) -> None:
+    """``FileExistsError`` naming ``path`` if it exists and ``overwrite`` is false."""
+    if not overwrite and Path(path).exists():
+        raise FileExistsError(f"{path}: exists; pass overwrite=True to replace it")

@@ -28,7 +28,7 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
-from scas_env.utils.atomic_file import write_text_atomic
+from scas_env.utils.atomic_file import refuse_existing, write_text_atomic
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -171,8 +171,7 @@ def write_mapping(path: str | Path, data: Mapping[str, Any], *, overwrite: bool 
     """
     path = Path(path)
     kind = file_format(path)
-    if path.exists() and not overwrite:
-        raise FileExistsError(f"{path}: exists; pass overwrite=True to replace it")
+    refuse_existing(path, overwrite)
     if not path.parent.is_dir():
         raise FileNotFoundError(f"{path}: folder {path.parent} does not exist")
     if kind == "toml":

@@ -276,7 +276,8 @@ class FleetBatch:
             if a["broken"][e, p]:
                 self.actuators.repair(e, (part,))
             else:
-                self.log.removal(day, e, p, "preventive", belief=True)
+                if not self.removed[b, i, j]:  # a removed actuator's lives are closed
+                    self.log.removal(day, e, p, "preventive", belief=True)
                 now = self._actions[e]
                 fit = REPLACE_SPRING if part == "spring" else REPLACE_SEAL
                 self._actions[e] = fit if now == STAND_BY else REPLACE_BOTH
