@@ -199,7 +199,8 @@ _UNREAD = {
     "file without [fleet] (scas-benchmark and scas-tune run fleets)",
     "mismatch": "this command runs the world the monitor assumes; give it a file without "
     "[mismatch] (scas-benchmark, scas-tune and scas-value run a [mismatch] world of one "
-    "actuator; in Python: mismatch=Mismatch.load(FILE))",
+    "actuator; in Python: mismatch=Mismatch.load(FILE), a table without world_surrogate, "
+    "and world_surrogate=SurrogateModel.load(...))",
     "params": "the commands run the built-in actuator design; give it a file without "
     "[params] (in Python: params=ScasParams.load(FILE))",
 }

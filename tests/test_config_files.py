@@ -342,3 +342,57 @@ def test_the_filter_noise_scale_floor_is_one_the_filters_run_at() -> None:
             if terminated or truncated:
                 break
         assert truncated and k == 599
+
+
+@pytest.mark.parametrize(
+    ("fields", "name"),
+    [
+        ({"window_library": 2}, "window_library"),  # the surrogate fidelity flies no windows
+        ({"rejuvenation_steps": 5}, "rejuvenation_steps"),  # no filter is moved
+        (
+            {"seal_cross_persistence": 0.5, "seal_cross_variance_inflation": 50},
+            "seal_cross_variance_inflation",
+        ),
+    ],
+)
+def test_a_setting_the_others_leave_unread_is_refused(fields: dict, name: str) -> None:
+    """A field that changes nothing under the other settings (each gave a bit-identical
+    episode) is refused naming it and what would read it, not silently ignored; with the
+    setting that reads it, it is accepted."""
+    with pytest.raises(ValueError, match=rf"Scenario\.{name} = .* has no effect here"):
+        Scenario(**fields)
+    readers = {
+        "window_library": {"fidelity": "physics"},
+        "rejuvenation_steps": {"rejuvenation": "resample_move"},
+        "seal_cross_variance_inflation": {"seal_cross_persistence": 0.0},
+    }
+    assert getattr(Scenario(**{**fields, **readers[name]}), name) == fields[name]
+
+
+def test_numpy_strings_are_stored_as_str_and_save_as_yaml(tmp_path: Path) -> None:
+    """A numpy string (e.g. read from an array) is stored as ``str``, so YAML can save it
+    (``numpy.str_`` raised a RepresenterError) and the file loads back equal."""
+    import numpy as np
+
+    from scas_env.core.fleet.config import FleetConfig
+    from scas_env.core.fleet.demand import DemandModel
+
+    scenario = Scenario(fidelity=np.str_("physics"))
+    assert type(scenario.fidelity) is str
+    assert Scenario.load(scenario.save(tmp_path / "s.yaml")) == scenario
+    fleet = FleetConfig(
+        mission_types=(np.str_("standard"),), mission_value_usd=(5000.0,),
+        mission_not_flown_usd=(5000.0,), demand=DemandModel(arrivals=np.str_("poisson")),
+    )  # fmt: skip
+    assert all(type(t) is str for t in fleet.mission_types)
+    assert type(fleet.demand.arrivals) is str
+    assert FleetConfig.load(fleet.save(tmp_path / "f.yaml")) == fleet
+
+
+def test_a_base_of_another_class_is_refused() -> None:
+    """``from_dict(data, base=...)`` with a base of another class names it, rather than
+    returning the class's defaults as if no base were given."""
+    from scas_env.core.costs import CostModel
+
+    with pytest.raises(ValueError, match=r"base = CostModel\(.*must be None or a Scenario"):
+        Scenario.from_dict({}, base=CostModel())

@@ -169,6 +169,8 @@ class Validated:
                 else:
                     # float() first: a string such as "2e3" is a valid whole number
                     object.__setattr__(self, f.name, int(float(value)))
+            elif isinstance(value, str) and type(value) is not str:  # e.g. numpy.str_
+                object.__setattr__(self, f.name, str(value))  # saved as YAML, compared as str
         self._check()
 
     def _check(self) -> None:
@@ -193,6 +195,8 @@ class Validated:
                 kwargs[key] = ftype.from_dict(value, base=_field_default(names[key]))
             else:
                 kwargs[key] = value
+        if base is not None and not isinstance(base, cls):
+            raise ValueError(f"base = {base!r} must be None or a {cls.__name__}")
         if isinstance(base, cls):  # fields left out keep the parent's default for this table
             return base.replace(**kwargs)
         return cls(**kwargs)

@@ -14,7 +14,7 @@ ValueError: Scenario.fidelity = 'fast' must be one of ('surrogate', 'physics')
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 
 from scas_env.actuator.config import Validated, param
 
@@ -240,6 +240,24 @@ class Scenario(Validated):
             )
         if not (self.crack_active or self.wear_active):
             raise ValueError("Scenario: at least one of crack_active, wear_active must be 1")
+        defaults = {f.name: f.default for f in fields(self)}
+        for name, unread, why in (  # a field the other settings leave unread: not set
+            ("window_library", self.fidelity == "surrogate", "the physics fidelity's"),
+            ("rejuvenation_steps", self.rejuvenation == "none", "a moved filter's"),
+            (
+                "seal_cross_variance_inflation",
+                self.seal_cross_persistence > 0,
+                "unused with seal_cross_persistence > 0 (the spring's error carried, not its "
+                "variance); the factor",
+            ),
+        ):
+            if unread and getattr(self, name) != defaults[name]:
+                raise ValueError(
+                    f"Scenario.{name} = {getattr(self, name)!r} has no effect here: it is "
+                    f"{why} setting (fidelity {self.fidelity!r}, rejuvenation "
+                    f"{self.rejuvenation!r}, seal_cross_persistence "
+                    f"{self.seal_cross_persistence!r}); leave it at {defaults[name]!r}"
+                )
         if self.rejuvenation != "none":
             r = self.rejuvenation
             if self.initial_health == "random":

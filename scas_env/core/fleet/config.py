@@ -269,8 +269,9 @@ class FleetConfig(Validated):
                 )
         if len(set(names)) != len(names):
             raise ValueError(f"{own}.mission_types = {list(names)!r} names a type twice")
-        object.__setattr__(self, "mission_types", tuple(names))
-        return tuple(names)
+        names = tuple(str(n) for n in names)  # plain str (numpy.str_ is saved as YAML badly)
+        object.__setattr__(self, "mission_types", names)
+        return names
 
     def _amounts(self, own: str, name: str, n: int) -> None:
         values = getattr(self, name)
