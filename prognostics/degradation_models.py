@@ -104,7 +104,7 @@ def _segment_integral(g0: float, slope: float, t: float) -> float:
     """int_0^t dz / (g0 + slope z) = log(1 + slope t / g0) / slope.
 
     A 3-term series below ``|slope t / g0| < 1e-4`` (relative error < 1e-12); above it
-    ``log(1 + z)`` (rounding error < 1e-12).
+    ``log(1 + z)`` (rounding error < 1.2e-12).
     """
     z = slope * t / g0
     if abs(z) < _SERIES:

@@ -352,8 +352,25 @@ def g3_current_per_displacement(
         x_k = np.mean(x_arr[..., s_settled:e], axis=-1)
         if np.any(x_k == 0.0):
             raise ValueError(f"plateau [{s}, {e}) has zero mean position; G3 undefined")
-        ratios.append(np.mean(i_arr[..., s_settled:e], axis=-1) / x_k)
-    return np.mean(ratios, axis=0)
+        i_k = np.mean(i_arr[..., s_settled:e], axis=-1)
+        with np.errstate(over="ignore"):
+            ratio = i_k / x_k
+        if not np.all(np.isfinite(ratio)):
+            bad = np.flatnonzero(~np.isfinite(ratio))[0]
+            raise ValueError(
+                f"plateau [{s}, {e}): mean current {float(np.ravel(i_k)[bad])!r} A / mean "
+                f"position {float(np.ravel(x_k)[bad])!r} m overflows float64; G3 undefined "
+                "(the mean position must be far enough from 0 for a finite ratio)"
+            )
+        ratios.append(ratio)
+    with np.errstate(over="ignore"):
+        g3 = np.mean(ratios, axis=0)
+    if not np.all(np.isfinite(g3)):
+        raise ValueError(
+            f"the mean of the plateau ratios (up to {float(np.max(np.abs(ratios)))!r} A/m) "
+            "overflows float64; G3 undefined"
+        )
+    return g3
 
 
 def ground_features(
@@ -441,7 +458,19 @@ def _mean_norm_xcorr(
     if np.any(energy_a <= 0.0) or np.any(energy_b <= 0.0):
         raise ValueError("a signal is identically zero in at least one record: xcorr undefined")
     total = np.einsum("...n,...n->...", np.broadcast_to(b, moving_a.shape), moving_a)
-    return total / ((2 * lag + 1) * np.sqrt(energy_a * energy_b))
+    return total / ((2 * lag + 1) * _norm_product(energy_a, energy_b))
+
+
+def _norm_product(energy_a: FloatArray, energy_b: FloatArray) -> FloatArray:
+    """sqrt(E_a E_b) for energies > 0: as written where the product is a positive finite
+    float64 (the same bits), else sqrt(E_a) sqrt(E_b) (the product overflows for signals of
+    |values| above ~1e77 and underflows to 0 below ~1e-155; both are allowed signals)."""
+    with np.errstate(over="ignore", under="ignore"):
+        norm = np.sqrt(energy_a * energy_b)
+    out_of_range = ~np.isfinite(norm) | (norm == 0.0)
+    if np.any(out_of_range):
+        norm = np.where(out_of_range, np.sqrt(energy_a) * np.sqrt(energy_b), norm)
+    return norm
 
 
 def _baseline_xcorr(

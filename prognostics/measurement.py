@@ -293,7 +293,8 @@ class MeasurementModel:
     ``kind`` ("poly" or "pchip"); for "poly", ``coef`` (ascending) in ``t = offset + scale x``;
     for "pchip", ``knots`` (strictly increasing), ``values`` and ``slopes`` (dh/dx) at them;
     ``sigma_knots`` (strictly increasing, >= 1) and ``sigma_values`` (> 0), feature units.
-    Unused fields are empty arrays.
+    Unused fields are empty arrays ("poly": knots, values, slopes; "pchip": coef) and, for
+    "pchip", ``offset`` and ``scale`` keep their defaults 0 and 1; other values raise.
     """
 
     kind: str
@@ -312,6 +313,28 @@ class MeasurementModel:
         for name in ("coef", "knots", "values", "slopes"):
             needed = (name == "coef") == is_poly
             object.__setattr__(self, name, _float_array(name, getattr(self, name), int(needed)))
+        check.real("offset", self.offset)
+        check.real("scale", self.scale)
+        unused = [
+            f"{name} = {check.show(getattr(self, name))}"
+            for name in (("knots", "values", "slopes") if is_poly else ("coef",))
+            if getattr(self, name).size
+        ]
+        if not is_poly:
+            unused += [
+                f"{name} = {getattr(self, name)!r}"
+                for name, default in (("offset", 0.0), ("scale", 1.0))
+                if getattr(self, name) != default
+            ]
+        if unused:
+            allowed = (
+                "knots, values and slopes empty"
+                if is_poly
+                else "coef empty and offset, scale at their defaults 0 and 1"
+            )
+            raise ValueError(
+                f"kind = {self.kind!r} does not use {', '.join(unused)}: leave {allowed}"
+            )
         if not is_poly and (
             self.knots.size < 2
             or self.values.size != self.knots.size
@@ -322,8 +345,6 @@ class MeasurementModel:
                 "pchip needs >= 2 strictly increasing knots and one value and slope per knot, "
                 f"got {self.knots.size} knots, {self.values.size} values, {self.slopes.size} slopes"
             )
-        check.real("offset", self.offset)
-        check.real("scale", self.scale)
         sk = _float_array("sigma_knots", self.sigma_knots, 1)
         if np.any(np.diff(sk) <= 0.0):
             raise ValueError(f"sigma_knots must be strictly increasing, got {check.show(sk)}")

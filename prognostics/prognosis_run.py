@@ -31,7 +31,7 @@ from prognostics import validation as check
 from prognostics.degradation_models import TabulatedRateModel
 from prognostics.measurement import MeasurementModel
 from prognostics.metrics import PrognosticMetrics, evaluate_predictions
-from prognostics.particle_filter import InitialValues, ParticleFilter
+from prognostics.particle_filter import InitialValues, ParticleFilter, _initial
 from prognostics.rul import HazardZone, predict_rul, summarize_rul
 
 __all__ = ["PrognosisTrace", "run_prognosis"]
@@ -95,6 +95,38 @@ class PrognosisTrace:
         )
 
 
+def _check_initial_values(
+    x0: InitialValues, theta0: InitialValues, rng: np.random.Generator, n: int
+) -> None:
+    """The checks of :meth:`ParticleFilter.reset` on ``x0`` and ``theta0`` given as values
+    (samplers are checked on their draw by ``reset``): a bad value is refused before a
+    sampler of the other draws from the Generator."""
+    for name, value in (("x0", x0), ("theta0", theta0)):
+        if callable(value):
+            continue
+        arr = _initial(name, value, rng, n)  # a value, not a sampler: rng is not drawn from
+        if name == "theta0" and not np.all(arr > 0.0):
+            raise ValueError(
+                f"theta0 must be > 0 for every particle, got {check.show(float(arr.min()))}"
+            )
+
+
+def _child_generator(rng: np.random.Generator) -> np.random.Generator:
+    """A Generator for the hazard's draws that is a function of ``rng``'s state alone (not
+    of its seed sequence's spawn counter): two Generators in one state give one child.
+
+    The bit generator jumped ahead (``jumped()``: 2**128 steps for PCG64), ``rng`` itself
+    untouched, so the filter draws what it would without hazard draws; a bit generator
+    without ``jumped`` (SFC64) seeds a new one of its type from one draw of ``rng``.
+    """
+    bit_generator = rng.bit_generator
+    jumped = getattr(bit_generator, "jumped", None)
+    if callable(jumped):
+        return np.random.Generator(jumped())
+    seed = np.random.SeedSequence(bit_generator.random_raw(2).tolist())
+    return np.random.Generator(type(bit_generator)(seed))
+
+
 def run_prognosis(
     process: TabulatedRateModel,
     measurement: MeasurementModel,
@@ -118,7 +150,9 @@ def run_prognosis(
     measurements : (T,) feature values (NaN = test missing: prediction only).
     hazard : failure threshold on the severity.
     n_particles : N >= 2.
-    rng : the only source of randomness (filter and hazard draws).
+    rng : the only source of randomness (filter and hazard draws). The result is a
+        function of its state (``rng.bit_generator.state``) and the inputs alone; a refused
+        call draws nothing.
     x0, theta0 : initial severity and growth multiplier: scalars, (N,) arrays or samplers
         ``f(rng, N)`` (see :meth:`ParticleFilter.reset`).
     start_index : first test (0 <= start_index < T) with a RUL prediction, e.g. the test
@@ -131,10 +165,11 @@ def run_prognosis(
     check.instance("hazard", hazard, HazardZone)
     check.integer("start_index", start_index, ge=0, le=u.size - 1)
     pf = ParticleFilter(process, measurement, n_particles, rng)
+    _check_initial_values(x0, theta0, rng, pf.n_particles)  # before a sampler draws
+    pf.reset(x0, theta0)  # the first draws of rng (samplers), after every check
     # the hazard's draws (a Gaussian zone) from a child stream: the filter's own draws do
     # not depend on when the predictions start
-    hazard_rng = rng.spawn(1)[0]
-    pf.reset(x0, theta0)
+    hazard_rng = _child_generator(rng) if hazard.std > 0.0 else None
     n = u.size
     out = {k: np.full(n, math.nan) for k in ("x_mean", "x_std", "theta_mean")}
     ruls = {k: np.full(n, math.nan) for k in ("mean", "median", "low", "high")}

@@ -181,9 +181,9 @@ class AgeingRul:
 
     def __init__(self, rul: np.ndarray, weights: np.ndarray, *, low_quantile: float) -> None:
         r = np.ascontiguousarray(check.array("rul", rul, ndim=1, min_size=1, ge=0.0))
-        # checked here; the kernel reads them as given
-        check.weights("weights", weights, r.shape, like="rul")
-        w = np.ascontiguousarray(weights, dtype=np.float64)
+        # checked here (weights whose sum overflows come back rescaled, the same normalised
+        # weights); the kernel reads them as given
+        w = np.ascontiguousarray(check.weights("weights", weights, r.shape, like="rul"))
         _check_level(low_quantile)
         n = r.size
         self._r = np.empty(n)
@@ -210,12 +210,14 @@ class AgeingRul:
         """``AgeingRul(predictor.values(x, log_theta), weights, low_quantile=...)`` in one
         kernel: the summary of a particle filter's cloud (its own float64 arrays of one
         length, e.g. ``pf.x``, ``pf.log_theta``, ``pf.weights``), the same numbers. Other
-        real arrays are converted; all must be finite (a NaN severity would read as RUL 0)."""
+        real arrays are converted; all must be finite (a NaN severity would read as RUL 0), the
+        weights >= 0 with a positive sum."""
         check.instance("predictor", predictor, RulPredictor)
         x = np.ascontiguousarray(check.array("x", x, ndim=1, min_size=1))
         n = x.size
         log_theta = np.ascontiguousarray(check.array("log_theta", log_theta, shape=(n,), like="x"))
-        weights = np.ascontiguousarray(check.array("weights", weights, shape=(n,), like="x"))
+        # rescaled if their sum overflows (the same normalised weights)
+        weights = np.ascontiguousarray(check.weights("weights", weights, (n,), like="x"))
         _check_level(low_quantile)
         self = cls.__new__(cls)
         self._r, self._cum_w = np.empty(n), np.empty(n + 1)

@@ -24,7 +24,8 @@ import hashlib
 import json
 import logging
 import math
-from dataclasses import asdict, dataclass
+from collections.abc import Sequence
+from dataclasses import asdict, dataclass, fields
 from functools import lru_cache
 from pathlib import Path
 
@@ -46,13 +47,14 @@ from scas_env.actuator.flight_damage import (
 )
 from scas_env.actuator.health import actuator_config
 from scas_env.actuator.missions import flight_profile, link_force_n
-from scas_env.actuator.params import ScasParams
+from scas_env.actuator.params import MissionParams, ScasParams
 from scas_env.actuator.physics.actuator import simulate
 from scas_env.actuator.uncertainty import draw_units, nominal_unit
 from scas_env.utils.atomic_file import refuse_existing, write_text_atomic
 from scas_env.utils.shipped_files import shipped_path, verify_shipped_file
 from scas_env.utils.table_checks import (
     finite_array,
+    finite_numbers,
     finite_scalar,
     load_json_table,
     whole_number,
@@ -210,9 +212,17 @@ class Calibration:
 
     def crack_cv_at(self, depth_m: float | FloatArray, source: str = "window") -> FloatArray:
         """Flight-to-flight CV of the crack increment at ``depth_m`` (log-depth
-        interpolation) of ``source`` (:meth:`flight_scatter`)."""
+        interpolation) of ``source`` (:meth:`flight_scatter`).
+
+        ``depth_m`` must be finite and > 0 m (``ValueError`` otherwise). Beyond the ends of
+        ``crack_cv_depth_m`` the CV is held at the end value (clamped, as ``np.interp``
+        does): the CV of a shallower crack is the first depth's, of a deeper one the last's.
+        """
+        depth = np.asarray(depth_m, dtype=np.float64)
+        if np.any(~np.isfinite(depth) | (depth <= 0.0)):
+            raise ValueError(f"depth_m = {depth_m!r} must be finite and > 0 m")
         cvs = self.flight_scatter(source)[0]
-        return np.interp(np.log(depth_m), np.log(self.crack_cv_depth_m), cvs)
+        return np.interp(np.log(depth), np.log(self.crack_cv_depth_m), cvs)
 
     def crack_cv_whole_flight_at(self, depth_m: float | FloatArray) -> FloatArray:
         """Whole-flight CV of the crack increment at ``depth_m`` (log-depth interpolation);
@@ -255,6 +265,11 @@ class Calibration:
         return load_json_table(path, lambda data: cls(**data), "calibration")
 
 
+#: Depths (m) of the flight-to-flight crack CV that :func:`build_calibration` estimates by
+#: default (those below the spring's failure depth).
+DEFAULT_CV_DEPTHS_M: tuple[float, ...] = (60e-6, 100e-6, 200e-6, 400e-6, 800e-6)
+
+
 def build_calibration(
     params: ScasParams,
     *,
@@ -262,7 +277,7 @@ def build_calibration(
     n_windows: int = 30,
     window_s: float | None = None,
     spectrum_window_s: float = 120.0,
-    cv_depths_m: tuple[float, ...] = (60e-6, 100e-6, 200e-6, 400e-6, 800e-6),
+    cv_depths_m: Sequence[float] | None = None,
     whole_flights: int = 0,
     progress: bool = True,
 ) -> Calibration:
@@ -276,12 +291,27 @@ def build_calibration(
     ``whole_flights`` > 0 also simulates that many whole flights for the whole-flight
     scatter fields (:func:`whole_flight_scatter`, about 6 s per flight); the other fields do
     not depend on it.
+
+    Arguments (all checked before any simulation; ``ValueError`` naming the argument):
+    ``seed`` an integer >= 0; ``n_windows`` an integer >= 2; ``window_s`` (default
+    ``params.mission.flight_window_s``) and ``spectrum_window_s`` in the range of
+    ``MissionParams.flight_window_s`` ([1, 3600] s); ``whole_flights`` 0 or an integer >= 2;
+    ``cv_depths_m`` finite depths > 0 m, strictly rising, each below the failure depth of
+    the nominal spring (a depth at or beyond it is refused: the crack does not exist
+    there). Default ``cv_depths_m``: :data:`DEFAULT_CV_DEPTHS_M`, less those at or beyond
+    the failure depth (a thinner wire fails at a smaller depth).
     """
+    if not isinstance(params, ScasParams):
+        raise ValueError(f"params must be a ScasParams, got {type(params).__name__}")
+    whole_number("", "seed", seed, lo=0)
     if whole_flights != 0:
         whole_number("build_calibration", "whole_flights", whole_flights, lo=2)
-    if n_windows < 2:
-        raise ValueError(f"n_windows = {n_windows} must be >= 2 to estimate a scatter")
+    if isinstance(n_windows, bool) or not isinstance(n_windows, int | np.integer) or n_windows < 2:
+        raise ValueError(f"n_windows = {n_windows!r} must be an integer >= 2 to estimate a scatter")
     window_s = params.mission.flight_window_s if window_s is None else window_s
+    _check_window("window_s", window_s)
+    _check_window("spectrum_window_s", spectrum_window_s)
+    cv_depths_m = _check_cv_depths(params, cv_depths_m)
     root = np.random.SeedSequence(seed)
     spectrum_seq, windows_seq = root.spawn(2)
     criterion = seal_criterion(params)
@@ -333,6 +363,37 @@ def build_calibration(
         wear_cv=float(wears.std(ddof=1) / wears.mean()),
         **whole,  # type: ignore[arg-type]
     )
+
+
+def _check_window(name: str, value: object) -> float:
+    """``value`` as a float if it lies in the range of ``MissionParams.flight_window_s``."""
+    md = next(f.metadata for f in fields(MissionParams) if f.name == "flight_window_s")
+    return finite_scalar("build_calibration", name, value, lo=md["lo"], hi=md["hi"])
+
+
+def _check_cv_depths(params: ScasParams, cv_depths_m: object) -> tuple[float, ...]:
+    """The depths of :func:`build_calibration`'s crack CV: ``cv_depths_m`` checked (finite,
+    > 0, strictly rising, below the nominal spring's failure depth), or the default ones
+    below that depth if ``cv_depths_m`` is None."""
+    failure = growth_model(params).failure_depth_m  # no simulation: geometry and material
+    if cv_depths_m is None:
+        return tuple(d for d in DEFAULT_CV_DEPTHS_M if d < failure)
+    allowed = f"finite, > 0 m and below the spring's failure depth {failure:.6g} m"
+    depths = finite_numbers("cv_depths_m", cv_depths_m, lo=0.0, allowed=f"must be {allowed}")
+    if not depths:
+        raise ValueError(f"cv_depths_m = {cv_depths_m!r} must hold at least one depth")
+    for k, d in enumerate(depths):
+        if not 0.0 < d < failure:
+            raise ValueError(
+                f"cv_depths_m[{k}] = {d!r} m must be {allowed} (the failure depth of the "
+                "nominal spring of these params: no crack grows beyond it)"
+            )
+        if k and d <= depths[k - 1]:
+            raise ValueError(
+                f"cv_depths_m[{k}] = {d!r} m must exceed cv_depths_m[{k - 1}] = "
+                f"{depths[k - 1]!r} m: the depths must be strictly rising"
+            )
+    return depths
 
 
 def whole_flight_scatter(
@@ -442,7 +503,23 @@ def sample_lives(
 
     Spring: ``(I(a_f) - I(a_0)) / theta`` with ``I`` the damage integral of the growth
     table and ``theta = C_unit / C_nom``; seal: ``lambda_crit / (r k_w,unit / k_w,nom)``.
+
+    ``calibration`` must be built for ``params`` (same :func:`params_digest`; else
+    ``ValueError`` before any draw): the unit scatter is normalised by ``params``' nominal
+    Paris C and wear rate, the tables are the calibration's.
     """
+    if not isinstance(calibration, Calibration):
+        raise ValueError(f"calibration must be a Calibration, got {type(calibration).__name__}")
+    if not isinstance(params, ScasParams):
+        raise ValueError(f"params must be a ScasParams, got {type(params).__name__}")
+    digest = params_digest(params)
+    if calibration.params_digest != digest:
+        raise ValueError(
+            f"sample_lives: calibration.params_digest = {calibration.params_digest!r} does "
+            f"not match params_digest(params) = {digest!r}: the calibration was built for "
+            "other parameters; use calibration_for(params) (or build_calibration(params)) "
+            "to get one for these params"
+        )
     units = draw_units(params, rng, n_units)
     model = paris_crack_model(calibration.crack_depth_m, calibration.crack_rate_m_per_flight)
     a0 = np.array([u.initial_crack_m for u in units])

@@ -263,6 +263,19 @@ def preflight_test_command(mission: MissionParams, sample_rate_hz: float) -> Mis
     )
 
 
+def _segment_samples(segment_s: float, sample_rate_hz: float, fs: float) -> float:
+    """Samples per segment, ``segment_s * fs``: ``ValueError`` unless ``segment_s`` is finite,
+    > 0 and holds at least one sample (a shorter segment would be empty)."""
+    seg_n = _check_positive("segment_s", segment_s) * fs
+    if not seg_n >= 1.0:
+        raise ValueError(
+            f"segment_s = {segment_s} s at sample_rate_hz = {sample_rate_hz} Hz holds "
+            f"{seg_n:.6g} samples; segment_s * sample_rate_hz must be >= 1 (a segment of less "
+            "than one sample is empty)"
+        )
+    return seg_n
+
+
 def _split(n: int, n_pieces: int) -> list[int]:
     """Split n samples into n_pieces lengths differing by at most one."""
     base, extra = divmod(n, n_pieces)
@@ -385,7 +398,8 @@ def flight_profile(
     duration_s : float, optional
         Window length (s); default ``mission.flight_window_s``.
     segment_s : float, optional
-        Target segment length (s), [B] (the paper gives none).
+        Target segment length (s), [B] (the paper gives none); at least one sample
+        (``segment_s * sample_rate_hz >= 1``).
     crossfade_s : float, optional
         Amplitude ramp at each join (s), [B].
 
@@ -418,7 +432,7 @@ def _table_flight(
     _check_mission(mission, rng)
     fs = _check_rate(sample_rate_hz, 2.0 * _MAX_FREQUENCY_HZ)
     n = _n_samples(mission.flight_window_s if duration_s is None else duration_s, fs)
-    seg_n = _check_positive("segment_s", segment_s) * fs
+    seg_n = _segment_samples(segment_s, sample_rate_hz, fs)
     _check_positive("crossfade_s", crossfade_s)  # before any draw (used by _synthesise)
     pieces: list[tuple[int, int]] = []
     for regime, share in zip(table, _allocate(n, [r.occurrence for r in table]), strict=True):
@@ -463,7 +477,7 @@ def regime_profile(
     _check_mission(mission, rng)
     fs = _check_rate(sample_rate_hz, 2.0 * _MAX_FREQUENCY_HZ)
     n = _n_samples(duration_s, fs)
-    seg_n = _check_positive("segment_s", segment_s) * fs
+    seg_n = _segment_samples(segment_s, sample_rate_hz, fs)
     lengths = _split(n, max(1, round(n / seg_n)))
     return _synthesise(
         "regime", [int(regime)] * len(lengths), lengths, mission, rng, fs, crossfade_s

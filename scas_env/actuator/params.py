@@ -19,7 +19,7 @@ users can change them. Derived quantities (areas, rates, coefficients) are prope
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 
 from scas_env.actuator.config import Validated, param
 
@@ -48,7 +48,13 @@ class FluidParams(Validated):
         1.5e9, "Pa", lo=1e8, hi=5e9, source="pure liquid at 40 degC, ref §9 [B]"
     )
     bulk_modulus_temp_coeff_per_k: float = param(
-        0.0045, "1/K", lo=0.0, hi=0.05, source="~0.4-0.5 %/K decrease, ref §9 [B]"
+        0.0045,
+        "1/K",
+        lo=0.0,
+        hi=0.05,
+        source="~0.4-0.5 %/K decrease, ref §9 [B]; also below 1/(T_max - 40 K) = 1/95 K, so "
+        "that E_l(T) = E_l40 (1 - c (T - 40)) stays > 0 up to the top T_max = 135 degC of the "
+        "temperature_c range, which the per-run temperature draws reach (FluidParams._check)",
     )
     air_fraction: float = param(
         0.005, "-", lo=0.0, hi=0.2, source="entrained air at atmospheric pressure, Simscape [A]"
@@ -57,6 +63,17 @@ class FluidParams(Validated):
     temperature_c: float = param(40.0, "degC", lo=-55.0, hi=135.0, source="ref §9 [B]")
 
     def _check(self) -> None:
+        # Per-run temperatures are drawn up to the top of the temperature_c range
+        # (scas_env.actuator.uncertainty.draw_run_conditions_many): E_l(T) must stay > 0 there.
+        t_max = next(f.metadata["hi"] for f in fields(self) if f.name == "temperature_c")
+        c = self.bulk_modulus_temp_coeff_per_k
+        if not 1.0 - c * (t_max - 40.0) > 0.0:
+            raise ValueError(
+                f"FluidParams.bulk_modulus_temp_coeff_per_k = {c} 1/K makes the liquid bulk "
+                f"modulus E_l(T) = E_l40 (1 - c (T - 40)) <= 0 at T = {t_max:g} degC, the top "
+                "of the FluidParams.temperature_c range that the per-run temperature draws "
+                f"reach; allowed: c < 1/({t_max:g} - 40) = {1.0 / (t_max - 40.0):.6g} 1/K"
+            )
         if self.return_pressure_pa >= self.supply_pressure_pa:
             raise ValueError(
                 f"FluidParams.return_pressure_pa = {self.return_pressure_pa} Pa must be below "

@@ -268,7 +268,10 @@ class SurrogateModel:
         """One run's features ``idx`` at (c, w) for an installation with effects ``unit_z``.
 
         ``unit_z`` holds one standard-normal draw per modelled feature (from
-        :meth:`draw_unit_z`); the run noise is ``rng.standard_normal(len(idx))``.
+        :meth:`draw_unit_z`, ``len(features)`` values); the run noise is
+        ``rng.standard_normal(len(idx))``. Each index must lie in ``0 <= k < len(features)``
+        (a negative one is refused, not counted from the end). ``ValueError`` otherwise,
+        before any draw.
         """
         return np.array(self.sample_list(crack_frac, wear_frac, unit_z, rng, idx))
 
@@ -280,7 +283,16 @@ class SurrogateModel:
         rng: np.random.Generator,
         idx: Sequence[int],
     ) -> list[float]:
-        """:meth:`sample` as a list of Python floats (the same values, without arrays)."""
+        """:meth:`sample` as a list of Python floats (the same values, without arrays);
+        the same checks of ``unit_z`` and ``idx``."""
+        nf = len(self.features)
+        if len(unit_z) != nf:
+            raise ValueError(
+                f"unit_z has {len(unit_z)} values; one per modelled feature ({nf}) is required"
+            )
+        if len(idx) and not (min(idx) >= 0 and max(idx) < nf):  # cheap: no per-k loop
+            bad = next(k for k in idx if not 0 <= k < nf)
+            raise ValueError(f"idx holds feature index {bad!r}; allowed: 0 <= k < {nf}")
         n = len(idx)
         t = self._scalar_tables(crack_frac, wear_frac, idx, (0, 1, 2))
         z = rng.standard_normal(n).tolist()

@@ -86,7 +86,7 @@ def truncated_normal(
     mean, sigma : array_like
         Mean and standard deviation (``sigma >= 0``) of the parent Gaussian.
     lower, upper : array_like, optional
-        Inclusive bounds (default: none).
+        Inclusive bounds (default: none, i.e. -inf/inf); NaN is refused.
     size : int or tuple, optional
         Output shape; default is the broadcast shape of the other arguments.
 
@@ -139,6 +139,11 @@ def _truncated(
         raise ValueError(f"truncated_normal: sigma = {sigma!r} must be >= 0")
     if status == 3:
         raise ValueError(f"truncated_normal: lower = {lower!r} must not exceed upper = {upper!r}")
+    if status == 4:
+        raise ValueError(
+            f"truncated_normal: lower = {lower!r} and upper = {upper!r} must not be NaN "
+            "(a real number, or -inf/inf for no bound)"
+        )
     if worst < MIN_ACCEPTANCE:
         raise ValueError(
             f"truncated_normal: bounds [{lower!r}, {upper!r}] keep only a fraction {worst:.3g} "
@@ -154,7 +159,7 @@ def _check_truncated(
     """(status, smallest acceptance probability) of :func:`truncated_normal`'s arguments.
 
     Each array holds one value (shared) or one per element. Status 1: non-finite mean or
-    sigma; 2: sigma < 0; 3: lower > upper. The acceptance is
+    sigma; 2: sigma < 0; 3: lower > upper; 4: a NaN bound (+-inf is allowed). The acceptance is
     ``Phi((hi - mu)/sd) - Phi((lo - mu)/sd)`` (``Phi(z) = erfc(-z / sqrt 2) / 2``), or 1/0
     for ``sd = 0`` with the mean inside/outside the bounds.
     """
@@ -173,6 +178,8 @@ def _check_truncated(
             return 2, 0.0
         if a_lo > a_hi:
             return 3, 0.0
+        if math.isnan(a_lo) or math.isnan(a_hi):
+            return 4, 0.0
         if s > 0.0:
             a = 0.5 * math.erfc(-(a_hi - m) / s / math.sqrt(2.0))
             b = 0.5 * math.erfc(-(a_lo - m) / s / math.sqrt(2.0))
@@ -429,7 +436,7 @@ def draw_units(params: ScasParams, rng: np.random.Generator, n: int) -> tuple[Un
         )  # fmt: skip
     if stage:
         what = ("wire diameters", "coil diameters", "initial cracks")[stage - 1]
-        problem = ("non-finite mean or sigma", "sigma < 0", "lower > upper")
+        problem = ("non-finite mean or sigma", "sigma < 0", "lower > upper", "a NaN bound")
         raise ValueError(
             f"draw_units: the truncated normal of the {what} is ill-posed: "
             + (problem[status - 1] if status else f"acceptance {worst:.3g} < {MIN_ACCEPTANCE}")
