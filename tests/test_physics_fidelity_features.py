@@ -117,8 +117,8 @@ def test_an_aircraft_s_other_actuator_flies_the_failing_flight_in_either_order(
     from scas_env.core.batch import ActuatorBatch
     from scas_env.env import make_setup
 
-    setup = make_setup(None, None, None, None, None, {"fidelity": fidelity,
-                       **({"window_library": 1} if fidelity == "physics" else {})})
+    fields = {"fidelity": fidelity, **({"window_library": 1} if fidelity == "physics" else {})}
+    setup = make_setup(None, None, None, None, None, fields)
     batch = ActuatorBatch(setup, 2)
     rows = np.arange(2, dtype=np.int64)
     batch.reset(rows, [np.random.default_rng(0), np.random.default_rng(1)])
