@@ -117,6 +117,37 @@ def test_alpha_lambda_scores_the_prediction_made_at_t_lambda_despite_its_roundin
         assert m.alpha_lambda == {lam: True}, (dt, lam, times[k], lam * eol)
 
 
+def test_alpha_lambda_measures_t_lambda_from_the_first_prediction() -> None:
+    """Saxena, Celaya, Saha, Saha & Goebel (2010), "Metrics for offline evaluation of
+    prognostic performance", IJPHM 1(1), alpha-lambda accuracy: the prediction scored is the
+    one at t_lambda = t_P + lambda (t_EoL - t_P), t_P the time of the first prediction, and
+    it passes when (1 - alpha) r*(t_lambda) <= r(t_lambda) <= (1 + alpha) r*(t_lambda).
+
+    Predictions start at t_P = 100 (EoL 200), so t_lambda = 125, 150, 175 for lambda = 0.25,
+    0.5, 0.75 (not lambda EoL = 50, 100, 150). By hand, alpha = 0.2:
+    t = 100: r* = 100, cone [80, 120], r = 150 -> out
+    t = 125: r* = 75,  cone [60, 90],  r = 80  -> in
+    t = 150: r* = 50,  cone [40, 60],  r = 70  -> out
+    t = 175: r* = 25,  cone [20, 30],  r = 25  -> in
+    Scoring lambda EoL instead would take t = 100, 100, 150: all out."""
+    times, eol = np.array([100.0, 125.0, 150.0, 175.0]), 200.0
+    preds = [np.array([150.0]), np.array([80.0]), np.array([70.0]), np.array([25.0])]
+    m = evaluate_predictions(times, preds, None, eol, alpha=0.2)
+    assert m.alpha_lambda == {0.25: True, 0.5: False, 0.75: True}
+    assert m.alpha_lambda_unscored == ()
+
+
+def test_weighted_mean_normalises_unnormalised_weights() -> None:
+    """Weights need not sum to 1: the weighted mean is sum(w r) / sum(w) (numpy's average);
+    RA follows it."""
+    r, w = np.array([10.0, 30.0]), np.array([2.0, 6.0])
+    want = float(np.average(r, weights=w))  # (20 + 180) / 8 = 25
+    assert want == 25.0
+    assert point_prediction(r, w) == pytest.approx(want, rel=1e-12)
+    assert point_prediction(r, 1000.0 * w) == pytest.approx(want, rel=1e-12)
+    assert relative_accuracy(20.0, r, w) == pytest.approx(1.0 - abs(20.0 - want) / 20.0)
+
+
 def test_bad_inputs_raise() -> None:
     with pytest.raises(ValueError, match="true_rul"):
         relative_accuracy(0.0, np.array([1.0]))

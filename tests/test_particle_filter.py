@@ -99,10 +99,28 @@ def test_nan_measurement_keeps_weights_and_update_normalises() -> None:
     assert pf.ess == pytest.approx(1.0 / np.sum(expected**2), rel=1e-12)
 
 
-def test_shrinkage_regularisation_keeps_mean_and_variance() -> None:
-    pf = _linear_gaussian_pf(20000, seed=3, resample_threshold=1.0)
+@pytest.mark.parametrize("shrink", [True, False])
+def test_shrinkage_regularisation_keeps_mean_and_variance(shrink: bool) -> None:
+    """Resampling then jittering (Epanechnikov kernel, 2-D state) keeps the weighted mean;
+    the variance is kept with Liu-West shrinkage and inflated by 1 + h^2 kappa without.
+
+    Derivation: the parents are drawn from the weighted cloud (mean m, variance v); each
+    moves to m + a (x_parent - m) + h sqrt(v) e with e independent of the parent, E e = 0,
+    Var e = kappa, so the new variance is a^2 v + h^2 kappa v: v for a^2 = 1 - h^2 kappa
+    (shrink), (1 + h^2 kappa) v for a = 1 (plain RPF). The bandwidth and kernel variance
+    from their definitions (Musso, Oudjane & Le Gland 2001), n = 2: h = A N^(-1/(n+4)),
+    A^(n+4) = 8 / c_n (n+4) (2 sqrt(pi))^n = 8 / pi * 6 * 4 pi = 192, and the 2-D
+    Epanechnikov draw has radius^2 ~ Beta(1, 2), E r^2 = 1/3, so kappa = E e_1^2 = 1/6.
+    At N = 10^6, h^2 kappa = 0.0096.
+
+    Tolerance from the sampling error: after resampling the N particles weigh 1/N each
+    (ESS = N); the sample variance of ESS near-Gaussian draws has relative sd sqrt(2/ESS)
+    (systematic resampling is no noisier than multinomial; the jitter adds < 0.1 %), so 3 sd
+    is 3 sqrt(2/ESS) = 0.0042, well inside the 0.0096 that missing shrinkage adds."""
+    n = 1_000_000
+    pf = _linear_gaussian_pf(n, seed=3, resample_threshold=1.0, shrink=shrink)
     pf.predict(USAGE)
-    x, w = pf.x.copy(), pf.weights.copy()
+    x = pf.x.copy()
     # weights from a measurement, computed independently
     logw = -0.5 * (2.0 - x) ** 2 / R
     w = np.exp(logw - logw.max())
@@ -110,8 +128,12 @@ def test_shrinkage_regularisation_keeps_mean_and_variance() -> None:
     mean, var = w @ x, w @ (x - w @ x) ** 2
     assert pf.update(2.0) is True
     est = pf.estimate()
-    assert est.x_mean == pytest.approx(mean, abs=4.0 * math.sqrt(var / 20000))
-    assert est.x_std**2 == pytest.approx(var, rel=0.05)
+    assert est.ess == n  # equally weighted after resampling
+    h2_kappa = (192.0 ** (1.0 / 6.0) * n ** (-1.0 / 6.0)) ** 2 / 6.0
+    assert h2_kappa == pytest.approx(0.0096, abs=5e-5)
+    want = var if shrink else (1.0 + h2_kappa) * var
+    assert est.x_mean == pytest.approx(mean, abs=4.0 * math.sqrt(var / est.ess))
+    assert est.x_std**2 == pytest.approx(want, rel=3.0 * math.sqrt(2.0 / est.ess))
 
 
 def test_bad_inputs_raise() -> None:

@@ -45,8 +45,14 @@ def test_rates_never_go_below_zero_and_pool_counts():
         for a, b, fh in ((0, 1, 3000.0), (0, 0, 2990.0), (2, 0, 2800.0))
     ]
     iv = metric_interval(rows, "failures_per_1000fh")
-    ref = garwood_rate(3, 8.79)
-    assert (iv.mean, iv.low, iv.high) == pytest.approx((ref.mean, ref.low, ref.high))
+    # closed form, not garwood_rate (which metric_interval calls): the Garwood exact Poisson
+    # interval of k = 3 pooled failures, chi2 quantiles / 2, divided by the pooled exposure
+    # E = 8.79 thousand flight hours
+    k, exposure = 3, (3000.0 + 2990.0 + 2800.0) / 1000.0
+    want_low = stats.chi2.ppf(0.025, 2 * k) / 2.0 / exposure
+    want_high = stats.chi2.ppf(0.975, 2 * k + 2) / 2.0 / exposure
+    assert (iv.mean, iv.low, iv.high) == pytest.approx((k / exposure, want_low, want_high))
+    assert iv.low <= iv.mean <= iv.high
     assert iv.n == 3
 
 
