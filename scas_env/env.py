@@ -76,12 +76,14 @@ def make_setup(
             raise ValueError(f"{name} = {value!r} must be None (the default) or a {cls.__name__}")
     scenario = scenario if scenario is not None else Scenario.from_dict(scenario_fields)
     params = params if params is not None else ScasParams()
+    # before the calibration, which other params build in minutes
+    surrogate = surrogate if surrogate is not None else shipped_surrogate_for(params)
     return Setup(
         params=params,
         scenario=scenario,
         costs=cost_model if cost_model is not None else CostModel(),
         calibration=calibration if calibration is not None else env_calibration(params),
-        surrogate=surrogate if surrogate is not None else shipped_surrogate_for(params),
+        surrogate=surrogate,
         mismatch=mismatch if mismatch is not None else Mismatch(),
         world_surrogate=world_surrogate,
     )

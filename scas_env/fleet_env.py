@@ -81,6 +81,8 @@ def make_fleet_setup(
         obs_mode=wanted,
     )
     params = params if params is not None else ScasParams()
+    # before the calibration, which other params build in minutes
+    surrogate = surrogate if surrogate is not None else shipped_surrogate_for(params)
     hours = params.mission.flight_duration_s / 3600.0
     if not math.isclose(config.demand.flight_hours_per_flight, hours, rel_tol=1e-9):
         raise ValueError(
@@ -94,7 +96,7 @@ def make_fleet_setup(
         scenario=base,
         costs=cost_model if cost_model is not None else CostModel(),
         calibration=calibration if calibration is not None else env_calibration(params),
-        surrogate=surrogate if surrogate is not None else shipped_surrogate_for(params),
+        surrogate=surrogate,
         mission_types=types,
     )
     return config, setup

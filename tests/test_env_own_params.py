@@ -67,7 +67,9 @@ def test_an_env_on_other_params_builds_a_whole_flight_calibration(
     assert truncated and np.all(np.isfinite(obs))
 
 
-def test_an_env_on_other_sensing_needs_a_surrogate_of_its_own() -> None:
+def test_an_env_on_other_sensing_needs_a_surrogate_of_its_own(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
     """The shipped feature surrogate is the default params': an env on params whose
     features differ (the paper's sensing preset: noise, test steps, spring tolerances) is
     refused naming those fields, before any calibration is built, unless a surrogate is
@@ -76,6 +78,14 @@ def test_an_env_on_other_sensing_needs_a_surrogate_of_its_own() -> None:
     from scas_env.actuator.presets import preset_params
     from scas_env.actuator.surrogate import DEGRADATION_ONLY, default_surrogate
 
+    def no_calibration(params: ScasParams) -> None:  # minutes for other params
+        raise AssertionError("a calibration was built before the refusal")
+
+    import scas_env.env
+    import scas_env.fleet_env
+
+    monkeypatch.setattr(scas_env.env, "env_calibration", no_calibration)
+    monkeypatch.setattr(scas_env.fleet_env, "env_calibration", no_calibration)
     paper = preset_params("paper")
     with pytest.raises(ValueError, match=r"sensors\.current_noise_a.*mission\.test_step_m") as e:
         gym.make(scas_env.ENV_ID, params=paper)
