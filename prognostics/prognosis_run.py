@@ -117,7 +117,8 @@ def _child_generator(rng: np.random.Generator) -> np.random.Generator:
 
     The bit generator jumped ahead (``jumped()``: 2**128 steps for PCG64), ``rng`` itself
     untouched, so the filter draws what it would without hazard draws; a bit generator
-    without ``jumped`` (SFC64) seeds a new one of its type from one draw of ``rng``.
+    without ``jumped`` (SFC64) seeds a new one of its type from two raw draws of ``rng``,
+    so there the filter's stream depends on whether the zone is Gaussian.
     """
     bit_generator = rng.bit_generator
     jumped = getattr(bit_generator, "jumped", None)

@@ -218,7 +218,9 @@ class ScasMaintenanceEnv(gym.Env):
     Keywords are the fields of :class:`~scas_env.core.scenario.Scenario` (or pass
     ``scenario``); unknown keywords raise ``ValueError``. ``fidelity="physics"`` simulates the
     actuator for every test and flight window (the parts grow as in the surrogate fidelity).
-    ``params`` other than the default are calibrated from physics at construction;
+    ``params`` other than the default are calibrated from physics at construction, and need
+    a ``surrogate`` of their own unless they differ in degradation constants only
+    (:data:`scas_env.actuator.surrogate.DEGRADATION_ONLY`);
     ``calibration=Calibration(...)`` (:mod:`scas_env.actuator.calibration`: the parts'
     failure thresholds and lives) and ``surrogate=SurrogateModel(...)``
     (:mod:`scas_env.actuator.surrogate`: the feature surrogate the world and the monitor use)

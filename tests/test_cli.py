@@ -136,7 +136,14 @@ def _cases(tmp: Path) -> list[tuple[str, list[str], str]]:
     clash.write_text('[scenario]\nfidelity = "physics"\n[mismatch]\nsensing_noise = 2.0\n')
     fleet_costs = tmp / "fleet_costs.toml"
     fleet_costs.write_text("[costs]\nflight_value_usd = 1000\n[fleet]\naircraft = 2\n")
+    library = tmp / "library.toml"  # a physics setting the --fidelity override leaves unread
+    library.write_text('[scenario]\nfidelity = "physics"\nwindow_library = 2\n')
     return [
+        (
+            "scas-benchmark",
+            ["--scenario", str(library), "--fidelity", "surrogate", "--out", str(tmp / "o")],
+            "--fidelity surrogate: Scenario.window_library = 2 has no effect here",
+        ),
         ("scas-value", ["--scenario", str(clash), "--out", str(tmp / "o")], "clash.toml: Mismatch"),
         ("scas-tune", ["--scenario", str(clash), "--out", str(tmp / "o")], "clash.toml: Mismatch"),
         (

@@ -76,7 +76,11 @@ def test_an_env_on_other_sensing_needs_a_surrogate_of_its_own(
     given; degradation constants alone (Paris C, the seals' wear rate) keep the shipped
     tables (the test above)."""
     from scas_env.actuator.presets import preset_params
-    from scas_env.actuator.surrogate import DEGRADATION_ONLY, default_surrogate
+    from scas_env.actuator.surrogate import (
+        DEGRADATION_ONLY,
+        default_surrogate,
+        shipped_surrogate_for,
+    )
 
     def no_calibration(params: ScasParams) -> None:  # minutes for other params
         raise AssertionError("a calibration was built before the refusal")
@@ -91,9 +95,15 @@ def test_an_env_on_other_sensing_needs_a_surrogate_of_its_own(
         gym.make(scas_env.ENV_ID, params=paper)
     assert "uncertainty.wire_diameter_sigma_m" in str(e.value)
     assert "surrogate=default_surrogate()" in str(e.value)
-    with pytest.raises(ValueError, match=r"\['seal\.friction_coefficient'\]"):
-        gym.make("scas_env/ScasFleet-v0", params=ScasParams().replace(
-            seal=ScasParams().seal.replace(friction_coefficient=0.2)))  # fmt: skip
+    seal = ScasParams().seal
+    lip = ScasParams().replace(seal=seal.replace(lip_wear_m=2 * seal.lip_wear_m))
+    with pytest.raises(ValueError, match=r"\['seal\.lip_wear_m'\]"):
+        gym.make("scas_env/ScasFleet-v0", params=lip)
+    # Archard's wear constants (friction coefficient, contact width) set the wear rate only
+    wear_only = ScasParams().replace(
+        seal=ScasParams().seal.replace(friction_coefficient=0.2, contact_width_m=0.002)
+    )
+    assert shipped_surrogate_for(wear_only) is default_surrogate()
     env = gym.make(scas_env.ENV_ID, params=paper, surrogate=default_surrogate(),
                    calibration=cal_module.default_calibration())  # fmt: skip
     assert env.unwrapped.setup.surrogate is default_surrogate()

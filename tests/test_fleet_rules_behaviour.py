@@ -204,6 +204,21 @@ def test_aware_rule_releases_only_the_spare_aircraft_riskiest_first(
     assert both.tolist() == [[0, 1, 0], [0, 1, 0], [0, 0, 2]]
 
 
+def test_aware_rule_spends_no_spare_aircraft_on_one_already_on_the_ground(
+    names: tuple[str, ...],
+) -> None:
+    """A deferred aircraft already on the ground (a job queued) goes to the hangar anyway
+    and uses none of the slack: the one spare free aircraft with a deferred part goes too,
+    though the grounded one is riskier."""
+    urgency = 2.0
+    rule = FleetRule("fleet_aware", names, urgency=urgency)
+    r = rule.values["risk_threshold"]
+    parts = {(0, 0): {"spring_risk": 1.6 * r}, (1, 0): {"spring_risk": 1.2 * r}}
+    act = decide(rule, fleet_obs(names, parts=parts, aircraft={0: {"jobs_queued": 1.0}},
+                                 demand=(1, 0)))  # fmt: skip
+    assert act.tolist() == [[0, 1, 0], [0, 1, 0], [fly(TYPES[0]), 0, 0]]
+
+
 @pytest.mark.parametrize("family", ["fleet_naive", "fleet_age", "fleet_aware"])
 def test_an_aircraft_with_jobs_queued_stays_on_the_ground(
     names: tuple[str, ...], family: str

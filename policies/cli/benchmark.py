@@ -166,13 +166,15 @@ def main(argv: Sequence[str] | None = None) -> int:
             f"{args.scenario}: obs_mode = {scenario.obs_mode!r}: the benchmark gives each "
             "policy the observation it needs; leave obs_mode out of the scenario file"
         )
-    try:
-        scenario = scenario.replace(
-            episode_slots=args.slots or scenario.episode_slots,
-            fidelity=args.fidelity or scenario.fidelity,
-        )
-    except ValueError as exc:
-        parser.error(f"--slots {args.slots}: {exc}")
+    for option, field, value in (
+        ("--slots", "episode_slots", args.slots),
+        ("--fidelity", "fidelity", args.fidelity),
+    ):
+        if value:
+            try:
+                scenario = scenario.replace(**{field: value})
+            except ValueError as exc:
+                parser.error(f"{option} {value}: {exc}")
     env_kwargs = {
         "fidelity": scenario.fidelity,
         **env_keywords(scenario, costs, ("obs_mode", "episode_slots"), mismatch, world_surrogate),

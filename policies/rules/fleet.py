@@ -307,9 +307,9 @@ class FleetRule:
         must = needs & (urgent | failed)
         deferred = needs & ~must
         slack = (free & ~must).sum(axis=1) - demand.sum(axis=1)
-        go = must.copy()
-        for b in np.flatnonzero((slack > 0) & deferred.any(axis=1)):
-            waiting = np.flatnonzero(deferred[b])
+        go = must | (deferred & ~free)  # on the ground anyway: no spare aircraft used
+        for b in np.flatnonzero((slack > 0) & (deferred & free).any(axis=1)):
+            waiting = np.flatnonzero(deferred[b] & free[b])
             riskiest = waiting[np.argsort(-self._health(obs[b])[waiting], kind="stable")]
             go[b, riskiest[: slack[b]]] = True
         return go

@@ -349,7 +349,7 @@ DEGRADATION_ONLY: dict[str, tuple[str, ...]] = {
     "spring": (
         "paris_c", "paris_m", "delta_k_threshold_mpa_sqrt_m", "walker_gamma", "initial_crack_m",
     ),
-    "seal": ("wear_rate_m3_n_m",),
+    "seal": ("wear_rate_m3_n_m", "friction_coefficient", "contact_width_m"),  # Archard's law
     "uncertainty": ("paris_c_log_sigma", "wear_rate_log_sigma", "initial_crack_sigma_m"),
     "mission": ("flight_duration_s",),
 }  # fmt: skip
