@@ -226,6 +226,16 @@ def main(argv: Sequence[str] | None = None) -> int:
                 "rules on held-out seeds (e.g. --seed 2, the documented held-out root)"
             )
         specs += _tuned_specs(parser, args.tuned, fleet=fleet is not None)
+    from policies.base import policy_family
+    from policies.value.tuning import HELD_OUT_SEED, TRAIN_SEED
+
+    rules = [s for s in specs if s.module is None and policy_family(s.name) == "rule"]
+    if args.seed == TRAIN_SEED and rules:
+        log.warning(
+            f"--seed {args.seed} is the root of the training episodes the shipped rules' "
+            f"defaults were tuned on: their results here are in-sample (held out: --seed "
+            f"{HELD_OUT_SEED})"
+        )
     labels = [s.key for s in specs]
     if len(set(labels)) != len(labels):
         parser.error(f"policy labels {labels} must be unique (--agent LABEL=FILE names an agent)")
