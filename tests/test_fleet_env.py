@@ -226,6 +226,26 @@ def test_pettingzoo_parallel_and_aec_api_tests_pass() -> None:
                  num_cycles=20)  # fmt: skip
 
 
+def test_pettingzoo_space_dicts_match_the_methods_and_unknown_agents_are_refused() -> None:
+    """``observation_spaces`` / ``action_spaces`` (PettingZoo's per-agent dicts, read by
+    wrappers) hold every possible agent with the methods' spaces; an unknown agent name is
+    refused naming the allowed ones, not answered with some agent's space."""
+    pytest.importorskip("pettingzoo")
+    from scas_env.multiagent import fleet_v1
+
+    env = fleet_v1.parallel_env(fleet=SMALL)
+    assert list(env.observation_spaces) == list(env.action_spaces) == env.possible_agents
+    for agent in env.possible_agents:
+        assert env.observation_spaces[agent] == env.observation_space(agent)
+        assert env.action_spaces[agent] == env.action_space(agent)
+    obs, _ = env.reset(seed=0)
+    assert all(env.observation_spaces[a].contains(o) for a, o in obs.items())
+    n = len(env.possible_agents)
+    for call in (env.observation_space, env.action_space):
+        with pytest.raises(ValueError, match=rf"'aircraft_{n}' .*aircraft_0 .. aircraft_{n - 1}"):
+            call(f"aircraft_{n}")
+
+
 def test_the_agents_views_concatenate_back_to_the_fleet_and_share_the_reward() -> None:
     """Aircraft ``i``'s observation is its actuators' entries, its aircraft row and the shared
     groups of the fleet's observation; the reward is the team's, each aircraft's info holds

@@ -74,12 +74,23 @@ class FleetParallelEnv(ParallelEnv):
         self._entry_ends = np.cumsum(per)[:-1]  # where a flat mask row splits into entries
         self._obs_space = self.fleet_env.view.agent_space
         self.state_space = self.fleet_env.observation_space
+        # PettingZoo's per-agent dicts (one space object for every agent)
+        self.observation_spaces = dict.fromkeys(self.possible_agents, self._obs_space)
+        self.action_spaces = dict.fromkeys(self.possible_agents, self._action_space)
 
     def observation_space(self, agent: str) -> spaces.Box:
-        return self._obs_space  # one space object for every agent
+        return self.observation_spaces[self._known(agent)]
 
     def action_space(self, agent: str) -> spaces.MultiDiscrete:
-        return self._action_space
+        return self.action_spaces[self._known(agent)]
+
+    def _known(self, agent: str) -> str:
+        if agent not in self.observation_spaces:
+            raise ValueError(
+                f"agent = {agent!r} is not an agent of this fleet; allowed: "
+                f"aircraft_0 .. aircraft_{len(self.possible_agents) - 1}"
+            )
+        return agent
 
     def state(self) -> np.ndarray:
         """The global state for centralised training (MAPPO, QMIX): the fleet env's whole
