@@ -105,8 +105,15 @@ class Policy(ABC):
                 f"observation has shape {obs.shape}; expected ({len(self.obs_names)},) or "
                 f"(n_envs, {len(self.obs_names)}) for obs_names {self.obs_names}"
             )
+        if episode_start is not None:
+            self._start_episodes(episode_start)
         actions = self._act(np.atleast_2d(obs)).astype(np.int64)
         return (int(actions[0]) if obs.ndim == 1 else actions), state
+
+    def _start_episodes(self, episode_start: Any) -> None:  # noqa: B027
+        """SB3's ``episode_start`` of a :meth:`predict` call (:func:`episode_starts` reads it
+        per row): the rows set begin an episode. Rules keep no state; a policy that keeps
+        per-episode state starts it over here."""
 
     def reset(self, seed: int | Sequence[int] | None = None) -> None:  # noqa: B027
         """Start a new episode, or a batch of episodes side by side (a sequence of seeds, one

@@ -512,14 +512,22 @@ class ParticleFilter:
 
         ``x0`` and ``theta0`` are each a scalar, an (N,) array, or a sampler
         ``f(rng, N) -> (N,) array`` called with the filter's Generator; theta0 must be > 0.
+        Values are checked before any sampler draws: a refused reset leaves the Generator as
+        it was when the bad input is a value.
         """
         n = self.n_particles
-        x = _initial("x0", x0, self.rng, n)
-        theta = _initial("theta0", theta0, self.rng, n)
-        if not np.all(theta > 0.0):
-            raise ValueError(
-                f"theta0 must be > 0 for every particle, got {check.show(float(theta.min()))}"
-            )
+
+        def initial(name: str, values: InitialValues) -> np.ndarray:
+            arr = _initial(name, values, self.rng, n)
+            if name == "theta0" and not np.all(arr > 0.0):
+                raise ValueError(
+                    f"theta0 must be > 0 for every particle, got {check.show(float(arr.min()))}"
+                )
+            return arr
+
+        given = {k: initial(k, v) for k, v in (("x0", x0), ("theta0", theta0)) if not callable(v)}
+        x = given["x0"] if "x0" in given else initial("x0", x0)
+        theta = given["theta0"] if "theta0" in given else initial("theta0", theta0)
         self._ready = False  # until both clouds are written and representable
         self._x[:] = x
         self._log_theta[:] = theta

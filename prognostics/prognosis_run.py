@@ -31,7 +31,7 @@ from prognostics import validation as check
 from prognostics.degradation_models import TabulatedRateModel
 from prognostics.measurement import MeasurementModel
 from prognostics.metrics import PrognosticMetrics, evaluate_predictions
-from prognostics.particle_filter import InitialValues, ParticleFilter, _initial
+from prognostics.particle_filter import InitialValues, ParticleFilter
 from prognostics.rul import HazardZone, predict_rul, summarize_rul
 
 __all__ = ["PrognosisTrace", "run_prognosis"]
@@ -95,22 +95,6 @@ class PrognosisTrace:
         )
 
 
-def _check_initial_values(
-    x0: InitialValues, theta0: InitialValues, rng: np.random.Generator, n: int
-) -> None:
-    """The checks of :meth:`ParticleFilter.reset` on ``x0`` and ``theta0`` given as values
-    (samplers are checked on their draw by ``reset``): a bad value is refused before a
-    sampler of the other draws from the Generator."""
-    for name, value in (("x0", x0), ("theta0", theta0)):
-        if callable(value):
-            continue
-        arr = _initial(name, value, rng, n)  # a value, not a sampler: rng is not drawn from
-        if name == "theta0" and not np.all(arr > 0.0):
-            raise ValueError(
-                f"theta0 must be > 0 for every particle, got {check.show(float(arr.min()))}"
-            )
-
-
 def _child_generator(rng: np.random.Generator) -> np.random.Generator:
     """A Generator for the hazard's draws that is a function of ``rng``'s state alone (not
     of its seed sequence's spawn counter): two Generators in one state give one child.
@@ -166,8 +150,7 @@ def run_prognosis(
     check.instance("hazard", hazard, HazardZone)
     check.integer("start_index", start_index, ge=0, le=u.size - 1)
     pf = ParticleFilter(process, measurement, n_particles, rng)
-    _check_initial_values(x0, theta0, rng, pf.n_particles)  # before a sampler draws
-    pf.reset(x0, theta0)  # the first draws of rng (samplers), after every check
+    pf.reset(x0, theta0)  # values checked before a sampler draws (a refused call draws nothing)
     # the hazard's draws (a Gaussian zone) from a child stream: the filter's own draws do
     # not depend on when the predictions start
     hazard_rng = _child_generator(rng) if hazard.std > 0.0 else None

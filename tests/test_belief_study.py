@@ -4,6 +4,7 @@ coverage, undercut, log-ratio spread and reliability bins against direct computa
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import numpy as np
 import pytest
@@ -224,6 +225,18 @@ def test_paired_difference_interval_is_as_wide_as_the_episode_effect_makes_it() 
     assert ratio > 1.3  # per-life resampling gives 1
 
 
+def _coverage(interval: Any, draw: Any, truth: float, episodes: int, runs: int = 200) -> float:
+    """Share of ``runs`` draws (``draw(rng, episodes, 8)``: 8 lives an episode) whose
+    ``interval`` (999 resamples) holds ``truth``."""
+    rng = np.random.default_rng(70)
+    hits = 0
+    for _ in range(runs):
+        a, b, episode = draw(rng, episodes, 8)
+        out = interval(a, b, episode, rng, n_resamples=999)
+        hits += out["ci_low"] <= truth <= out["ci_high"]
+    return hits / runs
+
+
 def test_paired_difference_interval_covers_the_true_difference() -> None:
     """200 small runs (30 episodes of 8 lives): the interval holds the true difference
     (1/4) in at least 0.95 - 3 sqrt(0.95 x 0.05 / 200) = 0.904 of them (3 binomial sd
@@ -231,14 +244,10 @@ def test_paired_difference_interval_covers_the_true_difference() -> None:
     0.82 of them here (design effect 2.46)."""
     from experiments.belief_comparison import paired_difference
 
-    rng = np.random.default_rng(70)
-    runs, hits = 200, 0
-    for _ in range(runs):
-        a, b, episode = _clustered_shares(rng, 30, 8)
-        out = paired_difference(a, b, episode, rng, n_resamples=999)
-        hits += out["ci_low"] <= PAIRED_SHARE_TRUTH <= out["ci_high"]
-    assert hits / runs >= 0.95 - 3.0 * math.sqrt(0.95 * 0.05 / runs)
-    assert hits / runs <= 1.0 - 0.01  # not a degenerate, everything-covering interval
+    runs = 200
+    covered = _coverage(paired_difference, _clustered_shares, PAIRED_SHARE_TRUTH, 30, runs)
+    assert covered >= 0.95 - 3.0 * math.sqrt(0.95 * 0.05 / runs)
+    assert covered <= 1.0 - 0.01  # not a degenerate, everything-covering interval
 
 
 def test_paired_sd_difference_interval_is_wider_than_a_per_life_bootstrap() -> None:
@@ -264,13 +273,7 @@ def test_paired_sd_difference_interval_covers_the_true_difference() -> None:
     covers about 0.79 here."""
     from experiments.belief_comparison import paired_sd_difference
 
-    rng = np.random.default_rng(70)
-    runs, hits = 200, 0
-    for _ in range(runs):
-        a, b, episode = _clustered_log_ratios(rng, 60, 8)
-        out = paired_sd_difference(a, b, episode, rng, n_resamples=999)
-        hits += out["ci_low"] <= SD_TRUTH <= out["ci_high"]
-    assert 0.85 <= hits / runs <= 0.99
+    assert 0.85 <= _coverage(paired_sd_difference, _clustered_log_ratios, SD_TRUTH, 60) <= 0.99
 
 
 def test_compare_runs_pairs_lives_and_pools_stages(tmp_path) -> None:

@@ -261,3 +261,19 @@ def test_sigma_values_override_equals_a_model_with_that_noise() -> None:
     for bad in (np.full(5, 0.3), np.array([0.3, 0.3, 0.0, 0.3, 0.3, 0.3]), np.full(6, np.nan)):
         with pytest.raises(ValueError, match="sigma_values"):
             pf.update(1.0, sigma_values=bad)
+
+
+@pytest.mark.parametrize(("x0", "theta0"), [("sampler", -1.0), (np.nan, "sampler")])
+def test_a_reset_refused_for_a_value_draws_nothing(x0: object, theta0: object) -> None:
+    """The values are checked before any sampler draws: a reset refused for a bad value
+    leaves the Generator where it was, whichever argument is the sampler."""
+    pf = _linear_gaussian_pf(50, 3)
+    before = pf.rng.bit_generator.state
+
+    def sampler(rng: np.random.Generator, n: int) -> np.ndarray:
+        return 1.0 + rng.random(n)
+
+    args = [sampler if v == "sampler" else v for v in (x0, theta0)]
+    with pytest.raises(ValueError, match=r"theta0|x0"):
+        pf.reset(*args)
+    assert pf.rng.bit_generator.state == before

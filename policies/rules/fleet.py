@@ -64,6 +64,15 @@ PARTS = ("spring", "seal")
 #: aware rule's deferral tunes to off (``urgency`` 1, its start), the filter rules'
 #: ``test_every`` beyond the 365-day episode (no scheduled test is made) and the grouping
 #: to a tenth of a threshold.
+_OPPORTUNISTIC = {
+    "spring_age": 1537.0,
+    "seal_age": 4435.0,
+    "test_every": 4526.0,
+    "risk_threshold": 0.1008,
+    "spring_lead": 5.057,
+    "seal_lead": 0.5897,
+    "opportunity": 0.1059,
+}
 FLEET_TUNED: dict[str, dict[str, float]] = {
     "fleet_age": {"spring_age": 999.5, "seal_age": 2283.0, "opportunity": 0.7234},
     "fleet_naive": {
@@ -74,25 +83,9 @@ FLEET_TUNED: dict[str, dict[str, float]] = {
         "spring_lead": 2.102,
         "seal_lead": 0.9441,
     },
-    "fleet_opportunistic": {
-        "spring_age": 1537.0,
-        "seal_age": 4435.0,
-        "test_every": 4526.0,
-        "risk_threshold": 0.1008,
-        "spring_lead": 5.057,
-        "seal_lead": 0.5897,
-        "opportunity": 0.1059,
-    },
-    "fleet_aware": {
-        "spring_age": 1537.0,
-        "seal_age": 4435.0,
-        "test_every": 4526.0,
-        "risk_threshold": 0.1008,
-        "spring_lead": 5.057,
-        "seal_lead": 0.5897,
-        "opportunity": 0.1059,
-        "urgency": 1.0,
-    },
+    "fleet_opportunistic": _OPPORTUNISTIC,
+    # its best trial is its start: the opportunistic rule's best, urgency 1
+    "fleet_aware": {**_OPPORTUNISTIC, "urgency": 1.0},
     "fleet_oracle": {"lead_flights": 10.05, "opportunity": 0.06485},
 }
 

@@ -85,21 +85,14 @@ class NoisyOraclePolicy(NestedRule):
                 self.base_seed = int(seeds[0])
         self.z, self.last_age = None, None
 
-    def predict(
-        self,
-        observation: Any,
-        state: Any = None,
-        episode_start: Any = None,
-        deterministic: bool = True,
-    ) -> tuple[int | IntArray, Any]:
-        """As :meth:`Policy.predict`; rows with ``episode_start`` set draw their parts' ``z``
-        anew (once: their ages are not compared with the last episode's)."""
+    def _start_episodes(self, episode_start: Any) -> None:
+        """Rows with ``episode_start`` set draw their parts' ``z`` anew (once: their ages are
+        not compared with the last episode's)."""
         start = None if self.z is None else episode_starts(episode_start, self.z.shape[0])
         if start is not None and start.any():
             for k in range(2):
                 self._draw(start, k)
             self.last_age[start] = -np.inf
-        return super().predict(observation, state, episode_start, deterministic)
 
     def _draw(self, rows: np.ndarray, part: int) -> None:
         for r in np.flatnonzero(rows):

@@ -296,19 +296,12 @@ class OraclePolicy(Policy):
         """A new episode (or batch): the slot counters and planned groupings start over."""
         self.slot, self.pending = None, None
 
-    def predict(
-        self,
-        observation: Any,
-        state: Any = None,
-        episode_start: Any = None,
-        deterministic: bool = True,
-    ) -> tuple[int | IntArray, Any]:
-        """As :meth:`Policy.predict`; rows with ``episode_start`` set start over."""
+    def _start_episodes(self, episode_start: Any) -> None:
+        """Rows with ``episode_start`` set start over (slot 0, no pair pending)."""
         start = None if self.slot is None else episode_starts(episode_start, self.slot.size)
         if start is not None:
             self.slot[start] = 0
             self.pending[start] = False
-        return super().predict(observation, state, episode_start, deterministic)
 
     def _decide(self, h: int, rul: np.ndarray, upcoming: Any = None) -> bool:
         """Whether to replace both parts now (the due one and the other) rather than the
