@@ -261,6 +261,12 @@ def test_existing_output_refused_before_work_and_replaced_on_request(tmp_path: P
     with pytest.raises(FileExistsError, match="overwrite=True"):
         export_run_to_failure(10_000, out=out, progress=False)  # refused at once
     assert (out / "keep.txt").read_text() == "mine"
+    with pytest.raises(FileExistsError, match="not written by this package"):
+        export_run_to_failure(1, out=out, seed=0, max_slots=20, overwrite=True, progress=False)
+    assert (out / "keep.txt").read_text() == "mine"  # a folder it did not write is kept
+    (out / "keep.txt").unlink()
+    export_run_to_failure(1, out=out, seed=0, max_slots=20, progress=False)
+    (out / "old.txt").write_text("replaced whole")  # beside the card: goes with the folder
     export_run_to_failure(1, out=out, seed=0, max_slots=20, overwrite=True, progress=False)
     assert sorted(p.name for p in out.iterdir()) == [
         "datacard.json", "datacard.md", "flights.csv", "flights.parquet", "units.csv",

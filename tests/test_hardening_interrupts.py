@@ -70,6 +70,7 @@ def _start(tmp_path: Path, *extra: str) -> tuple[subprocess.Popen[str], Path, Pa
     dest.mkdir()
     marks.mkdir()
     (dest / "old.csv").write_text("old results\n")
+    (dest / "manifest.json").write_text("{}\n")  # an earlier run's folder: overwrite may replace it
     proc = subprocess.Popen(
         [sys.executable, "-m", "tests.interrupt_run", str(dest), str(marks), *extra],
         cwd=ROOT,
@@ -133,7 +134,10 @@ def test_an_interrupted_two_worker_run_leaves_nothing(
     assert exited < TARGET_S and gone < TARGET_S, (exited, gone, err)
     assert proc.returncode == status, err
     assert sorted(p.name for p in tmp_path.iterdir()) == ["dest", "marks"], "a partial folder"
-    assert sorted(p.name for p in dest.iterdir()) == ["old.csv"]  # destination untouched
+    assert sorted(p.name for p in dest.iterdir()) == [
+        "manifest.json",
+        "old.csv",
+    ]  # destination untouched
     assert (dest / "old.csv").read_text() == "old results\n"
     if how != "SIGTERM":  # Ctrl-C: Python's KeyboardInterrupt, once (workers ignore SIGINT)
         assert err.count("KeyboardInterrupt") == 1, err
@@ -211,12 +215,13 @@ def test_sigterm_while_writing_removes_the_partial_folder(tmp_path: Path) -> Non
     dest = tmp_path / "bench"
     dest.mkdir()
     (dest / "old.csv").write_text("old")
+    (dest / "manifest.json").write_text("{}")
     with pytest.raises(Terminated), results_folder(dest, config={}, seeds=0, overwrite=True) as tmp:
         (tmp / "results.csv").write_text("new")
         os.kill(os.getpid(), signal.SIGTERM)
         time.sleep(5)
     assert sorted(p.name for p in tmp_path.iterdir()) == ["bench"]
-    assert sorted(p.name for p in dest.iterdir()) == ["old.csv"]
+    assert sorted(p.name for p in dest.iterdir()) == ["manifest.json", "old.csv"]
     with pytest.raises(KeyboardInterrupt), partial_folder(dest) as tmp:
         raise KeyboardInterrupt
     assert not tmp.exists()

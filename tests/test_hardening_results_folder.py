@@ -14,7 +14,9 @@ import pytest
 
 from scas_env.utils.results_folder import (
     MANIFEST,
+    OWN_MARKERS,
     ResultsFolderError,
+    ResultsFolderExistsError,
     ResultsKeptElsewhereError,
     check_destination,
     json_text,
@@ -301,6 +303,10 @@ def test_the_commands_check_accepts_an_empty_folder(
     with pytest.raises(SystemExit):
         check_out_dir(parser, tmp_path / "empty", False)
     assert "already exists and is not empty; pass --overwrite" in capsys.readouterr().err
+    with pytest.raises(SystemExit):  # --overwrite deletes only a folder this package wrote
+        check_out_dir(parser, tmp_path / "empty", True)
+    assert "not written by this package" in capsys.readouterr().err
+    (tmp_path / "empty" / "manifest.json").write_text("{}")
     assert check_out_dir(parser, tmp_path / "empty", True) == tmp_path / "empty"
 
 
@@ -389,6 +395,7 @@ def test_a_results_folder_is_readable_as_files_are_or_keeps_the_old_mode(
     if old_mode is not None:
         dest.mkdir()
         (dest / "old.txt").write_text("old")
+        (dest / "run.json").write_text("{}")  # a folder this package wrote: replaceable
         dest.chmod(old_mode)
     with results_folder(dest, config={}, seeds=1, overwrite=old_mode is not None) as tmp:
         (tmp / "rows.csv").write_text("a\n1\n")
@@ -421,3 +428,24 @@ def test_results_kept_elsewhere_end_a_command_with_the_message_and_status_1(
     assert main([*argv, "--out", str(tmp_path / "run"), "-q"]) == 1
     err = capsys.readouterr().err
     assert f"complete at {kept}" in err and "Traceback" not in err
+
+
+@pytest.mark.parametrize("marker", [None, "notes.txt", *OWN_MARKERS])
+def test_overwrite_replaces_only_a_folder_this_package_wrote(
+    tmp_path: Path, marker: str | None
+) -> None:
+    """``--overwrite`` deleted any non-empty folder (a mistyped ``--out src`` lost it); it
+    now replaces only a folder holding a file this package writes, and keeps any other."""
+    dest = tmp_path / "out"
+    dest.mkdir()
+    (dest / "mine.txt").write_text("keep")
+    if marker is not None:
+        (dest / marker).write_text("{}")
+    if marker in OWN_MARKERS:
+        with results_folder(dest, config={}, seeds=0, overwrite=True) as tmp:
+            (tmp / "rows.csv").write_text("a\n")
+        assert sorted(p.name for p in dest.iterdir()) == [MANIFEST, "rows.csv"]
+    else:
+        with pytest.raises(ResultsFolderExistsError, match="not written by this package"):
+            check_destination(dest, overwrite=True)
+        assert (dest / "mine.txt").read_text() == "keep"

@@ -12,9 +12,10 @@ a timestamped sibling instead (:class:`ResultsKeptElsewhereError` says where). T
 has the replaced folder's permissions, else ``rwxr-xr-x``.
 
 The destination is a folder: a name ending in a file suffix (``run.json``) is refused. An
-existing empty folder is filled; a non-empty one is refused unless ``overwrite=True``; then
-the old folder is moved aside, the new one renamed in, and the old one deleted (replaced
-whole: no old PNG next to a new CSV). :func:`check_destination` runs the same checks
+existing empty folder is filled; a non-empty one is refused unless ``overwrite=True`` and it
+holds a file this package writes (:data:`OWN_MARKERS`); then the old folder is moved aside,
+the new one renamed in, and the old one deleted (replaced whole: no old PNG next to a new
+CSV). :func:`check_destination` runs the same checks
 without doing anything (call it before hours of simulation, so a bad ``--out`` fails first;
 every command's ``--out`` goes through it); :func:`timestamped` gives a fresh sibling name
 instead of overwriting; :func:`verify_results_folder` re-checks the hashes.
@@ -55,6 +56,9 @@ from scas_env.utils.atomic_file import sigterm_raises
 from scas_env.utils.shipped_files import file_sha256
 
 MANIFEST = "manifest.json"
+#: Files by which a folder shows it was written by this package (a results folder's manifest,
+#: a dataset's card, a training run's record): ``overwrite`` replaces only such a folder.
+OWN_MARKERS: tuple[str, ...] = (MANIFEST, "datacard.json", "run.json")
 #: Distributions whose versions go into every manifest (absent ones are recorded as such).
 LIBRARIES: tuple[str, ...] = (
     "numpy",
@@ -162,7 +166,8 @@ def check_destination(
     - a name ending in a file suffix (:data:`FILE_SUFFIXES`, e.g. ``.json``) is refused: the
       path names a folder, the files go inside it;
     - an existing folder is accepted if empty, and if not empty only with ``overwrite``
-      (:class:`ResultsFolderExistsError`, also a ``FileExistsError``);
+      and only if it holds one of :data:`OWN_MARKERS` (a folder this package wrote; anything
+      else is never deleted) (:class:`ResultsFolderExistsError`, also a ``FileExistsError``);
     - an existing file, or a file where a parent folder should be, is refused;
     - the nearest existing ancestor must be a writable folder (tried by creating and removing
       a temporary folder there: permission bits alone miss read-only file systems and root).
@@ -196,11 +201,18 @@ def check_destination(
             f"inside it), not a {dest.suffix} file: {path}; choose a name without a file "
             f"suffix, e.g. {f'{option} ' if option else ''}{Path(path).with_suffix('')}"
         )
-    if exists and not overwrite and any(dest.iterdir()):  # an empty one holds nothing to lose
-        raise ResultsFolderExistsError(
-            f"{label} already exists and is not empty; pass {replace} to replace it "
-            "whole, or choose a new folder (e.g. timestamped)"
-        )
+    if exists and any(dest.iterdir()):  # an empty one holds nothing to lose
+        if not overwrite:
+            raise ResultsFolderExistsError(
+                f"{label} already exists and is not empty; pass {replace} to replace it "
+                "whole, or choose a new folder (e.g. timestamped)"
+            )
+        if not any((dest / name).is_file() for name in OWN_MARKERS):
+            raise ResultsFolderExistsError(
+                f"{label} is not empty and holds none of {list(OWN_MARKERS)}, so it was not "
+                f"written by this package; {replace} replaces only such folders (it deletes "
+                "the old contents); delete it yourself or choose a new folder"
+            )
     anchor = _nearest_existing(dest.parent)
     if not anchor.is_dir():
         raise ResultsFolderError(f"cannot create {label}: {anchor} is a file, not a folder")
