@@ -97,7 +97,7 @@ class HealthRecord:
     crack_depth_m, seal_wear_m : current true values (m).
     spring_critical_m, seal_critical_m : critical crack depth and wear (m).
     rul : per part (``"spring"``, ``"seal"``) its :class:`PartRul`, or ``None`` when the
-        observation has no filter (``obs_mode`` without RUL).
+        observation shows no filter output (an ``obs_mode`` without RUL; the filters run).
     features : latest measured features ``(name, value, unit)`` in display units.
     cost_usd, revenue_usd : costs and flight revenue so far (USD).
     availability : flights flown / slots so far.
@@ -418,7 +418,7 @@ class HealthDashboard:
                 self.rul_interval[p].set_data([], [])
                 self.rul_mean[p].set_data([], [])
                 self.rul_true[p].set_xdata([math.nan, math.nan])
-            self.rul_note.set_text("no filter in this obs_mode")
+            self.rul_note.set_text("filter RUL not observed in this obs_mode")
             return (0.0, 1.0)
         self.rul_note.set_text("")
         q = {p: d.quantiles((*INTERVAL, 0.99)) for p, d in rul.items()}

@@ -413,7 +413,15 @@ class ScasMaintenanceEnv(gym.Env):
 
     def render(self) -> str | np.ndarray | None:
         """``"ansi"``: one line of text; ``"rgb_array"``: the health dashboard as an
-        (H, W, 3) uint8 frame; ``"human"``: the dashboard in a window (returns None)."""
+        (H, W, 3) uint8 frame; ``"human"``: the dashboard in a window (returns None);
+        no render mode: None.
+
+        With a render mode, before :meth:`reset` (or after a step that raised) there is no
+        episode to draw: ``RuntimeError``, as :meth:`step` and :meth:`action_masks` raise,
+        following Gymnasium's convention that ``render()`` needs a ``reset()`` first (the
+        ``OrderEnforcing`` wrapper of ``gym.make`` raises ``ResetNeeded``)."""
+        if self.render_mode is not None and not self._started:
+            raise RuntimeError("call reset() before render()")
         if self._renderer is not None:
             return self._renderer.render(self)
         if self.render_mode != "ansi":

@@ -6,11 +6,21 @@ vector env (:class:`gymnasium.wrappers.TransformObservation` and its vector form
 they pass through :class:`prognostics.metrics.RiskMap` s fitted on training lives
 (``python -m experiments.risk_recalibration``; docs/beliefs.md, "Recalibrated risk"): every
 other entry, the action space, the rewards and ``info`` (whose beliefs stay the filters')
-are unchanged, the mapped risk is cast to float32 as the observation is. A map belongs to
-the monitor and the world it was fitted on: :func:`load_risk_maps` reads a file written by
-:func:`save_risk_maps` and :func:`recalibrate_risk` refuses an env whose scenario or
-parameters differ from the file's, except in :data:`FREE_FIELDS` (fields that change
-neither what the filters believe nor how the parts live).
+are unchanged, the mapped risk is cast to float32 as the observation is. Only the
+observation modes of :data:`RISK_OBS_MODES` show the risks.
+
+A map belongs to the monitor and the world it was fitted on. :func:`save_risk_maps` writes
+the maps with a :class:`FittedOn` record: the scenario and parameters, the world's
+:class:`~scas_env.core.mismatch.Mismatch`, and SHA-256 digests (:func:`table_digest`) of
+the calibration, the monitor's feature surrogate and the world's own surrogate.
+:func:`read_risk_maps` returns the maps and that record, and :func:`recalibrate_risk`
+refuses an env that differs from it, naming the fields: in the scenario outside
+:data:`FREE_FIELDS` (fields that change neither what the filters believe nor how the parts
+live), the parameters, the mismatch, the calibration or either surrogate (``transfer=True``
+accepts another mismatch, calibration or surrogate: a transfer study). A file without the
+world's fields stands for the defaults of its parameters (no mismatch, the calibration and
+surrogate an env built on them runs on, no world surrogate). :func:`load_risk_maps` returns
+the maps, scenario and parameters of a file fitted on those defaults.
 
     >>> import gymnasium as gym
     >>> from prognostics.metrics import RiskMap
@@ -25,8 +35,11 @@ neither what the filters believe nor how the parts live).
 
 from __future__ import annotations
 
+import hashlib
 import json
+import re
 from collections.abc import Mapping
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -36,17 +49,115 @@ from gymnasium.wrappers import TransformObservation
 from gymnasium.wrappers.vector import TransformObservation as VectorTransformObservation
 
 from prognostics.metrics import RiskMap
+from scas_env.actuator.calibration import Calibration
 from scas_env.actuator.params import ScasParams
-from scas_env.core.scenario import Scenario
-from scas_env.core.setup import PARTS
+from scas_env.actuator.surrogate import SurrogateModel
+from scas_env.core.mismatch import Mismatch
+from scas_env.core.scenario import OBS_MODES, Scenario
+from scas_env.core.setup import PARTS, Setup
 from scas_env.utils.atomic_file import write_text_atomic
 
-__all__ = ["FREE_FIELDS", "check_fitted_on", "load_risk_maps", "recalibrate_risk", "save_risk_maps"]
+__all__ = [
+    "FREE_FIELDS",
+    "RISK_OBS_MODES",
+    "FittedOn",
+    "check_fitted_on",
+    "check_fitted_setup",
+    "load_risk_maps",
+    "read_risk_maps",
+    "recalibrate_risk",
+    "save_risk_maps",
+    "table_digest",
+]
 
 #: Scenario fields a map does not depend on: what the observation shows and how long an
 #: episode runs (the filters and the parts' lives are the same)
 FREE_FIELDS: tuple[str, ...] = ("obs_mode", "episode_slots")
+#: observation modes that show the filters' risks (``"dict"`` in its ``filter`` group)
+RISK_OBS_MODES: tuple[str, ...] = ("features+rul", "dict")
 _FILE_KEYS = ("scenario", "params", "maps", "command")
+#: the digests of :class:`FittedOn`
+_DIGESTS = ("calibration_sha256", "surrogate_sha256", "world_surrogate_sha256")
+#: the world's fields of a file (:class:`FittedOn`); a file without them stands for defaults
+_WORLD_KEYS = ("mismatch", *_DIGESTS)
+_SHA256 = re.compile(r"^[0-9a-f]{64}$")
+
+
+def table_digest(table: Calibration | SurrogateModel) -> str:
+    """SHA-256 (hex) of a calibration's or feature surrogate's ``to_dict()`` as JSON with
+    sorted keys: equal digests, equal tables."""
+    text = json.dumps(table.to_dict(), sort_keys=True)
+    return hashlib.sha256(text.encode()).hexdigest()
+
+
+@dataclass(frozen=True)
+class FittedOn:
+    """What risk maps were fitted on (module docstring).
+
+    ``calibration_sha256`` and ``surrogate_sha256`` of ``None`` stand for the tables an env
+    built on ``params`` runs on without them (:meth:`resolved`); ``world_surrogate_sha256``
+    of ``None`` for no world surrogate of its own (the world's features from the monitor's).
+    """
+
+    scenario: Scenario
+    params: ScasParams
+    mismatch: Mismatch = field(default_factory=Mismatch)
+    calibration_sha256: str | None = None
+    surrogate_sha256: str | None = None
+    world_surrogate_sha256: str | None = None
+
+    def __post_init__(self) -> None:
+        for name, cls in (("scenario", Scenario), ("params", ScasParams), ("mismatch", Mismatch)):
+            if not isinstance(getattr(self, name), cls):
+                raise ValueError(f"{name} = {getattr(self, name)!r} must be a {cls.__name__}")
+        for name in _DIGESTS:
+            value = getattr(self, name)
+            if value is not None and not (isinstance(value, str) and _SHA256.match(value)):
+                raise ValueError(f"{name} = {value!r} must be None or 64 lower-case hex digits")
+
+    @classmethod
+    def of_setup(cls, setup: Setup) -> FittedOn:
+        """The record of an env's setup (``env.unwrapped.setup``)."""
+        world = setup.world_surrogate
+        return cls(
+            scenario=setup.scenario,
+            params=setup.params,
+            mismatch=setup.mismatch,
+            calibration_sha256=table_digest(setup.calibration),
+            surrogate_sha256=table_digest(setup.surrogate),
+            world_surrogate_sha256=None if world is None else table_digest(world),
+        )
+
+    def resolved(self) -> FittedOn:
+        """This record with the calibration's and surrogate's digests of ``None`` replaced
+        by those of the tables an env built on ``params`` runs on
+        (:func:`~scas_env.actuator.calibration.env_calibration`, built from physics for
+        parameters other than the shipped ones, and
+        :func:`~scas_env.actuator.surrogate.shipped_surrogate_for`)."""
+        from scas_env.actuator.calibration import env_calibration
+        from scas_env.actuator.surrogate import shipped_surrogate_for
+
+        cal, sur = self.calibration_sha256, self.surrogate_sha256
+        if sur is None:
+            try:
+                sur = table_digest(shipped_surrogate_for(self.params))
+            except ValueError as exc:
+                raise ValueError(
+                    f"the maps record no surrogate, and the shipped one does not fit their "
+                    f"params: {exc}"
+                ) from None
+        if cal is None:
+            cal = table_digest(env_calibration(self.params))
+        return FittedOn(
+            self.scenario, self.params, self.mismatch, cal, sur, self.world_surrogate_sha256
+        )
+
+    def world_fields(self) -> dict[str, Any]:
+        """The file's fields of the world (``mismatch`` and the three digests)."""
+        return {
+            "mismatch": self.mismatch.to_dict(),
+            **{name: getattr(self, name) for name in _DIGESTS},
+        }
 
 
 def save_risk_maps(
@@ -57,37 +168,91 @@ def save_risk_maps(
     command: str = "",
     *,
     overwrite: bool = False,
+    mismatch: Mismatch | None = None,
+    calibration: Calibration | None = None,
+    surrogate: SurrogateModel | None = None,
+    world_surrogate: SurrogateModel | None = None,
 ) -> None:
-    """Write ``maps`` (part -> map) with the scenario and parameters they were fitted on, and
-    the ``command`` that fitted them, to the JSON file ``path`` (atomically; an existing file
-    only with ``overwrite``)."""
+    """Write ``maps`` (part -> map) with what they were fitted on (:class:`FittedOn`: the
+    scenario, parameters, mismatch, and digests of the calibration, surrogate and world
+    surrogate; ``None``: the defaults of an env built on ``params``) and the ``command``
+    that fitted them, to the JSON file ``path`` (atomically; an existing file only with
+    ``overwrite``)."""
     _check_maps(maps)
+    for name, value, cls in (
+        ("calibration", calibration, Calibration),
+        ("surrogate", surrogate, SurrogateModel),
+        ("world_surrogate", world_surrogate, SurrogateModel),
+    ):
+        if value is not None and not isinstance(value, cls):
+            raise ValueError(f"{name} = {value!r} must be None (the default) or a {cls.__name__}")
+    fitted = FittedOn(
+        scenario,
+        params,
+        Mismatch() if mismatch is None else mismatch,
+        None if calibration is None else table_digest(calibration),
+        None if surrogate is None else table_digest(surrogate),
+        None if world_surrogate is None else table_digest(world_surrogate),
+    )
     if Path(path).exists() and not overwrite:
         raise FileExistsError(f"{path} exists; pass overwrite=True to replace it")
     data = {
         "scenario": scenario.to_dict(),
         "params": params.to_dict(),
+        **fitted.resolved().world_fields(),
         "maps": {part: m.to_dict() for part, m in maps.items()},
         "command": str(command),
     }
     write_text_atomic(path, json.dumps(data, indent=1) + "\n")
 
 
-def load_risk_maps(path: str | Path) -> tuple[dict[str, RiskMap], Scenario, ScasParams]:
-    """The maps of a file written by :func:`save_risk_maps`, with the scenario and
-    parameters they were fitted on (unknown keys refused)."""
+def read_risk_maps(path: str | Path) -> tuple[dict[str, RiskMap], FittedOn]:
+    """The maps of a file written by :func:`save_risk_maps` and what they were fitted on
+    (unknown keys refused; a file without the world's fields: their defaults)."""
     try:
         data = json.loads(Path(path).read_text(encoding="utf-8"))
     except json.JSONDecodeError as exc:
         raise ValueError(f"{path} is not a JSON risk-map file: {exc}") from None
-    if not isinstance(data, dict) or sorted(data) != sorted(_FILE_KEYS):
-        keys = sorted(data) if isinstance(data, dict) else type(data).__name__
-        raise ValueError(f"{path}: a risk-map file holds the keys {list(_FILE_KEYS)}, got {keys}")
+    keys = sorted(data) if isinstance(data, dict) else type(data).__name__
+    if not isinstance(data, dict) or not (
+        set(_FILE_KEYS) <= set(data) <= set(_FILE_KEYS) | set(_WORLD_KEYS)
+    ):
+        raise ValueError(
+            f"{path}: a risk-map file holds the keys {list(_FILE_KEYS)} and optionally "
+            f"{list(_WORLD_KEYS)}, got {keys}"
+        )
     if not isinstance(data["maps"], dict):
         raise ValueError(f"{path}: 'maps' must map parts to maps, got {data['maps']!r}")
     maps = {part: RiskMap.from_dict(m) for part, m in data["maps"].items()}
     _check_maps(maps)
-    return maps, Scenario.from_dict(data["scenario"]), ScasParams.from_dict(data["params"])
+    try:
+        fitted = FittedOn(
+            Scenario.from_dict(data["scenario"]),
+            ScasParams.from_dict(data["params"]),
+            Mismatch.from_dict(data.get("mismatch", {})),
+            **{name: data.get(name) for name in _DIGESTS},
+        )
+    except ValueError as exc:
+        raise ValueError(f"{path}: {exc}") from None
+    return maps, fitted
+
+
+def load_risk_maps(path: str | Path) -> tuple[dict[str, RiskMap], Scenario, ScasParams]:
+    """The maps of a file written by :func:`save_risk_maps`, with the scenario and
+    parameters they were fitted on, for ``recalibrate_risk(..., fitted_on=(scenario,
+    params))``; a file fitted on anything but the defaults of those parameters (a
+    mismatch, another calibration or surrogate, a world surrogate) is refused here, naming
+    the fields: :func:`read_risk_maps` returns its full record."""
+    maps, fitted = read_risk_maps(path)
+    default = FittedOn(fitted.scenario, fitted.params)
+    differ = _world_differences(fitted, default) if fitted != default else []
+    if differ:
+        raise ValueError(
+            f"{path}: the maps were fitted on more than a scenario and params "
+            f"({'; '.join(differ)}); read it with read_risk_maps and pass its FittedOn "
+            "record as recalibrate_risk(..., fitted_on=...)"
+        )
+    return maps, fitted.scenario, fitted.params
 
 
 def _check_maps(maps: Mapping[str, RiskMap]) -> None:
@@ -103,7 +268,8 @@ def _check_maps(maps: Mapping[str, RiskMap]) -> None:
 def check_fitted_on(env_scenario: Scenario, env_params: ScasParams,
                      scenario: Scenario, params: ScasParams) -> None:  # fmt: skip
     """Refuse maps fitted on ``scenario`` and ``params`` for an env of ``env_scenario`` and
-    ``env_params`` where beliefs depend on the difference (module docstring)."""
+    ``env_params`` where beliefs depend on the difference (module docstring); the world's
+    fields: :func:`check_fitted_setup`."""
     ours, theirs = env_scenario.to_dict(), scenario.to_dict()
     differ = sorted(k for k in ours if k not in FREE_FIELDS and ours[k] != theirs[k])
     if differ:
@@ -115,24 +281,76 @@ def check_fitted_on(env_scenario: Scenario, env_params: ScasParams,
                          "fit maps for these parameters")  # fmt: skip
 
 
+def _world_differences(ours: FittedOn, theirs: FittedOn) -> list[str]:
+    """``"field = ours (maps: theirs)"`` for each world field where two records differ
+    (digests of ``None`` resolved first)."""
+    ours, theirs = ours.resolved(), theirs.resolved()
+    mine, maps = ours.mismatch.to_dict(), theirs.mismatch.to_dict()
+    out = [f"mismatch.{k} = {mine[k]!r} (maps: {maps[k]!r})" for k in mine if mine[k] != maps[k]]
+    for name in _DIGESTS:
+        a, b = getattr(ours, name), getattr(theirs, name)
+        if a != b:
+            out.append(f"{name} = {a or 'none'} (maps: {b or 'none'})")
+    return out
+
+
+def check_fitted_setup(setup: Setup, fitted: FittedOn, *, transfer: bool = False) -> None:
+    """Refuse maps fitted on ``fitted`` for an env of ``setup`` (``env.unwrapped.setup``)
+    whose scenario or parameters differ (:func:`check_fitted_on`) or, unless ``transfer``,
+    whose mismatch, calibration, surrogate or world surrogate do; the ``ValueError`` names
+    each differing field."""
+    if not isinstance(fitted, FittedOn):
+        raise ValueError(f"fitted = {fitted!r} must be a FittedOn record (read_risk_maps)")
+    if not isinstance(transfer, bool):
+        raise ValueError(f"transfer = {transfer!r} must be True or False")
+    check_fitted_on(setup.scenario, setup.params, fitted.scenario, fitted.params)
+    if transfer:
+        return
+    differ = _world_differences(FittedOn.of_setup(setup), fitted)
+    if differ:
+        raise ValueError(
+            f"the env's world or model differs from the one the maps were fitted on: "
+            f"{'; '.join(differ)}; fit maps for this env, or pass transfer=True to apply "
+            "them to it knowingly (a transfer study)"
+        )
+
+
 def recalibrate_risk(
     env: gym.Env | gym.vector.VectorEnv,
     maps: Mapping[str, RiskMap],
     *,
-    fitted_on: tuple[Scenario, ScasParams] | None = None,
+    fitted_on: FittedOn | tuple[Scenario, ScasParams] | None = None,
+    transfer: bool = False,
 ) -> gym.Env | gym.vector.VectorEnv:
-    """``env`` (a single env or the native vector env of ``ScasMaintenance-v2``) with the
-    risk of each part in ``maps`` passed through its map (module docstring); ``fitted_on``
-    (the scenario and parameters :func:`load_risk_maps` returns) is checked against the
-    env's."""
+    """``env`` (a single env or the native vector env of ``ScasMaintenance-v2``, of an
+    observation mode of :data:`RISK_OBS_MODES`) with the risk of each part in ``maps``
+    passed through its map (module docstring). ``fitted_on`` (:func:`read_risk_maps`'s
+    record, or the scenario and parameters :func:`load_risk_maps` returns, which stand for
+    their defaults) is checked against the env's (:func:`check_fitted_setup`;
+    ``transfer=True`` accepts another mismatch, calibration or surrogate)."""
     _check_maps(maps)
     base = env.unwrapped
     names = getattr(base, "obs_names", None)
     if names is None or not hasattr(base, "setup"):
         raise TypeError(f"env = {env!r} must be a ScasMaintenance env or its native vector env")
+    mode = base.setup.scenario.obs_mode
+    if mode not in RISK_OBS_MODES:
+        raise ValueError(
+            f"obs_mode = {mode!r} shows no risk to recalibrate; the modes that show the "
+            f"filters' risks are {RISK_OBS_MODES} (of {OBS_MODES})"
+        )
+    if not isinstance(transfer, bool):
+        raise ValueError(f"transfer = {transfer!r} must be True or False")
     if fitted_on is not None:
-        check_fitted_on(base.setup.scenario, base.setup.params, *fitted_on)
-    func = _RiskTransform(tuple(names), maps, base.setup.scenario.obs_mode == "dict")
+        if not isinstance(fitted_on, FittedOn):
+            if not (isinstance(fitted_on, tuple) and len(fitted_on) == 2):
+                raise ValueError(
+                    f"fitted_on = {fitted_on!r} must be None, a FittedOn record "
+                    "(read_risk_maps) or a (Scenario, ScasParams) pair (load_risk_maps)"
+                )
+            fitted_on = FittedOn(*fitted_on)
+        check_fitted_setup(base.setup, fitted_on, transfer=transfer)
+    func = _RiskTransform(tuple(names), maps, mode == "dict")
     if isinstance(env, gym.vector.VectorEnv):
         return VectorTransformObservation(env, func)
     return TransformObservation(env, func, env.observation_space)

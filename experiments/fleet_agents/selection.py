@@ -6,7 +6,8 @@
 2. :func:`validate`: every checkpoint of the runs, and the rules, on the **validation** fleets
    (``SeedSequence(VALIDATION_SEED)``, 32 episodes by default; never the held-out
    ``HELD_OUT_SEED``), through the benchmark's runner (common random numbers); the
-   per-episode rows are kept in a CSV (a rerun runs only what is new).
+   per-episode rows are kept in a CSV, its seed, episodes and env keywords in a JSON beside
+   it (a rerun with the same settings runs only what is new; other settings are refused).
 3. :func:`choose`: the checkpoint with the highest mean validation reward, and its paired
    difference against each rule (:func:`policies.benchmark.stats.paired_difference`, 95 %).
 4. :func:`ship`: the chosen checkpoint into ``policies/data`` as ``<name>.zip`` (the network
@@ -19,6 +20,7 @@
 from __future__ import annotations
 
 import csv
+import io
 import json
 import re
 import shutil
@@ -29,6 +31,7 @@ from typing import Any
 import numpy as np
 
 from policies.benchmark.stats import paired_difference
+from scas_env.utils.atomic_file import write_text_atomic
 from scas_env.utils.results_folder import json_text
 
 __all__ = [
@@ -40,9 +43,11 @@ __all__ = [
     "choose",
     "curves",
     "kpi_table",
+    "settings_path",
     "ship",
     "tuned_rules",
     "validate",
+    "validation_settings",
 ]
 
 #: validation fleets (the brief's seed 3) and the held-out ones (the lead's; never used here)
@@ -103,6 +108,74 @@ def _read_rows(path: Path) -> list[dict[str, Any]]:
         return list(csv.DictReader(fh))
 
 
+def settings_path(out_csv: str | Path) -> Path:
+    """The JSON beside a validation CSV holding the settings its rows were made with
+    (``validation.csv`` -> ``validation.settings.json``)."""
+    return Path(out_csv).with_suffix(".settings.json")
+
+
+def _setting(value: Any) -> Any:
+    """An env keyword as JSON: a config (``FleetConfig``, ``Scenario``, a surrogate...) by
+    its ``to_dict()``, a number or string as it is, anything else by ``repr``."""
+    if hasattr(value, "to_dict"):
+        return json.loads(json_text(value.to_dict()))
+    if value is None or isinstance(value, bool | int | float | str):
+        return value
+    return repr(value)
+
+
+def validation_settings(seed: int, episodes: int, env_kwargs: Mapping[str, Any]) -> dict[str, Any]:
+    """The settings a validation row depends on: ``seed``, ``episodes`` and the env keywords
+    (each config by its ``to_dict()``), as JSON values."""
+    return {
+        "seed": int(seed),
+        "episodes": int(episodes),
+        "env_kwargs": {k: _setting(v) for k, v in sorted(env_kwargs.items())},
+    }
+
+
+def _differences(ours: Any, theirs: Any, prefix: str = "") -> list[str]:
+    """``"name: <file's value> in the file, <this run's> asked"`` for each field (dotted
+    name) where two JSON values differ."""
+    if isinstance(ours, dict) and isinstance(theirs, dict):
+        out: list[str] = []
+        for key in sorted(set(ours) | set(theirs), key=str):
+            name = f"{prefix}.{key}" if prefix else str(key)
+            if key in ours and key in theirs:
+                out += _differences(ours[key], theirs[key], name)
+            else:
+                have = [repr(d[key]) if key in d else "(absent)" for d in (theirs, ours)]
+                out.append(f"{name}: {have[0]} in the file, {have[1]} asked")
+        return out
+    if ours != theirs:
+        return [f"{prefix}: {theirs!r} in the file, {ours!r} asked"]
+    return []
+
+
+def _check_settings(out_csv: Path, rows: list[dict[str, Any]], settings: dict[str, Any]) -> None:
+    """``ValueError`` unless the rows of ``out_csv`` (if any) were made with ``settings``."""
+    if not rows:
+        return
+    path = settings_path(out_csv)
+    how = (
+        "pass restart=True (ship --restart-validation) to start a new file, or validate "
+        "into another CSV"
+    )
+    if not path.is_file():
+        raise ValueError(
+            f"{out_csv} holds {len(rows)} rows but {path} (the seed, episodes and env "
+            f"keywords they were made with) is missing, so they cannot be compared with "
+            f"this run's: {how}"
+        )
+    diff = _differences(settings, json.loads(path.read_text()))
+    if diff:
+        shown = "; ".join(diff[:8]) + (f"; and {len(diff) - 8} more" if len(diff) > 8 else "")
+        raise ValueError(
+            f"{out_csv} was made with other settings than this run's ({shown}): its rows "
+            f"are not comparable with new ones; {how}"
+        )
+
+
 def validate(
     runs: Mapping[str, str | Path],
     out_csv: str | Path,
@@ -113,18 +186,37 @@ def validate(
     n_workers: int = 2,
     env_kwargs: Mapping[str, Any] | None = None,
     every: int = 1,
+    restart: bool = False,
 ) -> list[dict[str, Any]]:
     """Per-episode validation rows (label, episode, reward, KPIs) of every checkpoint of
     ``runs`` (``label -> run folder``; every ``every``-th checkpoint, the last always) and of
-    ``rules`` (``label -> params``), appended to ``out_csv``; only labels not in it run."""
-    from policies.benchmark.run import PolicySpec, run_benchmark
-    from scas_env.core.fleet.config import FleetConfig
+    ``rules`` (``label -> params``), appended to ``out_csv``; only labels not in it run.
 
+    ``seed``, ``episodes`` and ``env_kwargs`` are written to :func:`settings_path` beside
+    the CSV; existing rows made with other settings (or without that file) raise
+    ``ValueError`` naming the differing fields, before any episode runs, unless ``restart``
+    is true, which discards them and starts a new file."""
+    from policies.benchmark.run import PolicySpec, episode_seeds, run_benchmark
+    from scas_env.core.fleet.config import FleetConfig
+    from scas_env.core.scenario import Scenario
+    from scas_env.fleet_env import FLEET_SCENARIO
+
+    if isinstance(seed, bool) or not isinstance(seed, int | np.integer) or seed < 0:
+        raise ValueError(f"seed = {seed!r} must be an integer >= 0")
+    episode_seeds(seed, episodes)  # the count's check, before the settings record it
     if seed == HELD_OUT_SEED:
         raise ValueError(f"seed {seed} is the held-out seed: validation must not use it")
+    if not isinstance(restart, bool):
+        raise ValueError(f"restart = {restart!r} must be True or False")
     out_csv = Path(out_csv)
-    rows = _read_rows(out_csv)
+    kwargs = dict(env_kwargs or {"fleet": FleetConfig()})
+    settings = validation_settings(seed, episodes, kwargs)
+    rows = [] if restart else _read_rows(out_csv)
+    _check_settings(out_csv, rows, settings)
     done = {r["label"] for r in rows}
+    # the agents' masks depend on the preflight, which their observation does not show
+    scenario = kwargs.get("scenario")
+    preflight = (Scenario(**FLEET_SCENARIO) if scenario is None else scenario).preflight
     specs = [PolicySpec(name, params=dict(p), label=f"rule:{name}") for name, p in rules.items()]
     for run, folder in runs.items():
         found = checkpoints(folder)
@@ -133,29 +225,29 @@ def validate(
             specs.append(
                 PolicySpec(
                     "fleet_ppo",
-                    params={"path": str(path)},
+                    params={"path": str(path), "preflight": preflight},
                     label=f"{run}:{days}",
                     module="policies.agents.fleet.plugins",
                 )
             )
     todo = [s for s in specs if s.key not in done]
     if todo:
-        kwargs = dict(env_kwargs or {"fleet": FleetConfig()})
         result = run_benchmark(
             todo, episodes=episodes, seed=seed, n_workers=n_workers, env_kwargs=kwargs
         )
-        new = [
+        rows = rows + [
             {"label": r["policy"], **{k: v for k, v in r.items() if k != "policy"}}
             for r in result.rows
         ]
-        rows = rows + new
         fields = list(dict.fromkeys(k for r in rows for k in r))
-        tmp = out_csv.with_suffix(".tmp")
-        with tmp.open("w", newline="") as fh:
-            writer = csv.DictWriter(fh, fieldnames=fields, restval="")
-            writer.writeheader()
-            writer.writerows(rows)
-        tmp.replace(out_csv)
+        text = io.StringIO(newline="")
+        writer = csv.DictWriter(text, fieldnames=fields, restval="")
+        writer.writeheader()
+        writer.writerows(rows)
+        # the CSV first: interrupted between the two, the next run finds settings that do
+        # not match (or none) and refuses, never new rows passed off as the old settings'
+        write_text_atomic(out_csv, text.getvalue())
+        write_text_atomic(settings_path(out_csv), json_text(settings, indent=1, sort_keys=True))
     return rows
 
 

@@ -3,7 +3,9 @@
 Every checkpoint of ``RUN/run`` (``python -m experiments.fleet_agents.train --out RUN``) and
 the rules (``--rules``, default the filter families with their defaults or the tuned parameters
 of ``--rules-from``) run on the validation fleets (seed 3, never the held-out seed 2), 32 paired
-episodes by default (rows kept in ``RUN/validation.csv``: a rerun runs only new checkpoints);
+episodes by default (rows kept in ``RUN/validation.csv``, their seed, episodes and fleet in
+``RUN/validation.settings.json``: a rerun runs only new checkpoints, and is refused if those
+settings differ unless ``--restart-validation`` starts the CSV anew);
 the checkpoint with the best mean reward is shipped as ``--name`` with its metadata, curves
 and the manifest entry, and its paired difference against each rule is printed. The shipped
 joint agent::
@@ -54,6 +56,11 @@ def main(argv: list[str] | None = None) -> int:
         "--ship-to", type=Path, default=None, help="folder instead of policies/data"
     )
     parser.add_argument("--overwrite", action="store_true")
+    parser.add_argument(
+        "--restart-validation",
+        action="store_true",
+        help="discard RUN/validation.csv (rows of other settings) and validate anew",
+    )
     args = parser.parse_args(argv)
     tuned = tuned_rules(args.rules_from)
     rules = {f: tuned[f]["params"] for f in args.rules if f in tuned}
@@ -67,6 +74,7 @@ def main(argv: list[str] | None = None) -> int:
         n_workers=args.workers,
         env_kwargs=env_kwargs,
         every=args.every,
+        restart=args.restart_validation,
     )
     chosen = choose(rows, label, list(rules))
     print(json.dumps({k: v for k, v in chosen.items() if k != "checkpoints"}, indent=1))

@@ -16,10 +16,11 @@ the agent's frozen ``VecNormalize`` statistics and asks the MaskablePPO network 
 observation statistics, :class:`policies.agents.obs_normalization.ObsNormalization`) and
 ``<stem>.json`` (kind, the observation names it was trained on, the per-aircraft view's
 options, whether the scenario tests before every flight) and checks the model's observation and
-action spaces against the env's before it acts, with an error that says what differs.
-Registered for the benchmark: ``"fleet_ppo"`` (default: the shipped :data:`FLEET_JOINT_AGENT`)
-and ``"fleet_shared_ppo"`` (:data:`FLEET_SHARED_AGENT`), both with ``params={"path": ...}`` for
-another file.
+action spaces against the env's before it acts, with an error that says what differs. The
+observation does not tell the env's ``Scenario.preflight``, on which the masks depend: given
+(``preflight=``), an agent trained on the other one is refused. Registered for the benchmark:
+``"fleet_ppo"`` (default: the shipped :data:`FLEET_JOINT_AGENT`) and ``"fleet_shared_ppo"``
+(:data:`FLEET_SHARED_AGENT`), both with ``params={"path": ..., "preflight": ...}``.
 
 **Nothing is unpickled**, as for the single-actuator agent (:mod:`policies.agents.sb3_agents`):
 the network is rebuilt from the zip's JSON ``data`` and its ``policy.pth`` tensors
@@ -59,6 +60,7 @@ from policies.agents.obs_normalization import ObsNormalization
 from policies.agents.policy_random import PolicyRandom
 from policies.agents.sb3_agents import DATA_DIR, check_manifest
 from policies.base import register_policy
+from scas_env.core.scenario import PREFLIGHT
 from scas_env.utils.atomic_file import write_text_atomic
 
 __all__ = [
@@ -205,10 +207,20 @@ def read_fleet_policy(path: Path, obs_size: int, nvec: np.ndarray) -> LoadedMode
 
 
 def load_fleet_agent(
-    path: str | Path, obs_names: Sequence[str], *, kind: str | None = None
+    path: str | Path,
+    obs_names: Sequence[str],
+    *,
+    kind: str | None = None,
+    preflight: str | None = None,
 ) -> FleetAgent:
     """The fleet agent of ``path`` (``.zip`` with ``_normalization.json`` and ``.json`` beside
-    it) for an env with ``obs_names``; nothing is unpickled (module docstring)."""
+    it) for an env with ``obs_names``; nothing is unpickled (module docstring).
+
+    ``preflight``: the env's ``Scenario.preflight``; an agent whose metadata says it was
+    trained on the other one (``tests_every_flight``) raises ``ValueError``, since its masks
+    would differ from the env's. ``None``: not checked (the metadata's masks are used)."""
+    if preflight is not None and preflight not in PREFLIGHT:
+        raise ValueError(f"preflight = {preflight!r} must be None or one of {PREFLIGHT}")
     path = Path(path)
     if not path.is_file():
         raise ValueError(f"path = {str(path)!r} does not exist (expected a fleet agent's .zip)")
@@ -241,6 +253,15 @@ def load_fleet_agent(
     recorded = meta.get("weights_sha256")
     if recorded is not None and recorded != weights_sha256(path):
         raise ValueError(f"{path}: its weights differ from the weights_sha256 of {meta_path.name}")
+    every_flight = bool(meta.get("tests_every_flight", False))
+    if preflight is not None and every_flight != (preflight == "every_flight"):
+        trained = "every_flight" if every_flight else "on_demand"
+        raise ValueError(
+            f"{path}: trained with preflight = {trained!r} (tests_every_flight = "
+            f"{every_flight} in {meta_path.name}), this env's preflight is {preflight!r}: "
+            "its action masks (plain flying of an aircraft a failed test holds) would differ "
+            "from the env's; use an agent trained on this preflight"
+        )
     agent_id = bool(meta.get("agent_id", True))
     fleet_status = bool(meta.get("fleet_status", True))
     lay = FleetObsLayout(obs_names)
@@ -276,18 +297,23 @@ def load_fleet_agent(
         kind=kind,
         agent_id=agent_id,
         fleet_status=fleet_status,
-        tests_every_flight=bool(meta.get("tests_every_flight", False)),
+        tests_every_flight=every_flight,
     )
 
 
-def _joint_factory(obs_names: Sequence[str], path: str | Path = FLEET_JOINT_AGENT) -> FleetAgent:
-    """Registry factory ``"fleet_ppo"``: the shipped centralised agent or ``path``."""
-    return load_fleet_agent(path, obs_names)
+def _joint_factory(
+    obs_names: Sequence[str], path: str | Path = FLEET_JOINT_AGENT, preflight: str | None = None
+) -> FleetAgent:
+    """Registry factory ``"fleet_ppo"``: the shipped centralised agent or ``path``
+    (``preflight``: the env's, checked against the agent's; :func:`load_fleet_agent`)."""
+    return load_fleet_agent(path, obs_names, preflight=preflight)
 
 
-def _shared_factory(obs_names: Sequence[str], path: str | Path | None = None) -> FleetAgent:
+def _shared_factory(
+    obs_names: Sequence[str], path: str | Path | None = None, preflight: str | None = None
+) -> FleetAgent:
     """Registry factory ``"fleet_shared_ppo"``: the shipped parameter-shared agent or
-    ``path``."""
+    ``path`` (``preflight``: as ``"fleet_ppo"``'s)."""
     if path is None:
         path = FLEET_SHARED_AGENT
         if not path.is_file():
@@ -295,7 +321,7 @@ def _shared_factory(obs_names: Sequence[str], path: str | Path | None = None) ->
                 "fleet_shared_ppo: no parameter-shared fleet agent is shipped; pass "
                 'params={"path": ".../ckpt_<n>.zip"} (docs/fleet_agents.md)'
             )
-    return load_fleet_agent(path, obs_names)
+    return load_fleet_agent(path, obs_names, preflight=preflight)
 
 
 register_policy("fleet_ppo", _joint_factory, obs_mode="features+rul", family="external")
