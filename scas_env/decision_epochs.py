@@ -108,7 +108,7 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
-from scas_env.env import maintenance_mask
+from scas_env.env import ScasMaintenanceEnv, maintenance_mask
 
 FLY, TEST_AND_FLY, REPLACE_SPRING, REPLACE_SEAL = range(4)
 N_MAINTENANCE = 4
@@ -215,6 +215,11 @@ class DecisionEpochs(gym.Env):
     ) -> None:
         if not isinstance(env, gym.Env):
             raise ValueError(f"env = {env!r} must be a gymnasium.Env (ScasMaintenance-v2)")
+        if not isinstance(env.unwrapped, ScasMaintenanceEnv):
+            raise ValueError(
+                f"env = {env!r} is a {type(env.unwrapped).__name__}; DecisionEpochs needs a "
+                "ScasMaintenance-v2 env (scas_env.env.ScasMaintenanceEnv, possibly wrapped)"
+            )
         self.env = env
         self.metadata = env.metadata
         self.render_mode = env.render_mode
@@ -343,6 +348,4 @@ def make_decision_epoch_env(
 ) -> DecisionEpochs:
     """Entry point of :data:`EPOCHS_ENV_ID`: a ``ScasMaintenance-v2`` env (``kwargs``: its
     keywords) in :class:`DecisionEpochs` (so RL-Zoo can train on it by id)."""
-    from scas_env.env import ScasMaintenanceEnv
-
     return DecisionEpochs(ScasMaintenanceEnv(**kwargs), ks=ks, gamma=gamma, delegate=delegate)

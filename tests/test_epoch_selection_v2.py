@@ -114,13 +114,16 @@ def test_validation_on_the_runs_scenario_picks_the_best_checkpoint(v2_runs, tmp_
         assert float(r["diff_vs_rule"]) == pytest.approx(float(r["reward"]) - rule, abs=1e-6)
         assert json.loads(r["scenario"]) == V2 and r["rule"] == "preventive_tuned"
     # rerun: nothing new to validate, the same rows come back
-    again = validate_checkpoints(runs, out, episodes=EPISODES, n_workers=1, progress=False)
+    again = validate_checkpoints(
+        runs, out, reference=age, episodes=EPISODES, n_workers=1, progress=False
+    )
     assert [(r["run"], int(r["decisions"])) for r in again] == list(reward)
 
     zip_path = ship_best(out, v2_runs, "agent_v2", out_dir=tmp_path)
     meta = json.loads((tmp_path / "agent_v2.json").read_text())
     assert meta["selected"]["run"] == "a" and meta["selected"]["decisions"] == 200
     assert meta["scenario"] == V2 and meta["episode_slots"] == SLOTS
+    assert meta["validation_reference"] == "preventive_tuned"  # the rows' rule
     assert meta["training_scale"]["episodes"] == 6  # 3 monitor rows per run
     assert meta["training_scale"]["flights"] == 6 * SLOTS
     assert meta["training_scale"]["decisions"] == 300

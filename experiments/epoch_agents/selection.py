@@ -11,8 +11,8 @@
    **validation** seeds ``SeedSequence(VALIDATION_SEED)``, beside a reference rule on the
    same episodes (default the age rule ``preventive`` with its shipped parameters, or the
    rule tuned on the scenario, :func:`tuned_rules`). Results are appended to
-   a CSV with the scenario (rerun: only new checkpoints run; a CSV of another scenario is
-   refused).
+   a CSV with the scenario (rerun: only new checkpoints run; a CSV of another scenario,
+   episode count or reference rule is refused).
 2. :func:`ship_best`: the checkpoint with the highest mean validation reward is copied into
    ``policies/data`` with its observation statistics (a normalisation JSON), a metadata JSON
    (what
@@ -193,9 +193,12 @@ def _spec(
     return PolicySpec("sb3", params=params, label=label, module="policies.agents.sb3_agents")
 
 
-def _read_validation(out_csv: Path, scenario: Mapping[str, Any]) -> list[dict[str, Any]]:
+def _read_validation(
+    out_csv: Path, scenario: Mapping[str, Any], episodes: int, rule: str
+) -> list[dict[str, Any]]:
     """Rows of an existing validation CSV; refused if they are of another scenario (rows
-    without a ``scenario`` column are of the default scenario, ``{}``)."""
+    without a ``scenario`` column are of the default scenario, ``{}``), another number of
+    ``episodes`` or another reference ``rule`` (their rewards are not comparable)."""
     if not out_csv.is_file():
         return []
     with out_csv.open() as fh:
@@ -207,6 +210,13 @@ def _read_validation(out_csv: Path, scenario: Mapping[str, Any]) -> list[dict[st
             f"{out_csv} holds validation rows of scenario(s) {other}, not {wanted}: "
             "use another CSV per scenario"
         )
+    for column, value in (("episodes", str(episodes)), ("rule", rule)):
+        found = sorted({r.get(column) or "" for r in rows} - {value})
+        if found:
+            raise ValueError(
+                f"{out_csv} holds validation rows of {column} {found}, not {column} = "
+                f"{value!r}: validate with those settings or into another CSV"
+            )
     for r in rows:
         r["scenario"] = wanted
     return rows
@@ -239,6 +249,8 @@ def validate_checkpoints(
     pickle with ``trust_pickle``) every checkpoint is run with instead of its own (a
     diagnostic: the same weights under other observation statistics); its path is the rows'
     ``statistics`` column (empty: the checkpoint's own) and part of what is already done.
+    An ``out_csv`` whose rows are of another scenario, ``episodes`` or ``reference`` is
+    refused before any work.
     ``trust_pickle``: read checkpoints whose statistics exist only as pickles (runs of an
     older version): that runs code from those files.
     """
@@ -248,9 +260,9 @@ def validate_checkpoints(
     out_csv = Path(out_csv)
     scenario = resolve_scenario(run_dirs, scenario)
     env_kwargs, slots = _split_slots(scenario, slots)
-    done = _read_validation(out_csv, scenario)
-    seen = {(r["run"], int(r["decisions"]), r.get("statistics") or "") for r in done}
     reference = reference or PolicySpec("preventive", label="preventive")
+    done = _read_validation(out_csv, scenario, episodes, reference.key)
+    seen = {(r["run"], int(r["decisions"]), r.get("statistics") or "") for r in done}
     specs = [reference]
     for run_dir in map(Path, run_dirs):
         run = _run_json(run_dir) or _TRAINING_DEFAULTS
@@ -357,7 +369,7 @@ def ship_best(
     *,
     slots: int | None = None,
     out_dir: str | Path = DATA_DIR,
-    reference: str = "preventive",
+    reference: str | None = None,
     overwrite: bool = False,
     trust_pickle: bool = False,
 ) -> Path:
@@ -365,12 +377,14 @@ def ship_best(
     metadata and the training curves (``<name>_curves.csv/.png``); returns the zip path.
     Existing files of that name are refused unless ``overwrite`` (raised before any work).
 
-    The validation rows must be of one scenario (the CSV of :func:`validate_checkpoints`);
-    the metadata records it with the observation names of its env, which
-    :func:`policies.agents.sb3_agents.load_sb3_policy` checks against the env it is asked to act
-    on, and the training scale of every validated run (:func:`training_scale`). The
-    checkpoint's statistics are shipped as a normalisation JSON (a run of an older version,
-    whose statistics are pickles only, needs ``trust_pickle`` to convert them)."""
+    The validation rows must be of one scenario, one number of episodes and one reference
+    rule (the CSV of :func:`validate_checkpoints`), that rule ``reference`` when given
+    (default: the rows' rule); the metadata records the scenario with the observation names
+    of its env, which :func:`policies.agents.sb3_agents.load_sb3_policy` checks against the
+    env it is asked to act on, and the training scale of every validated run
+    (:func:`training_scale`). The checkpoint's statistics are shipped as a normalisation JSON
+    (a run of an older version, whose statistics are pickles only, needs ``trust_pickle`` to
+    convert them)."""
     _refuse_existing(out_dir, name, overwrite)
     with Path(validation_csv).open() as fh:
         rows = list(csv.DictReader(fh))
@@ -379,6 +393,19 @@ def ship_best(
     keys = sorted({r.get("scenario") or "{}" for r in rows})
     if len(keys) > 1:
         raise ValueError(f"{validation_csv}: rows of several scenarios {keys}")
+    for column in ("episodes", "rule"):
+        values = sorted({r.get(column) or "" for r in rows})
+        if len(values) > 1:
+            raise ValueError(
+                f"{validation_csv}: rows of several {column} {values} (their rewards are not "
+                "comparable); ship from a validation of one"
+            )
+    rule = rows[0].get("rule") or ""
+    if reference is not None and reference != rule:
+        raise ValueError(
+            f"reference = {reference!r} differs from the rule {rule!r} that "
+            f"{validation_csv} was validated against"
+        )
     swapped = sorted({r["statistics"] for r in rows if r.get("statistics")})
     if swapped:
         raise ValueError(
@@ -448,7 +475,7 @@ def ship_best(
         "versions": _versions(),
     }
     meta["scenario"] = scenario
-    meta["validation_reference"] = reference
+    meta["validation_reference"] = rule
     scale = {r: training_scale(runs_root / r, slots) for r in runs}
     meta["training_scale"] = {
         "runs": scale,
@@ -604,6 +631,15 @@ def paired_vs_rules(
     return out
 
 
+def _refuse_held_out(out: Path, overwrite: bool) -> None:
+    """Raise ``ValueError`` naming the held-out results already in ``out`` (unless
+    ``overwrite``)."""
+    existing = [str(out / n) for n in ("held_out.json", "held_out_rows.csv")]
+    existing = [f for f in existing if Path(f).exists()]
+    if existing and not overwrite:
+        raise ValueError(f"{existing} exist; pass overwrite=True (--overwrite) to replace them")
+
+
 def held_out_comparison(
     agents: dict[str, str | Path],
     out: str | Path,
@@ -615,15 +651,16 @@ def held_out_comparison(
     seed: int = HELD_OUT_SEED,
     scenario: Mapping[str, Any] | None = None,
     progress: bool = True,
-    overwrite: bool = True,
+    overwrite: bool = False,
 ) -> dict[str, Any]:
     """``agents`` (label -> zip) and ``rules`` (names or specs) on held-out seeds
     ``SeedSequence(seed)`` of ``scenario`` (env keywords, default ``{}``); writes
     ``out/held_out.json`` (the benchmark summary, with paired intervals against the best
     rule, plus ``paired_vs_rules``: each agent minus each rule, :func:`paired_vs_rules`) and
-    ``out/held_out_rows.csv`` (per episode). ``overwrite=False`` refuses an existing
-    ``held_out.json``. ``seed`` may be neither :data:`VALIDATION_SEED` nor the rules'
-    tuning seed (``policies.value.tuning.TRAIN_SEED``)."""
+    ``out/held_out_rows.csv`` (per episode). An existing ``held_out.json`` or
+    ``held_out_rows.csv`` is refused before any work unless ``overwrite``. ``seed`` may be
+    neither :data:`VALIDATION_SEED` nor the rules' tuning seed
+    (``policies.value.tuning.TRAIN_SEED``)."""
     from policies.value.tuning import TRAIN_SEED
 
     if seed in (VALIDATION_SEED, TRAIN_SEED):
@@ -631,9 +668,8 @@ def held_out_comparison(
             f"seed = {seed} is a validation ({VALIDATION_SEED}) or rule-tuning ({TRAIN_SEED}) "
             "seed, not a held-out one"
         )
+    _refuse_held_out(Path(out), overwrite)
     out = Path(out)
-    if not overwrite and (out / "held_out.json").exists():
-        raise ValueError(f"{out / 'held_out.json'} exists; pass overwrite=True to replace it")
     env_kwargs, slots = _split_slots(_canonical(scenario or {}), slots)
     rule_specs = [PolicySpec(r) if isinstance(r, str) else r for r in rules]
     specs = rule_specs + [
@@ -686,7 +722,8 @@ def select_ship_evaluate(
     best as ``policies/data/<name>`` and compare it on held-out seeds ``held_out_seed`` with
     every rule; writes ``out/validation.csv`` and ``out/held_out.json``;
     returns the held-out summary. ``ship_to``: where the agent goes (default the package's
-    ``policies/data``, refused if ``name`` is there unless ``overwrite``). ``trust_pickle``:
+    ``policies/data``); ``name`` there and held-out results in ``out`` are refused before any
+    work unless ``overwrite``. ``trust_pickle``:
     runs of an older version whose statistics are pickles only (reading them runs code)."""
     runs_root, out = Path(runs_root), Path(out)
     runs = sorted(p for p in runs_root.iterdir() if (p / "progress.csv").is_file())
@@ -695,6 +732,7 @@ def select_ship_evaluate(
     scenario = resolve_scenario(runs, scenario)
     rules = list(rules) if rules else [PolicySpec("preventive")]
     _refuse_existing(ship_to, name, overwrite)  # before the long validation
+    _refuse_held_out(out, overwrite)
     validation = out / "validation.csv"
     validate_checkpoints(
         runs,
@@ -723,4 +761,5 @@ def select_ship_evaluate(
         rules=rules,
         seed=held_out_seed,
         scenario=scenario,
+        overwrite=overwrite,
     )

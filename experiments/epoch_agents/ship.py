@@ -42,7 +42,9 @@ def main() -> None:
         "--ship-to", default=None, help="folder for the agent's files (default policies/data)"
     )
     parser.add_argument(
-        "--overwrite", action="store_true", help="replace an agent of the same name there"
+        "--overwrite",
+        action="store_true",
+        help="replace an agent of the same name there and the held-out results in --out",
     )
     parser.add_argument(
         "--trust-pickle",

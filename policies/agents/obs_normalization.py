@@ -151,12 +151,27 @@ class ObsNormalization:
 
     def apply_to(self, venv: Any) -> None:
         """Set an SB3 ``VecNormalize``'s statistics to these (the return statistics too, when
-        this file has them)."""
+        this file has them).
+
+        Return statistics come with the reward scaling they were kept under: the discounted
+        return of the file's ``gamma``, scaled rewards clipped at its ``clip_reward``. Both
+        must equal the ``VecNormalize``'s, else ``ValueError`` names them before anything is
+        set. They are checked, not set: they are settings the caller gave the
+        ``VecNormalize`` (replacing them would change its training unseen), and statistics of
+        another ``gamma`` are those of another return."""
         if venv.obs_rms.mean.shape != self.mean.shape:
             raise ValueError(
                 f"the statistics are of {self.size} observation entries, the env's "
                 f"{venv.obs_rms.mean.shape}"
             )
+        if self.returns is not None:
+            for key in ("gamma", "clip_reward"):
+                if float(getattr(venv, key)) != self.returns[key]:
+                    raise ValueError(
+                        f"the return statistics are of {key} = {self.returns[key]!r}; the "
+                        f"VecNormalize has {key} = {getattr(venv, key)!r} (make it with "
+                        f"{key}={self.returns[key]!r})"
+                    )
         venv.obs_rms.mean = self.mean.copy()
         venv.obs_rms.var = self.var.copy()
         venv.obs_rms.count = self.count

@@ -67,6 +67,7 @@ from scas_env.decision_epochs import (
     FLY,
     MASK_READS,
     N_MAINTENANCE,
+    _check_ks,
     delegate_actions,
     maintenance_mask,
     with_delegation,
@@ -251,7 +252,8 @@ class EpochAgent(SB3Agent):
     decides again. The per-env counters travel in the returned ``state`` (pass it back, as
     the benchmark does; ``episode_start`` resets them), so the same object serves batches.
     A per-flight episode played this way equals the decision-epoch episode on the same seed
-    (tested).
+    (tested). An episode longer than ``episode_slots`` is refused (``ValueError`` at its slot
+    ``episode_slots``, where ``flights_left`` would reach 0: past the agent's horizon).
     With ``delegate`` (a stateless policy on the per-flight observation: a residual agent, see
     :mod:`policies.agents.delegation`) the model has a fifth maintenance choice, "the
     delegate for ``k`` slots": the delegate then acts at each of those slots.
@@ -268,9 +270,11 @@ class EpochAgent(SB3Agent):
         masked: bool = True,
         delegate: Any = None,
     ) -> None:
+        ks = _check_ks(ks)
+        episode_slots = _check_episode_slots(episode_slots)
         super().__init__(model, normalizer, obs_names, masked=False)
-        self.ks = tuple(int(k) for k in ks)
-        self.episode_slots = int(episode_slots)
+        self.ks = ks
+        self.episode_slots = episode_slots
         self.masked_epochs = masked
         self.delegate = delegate
         choices = N_MAINTENANCE + (delegate is not None)
@@ -306,6 +310,14 @@ class EpochAgent(SB3Agent):
         if episode_start is not None:
             start = np.broadcast_to(np.asarray(episode_start, dtype=bool), (n,))
             slot[start], remaining[start], delegating[start] = 0, 0, False
+        if np.any(slot >= self.episode_slots):
+            late = int(slot.max())
+            raise ValueError(
+                f"slot {late} of an episode: the episode is longer than the agent's horizon "
+                f"episode_slots = {self.episode_slots} (flights_left would be "
+                f"{self.episode_slots - late}); load the agent with episode_slots = the "
+                "episode's length"
+            )
         actions = np.zeros(n, np.int64)  # fly while committed
         due = np.flatnonzero(remaining <= 0)
         if due.size:
@@ -349,6 +361,19 @@ class EpochAgent(SB3Agent):
                 return logits.argmax(dim=1).numpy()
             with self.rng.torch_stream():
                 return torch.distributions.Categorical(logits=logits).sample().numpy()
+
+
+def _check_episode_slots(episode_slots: Any) -> int:
+    """``episode_slots`` as an ``int`` >= 1 (``ValueError`` naming it otherwise)."""
+    if (
+        isinstance(episode_slots, bool | np.bool_)
+        or not isinstance(episode_slots, int | np.integer)
+        or episode_slots < 1
+    ):
+        raise ValueError(
+            f"episode_slots = {episode_slots!r} must be an integer >= 1 (the episode's length)"
+        )
+    return int(episode_slots)
 
 
 # ---------------------------------------------------------------------------- loading
@@ -546,7 +571,7 @@ def load_sb3_policy(
         default from metadata or the zip.
     ks, episode_slots : make it an :class:`EpochAgent` (decision epochs: slots per decision,
         episode length); default from the metadata ``<stem>.json`` (``"formulation":
-        "decision_epochs"``).
+        "decision_epochs"``); a ``ks`` other than the metadata's is refused.
     require_vecnormalize : True: missing statistics are an error; False: act without them;
         None (default): required if the metadata or RL-Zoo's ``config.yml`` says the agent was
         trained with VecNormalize.
@@ -564,8 +589,17 @@ def load_sb3_policy(
         raise ValueError(f"trust_pickle = {trust_pickle!r} must be True or False")
     if algo is not None and algo not in ALGO_NAMES:
         raise ValueError(f"algo = {algo!r} must be one of {sorted(ALGO_NAMES)}")
+    if ks is not None:
+        ks = _check_ks(ks)
+    if episode_slots is not None:
+        episode_slots = _check_episode_slots(episode_slots)
     check_manifest(path)
     meta = _metadata(path)
+    if ks is not None and meta.get("ks") is not None and ks != _check_ks(meta["ks"]):
+        raise ValueError(
+            f"ks = {ks} differ from the agent's ks = {tuple(meta['ks'])} in its metadata "
+            f"({path}: its actions mean those slots per decision); leave ks unset"
+        )
     if (
         obs_names is not None
         and "obs_names" in meta

@@ -14,10 +14,11 @@ Semantics (SB3's ``VecEnv`` contract):
 - autoreset: at a done, ``obs[i]`` is already the next episode's first observation; the
   last one is in ``infos[i]["terminal_observation"]``, and ``infos[i]["TimeLimit.truncated"]``
   says truncation.
+- ``step_async(actions)``: ``N`` integer actions (an array of another dtype is refused).
 - ``infos[i]``: the vector info's entries of env ``i`` (``info_keys``; default all, nested
-  dicts kept).
+  dicts kept; a key the info never holds is refused at the first step).
 - ``env_method("action_masks")``: per env the bool mask of
-  :func:`scas_env.decision_epochs.maintenance_mask` (MaskablePPO).
+  :func:`scas_env.decision_epochs.maintenance_mask` (MaskablePPO), after a ``reset()``.
 - ``get_attr`` / ``set_attr`` / ``env_method``: on the vector env itself (attributes shared
   by its N actuators), the value once per index.
 
@@ -84,6 +85,15 @@ class HorizonIsTerminal(gym.Wrapper):
         if truncated and not terminated and float(obs[self._column]) == 0.0:
             return obs, reward, True, False, info
         return obs, reward, terminated, truncated, info
+
+
+#: keys an info holds only at a done: Gymnasium's same-step autoreset's, this adapter's own
+_ALWAYS = frozenset({"final_obs", "final_info", "terminal_observation", "TimeLimit.truncated"})
+
+
+def _keys(info: dict[str, Any]) -> set[str]:
+    """The keys of a vector info, without Gymnasium's ``_key`` masks."""
+    return {k for k in info if not (k.startswith("_") and k[1:] in info)}
 
 
 def _split(info: dict[str, Any], n: int, keys: Sequence[str] | None) -> list[dict[str, Any]]:
@@ -158,7 +168,9 @@ class NativeVecEnv(VectorEnvAccess, VecEnv):
     venv : ``gym.make_vec(..., vectorization_mode="vector_entry_point")``.
     info_keys : keys of the vector info copied into each env's info dict (None: all;
         ``()``: none, the fastest; ``terminal_observation`` and ``TimeLimit.truncated`` are
-        always set at a done).
+        always set at a done). A key that neither the first reset's nor the first step's
+        info holds (nor Gymnasium's ``final_obs`` / ``final_info`` at a done) raises
+        ``ValueError`` at that first step, naming the keys there are.
     truncation_is_terminal : an end whose last observation has 0 time left is terminal
         (``TimeLimit.truncated = False``; module docstring). None (default): when the
         observation has a :data:`TIME_LEFT` entry.
@@ -174,7 +186,12 @@ class NativeVecEnv(VectorEnvAccess, VecEnv):
         space = venv.single_observation_space
         if not isinstance(space, spaces.Box) or len(space.shape) != 1:
             raise ValueError(f"the vector env's observation space {space} must be a flat Box")
-        self.info_keys = None if info_keys is None else tuple(info_keys)
+        keys = None if info_keys is None or isinstance(info_keys, str) else tuple(info_keys)
+        if isinstance(info_keys, str) or not all(isinstance(k, str) for k in keys or ()):
+            raise ValueError(f"info_keys = {info_keys!r} must be None or an iterable of keys")
+        self.info_keys = keys
+        #: keys the infos held so far, until ``info_keys`` is checked (at the first step)
+        self._info_seen: set[str] | None = None if self.info_keys is None else set(_ALWAYS)
         names = tuple(getattr(venv, "obs_names", ()))
         column = time_left_column(names)
         if truncation_is_terminal not in (None, True, False):
@@ -188,7 +205,8 @@ class NativeVecEnv(VectorEnvAccess, VecEnv):
         self._mask_cols = (
             [names.index(n) for n in MASK_READS] if all(n in names for n in MASK_READS) else None
         )
-        self._obs = np.zeros((venv.num_envs, *space.shape), dtype=space.dtype)
+        #: the current observations (None before the first reset: no mask to read)
+        self._obs: np.ndarray | None = None
         #: the vector env resets done envs in the step itself (e.g. the decision-epoch
         #: vector env) instead of on the next one (the per-flight native env)
         mode = getattr(venv, "metadata", {}).get("autoreset_mode")
@@ -207,18 +225,27 @@ class NativeVecEnv(VectorEnvAccess, VecEnv):
         obs, info = self.venv.reset(seed=seed_arg, options=opts)
         self._reset_seeds()
         self._reset_options()
+        if self._info_seen is not None:
+            self._info_seen |= _keys(info)
         self.reset_infos = _split(info, self.num_envs, self.info_keys)
         self._obs = np.array(obs, copy=True)
         return self._obs.copy()
 
     def step_async(self, actions: np.ndarray) -> None:
-        self._actions = np.asarray(actions, dtype=np.int64).reshape(self.num_envs)
+        """Store ``num_envs`` integer actions for :meth:`step_wait`; any other dtype (floats,
+        bools) raises ``ValueError`` naming them, as the envs do (nothing is truncated)."""
+        a = np.asarray(actions)
+        if a.dtype.kind not in "iu" or a.size != self.num_envs:  # not timedelta64 ("m")
+            raise ValueError(f"actions = {actions!r} must be {self.num_envs} integers")
+        self._actions = a.astype(np.int64).reshape(self.num_envs)
 
     def step_wait(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, list[dict[str, Any]]]:
         if self._actions is None:
             raise RuntimeError("step_wait() called without step_async(actions)")
         obs, rewards, terminated, truncated, info = self.venv.step(self._actions)
         self._actions = None
+        if self._info_seen is not None:
+            self._check_info_keys(info)
         dones = np.asarray(terminated) | np.asarray(truncated)
         infos = _split(info, self.num_envs, self.info_keys)
         obs = np.array(obs, copy=True)
@@ -245,6 +272,18 @@ class NativeVecEnv(VectorEnvAccess, VecEnv):
         self._obs = obs
         return obs.copy(), np.asarray(rewards, dtype=np.float32), dones, infos
 
+    def _check_info_keys(self, info: dict[str, Any]) -> None:
+        """Refuse ``info_keys`` that neither the reset infos seen nor this first step's info
+        hold (checked until a step passes)."""
+        seen = self._info_seen | _keys(info)
+        unknown = [k for k in self.info_keys or () if k not in seen]
+        if unknown:
+            raise ValueError(
+                f"info_keys = {self.info_keys!r}: {unknown} are not in the vector env's info; "
+                f"allowed: {sorted(seen)}"
+            )
+        self._info_seen = None
+
     def _cut(self, last: np.ndarray, truncated: Any, terminated: Any) -> bool:
         """SB3's ``TimeLimit.truncated``: truncated, not terminated, and not at the horizon
         of an observation that counts down to it."""
@@ -264,6 +303,8 @@ class NativeVecEnv(VectorEnvAccess, VecEnv):
             return np.asarray(own())
         if self._mask_cols is None:
             raise ValueError(f"the observation lacks {MASK_READS} that the action mask reads")
+        if self._obs is None:
+            raise RuntimeError("call reset() before action_masks()")
         return maintenance_mask(*(self._obs[:, c] for c in self._mask_cols))
 
     # ------------------------------------------------------------------ attributes

@@ -18,7 +18,9 @@ sb3-contrib (MaskablePPO) is a dependency of this package; TensorBoard logs need
 
 from __future__ import annotations
 
+import io
 import json
+import pickle
 import time
 from collections.abc import Mapping, Sequence
 from pathlib import Path
@@ -30,7 +32,7 @@ from policies.agents.delegation import DelegateSpec, flight_obs_names
 from policies.agents.sb3_agents import require_contrib
 from scas_env import ENV_ID, ENV_ID_EPOCHS
 from scas_env.decision_epochs import DEFAULT_KS, DecisionEpochs
-from scas_env.utils.atomic_file import write_text_atomic
+from scas_env.utils.atomic_file import write_bytes_atomic, write_text_atomic
 
 #: the observation and return statistics of a clone (``experiments.epoch_agents.clone``),
 #: read without unpickling (:class:`policies.agents.obs_normalization.ObsNormalization`)
@@ -337,6 +339,26 @@ class _SaveStatistics:
         return SaveStatistics()
 
 
+def _save_final_checkpoint(model: Any, venv: Any, out: Path, *, normalize: bool) -> bool:
+    """Save the weights at the end of training as checkpoint ``out/ckpt_<n>_steps.zip``
+    (``n = model.num_timesteps``) with, if ``normalize``, its statistics (the normalisation
+    JSON and SB3's ``ckpt_vecnormalize_<n>_steps.pkl``), each file written atomically, the
+    zip last. Returns False and writes nothing if ``ckpt_<n>_steps.zip`` exists: the
+    checkpoint callback saved it in the last rollout, before that rollout's update, and it
+    is kept as it is (it may be validated already while the run trains)."""
+    n = int(model.num_timesteps)
+    zip_path = out / f"ckpt_{n}_steps.zip"
+    if zip_path.exists():
+        return False
+    if normalize:
+        save_statistics(venv, out / f"ckpt_normalization_{n}_steps.json")
+        write_bytes_atomic(out / f"ckpt_vecnormalize_{n}_steps.pkl", pickle.dumps(venv))
+    buffer = io.BytesIO()
+    model.save(buffer)
+    write_bytes_atomic(zip_path, buffer.getvalue())
+    return True
+
+
 def save_statistics(venv: Any, path: Path) -> None:
     """Write a ``VecNormalize``'s statistics as a normalisation JSON file."""
     from policies.agents.obs_normalization import ObsNormalization
@@ -465,7 +487,8 @@ def train_epochs(
     fine-tuning run had accumulated after 1 M decisions lost 1,864 USD/episode on
     validation, all of the decline of that run). Writes
     ``out_dir/ckpt_<n>_steps.zip`` checkpoints with their statistics
-    (``ckpt_normalization_<n>_steps.json``, and SB3's ``ckpt_vecnormalize_<n>_steps.pkl``),
+    (``ckpt_normalization_<n>_steps.json``, and SB3's ``ckpt_vecnormalize_<n>_steps.pkl``;
+    the last at the end, unless a checkpoint of that count exists: it is kept as it is),
     ``progress.csv``
     (SB3's logger: training episode rewards of the Monitor) and ``run.json`` (config, written
     before training so that checkpoints can be validated while it runs, ``"finished":
@@ -555,10 +578,7 @@ def train_epochs(
     finally:
         model.logger.close()  # progress.csv complete and closed, also on an interrupt
     wall = time.perf_counter() - start
-    model.save(out / f"ckpt_{model.num_timesteps}_steps.zip")
-    if normalize:
-        venv.save(str(out / f"ckpt_vecnormalize_{model.num_timesteps}_steps.pkl"))
-        save_statistics(venv, out / f"ckpt_normalization_{model.num_timesteps}_steps.json")
+    _save_final_checkpoint(model, venv, out, normalize=normalize)
     run.update(
         decisions=int(model.num_timesteps),
         wall_s=round(wall, 1),
