@@ -808,21 +808,39 @@ def test_tune_and_value_fly_the_scenario_file_s_episode_length(tmp_path: Path) -
     assert config["size"]["slots"] == config["scenario"]["episode_slots"] == 200
 
 
-def test_a_benchmark_on_the_tuning_s_training_seed_says_the_rules_are_in_sample(
+def test_a_benchmark_on_the_seeds_behind_the_defaults_says_which_rules_are_in_sample(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    """The shipped rules' defaults were tuned on the episodes of seed root 1: a benchmark
-    there warns that their results are in-sample and names the held-out root; another
-    seed, or no rule, does not."""
-    from policies.value.tuning import HELD_OUT_SEED, TRAIN_SEED
+    """A rule's shipped default was tuned on training episodes (detection: seed root 1;
+    rul_risk: 11) and chosen on validation episodes (every rule: 3): a benchmark on such a
+    root warns that those rules' results are in-sample, naming them, the seed's role and the
+    held-out root; another seed, or a rule whose default no episode of that seed made, does
+    not (rul_risk on seed 1 was warned of, and rul_risk on 11 or 3 was not)."""
+    from policies.value.tuning import (
+        DEFAULTS_VALIDATION_SEED,
+        HELD_OUT_SEED,
+        REPLICATE_TRAIN_SEED,
+        TRAIN_SEED,
+    )
 
     tiny = ["--episodes", "1", "--slots", "20", "--workers", "1", "-q"]
     runs = [
-        (["--policies", "rul_risk", "--seed", str(TRAIN_SEED)], True),
-        (["--policies", "rul_risk", "--seed", str(HELD_OUT_SEED)], False),
-        (["--policies", "random", "--seed", str(TRAIN_SEED)], False),
-    ]
-    for k, (argv, warned) in enumerate(runs):
-        assert benchmark_cli.main([*tiny, *argv, "--out", str(tmp_path / str(k))]) == 0
+        ("rul_risk", REPLICATE_TRAIN_SEED, "training episodes the shipped defaults of rul_risk "
+         "were tuned on"),
+        ("preventive,detection", DEFAULTS_VALIDATION_SEED, "validation episodes the shipped "
+         "defaults of preventive, detection were chosen on"),
+        ("detection", TRAIN_SEED, "training episodes the shipped defaults of detection were "
+         "tuned on"),
+        ("rul_risk", TRAIN_SEED, None),
+        ("rul_risk", HELD_OUT_SEED, None),
+        ("random", TRAIN_SEED, None),
+    ]  # fmt: skip
+    for k, (names, seed, warning) in enumerate(runs):
+        argv = [*tiny, "--policies", names, "--seed", str(seed), "--out", str(tmp_path / str(k))]
+        assert benchmark_cli.main(argv) == 0
         err = capsys.readouterr().err
-        assert ("in-sample (held out: --seed 2)" in err) is warned, (argv, err)
+        if warning is None:
+            assert "in-sample" not in err, (argv, err)
+        else:
+            assert f"--seed {seed} is the root of the {warning}" in err, (argv, err)
+            assert "in-sample (held out: --seed 2)" in err, (argv, err)

@@ -109,6 +109,27 @@ def test_bad_input_is_refused_before_any_episode() -> None:
         tune_fleet_families({"aircraft": 3}, ["fleet_age"])
 
 
+def test_only_parameters_that_act_are_checked_for_edges() -> None:
+    """A nested family's own parameter at the value that turns it off (the opportunistic
+    rule's ``opportunity = 0``, the aware rule's ``urgency = 1``: the family before it
+    exactly) and a test interval beyond the episode (never a test) are legitimate optima,
+    not box edges; a test interval within the episode near its box's end is flagged."""
+    from policies.value.fleet_tuning import fleet_relevant_box
+
+    opp, aware = FLEET_FAMILIES["fleet_opportunistic"], FLEET_FAMILIES["fleet_aware"]
+    off = {**STARTS["fleet_naive"], "opportunity": 0.0, "test_every": 9900.0}
+    r = tune_fleet_family(opp, FLEET, trials=1, episodes=1, start=off)
+    assert r.best_params == {**off, "opportunity": 0.0}  # the only trial: its start
+    assert "opportunity" not in r.edges and "test_every" not in r.edges  # not flagged
+    assert set(r.edges) == set(opp.box) - {"opportunity", "test_every"}
+    point = {**off, "opportunity": 0.88, "urgency": 1.0, "test_every": 12.0}
+    r = tune_fleet_family(aware, FLEET, trials=1, episodes=1, start=point)
+    assert "urgency" not in r.edges  # off: every due part urgent
+    assert r.edges["test_every"] == "low" and r.edges["opportunity"] == "high"  # they act
+    box = fleet_relevant_box(aware, {**point, "urgency": 1.5}, FLEET)
+    assert set(box) == set(aware.box)
+
+
 def _fleet_file(tmp_path: Path) -> Path:
     path = tmp_path / "fleet.toml"
     path.write_text("[fleet]\naircraft = 3\nepisode_days = 25\n")

@@ -226,16 +226,9 @@ def main(argv: Sequence[str] | None = None) -> int:
                 "rules on held-out seeds (e.g. --seed 2, the documented held-out root)"
             )
         specs += _tuned_specs(parser, args.tuned, fleet=fleet is not None)
-    from policies.base import policy_family
-    from policies.value.tuning import HELD_OUT_SEED, TRAIN_SEED
-
-    rules = [s for s in specs if s.module is None and policy_family(s.name) == "rule"]
-    if args.seed == TRAIN_SEED and rules:
-        log.warning(
-            f"--seed {args.seed} is the root of the training episodes the shipped rules' "
-            f"defaults were tuned on: their results here are in-sample (held out: --seed "
-            f"{HELD_OUT_SEED})"
-        )
+    in_sample = _in_sample_warning(args.seed, specs)
+    if in_sample:
+        log.warning(in_sample)
     labels = [s.key for s in specs]
     if len(set(labels)) != len(labels):
         parser.error(f"policy labels {labels} must be unique (--agent LABEL=FILE names an agent)")
@@ -310,6 +303,26 @@ def _fitting_agents(specs: list[Any], *, slots: int, env_kwargs: dict[str, Any])
                 continue
         kept.append(spec)
     return kept
+
+
+def _in_sample_warning(seed: int, specs: Sequence[Any]) -> str | None:
+    """The warning of a benchmark on root ``seed`` of rules at their shipped defaults
+    (registered, no parameters given) that were tuned or chosen on that seed's episodes
+    (:data:`policies.value.tuning.DEFAULTS_SEEDS`), naming them and the seed's role; None
+    when no such rule runs."""
+    from policies.value.tuning import DEFAULTS_SEEDS, HELD_OUT_SEED
+
+    role, names = DEFAULTS_SEEDS.get(seed, ("", ()))
+    at_defaults = dict.fromkeys(s.name for s in specs if s.module is None and not s.params)
+    hit = [name for name in at_defaults if name in names]
+    if not hit:
+        return None
+    how = "tuned on" if role == "training" else "chosen on (among their tuned points)"
+    return (
+        f"--seed {seed} is the root of the {role} episodes the shipped defaults of "
+        f"{', '.join(hit)} were {how}: their results here are in-sample (held out: --seed "
+        f"{HELD_OUT_SEED})"
+    )
 
 
 def _recorded_train_seed(path: Path) -> int:

@@ -3,14 +3,14 @@
 As :mod:`policies.value.tuning` for the single actuator, on fleets (``ScasFleet-v0``): every
 family gets ``trials x episodes`` fleet episodes (default 30 x 16) of the same training
 seeds (:data:`~policies.value.tuning.TRAIN_SEED`), Optuna's TPE (seeded) maximises the mean
-reward per episode, and the chosen point's parameters are checked against the edges of
-their box. The families nest: the naive rule's search starts from the single actuator's
-tuned filter rule; the opportunistic rule's from the naive rule's best with no grouping
-(``opportunity = 0``: the naive rule exactly); the fleet-aware rule's from the
-opportunistic rule's best with no deferral (``urgency = 1``), so each can match the one
-before it on the training seeds (the aware rule's mission ordering is on from its first
-trial). The held-out comparison (:data:`~policies.value.tuning.HELD_OUT_SEED`) is the
-benchmark's.
+reward per episode, and the chosen point's parameters that act are checked against the
+edges of their box (:func:`fleet_relevant_box`). The families nest: the naive rule's
+search starts from the single actuator's tuned filter rule; the opportunistic rule's from
+the naive rule's best with no grouping (``opportunity = 0``: the naive rule exactly); the
+fleet-aware rule's from the opportunistic rule's best with no deferral (``urgency = 1``), so
+each can match the one before it on the training seeds (the aware rule's mission ordering
+is on from its first trial). The held-out comparison
+(:data:`~policies.value.tuning.HELD_OUT_SEED`) is the benchmark's.
 
     scas-tune --fleet --out results/fleet_tuning   # ~1 h on 2 cores
 """
@@ -91,6 +91,21 @@ CHAIN = ("fleet_naive", "fleet_opportunistic", "fleet_aware")
 _ADDED = {"fleet_opportunistic": {"opportunity": 0.0}, "fleet_aware": {"urgency": 1.0}}
 
 
+def fleet_relevant_box(family: Family, params: Mapping[str, Any], fleet: FleetConfig) -> Box:
+    """The part of a fleet family's box that acts at ``params`` (as
+    :func:`policies.value.tuning.relevant_box`): the parameter a nested family adds to the one
+    before it (:data:`_ADDED`) only off the value that turns it off (there the family is the
+    one before exactly, a legitimate optimum), the test interval only when it is shorter than
+    the episode (an actuator's test age counts days: a longer one means "never test")."""
+    box = dict(family.box)
+    for name, off in _ADDED.get(family.label, {}).items():
+        if name in params and float(params[name]) == off:
+            box.pop(name, None)
+    if float(params.get("test_every", 0.0)) >= fleet.episode_days:
+        box.pop("test_every", None)
+    return box
+
+
 def tune_fleet_family(
     family: Family,
     fleet: FleetConfig,
@@ -140,7 +155,7 @@ def tune_fleet_family(
         params,
         best_reward,
         history,
-        edge_report(params, family.box),
+        edge_report(params, fleet_relevant_box(family, params, fleet)),
         trials * episodes,
         time.perf_counter() - t0,
     )
@@ -195,4 +210,11 @@ def tune_fleet_families(
     return {f: out[f] for f in FLEET_FAMILIES if f in out}
 
 
-__all__ = ["CHAIN", "FLEET_FAMILIES", "STARTS", "tune_fleet_families", "tune_fleet_family"]
+__all__ = [
+    "CHAIN",
+    "FLEET_FAMILIES",
+    "STARTS",
+    "fleet_relevant_box",
+    "tune_fleet_families",
+    "tune_fleet_family",
+]

@@ -19,7 +19,8 @@ Every arm of a held-out run uses the same episode seeds (common random numbers).
 the intervals of :func:`policies.benchmark.stats.metric_interval` and the paired difference
 of the reward against ``age`` with its t-interval and minimum detectable difference; the
 **break-even sigma** is where the noisy oracle's paired value against the age rule crosses
-zero (linear interpolation between the two sigmas that bracket it).
+zero (linear interpolation between the two sigmas that bracket it), its interval the sigmas
+where the value's interval holds zero (:func:`break_even_interval`).
 
 The sensing-quality sweep (sensor noise x0.1 ... x3, per-unit tolerances on/off) re-tunes
 the same nested families at each sensing variant of the design, each with its own feature
@@ -33,6 +34,7 @@ import csv
 import itertools
 import json
 import math
+import numbers
 import time
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
@@ -47,7 +49,10 @@ from policies.benchmark.stats import METRICS, metric_interval, paired_comparison
 from policies.value.tuning import (
     FAMILIES,
     HELD_OUT_SEED,
+    SAMPLER_SEED,
+    TRAIN_SEED,
     TuningResult,
+    check_counts,
     family_env_kwargs,
     tune_families,
 )
@@ -75,6 +80,7 @@ __all__ = [
     "QUICK",
     "REFERENCE",
     "LadderResult",
+    "break_even_interval",
     "break_even_sigma",
     "markdown_report",
     "run_ladder",
@@ -99,25 +105,66 @@ def _sigma(label: str) -> float | None:
     return float(label[len(prefix) :]) if label.startswith(prefix) else None
 
 
+def _crossing(
+    sigmas: Sequence[float], values: Sequence[float], strict: bool
+) -> tuple[float, tuple[float, ...]]:
+    """The sigma where ``values`` first reaches zero (``<= 0``; ``< 0`` if ``strict``),
+    linearly interpolated, and the sigmas that bracket it (one if the first value has
+    crossed, none without a crossing: NaN)."""
+    order = np.argsort(sigmas)
+    s = np.asarray(sigmas, dtype=np.float64)[order]
+    v = np.asarray(values, dtype=np.float64)[order]
+    crossed = (v < 0) if strict else (v <= 0)
+    if v.size == 0 or not crossed.any():
+        return math.nan, ()
+    k = int(np.argmax(crossed))
+    if k == 0:
+        return float(s[0]), (float(s[0]),)
+    x = float(s[k - 1] + (s[k] - s[k - 1]) * v[k - 1] / (v[k - 1] - v[k]))
+    return x, (float(s[k - 1]), float(s[k]))
+
+
 def break_even_sigma(sigmas: Sequence[float], values: Sequence[float]) -> float:
     """Smallest sigma at which the value (paired reward vs the age rule) crosses from
-    positive to <= 0, linearly interpolated; NaN if it never does (or starts <= 0: then
-    the first sigma if the first value is <= 0).
+    positive to <= 0, linearly interpolated; NaN if it never does (the first sigma if the
+    first value is <= 0).
 
     >>> round(break_even_sigma([0.0, 0.1, 0.2, 0.3], [30.0, 10.0, -10.0, -20.0]), 6)
     0.15
     """
-    order = np.argsort(sigmas)
-    s = np.asarray(sigmas, dtype=np.float64)[order]
-    v = np.asarray(values, dtype=np.float64)[order]
-    if v.size == 0:
-        return math.nan
-    if v[0] <= 0:
-        return float(s[0])
-    for k in range(1, v.size):
-        if v[k] <= 0:
-            return float(s[k - 1] + (s[k] - s[k - 1]) * v[k - 1] / (v[k - 1] - v[k]))
-    return math.nan
+    return _crossing(sigmas, values, strict=False)[0]
+
+
+def break_even_interval(
+    sigmas: Sequence[float], values: Sequence[Mapping[str, float]]
+) -> dict[str, Any]:
+    """The break-even sigma of the paired values ``values`` (``mean``, ``low``, ``high`` of
+    each sigma's interval) with its interval, the convention of
+    :func:`experiments.mismatch_study.break_even_level`: ``significant_until``, where the
+    lower bound reaches <= 0 (beyond it the value is no longer significantly positive), and
+    ``negative_beyond``, where the upper bound falls strictly below 0 (significantly
+    negative); between them the interval holds zero. NaN: no crossing within the sigmas
+    run. ``resolved``: a crossing of the mean (``bracket``: the sigmas around it) where the
+    interval does not hold zero at every sigma of the bracket (else it is not located).
+
+    >>> v = [{"mean": 30.0, "low": 20.0, "high": 40.0}, {"mean": -10.0, "low": -20.0, "high": -1.0}]
+    >>> b = break_even_interval([0.0, 0.2], v)
+    >>> round(b["sigma"], 6), round(b["significant_until"], 6), round(b["negative_beyond"], 6)
+    (0.15, 0.1, 0.195122)
+    >>> b["resolved"], b["bracket"]
+    (True, [0.0, 0.2])
+    """
+    sigma, bracket = _crossing(sigmas, [v["mean"] for v in values], strict=False)
+    holds = {
+        float(s): bool(v["low"] <= 0.0 <= v["high"]) for s, v in zip(sigmas, values, strict=True)
+    }
+    return {
+        "sigma": sigma,
+        "significant_until": _crossing(sigmas, [v["low"] for v in values], strict=False)[0],
+        "negative_beyond": _crossing(sigmas, [v["high"] for v in values], strict=True)[0],
+        "resolved": bool(bracket) and not all(holds[s] for s in bracket),
+        "bracket": list(bracket),
+    }
 
 
 def _specs(
@@ -152,15 +199,39 @@ def run_ladder(
     env_kwargs: Mapping[str, Any] | None = None,
 ) -> LadderResult:
     """Tune every family (:func:`policies.value.tuning.tune_families`, ``trials x
-    train_episodes`` training episodes each), then run every arm on ``episodes`` held-out
-    episodes and summarise (:func:`summarize_ladder`). ``env_kwargs``: the user's scenario
-    and costs, under each arm's own keywords."""
+    train_episodes`` training episodes each, root seeds :data:`~policies.value.tuning.TRAIN_SEED`
+    and :data:`~policies.value.tuning.SAMPLER_SEED`), then run every arm on ``episodes``
+    held-out episodes and summarise (:func:`summarize_ladder`). ``env_kwargs``: the user's
+    scenario and costs, under each arm's own keywords. Every input is checked before any
+    tuning (``ValueError``): the counts integers >= 1, ``episodes`` >= 2 (a paired interval
+    needs two), ``0 < confidence < 1``, ``families`` known labels, each once."""
     if families is not None:  # a list of labels: a bare string would match by substring
         if isinstance(families, str) or not all(isinstance(f, str) for f in families):
             raise ValueError(f"families = {families!r} must be None or a list of family labels")
         unknown = sorted(set(families) - set(FAMILIES))
         if unknown:
             raise ValueError(f"families {unknown} unknown; known: {list(FAMILIES)}")
+        repeated = sorted({f for f in families if list(families).count(f) > 1})
+        if repeated:
+            raise ValueError(f"families {repeated} given more than once")
+    check_counts(
+        episodes=episodes,
+        slots=slots,
+        trials=trials,
+        train_episodes=train_episodes,
+        n_workers=n_workers,
+    )
+    if not 2 <= episodes <= 10**8:
+        raise ValueError(
+            f"episodes = {episodes!r} must be in [2, 10**8]: a paired interval needs at least "
+            "2 held-out episodes"
+        )
+    if (
+        isinstance(confidence, bool)
+        or not isinstance(confidence, numbers.Real)
+        or not 0.0 < confidence < 1.0
+    ):
+        raise ValueError(f"confidence = {confidence!r} must be a number in (0, 1)")
     t0 = time.perf_counter()
     base = dict(env_kwargs or {})
     labels = [k for k in FAMILIES if families is None or k in families or k == REFERENCE]
@@ -172,6 +243,8 @@ def run_ladder(
         n_workers=n_workers,
         progress=progress,
         env_kwargs=base,
+        train_seed=TRAIN_SEED,
+        sampler_seed=SAMPLER_SEED,
     )
     arms = _specs(tuning, slots, base)
     groups: dict[str, list[tuple[str, PolicySpec, dict[str, Any]]]] = {}
@@ -200,6 +273,8 @@ def run_ladder(
         "episodes": episodes,
         "slots": slots,
         "held_out_seed": HELD_OUT_SEED,
+        "train_seed": TRAIN_SEED,
+        "sampler_seed": SAMPLER_SEED,
         "trials": trials,
         "train_episodes": train_episodes,
         "n_workers": n_workers,
@@ -230,8 +305,10 @@ def summarize_ladder(
     rows: Sequence[Mapping[str, Any]], arms: Sequence[str], confidence: float = 0.95
 ) -> dict[str, Any]:
     """Per arm: intervals of every metric, the paired reward difference vs ``age`` (with
-    sd, p-value and minimum detectable difference); the break-even sigma and the paired
-    differences between consecutive noisy-oracle sigmas (the monotonicity control)."""
+    sd, p-value and minimum detectable difference); the break-even sigma
+    (``break_even_sigma``; with its interval: ``break_even``, :func:`break_even_interval`)
+    and the paired differences between consecutive noisy-oracle sigmas (the monotonicity
+    control)."""
     if REFERENCE not in arms:
         raise ValueError(f"arms {list(arms)} must include the reference {REFERENCE!r}")
     by_arm = {
@@ -253,8 +330,9 @@ def summarize_ladder(
         }
     noisy = sorted((s, a) for a in arms if (s := _sigma(a)) is not None)
     if noisy:
-        values = [out["arms"][a]["value_vs_age"]["mean"] for _, a in noisy]
-        out["break_even_sigma"] = break_even_sigma([s for s, _ in noisy], values)
+        values = [out["arms"][a]["value_vs_age"] for _, a in noisy]
+        out["break_even"] = break_even_interval([s for s, _ in noisy], values)
+        out["break_even_sigma"] = out["break_even"]["sigma"]
         out["monotone_steps"] = [
             {
                 "from": a,
@@ -270,10 +348,34 @@ def _money(x: float) -> str:
     return "-" if not math.isfinite(x) else f"{x:+,.0f}"
 
 
+def _percent(fraction: float) -> str:
+    """``0.95`` as ``"95%"``, ``0.975`` as ``"97.5%"``."""
+    return f"{100 * fraction:g}%"
+
+
+def _break_even_text(b: Mapping[str, Any], pct: str) -> str:
+    """The break-even line's value (:func:`break_even_interval`'s record ``b``)."""
+    if not math.isfinite(b["sigma"]):
+        low = b["significant_until"]
+        return "none within the sigmas run" + (
+            f" (the {pct} CI holds 0 from sigma {low:g})" if math.isfinite(low) else ""
+        )
+    if not b["resolved"]:
+        at = " and ".join(f"{x:g}" for x in b["bracket"])
+        return f"not resolved (the {pct} CIs at sigma {at} hold 0)"
+    high = b["negative_beyond"]
+    top = f"{high:.3g}" if math.isfinite(high) else "none within the sigmas run"
+    return (
+        f"{b['sigma']:.3g} [{b['significant_until']:.3g}, {top}] (interval: the sigmas where "
+        f"the {pct} CI holds 0)"
+    )
+
+
 def markdown_report(result: LadderResult) -> str:
-    """ladder.md: the ladder table, the controls and the tuning summary."""
+    """ladder.md: the ladder table, the controls and the tuning summary (intervals and
+    labels at the summary's confidence)."""
     s, c = result.summary, result.config
-    pct = f"{100 * s['confidence']:.0f}%"
+    pct = _percent(s["confidence"])
     lines = [
         "# Value of prognostics: the information ladder",
         "",
@@ -281,7 +383,8 @@ def markdown_report(result: LadderResult) -> str:
         f"{c['held_out_seed']} (the same episodes for every arm; no trial saw them). Tuning: "
         f"{c['trials']} Optuna TPE trials x {c['train_episodes']} training episodes per family. "
         f"Value = paired reward difference vs the tuned age rule (USD per episode), {pct} "
-        "t-interval, MDD = minimum detectable difference (80 % power, two-sided 5 %). "
+        "t-interval, MDD = minimum detectable difference (80 % power, two-sided "
+        f"{100 * (1.0 - s['confidence']):g} %). "
         + (
             "Cost per FH and rates are finite-horizon figures (episodes from new parts, "
             f"{c['slots']} slots): not long-run rates (docs/value.md)."
@@ -289,7 +392,7 @@ def markdown_report(result: LadderResult) -> str:
             else f"Cost per FH and rates are over {c['slots']} slots (not long-run rates)."
         ),
         "",
-        "| arm | value USD/episode | 95% CI | MDD | p | reward USD/episode | cost USD/FH "
+        f"| arm | value USD/episode | {pct} CI | MDD | p | reward USD/episode | cost USD/FH "
         "(finite horizon) | availability | failures/1000 FH (Garwood) |",
         "|---|---|---|---|---|---|---|---|---|",
     ]
@@ -308,9 +411,8 @@ def markdown_report(result: LadderResult) -> str:
             f"{av['mean']:.4f} [{av['low']:.4f}, {av['high']:.4f}] | "
             f"{fl['mean']:.3f} [{fl['low']:.3f}, {fl['high']:.3f}] |"
         )
-    if "break_even_sigma" in s:
-        sigma = s["break_even_sigma"]
-        found = f"{sigma:.3f}" if math.isfinite(sigma) else "none within the sigmas run"
+    if "break_even" in s:
+        found = _break_even_text(s["break_even"], pct)
         lines += ["", f"Break-even sigma (noisy oracle = age rule): {found}"]
     if s.get("monotone_steps"):
         lines += ["", "Monotonicity control (paired, next sigma minus previous, USD/episode):", ""]
@@ -331,6 +433,16 @@ def markdown_report(result: LadderResult) -> str:
 
 
 def _plot(summary: Mapping[str, Any], path: Path) -> None:
+    fig = _figure(summary)
+    import matplotlib.pyplot as plt
+
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+
+
+def _figure(summary: Mapping[str, Any]) -> Any:
+    """value_vs_information.png's figure: each rung's value with its interval and the
+    +- MDD band, labelled at the summary's confidence."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -343,8 +455,10 @@ def _plot(summary: Mapping[str, Any], path: Path) -> None:
     mdd = np.array([d["mdd"] for d in v])
     fig, ax = plt.subplots(figsize=(9, 4.8))
     x = np.arange(len(arms))
-    ax.errorbar(x, mean, yerr=err, fmt="o", capsize=4, label="value, 95% CI")
-    ax.fill_between(x, -mdd, mdd, color="grey", alpha=0.15, label="± MDD (80% power)")
+    pct = _percent(summary["confidence"])
+    ax.errorbar(x, mean, yerr=err, fmt="o", capsize=4, label=f"value, {pct} CI")
+    mdd_label = f"± MDD (80% power, two-sided {_percent(1.0 - summary['confidence'])})"
+    ax.fill_between(x, -mdd, mdd, color="grey", alpha=0.15, label=mdd_label)
     ax.axhline(0.0, color="black", lw=0.8)
     ax.set_xticks(x, arms, rotation=30, ha="right")
     ax.set_ylabel("value per episode vs tuned age rule (USD)")
@@ -352,8 +466,7 @@ def _plot(summary: Mapping[str, Any], path: Path) -> None:
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8)
     fig.tight_layout()
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
+    return fig
 
 
 def write_outputs(
@@ -362,8 +475,9 @@ def write_outputs(
     """Write ladder.csv (held-out rows), ladder.json (statistics, tuning, config, wall
     time), ladder.md, tuning_history.csv and value_vs_information.png (+ its numbers in
     ladder.json) into the folder ``out_dir``, atomically with ``manifest.json``
-    (:mod:`scas_env.utils.results_folder`): an existing folder is refused unless
-    ``overwrite`` (then replaced whole, never mixed)."""
+    (:mod:`scas_env.utils.results_folder`; its ``seeds``: the held-out, training and sampler
+    roots): an existing folder is refused unless ``overwrite`` (then replaced whole, never
+    mixed)."""
     from scas_env.utils.results_folder import json_text, results_folder
 
     out = Path(out_dir)
@@ -379,6 +493,8 @@ def write_outputs(
     seeds = {
         "held_out": result.config.get("held_out_seed"),
         "episodes": result.config.get("episodes"),
+        "train_seed": result.config.get("train_seed"),
+        "sampler_seed": result.config.get("sampler_seed"),
     }
     with results_folder(out, config=config, seeds=seeds, overwrite=overwrite) as tmp:
         at = {k: tmp / v for k, v in names.items()}

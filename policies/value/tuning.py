@@ -48,6 +48,36 @@ from scas_env.utils.parallel import map_chunks
 TRAIN_SEED = 1
 HELD_OUT_SEED = 2
 SAMPLER_SEED = 7
+#: Root seed of the training episodes of the second tuning replicate on the current scenario
+#: (docs/value_v2/replicates.json, seeds (11, 8)): ``rul_risk``'s default is its filter point.
+REPLICATE_TRAIN_SEED = 11
+#: Root seed of the validation episodes on which the single actuator's rule defaults were
+#: chosen among their tuned points (``python -m experiments.rule_defaults``, its
+#: ``--validation-seed``; record docs/value_v2/rule_defaults.json).
+DEFAULTS_VALIDATION_SEED = 3
+#: Root seed -> (role of its episodes, the registered policies whose shipped defaults they
+#: made): a benchmark of those defaults on that seed is in-sample. Training seed 1: the
+#: detection rule's default (docs/value_v2/tuning_detection.json) and every fleet rule's
+#: (``policies.rules.fleet.FLEET_TUNED``, :mod:`policies.value.fleet_tuning`); the age
+#: rule's default was tuned on the retired v0 scenario, on none of this one's episodes.
+DEFAULTS_SEEDS: dict[int, tuple[str, tuple[str, ...]]] = {
+    TRAIN_SEED: (
+        "training",
+        (
+            "detection",
+            "fleet_age",
+            "fleet_naive",
+            "fleet_opportunistic",
+            "fleet_aware",
+            "fleet_oracle",
+        ),
+    ),
+    REPLICATE_TRAIN_SEED: ("training", ("rul_risk",)),
+    DEFAULTS_VALIDATION_SEED: ("validation", ("preventive", "detection", "rul_risk")),
+}
+#: env keywords :func:`tune_family` sets itself (the episode length and the policy's
+#: observation), refused in its ``env_kwargs``
+TUNING_KEYWORDS = ("episode_slots", "obs_mode", "num_envs", "vectorization_mode")
 #: Fraction of a box (in the parameter's scale) that counts as its edge.
 EDGE_FRACTION = 0.05
 
@@ -152,10 +182,15 @@ QUICK: dict[str, int] = {"trials": 4, "episodes": 4, "slots": 2000}
 
 __all__ = [
     "AGE_BOX",
+    "DEFAULTS_SEEDS",
+    "DEFAULTS_VALIDATION_SEED",
     "FAMILIES",
     "HELD_OUT_SEED",
     "QUICK",
+    "REPLICATE_TRAIN_SEED",
+    "SAMPLER_SEED",
     "TRAIN_SEED",
+    "TUNING_KEYWORDS",
     "Family",
     "TuningResult",
     "edge_report",
@@ -272,6 +307,17 @@ def check_counts(**counts: Any) -> None:
             raise ValueError(f"{name} = {value!r} must be an integer >= 1")
 
 
+def check_env_kwargs(env_kwargs: Mapping[str, Any] | None) -> None:
+    """``ValueError`` naming the keywords of ``env_kwargs`` that the tuning sets itself
+    (:data:`TUNING_KEYWORDS`)."""
+    taken = sorted(set(env_kwargs or {}) & set(TUNING_KEYWORDS))
+    if taken:
+        raise ValueError(
+            f"env_kwargs {taken}: set by the tuning (episode_slots from slots, obs_mode the "
+            "family's policy's); leave them out"
+        )
+
+
 def search(
     family: Family,
     rewards: Callable[[dict[str, Any]], np.ndarray],
@@ -329,11 +375,8 @@ def tune_family(
     enqueued next (a warm start, e.g. the point tuned on another scenario: the search then
     ends at least as good on the training seeds)."""
     check_counts(trials=trials, episodes=episodes, slots=slots)
-    if train_seed == HELD_OUT_SEED:
-        raise ValueError(
-            f"train_seed = {train_seed!r} is the held-out seed: tuning must not see the "
-            "evaluation episodes"
-        )
+    check_env_kwargs(env_kwargs)
+    _check_train_seed(train_seed)
     t0 = time.perf_counter()
     if "test_every" in family.box and family.box["test_every"][1] <= slots:
         lo, _, log = family.box["test_every"]  # its top must mean "no test" in this episode
@@ -373,6 +416,14 @@ def tune_family(
     )
 
 
+def _check_train_seed(train_seed: int) -> None:
+    if train_seed == HELD_OUT_SEED:
+        raise ValueError(
+            f"train_seed = {train_seed!r} is the held-out seed: tuning must not see the "
+            "evaluation episodes"
+        )
+
+
 def _tune_chunk(
     settings: Mapping[str, Any], chunk: Sequence[tuple[Family, dict[str, Any] | None]]
 ) -> list[TuningResult]:
@@ -396,12 +447,20 @@ def tune_families(
     """Tune the age rule first, then every other family in ``labels`` (default: all of
     :data:`FAMILIES`) on ``n_workers`` processes, the nested ones starting from the age
     rule's point. Same budget for all: ``trials x episodes`` episodes. ``train_seed``,
-    ``sampler_seed``: the tuning replicate (:func:`tune_family`)."""
+    ``sampler_seed``: the tuning replicate (:func:`tune_family`). Every input is checked
+    before any tuning (``ValueError``): a label unknown or given twice, a count below 1,
+    ``env_kwargs`` naming a keyword the tuning sets, the held-out seed as ``train_seed``."""
     fams = dict(FAMILIES if families is None else families)
     labels = list(fams) if labels is None else list(labels)
     unknown = [k for k in labels if k not in fams]
     if unknown:
         raise ValueError(f"unknown families {unknown}; known: {sorted(fams)}")
+    repeated = sorted({k for k in labels if labels.count(k) > 1})
+    if repeated:
+        raise ValueError(f"families {repeated} given more than once in labels = {labels!r}")
+    check_counts(trials=trials, episodes=episodes, slots=slots, n_workers=n_workers)
+    check_env_kwargs(env_kwargs)
+    _check_train_seed(train_seed)
     settings = {
         "trials": trials,
         "episodes": episodes,
