@@ -300,14 +300,20 @@ class DecisionEpochs(gym.Env):
         total, weight, n = 0.0, 1.0, 0
         act = self._delegated(self._last) if delegated else maintenance
         terminated = truncated = False
-        while True:
-            obs, reward, terminated, truncated, info = self.env.step(act)
-            total += weight * float(reward)
-            weight *= self.gamma
-            n += 1
-            if n >= k or terminated or truncated:
-                break
-            act = self._delegated(obs) if delegated else FLY
+        try:
+            while True:
+                obs, reward, terminated, truncated, info = self.env.step(act)
+                total += weight * float(reward)
+                weight *= self.gamma
+                n += 1
+                if n >= k or terminated or truncated:
+                    break
+                act = self._delegated(obs) if delegated else FLY
+        except BaseException:
+            if n:  # slots flown, their rewards lost: the epoch is undefined, as a failed step
+                self.env.unwrapped._started = False
+                self._last = None
+            raise
         self._last = obs
         info = dict(info)
         info.update(epoch_slots=n, epoch_discount=weight, epoch_action=maintenance, epoch_k=k)

@@ -45,6 +45,7 @@ from gymnasium import spaces
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
+from scas_env.core.batch import reset_needed_on_error
 from scas_env.decision_epochs import (
     DEFAULT_KS,
     DELEGATE,
@@ -155,19 +156,20 @@ class DecisionEpochsVectorEnv(VectorEnv):
             if self._last is None:
                 raise RuntimeError("call reset() before step()")
             act[delegated] = delegate_actions(self.delegate, self._last[delegated])
-        while active.any():
-            _, reward, term, trunc, _ = self.inner.step_active(act, active, outputs=False)
-            total[active] += weight[active] * reward[active]
-            weight[active] *= self.gamma
-            slots[active] += 1
-            truncated |= trunc
-            active &= ~((slots >= k) | term | trunc)
-            act[:] = FLY
-            if delegated is None:
-                continue
-            asked = active & delegated
-            if asked.any():
-                act[asked] = delegate_actions(self.delegate, self.inner.observe()[asked])
+        with reset_needed_on_error(self.inner):  # a delegate failing mid-epoch: slots flown
+            while active.any():
+                _, reward, term, trunc, _ = self.inner.step_active(act, active, outputs=False)
+                total[active] += weight[active] * reward[active]
+                weight[active] *= self.gamma
+                slots[active] += 1
+                truncated |= trunc
+                active &= ~((slots >= k) | term | trunc)
+                act[:] = FLY
+                if delegated is None:
+                    continue
+                asked = active & delegated
+                if asked.any():
+                    act[asked] = delegate_actions(self.delegate, self.inner.observe()[asked])
         inner_obs = self.inner.observe()
         out = self._obs(inner_obs)
         info: dict[str, Any] = with_info_masks(
