@@ -296,9 +296,12 @@ def _first_of_each_life(table: dict[str, np.ndarray], mask: np.ndarray) -> np.nd
 
 def life_rows(table: dict[str, np.ndarray], stages: Sequence[float]) -> list[dict[str, float]]:
     """Per stage and life, the record :func:`stage_rows` counts against the ``info`` truth:
-    episode, life within it, covered (0/1), undercut (0/1), ``log(mean / truth)``. Two runs
-    on the same seeds fly the same lives (each part's growth draws are its own, and the
-    policies do not read the filters), so these rows pair them (:mod:`.belief_comparison`)."""
+    episode, life within it, covered (0/1), undercut (0/1), ``log(mean / truth)``, and the
+    life's identity: its length ``life_length`` (the flight on which it failed, or its age
+    at the end of the episode plus the info RUL then) and the info RUL at the record
+    (``true_rul``). Two runs on the same seeds and world fly the same lives (each part's
+    growth draws are its own, and the policies do not read the filters), so these rows pair
+    them (:mod:`.belief_comparison`, which refuses pairs whose identities differ)."""
     rows: list[dict[str, float]] = []
     for s in stages:
         first = _first_at(table, s)
@@ -315,6 +318,8 @@ def life_rows(table: dict[str, np.ndarray], stages: Sequence[float]) -> list[dic
                     "covered": int(table["q_lo"][i] <= truth <= table["q_hi"][i]),
                     "undercut": int(truth < table["low"][i]),
                     "log_ratio": ratio,
+                    "life_length": float(table["life_length"][i]),
+                    "true_rul": float(truth),
                 }
             )
     return rows
@@ -567,12 +572,13 @@ def main(argv: Sequence[str] | None = None) -> int:
         from experiments.belief_comparison import compare_runs, format_comparison, read_lives
 
         try:
-            # lives pair by episode index: runs of other seeds would pair other lives
+            # lives pair by episode index: runs of other seeds would pair other lives, and
+            # compare_runs refuses lives whose identities differ (another world)
             check_same_settings(args.compare, ("seed",), name="study.json")
             a, b = (read_lives(folder) for folder in args.compare)
+            rows = compare_runs(a, b, np.random.default_rng(args.seed))
         except (FileNotFoundError, ValueError) as exc:
             parser.error(str(exc))
-        rows = compare_runs(a, b, np.random.default_rng(args.seed))
         print(f"paired: A = {args.compare[0]}, B = {args.compare[1]} (info truth)")
         only_a, only_b = len(set(a) - set(b)), len(set(b) - set(a))
         if only_a or only_b:  # lives one run recorded at a stage and the other did not

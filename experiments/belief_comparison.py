@@ -17,6 +17,12 @@ stages:
   ``share_b`` the two runs' sds), over the lives finite in both runs, by the same cluster
   bootstrap of each episode's count, sums and sums of squares.
 
+Pairs are refused (``ValueError`` naming the first) unless the life's identity
+(:data:`LIFE_IDENTITY`: its length and the info RUL at the record) is the same in both runs:
+a scenario field that changes the world (growth, the episode's length, the initial health)
+flies other lives on the same seeds. A ``lives.csv`` without these columns is read, with a
+warning that its lives cannot be checked.
+
 ``python -m experiments.belief_calibration --compare A B`` reads the runs' ``lives.csv``;
 ``--by-life A`` splits one run's shares between the first lives (life 0: the parts fitted at
 the episode's start; both new unless ``initial_health`` says otherwise) and the later ones
@@ -28,6 +34,7 @@ from __future__ import annotations
 
 import csv
 import math
+import warnings
 from collections import defaultdict
 from collections.abc import Sequence
 from pathlib import Path
@@ -42,23 +49,60 @@ from experiments.belief_common import wilson_share
 METRICS: tuple[str, ...] = ("covered", "undercut")
 #: minimum detectable difference factor: z_{0.975} + z_{0.80}
 MDD_FACTOR = float(norm.ppf(0.975) + norm.ppf(0.80))
+#: columns of ``lives.csv`` that identify a life: two runs pair it only if they agree
+LIFE_IDENTITY: tuple[str, ...] = ("life_length", "true_rul")
 
 Key = tuple[str, str, str, float, int, int]
 
 
 def read_lives(folder: str | Path) -> dict[Key, dict[str, float]]:
     """``lives.csv`` of a results folder keyed by (policy, part, preset, stage, episode,
-    life); raises ``FileNotFoundError`` naming the file if the run did not write it."""
+    life): the metrics, the log ratio and, where the file has them, the
+    :data:`LIFE_IDENTITY` columns; raises ``FileNotFoundError`` naming the file if the run
+    did not write it."""
     path = Path(folder) / "lives.csv"
     if not path.is_file():
         raise FileNotFoundError(f"{path}: no per-life rows (re-run the study to write them)")
     out: dict[Key, dict[str, float]] = {}
     with path.open(newline="") as fh:
-        for r in csv.DictReader(fh):
+        reader = csv.DictReader(fh)
+        identity = tuple(c for c in LIFE_IDENTITY if c in (reader.fieldnames or ()))
+        for r in reader:
             key = (r["policy"], r["part"], r["preset"], float(r["stage"]), int(r["episode"]),
                    int(r["life"]))  # fmt: skip
-            out[key] = {m: float(r[m]) for m in (*METRICS, "log_ratio")}
+            out[key] = {m: float(r[m]) for m in (*METRICS, "log_ratio", *identity)}
     return out
+
+
+def check_same_lives(
+    a: dict[Key, dict[str, float]], b: dict[Key, dict[str, float]], common: Sequence[Key]
+) -> None:
+    """Refuse the ``common`` records of runs ``a`` and ``b`` (:func:`read_lives`) whose
+    :data:`LIFE_IDENTITY` values differ: ``ValueError`` naming the first such record (in
+    ``common``'s order) and both values. Runs without those columns (or with only some)
+    are not checked: a ``UserWarning`` says so."""
+    missing = [
+        name
+        for name, run in (("A", a), ("B", b))
+        if any(c not in run[k] for k in common for c in LIFE_IDENTITY)
+    ]
+    if missing:
+        warnings.warn(
+            f"lives.csv without the {'/'.join(LIFE_IDENTITY)} columns (run "
+            f"{' and '.join(missing)}): the lives cannot be checked to be the same in both runs",
+            UserWarning,
+            stacklevel=3,
+        )
+        return
+    for k in common:
+        for c in LIFE_IDENTITY:
+            if a[k][c] != b[k][c]:
+                raise ValueError(
+                    f"the runs fly different lives: preset {k[2]}, policy {k[0]}, part {k[1]}, "
+                    f"stage {k[3]:g}, episode {k[4]}, life {k[5]} has {c} = {a[k][c]:.10g} in A "
+                    f"and {b[k][c]:.10g} in B; a paired comparison needs the same lives (a "
+                    "scenario field that changes the world changes them)"
+                )
 
 
 def _cluster_interval(
@@ -151,10 +195,12 @@ def compare_runs(
 ) -> list[dict[str, float | str]]:
     """Per (preset, policy, part, stage) and pooled over ``stages`` (all of A's if None):
     the paired comparison of each metric over the lives present in both runs, and of the sd
-    of the log ratio (``sd_log``)."""
+    of the log ratio (``sd_log``). Raises ``ValueError`` before any work if a paired life's
+    identity differs between the runs (:func:`check_same_lives`)."""
     common = sorted(set(a) & set(b))
     if not common:
         raise ValueError("the two runs share no (policy, part, stage, episode, life) record")
+    check_same_lives(a, b, common)
     groups: dict[tuple[str, str, str, str], list[Key]] = defaultdict(list)
     for k in common:
         if stages is None or k[3] in stages:
@@ -228,8 +274,10 @@ def format_comparison(rows: Sequence[dict[str, float | str]]) -> str:
 
 
 __all__ = [
+    "LIFE_IDENTITY",
     "METRICS",
     "by_life",
+    "check_same_lives",
     "compare_runs",
     "format_by_life",
     "format_comparison",

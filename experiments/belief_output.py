@@ -11,6 +11,7 @@ from pathlib import Path
 import numpy as np
 
 from experiments.belief_common import INTERVAL, LIFE_COLUMNS, TARGETS, StudyResult
+from experiments.belief_comparison import LIFE_IDENTITY
 from scas_env.core.setup import PARTS
 from scas_env.utils.results_folder import json_text, results_folder
 
@@ -97,7 +98,7 @@ def write_study(result: StudyResult, out: str | Path, *, overwrite: bool = False
         if lives:
             write_csv(tmp / "lives.csv", lives)
         else:  # no life reached a stage: the header only
-            (tmp / "lives.csv").write_text(",".join(LIFE_COLUMNS) + "\n")
+            (tmp / "lives.csv").write_text(",".join((*LIFE_COLUMNS, *LIFE_IDENTITY)) + "\n")
         (tmp / "study.json").write_text(
             json_text(
                 {"config": result.config, "stages": stages, "ages": ages, "reliability": rel},

@@ -116,7 +116,7 @@ def benchmark_integrator(
             lambda c=cmd: simulate(config, c, rng=np.random.default_rng(seeds[0])), repeats
         )
         t_batch = _best_time(
-            lambda c=cmd: simulate_batch([config] * batch_runs, c, rngs=seeds[1:]), 1
+            lambda c=cmd: simulate_batch([config] * batch_runs, c, rngs=seeds[1:]), repeats
         )
         run = simulate(config, cmd, rng=None, noise=False)
         ref = simulate(fine, cmd, rng=None, noise=False)

@@ -10,7 +10,11 @@ override: :func:`age_rule_answering_no_go`) is what an operator would run.
 
 :func:`preflight_availability` runs both rules, both test modes, on the same seeded
 episodes of each scenario, and reports availability (mean and standard error), no-go per
-episode and reward per episode. Command line::
+episode and reward per episode. :func:`preflight_comparison` adds, for every pair of these
+four arms of a scenario, the paired difference of each per-episode metric (:data:`PAIRED`)
+episode by episode (:func:`policies.benchmark.stats.paired_comparison`: mean, 95 % interval,
+p-value and minimum detectable difference). Command line (``preflight.csv``/``.json`` and
+``preflight_pairs.csv``/``.json``)::
 
     python -m experiments.preflight_study --episodes 200 --out results/preflight
 """
@@ -26,16 +30,27 @@ from typing import Any
 import numpy as np
 
 from policies.benchmark.runner import run_episodes
+from policies.benchmark.stats import paired_comparison
 from policies.rules.classic import PREVENTIVE_DEFAULTS, PreventivePolicy
 from policies.rules.prognostic import RulRiskPolicy
 from scas_env.vector_env import ScasMaintenanceVectorEnv
 
-__all__ = ["RULES", "SCENARIOS", "age_rule_answering_no_go", "main", "preflight_availability"]
+__all__ = [
+    "PAIRED",
+    "RULES",
+    "SCENARIOS",
+    "age_rule_answering_no_go",
+    "main",
+    "preflight_availability",
+    "preflight_comparison",
+]
 
 #: The two rules compared: the plain age rule, and the same ages answering a no-go.
 RULES = ("age rule", "age rule answering a no-go")
 #: The scenarios of the command line: name -> env keywords (the current version's defaults)
 SCENARIOS: dict[str, dict[str, Any]] = {"v2": {}}
+#: Per-episode metrics compared in pairs of arms (keys of the runner's episode rows).
+PAIRED = ("availability", "no_go", "reward")
 
 
 def age_rule_answering_no_go(obs_names: Sequence[str], **ages: float) -> RulRiskPolicy:
@@ -55,13 +70,39 @@ def preflight_availability(
 ) -> list[dict[str, Any]]:
     """One row per (scenario, preflight mode, rule): availability mean and standard error,
     no-go per episode, reward per episode, over ``episodes`` episodes seeded from
-    ``SeedSequence(seed)`` (the same episodes for every row)."""
+    ``SeedSequence(seed)`` (the same episodes for every row); the rows of
+    :func:`preflight_comparison`."""
+    return preflight_comparison(
+        scenarios, episodes=episodes, seed=seed, ages=ages, episode_slots=episode_slots
+    )[0]
+
+
+def preflight_comparison(
+    scenarios: Mapping[str, Mapping[str, Any]],
+    *,
+    episodes: int = 200,
+    seed: int = 99,
+    ages: Mapping[str, float] = PREVENTIVE_DEFAULTS,
+    episode_slots: int = 2000,
+) -> tuple[list[dict[str, Any]], list[dict[str, Any]]]:
+    """The rows of :func:`preflight_availability` and the paired differences.
+
+    The arms of a scenario are its rows in order (on demand, every flight; the plain age
+    rule, the one answering a no-go). For every pair of arms ``a`` before ``b`` and every
+    metric of :data:`PAIRED` one paired row gives ``b - a`` over the episodes both ran
+    (episode ``e`` of every arm starts from the same seed): ``mean``, ``low``, ``high``
+    (95 % t-interval), ``n``, ``mdd`` (minimum detectable difference at 80 % power), ``sd``
+    and ``p_value`` (:func:`policies.benchmark.stats.paired_comparison`; NaN where the
+    differences do not vary, as between the two rules on demand).
+    """
     if isinstance(episodes, bool) or not isinstance(episodes, int) or episodes < 2:
         raise ValueError(f"episodes = {episodes!r} must be an integer >= 2")
     states = np.random.SeedSequence(seed).generate_state(episodes, dtype=np.uint32)
     seeds = [(int(s) % 2**31, 0) for s in states]
-    rows = []
+    rows: list[dict[str, Any]] = []
+    pairs: list[dict[str, Any]] = []
     for name, kwargs in scenarios.items():
+        arms: list[tuple[str, str, dict[str, np.ndarray]]] = []
         for preflight in ("on_demand", "every_flight"):
             for rule in RULES:
                 obs_mode = "features" if rule == RULES[0] else "features+rul"
@@ -80,7 +121,9 @@ def preflight_availability(
                     else age_rule_answering_no_go(venv.obs_names, **ages)
                 )
                 done = [r["row"] for r in run_episodes(venv, policy, seeds)]
-                avail = np.array([r["availability"] for r in done])
+                per_episode = {k: np.array([r[k] for r in done], dtype=np.float64) for k in PAIRED}
+                arms.append((preflight, rule, per_episode))
+                avail = per_episode["availability"]
                 rows.append(
                     {
                         "scenario": name,
@@ -89,11 +132,25 @@ def preflight_availability(
                         "episodes": episodes,
                         "availability": float(avail.mean()),
                         "availability_se": float(avail.std(ddof=1) / math.sqrt(episodes)),
-                        "no_go_per_episode": float(np.mean([r["no_go"] for r in done])),
-                        "reward_usd": float(np.mean([r["reward"] for r in done])),
+                        "no_go_per_episode": float(per_episode["no_go"].mean()),
+                        "reward_usd": float(per_episode["reward"].mean()),
                     }
                 )
-    return rows
+        for i, (pre_a, rule_a, a) in enumerate(arms):
+            for pre_b, rule_b, b in arms[i + 1 :]:
+                for metric in PAIRED:
+                    pairs.append(
+                        {
+                            "scenario": name,
+                            "preflight_b": pre_b,
+                            "rule_b": rule_b,
+                            "preflight_a": pre_a,
+                            "rule_a": rule_a,
+                            "metric": metric,
+                            **paired_comparison(b[metric], a[metric]),
+                        }
+                    )
+    return rows, pairs
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -120,21 +177,32 @@ def main(argv: Sequence[str] | None = None) -> int:
     configure_logging(args)
     out = check_out_dir(parser, args.out, args.overwrite)
     announce_uncached_kernels()
-    rows = preflight_availability(SCENARIOS, episodes=args.episodes, seed=args.seed)
+    rows, pairs = preflight_comparison(SCENARIOS, episodes=args.episodes, seed=args.seed)
     config = {"episodes": args.episodes, "seed": args.seed, "scenarios": SCENARIOS}
     with results_folder(out, config=config, seeds=args.seed, overwrite=args.overwrite) as tmp:
-        (tmp / "preflight.json").write_text(json_text(rows, indent=1))
-        with open(tmp / "preflight.csv", "w", newline="") as f:
-            writer = csv.DictWriter(f, fieldnames=list(rows[0]))
-            writer.writeheader()
-            writer.writerows(rows)
-    print("| scenario | preflight | rule | availability | no-go per episode | reward USD |")
+        for stem, table in (("preflight", rows), ("preflight_pairs", pairs)):
+            (tmp / f"{stem}.json").write_text(json_text(table, indent=1))
+            with open(tmp / f"{stem}.csv", "w", newline="") as f:
+                writer = csv.DictWriter(f, fieldnames=list(table[0]))
+                writer.writeheader()
+                writer.writerows(table)
+    print("| scenario | preflight | rule | availability +- SE | no-go per episode | reward USD |")
     print("|---|---|---|---|---|---|")
     for r in rows:
         print(
             f"| {r['scenario']} | {r['preflight']} | {r['rule']} | "
             f"{r['availability']:.5f} +- {r['availability_se']:.5f} | "
             f"{r['no_go_per_episode']:.2f} | {r['reward_usd']:,.0f} |"
+        )
+    print()
+    print("| scenario | b | a | metric | b - a [95 % interval] | p-value | MDD |")
+    print("|---|---|---|---|---|---|---|")
+    for p in pairs:
+        print(
+            f"| {p['scenario']} | {p['preflight_b']}, {p['rule_b']} | "
+            f"{p['preflight_a']}, {p['rule_a']} | {p['metric']} | "
+            f"{p['mean']:+.6g} [{p['low']:+.6g}, {p['high']:+.6g}] | "
+            f"{p['p_value']:.3g} | {p['mdd']:.6g} |"
         )
     return 0
 

@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import csv
 import functools
+import io
 import statistics
 import time
 from collections.abc import Callable, Sequence
@@ -37,6 +38,7 @@ import gymnasium as gym
 from tqdm.auto import tqdm
 
 from scas_env import ENV_ID
+from scas_env.utils.atomic_file import write_bytes_atomic, write_text_atomic
 from scas_env.utils.results_folder import json_text
 
 #: PPO settings: SB3's own defaults (``PPO("MlpPolicy", env)``: n_steps 2048, batch 64, 10
@@ -278,7 +280,8 @@ def run_sb3_bench(
 ) -> dict[str, dict[str, float]]:
     """Run :func:`fps_rounds`, write ``bench_sb3.json`` (arguments, summary, runs),
     ``bench_sb3.csv`` (runs) and ``bench_sb3.png`` (median fps per setup) into ``out`` (a
-    new or empty folder, checked first); returns the summary."""
+    new or empty folder, checked first; each file written atomically); returns the
+    summary."""
     out = Path(out)
     if out.exists() and (not out.is_dir() or any(out.iterdir())):
         raise ValueError(f"out = {str(out)!r} exists and is not an empty folder")
@@ -295,13 +298,15 @@ def run_sb3_bench(
         "config": config,
         "init": init,
     }
-    (out / "bench_sb3.json").write_text(
-        json_text({"args": args, "summary": summary, "runs": rows}, indent=2)
+    write_text_atomic(
+        out / "bench_sb3.json",
+        json_text({"args": args, "summary": summary, "runs": rows}, indent=2),
     )
-    with (out / "bench_sb3.csv").open("w", newline="") as fh:
-        writer = csv.DictWriter(fh, fieldnames=list(rows[0]))
-        writer.writeheader()
-        writer.writerows(rows)
+    table = io.StringIO(newline="")
+    writer = csv.DictWriter(table, fieldnames=list(rows[0]))
+    writer.writeheader()
+    writer.writerows(rows)
+    write_text_atomic(out / "bench_sb3.csv", table.getvalue())
     from matplotlib.figure import Figure
 
     fig = Figure(figsize=(6.0, 3.2), layout="constrained")
@@ -314,7 +319,9 @@ def run_sb3_bench(
         )
     ax.set_ylabel("PPO frames / s (median)")
     ax.set_title(f"SB3 PPO ({config}), {timesteps} steps per run, {repeats} rounds")
-    fig.savefig(out / "bench_sb3.png", dpi=120)
+    png = io.BytesIO()
+    fig.savefig(png, format="png", dpi=120)
+    write_bytes_atomic(out / "bench_sb3.png", png.getvalue())
     return summary
 
 

@@ -78,6 +78,7 @@ __all__ = [
     "REFERENCE",
     "SWEPT",
     "SweepResult",
+    "check_sweep_settings",
     "main",
     "replicate_seeds",
     "run_sensing_sweep",
@@ -144,6 +145,24 @@ def _tune_task(
     ]
 
 
+def check_sweep_settings(families: Sequence[str], replicates: int) -> None:
+    """Refuse ``families`` unless it is a non-empty list of nested families of the ladder
+    other than :data:`REFERENCE` that bring no env keywords of their own, and
+    ``replicates`` unless it is an integer >= 1 (``ValueError`` naming the values and what
+    is allowed); cheap, so a command line calls it before building the variants."""
+    unknown = [f for f in families if f not in FAMILIES or f == REFERENCE]
+    if unknown or not families:
+        raise ValueError(
+            f"families {list(families)}: each must be a nested family of the ladder other than "
+            f"{REFERENCE!r}; known: {sorted(k for k in FAMILIES if k != REFERENCE)}"
+        )
+    own = [f for f in families if FAMILIES[f].env_kwargs]
+    if own:
+        raise ValueError(f"families {own} bring their own env keywords; not supported here")
+    if isinstance(replicates, bool) or not isinstance(replicates, int) or replicates < 1:
+        raise ValueError(f"replicates = {replicates!r} must be an integer >= 1")
+
+
 def run_sensing_sweep(
     levels: Mapping[str, Mapping[str, Any]],
     *,
@@ -168,17 +187,7 @@ def run_sensing_sweep(
     compared with family by family (default: the first)."""
     if not levels:
         raise ValueError("levels is empty: give at least one sensing level")
-    unknown = [f for f in families if f not in FAMILIES or f == REFERENCE]
-    if unknown or not families:
-        raise ValueError(
-            f"families {list(families)}: each must be a nested family of the ladder other than "
-            f"{REFERENCE!r}; known: {sorted(k for k in FAMILIES if k != REFERENCE)}"
-        )
-    own = [f for f in families if FAMILIES[f].env_kwargs]
-    if own:
-        raise ValueError(f"families {own} bring their own env keywords; not supported here")
-    if isinstance(replicates, bool) or not isinstance(replicates, int) or replicates < 1:
-        raise ValueError(f"replicates = {replicates!r} must be an integer >= 1")
+    check_sweep_settings(families, replicates)
     base = dict(env_kwargs or {})
     clash = sorted(set(base) & {k for kw in levels.values() for k in kw})
     if clash:
@@ -444,7 +453,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     from experiments.sensing_sweep_output import write_sweep_outputs
     from experiments.sensing_variants import sensing_levels, sensing_variants
 
-    families = [f.strip() for f in args.families.split(",") if f.strip()] or list(SWEPT)
+    families = [f.strip() for f in args.families.split(",") if f.strip()]
+    try:  # before the variants, which take minutes to build
+        check_sweep_settings(families, args.replicates)
+    except ValueError as exc:
+        parse.error(str(exc))
     announce_uncached_kernels()
     t0 = time.perf_counter()
     variants = sensing_variants(
