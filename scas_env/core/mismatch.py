@@ -74,7 +74,9 @@ GROWTH_FIELDS = (
 
 
 def _multiplier(source: str, hi: float = 100.0) -> Any:
-    return param(1.0, "-", lo=0.0, lo_open=True, hi=hi, source=source)
+    # floor 0.01, as Scenario.filter_noise_scale: far below it the world's tables underflow
+    # (a crack-growth rate of 1e-310 gives a damage integral that overflows)
+    return param(1.0, "-", lo=0.01, hi=hi, source=source)
 
 
 @dataclass(frozen=True)

@@ -126,10 +126,10 @@ class Scenario(Validated):
     filter_growth_bias: float = param(
         1.0,
         "-",
-        lo=0.0,
-        lo_open=True,
+        lo=0.01,
         hi=100.0,
-        source="multiplies the growth rates the filters assume (a model that is off)",
+        source="multiplies the growth rates the filters assume (a model that is off; far "
+        "below 0.01 the filters' growth tables underflow)",
     )
 
     reference_tests: float = param(
