@@ -324,8 +324,14 @@ class ScasFleetEnv(gym.Env):
         return self._masks.ravel()
 
     def render(self) -> str | np.ndarray | None:
-        if not self._started:
+        """``"ansi"``: the day in text; ``"rgb_array"``: the fleet drawn as an (H, W, 3)
+        uint8 frame; no render mode: None. With a render mode, before :meth:`reset` (or
+        after a step that raised) there is no day to draw: ``RuntimeError``, as the single
+        env raises."""
+        if self.render_mode is None:
             return None
+        if not self._started:
+            raise RuntimeError("call reset() before render()")
         if self.render_mode == "ansi":
             return render_text(self.view.info(0))
         if self.render_mode == "rgb_array":

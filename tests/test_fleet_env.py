@@ -581,7 +581,9 @@ def test_vector_envs_refuse_bad_seed_lists_as_the_single_env_refuses_bad_seeds(
 # ---------------------------------------------------------------------- dashboard
 def test_the_dashboard_draws_the_fleet() -> None:
     env = ScasFleetEnv(fleet=SMALL, render_mode="rgb_array")
-    assert env.render() is None
+    with pytest.raises(RuntimeError, match=r"call reset\(\) before render\(\)"):
+        env.render()  # no day to draw yet, as the single env
+    assert ScasFleetEnv(fleet=SMALL).render() is None  # no render mode
     env.reset(seed=0)
     frame = env.render()
     assert frame.dtype == np.uint8 and frame.ndim == 3 and frame.shape[2] == 3
