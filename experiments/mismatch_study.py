@@ -27,7 +27,8 @@ Each difference comes with its t-interval and minimum detectable difference
 value's mean crosses zero, interpolated linearly in log(level); its interval is where the
 interval's upper and lower bounds cross zero: beyond the first the value is no longer
 significantly positive, beyond the second it is significantly negative (the levels whose
-interval holds zero). NaN: no crossing within the levels run.
+interval holds zero; an interval [0, 0], where the re-tuned filter rule became the age rule,
+is a floor, not a negative value). NaN: no crossing within the levels run.
 
 Command (docs/value.md, "Model mismatch"): ``python -m experiments.mismatch_study --out
 results/mismatch --workers 2``; ``--quick`` for a smoke run.
@@ -60,6 +61,7 @@ from policies.value.tuning import (
     tune_family,
 )
 from scas_env.core.mismatch import SENSING_FIELDS, Mismatch
+from scas_env.utils.atomic_file import write_text_atomic
 from scas_env.utils.parallel import map_chunks
 
 
@@ -152,20 +154,30 @@ def world_mismatch(kind: str, level: float) -> Mismatch:
 
 
 def break_even_level(
-    levels: Sequence[float], values: Sequence[float], *, direction: str = "up"
+    levels: Sequence[float],
+    values: Sequence[float],
+    *,
+    direction: str = "up",
+    strict: bool = False,
 ) -> float:
-    """The level where ``values`` crosses from > 0 to <= 0, walking from level 1 up
-    (``direction="up"``: levels >= 1, ascending) or down (``"down"``: levels <= 1,
-    descending), linearly interpolated in log(level). The nominal level itself if its value
-    is <= 0; NaN without a crossing (or without the nominal level).
+    """The level where ``values`` crosses from > 0 to <= 0 (``strict``: from >= 0 to < 0),
+    walking from level 1 up (``direction="up"``: levels >= 1, ascending) or down
+    (``"down"``: levels <= 1, descending), linearly interpolated in log(level). The nominal
+    level itself if its value is <= 0 (``strict``: < 0); NaN without a crossing (or without
+    the nominal level). ``strict`` serves an interval's upper bound: a bound of exactly 0
+    (an interval [0, 0], the two arms' rules alike) is a floor, not a negative value.
 
     >>> round(break_even_level([1.0, 2.0, 4.0], [30.0, 10.0, -10.0]), 6)
     2.828427
     >>> break_even_level([0.5, 1.0], [5.0, 3.0], direction="down")
     nan
+    >>> break_even_level([1.0, 2.0, 4.0], [30.0, 0.0, 0.0], strict=True)
+    nan
     """
     if direction not in ("up", "down"):
         raise ValueError(f"direction = {direction!r} must be 'up' or 'down'")
+    if not isinstance(strict, bool):
+        raise ValueError(f"strict = {strict!r} must be True or False")
     lv = np.asarray(levels, dtype=np.float64)
     v = np.asarray(values, dtype=np.float64)
     if lv.shape != v.shape or np.any(lv <= 0) or np.any(~np.isfinite(lv)):
@@ -177,10 +189,11 @@ def break_even_level(
     x, y = np.log(lv[keep][order]), v[keep][order]
     if x.size == 0 or x[0] != 0.0 or not np.all(np.isfinite(y)):
         return math.nan
-    if y[0] <= 0:
+    crossed = (y < 0) if strict else (y <= 0)
+    if crossed[0]:
         return 1.0
     for k in range(1, y.size):
-        if y[k] <= 0:
+        if crossed[k]:
             t = y[k - 1] / (y[k - 1] - y[k])
             return float(math.exp(x[k - 1] + t * (x[k] - x[k - 1])))
     return math.nan
@@ -198,11 +211,20 @@ class MismatchResult:
 
 
 def _worlds(levels: Mapping[str, Sequence[float]]) -> dict[str, tuple[str, float]]:
-    """Distinct worlds: key -> (kind, level) (the nominal world once, as level 1)."""
+    """Distinct worlds: key -> (kind, level) (the nominal world once, as level 1). Two
+    levels of a kind that :func:`world_key` names alike (equal to 6 significant digits) are
+    refused: they would share one world's tuning, rows and cache files."""
     out: dict[str, tuple[str, float]] = {NOMINAL: ("growth", 1.0)}
     for kind, lv in levels.items():
         for level in lv:
-            out.setdefault(world_key(kind, level), (kind, float(level)))
+            key = world_key(kind, level)
+            if key in out and key != NOMINAL and out[key][1] != float(level):
+                raise ValueError(
+                    f"levels {out[key][1]!r} and {float(level)!r} of {kind!r} share the world "
+                    f"name {key!r} (levels are named to 6 significant digits); use levels "
+                    "that differ within 6 significant digits"
+                )
+            out.setdefault(key, (kind, float(level)))
     return out
 
 
@@ -239,9 +261,7 @@ def _cached(cache: Path | None, name: str, make: Callable[[], Any]) -> Any:
         return json.loads(path.read_text())
     value = make()
     cache.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_suffix(".tmp")
-    tmp.write_text(json.dumps(value, default=_jsonable) + "\n")
-    tmp.replace(path)
+    write_text_atomic(path, json.dumps(value, default=_jsonable) + "\n")
     return value
 
 
@@ -258,7 +278,7 @@ def _check_cache(cache: Path, settings: Mapping[str, Any]) -> None:
             )
         return
     cache.mkdir(parents=True, exist_ok=True)
-    path.write_text(text + "\n")
+    write_text_atomic(path, text + "\n")
 
 
 def _jsonable(v: Any) -> Any:
@@ -514,7 +534,9 @@ def summarize_study(
                 d: {
                     "level": break_even_level(lvls, [v["mean"] for v in s], direction=d),
                     "significant_until": break_even_level(lvls, [v["low"] for v in s], direction=d),
-                    "negative_beyond": break_even_level(lvls, [v["high"] for v in s], direction=d),
+                    "negative_beyond": break_even_level(
+                        lvls, [v["high"] for v in s], direction=d, strict=True
+                    ),
                 }
                 for d in ("up", "down")
             }
@@ -797,6 +819,7 @@ def _levels_arg(text: str) -> tuple[str, tuple[float, ...]]:
     try:
         for level in levels:
             world_mismatch(kind, level)
+        _worlds({kind: levels})
     except ValueError as exc:
         raise argparse.ArgumentTypeError(str(exc)) from None
     return kind, levels

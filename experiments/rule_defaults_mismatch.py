@@ -4,7 +4,9 @@ Each candidate point of ``rul_risk`` (:func:`experiments.rule_defaults.candidate
 the same held-out episodes (seed 2) in worlds that differ from the monitor's model by one
 factor (:class:`scas_env.core.mismatch.Mismatch`: doubled sensing noise, 1.5 x crack growth,
 1.5 x wear growth); the chosen default is paired against each other candidate (t-interval,
-MDD) and every candidate's in-flight failures per 1000 FH are given. Writes
+MDD) and every candidate's in-flight failures per 1000 FH are given (the pooled count over
+the pooled flight hours with its exact Poisson interval, as the benchmark gives rates:
+:func:`policies.benchmark.stats.metric_interval`). Writes
 ``rule_defaults_mismatch.json`` into a results folder (with its manifest):
 
     python -m experiments.rule_defaults_mismatch --episodes 1000 --workers 2 \\
@@ -19,11 +21,9 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
 from experiments import rule_defaults
 from policies.benchmark import run_benchmark
-from policies.benchmark.stats import paired_difference
+from policies.benchmark.stats import metric_interval, paired_difference
 from policies.value.tuning import HELD_OUT_SEED
 from scas_env.core.mismatch import Mismatch
 
@@ -49,15 +49,16 @@ def study(*, episodes: int, n_workers: int, progress: bool = True) -> dict[str, 
                                n_workers=n_workers, env_kwargs={"mismatch": world},
                                progress=progress)  # fmt: skip
         rewards = rule_defaults.rewards_by_label(result.rows)
-        failures: dict[str, list[float]] = {}
+        by_policy: dict[str, list[dict[str, Any]]] = {}
         for row in result.rows:
-            failures.setdefault(row["policy"], []).append(float(row["failures_per_1000fh"]))
+            by_policy.setdefault(row["policy"], []).append(row)
         rows = {}
         for key, r in rewards.items():
             name = key.split(" | ", 1)[1]
+            failures = metric_interval(by_policy[key], "failures_per_1000fh")
             rows[name] = {
                 "reward_mean": float(r.mean()),
-                "failures_per_1000fh": float(np.mean(failures[key])),
+                "failures_per_1000fh": failures.to_dict(),
             }
             if key != chosen:
                 rows[name]["chosen_minus_this"] = paired_difference(rewards[chosen], r).to_dict()
@@ -89,8 +90,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         for name, row in world["candidates"].items():
             d = row.get("chosen_minus_this")
             vs = "" if d is None else f", chosen - this {rule_defaults.pair_text(d)}"
+            f = row["failures_per_1000fh"]
             print(f"{label}: {name:11s} {row['reward_mean']:,.0f} USD/episode, failures "
-                  f"{row['failures_per_1000fh']:.4f} /1000 FH{vs}")  # fmt: skip
+                  f"{f['mean']:.4f} [{f['low']:.4f}, {f['high']:.4f}] /1000 FH{vs}")  # fmt: skip
     return 0
 
 

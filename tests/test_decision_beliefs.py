@@ -139,9 +139,9 @@ def test_runner_scores_the_trace_as_defined_by_hand() -> None:
     # slot 1, episode 0 tested: the beliefs after it, the truth after it
     add(0, "test", "spring", 249, 260, 180)
     add(0, "test", "seal", 799, 880, 650)
-    # slot 2, episode 0 replaced its spring: slot 1's beliefs and truth, both parts
+    # slot 2, episode 0 replaced its spring: slot 1's beliefs and truth, the spring only
+    # (the seal stayed fitted: not a replacement decision about it, as in the fleet log)
     add(0, "replacement", "spring", 249, 260, 180)
-    add(0, "replacement", "seal", 799, 880, 650)
     # slot 2, episode 1 tested, its seal failed in that slot: the spring only
     add(1, "test", "spring", 98, 70, 40)
     # slot 3, both tested
@@ -152,6 +152,7 @@ def test_runner_scores_the_trace_as_defined_by_hand() -> None:
         for col in decision_columns():
             assert rows[e][col] == pytest.approx(expected[e][col], rel=1e-12, abs=0), (e, col)
     assert rows[0]["prog_test_seal_covered"] == 2 and rows[1]["prog_test_spring_covered"] == 2
+    assert rows[0]["prog_replacement_spring_n"] == 1 and rows[0]["prog_replacement_seal_n"] == 0
     assert rows[0]["prog_test_seal_ra_sum"] == pytest.approx((1 - 81 / 799) + 0.995)
 
 
@@ -171,7 +172,7 @@ def test_block_summary_and_table_from_rows() -> None:
     n = sum(r[f"prog_{k}_{p}_n"] for r in rows for k in ("replacement", "test") for p in PARTS)
     hits = sum(r[c] for r in rows for c in decision_columns() if c.endswith("alpha_hits"))
     cov = sum(r[c] for r in rows for c in decision_columns() if c.endswith("covered"))
-    assert block["n"] == n == 8 and block["alpha"] == 0.2
+    assert block["n"] == n == 7 and block["alpha"] == 0.2
     assert block["coverage"]["mean"] == cov / n
     # intervals resample whole episodes: each episode's own counts, summed by hand
     for name, stat in (("coverage", "covered"), ("alpha_lambda", "alpha_hits")):
@@ -180,7 +181,7 @@ def test_block_summary_and_table_from_rows() -> None:
         want = cluster_ratio_bootstrap(per_episode, n_e)
         assert (block[name]["low"], block[name]["high"]) == (want.low, want.high)
     assert block["alpha_lambda"]["mean"] == hits / n
-    assert block["by_event"]["replacement"]["n"] == 2 and block["by_part"]["seal"]["n"] == 3
+    assert block["by_event"]["replacement"]["n"] == 1 and block["by_part"]["seal"]["n"] == 2
     no_beliefs = [{**r, **dict.fromkeys(decision_columns(), 0)} for r in rows]
     assert prognostics_block(no_beliefs) is None
     assert prognostics_block([{"reward": 1.0}]) is None

@@ -190,6 +190,21 @@ def _horizon_note(s: Mapping[str, Any], c: Mapping[str, Any]) -> str:
     return FINITE_HORIZON if parts_start_new(c) else ""
 
 
+def _world_text(c: Mapping[str, Any]) -> str:
+    """How the run's world departs from the monitor's model (its config's ``mismatch``
+    multipliers other than 1, its ``world_surrogate``: a file and its SHA-256, or the
+    surrogate's features and digest), as the tail of the summary's world line; empty for
+    the monitor's own model."""
+    world = {k: v for k, v in (c.get("mismatch") or {}).items() if v != 1.0}
+    parts = [f" (Mismatch): {world}"] if world else []
+    own = c.get("world_surrogate")
+    if isinstance(own, Mapping) and {"file", "sha256"} <= set(own):
+        own = f"{own['file']} (sha256 {own['sha256']})"
+    if own:
+        parts.append(f"{'; ' if parts else ': '}features from its own surrogate {own}")
+    return "".join(parts)
+
+
 def markdown_summary(result: BenchmarkResult) -> str:
     """The summary as Markdown tables with the run's configuration."""
     s, c = result.summary, result.config
@@ -206,9 +221,9 @@ def markdown_summary(result: BenchmarkResult) -> str:
         _horizon_note(s, c),
         "",
     ]
-    world = {k: v for k, v in (c.get("mismatch") or {}).items() if v != 1.0}
+    world = _world_text(c)
     if world:
-        out += [f"World against the monitor's model (Mismatch): {world}.", ""]
+        out += [f"World against the monitor's model{world}.", ""]
     beliefs = s.get("prognostics")
     for index, (title, header, rows) in enumerate(_blocks(s)):
         if index == 0 and beliefs:

@@ -494,6 +494,8 @@ def run_benchmark(
     }
     if "mismatch" in kwargs:  # the world's departure from the monitor's model
         config["mismatch"] = kwargs["mismatch"].to_dict()
+    if kwargs.get("world_surrogate") is not None:  # the world's own feature surrogate
+        config["world_surrogate"] = _recorded(kwargs["world_surrogate"])
     metrics = FLEET_METRICS if fleet else METRICS
     gap = (FLEET_GAP_BASE, FLEET_GAP_BOUND) if fleet else None
     summary = summarize(rows, keys, rules, confidence, metrics=metrics, gap=gap)

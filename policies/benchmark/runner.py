@@ -15,9 +15,10 @@ scores the filters' RUL prediction of each part against the truth (``info["true_
 ``*_rul_flights``: the exact remaining life, the failing flight included) at every
 decision that acted on them:
 
-* ``replacement``: a slot where a part was replaced preventively (not after a failure): the
-  observation the policy decided on against the truth at that moment (the info before the
-  step);
+* ``replacement``: a slot where a part was replaced preventively (not after a failure): that
+  part's beliefs in the observation the policy decided on against its truth at that moment
+  (the info before the step); a part not replaced in the slot is not scored, as in the
+  fleet runner;
 * ``test``: a slot where a pre-flight test ran: the observation after the step (the beliefs
   the test updated, which the next decisions read) against the truth after the step; a part
   that failed in that slot's flight is left out (its filter restarted on a new part).
@@ -249,19 +250,17 @@ def _score_decisions(
 ) -> None:
     """Add this slot's decision-time scores (module docstring) to each episode's sums."""
     failed = {p: info["failures"][p] > before["failures"][p] for p in PARTS}
-    replaced = np.zeros(len(scores), dtype=np.bool_)
-    for p in PARTS:
-        replaced |= (info["replacements"][p] > before["replacements"][p]) & ~failed[p]
-    tested = info["tests"] > before["tests"]
+    replaced = {
+        p: (info["replacements"][p] > before["replacements"][p]) & ~failed[p] for p in PARTS
+    }
+    tested = {p: (info["tests"] > before["tests"]) & ~failed[p] for p in PARTS}
     for kind, rows, seen, when in (
         ("replacement", replaced, decided_on, before),
         ("test", tested, obs, info),
     ):
-        for e in np.flatnonzero(rows):
-            for p in PARTS:
-                if kind == "test" and failed[p][e]:
-                    continue
-                m, lo = beliefs[p]
+        for p in PARTS:
+            m, lo = beliefs[p]
+            for e in np.flatnonzero(rows[p]):
                 truth = float(when["true_state"][f"{p}_rul_flights"][e])
                 got = decision_scores(truth, float(seen[e, m]), float(seen[e, lo]), cap)
                 add_decision(scores[e], kind, p, got)
