@@ -3,15 +3,25 @@
 Each part hashes every output of a seeded run, bit for bit: single-env episodes under
 seeded random actions in every observation mode and several scenario variants
 (observations, rewards, flags and the whole info), the native vector env across autoresets
-(info masks left out), decision epochs (single and vector), the clairvoyant view of part
-lives, a small physics campaign, and the benchmark's rows and removal events. Equal digests
-mean equal results.
+(info masks left out), the monitor's float64 filter state (:data:`FILTER_STATE`: particles,
+weights, RUL tables, detectors, after every step of a single and a vector env's episodes),
+decision epochs (single and vector), the clairvoyant view of part lives, a small physics
+campaign, the benchmark's rows and removal events, and ``ScasFleet-v0``: an episode under the
+``fleet_naive`` rule and one under seeded random valid actions (observations, rewards, flags,
+the whole info; the latter also its actuators' filter state and its maintenance log), its
+PettingZoo face (``fleet_v1``) and a small fleet benchmark's rows and removal events. Equal
+digests mean equal results.
 
     python -m experiments.fingerprint > after.json
     python -m experiments.fingerprint --check experiments/fingerprint.json
+    python -m experiments.fingerprint --check experiments/fingerprint.json --parts lives,epochs
 
-``experiments/fingerprint.json`` holds the digests of the current version (refreshed with
-``--write`` when a change is meant to move numbers; the CHANGELOG says why).
+``--check`` of every part takes about 21 s of CPU time with numba's kernels cached (a first
+run compiles them for some minutes); the fleet parts take 3 s of it, the filter-state parts
+2.5 s (one minute of wall time on a busy two-core machine). ``experiments/fingerprint.json``
+holds the digests of the current version (refreshed with ``--write`` when a change is meant
+to move numbers; the CHANGELOG says why); ``--write --parts ...`` replaces those parts'
+digests in it and keeps the others.
 """
 
 from __future__ import annotations
@@ -27,13 +37,24 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
-from scas_env import ENV_ID, ENV_ID_EPOCHS
+from scas_env import ENV_ID, ENV_ID_EPOCHS, ENV_ID_FLEET
 from scas_env.actuator.params import ScasParams
+from scas_env.utils.atomic_file import write_text_atomic
 
 #: action probabilities of the random episodes: fly, test, replace spring, replace seal
 ACTION_P = (0.85, 0.1, 0.025, 0.025)
 #: the committed digests of the current version
 COMMITTED = Path(__file__).with_suffix(".json")
+#: the monitor's float64 state of a batch (``ActuatorBatch.a``; scas_env.core.state): both
+#: filters' particles, weights and effect states, pending flights, the learning batch, the
+#: RUL tables, the detectors and the resample-move arrays
+FILTER_STATE = (
+    "x", "log_theta", "w", "log_w", "aux", "pending", "flight_sum", "flight_count",
+    "batch_usage", "rul_sorted", "rul_cum_w", "rul_suffix_w", "rul_suffix_wr", "rul_low",
+    "stale", "det_buf", "det_n", "detected", "history", "history_n", "clock", "loglik", "tally",
+)  # fmt: skip
+#: a random fleet episode's chance that an actuator entry asks for a replacement on a day
+FLEET_JOB_P = 0.01
 
 
 def feed(h: Any, obj: Any) -> None:
@@ -60,6 +81,13 @@ def feed(h: Any, obj: Any) -> None:
         h.update(repr(obj).encode())
 
 
+def feed_filters(h: Any, a: dict[str, np.ndarray]) -> None:
+    """Hash the :data:`FILTER_STATE` columns of a batch's arrays ``a`` into ``h``."""
+    for k in FILTER_STATE:
+        h.update(k.encode())
+        feed(h, a[k])
+
+
 def without_masks(info: dict[str, Any]) -> dict[str, Any]:
     """A vector info without Gymnasium's ``_key`` masks."""
     return {
@@ -75,10 +103,12 @@ def episodes_digest(
     slots: int = 2000,
     steps: int | None = None,
     action_p: Sequence[float] = ACTION_P,
+    filters: bool = False,
     **fields: Any,
 ) -> str:
     """Single-env episodes under seeded random actions drawn with ``action_p`` (``steps``
-    per episode, default all ``slots``)."""
+    per episode, default all ``slots``); with ``filters``, the monitor's state
+    (:func:`feed_filters`) after the reset and after every step besides the outputs."""
     h = hashlib.sha256()
     for s in seeds:
         env = gym.make(ENV_ID, obs_mode=obs_mode, episode_slots=slots, **fields)
@@ -86,12 +116,16 @@ def episodes_digest(
         obs, info = env.reset(seed=s)
         feed(h, obs)
         feed(h, dict(info))
+        if filters:
+            feed_filters(h, env.unwrapped.batch.a)
         for _ in range(steps or slots):
             obs, r, te, tr, info = env.step(int(rng.choice(4, p=action_p)))
             feed(h, obs)
             feed(h, float(r))
             feed(h, (te, tr))
             feed(h, dict(info))
+            if filters:
+                feed_filters(h, env.unwrapped.batch.a)
             if te or tr:
                 break
         env.close()
@@ -99,9 +133,15 @@ def episodes_digest(
 
 
 def vector_digest(
-    num_envs: int = 6, slots: int = 300, steps: int = 700, seed: int = 3, **fields: Any
+    num_envs: int = 6,
+    slots: int = 300,
+    steps: int = 700,
+    seed: int = 3,
+    filters: bool = False,
+    **fields: Any,
 ) -> str:
-    """The native vector env over ``steps`` (several autoresets)."""
+    """The native vector env over ``steps`` (several autoresets); with ``filters``, the
+    monitor's state of every row (:func:`feed_filters`) after the reset and every step."""
     h = hashlib.sha256()
     envs = gym.make_vec(
         ENV_ID,
@@ -113,10 +153,14 @@ def vector_digest(
     rng = np.random.default_rng(7)
     obs, _ = envs.reset(seed=seed)
     feed(h, obs)
+    if filters:
+        feed_filters(h, envs.unwrapped.batch.a)
     for _ in range(steps):
         obs, r, te, tr, info = envs.step(rng.choice(4, size=num_envs, p=ACTION_P))
         for part in (obs, r, te, tr, without_masks(info)):
             feed(h, part)
+        if filters:
+            feed_filters(h, envs.unwrapped.batch.a)
     envs.close()
     return h.hexdigest()
 
@@ -194,6 +238,111 @@ def benchmark_digest(episodes: int = 4, slots: int = 400, seed: int = 11) -> str
     return h.hexdigest()
 
 
+def random_fleet_choices(
+    rng: np.random.Generator, entries: Sequence[np.ndarray], actuators: int
+) -> np.ndarray:
+    """Random valid choices of a fleet's (or one aircraft's) action entries from their masks
+    ``entries`` (each entry's valid choices, aircraft by aircraft: a mission entry, then
+    ``actuators`` maintenance entries): a mission choice uniform among the valid ones; a
+    maintenance entry asks, with probability :data:`FLEET_JOB_P`, for one of its valid
+    replacements (uniform), else for nothing."""
+    out = np.zeros(len(entries), dtype=np.int64)
+    for i, m in enumerate(entries):
+        valid = np.flatnonzero(m)
+        if i % (1 + actuators) == 0:
+            out[i] = rng.choice(valid)
+        elif rng.random() < FLEET_JOB_P and valid.size > 1:
+            out[i] = rng.choice(valid[1:])
+    return out
+
+
+def fleet_digest(policy: str | None = None, seed: int = 0, days: int = 365) -> str:
+    """A seeded ``ScasFleet-v0`` episode (the default fleet, ``days`` long) under the rule
+    ``policy`` (as registered) or, with None, under :func:`random_fleet_choices` (then also
+    the actuators' filter state every day and the maintenance log at the end)."""
+    from policies.base import make_policy
+
+    h = hashlib.sha256()
+    env = gym.make(ENV_ID_FLEET, episode_days=days)
+    u = env.unwrapped
+    nvec = u.action_space.nvec
+    actuators = int(u.config.actuators_per_aircraft)
+    rule = None if policy is None else make_policy(policy, u.obs_names)
+    rng = np.random.default_rng(600 + seed)
+    obs, info = env.reset(seed=seed)
+    feed(h, obs)
+    feed(h, dict(info))
+    done = False
+    while not done:
+        if rule is None:
+            entries = np.split(u.action_masks(), np.cumsum(nvec)[:-1])
+            action = random_fleet_choices(rng, entries, actuators)
+        else:
+            action = np.asarray(rule.predict(obs)[0]).ravel()
+        obs, r, te, tr, info = env.step(action)
+        feed(h, obs)
+        feed(h, float(r))
+        feed(h, (te, tr))
+        feed(h, dict(info))
+        if rule is None:
+            feed_filters(h, u.fleet.actuators.a)
+        done = te or tr
+    if rule is None:
+        feed(h, u.fleet.episode_log(0))
+    env.close()
+    return h.hexdigest()
+
+
+def pettingzoo_digest(seed: int = 2, days: int = 40) -> str:
+    """A seeded episode of the fleet's PettingZoo ``ParallelEnv`` (``fleet_v1``) under
+    :func:`random_fleet_choices` per agent: observations, rewards, flags, infos and
+    ``state()``."""
+    from scas_env.multiagent import fleet_v1
+
+    h = hashlib.sha256()
+    env = fleet_v1.parallel_env(episode_days=days)
+    actuators = int(env.fleet_env.config.actuators_per_aircraft)
+    rng = np.random.default_rng(700 + seed)
+    observations, infos = env.reset(seed=seed)
+    feed(h, [observations, infos, env.state()])
+    while env.agents:
+        actions = {
+            a: random_fleet_choices(rng, infos[a]["action_mask"], actuators) for a in env.agents
+        }
+        observations, rewards, terminations, truncations, infos = env.step(actions)
+        feed(h, [observations, rewards, terminations, truncations, infos, env.state()])
+    env.close()
+    return h.hexdigest()
+
+
+#: the fleet benchmark part's rules (the fleet families of policies.rules.fleet)
+FLEET_RULES = (
+    "fleet_corrective", "fleet_age", "fleet_naive", "fleet_opportunistic", "fleet_aware",
+    "fleet_oracle", "fleet_random",
+)  # fmt: skip
+
+
+def fleet_benchmark_digest(episodes: int = 2, days: int = 180, seed: int = 13) -> str:
+    """The fleet rules' benchmark rows, removal events and day records (one worker,
+    ``episodes`` fleets of ``days`` days each)."""
+    from policies.benchmark import run_benchmark
+    from scas_env.core.fleet.config import FleetConfig
+
+    result = run_benchmark(
+        FLEET_RULES,
+        episodes=episodes,
+        seed=seed,
+        n_workers=1,
+        env_kwargs={"fleet": FleetConfig(episode_days=days)},
+    )
+    h = hashlib.sha256()
+    # as the benchmark part: the decision-time belief scores (prog_*) left out
+    feed(h, [{k: v for k, v in r.items() if not k.startswith("prog_")} for r in result.rows])
+    feed(h, result.events)
+    feed(h, result.traces)
+    return h.hexdigest()
+
+
 #: the paper preset's seal options (a test before every flight)
 _BOTH_MOVES = {"preflight": "every_flight", "rejuvenation": "resample_move_both",
                "cross_variance_inflation": 500, "seal_cross_variance_inflation": 1}  # fmt: skip
@@ -232,16 +381,64 @@ PARTS: dict[str, Callable[[], str]] = {
     "lives": lives_digest,
     "campaign": campaign_digest,
     "benchmark": benchmark_digest,
+    "filter state": lambda: episodes_digest(seeds=(0, 1), filters=True),
+    "filter state every_flight": lambda: episodes_digest(
+        seeds=(4,), filters=True, preflight="every_flight"
+    ),
+    "filter state resample_move_both": lambda: episodes_digest(
+        seeds=(4,), filters=True, **_FLY_ONLY, **_BOTH_MOVES
+    ),
+    "filter state vector": lambda: vector_digest(filters=True),
+    "fleet naive": lambda: fleet_digest("fleet_naive"),
+    "fleet random": lambda: fleet_digest(None, seed=1),
+    "fleet pettingzoo": pettingzoo_digest,
+    "fleet benchmark": fleet_benchmark_digest,
 }
+
+
+def check_parts(parts: Sequence[str]) -> None:
+    """``ValueError`` naming the unknown parts and the allowed ones, if any is unknown."""
+    unknown = sorted(set(parts) - set(PARTS))
+    if unknown:
+        raise ValueError(f"unknown parts {unknown}; allowed: {list(PARTS)}")
 
 
 def fingerprint(parts: Sequence[str] | None = None) -> dict[str, str]:
     """Digests of the named parts (default: all of :data:`PARTS`)."""
     names = list(PARTS) if parts is None else list(parts)
-    unknown = sorted(set(names) - set(PARTS))
-    if unknown:
-        raise ValueError(f"unknown parts {unknown}; allowed: {list(PARTS)}")
+    check_parts(names)
     return {n: PARTS[n]() for n in names}
+
+
+def read_digests(path: Path) -> dict[str, str]:
+    """The digests a JSON file at ``path`` holds, or ``ValueError`` naming the file if it is
+    missing or not a JSON object of part name -> digest string."""
+    try:
+        digests = json.loads(Path(path).read_text())
+    except FileNotFoundError as exc:
+        raise ValueError(f"{path} does not exist (a JSON file of digests)") from exc
+    except OSError as exc:
+        raise ValueError(f"{path} cannot be read ({exc})") from exc
+    except json.JSONDecodeError as exc:
+        raise ValueError(f"{path} is not valid JSON ({exc})") from exc
+    if not isinstance(digests, dict) or not all(isinstance(v, str) for v in digests.values()):
+        raise ValueError(f"{path} must hold a JSON object of part name -> digest string")
+    return digests
+
+
+def committed_digests() -> dict[str, str]:
+    """The digests of :data:`COMMITTED` (:func:`read_digests`; none if there is no file)."""
+    return read_digests(COMMITTED) if COMMITTED.exists() else {}
+
+
+def merged(kept: dict[str, str], digests: dict[str, str]) -> dict[str, str]:
+    """``kept`` with ``digests`` replacing or adding their parts, in :data:`PARTS` order (a
+    kept name that is no part stays, after them)."""
+    both = {**kept, **digests}
+    return {
+        **{k: both[k] for k in PARTS if k in both},
+        **{k: v for k, v in kept.items() if k not in PARTS},
+    }
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -249,18 +446,27 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser.add_argument("--parts", default=None, help=f"comma-separated parts of {list(PARTS)}")
     group = parser.add_mutually_exclusive_group()
     group.add_argument("--check", type=Path, default=None, help="compare with this JSON")
-    group.add_argument("--write", action="store_true", help=f"write {COMMITTED.name}")
+    group.add_argument(
+        "--write",
+        action="store_true",
+        help=f"write {COMMITTED.name} (with --parts: those parts' digests, the others kept)",
+    )
     args = parser.parse_args(argv)
     names = None if args.parts is None else [p.strip() for p in args.parts.split(",") if p]
-    try:
-        digests = fingerprint(names)
+    try:  # every input checked before any part runs
+        if names is not None:
+            if not names:
+                raise ValueError(f"--parts {args.parts!r} names no part; allowed: {list(PARTS)}")
+            check_parts(names)
+        kept = committed_digests() if args.write and names is not None else {}
+        expected = None if args.check is None else read_digests(args.check)
     except ValueError as exc:
         parser.error(str(exc))
+    digests = fingerprint(names)
     if args.write:
-        COMMITTED.write_text(json.dumps(digests, indent=1) + "\n")
+        write_text_atomic(COMMITTED, json.dumps(merged(kept, digests), indent=1) + "\n")
     print(json.dumps(digests, indent=1))
-    if args.check is not None:
-        expected = json.loads(args.check.read_text())
+    if expected is not None:
         moved = [k for k, v in digests.items() if expected.get(k) != v]
         if moved:
             print(f"moved: {moved}", file=sys.stderr)

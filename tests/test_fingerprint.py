@@ -24,7 +24,7 @@ from experiments.fingerprint import (
 
 ROOT = Path(__file__).resolve().parents[1]
 #: cheap parts (a few seconds) checked against the committed digests in the default suite
-CHEAP = ("lives", "every_flight")
+CHEAP = ("lives", "every_flight", "filter state every_flight", "fleet naive", "fleet pettingzoo")
 
 
 def _digest(obj: object) -> str:
@@ -73,7 +73,8 @@ def test_cheap_parts_equal_the_committed_digests(part: str) -> None:
 @pytest.mark.slow
 def test_every_part_equals_the_committed_digests() -> None:
     """``python -m experiments.fingerprint --check experiments/fingerprint.json``: single,
-    vector and decision-epoch episodes, physics, campaign and benchmark rows unchanged."""
+    vector and decision-epoch episodes, filter state, physics, campaign, benchmark rows and
+    the fleet's episodes and benchmark rows unchanged."""
     _committed()
     run = subprocess.run(
         [sys.executable, "-m", "experiments.fingerprint", "--check", str(COMMITTED)],
