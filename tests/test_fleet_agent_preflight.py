@@ -94,3 +94,20 @@ def test_validation_refuses_a_checkpoint_of_the_other_preflight(tmp_path: Path) 
                        r"'on_demand'"):  # fmt: skip
         validate({"r": run}, tmp_path / "validation.csv", {}, episodes=1, n_workers=1)
     assert not (tmp_path / "validation.csv").exists()
+
+
+def test_the_benchmark_gives_fleet_agents_the_env_s_preflight(tmp_path: Path) -> None:
+    """``scas-benchmark --fleet`` builds each policy with the run's preflight, so an agent of
+    the other one is refused before any episode (it ran with masks the env does not use)."""
+    from policies.benchmark.run import PolicySpec, check_specs, policy_params
+    from scas_env.core.fleet.config import FleetConfig
+
+    every = _copy(tmp_path, "every", every_flight=True)
+    spec = PolicySpec("fleet_ppo", {"path": str(every)})
+    on_demand = {"fleet": FleetConfig(), "scenario": Scenario(**FLEET_SCENARIO)}
+    assert policy_params(spec, on_demand)["preflight"] == "on_demand"
+    with pytest.raises(ValueError, match=r"this env's preflight is 'on_demand'"):
+        check_specs([spec], on_demand)
+    tested = {**on_demand, "scenario": Scenario(**FLEET_SCENARIO, preflight="every_flight")}
+    assert policy_params(spec, tested)["preflight"] == "every_flight"
+    assert policy_params(PolicySpec("fleet_naive", {}), on_demand) == {}  # rules: not built with it

@@ -158,10 +158,17 @@ Batch = tuple[int, tuple[tuple[int, int, int], ...]]
 def policy_params(spec: PolicySpec, env_kwargs: Mapping[str, Any]) -> dict[str, Any]:
     """A policy's keywords: its spec's, and the run's ``cost_model`` for a registered policy
     that plans with prices (its constructor takes ``cost_model``; e.g. the oracle), unless
-    the spec sets one: it plans with the prices the env charges."""
+    the spec sets one: it plans with the prices the env charges. On fleets, a policy built
+    with ``preflight`` (the fleet agents: their masks depend on it) gets the env's."""
     params = dict(spec.params)
     if "cost_model" in env_kwargs and _takes(spec.name, "cost_model"):
         params.setdefault("cost_model", env_kwargs["cost_model"])
+    if is_fleet(env_kwargs) and _takes(spec.name, "preflight"):
+        from scas_env.core.scenario import Scenario
+        from scas_env.fleet_env import FLEET_SCENARIO
+
+        scenario = env_kwargs.get("scenario") or Scenario(**FLEET_SCENARIO)
+        params.setdefault("preflight", scenario.preflight)
     return params
 
 
