@@ -58,6 +58,8 @@ def assert_the_move_is_per_proposal(
             lp_now = log_prior(ref_d[i], lt[i], 0, bank, filt, p)
             if not (math.log(u) < (lp_new + ll_new) - (lp_now + loglik[i])):
                 continue
+            if d_new == ref_d[i] and lam_new == lt[i]:
+                continue  # the particle itself: no move
             tally[1] += 1
             ref_d[i], lt[i], loglik[i] = d_new, lam_new, ll_new
             x[i] = inverse_damage_scalar(grid, rate, cum, d_new)

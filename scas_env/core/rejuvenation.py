@@ -42,18 +42,20 @@ table, installation-effect slot, the other part's cell and fraction in it, extra
 or a belief row), the number of rows (``count``; -1 once the history is full: moves stop
 until the filter restarts, resampling falls back to the kernel jitter), ``clock`` (the
 filter's age and survival age, flights), ``loglik`` (per particle, the sum of its likelihood
-terms, as the filter learnt them) and ``tally`` (proposals, acceptances).
+terms, as the filter learnt them) and ``tally`` (proposals, accepted proposals that moved a
+particle).
 
 After a resampling (systematic, no jitter) each particle takes ``steps`` random-walk
 Metropolis-Hastings steps in ``u = (D(x(t)), lambda)``: a Gaussian proposal with the
 covariance of the weighted cloud before resampling times ``(2.38 / sqrt 2)^2`` (Roberts,
-Gelman & Gilks 1997), accepted with probability ``min(1, pi(u') / pi(u))``. In these
+Gelman & Gilks 1997), its spread floored at :data:`SPREAD_FLOOR` of the prior's
+(:func:`proposal_factor`), accepted with probability ``min(1, pi(u') / pi(u))``. In these
 coordinates ``pi(u) = p(a0) g(a0) p(lambda) x likelihood`` (``g = 1 / D'``, the Jacobian of
 ``a0 -> D(x(t))``). The proposal's likelihood is the whole history replayed (its
 installation-effect beliefs with it); the current particle's is its ``loglik``. Each step
 draws two normals and a uniform from the row's filter stream, in particle order. The seal's
 move is 1-D, in ``lambda`` (no Jacobian: ``pi(lambda)`` as above): a Gaussian random walk of
-sd ``2.38`` times the weighted cloud's sd of ``lambda`` before resampling
+sd ``2.38`` times the weighted cloud's sd of ``lambda`` before resampling, floored likewise
 (:func:`proposal_sd`), one normal and a uniform per step and particle from the same stream.
 
 The replay is the move's cost (one pass over the history per proposal). :func:`history_loglik`
@@ -89,6 +91,13 @@ HISTORY_COLUMNS = 8
 #: clock columns, per filter: its age (flights predicted since it restarted) and the age of
 #: its latest survival conditioning
 C_AGE, C_SURVIVED = 0, 1
+#: the least spread of a random-walk proposal, per coordinate, as a fraction of the prior's
+#: sd of that coordinate (:func:`proposal_factor`, :func:`proposal_sd`). The clouds of 200
+#: particles in ten episodes of 2,000 slots (a test every 10th) spread at least 0.004 of it
+#: (the spring; the seal 0.008) before a resampling: the floor binds where the weight sits
+#: on one particle or a few nearly equal ones, whose covariance (0 for a point mass) would
+#: leave every particle where resampling put it
+SPREAD_FLOOR = 1e-3
 
 
 class MoveModel(NamedTuple):
@@ -419,9 +428,14 @@ def proposal_factor(x: np.ndarray, lam: np.ndarray, w: np.ndarray, model: tuple,
                     d: np.ndarray) -> tuple[float, float, float]:  # fmt: skip
     """Cholesky factor ``(l11, l21, l22)`` of the random-walk proposal's covariance: the
     weighted cloud's covariance of ``(D(x), lambda)`` times the squared scale; ``d``
-    receives ``D(x)`` (scratch of N)."""
+    receives ``D(x)`` (scratch of N). Where the cloud spreads less than :data:`SPREAD_FLOOR`
+    of the prior's sd, the factor is floored there: ``l11`` (the sd of ``D``) at that
+    fraction of the prior's sd of ``D(a0)`` (``a0_sd / g(a0_mean)``, the delta method) and
+    ``l22`` (the sd of ``lambda`` given ``D``) at that fraction of ``lambda``'s prior sd; a
+    cloud above both floors gives its own factor, bit for bit."""
     grid, rate, cum, cells, inv_cell = model.rul_tables[0]
-    scale = model.move.spring_scale
+    mv = model.move
+    scale = mv.spring_scale
     m1 = 0.0
     m2 = 0.0
     for i in range(x.size):
@@ -437,16 +451,29 @@ def proposal_factor(x: np.ndarray, lam: np.ndarray, w: np.ndarray, model: tuple,
         s11 += w[i] * d1 * d1
         s12 += w[i] * d1 * d2
         s22 += w[i] * d2 * d2
+    # The floors keep a collapsed cloud moving (a point mass: covariance 0, every proposal
+    # the particle itself). The move still keeps the full-history posterior invariant: the
+    # factor is computed once, before the move, from the cloud before resampling, and is
+    # the same for every particle and step, so each step is a random walk with a symmetric
+    # proposal that does not depend on the particle's state, accepted by the ratio of the
+    # targets alone; the floor changes the walk's scale, never that ratio.
+    floor_d = SPREAD_FLOOR * mv.a0_sd / rate_at_scalar(grid, rate, cells, inv_cell, mv.a0_mean)
+    floor_lam = SPREAD_FLOOR * mv.spring_lam_sd
     l11 = math.sqrt(s11)
-    l21 = s12 / l11 if l11 > 0.0 else 0.0
+    if l11 < floor_d:
+        l11 = floor_d
+    l21 = s12 / l11
     l22 = math.sqrt(max(s22 - l21 * l21, 0.0))
+    if l22 < floor_lam:
+        l22 = floor_lam
     return scale * l11, scale * l21, scale * l22
 
 
 @njit(cache=True, error_model="numpy")
 def proposal_sd(lam: np.ndarray, w: np.ndarray, model: tuple) -> float:
-    """The seal's random-walk proposal sd: the weighted cloud's sd of lambda times the
-    1-D scale."""
+    """The seal's random-walk proposal sd: the weighted cloud's sd of lambda, floored at
+    :data:`SPREAD_FLOOR` of lambda's prior sd (:func:`proposal_factor`: why, and why the
+    move keeps its target), times the 1-D scale."""
     m = 0.0
     for i in range(lam.size):
         m += w[i] * lam[i]
@@ -454,7 +481,11 @@ def proposal_sd(lam: np.ndarray, w: np.ndarray, model: tuple) -> float:
     for i in range(lam.size):
         dl = lam[i] - m
         s += w[i] * dl * dl
-    return model.move.seal_scale * math.sqrt(s)
+    sd = math.sqrt(s)
+    floor = SPREAD_FLOOR * model.move.seal_lam_sd
+    if sd < floor:
+        sd = floor
+    return model.move.seal_scale * sd
 
 
 @njit(cache=True)
@@ -494,7 +525,8 @@ def move_particles(e: int, bank: tuple, model: tuple, factor: tuple, d: np.ndarr
     every particle's proposal (the spring: two normals, the seal: one; then a uniform; in
     particle order), replays the history at those inside the prior's support together
     (:func:`replay_histories`), then accepts or rejects each in turn; a particle's log
-    prior is kept while it stays. ``factor``: the spring's Cholesky factor
+    prior is kept while it stays, rejected or proposed as itself (a zero step: ``tally``
+    counts no move). ``factor``: the spring's Cholesky factor
     (:func:`proposal_factor`), the seal's ``(sd, 0, 0)`` (:func:`proposal_sd`)."""
     bx, blt, baux = bank[0], bank[1], bank[4]
     loglik, tally = bank[5][3], bank[5][4]
@@ -545,6 +577,8 @@ def move_particles(e: int, bank: tuple, model: tuple, factor: tuple, d: np.ndarr
             log_ratio = (lp_new[i] + ll_new[r]) - (lp[i] + loglik[e, p, i])
             if not (math.log(u[i]) < log_ratio):
                 continue
+            if d_new[r] == d[i] and lam_new[r] == blt[e, p, i]:
+                continue  # a null proposal (a zero step): the particle stays, no move counted
             tally[e, p, 1] += 1
             d[i] = d_new[r]
             bx[e, p, i] = inverse_damage_scalar(grid, rate, cum, d_new[r])
@@ -602,6 +636,7 @@ def restart(e: int, bank: tuple, p: int = 0) -> None:
 __all__ = [
     "HISTORY_COLUMNS",
     "SET_EFFECT",
+    "SPREAD_FLOOR",
     "MoveModel",
     "history_loglik",
     "log_prior",

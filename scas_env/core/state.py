@@ -137,7 +137,7 @@ class ActuatorState:
             # flights, value, runs, table, effect slot, the other part's cell and fraction,
             # extra variance) and its belief rows, how many (-1: the history overflowed),
             # its age and survival age (flights), each particle's log-likelihood, proposals
-            # and acceptances of its moves
+            # and moves (accepted proposals that change the particle)
             "history": np.zeros((n, 2, cap, HISTORY_COLUMNS)),
             "history_n": np.zeros((n, 2), dtype=i8),
             "clock": np.zeros((n, 2, 2)),
