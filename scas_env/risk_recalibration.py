@@ -95,8 +95,10 @@ class FittedOn:
     """What risk maps were fitted on (module docstring).
 
     ``calibration_sha256`` and ``surrogate_sha256`` of ``None`` stand for the tables an env
-    built on ``params`` runs on without them (:meth:`resolved`); ``world_surrogate_sha256``
-    of ``None`` for no world surrogate of its own (the world's features from the monitor's).
+    built on ``params`` runs on without them (told without building one: the shipped
+    tables, or a calibration of these params with the env's build settings);
+    ``world_surrogate_sha256`` of ``None`` for no world surrogate of its own (the world's
+    features from the monitor's).
     """
 
     scenario: Scenario
@@ -126,30 +128,6 @@ class FittedOn:
             calibration_sha256=table_digest(setup.calibration),
             surrogate_sha256=table_digest(setup.surrogate),
             world_surrogate_sha256=None if world is None else table_digest(world),
-        )
-
-    def resolved(self) -> FittedOn:
-        """This record with the calibration's and surrogate's digests of ``None`` replaced
-        by those of the tables an env built on ``params`` runs on
-        (:func:`~scas_env.actuator.calibration.env_calibration`, built from physics for
-        parameters other than the shipped ones, and
-        :func:`~scas_env.actuator.surrogate.shipped_surrogate_for`)."""
-        from scas_env.actuator.calibration import env_calibration
-        from scas_env.actuator.surrogate import shipped_surrogate_for
-
-        cal, sur = self.calibration_sha256, self.surrogate_sha256
-        if sur is None:
-            try:
-                sur = table_digest(shipped_surrogate_for(self.params))
-            except ValueError as exc:
-                raise ValueError(
-                    f"the maps record no surrogate, and the shipped one does not fit their "
-                    f"params: {exc}"
-                ) from None
-        if cal is None:
-            cal = table_digest(env_calibration(self.params))
-        return FittedOn(
-            self.scenario, self.params, self.mismatch, cal, sur, self.world_surrogate_sha256
         )
 
     def world_fields(self) -> dict[str, Any]:
@@ -199,7 +177,7 @@ def save_risk_maps(
     data = {
         "scenario": scenario.to_dict(),
         "params": params.to_dict(),
-        **fitted.resolved().world_fields(),
+        **fitted.world_fields(),
         "maps": {part: m.to_dict() for part, m in maps.items()},
         "command": str(command),
     }
@@ -244,8 +222,15 @@ def load_risk_maps(path: str | Path) -> tuple[dict[str, RiskMap], Scenario, Scas
     mismatch, another calibration or surrogate, a world surrogate) is refused here, naming
     the fields: :func:`read_risk_maps` returns its full record."""
     maps, fitted = read_risk_maps(path)
-    default = FittedOn(fitted.scenario, fitted.params)
-    differ = _world_differences(fitted, default) if fitted != default else []
+    cal, sur = _default_digests(fitted.params)
+    differ = [f"mismatch.{k} = {v!r}" for k, v in fitted.mismatch.changed().items()]
+    for name, value, known in (
+        ("calibration_sha256", fitted.calibration_sha256, cal),
+        ("surrogate_sha256", fitted.surrogate_sha256, sur),
+        ("world_surrogate_sha256", fitted.world_surrogate_sha256, None),
+    ):
+        if value is not None and value != known:
+            differ.append(f"{name} = {value}")
     if differ:
         raise ValueError(
             f"{path}: the maps were fitted on more than a scenario and params "
@@ -281,16 +266,61 @@ def check_fitted_on(env_scenario: Scenario, env_params: ScasParams,
                          "fit maps for these parameters")  # fmt: skip
 
 
-def _world_differences(ours: FittedOn, theirs: FittedOn) -> list[str]:
-    """``"field = ours (maps: theirs)"`` for each world field where two records differ
-    (digests of ``None`` resolved first)."""
-    ours, theirs = ours.resolved(), theirs.resolved()
-    mine, maps = ours.mismatch.to_dict(), theirs.mismatch.to_dict()
+def _default_digests(params: ScasParams) -> tuple[str | None, str | None]:
+    """The digests of the calibration and surrogate an env built on ``params`` runs on,
+    where they are known without building anything: the shipped tables' for the shipped
+    parameters (``None`` for one that would be built, or for no shipped surrogate)."""
+    from scas_env.actuator.calibration import default_calibration, params_digest
+    from scas_env.actuator.surrogate import shipped_surrogate_for
+
+    shipped = default_calibration()
+    cal = table_digest(shipped) if shipped.params_digest == params_digest(params) else None
+    try:
+        sur: str | None = table_digest(shipped_surrogate_for(params))
+    except ValueError:
+        sur = None
+    return cal, sur
+
+
+def _is_env_default(calibration: Calibration, params: ScasParams) -> bool:
+    """Whether ``calibration`` is the one an env built on ``params`` runs on when none is
+    passed (:func:`~scas_env.actuator.calibration.env_calibration`: the shipped one, or one
+    built with :data:`~scas_env.actuator.calibration.ENV_BUILD`), told without building."""
+    from scas_env.actuator.calibration import ENV_BUILD, params_digest
+
+    cal, _ = _default_digests(params)
+    if cal is not None:
+        return table_digest(calibration) == cal
+    return (
+        calibration.params_digest == params_digest(params)
+        and calibration.seed == ENV_BUILD["seed"]
+        and calibration.whole_flights == ENV_BUILD["whole_flights"]
+    )
+
+
+def _world_differences(setup: Setup, fitted: FittedOn) -> list[str]:
+    """``"field = the env's (maps: theirs)"`` for each world field where the env of ``setup``
+    differs from ``fitted`` (a digest of ``None``: the env's default for the params)."""
+    mine, maps = setup.mismatch.to_dict(), fitted.mismatch.to_dict()
     out = [f"mismatch.{k} = {mine[k]!r} (maps: {maps[k]!r})" for k in mine if mine[k] != maps[k]]
-    for name in _DIGESTS:
-        a, b = getattr(ours, name), getattr(theirs, name)
-        if a != b:
-            out.append(f"{name} = {a or 'none'} (maps: {b or 'none'})")
+    default = "the default for their params"
+    cal = table_digest(setup.calibration)
+    if fitted.calibration_sha256 is None:
+        if not _is_env_default(setup.calibration, setup.params):
+            out.append(f"calibration_sha256 = {cal} (maps: {default})")
+    elif cal != fitted.calibration_sha256:
+        out.append(f"calibration_sha256 = {cal} (maps: {fitted.calibration_sha256})")
+    sur = table_digest(setup.surrogate)
+    expected = fitted.surrogate_sha256 or _default_digests(setup.params)[1]
+    if sur != expected:
+        out.append(f"surrogate_sha256 = {sur} (maps: {expected or default})")
+    world = setup.world_surrogate
+    world_sur = None if world is None else table_digest(world)
+    if world_sur != fitted.world_surrogate_sha256:
+        out.append(
+            f"world_surrogate_sha256 = {world_sur or 'none'} "
+            f"(maps: {fitted.world_surrogate_sha256 or 'none'})"
+        )
     return out
 
 
@@ -306,7 +336,7 @@ def check_fitted_setup(setup: Setup, fitted: FittedOn, *, transfer: bool = False
     check_fitted_on(setup.scenario, setup.params, fitted.scenario, fitted.params)
     if transfer:
         return
-    differ = _world_differences(FittedOn.of_setup(setup), fitted)
+    differ = _world_differences(setup, fitted)
     if differ:
         raise ValueError(
             f"the env's world or model differs from the one the maps were fitted on: "

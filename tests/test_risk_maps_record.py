@@ -70,11 +70,11 @@ def test_a_new_file_records_its_world_and_refuses_another(tmp_path: Path) -> Non
     data = json.loads(path.read_text())
     env = ScasMaintenanceEnv(mismatch=world)
     assert data["mismatch"]["wear_growth"] == 2.0
-    assert data["calibration_sha256"] == table_digest(env.calibration)
-    assert data["surrogate_sha256"] == table_digest(env.setup.surrogate)
-    assert data["world_surrogate_sha256"] is None
+    assert data["calibration_sha256"] is None  # the env's defaults: nothing built to save
+    assert data["surrogate_sha256"] is None and data["world_surrogate_sha256"] is None
     maps, fitted = read_risk_maps(path)
-    assert fitted == FittedOn.of_setup(env.setup)
+    assert fitted == FittedOn(Scenario(), ScasParams(), world)
+    assert FittedOn.of_setup(env.setup).calibration_sha256 == table_digest(env.calibration)
     recalibrate_risk(env, maps, fitted_on=fitted)
     with pytest.raises(ValueError, match=r"mismatch\.wear_growth = 1\.0 \(maps: 2\.0\)"):
         recalibrate_risk(ScasMaintenanceEnv(), maps, fitted_on=fitted)
@@ -101,3 +101,32 @@ def test_an_obs_mode_without_risks_is_refused_by_name(mode: str) -> None:
 def test_the_risk_modes_show_both_risks(mode: str) -> None:
     names = ScasMaintenanceEnv(obs_mode=mode).obs_names
     assert {n.split(".")[-1] for n in names if n.endswith("_risk")} == {"spring_risk", "seal_risk"}
+
+
+def test_other_params_are_saved_and_checked_without_building_a_calibration(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Resolving a default digest rebuilt the calibration from physics (40 whole flights,
+    about 240 s) for parameters other than the shipped ones, on every save and check."""
+    from scas_env.actuator import calibration as calibration_module
+
+    def no_build(*args: object, **kwargs: object) -> None:
+        raise AssertionError("a calibration was built from physics")
+
+    monkeypatch.setattr(calibration_module, "build_calibration", no_build)
+    params = ScasParams()
+    params = dataclasses.replace(
+        params, spring=dataclasses.replace(params.spring, paris_c=params.spring.paris_c * 1.1)
+    )
+    shipped = ScasMaintenanceEnv().calibration
+    own = dataclasses.replace(shipped, params_digest=calibration_module.params_digest(params))
+    path = tmp_path / "maps.json"
+    save_risk_maps(path, MAPS, Scenario(), params, "cmd")
+    maps, fitted = read_risk_maps(path)
+    env = ScasMaintenanceEnv(params=params, calibration=own)  # as env_calibration builds it
+    recalibrate_risk(env, maps, fitted_on=fitted)
+    other = ScasMaintenanceEnv(params=params, calibration=dataclasses.replace(own, seed=7))
+    with pytest.raises(
+        ValueError, match=r"calibration_sha256 = [0-9a-f]{64} \(maps: the default for their"
+    ):
+        recalibrate_risk(other, maps, fitted_on=fitted)

@@ -50,7 +50,7 @@ level), ``Mismatch.load("case.toml")``; unknown keys and out-of-range values are
 >>> Mismatch(sensing_noise=0.0)
 Traceback (most recent call last):
 ...
-ValueError: Mismatch.sensing_noise = 0.0 - is outside the allowed range (0, 100]
+ValueError: Mismatch.sensing_noise = 0.0 - is outside the allowed range [0.01, 100]
 """
 
 from __future__ import annotations
