@@ -449,3 +449,19 @@ def test_overwrite_replaces_only_a_folder_this_package_wrote(
         with pytest.raises(ResultsFolderExistsError, match="not written by this package"):
             check_destination(dest, overwrite=True)
         assert (dest / "mine.txt").read_text() == "keep"
+
+
+def test_overwrite_replaces_a_folder_whose_subfolder_this_package_wrote(tmp_path: Path) -> None:
+    """A fleet training's --out holds ``clone/`` and ``run/`` (their records one folder
+    down) and ``train.json``: its own output is replaced; a deeper marker does not count."""
+    out = tmp_path / "train"
+    (out / "run").mkdir(parents=True)
+    (out / "run" / "run.json").write_text("{}")
+    (out / "train.json").write_text("{}")
+    assert check_destination(out, overwrite=True) == out
+    deep = tmp_path / "src"
+    (deep / "a" / "b").mkdir(parents=True)
+    (deep / "a" / "b" / "run.json").write_text("{}")
+    (deep / "a" / "code.py").write_text("")
+    with pytest.raises(ResultsFolderExistsError, match=r"in it or one folder down"):
+        check_destination(deep, overwrite=True)

@@ -57,8 +57,18 @@ from scas_env.utils.shipped_files import file_sha256
 
 MANIFEST = "manifest.json"
 #: Files by which a folder shows it was written by this package (a results folder's manifest,
-#: a dataset's card, a training run's record): ``overwrite`` replaces only such a folder.
-OWN_MARKERS: tuple[str, ...] = (MANIFEST, "datacard.json", "run.json")
+#: a dataset's card, a training run's record, a behaviour clone's record), in it or in one of
+#: its folders (a fleet training's ``clone/`` and ``run/``): ``overwrite`` replaces only such
+#: a folder.
+OWN_MARKERS: tuple[str, ...] = (MANIFEST, "datacard.json", "run.json", "clone_record.json")
+
+
+def written_by_us(folder: Path) -> bool:
+    """Whether ``folder`` holds one of :data:`OWN_MARKERS`, in it or one folder down."""
+    places = [folder, *(p for p in folder.iterdir() if p.is_dir() and not p.is_symlink())]
+    return any((place / name).is_file() for place in places for name in OWN_MARKERS)
+
+
 #: Distributions whose versions go into every manifest (absent ones are recorded as such).
 LIBRARIES: tuple[str, ...] = (
     "numpy",
@@ -166,8 +176,9 @@ def check_destination(
     - a name ending in a file suffix (:data:`FILE_SUFFIXES`, e.g. ``.json``) is refused: the
       path names a folder, the files go inside it;
     - an existing folder is accepted if empty, and if not empty only with ``overwrite``
-      and only if it holds one of :data:`OWN_MARKERS` (a folder this package wrote; anything
-      else is never deleted) (:class:`ResultsFolderExistsError`, also a ``FileExistsError``);
+      and only if it holds one of :data:`OWN_MARKERS`, in it or one folder down (a folder
+      this package wrote; anything else is never deleted) (:class:`ResultsFolderExistsError`,
+      also a ``FileExistsError``);
     - an existing file, or a file where a parent folder should be, is refused;
     - the nearest existing ancestor must be a writable folder (tried by creating and removing
       a temporary folder there: permission bits alone miss read-only file systems and root).
@@ -207,9 +218,10 @@ def check_destination(
                 f"{label} already exists and is not empty; pass {replace} to replace it "
                 "whole, or choose a new folder (e.g. timestamped)"
             )
-        if not any((dest / name).is_file() for name in OWN_MARKERS):
+        if not written_by_us(dest):
             raise ResultsFolderExistsError(
-                f"{label} is not empty and holds none of {list(OWN_MARKERS)}, so it was not "
+                f"{label} is not empty and holds none of {list(OWN_MARKERS)} (in it or one "
+                "folder down), so it was not "
                 f"written by this package; {replace} replaces only such folders (it deletes "
                 "the old contents); delete it yourself or choose a new folder"
             )
