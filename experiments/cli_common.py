@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import argparse
 import tempfile
-from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
@@ -25,7 +24,6 @@ from scas_env.cli_args import (
 __all__ = [
     "add_params_arg",
     "check_out_file",
-    "check_out_stem",
     "int_at_least",
     "load_params",
     "vector_steps_parser",
@@ -93,16 +91,6 @@ def _check_writable(parser: argparse.ArgumentParser, folder: Path, option: str =
             pass
     except OSError as exc:
         parser.error(f"{option}: cannot write in {folder} ({exc.strerror or exc})")
-
-
-def check_out_stem(
-    parser: argparse.ArgumentParser, stem: str | Path, suffixes: Sequence[str], overwrite: bool
-) -> Path:
-    """Validate the files ``<stem><suffix>`` of one output (e.g. a campaign's CSV + JSON)."""
-    stem = Path(stem)
-    for suffix in suffixes:
-        check_out_file(parser, stem.with_suffix(suffix), overwrite)
-    return stem
 
 
 def vector_steps_parser(prog: str, doc: str | None, *, steps: int, seed: int) -> Any:

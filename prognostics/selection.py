@@ -361,12 +361,14 @@ def plot_accuracy_sensitivity(
     path: str | os.PathLike[str],
     *,
     title: str | None = None,
+    xlabel: str = "severity at detection",
 ) -> Figure:
     """Accuracy-sensitivity plane of [DJS20] Fig. 8, saved to ``path`` (format from suffix).
 
-    x = severity at detection, y = accuracy, bubble area linear in SNR_dB (lowest -> 40 pt^2,
-    highest -> 900 pt^2), labelled with the feature name. Undetected candidates are drawn
-    hollow at x = s_max with "(n.d.)". Uses the Agg canvas directly (no pyplot state).
+    x = severity at detection (axis labelled ``xlabel``), y = accuracy, bubble area linear
+    in SNR_dB (lowest -> 40 pt^2, highest -> 900 pt^2), labelled with the feature name.
+    Undetected candidates are drawn hollow at x = s_max with "(n.d.)". Uses the Agg canvas
+    directly (no pyplot state).
     """
     check.sequence("scores", scores)
     if len(scores) == 0:
@@ -377,6 +379,8 @@ def plot_accuracy_sensitivity(
         raise check.ArgumentTypeError(f"path = {check.show(path)} must be a str or a path")
     if title is not None and not isinstance(title, str):
         raise check.ArgumentTypeError(f"title = {check.show(title)} must be a string or None")
+    if not isinstance(xlabel, str):
+        raise check.ArgumentTypeError(f"xlabel = {check.show(xlabel)} must be a string")
     out = Path(path)
     if not out.parent.is_dir():
         raise ValueError(f"path's directory {out.parent} does not exist")
@@ -404,7 +408,7 @@ def plot_accuracy_sensitivity(
         )
         label = s.name if detected else f"{s.name} (n.d.)"
         ax.annotate(label, (x_pos, s.accuracy), textcoords="offset points", xytext=(6, 6))
-    ax.set_xlabel("severity at detection")
+    ax.set_xlabel(xlabel)
     ax.set_ylabel("accuracy (probability of correct response)")
     ax.set_ylim(0.0, 1.05)
     ax.set_title(title if title is not None else "Feature selection (bubble area ~ SNR dB)")

@@ -36,6 +36,7 @@ from numpy.typing import NDArray
 
 from prognostics.features import CANDIDATE_INFO
 from scas_env.actuator.params import ScasParams
+from scas_env.utils.atomic_file import write_bytes_atomic, write_text_atomic
 from scas_env.utils.results_folder import json_text
 
 __all__ = [
@@ -46,6 +47,7 @@ __all__ = [
     "RUN_COLUMNS",
     "CampaignResult",
     "campaign_columns",
+    "campaign_paths",
     "condition_features",
     "load",
 ]
@@ -184,19 +186,25 @@ class CampaignResult:
             lines.append(f"{mode:<6} {level:>5} {severity:>6.3f}{cells}")
         return "\n".join(lines)
 
+    @property
+    def csv_sha256(self) -> str:
+        """SHA-256 hex digest of the table's CSV bytes (those :meth:`save` writes)."""
+        return hashlib.sha256(self._csv_bytes()).hexdigest()
+
     def to_csv(self, path: str | os.PathLike[str]) -> str:
-        """Write the table as CSV at ``path``; returns the SHA-256 hex digest of the bytes."""
+        """Write the table as CSV at ``path`` (atomically); returns the SHA-256 hex digest of
+        the bytes."""
         data = self._csv_bytes()
-        Path(path).write_bytes(data)
+        write_bytes_atomic(path, data)
         return hashlib.sha256(data).hexdigest()
 
     def save(self, path: str | os.PathLike[str]) -> tuple[Path, Path]:
-        """Write ``<stem>.csv`` (table) and ``<stem>.json`` (metadata); returns both paths.
-
-        ``path`` with any suffix names the pair: ``results/c.csv`` and ``results/c`` both
-        give ``results/c.csv`` + ``results/c.json``.
+        """Write ``<stem>.csv`` (table) and ``<stem>.json`` (metadata), each atomically;
+        returns both paths (:func:`campaign_paths`: ``results/c.csv``, ``results/c.json`` and
+        ``results/c`` all give ``results/c.csv`` + ``results/c.json``; ``results/t_0.5``
+        gives ``results/t_0.5.csv`` + ``results/t_0.5.json``).
         """
-        csv_path, json_path = _paths(path)
+        csv_path, json_path = campaign_paths(path)
         csv_path.parent.mkdir(parents=True, exist_ok=True)
         digest = self.to_csv(csv_path)
         sidecar = {
@@ -205,7 +213,7 @@ class CampaignResult:
             "n_rows": self.n_rows,
             "csv_sha256": digest,
         }
-        json_path.write_text(json_text(sidecar, indent=1))
+        write_text_atomic(json_path, json_text(sidecar, indent=1))
         return csv_path, json_path
 
     def _csv_bytes(self) -> bytes:
@@ -220,9 +228,14 @@ class CampaignResult:
         return buf.getvalue().encode()
 
 
-def _paths(path: str | os.PathLike[str]) -> tuple[Path, Path]:
+def campaign_paths(path: str | os.PathLike[str]) -> tuple[Path, Path]:
+    """The CSV and JSON files of the campaign named ``path``: a ``.csv`` or ``.json`` suffix
+    is dropped, any other dot belongs to the stem (``sweep_temp_0.5`` gives
+    ``sweep_temp_0.5.csv`` and ``sweep_temp_0.5.json``)."""
     p = Path(path)
-    return p.with_suffix(".csv"), p.with_suffix(".json")
+    if p.suffix.lower() in (".csv", ".json"):
+        p = p.with_suffix("")
+    return p.with_name(p.name + ".csv"), p.with_name(p.name + ".json")
 
 
 def load(path: str | os.PathLike[str]) -> CampaignResult:
@@ -232,7 +245,7 @@ def load(path: str | os.PathLike[str]) -> CampaignResult:
     the sidecar's column list and the columns implied by its config disagree, when the row
     count or the SHA-256 of the CSV differs from the sidecar, or when a value does not parse.
     """
-    csv_path, json_path = _paths(path)
+    csv_path, json_path = campaign_paths(path)
     try:
         meta = json.loads(json_path.read_text())
     except json.JSONDecodeError as err:

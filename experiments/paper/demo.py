@@ -24,7 +24,7 @@ import math
 import os
 import time
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
@@ -42,6 +42,7 @@ from scas_env.actuator.missions import (
 from scas_env.actuator.params import ScasParams
 from scas_env.actuator.physics.actuator import ActuatorRun, simulate
 from scas_env.actuator.physics.spring import failure_depth_from_params
+from scas_env.cli_args import keeps_results
 
 #: Signals written to each CSV, in order (SI units: s, m, A, Pa).
 CSV_COLUMNS = (
@@ -138,24 +139,52 @@ def run_demo(
     *,
     window_s: float = DEFAULT_WINDOW_S,
     progress: bool = True,
+    overwrite: bool = False,
 ) -> DemoSummary:
     """Simulate the pre-flight test and a flight window per health state; save CSV and PNG.
 
     Parameters
     ----------
     params : design parameters (nominal unit, nominal conditions).
-    out_dir : output folder, created if missing. Files: ``<state>_<condition>.csv`` and
-        ``<condition>.png`` for condition in :data:`CONDITIONS`.
-    seed : root seed (>= 0); same seed, same files byte for byte.
+    out_dir : results folder, written atomically with ``manifest.json``
+        (:func:`scas_env.utils.results_folder.results_folder`). Files:
+        ``<state>_<condition>.csv`` and ``<condition>.png`` for condition in
+        :data:`CONDITIONS`.
+    seed : root seed (>= 0); same seed, same CSV files byte for byte.
     health_states : name -> HealthState; default :func:`default_health_states`.
     window_s : length of the flight window (s).
     progress : show a tqdm bar over the states.
+    overwrite : replace an existing non-empty ``out_dir`` written by this package (whole);
+        without it such a folder is refused before any simulation.
     """
+    from scas_env.utils.results_folder import results_folder
+
     _check_run(seed, window_s)
     states = default_health_states(params) if health_states is None else dict(health_states)
     _check_states(states)
     out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
+    config = {
+        "window_s": window_s,
+        "health_states": {name: vars(state) for name, state in states.items()},
+        "params": params.to_dict(),
+    }
+    with results_folder(out, config=config, seeds={"root": seed}, overwrite=overwrite) as tmp:
+        summary = _write_demo(params, tmp, seed, states, window_s, progress)
+    return DemoSummary(
+        tuple(replace(r, csv_path=out / r.csv_path.name) for r in summary.rows),
+        tuple(out / p.name for p in summary.png_paths),
+    )
+
+
+def _write_demo(
+    params: ScasParams,
+    out: Path,
+    seed: int,
+    states: dict[str, HealthState],
+    window_s: float,
+    progress: bool,
+) -> DemoSummary:
+    """The runs and files of :func:`run_demo`, written into the existing folder ``out``."""
     fs = params.sensors.sample_rate_hz
     mission_seq, *state_seqs = np.random.SeedSequence(seed).spawn(1 + len(states))
     profiles = {
@@ -224,6 +253,7 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+@keeps_results
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the demo into ``--out`` and print its table."""
     from experiments.cli_common import load_params
@@ -235,7 +265,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     check_out_dir(parser, args.out, args.overwrite)
     params = load_params(parser, args)
     start = time.perf_counter()
-    summary = run_demo(params, args.out, args.seed, window_s=args.window)
+    summary = run_demo(params, args.out, args.seed, window_s=args.window, overwrite=args.overwrite)
     print(summary.format_table())
     log.info(
         f"wrote {len(summary.rows)} CSV and {len(summary.png_paths)} PNG files to {args.out} "

@@ -32,7 +32,8 @@ from experiments.paper.figure_data import (
     paper_figures,
 )
 from scas_env.actuator.physics.actuator import ActuatorRun
-from scas_env.utils.results_folder import json_text
+from scas_env.cli_args import keeps_results
+from scas_env.utils.results_folder import json_text, results_folder
 
 DPI = 120
 MM = 1e3  # m -> mm
@@ -284,19 +285,27 @@ PAPER_PLOTS = {
 }
 
 
-def save_paper_figures(figs: PaperFigures, out_dir: str | os.PathLike[str]) -> list[Path]:
-    """Write one PNG per paper figure and ``figures.json`` (all curves) into ``out_dir``."""
+def save_paper_figures(
+    figs: PaperFigures,
+    out_dir: str | os.PathLike[str],
+    *,
+    overwrite: bool = False,
+    seed: int | None = None,
+) -> list[Path]:
+    """Write one PNG per paper figure and ``figures.json`` (all curves) as the results
+    folder ``out_dir``, atomically and with ``manifest.json``
+    (:func:`scas_env.utils.results_folder.results_folder`; ``seed``, the Fig. 4 load
+    spectrum's, goes into its seeds). An existing non-empty folder is refused unless
+    ``overwrite`` and written by this package (then replaced whole). Returns the written
+    files' paths (the manifest excluded)."""
     out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
-    written = []
-    for name, (stem, plot) in PAPER_PLOTS.items():
-        path = out / f"{stem}.png"
-        plot(getattr(figs, name), path)
-        written.append(path)
-    json_path = out / "figures.json"
-    json_path.write_text(json_text(figs.to_dict()))
-    written.append(json_path)
-    return written
+    names = [f"{stem}.png" for stem, _ in PAPER_PLOTS.values()] + ["figures.json"]
+    config = {"figures": list(PAPER_PLOTS)}
+    with results_folder(out, config=config, seeds={"fig4": seed}, overwrite=overwrite) as tmp:
+        for name, (stem, plot) in PAPER_PLOTS.items():
+            plot(getattr(figs, name), tmp / f"{stem}.png")
+        (tmp / "figures.json").write_text(json_text(figs.to_dict()))
+    return [out / name for name in names]
 
 
 # --- command line -----------------------------------------------------------------------
@@ -328,6 +337,7 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+@keeps_results
 def main(argv: Sequence[str] | None = None) -> int:
     """Compute the figures' data and write one PNG per figure and ``figures.json``."""
     from experiments.cli_common import load_params
@@ -341,7 +351,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     start = time.perf_counter()
     figs = paper_figures(params, np.random.default_rng(args.seed))
     computed = time.perf_counter() - start
-    paths = save_paper_figures(figs, args.out)
+    paths = save_paper_figures(figs, args.out, overwrite=args.overwrite, seed=args.seed)
     for path in paths:
         log.info(f"wrote {path}")
     log.info(f"computed in {computed:.1f} s, total {time.perf_counter() - start:.1f} s")

@@ -24,6 +24,7 @@ from scas_env.cli_args import (
     announce_uncached_kernels,
     check_out_dir,
     configure_logging,
+    keeps_results,
     make_parser,
     nonneg_int,
     positive_int,
@@ -91,11 +92,13 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+@keeps_results
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the reproduction and write its report folder."""
     parser = build_parser()
     args = parser.parse_args(argv)
     configure_logging(args)
+    from experiments.paper.campaign_table import campaign_paths
     from experiments.paper.reproduction import (
         ReproductionConfig,
         check_campaign_params,
@@ -109,10 +112,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     out = args.out or Path("results/reproduction_quick" if args.quick else "results/reproduction")
     check_out_dir(parser, out, args.overwrite)
     if args.campaign is not None:
-        for suffix in (".csv", ".json"):
-            if not args.campaign.with_suffix(suffix).is_file():
-                parser.error(f"--campaign {args.campaign}: {args.campaign.with_suffix(suffix)} "
-                             "does not exist")  # fmt: skip
+        for path in campaign_paths(args.campaign):
+            if not path.is_file():
+                parser.error(f"--campaign {args.campaign}: {path} does not exist")
     params = load_params(parser, args)
     if args.campaign is not None:
         try:
@@ -140,7 +142,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     wall_s = time.perf_counter() - start
     given = sys.argv[1:] if argv is None else argv
     command = " ".join(["python -m experiments.paper.reproduce", *map(shlex.quote, given)])
-    paths = write_report(rep, out, {"wall_s": round(wall_s, 1), "command": command})
+    paths = write_report(
+        rep, out, {"wall_s": round(wall_s, 1), "command": command}, overwrite=args.overwrite
+    )
     print(paths[-1].read_text())
     log.info(f"wall time {wall_s:.1f} s; wrote {len(paths)} files to {out}")
     return 0

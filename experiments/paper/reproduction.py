@@ -381,7 +381,8 @@ class Reproduction:
     """Everything the report needs (see :mod:`experiments.paper.reproduction_report`).
 
     ``healthy_unit_alarm_share[variant][fault]``: per-unit false alarm
-    (:func:`healthy_unit_alarms`); ``healthy``: the nested healthy set.
+    (:func:`healthy_unit_alarms`); ``healthy``: the nested healthy set; ``campaign_path``:
+    the saved campaign analysed (None: the campaign was run from ``seed``).
     """
 
     config: ReproductionConfig
@@ -394,6 +395,7 @@ class Reproduction:
     healthy_unit_alarm_share: dict[str, dict[str, float]]
     calibration: Calibration
     timings_s: dict[str, float]
+    campaign_path: str | None = None
 
 
 def healthy_set_for(
@@ -468,5 +470,15 @@ def run_reproduction(
     unit_far = healthy_unit_alarms(campaign, selection, healthy, config.detector_window)
     timings["prognosis"] = time.perf_counter() - clock - sum(timings.values())
     return Reproduction(
-        config, seed, campaign, selection, detection, healthy, prognosis, unit_far, cal, timings
+        config,
+        seed,
+        campaign,
+        selection,
+        detection,
+        healthy,
+        prognosis,
+        unit_far,
+        cal,
+        timings,
+        None if campaign_path is None else str(campaign_path),
     )

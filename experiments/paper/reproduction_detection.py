@@ -39,6 +39,7 @@ from experiments.paper.reproduction import (
     ReproductionConfig,
     check_campaign_params,
     healthy_set_for,
+    load_campaign,
     select_features,
 )
 from experiments.paper.reproduction_conventions import leakage_fraction
@@ -311,19 +312,20 @@ def build_parser() -> argparse.ArgumentParser:
 def main(argv: Sequence[str] | None = None) -> int:
     """Write the detection result to ``--out`` (JSON) and print it beside the targets."""
     from experiments.cli_common import check_out_file, load_params
-    from experiments.paper.campaign_table import load
+    from experiments.paper.campaign_table import campaign_paths
     from scas_env.utils.atomic_file import write_text_atomic
     from scas_env.utils.results_folder import json_text
 
     parser = build_parser()
     args = parser.parse_args(argv)
-    for suffix in (".csv", ".json"):
-        if not args.campaign.with_suffix(suffix).is_file():
-            parser.error(f"--campaign {args.campaign}: {args.campaign.with_suffix(suffix)} missing")
+    for path in campaign_paths(args.campaign):
+        if not path.is_file():
+            parser.error(f"--campaign {args.campaign}: {path} missing")
     check_out_file(parser, args.out, args.overwrite)
     params = load_params(parser, args)
-    campaign = load(args.campaign)
-    try:  # the campaign's feature choice belongs to its design and sensing
+    try:  # both faults, both conditions, enough levels; the feature choice belongs to the
+        # campaign's design and sensing
+        campaign = load_campaign(args.campaign)
         check_campaign_params(campaign, params, args.campaign)
     except ValueError as exc:
         parser.error(f"--campaign: {exc}")

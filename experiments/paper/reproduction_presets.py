@@ -21,8 +21,24 @@ __all__ = ["main", "preset_table", "read_reports"]
 
 
 def read_reports(paths: dict[str, str | Path]) -> dict[str, dict[str, Any]]:
-    """``{preset: report.json content}``; every file must hold the same claims in order."""
-    reports = {name: json.loads(Path(p).read_text()) for name, p in paths.items()}
+    """``{preset: report.json content}``; every file must be a JSON object with a
+    ``verdicts`` list, and all must hold the same claims in order (``ValueError`` naming the
+    file otherwise)."""
+    reports = {}
+    for name, p in paths.items():
+        try:
+            report = json.loads(Path(p).read_text())
+        except json.JSONDecodeError as err:
+            raise ValueError(f"{name}={p} is not valid JSON ({err})") from None
+        verdicts = report.get("verdicts") if isinstance(report, dict) else None
+        if not isinstance(verdicts, list) or not all(
+            isinstance(r, dict) and "claim" in r for r in verdicts
+        ):
+            raise ValueError(
+                f"{name}={p} holds no 'verdicts' list of claims; expected the report.json "
+                "of python -m experiments.paper.reproduce"
+            )
+        reports[name] = report
     claims = [[r["claim"] for r in rep["verdicts"]] for rep in reports.values()]
     if any(c != claims[0] for c in claims[1:]):
         raise ValueError(f"reports {list(paths)} hold different claims: compare like with like")
@@ -52,11 +68,16 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser = make_parser("python -m experiments.paper.reproduction_presets", __doc__)
     parser.add_argument("reports", nargs="+", help="NAME=path/to/report.json, one per preset")
     args = parser.parse_args(argv)
-    paths = {}
+    paths: dict[str, str] = {}
     for item in args.reports:
         name, sep, path = item.partition("=")
         if not sep or not name or not path:
             parser.error(f"{item!r} must read NAME=path/to/report.json")
+        if name in paths:
+            parser.error(
+                f"preset name {name!r} is given twice ({paths[name]} and {path}); "
+                "each column needs its own NAME"
+            )
         paths[name] = path
     try:
         print(preset_table(read_reports(paths)), end="")

@@ -1,10 +1,15 @@
 """Report of a :class:`~experiments.paper.reproduction.Reproduction`: verdicts, tables and figures.
 
 :func:`verdicts` compares every result [DJS20] states in §4-5 with ours and labels it
-"holds" or "differs" with a one-line reason. Rules: a feature choice or a direction holds
-when it is the same; a detection severity holds within +-0.10 of the paper's value (fraction
-of critical); a minimum RA holds at or above the paper's bound; a final CRA holds when at
-least the paper's value minus 0.05. Prognosis numbers are means over the paths of a fault.
+"holds", "differs" or "undetermined (n paths)" with a one-line reason. Rules: a feature
+choice or a direction holds when it is the same; a detection severity holds within +-0.10
+of the paper's value (fraction of critical); a minimum RA holds at or above the paper's
+bound; a final CRA holds when at least the paper's value minus 0.05. Detection, min RA and
+CRA are means over paths (campaign paths for the paper protocol's detection, prognosis paths
+otherwise): such a row holds when the mean's 95 % t-interval over the paths
+(:func:`path_interval`) lies within the allowed range, differs when it lies wholly outside,
+else it is "undetermined (n paths)" (:func:`interval_verdict`); a detection row differs
+when a path never detects.
 Rows without suffix follow the paper's protocol; rows "(installation baseline)" the
 physics-informed variant of :mod:`experiments.paper.reproduction_prognosis` (only on prognosis
 paths: a
@@ -16,7 +21,10 @@ this run (campaign scatter, temperature share, life fraction of the min RA).
 ``fig9_<fault>.png`` and ``fig9_<fault>_installation.png`` (first path, per variant:
 severity tracking and RUL with the alpha = 0.2 cone) and ``ra_over_time.png`` (both
 variants), and the numbers behind each figure as CSV (``fig8_<fault>.csv``,
-``fig9_<fault>[_installation].csv``; the RA curve is a column of the latter).
+``fig9_<fault>[_installation].csv``; the RA curve is a column of the latter), as one results
+folder with ``manifest.json``. Fig. 8 places candidates at the campaign's severity levels:
+fractions of the critical crack depth, and for wear of the critical worn depth (axis and
+CSV columns say so), not the leakage fraction of the verdicts.
 """
 
 from __future__ import annotations
@@ -29,6 +37,7 @@ from typing import Any
 import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
+from scipy import stats
 
 from experiments.paper.reproduction import FAULTS, RESPONSIVE_MIN_SPEARMAN, Reproduction
 from experiments.paper.reproduction_conventions import leakage_fraction
@@ -36,9 +45,9 @@ from experiments.paper.reproduction_prognosis import INSTALLATION_EFFECT, VARIAN
 from prognostics.features import CANDIDATE_INFO
 from prognostics.selection import plot_accuracy_sensitivity
 from scas_env.actuator.surrogate import default_surrogate
-from scas_env.utils.results_folder import json_text
+from scas_env.utils.results_folder import json_text, results_folder
 
-__all__ = ["PAPER", "verdicts", "write_report"]
+__all__ = ["PAPER", "interval_verdict", "path_interval", "verdicts", "write_report"]
 
 PAPER: dict[str, Any] = {
     "crack": {"ground": "G3", "flight": "I2", "g3": "rising", "detect": 0.25, "ra": 0.80},
@@ -58,16 +67,56 @@ def _fmt(value: float, digits: int = 2) -> str:
 
 
 def _row(
-    claim: str, paper: Any, ours: Any, holds: bool, reason: str, depth: str = ""
+    claim: str, paper: Any, ours: Any, holds: bool | str, reason: str, depth: str = ""
 ) -> dict[str, Any]:
+    """A verdict row; ``holds`` is the verdict itself when a string (:func:`interval_verdict`)."""
     return {
         "claim": claim,
         "paper": paper,
         "ours": ours,
         "ours_worn_depth": depth,
-        "verdict": "holds" if holds else "differs",
+        "verdict": holds if isinstance(holds, str) else ("holds" if holds else "differs"),
         "reason": reason,
     }
+
+
+def path_interval(values: list[float]) -> tuple[float, float]:
+    """95 % t-interval ``(low, high)`` of the mean of per-path ``values``; NaN bounds with
+    fewer than 2 paths or a NaN value."""
+    v = np.asarray(values, dtype=np.float64)
+    if v.size < 2 or not np.all(np.isfinite(v)):
+        return math.nan, math.nan
+    half = float(stats.t.ppf(0.975, v.size - 1) * v.std(ddof=1) / math.sqrt(v.size))
+    mean = float(v.mean())
+    return mean - half, mean + half
+
+
+def interval_verdict(
+    values: list[float], low_ok: float, high_ok: float = math.inf
+) -> tuple[str, str]:
+    """Verdict and reason prefix of a path-mean row: "holds" when the 95 % t-interval of the
+    mean of ``values`` (:func:`path_interval`) lies within ``[low_ok, high_ok]``, "differs"
+    when it lies wholly outside, else "undetermined (<n> paths)" (also with fewer than 2
+    paths)."""
+    low, high = path_interval(values)
+    n = len(values)
+    if not (math.isfinite(low) and math.isfinite(high)):
+        return f"undetermined ({n} paths)", f"{n} path(s), no interval"
+    text = f"95% t-interval [{low:.2f}, {high:.2f}] over {n} paths"
+    if low_ok <= low and high <= high_ok:
+        return "holds", text
+    if high < low_ok or low > high_ok:
+        return "differs", text
+    return f"undetermined ({n} paths)", text
+
+
+def _detection_verdict(values: list[float], paper: float) -> tuple[str, str]:
+    """:func:`interval_verdict` of per-path severities at detection within the detection
+    tolerance of ``paper``; "differs" when a path never detects."""
+    missed = sum(not math.isfinite(v) for v in values)
+    if missed:
+        return "differs", f"{missed} of {len(values)} paths never detect"
+    return interval_verdict(values, paper - DETECTION_TOLERANCE, paper + DETECTION_TOLERANCE)
 
 
 def paper_severity(rep: Reproduction, fault: str, value: float) -> float:
@@ -322,6 +371,13 @@ def verdicts(rep: Reproduction) -> list[dict[str, Any]]:
     for fault in FAULTS:
         paper = PAPER[fault]["detect"]
         detected = prog["paper"][fault]["severity_at_detection_detected"]
+        verdict, interval = _detection_verdict(
+            [
+                paper_severity(rep, fault, v)
+                for v in rep.detection[fault]["combined_severity_at_detection"]
+            ],
+            paper,
+        )
         rows.append(
             _row(
                 f"{_NAMES[fault]}: severity at detection",
@@ -329,9 +385,9 @@ def verdicts(rep: Reproduction) -> list[dict[str, Any]]:
                 f"campaign paths {detected_share(rep, fault)}; prognosis paths "
                 f"{_fmt(_detected_mean(rep, fault, 'paper'))} "
                 f"({prog['paper'][fault]['detected_paths']:.0%} of paths)",
-                math.isfinite(det[fault]) and abs(det[fault] - paper) <= DETECTION_TOLERANCE,
-                "population baseline: unit-to-unit scatter of G3 (spring tolerances, fluid "
-                "temperature) hides the early signature",
+                verdict,
+                f"campaign paths: {interval}; population baseline: unit-to-unit scatter of G3 "
+                "(spring tolerances, fluid temperature) hides the early signature",
                 _depth_text(fault, detection_severity(rep, fault), detected),
             )
         )
@@ -346,23 +402,28 @@ def verdicts(rep: Reproduction) -> list[dict[str, Any]]:
         for fault in FAULTS:
             s, bound, cra = prog[variant][fault], PAPER[fault]["ra"], PAPER["cra"][fault]
             suffix = "" if variant == "paper" else f" {_SUFFIX[variant]}"
+            metrics = [p.variants[variant].metrics for p in rep.prognosis[fault]]
+            verdict, interval = interval_verdict([m.min_relative_accuracy for m in metrics], bound)
             rows.append(
                 _row(
                     f"{_NAMES[fault]}: min RA{suffix}",
                     f">= {bound}",
                     _fmt(s["min_ra"]),
-                    s["min_ra"] >= bound,
-                    _min_ra_reason(rep, fault, variant, s),
+                    verdict,
+                    f"{interval}; {_min_ra_reason(rep, fault, variant, s)}",
                 )
+            )
+            verdict, interval = interval_verdict(
+                [m.cumulative_relative_accuracy for m in metrics], cra - CRA_TOLERANCE
             )
             rows.append(
                 _row(
                     f"{_NAMES[fault]}: final CRA{suffix}",
                     cra,
                     _fmt(s["cra"]),
-                    s["cra"] >= cra - CRA_TOLERANCE,
-                    f"mean over {len(rep.prognosis[fault])} path(s); predictions from "
-                    f"t/EoL = {_start_fraction(rep, fault, variant):.2f} (mean)",
+                    verdict,
+                    f"{interval}; mean over {len(rep.prognosis[fault])} path(s); predictions "
+                    f"from t/EoL = {_start_fraction(rep, fault, variant):.2f} (mean)",
                 )
             )
     return rows
@@ -412,16 +473,21 @@ def _installation_detection_row(rep: Reproduction, fault: str, s: dict[str, floa
     k = int(p0.reference["n_reference"])
     scale, unit = _scale(p0.feature)
     run = rep.healthy.run_std(p0.feature) * scale
-    value = paper_mean(rep, fault, path_detections(rep.prognosis[fault], "installation"))
+    per_path = [
+        paper_severity(rep, fault, v) for v in path_detections(rep.prognosis[fault], "installation")
+    ]
+    value = float(np.mean(per_path))
     early = math.isfinite(value) and value < paper - DETECTION_TOLERANCE
     detected = s["severity_at_detection_detected"]
+    verdict, interval = _detection_verdict(per_path, paper)
     return _row(
         f"{_NAMES[fault]}: severity at detection {_SUFFIX['installation']}",
         paper,
         f"prognosis paths {_fmt(_detected_mean(rep, fault, 'installation'))} "
         f"({s['detected_paths']:.0%} of paths)",
-        math.isfinite(value) and abs(value - paper) <= DETECTION_TOLERANCE,
-        f"{p0.feature} ({INSTALLATION_EFFECT[p0.feature]}) from the first {k} tests, healthy "
+        verdict,
+        f"{interval}; {p0.feature} ({INSTALLATION_EFFECT[p0.feature]}) from the first {k} "
+        "tests, healthy "
         f"run spread {run:.2f} {unit}; the section-5.1 rule needs 95% of a "
         f"{rep.config.detector_window}-test window beyond P95, a shift of ~3.3 sigma"
         + ("; earlier than the paper" if early else ""),
@@ -574,6 +640,17 @@ def _path_entry(p: PathPrognosis) -> dict[str, Any]:
     }
 
 
+def campaign_source(rep: Reproduction) -> dict[str, Any]:
+    """The analysed campaign's own ``seed``, ``path`` (the ``--campaign`` stem; None when the
+    reproduction ran its campaign) and ``csv_sha256`` (of its CSV table, as in its sidecar)."""
+    path = rep.campaign_path
+    return {
+        "seed": rep.campaign.metadata["seed"],
+        "path": None if path is None else str(path),
+        "csv_sha256": rep.campaign.csv_sha256,
+    }
+
+
 def report_dict(rep: Reproduction, extra: dict[str, Any] | None = None) -> dict[str, Any]:
     """Everything of the report as JSON-ready data (no particle samples)."""
     sel = {k: v for k, v in rep.selection.items() if k != "scores"}
@@ -594,7 +671,11 @@ def report_dict(rep: Reproduction, extra: dict[str, Any] | None = None) -> dict[
         {
             "seed": rep.seed,
             "config": rep.config.to_dict(),
-            "campaign": {"n_rows": rep.campaign.n_rows, **rep.campaign.metadata["config"]},
+            "campaign": {
+                "n_rows": rep.campaign.n_rows,
+                **rep.campaign.metadata["config"],
+                **campaign_source(rep),
+            },
             "verdicts": verdicts(rep),
             "selection": sel,
             "detection": rep.detection,
@@ -618,7 +699,9 @@ def _markdown(report: dict[str, Any]) -> str:
         "# Reproduction of [DJS20] sections 4-5",
         "",
         f"Seed {report['seed']}; campaign {report['campaign']['n_runs']} runs x "
-        f"{report['campaign']['n_levels']} levels; {report['config']['n_paths']} prognosis "
+        f"{report['campaign']['n_levels']} levels (campaign seed {report['campaign']['seed']}, "
+        f"{report['campaign']['path'] or 'run by this reproduction'}, CSV SHA-256 "
+        f"{report['campaign']['csv_sha256']}); {report['config']['n_paths']} prognosis "
         f"path(s) per fault.",
         "",
         "Severities: crack as a fraction of the critical depth, seal as a fraction of the "
@@ -662,20 +745,53 @@ def _markdown(report: dict[str, Any]) -> str:
     return "\n".join(lines) + "\n"
 
 
+#: Fig. 8's severity columns and axis label per fault: campaign levels are fractions of the
+#: critical crack depth and of the critical **worn depth** (not the report's leakage fraction).
+FIG8_SEVERITY = {
+    "crack": ("severity_at_detection", "max_severity", "severity at detection"),
+    "wear": (
+        "worn_depth_fraction_at_detection",
+        "max_worn_depth_fraction",
+        "worn-depth fraction at detection",
+    ),
+}
+
+
 def write_report(
-    rep: Reproduction, out_dir: str | Path, extra: dict[str, Any] | None = None
+    rep: Reproduction,
+    out_dir: str | Path,
+    extra: dict[str, Any] | None = None,
+    *,
+    overwrite: bool = False,
 ) -> list[Path]:
-    """Write report.json, report.md, the figures and their CSVs into ``out_dir``."""
+    """Write report.json, report.md, the figures and their CSVs as the results folder
+    ``out_dir``, atomically and with ``manifest.json``
+    (:func:`scas_env.utils.results_folder.results_folder`: the reproduction's config and the
+    campaign's source as config, the root and campaign seeds as seeds). An existing non-empty
+    folder is refused unless ``overwrite`` and written by this package (then replaced whole).
+    Returns the paths of the written files (the manifest excluded)."""
     out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
+    config = {"reproduction": rep.config.to_dict(), "campaign": campaign_source(rep)}
+    seeds = {"root": rep.seed, "campaign": rep.campaign.metadata["seed"]}
+    with results_folder(out, config=config, seeds=seeds, overwrite=overwrite) as tmp:
+        names = [p.relative_to(tmp) for p in _write_files(rep, tmp, extra)]
+    return [out / name for name in names]
+
+
+def _write_files(rep: Reproduction, out: Path, extra: dict[str, Any] | None) -> list[Path]:
+    """The files of :func:`write_report`, written into the existing folder ``out``."""
     written = []
     for fault in FAULTS:
         scores = (
             rep.selection["scores"][f"{fault}/ground"] + rep.selection["scores"][f"{fault}/flight"]
         )
         png = out / f"fig8_{fault}.png"
-        plot_accuracy_sensitivity(scores, png, title=f"Feature selection: {_NAMES[fault]}")
-        fields = list(vars(scores[0]))
+        at_detection, max_column, xlabel = FIG8_SEVERITY[fault]
+        plot_accuracy_sensitivity(
+            scores, png, title=f"Feature selection: {_NAMES[fault]}", xlabel=xlabel
+        )
+        names = {"severity_at_detection": at_detection, "max_severity": max_column}
+        fields = [names.get(f, f) for f in vars(scores[0])]
         _write_csv(out / f"fig8_{fault}.csv", fields, [list(vars(s).values()) for s in scores])
         p = rep.prognosis[fault][0]
         header = [
