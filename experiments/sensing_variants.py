@@ -47,6 +47,7 @@ from typing import Any
 from scas_env.actuator.calibration import Calibration, calibration_for, params_digest
 from scas_env.actuator.params import ScasParams
 from scas_env.actuator.surrogate import FEATURE_CONDITION, SurrogateModel, default_surrogate
+from scas_env.utils.shipped_files import json_sha256
 
 #: Sensor-noise factors of the sweep.
 NOISE_SCALES: tuple[float, ...] = (0.1, 0.3, 1.0, 3.0)
@@ -142,8 +143,7 @@ def sensing_params(base: ScasParams, level: SensingLevel) -> ScasParams:
 
 def surrogate_digest(surrogate: SurrogateModel) -> str:
     """SHA-256 (16 hex digits) of a surrogate's whole content (tables, features, design)."""
-    text = json.dumps(surrogate.to_dict(), sort_keys=True)
-    return hashlib.sha256(text.encode()).hexdigest()[:16]
+    return json_sha256(surrogate.to_dict())[:16]
 
 
 def surrogate_cache_key(params: ScasParams, design: dict[str, int] | None = None) -> str:

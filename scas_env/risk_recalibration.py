@@ -35,7 +35,6 @@ the maps, scenario and parameters of a file fitted on those defaults.
 
 from __future__ import annotations
 
-import hashlib
 import json
 import re
 from collections.abc import Mapping
@@ -56,6 +55,7 @@ from scas_env.core.mismatch import Mismatch
 from scas_env.core.scenario import OBS_MODES, Scenario
 from scas_env.core.setup import PARTS, Setup
 from scas_env.utils.atomic_file import write_text_atomic
+from scas_env.utils.shipped_files import json_sha256
 
 __all__ = [
     "FREE_FIELDS",
@@ -86,8 +86,7 @@ _SHA256 = re.compile(r"^[0-9a-f]{64}$")
 def table_digest(table: Calibration | SurrogateModel) -> str:
     """SHA-256 (hex) of a calibration's or feature surrogate's ``to_dict()`` as JSON with
     sorted keys: equal digests, equal tables."""
-    text = json.dumps(table.to_dict(), sort_keys=True)
-    return hashlib.sha256(text.encode()).hexdigest()
+    return json_sha256(table.to_dict())
 
 
 @dataclass(frozen=True)

@@ -26,9 +26,7 @@ of a part (failure or preventive replacement) and every part still fitted at the
 
 from __future__ import annotations
 
-import hashlib
 import importlib
-import json
 import math
 import signal
 import threading
@@ -514,12 +512,12 @@ def _recorded(value: Any) -> Any:
     feature surrogate by its features and the SHA-256 of its JSON (its tables run to 11 kB),
     anything else by ``repr``."""
     from scas_env.actuator.surrogate import SurrogateModel
+    from scas_env.utils.shipped_files import json_sha256
 
     if isinstance(value, int | float | str):
         return value
     if isinstance(value, SurrogateModel):
-        text = json.dumps(value.to_dict(), sort_keys=True)
-        digest = hashlib.sha256(text.encode()).hexdigest()
+        digest = json_sha256(value.to_dict())
         return f"SurrogateModel(features={list(value.features)}, sha256={digest})"
     return repr(value)
 

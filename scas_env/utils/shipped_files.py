@@ -68,6 +68,12 @@ def file_sha256(path: str | Path) -> str:
     return digest.hexdigest()
 
 
+def json_sha256(data: object) -> str:
+    """SHA-256 (hex) of ``data`` as JSON with sorted keys (a table's ``to_dict()``): equal
+    digests, equal contents."""
+    return hashlib.sha256(json.dumps(data, sort_keys=True).encode()).hexdigest()
+
+
 def shipped_files(root: Path | None = None) -> list[str]:
     """Relative paths (``/``-separated) of every data file in the shipped folders, sorted;
     the manifest itself, documentation (``*.md``), hidden files and ``__pycache__`` are
