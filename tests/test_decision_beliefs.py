@@ -95,22 +95,25 @@ TRACE = [
 
 
 class TraceEnv:
-    """Replays :data:`TRACE` as a vector env of two episodes."""
+    """Replays ``trace`` (default :data:`TRACE`) as a vector env of two episodes."""
 
     num_envs = 2
     obs_names = NAMES
     params = SimpleNamespace(mission=SimpleNamespace(flight_duration_s=3600.0))
     setup = SimpleNamespace(scenario=SimpleNamespace(rul_cap_flights=CAP))
 
+    def __init__(self, trace: list | None = None) -> None:
+        self.trace = TRACE if trace is None else trace
+
     def reset(self, seed=None):
         self.t = 0
-        obs, info = TRACE[0]
+        obs, info = self.trace[0]
         return np.array(obs, dtype=np.float32), info
 
     def step(self, actions):
         self.t += 1
-        obs, info = TRACE[self.t]
-        done = np.full(2, self.t == len(TRACE) - 1)
+        obs, info = self.trace[self.t]
+        done = np.full(2, self.t == len(self.trace) - 1)
         return np.array(obs, dtype=np.float32), np.zeros(2), np.zeros(2, bool), done, info
 
 

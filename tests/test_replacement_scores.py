@@ -3,13 +3,10 @@ slot only, as the fleet runner's log does (policies.benchmark.runner._score_deci
 
 from __future__ import annotations
 
-from types import SimpleNamespace
-
-import numpy as np
 import pytest
 
 from policies.benchmark.runner import decision_columns, run_episodes
-from tests.test_decision_beliefs import CAP, NAMES, Flyer, _by_hand, _info
+from tests.test_decision_beliefs import Flyer, TraceEnv, _by_hand, _info
 
 NONE = {"spring": [0, 0], "seal": [0, 0]}
 
@@ -31,27 +28,8 @@ TRACE = [
 ]
 
 
-class BothEnv:
-    """Replays :data:`TRACE` as a vector env of two episodes."""
-
-    num_envs = 2
-    obs_names = NAMES
-    params = SimpleNamespace(mission=SimpleNamespace(flight_duration_s=3600.0))
-    setup = SimpleNamespace(scenario=SimpleNamespace(rul_cap_flights=CAP))
-
-    def reset(self, seed=None):
-        self.t = 0
-        return np.array(TRACE[0][0], dtype=np.float32), TRACE[0][1]
-
-    def step(self, actions):
-        self.t += 1
-        obs, info = TRACE[self.t]
-        done = np.full(2, self.t == len(TRACE) - 1)
-        return np.array(obs, dtype=np.float32), np.zeros(2), np.zeros(2, bool), done, info
-
-
 def test_replacement_scores_only_the_parts_replaced() -> None:
-    rows = [r["row"] for r in run_episodes(BothEnv(), Flyer(), [(0, 0), (1, 1)])]
+    rows = [r["row"] for r in run_episodes(TraceEnv(TRACE), Flyer(), [(0, 0), (1, 1)])]
     # episode 0 replaced both parts: both scored on the reset obs and truth
     for part, truth, mean, low in (("spring", 250, 300, 200), ("seal", 800, 900, 700)):
         ra, hit, cov = _by_hand(truth, mean, low)
