@@ -125,6 +125,7 @@ __all__ = [
     "EPOCHS_ENV_ID",
     "DecisionEpochs",
     "check_gamma",
+    "check_ks",
     "delegate_actions",
     "maintenance_mask",
     "make_decision_epoch_env",
@@ -172,7 +173,7 @@ def delegate_actions(delegate: Any, obs: np.ndarray) -> np.ndarray:
     return out.astype(np.int64)
 
 
-def _check_ks(ks: Sequence[int]) -> tuple[int, ...]:
+def check_ks(ks: Sequence[int]) -> tuple[int, ...]:
     try:
         out = tuple(ks)
     except TypeError:  # not a sequence: the message below names it
@@ -223,7 +224,7 @@ class DecisionEpochs(gym.Env):
         self.env = env
         self.metadata = env.metadata
         self.render_mode = env.render_mode
-        self.ks = _check_ks(ks)
+        self.ks = check_ks(ks)
         self.delegate = _check_delegate(delegate)
         self.n_maintenance = N_MAINTENANCE + (delegate is not None)
         self.gamma = check_gamma(gamma)

@@ -52,8 +52,8 @@ from scas_env.decision_epochs import (
     FLY,
     N_MAINTENANCE,
     _check_delegate,
-    _check_ks,
     check_gamma,
+    check_ks,
     delegate_actions,
     maintenance_mask,
     with_delegation,
@@ -90,7 +90,7 @@ class DecisionEpochsVectorEnv(VectorEnv):
         delegate: Any = None,
         **kwargs: Any,
     ) -> None:
-        self.ks = _check_ks(ks)
+        self.ks = check_ks(ks)
         self.delegate = _check_delegate(delegate)
         self.n_maintenance = N_MAINTENANCE + (delegate is not None)
         self.gamma = check_gamma(gamma)

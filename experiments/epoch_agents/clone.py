@@ -35,7 +35,7 @@ from policies.agents.training import (
     prepared_run,
     save_statistics,
 )
-from scas_env.decision_epochs import DELEGATE, _check_ks
+from scas_env.decision_epochs import DELEGATE, check_ks
 from scas_env.utils.results_folder import json_text
 
 __all__ = ["clone_rule", "delegation_demonstrations"]
@@ -49,7 +49,7 @@ def delegation_demonstrations(
     following that from the slot (:func:`experiments.epoch_agents.demonstrations.epoch_returns` with
     ``k`` everywhere; ``gamma`` per decision) and the epoch env's masks with delegation.
     Played from slot 0 they replay the recorded episodes: delegating replays the rule."""
-    ks = _check_ks(ks)
+    ks = check_ks(ks)
     if k not in ks:
         raise ValueError(f"k = {k!r} must be one of ks = {ks}")
     n_ep, slots, _ = recorded.obs.shape

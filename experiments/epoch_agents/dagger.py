@@ -37,7 +37,7 @@ from experiments.epoch_agents.demonstrations import (
     label_k,
 )
 from policies.base import make_policy
-from scas_env.decision_epochs import FLY, _check_ks
+from scas_env.decision_epochs import FLY, check_ks
 
 __all__ = ["DaggerPlan", "dagger_samples", "merged"]
 
@@ -77,7 +77,7 @@ def dagger_samples(
 
     from scas_env import ENV_ID
 
-    ks = _check_ks(ks)
+    ks = check_ks(ks)
     ks_sorted = _checked_labelling(ks, safety)
     index_of_k = {k: i for i, k in enumerate(ks)}
     limit = int(np.ceil(safety * ks_sorted[-1]))

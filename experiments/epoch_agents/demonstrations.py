@@ -37,7 +37,7 @@ from scas_env.decision_epochs import (
     MASK_READS,
     N_MAINTENANCE,
     TEST_AND_FLY,
-    _check_ks,
+    check_ks,
     maintenance_mask,
     with_delegation,
 )
@@ -59,7 +59,7 @@ def _checked_labelling(ks: Sequence[int], safety: float) -> np.ndarray:
     """``ks`` sorted (int64) after checking them and ``safety`` for :func:`label_k`."""
     if not (isinstance(safety, int | float) and math.isfinite(safety) and safety >= 1.0):
         raise ValueError(f"safety = {safety!r} must be a finite number >= 1")
-    ks_sorted = np.sort(np.asarray(_check_ks(ks), dtype=np.int64))
+    ks_sorted = np.sort(np.asarray(check_ks(ks), dtype=np.int64))
     if ks_sorted[0] != 1:
         raise ValueError(f"ks = {tuple(ks)!r} must contain 1 (to land on every action)")
     return ks_sorted
@@ -254,7 +254,7 @@ def demonstrations(
     """The epoch samples of every recorded slot (module docstring; ``safety``: see
     :func:`epoch_labels`). Raises ``ValueError`` if a demonstrated action is not allowed by
     the epoch env's mask there."""
-    ks = _check_ks(ks)
+    ks = check_ks(ks)
     n_ep, slots, _ = recorded.obs.shape
     index_of_k = np.zeros(max(ks) + 1, dtype=np.int64)
     index_of_k[list(ks)] = np.arange(len(ks))

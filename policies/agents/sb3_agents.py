@@ -67,7 +67,7 @@ from scas_env.decision_epochs import (
     FLY,
     MASK_READS,
     N_MAINTENANCE,
-    _check_ks,
+    check_ks,
     delegate_actions,
     maintenance_mask,
     with_delegation,
@@ -270,7 +270,7 @@ class EpochAgent(SB3Agent):
         masked: bool = True,
         delegate: Any = None,
     ) -> None:
-        ks = _check_ks(ks)
+        ks = check_ks(ks)
         episode_slots = _check_episode_slots(episode_slots)
         super().__init__(model, normalizer, obs_names, masked=False)
         self.ks = ks
@@ -590,12 +590,12 @@ def load_sb3_policy(
     if algo is not None and algo not in ALGO_NAMES:
         raise ValueError(f"algo = {algo!r} must be one of {sorted(ALGO_NAMES)}")
     if ks is not None:
-        ks = _check_ks(ks)
+        ks = check_ks(ks)
     if episode_slots is not None:
         episode_slots = _check_episode_slots(episode_slots)
     check_manifest(path)
     meta = _metadata(path)
-    if ks is not None and meta.get("ks") is not None and ks != _check_ks(meta["ks"]):
+    if ks is not None and meta.get("ks") is not None and ks != check_ks(meta["ks"]):
         raise ValueError(
             f"ks = {ks} differ from the agent's ks = {tuple(meta['ks'])} in its metadata "
             f"({path}: its actions mean those slots per decision); leave ks unset"
