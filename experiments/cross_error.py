@@ -20,6 +20,7 @@ lag. Command line::
 from __future__ import annotations
 
 import json
+import math
 from collections.abc import Sequence
 from typing import Any
 
@@ -69,13 +70,16 @@ def error_lives(env: ScasMaintenanceEnv, policy: str, seed: int) -> dict[str, li
 
 def lag_correlation(lives: Sequence[np.ndarray], lag: int) -> tuple[float, int]:
     """Pearson correlation of the error between records ``lag`` apart within a life, pooled
-    over ``lives``, and the number of pairs (NaN, 0 without a pair)."""
+    over ``lives``, and the number of pairs (NaN, 0 without a pair; NaN with the pairs when
+    either side has no variance, e.g. a part that does not degrade)."""
     if lag < 1:
         raise ValueError(f"lag = {lag!r} must be a positive number of flights")
     pairs = [np.column_stack([life[:-lag], life[lag:]]) for life in lives if life.size > lag]
     if not pairs:
         return float("nan"), 0
     both = np.vstack(pairs)
+    if not (both.std(axis=0) > 0.0).all():
+        return float("nan"), int(both.shape[0])
     return float(np.corrcoef(both.T)[0, 1]), int(both.shape[0])
 
 
@@ -87,14 +91,38 @@ def inflation(rho: float) -> float:
     return (1.0 + rho) / (1.0 - rho)
 
 
+def check_run_args(episodes: int, seed: int, policy: str) -> None:
+    """``ValueError`` naming ``episodes`` (an integer >= 1), ``seed`` (an integer >= 0) or
+    ``policy`` (one of :data:`~experiments.belief_calibration.POLICIES`) when out of range."""
+    if isinstance(episodes, bool) or not isinstance(episodes, int) or episodes < 1:
+        raise ValueError(f"episodes = {episodes!r} must be an integer >= 1")
+    if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
+        raise ValueError(f"seed = {seed!r} must be an integer >= 0")
+    if policy not in POLICIES:
+        raise ValueError(f"policy = {policy!r} must be one of {POLICIES}")
+
+
+def scenario_of(fields: dict | None) -> Scenario:
+    """The :class:`~scas_env.core.scenario.Scenario` of ``fields`` over the defaults;
+    ``ValueError`` naming what is wrong (not a dict, an unknown field, a bad value)."""
+    if fields is not None and not isinstance(fields, dict):
+        raise ValueError(f"scenario = {fields!r} must be a dict of Scenario fields")
+    try:
+        return Scenario.from_dict(dict(fields or {}))
+    except TypeError as exc:
+        raise ValueError(f"scenario = {fields!r}: {exc}") from None
+
+
 def run(
     episodes: int, seed: int, policy: str = "test10", scenario: dict | None = None,
     progress: bool = True,
 ) -> dict[str, Any]:  # fmt: skip
-    """Per part and lag: the correlation and pairs; the inflation at the data interval."""
-    if policy not in POLICIES:
-        raise ValueError(f"policy = {policy!r} must be one of {POLICIES}")
-    env = ScasMaintenanceEnv(scenario=Scenario.from_dict(dict(scenario or {})))
+    """Per part and lag: the correlation and pairs (``None`` where undefined); the inflation
+    at the data interval, ``None`` with a ``note`` when the correlation there is not a
+    correlation in (-1, 1) (a part whose error has no variance, or no pair at that lag).
+    The arguments are checked before any episode runs."""
+    check_run_args(episodes, seed, policy)
+    env = ScasMaintenanceEnv(scenario=scenario_of(scenario))
     interval = int(env.scenario.flight_update_flights)
     pooled: dict[str, list[np.ndarray]] = {p: [] for p in PARTS}
     for e in tqdm(range(episodes), desc="episodes", disable=not progress):
@@ -104,12 +132,21 @@ def run(
                            "data_interval_flights": interval}  # fmt: skip
     for part in PARTS:
         rows = {lag: lag_correlation(pooled[part], lag) for lag in sorted({*LAGS, interval})}
-        rho = rows[interval][0]
+        rho, pairs = rows[interval]
         out[part] = {
-            "correlation": {str(k): v[0] for k, v in rows.items()},
+            "correlation": {str(k): v[0] if math.isfinite(v[0]) else None for k, v in rows.items()},
             "pairs": {str(k): v[1] for k, v in rows.items()},
-            "inflation_at_data_interval": inflation(rho),
         }
+        if -1.0 < rho < 1.0:
+            out[part]["inflation_at_data_interval"] = inflation(rho)
+        else:
+            why = "its error has no variance" if pairs else "no pair of records is that far apart"
+            out[part]["inflation_at_data_interval"] = None
+            out[part]["note"] = (
+                f"no inflation: the correlation at {interval} flights is {rho!r} ({why})"
+                if not math.isfinite(rho)
+                else f"no inflation: the correlation at {interval} flights is {rho!r}"
+            )
     return out
 
 
@@ -124,12 +161,25 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser.add_argument("--scenario", type=json.loads, default={}, help="Scenario fields as JSON")
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
     args = parser.parse_args(argv)
+    try:
+        scenario_of(args.scenario)
+    except ValueError as exc:
+        parser.error(f"--scenario: {exc}")
     result = run(args.episodes, args.seed, args.policy, args.scenario, not args.no_progress)
     print(json.dumps(result, indent=1))
     return 0
 
 
-__all__ = ["LAGS", "error_lives", "inflation", "lag_correlation", "main", "run"]
+__all__ = [
+    "LAGS",
+    "check_run_args",
+    "error_lives",
+    "inflation",
+    "lag_correlation",
+    "main",
+    "run",
+    "scenario_of",
+]
 
 
 if __name__ == "__main__":

@@ -84,7 +84,9 @@ def one_test(env: ScasMaintenanceEnv, rng: np.random.Generator, part: str, sever
 
 
 def format_rates(rows: Sequence[dict[str, float | str]]) -> str:
-    """A text table with each healthy and critical figure beside its target."""
+    """A text table with each healthy and critical figure beside its target: "met" when the
+    whole Wilson interval lies within the target, "within CI" when the interval reaches it,
+    "not met" when the interval lies wholly outside it."""
     lines = [
         f"{'part':6s} {'severity':>8s} {'no-go share':>11s} {'95% CI':>19s} {'model':>8s}  target"
     ]
@@ -104,7 +106,7 @@ def format_rates(rows: Sequence[dict[str, float | str]]) -> str:
             lo = TARGETS["critical_min"]
             verdict = (
                 "met"
-                if float(r["share"]) >= lo
+                if float(r["ci_low"]) >= lo
                 else "within CI"
                 if float(r["ci_high"]) >= lo
                 else "not met"

@@ -67,6 +67,15 @@ DEFAULT_PARTICLES, DEFAULT_STEPS = 500, 2
 RW_SCALE_SQ = 2.38**2 / 3
 
 
+def check_filter_size(n_particles: int, steps: int) -> None:
+    """``ValueError`` naming ``n_particles`` unless an integer >= 2 (a resampling needs two
+    particles), or ``steps`` unless an integer >= 1."""
+    if isinstance(n_particles, bool) or not isinstance(n_particles, int) or n_particles < 2:
+        raise ValueError(f"n_particles = {n_particles!r} must be an integer >= 2")
+    if isinstance(steps, bool) or not isinstance(steps, int) or steps < 1:
+        raise ValueError(f"steps = {steps!r} must be an integer >= 1")
+
+
 class JointParticleFilter(JointPosterior):
     """IBIS over ``(a0, log theta_c, log theta_w)`` (module docstring). ``log_weight`` holds
     each particle's log-likelihood since the last resampling, ``total`` since the prior;
@@ -80,8 +89,7 @@ class JointParticleFilter(JointPosterior):
         n_particles: int = DEFAULT_PARTICLES,
         steps: int = DEFAULT_STEPS,
     ) -> None:
-        if n_particles < 2 or steps < 1:
-            raise ValueError(f"n_particles = {n_particles}, steps = {steps}: need >= 2 and >= 1")
+        check_filter_size(n_particles, steps)
         if (spring.part, seal.part) != PARTS or (spring.dims, seal.dims) != (2, 1):
             raise ValueError("JointParticleFilter needs the spring's model and then the seal's")
         self.spring, self.seal, self.rng, self.steps = spring, seal, rng, steps
@@ -218,7 +226,9 @@ def run_filter_study(
     progress: bool = True,
 ) -> list[dict[str, Any]]:
     """Rows of :func:`filter_lives` over seeds ``seed .. seed + episodes - 1`` per policy;
-    each episode's filter draws from ``SeedSequence(seed)``'s child."""
+    each episode's filter draws from ``SeedSequence(seed)``'s child. The arguments are
+    checked (:func:`check_filter_size`, ValueError naming the value) before any env."""
+    check_filter_size(n_particles, steps)
     env = first_life_env(episodes, seed, policies, scenario_fields, stages)
     rows: list[dict[str, Any]] = []
     for policy, episode_seed, rng in episode_streams(
@@ -284,6 +294,7 @@ FILTER_CURVES = (
 def main(argv: Sequence[str] | None = None) -> int:
     """The command line (module docstring)."""
     from experiments.belief_common import add_study_options
+    from experiments.cli_common import int_at_least
     from experiments.reference_report import format_table, read_lives, stage_table, write_report
     from scas_env.cli_args import check_out_dir, make_parser, nonneg_int, positive_int
 
@@ -292,7 +303,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser.add_argument("--seed", type=nonneg_int, default=1000, help="first episode seed")
     parser.add_argument("--policies", nargs="+", default=["test10"], choices=POLICIES)
     parser.add_argument("--stages", nargs="+", type=float, default=[0.2, 0.4])
-    parser.add_argument("--particles", type=positive_int, default=DEFAULT_PARTICLES)
+    parser.add_argument("--particles", type=int_at_least(2), default=DEFAULT_PARTICLES)
     parser.add_argument("--steps", type=positive_int, default=DEFAULT_STEPS,
                         help="Metropolis-Hastings steps per resampling")  # fmt: skip
     parser.add_argument("--pair", metavar="DIR", nargs="+", default=None,
@@ -341,6 +352,7 @@ __all__ = [
     "FILTER_CURVES",
     "JointParticleFilter",
     "against_filter",
+    "check_filter_size",
     "filter_lives",
     "main",
     "paired_rows",

@@ -399,9 +399,68 @@ def run_joint_study(
     return rows
 
 
+#: the settings the runs joined by ``--tables`` share: lives judged otherwise are not one study's
+JOIN_KEYS = ("scenario_fields", "stages", "log2_points", "min_ess")
+
+
+def _join_settings(folder: str | Path, config: Mapping[str, Any]) -> dict[str, Any]:
+    """The :data:`JOIN_KEYS` settings of a run's recorded ``config`` (a joined report's: its
+    runs', which must agree); ``ValueError`` naming the folder otherwise."""
+    if "runs" in config:
+        settings = [_join_settings(folder, run) for run in config["runs"]]
+        if not settings or any(s != settings[0] for s in settings):
+            raise ValueError(f"{folder}: a joined report of runs of differing settings {settings}")
+        return settings[0]
+    missing = [k for k in JOIN_KEYS if k not in config]
+    if missing:
+        raise ValueError(f"{folder}: its study.json config records no {missing}")
+    return {k: config[k] for k in JOIN_KEYS}
+
+
+def check_joinable(
+    folders: Sequence[str | Path],
+    configs: Sequence[Mapping[str, Any]],
+    rows: Sequence[Sequence[Mapping[str, Any]]],
+) -> None:
+    """Refuse (``ValueError`` naming the folders and values) a join of results folders that
+    counts lives twice (a folder given twice, a record ``(part, policy, seed, stage)`` in
+    two folders or twice in one) or pools runs of differing :data:`JOIN_KEYS` settings;
+    ``configs`` and ``rows`` are each folder's recorded config and rows."""
+    given: dict[Path, int] = {}
+    for i, folder in enumerate(folders):
+        j = given.setdefault(Path(folder).resolve(), i)
+        if j != i:
+            raise ValueError(
+                f"{folder} is given twice (as {folders[j]}): its lives would count twice"
+            )
+    settings = [_join_settings(f, c) for f, c in zip(folders, configs, strict=True)]
+    for key in JOIN_KEYS:
+        values = [s[key] for s in settings]
+        if any(v != values[0] for v in values):
+            each = "; ".join(f"{f}: {v!r}" for f, v in zip(folders, values, strict=True))
+            raise ValueError(f"the runs differ in {key} ({each}): their lives are not one study's")
+    owner: dict[tuple[Any, ...], int] = {}
+    for i, mine in enumerate(rows):
+        seen: set[tuple[Any, ...]] = set()
+        for r in mine:
+            key = (r["part"], r["policy"], int(r["seed"]), float(r["stage"]))
+            j = owner.setdefault(key, i)
+            if j != i:
+                raise ValueError(
+                    f"{folders[j]} and {folders[i]} both hold the record (part, policy, seed, "
+                    f"stage) = {key}: its lives would count twice"
+                )
+            if key in seen:
+                raise ValueError(
+                    f"{folders[i]} holds the record (part, policy, seed, stage) = {key} twice: "
+                    "its lives would count twice"
+                )
+            seen.add(key)
+
+
 def _joined(parser: Any, args: Any) -> int:
-    """``--tables``: earlier runs' rows joined, their tables printed and (``--out``) written
-    as one report, its config the runs' configs."""
+    """``--tables``: earlier runs' rows joined (:func:`check_joinable`), their tables printed
+    and (``--out``) written as one report, its config the runs' configs."""
     import json
 
     from experiments.reference_report import format_table, read_lives, write_report
@@ -410,10 +469,12 @@ def _joined(parser: Any, args: Any) -> int:
     if args.out is not None:
         check_out_dir(parser, args.out, args.overwrite)
     try:
-        rows = [r for folder in args.tables for r in read_lives(folder)]
+        per_folder = [read_lives(folder) for folder in args.tables]
         runs = [json.loads((Path(f) / "study.json").read_text())["config"] for f in args.tables]
+        check_joinable(args.tables, runs, per_folder)
     except (FileNotFoundError, KeyError, ValueError) as exc:
         parser.error(f"--tables: {exc}")
+    rows = [r for mine in per_folder for r in mine]
     table = joint_tables(rows, np.random.default_rng(args.seed))
     print(format_table(table))
     if args.out is not None:
@@ -550,7 +611,9 @@ def plot_joint(
 
 
 __all__ = [
+    "JOIN_KEYS",
     "JointPosterior",
+    "check_joinable",
     "first_life_env",
     "first_life_events",
     "first_life_records",

@@ -25,7 +25,7 @@ from scipy.interpolate import RegularGridInterpolator
 from tqdm.auto import tqdm
 
 from experiments.belief_calibration import STAGES
-from experiments.belief_common import INTERVAL
+from experiments.belief_common import INTERVAL, wilson_share
 from experiments.reference_model import (
     BATCH,
     DEFAULT_MIN_ESS,
@@ -110,18 +110,26 @@ def synthetic_stage_pits(
 
 def format_synthetic(pits: dict[float, np.ndarray], low_quantile: float = 0.05) -> str:
     """Undercut of the low quantile, share above the 95 % quantile and coverage of the 90 %
-    interval per stage, with each share's binomial standard error."""
-    lines = [f"{'stage':>5s} {'lives':>5s} {'undercut':>15s} {'above':>15s} {'coverage':>15s}"]
+    interval per stage, each share with its Wilson 95 % interval (each life is judged once per
+    stage, so its lives are independent); ``no lives`` for a stage no life reached."""
+    width = 21
+    lines = [
+        f"{'stage':>5s} {'lives':>5s} "
+        + " ".join(f"{h:>{width}s}" for h in ("undercut", "above", "coverage"))
+    ]
     for s, p in pits.items():
-        n = max(p.size, 1)
+        if p.size == 0:
+            lines.append(f"{s:5.2f} {0:5d} no lives")
+            continue
         cells = []
-        for share in (
-            np.mean(p < low_quantile),
-            np.mean(p > INTERVAL[1]),
-            np.mean((p >= INTERVAL[0]) & (p <= INTERVAL[1])),
+        for hits in (
+            p < low_quantile,
+            p > INTERVAL[1],
+            (p >= INTERVAL[0]) & (p <= INTERVAL[1]),
         ):
-            cells.append(f"{share:6.3f} +- {np.sqrt(share * (1 - share) / n):.3f}")
-        lines.append(f"{s:5.2f} {p.size:5d} " + " ".join(f"{c:>15s}" for c in cells))
+            share, low, high, _ = wilson_share(hits)
+            cells.append(f"{share:.3f} [{low:.3f}, {high:.3f}]")
+        lines.append(f"{s:5.2f} {p.size:5d} " + " ".join(f"{c:>{width}s}" for c in cells))
     return "\n".join(lines)
 
 

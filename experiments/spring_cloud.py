@@ -38,9 +38,12 @@ from tqdm.auto import tqdm
 
 from experiments.belief_calibration import POLICIES, policy_action
 from experiments.belief_common import add_study_options
+from experiments.belief_comparison import _cluster_interval
 from scas_env.core.scenario import Scenario
 from scas_env.env import ScasMaintenanceEnv
 
+#: the PITs whose tail shares :func:`stage_summary` gives
+PITS = ("pit_rul", "pit_rul_det", "pit_theta", "pit_x")
 #: stage windows (fractions of the spring's life) of :func:`stage_summary`
 WINDOWS: tuple[tuple[float, float], ...] = (
     (0.15, 0.25),
@@ -118,13 +121,42 @@ def cloud_records(
     return out
 
 
+def share_interval(
+    hits: np.ndarray, episode: np.ndarray, rng: np.random.Generator, n_resamples: int = 4000
+) -> tuple[float, float, float]:
+    """The share of the 0/1 ``hits`` and its 95 % percentile interval with the episodes
+    resampled whole (:func:`experiments.belief_comparison._cluster_interval`, drawing from
+    ``rng``): one episode's records are correlated, so the episode is the unit. The interval
+    is the share itself when every episode has the same share, NaN with fewer than two
+    episodes."""
+    eps, inv = np.unique(episode, return_inverse=True)
+    k = np.bincount(inv, weights=hits, minlength=eps.size)
+    n = np.bincount(inv, minlength=eps.size).astype(np.float64)
+    share = float(k.sum() / n.sum())
+    if eps.size < 2:
+        return share, math.nan, math.nan
+    if np.all(k * n[0] == k[0] * n):  # the same share in every episode
+        return share, share, share
+    low, high, _ = _cluster_interval(
+        (k, n), lambda kk, nn, axis=-1: kk.sum(axis=axis) / nn.sum(axis=axis), rng, n_resamples
+    )
+    return share, low, high
+
+
 def stage_summary(
     records: Sequence[Mapping[str, float]],
     windows: Sequence[tuple[float, float]] = WINDOWS,
+    *,
+    rng: np.random.Generator,
 ) -> list[dict[str, float]]:
-    """Per stage window: records, the shares of each PIT below 0.05 and above 0.95, the sd
-    of the z-scores, the median cloud spreads and the sd of ``log_det_error``."""
+    """Per stage window: records and episodes, the shares of each PIT below 0.05 and above
+    0.95 with their episode-cluster 95 % intervals (:func:`share_interval`, drawing from
+    ``rng``; keys ``<share>_ci_low`` and ``<share>_ci_high``), the sd of the z-scores, the
+    median cloud spreads and the sd of ``log_det_error``."""
+    if not isinstance(rng, np.random.Generator):
+        raise TypeError(f"rng = {rng!r} must be a numpy Generator")
     stage = np.array([r["stage"] for r in records])
+    seeds = np.array([r["seed"] for r in records])
 
     def col(name: str, sel: np.ndarray) -> np.ndarray:
         return np.array([r[name] for r in records])[sel]
@@ -134,10 +166,14 @@ def stage_summary(
         sel = (stage >= lo) & (stage < hi)
         row: dict[str, float] = {"stage_low": lo, "stage_high": hi, "records": int(sel.sum())}
         if sel.any():
-            for name in ("pit_rul", "pit_rul_det", "pit_theta", "pit_x"):
+            episode = seeds[sel]
+            row["episodes"] = int(np.unique(episode).size)
+            for name in PITS:
                 v = col(name, sel)
-                row[f"{name}_below_0.05"] = float(np.mean(v < 0.05))
-                row[f"{name}_above_0.95"] = float(np.mean(v > 0.95))
+                for side, hits in (("below_0.05", v < 0.05), ("above_0.95", v > 0.95)):
+                    share, low, high = share_interval(hits.astype(np.float64), episode, rng)
+                    key = f"{name}_{side}"
+                    row[key], row[f"{key}_ci_low"], row[f"{key}_ci_high"] = share, low, high
             for name in ("z_theta", "z_x"):
                 row[f"{name}_sd"] = float(np.nanstd(col(name, sel)))
             row["sd_log_theta_median"] = float(np.median(col("sd_log_theta", sel)))
@@ -148,15 +184,15 @@ def stage_summary(
 
 
 def format_summary(rows: Sequence[Mapping[str, float]]) -> str:
-    """The summary as a fixed-width table (shares below 0.05 / above 0.95 of each PIT)."""
+    """The summary as fixed-width tables: the shares below 0.05 / above 0.95 of each PIT
+    and the cloud's spread, then each share with its episode-cluster 95 % interval."""
     head = (
         f"{'stage':>9} {'n':>5} | {'RUL lo/hi':>11} | {'theta lo/hi':>11} | {'x lo/hi':>11} | "
         f"{'sd z_th':>7} {'sd z_x':>7} | {'sd lt':>6} {'sd x/x':>6} | {'det err':>7}"
     )
     lines = [head]
-    for r in rows:
-        if not r["records"]:
-            continue
+    shown = [r for r in rows if r["records"]]
+    for r in shown:
         lines.append(
             f"{r['stage_low']:.2f}-{r['stage_high']:.2f} {r['records']:5d} | "
             f"{r['pit_rul_below_0.05']:.3f}/{r['pit_rul_above_0.95']:.3f} | "
@@ -166,11 +202,26 @@ def format_summary(rows: Sequence[Mapping[str, float]]) -> str:
             f"{r['sd_log_theta_median']:6.3f} {r['sd_x_rel_median']:6.3f} | "
             f"{r['log_det_error_sd']:7.4f}"
         )
+    lines.append("the shares with their 95 % intervals, episodes resampled whole:")
+    lines.append(
+        f"{'stage':>9} {'episodes':>8} {'PIT':>7} | {'below 0.05':>20} | {'above 0.95':>20}"
+    )
+    for r in shown:
+        for name in PITS:
+            cells = [
+                f"{r[k]:.3f} [{r[k + '_ci_low']:.3f}, {r[k + '_ci_high']:.3f}]"
+                for k in (f"{name}_below_0.05", f"{name}_above_0.95")
+            ]
+            lines.append(
+                f"{r['stage_low']:.2f}-{r['stage_high']:.2f} {r['episodes']:8d} "
+                f"{name[4:]:>7} | {cells[0]:>20} | {cells[1]:>20}"
+            )
     return "\n".join(lines)
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """The command line (module docstring): records, the summary printed, ``--out`` JSON."""
+    """The command line (module docstring): records, the summary printed (its intervals
+    drawing from ``default_rng(--seed)``), ``--out`` JSON."""
     from experiments.cli_common import check_out_file
     from scas_env.cli_args import make_parser, nonneg_int, positive_int
     from scas_env.utils.atomic_file import write_text_atomic
@@ -196,7 +247,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         )
     except (TypeError, ValueError) as exc:
         parser.error(str(exc))
-    rows = stage_summary(records)
+    rows = stage_summary(records, rng=np.random.default_rng(args.seed))
     print("spring cloud vs truth: shares of records with the truth below the cloud's 5 % / "
           "above its 95 %")  # fmt: skip
     print(format_summary(rows))
@@ -206,7 +257,15 @@ def main(argv: Sequence[str] | None = None) -> int:
     return 0
 
 
-__all__ = ["WINDOWS", "cloud_records", "format_summary", "main", "stage_summary"]
+__all__ = [
+    "PITS",
+    "WINDOWS",
+    "cloud_records",
+    "format_summary",
+    "main",
+    "share_interval",
+    "stage_summary",
+]
 
 
 if __name__ == "__main__":

@@ -126,6 +126,6 @@ def test_cloud_records_follow_the_world() -> None:
     assert first["pit_x"] == pytest.approx(pit_x, abs=w.max())
     assert first["pit_rul"] == pytest.approx(pit_rul, abs=w.max())
     # the summary's shares are plain counts over the window's records
-    rows = stage_summary(recs, [(0.0, 1.0)])
+    rows = stage_summary(recs, [(0.0, 1.0)], rng=np.random.default_rng(0))
     below_rul = np.mean([r["pit_rul"] < 0.05 for r in recs])
     assert rows[0]["records"] == len(recs) and rows[0]["pit_rul_below_0.05"] == below_rul
