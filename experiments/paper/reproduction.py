@@ -67,16 +67,30 @@ from scas_env.actuator.params import ScasParams
 
 __all__ = [
     "FAULTS",
+    "FLIGHT_RESIDUALS_STREAM",
+    "HEALTHY_SET_STREAM",
+    "PATH_STREAM_BASE",
     "Reproduction",
     "ReproductionConfig",
     "campaign_detection",
     "healthy_unit_alarms",
+    "path_seed_sequence",
     "run_reproduction",
     "select_features",
 ]
 
 FloatArray = NDArray[np.float64]
 FAULTS = ("crack", "wear")
+# Streams of the held-out units. A campaign run draws from SeedSequence(seed,
+# spawn_key=(mode, level, run)) with mode < 3, so these keys lie outside the campaign's key
+# space: the prognosis paths, the nested healthy units and the flight residuals are units
+# the measurement model and the population baseline were never fitted on.
+PATH_STREAM_BASE = 100
+"""Path i of fault f draws from ``SeedSequence(seed, spawn_key=(PATH_STREAM_BASE + f, i))``."""
+HEALTHY_SET_STREAM = 102
+"""The nested healthy units draw from ``SeedSequence(seed, spawn_key=(102,))``."""
+FLIGHT_RESIDUALS_STREAM = 103
+"""The healthy flight windows draw from ``SeedSequence(seed, spawn_key=(103,))``."""
 REDUNDANT_MIN_CORRELATION = 0.95
 RESPONSIVE_MIN_SPEARMAN = 0.2
 
@@ -398,12 +412,25 @@ class Reproduction:
     campaign_path: str | None = None
 
 
+def path_seed_sequence(seed: int, fault_index: int, path_index: int) -> np.random.SeedSequence:
+    """Seed sequence of path ``path_index`` of fault ``FAULTS[fault_index]``.
+
+    ``SeedSequence(seed, spawn_key=(PATH_STREAM_BASE + fault_index, path_index))``: outside
+    the campaign's ``(mode, level, run)`` keys, so no path repeats a campaign unit.
+    """
+    if not 0 <= fault_index < len(FAULTS):
+        raise ValueError(f"fault_index = {fault_index!r} must be in [0, {len(FAULTS) - 1}]")
+    if path_index < 0:
+        raise ValueError(f"path_index = {path_index!r} must be >= 0")
+    return np.random.SeedSequence(seed, spawn_key=(PATH_STREAM_BASE + fault_index, path_index))
+
+
 def healthy_set_for(
     params: ScasParams, selection: dict[str, Any], config: ReproductionConfig, seed: int
 ) -> HealthySet:
     """The nested healthy units of a reproduction: ``config.healthy_units`` units with
     ``installation_tests + detector_window`` tests each of every selected ground feature,
-    drawn from ``SeedSequence(seed, spawn_key=(len(FAULTS),))``."""
+    drawn from ``SeedSequence(seed, spawn_key=(HEALTHY_SET_STREAM,))``."""
     chosen = [
         selection["selected"][f][k] for f in FAULTS for k in ("ground", "ground_per_fault_top")
     ]
@@ -414,7 +441,7 @@ def healthy_set_for(
         config.healthy_units,
         k + config.detector_window,
         k,
-        np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(len(FAULTS),))),
+        np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(HEALTHY_SET_STREAM,))),
     )
 
 
@@ -430,8 +457,8 @@ def run_reproduction(
     """Campaign (or load), selection, detection, healthy set and prognosis paths.
 
     Randomness: the campaign from ``seed`` (:func:`run_campaign`), path i of fault f from
-    ``SeedSequence(seed, spawn_key=(f, i))`` (f = index in :data:`FAULTS`), the nested
-    healthy units from ``SeedSequence(seed, spawn_key=(2,))``.
+    :func:`path_seed_sequence`, the nested healthy units from
+    ``SeedSequence(seed, spawn_key=(HEALTHY_SET_STREAM,))``: keys no campaign run uses.
     """
     clock = time.perf_counter()
     timings: dict[str, float] = {}
@@ -460,7 +487,7 @@ def run_reproduction(
                 healthy,
                 fault,
                 config,
-                np.random.SeedSequence(seed, spawn_key=(f_index, i)),
+                path_seed_sequence(seed, f_index, i),
                 progress,
             )
             for i in range(config.n_paths)

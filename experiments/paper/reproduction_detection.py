@@ -6,11 +6,12 @@
 For each fault, ``n_paths`` degradation paths exactly as the reproduction's prognosis paths
 (:func:`experiments.paper.reproduction_prognosis.prognose_path`: the same unit, growth and
 physics pre-flight tests for the same seeds, path i of fault f from
-``SeedSequence(seed, spawn_key=(f, i))``), without the particle filter: the unit's own first
-K tests give its reference, the section-5.1 detector ([DJS20] §5.1: 95 % of a running
-window of W corrected tests beyond the P95 of the healthy run-to-run residuals) gives the
-first alarm, and the severity at that test is recorded in the paper's convention (crack:
-fraction of the critical depth; seal: fraction of the critical leakage growth,
+:func:`~experiments.paper.reproduction.path_seed_sequence`, held out of the campaign),
+without the particle filter: the unit's own first K tests give its reference, the
+section-5.1 detector ([DJS20] §5.1: 95 % of a running window of W corrected tests beyond
+the P95 of the healthy run-to-run residuals) gives the first alarm, and the severity at
+that test is recorded in the paper's convention (crack: fraction of the critical depth;
+seal: fraction of the critical leakage growth,
 :func:`~experiments.paper.reproduction_conventions.leakage_fraction`).
 
 The ground feature is each fault's top ground feature of the campaign's per-fault ranking
@@ -36,10 +37,12 @@ from experiments.paper.campaign_table import CampaignResult
 from experiments.paper.prognosis_setup import grow_path, healthy_residuals, installation_detector
 from experiments.paper.reproduction import (
     FAULTS,
+    FLIGHT_RESIDUALS_STREAM,
     ReproductionConfig,
     check_campaign_params,
     healthy_set_for,
     load_campaign,
+    path_seed_sequence,
     select_features,
 )
 from experiments.paper.reproduction_conventions import leakage_fraction
@@ -169,7 +172,8 @@ def installation_detection(
     ``flight=True`` also detects with each fault's in-flight winner of the selection (e.g.
     I8 for the crack, I9 for wear), one flight window per test point, referred to the unit's
     own first K windows, against the run-to-run residuals of ``config.healthy_units``
-    healthy units (generator ``SeedSequence(seed, spawn_key=(3,))``); keys ``flight_*``.
+    healthy units (generator ``SeedSequence(seed, spawn_key=(FLIGHT_RESIDUALS_STREAM,))``,
+    outside the campaign's keys); keys ``flight_*``.
 
     Returns per fault: ``feature``, ``depth_fraction`` (per path, NaN = never detected),
     ``paper_convention`` (the same in the paper's convention), ``mean``, ``ci95`` (t-interval
@@ -182,7 +186,12 @@ def installation_detection(
     healthy = healthy_set_for(params, selection, config, seed)
     cal = calibration_for(params)
     residuals = (
-        _flight_residuals(params, selection, config, np.random.SeedSequence(seed, spawn_key=(3,)))
+        _flight_residuals(
+            params,
+            selection,
+            config,
+            np.random.SeedSequence(seed, spawn_key=(FLIGHT_RESIDUALS_STREAM,)),
+        )
         if flight
         else None
     )
@@ -197,7 +206,7 @@ def installation_detection(
                 healthy,
                 fault,
                 config,
-                np.random.SeedSequence(seed, spawn_key=(f_index, i)),
+                path_seed_sequence(seed, f_index, i),
                 residuals,
             )
             for i in tqdm(range(n_paths), desc=f"{fault} paths", disable=not progress)
