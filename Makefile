@@ -45,10 +45,11 @@ benchmark: install
 	$(VENV)/bin/scas-benchmark --out $(RESULTS)/benchmark $(if $(filter 1,$(OVERWRITE)),--overwrite)
 
 ## Physics demonstration: a pre-flight test and a flight window at three health states
-## (signals as CSV, plots) and the paper's physics figures (experiments/, not installed).
+## (signals as CSV, plots) and the paper's physics figures (experiments/, not installed);
+## a second run needs OVERWRITE=1 (as demo, figures and reproduce below).
 demo: install
-	$(PY) -m experiments.paper.demo --out $(RESULTS)/demo
-	$(PY) -m experiments.paper.figures --out $(RESULTS)/figures
+	$(PY) -m experiments.paper.demo --out $(RESULTS)/demo $(if $(filter 1,$(OVERWRITE)),--overwrite)
+	$(PY) -m experiments.paper.figures --out $(RESULTS)/figures $(if $(filter 1,$(OVERWRITE)),--overwrite)
 
 ## Default test suite (fast; slow checks are behind the `slow` marker).
 test: install
@@ -116,11 +117,11 @@ bench: install
 
 ## The paper's physics figures (experiments/, not installed).
 figures: install
-	$(PY) -m experiments.paper.figures --out $(RESULTS)/figures
+	$(PY) -m experiments.paper.figures --out $(RESULTS)/figures $(if $(filter 1,$(OVERWRITE)),--overwrite)
 
 ## The paper's sections 4-5 from our physics (quick mode; `--full` for the paper's sizes).
 reproduce: install
-	$(PY) -m experiments.paper.reproduce --quick
+	$(PY) -m experiments.paper.reproduce --quick $(if $(filter 1,$(OVERWRITE)),--overwrite)
 
 ## The shipped v2 agent from scratch (docs/rl.md, "From the rule"): clone the tuned filter
 ## rule (demonstrations + DAgger), fine-tune 3 seeds x 5 M decisions with MaskablePPO on the
