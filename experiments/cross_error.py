@@ -30,6 +30,7 @@ from tqdm.auto import tqdm
 from experiments.belief_calibration import POLICIES, policy_action
 from scas_env.core.scenario import Scenario
 from scas_env.env import ScasMaintenanceEnv
+from scas_env.utils.table_checks import whole_number
 
 #: lags (slots) of the correlation table
 LAGS = (10, 50, 100, 200, 400)
@@ -94,10 +95,8 @@ def inflation(rho: float) -> float:
 def check_run_args(episodes: int, seed: int, policy: str) -> None:
     """``ValueError`` naming ``episodes`` (an integer >= 1), ``seed`` (an integer >= 0) or
     ``policy`` (one of :data:`~experiments.belief_calibration.POLICIES`) when out of range."""
-    if isinstance(episodes, bool) or not isinstance(episodes, int) or episodes < 1:
-        raise ValueError(f"episodes = {episodes!r} must be an integer >= 1")
-    if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
-        raise ValueError(f"seed = {seed!r} must be an integer >= 0")
+    whole_number("", "episodes", episodes, lo=1)
+    whole_number("", "seed", seed, lo=0)
     if policy not in POLICIES:
         raise ValueError(f"policy = {policy!r} must be one of {POLICIES}")
 

@@ -60,6 +60,7 @@ from experiments.reference_posterior import (
 )
 from prognostics.resampling import systematic_resample
 from scas_env.core.setup import PARTS
+from scas_env.utils.table_checks import whole_number
 
 #: particles and Metropolis-Hastings steps per resampling by default
 DEFAULT_PARTICLES, DEFAULT_STEPS = 500, 2
@@ -70,10 +71,8 @@ RW_SCALE_SQ = 2.38**2 / 3
 def check_filter_size(n_particles: int, steps: int) -> None:
     """``ValueError`` naming ``n_particles`` unless an integer >= 2 (a resampling needs two
     particles), or ``steps`` unless an integer >= 1."""
-    if isinstance(n_particles, bool) or not isinstance(n_particles, int) or n_particles < 2:
-        raise ValueError(f"n_particles = {n_particles!r} must be an integer >= 2")
-    if isinstance(steps, bool) or not isinstance(steps, int) or steps < 1:
-        raise ValueError(f"steps = {steps!r} must be an integer >= 1")
+    whole_number("", "n_particles", n_particles, lo=2)
+    whole_number("", "steps", steps, lo=1)
 
 
 class JointParticleFilter(JointPosterior):

@@ -8,10 +8,10 @@ worn part passes again or is replaced at its age; the same age rule that answers
 replacing the part the test implicates (a :class:`policies.rules.nested.NestedRule` without
 override: :func:`age_rule_answering_no_go`) is what an operator would run.
 
-:func:`preflight_availability` runs both rules, both test modes, on the same seeded
+:func:`preflight_comparison` runs both rules, both test modes, on the same seeded
 episodes of each scenario, and reports availability (mean and standard error), no-go per
-episode and reward per episode. :func:`preflight_comparison` adds, for every pair of these
-four arms of a scenario, the paired difference of each per-episode metric (:data:`PAIRED`)
+episode and reward per episode (its rows), and, for every pair of these four arms of a
+scenario, the paired difference of each per-episode metric (:data:`PAIRED`)
 episode by episode (:func:`policies.benchmark.stats.paired_comparison`: mean, 95 % interval,
 p-value and minimum detectable difference). Command line (``preflight.csv``/``.json`` and
 ``preflight_pairs.csv``/``.json``)::
@@ -41,7 +41,6 @@ __all__ = [
     "SCENARIOS",
     "age_rule_answering_no_go",
     "main",
-    "preflight_availability",
     "preflight_comparison",
 ]
 
@@ -60,23 +59,6 @@ def age_rule_answering_no_go(obs_names: Sequence[str], **ages: float) -> RulRisk
     return RulRiskPolicy(obs_names, override=False, test_every=math.inf, **ages)
 
 
-def preflight_availability(
-    scenarios: Mapping[str, Mapping[str, Any]],
-    *,
-    episodes: int = 200,
-    seed: int = 99,
-    ages: Mapping[str, float] = PREVENTIVE_DEFAULTS,
-    episode_slots: int = 2000,
-) -> list[dict[str, Any]]:
-    """One row per (scenario, preflight mode, rule): availability mean and standard error,
-    no-go per episode, reward per episode, over ``episodes`` episodes seeded from
-    ``SeedSequence(seed)`` (the same episodes for every row); the rows of
-    :func:`preflight_comparison`."""
-    return preflight_comparison(
-        scenarios, episodes=episodes, seed=seed, ages=ages, episode_slots=episode_slots
-    )[0]
-
-
 def preflight_comparison(
     scenarios: Mapping[str, Mapping[str, Any]],
     *,
@@ -85,7 +67,9 @@ def preflight_comparison(
     ages: Mapping[str, float] = PREVENTIVE_DEFAULTS,
     episode_slots: int = 2000,
 ) -> tuple[list[dict[str, Any]], list[dict[str, Any]]]:
-    """The rows of :func:`preflight_availability` and the paired differences.
+    """One row per (scenario, preflight mode, rule): availability mean and standard error,
+    no-go per episode, reward per episode, over ``episodes`` episodes seeded from
+    ``SeedSequence(seed)`` (the same episodes for every row); and the paired differences.
 
     The arms of a scenario are its rows in order (on demand, every flight; the plain age
     rule, the one answering a no-go). For every pair of arms ``a`` before ``b`` and every

@@ -67,6 +67,7 @@ from policies.value.tuning import (
     tune_family,
 )
 from scas_env.utils.parallel import map_chunks
+from scas_env.utils.table_checks import whole_number
 
 #: The nested families re-tuned at every sensing level (they read the measurements).
 SWEPT: tuple[str, ...] = ("features", "filter")
@@ -159,8 +160,7 @@ def check_sweep_settings(families: Sequence[str], replicates: int) -> None:
     own = [f for f in families if FAMILIES[f].env_kwargs]
     if own:
         raise ValueError(f"families {own} bring their own env keywords; not supported here")
-    if isinstance(replicates, bool) or not isinstance(replicates, int) or replicates < 1:
-        raise ValueError(f"replicates = {replicates!r} must be an integer >= 1")
+    whole_number("", "replicates", replicates, lo=1)
 
 
 def run_sensing_sweep(

@@ -116,19 +116,6 @@ class FittedOn:
             if value is not None and not (isinstance(value, str) and _SHA256.match(value)):
                 raise ValueError(f"{name} = {value!r} must be None or 64 lower-case hex digits")
 
-    @classmethod
-    def of_setup(cls, setup: Setup) -> FittedOn:
-        """The record of an env's setup (``env.unwrapped.setup``)."""
-        world = setup.world_surrogate
-        return cls(
-            scenario=setup.scenario,
-            params=setup.params,
-            mismatch=setup.mismatch,
-            calibration_sha256=table_digest(setup.calibration),
-            surrogate_sha256=table_digest(setup.surrogate),
-            world_surrogate_sha256=None if world is None else table_digest(world),
-        )
-
     def world_fields(self) -> dict[str, Any]:
         """The file's fields of the world (``mismatch`` and the three digests)."""
         return {

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from experiments.preflight_study import RULES, age_rule_answering_no_go, preflight_availability
+from experiments.preflight_study import RULES, age_rule_answering_no_go, preflight_comparison
 from policies.rules.classic import PREVENTIVE_DEFAULTS, PreventivePolicy
 from policies.rules.nested import ground_test_reference
 from scas_env.env import ScasMaintenanceEnv
@@ -69,7 +69,7 @@ def test_rows_cover_every_mode_and_rule_on_the_same_episodes() -> None:
     standard error (ddof=1), no-go and reward per episode. On demand neither rule tests, so
     both see the same episodes, bit for bit, and no no-go."""
     episodes, seed = 4, 5
-    rows = preflight_availability(
+    rows, _ = preflight_comparison(
         {"worn": SCENARIO}, episodes=episodes, seed=seed, episode_slots=SLOTS
     )
     assert [(r["preflight"], r["rule"]) for r in rows] == [

@@ -33,6 +33,7 @@ import numpy as np
 from policies.benchmark.stats import paired_difference
 from scas_env.utils.atomic_file import write_text_atomic
 from scas_env.utils.results_folder import json_text
+from scas_env.utils.table_checks import whole_number
 
 __all__ = [
     "FILTER_FAMILIES",
@@ -201,8 +202,7 @@ def validate(
     from scas_env.core.scenario import Scenario
     from scas_env.fleet_env import FLEET_SCENARIO
 
-    if isinstance(seed, bool) or not isinstance(seed, int | np.integer) or seed < 0:
-        raise ValueError(f"seed = {seed!r} must be an integer >= 0")
+    whole_number("", "seed", seed, lo=0)
     episode_seeds(seed, episodes)  # the count's check, before the settings record it
     if seed == HELD_OUT_SEED:
         raise ValueError(f"seed {seed} is the held-out seed: validation must not use it")
