@@ -41,23 +41,68 @@ __all__ = [
     "REPLACE_SPRING",
     "TEST_AND_FLY",
     "Policy",
+    "check_finite",
     "episode_starts",
     "make_policy",
     "policy_family",
     "policy_obs_mode",
     "register_policy",
+    "row_seeds",
 ]
 
 
 def episode_starts(episode_start: Any, rows: int) -> np.ndarray | None:
     """SB3's ``episode_start`` as one bool per row of a batch of ``rows`` (a single flag
-    for every row); None if not given or of another length."""
+    for every row); None if not given. Raises ``ValueError`` for any other length."""
     if episode_start is None:
         return None
     start = np.atleast_1d(np.asarray(episode_start, dtype=bool))
     if start.size == 1:
-        return np.full(rows, bool(start[0]))
-    return start if start.shape == (rows,) else None
+        return np.full(rows, bool(start.reshape(-1)[0]))
+    if start.shape != (rows,):
+        raise ValueError(
+            f"episode_start has shape {start.shape} for a batch of {rows} rows: give one "
+            f"flag, or one per row ({rows},)"
+        )
+    return start
+
+
+def row_seeds(seed: Any) -> list[Any] | None:
+    """The per-row seeds of ``reset(seed=...)``: a sequence (list, tuple) or a 1-D integer
+    numpy array gives one seed per row (an array as the same list of ints); None for a
+    single seed (an int, a 0-d array). Raises ``ValueError`` for another array."""
+    if isinstance(seed, np.ndarray):
+        if seed.ndim == 0:
+            return None
+        if seed.ndim != 1 or not np.issubdtype(seed.dtype, np.integer):
+            raise ValueError(
+                f"seed = {seed!r}: an array of seeds must be 1-D of integers (one per row), "
+                f"got shape {seed.shape} and dtype {seed.dtype}"
+            )
+        return [int(s) for s in seed]
+    if isinstance(seed, Sequence) and not isinstance(seed, str | bytes):
+        return list(seed)
+    return None
+
+
+def check_finite(obs: np.ndarray, names: Sequence[str]) -> None:
+    """Raise ``ValueError`` naming the non-finite (NaN, inf) entries of an observation or a
+    batch (2-D, one row per env) by row and name: the env's observations are finite (every
+    entry saturates at finite bounds), and a rule would act on a NaN as on a small value."""
+    bad = ~np.isfinite(obs)
+    if not bad.any():
+        return
+    rows, cols = np.nonzero(np.atleast_2d(bad))
+    values = np.atleast_2d(obs)[rows, cols]
+    where = [
+        f"{names[c]!r} = {v!r}" if obs.ndim == 1 else f"row {r} {names[c]!r} = {v!r}"
+        for r, c, v in zip(rows.tolist(), cols.tolist(), values.tolist(), strict=True)
+    ]
+    more = f" and {len(where) - 5} more" if len(where) > 5 else ""
+    raise ValueError(
+        f"observation has non-finite entries ({', '.join(where[:5])}{more}): every entry "
+        "must be a finite number"
+    )
 
 
 class Policy(ABC):
@@ -98,14 +143,19 @@ class Policy(ABC):
         deterministic: bool = True,
     ) -> tuple[int | IntArray, Any]:
         """Action(s) for one observation (returns an ``int``) or a batch (one row per env,
-        returns an ``int64`` array); ``state`` is passed through (SB3 convention)."""
+        returns an ``int64`` array); ``state`` is passed through (SB3 convention).
+        ``ValueError`` for a non-finite entry (:func:`check_finite`) or an
+        ``episode_start`` that is neither one flag nor one per row."""
         obs = np.asarray(observation, dtype=np.float64)
         if obs.ndim not in (1, 2) or obs.shape[-1] != len(self.obs_names):
             raise ValueError(
                 f"observation has shape {obs.shape}; expected ({len(self.obs_names)},) or "
                 f"(n_envs, {len(self.obs_names)}) for obs_names {self.obs_names}"
             )
+        check_finite(obs, self.obs_names)
         if episode_start is not None:
+            rows = 1 if obs.ndim == 1 else obs.shape[0]
+            episode_starts(episode_start, rows)  # one flag or one per row, else ValueError
             self._start_episodes(episode_start)
         actions = self._act(np.atleast_2d(obs)).astype(np.int64)
         return (int(actions[0]) if obs.ndim == 1 else actions), state
@@ -116,8 +166,9 @@ class Policy(ABC):
         per-episode state starts it over here."""
 
     def reset(self, seed: int | Sequence[int] | None = None) -> None:  # noqa: B027
-        """Start a new episode, or a batch of episodes side by side (a sequence of seeds, one
-        per row); rules keep no state, random policies re-seed."""
+        """Start a new episode, or a batch of episodes side by side (a sequence of seeds, or
+        a 1-D integer array, one per row: :func:`row_seeds`); rules keep no state, random
+        policies re-seed."""
 
     def params(self) -> dict[str, Any]:
         """The policy's parameters (for tables and for rebuilding it by name)."""

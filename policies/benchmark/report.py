@@ -251,13 +251,21 @@ def _write_csv(path: Path, rows: Sequence[Mapping[str, Any]]) -> None:
         writer.writerows(rows)
 
 
+def _error_bar(iv: Mapping[str, float]) -> list[list[float]]:
+    """An interval as matplotlib's asymmetric ``[[mean - low], [high - mean]]`` (percentile
+    and Poisson intervals are not symmetric about the mean); zero when undefined (and never
+    negative: matplotlib refuses that)."""
+    if math.isnan(iv["low"]) or math.isnan(iv["high"]):
+        return [[0.0], [0.0]]
+    return [[max(0.0, iv["mean"] - iv["low"])], [max(0.0, iv["high"] - iv["mean"])]]
+
+
 def _plot_cost_availability(summary: Mapping[str, Any], path: Path) -> None:
     fig, ax = plt.subplots(figsize=(6.5, 4.5))
     fleet = _is_fleet(summary)
     for policy, d in summary["policies"].items():
         a, c = d["mission_availability" if fleet else "availability"], d["cost_per_fh"]
-        xerr = 0.0 if math.isnan(a["low"]) else 0.5 * (a["high"] - a["low"])
-        yerr = 0.0 if math.isnan(c["low"]) else 0.5 * (c["high"] - c["low"])
+        xerr, yerr = _error_bar(a), _error_bar(c)
         ax.errorbar(a["mean"], c["mean"], xerr=xerr, yerr=yerr, fmt="o", capsize=3, label=policy)
     x_fleet, x_single = "mission availability (flown / asked)", "availability (flights / slots)"
     ax.set_xlabel(x_fleet if fleet else x_single)

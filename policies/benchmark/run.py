@@ -43,7 +43,7 @@ import policies  # noqa: F401  (registers the built-in policies)
 from policies.base import POLICIES, make_policy, policy_family, policy_obs_mode
 from policies.benchmark.fleet_runner import fleet_bound_rows, run_fleet_episodes
 from policies.benchmark.runner import TERMS, run_episode, run_episodes
-from policies.benchmark.stats import FLEET_METRICS, METRICS, summarize
+from policies.benchmark.stats import FLEET_METRICS, METRICS, check_confidence, summarize
 from scas_env import ENV_ID, ENV_ID_FLEET
 from scas_env.utils.parallel import in_worker, init_worker, map_chunks, single_thread
 
@@ -379,12 +379,14 @@ def prepare_benchmark(
     slots: int,
     env_kwargs: Mapping[str, Any] | None = None,
     ray_address: str | None = None,
+    confidence: float = 0.95,
 ) -> tuple[tuple[PolicySpec, ...], dict[str, Any], dict[str, dict[str, Any]]]:
     """Every check :func:`run_benchmark` makes before any episode: the policies resolved
     (names, unique labels, the run's horizon given to those that plan over it) and each built
-    once against its env's observation (:func:`check_specs`), the env keywords, the sizes
-    and, with ``ray_address``, that Ray is installed. Returns the specs and env keywords
-    the run uses and each policy's parameters as built (:func:`check_specs`); raises
+    once against its env's observation (:func:`check_specs`), the env keywords, the sizes,
+    ``confidence`` (in (0.2, 1): :func:`policies.benchmark.stats.check_confidence`) and,
+    with ``ray_address``, that Ray is installed. Returns the specs and env keywords the run
+    uses and each policy's parameters as built (:func:`check_specs`); raises
     ``ValueError`` (``ImportError`` for a missing package) otherwise.
     Commands call it first to turn a bad input into a usage error."""
     if ray_address is not None and not isinstance(ray_address, str):
@@ -398,6 +400,7 @@ def prepare_benchmark(
                 "pip install 'scas-maintenance-gym[ray]' (or 'ray>=2.9'), "
                 "or leave ray_address unset to run on local worker processes"
             )
+    check_confidence(confidence)
     episode_seeds(0, episodes)  # the count's check
     if isinstance(slots, bool) or not isinstance(slots, int) or slots < 1:
         raise ValueError(f"slots = {slots!r} must be an integer >= 1")
@@ -443,10 +446,16 @@ def run_benchmark(
     ``episode_slots``. ``ray_address`` (e.g. ``"auto"``, ``"local"``, ``"ray://host:10001"``)
     runs the episodes as Ray tasks instead of on ``n_workers`` local processes, with the
     same results (:func:`_map_ray`). Paired differences are taken against the rule-based
-    policy (family ``"rule"``) with the highest mean reward.
+    policy (family ``"rule"``) with the highest mean reward. ``confidence`` (of every
+    interval) must be in (0.2, 1), checked before any episode (:func:`prepare_benchmark`).
     """
     specs, kwargs, built = prepare_benchmark(
-        specs, episodes=episodes, slots=slots, env_kwargs=env_kwargs, ray_address=ray_address
+        specs,
+        episodes=episodes,
+        slots=slots,
+        env_kwargs=env_kwargs,
+        ray_address=ray_address,
+        confidence=confidence,
     )
     fleet = is_fleet(kwargs)
     keys = [s.key for s in specs]

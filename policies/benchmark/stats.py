@@ -34,6 +34,7 @@ is a ratio of per-episode sums, as are the alpha-lambda hit rate and the coverag
 from __future__ import annotations
 
 import math
+import numbers
 import warnings
 from collections.abc import Mapping, Sequence
 from dataclasses import asdict, dataclass
@@ -45,6 +46,7 @@ from scipy.stats import t as student_t
 
 from policies.benchmark.runner import DECISION_ALPHA, DECISION_EVENTS
 from scas_env.core.setup import PARTS
+from scas_env.utils.table_checks import whole_number
 
 #: Per-episode metrics summarised per policy (results.csv columns).
 METRICS = (
@@ -87,6 +89,8 @@ BOOTSTRAPPED = (
     "stock_outs",
     "waiting_job_days",
 )
+#: Power at which paired differences report their minimum detectable difference.
+MDD_POWER = 0.8
 #: Resamples of the bootstrap intervals, and their fixed seed (reproducible tables).
 BOOTSTRAP_RESAMPLES = 4999
 BOOTSTRAP_SEED = 20260
@@ -94,11 +98,13 @@ BOOTSTRAP_SEED = 20260
 __all__ = [
     "BOOTSTRAPPED",
     "FLEET_METRICS",
+    "MDD_POWER",
     "METRICS",
     "POOLED_COUNTS",
     "Interval",
     "best_policy",
     "bootstrap_mean",
+    "check_confidence",
     "cluster_ratio_bootstrap",
     "garwood_interval",
     "garwood_rate",
@@ -137,6 +143,24 @@ def _confidence(confidence: float) -> None:
         raise ValueError(f"confidence = {confidence!r} must be in (0, 1)")
 
 
+def check_confidence(confidence: float) -> None:
+    """``confidence`` of paired differences: a number in ``(1 - MDD_POWER, 1)`` = (0.2, 1).
+    Their minimum detectable difference tests at ``alpha = 1 - confidence`` with power
+    :data:`MDD_POWER`, which must exceed ``alpha``."""
+    low = 1.0 - MDD_POWER
+    if (
+        isinstance(confidence, bool)
+        or not isinstance(confidence, numbers.Real)
+        or not 0.0 < confidence < 1.0
+        or not 1.0 - confidence < MDD_POWER  # alpha below the power, as the MDD computes it
+    ):
+        raise ValueError(
+            f"confidence = {confidence!r} must be a number in ({low:g}, 1): the paired "
+            "differences' minimum detectable difference tests at alpha = 1 - confidence, "
+            f"which must stay below its power {MDD_POWER:g}"
+        )
+
+
 def _finite(values: Sequence[float] | np.ndarray) -> np.ndarray:
     x = np.asarray(values, dtype=np.float64)
     return x[np.isfinite(x)]
@@ -173,7 +197,7 @@ def t_interval(values: Sequence[float] | np.ndarray, confidence: float = 0.95) -
 
 
 def minimum_detectable_difference(
-    sd: float, n: int, *, alpha: float = 0.05, power: float = 0.8
+    sd: float, n: int, *, alpha: float = 0.05, power: float = MDD_POWER
 ) -> float:
     """Smallest true mean of paired differences that a two-sided one-sample t-test at level
     ``alpha`` detects with probability ``power`` (``n`` pairs, paired sd ``sd``).
@@ -181,19 +205,26 @@ def minimum_detectable_difference(
     Solved exactly on the noncentral t distribution: the noncentrality ``delta`` with
     ``P(|T'| > t_{1-alpha/2, n-1}) = power`` for ``T' ~ nct(n-1, delta)``; MDD =
     ``delta sd / sqrt(n)`` (for large ``n`` about ``(z_{1-alpha/2} + z_power) sd / sqrt(n)``,
-    2.80 sd / sqrt(n) at the defaults; 11.55 sd at ``n = 2``). NaN if ``n < 2``, ``sd`` is
-    not finite or ``sd == 0`` (no spread observed, e.g. no failure under either policy: the
-    sample does not estimate what it resolves, and 0 would claim it resolves anything). The
+    2.80 sd / sqrt(n) at the defaults; 11.55 sd at ``n = 2``). NaN if ``n < 2`` (no spread
+    to estimate; ``sd`` is then not read) or ``sd == 0`` (no spread observed, e.g. no
+    failure under either policy: the sample does not estimate what it resolves, and 0 would
+    claim it resolves anything). The
     lower tail ``P(T' < -t)`` is taken as ``P(nct(n-1, -delta) > t)``: scipy's ``nct.cdf``
     returns NaN there once ``delta`` exceeds about 8, which is where the root lies for
     ``n = 2``. Raises ``ValueError`` unless ``0 < alpha < power < 1`` (a two-sided test
-    rejects with probability ``alpha`` already at ``delta = 0``).
+    rejects with probability ``alpha`` already at ``delta = 0``), ``n`` is an integer >= 0
+    and (``n >= 2``) ``sd`` is finite and >= 0.
     """
     if not 0.0 < alpha < 1.0 or not 0.0 < power < 1.0:
         raise ValueError(f"alpha = {alpha!r} and power = {power!r} must be in (0, 1)")
     if power <= alpha:
         raise ValueError(f"power = {power!r} must exceed alpha = {alpha!r}")
-    if n < 2 or not math.isfinite(sd) or sd == 0.0:
+    n = whole_number("", "n", n, lo=0)
+    if n < 2:
+        return math.nan
+    if isinstance(sd, bool) or not isinstance(sd, numbers.Real) or not math.isfinite(sd) or sd < 0:
+        raise ValueError(f"sd = {sd!r} must be a finite number >= 0 (n = {n} pairs)")
+    if sd == 0.0:
         return math.nan
     df = n - 1
     crit = float(student_t.ppf(1.0 - alpha / 2.0, df))
@@ -215,14 +246,18 @@ def paired_difference(
     x: Sequence[float] | np.ndarray, y: Sequence[float] | np.ndarray, confidence: float = 0.95
 ) -> Interval:
     """t-interval of the mean of ``x_e - y_e`` over episodes where both are finite, with
-    the minimum detectable difference at 80 % power and ``alpha = 1 - confidence``."""
+    the minimum detectable difference at 80 % power (:data:`MDD_POWER`) and ``alpha = 1 -
+    confidence``: ``confidence`` must exceed ``1 - MDD_POWER`` = 0.2."""
+    check_confidence(confidence)
     a, b = np.asarray(x, dtype=np.float64), np.asarray(y, dtype=np.float64)
     if a.shape != b.shape:
         raise ValueError(f"paired samples need equal shapes, got {a.shape} and {b.shape}")
     d = _finite(a - b)
     iv = t_interval(d, confidence)
     sd = float(d.std(ddof=1)) if d.size > 1 else math.nan
-    mdd = minimum_detectable_difference(sd, int(d.size), alpha=1.0 - confidence)
+    mdd = math.nan
+    if d.size > 1 and math.isfinite(sd):  # else no spread to estimate (an overflow: none)
+        mdd = minimum_detectable_difference(sd, int(d.size), alpha=1.0 - confidence)
     return Interval(iv.mean, iv.low, iv.high, iv.n, mdd)
 
 
@@ -240,11 +275,17 @@ def paired_comparison(
 def garwood_interval(count: int, confidence: float = 0.95) -> tuple[float, float]:
     """Exact (Garwood) interval of a Poisson mean after observing ``count`` events:
     ``[chi2_{a/2}(2k) / 2, chi2_{1-a/2}(2k + 2) / 2]`` with ``a = 1 - confidence``
-    (lower bound 0 when ``count = 0``)."""
+    (lower bound 0 when ``count = 0``); ``count`` a whole number >= 0 (``2.0`` allowed)."""
     _confidence(confidence)
+    whole = (
+        not isinstance(count, bool | np.bool_)
+        and isinstance(count, numbers.Real)
+        and math.isfinite(count)
+        and count == int(count)
+    )
+    if not whole or count < 0:
+        raise ValueError(f"count = {count!r} must be a whole number >= 0 (finite)")
     k = int(count)
-    if k != count or k < 0:
-        raise ValueError(f"count = {count!r} must be an integer >= 0")
     a = 1.0 - confidence
     low = 0.0 if k == 0 else float(stats.chi2.ppf(a / 2.0, 2 * k) / 2.0)
     high = float(stats.chi2.ppf(1.0 - a / 2.0, 2 * k + 2) / 2.0)
@@ -261,9 +302,12 @@ def garwood_rate(count: int, exposure: float, confidence: float = 0.95, *, n: in
 
 
 def wilson_interval(successes: int, trials: int, confidence: float = 0.95) -> Interval:
-    """Wilson score interval of a binomial proportion (stays in [0, 1])."""
+    """Wilson score interval of a binomial proportion (stays in [0, 1]); ``successes`` and
+    ``trials`` integers (:func:`~scas_env.utils.table_checks.whole_number`)."""
     _confidence(confidence)
-    if trials < 1 or not 0 <= successes <= trials:
+    whole_number("", "successes", successes, lo=0)
+    whole_number("", "trials", trials, lo=1)
+    if not successes <= trials:
         raise ValueError(
             f"successes = {successes!r}, trials = {trials!r}: need 0 <= s <= t, t >= 1"
         )

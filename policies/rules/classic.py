@@ -36,6 +36,7 @@ from policies.base import (
     IntArray,
     Policy,
     register,
+    row_seeds,
 )
 from policies.rules.healthy_band import implicated_spring
 
@@ -228,11 +229,13 @@ class RandomPolicy(Policy):
     def reset(self, seed: int | Sequence[int] | None = None) -> None:
         """Re-seed when ``seed`` is given (the benchmark seeds each episode). A sequence of
         seeds gives one generator per row of the next batches (episodes run side by side),
-        each drawing what a single episode with that seed draws."""
+        each drawing what a single episode with that seed draws (a 1-D integer array as
+        the same list: :func:`policies.base.row_seeds`)."""
         if seed is None:
             return
-        if isinstance(seed, Sequence):
-            self.row_rngs = [np.random.default_rng(s) for s in seed]
+        rows = row_seeds(seed)
+        if rows is not None:
+            self.row_rngs = [np.random.default_rng(s) for s in rows]
         else:
             self.rng = np.random.default_rng(seed)
             self.row_rngs = None

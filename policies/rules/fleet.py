@@ -43,7 +43,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from policies.base import register_policy
+from policies.base import check_finite, register_policy, row_seeds
 from policies.rules.healthy_band import implicated_spring
 
 #: the families of this module, in the benchmark's order
@@ -226,6 +226,7 @@ class FleetRule:
             raise ValueError(
                 f"observation has shape {obs.shape}; expected (B, {len(self.obs_names)})"
             )
+        check_finite(obs if not single else obs[0], self.obs_names)
         lay = self.layout
         b = obs.shape[0]
         ones = np.ones((b, lay.n, 1))
@@ -326,8 +327,9 @@ class FleetRandom:
     ``p_fly`` for one of the types asked tomorrow (uniform among them; none asked: it stands
     by), tests with ``p_test`` (always when a failed test holds it); each flown part is
     replaced with probability ``p_replace`` a day: every choice one the env's mask allows.
-    One generator per episode (``reset(seed=...)``, a seed per row of the batch, or one seed
-    whose stream serves every row in turn; ``reset()`` keeps the current ones)."""
+    One generator per episode (``reset(seed=...)``, a seed per row of the batch as a list,
+    tuple or 1-D integer array, or one seed whose stream serves every row in turn;
+    ``reset()`` keeps the current ones)."""
 
     name = "fleet_random"
 
@@ -353,7 +355,8 @@ class FleetRandom:
     def reset(self, seed: Any = None) -> None:
         if seed is None:  # the protocol's reset between episodes: the streams go on
             return
-        seeds = seed if isinstance(seed, list | tuple) else [seed]
+        rows = row_seeds(seed)
+        seeds = [seed] if rows is None else rows
         self._rngs = [np.random.default_rng(s) for s in seeds]
 
     def predict(
@@ -365,6 +368,7 @@ class FleetRandom:
             raise ValueError(
                 f"observation has shape {obs.shape}; expected (B, {len(self.obs_names)})"
             )
+        check_finite(obs if np.ndim(observation) != 1 else obs[0], self.obs_names)
         if len(self._rngs) not in (1, obs.shape[0]):
             raise ValueError(
                 f"{obs.shape[0]} observations for {len(self._rngs)} seeded rows: reset(seed=...) "

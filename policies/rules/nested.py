@@ -18,10 +18,13 @@ and the answer to a failed test. Per row and slot:
 5. A test is requested when flying and ``test_age >= test_every`` (``inf``: never).
 6. One action per slot, seals first (:func:`policies.rules.classic.choose`).
 
-With ``override=False`` and ``test_every=inf`` every step is the age rule's (tested on
-whole episodes), so tuning the family over a box that contains that point can only match
-or beat the tuned age rule on the training seeds: a value of information measured with it
-is not negative by construction.
+With ``override=False`` and ``test_every=inf``, under on-demand testing
+(``Scenario.preflight="on_demand"``: no test runs, ``no_go`` stays 0) every step is the age
+rule's (tested on whole episodes), so tuning the family over a box that contains that point
+can only match or beat the tuned age rule on the training seeds: a value of information
+measured with it is not negative by construction. Not so with
+``preflight="every_flight"``: step 4 still replaces the part a failed test implicates,
+which the age rule ignores, so that point is not the age rule there.
 """
 
 from __future__ import annotations

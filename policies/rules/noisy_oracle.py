@@ -12,10 +12,11 @@ value (a control of the study).
 The policy keeps one generator and one ``z`` per row (episode); it recognises a new part by
 its age falling (a replacement or failure resets it to 0), and new parts at a row's
 ``episode_start`` (an env that resets itself: parts in service need not start younger).
-``reset(seed=...)`` re-seeds: a sequence of seeds gives one generator per row, each
-drawing what a single episode with that seed draws, so batched and single episodes agree
-(tested). A batch of ``n`` rows never seeded by row (SB3's ``evaluate_policy`` over ``n``
-envs) draws row ``r`` from child ``r`` of ``SeedSequence(seed).spawn(n)``.
+``reset(seed=...)`` re-seeds: a sequence (or a 1-D integer array) of seeds gives one
+generator per row, each drawing what a single episode with that seed draws, so batched and
+single episodes agree (tested). A batch of ``n`` rows never seeded by row (SB3's
+``evaluate_policy`` over ``n`` envs) draws row ``r`` from child ``r`` of
+``SeedSequence(seed).spawn(n)``.
 
 >>> names = ("crack_fraction", "wear_fraction", "spring_rul_true", "seal_rul_true",
 ...          "spring_age", "seal_age", "downtime")
@@ -34,7 +35,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from policies.base import IntArray, episode_starts, register
+from policies.base import IntArray, episode_starts, register, row_seeds
 from policies.rules.nested import NestedRule
 
 __all__ = ["NoisyOraclePolicy"]
@@ -70,7 +71,7 @@ class NoisyOraclePolicy(NestedRule):
         self.last_age: np.ndarray | None = None
 
     def _check_value(self, name: str, value: float) -> float:
-        if name == "seed" and (value != int(value) or not math.isfinite(value)):
+        if name == "seed" and (not math.isfinite(value) or value != int(value)):
             raise ValueError(f"seed = {value!r} must be an integer >= 0")
         if name == "sigma" and not math.isfinite(value):
             raise ValueError(f"sigma = {value!r} must be finite and >= 0")
@@ -79,7 +80,8 @@ class NoisyOraclePolicy(NestedRule):
     def reset(self, seed: int | Sequence[int] | None = None) -> None:
         """New episode(s): forget the parts' draws; re-seed when ``seed`` is given."""
         if seed is not None:
-            seeds = list(seed) if isinstance(seed, Sequence) else [seed]
+            rows = row_seeds(seed)
+            seeds = [seed] if rows is None else rows
             self.rngs = [np.random.default_rng(int(s)) for s in seeds]
             if len(seeds) == 1:
                 self.base_seed = int(seeds[0])

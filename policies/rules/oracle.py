@@ -297,8 +297,12 @@ class OraclePolicy(Policy):
         self.slot, self.pending = None, None
 
     def _start_episodes(self, episode_start: Any) -> None:
-        """Rows with ``episode_start`` set start over (slot 0, no pair pending)."""
-        start = None if self.slot is None else episode_starts(episode_start, self.slot.size)
+        """Rows with ``episode_start`` set start over (slot 0, no pair pending); a batch of
+        another size starts every row over anyway (:meth:`_act`)."""
+        flags = np.atleast_1d(np.asarray(episode_start, dtype=bool))
+        if self.slot is None or flags.size not in (1, self.slot.size):
+            return
+        start = episode_starts(flags, self.slot.size)
         if start is not None:
             self.slot[start] = 0
             self.pending[start] = False

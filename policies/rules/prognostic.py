@@ -14,7 +14,9 @@
   surrogate, :func:`policies.rules.nested.surrogate_reference`); with tests on, a section-5.1
   alarm (``spring_alarm`` / ``seal_alarm``) makes its part due too.
 
-``override=False`` and ``test_every=inf`` give the age rule exactly (tested).
+``override=False`` and ``test_every=inf`` give the age rule exactly (tested) under on-demand
+testing; with ``preflight="every_flight"`` a failed test still replaces the part it
+implicates (:mod:`policies.rules.nested`), which the age rule ignores.
 """
 
 from __future__ import annotations
