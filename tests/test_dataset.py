@@ -326,14 +326,66 @@ def test_bad_arguments_raise(tmp_path: Path, kwargs: dict, match: str) -> None:
     assert not (tmp_path / "o").exists()
 
 
+@pytest.mark.parametrize(
+    ("preflight", "test_every"), [("on_demand", 10), ("on_demand", 0), ("every_flight", 10)]
+)
+def test_card_policy_states_the_slots_the_rows_tested(
+    tmp_path: Path, preflight: str, test_every: int
+) -> None:
+    """The card's ``policy`` (and the Markdown card) names the test regime the rows show: the
+    slots of ``tested`` rows, every slot under ``preflight="every_flight"`` whatever
+    ``test_every`` (the env tests at every power-up there)."""
+    out = tmp_path / "d"
+    scenario = Scenario(preflight=preflight)
+    export_run_to_failure(
+        1, out=out, scenario=scenario, seed=0, max_slots=25, test_every=test_every, progress=False
+    )
+    data = load_run_to_failure(out)
+    tested = np.flatnonzero(data.flights["tested"].to_numpy(zero_copy_only=False)) + 1
+    assert data.flights.num_rows == 25
+    policy = data.card["policy"]
+    assert policy in (out / "datacard.md").read_text()
+    if tested.size == 25:  # every slot
+        assert preflight == "every_flight"
+        assert policy == (
+            "maintenance-free: fly every slot; pre-flight test before every slot "
+            "(scenario.preflight = every_flight: free, at every power-up; test_every = "
+            f"{test_every} has no effect)"
+        )
+    elif tested.size:  # slots 1, 11, 21: the default card text, unchanged
+        np.testing.assert_array_equal(tested, [1, 11, 21])
+        assert policy == (
+            "maintenance-free: fly every slot; pre-flight test before slots 1, "
+            f"{tested[1]}, ... (test_every = {tested[1] - tested[0]})"
+        )
+    else:
+        assert policy == "maintenance-free: fly every slot; no test (test_every = 0)"
+
+
 def test_physics_fidelity_short_horizon() -> None:
-    """The physics env gives the same columns (2 slots, one test)."""
+    """The physics env gives the same columns (2 slots, one test), and its spring fails at
+    the unit's own depth: ``failure_depth_from_params`` of the cracked spring's drawn wire
+    and coil diameters (the unit replayed from its seed), not the surrogate's nominal depth."""
+    from scas_env.actuator.health import CRACKED_SPRING
+    from scas_env.actuator.physics.spring import failure_depth_from_params
+
     flights, units = simulate_units(1, fidelity="physics", seed=0, max_slots=2, test_every=2)
     assert list(units["failure_mode"]) == ["none"]
     assert list(flights["tested"]) == [True, False]
     assert np.isfinite(flights["G1"][0]) and np.isfinite(flights["I7"]).all()
-    # the physics spring fails at the unit's own depth, not the nominal one
-    assert flights["spring_critical_depth_m"][0] == units["spring_critical_depth_m"][0]
+    env = gym.make(scas_env.ENV_ID, scenario=Scenario(fidelity="physics"))
+    env.reset(seed=int(units["seed"][0]))
+    unit = env.unwrapped.batch.physics[0].unit  # the drawn geometry, as the physics flies it
+    own = failure_depth_from_params(
+        ScasParams(),
+        wire_diameter_m=unit.wire_diameter_m[CRACKED_SPRING],
+        coil_diameter_m=unit.mean_coil_diameter_m[CRACKED_SPRING],
+    ).depth_m
+    nominal = env.unwrapped.calibration.spring_failure_depth_m
+    env.close()
+    np.testing.assert_allclose(flights["spring_critical_depth_m"], own, rtol=1e-12, atol=0)
+    np.testing.assert_allclose(units["spring_critical_depth_m"], own, rtol=1e-12, atol=0)
+    assert abs(own - nominal) > 1e-3 * nominal  # the unit's own depth, not the nominal one
 
 
 @pytest.mark.slow

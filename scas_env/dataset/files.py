@@ -17,6 +17,7 @@ package does not load it.
 from __future__ import annotations
 
 import json
+import numbers
 import os
 from dataclasses import dataclass
 from pathlib import Path
@@ -388,6 +389,17 @@ def load_run_to_failure(
     return RunToFailureDataset(tables["flights"], tables["units"], card)
 
 
+def open_fraction(name: str, value: Any) -> float:
+    """``float(value)`` if it is a real number (a numpy scalar too, not a bool) in (0, 1),
+    else ``ValueError`` naming ``name``, the value and what is allowed."""
+    if isinstance(value, bool | np.bool_) or not isinstance(value, numbers.Real):
+        kind = type(value).__name__
+        raise ValueError(f"{name} = {value!r} ({kind}) must be a real number in (0, 1)")
+    if not 0.0 < float(value) < 1.0:
+        raise ValueError(f"{name} = {value!r} must be in (0, 1)")
+    return float(value)
+
+
 def split_by_unit(
     data: RunToFailureDataset,
     *,
@@ -397,8 +409,7 @@ def split_by_unit(
     """Train and test sets holding disjoint units (C-MAPSS style): ``round(test_fraction *
     n_units)`` units drawn without replacement by ``seed``: a ``numpy.random.Generator``
     (drawn from), or an integer >= 0 (``numpy.random.default_rng(seed)``)."""
-    if not (isinstance(test_fraction, float | int) and 0.0 < test_fraction < 1.0):
-        raise ValueError(f"test_fraction = {test_fraction!r} must be in (0, 1)")
+    test_fraction = open_fraction("test_fraction", test_fraction)
     whole = isinstance(seed, int | np.integer) and not isinstance(seed, bool) and seed >= 0
     if not (whole or isinstance(seed, np.random.Generator)):
         raise ValueError(f"seed = {seed!r} must be an integer >= 0 or a numpy Generator")

@@ -2,12 +2,14 @@
 
 Each unit is a fresh ``ScasMaintenance-v2`` episode (``scas_env.ENV_ID``) flown under a
 maintenance-free policy: fly every slot, and (``test_every = k > 0``) run the pre-flight
-test before slots 1, k + 1, 2k + 1, ... so that the on-ground features G1, G3 exist. The
-unit stops at its first in-flight failure (a part reaching its critical value), or is
-censored after ``max_slots`` slots. Each slot before the failing flight is one row: what the
-avionics measured (in-flight features, test results, detector flags, the particle filter's
-RUL) next to the truth (crack depth, wear, leakage, critical levels, true RUL of each part
-and the realised RUL of the unit). Columns and units: :mod:`scas_env.dataset.files`.
+test before slots 1, k + 1, 2k + 1, ... so that the on-ground features G1, G3 exist (under
+``Scenario(preflight="every_flight")`` the env tests before every slot whatever ``k``, as
+the data card says). The unit stops at its first in-flight failure (a part reaching its
+critical value), or is censored after ``max_slots`` slots. Each slot before the failing
+flight is one row: what the avionics measured (in-flight features, test results, detector
+flags, the particle filter's RUL) next to the truth (crack depth, wear, leakage, critical
+levels, true RUL of each part and the realised RUL of the unit). Columns and units:
+:mod:`scas_env.dataset.files`.
 
 The failing flight itself has no row: its features are not reported (the flight is aborted)
 and the env replaces the failed part within the same step. Its index and part are in the
@@ -232,7 +234,8 @@ def simulate_units(
     scenario, params, fidelity : the episode setup (see :func:`dataset_scenario`);
         ``fidelity`` overrides the scenario's.
     seed : root seed (>= 0); unit ``u`` gets child ``u`` of ``SeedSequence(seed)``.
-    test_every : pre-flight test before every ``test_every``-th slot (0: never).
+    test_every : pre-flight test before every ``test_every``-th slot (0: never); no effect
+        under ``preflight="every_flight"`` (a test before every slot).
     max_slots : slots after which a unit without failure is censored.
     n_workers : worker processes (:func:`scas_env.utils.parallel.map_chunks`); results do not
         depend on it.
@@ -341,7 +344,15 @@ def data_card(
     No timestamp: the same arguments give byte-identical files.
     """
     modes, counts = np.unique(units["failure_mode"].astype(str), return_counts=True)
-    test = f"pre-flight test before slots 1, {test_every + 1}, ..." if test_every else "no test"
+    if scenario.preflight == "every_flight":  # the env tests every slot; action 1 = action 0
+        test = (
+            "pre-flight test before every slot (scenario.preflight = every_flight: free, "
+            f"at every power-up; test_every = {test_every} has no effect)"
+        )
+    elif test_every:
+        test = f"pre-flight test before slots 1, {test_every + 1}, ... (test_every = {test_every})"
+    else:
+        test = "no test (test_every = 0)"
     return {
         "format_version": FORMAT_VERSION,
         "generator": "scas_env.dataset.run_to_failure.export_run_to_failure",
@@ -351,7 +362,7 @@ def data_card(
         "seed": seed,
         "seeding": "unit u: env.reset(seed=units.seed[u]), the first 63 bits of child u of "
         "numpy.random.SeedSequence(seed).spawn(n_units)",
-        "policy": f"maintenance-free: fly every slot; {test} (test_every = {test_every})",
+        "policy": f"maintenance-free: fly every slot; {test}",
         "test_every": test_every,
         "censoring": "a unit ends at its first in-flight failure (the failing flight has no "
         f"row) or is censored after {int(scenario.episode_slots)} slots, then either held on "

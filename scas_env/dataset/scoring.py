@@ -43,6 +43,8 @@ from typing import Any
 import numpy as np
 from scipy import stats
 
+from scas_env.dataset.files import open_fraction
+
 #: edges (flights of true RUL) of the bands :func:`score_rul` reports besides all rows
 BAND_EDGES: tuple[float, ...] = (0.0, 100.0, 300.0, math.inf)
 
@@ -72,8 +74,13 @@ def _predictions(predicted: Any, true: np.ndarray, rows: np.ndarray) -> np.ndarr
     pred = np.asarray(predicted, dtype=np.float64)
     if pred.shape != true.shape:
         raise ValueError(f"predicted has shape {pred.shape}; expected one per row {true.shape}")
-    if not (np.all(np.isfinite(pred[rows])) and np.all(pred[rows] >= 0.0)):
-        raise ValueError("predicted must be finite and >= 0 on every scored row")
+    bad = rows[~(np.isfinite(pred[rows]) & (pred[rows] >= 0.0))]
+    if bad.size:
+        k = int(bad[0])
+        raise ValueError(
+            f"predicted[{k}] = {float(pred[k])!r} (row {k} of flights) must be finite and >= 0 "
+            f"on every scored row (flown rows of failed units; {bad.size} bad)"
+        )
     return pred
 
 
@@ -90,15 +97,20 @@ def population_rul(units: Any, flights_done: Any) -> np.ndarray:
     estimate of ``units``' lives (the ``units`` table of training units: ``flights``,
     ``censored``); module docstring. 0 from the longest life on."""
     units = _columns(units, "units")
-    life = _column(units, "flights", "units").astype(np.float64)
+    life = _column(units, "flights", "units")
+    if life.dtype.kind not in "iuf":
+        raise ValueError(f"units.flights has dtype {life.dtype}: expected flight counts")
+    life = life.astype(np.float64)
     censored = _column(units, "censored", "units").astype(bool)
     if life.ndim != 1 or life.size == 0 or censored.shape != life.shape:
         raise ValueError("units must hold one 'flights' and 'censored' entry per unit")
+    bad = np.flatnonzero(~(np.isfinite(life) & (life >= 0.0)))
+    if bad.size:
+        k = int(bad[0])
+        raise ValueError(f"units.flights[{k}] = {float(life[k])!r} must be a finite count >= 0")
     if censored.all():
         raise ValueError("every training unit is censored: no failure to estimate lives from")
-    f = np.asarray(flights_done, dtype=np.float64)
-    if not np.all(np.isfinite(f) & (f >= 0.0)):
-        raise ValueError("flights_done must hold finite counts >= 0")
+    f = _flights_done(flights_done)
     sf = stats.ecdf(stats.CensoredData(uncensored=life[~censored], right=life[censored])).sf
     times, surv = sf.quantiles, sf.probabilities  # S(t) = surv[k] on [times[k], times[k+1])
     edges = np.concatenate([[0.0], times])
@@ -111,6 +123,25 @@ def population_rul(units: Any, flights_done: Any) -> np.ndarray:
     s_before = level[np.clip(np.searchsorted(edges, f, side="left") - 1, 0, edges.size - 1)]
     with np.errstate(invalid="ignore", divide="ignore"):
         return np.where((s_before > 0.0) & (f < edges[-1]), left / s_before, 0.0)
+
+
+def _flights_done(value: Any) -> np.ndarray:
+    """``value`` as float64 flight counts: numbers (not bools), finite, >= 0."""
+    raw = np.asarray(value)
+    mixed = isinstance(value, list | tuple) and any(
+        isinstance(v, bool | np.bool_) for v in np.asarray(value, dtype=object).ravel()
+    )  # [True, 2] would pass as the integers [1, 2]
+    if raw.dtype.kind == "b" or mixed:
+        raise ValueError(f"flights_done = {value!r} holds a boolean: expected flight counts")
+    if raw.dtype.kind not in "iuf":
+        raise ValueError(f"flights_done has dtype {raw.dtype}: expected flight counts")
+    f = raw.astype(np.float64)
+    bad = np.flatnonzero(~(np.isfinite(f) & (f >= 0.0)).ravel())
+    if bad.size:
+        k = int(bad[0])
+        value_k = float(f.ravel()[k])
+        raise ValueError(f"flights_done[{k}] = {value_k!r} must be a finite count >= 0")
+    return f
 
 
 def monitor_rul(flights: Any) -> np.ndarray:
@@ -143,17 +174,16 @@ def score_rul(
     column mapping) on the rows :func:`scored_rows` keeps (the others are ignored):
     ``"all"`` and one entry per band ``"[lo, hi)"`` of true RUL (``edges``), each with
     ``rows``, ``rmse``, ``mae``, ``bias`` and ``within_alpha``."""
+    alpha = open_fraction("alpha", alpha)
+    e = np.asarray(edges, dtype=np.float64)
+    if e.ndim != 1 or e.size < 2 or not np.all(np.diff(e) > 0.0):
+        raise ValueError(f"edges = {edges!r} must be at least two rising values")
     flights = _columns(flights, "flights")
     true = _column(flights, "rul_flights", "flights").astype(np.float64)
     rows = scored_rows(flights)
     if rows.size == 0:
         raise ValueError("no flown row has a realised RUL (every unit censored)")
     pred = _predictions(predicted, true, rows)
-    if not (isinstance(alpha, int | float) and 0.0 < alpha < 1.0):
-        raise ValueError(f"alpha = {alpha!r} must be in (0, 1)")
-    e = np.asarray(edges, dtype=np.float64)
-    if e.ndim != 1 or e.size < 2 or not np.all(np.diff(e) > 0.0):
-        raise ValueError(f"edges = {edges!r} must be at least two rising values")
     r, p = true[rows], pred[rows]
     out = {"all": _metrics(r, p, alpha)}
     for lo, hi in itertools.pairwise(e.tolist()):
