@@ -169,6 +169,35 @@ def ageing_summary(
     return mean, max(low - k, 0.0), min(cum_w[j], 1.0)
 
 
+def _check_tables(
+    r: np.ndarray,
+    cum_w: np.ndarray,
+    suffix_w: np.ndarray,
+    suffix_wr: np.ndarray,
+    low: float,
+    level: float,
+) -> None:
+    """``ValueError`` unless these are one weighted sample's tables."""
+    tol = 1e-9
+    w = np.diff(cum_w)
+    problem = None
+    if cum_w[0] != 0.0 or np.any(w < 0.0) or abs(cum_w[-1] - 1.0) > tol:
+        problem = f"cum_w = {check.show(cum_w)} must rise from 0 to 1 (prefix sums of weights)"
+    elif suffix_w[-1] != 0.0 or not np.allclose(-np.diff(suffix_w), w, rtol=tol, atol=tol):
+        problem = f"suffix_w = {check.show(suffix_w)} must be the suffix sums of cum_w's weights"
+    elif suffix_wr[-1] != 0.0 or not np.allclose(
+        -np.diff(suffix_wr), w * r, rtol=tol, atol=tol * max(float(r[-1]), 1.0)
+    ):
+        problem = f"suffix_wr = {check.show(suffix_wr)} must be the suffix sums of w * sorted_rul"
+    else:
+        reached = np.flatnonzero(cum_w[1:] >= level)
+        quantile = float(r[reached[0]] if reached.size else r[-1])
+        if low != quantile:
+            problem = f"low = {low!r} must be the tables' {level} quantile, {quantile!r}"
+    if problem:
+        raise ValueError(problem)
+
+
 class AgeingRul:
     """Summary of a weighted RUL sample ``R`` after ``k`` further steps (module docstring).
 
@@ -243,7 +272,14 @@ class AgeingRul:
         low_quantile: float,
     ) -> AgeingRul:
         """An AgeingRul holding copies of tables :meth:`tables` returned (e.g. built by a
-        batched kernel with ``_build_from_cloud``): the inverse of :meth:`tables`."""
+        batched kernel with ``_build_from_cloud``): the inverse of :meth:`tables`.
+
+        The tables must describe one weighted sample, as :func:`_build` makes them:
+        ``cum_w`` rises from 0 to 1, ``suffix_w`` falls from 1 to 0 with the same weight per
+        entry, ``suffix_wr`` falls to 0 by ``w_j * sorted_rul[j]`` per entry (relative
+        tolerance 1e-9: the sums are rounded) and ``low`` is the sample's ``low_quantile``
+        quantile (the first ``sorted_rul[j]`` with ``cum_w[j + 1] >= low_quantile``);
+        ``ValueError`` naming the table otherwise."""
         r = check.array("sorted_rul", sorted_rul, ndim=1, min_size=1, ge=0.0)
         if np.any(np.diff(r) < 0.0):
             raise ValueError(f"sorted_rul must be sorted (non-decreasing), got {check.show(r)}")
@@ -254,6 +290,7 @@ class AgeingRul:
         ]
         check.real("low", low, ge=0.0)
         _check_level(low_quantile)
+        _check_tables(r, *sums, float(low), float(low_quantile))
         return cls._copied(r, *sums, low, low_quantile)
 
     @classmethod

@@ -116,6 +116,7 @@ def _clear_counters(batch: ActuatorState, e: int) -> None:
         "test_age", "no_go",
         "part_age", "downtime", "slot", "flown", "tests", "no_go_count", "cost", "revenue",
         "failures", "replacements", "wasted_sum", "wasted_count", "terms", "wasted_now",
+        "tally",
     ):  # fmt: skip
         a[name][e] = 0
     a["last"][e] = batch.healthy_features

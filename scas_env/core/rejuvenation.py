@@ -43,7 +43,7 @@ or a belief row), the number of rows (``count``; -1 once the history is full: mo
 until the filter restarts, resampling falls back to the kernel jitter), ``clock`` (the
 filter's age and survival age, flights), ``loglik`` (per particle, the sum of its likelihood
 terms, as the filter learnt them) and ``tally`` (proposals, accepted proposals that moved a
-particle).
+particle; counted over the episode, cleared at ``reset``).
 
 After a resampling (systematic, no jitter) each particle takes ``steps`` random-walk
 Metropolis-Hastings steps in ``u = (D(x(t)), lambda)``: a Gaussian proposal with the
