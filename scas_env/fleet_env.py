@@ -16,7 +16,7 @@ from scas_env.core.batch import reset_needed_on_error
 from scas_env.core.costs import CostModel
 from scas_env.core.fleet.batch import MAINTENANCE_CHOICES, FleetBatch
 from scas_env.core.fleet.config import FleetConfig
-from scas_env.core.fleet.view import FleetView
+from scas_env.core.fleet.view import FleetView, check_obs_mode
 from scas_env.core.scenario import Scenario
 from scas_env.core.setup import Setup
 from scas_env.fleet_dashboard import draw_fleet, render_text
@@ -37,7 +37,9 @@ def make_fleet_setup(
 ) -> tuple[FleetConfig, Setup]:
     """The fleet's configuration and its actuators' :class:`~scas_env.core.setup.Setup` from
     an env's keywords, each checked (``fleet_fields``: fields of :class:`FleetConfig`;
-    ``obs_mode`` sets the actuators' scenario's: ``"state"`` shows each actuator's truth)."""
+    ``obs_mode`` sets the actuators' scenario's: ``"state"`` shows each actuator's truth).
+    The cheap checks come first: a bad argument raises before any calibration is built."""
+    check_obs_mode(obs_mode)
     unread = sorted(set(fleet_fields) & {"mismatch", "world_surrogate"})
     if unread:
         raise ValueError(
@@ -232,8 +234,10 @@ class ScasFleetEnv(gym.Env):
     * v0: initial release (0.2.0). Unreleased: every actuator of an aircraft flies the
       flight on which one of them fails (only those before it in the row order did);
       physics-fidelity fleets likewise. Episodes with an in-flight failure differ from that
-      day on. Known defects kept until the next version (the rotable pool's repairs run
-      one at a time, kit jobs outlive an actuator swap): docs/findings.md, "Known defects".
+      day on. With ``preflight="every_flight"`` the actuators test before each flight of a
+      day, not once a day (a no-go grounds the aircraft for the rest of the day). Known
+      defects kept until the next version (the rotable pool's repairs run one at a time,
+      kit jobs outlive an actuator swap): docs/findings.md, "Known defects".
 
     ## Example
 

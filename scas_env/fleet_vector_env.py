@@ -29,13 +29,15 @@ from gymnasium.vector.utils import batch_space
 
 from scas_env.core.batch import reset_needed_on_error
 from scas_env.core.fleet.batch import FleetBatch
-from scas_env.core.fleet.view import FleetView
+from scas_env.core.fleet.view import FleetView, check_obs_mode
 from scas_env.fleet_env import check_fleet_action, fleet_action_space, make_fleet_setup
 from scas_env.vector_env import check_no_render, check_num_envs, vector_seeds, with_info_masks
 
 #: entries of the single fleet env's info that are per aircraft or per actuator (left out
 #: of the vector env's info, which holds one value per fleet)
 PER_AIRCRAFT = ("aircraft_reward", "missions_missed_today", "assigned_today", "true_life")
+#: the observation modes of the vector env (a ``Dict`` does not batch here)
+FLAT_OBS_MODES = ("features+rul", "state")
 
 
 def make_fleet_vector_env(num_envs: int, **kwargs: Any) -> ScasFleetVectorEnv:
@@ -65,13 +67,12 @@ class ScasFleetVectorEnv(VectorEnv):
     ) -> None:
         check_no_render(render_mode)
         n = check_num_envs(num_envs)
+        check_obs_mode(obs_mode, FLAT_OBS_MODES, ": the fleet vector env takes a flat obs_mode")
         self.config, self.setup = make_fleet_setup(
             fleet, scenario, cost_model, params, calibration, surrogate, fleet_fields, obs_mode
         )
         self.fleet = FleetBatch(self.setup, self.config, n)
         self.view = FleetView(self.fleet, obs_mode)
-        if obs_mode == "dict":
-            raise ValueError("the fleet vector env takes a flat obs_mode ('features+rul', 'state')")
         self.num_envs = n
         self.single_observation_space = self.view.space
         self.single_action_space = fleet_action_space(self.config)
@@ -161,4 +162,4 @@ class ScasFleetVectorEnv(VectorEnv):
         return self._masks
 
 
-__all__ = ["PER_AIRCRAFT", "ScasFleetVectorEnv", "make_fleet_vector_env"]
+__all__ = ["FLAT_OBS_MODES", "PER_AIRCRAFT", "ScasFleetVectorEnv", "make_fleet_vector_env"]

@@ -3,13 +3,16 @@ reward's own terms: the missions missed per type (the schedule in the observatio
 missions completed: aircraft assigned a type whose actuators flew all ``F`` flights), the
 background removals (the maintenance log's ``"background"`` records), the spares held (the
 spares ledger: the morning's stock less the units taken that day, before the evening's
-arrivals), and the actuators' own terms; then the episode's books against the same sums."""
+arrivals), and the actuators' terms, each priced from its own count (flights, tests, no-gos,
+the log's preventive and failure records) at the case's prices; then the episode's books
+against the same sums."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
+from scas_env.core.costs import CostModel
 from scas_env.core.fleet.config import FleetConfig, SparesConfig
 from scas_env.core.setup import PARTS, REWARD_TERMS
 from scas_env.fleet_env import ScasFleetEnv
@@ -43,6 +46,18 @@ NOT_FLOWN = np.array([1000.0, 3000.0, 7000.0])
 VALUE = np.array([5000.0, 6000.0, 8000.0])
 BACKGROUND_USD = 11_000.0
 HOLDING_USD = 37.0
+#: the actuators' prices, each unlike the defaults and the others (a price read for another
+#: term, or a default read instead, changes a day's sum); the downtimes stay the defaults
+TEST_USD, NO_GO_USD, SPRING_USD, SEAL_USD = 130.0, 770.0, 1_900.0, 5_300.0
+FAILURE_USD = 23_000.0 + 17_000.0  # unscheduled removal + mission abort
+PRICES = CostModel(
+    test_usd=TEST_USD,
+    no_go_inspection_usd=NO_GO_USD,
+    spring_replacement_usd=SPRING_USD,
+    seal_replacement_usd=SEAL_USD,
+    unscheduled_removal_usd=23_000.0,
+    mission_abort_usd=17_000.0,
+)
 
 
 def _action(env: ScasFleetEnv, day: int, rng: np.random.Generator) -> np.ndarray:
@@ -75,24 +90,37 @@ def test_a_day_s_reward_is_its_counts_times_their_prices() -> None:
     removals = distinct actuators of today's ``"background"`` log records (two records each,
     one per part), the units held = the morning's stock less the units taken (checked against
     the parts fitted: a kit per part, an actuator per both) and the evening's stock = those
-    plus the pipeline's head (the arrivals, counted after the holding); the actuators' flight
-    term = each aircraft's flights x its type's value / F. The episode's books are the sums."""
-    env = ScasFleetEnv(fleet=PRICED)
+    plus the pipeline's head (the arrivals, counted after the holding); the actuators' terms:
+    flight = each aircraft's flights x its type's value / F, test = today's tests (info) x
+    TEST_USD, no-go = today's failed tests x NO_GO_USD, replacement = today's ``"preventive"``
+    records x their part's price, failure = the actuators with a ``"failure"`` record today x
+    FAILURE_USD (one per actuator, whichever parts failed: on some days a part is set just
+    short of failing). The episode's books are the sums."""
+    env = ScasFleetEnv(fleet=PRICED, cost_model=PRICES)
     fb, a = env.fleet, env.fleet.actuators.a
     sh = fb.shape
     names = Names(env.obs_names)
     types = PRICED.mission_types
-    obs, _ = env.reset(seed=3)
+    obs, info = env.reset(seed=3)
     rng = np.random.default_rng(0)
     total = {"reward": 0.0, "missed": np.zeros(sh.types), "background": 0, "held": 0}
-    days_taking = days_arriving = 0
+    priced = dict.fromkeys(REWARD_TERMS, 0)  # days each actuators' term was charged
+    days_taking = days_arriving = both = 0
     for day in range(sh.days):
         demand = np.array([names(obs, f"demand_day0.{t}") for t in types], dtype=np.int64)
         on_hand, taken = fb.spares.on_hand[0].copy(), fb.spares.taken[0].copy()
         due = fb.spares.pipeline[0, :, 0].copy()
         fitted = a["replacements"].sum(axis=0).copy()
         logged = len(fb.log.records[0])
+        tests, failures = info["tests"], sum(info["failures"].values())
+        no_gos = int(a["no_go_count"].sum())
+        if day % 20 == 10:  # a spring about to fail (and the seals with it on day 50)
+            e = fb.row(0, day // 20, 0)
+            a["crack"][e] = a["fail"][e] * (1.0 - 1e-9)
+            if day == 50:
+                a["wear"][e] = env.setup.world.seal_critical_m * (1.0 - 1e-9)
         obs, reward, _, _, info = env.step(_action(env, day, rng))
+        today = fb.log.records[0][logged:]
 
         # missions: the schedule less the aircraft that completed their type's F flights
         flew = a["flew"].reshape(sh.aircraft, sh.actuators)
@@ -101,7 +129,7 @@ def test_a_day_s_reward_is_its_counts_times_their_prices() -> None:
         missed = demand - np.bincount(assigned[done], minlength=sh.types)
         assert (missed >= 0).all() and np.array_equal(missed, info["missions_missed_today"])
         # background removals: today's log records, both parts of each actuator removed
-        records = [r for r in fb.log.records[0][logged:] if r["kind"] == "background"]
+        records = [r for r in today if r["kind"] == "background"]
         assert all(r["day"] == day for r in records)
         removed = {(r["aircraft"], r["actuator"]) for r in records}
         assert len(records) == len(PARTS) * len(removed)
@@ -114,11 +142,26 @@ def test_a_day_s_reward_is_its_counts_times_their_prices() -> None:
         days_taking += bool(takes.any())
         days_arriving += bool(due.any())
 
-        terms = info["reward_terms"]
-        actuators = sum(terms[t] for t in REWARD_TERMS)
+        # the actuators' terms: each count from its own source, times its price
         assigned_value = np.where(assigned >= 0, VALUE[assigned], 0.0)
-        flight = float(flew[:, 0] @ assigned_value) / sh.flights
-        assert terms["flight"] == pytest.approx(flight, rel=1e-12, abs=1e-9)
+        preventive = [r["part"] for r in today if r["kind"] == "preventive"]
+        failed = [(r["aircraft"], r["actuator"]) for r in today if r["kind"] == "failure"]
+        assert len(failed) == sum(info["failures"].values()) - failures
+        own = {
+            "flight": float(flew[:, 0] @ assigned_value) / sh.flights,
+            "test": -TEST_USD * (info["tests"] - tests),
+            "no_go": -NO_GO_USD * (int(a["no_go_count"].sum()) - no_gos),
+            "replacement": -(
+                SPRING_USD * preventive.count("spring") + SEAL_USD * preventive.count("seal")
+            ),
+            "failure": -FAILURE_USD * len(set(failed)),
+        }
+        terms = info["reward_terms"]
+        for t in REWARD_TERMS:
+            assert terms[t] == pytest.approx(own[t], rel=1e-12, abs=1e-9), (day, t)
+            priced[t] += own[t] != 0.0
+        both += len(failed) > len(set(failed))
+        actuators = sum(own.values())
         missed_usd = float(missed @ NOT_FLOWN)
         background_usd = BACKGROUND_USD * len(removed)
         holding_usd = HOLDING_USD * float(held.sum())
@@ -147,3 +190,5 @@ def test_a_day_s_reward_is_its_counts_times_their_prices() -> None:
     assert total["missed"][0] != total["missed"][-1] and total["missed"].min() > 0
     assert total["background"] >= 3
     assert days_taking >= 5 and days_arriving >= 5
+    # and every actuators' term, on several days
+    assert min(priced.values()) >= 2 and both >= 1, (priced, both)

@@ -104,8 +104,10 @@ class ActuatorBatch(ActuatorState):
             a["wasted_now"][rows[0]] = 0.0
         else:
             a["wasted_now"][rows] = 0.0
-        if self.keeps_history:  # a test (2 data), one per flight, a replacement's batch
-            self.ensure_history(rows, 3 + int(a["flights"][rows].max(initial=0)))
+        if self.keeps_history:  # a test (2 data; before each flight with every_flight),
+            # one per flight, a replacement's batch
+            most = int(a["flights"][rows].max(initial=0))
+            self.ensure_history(rows, 2 * (most if self._every_flight else 1) + most + 1)
         plan = (actions, a["flights"], a["group"], a["mtype"], a["flight_value"])
         if st.physics:
             self._physics_slot(rows, plan)
@@ -177,7 +179,7 @@ class ActuatorBatch(ActuatorState):
 
     def _physics_slot(self, rows: np.ndarray, plan: tuple) -> None:
         """:func:`~scas_env.core.slot.slot_rows` with simulated measurements, row by row, in
-        the same phases."""
+        the same phases (a test before each flight after the first too, with every_flight)."""
         a, st = self.a, self.setup
         actions, flights, group, mtype, value = plan
         out = self._out
@@ -209,6 +211,24 @@ class ActuatorBatch(ActuatorState):
             go[g] = go.get(g, True) and bool(ok)
         most = max((int(flights[e]) for e in wants), default=0)
         for f in range(most):
+            if self._every_flight and f > 0:  # every row still flying tests again
+                held = set()
+                for e in list(wants):
+                    g = int(group[e])
+                    if not (go[g] and broken_at.get(g, -1) < 0 and f < flights[e]):
+                        continue
+                    g1, g3 = parts.physics_test(self, e, self.rngs[e]["measure"])
+                    ok = test_measured(
+                        e, g1, g3, True, self._world, self._monitor, self._memory,
+                        self._books, self._handles, out, st.go_limits, self._prices,
+                        st.filters, st.detector, len(FLIGHT_FEATURES),
+                    )  # fmt: skip
+                    if a["status"][e]:
+                        del wants[e]
+                    elif not ok:
+                        held.add(g)
+                for g in held:
+                    go[g] = False
             for e in wants:
                 g = int(group[e])
                 if not (go[g] and broken_at.get(g, -1) in (-1, f) and f < flights[e]):

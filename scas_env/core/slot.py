@@ -13,7 +13,9 @@ runs, for each listed row and its action (:data:`FLY`, :data:`TEST_AND_FLY`, a r
    drawn at the parts' state, the parts grown by their own draws for the row's mission type
    (``mtype``), the learning batch filled and learnt from when full. A part that reaches its
    critical value fails the flight: the flight earns nothing for any row of the group, and
-   the group flies no further that slot;
+   the group flies no further that slot. With a test before every flight, the rows of a
+   group still flying test again (as in phase 1) before each flight after the first; a
+   no-go holds the group for the rest of the slot (the flights before it stay flown);
 3. the slot's bookkeeping (:func:`close_row`).
 
 Python takes the rows left with an event (a replacement; a failure, ``event = FAILURE``, the
@@ -147,6 +149,27 @@ def _tested(e: int, g1: float, g3: float, every_flight: bool, world: tuple, moni
         books[5][e] += 1
         terms[e, T_NO_GO] = -prices[1]
     return passed
+
+
+@njit(cache=True, inline="always")
+def _ground_test(e: int, every_flight: bool, world: tuple, monitor: tuple, memory: tuple,
+                 books: tuple, handles: tuple, out: tuple, go_limits: np.ndarray,
+                 prices: tuple, wm: tuple, filt: tuple, det: tuple, ground_z: np.ndarray,
+                 ground: np.ndarray, work: tuple) -> bool:  # fmt: skip
+    """Row e's pre-flight test at its parts' state now: two normals of its measure stream,
+    the ground features (G1, G3), then :func:`_tested`. Returns go."""
+    crack, wear, fail, unit_z = world[0], world[1], world[2], world[5]
+    c = min(crack[e] / fail[e], 1.0)
+    w = min(wear[e] / wm.seal_critical_m, 1.0)
+    measure = _handle(handles[0], e)
+    ground_z[0] = standard_normal(measure)
+    ground_z[1] = standard_normal(measure)
+    features_at(c, w, unit_z[e], ground_z, wm.crack_grid, wm.wear_grid, wm.stack,
+                wm.ground_idx, ground)  # fmt: skip
+    return _tested(
+        e, ground[0], ground[1], every_flight, world, monitor, memory, books, handles, out,
+        go_limits, prices, filt, det, wm.flight_idx.size, work,
+    )  # fmt: skip
 
 
 @njit(cache=True, inline="always")
@@ -286,16 +309,9 @@ def slot_rows(
             continue
         ok = not no_go[e]
         if every_flight or a == TEST_AND_FLY:
-            c = min(crack[e] / fail[e], 1.0)
-            w = min(wear[e] / wm.seal_critical_m, 1.0)
-            measure = _handle(handles[0], e)
-            ground_z[0] = standard_normal(measure)
-            ground_z[1] = standard_normal(measure)
-            features_at(c, w, unit_z[e], ground_z, wm.crack_grid, wm.wear_grid, wm.stack,
-                        wm.ground_idx, ground)  # fmt: skip
-            ok = _tested(
-                e, ground[0], ground[1], every_flight, world, monitor, memory, books, handles,
-                out, go_limits, prices, filt, det, n_flight, work,
+            ok = _ground_test(
+                e, every_flight, world, monitor, memory, books, handles, out, go_limits,
+                prices, wm, filt, det, ground_z, ground, work,
             )  # fmt: skip
             if status[e] != 0:
                 continue
@@ -304,8 +320,27 @@ def slot_rows(
             go[group[e]] = False
         most = max(most, flights[e])
     # 2. the flights, flight by flight; a failure ends its group's flying after that flight
-    # (every row of the group flies the failing flight, whatever its index)
+    # (every row of the group flies the failing flight, whatever its index); with a test
+    # before every flight, every row still flying tests again before each later flight, and
+    # a no-go holds its group for the rest of the slot
     for f in range(most):
+        if every_flight and f > 0:
+            held = np.zeros(n, dtype=np.bool_)  # per group
+            for e in rows:
+                g = group[e]
+                if not (wants[e] and go[g] and broken_at[g] < 0 and f < flights[e]):
+                    continue
+                ok = _ground_test(
+                    e, every_flight, world, monitor, memory, books, handles, out, go_limits,
+                    prices, wm, filt, det, ground_z, ground, work,
+                )  # fmt: skip
+                if status[e] != 0:
+                    wants[e] = False
+                elif not ok:
+                    held[g] = True
+            for e in rows:
+                if held[group[e]]:
+                    go[group[e]] = False
         for e in rows:
             g = group[e]
             if not (wants[e] and go[g] and broken_at[g] in (-1, f) and f < flights[e]):

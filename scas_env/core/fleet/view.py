@@ -47,15 +47,22 @@ RESOURCE_FIELDS = (
 CALENDAR_FIELDS = (("season_sin", "-"), ("season_cos", "-"), ("days_left", "days"))
 #: groups of the flat observation, in order
 GROUPS = ("actuators", "aircraft", "resources", "demand", "calendar")
+#: the views of a fleet: the monitor's, the truth, the monitor's groups as a ``Dict``
+OBS_MODES = ("features+rul", "state", "dict")
+
+
+def check_obs_mode(obs_mode: Any, modes: tuple[str, ...] = OBS_MODES, why: str = "") -> None:
+    """``ValueError`` naming ``obs_mode`` and the allowed ``modes`` unless it is one (a
+    cheap check, run before any setup work)."""
+    if not isinstance(obs_mode, str) or obs_mode not in modes:
+        raise ValueError(f"obs_mode = {obs_mode!r} must be one of {modes}{why}")
 
 
 class FleetView:
     """Observation layout, masks and info of the fleets of a :class:`FleetBatch`."""
 
     def __init__(self, fleet: FleetBatch, obs_mode: str) -> None:
-        modes = ("features+rul", "state", "dict")
-        if obs_mode not in modes:
-            raise ValueError(f"obs_mode = {obs_mode!r} must be one of {modes}")
+        check_obs_mode(obs_mode)
         self.fleet, self.obs_mode = fleet, obs_mode
         sh = fleet.shape
         self.layout = ObservationLayout(fleet.setup.scenario, fleet.setup.costs)
@@ -324,4 +331,12 @@ def _box(low: np.ndarray, high: np.ndarray) -> spaces.Box:
     )
 
 
-__all__ = ["AIRCRAFT_FIELDS", "CALENDAR_FIELDS", "GROUPS", "RESOURCE_FIELDS", "FleetView"]
+__all__ = [
+    "AIRCRAFT_FIELDS",
+    "CALENDAR_FIELDS",
+    "GROUPS",
+    "OBS_MODES",
+    "RESOURCE_FIELDS",
+    "FleetView",
+    "check_obs_mode",
+]
