@@ -66,18 +66,20 @@ class PolicyRandom:
 
     def seed(self, seed: int | Sequence[int] | None) -> None:
         """Re-seed both streams. A sequence of seeds (a batch of episodes) uses its first
-        seed: one stream serves the whole batch (module docstring of the agents)."""
+        seed: one stream serves the whole batch (module docstring of the agents). A seed is
+        an integer >= 0 (``int``, a numpy integer, an integer array), taken modulo ``2**32``
+        as SB3's ``set_random_seed`` did (numpy's range; the benchmark's policy seeds are
+        64-bit); anything else (a float, a bool, a string, a negative or an empty batch)
+        raises ``ValueError`` naming it, before the streams change."""
         import torch
 
-        if seed is not None and np.ndim(seed) > 0:  # a batch's seeds (a list, an array)
-            batch = np.ravel(np.asarray(seed))
-            seed = int(batch[0]) if batch.size else None
-        if seed is None:
+        first = _first_seed(seed)
+        if first is None:
             entropy = np.random.SeedSequence()
             self.numpy = np.random.default_rng(entropy)
             torch_seed = int(entropy.generate_state(1, np.uint64)[0])
         else:
-            torch_seed = int(seed) % 2**32  # as SB3's set_random_seed did (numpy's range)
+            torch_seed = first % 2**32  # as SB3's set_random_seed did (numpy's range)
             self.numpy = np.random.default_rng(torch_seed)
         self._torch_state = torch.Generator().manual_seed(torch_seed).get_state()
 
@@ -94,3 +96,28 @@ class PolicyRandom:
                 yield
             finally:
                 self._torch_state = torch.get_rng_state()
+
+
+def _first_seed(seed: object) -> int | None:
+    """The seed :meth:`PolicyRandom.seed` uses: None, an integer >= 0, or the first of a
+    non-empty batch of them (every one checked); ``ValueError`` naming anything else."""
+    if seed is None:
+        return None
+    allowed = "None, an integer >= 0 or a non-empty sequence of them (one per row)"
+    if isinstance(seed, np.ndarray):
+        if seed.size == 0 or not np.issubdtype(seed.dtype, np.integer) or (seed < 0).any():
+            raise ValueError(f"seed = {seed!r} must be {allowed}")
+        return int(seed.reshape(-1)[0])
+    if isinstance(seed, str | bytes) or not isinstance(seed, int | np.integer | Sequence):
+        raise ValueError(f"seed = {seed!r} must be {allowed}")
+    batch = list(seed) if isinstance(seed, Sequence) else [seed]
+    bad = [
+        s
+        for s in batch
+        if isinstance(s, bool | np.bool_) or not isinstance(s, int | np.integer) or s < 0
+    ]
+    if not batch or (bad and not isinstance(seed, Sequence)):
+        raise ValueError(f"seed = {seed!r} must be {allowed}")
+    if bad:
+        raise ValueError(f"seed = {seed!r}: its entry {bad[0]!r} is not an integer >= 0")
+    return int(batch[0])

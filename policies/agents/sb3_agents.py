@@ -153,7 +153,8 @@ def _masked(model: Any) -> bool:
 class SB3Agent:
     """A per-flight SB3 model acting on raw observations (policy protocol):
     ``predict`` normalises with the ``VecNormalize`` statistics (if any; not updated) and,
-    for MaskablePPO, passes the action mask of the raw observation.
+    for MaskablePPO, passes the action mask of the raw observation. An observation of
+    another width or with non-finite entries (NaN, inf) raises ``ValueError`` naming them.
 
     Parameters
     ----------
@@ -184,6 +185,18 @@ class SB3Agent:
         n = len(self.obs_names)
         if obs.ndim not in (1, 2) or obs.shape[-1] != n:
             raise ValueError(f"observation has shape {obs.shape}; expected ({n},) or (n_envs, {n})")
+        bad = np.argwhere(~np.isfinite(np.atleast_2d(obs)))
+        if bad.size:  # the env's entries saturate at finite bounds: a NaN is an upstream bug
+            where = [
+                (f"row {r} " if obs.ndim == 2 else "")
+                + f"[{c}] {self.obs_names[c]!r} = {float(np.atleast_2d(obs)[r, c])!r}"
+                for r, c in bad[:5].tolist()
+            ]
+            more = f" and {len(bad) - 5} more" if len(bad) > 5 else ""
+            raise ValueError(
+                f"observation has non-finite entries ({', '.join(where)}{more}); every entry "
+                "must be a finite number"
+            )
         return obs
 
     def predict(

@@ -7,8 +7,9 @@ actuator's episode streams) under ``VecNormalize``
 (observations standardised, rewards scaled by the running std of the discounted return with
 the algorithm's ``gamma``), trained for ``total_timesteps`` *decisions* or until ``max_wall_s``
 seconds of wall time, whichever comes first. A checkpoint (model zip + VecNormalize
-statistics) is written every ``checkpoint_every`` decisions; the best one is chosen later on
-validation seeds (:mod:`experiments.epoch_agents.selection`), never on the held-out ones.
+statistics) is written every ``checkpoint_every`` decisions, rounded down to a multiple of
+the env count (:func:`checkpoint_interval`); the best one is chosen later on validation
+seeds (:mod:`experiments.epoch_agents.selection`), never on the held-out ones.
 
 Hyper-parameters come from an RL-Zoo-format YAML (:func:`load_zoo_hyperparams`): a mapping
 ``env id -> {n_envs, n_timesteps, policy, normalize, <algorithm keywords>}``.
@@ -18,8 +19,11 @@ sb3-contrib (MaskablePPO) is a dependency of this package; TensorBoard logs need
 
 from __future__ import annotations
 
+import inspect
 import io
 import json
+import math
+import numbers
 import pickle
 import time
 from collections.abc import Mapping, Sequence
@@ -27,11 +31,12 @@ from pathlib import Path
 from typing import Any
 
 import gymnasium as gym
+import numpy as np
 
 from policies.agents.delegation import DelegateSpec, flight_obs_names
 from policies.agents.sb3_agents import require_contrib
 from scas_env import ENV_ID, ENV_ID_EPOCHS
-from scas_env.decision_epochs import DEFAULT_KS, DecisionEpochs
+from scas_env.decision_epochs import DEFAULT_KS, N_MAINTENANCE, DecisionEpochs
 from scas_env.utils.atomic_file import write_bytes_atomic, write_text_atomic
 
 #: the observation and return statistics of a clone (``experiments.epoch_agents.clone``),
@@ -45,6 +50,8 @@ ZOO_KEYS = ("n_envs", "n_timesteps", "policy", "normalize")
 #: this project's key for fine-tuning near the ``init`` policy: the uniform share of the
 #: reference (:mod:`policies.agents.reference`; ``ent_coef`` is then the KL weight)
 REFERENCE_KEY = "reference_mix"
+#: algorithm keywords :func:`prepared_run` sets itself (a hyper-parameter file may not)
+RUN_KEYWORDS = ("policy", "env", "seed", "device", "verbose", "_init_setup_model")
 
 __all__ = [
     "EPOCH_ENV_ID",
@@ -53,11 +60,13 @@ __all__ = [
     "check_delegate",
     "check_run",
     "check_training",
+    "checkpoint_interval",
     "init_delegate",
     "load_zoo_hyperparams",
     "make_epoch_env",
     "new_out_dir",
     "prepared_run",
+    "run_settings",
     "save_statistics",
     "train_epochs",
     "warm_start",
@@ -71,29 +80,53 @@ def load_zoo_hyperparams(path: str | Path, env_id: str = EPOCH_ENV_ID) -> dict[s
     path = Path(path)
     if not path.is_file():
         raise ValueError(f"hyper-parameter file {str(path)!r} does not exist")
-    import yaml
-
-    data = yaml.safe_load(path.read_text())
+    data = _read_yaml(path)
     if not isinstance(data, dict) or env_id not in data:
         keys = sorted(data) if isinstance(data, dict) else type(data).__name__
         raise ValueError(f"{path}: no entry {env_id!r} (found {keys})")
+    if not isinstance(data[env_id], dict):
+        raise ValueError(f"{path}: entry {env_id!r} = {data[env_id]!r} must be a mapping")
     return dict(data[env_id])
+
+
+def _read_yaml(path: Path) -> Any:
+    """A YAML file's document; ``ValueError`` naming the file if it is not YAML."""
+    import yaml
+
+    try:
+        return yaml.safe_load(path.read_text())
+    except yaml.YAMLError as exc:
+        raise ValueError(f"{path}: not valid YAML ({' '.join(str(exc).split())})") from None
 
 
 def candidate_hyperparams(search: str | Path, candidate: str) -> dict[str, Any]:
     """Hyper-parameters of ``candidate`` in a search YAML (``base``: an RL-Zoo file beside it,
-    ``candidates``: name -> overrides)."""
-    import yaml
-
+    ``candidates``: name -> mapping of overrides); ``ValueError`` naming what is missing or
+    malformed. The values are checked by :func:`run_settings`."""
     search = Path(search)
     if not search.is_file():
         raise ValueError(f"search file {str(search)!r} does not exist")
-    spec = yaml.safe_load(search.read_text())
-    candidates = spec.get("candidates", {}) if isinstance(spec, dict) else {}
+    spec = _read_yaml(search)
+    if not isinstance(spec, dict):
+        raise ValueError(f"{search}: a mapping with 'base' and 'candidates' expected, got {spec!r}")
+    candidates = spec.get("candidates", {})
+    if not isinstance(candidates, dict):
+        raise ValueError(f"{search}: candidates = {candidates!r} must be a mapping name -> keys")
     if candidate not in candidates:
         raise ValueError(f"candidate = {candidate!r} must be one of {sorted(candidates)}")
-    base = load_zoo_hyperparams(search.parent / spec["base"])
-    return {**base, **candidates[candidate]}
+    overrides = candidates[candidate]
+    if not isinstance(overrides, dict):
+        raise ValueError(
+            f"{search}: candidate {candidate!r} = {overrides!r} must be a mapping of "
+            "hyper-parameters (e.g. {gamma: 0.99})"
+        )
+    base = spec.get("base")
+    if not isinstance(base, str):
+        raise ValueError(
+            f"{search}: base = {base!r}; it needs 'base: <file>.yml', the RL-Zoo file beside "
+            "it that the candidates override"
+        )
+    return {**load_zoo_hyperparams(search.parent / base), **overrides}
 
 
 def _schedule(name: str, value: Any) -> Any:
@@ -220,6 +253,117 @@ def check_run(algo: str, native_envs: int | None) -> None:
         raise ValueError(f"algo = {algo!r} must be one of {sorted(ALGOS)}")
 
 
+def _algo_class(algo: str) -> Any:
+    if algo == "ppo":
+        from stable_baselines3 import PPO
+
+        return PPO
+    return require_contrib("train on decision epochs").MaskablePPO
+
+
+def _check_keywords(cls: Any, hp: Mapping[str, Any]) -> None:
+    """Refuse algorithm keywords ``cls.__init__`` does not take, those :func:`prepared_run`
+    sets, values of another type than the keyword's default (a number, a bool) and the
+    obvious ranges (``gamma`` in (0, 1], ``learning_rate`` and ``clip_range`` >= 0,
+    ``n_steps``, ``batch_size`` and ``n_epochs`` integers >= 1)."""
+    params = inspect.signature(cls.__init__).parameters
+    own = sorted(k for k in hp if k in RUN_KEYWORDS)
+    if own:
+        raise ValueError(f"hyper-parameter(s) {own}: set by train_epochs, not by the file")
+    unknown = sorted(k for k in hp if k not in params)
+    if unknown and not any(p.kind is p.VAR_KEYWORD for p in params.values()):
+        allowed = sorted(k for k in params if k not in ("self", *RUN_KEYWORDS))
+        raise ValueError(
+            f"hyper-parameter(s) {unknown} are not {cls.__name__} keywords; allowed: "
+            f"{allowed}, and {[*ZOO_KEYS, REFERENCE_KEY]}"
+        )
+    for key, value in hp.items():
+        default = params[key].default if key in params else None
+        if isinstance(default, bool) and not isinstance(value, bool):
+            raise ValueError(f"{key} = {value!r} must be true or false")
+        number = isinstance(value, numbers.Real) and not isinstance(value, bool)
+        if (
+            isinstance(default, int | float)
+            and not isinstance(default, bool)
+            and not (callable(value) or (number and math.isfinite(value)))
+        ):
+            raise ValueError(f"{key} = {value!r} must be a finite number")
+    for key in ("n_steps", "batch_size", "n_epochs"):
+        value = hp.get(key, 1)
+        if isinstance(value, bool) or not isinstance(value, numbers.Integral) or value < 1:
+            raise ValueError(f"{key} = {value!r} must be an integer >= 1")
+    gamma = hp.get("gamma", 0.99)
+    if not 0 < gamma <= 1:
+        raise ValueError(f"gamma = {gamma!r} must be in (0, 1] (the discount per decision)")
+    for key in ("learning_rate", "clip_range"):
+        if not callable(hp.get(key, 1)) and not hp.get(key, 1) >= 0:  # 0: no step (tests)
+            raise ValueError(f"{key} = {hp[key]!r} must be >= 0 (or 'lin_<number>')")
+
+
+def run_settings(
+    hyperparams: Mapping[str, Any], algo: str
+) -> tuple[int, Any, bool, dict[str, Any]]:
+    """``n_envs``, the policy (a name or :class:`policies.agents.reference.ReferenceKLPolicy`
+    with ``reference_mix``), ``normalize`` and the algorithm keywords (``lin_<x>`` made
+    schedules) of an RL-Zoo entry for ``algo``, every key checked: ``ValueError`` naming the
+    value and what is allowed, the keywords against the algorithm's ``__init__``."""
+    if not isinstance(hyperparams, Mapping):
+        raise ValueError(f"hyperparams = {hyperparams!r} must be a mapping (an RL-Zoo entry)")
+    check_run(algo, None)
+    cls = _algo_class(algo)
+    hp = dict(hyperparams)
+    n_envs = hp.pop("n_envs", 4)
+    if isinstance(n_envs, bool) or not isinstance(n_envs, numbers.Integral) or n_envs < 1:
+        raise ValueError(f"n_envs = {n_envs!r} must be an integer >= 1")
+    _n_timesteps(hp.pop("n_timesteps", None))
+    policy = hp.pop("policy", "MlpPolicy")
+    if not (isinstance(policy, type) or (isinstance(policy, str) and policy in cls.policy_aliases)):
+        raise ValueError(
+            f"policy = {policy!r} must be one of {sorted(cls.policy_aliases)} (or a class)"
+        )
+    normalize = hp.pop("normalize", True)
+    if not isinstance(normalize, bool):
+        raise ValueError(f"normalize = {normalize!r} must be true or false")
+    mix = hp.pop(REFERENCE_KEY, None)
+    if mix is not None:
+        if policy != "MlpPolicy" or algo != "maskable_ppo":
+            raise ValueError(
+                f"{REFERENCE_KEY} needs policy 'MlpPolicy' and algo 'maskable_ppo', got "
+                f"{policy!r} and {algo!r}"
+            )
+        if isinstance(mix, bool) or not isinstance(mix, numbers.Real) or not 0 < mix <= 1:
+            raise ValueError(f"{REFERENCE_KEY} = {mix!r} must be a number in (0, 1]")
+        from policies.agents.reference import ReferenceKLPolicy
+
+        policy = ReferenceKLPolicy
+    hp = with_schedules(hp)
+    _check_keywords(cls, hp)
+    return int(n_envs), policy, normalize, hp
+
+
+def _n_timesteps(value: Any) -> int | None:
+    """The entry's ``n_timesteps`` (None if absent) as an ``int``: a number >= 1."""
+    if value is None:
+        return None
+    if isinstance(value, bool) or not isinstance(value, numbers.Real) or not value >= 1:
+        raise ValueError(f"n_timesteps = {value!r} must be a number >= 1 (decisions)")
+    if not math.isfinite(value):
+        raise ValueError(f"n_timesteps = {value!r} must be finite")
+    return int(float(value))
+
+
+def checkpoint_interval(checkpoint_every: int, n_envs: int) -> int:
+    """The decisions between checkpoints :func:`train_epochs` makes of ``checkpoint_every``
+    on ``n_envs`` envs: SB3 saves every ``checkpoint_every // n_envs`` steps of all envs
+    (at least one), so it is rounded down to a multiple of ``n_envs`` (and at least
+    ``n_envs``): 500,000 on 64 envs checkpoints every 499,968 decisions.
+
+    >>> checkpoint_interval(500_000, 64), checkpoint_interval(10, 64)
+    (499968, 64)
+    """
+    return max(checkpoint_every // n_envs, 1) * n_envs
+
+
 def prepared_run(
     hyperparams: Mapping[str, Any],
     out: Path,
@@ -234,30 +378,13 @@ def prepared_run(
 ) -> tuple[Any, Any, int, bool, dict[str, Any]]:
     """The model, its (normalised) vector env, ``n_envs``, ``normalize`` and the algorithm
     keywords of one run (:func:`train_epochs`), seeded as documented there."""
-    contrib = require_contrib("train on decision epochs")
     import torch
-    from stable_baselines3 import PPO
     from stable_baselines3.common.env_util import make_vec_env
     from stable_baselines3.common.utils import set_random_seed
     from stable_baselines3.common.vec_env import VecNormalize
 
     check_run(algo, native_envs)
-    classes = {"maskable_ppo": contrib.MaskablePPO, "ppo": PPO}
-    hp = dict(hyperparams)
-    n_envs = int(hp.pop("n_envs", 4))
-    hp.pop("n_timesteps", None)
-    policy = hp.pop("policy", "MlpPolicy")
-    normalize = bool(hp.pop("normalize", True))
-    if hp.pop(REFERENCE_KEY, None) is not None:
-        if policy != "MlpPolicy" or algo != "maskable_ppo":
-            raise ValueError(
-                f"{REFERENCE_KEY} needs policy 'MlpPolicy' and algo 'maskable_ppo', got "
-                f"{policy!r} and {algo!r}"
-            )
-        from policies.agents.reference import ReferenceKLPolicy
-
-        policy = ReferenceKLPolicy
-    hp = with_schedules(hp)
+    n_envs, policy, normalize, hp = run_settings(hyperparams, algo)
     torch.set_num_threads(1)
     set_random_seed(seed)
     if native_envs is None:
@@ -289,7 +416,7 @@ def prepared_run(
         venv = VecNormalize(venv, norm_obs=True, norm_reward=True, gamma=gamma)
     # the model's seed re-seeds the vector env (SB3's set_random_seed): the first reset uses
     # seed + rank, not the seed * 1000 above (kept: the shipped agents' runs were made so)
-    model = classes[algo](policy, venv, seed=seed, device="cpu", verbose=0, **hp)
+    model = _algo_class(algo)(policy, venv, seed=seed, device="cpu", verbose=0, **hp)
     return model, venv, n_envs, normalize, hp
 
 
@@ -395,13 +522,19 @@ def check_training(
     freeze_normalization: bool | None = None,
     delegate: DelegateSpec | None = None,
     scenario: Mapping[str, Any] | None = None,
+    seed: int = 0,
+    max_wall_s: float | None = None,
 ) -> tuple[int, bool, DelegateSpec | None]:
     """Every check :func:`train_epochs` makes before any work (``ValueError`` naming the
-    argument): the sizes, ``algo``, the output folder (new or empty), the warm start's
-    folder and files, the scenario's keywords and ``ks`` (an env is built), the delegate.
-    Returns the decisions to train, ``freeze_normalization`` resolved and the delegate
-    (``init``'s when not given)."""
-    n_timesteps = int(float(dict(hyperparams).get("n_timesteps", 1_000_000)))
+    argument): the hyper-parameters (:func:`run_settings`), the sizes, ``seed``,
+    ``max_wall_s``, ``algo``, the output folder (new or empty), the warm start's folder and
+    files, the scenario's keywords and ``ks`` (an env is built), the delegate, and the
+    network of ``policy_kwargs`` (built on the env's spaces) with, given ``init``, its
+    weights and statistics loaded into it. Returns the decisions to train,
+    ``freeze_normalization`` resolved and the delegate (``init``'s when not given)."""
+    check_run(algo, native_envs)
+    _, policy, normalize, hp = run_settings(hyperparams, algo)
+    n_timesteps = _n_timesteps(dict(hyperparams).get("n_timesteps", 1_000_000))
     total = n_timesteps if total_timesteps is None else total_timesteps
     if isinstance(total, bool) or not isinstance(total, int) or total < 1:
         raise ValueError(f"total_timesteps = {total!r} must be an integer >= 1")
@@ -409,6 +542,18 @@ def check_training(
         raise ValueError(f"checkpoint_every = {checkpoint_every!r} must be an integer >= 1")
     if checkpoint_every < 1:
         raise ValueError(f"checkpoint_every = {checkpoint_every!r} must be an integer >= 1")
+    if (
+        isinstance(seed, bool | np.bool_)
+        or not isinstance(seed, int | np.integer)
+        or not 0 <= seed < 2**32
+    ):
+        raise ValueError(f"seed = {seed!r} must be an integer in [0, 2**32)")
+    if max_wall_s is not None and (
+        isinstance(max_wall_s, bool)
+        or not isinstance(max_wall_s, numbers.Real)
+        or not 0 < max_wall_s < math.inf
+    ):
+        raise ValueError(f"max_wall_s = {max_wall_s!r} must be a finite number > 0 (s) or None")
     out = Path(out_dir)
     if out.exists() and (not out.is_dir() or any(out.iterdir())):
         raise ValueError(f"out_dir = {str(out)!r} exists and is not empty; choose a new one")
@@ -416,7 +561,7 @@ def check_training(
         raise ValueError(f"init = {str(init)!r} is not a folder")
     if init is not None:
         _init_files(Path(init))
-        if not bool(dict(hyperparams).get("normalize", True)):
+        if not normalize:
             raise ValueError(
                 f"init = {str(init)!r} with normalize = false: the warm start's network reads "
                 "normalised observations (its statistics need a VecNormalize)"
@@ -430,16 +575,51 @@ def check_training(
         raise ValueError(f"freeze_normalization = {freeze_normalization!r} must be a bool or None")
     elif freeze_normalization and init is None:
         raise ValueError("freeze_normalization = True needs init (the statistics to keep)")
-    check_run(algo, native_envs)
     scenario = dict(scenario or {})
     try:
-        make_epoch_env(ks=tuple(ks), **scenario).close()
+        env = make_epoch_env(ks=tuple(ks), **scenario)
     except TypeError as exc:
         raise ValueError(f"scenario {scenario}: {exc}") from None
-    if delegate is None and init is not None:
-        delegate = init_delegate(Path(init))
-    check_delegate(delegate, scenario)
+    try:
+        if delegate is None and init is not None:
+            delegate = init_delegate(Path(init))
+        check_delegate(delegate, scenario)
+        n_actions = (N_MAINTENANCE + (delegate is not None)) * len(tuple(ks))
+        _check_network(algo, policy, hp, env, gym.spaces.Discrete(n_actions), init, normalize)
+    finally:
+        env.close()
     return total, freeze_normalization, delegate
+
+
+def _check_network(
+    algo: str, policy: Any, hp: Mapping[str, Any], env: Any, actions: Any, init: Any, norm: bool
+) -> None:
+    """Build the policy network of ``hp``'s ``policy_kwargs`` for ``env``'s observation and
+    ``actions`` (as the algorithm's ``_setup_model`` does; the global generators kept) and,
+    given ``init``, load its weights and statistics into it and a ``VecNormalize`` of the
+    run's ``gamma`` (:func:`warm_start`; ``env`` is not stepped): ``ValueError`` naming what
+    does not fit, before any folder is made."""
+    from types import SimpleNamespace
+
+    from stable_baselines3.common.vec_env import DummyVecEnv, VecNormalize
+
+    from policies.agents.policy_random import global_rngs_kept
+
+    cls = _algo_class(algo)
+    policy_class = cls.policy_aliases[policy] if isinstance(policy, str) else policy
+    with global_rngs_kept():
+        try:
+            kwargs = dict(hp.get("policy_kwargs") or {})
+            if algo == "ppo":
+                kwargs.setdefault("use_sde", hp.get("use_sde", False))
+            network = policy_class(env.observation_space, actions, lambda _: 0.0, **kwargs)
+        except (TypeError, ValueError, AssertionError) as exc:
+            raise ValueError(f"policy_kwargs = {hp.get('policy_kwargs')!r}: {exc}") from None
+    if init is None or not norm:
+        return
+    gamma = float(hp.get("gamma", 0.99))
+    venv = VecNormalize(DummyVecEnv([lambda: env]), norm_obs=True, norm_reward=True, gamma=gamma)
+    warm_start(SimpleNamespace(policy=network), venv, Path(init))
 
 
 def train_epochs(
@@ -493,6 +673,10 @@ def train_epochs(
     (SB3's logger: training episode rewards of the Monitor) and ``run.json`` (config, written
     before training so that checkpoints can be validated while it runs, ``"finished":
     false``; at the end the decisions and wall time reached, ``"finished": true``).
+    ``checkpoint_every`` is rounded down to a multiple of the env count
+    (:func:`checkpoint_interval`). Every argument is checked before any folder or env is
+    made (:func:`check_training`; ``seed`` an integer in ``[0, 2**32)``, ``max_wall_s`` a
+    finite number > 0 or None).
     """
     from stable_baselines3.common.callbacks import CallbackList, CheckpointCallback
     from stable_baselines3.common.logger import configure
@@ -516,7 +700,10 @@ def train_epochs(
         freeze_normalization=freeze_normalization,
         delegate=delegate,
         scenario=scenario,
+        seed=seed,
+        max_wall_s=max_wall_s,
     )
+    seed = int(seed)
     mix = dict(hyperparams).get(REFERENCE_KEY)
     out = new_out_dir(out_dir)
     model, venv, n_envs, normalize, _ = prepared_run(
@@ -562,7 +749,7 @@ def train_epochs(
     }
     write_text_atomic(out / "run.json", json.dumps(run, indent=1))
     model.set_logger(configure(str(out), ["csv"]))
-    save_freq = max(checkpoint_every // n_envs, 1)
+    save_freq = checkpoint_interval(checkpoint_every, n_envs) // n_envs
     callbacks = [
         CheckpointCallback(save_freq, str(out), name_prefix="ckpt", save_vecnormalize=normalize)
     ]

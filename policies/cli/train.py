@@ -1,8 +1,9 @@
 """``scas-train``: a MaskablePPO (or PPO) agent trained on the decision epochs
 (:func:`policies.agents.training.train_epochs`).
 
-:func:`main` checks the options, the search file's candidate, ``--out`` and ``--init``'s
-files before any work (usage errors, exit status 2); stable-baselines3 is imported only after.
+:func:`main` checks the options, the search file's candidate (its keywords against the
+algorithm's), ``--out`` and ``--init``'s network and statistics before any folder or env is
+made (:func:`policies.agents.training.check_training`; usage errors, exit status 2).
 """
 
 from __future__ import annotations
@@ -70,7 +71,10 @@ def build_parser() -> Any:
         help="stop after this wall time in s (default: no limit, --timesteps decides)",
     )
     parser.add_argument(
-        "--checkpoint-every", type=positive_int, default=25_000, help="decisions per checkpoint"
+        "--checkpoint-every",
+        type=positive_int,
+        default=25_000,
+        help="decisions per checkpoint, rounded down to a multiple of the env count",
     )
     parser.add_argument(
         "--native-envs",
@@ -114,7 +118,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     if args.running_normalization and args.init is None:
         parser.error("--running-normalization needs --init")
     scenario = agent_scenario(parser, args)
-    from policies.agents.training import candidate_hyperparams, check_training, train_epochs
+    from policies.agents.training import (
+        candidate_hyperparams,
+        check_training,
+        checkpoint_interval,
+        train_epochs,
+    )
 
     try:
         hyperparams = candidate_hyperparams(args.search, args.candidate)
@@ -129,18 +138,26 @@ def main(argv: Sequence[str] | None = None) -> int:
         "freeze_normalization": None if args.init is None else not args.running_normalization,
     }
     changes = scenario_changes(scenario)
-    try:  # every check before any work: sizes, --out, --init's files, the scenario
-        total, *_ = check_training(hyperparams, args.out, scenario=changes, **settings)
+    try:  # every check before any work: keywords, sizes, --out, --init's files, the scenario
+        total, *_ = check_training(
+            hyperparams,
+            args.out,
+            scenario=changes,
+            seed=args.seed,
+            max_wall_s=args.max_wall_s,
+            **settings,
+        )
     except (ValueError, ImportError) as exc:
         parser.error(str(exc))
     announce_uncached_kernels()
-    rollout = int(hyperparams.get("n_steps", 2048)) * (
-        args.native_envs or int(hyperparams.get("n_envs", 4))
-    )
+    n_envs = args.native_envs or int(hyperparams.get("n_envs", 4))
+    rollout = int(hyperparams.get("n_steps", 2048)) * n_envs
+    every = checkpoint_interval(args.checkpoint_every, n_envs)
+    rounded = f": {args.checkpoint_every:,} rounded down to a multiple of {n_envs} envs"
+    rounded = "" if every == args.checkpoint_every else rounded
     log.info(
         f"training {args.algo} for {total:,} decisions, in whole rollouts of {rollout:,}, into "
-        f"{args.out} (SB3's progress.csv there; a checkpoint every "
-        f"{args.checkpoint_every:,} decisions)"
+        f"{args.out} (SB3's progress.csv there; a checkpoint every {every:,} decisions{rounded})"
     )
     out = train_epochs(
         hyperparams,
