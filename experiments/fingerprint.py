@@ -22,6 +22,19 @@ run compiles them for some minutes); the fleet parts take 3 s of it, the filter-
 holds the digests of the current version (refreshed with ``--write`` when a change is meant
 to move numbers; the CHANGELOG says why); ``--write --parts ...`` replaces those parts'
 digests in it and keeps the others.
+
+The digests are one machine's. numpy chooses its float64 ``exp``/``log`` loops by the CPU's
+SIMD extensions (``numpy.show_runtime()``) and numba compiles for the host CPU, so last bits
+may differ on another CPU. On an AVX-512 machine (2026-11-28) the commit whose digests are
+committed moved 6 parts (the campaign, the four filter-state parts, the fleet's random
+episode; the other 25, float32 observations and rewards among them, held); with numpy's
+AVX-512 loops switched off (``NPY_DISABLE_CPU_FEATURES``) "filter state" moved again, to a
+third digest. To show that a change moved nothing on such a machine, write the digests of
+the commit before it there and check against those::
+
+    git worktree add /tmp/before HEAD
+    (cd /tmp/before && python -m experiments.fingerprint --write)
+    python -m experiments.fingerprint --check /tmp/before/experiments/fingerprint.json
 """
 
 from __future__ import annotations
