@@ -29,8 +29,14 @@ may differ on another CPU. On an AVX-512 machine (2026-11-28) the commit whose d
 committed moved 6 parts (the campaign, the four filter-state parts, the fleet's random
 episode; the other 25, float32 observations and rewards among them, held); with numpy's
 AVX-512 loops switched off (``NPY_DISABLE_CPU_FEATURES``) "filter state" moved again, to a
-third digest. To show that a change moved nothing on such a machine, write the digests of
-the commit before it there and check against those::
+third digest. :data:`OTHER_CPUS` records, per CPU profile (:func:`cpu_profile`: numpy's
+SIMD extensions found, the host CPU numba compiles for, both versions), the digests that
+differ there for the same code; ``--check`` of the committed file accepts, part by part, the
+committed digest or the one recorded for this machine's profile (and says which).
+``--write-cpu`` records this machine's differing digests (run it at the commit whose digests
+are committed); ``--write`` drops the records of the parts it rewrites. To show that a change
+moved nothing on a machine without a record, write the digests of the commit before it there
+and check against those::
 
     git worktree add /tmp/before HEAD
     (cd /tmp/before && python -m experiments.fingerprint --write)
@@ -58,6 +64,14 @@ from scas_env.utils.atomic_file import write_text_atomic
 ACTION_P = (0.85, 0.1, 0.025, 0.025)
 #: the committed digests of the current version
 COMMITTED = Path(__file__).with_suffix(".json")
+#: per CPU profile, the digests that differ from :data:`COMMITTED`'s there (the same code)
+OTHER_CPUS = Path(__file__).with_name("fingerprint_other_cpus.json")
+#: the parts that hash float64 state (filters, the campaign's tables): their last bits
+#: follow the CPU; the others moved on no machine tried (2026-11-28)
+FLOAT64_PARTS = (
+    "campaign", "filter state", "filter state every_flight", "filter state resample_move_both",
+    "filter state vector", "fleet random",
+)  # fmt: skip
 #: the monitor's float64 state of a batch (``ActuatorBatch.a``; scas_env.core.state): both
 #: filters' particles, weights and effect states, pending flights, the learning batch, the
 #: RUL tables, the detectors and the resample-move arrays
@@ -444,6 +458,58 @@ def committed_digests() -> dict[str, str]:
     return read_digests(COMMITTED) if COMMITTED.exists() else {}
 
 
+def cpu_profile() -> str:
+    """What decides a float64 result's last bits here: the architecture, numpy's version and
+    the SIMD extensions it dispatches to, numba's version and the CPU it compiles for."""
+    import platform
+
+    import llvmlite.binding as llvm
+    import numba
+    from numpy._core import _multiarray_umath as umath
+
+    found = [f for f in umath.__cpu_dispatch__ if umath.__cpu_features__.get(f)]
+    return (
+        f"{platform.machine()}; numpy {np.__version__} ({', '.join(found)}); "
+        f"numba {numba.__version__} ({llvm.get_host_cpu_name()})"
+    )
+
+
+def other_cpu_digests(profile: str | None = None) -> dict[str, str]:
+    """The digests :data:`OTHER_CPUS` records for ``profile`` (default: this machine's)."""
+    if not OTHER_CPUS.exists():
+        return {}
+    records = json.loads(OTHER_CPUS.read_text())
+    return dict(records.get(cpu_profile() if profile is None else profile, {}))
+
+
+def accepted(part: str, digest: str, expected: dict[str, str], *, committed: bool) -> str:
+    """Whether ``digest`` of ``part`` passes against ``expected``: "equal", "this cpu" (the
+    digest recorded for this machine's profile, only against the committed file) or ""."""
+    if expected.get(part) == digest:
+        return "equal"
+    if committed and other_cpu_digests().get(part) == digest:
+        return "this cpu"
+    return ""
+
+
+def _write_other_cpu(digests: dict[str, str], *, drop: bool = False) -> None:
+    """Record this machine's ``digests`` that differ from the committed ones (``drop``: remove
+    every profile's record of those parts instead, after a ``--write``)."""
+    records = json.loads(OTHER_CPUS.read_text()) if OTHER_CPUS.exists() else {}
+    if drop:
+        records = {p: {k: v for k, v in r.items() if k not in digests} for p, r in records.items()}
+    else:
+        committed = committed_digests()
+        mine = {**records.get(cpu_profile(), {})}
+        for k, v in digests.items():
+            mine.pop(k, None)
+            if committed.get(k) != v:
+                mine[k] = v
+        records[cpu_profile()] = merged({}, mine)
+    records = {p: r for p, r in records.items() if r}
+    write_text_atomic(OTHER_CPUS, json.dumps(records, indent=1) + "\n")
+
+
 def merged(kept: dict[str, str], digests: dict[str, str]) -> dict[str, str]:
     """``kept`` with ``digests`` replacing or adding their parts, in :data:`PARTS` order (a
     kept name that is no part stays, after them)."""
@@ -464,6 +530,11 @@ def main(argv: Sequence[str] | None = None) -> int:
         action="store_true",
         help=f"write {COMMITTED.name} (with --parts: those parts' digests, the others kept)",
     )
+    group.add_argument(
+        "--write-cpu",
+        action="store_true",
+        help=f"record in {OTHER_CPUS.name} the digests that differ here from {COMMITTED.name}",
+    )
     args = parser.parse_args(argv)
     names = None if args.parts is None else [p.strip() for p in args.parts.split(",") if p]
     try:  # every input checked before any part runs
@@ -478,9 +549,17 @@ def main(argv: Sequence[str] | None = None) -> int:
     digests = fingerprint(names)
     if args.write:
         write_text_atomic(COMMITTED, json.dumps(merged(kept, digests), indent=1) + "\n")
+        _write_other_cpu(digests, drop=True)
+    if args.write_cpu:
+        _write_other_cpu(digests)
     print(json.dumps(digests, indent=1))
     if expected is not None:
-        moved = [k for k, v in digests.items() if expected.get(k) != v]
+        committed = args.check.resolve() == COMMITTED.resolve()
+        verdicts = {k: accepted(k, v, expected, committed=committed) for k, v in digests.items()}
+        cpu = [k for k, v in verdicts.items() if v == "this cpu"]
+        if cpu:
+            print(f"equal to the digests recorded for this cpu ({cpu_profile()}): {cpu}")
+        moved = [k for k, v in verdicts.items() if not v]
         if moved:
             print(f"moved: {moved}", file=sys.stderr)
             return 1

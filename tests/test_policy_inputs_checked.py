@@ -24,11 +24,8 @@ from scas_env.core.fleet.config import FleetConfig
 from scas_env.core.fleet.demand import DemandModel
 from scas_env.fleet_env import ScasFleetEnv
 
-FULL = (
-    "I2", "I6", "I7", "I8", "I9", "G1", "G3", "test_age", "no_go", "spring_rul_mean",
-    "spring_rul_low", "spring_risk", "seal_rul_mean", "seal_rul_low", "seal_risk",
-    "spring_alarm", "seal_alarm", "spring_age", "seal_age", "downtime",
-)  # fmt: skip
+#: the env's own observation names (features+rul)
+FULL = tuple(gym.make(scas_env.ENV_ID).unwrapped.obs_names)
 STATE = (
     "crack_fraction", "wear_fraction", "spring_rul_true", "seal_rul_true", "spring_age",
     "seal_age", "downtime",
