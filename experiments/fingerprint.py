@@ -474,40 +474,57 @@ def cpu_profile() -> str:
     )
 
 
+def _records() -> dict[str, Any]:
+    """:data:`OTHER_CPUS`: ``committed_profile`` (the profile that wrote :data:`COMMITTED`,
+    None if not recorded) and ``records`` (profile -> part -> digest)."""
+    data = json.loads(OTHER_CPUS.read_text()) if OTHER_CPUS.exists() else {}
+    return {"committed_profile": data.get("committed_profile"), "records": data.get("records", {})}
+
+
 def other_cpu_digests(profile: str | None = None) -> dict[str, str]:
     """The digests :data:`OTHER_CPUS` records for ``profile`` (default: this machine's)."""
-    if not OTHER_CPUS.exists():
-        return {}
-    records = json.loads(OTHER_CPUS.read_text())
-    return dict(records.get(cpu_profile() if profile is None else profile, {}))
+    return dict(_records()["records"].get(cpu_profile() if profile is None else profile, {}))
+
+
+def unknown_cpu() -> bool:
+    """Whether nothing is known of this machine's float64 last bits: it is not the profile
+    that wrote :data:`COMMITTED`, and :data:`OTHER_CPUS` holds no record of it."""
+    data, mine = _records(), cpu_profile()
+    return mine != data["committed_profile"] and mine not in data["records"]
 
 
 def accepted(part: str, digest: str, expected: dict[str, str], *, committed: bool) -> str:
-    """Whether ``digest`` of ``part`` passes against ``expected``: "equal", "this cpu" (the
-    digest recorded for this machine's profile, only against the committed file) or ""."""
+    """Whether ``digest`` of ``part`` passes against ``expected``: "equal"; against the
+    committed file also "this cpu" (the digest recorded for this machine's profile) or
+    "a recorded cpu" (another profile's: the same bits as there); "" otherwise."""
     if expected.get(part) == digest:
         return "equal"
-    if committed and other_cpu_digests().get(part) == digest:
-        return "this cpu"
+    if committed:
+        if other_cpu_digests().get(part) == digest:
+            return "this cpu"
+        if any(r.get(part) == digest for r in _records()["records"].values()):
+            return "a recorded cpu"
     return ""
 
 
-def _write_other_cpu(digests: dict[str, str], *, drop: bool = False) -> None:
-    """Record this machine's ``digests`` that differ from the committed ones (``drop``: remove
-    every profile's record of those parts instead, after a ``--write``)."""
-    records = json.loads(OTHER_CPUS.read_text()) if OTHER_CPUS.exists() else {}
-    if drop:
+def _write_other_cpu(digests: dict[str, str], *, committed: bool = False) -> None:
+    """Record this machine's ``digests`` that differ from the committed ones; ``committed``
+    (after ``--write``): this machine wrote them, every profile's record of those parts goes."""
+    data = _records()
+    records = data["records"]
+    if committed:
+        data["committed_profile"] = cpu_profile()
         records = {p: {k: v for k, v in r.items() if k not in digests} for p, r in records.items()}
     else:
-        committed = committed_digests()
+        base = committed_digests()
         mine = {**records.get(cpu_profile(), {})}
         for k, v in digests.items():
             mine.pop(k, None)
-            if committed.get(k) != v:
+            if base.get(k) != v:
                 mine[k] = v
         records[cpu_profile()] = merged({}, mine)
-    records = {p: r for p, r in records.items() if r}
-    write_text_atomic(OTHER_CPUS, json.dumps(records, indent=1) + "\n")
+    data["records"] = {p: r for p, r in records.items() if r}
+    write_text_atomic(OTHER_CPUS, json.dumps(data, indent=1) + "\n")
 
 
 def merged(kept: dict[str, str], digests: dict[str, str]) -> dict[str, str]:
@@ -549,16 +566,18 @@ def main(argv: Sequence[str] | None = None) -> int:
     digests = fingerprint(names)
     if args.write:
         write_text_atomic(COMMITTED, json.dumps(merged(kept, digests), indent=1) + "\n")
-        _write_other_cpu(digests, drop=True)
+        _write_other_cpu(digests, committed=True)
     if args.write_cpu:
         _write_other_cpu(digests)
     print(json.dumps(digests, indent=1))
     if expected is not None:
         committed = args.check.resolve() == COMMITTED.resolve()
         verdicts = {k: accepted(k, v, expected, committed=committed) for k, v in digests.items()}
-        cpu = [k for k, v in verdicts.items() if v == "this cpu"]
+        cpu = [k for k, v in verdicts.items() if v in ("this cpu", "a recorded cpu")]
         if cpu:
-            print(f"equal to the digests recorded for this cpu ({cpu_profile()}): {cpu}")
+            print(
+                f"equal to digests recorded in {OTHER_CPUS.name} (this cpu: {cpu_profile()}): {cpu}"
+            )
         moved = [k for k, v in verdicts.items() if not v]
         if moved:
             print(f"moved: {moved}", file=sys.stderr)

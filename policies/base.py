@@ -42,6 +42,7 @@ __all__ = [
     "TEST_AND_FLY",
     "Policy",
     "check_finite",
+    "check_seed",
     "episode_starts",
     "make_policy",
     "policy_family",
@@ -67,10 +68,20 @@ def episode_starts(episode_start: Any, rows: int) -> np.ndarray | None:
     return start
 
 
-def row_seeds(seed: Any) -> list[Any] | None:
+def check_seed(seed: Any) -> int:
+    """A policy's seed as an ``int``: an integer >= 0 (a numpy integer too), else
+    ``ValueError`` naming it (a float, a bool, a string is not silently turned into one)."""
+    if isinstance(seed, np.ndarray) and seed.ndim == 0:
+        seed = seed[()]
+    if isinstance(seed, bool | np.bool_) or not isinstance(seed, int | np.integer) or seed < 0:
+        raise ValueError(f"seed = {seed!r} must be an integer >= 0 (or None)")
+    return int(seed)
+
+
+def row_seeds(seed: Any) -> list[int] | None:
     """The per-row seeds of ``reset(seed=...)``: a sequence (list, tuple) or a 1-D integer
-    numpy array gives one seed per row (an array as the same list of ints); None for a
-    single seed (an int, a 0-d array). Raises ``ValueError`` for another array."""
+    numpy array gives one seed per row (each :func:`check_seed`-ed); None for a single seed
+    (an int, a 0-d array). Raises ``ValueError`` for another array or a bad entry."""
     if isinstance(seed, np.ndarray):
         if seed.ndim == 0:
             return None
@@ -79,9 +90,9 @@ def row_seeds(seed: Any) -> list[Any] | None:
                 f"seed = {seed!r}: an array of seeds must be 1-D of integers (one per row), "
                 f"got shape {seed.shape} and dtype {seed.dtype}"
             )
-        return [int(s) for s in seed]
+        return [check_seed(s) for s in seed]
     if isinstance(seed, Sequence) and not isinstance(seed, str | bytes):
-        return list(seed)
+        return [check_seed(s) for s in seed]
     return None
 
 

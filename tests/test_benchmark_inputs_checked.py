@@ -98,8 +98,16 @@ def test_garwood_takes_whole_floats_as_before():
     [(1.5, 3, "successes"), (2, 2.5, "trials"), (math.nan, 3, "successes"), (True, 3, "successes")],
 )
 def test_wilson_refuses_non_whole_counts(s, t, name):
-    with pytest.raises(ValueError, match=rf"{name} = .* must be an integer"):
+    with pytest.raises(ValueError, match=rf"{name} = .* must be a whole number"):
         wilson_interval(s, t)
+
+
+def test_the_three_count_checks_take_whole_floats_alike():
+    """One rule for counts (whole floats such as sums of float columns allowed): the same
+    results as with integers."""
+    assert garwood_interval(2.0) == garwood_interval(2)
+    assert wilson_interval(2.0, 10.0) == wilson_interval(2, 10)
+    assert minimum_detectable_difference(1.0, 10.0) == minimum_detectable_difference(1.0, 10)
 
 
 def test_wilson_takes_numpy_integers():

@@ -24,7 +24,7 @@ from experiments.fingerprint import (
     episodes_digest,
     feed,
     fingerprint,
-    other_cpu_digests,
+    unknown_cpu,
 )
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -72,27 +72,39 @@ def _committed() -> dict[str, str]:
 
 @pytest.mark.parametrize("part", CHEAP)
 def test_cheap_parts_equal_the_committed_digests(part: str) -> None:
-    """Equal to the committed digest, or to the one recorded for this CPU; a float64 part on
-    a CPU without a record cannot be checked (its last bits follow the CPU) and is skipped."""
+    """Equal to the committed digest, or to one recorded for a CPU; a float64 part that
+    differs on a CPU known to neither cannot be told from a change (its last bits follow the
+    CPU) and is skipped; on the committing or a recorded CPU it fails."""
     digest = fingerprint([part])[part]
     verdict = accepted(part, digest, _committed(), committed=True)
-    if not verdict and part in FLOAT64_PARTS and not other_cpu_digests():
+    if not verdict and part in FLOAT64_PARTS and unknown_cpu():
         pytest.skip(f"{part}: no digests recorded for this CPU ({cpu_profile()}); --write-cpu")
     assert verdict
 
 
-def test_a_cpu_s_record_serves_only_that_cpu(tmp_path: Path, monkeypatch) -> None:
-    """A digest recorded for this machine's profile passes against the committed file only;
-    one recorded for another profile does not pass here."""
+def test_recorded_digests_pass_and_only_an_unknown_cpu_may_skip(
+    tmp_path: Path, monkeypatch
+) -> None:
+    """Against the committed file a digest passes if committed or recorded for some CPU (the
+    same bits as there), not against another file; the CPU that wrote the committed digests
+    and a recorded one are known (a float64 part that differs there fails, not skips)."""
     part, mine, theirs = "lives", "a" * 64, "b" * 64
-    records = {cpu_profile(): {part: mine}, "another cpu": {part: theirs}}
     monkeypatch.setattr(fp, "OTHER_CPUS", tmp_path / "other.json")
-    fp.OTHER_CPUS.write_text(json.dumps(records))
     committed = {part: "c" * 64}
+    assert unknown_cpu()  # no file: nothing known
+    records = {
+        "committed_profile": None,
+        "records": {cpu_profile(): {part: mine}, "x": {part: theirs}},
+    }
+    fp.OTHER_CPUS.write_text(json.dumps(records))
+    assert not unknown_cpu()
     assert accepted(part, "c" * 64, committed, committed=True) == "equal"
     assert accepted(part, mine, committed, committed=True) == "this cpu"
+    assert accepted(part, theirs, committed, committed=True) == "a recorded cpu"
     assert accepted(part, mine, committed, committed=False) == ""
-    assert accepted(part, theirs, committed, committed=True) == ""
+    assert accepted(part, "d" * 64, committed, committed=True) == ""
+    fp.OTHER_CPUS.write_text(json.dumps({"committed_profile": cpu_profile(), "records": {}}))
+    assert not unknown_cpu()
 
 
 @pytest.mark.slow

@@ -244,3 +244,24 @@ def test_the_oracle_reused_on_a_batch_of_another_size_starts_it_over() -> None:
     a, _ = used.predict(batch, episode_start=np.array([True, True]))
     b, _ = fresh.predict(batch, episode_start=np.array([True, True]))
     assert np.array_equal(a, b) and np.array_equal(used.slot, fresh.slot)
+
+
+@pytest.mark.parametrize("bad", [1.5, True, "7", -1, [1.9], [True], np.float64(1.7)])
+def test_seeds_that_are_not_integers_are_refused_by_every_seeded_rule(bad) -> None:
+    """A fractional, boolean or string seed is not silently turned into another stream's."""
+    for policy in (
+        make_policy("random", FULL),
+        NoisyOraclePolicy(STATE),
+        FleetRandom(tuple(ScasFleetEnv().unwrapped.obs_names)),
+    ):
+        with pytest.raises(ValueError, match="seed"):
+            policy.reset(seed=bad)
+
+
+def test_integer_seeds_in_any_integer_form_give_one_stream() -> None:
+    draws = []
+    for seed in (3, np.int64(3), np.array(3)):
+        policy = make_policy("random", FULL)
+        policy.reset(seed=seed)
+        draws.append(policy.predict(np.zeros((5, len(FULL))))[0].tolist())
+    assert draws[0] == draws[1] == draws[2]

@@ -35,6 +35,7 @@ from policies.base import (
     TEST_AND_FLY,
     IntArray,
     Policy,
+    check_seed,
     register,
     row_seeds,
 )
@@ -237,7 +238,7 @@ class RandomPolicy(Policy):
         if rows is not None:
             self.row_rngs = [np.random.default_rng(s) for s in rows]
         else:
-            self.rng = np.random.default_rng(seed)
+            self.rng = np.random.default_rng(check_seed(seed))
             self.row_rngs = None
 
     def _act(self, obs: np.ndarray) -> IntArray:

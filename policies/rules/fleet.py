@@ -43,7 +43,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from policies.base import check_finite, register_policy, row_seeds
+from policies.base import check_finite, check_seed, register_policy, row_seeds
 from policies.rules.healthy_band import implicated_spring
 
 #: the families of this module, in the benchmark's order
@@ -356,7 +356,7 @@ class FleetRandom:
         if seed is None:  # the protocol's reset between episodes: the streams go on
             return
         rows = row_seeds(seed)
-        seeds = [seed] if rows is None else rows
+        seeds = [check_seed(seed)] if rows is None else rows
         self._rngs = [np.random.default_rng(s) for s in seeds]
 
     def predict(

@@ -35,7 +35,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from policies.base import IntArray, episode_starts, register, row_seeds
+from policies.base import IntArray, check_seed, episode_starts, register, row_seeds
 from policies.rules.nested import NestedRule
 
 __all__ = ["NoisyOraclePolicy"]
@@ -81,7 +81,7 @@ class NoisyOraclePolicy(NestedRule):
         """New episode(s): forget the parts' draws; re-seed when ``seed`` is given."""
         if seed is not None:
             rows = row_seeds(seed)
-            seeds = [seed] if rows is None else rows
+            seeds = [check_seed(seed)] if rows is None else rows
             self.rngs = [np.random.default_rng(int(s)) for s in seeds]
             if len(seeds) == 1:
                 self.base_seed = int(seeds[0])
