@@ -119,6 +119,7 @@ def fake_parts(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> list[str]:
 
     monkeypatch.setattr(fp, "PARTS", {n: part(n) for n in ("a", "b", "c")})
     monkeypatch.setattr(fp, "COMMITTED", tmp_path / "fingerprint.json")
+    monkeypatch.setattr(fp, "OTHER_CPUS", tmp_path / "other_cpus.json")
     return calls
 
 
@@ -136,7 +137,7 @@ def test_write_with_parts_replaces_only_those_atomically(
     monkeypatch.setattr(fp, "write_text_atomic", spy)
     assert fp.main(["--parts", "c,b", "--write"]) == 0
     assert fake_parts == ["c", "b"]
-    assert written == [fp.COMMITTED]
+    assert written == [fp.COMMITTED, fp.OTHER_CPUS]  # the latter: this cpu committed them
     text = fp.COMMITTED.read_text()
     assert json.loads(text) == {"a": "old-a", "b": "new-b", "c": "new-c", "gone": "old-g"}
     assert list(json.loads(text)) == ["a", "b", "c", "gone"]  # PARTS order, the others last
