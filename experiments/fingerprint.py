@@ -46,6 +46,7 @@ and check against those::
 from __future__ import annotations
 
 import argparse
+import functools
 import hashlib
 import json
 import sys
@@ -458,6 +459,7 @@ def committed_digests() -> dict[str, str]:
     return read_digests(COMMITTED) if COMMITTED.exists() else {}
 
 
+@functools.lru_cache(maxsize=1)
 def cpu_profile() -> str:
     """What decides a float64 result's last bits here: the architecture, numpy's version and
     the SIMD extensions it dispatches to, numba's version and the CPU it compiles for."""
@@ -500,9 +502,10 @@ def accepted(part: str, digest: str, expected: dict[str, str], *, committed: boo
     if expected.get(part) == digest:
         return "equal"
     if committed:
-        if other_cpu_digests().get(part) == digest:
+        records = _records()["records"]  # read once
+        if records.get(cpu_profile(), {}).get(part) == digest:
             return "this cpu"
-        if any(r.get(part) == digest for r in _records()["records"].values()):
+        if any(r.get(part) == digest for r in records.values()):
             return "a recorded cpu"
     return ""
 

@@ -39,6 +39,7 @@ __all__ = [
     "POLICIES",
     "REPLACE_SEAL",
     "REPLACE_SPRING",
+    "SEEDS_ALLOWED",
     "TEST_AND_FLY",
     "Policy",
     "check_finite",
@@ -68,13 +69,25 @@ def episode_starts(episode_start: Any, rows: int) -> np.ndarray | None:
     return start
 
 
+#: what ``reset(seed=...)`` of the project's policies takes
+SEEDS_ALLOWED = "None, an integer >= 0 or a non-empty sequence of them (one per row)"
+
+
+def _entry_seed(batch: Any, seed: Any) -> int:
+    """One entry of a batch of seeds (:func:`check_seed`), the batch named if it is bad."""
+    try:
+        return check_seed(seed)
+    except ValueError:
+        raise ValueError(f"seed = {batch!r}: its entry {seed!r} is not an integer >= 0") from None
+
+
 def check_seed(seed: Any) -> int:
     """A policy's seed as an ``int``: an integer >= 0 (a numpy integer too), else
     ``ValueError`` naming it (a float, a bool, a string is not silently turned into one)."""
     if isinstance(seed, np.ndarray) and seed.ndim == 0:
         seed = seed[()]
     if isinstance(seed, bool | np.bool_) or not isinstance(seed, int | np.integer) or seed < 0:
-        raise ValueError(f"seed = {seed!r} must be an integer >= 0 (or None)")
+        raise ValueError(f"seed = {seed!r} must be {SEEDS_ALLOWED}")
     return int(seed)
 
 
@@ -90,23 +103,24 @@ def row_seeds(seed: Any) -> list[int] | None:
                 f"seed = {seed!r}: an array of seeds must be 1-D of integers (one per row), "
                 f"got shape {seed.shape} and dtype {seed.dtype}"
             )
-        return [check_seed(s) for s in seed]
+        return [_entry_seed(seed, s) for s in seed]
     if isinstance(seed, Sequence) and not isinstance(seed, str | bytes):
-        return [check_seed(s) for s in seed]
+        return [_entry_seed(seed, s) for s in seed]
     return None
 
 
 def check_finite(obs: np.ndarray, names: Sequence[str]) -> None:
     """Raise ``ValueError`` naming the non-finite (NaN, inf) entries of an observation or a
-    batch (2-D, one row per env) by row and name: the env's observations are finite (every
-    entry saturates at finite bounds), and a rule would act on a NaN as on a small value."""
+    batch (2-D, one row per env) by row, index and name (rules and agents alike): the env's
+    observations are finite (every entry saturates at finite bounds), and a policy would
+    act on a NaN as on a small value."""
     bad = ~np.isfinite(obs)
     if not bad.any():
         return
     rows, cols = np.nonzero(np.atleast_2d(bad))
     values = np.atleast_2d(obs)[rows, cols]
     where = [
-        f"{names[c]!r} = {v!r}" if obs.ndim == 1 else f"row {r} {names[c]!r} = {v!r}"
+        ("" if obs.ndim == 1 else f"row {r} ") + f"[{c}] {names[c]!r} = {v!r}"
         for r, c, v in zip(rows.tolist(), cols.tolist(), values.tolist(), strict=True)
     ]
     more = f" and {len(where) - 5} more" if len(where) > 5 else ""

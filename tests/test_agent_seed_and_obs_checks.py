@@ -58,7 +58,7 @@ def test_integer_seeds_give_the_streams_of_their_first_seed(seed: object, first:
         ("7", "seed = '7' must be None"),
         ([], "seed = [] must be None, an integer >= 0 or a non-empty sequence"),
         (np.array([], dtype=np.int64), "must be None, an integer >= 0 or a non-empty"),
-        (np.array([1.0, 2.0]), "seed = array([1., 2.]) must be None"),
+        (np.array([1.0, 2.0]), "seed = array([1., 2.]): an array of seeds must be 1-D of integers"),
         ([3, -2], "seed = [3, -2]: its entry -2 is not an integer >= 0"),
         ([3.0], "seed = [3.0]: its entry 3.0 is not an integer >= 0"),
         ([True], "seed = [True]: its entry True is not an integer >= 0"),

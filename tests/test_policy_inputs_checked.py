@@ -60,7 +60,8 @@ def test_policies_refuse_non_finite_observations_naming_the_entry(name, bad):
     with pytest.raises(ValueError, match=rf"'spring_age' = {bad!r}"):
         policy.predict(x)
     batch = np.stack([obs(), obs(seal_risk=bad)])
-    with pytest.raises(ValueError, match=rf"row 1 'seal_risk' = {bad!r}"):
+    k = FULL.index("seal_risk")
+    with pytest.raises(ValueError, match=rf"row 1 \[{k}\] 'seal_risk' = {bad!r}"):
         policy.predict(batch)
     # finite observations still act, and the NaN-free row alone gives the same action
     assert policy.predict(obs())[0] == policy.predict(obs()[None])[0][0]
@@ -103,7 +104,9 @@ def test_fleet_rules_refuse_non_finite_observations(fleet, family):
     x[k] = math.nan
     with pytest.raises(ValueError, match=r"'aircraft_1.actuator_0.spring_age' = nan"):
         policy.predict(x)
-    with pytest.raises(ValueError, match=r"row 1 'aircraft_1.actuator_0.spring_age' = inf"):
+    with pytest.raises(
+        ValueError, match=rf"row 1 \[{k}\] 'aircraft_1.actuator_0.spring_age' = inf"
+    ):
         x[k] = math.inf
         policy.predict(np.stack([o, x]))
     policy.predict(o)  # the env's own observation is finite and accepted

@@ -12,6 +12,8 @@ from contextlib import contextmanager
 
 import numpy as np
 
+from policies.base import SEEDS_ALLOWED, check_seed, row_seeds
+
 __all__ = ["PolicyRandom", "global_rngs_kept"]
 
 
@@ -100,24 +102,13 @@ class PolicyRandom:
 
 def _first_seed(seed: object) -> int | None:
     """The seed :meth:`PolicyRandom.seed` uses: None, an integer >= 0, or the first of a
-    non-empty batch of them (every one checked); ``ValueError`` naming anything else."""
+    non-empty batch of them (every one checked: :func:`policies.base.row_seeds`);
+    ``ValueError`` naming anything else."""
     if seed is None:
         return None
-    allowed = "None, an integer >= 0 or a non-empty sequence of them (one per row)"
-    if isinstance(seed, np.ndarray):
-        if seed.size == 0 or not np.issubdtype(seed.dtype, np.integer) or (seed < 0).any():
-            raise ValueError(f"seed = {seed!r} must be {allowed}")
-        return int(seed.reshape(-1)[0])
-    if isinstance(seed, str | bytes) or not isinstance(seed, int | np.integer | Sequence):
-        raise ValueError(f"seed = {seed!r} must be {allowed}")
-    batch = list(seed) if isinstance(seed, Sequence) else [seed]
-    bad = [
-        s
-        for s in batch
-        if isinstance(s, bool | np.bool_) or not isinstance(s, int | np.integer) or s < 0
-    ]
-    if not batch or (bad and not isinstance(seed, Sequence)):
-        raise ValueError(f"seed = {seed!r} must be {allowed}")
-    if bad:
-        raise ValueError(f"seed = {seed!r}: its entry {bad[0]!r} is not an integer >= 0")
-    return int(batch[0])
+    rows = row_seeds(seed)
+    if rows is None:
+        return check_seed(seed)
+    if not rows:
+        raise ValueError(f"seed = {seed!r} must be {SEEDS_ALLOWED}")
+    return rows[0]

@@ -61,7 +61,7 @@ from policies.agents.agent_files import (
 )
 from policies.agents.obs_normalization import ObsNormalization
 from policies.agents.policy_random import PolicyRandom, global_rngs_kept
-from policies.base import register_policy
+from policies.base import check_finite, register_policy
 from scas_env.decision_epochs import (
     DELEGATE,
     FLY,
@@ -185,18 +185,7 @@ class SB3Agent:
         n = len(self.obs_names)
         if obs.ndim not in (1, 2) or obs.shape[-1] != n:
             raise ValueError(f"observation has shape {obs.shape}; expected ({n},) or (n_envs, {n})")
-        bad = np.argwhere(~np.isfinite(np.atleast_2d(obs)))
-        if bad.size:  # the env's entries saturate at finite bounds: a NaN is an upstream bug
-            where = [
-                (f"row {r} " if obs.ndim == 2 else "")
-                + f"[{c}] {self.obs_names[c]!r} = {float(np.atleast_2d(obs)[r, c])!r}"
-                for r, c in bad[:5].tolist()
-            ]
-            more = f" and {len(bad) - 5} more" if len(bad) > 5 else ""
-            raise ValueError(
-                f"observation has non-finite entries ({', '.join(where)}{more}); every entry "
-                "must be a finite number"
-            )
+        check_finite(obs, self.obs_names)  # the env saturates at finite bounds: a NaN is a bug
         return obs
 
     def predict(

@@ -46,6 +46,7 @@ from scipy.stats import t as student_t
 
 from policies.benchmark.runner import DECISION_ALPHA, DECISION_EVENTS
 from scas_env.core.setup import PARTS
+from scas_env.utils.table_checks import whole_number
 
 #: Per-episode metrics summarised per policy (results.csv columns).
 METRICS = (
@@ -114,7 +115,6 @@ __all__ = [
     "share_of_gap",
     "summarize",
     "t_interval",
-    "whole_count",
     "wilson_interval",
 ]
 
@@ -213,13 +213,13 @@ def minimum_detectable_difference(
     returns NaN there once ``delta`` exceeds about 8, which is where the root lies for
     ``n = 2``. Raises ``ValueError`` unless ``0 < alpha < power < 1`` (a two-sided test
     rejects with probability ``alpha`` already at ``delta = 0``), ``n`` is a whole number >= 0
-    (:func:`whole_count`) and (``n >= 2``) ``sd`` is finite and >= 0.
+    (``whole_number``, whole floats allowed) and (``n >= 2``) ``sd`` is finite and >= 0.
     """
     if not 0.0 < alpha < 1.0 or not 0.0 < power < 1.0:
         raise ValueError(f"alpha = {alpha!r} and power = {power!r} must be in (0, 1)")
     if power <= alpha:
         raise ValueError(f"power = {power!r} must exceed alpha = {alpha!r}")
-    n = whole_count("n", n)
+    n = whole_number("", "n", n, lo=0, whole_floats=True)
     if n < 2:
         return math.nan
     if isinstance(sd, bool) or not isinstance(sd, numbers.Real) or not math.isfinite(sd) or sd < 0:
@@ -272,28 +272,12 @@ def paired_comparison(
     return {**iv.to_dict(), "sd": sd, "p_value": p}
 
 
-def whole_count(name: str, value: Any, lo: int = 0) -> int:
-    """``value`` as an ``int`` if it is a whole number >= ``lo`` (an integer, or a finite
-    float such as ``2.0``: counts summed as floats), else ``ValueError`` naming ``name``; the
-    one rule of :func:`garwood_interval`, :func:`wilson_interval` and
-    :func:`minimum_detectable_difference`."""
-    whole = (
-        not isinstance(value, bool | np.bool_)
-        and isinstance(value, numbers.Real)
-        and math.isfinite(value)
-        and value == int(value)
-    )
-    if not whole or value < lo:
-        raise ValueError(f"{name} = {value!r} must be a whole number >= {lo} (2.0 allowed)")
-    return int(value)
-
-
 def garwood_interval(count: int, confidence: float = 0.95) -> tuple[float, float]:
     """Exact (Garwood) interval of a Poisson mean after observing ``count`` events:
     ``[chi2_{a/2}(2k) / 2, chi2_{1-a/2}(2k + 2) / 2]`` with ``a = 1 - confidence``
     (lower bound 0 when ``count = 0``); ``count`` a whole number >= 0 (``2.0`` allowed)."""
     _confidence(confidence)
-    k = whole_count("count", count)
+    k = whole_number("", "count", count, lo=0, whole_floats=True)
     a = 1.0 - confidence
     low = 0.0 if k == 0 else float(stats.chi2.ppf(a / 2.0, 2 * k) / 2.0)
     high = float(stats.chi2.ppf(1.0 - a / 2.0, 2 * k + 2) / 2.0)
@@ -311,9 +295,10 @@ def garwood_rate(count: int, exposure: float, confidence: float = 0.95, *, n: in
 
 def wilson_interval(successes: int, trials: int, confidence: float = 0.95) -> Interval:
     """Wilson score interval of a binomial proportion (stays in [0, 1]); ``successes`` and
-    ``trials`` whole numbers (:func:`whole_count`)."""
+    ``trials`` whole numbers (``whole_number``, whole floats allowed)."""
     _confidence(confidence)
-    successes, trials = whole_count("successes", successes), whole_count("trials", trials, 1)
+    successes = whole_number("", "successes", successes, lo=0, whole_floats=True)
+    trials = whole_number("", "trials", trials, lo=1, whole_floats=True)
     if not successes <= trials:
         raise ValueError(
             f"successes = {successes!r}, trials = {trials!r}: need 0 <= s <= t, t >= 1"

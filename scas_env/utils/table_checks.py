@@ -71,11 +71,17 @@ def finite_scalar(
     return v
 
 
-def whole_number(owner: str, name: str, value: Any, *, lo: int) -> int:
+def whole_number(owner: str, name: str, value: Any, *, lo: int, whole_floats: bool = False) -> int:
     """``int(value)`` if it is an integer (not a bool) >= ``lo``, else ``ValueError`` naming
-    ``owner.name`` (``name`` alone when ``owner`` is ``""``: a function's argument)."""
+    ``owner.name`` (``name`` alone when ``owner`` is ``""``: a function's argument).
+    ``whole_floats``: a finite float such as ``2.0`` counts too (counts summed as floats)."""
+    label = f"{owner}.{name}" if owner else name
+    if whole_floats:
+        real = not isinstance(value, bool | np.bool_) and isinstance(value, numbers.Real)
+        if real and math.isfinite(value) and value == int(value) and value >= lo:
+            return int(value)
+        raise ValueError(f"{label} = {value!r} must be a whole number >= {lo} (2.0 allowed)")
     if isinstance(value, bool) or not isinstance(value, int | np.integer) or value < lo:
-        label = f"{owner}.{name}" if owner else name
         raise ValueError(f"{label} = {value!r} must be an integer >= {lo}")
     return int(value)
 
