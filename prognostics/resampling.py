@@ -167,7 +167,7 @@ def residual_resample(weights: np.ndarray, rng: np.random.Generator) -> np.ndarr
     w = _check_weights(weights)
     check.generator("rng", rng)
     n = w.size
-    scaled = n * w / w.sum()
+    scaled = n * (w / w.sum())  # normalised first: n * w may overflow where w / sum does not
     copies = np.floor(scaled).astype(np.intp)
     out = np.repeat(np.arange(n, dtype=np.intp), copies)
     n_rest = n - out.size

@@ -229,7 +229,10 @@ def _check_summary_levels(horizon_steps: float, low_quantile: float, high_quanti
 
 
 def weighted_quantile(values: np.ndarray, weights: np.ndarray, q: np.ndarray) -> np.ndarray:
-    """Inverse of the weighted empirical CDF: smallest v with ``sum_{v_i <= v} w_i >= q``.
+    """Inverse of the weighted empirical CDF: smallest v with ``sum_{v_i <= v} w_i >= q``, the
+    the running sum compared with a slack of ``2 N`` ulps of the total weight (a level a
+    round-off short counts as reached, so that an exact tie takes its own sample as numpy's
+    inverted CDF does; :func:`prognostics.metrics.point_prediction` compares exactly).
 
     Equal weights give ``np.quantile(values, q, method="inverted_cdf")``.
 

@@ -74,6 +74,15 @@ def test_prognostic_horizon_band_and_cone() -> None:
     assert math.isnan(prognostic_horizon(times, never, None, eol))
 
 
+def test_prognostic_horizon_band_is_alpha_of_eol_when_predictions_start_late() -> None:
+    # Saxena et al. (2010): the band is r* +- alpha t_EoL, not alpha (t_EoL - t_P); with the
+    # first prediction at t_P = 100: +-20 at t=100 ([80, 120] holds 115) -> PH = 100, where
+    # +-10 would miss it and give PH = 50 (the [40, 60] band at t=150 holds 50)
+    times, eol, preds = np.array([100.0, 150.0]), 200.0, [np.array([115.0]), np.array([50.0])]
+    assert prognostic_horizon(times, preds, None, eol, alpha=0.1, band="band") == 100.0
+    assert evaluate_predictions(times, preds, None, eol, ph_alpha=0.1).prognostic_horizon == 100.0
+
+
 def test_convergence_centroid() -> None:
     # dt = 10, 10; M = 4, 2 (last point closes the interval); area 60
     # x_c = (100 * 4 + 300 * 2) / 2 / 60 = 25/3; y_c = (10 * 16 + 10 * 4) / 2 / 60 = 5/3

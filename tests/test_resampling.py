@@ -116,3 +116,11 @@ def test_bad_scheme_and_strata_shape_raise() -> None:
         resample(np.array([0.5, 0.5]), np.random.default_rng(0), "bogus")
     with pytest.raises(ValueError, match="shape"):
         stratified_resample(np.array([0.5, 0.5]), u=np.array([0.1]))
+
+
+@pytest.mark.parametrize("scheme", ["systematic", "stratified", "multinomial", "residual"])
+def test_huge_finite_weights_resample_as_their_normalised_values(scheme: str) -> None:
+    # N * w overflows for w = 1e308 while w / sum(w) does not: every scheme must give the
+    # indices of the normalised weights [1, 1e-308] (all copies of particle 0)
+    out = resample(np.array([1e308, 1.0]), np.random.default_rng(0), scheme)
+    np.testing.assert_array_equal(out, [0, 0])
