@@ -17,6 +17,7 @@ from scipy.integrate import solve_ivp
 
 from experiments.physics_batch import simulate_batch
 from scas_env.actuator.params import ActuatorParams, ScasParams, SensorParams
+from scas_env.actuator.physics import actuator_kernels as km
 from scas_env.actuator.physics.actuator import (
     ActuatorConfig,
     ActuatorRun,
@@ -102,8 +103,10 @@ def _step(t0: float, n: int, level: float) -> np.ndarray:
 
 
 # --- kernel vs independent reference --------------------------------------------------------
-def test_kernel_matches_solve_ivp_reference_on_step() -> None:
-    c = _cfg(spring_rates_n_m=(0.85 * K, K), leakage_k1=5e-13)
+@pytest.mark.parametrize("temperature_c", [40.0, 10.0, 70.0])
+def test_kernel_matches_solve_ivp_reference_on_step(temperature_c: float) -> None:
+    # away from 40 degC the reference's own E_l(T) checks the kernel's liquid bulk modulus
+    c = _cfg(spring_rates_n_m=(0.85 * K, K), leakage_k1=5e-13, temperature_c=temperature_c)
     cmd = _step(0.01, 80, 1e-3)
     run = simulate(c, cmd, rng=None, noise=False)
     x_ref, work_ref = _reference_run(c, cmd)
@@ -113,6 +116,18 @@ def test_kernel_matches_solve_ivp_reference_on_step() -> None:
     assert np.max(np.abs(run.position_m - x_ref)) < 1e-7
     assert run.friction_work_j == pytest.approx(work_ref, rel=5e-5)
     assert np.max(x_ref) > 0.9e-3  # the step was really followed
+
+
+@pytest.mark.parametrize("temperature_c", [-55.0, 10.0, 40.0, 70.0, 135.0])
+def test_liquid_bulk_modulus_follows_its_temperature_law(temperature_c: float) -> None:
+    # E_l(T) = E_l40 (1 - c (T - 40)) from the fluid parameters, ref §9
+    fl = PARAMS.fluid
+    expected = fl.bulk_modulus_liquid_pa * (
+        1.0 - fl.bulk_modulus_temp_coeff_per_k * (temperature_c - 40.0)
+    )
+    c = _cfg(temperature_c=temperature_c)
+    assert c.liquid_bulk_modulus_pa == pytest.approx(expected, rel=1e-14)
+    assert c.to_array()[km.I_E_LIQ] == pytest.approx(expected, rel=1e-14)
 
 
 def test_initial_state_is_an_equilibrium() -> None:

@@ -32,9 +32,10 @@ def _check_moments(x: np.ndarray, mean: float, std: float) -> None:
     assert abs(x.std(ddof=1) - std) < 5 * std / math.sqrt(2 * n), (x.std(ddof=1), std)
 
 
-#: Default parameters with the optional servovalve null-bias scatter switched on.
+#: Default parameters with the optional servovalve null-bias scatter switched on, and a
+#: wear-rate scatter unlike the Paris C one (both 0.3 by default) so that the two tell apart.
 SCATTERED = ScasParams().replace(
-    uncertainty=ScasParams().uncertainty.replace(null_bias_sigma_a=0.1e-3)
+    uncertainty=ScasParams().uncertainty.replace(null_bias_sigma_a=0.1e-3, wear_rate_log_sigma=0.5)
 )
 
 
@@ -148,7 +149,7 @@ def test_truncated_normal_draws_numpy_sequence_bit_for_bit(mean, sigma, lower, u
 @pytest.mark.parametrize("n", [1, 7])
 def test_draw_units_makes_numpys_draws_bit_for_bit(n: int) -> None:
     """The one-kernel draw_units equals the sequence of numpy calls it replaced."""
-    p = ScasParams()
+    p = SCATTERED
     sp, unc = p.spring, p.uncertainty
     ref = np.random.default_rng(4)
     wire = _numpy_truncated(
@@ -234,11 +235,12 @@ def test_bad_inputs_raise() -> None:
         draw_units(p, rng, 0)
     with pytest.raises(ValueError, match="supply_offset_sigma_frac"):
         draw_run_conditions(p, rng, supply_offset_sigma_frac=-0.1)
-    # a0 = 2.19 mm +- 0.1 um below wires of 2.2 +- 0.1 mm: half the units cannot get a flaw
+    # a0 = 0.9 mm +- 0.1 um (below the nominal failure depth, 0.99 mm) and wires of
+    # 2.2 +- 1 mm: about one unit in five has a wire thinner than 0.9 mm, with no room for it
     crowded = dataclasses.replace(
         p,
-        spring=p.spring.replace(initial_crack_m=2.19e-3),
-        uncertainty=UncertaintyParams(initial_crack_sigma_m=1e-7, wire_diameter_sigma_m=1e-4),
+        spring=p.spring.replace(initial_crack_m=0.9e-3),
+        uncertainty=UncertaintyParams(initial_crack_sigma_m=1e-7, wire_diameter_sigma_m=1e-3),
     )
     with pytest.raises(ValueError, match="initial cracks is ill-posed: acceptance"):
         draw_units(crowded, rng, 50)

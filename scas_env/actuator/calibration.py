@@ -482,17 +482,23 @@ class UnitLives:
     seal_flights: FloatArray
 
     def summary(self) -> dict[str, dict[str, float]]:
+        """Per part (``"spring"``, ``"seal"``): mean, median, p10, p90 and cv of the finite
+        lives (flights) and ``never_fails_fraction``, the share of units with an infinite
+        life. A part of which no unit fails has ``never_fails_fraction`` 1.0 alone."""
         out = {}
         for name, life in (("spring", self.spring_flights), ("seal", self.seal_flights)):
             finite = life[np.isfinite(life)]
-            out[name] = {
-                "mean": float(finite.mean()),
-                "median": float(np.median(finite)),
-                "p10": float(np.quantile(finite, 0.1)),
-                "p90": float(np.quantile(finite, 0.9)),
-                "cv": float(finite.std() / finite.mean()),
-                "never_fails_fraction": float(1.0 - finite.size / life.size),
-            }
+            stats = {"never_fails_fraction": float(1.0 - finite.size / life.size)}
+            if finite.size:
+                stats = {
+                    "mean": float(finite.mean()),
+                    "median": float(np.median(finite)),
+                    "p10": float(np.quantile(finite, 0.1)),
+                    "p90": float(np.quantile(finite, 0.9)),
+                    "cv": float(finite.std() / finite.mean()),
+                    **stats,
+                }
+            out[name] = stats
         return out
 
 

@@ -328,6 +328,12 @@ def _simulated_damage(
     if not (math.isfinite(duration) and duration > 0.0):
         raise ValueError(f"duration_s = {duration_s} s must be > 0")
     unit = nominal_unit(params)
+    wire_m = float(unit.wire_diameter_m[0])
+    if not np.all(depths < wire_m):
+        raise ValueError(
+            f"depths_m holds {depths[depths >= wire_m][0]} m: every depth must be smaller "
+            f"than the cracked spring's wire diameter {wire_m} m"
+        )
     model = growth_model(params, unit)
     cfg = actuator_config(params)
     fs = params.sensors.sample_rate_hz

@@ -241,6 +241,11 @@ class CrackGrowthModel:
             "failure_depth_m": "in (0, wire_diameter_m)",
         }
         for name, ok in checks.items():
+            if isinstance(getattr(self, name), bool):
+                raise ValueError(
+                    f"CrackGrowthModel.{name} = {getattr(self, name)!r} must be a number "
+                    f"{allowed[name]}, not a bool"
+                )
             value = float(getattr(self, name))
             if not (math.isfinite(value) and ok):
                 raise ValueError(f"CrackGrowthModel.{name} = {value} must be {allowed[name]}")
@@ -352,6 +357,11 @@ def paris_increment_m(stress_spectrum: CycleSpectrum, a_m: float, model: CrackGr
     if not (math.isfinite(a) and 0.0 <= a < d):
         raise ValueError(f"a_m = {a} m must satisfy 0 <= a_m < wire diameter {d} m")
     f_t = float(np.asarray(model.geometry_factor(np.asarray(a / d))))
+    if math.isnan(f_t):
+        raise ValueError(
+            f"CrackGrowthModel.geometry_factor {model.geometry_factor!r} returned NaN at "
+            f"eta = a/d = {a / d:.6g}; F_T(eta) must be a number"
+        )
     delta_k = 0.5 * math.pi * stress_spectrum.ranges * f_t * math.sqrt(0.5 * d) / 1e6
     tau_max = stress_spectrum.maxima
     ratio = np.divide(

@@ -413,7 +413,13 @@ def mode_iii_sif_pa_sqrt_m(
     tau = np.asarray(tau_pa, dtype=np.float64)
     if not np.all(np.isfinite(tau)):
         raise ValueError("tau_pa contains a non-finite value; stresses must be finite")
-    k = 0.5 * math.pi * tau * np.asarray(geometry_factor(a / d)) * math.sqrt(0.5 * d)
+    f_t = np.asarray(geometry_factor(a / d))
+    if np.any(np.isnan(f_t)):
+        raise ValueError(
+            f"geometry_factor {geometry_factor!r} returned NaN for eta = a/d in "
+            f"[{np.min(a) / d:.6g}, {np.max(a) / d:.6g}]; F_T(eta) must be a number, not NaN"
+        )
+    k = 0.5 * math.pi * tau * f_t * math.sqrt(0.5 * d)
     return float(k) if np.ndim(k) == 0 else k
 
 
