@@ -173,6 +173,11 @@ def delegate_actions(delegate: Any, obs: np.ndarray) -> np.ndarray:
     return out.astype(np.int64)
 
 
+def _is_integer(x: Any) -> bool:
+    """``x`` is a Python or numpy integer, not a boolean (``True == 1``) or a float."""
+    return isinstance(x, int | np.integer) and not isinstance(x, bool)
+
+
 def check_ks(ks: Sequence[int]) -> tuple[int, ...]:
     try:
         out = tuple(ks)
@@ -180,10 +185,7 @@ def check_ks(ks: Sequence[int]) -> tuple[int, ...]:
         out = ()
     if (
         not out
-        or any(
-            isinstance(k, bool) or not isinstance(k, int | np.integer) or not 1 <= k <= 10**7
-            for k in out
-        )
+        or any(not _is_integer(k) or not 1 <= k <= 10**7 for k in out)
         or len(set(out)) != len(out)
     ):
         raise ValueError(
@@ -251,12 +253,13 @@ class DecisionEpochs(gym.Env):
     params = property(lambda self: self.env.unwrapped.params)
 
     def encode(self, maintenance: int, k: int) -> int:
-        """The action for per-flight action ``maintenance`` then ``k`` slots in all."""
-        if k not in self.ks:
-            raise ValueError(f"k = {k!r} must be one of {self.ks}")
-        if maintenance not in range(self.n_maintenance):
+        """The action for per-flight action ``maintenance`` then ``k`` slots in all (both
+        integers: booleans and floats are refused)."""
+        if not _is_integer(k) or k not in self.ks:
+            raise ValueError(f"k = {k!r} must be one of the integers {self.ks}")
+        if not _is_integer(maintenance) or maintenance not in range(self.n_maintenance):
             raise ValueError(
-                f"maintenance = {maintenance!r} must be in 0..{self.n_maintenance - 1}"
+                f"maintenance = {maintenance!r} must be in 0..{self.n_maintenance - 1} (an integer)"
             )
         return int(maintenance) * len(self.ks) + self.ks.index(k)
 

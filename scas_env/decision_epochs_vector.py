@@ -17,8 +17,9 @@ Spaces, reward, discount and masks are :class:`~scas_env.decision_epochs.Decisio
   ``info["final_obs"]`` (rows where ``info["_final_obs"]`` is true), as SB3 expects;
 * ``info`` holds the epoch keys only (``epoch_slots``, ``epoch_discount``, ``epoch_action``,
   ``epoch_k``: arrays of N, with Gymnasium's ``_key`` masks), not the per-slot info of the env
-  underneath; at an autoreset ``info["final_info"]`` holds them too (rows where
-  ``info["_final_info"]``), and ``reset`` returns an empty info.
+  underneath; at an autoreset ``info["final_info"]`` holds them too, masked as
+  ``SyncVectorEnv`` masks them (each ``_key``, like ``info["_final_info"]``, true on the rows
+  whose episode ended), and ``reset`` returns an empty info.
 
 Throughput: a step costs as many batched slots as the largest ``k`` chosen; the actuators
 that chose a smaller one wait (docs/rl.md measures SB3's frames per second against
@@ -58,7 +59,11 @@ from scas_env.decision_epochs import (
     maintenance_mask,
     with_delegation,
 )
-from scas_env.vector_env import ScasMaintenanceVectorEnv, with_info_masks
+from scas_env.vector_env import (
+    ScasMaintenanceVectorEnv,
+    check_vector_actions,
+    with_info_masks,
+)
 
 #: the keys of a step's info (arrays of N)
 EPOCH_KEYS = ("epoch_slots", "epoch_discount", "epoch_action", "epoch_k")
@@ -133,17 +138,8 @@ class DecisionEpochsVectorEnv(VectorEnv):
         return self._obs(obs), {}
 
     def step(self, actions: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, dict]:
-        a = np.asarray(actions)
-        n_act = self.single_action_space.n
-        if (
-            a.shape != (self.num_envs,)
-            or a.dtype.kind not in "iu"  # integers, not timedelta64
-            or np.any((a < 0) | (a >= n_act))
-        ):
-            raise ValueError(
-                f"actions = {actions!r} must be {self.num_envs} integers in 0..{n_act - 1}"
-            )
-        n = self.num_envs
+        n, n_act = self.num_envs, int(self.single_action_space.n)
+        a = check_vector_actions(actions, n, n_act, f"{n} integers in 0..{n_act - 1}")
         maintenance = a // len(self.ks)
         k = self._ks[a % len(self.ks)]
         total, weight = np.zeros(n), np.ones(n)
@@ -182,7 +178,12 @@ class DecisionEpochsVectorEnv(VectorEnv):
                 final[e] = out[e]
             info["final_obs"] = final
             info["_final_obs"] = truncated.copy()
-            info["final_info"] = with_info_masks({k: info[k].copy() for k in EPOCH_KEYS}, n)
+            # Gymnasium's layout (SyncVectorEnv): each key's mask is the rows that ended
+            final_info: dict[str, Any] = {}
+            for key in EPOCH_KEYS:
+                final_info[key] = info[key].copy()
+                final_info[f"_{key}"] = truncated.copy()
+            info["final_info"] = final_info
             info["_final_info"] = truncated.copy()
             self.inner.step_active(np.zeros(n, dtype=np.int64), truncated, outputs=False)
             inner_obs = self.inner.observe()

@@ -67,6 +67,31 @@ def vector_seeds(seed: Any, n: int) -> list[int | None]:
     return [None if s is None else int(s) for s in seed]
 
 
+def check_vector_actions(actions: Any, n: int, n_act: int, allowed: str) -> np.ndarray:
+    """``actions`` as an integer array of shape ``(n,)``, each in ``0..n_act - 1``, or a
+    ``ValueError`` naming the value and ``allowed``: integers only (no booleans, floats or
+    timedelta64). An array costs a dtype and range check; a list or tuple is scanned for
+    booleans once, then converted once."""
+    if isinstance(actions, list | tuple):
+        for i, v in enumerate(actions):
+            if isinstance(v, bool | np.bool_):
+                raise ValueError(
+                    f"actions = {actions!r} holds a boolean ({v!r} at index {i}); "
+                    f"they must be {allowed}"
+                )
+    try:
+        act = np.asarray(actions)
+    except (ValueError, TypeError):
+        raise ValueError(f"actions = {actions!r} is not an array; they must be {allowed}") from None
+    if (
+        act.shape != (n,)
+        or act.dtype.kind not in "iu"  # integers, not booleans or timedelta64
+        or np.any((act < 0) | (act >= n_act))
+    ):
+        raise ValueError(f"actions = {actions!r} must be {allowed}")
+    return act
+
+
 def check_num_envs(num_envs: Any) -> int:
     """``num_envs`` as an int >= 1 (ValueError otherwise)."""
     if isinstance(num_envs, bool) or not isinstance(num_envs, int | np.integer) or num_envs < 1:
@@ -147,13 +172,7 @@ class ScasMaintenanceVectorEnv(VectorEnv):
         if not self._started:
             raise RuntimeError("call reset() before step()")
         n = self.num_envs
-        act = np.asarray(actions)
-        if (
-            act.shape != (n,)
-            or act.dtype.kind not in "iu"  # integers, not timedelta64
-            or np.any((act < 0) | (act > 3))
-        ):
-            raise ValueError(f"actions = {actions!r} must be {n} integers in 0..3 {ACTION_NAMES}")
+        act = check_vector_actions(actions, n, 4, f"{n} integers in 0..3 {ACTION_NAMES}")
         if active is None:
             active = np.ones(n, dtype=np.bool_)
         elif not (isinstance(active, np.ndarray) and active.shape == (n,) and active.dtype == bool):
@@ -222,6 +241,7 @@ __all__ = [
     "ScasMaintenanceVectorEnv",
     "check_no_render",
     "check_num_envs",
+    "check_vector_actions",
     "make_vector_env",
     "with_info_masks",
 ]
