@@ -82,7 +82,8 @@ def plan_cost(
     ``lives``: per part, equally likely lives (flights) of a part fitted later (quantiles
     of the life distribution): the expectation over them replaces the unknown future. At
     each forced replacement the program compares replacing that part alone with replacing
-    both (:func:`_pair_slots` slots on the ground). ``step``: the slots left after each
+    both (:func:`_pair_slots` slots on the ground); with both parts due, either part alone
+    too (:func:`_options`). ``step``: the slots left after each
     replacement are rounded to a multiple of it (1: exact; the oracle uses
     :data:`HORIZON_STEP` so that few distinct states need caching).
 
@@ -97,8 +98,7 @@ def plan_cost(
         return 0.0
     h, after, a = forced
     return min(
-        _option_cost(h, after, a, False, costs, lives, step),
-        _option_cost(h, after, a, True, costs, lives, step),
+        _option_cost(h, after, part, both, costs, lives, step) for part, both in _options(after, a)
     )
 
 
@@ -115,6 +115,15 @@ def _next_forced(
         return None
     a = 0 if spring_left <= seal_left else 1
     return slots_left - k, (spring_left - k, seal_left - k), a
+
+
+def _options(left: tuple[int, int], a: int) -> tuple[tuple[int, bool], ...]:
+    """The choices at a forced replacement of part ``a``: (part, both). Part ``a`` alone or
+    both; when both parts are due (``left == (0, 0)``) either part alone too (near the
+    episode's end, the other part's replacement may fall beyond it)."""
+    if left[0] == left[1] == 0:
+        return ((a, False), (1 - a, False), (a, True))
+    return ((a, False), (a, True))
 
 
 def _first_of_pair(down: tuple[int, int]) -> int:
@@ -186,7 +195,8 @@ def plan_cost_known(
         return 0.0
     h, after, a = forced
     return min(
-        _option_cost_known(h, after, a, both, costs, upcoming, lives) for both in (False, True)
+        _option_cost_known(h, after, part, both, costs, upcoming, lives)
+        for part, both in _options(after, a)
     )
 
 
