@@ -35,6 +35,7 @@ from typing import Any
 
 import numpy as np
 
+from policies.base import check_seed
 from policies.benchmark.runner import add_decision, decision_columns, decision_scores
 from scas_env.core.fleet.log import REMOVAL_KINDS
 from scas_env.core.fleet.resources import SPARE_KINDS
@@ -84,14 +85,19 @@ def run_fleet_episodes(
     project's protocol (``predict`` on a batch, ``reset(seed=[...])`` if it has one).
     Returns, per episode, ``{"row": results row, "events": removal events}`` (module
     docstring) and, for the episodes ``record`` marks, ``"trace"``: its :func:`day_record`
-    of every day."""
-    n = len(seeds)
+    of every day. ``ValueError``, before any env or policy is reset, for a seed that is not
+    an integer >= 0 (:func:`seed_pairs`), a ``record`` of another length than ``seeds`` or
+    a ``venv`` of another number of fleets."""
+    pairs = seed_pairs(seeds)
+    n = len(pairs)
+    if record is not None and len(record) != n:
+        raise ValueError(f"record has {len(record)} entries for {n} seeds: give one per episode")
     if venv.num_envs != n:
         raise ValueError(f"the vector env has {venv.num_envs} fleets for {n} seeds")
     reset = getattr(policy, "reset", None)
     if callable(reset):
-        reset(seed=[int(ps) for _, ps in seeds])
-    obs, info = venv.reset(seed=[int(es) for es, _ in seeds])
+        reset(seed=[ps for _, ps in pairs])
+    obs, info = venv.reset(seed=[es for es, _ in pairs])
     reward = np.zeros(n)
     start = np.ones(n, dtype=np.bool_)
     state = None
@@ -122,6 +128,22 @@ def run_fleet_episodes(
         out.append({"row": row, "events": events})
     for e in recorded:
         out[e]["trace"] = traces[e]
+    return out
+
+
+def seed_pairs(seeds: Sequence[tuple[int, int]]) -> list[tuple[int, int]]:
+    """``seeds`` as ``(env_seed, policy_seed)`` pairs of ``int`` (each
+    :func:`policies.base.check_seed`-ed), else ``ValueError`` naming the bad pair: a float,
+    a bool or a string is not truncated to a seed."""
+    out = []
+    for k, pair in enumerate(seeds):
+        try:
+            env_seed, policy_seed = pair
+            out.append((check_seed(env_seed), check_seed(policy_seed)))
+        except (TypeError, ValueError):
+            raise ValueError(
+                f"seeds[{k}] = {pair!r} must be a pair (env_seed, policy_seed) of integers >= 0"
+            ) from None
     return out
 
 
@@ -221,12 +243,13 @@ def fleet_bound_rows(
     results row (:func:`policies.rules.fleet_bound.fleet_upper_bound`; the episode's
     missions and lives are those every policy meets on that seed). The relaxed plan has no
     failure, removal, test, stock-out or wait (0); what it relaxes away (aircraft and crew
-    use, wasted life, replacements counted per part) is NaN."""
+    use, wasted life, replacements counted per part) is NaN. ``ValueError`` for a bad seed
+    (:func:`seed_pairs`), before any bound is computed."""
     from policies.rules.fleet_bound import fleet_upper_bound
 
     out = []
-    for env_seed, _ in seeds:
-        b = fleet_upper_bound(int(env_seed), **env_kwargs)
+    for env_seed, _ in seed_pairs(seeds):  # every seed checked before the first bound
+        b = fleet_upper_bound(env_seed, **env_kwargs)
         fh = float(b["flight_hours"])
         row: dict[str, Any] = dict.fromkeys(FLEET_ROW, math.nan)
         row.update(
@@ -253,4 +276,5 @@ __all__ = [
     "fleet_row",
     "log_scores",
     "run_fleet_episodes",
+    "seed_pairs",
 ]

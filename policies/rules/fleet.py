@@ -129,6 +129,17 @@ class FleetLayout:
         return self._index[name]
 
 
+def _number(name: str, value: Any) -> float:
+    """A numeric parameter as a ``float``, else ``ValueError`` naming it: a bool (``True``
+    would act as 1.0) or anything ``float`` cannot read is refused."""
+    if isinstance(value, bool | np.bool_):
+        raise ValueError(f"{name} = {value!r} must be a number, not a bool")
+    try:
+        return float(value)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name} = {value!r} must be a number") from None
+
+
 def _positive(name: str, value: float) -> float:
     v = float(value)
     if not v > 0.0 or math.isnan(v):
@@ -160,7 +171,7 @@ class FleetRule:
             raise ValueError(
                 f"unknown parameters {unknown} of {family!r}; it takes {sorted(defaults)}"
             )
-        self.values = {**defaults, **{k: float(v) for k, v in params.items()}}
+        self.values = {**defaults, **{k: _number(k, v) for k, v in params.items()}}
         for k, v in self.values.items():
             if k == "opportunity" and not 0.0 <= v < 1.0:
                 raise ValueError(f"opportunity = {v!r} must be in [0, 1)")
@@ -337,8 +348,9 @@ class FleetRandom:
         self, obs_names: Sequence[str], p_fly: float = 0.9, p_test: float = 0.05,
         p_replace: float = 0.002,
     ) -> None:  # fmt: skip
-        for k, v in (("p_fly", p_fly), ("p_test", p_test), ("p_replace", p_replace)):
-            if not 0.0 <= float(v) <= 1.0:
+        given = {"p_fly": p_fly, "p_test": p_test, "p_replace": p_replace}
+        for k, v in given.items():
+            if not 0.0 <= _number(k, v) <= 1.0:
                 raise ValueError(f"{k} = {v!r} must be a probability in [0, 1]")
         self.p = (float(p_fly), float(p_test), float(p_replace))
         self.layout = lay = FleetLayout(obs_names)

@@ -38,7 +38,7 @@ from typing import Any
 
 import numpy as np
 
-from policies.base import register_policy
+from policies.base import check_seed, register_policy
 from scas_env.core.fleet.config import FleetConfig
 from scas_env.core.parts import next_lives
 from scas_env.core.setup import PARTS
@@ -47,14 +47,28 @@ from scas_env.core.setup import PARTS
 LOOKAHEAD_PARTS = 6
 
 
+def _env_seed(seed: Any) -> int:
+    """An episode's env seed as an ``int`` (:func:`policies.base.check_seed`), else
+    ``ValueError`` naming it: an integer >= 0, a numpy integer too."""
+    try:
+        return check_seed(seed)
+    except ValueError:
+        raise ValueError(
+            f"seed = {seed!r} must be an integer >= 0 (the episode's env seed)"
+        ) from None
+
+
 def fleet_upper_bound(seed: int, fleet: FleetConfig | None = None, **env_kwargs: Any) -> dict:
     """The clairvoyant relaxation's bound of the episode of ``ScasFleet-v0`` seeded ``seed``
     (module docstring): ``{"bound", "missions", "gains", "penalties", "replacement_cost"}``
-    (USD; missions flown in the best plan, their values plus penalties, every penalty)."""
+    (USD; missions flown in the best plan, their values plus penalties, every penalty).
+    ``ValueError`` for a ``seed`` that is not an integer >= 0 (a float, a bool, a string is
+    not truncated to one), before the env is made."""
     from scas_env.fleet_env import ScasFleetEnv
 
+    seed = _env_seed(seed)
     env = ScasFleetEnv(fleet=fleet, **env_kwargs)
-    env.reset(seed=int(seed))
+    env.reset(seed=seed)
     cfg, fb = env.config, env.fleet
     sh = fb.shape
     costs = env.setup.costs

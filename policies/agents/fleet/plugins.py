@@ -59,7 +59,7 @@ from policies.agents.fleet.masks import FleetObsLayout
 from policies.agents.obs_normalization import ObsNormalization
 from policies.agents.policy_random import PolicyRandom
 from policies.agents.sb3_agents import DATA_DIR, check_manifest
-from policies.base import register_policy
+from policies.base import check_finite, register_policy
 from scas_env.core.scenario import PREFLIGHT
 from scas_env.utils.atomic_file import write_text_atomic
 
@@ -145,8 +145,13 @@ class FleetAgent:
         episode_start: Any = None,
         deterministic: bool = True,
     ) -> tuple[np.ndarray, Any]:
-        """The fleet's action (N (1 + A),) for one observation, (B, N (1 + A)) for a batch."""
+        """The fleet's action (N (1 + A),) for one observation, (B, N (1 + A)) for a batch.
+        ``ValueError`` for another shape or a non-finite entry (:func:`check_finite`)."""
         obs = np.asarray(observation, dtype=np.float32)
+        n = len(self.obs_names)
+        if obs.ndim not in (1, 2) or obs.shape[-1] != n:
+            raise ValueError(f"observation has shape {obs.shape}; expected ({n},) or (n_envs, {n})")
+        check_finite(obs, self.obs_names)  # the env saturates at finite bounds: a NaN is a bug
         single = obs.ndim == 1
         batch = np.atleast_2d(obs)
         rows, masks = self.network_input(batch)
