@@ -826,11 +826,11 @@ def test_a_benchmark_on_the_seeds_behind_the_defaults_says_which_rules_are_in_sa
     tiny = ["--episodes", "1", "--slots", "20", "--workers", "1", "-q"]
     runs = [
         ("rul_risk", REPLICATE_TRAIN_SEED, "training episodes the shipped defaults of rul_risk "
-         "were tuned on"),
+         "were tuned or trained on"),
         ("preventive,detection", DEFAULTS_VALIDATION_SEED, "validation episodes the shipped "
          "defaults of preventive, detection were chosen on"),
         ("detection", TRAIN_SEED, "training episodes the shipped defaults of detection were "
-         "tuned on"),
+         "tuned or trained on"),
         ("rul_risk", TRAIN_SEED, None),
         ("rul_risk", HELD_OUT_SEED, None),
         ("random", TRAIN_SEED, None),

@@ -659,19 +659,27 @@ def held_out_comparison(
     rule, plus ``paired_vs_rules``: each agent minus each rule, :func:`paired_vs_rules`) and
     ``out/held_out_rows.csv`` (per episode). An existing ``held_out.json`` or
     ``held_out_rows.csv`` is refused before any work unless ``overwrite``. ``seed`` may be
-    neither :data:`VALIDATION_SEED` nor the rules' tuning seed
-    (``policies.value.tuning.TRAIN_SEED``)."""
-    from policies.value.tuning import TRAIN_SEED
+    neither :data:`VALIDATION_SEED`, the rules' tuning seed
+    (``policies.value.tuning.TRAIN_SEED``), nor a seed that made a compared rule's shipped
+    default (``policies.value.tuning.DEFAULTS_SEEDS``)."""
+    from policies.value.tuning import DEFAULTS_SEEDS, TRAIN_SEED
 
+    rule_specs = [PolicySpec(r) if isinstance(r, str) else r for r in rules]
     if seed in (VALIDATION_SEED, TRAIN_SEED):
         raise ValueError(
             f"seed = {seed} is a validation ({VALIDATION_SEED}) or rule-tuning ({TRAIN_SEED}) "
             "seed, not a held-out one"
         )
+    role, names = DEFAULTS_SEEDS.get(seed, ("", ()))
+    made = [s.name for s in rule_specs if s.module is None and not s.params and s.name in names]
+    if made:
+        raise ValueError(
+            f"seed = {seed} is the root of the {role} episodes that made the shipped defaults "
+            f"of {made}, not a held-out seed for them"
+        )
     _refuse_held_out(Path(out), overwrite)
     out = Path(out)
     env_kwargs, slots = _split_slots(_canonical(scenario or {}), slots)
-    rule_specs = [PolicySpec(r) if isinstance(r, str) else r for r in rules]
     specs = rule_specs + [
         PolicySpec("sb3", params={"path": str(p)}, label=label, module="policies.agents.sb3_agents")
         for label, p in agents.items()

@@ -306,18 +306,28 @@ def _fitting_agents(specs: list[Any], *, slots: int, env_kwargs: dict[str, Any])
 
 
 def _in_sample_warning(seed: int, specs: Sequence[Any]) -> str | None:
-    """The warning of a benchmark on root ``seed`` of rules at their shipped defaults
-    (registered, no parameters given) that were tuned or chosen on that seed's episodes
+    """The warning of a benchmark on root ``seed`` of policies at their shipped defaults
+    (registered rules with no parameters given, the shipped agents' plug-ins as shipped)
+    that were tuned, trained or chosen on that seed's episodes
     (:data:`policies.value.tuning.DEFAULTS_SEEDS`), naming them and the seed's role; None
-    when no such rule runs."""
+    when no such policy runs."""
+    from policies.benchmark.run import PLUGINS
     from policies.value.tuning import DEFAULTS_SEEDS, HELD_OUT_SEED
 
     role, names = DEFAULTS_SEEDS.get(seed, ("", ()))
-    at_defaults = dict.fromkeys(s.name for s in specs if s.module is None and not s.params)
+    at_defaults = dict.fromkeys(
+        s.name if s.module is None else s.key
+        for s in specs
+        if (s.module is None and not s.params) or PLUGINS.get(s.key) == s
+    )
     hit = [name for name in at_defaults if name in names]
     if not hit:
         return None
-    how = "tuned on" if role == "training" else "chosen on (among their tuned points)"
+    how = (
+        "tuned or trained on"
+        if role == "training"
+        else "chosen on (among their tuned points or checkpoints)"
+    )
     return (
         f"--seed {seed} is the root of the {role} episodes the shipped defaults of "
         f"{', '.join(hit)} were {how}: their results here are in-sample (held out: --seed "

@@ -55,11 +55,17 @@ REPLICATE_TRAIN_SEED = 11
 #: chosen among their tuned points (``python -m experiments.rule_defaults``, its
 #: ``--validation-seed``; record docs/value_v2/rule_defaults.json).
 DEFAULTS_VALIDATION_SEED = 3
-#: Root seed -> (role of its episodes, the registered policies whose shipped defaults they
-#: made): a benchmark of those defaults on that seed is in-sample. Training seed 1: the
-#: detection rule's default (docs/value_v2/tuning_detection.json) and every fleet rule's
-#: (``policies.rules.fleet.FLEET_TUNED``, :mod:`policies.value.fleet_tuning`); the age
-#: rule's default was tuned on the retired v0 scenario, on none of this one's episodes.
+#: Root seed of the validation episodes on which the shipped single-actuator agent's
+#: checkpoint was chosen (``policies/data/maskable_ppo_epochs_v2.json``, ``validation_seed``).
+AGENT_VALIDATION_SEED = 101
+#: Root seed -> (role of its episodes, the policies whose shipped defaults they made: the
+#: registered rules' names and the shipped agents' benchmark labels): a benchmark of those
+#: defaults on that seed is in-sample. Training seed 1: the detection rule's default
+#: (docs/value_v2/tuning_detection.json), every fleet rule's
+#: (``policies.rules.fleet.FLEET_TUNED``, :mod:`policies.value.fleet_tuning`) and the shipped
+#: agents' demonstrations and training (policies/data/README.md); the age rule's default was
+#: tuned on the retired v0 scenario, on none of this one's episodes. Validation seed 3 chose
+#: the single actuator's rule defaults and the fleet agents' checkpoints.
 DEFAULTS_SEEDS: dict[int, tuple[str, tuple[str, ...]]] = {
     TRAIN_SEED: (
         "training",
@@ -70,10 +76,17 @@ DEFAULTS_SEEDS: dict[int, tuple[str, tuple[str, ...]]] = {
             "fleet_opportunistic",
             "fleet_aware",
             "fleet_oracle",
+            "ppo",
+            "fleet_ppo",
+            "fleet_shared_ppo",
         ),
     ),
     REPLICATE_TRAIN_SEED: ("training", ("rul_risk",)),
-    DEFAULTS_VALIDATION_SEED: ("validation", ("preventive", "detection", "rul_risk")),
+    DEFAULTS_VALIDATION_SEED: (
+        "validation",
+        ("preventive", "detection", "rul_risk", "fleet_ppo", "fleet_shared_ppo"),
+    ),
+    AGENT_VALIDATION_SEED: ("validation", ("ppo",)),
 }
 #: env keywords :func:`tune_family` sets itself (the episode length and the policy's
 #: observation), refused in its ``env_kwargs``
@@ -181,6 +194,7 @@ FAMILIES: dict[str, Family] = _families()
 QUICK: dict[str, int] = {"trials": 4, "episodes": 4, "slots": 2000}
 
 __all__ = [
+    "AGENT_VALIDATION_SEED",
     "AGE_BOX",
     "DEFAULTS_SEEDS",
     "DEFAULTS_VALIDATION_SEED",
