@@ -578,6 +578,11 @@ def _belief_text(b: Mapping[str, Any] | None) -> str:
     return f"RA {ra['mean']:.2f}, cov {cov['mean']:.3f} (n {b['n']})"
 
 
+def _pct(level: float) -> str:
+    """0.95 -> "95 %"."""
+    return f"{100 * level:.4g} %"
+
+
 def markdown_report(result: MismatchResult) -> str:
     """mismatch.md: per kind, the value before and after re-tuning at every level, the
     re-tuning gains, the filters' beliefs at decision time and the break-even levels."""
@@ -590,19 +595,21 @@ def markdown_report(result: MismatchResult) -> str:
         "arm; level 1 runs the largest number). Tuning: "
         f"{c['trials']} Optuna TPE trials x {c['train_episodes']} training episodes per family "
         f"and world (seed {c['train_seed']}). Value = paired reward difference, filter rule "
-        "minus age rule (USD per episode), 95 % t-interval, MDD = minimum detectable "
+        f"minus age rule (USD per episode), {_pct(s['confidence'])} t-interval, MDD = "
+        "minimum detectable "
         "difference (80 % power). Nominal-tuned: both rules tuned on the nominal model; "
         "re-tuned: both tuned on the mismatched world (the age rule is not re-tuned for the "
         "sensing kinds: its episodes do not depend on the features). Beliefs: the nominal-tuned "
         "filter rule's decision-time RA (mean) and coverage of [rul_low, inf) (nominal 0.95). "
         f"Wall {result.wall_s / 60:.0f} min.",
     ]
+    ci = f"{100 * s['confidence']:.4g}% CI"
     for kind, d in s["kinds"].items():
         lines += [
             "",
             f"## {kind}: {d['what']} x level ({', '.join(d['fields'])})",
             "",
-            "| level | value nominal-tuned [95% CI] | MDD | value re-tuned [95% CI] | MDD | "
+            f"| level | value nominal-tuned [{ci}] | MDD | value re-tuned [{ci}] | MDD | "
             "re-tuning gain, filter | re-tuning gain, age | failures/1000 FH age, filter "
             "(nominal-tuned) | beliefs (nominal-tuned filter) |",
             "|---|---|---|---|---|---|---|---|---|",
@@ -626,7 +633,7 @@ def markdown_report(result: MismatchResult) -> str:
             )
         lines += [
             "",
-            "Break-even (value = 0; interval: levels where the 95 % CI holds 0; both "
+            f"Break-even (value = 0; interval: levels where the {ci} holds 0; both "
             "interpolated linearly in log(level) between the levels run):",
             "",
         ]
@@ -712,7 +719,8 @@ def plot(summary: Mapping[str, Any], path: Path) -> None:
         ax.set_title(kind, fontsize=10)
         ax.grid(alpha=0.3)
         if j == 0:
-            ax.set_ylabel("value: filter - age rule\n(USD per episode, 95% CI)")
+            ci = f"{100 * summary['confidence']:.4g}% CI"
+            ax.set_ylabel(f"value: filter - age rule\n(USD per episode, {ci})")
             ax.legend(fontsize=7)
         ax2 = axes[1, j]
         beliefs = [p["arms"][FILTER_NOMINAL]["beliefs"] for p in d["points"]]

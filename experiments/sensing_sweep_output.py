@@ -34,6 +34,11 @@ def _money(x: float) -> str:
     return "-" if not math.isfinite(x) else f"{x:+,.0f}"
 
 
+def _pct(level: float) -> str:
+    """0.95 -> "95 %"."""
+    return f"{100 * level:.4g} %"
+
+
 def markdown_sweep(result: SweepResult, levels_info: Mapping[str, Any] | None = None) -> str:
     """sweep.md: the value table (and the tuning spread when there are replicates)."""
     c, s = result.config, result.summary
@@ -44,10 +49,10 @@ def markdown_sweep(result: SweepResult, levels_info: Mapping[str, Any] | None = 
         f"{c['held_out_seed']}. Tuning per level: {c['trials']} TPE trials x "
         f"{c['train_episodes']} training episodes per family (seeds "
         f"{c['replicate_seeds']}). Value = paired reward difference vs the tuned age rule "
-        "(USD per episode), 95 % t-interval, MDD = minimum detectable difference (80 % "
-        "power, two-sided 5 %).",
+        f"(USD per episode), {_pct(s['confidence'])} t-interval, MDD = minimum detectable "
+        f"difference (80 % power, two-sided {_pct(1.0 - s['confidence'])}).",
         "",
-        "| replicate | level | arm | value | 95% CI | MDD | p |",
+        f"| replicate | level | arm | value | {100 * s['confidence']:.4g}% CI | MDD | p |",
         "|---|---|---|---|---|---|---|",
     ]
     for v in s["values"]:
