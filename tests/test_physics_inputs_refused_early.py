@@ -1,7 +1,7 @@
 """Input checks and per-unit choices of the spring, crack-growth, flight-damage and life code.
 
-- a nominal initial flaw at or beyond the spring's failure depth is refused when the
-  ``ScasParams`` are built;
+- a nominal initial flaw at or beyond the spring's failure depth is refused before a
+  calibration is built from the parameters, and by an env given a calibration;
 - ``simulated_flight_damage`` refuses depths at or beyond the wire diameter before it
   simulates (the generators are left untouched);
 - ``UnitLives.summary`` of a part of which no unit fails;
@@ -18,7 +18,7 @@ import math
 import numpy as np
 import pytest
 
-from scas_env.actuator.calibration import UnitLives
+from scas_env.actuator.calibration import UnitLives, build_calibration, default_calibration
 from scas_env.actuator.flight_damage import growth_model, simulated_flight_damage
 from scas_env.actuator.params import ScasParams, SpringParams
 from scas_env.actuator.physics.crack_growth import (
@@ -27,10 +27,12 @@ from scas_env.actuator.physics.crack_growth import (
     paris_increment_m,
 )
 from scas_env.actuator.physics.spring import (
+    check_initial_crack,
     failure_depth_from_params,
     mode_iii_sif_pa_sqrt_m,
 )
 from scas_env.actuator.uncertainty import draw_unit
+from scas_env.env import ScasMaintenanceEnv
 
 #: a low-toughness design whose failure is brittle fracture (a_c < a_p)
 BRITTLE = ScasParams(spring=SpringParams(fracture_toughness_pa_sqrt_m=20e6))
@@ -43,19 +45,31 @@ def _nan_factor(eta: np.ndarray) -> np.ndarray:
 # ----------------------------------------------------------- initial flaw vs failure depth
 @pytest.mark.parametrize("base", [ScasParams(), BRITTLE], ids=["collapse", "fracture"])
 def test_initial_crack_at_or_beyond_the_failure_depth_is_refused(base: ScasParams) -> None:
+    """By check_initial_crack, which build_calibration runs first (before any simulation:
+    an unreachable seed would be refused after it)."""
     fd = failure_depth_from_params(base)
     assert fd.governing == ("plastic_collapse" if base is not BRITTLE else "fracture")
     a_f = fd.depth_m
     assert a_f < base.spring.wire_diameter_m  # the wire-diameter check alone lets it pass
     for a_0 in (a_f, a_f * (1.0 + 1e-6), 0.5 * (a_f + base.spring.wire_diameter_m)):
-        spring = base.spring.replace(initial_crack_m=a_0)
+        params = base.replace(spring=base.spring.replace(initial_crack_m=a_0))
         with pytest.raises(ValueError, match="initial_crack_m") as info:
-            base.replace(spring=spring)
+            check_initial_crack(params)
         assert f"{a_0} m" in str(info.value) and f"{a_f} m" in str(info.value)
         with pytest.raises(ValueError, match="failure depth"):
-            ScasParams.from_dict({"spring": spring.to_dict()}, base=base)
-    accepted = base.replace(spring=base.spring.replace(initial_crack_m=a_f * (1.0 - 1e-6)))
-    assert accepted.spring.initial_crack_m < a_f
+            build_calibration(params, seed=-1)
+    check_initial_crack(base.replace(spring=base.spring.replace(initial_crack_m=a_f * 0.999999)))
+
+
+def test_an_env_refuses_an_initial_crack_past_its_calibrations_failure_depth() -> None:
+    """With a calibration passed (none is built), the env's setup compares the filter's prior
+    mean with the calibration's failure depth: the truncated prior would have nothing left."""
+    cal = default_calibration()
+    bad = ScasParams().replace(
+        spring=ScasParams().spring.replace(initial_crack_m=cal.spring_failure_depth_m)
+    )
+    with pytest.raises(ValueError, match="calibration's spring failure depth"):
+        ScasMaintenanceEnv(params=bad, calibration=cal)
 
 
 # ------------------------------------------------------------------- flight-damage depths

@@ -49,6 +49,7 @@ from scas_env.actuator.health import actuator_config
 from scas_env.actuator.missions import flight_profile, link_force_n
 from scas_env.actuator.params import MissionParams, ScasParams
 from scas_env.actuator.physics.actuator import simulate
+from scas_env.actuator.physics.spring import check_initial_crack
 from scas_env.actuator.uncertainty import draw_units, nominal_unit
 from scas_env.utils.atomic_file import refuse_existing, write_text_atomic
 from scas_env.utils.shipped_files import shipped_path, verify_shipped_file
@@ -293,7 +294,9 @@ def build_calibration(
     not depend on it.
 
     Arguments (all checked before any simulation; ``ValueError`` naming the argument):
-    ``seed`` an integer >= 0; ``n_windows`` an integer >= 2; ``window_s`` (default
+    ``params.spring.initial_crack_m`` below the spring's failure depth
+    (:func:`~scas_env.actuator.physics.spring.check_initial_crack`); ``seed`` an integer >= 0;
+    ``n_windows`` an integer >= 2; ``window_s`` (default
     ``params.mission.flight_window_s``) and ``spectrum_window_s`` in the range of
     ``MissionParams.flight_window_s`` ([1, 3600] s); ``whole_flights`` 0 or an integer >= 2;
     ``cv_depths_m`` finite depths > 0 m, strictly rising, each below the failure depth of
@@ -303,6 +306,7 @@ def build_calibration(
     """
     if not isinstance(params, ScasParams):
         raise ValueError(f"params must be a ScasParams, got {type(params).__name__}")
+    check_initial_crack(params)
     whole_number("", "seed", seed, lo=0)
     if whole_flights != 0:
         whole_number("build_calibration", "whole_flights", whole_flights, lo=2)

@@ -509,16 +509,3 @@ class ScasParams(Validated):
                 f"SpringParams.preload_n = {self.spring.preload_n} N must exceed k * end_stop = "
                 f"{stroke_force:.1f} N so that both springs stay seated over the stroke"
             )
-        # imported here: scas_env.actuator.physics.spring imports this module
-        from scas_env.actuator.physics.spring import failure_depth_from_params
-
-        try:
-            depth_m = failure_depth_from_params(self).depth_m
-        except ValueError:  # the uncracked wire yields: refused where a failure depth is needed
-            return
-        if self.spring.initial_crack_m >= depth_m:
-            raise ValueError(
-                f"SpringParams.initial_crack_m = {self.spring.initial_crack_m} m must be smaller "
-                f"than the spring's failure depth {depth_m} m (brittle fracture or plastic "
-                "collapse under the largest service force, failure_depth_from_params)"
-            )

@@ -169,6 +169,12 @@ class Setup:
 
     def __post_init__(self) -> None:
         s, cal, sur, m = self.scenario, self.calibration, self.surrogate, self.mismatch
+        a0_m = self.params.spring.initial_crack_m
+        if a0_m >= cal.spring_failure_depth_m:  # the spring filter's prior ends there
+            raise ValueError(
+                f"SpringParams.initial_crack_m = {a0_m} m must be smaller than the "
+                f"calibration's spring failure depth {cal.spring_failure_depth_m} m"
+            )
         if not isinstance(m, Mismatch):
             raise ValueError(f"mismatch = {m!r} must be a Mismatch")
         sensing = {k: getattr(m, k) for k in SENSING_FIELDS if getattr(m, k) != 1.0}

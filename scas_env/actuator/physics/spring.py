@@ -596,3 +596,20 @@ def failure_depth_from_params(
         j_form=j_form,
         stress_section=stress_section,
     )
+
+
+def check_initial_crack(params: ScasParams) -> None:
+    """``ValueError`` when the nominal initial flaw ``params.spring.initial_crack_m`` lies at
+    or past the spring's failure depth (:func:`failure_depth_from_params`), naming both; run
+    before a calibration is built from ``params`` (a spring whose uncracked wire already
+    yields has no failure depth: refused where one is computed)."""
+    try:
+        depth_m = failure_depth_from_params(params).depth_m
+    except ValueError:
+        return
+    if params.spring.initial_crack_m >= depth_m:
+        raise ValueError(
+            f"SpringParams.initial_crack_m = {params.spring.initial_crack_m} m must be smaller "
+            f"than the spring's failure depth {depth_m} m (brittle fracture or plastic "
+            "collapse under the largest service force, failure_depth_from_params)"
+        )
