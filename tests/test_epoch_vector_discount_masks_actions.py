@@ -5,6 +5,8 @@ floats (refused by the single and vector envs alike).
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 import pytest
 from gymnasium.vector import AutoresetMode, SyncVectorEnv
@@ -109,26 +111,37 @@ def test_final_info_masks_are_the_ended_rows_as_in_sync_vector_env() -> None:
 
 
 # ----------------------------------------------------------------------------- bad actions
-@pytest.mark.parametrize("actions", [[True, 2, 0], (0, np.bool_(False), 1), [0, 1, True]], ids=repr)
-def test_vector_epochs_refuse_booleans_in_action_lists(actions) -> None:
-    venv = DecisionEpochsVectorEnv(3, episode_slots=20)
-    venv.reset(seed=0)
-    with pytest.raises(ValueError, match=r"holds a boolean .* must be 3 integers in 0\.\.19"):
-        venv.step(actions)
-    with pytest.raises(ValueError, match=r"must be 3 integers in 0\.\.19"):
-        venv.step(np.array([True, False, True]))
-    assert (venv.inner.a["slot"] == 0).all()  # refused before any slot was flown
+def _epochs(n: int) -> tuple[DecisionEpochsVectorEnv, Any, int]:
+    venv = DecisionEpochsVectorEnv(n, episode_slots=20)
+    return venv, lambda: venv.inner.a["slot"], 19
 
 
-@pytest.mark.parametrize("actions", [[True, 0], (np.bool_(True), 3)], ids=repr)
-def test_native_vector_env_refuses_booleans_in_action_lists(actions) -> None:
-    venv = ScasMaintenanceVectorEnv(2, episode_slots=20)
+def _native(n: int) -> tuple[ScasMaintenanceVectorEnv, Any, int]:
+    venv = ScasMaintenanceVectorEnv(n, episode_slots=20)
+    return venv, lambda: venv.a["slot"], 3
+
+
+@pytest.mark.parametrize(
+    ("make", "actions"),
+    [
+        (_epochs, [True, 2, 0]),
+        (_epochs, (0, np.bool_(False), 1)),
+        (_epochs, [0, 1, True]),
+        (_native, [True, 0]),
+        (_native, (np.bool_(True), 3)),
+    ],
+    ids=repr,
+)
+def test_vector_envs_refuse_booleans_as_actions(make, actions) -> None:
+    n = len(actions)
+    venv, slots, top = make(n)
     venv.reset(seed=0)
-    with pytest.raises(ValueError, match=r"holds a boolean .* must be 2 integers in 0\.\.3"):
+    allowed = rf"must be {n} integers in 0\.\.{top}"
+    with pytest.raises(ValueError, match=rf"holds a boolean .* {allowed}"):
         venv.step(actions)
-    with pytest.raises(ValueError, match=r"must be 2 integers in 0\.\.3"):
-        venv.step(np.array([True, False]))
-    assert (venv.a["slot"] == 0).all()
+    with pytest.raises(ValueError, match=allowed):
+        venv.step(np.array([True, False] * n)[:n])
+    assert (slots() == 0).all()  # refused before any slot was flown
 
 
 @pytest.mark.parametrize("dtype", [np.int32, np.int64, np.uint8, None])
