@@ -688,8 +688,8 @@ def point_rows(summary: Mapping[str, Any]) -> list[dict[str, Any]]:
 
 def plot(summary: Mapping[str, Any], path: Path) -> None:
     """mismatch.png: per kind, the value (nominal-tuned, re-tuned) against the level with
-    95 % intervals and the break-even levels (top), and the nominal-tuned filter rule's
-    decision-time coverage and RA (bottom)."""
+    intervals at the run's confidence and the break-even levels (top), and the nominal-tuned
+    filter rule's decision-time coverage and RA (bottom)."""
     import matplotlib
 
     matplotlib.use("Agg")

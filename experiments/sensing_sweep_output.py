@@ -1,7 +1,8 @@
 """Outputs of the sensing-quality sweep (:mod:`experiments.sensing_sweep`): ``sweep.csv``
 (one row per replicate, level, arm and held-out episode), ``sweep.json`` (statistics,
 variants, tuning, timings, config), ``sweep.md`` (the table) and ``value_vs_sensing.png``
-(value per episode vs sensing quality, 95 % CI and MDD; its numbers are in ``sweep.json``)."""
+(value per episode vs sensing quality, intervals at the run's ``confidence`` (0.95 by default)
+and MDD; its numbers are in ``sweep.json``)."""
 
 from __future__ import annotations
 
@@ -39,9 +40,15 @@ def _pct(level: float) -> str:
     return f"{100 * level:.4g} %"
 
 
+def _ci(level: float) -> str:
+    """0.95 -> "95% CI" (the tables' column)."""
+    return f"{100 * level:.4g}% CI"
+
+
 def markdown_sweep(result: SweepResult, levels_info: Mapping[str, Any] | None = None) -> str:
     """sweep.md: the value table (and the tuning spread when there are replicates)."""
     c, s = result.config, result.summary
+    ci = _ci(s["confidence"])
     lines = [
         "# Value of prognostics vs sensing quality",
         "",
@@ -52,7 +59,7 @@ def markdown_sweep(result: SweepResult, levels_info: Mapping[str, Any] | None = 
         f"(USD per episode), {_pct(s['confidence'])} t-interval, MDD = minimum detectable "
         f"difference (80 % power, two-sided {_pct(1.0 - s['confidence'])}).",
         "",
-        f"| replicate | level | arm | value | {100 * s['confidence']:.4g}% CI | MDD | p |",
+        f"| replicate | level | arm | value | {ci} | MDD | p |",
         "|---|---|---|---|---|---|---|",
     ]
     for v in s["values"]:
@@ -65,7 +72,7 @@ def markdown_sweep(result: SweepResult, levels_info: Mapping[str, Any] | None = 
             "",
             "## Tuning noise: value of replicate r minus replicate 0 (same held-out episodes)",
             "",
-            "| level | arm | r | difference | 95% CI | value MDD |",
+            f"| level | arm | r | difference | {ci} | value MDD |",
             "|---|---|---|---|---|---|",
         ]
         for v in s["tuning_spread"]:
@@ -78,7 +85,7 @@ def markdown_sweep(result: SweepResult, levels_info: Mapping[str, Any] | None = 
             "",
             f"## Same family, level minus {s['base_level']} (same held-out episodes)",
             "",
-            "| replicate | level | arm | difference | 95% CI | MDD |",
+            f"| replicate | level | arm | difference | {ci} | MDD |",
             "|---|---|---|---|---|---|",
         ]
         for v in s["vs_base"]:
@@ -141,7 +148,8 @@ def _plot(result: SweepResult, levels_info: Mapping[str, Any] | None, path: Path
             shift = (1.0 + 0.03 * (k - (len(series) - 1) / 2)) if numeric else 1.0
             style = {"fmt": "o-"} if r == 0 else {"fmt": "s--", "mfc": "none", "alpha": 0.7}
             what = arm if len(replicates) == 1 else f"{arm}, tuning replicate {r}"
-            ax.errorbar(x * shift, mean, yerr=err, capsize=4, label=f"{what}, 95% CI", **style)
+            ax.errorbar(x * shift, mean, yerr=err, capsize=4, **style,
+                        label=f"{what}, {_ci(result.summary['confidence'])}")  # fmt: skip
         ax.fill_between(x, -mdd, mdd, color="grey", alpha=0.15, label="± MDD (80% power)")
         ax.axhline(0.0, color="black", lw=0.8)
         if numeric:

@@ -174,7 +174,10 @@ def delegate_actions(delegate: Any, obs: np.ndarray) -> np.ndarray:
 
 
 def _is_integer(x: Any) -> bool:
-    """``x`` is a Python or numpy integer, not a boolean (``True == 1``) or a float."""
+    """``x`` is a Python or numpy integer (a 0-d integer array too), not a boolean
+    (``True == 1``) or a float."""
+    if isinstance(x, np.ndarray) and x.ndim == 0:
+        x = x[()]
     return isinstance(x, int | np.integer) and not isinstance(x, bool)
 
 

@@ -73,8 +73,8 @@ def check_vector_actions(actions: Any, n: int, n_act: int, allowed: str) -> np.n
     timedelta64). An array costs a dtype and range check; a list or tuple is scanned for
     booleans once, then converted once."""
     if isinstance(actions, list | tuple):
-        for i, v in enumerate(actions):
-            if isinstance(v, bool | np.bool_):
+        for i, v in enumerate(actions):  # a bool, np.bool_ or 0-d boolean array
+            if isinstance(v, bool | np.bool_) or (isinstance(v, np.ndarray) and v.dtype == bool):
                 raise ValueError(
                     f"actions = {actions!r} holds a boolean ({v!r} at index {i}); "
                     f"they must be {allowed}"

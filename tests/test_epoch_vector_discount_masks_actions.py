@@ -129,6 +129,7 @@ def _native(n: int) -> tuple[ScasMaintenanceVectorEnv, Any, int]:
         (_epochs, [0, 1, True]),
         (_native, [True, 0]),
         (_native, (np.bool_(True), 3)),
+        (_native, [np.array(True), 0]),
     ],
     ids=repr,
 )
@@ -175,6 +176,7 @@ def test_encode_refuses_booleans_and_floats(maintenance, k, name) -> None:
 def test_encode_takes_python_and_numpy_integers() -> None:
     env = DecisionEpochs(ScasMaintenanceEnv(episode_slots=20))
     n_ks = len(env.ks)
-    for m, k in [(3, 20), (np.int64(3), np.int32(20)), (np.uint8(1), np.int64(1))]:
+    for m, k in [(3, 20), (np.int64(3), np.int32(20)), (np.uint8(1), np.int64(1)),
+                 (np.array(2), np.array(5))]:  # fmt: skip
         assert env.encode(m, k) == int(m) * n_ks + env.ks.index(int(k))
         assert env.decode(env.encode(m, k)) == (int(m), int(k))

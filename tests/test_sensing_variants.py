@@ -192,3 +192,27 @@ def test_sweep_levels_share_the_age_rule_and_replicates_their_seeds(sweep, tiny_
     ref = result.tuning[label]["features"].best_params["reference"]
     assert ref == surrogate_reference(tiny_variant[0].surrogate) != shipped_reference()
     assert "reference" not in result.tuning["0|default"]["features"].best_params
+
+
+def test_the_sweep_report_labels_its_intervals_at_the_confidence_used() -> None:
+    """Every interval of sweep.md (values, tuning noise, level minus base) says the
+    confidence its numbers were computed at, not a fixed 95 %."""
+    from experiments.sensing_sweep import REFERENCE, summarize_sweep
+    from experiments.sensing_sweep_output import SweepResult, markdown_sweep
+
+    rng = np.random.default_rng(0)
+    rows = [
+        {"replicate": r, "level": lv, "arm": arm, "episode": e, "reward": float(rng.normal())}
+        for r in (0, 1)
+        for lv in ("a", "b")
+        for arm in (REFERENCE, "rul_risk")
+        for e in range(20)
+    ]
+    summary = summarize_sweep(rows, ["a", "b"], [REFERENCE, "rul_risk"], confidence=0.80)
+    config = {"episodes": 20, "slots": 10, "held_out_seed": 2, "trials": 1,
+              "train_episodes": 1, "replicate_seeds": [1, 11], "levels": ["a", "b"],
+              "families": ["rul_risk"]}  # fmt: skip
+    text = markdown_sweep(SweepResult(rows, summary, {}, config, {}, 1.0))
+    headers = [line for line in text.splitlines() if "CI |" in line]
+    assert len(headers) == 3 and all("| 80% CI |" in line for line in headers), headers
+    assert "80 % t-interval" in text and "two-sided 20 %" in text and "95" not in text
