@@ -124,18 +124,18 @@ def _native(n: int) -> tuple[ScasMaintenanceVectorEnv, Any, int]:
 @pytest.mark.parametrize(
     ("make", "actions"),
     [
-        (_epochs, [True, 2, 0]),
-        (_epochs, (0, np.bool_(False), 1)),
-        (_epochs, [0, 1, True]),
-        (_native, [True, 0]),
-        (_native, (np.bool_(True), 3)),
-        (_native, [np.array(True), 0]),
+        ("epochs", [True, 2, 0]),
+        ("epochs", (0, np.bool_(False), 1)),
+        ("epochs", [0, 1, True]),
+        ("native", [True, 0]),
+        ("native", (np.bool_(True), 3)),
+        ("native", [np.array(True), 0]),
     ],
     ids=repr,
 )
 def test_vector_envs_refuse_booleans_as_actions(make, actions) -> None:
     n = len(actions)
-    venv, slots, top = make(n)
+    venv, slots, top = {"epochs": _epochs, "native": _native}[make](n)
     venv.reset(seed=0)
     allowed = rf"must be {n} integers in 0\.\.{top}"
     with pytest.raises(ValueError, match=rf"holds a boolean .* {allowed}"):
