@@ -108,6 +108,7 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
+from prognostics import validation
 from scas_env.env import ScasMaintenanceEnv, maintenance_mask
 
 FLY, TEST_AND_FLY, REPLACE_SPRING, REPLACE_SEAL = range(4)
@@ -175,10 +176,12 @@ def delegate_actions(delegate: Any, obs: np.ndarray) -> np.ndarray:
 
 def _is_integer(x: Any) -> bool:
     """``x`` is a Python or numpy integer (a 0-d integer array too), not a boolean
-    (``True == 1``) or a float."""
-    if isinstance(x, np.ndarray) and x.ndim == 0:
-        x = x[()]
-    return isinstance(x, int | np.integer) and not isinstance(x, bool)
+    (``True == 1``) or a float (:func:`prognostics.validation.integer`)."""
+    try:
+        validation.integer("x", x)
+    except ValueError:
+        return False
+    return True
 
 
 def check_ks(ks: Sequence[int]) -> tuple[int, ...]:

@@ -141,7 +141,7 @@ def test_a_fleet_rule_refuses_a_bool_as_a_number(
     env_obs: tuple[tuple[str, ...], np.ndarray], family: str, name: str, flag: Any
 ) -> None:
     names, _ = env_obs
-    with pytest.raises(ValueError, match=re.escape(f"{name} = {flag!r} must be a number")):
+    with pytest.raises(ValueError, match=rf"{name} = {bool(flag)} \(bool\) must be a number"):
         FleetRule(family, names, **{name: flag})
 
 
@@ -151,15 +151,17 @@ def test_the_random_fleet_policy_refuses_a_bool_as_a_probability(
     env_obs: tuple[tuple[str, ...], np.ndarray], name: str, flag: Any
 ) -> None:
     names, _ = env_obs
-    with pytest.raises(ValueError, match=re.escape(f"{name} = {flag!r} must be a number")):
+    with pytest.raises(ValueError, match=rf"{name} = {bool(flag)} \(bool\) must be a number"):
         FleetRandom(names, **{name: flag})
 
 
-def test_a_fleet_rule_names_a_parameter_float_cannot_read(
+def test_a_fleet_rule_refuses_a_string_for_a_number_naming_it(
     env_obs: tuple[tuple[str, ...], np.ndarray],
 ) -> None:
+    """A string is no number, not even "3" (float would read it)."""
     names, _ = env_obs
-    with pytest.raises(ValueError, match=re.escape("spring_age = 'abc' must be a number")):
-        FleetRule("fleet_age", names, spring_age="abc")
-    with pytest.raises(ValueError, match=re.escape("p_fly = 'x' must be a number")):
+    for text in ("abc", "3"):
+        with pytest.raises(ValueError, match=re.escape(f"spring_age = {text!r} (str) must be")):
+            FleetRule("fleet_age", names, spring_age=text)
+    with pytest.raises(ValueError, match=re.escape("p_fly = 'x' (str) must be a number")):
         FleetRandom(names, p_fly="x")

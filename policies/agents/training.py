@@ -38,6 +38,7 @@ from policies.agents.sb3_agents import require_contrib
 from scas_env import ENV_ID, ENV_ID_EPOCHS
 from scas_env.decision_epochs import DEFAULT_KS, N_MAINTENANCE, DecisionEpochs
 from scas_env.utils.atomic_file import write_bytes_atomic, write_text_atomic
+from scas_env.utils.table_checks import whole_number
 
 #: the observation and return statistics of a clone (``experiments.epoch_agents.clone``),
 #: read without unpickling (:class:`policies.agents.obs_normalization.ObsNormalization`)
@@ -289,9 +290,7 @@ def _check_keywords(cls: Any, hp: Mapping[str, Any]) -> None:
         ):
             raise ValueError(f"{key} = {value!r} must be a finite number")
     for key in ("n_steps", "batch_size", "n_epochs"):
-        value = hp.get(key, 1)
-        if isinstance(value, bool) or not isinstance(value, numbers.Integral) or value < 1:
-            raise ValueError(f"{key} = {value!r} must be an integer >= 1")
+        whole_number("", key, hp.get(key, 1), lo=1)
     gamma = hp.get("gamma", 0.99)
     if not 0 < gamma <= 1:
         raise ValueError(f"gamma = {gamma!r} must be in (0, 1] (the discount per decision)")
@@ -312,9 +311,7 @@ def run_settings(
     check_run(algo, None)
     cls = _algo_class(algo)
     hp = dict(hyperparams)
-    n_envs = hp.pop("n_envs", 4)
-    if isinstance(n_envs, bool) or not isinstance(n_envs, numbers.Integral) or n_envs < 1:
-        raise ValueError(f"n_envs = {n_envs!r} must be an integer >= 1")
+    n_envs = whole_number("", "n_envs", hp.pop("n_envs", 4), lo=1)
     _n_timesteps(hp.pop("n_timesteps", None))
     policy = hp.pop("policy", "MlpPolicy")
     if not (isinstance(policy, type) or (isinstance(policy, str) and policy in cls.policy_aliases)):
@@ -338,7 +335,7 @@ def run_settings(
         policy = ReferenceKLPolicy
     hp = with_schedules(hp)
     _check_keywords(cls, hp)
-    return int(n_envs), policy, normalize, hp
+    return n_envs, policy, normalize, hp
 
 
 def _n_timesteps(value: Any) -> int | None:

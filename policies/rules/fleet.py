@@ -45,6 +45,7 @@ import numpy as np
 
 from policies.base import check_finite, check_seed, register_policy, row_seeds
 from policies.rules.healthy_band import implicated_spring
+from prognostics.validation import real
 
 #: the families of this module, in the benchmark's order
 FLEET_FAMILIES = (
@@ -129,17 +130,6 @@ class FleetLayout:
         return self._index[name]
 
 
-def _number(name: str, value: Any) -> float:
-    """A numeric parameter as a ``float``, else ``ValueError`` naming it: a bool (``True``
-    would act as 1.0) or anything ``float`` cannot read is refused."""
-    if isinstance(value, bool | np.bool_):
-        raise ValueError(f"{name} = {value!r} must be a number, not a bool")
-    try:
-        return float(value)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name} = {value!r} must be a number") from None
-
-
 def _positive(name: str, value: float) -> float:
     v = float(value)
     if not v > 0.0 or math.isnan(v):
@@ -171,7 +161,7 @@ class FleetRule:
             raise ValueError(
                 f"unknown parameters {unknown} of {family!r}; it takes {sorted(defaults)}"
             )
-        self.values = {**defaults, **{k: _number(k, v) for k, v in params.items()}}
+        self.values = {**defaults, **{k: real(k, v, finite=False) for k, v in params.items()}}
         for k, v in self.values.items():
             if k == "opportunity" and not 0.0 <= v < 1.0:
                 raise ValueError(f"opportunity = {v!r} must be in [0, 1)")
@@ -350,7 +340,7 @@ class FleetRandom:
     ) -> None:  # fmt: skip
         given = {"p_fly": p_fly, "p_test": p_test, "p_replace": p_replace}
         for k, v in given.items():
-            if not 0.0 <= _number(k, v) <= 1.0:
+            if not 0.0 <= real(k, v, finite=False) <= 1.0:
                 raise ValueError(f"{k} = {v!r} must be a probability in [0, 1]")
         self.p = (float(p_fly), float(p_test), float(p_replace))
         self.layout = lay = FleetLayout(obs_names)
